@@ -1,0 +1,43 @@
+"""The exception hierarchy of tuckercodec.
+
+Every error the library raises on purpose derives from :class:`TuckerCodecError`, so a caller can
+catch one class. Misuse of the API (a wrong argument type or an impossible parameter) raises the
+plain ``TypeError``/``ValueError`` as usual; :class:`InputError` is also a ``ValueError`` so that
+code written against generic exceptions keeps working.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+class TuckerCodecError(Exception):
+    """Base class of every error raised by tuckercodec."""
+
+
+class InputError(TuckerCodecError, ValueError):
+    """A mesh sequence that cannot be read or used: names the file, frame and line at fault.
+
+    Attributes are ``None`` where they do not apply.
+    """
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        path: str | Path | None = None,
+        line: int | None = None,
+        frame: int | None = None,
+    ) -> None:
+        self.reason = message
+        self.path = None if path is None else str(path)
+        self.line = line
+        self.frame = frame
+        where = []
+        if self.path is not None:
+            where.append(self.path + (f":{line}" if line is not None else ""))
+        elif line is not None:
+            where.append(f"line {line}")
+        if frame is not None:
+            where.append(f"frame {frame}")
+        super().__init__(f"{', '.join(where)}: {message}" if where else message)

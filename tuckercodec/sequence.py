@@ -1,0 +1,109 @@
+"""The in-memory mesh sequence: F frames of K vertices sharing one set of faces."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import InputError
+
+
+@dataclass(eq=False)
+class MeshSequence:
+    """A temporally coherent mesh sequence.
+
+    Attributes:
+        vertices: float64 array of shape (F, K, 3): frame, vertex, xyz. Vertex order is the order
+            of the source files, never changed.
+        faces: int64 array of shape (M, n) with 0-based vertex indices. Every face has n corners,
+            except that a polygon with fewer corners than the widest face is padded with -1 at the
+            end of its row (a mesh of triangles is simply (M, 3)). May be (0, 3) for a point cloud.
+        frame_names: one name per frame (the source file name, or ``frame_00000``...).
+        frame_rate: frames per second, if known.
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    frame_names: list[str] = field(default_factory=list)
+    frame_rate: float | None = None
+
+    def __post_init__(self) -> None:
+        vertices = np.asarray(self.vertices)
+        if vertices.ndim != 3 or vertices.shape[2] != 3:
+            raise InputError(f"vertices must have shape (frames, vertices, 3), got {vertices.shape}")
+        if vertices.shape[0] < 1 or vertices.shape[1] < 1:
+            raise InputError(f"a sequence needs at least one frame and one vertex, got {vertices.shape}")
+        if not np.issubdtype(vertices.dtype, np.number) or np.iscomplexobj(vertices):
+            raise InputError(f"vertices must be real numbers, got dtype {vertices.dtype}")
+        self.vertices = np.ascontiguousarray(vertices, dtype=np.float64)
+        bad = ~np.isfinite(self.vertices)
+        if bad.any():
+            f, k, _ = np.argwhere(bad)[0]
+            raise InputError(f"vertex {k} has a non-finite coordinate", frame=int(f))
+
+        faces = np.asarray(self.faces)
+        if faces.size == 0:
+            faces = np.zeros((0, 3), dtype=np.int64)
+        if faces.ndim != 2 or faces.shape[1] < 3:
+            raise InputError(f"faces must have shape (faces, n >= 3), got {faces.shape}")
+        if not np.issubdtype(faces.dtype, np.integer):
+            raise InputError(f"faces must be integers, got dtype {faces.dtype}")
+        self.faces = np.ascontiguousarray(faces, dtype=np.int64)
+        _check_faces(self.faces, self.vertex_count)
+
+        if not self.frame_names:
+            self.frame_names = [f"frame_{n:05d}" for n in range(self.frame_count)]
+        self.frame_names = [str(name) for name in self.frame_names]
+        if len(self.frame_names) != self.frame_count:
+            raise InputError(
+                f"{len(self.frame_names)} frame names given for {self.frame_count} frames"
+            )
+        if self.frame_rate is not None and not (np.isfinite(self.frame_rate) and self.frame_rate > 0):
+            raise InputError(f"frame rate must be a positive number, got {self.frame_rate}")
+
+    @property
+    def frame_count(self) -> int:
+        """F, the number of frames."""
+        return int(self.vertices.shape[0])
+
+    @property
+    def vertex_count(self) -> int:
+        """K, the number of vertices of every frame."""
+        return int(self.vertices.shape[1])
+
+    def triangles(self) -> np.ndarray:
+        """The faces as triangles, (T, 3): polygons are split into fans from their first corner."""
+        if self.faces.shape[1] == 3:
+            return self.faces.copy()
+        parts = []
+        for corner in range(1, self.faces.shape[1] - 1):
+            tri = self.faces[:, [0, corner, corner + 1]]
+            parts.append(tri[tri[:, 2] >= 0])
+        return np.concatenate(parts) if parts else np.zeros((0, 3), dtype=np.int64)
+
+    def __repr__(self) -> str:
+        return (
+            f"MeshSequence(frames={self.frame_count}, vertices={self.vertex_count}, "
+            f"faces={self.faces.shape[0]})"
+        )
+
+
+def _check_faces(faces: np.ndarray, vertex_count: int) -> None:
+    """Reject indices out of range and padding anywhere but at the end of a row."""
+    if faces.size == 0:
+        return
+    if faces.max() >= vertex_count or faces.min() < -1:
+        row = int(np.argwhere((faces >= vertex_count) | (faces < -1))[0, 0])
+        raise InputError(
+            f"face {row} has a vertex index outside 0..{vertex_count - 1}: {faces[row].tolist()}"
+        )
+    padded = faces < 0
+    if padded.any():
+        # a row may only be padded at its end, and must keep at least 3 corners
+        bad_order = padded[:, :-1] & ~padded[:, 1:]
+        too_short = (~padded).sum(axis=1) < 3
+        bad_rows = np.flatnonzero(bad_order.any(axis=1) | too_short)
+        if bad_rows.size:
+            row = int(bad_rows[0])
+            raise InputError(f"face {row} is malformed: {faces[row].tolist()}")
