@@ -41,3 +41,7 @@ class InputError(TuckerCodecError, ValueError):
         if frame is not None:
             where.append(f"frame {frame}")
         super().__init__(f"{', '.join(where)}: {message}" if where else message)
+
+
+class DependencyError(TuckerCodecError, RuntimeError):
+    """An optional dependency (such as matplotlib for plots) is not installed."""

@@ -1,0 +1,62 @@
+"""Writing output files so that nothing is lost: never a half-written file, never an overwrite
+that was not asked for.
+
+A file is written to a temporary name in its destination folder and renamed over the target
+only once complete (a rename within one file system is atomic), so a failure or an interrupt
+leaves either the old file or the new one, and no stray temporary file.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import BinaryIO
+
+
+def refuse_existing(paths: list[Path], overwrite: bool) -> None:
+    """Raise ``FileExistsError`` naming the first path that exists, unless ``overwrite``."""
+    if overwrite:
+        return
+    for path in paths:
+        if path.exists():
+            raise FileExistsError(f"{path} already exists (use --force / overwrite=True to replace it)")
+
+
+@contextmanager
+def atomic_output(path: str | Path, *, overwrite: bool = False) -> Iterator[BinaryIO]:
+    """Open a temporary file beside ``path`` for binary writing; rename it to ``path`` on success.
+
+    On any exception the temporary file is removed and ``path`` is left as it was.
+    """
+    target = Path(path)
+    refuse_existing([target], overwrite)
+    folder = target.parent if str(target.parent) else Path(".")
+    handle = tempfile.NamedTemporaryFile(
+        mode="wb", dir=folder, prefix=f".{target.name}.", suffix=".tmp", delete=False
+    )
+    try:
+        with handle:
+            yield handle
+            handle.flush()
+            os.fsync(handle.fileno())
+        if not overwrite and target.exists():  # created by someone else while we wrote
+            raise FileExistsError(f"{target} already exists (use --force / overwrite=True)")
+        os.replace(handle.name, target)
+    except BaseException:
+        try:
+            os.unlink(handle.name)
+        except FileNotFoundError:
+            pass
+        raise
+
+
+def write_atomic(path: str | Path, data: bytes | Callable[[BinaryIO], None], *, overwrite: bool = False) -> None:
+    """Write ``data`` (bytes, or a function that writes to a binary file) to ``path`` atomically."""
+    with atomic_output(path, overwrite=overwrite) as handle:
+        if callable(data):
+            data(handle)
+        else:
+            handle.write(data)
