@@ -87,7 +87,11 @@ class Analysis:
                 "Karni-Gotsman denominator is zero"
             )
         self._error2 = _discarded_energy(energy)
-        self._bound2 = _bound_energy(decomposition.mode1_energy, decomposition.mode3_energy)
+        self._kg = 100.0 * np.sqrt(self._error2 / self.total_energy)
+        bound2 = _bound_energy(decomposition.mode1_energy, decomposition.mode3_energy)
+        self._kg_bound = 100.0 * np.sqrt(np.minimum(bound2, self.total_energy) / self.total_energy)
+        for table in (self._error2, self._kg, self._kg_bound):
+            table.flags.writeable = False  # handed out by the *_table methods, never copied
         r1, r3 = decomposition.max_ranks
         ii, kk = np.meshgrid(np.arange(r1 + 1), np.arange(r3 + 1), indexing="ij")
         self._floats = stored_floats(ii, kk, k_vertices, frames)
@@ -106,12 +110,12 @@ class Analysis:
     def kg(self, i: int, k: int) -> float:
         """Exact KG error of the truncation (i, 3, k), in percent."""
         self._check(i, k)
-        return float(self.kg_table()[i, k])
+        return float(self._kg[i, k])
 
     def kg_bound(self, i: int, k: int) -> float:
         """The paper's estimate of the KG error of (i, 3, k): an upper bound."""
         self._check(i, k)
-        return float(self.kg_bound_table()[i, k])
+        return float(self._kg_bound[i, k])
 
     def psi(self, i: int, k: int) -> float:
         """The estimator's error: kg_bound(i, k) - kg(i, k), in KG units."""
@@ -137,11 +141,11 @@ class Analysis:
 
     def kg_table(self) -> np.ndarray:
         """Exact KG error of every (i, k), shape (R1+1, R3+1); row/column 0 keep nothing."""
-        return 100.0 * np.sqrt(self._error2 / self.total_energy)
+        return self._kg
 
     def kg_bound_table(self) -> np.ndarray:
         """The paper's estimated KG error of every (i, k), shape (R1+1, R3+1)."""
-        return 100.0 * np.sqrt(np.minimum(self._bound2, self.total_energy) / self.total_energy)
+        return self._kg_bound
 
     def psi_table(self) -> np.ndarray:
         """kg_bound - kg for every (i, k)."""
