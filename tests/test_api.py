@@ -71,3 +71,7 @@ def test_atomic_write_never_leaves_half_a_file(tmp_path):
     write_atomic(target, b"new", overwrite=True)
     assert target.read_bytes() == b"new"
     assert [p.name for p in tmp_path.iterdir()] == ["out.bin"]
+    # the same permissions as a file written by open(), not mkstemp's private 0600
+    plain = tmp_path / "plain.bin"
+    plain.write_bytes(b"x")
+    assert target.stat().st_mode & 0o777 == plain.stat().st_mode & 0o777

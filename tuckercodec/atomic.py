@@ -22,7 +22,7 @@ def refuse_existing(paths: list[Path], overwrite: bool) -> None:
         return
     for path in paths:
         if path.exists():
-            raise FileExistsError(f"{path} already exists (use --force / overwrite=True to replace it)")
+            raise FileExistsError(f"{path} already exists (pass --force, or overwrite=True, to replace it)")
 
 
 @contextmanager
@@ -34,16 +34,19 @@ def atomic_output(path: str | Path, *, overwrite: bool = False) -> Iterator[Bina
     target = Path(path)
     refuse_existing([target], overwrite)
     folder = target.parent if str(target.parent) else Path(".")
-    handle = tempfile.NamedTemporaryFile(
+    # Not a with-block: the file must outlive its handle until the rename below.
+    handle = tempfile.NamedTemporaryFile(  # noqa: SIM115
         mode="wb", dir=folder, prefix=f".{target.name}.", suffix=".tmp", delete=False
     )
     try:
+        # mkstemp creates the file as 0600; give it the mode a plain open() would have.
+        os.chmod(handle.name, 0o666 & ~_current_umask())
         with handle:
             yield handle
             handle.flush()
             os.fsync(handle.fileno())
         if not overwrite and target.exists():  # created by someone else while we wrote
-            raise FileExistsError(f"{target} already exists (use --force / overwrite=True)")
+            raise FileExistsError(f"{target} already exists (pass --force, or overwrite=True, to replace it)")
         os.replace(handle.name, target)
     except BaseException:
         try:
@@ -51,6 +54,12 @@ def atomic_output(path: str | Path, *, overwrite: bool = False) -> Iterator[Bina
         except FileNotFoundError:
             pass
         raise
+
+
+def _current_umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
 
 
 def write_atomic(path: str | Path, data: bytes | Callable[[BinaryIO], None], *, overwrite: bool = False) -> None:

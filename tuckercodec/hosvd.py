@@ -149,7 +149,7 @@ def reconstruct(core: np.ndarray, u1: np.ndarray, u2: np.ndarray, u3: np.ndarray
 def hosvd(tensor: np.ndarray) -> HOSVD:
     """Decompose a centred (K, 3, F) tensor. See the module docstring for the method."""
     tensor = np.ascontiguousarray(tensor, dtype=np.float64)
-    k, three, f = tensor.shape
+    _, three, f = tensor.shape
     if three != 3:
         raise ValueError(f"expected a (K, 3, F) tensor, got {tensor.shape}")
 

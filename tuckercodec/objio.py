@@ -1,0 +1,566 @@
+"""Reading and writing Wavefront OBJ meshes, fast and exactly.
+
+Only what a mesh sequence needs is read: the ``v`` positions, in file order, and the ``f`` faces.
+Everything else (``vt``, ``vn``, ``vp``, ``o``, ``g``, ``s``, ``usemtl``, ``mtllib``, ``l``,
+comments, unknown statements) is ignored. trimesh is never used for OBJ because it reorders and
+merges vertices, which would break the vertex correspondence between frames.
+
+Two parsers share one set of rules:
+
+* :func:`_parse_fast` handles the common, tidy file with a few whole-file operations (numpy finds
+  the line starts, ``bytes.split`` cuts all numbers at once). It never reports errors: as soon as
+  anything is unusual it gives up and returns ``None``.
+* :func:`_parse_careful` walks the file line by line. It is the reference: it reads everything
+  the fast parser reads, to the same result, and more (indented lines, trailing comments, line
+  continuations...), and it is the one that reports errors, with the 1-based line number.
+
+The fast parser gives up on every input the careful one might read differently, so the two always
+agree; the tests check this, also on random input.
+"""
+
+from __future__ import annotations
+
+import codecs
+import os
+import re
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .atomic import write_atomic
+from .errors import InputError
+
+# Characters a tidy ``v`` block may hold: the keyword, numbers, whitespace. Anything else
+# (``nan``, ``inf``, ``_``, ``#``...) sends the file to the careful parser, so ``float`` in the fast
+# path only ever sees plain decimal numbers, exactly like the careful parser's _NUMBER pattern.
+_VERTEX_CHARS = b"v0123456789+-.eE \t\n\r\x0b\x0c"
+_FACE_CHARS = b"f0123456789+- \t\n\r\x0b\x0c"
+
+_NUMBER = re.compile(rb"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+_NON_FINITE = {b"nan", b"inf", b"infinity"}
+_INTEGER = re.compile(rb"[+-]?\d+")
+# The "/vt/vn" after the vertex index of a corner ("1/2/3" -> "1"). Only after a digit: a corner
+# without a vertex index ("/2") must keep its slash so that the fast parser gives up on it.
+_TEXTURE_NORMAL_PART = re.compile(rb"(?<=[0-9])/\S*")
+
+# A v line may carry a weight w (4 numbers) or an RGB(A) colour (6 or 7 numbers): xyz is kept.
+_VERTEX_NUMBER_COUNTS = (3, 4, 6, 7)
+
+_NEWLINE, _SPACE = ord("\n"), ord(" ")
+_ODD_LINE_START = np.frombuffer(b" \t\x0b\x0c", dtype=np.uint8)  # indented lines
+_ODD_AFTER_KEYWORD = np.frombuffer(b"\t\x0b\x0c#\\\n", dtype=np.uint8)  # "v\t", "v#", bare "v"
+
+
+@dataclass(eq=False)
+class ObjMesh:
+    """One OBJ file as read by :func:`read_obj_frame`.
+
+    Attributes:
+        vertices: (K, 3) float64 positions in the order of the ``v`` lines.
+        faces: (M, n) int64, 0-based, rows shorter than n padded with -1; (0, 3) if none.
+        face_text: the raw ``f`` lines, which lets the next frame of a sequence check that its
+            faces are identical by comparing bytes instead of parsing them again. ``None`` when
+            the same text could mean different faces (negative indices depend on where the line
+            is) or when the file was read by the careful parser.
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    face_text: bytes | None = None
+
+
+@dataclass(eq=False)
+class _Located:
+    """The careful parser's result: the mesh plus the line number of every vertex and face."""
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    vertex_lines: list[int]
+    face_lines: list[int]
+
+
+# --------------------------------------------------------------------------------------------
+# reading
+
+
+def read_obj(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
+    """Read the vertices and faces of an OBJ file.
+
+    Returns ``(vertices, faces)``: vertices (K, 3) float64 in the order of the ``v`` lines, faces
+    (M, n) int64 with 0-based indices, rows of polygons shorter than the widest one padded with
+    -1 ((0, 3) when the file has no faces).
+
+    Raises:
+        InputError: the file cannot be read or is not a valid OBJ mesh; the error names the file
+            and, where one is at fault, the 1-based line.
+    """
+    mesh = read_obj_frame(path)
+    return mesh.vertices, mesh.faces
+
+
+def read_obj_frame(path: str | os.PathLike[str], reference: ObjMesh | None = None) -> ObjMesh:
+    """Read one OBJ frame of a sequence, checking it against the first frame ``reference``.
+
+    With a reference, the frame must have as many vertices and the same faces as the reference;
+    when its face lines are byte for byte those of the reference, they are not parsed again and
+    ``faces`` is the reference's array.
+
+    Raises:
+        InputError: as :func:`read_obj`, and when the vertex count or the faces differ from the
+            reference (naming the first line that differs).
+    """
+    path = Path(path)
+    data = _read_text(path)
+    mesh = _parse_fast(data, reference)
+    if mesh is None:
+        located = _parse_careful(data, path)
+        mesh = ObjMesh(located.vertices, located.faces)
+    if reference is not None:
+        _check_matches(mesh, reference, data, path)
+    return mesh
+
+
+def _read_text(path: Path) -> bytes:
+    """The bytes of a text file, with line ends made ``\\n``; binary or empty files are errors."""
+    try:
+        data = path.read_bytes()
+    except IsADirectoryError:
+        raise InputError("is a folder, not an OBJ file", path=path) from None
+    except OSError as error:
+        raise InputError(f"cannot read: {error.strerror or error}", path=path) from None
+    data = data.removeprefix(codecs.BOM_UTF8)
+    nul = data.find(b"\0")
+    if nul >= 0:
+        raise InputError(
+            "contains NUL bytes: this is binary data, not an OBJ text file",
+            path=path,
+            line=data.count(b"\n", 0, nul) + 1,
+        )
+    if not data.isascii():
+        try:
+            data.decode("utf-8")
+        except UnicodeDecodeError as error:
+            raise InputError(
+                "is not UTF-8 text (binary data?), so not an OBJ file",
+                path=path,
+                line=data.count(b"\n", 0, error.start) + 1,
+            ) from None
+    if not data.strip():
+        raise InputError("the file is empty", path=path)
+    if b"\r" in data:
+        # "\r\n" (Windows) and a lone "\r" (old Mac) end a line, as bytes.splitlines() says
+        data = data.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
+    return data
+
+
+# --------------------------------------------------------------------------------------------
+# the fast parser
+
+
+def _parse_fast(data: bytes, reference: ObjMesh | None) -> ObjMesh | None:
+    """Parse a tidy file in a few whole-file operations, or return ``None`` to go the careful way."""
+    lines = _line_table(data)
+    if lines is None:
+        return None
+    starts, ends, is_vertex, is_face = lines
+
+    vertex_text = _join_lines(data, starts, ends, is_vertex)
+    vertices = _fast_vertices(vertex_text, int(is_vertex.sum()))
+    if vertices is None:
+        return None
+
+    face_text = _join_lines(data, starts, ends, is_face)
+    # Negative indices count back from the line they are on, so equal text is not enough then.
+    reusable = b"-" not in face_text
+    if (
+        reference is not None
+        and reusable
+        and reference.face_text == face_text
+        and len(reference.vertices) == len(vertices)
+    ):
+        return ObjMesh(vertices, reference.faces, face_text)
+    vertices_before = np.cumsum(is_vertex)[is_face]
+    faces = _fast_faces(face_text, vertices_before, len(vertices))
+    if faces is None:
+        return None
+    return ObjMesh(vertices, faces, face_text if reusable else None)
+
+
+def _line_table(data: bytes) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
+    """Start and end offsets of every line and which are ``v``/``f`` lines; None if any is odd.
+
+    Odd lines are those the careful parser could read differently than "a line starting with
+    ``v `` or ``f ``": indented lines, ``v`` followed by a tab, ``#`` or nothing, and lines
+    continued on the next one (a backslash at the end or before a comment; this also catches some
+    harmless backslashes, which only costs the careful parser's time).
+    """
+    if b"\\" in data and (b"\\\n" in data or b"\\#" in data or data.endswith(b"\\")):
+        return None
+    text = np.frombuffer(data + b"\n\n", dtype=np.uint8)  # two spare bytes to look past the end
+    newlines = np.flatnonzero(text[: len(data)] == _NEWLINE)
+    starts = np.concatenate(([0], newlines + 1))
+    ends = np.concatenate((newlines, [len(data)]))
+    first, second = text[starts], text[starts + 1]
+    keyword = (first == ord("v")) | (first == ord("f"))
+    odd = np.isin(first, _ODD_LINE_START) | (keyword & np.isin(second, _ODD_AFTER_KEYWORD))
+    if odd.any():
+        return None
+    is_vertex = (first == ord("v")) & (second == _SPACE)
+    is_face = (first == ord("f")) & (second == _SPACE)
+    return starts, ends, is_vertex, is_face
+
+
+def _join_lines(data: bytes, starts: np.ndarray, ends: np.ndarray, chosen: np.ndarray) -> bytes:
+    """The chosen lines joined by newlines (one slice when they follow each other, as usual)."""
+    rows = np.flatnonzero(chosen)
+    if rows.size == 0:
+        return b""
+    first, last = int(rows[0]), int(rows[-1])
+    if last - first + 1 == rows.size:
+        return data[starts[first] : ends[last]]
+    return b"\n".join(data[s:e] for s, e in zip(starts[rows].tolist(), ends[rows].tolist()))
+
+
+def _fast_vertices(text: bytes, count: int) -> np.ndarray | None:
+    """(count, 3) positions from ``v`` lines that all have 3 (or all 4, 6 or 7) plain numbers."""
+    if count == 0 or text.translate(None, _VERTEX_CHARS):
+        return None
+    tokens = text.split()
+    per_line = len(tokens) // count  # keyword + numbers, if every line has as many numbers
+    # With every per_line-th token the keyword, each line has exactly per_line - 1 numbers (a
+    # stray "v" among the numbers would make float() fail below).
+    if (
+        per_line - 1 not in _VERTEX_NUMBER_COUNTS
+        or len(tokens) != per_line * count
+        or tokens[::per_line].count(b"v") != count
+    ):
+        return None
+    del tokens[::per_line]
+    try:
+        values = np.array(list(map(float, tokens)), dtype=np.float64)
+    except ValueError:
+        return None
+    xyz = values.reshape(count, per_line - 1)[:, :3]
+    if not np.isfinite(xyz).all():  # e.g. 1e999; the careful parser names the line
+        return None
+    return np.ascontiguousarray(xyz)
+
+
+def _fast_faces(text: bytes, vertices_before: np.ndarray, vertex_count: int) -> np.ndarray | None:
+    """0-based, -1-padded faces from plain ``f`` lines with valid indices, else None.
+
+    ``vertices_before[i]`` is the number of ``v`` lines above face line i, which resolves
+    negative (relative) indices.
+    """
+    count = len(vertices_before)
+    if count == 0:
+        return np.zeros((0, 3), dtype=np.int64)
+    if b"#" in text:  # a trailing comment, which the slash removal below could swallow
+        return None
+    if b"/" in text:
+        text = _TEXTURE_NORMAL_PART.sub(b"", text)
+    if text.translate(None, _FACE_CHARS):
+        return None
+    tokens = text.split()
+    # Each line starts with the keyword; a stray "f" among the corners would fail int() below.
+    keyword_at = [position for position, token in enumerate(tokens) if token == b"f"]
+    if len(keyword_at) != count:
+        return None
+    sizes = np.diff(np.append(keyword_at, len(tokens))) - 1
+    if sizes.min() < 3:
+        return None
+    try:
+        values = np.array([int(token) for token in tokens if token != b"f"], dtype=np.int64)
+    except (ValueError, OverflowError):
+        return None
+    # OBJ indices are 1-based; negative ones count back from the face's line (-1 = last vertex).
+    before = np.repeat(vertices_before, sizes)
+    indices = np.where(values < 0, before + values, values - 1)
+    if (values == 0).any() or indices.min() < 0 or indices.max() >= vertex_count:
+        return None
+    return _rows_from_sizes(indices, sizes)
+
+
+def _rows_from_sizes(indices: np.ndarray, sizes: np.ndarray) -> np.ndarray:
+    """Cut a flat index list into rows of the given sizes, padding short rows with -1."""
+    width = int(sizes.max())
+    if (sizes == width).all():
+        return indices.reshape(len(sizes), width)
+    faces = np.full((len(sizes), width), -1, dtype=np.int64)
+    rows = np.repeat(np.arange(len(sizes)), sizes)
+    columns = np.arange(len(indices)) - np.repeat(np.cumsum(sizes) - sizes, sizes)
+    faces[rows, columns] = indices
+    return faces
+
+
+# --------------------------------------------------------------------------------------------
+# the careful parser
+
+
+def _statements(data: bytes) -> Iterator[tuple[int, list[bytes]]]:
+    """Yield ``(line number, tokens)`` of every statement, without comments and blank lines.
+
+    A line ending in a backslash (once its comment is removed) continues on the next line; the
+    statement keeps the number of its first line.
+    """
+    pending: list[bytes] = []
+    pending_line = 0
+    for number, line in enumerate(data.splitlines(), start=1):
+        line = line.split(b"#", 1)[0]
+        if line.endswith(b"\\"):
+            if not pending:
+                pending_line = number
+            pending.append(line[:-1])
+            continue
+        if pending:
+            line = b" ".join([*pending, line])
+            number = pending_line
+            pending = []
+        tokens = line.split()
+        if tokens:
+            yield number, tokens
+    if pending:
+        tokens = b" ".join(pending).split()
+        if tokens:
+            yield pending_line, tokens
+
+
+def _parse_careful(data: bytes, path: Path) -> _Located:
+    """Parse line by line, raising an :class:`InputError` that names the line at fault."""
+    vertices: list[tuple[float, float, float]] = []
+    vertex_lines: list[int] = []
+    faces: list[list[int]] = []
+    face_lines: list[int] = []
+    for number, tokens in _statements(data):
+        keyword = tokens[0]
+        if keyword == b"v":
+            vertices.append(_vertex(tokens[1:], path, number))
+            vertex_lines.append(number)
+        elif keyword == b"f":
+            faces.append(_face(tokens[1:], len(vertices), path, number))
+            face_lines.append(number)
+        # everything else (vt, vn, vp, o, g, s, usemtl, mtllib, l, p, ...) does not matter here
+
+    if not vertices:
+        raise InputError("no vertices: the file has no 'v' lines", path=path)
+    for face, number in zip(faces, face_lines):
+        for index in face:
+            if index >= len(vertices):
+                raise InputError(
+                    f"face refers to vertex {index + 1}, but the file has only "
+                    f"{len(vertices)} vertices",
+                    path=path,
+                    line=number,
+                )
+    return _Located(
+        np.array(vertices, dtype=np.float64).reshape(-1, 3),
+        _pad_faces(faces),
+        vertex_lines,
+        face_lines,
+    )
+
+
+def _vertex(numbers: list[bytes], path: Path, line: int) -> tuple[float, float, float]:
+    """The xyz of a ``v`` line's numbers (x y z [w] or x y z r g b [a])."""
+    if len(numbers) not in _VERTEX_NUMBER_COUNTS:
+        raise InputError(
+            f"a 'v' line needs x y z (optionally w, or an r g b [a] colour), "
+            f"got {len(numbers)} value(s)",
+            path=path,
+            line=line,
+        )
+    values = [_number(token, path, line) for token in numbers]
+    if not all(np.isfinite(values[:3])):
+        shown = " ".join(token.decode("utf-8", "replace") for token in numbers[:3])
+        raise InputError(f"non-finite vertex coordinate: {shown}", path=path, line=line)
+    return values[0], values[1], values[2]
+
+
+def _number(token: bytes, path: Path, line: int) -> float:
+    """A decimal number; nan and inf are returned so that the caller can say "non-finite"."""
+    if _NUMBER.fullmatch(token):
+        return float(token)
+    if token.lower().lstrip(b"+-") in _NON_FINITE:
+        return float(token)
+    shown = token.decode("utf-8", "replace")
+    raise InputError(f"not a number: {shown!r}", path=path, line=line)
+
+
+def _face(corners: list[bytes], vertices_so_far: int, path: Path, line: int) -> list[int]:
+    """0-based vertex indices of an ``f`` line's corners (``a``, ``a/b``, ``a//c``, ``a/b/c``).
+
+    Negative indices count back from the last vertex defined before this line (-1 is that
+    vertex). Positive indices are checked against the vertex count once the file is read.
+    """
+    if len(corners) < 3:
+        raise InputError(
+            f"a face needs at least 3 corners, got {len(corners)}", path=path, line=line
+        )
+    indices = []
+    for corner in corners:
+        text = corner.split(b"/", 1)[0]
+        shown = corner.decode("utf-8", "replace")
+        if not _INTEGER.fullmatch(text):
+            raise InputError(f"face corner {shown!r} is not a vertex index", path=path, line=line)
+        value = int(text)
+        if value == 0:
+            raise InputError(
+                f"face corner {shown!r}: OBJ indices start at 1, 0 is invalid",
+                path=path,
+                line=line,
+            )
+        if value < 0:
+            if -value > vertices_so_far:
+                raise InputError(
+                    f"face corner {shown!r} counts back past the first vertex "
+                    f"(only {vertices_so_far} defined so far)",
+                    path=path,
+                    line=line,
+                )
+            indices.append(vertices_so_far + value)
+        else:
+            indices.append(value - 1)
+    return indices
+
+
+def _pad_faces(faces: list[list[int]]) -> np.ndarray:
+    """A list of faces of any sizes as one (M, n) array, short rows padded with -1."""
+    if not faces:
+        return np.zeros((0, 3), dtype=np.int64)
+    width = max(len(face) for face in faces)
+    if all(len(face) == width for face in faces):
+        return np.array(faces, dtype=np.int64)
+    padded = np.full((len(faces), width), -1, dtype=np.int64)
+    for row, face in enumerate(faces):
+        padded[row, : len(face)] = face
+    return padded
+
+
+# --------------------------------------------------------------------------------------------
+# checking a frame against the first one
+
+
+def _check_matches(mesh: ObjMesh, reference: ObjMesh, data: bytes, path: Path) -> None:
+    """Raise if ``mesh`` has another vertex count or other faces than ``reference``."""
+    same_count = len(mesh.vertices) == len(reference.vertices)
+    if same_count and (
+        mesh.faces is reference.faces or np.array_equal(mesh.faces, reference.faces)
+    ):
+        return
+    # Something differs: the careful parser knows on which line.
+    located = _parse_careful(data, path)
+    if not same_count:
+        count, expected = len(mesh.vertices), len(reference.vertices)
+        line = located.vertex_lines[min(expected, count - 1)]
+        raise InputError(
+            f"has {count} vertices but the first frame has {expected}: every frame of a "
+            "sequence must have the same vertices",
+            path=path,
+            line=line,
+        )
+    row = _first_different_row(mesh.faces, reference.faces)
+    ours = _face_text(mesh.faces, row)
+    theirs = _face_text(reference.faces, row)
+    if located.face_lines:
+        line = located.face_lines[min(row, len(located.face_lines) - 1)]
+    else:  # no faces at all: point at the end of the file, where they are missing
+        line = len(data.splitlines())
+    raise InputError(
+        f"face {row + 1} is {ours} but in the first frame it is {theirs}: every frame of a "
+        "sequence must have the same faces",
+        path=path,
+        line=line,
+    )
+
+
+def _first_different_row(faces: np.ndarray, reference: np.ndarray) -> int:
+    """Index of the first face that differs (or is missing in one of the two)."""
+    width = max(faces.shape[1], reference.shape[1])
+    rows = min(len(faces), len(reference))
+    a = _widen(faces[:rows], width)
+    b = _widen(reference[:rows], width)
+    different = np.flatnonzero((a != b).any(axis=1))
+    return int(different[0]) if different.size else rows
+
+
+def _widen(faces: np.ndarray, width: int) -> np.ndarray:
+    """Pad faces with -1 columns up to ``width``."""
+    extra = np.full((len(faces), width - faces.shape[1]), -1, dtype=np.int64)
+    return np.hstack([faces, extra])
+
+
+def _face_text(faces: np.ndarray, row: int) -> str:
+    """A face as its 1-based OBJ corners, e.g. ``f 1 2 3``, or ``missing``."""
+    if row >= len(faces):
+        return "missing"
+    return "f " + " ".join(str(index + 1) for index in faces[row].tolist() if index >= 0)
+
+
+# --------------------------------------------------------------------------------------------
+# writing
+
+
+def write_obj(
+    path: str | os.PathLike[str],
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    *,
+    precision: int | None = None,
+    overwrite: bool = False,
+) -> None:
+    """Write vertices and faces as an OBJ file, atomically.
+
+    Args:
+        path: the file to write.
+        vertices: (K, 3) positions, written as ``v x y z`` lines in this order.
+        faces: (M, n) 0-based indices, -1 for padding (omitted), written as 1-based ``f`` lines.
+        precision: significant digits of the coordinates; ``None`` (default) writes the
+            shortest text that reads back to the very same float64 (Python's ``repr``).
+        overwrite: replace an existing file; otherwise an existing file is an error.
+
+    Raises:
+        FileExistsError: ``path`` exists and ``overwrite`` is False (checked before writing; the
+            file is written to a temporary name and renamed, see :mod:`tuckercodec.atomic`).
+        ValueError: the arrays have the wrong shape or hold non-finite/out-of-range values.
+    """
+    vertices = np.asarray(vertices, dtype=np.float64)
+    faces = np.asarray(faces)
+    _check_writable(vertices, faces, precision)
+    text = "\n".join([*_vertex_lines(vertices, precision), *_face_lines(faces), ""])
+    write_atomic(path, text.encode("ascii"), overwrite=overwrite)
+
+
+def _check_writable(vertices: np.ndarray, faces: np.ndarray, precision: int | None) -> None:
+    """Reject what would make a broken or unreadable OBJ file."""
+    if vertices.ndim != 2 or vertices.shape[1] != 3:
+        raise ValueError(f"vertices must have shape (K, 3), got {vertices.shape}")
+    if not np.isfinite(vertices).all():
+        raise ValueError("vertices must be finite (OBJ readers reject nan and inf)")
+    if faces.size and (faces.ndim != 2 or faces.shape[1] < 3):
+        raise ValueError(f"faces must have shape (M, n >= 3), got {faces.shape}")
+    if faces.size and not np.issubdtype(faces.dtype, np.integer):
+        raise ValueError(f"faces must be integers, got dtype {faces.dtype}")
+    if faces.size and (faces.min() < -1 or faces.max() >= len(vertices)):
+        raise ValueError(f"face indices must be in -1..{len(vertices) - 1}")
+    if precision is not None and (isinstance(precision, bool) or not 1 <= precision <= 17):
+        raise ValueError(f"precision must be 1..17 significant digits or None, got {precision!r}")
+
+
+def _vertex_lines(vertices: np.ndarray, precision: int | None) -> list[str]:
+    """``v x y z`` lines; ``%r`` of a Python float is its shortest exact round-trip text."""
+    number = "%r" if precision is None else f"%.{precision}g"
+    line = f"v {number} {number} {number}"
+    return [line % tuple(row) for row in vertices.tolist()]
+
+
+def _face_lines(faces: np.ndarray) -> list[str]:
+    """1-based ``f`` lines, leaving out the -1 padding."""
+    if faces.size == 0:
+        return []
+    rows = (faces.astype(np.int64) + 1).tolist()
+    if (faces >= 0).all():
+        line = "f " + " ".join(["%d"] * faces.shape[1])
+        return [line % tuple(row) for row in rows]
+    return ["f " + " ".join(str(index) for index in row if index > 0) for row in rows]

@@ -1,0 +1,404 @@
+"""Loading and saving whole mesh sequences: folders of OBJ files, globs, lists of files, .npz.
+
+A sequence on disk is usually one OBJ file per frame. :func:`load_sequence` finds the files,
+orders them by natural sort of their names (``frame2`` before ``frame10``), reads them with the
+fast OBJ reader and checks that every frame has the vertex count and faces of the first one.
+"""
+
+from __future__ import annotations
+
+import errno
+import glob
+import os
+import re
+import zipfile
+import zlib
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from .atomic import atomic_output, refuse_existing
+from .errors import InputError
+from .objio import ObjMesh, read_obj_frame, write_obj
+from .progress import progress as progress_bar
+from .sequence import MeshSequence
+
+#: Single-file mesh formats read through trimesh (one frame per file). OBJ is read by objio.
+TRIMESH_SUFFIXES = frozenset({".ply", ".off", ".stl", ".glb", ".gltf", ".3mf", ".dae"})
+_GLOB_CHARACTERS = re.compile(r"[*?[]")
+_UNSAFE_NAME_CHARACTERS = re.compile(r"[^A-Za-z0-9._-]+")
+
+#: What load_sequence accepts: a folder, glob pattern, mesh or .npz file, or a list of files.
+Source = str | os.PathLike[str] | Sequence[str | os.PathLike[str]]
+
+
+def natural_sort_key(name: str) -> tuple:
+    """A sort key that orders the digit runs of ``name`` by value: ``f2`` before ``f10``.
+
+    Letters compare without regard to case; names that differ only in case or leading zeros
+    (``f01`` and ``f1``) are then ordered by their plain text so the order is always the same.
+    """
+    parts = re.split(r"([0-9]+)", name)
+    # re.split with a group alternates text, digits, text...: same kinds meet at each position
+    key = tuple(int(part) if i % 2 else part.casefold() for i, part in enumerate(parts))
+    return key, name
+
+
+# --------------------------------------------------------------------------------------------
+# loading
+
+
+def load_sequence(source: Source, *, progress: bool = True) -> MeshSequence:
+    """Load a mesh sequence.
+
+    Args:
+        source: one of
+            - a folder: every ``*.obj`` file in it (any case), or if it has none, every mesh file
+              trimesh reads (``.ply``, ``.off``, ``.stl``, ``.glb``...); hidden files (names
+              starting with ``.``) are skipped;
+            - a glob pattern such as ``"frames/*.obj"``;
+            - a list or tuple of files, read in the order given;
+            - an ``.npz`` file with keys ``V`` (F, K, 3) and optionally ``F`` (faces),
+              ``frame_files`` (names) and ``frame_rate``;
+            - a single mesh file, giving a one-frame sequence.
+            Files of a folder or glob are ordered by :func:`natural_sort_key` of their names.
+        progress: draw a progress bar on a terminal while reading many files.
+
+    Returns:
+        The sequence; faces come from the first frame and ``frame_names`` are the file names.
+
+    Raises:
+        InputError: nothing to read, a file that cannot be read, or a frame whose vertex count
+            or faces differ from the first; the error names the file, frame and line.
+    """
+    if isinstance(source, (list, tuple)):
+        files = [Path(item) for item in source]
+        if not files:
+            raise InputError("the list of frame files is empty")
+        return _load_files(files, progress)
+
+    path = Path(source)
+    if not path.exists() and _GLOB_CHARACTERS.search(str(source)):
+        return _load_files(_glob_files(str(source)), progress)
+    if path.is_dir():
+        return _load_files(_folder_files(path), progress)
+    if not path.exists():
+        raise InputError("no such file or folder", path=path)
+    if path.suffix.lower() == ".npz":
+        return _load_npz(path)
+    return _load_files([path], progress)
+
+
+def _folder_files(folder: Path) -> list[Path]:
+    """The OBJ files of a folder, else its other mesh files, in natural order of their names."""
+    # hidden files are skipped: editors' backups, macOS "._name.obj" metadata, temporary files
+    files = [e for e in folder.iterdir() if e.is_file() and not e.name.startswith(".")]
+    objs = [entry for entry in files if entry.suffix.lower() == ".obj"]
+    chosen = objs or [entry for entry in files if entry.suffix.lower() in TRIMESH_SUFFIXES]
+    if not chosen:
+        raise InputError("the folder holds no .obj (or other mesh) files", path=folder)
+    return sorted(chosen, key=lambda entry: natural_sort_key(entry.name))
+
+
+def _glob_files(pattern: str) -> list[Path]:
+    """The files matching a glob pattern, in natural order of their names."""
+    files = [Path(name) for name in glob.glob(os.path.expanduser(pattern)) if Path(name).is_file()]
+    if not files:
+        raise InputError("the pattern matches no files", path=pattern)
+    return sorted(files, key=lambda entry: (natural_sort_key(entry.name), str(entry)))
+
+
+def _load_files(files: list[Path], show_progress: bool) -> MeshSequence:
+    """Read one frame per file; every frame must match the first one's vertices and faces."""
+    for file in files:
+        if file.suffix.lower() == ".npz":
+            raise InputError("an .npz file holds a whole sequence: load it on its own", path=file)
+    label = "reading OBJ" if all(f.suffix.lower() == ".obj" for f in files) else "reading meshes"
+    frames = progress_bar(files, total=len(files), label=label) if show_progress else files
+
+    vertices: np.ndarray | None = None
+    reference: ObjMesh | None = None
+    for index, file in enumerate(frames):
+        try:
+            mesh = _read_frame(file, reference)
+        except InputError as error:
+            if len(files) == 1:
+                raise
+            # add the frame number to the reader's message (file and line are already there)
+            raise InputError(error.reason, path=error.path, line=error.line, frame=index) from None
+        if reference is None:
+            reference = mesh
+            vertices = np.empty((len(files), *mesh.vertices.shape), dtype=np.float64)
+        vertices[index] = mesh.vertices
+
+    assert reference is not None and vertices is not None
+    return MeshSequence(vertices, reference.faces, frame_names=[f.name for f in files])
+
+
+def _read_frame(path: Path, reference: ObjMesh | None) -> ObjMesh:
+    """One frame from an OBJ file (objio) or another mesh file (trimesh), checked against the first."""
+    if path.suffix.lower() == ".obj":
+        return read_obj_frame(path, reference)
+    mesh = _read_with_trimesh(path)
+    if reference is not None:
+        if len(mesh.vertices) != len(reference.vertices):
+            raise InputError(
+                f"has {len(mesh.vertices)} vertices but the first frame has "
+                f"{len(reference.vertices)}: every frame must have the same vertices",
+                path=path,
+            )
+        if not np.array_equal(mesh.faces, reference.faces):
+            raise InputError(
+                "its faces differ from the first frame's: every frame must have the same faces",
+                path=path,
+            )
+    return mesh
+
+
+def _read_with_trimesh(path: Path) -> ObjMesh:
+    """Vertices and faces of a PLY/OFF/STL/glTF... file, in the file's vertex order."""
+    import trimesh  # imported here: it is slow to import and only needed for these formats
+
+    if not path.is_file():
+        raise InputError("no such file", path=path)
+    try:
+        mesh = trimesh.load(path, process=False, maintain_order=True, force="mesh")
+        vertices = np.asarray(mesh.vertices, dtype=np.float64)
+        faces = np.asarray(mesh.faces, dtype=np.int64)
+    except Exception as error:  # noqa: BLE001 - trimesh raises all kinds for a broken file
+        raise InputError(
+            f"trimesh cannot read it as a mesh: {type(error).__name__}: {error}", path=path
+        ) from None
+    if vertices.ndim != 2 or vertices.shape[1] != 3 or len(vertices) == 0:
+        raise InputError("no vertices found", path=path)
+    if faces.size == 0:
+        faces = np.zeros((0, 3), dtype=np.int64)
+    if not np.isfinite(vertices).all():
+        row = int(np.argwhere(~np.isfinite(vertices))[0, 0])
+        raise InputError(f"vertex {row} has a non-finite coordinate", path=path)
+    return ObjMesh(vertices, faces)
+
+
+# --------------------------------------------------------------------------------------------
+# .npz
+
+
+def _load_npz(path: Path) -> MeshSequence:
+    """A sequence from an .npz archive (keys V, optional F, frame_files, frame_rate)."""
+    try:
+        with path.open("rb") as stream:
+            is_zip = stream.read(2) == b"PK"  # an .npz is a zip archive of .npy arrays
+        if not is_zip:
+            raise InputError("is not an .npz archive (not a zip file)", path=path)
+        archive = np.load(path, allow_pickle=False)
+    except (OSError, EOFError, zipfile.BadZipFile) as error:
+        raise InputError(f"cannot read as an .npz archive: {error}", path=path) from None
+    with archive:
+        if "V" not in archive.files:
+            raise InputError(
+                f"missing key 'V' (vertex positions, frames x vertices x 3); "
+                f"the archive has {sorted(archive.files)}",
+                path=path,
+            )
+        vertices = _npz_vertices(_npz_member(archive, "V", path), path)
+        faces = np.zeros((0, 3), dtype=np.int64)
+        if "F" in archive.files:
+            faces = _npz_faces(_npz_member(archive, "F", path), vertices.shape[1], path)
+        names: list[str] = []
+        if "frame_files" in archive.files:
+            names = _npz_names(_npz_member(archive, "frame_files", path), len(vertices), path)
+        rate = None
+        if "frame_rate" in archive.files:
+            rate = _npz_rate(_npz_member(archive, "frame_rate", path), path)
+    try:
+        return MeshSequence(vertices, faces, frame_names=names, frame_rate=rate)
+    except InputError as error:
+        raise InputError(error.reason, path=path, frame=error.frame) from None
+
+
+def _npz_member(archive: np.lib.npyio.NpzFile, key: str, path: Path) -> np.ndarray:
+    """Read one array of the archive; object arrays (which would need pickle) are errors."""
+    try:
+        return archive[key]
+    except ValueError as error:
+        if "allow_pickle" in str(error):
+            message = "holds Python objects (needs pickle, which is never loaded for safety)"
+        else:
+            message = f"cannot be read: {error}"
+        raise InputError(f"key {key!r} {message}", path=path) from None
+    except (OSError, EOFError, zipfile.BadZipFile, zlib.error) as error:
+        raise InputError(f"key {key!r} cannot be read: {error}", path=path) from None
+
+
+def _npz_vertices(values: np.ndarray, path: Path) -> np.ndarray:
+    """Key V as float64 (F, K, 3); a (K, 3) array is one frame."""
+    if values.dtype.kind not in "fiu":
+        raise InputError(f"key 'V' must hold real numbers, got dtype {values.dtype}", path=path)
+    if values.ndim == 2:
+        values = values[np.newaxis]
+    if values.ndim != 3 or values.shape[2] != 3 or values.shape[0] < 1 or values.shape[1] < 1:
+        raise InputError(
+            f"key 'V' must have shape (frames, vertices, 3), got {values.shape}", path=path
+        )
+    values = values.astype(np.float64)
+    bad = ~np.isfinite(values)
+    if bad.any():
+        frame, vertex, _ = (int(i) for i in np.argwhere(bad)[0])
+        raise InputError(
+            f"key 'V': vertex {vertex} has a non-finite coordinate", path=path, frame=frame
+        )
+    return values
+
+
+def _npz_faces(values: np.ndarray, vertex_count: int, path: Path) -> np.ndarray:
+    """Key F as int64 (M, n), 0-based, -1 padding."""
+    if values.size == 0:
+        return np.zeros((0, 3), dtype=np.int64)
+    if values.dtype.kind not in "iu":
+        raise InputError(
+            f"key 'F' must hold integer vertex indices, got dtype {values.dtype}", path=path
+        )
+    if values.ndim != 2 or values.shape[1] < 3:
+        raise InputError(
+            f"key 'F' must have shape (faces, corners >= 3), got {values.shape}", path=path
+        )
+    values = values.astype(np.int64)
+    low, high = int(values.min()), int(values.max())
+    if low < -1 or high >= vertex_count:
+        hint = " (it looks 1-based; F must be 0-based)" if high == vertex_count else ""
+        raise InputError(
+            f"key 'F' has vertex indices {low}..{high}, outside 0..{vertex_count - 1}{hint}",
+            path=path,
+        )
+    return values
+
+
+def _npz_names(values: np.ndarray, frame_count: int, path: Path) -> list[str]:
+    """Key frame_files as one string per frame."""
+    if values.dtype.kind not in "US" or values.ndim != 1 or len(values) != frame_count:
+        raise InputError(
+            f"key 'frame_files' must be {frame_count} strings (one per frame), "
+            f"got dtype {values.dtype} shape {values.shape}",
+            path=path,
+        )
+    if values.dtype.kind == "S":
+        try:
+            return [name.decode("utf-8") for name in values.tolist()]
+        except UnicodeDecodeError:
+            raise InputError(
+                "key 'frame_files' holds names that are not UTF-8", path=path
+            ) from None
+    return [str(name) for name in values.tolist()]
+
+
+def _npz_rate(values: np.ndarray, path: Path) -> float:
+    """Key frame_rate as a positive number of frames per second."""
+    if values.dtype.kind not in "fiu" or values.size != 1:
+        raise InputError(
+            f"key 'frame_rate' must be one number, got dtype {values.dtype} shape {values.shape}",
+            path=path,
+        )
+    rate = float(values.reshape(()))
+    if not (np.isfinite(rate) and rate > 0):
+        raise InputError(f"key 'frame_rate' must be a positive number, got {rate}", path=path)
+    return rate
+
+
+# --------------------------------------------------------------------------------------------
+# saving
+
+
+def save_sequence(
+    seq: MeshSequence,
+    destination: str | os.PathLike[str],
+    *,
+    overwrite: bool = False,
+    precision: int | None = None,
+    progress: bool = True,
+) -> None:
+    """Save a sequence as an ``.npz`` file or as a folder of OBJ files.
+
+    Args:
+        seq: the sequence.
+        destination: a path ending in ``.npz`` writes one archive (V float64, F int64,
+            frame_files, and frame_rate if set). Anything else is a folder (created if needed)
+            that receives one OBJ file per frame, named after ``seq.frame_names`` (made safe
+            for file names, with an ``.obj`` suffix, unique). If those names would not sort
+            back into frame order, they are prefixed with the frame number.
+        overwrite: replace existing files; otherwise an existing target file is an error,
+            raised before anything is written.
+        precision: significant digits of OBJ coordinates; ``None`` writes exact round-trip
+            text. Ignored for ``.npz`` (always exact).
+        progress: draw a progress bar on a terminal while writing many files.
+
+    Raises:
+        FileExistsError: a target file exists and ``overwrite`` is False.
+    """
+    destination = Path(destination)
+    if destination.suffix.lower() == ".npz":
+        _save_npz(seq, destination, overwrite)
+        return
+    if destination.exists() and not destination.is_dir():
+        raise NotADirectoryError(
+            errno.ENOTDIR,
+            "not a folder: name an .npz file or a folder for OBJ frames",
+            str(destination),
+        )
+    targets = [destination / name for name in _obj_file_names(seq.frame_names)]
+    refuse_existing(targets, overwrite)  # all of them before writing any
+    destination.mkdir(parents=True, exist_ok=True)
+    frames = range(seq.frame_count)
+    if progress:
+        frames = progress_bar(frames, total=seq.frame_count, label="writing OBJ")
+    for index in frames:
+        write_obj(
+            targets[index],
+            seq.vertices[index],
+            seq.faces,
+            precision=precision,
+            overwrite=overwrite,
+        )
+
+
+def _save_npz(seq: MeshSequence, path: Path, overwrite: bool) -> None:
+    """Write the sequence as an .npz archive, atomically."""
+    arrays = {
+        "V": np.asarray(seq.vertices, dtype=np.float64),
+        "F": np.asarray(seq.faces, dtype=np.int64),
+        "frame_files": np.array(seq.frame_names, dtype=str),
+    }
+    if seq.frame_rate is not None:
+        arrays["frame_rate"] = np.float64(seq.frame_rate)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    # np.savez adds ".npz" to a file *name* without it, so it gets an open file instead
+    with atomic_output(path, overwrite=overwrite) as stream:
+        np.savez(stream, **arrays)
+
+
+def _obj_file_names(frame_names: Sequence[str]) -> list[str]:
+    """Safe, unique ``.obj`` file names for the frames, which natural-sort into frame order."""
+    names: list[str] = []
+    taken: set[str] = set()
+    for index, frame_name in enumerate(frame_names):
+        stem = _safe_stem(frame_name) or f"frame_{index:05d}"
+        name = f"{stem}.obj"
+        copy = 1
+        while name.casefold() in taken:  # case-insensitive file systems would merge them
+            copy += 1
+            name = f"{stem}_{copy}.obj"
+        taken.add(name.casefold())
+        names.append(name)
+    if sorted(names, key=natural_sort_key) != names:
+        # reading the folder back must give the frames in this order
+        width = max(5, len(str(len(names) - 1)))
+        names = [f"{index:0{width}d}_{name}" for index, name in enumerate(names)]
+    return names
+
+
+def _safe_stem(frame_name: str) -> str:
+    """The frame name without folders, mesh suffix or characters unsafe in file names."""
+    name = Path(str(frame_name).replace("\\", "/")).name
+    if Path(name).suffix.lower() in TRIMESH_SUFFIXES | {".obj", ".npz"}:
+        name = Path(name).stem
+    return _UNSAFE_NAME_CHARACTERS.sub("_", name).lstrip(".")
