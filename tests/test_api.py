@@ -75,3 +75,15 @@ def test_atomic_write_never_leaves_half_a_file(tmp_path):
     plain = tmp_path / "plain.bin"
     plain.write_bytes(b"x")
     assert target.stat().st_mode & 0o777 == plain.stat().st_mode & 0o777
+
+
+def test_builtin_sample_is_the_shared_cloth_unchanged():
+    from conftest import load_shared_npz
+
+    from tuckercodec.samples import sample_path
+
+    shipped = tuckercodec.load_sequence(sample_path(), progress=False)
+    vertices, faces = load_shared_npz("cloth-vellum.npz")
+    np.testing.assert_array_equal(shipped.vertices, vertices.astype(np.float64))
+    np.testing.assert_array_equal(shipped.faces, faces)
+    assert (sample_path().parent / "cloth-vellum.LICENSE.txt").read_text().count("MIT License") == 1

@@ -7,6 +7,7 @@ Exit codes: 0 success; 1 an output that exists (without --force) or another I/O 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from collections.abc import Sequence
@@ -18,7 +19,7 @@ from .atomic import refuse_existing, write_atomic
 from .errors import DependencyError, InputError, TuckerCodecError
 from .metrics import KG_DEFINITION
 from .report import DEFAULT_TARGETS, curves_csv, targets_table
-from .samples import sample_path
+from .samples import SAMPLE_NAME, sample_path
 from .seqio import load_sequence
 
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_CORRUPT, EXIT_BAD_INPUT = 0, 1, 2, 3, 4
@@ -91,7 +92,8 @@ def _run_rd(args: argparse.Namespace, source: str | Path) -> int:
     analysed = time.perf_counter()
 
     r1, r3 = analysis.max_ranks
-    print(f"{source}: {sequence.frame_count} frames, {sequence.vertex_count} vertices, "
+    label = f"built-in sample ({SAMPLE_NAME})" if source == sample_path() else source
+    print(f"{label}: {sequence.frame_count} frames, {sequence.vertex_count} vertices, "
           f"{sequence.faces.shape[0]} faces")
     print(f"read in {loaded - start:.2f} s; HOSVD and exact table of {r1} x {r3} ranks in "
           f"{analysed - loaded:.2f} s")
@@ -139,6 +141,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ValueError as error:  # a target that cannot be met, a rank out of range
         print(f"tuckercodec: {error}", file=sys.stderr)
         return EXIT_USAGE
+    except BrokenPipeError:  # the reader went away (`| head`): stop quietly, like other tools
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_FAILURE
     except OSError as error:
         print(f"tuckercodec: {error.filename or ''}: {error.strerror or error}", file=sys.stderr)
         return EXIT_FAILURE
