@@ -69,7 +69,8 @@ class HOSVD:
         tensor: T, (K, 3, F).
         u2: the mode-2 factor, (3, 3).
         u3: the mode-3 (time) factor, (F, R3), orthonormal columns.
-        mode1_energy: squared singular values of the mode-1 unfolding, descending, (R1,).
+        mode1_energy: energy of each mode-1 core row, (R1,): the squared singular values of
+            the mode-1 unfolding up to rounding; sums of its tails are the discarded energies.
         mode3_energy: squared singular values of the mode-3 unfolding, descending, (R3,).
         core_energy: E[a, b], the squared core summed over mode 2, (R1, R3). Mode 2 is always
             kept whole, and the sum over it does not depend on U2.
