@@ -107,3 +107,13 @@ def test_console_script_version():
     done = subprocess.run(command + ["--version"], capture_output=True, text=True, check=False)
     assert done.returncode == 0
     assert done.stdout.strip() == f"tuckercodec {__version__}"
+
+
+def test_outputs_are_checked_before_the_work(wave_npz, tmp_path, capsys):
+    missing = tmp_path / "no-such-folder" / "rd.csv"
+    assert main(["rd", str(wave_npz), "--csv", str(missing)]) == 1
+    err = capsys.readouterr().err
+    assert "no-such-folder: the output folder does not exist" in err and "HOSVD" not in err
+    assert main(["rd", str(wave_npz), "--plot", str(tmp_path / "rd.txt")]) == 2
+    assert "must end in .png" in capsys.readouterr().err
+    assert not (tmp_path / "rd.txt").exists()

@@ -8,6 +8,7 @@ leaves either the old file or the new one, and no stray temporary file.
 
 from __future__ import annotations
 
+import errno
 import os
 import tempfile
 from collections.abc import Callable, Iterator
@@ -17,11 +18,18 @@ from typing import BinaryIO
 
 
 def refuse_existing(paths: list[Path], overwrite: bool) -> None:
-    """Raise ``FileExistsError`` naming the first path that exists, unless ``overwrite``."""
-    if overwrite:
-        return
+    """Check, before any work, that every output can be written.
+
+    Raises ``FileExistsError`` naming the first path that exists (unless ``overwrite``), and
+    ``FileNotFoundError``/``NotADirectoryError`` naming a path whose folder is missing.
+    """
     for path in paths:
-        if path.exists():
+        folder = Path(path).parent
+        if not folder.exists():
+            raise FileNotFoundError(errno.ENOENT, "the output folder does not exist", str(folder))
+        if not folder.is_dir():
+            raise NotADirectoryError(errno.ENOTDIR, "the output's folder is not a folder", str(folder))
+        if not overwrite and Path(path).exists():
             raise FileExistsError(f"{path} already exists (pass --force, or overwrite=True, to replace it)")
 
 

@@ -81,7 +81,13 @@ def _add_rd_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--force", action="store_true", help="replace output files that exist")
 
 
+PLOT_FORMATS = (".png", ".svg", ".pdf")
+
+
 def _run_rd(args: argparse.Namespace, source: str | Path) -> int:
+    for option, path in (("--plot", args.plot), ("--heatmap", args.heatmap)):
+        if path is not None and path.suffix.lower() not in PLOT_FORMATS:
+            raise ValueError(f"{option} {path}: the file name must end in {', '.join(PLOT_FORMATS)}")
     outputs = [p for p in (args.csv, args.plot, args.heatmap) if p is not None]
     refuse_existing(outputs, args.force)  # before the work, not after it
 
