@@ -346,8 +346,8 @@ def save_sequence(
             str(destination),
         )
     targets = [destination / name for name in _obj_file_names(seq.frame_names)]
+    destination.mkdir(parents=True, exist_ok=True)  # a new folder holds no files to refuse
     refuse_existing(targets, overwrite)  # all of them before writing any
-    destination.mkdir(parents=True, exist_ok=True)
     frames = range(seq.frame_count)
     if progress:
         frames = progress_bar(frames, total=seq.frame_count, label="writing OBJ")
