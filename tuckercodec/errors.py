@@ -45,3 +45,40 @@ class InputError(TuckerCodecError, ValueError):
 
 class DependencyError(TuckerCodecError, RuntimeError):
     """An optional dependency (such as matplotlib for plots) is not installed."""
+
+
+class FormatError(TuckerCodecError, ValueError):
+    """A compressed file that breaks a rule of ``spec/FORMAT.md``: names the field or offset.
+
+    Attributes:
+        field: the header field or section at fault (``None`` if none applies).
+        offset: the byte offset in the file at fault (``None`` if none applies).
+    """
+
+    def __init__(self, message: str, *, field: str | None = None, offset: int | None = None) -> None:
+        self.reason = message
+        self.field = field
+        self.offset = offset
+        where = []
+        if field is not None:
+            where.append(field)
+        if offset is not None:
+            where.append(f"offset {offset}")
+        super().__init__(f"{', '.join(where)}: {message}" if where else message)
+
+
+class TruncatedFileError(FormatError):
+    """The file ends before the data its preamble, header or section table promises."""
+
+
+class ChecksumError(FormatError):
+    """A CRC-32 in the file does not match the bytes it covers: the file was damaged."""
+
+
+class UnsupportedVersionError(FormatError):
+    """A format major version, critical flag, critical section or codec this decoder does not
+    know. The file may be valid for a newer decoder."""
+
+
+class LimitError(FormatError):
+    """A declared size beyond this decoder's limits (checked before anything is allocated)."""

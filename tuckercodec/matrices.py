@@ -1,0 +1,125 @@
+"""Quantized matrices: the codec ``qmat`` of ``spec/FORMAT.md`` §6.3.
+
+A float matrix of shape (rows, cols) is stored as integers ``q`` with one step per column:
+``value = step[c] * q[r, c]``. Each column either stores ``q`` itself (predictor 0) or each
+entry minus its parent's entry (predictor 1, see :mod:`tuckercodec.prediction`). The residuals
+go column after column into one integer stream (:mod:`tuckercodec.streams`).
+
+The section entry carries ``shape`` [rows, cols], ``planes``, ``steps`` (cols float32,
+little-endian, as bytes) and ``predict`` (cols uint8, as bytes).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from . import streams
+from .errors import FormatError
+from .prediction import accumulate, residuals
+
+CODEC = "qmat"
+PREDICT_NONE, PREDICT_PARENT = 0, 1
+#: Largest |q| the encoder writes: leaves room below the 32-bit stream range for residuals.
+MAX_QUANTIZED = 2**30 - 1
+
+
+@dataclass
+class QuantizedMatrix:
+    """Integers and the per-column steps that turn them back into floats."""
+
+    q: np.ndarray  # (rows, cols) int64
+    steps: np.ndarray  # (cols,) float32
+
+    def values(self) -> np.ndarray:
+        """The dequantized matrix, float64: ``step[c] * q[r, c]`` (§6.3)."""
+        return self.q.astype(np.float64) * self.steps.astype(np.float64)[None, :]
+
+
+def quantize(values: np.ndarray, steps: np.ndarray) -> QuantizedMatrix:
+    """Round ``values / step`` per column. Steps are rounded to float32 first, because the file
+    stores them so and the decoder must multiply by exactly the same number."""
+    steps32 = np.asarray(steps, dtype=np.float32)
+    if not (np.isfinite(steps32).all() and (steps32 > 0).all()):
+        raise ValueError("quantization steps must be positive finite float32 numbers")
+    q = np.rint(values / steps32.astype(np.float64)[None, :])
+    if q.size and np.abs(q).max() > MAX_QUANTIZED:
+        raise ValueError(
+            "the error target is too small for the format's integer range: a quantized value "
+            f"would need {int(np.abs(q).max())} > {MAX_QUANTIZED}"
+        )
+    return QuantizedMatrix(q.astype(np.int64), steps32)
+
+
+def _cost(columns: np.ndarray) -> np.ndarray:
+    """A cheap per-column proxy for the bits of an integer column: mean log2(1 + 2|x|)."""
+    return np.log2(1.0 + 2.0 * np.abs(columns)).mean(axis=0) if columns.size else np.zeros(columns.shape[1])
+
+
+def encode_matrix(
+    matrix: QuantizedMatrix, parents: np.ndarray | None, *, allow_predict: bool = True,
+    level: int = streams.DEFAULT_LEVEL,
+) -> tuple[dict[str, Any], bytes]:
+    """``(params, payload)`` of the section, choosing per column whether prediction helps.
+
+    ``parents`` as in :func:`tuckercodec.prediction.residuals` (``None``: the previous row).
+    """
+    q = matrix.q
+    predict = np.zeros(q.shape[1], dtype=np.uint8)
+    stream = q
+    if allow_predict and q.shape[0] > 1:
+        predicted = residuals(q, parents)
+        predict = (_cost(predicted) < _cost(q)).astype(np.uint8)
+        stream = np.where(predict[None, :] == PREDICT_PARENT, predicted, q)
+    payload, planes = streams.pack_integers(np.ascontiguousarray(stream.T), level)
+    params = {
+        "shape": [int(q.shape[0]), int(q.shape[1])],
+        "planes": planes,
+        "steps": matrix.steps.astype("<f4").tobytes(),
+        "predict": predict.tobytes(),
+    }
+    return params, payload
+
+
+def matrix_shape(params: dict[str, Any], where: str) -> tuple[int, int]:
+    """The declared ``shape`` of a qmat section, checked to be two non-negative integers."""
+    shape = params.get("shape")
+    if (
+        not isinstance(shape, list)
+        or len(shape) != 2
+        or not all(isinstance(n, int) and not isinstance(n, bool) and n >= 0 for n in shape)
+    ):
+        raise FormatError(f"shape must be [rows, cols] of non-negative integers, got {shape!r}", field=f"{where}.shape")
+    return shape[0], shape[1]
+
+
+def decode_matrix(
+    payload: bytes | memoryview, params: dict[str, Any], parents: np.ndarray | None, where: str,
+    *, allow_predict: bool = True,
+) -> QuantizedMatrix:
+    """The quantized matrix of a qmat section (§6.3). The caller has checked ``shape`` against
+    the header and the limits."""
+    rows, cols = matrix_shape(params, where)
+    planes = params.get("planes")
+    if not isinstance(planes, int) or isinstance(planes, bool) or not 1 <= planes <= streams.MAX_PLANES:
+        raise FormatError(f"planes must be 1..{streams.MAX_PLANES}, got {planes!r}", field=f"{where}.planes")
+    steps_raw, predict_raw = params.get("steps"), params.get("predict")
+    if not isinstance(steps_raw, bytes) or len(steps_raw) != 4 * cols:
+        raise FormatError(f"steps must be {cols} float32 values as {4 * cols} bytes", field=f"{where}.steps")
+    if not isinstance(predict_raw, bytes) or len(predict_raw) != cols:
+        raise FormatError(f"predict must be {cols} bytes", field=f"{where}.predict")
+    steps = np.frombuffer(steps_raw, dtype="<f4").astype(np.float32)
+    if not (np.isfinite(steps).all() and (steps > 0).all()):
+        raise FormatError("every step must be a positive finite float32", field=f"{where}.steps")
+    predict = np.frombuffer(predict_raw, dtype=np.uint8)
+    if (predict > PREDICT_PARENT).any() or (not allow_predict and predict.any()):
+        allowed = "0 or 1" if allow_predict else "0 (no parent relation here)"
+        raise FormatError(f"every predictor must be {allowed}", field=f"{where}.predict")
+    stream = streams.unpack_integers(payload, rows * cols, planes, where)
+    q = np.ascontiguousarray(stream.reshape(cols, rows).T)
+    chosen = np.flatnonzero(predict == PREDICT_PARENT)
+    if chosen.size:
+        q[:, chosen] = accumulate(q[:, chosen], parents)
+    return QuantizedMatrix(q, steps)

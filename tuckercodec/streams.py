@@ -1,0 +1,102 @@
+"""Byte streams of the sections: zigzag integers split into byte planes, compressed with zstd.
+
+``spec/FORMAT.md`` §6.1 defines the layout: n integers (already in stream order) are mapped to
+unsigned by zigzag (0, -1, 1, -2 ... -> 0, 1, 2, 3 ...), then written as ``planes`` byte planes:
+first the least significant byte of every value, then the next byte of every value, and so on.
+Small integers then leave the high planes almost all zero, which zstd's entropy coder and match
+finder squeeze to nearly nothing. The whole is one zstd frame that declares its content size.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import zstandard
+
+from .errors import FormatError
+
+#: zstd level of the final file; the size is entropy-coder bound, so higher levels gain little.
+DEFAULT_LEVEL = 19
+#: zstd level for trial packings while the encoder searches (sizes within ~1 % of level 19).
+SEARCH_LEVEL = 3
+MAX_PLANES = 4  # integers of at most 32 bits after zigzag: |value| <= 2**31
+
+
+def zigzag(values: np.ndarray) -> np.ndarray:
+    """Signed to unsigned: 0, -1, 1, -2, 2 ... -> 0, 1, 2, 3, 4 ..."""
+    values = values.astype(np.int64, copy=False)
+    return ((values << 1) ^ (values >> 63)).astype(np.uint64)
+
+
+def unzigzag(values: np.ndarray) -> np.ndarray:
+    """The inverse of :func:`zigzag`."""
+    values = values.astype(np.uint64, copy=False)
+    return ((values >> np.uint64(1)).astype(np.int64)) ^ -((values & np.uint64(1)).astype(np.int64))
+
+
+def planes_needed(unsigned: np.ndarray) -> int:
+    """The fewest byte planes (at least 1) that hold every value."""
+    largest = int(unsigned.max()) if unsigned.size else 0
+    return max(1, (largest.bit_length() + 7) // 8)
+
+
+def to_planes(unsigned: np.ndarray, planes: int) -> bytes:
+    """Byte planes of unsigned values, least significant plane first (§6.1)."""
+    little = np.ascontiguousarray(unsigned, dtype="<u8").reshape(-1)
+    as_bytes = little.view(np.uint8).reshape(-1, 8)[:, :planes]
+    return np.ascontiguousarray(as_bytes.T).tobytes()
+
+
+def from_planes(raw: bytes | memoryview, count: int, planes: int) -> np.ndarray:
+    """Unsigned values (uint64) from ``planes`` byte planes of ``count`` values each."""
+    grid = np.frombuffer(raw, dtype=np.uint8).reshape(planes, count)
+    out = np.zeros((count, 8), dtype=np.uint8)
+    out[:, :planes] = grid.T
+    return out.view("<u8").reshape(count).astype(np.uint64)
+
+
+def compress(raw: bytes, level: int = DEFAULT_LEVEL) -> bytes:
+    """One zstd frame holding ``raw``, with its content size declared."""
+    return zstandard.ZstdCompressor(level=level, write_content_size=True).compress(raw)
+
+
+def decompress_exact(payload: bytes | memoryview, size: int, where: str) -> bytes:
+    """Decompress one zstd frame that must hold exactly ``size`` bytes (§6.1).
+
+    The frame's declared content size is checked before anything is allocated, and bytes after
+    the frame are an error.
+    """
+    try:
+        declared = zstandard.frame_content_size(payload)
+    except zstandard.ZstdError:
+        raise FormatError("the payload does not start with a zstd frame header", field=where) from None
+    if declared != size:
+        what = "no content size" if declared == -1 else f"{declared} bytes"
+        raise FormatError(
+            f"the zstd frame declares {what}, but the section's shape needs {size}", field=where
+        )
+    try:
+        raw = zstandard.ZstdDecompressor().decompress(
+            payload, max_output_size=size, allow_extra_data=False
+        )
+    except zstandard.ZstdError as error:
+        raise FormatError(f"the zstd frame does not decompress: {error}", field=where) from None
+    if len(raw) != size:
+        raise FormatError(f"the zstd frame holds {len(raw)} bytes, not {size}", field=where)
+    return raw
+
+
+def pack_integers(values: np.ndarray, level: int = DEFAULT_LEVEL) -> tuple[bytes, int]:
+    """``(payload, planes)`` for integers in stream order."""
+    unsigned = zigzag(values.reshape(-1))
+    planes = planes_needed(unsigned)
+    if planes > MAX_PLANES:
+        raise ValueError(
+            f"an integer of {int(np.abs(values).max())} does not fit the format's 32-bit range"
+        )
+    return compress(to_planes(unsigned, planes), level), planes
+
+
+def unpack_integers(payload: bytes | memoryview, count: int, planes: int, where: str) -> np.ndarray:
+    """``count`` signed integers (int64) from a payload written by :func:`pack_integers`."""
+    raw = decompress_exact(payload, count * planes, where)
+    return unzigzag(from_planes(raw, count, planes))
