@@ -1,3 +1,3 @@
 """The library version (the file format carries its own version, see spec/FORMAT.md)."""
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"

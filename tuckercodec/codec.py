@@ -1,0 +1,92 @@
+"""File helpers of the codec: encode a sequence on disk into a file, decode a file onto disk.
+
+The in-memory functions are :func:`tuckercodec.encode`, :func:`tuckercodec.decode` and
+:func:`tuckercodec.info`; these helpers add reading, writing (atomically, never replacing a file
+without ``overwrite=True``) and the choice of output format.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Literal
+
+from .analysis import Selection
+from .atomic import refuse_existing, write_atomic
+from .container import DEFAULT_LIMITS, SIGNATURE, Limits
+from .decoder import Decoder, FrameSelection
+from .encoder import EncodeReport, encode_with_report
+from .seqio import Source, load_sequence, save_sequence
+from .sequence import MeshSequence
+
+#: The suffix of compressed files.
+SUFFIX = ".tkc"
+OutputFormat = Literal["obj", "npz"]
+
+
+def is_compressed_file(path: str | os.PathLike[str]) -> bool:
+    """Whether ``path`` is a file that starts with the format's signature."""
+    try:
+        with open(path, "rb") as handle:
+            return handle.read(len(SIGNATURE)) == SIGNATURE
+    except (IsADirectoryError, FileNotFoundError, NotADirectoryError):
+        return False
+
+
+def encode_file(
+    source: Source,
+    output: str | os.PathLike[str],
+    *,
+    target_kg: float | None = None,
+    ranks: tuple[int, int] | None = None,
+    target_bpfv: float | None = None,
+    select: Selection = "exact",
+    overwrite: bool = False,
+    progress: bool = False,
+) -> EncodeReport:
+    """Read a sequence (folder of OBJ files, glob, .npz...), encode it and write ``output``.
+
+    The output is checked before any work (it must not exist unless ``overwrite``) and written
+    atomically. Returns the encoder's report.
+    """
+    refuse_existing([Path(output)], overwrite)
+    sequence = load_sequence(source, progress=progress)
+    result = encode_with_report(
+        sequence, target_kg=target_kg, ranks=ranks, target_bpfv=target_bpfv, select=select
+    )
+    write_atomic(output, result.data, overwrite=overwrite)
+    return result.report
+
+
+def read_compressed(path: str | os.PathLike[str], *, limits: Limits = DEFAULT_LIMITS) -> Decoder:
+    """Open a compressed file from disk."""
+    return Decoder(Path(path).read_bytes(), limits=limits)
+
+
+def decode_file(
+    path: str | os.PathLike[str],
+    output: str | os.PathLike[str],
+    *,
+    frames: FrameSelection = None,
+    output_format: OutputFormat | None = None,
+    overwrite: bool = False,
+    precision: int | None = None,
+    progress: bool = False,
+) -> MeshSequence:
+    """Decode a compressed file and write the frames: a folder of OBJ files, or an ``.npz``.
+
+    ``output_format`` defaults to ``npz`` when ``output`` ends in ``.npz`` and to ``obj``
+    otherwise. Returns the decoded sequence.
+    """
+    output = Path(output)
+    if output_format is None:
+        output_format = "npz" if output.suffix.lower() == ".npz" else "obj"
+    if output_format not in ("obj", "npz"):
+        raise ValueError(f"output format must be 'obj' or 'npz', got {output_format!r}")
+    if output_format == "npz" and output.suffix.lower() != ".npz":
+        output = output.with_suffix(".npz") if output.suffix == "" else Path(f"{output}.npz")
+    if output_format == "obj" and output.suffix.lower() == ".npz":
+        raise ValueError(f"{output}: an OBJ output is a folder, not an .npz file")
+    sequence = read_compressed(path).sequence(frames)
+    save_sequence(sequence, output, overwrite=overwrite, precision=precision, progress=progress)
+    return sequence

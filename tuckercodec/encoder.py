@@ -1,0 +1,472 @@
+"""The encoder: a mesh sequence to a compressed file that meets the error asked for.
+
+Three modes, one at a time: a target KG error (the default, 0.1), fixed ranks (i, k), or a target
+size in bpfv (the smallest error that fits).
+
+How a target KG error is met (errors are squared norms; E is the KG denominator's square):
+
+1. The exact table (:mod:`tuckercodec.analysis`) gives the truncation error of every (i, k).
+2. Quantization adds error. An error e in column a of U1 reaches the tensor multiplied by the
+   norm of core slice a, so column a gets the step sqrt(D) / ||CORE[a, :, :]||; likewise U3's
+   column b with ||CORE[:, :, b]||, the core gets sqrt(D), the centroids sqrt(D / K) (an error
+   there moves all K vertices). Every stored number then adds about D/12 to the squared error,
+   which is also the split that minimises the bits for a given error (reverse water-filling),
+   so one number D sets the whole quantizer.
+3. For a few splits of the error budget between truncation and quantization, the encoder picks
+   the cheapest ranks whose truncation error fits the truncation share (by the exact table, or by
+   the paper's bound with ``select="bound"``), sets D from the remaining share, and packs the
+   result to count its real bytes. The smallest wins.
+4. It then reconstructs exactly what the decoder will return, measures the KG error, and
+   tightens D (or loosens it once, if there is room) until the decoded error is at most the
+   target. The decoded error is never above the target.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import msgpack
+import numpy as np
+
+from . import connectivity, matrices, streams
+from ._version import __version__
+from .analysis import Analysis, Selection, analyze
+from .container import pack_container
+from .decoder import KG_DEFINITION_ID, reconstruct_frames, reconstruction_basis
+from .hosvd import project
+from .matrices import QuantizedMatrix
+from .metrics import bpfv as bits_per_frame_vertex
+from .prediction import mesh_parents
+from .sequence import MeshSequence
+
+DEFAULT_TARGET_KG = 0.1
+#: Shares of the squared error budget given to truncation in the search (the rest is quantization).
+TRUNCATION_SHARES = (0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7)
+#: Fewer shares while searching for a size target, where each trial is a whole encode.
+QUICK_SHARES = (0.1, 0.3, 0.5)
+#: The decoded error must stay this far (relative) below the target, so that a decoder whose
+#: BLAS rounds differently (about 1e-15 relative) still meets it.
+SAFETY = 1e-9
+#: With fixed ranks, quantization may add this much to the truncation's squared error (KG +5 %).
+RANKS_QUANTIZATION_SHARE = 1.05**2 - 1
+#: With fixed ranks that lose nothing, the quantization error aimed for, in KG percent.
+RANKS_FLOOR_KG = 1e-4
+FRAME_BLOCK = 64  # frames reconstructed at once when measuring the error: bounds the memory
+
+Mode = Literal["kg", "ranks", "bpfv"]
+
+
+@dataclass(frozen=True)
+class EncodeReport:
+    """What the encoder did and measured. Errors are KG errors (Karni-Gotsman, per-frame mean)."""
+
+    mode: Mode
+    target: float | None  # the KG target (mode "kg") or bpfv target (mode "bpfv")
+    select: Selection
+    ranks: tuple[int, int]
+    kg: float  # of the decoded sequence against the input
+    truncation_kg: float  # of the truncation alone, before quantization
+    exact_ranks: tuple[int, int] | None  # the cheapest ranks by the exact table (mode "kg")
+    bound_ranks: tuple[int, int] | None  # what the paper's bound alone would pick (mode "kg")
+    total_bytes: int
+    section_bytes: dict[str, int] = field(default_factory=dict)
+    vertices: int = 0
+    frames: int = 0
+    seconds: float = 0.0
+    trials: int = 0
+
+    @property
+    def bpfv(self) -> float:
+        """Bits per frame per vertex of the whole file, header and connectivity included."""
+        return bits_per_frame_vertex(self.total_bytes, self.frames, self.vertices)
+
+    @property
+    def connectivity_bpfv(self) -> float:
+        """The faces section's share of :attr:`bpfv`."""
+        return bits_per_frame_vertex(self.section_bytes.get("FACE", 0), self.frames, self.vertices)
+
+    @property
+    def raw_float32_bytes(self) -> int:
+        """The positions as plain float32: F * K * 3 * 4 bytes (faces not counted)."""
+        return self.frames * self.vertices * 12
+
+    @property
+    def ratio(self) -> float:
+        """:attr:`raw_float32_bytes` over the whole file's size."""
+        return self.raw_float32_bytes / self.total_bytes
+
+
+@dataclass(frozen=True)
+class EncodeResult:
+    """The file's bytes and the report of how they were made."""
+
+    data: bytes
+    report: EncodeReport
+
+
+@dataclass
+class _Quantized:
+    """One quantization of one truncation: everything the file stores but the faces."""
+
+    i: int
+    k: int
+    step: float  # D
+    u1: QuantizedMatrix
+    u3: QuantizedMatrix
+    core: QuantizedMatrix
+    centroids: QuantizedMatrix
+
+
+class _Workspace:
+    """The input, its analysis and the parts shared by every trial of the search."""
+
+    def __init__(self, sequence: MeshSequence, analysis: Analysis, level: int) -> None:
+        self.sequence = sequence
+        self.analysis = analysis
+        self.level = level
+        self.vertex_count = sequence.vertex_count
+        self.frame_count = sequence.frame_count
+        # The KG denominator: each frame is centred, so ||A - E(A)|| is the centred tensor's norm.
+        self.denominator2 = analysis.total_energy
+        self.parents = mesh_parents(sequence.faces, self.vertex_count)
+        self.face_section = connectivity.encode_faces(sequence.faces, level)
+        self.name_section = _names_section(sequence, level)
+        self._u1 = np.zeros((self.vertex_count, 0))
+        self._core = np.zeros((0, 3, 0))
+
+    def truncation_error2(self, i: int, k: int) -> float:
+        return float(self.analysis.error_table()[i, k])
+
+    def factors(self, i: int, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """U1 (K, i), U3 (F, k) and the core (i, 3, k) of the truncation.
+
+        U1's leading columns and the projection are the same for every rank, so they are formed
+        once for the largest ranks asked for and sliced after.
+        """
+        decomposition = self.analysis.decomposition
+        if i > self._u1.shape[1] or k > self._core.shape[2]:
+            top_i = max(i, self._u1.shape[1])
+            top_k = max(k, self._core.shape[2])
+            self._u1 = decomposition.u1(top_i)
+            self._core = project(decomposition.tensor, self._u1, decomposition.u2, decomposition.u3[:, :top_k])
+        return self._u1[:, :i], decomposition.u3[:, :k], self._core[:i, :, :k]
+
+    def quantize(self, i: int, k: int, step: float) -> _Quantized:
+        """Quantize the truncation (i, k) with the single parameter D = ``step`` (see above)."""
+        u1, u3, core = self.factors(i, k)
+        root = math.sqrt(step)
+        row_norms = np.sqrt(np.square(core).sum(axis=(1, 2)))
+        column_norms = np.sqrt(np.square(core).sum(axis=(0, 1)))
+        return _Quantized(
+            i,
+            k,
+            step,
+            matrices.quantize(u1, _steps(root, row_norms)),
+            matrices.quantize(u3, _steps(root, column_norms)),
+            matrices.quantize(core.reshape(-1, 1), np.array([root])),
+            matrices.quantize(self.analysis.centroids, np.full(3, root / math.sqrt(self.vertex_count))),
+        )
+
+    def decoded_error2(self, quantized: _Quantized) -> float:
+        """||decoded - input||**2, computed with the decoder's own reconstruction."""
+        u1 = quantized.u1.values()
+        u3 = quantized.u3.values()
+        centroids = quantized.centroids.values()
+        core = quantized.core.values().reshape(quantized.i, 3, quantized.k)
+        basis = reconstruction_basis(core, self.analysis.decomposition.u2)
+        total = 0.0
+        vertices = self.sequence.vertices
+        for start in range(0, self.frame_count, FRAME_BLOCK):
+            block = slice(start, start + FRAME_BLOCK)
+            decoded = reconstruct_frames(u1, basis, u3[block], centroids[block])
+            total += float(np.square(decoded - vertices[block]).sum())
+        return total
+
+    def kg(self, error2: float) -> float:
+        return 100.0 * math.sqrt(error2 / self.denominator2)
+
+    def sections(self, quantized: _Quantized, level: int) -> list[tuple[dict[str, Any], bytes]]:
+        """The file's sections, in file order: faces first, as the decoder needs them for U1."""
+        face_params, face_payload = self.face_section
+        out = [({"id": "FACE", "critical": True, "codec": connectivity.CODEC, **face_params}, face_payload)]
+        for section_id, matrix, parents, predict in (
+            ("CENT", quantized.centroids, None, True),
+            ("U3", quantized.u3, None, True),
+            ("CORE", quantized.core, None, False),
+            ("U1", quantized.u1, self.parents, True),
+        ):
+            params, payload = matrices.encode_matrix(matrix, parents, allow_predict=predict, level=level)
+            out.append(({"id": section_id, "critical": True, "codec": matrices.CODEC, **params}, payload))
+        if self.name_section is not None:
+            out.append(self.name_section)
+        return out
+
+    def trial_bytes(self, quantized: _Quantized) -> int:
+        """The payload bytes at the fast search level: to compare trials, not the final size."""
+        return sum(len(payload) for _, payload in self.sections(quantized, streams.SEARCH_LEVEL))
+
+    def pack(self, quantized: _Quantized, error2: float, target_kg: float | None) -> bytes:
+        header: dict[str, Any] = {
+            "vertices": self.vertex_count,
+            "frames": self.frame_count,
+            "ranks": [quantized.i, quantized.k],
+            "u2": [float(x) for x in self.analysis.decomposition.u2.reshape(-1)],
+            "error": {
+                "kg": self.kg(error2),
+                "definition": KG_DEFINITION_ID,
+                "truncation_kg": self.kg(self.truncation_error2(quantized.i, quantized.k)),
+                "target_kg": target_kg,
+            },
+            "encoder": f"tuckercodec {__version__}",
+        }
+        if self.sequence.frame_rate is not None:
+            header["frame_rate"] = float(self.sequence.frame_rate)
+        return pack_container(header, self.sections(quantized, self.level))
+
+
+def _steps(root: float, norms: np.ndarray) -> np.ndarray:
+    """sqrt(D) / norm per column; a column whose core slice is empty carries nothing (step 1)."""
+    safe = np.where(norms > 0, norms, 1.0)
+    return np.where(norms > 0, root / safe, 1.0)
+
+
+def _names_section(sequence: MeshSequence, level: int) -> tuple[dict[str, Any], bytes] | None:
+    """The ancillary NAME section, left out when the names are the default ``frame_00000``..."""
+    default = [f"frame_{n:05d}" for n in range(sequence.frame_count)]
+    if sequence.frame_names == default:
+        return None
+    raw = msgpack.packb(list(sequence.frame_names), use_bin_type=True)
+    return (
+        {"id": "NAME", "critical": False, "codec": "msgpack-zstd", "size": len(raw)},
+        streams.compress(raw, level),
+    )
+
+
+def _coefficient_count(i: int, k: int, vertices: int, frames: int) -> int:
+    """Numbers quantized with ranks (i, k): U1, U3, the core and the centroids."""
+    return vertices * i + frames * k + 3 * i * k + 3 * frames
+
+
+# ------------------------------------------------------------------------------------------
+# meeting a target
+
+
+def _initial_step(work: _Workspace, i: int, k: int, budget2: float) -> float:
+    """D such that the quantization noise, about D/12 per stored number, fills ``budget2``."""
+    count = _coefficient_count(i, k, work.vertex_count, work.frame_count)
+    return 12.0 * budget2 / count
+
+
+def _meet(work: _Workspace, i: int, k: int, step: float, limit2: float) -> tuple[_Quantized, float, int]:
+    """Adjust D so that the decoded squared error is at most ``limit2``, as loose as it can be.
+
+    Returns the quantization, its decoded squared error and the number of measurements.
+    """
+    truncation2 = work.truncation_error2(i, k)
+    best: tuple[_Quantized, float] | None = None
+    loosened = False
+    for attempt in range(1, 40):
+        quantized = work.quantize(i, k, step)
+        error2 = work.decoded_error2(quantized)
+        added = max(error2 - truncation2, 1e-300)
+        room = limit2 - truncation2
+        if error2 <= limit2:
+            best = (quantized, error2)
+            if loosened or added >= 0.97 * room:
+                return quantized, error2, attempt
+            loosened = True  # once: the noise model is a little pessimistic
+            step *= min(1.5, 0.99 * room / added)
+        elif best is not None:
+            return best[0], best[1], attempt
+        else:
+            # the noise grows about linearly with D; aim a little inside and never stall
+            step *= min(0.95, max(0.25, 0.97 * room / added))
+    raise RuntimeError(f"could not meet the error target with ranks ({i}, {k})")  # pragma: no cover
+
+
+def _search_kg(work: _Workspace, target_kg: float, select: Selection, shares: tuple[float, ...]) -> tuple[_Quantized, float, int]:
+    """The smallest file found for a target KG error: see the module docstring."""
+    limit2 = (target_kg * (1.0 - SAFETY) / 100.0) ** 2 * work.denominator2
+    trials: dict[tuple[int, int], tuple[int, float]] = {}
+    for share in shares:
+        choice = work.analysis.cheapest(target_kg * math.sqrt(share), select=select)
+        i, k = choice.i, choice.k
+        room = limit2 - work.truncation_error2(i, k)
+        if room <= 0 or (i, k) in trials:
+            continue
+        step = _initial_step(work, i, k, room)
+        trials[(i, k)] = (work.trial_bytes(work.quantize(i, k, step)), step)
+    if not trials:  # the target is within rounding of zero error
+        r1, r3 = work.analysis.max_ranks
+        trials[(r1, r3)] = (0, _initial_step(work, r1, r3, max(limit2, 1e-300)))
+    (i, k), (_, step) = min(trials.items(), key=lambda item: item[1][0])
+    quantized, error2, measured = _meet(work, i, k, step, limit2)
+    return quantized, error2, len(trials) + measured
+
+
+# ------------------------------------------------------------------------------------------
+# the public entry points
+
+
+def _check_modes(target_kg: float | None, ranks: tuple[int, int] | None, target_bpfv: float | None) -> Mode:
+    given = [name for name, value in (("target_kg", target_kg), ("ranks", ranks), ("target_bpfv", target_bpfv)) if value is not None]
+    if len(given) > 1:
+        raise ValueError(f"give one of target_kg, ranks and target_bpfv, not {' and '.join(given)}")
+    for name, value in (("target_kg", target_kg), ("target_bpfv", target_bpfv)):
+        if value is not None and not (
+            isinstance(value, (int, float, np.floating)) and not isinstance(value, bool)
+            and math.isfinite(value) and value > 0
+        ):
+            raise ValueError(f"{name} must be a positive finite number, got {value!r}")
+    if ranks is not None:
+        return "ranks"
+    return "bpfv" if target_bpfv is not None else "kg"
+
+
+def encode_with_report(
+    sequence: MeshSequence,
+    *,
+    target_kg: float | None = None,
+    ranks: tuple[int, int] | None = None,
+    target_bpfv: float | None = None,
+    select: Selection = "exact",
+    level: int = streams.DEFAULT_LEVEL,
+    analysis: Analysis | None = None,
+) -> EncodeResult:
+    """Encode a sequence; the file's bytes and a report of ranks, errors and sizes.
+
+    Args:
+        sequence: the mesh sequence (at least 2 frames, not every frame a single point).
+        target_kg: the largest KG error allowed for the decoded sequence, in percent (default
+            0.1 when no mode is given).
+        ranks: fixed ranks (i, k); quantization then adds at most about 5 % to the KG error of
+            the truncation.
+        target_bpfv: the largest whole-file size in bits per frame per vertex; the smallest KG
+            error that fits is chosen.
+        select: ``"exact"`` chooses ranks by the exact error table, ``"bound"`` by the seed
+            paper's bound alone.
+        level: zstd level of the sections (1-22).
+        analysis: the sequence's :func:`~tuckercodec.analyze` result, if already computed.
+
+    Raises:
+        InputError: the sequence cannot be encoded (one frame, every frame a single point).
+        ValueError: a mode argument that is out of range, or a target the format cannot meet.
+    """
+    start = time.perf_counter()
+    mode = _check_modes(target_kg, ranks, target_bpfv)
+    if select not in ("exact", "bound"):
+        raise ValueError(f"select must be 'exact' or 'bound', got {select!r}")
+    if not isinstance(sequence, MeshSequence):
+        raise TypeError(f"expected a MeshSequence, got {type(sequence).__name__}")
+    analysis = analyze(sequence) if analysis is None else analysis
+    work = _Workspace(sequence, analysis, level)
+    exact_ranks = bound_ranks = None
+    target: float | None = None
+
+    if mode == "ranks":
+        i, k = _checked_ranks(ranks, analysis)
+        truncation2 = work.truncation_error2(i, k)
+        floor2 = (RANKS_FLOOR_KG / 100.0) ** 2 * work.denominator2
+        budget2 = max(RANKS_QUANTIZATION_SHARE * truncation2, floor2)
+        quantized, error2, trials = _meet(work, i, k, _initial_step(work, i, k, budget2), truncation2 + budget2)
+        target_for_header = None
+    elif mode == "kg":
+        target = DEFAULT_TARGET_KG if target_kg is None else float(target_kg)
+        exact, bound = analysis.cheapest(target), analysis.cheapest(target, select="bound")
+        exact_ranks, bound_ranks = (exact.i, exact.k), (bound.i, bound.k)
+        quantized, error2, trials = _search_kg(work, target, select, TRUNCATION_SHARES)
+        target_for_header = target
+    else:
+        target = float(target_bpfv)
+        quantized, error2, trials = _search_bpfv(work, target, select)
+        target_for_header = None
+
+    data = work.pack(quantized, error2, target_for_header)
+    if mode == "bpfv" and bits_per_frame_vertex(len(data), work.frame_count, work.vertex_count) > target:
+        raise ValueError(  # pragma: no cover - _search_bpfv packs the very same file
+            f"the file needs {bits_per_frame_vertex(len(data), work.frame_count, work.vertex_count):.3f} bpfv"
+        )
+    sizes = {entry["id"]: len(payload) for entry, payload in work.sections(quantized, level)}
+    report = EncodeReport(
+        mode=mode,
+        target=target,
+        select=select,
+        ranks=(quantized.i, quantized.k),
+        kg=work.kg(error2),
+        truncation_kg=work.kg(work.truncation_error2(quantized.i, quantized.k)),
+        exact_ranks=exact_ranks,
+        bound_ranks=bound_ranks,
+        total_bytes=len(data),
+        section_bytes=sizes,
+        vertices=work.vertex_count,
+        frames=work.frame_count,
+        seconds=time.perf_counter() - start,
+        trials=trials,
+    )
+    return EncodeResult(data, report)
+
+
+def _checked_ranks(ranks: Any, analysis: Analysis) -> tuple[int, int]:
+    r1, r3 = analysis.max_ranks
+    try:
+        i, k = (int(r) for r in ranks)
+        valid = all(float(a) == b for a, b in zip(ranks, (i, k)))
+    except (TypeError, ValueError):
+        valid = False
+    if not valid or not (1 <= i <= r1 and 1 <= k <= r3):
+        raise ValueError(f"ranks must be two integers with 1 <= i <= {r1} and 1 <= k <= {r3}, got {ranks!r}")
+    return i, k
+
+
+def _search_bpfv(work: _Workspace, target_bpfv: float, select: Selection) -> tuple[_Quantized, float, int]:
+    """The smallest KG error whose file fits ``target_bpfv``: bisection on log KG."""
+    budget = target_bpfv * work.frame_count * work.vertex_count / 8.0
+
+    def attempt(kg: float, shares: tuple[float, ...]) -> tuple[_Quantized, float, int, int]:
+        quantized, error2, trials = _search_kg(work, kg, select, shares)
+        return quantized, error2, trials, len(work.pack(quantized, error2, None))
+
+    trials = 0
+    low, high = math.log(1e-4), math.log(100.0)  # KG percent
+    best = attempt(100.0, QUICK_SHARES[:1])
+    trials += best[2]
+    if best[3] > budget:
+        raise ValueError(
+            f"no file fits {target_bpfv} bpfv: even the coarsest one needs "
+            f"{bits_per_frame_vertex(best[3], work.frame_count, work.vertex_count):.3f} bpfv "
+            f"(the faces alone take {bits_per_frame_vertex(len(work.face_section[1]), work.frame_count, work.vertex_count):.3f})"
+        )
+    for _ in range(14):  # log KG to within about 1 %
+        middle = 0.5 * (low + high)
+        result = attempt(math.exp(middle), QUICK_SHARES)
+        trials += result[2]
+        if result[3] <= budget:
+            best, high = result, middle
+        else:
+            low = middle
+    return best[0], best[1], trials
+
+
+def encode(
+    sequence: MeshSequence,
+    *,
+    target_kg: float | None = None,
+    ranks: tuple[int, int] | None = None,
+    target_bpfv: float | None = None,
+    select: Selection = "exact",
+) -> bytes:
+    """Encode a sequence into the bytes of a file (``spec/FORMAT.md``).
+
+    One mode at a time: ``target_kg`` (default 0.1, a KG error in percent that the decoded
+    sequence never exceeds), ``ranks`` (i, k), or ``target_bpfv`` (the smallest error that fits).
+    :func:`encode_with_report` also says what was chosen and measured.
+    """
+    return encode_with_report(
+        sequence, target_kg=target_kg, ranks=ranks, target_bpfv=target_bpfv, select=select
+    ).data
+
+
+__all__ = ["EncodeReport", "EncodeResult", "encode", "encode_with_report"]
