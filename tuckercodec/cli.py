@@ -7,6 +7,7 @@ Exit codes: 0 success; 1 an output that exists (without --force) or another I/O 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import sys
 import time
@@ -16,11 +17,21 @@ from pathlib import Path
 from ._version import __version__
 from .analysis import analyze
 from .atomic import refuse_existing, write_atomic
-from .errors import DependencyError, InputError, TuckerCodecError
-from .metrics import KG_DEFINITION
+from .codec import SUFFIX, decode_file, is_compressed_file, read_compressed
+from .decoder import info as read_info
+from .encoder import DEFAULT_TARGET_KG, EncodeReport, encode_with_report
+from .errors import DependencyError, FormatError, InputError, TuckerCodecError
+from .metrics import (
+    KG_DEFINITION,
+    kg_error,
+    max_vertex_displacement,
+    per_frame_kg,
+    relative_error,
+)
 from .report import DEFAULT_TARGETS, curves_csv, targets_table
 from .samples import SAMPLE_NAME, sample_path
 from .seqio import load_sequence
+from .sequence import MeshSequence
 
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_CORRUPT, EXIT_BAD_INPUT = 0, 1, 2, 3, 4
 
@@ -33,6 +44,37 @@ def _targets(text: str) -> list[float]:
     if not values or any(not (v > 0 and v < float("inf")) for v in values):
         raise argparse.ArgumentTypeError(f"targets must be positive numbers, got {text!r}")
     return values
+
+
+def _positive(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (value > 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"must be a positive number, got {text!r}")
+    return value
+
+
+def _ranks(text: str) -> tuple[int, int]:
+    parts = text.split(",")
+    try:
+        i, k = (int(part) for part in parts)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"ranks are two integers 'i,k', got {text!r}") from None
+    return i, k
+
+
+def _frames(text: str) -> slice:
+    """``a:b`` (either end may be left out) or a single frame ``n``; frames count from 0."""
+    try:
+        if ":" not in text:
+            n = int(text)
+            return slice(n, n + 1)
+        start, stop = text.split(":")
+        return slice(int(start) if start else None, int(stop) if stop else None)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"frames are 'a:b', 'a:', ':b' or 'n', got {text!r}") from None
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -56,12 +98,68 @@ def _parser() -> argparse.ArgumentParser:
     rd.add_argument("input", help="a folder of OBJ frames, a glob, an .npz, or 'sample'")
     _add_rd_options(rd)
 
+    encode = verbs.add_parser(
+        "encode",
+        help="compress a mesh sequence into one file",
+        description=(
+            "Compress a sequence. One mode: --kg (the decoded KG error never exceeds it; default "
+            f"{DEFAULT_TARGET_KG}), --ranks i,k, or --bpfv (the smallest error that fits)."
+        ),
+    )
+    encode.add_argument("input", help="a folder of OBJ frames, a glob, an .npz, or 'sample'")
+    encode.add_argument("-o", "--output", type=Path, required=True, metavar=f"OUT{SUFFIX}")
+    mode = encode.add_mutually_exclusive_group()
+    mode.add_argument("--kg", type=_positive, metavar="KG", help="target KG error in percent")
+    mode.add_argument("--ranks", type=_ranks, metavar="I,K", help="fixed ranks (i, 3, k)")
+    mode.add_argument("--bpfv", type=_positive, metavar="BPFV", help="target size, bits per frame per vertex")
+    encode.add_argument(
+        "--select",
+        choices=("exact", "bound"),
+        default="exact",
+        help="choose ranks by the exact error table (default) or by the seed paper's bound",
+    )
+    encode.add_argument("--force", action="store_true", help="replace the output if it exists")
+
+    decode = verbs.add_parser(
+        "decode",
+        help="rebuild the frames of a compressed file as OBJ files or an .npz",
+        description="Decode all frames, or a range, to a folder of OBJ files (with faces) or an .npz.",
+    )
+    decode.add_argument("input", help=f"a compressed file ({SUFFIX})")
+    decode.add_argument("-o", "--output", type=Path, required=True, metavar="OUTDIR|OUT.npz")
+    decode.add_argument("--frames", type=_frames, metavar="A:B", help="frames a to b-1, counted from 0")
+    decode.add_argument("--format", choices=("obj", "npz"), help="default: npz if OUT ends in .npz, else obj")
+    decode.add_argument("--reference", metavar="ORIGINAL", help="report the actual error against this sequence")
+    decode.add_argument("--precision", type=int, metavar="DIGITS", help="significant digits in OBJ files (default: exact)")
+    decode.add_argument("--force", action="store_true", help="replace output files that exist")
+
+    info = verbs.add_parser(
+        "info", help="show a compressed file's header", description="Read the header; decode nothing."
+    )
+    info.add_argument("input", help=f"a compressed file ({SUFFIX})")
+    info.add_argument("--json", action="store_true", help="print JSON")
+
+    evaluate = verbs.add_parser(
+        "eval",
+        help="compare two sequences: KG error, relative error, largest displacement",
+        description="Compare B with the original A (sequences, or compressed files, which are decoded).",
+    )
+    evaluate.add_argument("original", help="the original sequence A")
+    evaluate.add_argument("approximation", help="the sequence B to judge")
+    evaluate.add_argument("--json", action="store_true", help="print JSON")
+
     demo = verbs.add_parser(
         "demo",
-        help="run the analysis on the built-in sample (a simulated cloth, 60 frames)",
-        description="The rate-distortion analysis of the built-in cloth sample.",
+        help="encode and decode the built-in sample (a simulated cloth, 60 frames)",
+        description="Encode the built-in cloth sample at a few KG targets, decode it and measure.",
     )
-    _add_rd_options(demo)
+    demo.add_argument(
+        "--targets",
+        type=_targets,
+        default=[1.0, 0.1, 0.02],
+        metavar="KG,KG,...",
+        help="target KG errors in percent (default: %(default)s)",
+    )
     return parser
 
 
@@ -123,18 +221,182 @@ def _run_rd(args: argparse.Namespace, source: str | Path) -> int:
     return EXIT_OK
 
 
+def _load(source: str) -> MeshSequence:
+    """A sequence from a path, 'sample', or a compressed file (decoded)."""
+    if source == "sample":
+        return load_sequence(sample_path(), progress=False)
+    if is_compressed_file(source):
+        return read_compressed(source).sequence()
+    return load_sequence(source)
+
+
+def _print_encode_report(report: EncodeReport) -> None:
+    i, k = report.ranks
+    print(f"ranks (i, 3, k) = ({i}, 3, {k}); decoded KG error {report.kg:.5f} "
+          f"(truncation alone {report.truncation_kg:.5f}; {KG_DEFINITION})")
+    print(f"size {report.total_bytes} bytes = {report.bpfv:.4f} bpfv (whole file; connectivity "
+          f"{report.connectivity_bpfv:.4f} bpfv of it), {report.ratio:.1f}x smaller than raw float32")
+    if report.exact_ranks is not None:
+        print(f"cheapest truncation for the target: exact table {report.exact_ranks}, the paper's "
+              f"bound {report.bound_ranks}; chosen by '{report.select}' with quantization")
+    print(f"time {report.seconds:.2f} s")
+
+
+def _run_encode(args: argparse.Namespace) -> int:
+    refuse_existing([args.output], args.force)  # before the work, not after it
+    start = time.perf_counter()
+    sequence = load_sequence(sample_path() if args.input == "sample" else args.input)
+    target = args.kg if args.kg is not None or args.ranks or args.bpfv else DEFAULT_TARGET_KG
+    result = encode_with_report(
+        sequence, target_kg=target, ranks=args.ranks, target_bpfv=args.bpfv, select=args.select
+    )
+    write_atomic(args.output, result.data, overwrite=args.force)
+    print(f"{args.input}: {sequence.frame_count} frames, {sequence.vertex_count} vertices "
+          f"-> {args.output}")
+    _print_encode_report(result.report)
+    print(f"total time with reading and writing {time.perf_counter() - start:.2f} s")
+    return EXIT_OK
+
+
+def _run_decode(args: argparse.Namespace) -> int:
+    reference = _load(args.reference) if args.reference else None
+    start = time.perf_counter()
+    decoded = decode_file(
+        args.input,
+        args.output,
+        frames=args.frames,
+        output_format=args.format,
+        overwrite=args.force,
+        precision=args.precision,
+        progress=True,
+    )
+    elapsed = time.perf_counter() - start
+    header = read_info(args.input)
+    print(f"{args.input}: {decoded.frame_count} of {header.frames} frames, "
+          f"{decoded.vertex_count} vertices -> {args.output} in {elapsed:.2f} s")
+    print(f"file: {header.total_bytes} bytes = {header.bpfv:.4f} bpfv; KG error recorded by the "
+          f"encoder {_number(header.kg)} ({header.kg_definition or 'no definition recorded'})")
+    if reference is not None:
+        selected = reference.vertices[args.frames or slice(None)]
+        if selected.shape != decoded.vertices.shape:
+            raise InputError(
+                f"the reference has shape {selected.shape} for these frames, the file {decoded.vertices.shape}",
+                path=args.reference,
+            )
+        print(f"actual KG error against {args.reference}: {kg_error(selected, decoded):.5f} "
+              f"({KG_DEFINITION})")
+    return EXIT_OK
+
+
+def _number(value: float | None) -> str:
+    return "unknown" if value is None else f"{value:.5f}"
+
+
+def _run_info(args: argparse.Namespace) -> int:
+    header = read_info(args.input)
+    if args.json:
+        print(json.dumps(header.to_dict(), indent=2))
+        return EXIT_OK
+    i, k = header.ranks
+    print(f"{args.input}: tuckercodec format {header.format_version}")
+    print(f"  {header.frames} frames, {header.vertices} vertices, {header.faces} faces of up to "
+          f"{header.face_width} corners")
+    print(f"  ranks (i, 3, k) = ({i}, 3, {k})")
+    print(f"  {header.total_bytes} bytes = {header.bpfv:.4f} bpfv (whole file)")
+    print(f"  KG error {_number(header.kg)} ({header.kg_definition or 'no definition recorded'}), "
+          f"target {_number(header.target_kg)}")
+    if header.frame_rate is not None:
+        print(f"  {header.frame_rate:g} frames per second")
+    print(f"  written by {header.encoder or 'an unnamed encoder'}")
+    for section_id, length, codec, critical in header.sections:
+        print(f"  section {section_id:<5} {length:>10} bytes  {codec}{'' if critical else ' (ancillary)'}")
+    return EXIT_OK
+
+
+def _run_eval(args: argparse.Namespace) -> int:
+    original, approximation = _load(args.original), _load(args.approximation)
+    per_frame = per_frame_kg(original, approximation)
+    worst_frame = int(per_frame.argmax())
+    displacement = max_vertex_displacement(original, approximation)
+    figures = {
+        "kg": kg_error(original, approximation),
+        "kg_definition": KG_DEFINITION,
+        "relative_error": relative_error(original, approximation),
+        "max_vertex_displacement": displacement.distance,
+        "max_displacement_frame": displacement.frame,
+        "max_displacement_vertex": displacement.vertex,
+        "worst_frame": worst_frame,
+        "worst_frame_kg_share": float(per_frame[worst_frame]),
+    }
+    if args.json:
+        print(json.dumps(figures, indent=2))
+        return EXIT_OK
+    print(f"KG error {figures['kg']:.6f} ({KG_DEFINITION})")
+    print(f"relative error ||A-B||/||A|| {figures['relative_error']:.3e} (uncentred)")
+    print(f"largest vertex displacement {displacement.distance:.6g} (frame {displacement.frame}, "
+          f"vertex {displacement.vertex}), in scene units")
+    print(f"worst frame {worst_frame}: {per_frame[worst_frame]:.6f} of the KG error "
+          "(its share; the squares of all frames' shares sum to KG squared)")
+    return EXIT_OK
+
+
+def _run_demo(args: argparse.Namespace) -> int:
+    from .decoder import decode
+
+    sequence = load_sequence(sample_path(), progress=False)
+    print(f"built-in sample ({SAMPLE_NAME}): {sequence.frame_count} frames, "
+          f"{sequence.vertex_count} vertices, {sequence.faces.shape[0]} faces")
+    print(f"errors: {KG_DEFINITION}; bpfv counts the whole file")
+    print()
+    header = (f"{'target KG':>9}  {'i':>3}  {'k':>3}  {'bytes':>8}  {'bpfv':>7}  {'ratio':>6}  "
+              f"{'decoded KG':>10}  {'encode s':>8}  {'decode s':>8}")
+    print(header)
+    print("-" * len(header))
+    for target in args.targets:
+        result = encode_with_report(sequence, target_kg=target)
+        start = time.perf_counter()
+        decoded = decode(result.data)
+        decode_seconds = time.perf_counter() - start
+        measured = kg_error(sequence, decoded)  # measured again here, not taken from the report
+        r = result.report
+        print(f"{target:>9g}  {r.ranks[0]:>3}  {r.ranks[1]:>3}  {r.total_bytes:>8}  {r.bpfv:>7.3f}  "
+              f"{r.ratio:>5.0f}x  {measured:>10.5f}  {r.seconds:>8.2f}  {decode_seconds:>8.3f}")
+    print()
+    print("Try: tuckercodec encode sample -o cloth.tkc && tuckercodec decode cloth.tkc -o frames/")
+    return EXIT_OK
+
+
+def _source(args: argparse.Namespace) -> str:
+    """``'FILE: '`` for the compressed file a verb read, so a format error names it."""
+    path = getattr(args, "input", None)
+    if args.verb == "eval":
+        return ""  # either operand may be at fault; their errors name the field
+    return f"{path}: " if path else ""
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit code."""
     parser = _parser()
     args = parser.parse_args(argv)
     try:
         if args.verb == "demo":
-            return _run_rd(args, sample_path())
+            return _run_demo(args)
+        if args.verb == "encode":
+            return _run_encode(args)
+        if args.verb == "decode":
+            return _run_decode(args)
+        if args.verb == "info":
+            return _run_info(args)
+        if args.verb == "eval":
+            return _run_eval(args)
         source = sample_path() if args.input == "sample" else args.input
         return _run_rd(args, source)
     except InputError as error:
         print(f"tuckercodec: bad input: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except FormatError as error:
+        print(f"tuckercodec: {_source(args)}invalid or corrupt file: {error}", file=sys.stderr)
+        return EXIT_CORRUPT
     except DependencyError as error:
         print(f"tuckercodec: {error}", file=sys.stderr)
         return EXIT_FAILURE
