@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import json
 import shutil
 import subprocess
 import sys
@@ -87,7 +88,7 @@ def test_usage_errors_exit_2(capsys):
     assert exit_info.value.code == 2
 
 
-@pytest.mark.parametrize("verb", [[], ["rd"], ["demo"]])
+@pytest.mark.parametrize("verb", [[], ["rd"], ["demo"], ["encode"], ["decode"], ["info"], ["eval"]])
 def test_help_on_every_verb(verb, capsys):
     with pytest.raises(SystemExit) as exit_info:
         main(verb + ["--help"])
@@ -99,6 +100,8 @@ def test_demo_runs_on_the_builtin_sample(capsys):
     assert main(["demo", "--targets", "0.5"]) == 0
     out = capsys.readouterr().out
     assert "60 frames, 3101 vertices, 5912 faces" in out
+    row = [line.split() for line in out.splitlines() if line.strip().startswith("0.5")][0]
+    assert float(row[6]) <= 0.5  # the decoded KG error, measured by the demo itself
 
 
 def test_console_script_version():
@@ -117,3 +120,77 @@ def test_outputs_are_checked_before_the_work(wave_npz, tmp_path, capsys):
     assert main(["rd", str(wave_npz), "--plot", str(tmp_path / "rd.txt")]) == 2
     assert "must end in .png" in capsys.readouterr().err
     assert not (tmp_path / "rd.txt").exists()
+
+
+# ------------------------------------------------------------------------------------------
+# the codec's verbs
+
+
+def test_encode_decode_info_eval(wave_npz, tmp_path, capsys):
+    packed = tmp_path / "wave.tkc"
+    assert main(["encode", str(wave_npz), "-o", str(packed), "--kg", "0.5"]) == 0
+    out = capsys.readouterr().out
+    assert "decoded KG error" in out and "bpfv" in out and "smaller than raw float32" in out
+    assert "Karni-Gotsman" in out
+
+    assert main(["info", str(packed), "--json"]) == 0
+    header = json.loads(capsys.readouterr().out)
+    assert header["frames"] == 20 and header["vertices"] == 64 and header["kg"] <= 0.5
+    assert header["total_bytes"] == packed.stat().st_size
+
+    frames = tmp_path / "frames"
+    assert main(["decode", str(packed), "-o", str(frames), "--frames", "5:8", "--reference", str(wave_npz)]) == 0
+    out = capsys.readouterr().out
+    assert "3 of 20 frames" in out and "of the 3 frames decoded" in out
+    assert len(list(frames.glob("*.obj"))) == 3
+    assert sum(line.startswith("f ") for line in next(frames.glob("*.obj")).read_text().splitlines()) == 98
+
+    assert main(["decode", str(packed), "-o", str(tmp_path / "all.npz"), "--reference", str(wave_npz)]) == 0
+    out = capsys.readouterr().out
+    actual = float(out.split("actual KG error against")[1].split(":")[1].split()[0])
+    assert actual <= 0.5
+    assert main(["eval", str(wave_npz), str(tmp_path / "all.npz"), "--json"]) == 0
+    figures = json.loads(capsys.readouterr().out)
+    assert figures["kg"] == pytest.approx(header["kg"], rel=1e-6)
+    assert main(["eval", str(wave_npz), str(packed)]) == 0  # a compressed file is decoded
+    assert "largest vertex displacement" in capsys.readouterr().out
+
+
+def test_encode_never_overwrites_without_force(wave_npz, tmp_path, capsys):
+    packed = tmp_path / "wave.tkc"
+    packed.write_bytes(b"precious")
+    assert main(["encode", str(wave_npz), "-o", str(packed)]) == 1
+    assert "already exists" in capsys.readouterr().err
+    assert packed.read_bytes() == b"precious"
+    assert main(["encode", str(wave_npz), "-o", str(packed), "--force", "--ranks", "4,4"]) == 0
+    assert packed.read_bytes()[:4] == b"\x89TKC"
+    assert not list(tmp_path.glob(".*.tmp"))
+
+
+def test_corrupt_files_exit_3_naming_the_file(wave_npz, tmp_path, capsys):
+    packed = tmp_path / "wave.tkc"
+    assert main(["encode", str(wave_npz), "-o", str(packed)]) == 0
+    data = packed.read_bytes()
+    cut = tmp_path / "cut.tkc"
+    cut.write_bytes(data[:-10])
+    flipped = tmp_path / "flipped.tkc"
+    flipped.write_bytes(data[:-5] + bytes([data[-5] ^ 0x10]) + data[-4:])
+    capsys.readouterr()
+    for path, verb, words in ((cut, "info", "cut short"), (cut, "decode", "cut short"), (flipped, "decode", "CRC-32")):
+        args = [verb, str(path)] + (["-o", str(tmp_path / "out")] if verb == "decode" else [])
+        assert main(args) == 3
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and str(path) in err and words in err and "Traceback" not in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_encode_usage_errors_exit_2(wave_npz, tmp_path, capsys):
+    packed = str(tmp_path / "x.tkc")
+    for args in (["--kg", "0.1", "--ranks", "2,2"], ["--kg", "-1"], ["--ranks", "2"], ["--bpfv", "zero"]):
+        with pytest.raises(SystemExit) as exit_info:
+            main(["encode", str(wave_npz), "-o", packed] + args)
+        assert exit_info.value.code == 2
+    assert main(["encode", str(wave_npz), "-o", packed, "--ranks", "500,2"]) == 2
+    assert "ranks must be" in capsys.readouterr().err
+    assert main(["decode", str(wave_npz), "-o", str(tmp_path / "o")]) == 3  # not a compressed file
+    assert "not a tuckercodec file" in capsys.readouterr().err

@@ -283,7 +283,11 @@ def _run_decode(args: argparse.Namespace) -> int:
                 f"the reference has shape {selected.shape} for these frames, the file {decoded.vertices.shape}",
                 path=args.reference,
             )
-        print(f"actual KG error against {args.reference}: {kg_error(selected, decoded):.5f} "
+        scope = "" if args.frames is None else (
+            f" (of the {decoded.frame_count} frames decoded, with their own KG denominator; the "
+            "target applies to the whole sequence)"
+        )
+        print(f"actual KG error against {args.reference}: {kg_error(selected, decoded):.5f}{scope} "
               f"({KG_DEFINITION})")
     return EXIT_OK
 
