@@ -44,7 +44,7 @@ from .sequence import MeshSequence
 
 DEFAULT_TARGET_KG = 0.1
 #: Shares of the squared error budget given to truncation in the search (the rest is quantization).
-TRUNCATION_SHARES = (0.05, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7)
+TRUNCATION_SHARES = (0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7)
 #: Fewer shares while searching for a size target, where each trial is a whole encode.
 QUICK_SHARES = (0.1, 0.3, 0.5)
 #: The decoded error must stay this far (relative) below the target, so that a decoder whose
@@ -208,7 +208,11 @@ class _Workspace:
         """The payload bytes at the fast search level: to compare trials, not the final size."""
         return sum(len(payload) for _, payload in self.sections(quantized, streams.SEARCH_LEVEL))
 
-    def pack(self, quantized: _Quantized, error2: float, target_kg: float | None) -> bytes:
+    def pack(
+        self, quantized: _Quantized, error2: float, target_kg: float | None, level: int | None = None
+    ) -> tuple[bytes, dict[str, int]]:
+        """The file's bytes, and the size of each section (zstd ``level``: the final one unless
+        given)."""
         header: dict[str, Any] = {
             "vertices": self.vertex_count,
             "frames": self.frame_count,
@@ -224,7 +228,9 @@ class _Workspace:
         }
         if self.sequence.frame_rate is not None:
             header["frame_rate"] = float(self.sequence.frame_rate)
-        return pack_container(header, self.sections(quantized, self.level))
+        sections = self.sections(quantized, self.level if level is None else level)
+        sizes = {entry["id"]: len(payload) for entry, payload in sections}
+        return pack_container(header, sections), sizes
 
 
 def _steps(root: float, norms: np.ndarray) -> np.ndarray:
@@ -384,12 +390,11 @@ def encode_with_report(
         quantized, error2, trials = _search_bpfv(work, target, select)
         target_for_header = None
 
-    data = work.pack(quantized, error2, target_for_header)
+    data, sizes = work.pack(quantized, error2, target_for_header)
     if mode == "bpfv" and bits_per_frame_vertex(len(data), work.frame_count, work.vertex_count) > target:
         raise ValueError(  # pragma: no cover - _search_bpfv packs the very same file
             f"the file needs {bits_per_frame_vertex(len(data), work.frame_count, work.vertex_count):.3f} bpfv"
         )
-    sizes = {entry["id"]: len(payload) for entry, payload in work.sections(quantized, level)}
     report = EncodeReport(
         mode=mode,
         target=target,
@@ -422,16 +427,18 @@ def _checked_ranks(ranks: Any, analysis: Analysis) -> tuple[int, int]:
 
 
 def _search_bpfv(work: _Workspace, target_bpfv: float, select: Selection) -> tuple[_Quantized, float, int]:
-    """The smallest KG error whose file fits ``target_bpfv``: bisection on log KG."""
+    """The smallest KG error whose file fits ``target_bpfv``: bisection on log KG, sizing the
+    trials at the fast zstd level, then the final level checked (and the error loosened a step
+    at a time in the rare case that it packs larger)."""
     budget = target_bpfv * work.frame_count * work.vertex_count / 8.0
 
-    def attempt(kg: float, shares: tuple[float, ...]) -> tuple[_Quantized, float, int, int]:
+    def attempt(kg: float, shares: tuple[float, ...], level: int | None) -> tuple[_Quantized, float, int, int]:
         quantized, error2, trials = _search_kg(work, kg, select, shares)
-        return quantized, error2, trials, len(work.pack(quantized, error2, None))
+        return quantized, error2, trials, len(work.pack(quantized, error2, None, level)[0])
 
     trials = 0
     low, high = math.log(1e-4), math.log(100.0)  # KG percent
-    best = attempt(100.0, QUICK_SHARES[:1])
+    best = attempt(100.0, QUICK_SHARES[:1], None)
     trials += best[2]
     if best[3] > budget:
         raise ValueError(
@@ -441,12 +448,18 @@ def _search_bpfv(work: _Workspace, target_bpfv: float, select: Selection) -> tup
         )
     for _ in range(14):  # log KG to within about 1 %
         middle = 0.5 * (low + high)
-        result = attempt(math.exp(middle), QUICK_SHARES)
+        result = attempt(math.exp(middle), QUICK_SHARES, streams.SEARCH_LEVEL)
         trials += result[2]
         if result[3] <= budget:
-            best, high = result, middle
+            high = middle
         else:
             low = middle
+    while high < math.log(100.0):
+        result = attempt(math.exp(high), QUICK_SHARES, None)
+        trials += result[2]
+        if result[3] <= budget:
+            return result[0], result[1], trials
+        high += 0.02
     return best[0], best[1], trials
 
 

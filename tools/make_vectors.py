@@ -1,0 +1,354 @@
+"""Write the conformance vectors of spec/FORMAT.md §12 into spec/vectors/.
+
+    python tools/make_vectors.py [--force]
+
+Valid vectors: small files encoded from deterministic synthetic sequences, each with a JSON of
+the header fields a decoder must report, SHA-256 digests of the dequantized arrays, and the
+reference reconstruction (an .npy of the decoded positions) with its tolerance.
+
+Invalid vectors: one per rule of §11, each made by breaking exactly that rule in a valid file
+(checksums recomputed, so that nothing else is wrong), with the error it must raise.
+
+The encoder is not byte-identical across machines (the SVD's signs and last bits depend on the
+BLAS), so the vectors are written once and committed; every test run decodes them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import struct
+import sys
+import zlib
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import msgpack
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from tuckercodec import MeshSequence, encode  # noqa: E402
+from tuckercodec.container import HEAD_SIZE, SIGNATURE, parse_container  # noqa: E402
+from tuckercodec.decoder import Decoder  # noqa: E402
+from tuckercodec.streams import compress  # noqa: E402
+
+VECTORS = ROOT / "spec" / "vectors"
+#: A conforming decoder's positions may differ from the reference by rounding only (§8).
+RELATIVE_TOLERANCE = 1e-9
+
+
+# ------------------------------------------------------------------------------------------
+# sequences
+
+
+def wave(frames: int, grid: int) -> np.ndarray:
+    """A sheet with travelling waves, drifting and turning (the tests' synthetic sequence)."""
+    u, v = np.meshgrid(np.linspace(0, 1, grid), np.linspace(0, 1, grid), indexing="ij")
+    u, v = u.ravel(), v.ravel()
+    out = np.empty((frames, u.size, 3))
+    for f in range(frames):
+        t = f / frames
+        z = 0.2 * np.sin(2 * np.pi * (u + t)) * np.cos(np.pi * (v - 0.5 * t))
+        angle = 0.5 * t
+        out[f] = np.stack([u * np.cos(angle) - v * np.sin(angle) + 0.3 * t, u * np.sin(angle) + v * np.cos(angle), z], 1)
+    return out
+
+
+def triangles(grid: int) -> np.ndarray:
+    index = np.arange(grid * grid).reshape(grid, grid)
+    a, b, c, d = index[:-1, :-1].ravel(), index[1:, :-1].ravel(), index[1:, 1:].ravel(), index[:-1, 1:].ravel()
+    return np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
+
+
+def polygons(grid: int) -> np.ndarray:
+    """Quads, every third one a triangle padded with -1."""
+    index = np.arange(grid * grid).reshape(grid, grid)
+    quads = np.stack([index[:-1, :-1], index[1:, :-1], index[1:, 1:], index[:-1, 1:]], -1).reshape(-1, 4)
+    quads[::3, 3] = -1
+    return quads
+
+
+# ------------------------------------------------------------------------------------------
+# taking a file apart and putting it back with one thing changed
+
+
+class Parts:
+    """A file as editable parts: preamble fields, header map, section payloads."""
+
+    def __init__(self, data: bytes) -> None:
+        container = parse_container(data)
+        self.major, self.minor, self.flags = container.major, container.minor, container.flags
+        self.header = dict(container.header)
+        self.entries = [dict(entry) for entry in container.header["sections"]]
+        self.payloads = [bytes(container.payload(data, s)) for s in container.sections]
+
+    def index(self, section_id: str) -> int:
+        return next(n for n, entry in enumerate(self.entries) if entry["id"] == section_id)
+
+    def pack(self, *, fix_table: bool = True, header_bytes: bytes | None = None, total: int | None = None) -> bytes:
+        """Bytes of the file; offsets, lengths and CRCs recomputed unless ``fix_table`` is off."""
+        if fix_table:
+            offset = 0
+            for entry, payload in zip(self.entries, self.payloads):
+                entry.update(offset=offset, length=len(payload), crc32=zlib.crc32(payload))
+                offset += len(payload)
+        if header_bytes is None:
+            header_bytes = msgpack.packb({**self.header, "sections": self.entries}, use_bin_type=True)
+        body = b"".join(self.payloads)
+        total = HEAD_SIZE + len(header_bytes) + 4 + len(body) if total is None else total
+        head = SIGNATURE + struct.pack("<HHIIQ", self.major, self.minor, self.flags, len(header_bytes), total)
+        return b"".join([head, struct.pack("<I", zlib.crc32(head)), header_bytes,
+                         struct.pack("<I", zlib.crc32(header_bytes)), body])
+
+
+def _with_crc_fixed(data: bytearray) -> bytes:
+    """Recompute the preamble CRC after editing preamble fields in place."""
+    data[28:32] = struct.pack("<I", zlib.crc32(bytes(data[:28])))
+    return bytes(data)
+
+
+def _set_preamble(data: bytes, offset: int, fmt: str, value: int) -> bytes:
+    edited = bytearray(data)
+    struct.pack_into(fmt, edited, offset, value)
+    return _with_crc_fixed(edited)
+
+
+def _edit(data: bytes, change: Callable[[Parts], None], **pack_options: Any) -> bytes:
+    parts = Parts(data)
+    change(parts)
+    return parts.pack(**pack_options)
+
+
+def _entry(section_id: str, **fields: Any) -> Callable[[Parts], None]:
+    def change(parts: Parts) -> None:
+        parts.entries[parts.index(section_id)].update(fields)
+    return change
+
+
+def _header(**fields: Any) -> Callable[[Parts], None]:
+    def change(parts: Parts) -> None:
+        for key, value in fields.items():
+            if value is _DELETE:
+                del parts.header[key]
+            else:
+                parts.header[key] = value
+    return change
+
+
+_DELETE = object()
+
+
+def _payload(section_id: str, payload: bytes, **fields: Any) -> Callable[[Parts], None]:
+    def change(parts: Parts) -> None:
+        n = parts.index(section_id)
+        parts.payloads[n] = payload
+        parts.entries[n].update(fields)
+    return change
+
+
+def _flip_last_payload_byte(section_id: str) -> Callable[[Parts], None]:
+    """Damage a section after its CRC was computed: the table keeps the old CRC."""
+    def change(parts: Parts) -> None:
+        n = parts.index(section_id)
+        offset = 0
+        for entry, payload in zip(parts.entries, parts.payloads):
+            entry.update(offset=offset, length=len(payload), crc32=zlib.crc32(payload))
+            offset += len(payload)
+        damaged = bytearray(parts.payloads[n])
+        damaged[-1] ^= 0x01
+        parts.payloads[n] = bytes(damaged)
+    return change
+
+
+def invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str, str]]:
+    """rule id -> (file bytes, error class name, text the message must contain)."""
+    parts = Parts(good)
+    header_length = struct.unpack_from("<I", good, 16)[0]
+    faces_shape = parts.entries[parts.index("FACE")]["shape"]
+    k_vertices = parts.header["vertices"]
+    bad_faces = np.full(faces_shape, 0, dtype=np.int64)
+    bad_faces[0, 0] = k_vertices  # one past the last vertex
+    shifted = (bad_faces + 1).reshape(-1)
+    deltas = np.diff(shifted, prepend=0)
+    zig = ((deltas << 1) ^ (deltas >> 63)).astype("<u8")
+    face_payload = compress(np.ascontiguousarray(zig.view(np.uint8).reshape(-1, 8)[:, :1].T).tobytes())
+    padded = np.zeros(faces_shape, dtype=np.int64)
+    padded[:, 1] = -1  # padding before the end of a row
+    zig2 = (lambda d: ((d << 1) ^ (d >> 63)).astype("<u8"))(np.diff((padded + 1).reshape(-1), prepend=0))
+    padded_payload = compress(np.ascontiguousarray(zig2.view(np.uint8).reshape(-1, 8)[:, :1].T).tobytes())
+    core_entry = parts.entries[parts.index("CORE")]
+    names = msgpack.packb(["only one name"])
+
+    return {
+        "R01-signature": (b"PK\x03\x04" + good[4:], "FormatError", "not a tuckercodec file"),
+        "R02-signature-transfer": (good[:4] + b"\r\r\n" + good[7:], "FormatError", "text mode"),
+        "R03-preamble-truncated": (good[:20], "TruncatedFileError", "preamble"),
+        "R04-preamble-crc": (good[:10] + bytes([good[10] ^ 0x04]) + good[11:], "ChecksumError", "preamble"),
+        "R05-major-version": (_set_preamble(good, 8, "<H", 2), "UnsupportedVersionError", "format version 2"),
+        "R06-critical-flag": (_set_preamble(good, 12, "<I", 0x0001), "UnsupportedVersionError", "critical flag"),
+        "R07-header-limit": (_set_preamble(good, 16, "<I", (16 << 20) + 1), "LimitError", "header"),
+        "R08-total-length": (_set_preamble(good, 20, "<Q", HEAD_SIZE + header_length), "FormatError", "total_length"),
+        "R09-trailing-bytes": (good + b"\x00\x00\x00\x00", "FormatError", "follow the end"),
+        "R10-file-truncated": (good[:-7], "TruncatedFileError", "cut short"),
+        "R11-header-crc": (good[:40] + bytes([good[40] ^ 0x20]) + good[41:], "ChecksumError", "header"),
+        "R12-header-not-map": (parts.pack(header_bytes=msgpack.packb([1, 2, 3])), "FormatError", "not a map"),
+        "R13-section-table-missing": (
+            parts.pack(header_bytes=msgpack.packb({k: v for k, v in parts.header.items() if k != "sections"})),
+            "FormatError", "header.sections",
+        ),
+        "R14-section-entry-field": (_edit(good, _entry("U3", crc32="0"), fix_table=False), "FormatError", "crc32"),
+        "R15-section-duplicate-id": (_edit(good, _entry("U3", id="U1")), "FormatError", "appears twice"),
+        "R16-section-not-contiguous": (
+            _edit(good, lambda p: p.entries[1].update(offset=p.entries[1]["offset"] + 1), fix_table=False),
+            "FormatError", "back to back",
+        ),
+        "R17-section-past-end": (
+            _edit(good, lambda p: p.entries[-1].update(length=p.entries[-1]["length"] + 1), fix_table=False),
+            "FormatError", "runs past the end",
+        ),
+        "R18-section-coverage": (_edit(good, _forget_last_entry), "FormatError", "cover"),
+        "R19-section-crc": (_edit(good, _flip_last_payload_byte("U1"), fix_table=False), "ChecksumError", "section U1"),
+        "R20-header-field": (_edit(good, _header(vertices=_DELETE)), "FormatError", "header.vertices"),
+        "R21-header-limit": (_edit(good, _header(vertices=1 << 40)), "LimitError", "header.vertices"),
+        "R22-ranks": (_edit(good, _header(ranks=[parts.header["ranks"][0], 10_000])), "FormatError", "header.ranks"),
+        "R23-u2": (_edit(good, _header(u2=[1.0] * 8)), "FormatError", "header.u2"),
+        "R24-unknown-critical-section": (
+            _edit(good, _append_section({"id": "XTRA", "critical": True, "codec": "raw"}, b"?")),
+            "UnsupportedVersionError", "unknown critical section",
+        ),
+        "R25-unknown-codec": (_edit(good, _entry("U3", codec="qmat2")), "UnsupportedVersionError", "unknown codec"),
+        "R26-required-section-missing": (_edit(good, lambda p: _drop(p, "CENT")), "FormatError", "section CENT"),
+        "R27-criticality": (_edit(good, _entry("U1", critical=False)), "FormatError", "critical"),
+        "R28-shape": (_edit(good, _entry("U3", shape=[parts.header["frames"] + 1, parts.header["ranks"][1]])), "FormatError", "section U3.shape"),
+        "R29-zstd-content-size": (
+            _edit(good, _payload("CORE", compress(b"\x00" * 3))), "FormatError", "section CORE",
+        ),
+        "R30-planes": (_edit(good, _entry("U1", planes=5)), "FormatError", "planes"),
+        "R31-steps": (
+            _edit(good, _entry("CORE", steps=np.array([0.0], "<f4").tobytes())), "FormatError", "section CORE.steps",
+        ),
+        "R32-predictor": (
+            _edit(good, _entry("CORE", predict=b"\x01" * len(core_entry["predict"]))), "FormatError", "predictor",
+        ),
+        "R33-face-index": (_edit(good, _payload("FACE", face_payload, planes=1)), "FormatError", "outside"),
+        "R34-face-padding": (_edit(good, _payload("FACE", padded_payload, planes=1)), "FormatError", "padded"),
+        "R35-names": (
+            _edit(good, lambda p: _add_names(p, names)), "FormatError", "section NAME",
+        ),
+    }
+
+
+def _forget_last_entry(parts: Parts) -> None:
+    """Keep the last section's bytes in the file but drop its entry from the table (pack()
+    lays out only the sections that have entries, then appends every payload)."""
+    parts.entries.pop()
+
+
+def _append_section(entry: dict[str, Any], payload: bytes) -> Callable[[Parts], None]:
+    def change(parts: Parts) -> None:
+        parts.entries.append(dict(entry))
+        parts.payloads.append(payload)
+    return change
+
+
+def _drop(parts: Parts, section_id: str) -> None:
+    n = parts.index(section_id)
+    parts.entries.pop(n)
+    parts.payloads.pop(n)
+
+
+def _add_names(parts: Parts, raw: bytes) -> None:
+    if any(entry["id"] == "NAME" for entry in parts.entries):
+        _drop(parts, "NAME")
+    parts.entries.append({"id": "NAME", "critical": False, "codec": "msgpack-zstd", "size": len(raw)})
+    parts.payloads.append(compress(raw))
+
+
+# ------------------------------------------------------------------------------------------
+# valid vectors
+
+
+def digests(decoder: Decoder) -> dict[str, str]:
+    """SHA-256 of the dequantized arrays as little-endian C-order float64 (faces: int64)."""
+    arrays = {
+        "faces": np.ascontiguousarray(decoder.faces, dtype="<i8"),
+        "u1": np.ascontiguousarray(decoder.u1, dtype="<f8"),
+        "u3": np.ascontiguousarray(decoder.u3, dtype="<f8"),
+        "core": np.ascontiguousarray(decoder.core, dtype="<f8"),
+        "centroids": np.ascontiguousarray(decoder.centroids, dtype="<f8"),
+    }
+    return {name: hashlib.sha256(array.tobytes()).hexdigest() for name, array in arrays.items()}
+
+
+def valid_vectors() -> dict[str, tuple[bytes, str]]:
+    """name -> (file bytes, what it exercises)."""
+    wave_tri = MeshSequence(wave(24, 9), triangles(9))
+    basic = encode(wave_tri, target_kg=0.5)
+    named = MeshSequence(
+        wave(16, 7) * 3.0 + 10.0, polygons(7), [f"walk_{n:03d}.obj" for n in range(16)], frame_rate=30.0
+    )
+    extended = Parts(basic)
+    extended.flags |= 0x00010000  # an ignorable flag bit
+    extended.header["x-note"] = "an unknown header key is ignored"
+    extended.entries.append({"id": "xmeta", "critical": False, "codec": "opaque"})
+    extended.payloads.append(b"unknown ancillary data is skipped unread")
+    return {
+        "v1-wave-triangles": (basic, "triangles, no names: the basic file"),
+        "v1-polygons-names": (encode(named, target_kg=0.1), "quads padded to triangles, frame names, frame rate, far from the origin"),
+        "v1-ignorable-extensions": (extended.pack(), "v1-wave-triangles plus an ignorable flag, header key and ancillary section"),
+    }
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--force", action="store_true", help="replace existing vectors")
+    args = parser.parse_args()
+    if VECTORS.exists() and any(VECTORS.iterdir()) and not args.force:
+        print(f"{VECTORS} is not empty: pass --force to write the vectors again", file=sys.stderr)
+        return 1
+    VECTORS.mkdir(parents=True, exist_ok=True)
+    for old in VECTORS.iterdir():
+        old.unlink()
+    valid = valid_vectors()
+    for name, (data, purpose) in valid.items():
+        decoder = Decoder(data)
+        positions = decoder.positions()
+        (VECTORS / f"{name}.tkc").write_bytes(data)
+        np.save(VECTORS / f"{name}.positions.npy", positions)
+        header = decoder.info
+        expected = {
+            "file": f"{name}.tkc",
+            "valid": True,
+            "purpose": purpose,
+            "header": {
+                "format_version": header.format_version,
+                "vertices": header.vertices,
+                "frames": header.frames,
+                "ranks": list(header.ranks),
+                "faces": header.faces,
+                "face_width": header.face_width,
+                "total_bytes": header.total_bytes,
+                "frame_rate": header.frame_rate,
+                "kg": header.kg,
+            },
+            "frame_names": decoder.frame_names,
+            "sha256": digests(decoder),
+            "reference": f"{name}.positions.npy",
+            "tolerance": {"relative_to_max_abs": RELATIVE_TOLERANCE},
+        }
+        (VECTORS / f"{name}.json").write_text(json.dumps(expected, indent=2) + "\n")
+    good = valid["v1-wave-triangles"][0]
+    for rule, (data, error, contains) in invalid_vectors(good).items():
+        (VECTORS / f"{rule}.tkc").write_bytes(data)
+        expected = {"file": f"{rule}.tkc", "valid": False, "rule": rule, "error": error, "message_contains": contains}
+        (VECTORS / f"{rule}.json").write_text(json.dumps(expected, indent=2) + "\n")
+    print(f"wrote {len(valid)} valid and {len(invalid_vectors(good))} invalid vectors to {VECTORS}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
