@@ -175,7 +175,7 @@ def read_preamble(data: bytes | memoryview, limits: Limits = DEFAULT_LIMITS) -> 
     (stored_crc,) = _CRC.unpack_from(data, PREAMBLE_END)
     if zlib.crc32(data[:PREAMBLE_END]) != stored_crc:
         raise ChecksumError(
-            "the preamble's CRC-32 does not match (the file is damaged)", field="preamble", offset=8
+            "the preamble's CRC-32 does not match (the file is damaged)", field="preamble", offset=PREAMBLE_END
         )
     major, minor, flags, header_length, total_length = _PREAMBLE.unpack_from(data, len(SIGNATURE))
     if major != FORMAT_MAJOR:
@@ -267,11 +267,37 @@ def _reject_ext(code: int, data: bytes) -> None:
     raise FormatError(f"msgpack extension type {code} is not allowed in the header", field="header")
 
 
+def _strict_map(pairs: list[tuple[Any, Any]]) -> dict[str, Any]:
+    """A map whose keys are all str and all different: otherwise two decoders taking the first
+    or the last of a repeated key would read different files."""
+    out: dict[str, Any] = {}
+    for key, value in pairs:
+        if not isinstance(key, str):
+            raise FormatError(f"map keys must be strings, got {key!r}", field="header")
+        if key in out:
+            raise FormatError(f"the key {key!r} appears twice in one map", field="header")
+        out[key] = value
+    return out
+
+
+def _reject_timestamps(value: Any, depth: int = 0) -> None:
+    """msgpack decodes its timestamp extension (type -1) itself, past the ext hook."""
+    if isinstance(value, msgpack.Timestamp):
+        raise FormatError("msgpack extension type -1 (timestamp) is not allowed in the header", field="header")
+    if isinstance(value, dict):
+        for item in value.values():
+            _reject_timestamps(item, depth + 1)
+    elif isinstance(value, list):
+        for item in value:
+            _reject_timestamps(item, depth + 1)
+
+
 def _unpack_header(header_bytes: bytes) -> dict[str, Any]:
-    """The header map (§4): one msgpack map with string keys, no extension types."""
+    """The header map (§4): one msgpack map with string keys, each once, no extension types."""
     try:
         header = msgpack.unpackb(
-            header_bytes, raw=False, strict_map_key=True, ext_hook=_reject_ext, use_list=True
+            header_bytes, raw=False, strict_map_key=True, ext_hook=_reject_ext, use_list=True,
+            object_pairs_hook=_strict_map, timestamp=0,
         )
     except FormatError:
         raise
@@ -280,6 +306,7 @@ def _unpack_header(header_bytes: bytes) -> dict[str, Any]:
         raise FormatError(f"the header is not one valid msgpack map ({error})", field="header") from None
     if not isinstance(header, dict):
         raise FormatError(f"the header is a msgpack {type(header).__name__}, not a map", field="header")
+    _reject_timestamps(header)
     return header
 
 

@@ -150,9 +150,11 @@ def _check_sections(container: Container, shape: dict[str, tuple[int, int]], lim
         if section_id == "FACE":
             if rows > limits.max_faces:
                 raise LimitError(f"{rows} faces exceed the limit of {limits.max_faces}", field="section FACE.shape")
-            if not 3 <= cols <= limits.max_face_width:
+            if cols < 3:
+                raise FormatError(f"faces need at least 3 corners, the width is {cols}", field="section FACE.shape")
+            if cols > limits.max_face_width:
                 raise LimitError(
-                    f"faces of {cols} corners: the width must be 3..{limits.max_face_width}",
+                    f"faces of {cols} corners exceed the limit of {limits.max_face_width}",
                     field="section FACE.shape",
                 )
         elif (rows, cols) != expected:
@@ -335,8 +337,10 @@ def _frame_names(container: Container, data: bytes | memoryview, frames: int, li
         return [f"frame_{n:05d}" for n in range(frames)]
     where = "section NAME"
     size = entry.params.get("size")
-    if not isinstance(size, int) or isinstance(size, bool) or not 0 <= size <= limits.max_section_bytes:
-        raise FormatError(f"size must be a non-negative integer within the limits, got {size!r}", field=f"{where}.size")
+    if not isinstance(size, int) or isinstance(size, bool) or size < 0:
+        raise FormatError(f"size must be a non-negative integer, got {size!r}", field=f"{where}.size")
+    if size > limits.max_section_bytes:
+        raise LimitError(f"{size} bytes exceed the section size limit", field=f"{where}.size")
     raw = streams.decompress_exact(container.payload(data, entry), size, where)
     try:
         names = msgpack.unpackb(raw, raw=False, strict_map_key=True)

@@ -56,7 +56,7 @@ def mesh_parents(faces: np.ndarray, vertex_count: int) -> np.ndarray:
     proper = a != b  # a degenerate face may repeat a vertex
     a, b = a[proper], b[proper]
     adjacency = sparse.csr_matrix(
-        (np.ones(2 * a.size, dtype=np.int8), (np.concatenate([a, b]), np.concatenate([b, a]))),
+        (np.ones(2 * a.size, dtype=np.int32), (np.concatenate([a, b]), np.concatenate([b, a]))),
         shape=(vertex_count, vertex_count),
     )
     adjacency.sum_duplicates()  # also sorts each row's neighbours ascending

@@ -75,9 +75,16 @@ def decompress_exact(payload: bytes | memoryview, size: int, where: str) -> byte
             f"the zstd frame declares {what}, but the section's shape needs {size}", field=where
         )
     try:
-        raw = zstandard.ZstdDecompressor().decompress(
-            payload, max_output_size=size, allow_extra_data=False
-        )
+        if size == 0:
+            # one-shot decompression stops at a header declaring 0 bytes: read the frame to its end
+            reader = zstandard.ZstdDecompressor().decompressobj()
+            raw = reader.decompress(payload)
+            if not reader.eof or reader.unused_data:
+                raise zstandard.ZstdError("the frame is incomplete or followed by other data")
+        else:
+            raw = zstandard.ZstdDecompressor().decompress(
+                payload, max_output_size=size, allow_extra_data=False
+            )
     except zstandard.ZstdError as error:
         raise FormatError(f"the zstd frame does not decompress: {error}", field=where) from None
     if len(raw) != size:
