@@ -54,7 +54,8 @@ SAFETY = 1e-9
 RANKS_QUANTIZATION_SHARE = 1.05**2 - 1
 #: With fixed ranks that lose nothing, the quantization error aimed for, in KG percent.
 RANKS_FLOOR_KG = 1e-4
-FRAME_BLOCK = 64  # frames reconstructed at once when measuring the error: bounds the memory
+#: Bytes of positions reconstructed at once when measuring the error: bounds the memory.
+BLOCK_BYTES = 8 << 20
 
 Mode = Literal["kg", "ranks", "bpfv"]
 
@@ -179,10 +180,13 @@ class _Workspace:
         basis = reconstruction_basis(core, self.analysis.decomposition.u2)
         total = 0.0
         vertices = self.sequence.vertices
-        for start in range(0, self.frame_count, FRAME_BLOCK):
-            block = slice(start, start + FRAME_BLOCK)
-            decoded = reconstruct_frames(u1, basis, u3[block], centroids[block])
-            total += float(np.square(decoded - vertices[block]).sum())
+        frames_at_once = max(1, BLOCK_BYTES // (24 * self.vertex_count))
+        for start in range(0, self.frame_count, frames_at_once):
+            block = slice(start, start + frames_at_once)
+            difference = reconstruct_frames(u1, basis, u3[block], centroids[block])
+            difference -= vertices[block]
+            flat = difference.reshape(-1)
+            total += float(flat @ flat)
         return total
 
     def kg(self, error2: float) -> float:
@@ -297,11 +301,16 @@ def _search_kg(work: _Workspace, target_kg: float, select: Selection, shares: tu
     """The smallest file found for a target KG error: see the module docstring."""
     limit2 = (target_kg * (1.0 - SAFETY) / 100.0) ** 2 * work.denominator2
     trials: dict[tuple[int, int], tuple[int, float]] = {}
+    candidates = []
     for share in shares:
         choice = work.analysis.cheapest(target_kg * math.sqrt(share), select=select)
-        i, k = choice.i, choice.k
+        if (choice.i, choice.k) not in candidates:
+            candidates.append((choice.i, choice.k))
+    if candidates:  # form the factors once, for the largest ranks, rather than growing them
+        work.factors(max(i for i, _ in candidates), max(k for _, k in candidates))
+    for i, k in candidates:
         room = limit2 - work.truncation_error2(i, k)
-        if room <= 0 or (i, k) in trials:
+        if room <= 0:
             continue
         step = _initial_step(work, i, k, room)
         trials[(i, k)] = (work.trial_bytes(work.quantize(i, k, step)), step)
