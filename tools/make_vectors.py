@@ -32,6 +32,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from tuckercodec import MeshSequence, encode  # noqa: E402
+from tuckercodec.samples import sheet_triangles as triangles  # noqa: E402
+from tuckercodec.samples import wave_sheet as wave  # noqa: E402
 from tuckercodec.container import HEAD_SIZE, SIGNATURE, parse_container  # noqa: E402
 from tuckercodec.decoder import Decoder  # noqa: E402
 from tuckercodec.streams import compress  # noqa: E402
@@ -43,25 +45,6 @@ RELATIVE_TOLERANCE = 1e-9
 
 # ------------------------------------------------------------------------------------------
 # sequences
-
-
-def wave(frames: int, grid: int) -> np.ndarray:
-    """A sheet with travelling waves, drifting and turning (the tests' synthetic sequence)."""
-    u, v = np.meshgrid(np.linspace(0, 1, grid), np.linspace(0, 1, grid), indexing="ij")
-    u, v = u.ravel(), v.ravel()
-    out = np.empty((frames, u.size, 3))
-    for f in range(frames):
-        t = f / frames
-        z = 0.2 * np.sin(2 * np.pi * (u + t)) * np.cos(np.pi * (v - 0.5 * t))
-        angle = 0.5 * t
-        out[f] = np.stack([u * np.cos(angle) - v * np.sin(angle) + 0.3 * t, u * np.sin(angle) + v * np.cos(angle), z], 1)
-    return out
-
-
-def triangles(grid: int) -> np.ndarray:
-    index = np.arange(grid * grid).reshape(grid, grid)
-    a, b, c, d = index[:-1, :-1].ravel(), index[1:, :-1].ravel(), index[1:, 1:].ravel(), index[:-1, 1:].ravel()
-    return np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)])
 
 
 def polygons(grid: int) -> np.ndarray:
