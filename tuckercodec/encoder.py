@@ -55,7 +55,7 @@ RANKS_QUANTIZATION_SHARE = 1.05**2 - 1
 #: With fixed ranks that lose nothing, the quantization error aimed for, in KG percent.
 RANKS_FLOOR_KG = 1e-4
 #: Bytes of positions reconstructed at once when measuring the error: bounds the memory.
-BLOCK_BYTES = 8 << 20
+BLOCK_BYTES = 2 << 20
 
 Mode = Literal["kg", "ranks", "bpfv"]
 

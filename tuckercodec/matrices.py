@@ -44,7 +44,8 @@ def quantize(values: np.ndarray, steps: np.ndarray) -> QuantizedMatrix:
     steps32 = np.asarray(steps, dtype=np.float32)
     if not (np.isfinite(steps32).all() and (steps32 > 0).all()):
         raise ValueError("quantization steps must be positive finite float32 numbers")
-    q = np.rint(values / steps32.astype(np.float64)[None, :])
+    q = values / steps32.astype(np.float64)[None, :]
+    np.rint(q, out=q)
     if q.size and np.abs(q).max() > MAX_QUANTIZED:
         raise ValueError(
             "the error target is too small for the format's integer range: a quantized value "
@@ -70,9 +71,10 @@ def encode_matrix(
     predict = np.zeros(q.shape[1], dtype=np.uint8)
     stream = q
     if allow_predict and q.shape[0] > 1:
-        predicted = residuals(q, parents)
-        predict = (_cost(predicted) < _cost(q)).astype(np.uint8)
-        stream = np.where(predict[None, :] == PREDICT_PARENT, predicted, q)
+        stream = residuals(q, parents)
+        predict = (_cost(stream) < _cost(q)).astype(np.uint8)
+        plain = np.flatnonzero(predict == PREDICT_NONE)
+        stream[:, plain] = q[:, plain]  # in place: these columns store q itself
     payload, planes = streams.pack_integers(np.ascontiguousarray(stream.T), level)
     params = {
         "shape": [int(q.shape[0]), int(q.shape[1])],

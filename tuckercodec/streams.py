@@ -24,7 +24,9 @@ MAX_PLANES = 4  # integers of at most 32 bits after zigzag: |value| <= 2**31
 def zigzag(values: np.ndarray) -> np.ndarray:
     """Signed to unsigned: 0, -1, 1, -2, 2 ... -> 0, 1, 2, 3, 4 ..."""
     values = values.astype(np.int64, copy=False)
-    return ((values << 1) ^ (values >> 63)).astype(np.uint64)
+    out = np.left_shift(values, 1)
+    np.bitwise_xor(out, np.right_shift(values, 63), out=out)  # in place: one scratch array
+    return out.view(np.uint64)
 
 
 def unzigzag(values: np.ndarray) -> np.ndarray:
