@@ -194,3 +194,33 @@ def test_encode_usage_errors_exit_2(wave_npz, tmp_path, capsys):
     assert "ranks must be" in capsys.readouterr().err
     assert main(["decode", str(wave_npz), "-o", str(tmp_path / "o")]) == 3  # not a compressed file
     assert "not a tuckercodec file" in capsys.readouterr().err
+
+
+def test_decode_frame_options_and_reference_checks(wave_npz, tmp_path, capsys):
+    packed = tmp_path / "wave.tkc"
+    assert main(["encode", str(wave_npz), "-o", str(packed), "--kg", "1"]) == 0
+    assert main(["decode", str(packed), "-o", str(tmp_path / "last"), "--frames=-1", "--format", "npz"]) == 0
+    out = capsys.readouterr().out
+    assert "1 of 20 frames" in out and str(tmp_path / "last.npz") in out  # the path really written
+    assert (tmp_path / "last.npz").exists()
+    with pytest.raises(SystemExit) as exit_info:
+        main(["decode", str(packed), "-o", str(tmp_path / "x"), "--frames", "5:2"])
+    assert exit_info.value.code == 2 and "5:2 is empty" in capsys.readouterr().err
+    short = tmp_path / "short.npz"
+    np.savez(short, V=wave_sequence(5, 8), F=grid_faces(8))
+    assert main(["decode", str(packed), "-o", str(tmp_path / "r.npz"), "--reference", str(short)]) == 4
+    assert "has 5 frames" in capsys.readouterr().err
+    assert not (tmp_path / "r.npz").exists()  # checked before anything was written
+
+
+def test_eval_names_the_file_at_fault(wave_npz, tmp_path, capsys):
+    garbage = tmp_path / "garbage.tkc"
+    garbage.write_bytes(b"not a compressed file at all")
+    assert main(["eval", str(wave_npz), str(garbage)]) == 3
+    err = capsys.readouterr().err
+    assert str(garbage) in err and "not a tuckercodec file" in err
+    short = tmp_path / "short.npz"
+    np.savez(short, V=wave_sequence(5, 8), F=grid_faces(8))
+    assert main(["eval", str(wave_npz), str(short)]) == 4
+    err = capsys.readouterr().err
+    assert str(short) in err and str(wave_npz) in err

@@ -175,3 +175,22 @@ def test_real_sequences_meet_every_target_within_the_reference_size(name):
         if name in REFERENCE_BPFV:
             geometry, faces = REFERENCE_BPFV[name]
             assert result.report.bpfv <= geometry[n] + faces, (name, target, result.report.bpfv)
+
+
+def test_frame_selections(cloth):
+    decoder = tc.Decoder(encode(cloth, target_kg=1.0))
+    assert decoder.frame_indices(-1).tolist() == [59]  # negative numbers count from the end
+    assert decoder.frame_indices(slice(-3, None)).tolist() == [57, 58, 59]
+    for bad in ([1.5], "12", np.array([True, False])):
+        with pytest.raises(TypeError):
+            decoder.positions(bad)
+    with pytest.raises(ValueError, match="names no frame"):
+        decoder.positions(slice(5, 2))
+    with pytest.raises(ValueError, match="does not exist"):
+        decoder.positions([2**70])
+
+
+def test_coordinates_whose_squares_overflow_are_refused():
+    huge = MeshSequence(wave_sequence(frames=4, grid=4) * 1e200, grid_faces(4))
+    with pytest.raises(tc.InputError, match="too large"):
+        encode(huge)

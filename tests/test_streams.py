@@ -125,7 +125,17 @@ def test_quantized_matrix_round_trip_with_prediction():
 
 def test_quantization_refuses_steps_too_small_for_the_integers():
     with pytest.raises(ValueError, match="integer range"):
-        quantize(np.array([[1.0]]), np.array([1e-12]))
+        quantize(np.array([[1.0]]), np.array([1e-20]))
+    # within float64's exact integers, but not the 32-bit stream: refused when packed
+    with pytest.raises(ValueError, match="32-bit"):
+        encode_matrix(quantize(np.array([[1.0], [1.0]]), np.array([1e-12])), None)
+
+
+def test_skippable_zstd_frames_are_not_payloads():
+    import struct
+
+    with pytest.raises(FormatError, match="zstd frame header"):
+        streams.decompress_exact(struct.pack("<II", 0x184D2A50, 4) + b"abcd", 0, "s")
 
 
 def test_faces_round_trip_and_checks():

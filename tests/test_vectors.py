@@ -55,7 +55,7 @@ def test_invalid_vector(path):
     expected, data = _load(path)
     error = getattr(tuckercodec, expected["error"])
     with pytest.raises(error) as raised:
-        Decoder(data)
+        tuckercodec.decode(data)  # open and reconstruct every frame
     assert type(raised.value) is error  # the most specific class, not just a subclass
     assert expected["message_contains"] in str(raised.value)
 
@@ -65,3 +65,49 @@ def test_every_rule_of_the_spec_has_a_vector():
     rules = set(re.findall(r"\b(R\d\d-[a-z0-9-]+[a-z0-9])", text))
     vectors = {json.loads(p.read_text()).get("rule") for p in VECTORS} - {None}
     assert rules == vectors
+
+
+def _repacked(header_change) -> bytes:
+    """v1-wave-triangles with its header changed and the checksums made right again."""
+    import sys
+
+    sys.path.insert(0, str(SPEC.parent / "tools"))
+    from make_vectors import Parts
+
+    parts = Parts((SPEC / "vectors" / "v1-wave-triangles.tkc").read_bytes())
+    header_change(parts.header)
+    return parts.pack()
+
+
+def _with_raw_header_entry(raw_key_and_value: bytes) -> bytes:
+    """v1-wave-triangles with one more header entry, given as raw msgpack bytes (Python cannot
+    build values nested beyond its recursion limit), checksums made right again."""
+    import struct
+    import zlib
+
+    data = (SPEC / "vectors" / "v1-wave-triangles.tkc").read_bytes()
+    header_length = struct.unpack_from("<I", data, 16)[0]
+    header = data[32 : 32 + header_length]
+    assert 0x80 <= header[0] < 0x8F  # a fixmap: its low bits count the keys
+    new_header = bytes([header[0] + 1]) + header[1:] + raw_key_and_value
+    body = data[32 + header_length + 4 :]
+    head = bytearray(data[:28])
+    struct.pack_into("<IQ", head, 16, len(new_header), 32 + len(new_header) + 4 + len(body))
+    return b"".join([bytes(head), struct.pack("<I", zlib.crc32(bytes(head))), new_header,
+                     struct.pack("<I", zlib.crc32(new_header)), body])
+
+
+@pytest.mark.parametrize("depth", [10, 999, 1023, 1100])
+def test_deeply_nested_header_values_are_handled_without_recursion(depth):
+    data = _with_raw_header_entry(b"\xa6x-deep" + b"\x91" * depth + b"\x01")
+    if depth < 1024:
+        Decoder(data)  # valid: an unknown key is ignored, however deep its value
+    else:
+        with pytest.raises(tuckercodec.FormatError, match="1024"):
+            Decoder(data)
+
+
+def test_a_reconstruction_that_overflows_is_a_format_error():
+    data = _repacked(lambda h: h.__setitem__("u2", [1e308] * 9))
+    with pytest.raises(tuckercodec.FormatError, match="overflows"):
+        Decoder(data).positions()

@@ -219,6 +219,7 @@ def invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str, str]]:
         ),
         "R33-face-index": (_edit(good, _payload("FACE", face_payload, planes=1)), "FormatError", "outside"),
         "R34-face-padding": (_edit(good, _payload("FACE", padded_payload, planes=1)), "FormatError", "padded"),
+        "R36-reconstruction-finite": (_edit(good, _header(u2=[1e308] * 9)), "FormatError", "overflows"),
         "R35-names": (
             _edit(good, lambda p: _add_names(p, names)), "FormatError", "section NAME",
         ),

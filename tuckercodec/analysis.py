@@ -264,6 +264,11 @@ def analyze(sequence: MeshSequence | np.ndarray) -> Analysis:
         )
     if not np.isfinite(vertices).all():
         raise InputError("the positions contain a non-finite coordinate")
+    with np.errstate(over="ignore"):
+        if not np.isfinite(np.square(vertices).sum()):
+            raise InputError(
+                "the coordinates are too large: their squared norm overflows float64 (rescale them)"
+            )
     tensor, centroids = centre_frames(vertices)
     return Analysis(hosvd(tensor), centroids)
 

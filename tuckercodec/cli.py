@@ -17,7 +17,7 @@ from pathlib import Path
 from ._version import __version__
 from .analysis import analyze
 from .atomic import refuse_existing, write_atomic
-from .codec import SUFFIX, decode_file, is_compressed_file, read_compressed
+from .codec import SUFFIX, decode_file, decoded_output_path, is_compressed_file, read_compressed
 from .decoder import info as read_info
 from .encoder import DEFAULT_TARGET_KG, EncodeReport, encode_with_report
 from .errors import DependencyError, FormatError, InputError, TuckerCodecError
@@ -65,16 +65,24 @@ def _ranks(text: str) -> tuple[int, int]:
     return i, k
 
 
-def _frames(text: str) -> slice:
-    """``a:b`` (either end may be left out) or a single frame ``n``; frames count from 0."""
+def _frames(text: str) -> slice | list[int]:
+    """``a:b`` (either end may be left out; negative numbers count from the end, as in Python)
+    or a single frame ``n``; frames count from 0."""
     try:
         if ":" not in text:
-            n = int(text)
-            return slice(n, n + 1)
+            return [int(text)]
         start, stop = text.split(":")
-        return slice(int(start) if start else None, int(stop) if stop else None)
+        selection = slice(int(start) if start else None, int(stop) if stop else None)
     except ValueError:
         raise argparse.ArgumentTypeError(f"frames are 'a:b', 'a:', ':b' or 'n', got {text!r}") from None
+    if (
+        selection.start is not None
+        and selection.stop is not None
+        and (selection.start >= 0) == (selection.stop >= 0)
+        and selection.start >= selection.stop
+    ):
+        raise argparse.ArgumentTypeError(f"the range {text} is empty: frames a to b-1 need a < b")
+    return selection
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -127,7 +135,12 @@ def _parser() -> argparse.ArgumentParser:
     )
     decode.add_argument("input", help=f"a compressed file ({SUFFIX})")
     decode.add_argument("-o", "--output", type=Path, required=True, metavar="OUTDIR|OUT.npz")
-    decode.add_argument("--frames", type=_frames, metavar="A:B", help="frames a to b-1, counted from 0")
+    decode.add_argument(
+        "--frames",
+        type=_frames,
+        metavar="A:B",
+        help="frames a to b-1, counted from 0 (negative: from the end; clipped to the file, as Python slices)",
+    )
     decode.add_argument("--format", choices=("obj", "npz"), help="default: npz if OUT ends in .npz, else obj")
     decode.add_argument("--reference", metavar="ORIGINAL", help="report the actual error against this sequence")
     decode.add_argument("--precision", type=int, metavar="DIGITS", help="significant digits in OBJ files (default: exact)")
@@ -222,11 +235,14 @@ def _run_rd(args: argparse.Namespace, source: str | Path) -> int:
 
 
 def _load(source: str) -> MeshSequence:
-    """A sequence from a path, 'sample', or a compressed file (decoded)."""
+    """A sequence from a path, 'sample', or a compressed file (decoded); errors name the path."""
     if source == "sample":
         return load_sequence(sample_path(), progress=False)
-    if is_compressed_file(source):
-        return read_compressed(source).sequence()
+    if is_compressed_file(source) or Path(source).suffix.lower() == SUFFIX:
+        try:
+            return read_compressed(source).sequence()
+        except FormatError as error:
+            raise type(error)(f"{source}: {error}", field=None, offset=None) from None
     return load_sequence(source)
 
 
@@ -259,11 +275,19 @@ def _run_encode(args: argparse.Namespace) -> int:
 
 
 def _run_decode(args: argparse.Namespace) -> int:
+    header = read_info(args.input)
     reference = _load(args.reference) if args.reference else None
+    if reference is not None and (reference.frame_count, reference.vertex_count) != (header.frames, header.vertices):
+        raise InputError(  # before anything is written
+            f"the reference has {reference.frame_count} frames of {reference.vertex_count} vertices, "
+            f"the file {header.frames} of {header.vertices}",
+            path=args.reference,
+        )
+    output = decoded_output_path(args.output, args.format)
     start = time.perf_counter()
     decoded = decode_file(
         args.input,
-        args.output,
+        output,
         frames=args.frames,
         output_format=args.format,
         overwrite=args.force,
@@ -271,18 +295,12 @@ def _run_decode(args: argparse.Namespace) -> int:
         progress=True,
     )
     elapsed = time.perf_counter() - start
-    header = read_info(args.input)
     print(f"{args.input}: {decoded.frame_count} of {header.frames} frames, "
-          f"{decoded.vertex_count} vertices -> {args.output} in {elapsed:.2f} s")
+          f"{decoded.vertex_count} vertices -> {output} in {elapsed:.2f} s")
     print(f"file: {header.total_bytes} bytes = {header.bpfv:.4f} bpfv; KG error recorded by the "
           f"encoder {_number(header.kg)} ({header.kg_definition or 'no definition recorded'})")
     if reference is not None:
-        selected = reference.vertices[args.frames or slice(None)]
-        if selected.shape != decoded.vertices.shape:
-            raise InputError(
-                f"the reference has shape {selected.shape} for these frames, the file {decoded.vertices.shape}",
-                path=args.reference,
-            )
+        selected = reference.vertices[args.frames if args.frames is not None else slice(None)]
         scope = "" if args.frames is None else (
             f" (of the {decoded.frame_count} frames decoded, with their own KG denominator; the "
             "target applies to the whole sequence)"
@@ -307,8 +325,9 @@ def _run_info(args: argparse.Namespace) -> int:
           f"{header.face_width} corners")
     print(f"  ranks (i, 3, k) = ({i}, 3, {k})")
     print(f"  {header.total_bytes} bytes = {header.bpfv:.4f} bpfv (whole file)")
+    target = "none (fixed ranks or a size target)" if header.target_kg is None else f"{header.target_kg:g}"
     print(f"  KG error {_number(header.kg)} ({header.kg_definition or 'no definition recorded'}), "
-          f"target {_number(header.target_kg)}")
+          f"target {target}")
     if header.frame_rate is not None:
         print(f"  {header.frame_rate:g} frames per second")
     print(f"  written by {header.encoder or 'an unnamed encoder'}")
@@ -319,6 +338,11 @@ def _run_info(args: argparse.Namespace) -> int:
 
 def _run_eval(args: argparse.Namespace) -> int:
     original, approximation = _load(args.original), _load(args.approximation)
+    if original.vertices.shape != approximation.vertices.shape:
+        raise InputError(
+            f"{args.original} has {original.frame_count} frames of {original.vertex_count} vertices, "
+            f"{args.approximation} {approximation.frame_count} of {approximation.vertex_count}"
+        )
     per_frame = per_frame_kg(original, approximation)
     worst_frame = int(per_frame.argmax())
     displacement = max_vertex_displacement(original, approximation)

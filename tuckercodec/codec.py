@@ -63,6 +63,21 @@ def read_compressed(path: str | os.PathLike[str], *, limits: Limits = DEFAULT_LI
     return Decoder(Path(path).read_bytes(), limits=limits)
 
 
+def decoded_output_path(output: str | os.PathLike[str], output_format: OutputFormat | None) -> Path:
+    """Where :func:`decode_file` writes: ``output`` itself, or with ``.npz`` added for the npz
+    format. The format defaults to npz for a name ending in ``.npz`` and to OBJ otherwise."""
+    output = Path(output)
+    if output_format is None:
+        output_format = "npz" if output.suffix.lower() == ".npz" else "obj"
+    if output_format not in ("obj", "npz"):
+        raise ValueError(f"output format must be 'obj' or 'npz', got {output_format!r}")
+    if output_format == "obj" and output.suffix.lower() == ".npz":
+        raise ValueError(f"{output}: an OBJ output is a folder, not an .npz file")
+    if output_format == "npz" and output.suffix.lower() != ".npz":
+        return Path(f"{output}.npz")
+    return output
+
+
 def decode_file(
     path: str | os.PathLike[str],
     output: str | os.PathLike[str],
@@ -76,17 +91,10 @@ def decode_file(
     """Decode a compressed file and write the frames: a folder of OBJ files, or an ``.npz``.
 
     ``output_format`` defaults to ``npz`` when ``output`` ends in ``.npz`` and to ``obj``
-    otherwise. Returns the decoded sequence.
+    otherwise, and ``.npz`` is added to the name for the npz format if missing
+    (:func:`decoded_output_path`). Returns the decoded sequence.
     """
-    output = Path(output)
-    if output_format is None:
-        output_format = "npz" if output.suffix.lower() == ".npz" else "obj"
-    if output_format not in ("obj", "npz"):
-        raise ValueError(f"output format must be 'obj' or 'npz', got {output_format!r}")
-    if output_format == "npz" and output.suffix.lower() != ".npz":
-        output = output.with_suffix(".npz") if output.suffix == "" else Path(f"{output}.npz")
-    if output_format == "obj" and output.suffix.lower() == ".npz":
-        raise ValueError(f"{output}: an OBJ output is a folder, not an .npz file")
+    output = decoded_output_path(output, output_format)
     sequence = read_compressed(path).sequence(frames)
     save_sequence(sequence, output, overwrite=overwrite, precision=precision, progress=progress)
     return sequence

@@ -63,6 +63,7 @@ class Limits:
     max_face_width: int = 64
     max_sections: int = 64
     max_section_bytes: int = 1 << 32  # decompressed size of one section
+    max_factor_values: int = 1 << 27  # K*i + F*k + 3*i*k + 3*F, the numbers decoded before any frame
 
 
 DEFAULT_LIMITS = Limits()
@@ -280,16 +281,18 @@ def _strict_map(pairs: list[tuple[Any, Any]]) -> dict[str, Any]:
     return out
 
 
-def _reject_timestamps(value: Any, depth: int = 0) -> None:
-    """msgpack decodes its timestamp extension (type -1) itself, past the ext hook."""
-    if isinstance(value, msgpack.Timestamp):
-        raise FormatError("msgpack extension type -1 (timestamp) is not allowed in the header", field="header")
-    if isinstance(value, dict):
-        for item in value.values():
-            _reject_timestamps(item, depth + 1)
-    elif isinstance(value, list):
-        for item in value:
-            _reject_timestamps(item, depth + 1)
+def _reject_timestamps(header: dict[str, Any]) -> None:
+    """msgpack decodes its timestamp extension (type -1) itself, past the ext hook. The walk
+    keeps its own stack: msgpack nests up to 1024 deep, beyond Python's recursion limit."""
+    pending: list[Any] = [header]
+    while pending:
+        value = pending.pop()
+        if isinstance(value, msgpack.Timestamp):
+            raise FormatError("msgpack extension type -1 (timestamp) is not allowed in the header", field="header")
+        if isinstance(value, dict):
+            pending.extend(value.values())
+        elif isinstance(value, list):
+            pending.extend(value)
 
 
 def _unpack_header(header_bytes: bytes) -> dict[str, Any]:
@@ -301,9 +304,12 @@ def _unpack_header(header_bytes: bytes) -> dict[str, Any]:
         )
     except FormatError:
         raise
+    except msgpack.StackError:
+        raise FormatError("the header nests deeper than msgpack's 1024 levels", field="header") from None
     except (ValueError, TypeError, msgpack.UnpackException, RecursionError) as error:
-        # ExtraData, FormatError, StackError and invalid UTF-8 all derive from ValueError
-        raise FormatError(f"the header is not one valid msgpack map ({error})", field="header") from None
+        # ExtraData, FormatError and invalid UTF-8 all derive from ValueError
+        reason = str(error) or type(error).__name__
+        raise FormatError(f"the header is not one valid msgpack map ({reason})", field="header") from None
     if not isinstance(header, dict):
         raise FormatError(f"the header is a msgpack {type(header).__name__}, not a map", field="header")
     _reject_timestamps(header)

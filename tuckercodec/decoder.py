@@ -13,6 +13,7 @@ without touching the others.
 from __future__ import annotations
 
 import math
+import operator
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -148,10 +149,10 @@ def _check_sections(container: Container, shape: dict[str, tuple[int, int]], lim
         entry = container.section(section_id)
         rows, cols = matrices.matrix_shape(entry.params, f"section {section_id}")
         if section_id == "FACE":
-            if rows > limits.max_faces:
-                raise LimitError(f"{rows} faces exceed the limit of {limits.max_faces}", field="section FACE.shape")
             if cols < 3:
                 raise FormatError(f"faces need at least 3 corners, the width is {cols}", field="section FACE.shape")
+            if rows > limits.max_faces:
+                raise LimitError(f"{rows} faces exceed the limit of {limits.max_faces}", field="section FACE.shape")
             if cols > limits.max_face_width:
                 raise LimitError(
                     f"faces of {cols} corners exceed the limit of {limits.max_face_width}",
@@ -192,6 +193,13 @@ def _file_info(container: Container, limits: Limits) -> FileInfo:
         raise FormatError(
             f"ranks ({i}, {k}) must satisfy 1 <= i <= min(K, 3F) = {min(vertices, 3 * frames)} "
             f"and 1 <= k <= min(F, 3K) = {min(frames, 3 * vertices)}",
+            field="header.ranks",
+        )
+    factor_values = vertices * i + frames * k + 3 * i * k + 3 * frames
+    if factor_values > limits.max_factor_values:
+        raise LimitError(
+            f"ranks ({i}, {k}) make {factor_values} factor values, beyond the limit of "
+            f"{limits.max_factor_values}",
             field="header.ranks",
         )
     u2 = header.get("u2")
@@ -301,19 +309,35 @@ class Decoder:
         if frames is None:
             return np.arange(count)
         if isinstance(frames, slice):
-            return np.arange(count)[frames]
-        if isinstance(frames, (int, np.integer)) and not isinstance(frames, bool):
-            frames = [int(frames)]
-        indices = np.asarray(list(frames), dtype=np.int64)
-        if indices.size and (indices.min() < 0 or indices.max() >= count):
-            bad = int(indices[(indices < 0) | (indices >= count)][0])
-            raise ValueError(f"frame {bad} does not exist: the file has frames 0..{count - 1}")
-        return indices
+            return np.arange(count)[frames]  # clipped to the file's frames, like any slice
+        if isinstance(frames, (str, bytes)):
+            raise TypeError(f"frames must be frame numbers, a range or a slice, not {frames!r}")
+        single = [frames] if np.ndim(frames) == 0 else list(frames)
+        try:
+            # operator.index refuses bools' cousins floats and strings; bools are refused below
+            numbers = [operator.index(n) for n in single if not isinstance(n, (bool, np.bool_))]
+        except TypeError:
+            raise TypeError(f"frame numbers must be integers, got {frames!r}") from None
+        if len(numbers) != len(single):
+            raise TypeError(f"frame numbers must be integers, not booleans: {frames!r}")
+        for n in numbers:  # negative numbers count from the end, as in Python
+            if not -count <= n < count:
+                raise ValueError(f"frame {n} does not exist: the file has frames 0..{count - 1}")
+        return np.array([n % count for n in numbers], dtype=np.int64)
+
+    def _selected(self, frames: FrameSelection) -> np.ndarray:
+        chosen = self.frame_indices(frames)
+        if chosen.size == 0:
+            raise ValueError(f"the selection {frames!r} names no frame of the file's 0..{self.frame_count - 1}")
+        return chosen
 
     def positions(self, frames: FrameSelection = None) -> np.ndarray:
         """Decoded positions of the selected frames, (n, K, 3) float64 (§8)."""
-        chosen = self.frame_indices(frames)
-        return reconstruct_frames(self.u1, self._basis, self.u3[chosen], self.centroids[chosen])
+        chosen = self._selected(frames)
+        positions = reconstruct_frames(self.u1, self._basis, self.u3[chosen], self.centroids[chosen])
+        if not np.isfinite(positions).all():  # finite factors whose products overflow
+            raise FormatError("the reconstruction overflows float64: the factors are out of range", field="header.u2")
+        return positions
 
     def frame(self, index: int) -> np.ndarray:
         """One decoded frame, (K, 3)."""
@@ -321,7 +345,7 @@ class Decoder:
 
     def sequence(self, frames: FrameSelection = None) -> MeshSequence:
         """The selected frames as a :class:`MeshSequence` with the file's faces and names."""
-        chosen = self.frame_indices(frames)
+        chosen = self._selected(frames)
         return MeshSequence(
             self.positions(chosen),
             self.faces,
@@ -363,7 +387,8 @@ def decode(data: bytes | bytearray | memoryview, *, frames: FrameSelection = Non
     Raises:
         FormatError: the bytes are not a valid file (a subclass says how: truncated, checksum,
             unsupported version, limit).
-        ValueError: a selected frame does not exist.
+        ValueError: a selected frame does not exist, or the selection is empty.
+        TypeError: ``frames`` is not frame numbers, a range or a slice.
     """
     return Decoder(data, limits=limits).sequence(frames)
 

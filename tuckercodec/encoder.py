@@ -294,7 +294,7 @@ def _meet(work: _Workspace, i: int, k: int, step: float, limit2: float) -> tuple
         else:
             # the noise grows about linearly with D; aim a little inside and never stall
             step *= min(0.95, max(0.25, 0.97 * room / added))
-    raise RuntimeError(f"could not meet the error target with ranks ({i}, {k})")  # pragma: no cover
+    raise ValueError(f"could not meet the error target with ranks ({i}, {k})")  # pragma: no cover
 
 
 def _search_kg(work: _Workspace, target_kg: float, select: Selection, shares: tuple[float, ...]) -> tuple[_Quantized, float, int]:
@@ -360,7 +360,7 @@ def encode_with_report(
         ranks: fixed ranks (i, k); quantization then adds at most about 5 % to the KG error of
             the truncation.
         target_bpfv: the largest whole-file size in bits per frame per vertex; the smallest KG
-            error that fits is chosen.
+            error that fits is chosen, down to a KG error of 1e-4 (a larger budget is not filled).
         select: ``"exact"`` chooses ranks by the exact error table, ``"bound"`` by the seed
             paper's bound alone.
         level: zstd level of the sections (1-22).

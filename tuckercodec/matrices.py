@@ -22,8 +22,9 @@ from .prediction import accumulate, residuals
 
 CODEC = "qmat"
 PREDICT_NONE, PREDICT_PARENT = 0, 1
-#: Largest |q| the encoder writes: leaves room below the 32-bit stream range for residuals.
-MAX_QUANTIZED = 2**30 - 1
+#: Largest |q| the encoder forms: exact in float64. What is streamed (q, or its residual from
+#: the parent) must also fit 32 bits, which :func:`tuckercodec.streams.pack_integers` checks.
+MAX_QUANTIZED = 2**52
 
 
 @dataclass

@@ -19,6 +19,7 @@ DEFAULT_LEVEL = 19
 #: zstd level for trial packings while the encoder searches (sizes within ~1 % of level 19).
 SEARCH_LEVEL = 3
 MAX_PLANES = 4  # integers of at most 32 bits after zigzag: |value| <= 2**31
+ZSTD_MAGIC = b"\x28\xb5\x2f\xfd"  # a zstd data frame (skippable frames have other magics)
 
 
 def zigzag(values: np.ndarray) -> np.ndarray:
@@ -51,9 +52,10 @@ def to_planes(unsigned: np.ndarray, planes: int) -> bytes:
 def from_planes(raw: bytes | memoryview, count: int, planes: int) -> np.ndarray:
     """Unsigned values (uint64) from ``planes`` byte planes of ``count`` values each."""
     grid = np.frombuffer(raw, dtype=np.uint8).reshape(planes, count)
-    out = np.zeros((count, 8), dtype=np.uint8)
-    out[:, :planes] = grid.T
-    return out.view("<u8").reshape(count).astype(np.uint64)
+    out = grid[0].astype(np.uint64)
+    for plane in range(1, planes):
+        out |= grid[plane].astype(np.uint64) << np.uint64(8 * plane)
+    return out
 
 
 def compress(raw: bytes, level: int = DEFAULT_LEVEL) -> bytes:
@@ -67,6 +69,8 @@ def decompress_exact(payload: bytes | memoryview, size: int, where: str) -> byte
     The frame's declared content size is checked before anything is allocated, and bytes after
     the frame are an error.
     """
+    if bytes(payload[:4]) != ZSTD_MAGIC:
+        raise FormatError("the payload does not start with a zstd frame header", field=where)
     try:
         declared = zstandard.frame_content_size(payload)
     except zstandard.ZstdError:
@@ -100,7 +104,8 @@ def pack_integers(values: np.ndarray, level: int = DEFAULT_LEVEL) -> tuple[bytes
     planes = planes_needed(unsigned)
     if planes > MAX_PLANES:
         raise ValueError(
-            f"an integer of {int(np.abs(values).max())} does not fit the format's 32-bit range"
+            f"a quantized value of {int(np.abs(values).max())} does not fit the format's 32-bit "
+            "range: the error target is too small for the size of the coordinates"
         )
     return compress(to_planes(unsigned, planes), level), planes
 
