@@ -34,6 +34,7 @@ sys.path.insert(0, str(ROOT))
 from tuckercodec import MeshSequence, encode  # noqa: E402
 from tuckercodec.samples import sheet_triangles as triangles  # noqa: E402
 from tuckercodec.samples import wave_sheet as wave  # noqa: E402
+from tuckercodec.connectivity import encode_faces  # noqa: E402
 from tuckercodec.container import HEAD_SIZE, SIGNATURE, parse_container  # noqa: E402
 from tuckercodec.decoder import Decoder  # noqa: E402
 from tuckercodec.streams import compress  # noqa: E402
@@ -72,13 +73,17 @@ class Parts:
     def index(self, section_id: str) -> int:
         return next(n for n, entry in enumerate(self.entries) if entry["id"] == section_id)
 
+    def fill_table(self) -> None:
+        """Offsets, lengths and CRCs of the entries, from the payloads as they are now."""
+        offset = 0
+        for entry, payload in zip(self.entries, self.payloads):
+            entry.update(offset=offset, length=len(payload), crc32=zlib.crc32(payload))
+            offset += len(payload)
+
     def pack(self, *, fix_table: bool = True, header_bytes: bytes | None = None, total: int | None = None) -> bytes:
         """Bytes of the file; offsets, lengths and CRCs recomputed unless ``fix_table`` is off."""
         if fix_table:
-            offset = 0
-            for entry, payload in zip(self.entries, self.payloads):
-                entry.update(offset=offset, length=len(payload), crc32=zlib.crc32(payload))
-                offset += len(payload)
+            self.fill_table()
         if header_bytes is None:
             header_bytes = msgpack.packb({**self.header, "sections": self.entries}, use_bin_type=True)
         body = b"".join(self.payloads)
@@ -137,10 +142,7 @@ def _flip_last_payload_byte(section_id: str) -> Callable[[Parts], None]:
     """Damage a section after its CRC was computed: the table keeps the old CRC."""
     def change(parts: Parts) -> None:
         n = parts.index(section_id)
-        offset = 0
-        for entry, payload in zip(parts.entries, parts.payloads):
-            entry.update(offset=offset, length=len(payload), crc32=zlib.crc32(payload))
-            offset += len(payload)
+        parts.fill_table()
         damaged = bytearray(parts.payloads[n])
         damaged[-1] ^= 0x01
         parts.payloads[n] = bytes(damaged)
@@ -155,14 +157,10 @@ def invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str, str]]:
     k_vertices = parts.header["vertices"]
     bad_faces = np.full(faces_shape, 0, dtype=np.int64)
     bad_faces[0, 0] = k_vertices  # one past the last vertex
-    shifted = (bad_faces + 1).reshape(-1)
-    deltas = np.diff(shifted, prepend=0)
-    zig = ((deltas << 1) ^ (deltas >> 63)).astype("<u8")
-    face_payload = compress(np.ascontiguousarray(zig.view(np.uint8).reshape(-1, 8)[:, :1].T).tobytes())
+    face_params, face_payload = encode_faces(bad_faces)  # the encoder does not check indices
     padded = np.zeros(faces_shape, dtype=np.int64)
     padded[:, 1] = -1  # padding before the end of a row
-    zig2 = (lambda d: ((d << 1) ^ (d >> 63)).astype("<u8"))(np.diff((padded + 1).reshape(-1), prepend=0))
-    padded_payload = compress(np.ascontiguousarray(zig2.view(np.uint8).reshape(-1, 8)[:, :1].T).tobytes())
+    padded_params, padded_payload = encode_faces(padded)
     core_entry = parts.entries[parts.index("CORE")]
     names = msgpack.packb(["only one name"])
 
@@ -217,8 +215,8 @@ def invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str, str]]:
         "R32-predictor": (
             _edit(good, _entry("CORE", predict=b"\x01" * len(core_entry["predict"]))), "FormatError", "predictor",
         ),
-        "R33-face-index": (_edit(good, _payload("FACE", face_payload, planes=1)), "FormatError", "outside"),
-        "R34-face-padding": (_edit(good, _payload("FACE", padded_payload, planes=1)), "FormatError", "padded"),
+        "R33-face-index": (_edit(good, _payload("FACE", face_payload, **face_params)), "FormatError", "outside"),
+        "R34-face-padding": (_edit(good, _payload("FACE", padded_payload, **padded_params)), "FormatError", "padded"),
         "R36-reconstruction-finite": (_edit(good, _header(u2=[1e308] * 9)), "FormatError", "overflows"),
         "R35-names": (
             _edit(good, lambda p: _add_names(p, names)), "FormatError", "section NAME",

@@ -262,9 +262,8 @@ def _run_encode(args: argparse.Namespace) -> int:
     refuse_existing([args.output], args.force)  # before the work, not after it
     start = time.perf_counter()
     sequence = load_sequence(sample_path() if args.input == "sample" else args.input)
-    target = args.kg if args.kg is not None or args.ranks or args.bpfv else DEFAULT_TARGET_KG
-    result = encode_with_report(
-        sequence, target_kg=target, ranks=args.ranks, target_bpfv=args.bpfv, select=args.select
+    result = encode_with_report(  # no mode given: the encoder's default target
+        sequence, target_kg=args.kg, ranks=args.ranks, target_bpfv=args.bpfv, select=args.select
     )
     write_atomic(args.output, result.data, overwrite=args.force)
     print(f"{args.input}: {sequence.frame_count} frames, {sequence.vertex_count} vertices "

@@ -36,7 +36,7 @@ from .container import (
 from .errors import FormatError, LimitError, TruncatedFileError, UnsupportedVersionError
 from .metrics import bpfv
 from .prediction import mesh_parents
-from .sequence import MeshSequence
+from .sequence import MeshSequence, default_frame_names
 
 #: The sections of format 1.0: id -> (codec, critical).
 KNOWN_SECTIONS = {
@@ -123,6 +123,11 @@ def _optional_float(header: dict[str, Any], key: str, positive: bool = False) ->
     return value
 
 
+def factor_value_count(vertices: int, frames: int, i: int, k: int) -> int:
+    """The numbers a file with ranks (i, k) stores: U1, U3, the core and the centroids."""
+    return vertices * i + frames * k + 3 * i * k + 3 * frames
+
+
 def _check_sections(container: Container, shape: dict[str, tuple[int, int]], limits: Limits) -> None:
     """§6: known sections with their codec and criticality; unknown critical ones refused;
     every shape as the header implies, and within the limits."""
@@ -195,7 +200,7 @@ def _file_info(container: Container, limits: Limits) -> FileInfo:
             f"and 1 <= k <= min(F, 3K) = {min(frames, 3 * vertices)}",
             field="header.ranks",
         )
-    factor_values = vertices * i + frames * k + 3 * i * k + 3 * frames
+    factor_values = factor_value_count(vertices, frames, i, k)
     if factor_values > limits.max_factor_values:
         raise LimitError(
             f"ranks ({i}, {k}) make {factor_values} factor values, beyond the limit of "
@@ -312,18 +317,24 @@ class Decoder:
             return np.arange(count)[frames]  # clipped to the file's frames, like any slice
         if isinstance(frames, (str, bytes)):
             raise TypeError(f"frames must be frame numbers, a range or a slice, not {frames!r}")
-        single = [frames] if np.ndim(frames) == 0 else list(frames)
-        try:
-            # operator.index refuses bools' cousins floats and strings; bools are refused below
-            numbers = [operator.index(n) for n in single if not isinstance(n, (bool, np.bool_))]
-        except TypeError:
-            raise TypeError(f"frame numbers must be integers, got {frames!r}") from None
-        if len(numbers) != len(single):
-            raise TypeError(f"frame numbers must be integers, not booleans: {frames!r}")
-        for n in numbers:  # negative numbers count from the end, as in Python
-            if not -count <= n < count:
-                raise ValueError(f"frame {n} does not exist: the file has frames 0..{count - 1}")
-        return np.array([n % count for n in numbers], dtype=np.int64)
+        if isinstance(frames, range):
+            numbers = np.arange(frames.start, frames.stop, frames.step, dtype=object)
+        elif isinstance(frames, np.ndarray) and frames.dtype.kind in "iu":
+            numbers = frames.reshape(-1).astype(object)
+        else:
+            single = [frames] if np.ndim(frames) == 0 else list(frames)
+            if any(isinstance(n, (bool, np.bool_)) for n in single):
+                raise TypeError(f"frame numbers must be integers, not booleans: {frames!r}")
+            try:  # operator.index refuses floats and strings
+                numbers = np.array([operator.index(n) for n in single] + [0], dtype=object)[:-1]
+            except TypeError:
+                raise TypeError(f"frame numbers must be integers, got {frames!r}") from None
+        # object arithmetic: a number beyond int64 is reported, not overflowed
+        outside = (numbers < -count) | (numbers >= count)
+        if outside.any():
+            bad = numbers[outside][0]
+            raise ValueError(f"frame {bad} does not exist: the file has frames 0..{count - 1}")
+        return (numbers % count).astype(np.int64)  # negative numbers count from the end
 
     def _selected(self, frames: FrameSelection) -> np.ndarray:
         chosen = self.frame_indices(frames)
@@ -358,7 +369,7 @@ def _frame_names(container: Container, data: bytes | memoryview, frames: int, li
     """The NAME section's frame names (§6.5), or ``frame_00000``... where it is absent."""
     entry = container.section("NAME")
     if entry is None:
-        return [f"frame_{n:05d}" for n in range(frames)]
+        return default_frame_names(frames)
     where = "section NAME"
     size = entry.params.get("size")
     if not isinstance(size, int) or isinstance(size, bool) or size < 0:

@@ -35,12 +35,12 @@ from . import connectivity, matrices, streams
 from ._version import __version__
 from .analysis import Analysis, Selection, analyze
 from .container import pack_container
-from .decoder import KG_DEFINITION_ID, reconstruct_frames, reconstruction_basis
+from .decoder import KG_DEFINITION_ID, factor_value_count, reconstruct_frames, reconstruction_basis
 from .hosvd import project
 from .matrices import QuantizedMatrix
 from .metrics import bpfv as bits_per_frame_vertex
 from .prediction import mesh_parents
-from .sequence import MeshSequence
+from .sequence import MeshSequence, default_frame_names
 
 DEFAULT_TARGET_KG = 0.1
 #: Shares of the squared error budget given to truncation in the search (the rest is quantization).
@@ -245,8 +245,7 @@ def _steps(root: float, norms: np.ndarray) -> np.ndarray:
 
 def _names_section(sequence: MeshSequence, level: int) -> tuple[dict[str, Any], bytes] | None:
     """The ancillary NAME section, left out when the names are the default ``frame_00000``..."""
-    default = [f"frame_{n:05d}" for n in range(sequence.frame_count)]
-    if sequence.frame_names == default:
+    if sequence.frame_names == default_frame_names(sequence.frame_count):
         return None
     raw = msgpack.packb(list(sequence.frame_names), use_bin_type=True)
     return (
@@ -255,19 +254,13 @@ def _names_section(sequence: MeshSequence, level: int) -> tuple[dict[str, Any], 
     )
 
 
-def _coefficient_count(i: int, k: int, vertices: int, frames: int) -> int:
-    """Numbers quantized with ranks (i, k): U1, U3, the core and the centroids."""
-    return vertices * i + frames * k + 3 * i * k + 3 * frames
-
-
 # ------------------------------------------------------------------------------------------
 # meeting a target
 
 
 def _initial_step(work: _Workspace, i: int, k: int, budget2: float) -> float:
     """D such that the quantization noise, about D/12 per stored number, fills ``budget2``."""
-    count = _coefficient_count(i, k, work.vertex_count, work.frame_count)
-    return 12.0 * budget2 / count
+    return 12.0 * budget2 / factor_value_count(work.vertex_count, work.frame_count, i, k)
 
 
 def _meet(work: _Workspace, i: int, k: int, step: float, limit2: float) -> tuple[_Quantized, float, int]:
@@ -400,10 +393,6 @@ def encode_with_report(
         target_for_header = None
 
     data, sizes = work.pack(quantized, error2, target_for_header)
-    if mode == "bpfv" and bits_per_frame_vertex(len(data), work.frame_count, work.vertex_count) > target:
-        raise ValueError(  # pragma: no cover - _search_bpfv packs the very same file
-            f"the file needs {bits_per_frame_vertex(len(data), work.frame_count, work.vertex_count):.3f} bpfv"
-        )
     report = EncodeReport(
         mode=mode,
         target=target,

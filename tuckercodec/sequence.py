@@ -9,6 +9,11 @@ import numpy as np
 from .errors import InputError
 
 
+def default_frame_names(count: int) -> list[str]:
+    """``frame_00000``, ``frame_00001``...: the names of frames that came without any."""
+    return [f"frame_{n:05d}" for n in range(count)]
+
+
 @dataclass(eq=False)
 class MeshSequence:
     """A temporally coherent mesh sequence.
@@ -53,7 +58,7 @@ class MeshSequence:
         _check_faces(self.faces, self.vertex_count)
 
         if not self.frame_names:
-            self.frame_names = [f"frame_{n:05d}" for n in range(self.frame_count)]
+            self.frame_names = default_frame_names(self.frame_count)
         self.frame_names = [str(name) for name in self.frame_names]
         if len(self.frame_names) != self.frame_count:
             raise InputError(
