@@ -243,7 +243,7 @@ def packed(wave_npz, tmp_path):
 
 def test_eval_reports_sted_with_its_parameters_and_definition(wave_npz, packed, capsys):
     from tuckercodec import load_sequence, read_compressed, sted
-    from tuckercodec.metrics import STED_DEFINITION
+    from tuckercodec.perceptual import STED_DEFINITION
 
     capsys.readouterr()
     assert main(["eval", str(wave_npz), str(packed), "--json"]) == 0
@@ -312,7 +312,7 @@ def test_render_draws_a_frame_with_and_without_a_reference(wave_npz, packed, tmp
 
 def test_render_decodes_only_the_frame_it_draws(packed, tmp_path, monkeypatch):
     pytest.importorskip("matplotlib")
-    from tuckercodec.decoder import Decoder
+    from tuckercodec import Decoder
 
     asked = []
     original = Decoder.positions

@@ -108,7 +108,7 @@ def test_sequences_without_a_measurable_shape_are_refused(positions, message):
 def test_far_from_the_origin_a_tight_target_is_refused_with_what_is_reachable():
     base = _strip()
     far = MeshSequence(base.vertices + 1e7, base.faces)  # 1e7 times the strip's size
-    with pytest.raises(tc.InputError, match="too far from the origin") as refused:
+    with pytest.raises(tc.UnreachableTargetError, match="too far from the origin") as refused:
         tc.encode(far, target_kg=0.1)
     floor = float(re.search(r"already costs a KG error of ([0-9.]+)\. ", str(refused.value)).group(1))
     assert 0.1 < floor < 10

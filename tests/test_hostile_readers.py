@@ -33,9 +33,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from tuckercodec import InputError, MeshSequence, objio
-from tuckercodec.objio import MAX_LINE_BYTES, _parse_careful, _read_text, read_obj
-from tuckercodec.seqio import load_sequence
+from tuckercodec import InputError, MeshSequence
+from tuckercodec.io import load_sequence
+from tuckercodec.io import obj as objio
+from tuckercodec.io.obj import MAX_LINE_BYTES, _parse_careful, _read_text, read_obj
 
 TRIANGLE = "v 0 0 0\nv 1 0 0\nv 0 1 0\n"
 
@@ -609,12 +610,12 @@ TRI = np.array([[0, 1, 2]])
         ({"V": V3, "F": np.array([[0, 1], [1, 2]])}, r"'F' must have shape .* got \(2, 2\)"),
         ({"V": V3, "F": np.array([0, 1, 2])}, "'F' must have shape"),
         ({"V": V3, "F": np.zeros((1, 3, 1), dtype=int)}, "'F' must have shape"),
-        ({"V": V3, "F": np.array([[0, 1, -2]])}, r"'F' has vertex indices -2\.\.1"),
+        ({"V": V3, "F": np.array([[0, 1, -2]])}, r"'F': face 0 has a vertex index -2 outside 0\.\.2"),
         ({"V": V3, "F": np.array([[0, 1, 3]])}, "1-based"),
         ({"V": V3, "F": np.array([[0, 1, 7]])}, r"outside 0\.\.2"),
         ({"V": V3, "F": np.array([[0, 1, 2**62]])}, r"outside 0\.\.2"),
-        ({"V": V3, "F": np.array([[0, -1, 1, 2]])}, "face 0 is malformed"),  # padding inside
-        ({"V": V3, "F": np.array([[0, 1, -1]])}, "face 0 is malformed"),  # under 3 corners
+        ({"V": V3, "F": np.array([[0, -1, 1, 2]])}, "face 0 is padded before its end"),  # padding inside
+        ({"V": V3, "F": np.array([[0, 1, -1]])}, "face 0 is padded before its end"),  # under 3 corners
         # unsigned indices that a cast to int64 would turn into -1 padding
         ({"V": V3, "F": np.array([[0, 1, 2, 2**64 - 1]], dtype=np.uint64)}, r"outside 0\.\.2"),
         # frame names and rate

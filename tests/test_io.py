@@ -10,7 +10,7 @@ import pytest
 from conftest import shared_file
 
 from tuckercodec import InputError, MeshSequence
-from tuckercodec.objio import (
+from tuckercodec.io.obj import (
     _parse_careful,
     _parse_fast,
     _read_text,
@@ -18,7 +18,7 @@ from tuckercodec.objio import (
     read_obj_frame,
     write_obj,
 )
-from tuckercodec.seqio import load_sequence, natural_sort_key, save_sequence
+from tuckercodec.io import load_sequence, natural_sort_key, save_sequence
 
 CUBE_VERTICES = np.array(
     [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]],

@@ -201,7 +201,7 @@ def _failing_after(count: int, real):
 
 
 def test_a_decode_into_a_new_folder_that_fails_leaves_no_folder(tmp_path, monkeypatch):
-    from tuckercodec import seqio
+    from tuckercodec.io import obj as seqio
 
     sequence = tc.MeshSequence(wave_sequence(6, 4), grid_faces(4))
     monkeypatch.setattr(seqio, "write_obj", _failing_after(3, seqio.write_obj))
@@ -211,7 +211,7 @@ def test_a_decode_into_a_new_folder_that_fails_leaves_no_folder(tmp_path, monkey
 
 
 def test_a_failed_decode_over_an_existing_folder_keeps_every_old_frame(tmp_path, monkeypatch):
-    from tuckercodec import seqio
+    from tuckercodec.io import obj as seqio
 
     old = tc.MeshSequence(wave_sequence(6, 4), grid_faces(4))
     tc.save_sequence(old, tmp_path / "frames", progress=False)

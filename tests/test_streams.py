@@ -7,10 +7,12 @@ import collections
 import numpy as np
 import pytest
 
-from tuckercodec import FormatError, streams
-from tuckercodec.connectivity import decode_faces, encode_faces
-from tuckercodec.matrices import decode_matrix, encode_matrix, quantize
-from tuckercodec.prediction import accumulate, face_edges, mesh_parents, residuals
+from tuckercodec import FormatError
+from tuckercodec.format import streams
+from tuckercodec.format.faces import decode_faces, encode_faces
+from tuckercodec.format.prediction import accumulate, residuals
+from tuckercodec.format.qmat import decode_matrix, encode_matrix, quantize
+from tuckercodec.topology import face_edges, mesh_parents
 
 
 def test_zigzag_and_planes_round_trip():

@@ -56,7 +56,7 @@ from tuckercodec.metrics import KG_DEFINITION, max_vertex_displacement  # noqa: 
 from tuckercodec.samples import sample_path  # noqa: E402
 
 try:
-    from tuckercodec.metrics import sted
+    from tuckercodec import sted
 except ImportError:  # pragma: no cover - older checkouts
     sted = None
 

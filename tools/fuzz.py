@@ -387,9 +387,9 @@ def make_seeds(folder: Path = CORPUS) -> list[Path]:
     import numpy as np
 
     import tuckercodec as tc
-    from tuckercodec.container import pack_container
+    from tuckercodec.format.container import pack_container
     from tuckercodec.samples import sheet_triangles, wave_sheet
-    from tuckercodec.streams import compress
+    from tuckercodec.format.streams import compress
 
     folder.mkdir(parents=True, exist_ok=True)
     frames = wave_sheet(8, 5)

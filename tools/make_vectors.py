@@ -34,10 +34,10 @@ sys.path.insert(0, str(ROOT))
 from tuckercodec import MeshSequence, encode  # noqa: E402
 from tuckercodec.samples import sheet_triangles as triangles  # noqa: E402
 from tuckercodec.samples import wave_sheet as wave  # noqa: E402
-from tuckercodec.connectivity import encode_faces  # noqa: E402
-from tuckercodec.container import HEAD_SIZE, SIGNATURE, parse_container  # noqa: E402
-from tuckercodec.decoder import Decoder  # noqa: E402
-from tuckercodec.streams import compress  # noqa: E402
+from tuckercodec.format.faces import encode_faces  # noqa: E402
+from tuckercodec.format.container import HEAD_SIZE, SIGNATURE, parse_container  # noqa: E402
+from tuckercodec import Decoder  # noqa: E402
+from tuckercodec.format.streams import compress  # noqa: E402
 
 VECTORS = ROOT / "spec" / "vectors"
 #: A conforming decoder's positions may differ from the reference by rounding only (§8).

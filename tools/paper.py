@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from tuckercodec import decode, load_sequence, metrics
+from tuckercodec.perceptual import STED_DEFINITION
 from tuckercodec.analysis import Analysis, Curve, analyze
 from tuckercodec.atomic import refuse_existing, write_atomic
 from tuckercodec.encoder import encode_with_report
@@ -244,7 +245,7 @@ def file_cost(
     result = encode_with_report(sequence, target_kg=target, analysis=analysis)
     report = result.report
     sted = None
-    if with_sted and hasattr(metrics, "sted"):
+    if with_sted:
         sted = sted_of(sequence, decode(result.data))
     return FileCost(
         report.ranks,
@@ -297,9 +298,7 @@ def reconstruction(sequence: MeshSequence, analysis: Analysis, i: int, k: int) -
 
 def sted_of(original: MeshSequence, approx: MeshSequence) -> float | str | None:
     """STED if :mod:`tuckercodec.metrics` has it (another engineer is adding it), else None."""
-    sted = getattr(metrics, "sted", None)
-    if sted is None:
-        return None
+    from tuckercodec import sted
     try:
         value = sted(original, approx)
         return float(getattr(value, "value", value))  # a Sted record, or a plain number
@@ -620,9 +619,7 @@ def summary(results: list[Result], command: str, seconds: float, encode: bool) -
         "  tuckercodec files (exact ranks, quantized, connectivity included), raw float32 = 12·K·F bytes.",
         "- STED: "
         + (
-            getattr(metrics, "STED_DEFINITION", "tuckercodec.metrics.sted, default parameters")
-            if hasattr(metrics, "sted")
-            else "not available (tuckercodec.metrics has no sted)"
+            STED_DEFINITION
         ),
         "",
     ]

@@ -55,11 +55,14 @@ import numpy as np
 import zstandard
 
 from tuckercodec import MeshSequence, decode
-from tuckercodec import connectivity, matrices, streams
-from tuckercodec.container import pack_container, parse_container
 from tuckercodec.encoder import encode_with_report
+from tuckercodec.format import faces as connectivity
+from tuckercodec.format import qmat as matrices
+from tuckercodec.format import sections as format_sections
+from tuckercodec.format import streams
+from tuckercodec.format.container import pack_container, parse_container
 from tuckercodec.hosvd import centre_frames
-from tuckercodec.prediction import mesh_parents
+from tuckercodec.topology import mesh_parents
 
 ZSTD_LEVEL = 19
 #: Bytes of framing per frame for coders that store one buffer per frame: its length, uint32.
@@ -321,11 +324,12 @@ class _PcaModel:
     def pack(self, rank: int, parts, level: int) -> bytes:
         basis_q, coefficients_q, centroids_q = parts
         face_params, face_payload = self.faces
-        sections = [({"id": "FACE", "critical": True, "codec": connectivity.CODEC, **face_params}, face_payload)]
+        sections = [(format_sections.entry("FACE", face_params), face_payload)]
         for section_id, matrix, parents in (("CENT", centroids_q, None), ("COEF", coefficients_q, None),
                                             ("BASE", basis_q, self.parents)):
             params, payload = matrices.encode_matrix(matrix, parents, level=level)
-            sections.append(({"id": section_id, "critical": True, "codec": matrices.CODEC, **params}, payload))
+            entry = {"id": section_id, "critical": True, "codec": format_sections.QMAT, **params}
+            sections.append((entry, payload))
         header = {"vertices": self.sequence.vertex_count, "frames": self.sequence.frame_count,
                   "pca_rank": rank, "encoder": "tools/peers.py PCA baseline"}
         return pack_container(header, sections)

@@ -8,8 +8,13 @@ The public API::
     save_sequence(seq, "out/")             # OBJ frames with their faces, or an .npz
 
     data = encode(seq, target_kg=0.1)      # a compressed file (spec/FORMAT.md) as bytes
-    decode(data, frames=range(10, 20))     # any frames back, as a MeshSequence
+    decode(data, frames=range(10, 20))     # any frames back, as a MeshSequence (or pass a path)
     info(data)                             # the header, without decoding anything
+
+The package follows the pipeline: :mod:`~tuckercodec.io` reads and writes sequences,
+:mod:`~tuckercodec.hosvd` and :mod:`~tuckercodec.analysis` decompose and tabulate,
+:mod:`~tuckercodec.encoder` meets the target over :mod:`~tuckercodec.format` (the spec's parts),
+and :mod:`~tuckercodec.decoder` rebuilds frames from it.
 
 Errors are KG errors (Karni-Gotsman, per-frame centroid) unless a name says otherwise;
 ``sted(original, approx)`` is the perception-correlated STED of Váša and Skala (2011).
@@ -17,27 +22,32 @@ Errors are KG errors (Karni-Gotsman, per-frame centroid) unless a name says othe
 
 from ._version import __version__
 from .analysis import Analysis, RankChoice, analyze
-from .codec import decode_file, encode_file, read_compressed
-from .container import Limits
 from .decoder import Decoder, FileInfo, decode, info
 from .encoder import EncodeReport, EncodeResult, encode, encode_with_report
 from .errors import (
     ChecksumError,
+    DependencyError,
     FormatError,
     InputError,
     LimitError,
     TruncatedFileError,
     TuckerCodecError,
+    UnreachableTargetError,
     UnsupportedVersionError,
 )
-from .metrics import bpfv, kg_error, max_vertex_displacement, relative_error, sted
-from .seqio import load_sequence, save_sequence
+from .files import decode_file, encode_file, read_compressed
+from .format.limits import Limits
+from .io import load_sequence, save_sequence
+from .metrics import kg_error, max_vertex_displacement, relative_error
+from .rate import bpfv
 from .sequence import MeshSequence
+from .perceptual import sted
 
 __all__ = [
     "Analysis",
     "ChecksumError",
     "Decoder",
+    "DependencyError",
     "EncodeReport",
     "EncodeResult",
     "FileInfo",
@@ -49,6 +59,7 @@ __all__ = [
     "RankChoice",
     "TruncatedFileError",
     "TuckerCodecError",
+    "UnreachableTargetError",
     "UnsupportedVersionError",
     "__version__",
     "analyze",

@@ -28,20 +28,20 @@ import time
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-import msgpack
 import numpy as np
 
-from . import connectivity, matrices, streams
 from ._version import __version__
 from .analysis import Analysis, Selection, analyze
-from .container import pack_container
-from .decoder import KG_DEFINITION_ID, factor_value_count, reconstruct_frames, reconstruction_basis
-from .errors import InputError
+from .errors import UnreachableTargetError
+from .format import faces, names, qmat, sections, streams
+from .format.container import pack_container
+from .format.header import header_map
+from .format.qmat import QuantizedMatrix
+from .format.reconstruction import factor_value_count, reconstruct_frames, reconstruction_basis
 from .hosvd import project
-from .matrices import QuantizedMatrix
-from .metrics import bpfv as bits_per_frame_vertex
-from .prediction import mesh_parents
-from .sequence import MeshSequence, default_frame_names
+from .rate import bpfv as bits_per_frame_vertex
+from .sequence import MeshSequence
+from .topology import mesh_parents
 
 DEFAULT_TARGET_KG = 0.1
 #: Shares of the squared error budget given to truncation in the search (the rest is quantization).
@@ -136,8 +136,8 @@ class _Workspace:
         # The KG denominator: each frame is centred, so ||A - E(A)|| is the centred tensor's norm.
         self.denominator2 = analysis.total_energy
         self.parents = mesh_parents(sequence.faces, self.vertex_count)
-        self.face_section = connectivity.encode_faces(sequence.faces, level)
-        self.name_section = _names_section(sequence, level)
+        self.face_section = faces.encode_faces(sequence.faces, level)
+        self.name_section = names.encode_names(sequence.frame_names, level)
         self.centroid_floor_step, self.centroid_floor_error2 = self._centroid_floor()
         self._u1 = np.zeros((self.vertex_count, 0))
         self._core = np.zeros((0, 3, 0))
@@ -170,9 +170,9 @@ class _Workspace:
             i,
             k,
             step,
-            matrices.quantize(u1, _steps(root, row_norms)),
-            matrices.quantize(u3, _steps(root, column_norms)),
-            matrices.quantize(core.reshape(-1, 1), np.array([root])),
+            qmat.quantize(u1, _steps(root, row_norms)),
+            qmat.quantize(u3, _steps(root, column_norms)),
+            qmat.quantize(core.reshape(-1, 1), np.array([root])),
             centroids,
         )
 
@@ -180,7 +180,7 @@ class _Workspace:
         """The centroids at ``step``, or at the smallest step whose integers fit the format
         (:attr:`centroid_floor_step`) if that is larger: the decoded-error check then makes the
         other factors finer to make up for it."""
-        return matrices.quantize(self.analysis.centroids, np.full(3, max(step, self.centroid_floor_step)))
+        return qmat.quantize(self.analysis.centroids, np.full(3, max(step, self.centroid_floor_step)))
 
     def _centroid_floor(self) -> tuple[float, float]:
         """The smallest centroid step whose integers fit 32 bits (the first frame's values and
@@ -202,7 +202,7 @@ class _Workspace:
         if self.centroid_floor_error2 < limit2:
             return
         floor_kg = self.kg(self.centroid_floor_error2)
-        raise InputError(
+        raise UnreachableTargetError(
             f"the sequence lies too far from the origin for this error target: its centroids "
             f"(or their changes from frame to frame) reach {LARGEST_STREAMED * self.centroid_floor_step:.6g}, "
             "the format stores them as 32-bit multiples of a step, and the finest step that fits "
@@ -232,20 +232,24 @@ class _Workspace:
         return 100.0 * math.sqrt(error2 / self.denominator2)
 
     def sections(self, quantized: _Quantized, level: int) -> list[tuple[dict[str, Any], bytes]]:
-        """The file's sections, in file order: faces first, as the decoder needs them for U1."""
-        face_params, face_payload = self.face_section
-        out = [({"id": "FACE", "critical": True, "codec": connectivity.CODEC, **face_params}, face_payload)]
+        """The file's sections, in the order of :data:`~.format.sections.WRITE_ORDER`."""
+        coded = {"FACE": self.face_section}
         for section_id, matrix, parents, predict in (
             ("CENT", quantized.centroids, None, True),
             ("U3", quantized.u3, None, True),
             ("CORE", quantized.core, None, False),
             ("U1", quantized.u1, self.parents, True),
         ):
-            params, payload = matrices.encode_matrix(matrix, parents, allow_predict=predict, level=level)
-            out.append(({"id": section_id, "critical": True, "codec": matrices.CODEC, **params}, payload))
+            coded[section_id] = qmat.encode_matrix(
+                matrix, parents, allow_predict=predict, level=level
+            )
         if self.name_section is not None:
-            out.append(self.name_section)
-        return out
+            coded["NAME"] = self.name_section
+        return [
+            (sections.entry(section_id, coded[section_id][0]), coded[section_id][1])
+            for section_id in sections.WRITE_ORDER
+            if section_id in coded
+        ]
 
     def trial_bytes(self, quantized: _Quantized) -> int:
         """The payload bytes at the fast search level: to compare trials, not the final size."""
@@ -256,41 +260,26 @@ class _Workspace:
     ) -> tuple[bytes, dict[str, int]]:
         """The file's bytes, and the size of each section (zstd ``level``: the final one unless
         given)."""
-        header: dict[str, Any] = {
-            "vertices": self.vertex_count,
-            "frames": self.frame_count,
-            "ranks": [quantized.i, quantized.k],
-            "u2": [float(x) for x in self.analysis.decomposition.u2.reshape(-1)],
-            "error": {
-                "kg": self.kg(error2),
-                "definition": KG_DEFINITION_ID,
-                "truncation_kg": self.kg(self.truncation_error2(quantized.i, quantized.k)),
-                "target_kg": target_kg,
-            },
-            "encoder": f"tuckercodec {__version__}",
-        }
-        if self.sequence.frame_rate is not None:
-            header["frame_rate"] = float(self.sequence.frame_rate)
-        sections = self.sections(quantized, self.level if level is None else level)
-        sizes = {entry["id"]: len(payload) for entry, payload in sections}
-        return pack_container(header, sections), sizes
+        header = header_map(
+            vertices=self.vertex_count,
+            frames=self.frame_count,
+            ranks=(quantized.i, quantized.k),
+            u2=self.analysis.decomposition.u2.reshape(-1).tolist(),
+            kg=self.kg(error2),
+            truncation_kg=self.kg(self.truncation_error2(quantized.i, quantized.k)),
+            target_kg=target_kg,
+            encoder=f"tuckercodec {__version__}",
+            frame_rate=self.sequence.frame_rate,
+        )
+        packed = self.sections(quantized, self.level if level is None else level)
+        sizes = {entry["id"]: len(payload) for entry, payload in packed}
+        return pack_container(header, packed), sizes
 
 
 def _steps(root: float, norms: np.ndarray) -> np.ndarray:
     """sqrt(D) / norm per column; a column whose core slice is empty carries nothing (step 1)."""
     safe = np.where(norms > 0, norms, 1.0)
     return np.where(norms > 0, root / safe, 1.0)
-
-
-def _names_section(sequence: MeshSequence, level: int) -> tuple[dict[str, Any], bytes] | None:
-    """The ancillary NAME section, left out when the names are the default ``frame_00000``..."""
-    if sequence.frame_names == default_frame_names(sequence.frame_count):
-        return None
-    raw = msgpack.packb(list(sequence.frame_names), use_bin_type=True)
-    return (
-        {"id": "NAME", "critical": False, "codec": "msgpack-zstd", "size": len(raw)},
-        streams.compress(raw, level),
-    )
 
 
 # ------------------------------------------------------------------------------------------
@@ -328,7 +317,9 @@ def _meet(work: _Workspace, i: int, k: int, step: float, limit2: float) -> tuple
         else:
             # the noise grows about linearly with D; aim a little inside and never stall
             step *= min(0.95, max(0.25, 0.97 * room / added))
-    raise ValueError(f"could not meet the error target with ranks ({i}, {k})")  # pragma: no cover
+    raise UnreachableTargetError(  # pragma: no cover
+        f"could not meet the error target with ranks ({i}, {k})"
+    )
 
 
 def _search_kg(work: _Workspace, target_kg: float, select: Selection, shares: tuple[float, ...]) -> tuple[_Quantized, float, int]:
@@ -402,9 +393,12 @@ def encode_with_report(
         analysis: the sequence's :func:`~tuckercodec.analyze` result, if already computed.
 
     Raises:
-        InputError: the sequence cannot be encoded (every frame a single point, coordinates
-            float64 cannot square, or a target the centroids cannot reach far from the origin).
-        ValueError: a mode argument that is out of range, or a target the format cannot meet.
+        InputError: the sequence cannot be encoded (every frame a single point, or coordinates
+            float64 cannot square).
+        UnreachableTargetError: no file of the format meets the target: a ``target_bpfv``
+            below the coarsest file's size, or an error target too small for the format's
+            32-bit integers (centroids far from the origin, or a target within rounding of 0).
+        ValueError: a mode argument that is out of range (ranks, a non-positive target).
     """
     start = time.perf_counter()
     mode = _check_modes(target_kg, ranks, target_bpfv)
@@ -482,7 +476,7 @@ def _search_bpfv(work: _Workspace, target_bpfv: float, select: Selection) -> tup
     best = attempt(100.0, QUICK_SHARES[:1], None)
     trials += best[2]
     if best[3] > budget:
-        raise ValueError(
+        raise UnreachableTargetError(
             f"no file fits {target_bpfv} bpfv: even the coarsest one needs "
             f"{bits_per_frame_vertex(best[3], work.frame_count, work.vertex_count):.3f} bpfv "
             f"(the faces alone take {bits_per_frame_vertex(len(work.face_section[1]), work.frame_count, work.vertex_count):.3f})"
@@ -491,7 +485,7 @@ def _search_bpfv(work: _Workspace, target_bpfv: float, select: Selection) -> tup
         middle = 0.5 * (low + high)
         try:
             result = attempt(math.exp(middle), QUICK_SHARES, streams.SEARCH_LEVEL)
-        except InputError:  # an error the format cannot reach (centroids far from the origin)
+        except UnreachableTargetError:  # the centroids far from the origin cannot reach it
             low = middle  # behaves as "too large": smaller errors are out of reach too
             continue
         trials += result[2]

@@ -1,18 +1,34 @@
-"""The exception hierarchy of tuckercodec.
+"""The exception hierarchy of tuckercodec, and the command line's exit code for each class.
 
 Every error the library raises on purpose derives from :class:`TuckerCodecError`, so a caller can
-catch one class. Misuse of the API (a wrong argument type or an impossible parameter) raises the
-plain ``TypeError``/``ValueError`` as usual; :class:`InputError` is also a ``ValueError`` so that
-code written against generic exceptions keeps working.
+catch one class. Misuse of the API (a wrong argument type, an impossible parameter, a frame that
+does not exist) raises the plain ``TypeError``/``ValueError`` as usual. The classes that describe
+a bad value (:class:`InputError`, :class:`FormatError`, :class:`UnreachableTargetError`) are also
+``ValueError``\\ s, so that code written against generic exceptions keeps working.
+
+Each class carries the exit code the command line returns for it (:attr:`TuckerCodecError.exit_code`).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
+
+#: The command line's exit codes (also listed in the README).
+EXIT_OK = 0
+EXIT_FAILURE = 1  # an output that exists (without --force), or another I/O failure
+EXIT_USAGE = 2  # a usage error: an option out of range, a frame that does not exist
+EXIT_CORRUPT = 3  # an invalid or corrupt compressed file (FormatError)
+EXIT_BAD_INPUT = 4  # a mesh sequence that cannot be read or used (InputError)
+EXIT_UNREACHABLE = 5  # a target no file of the format can meet (UnreachableTargetError)
+EXIT_MISSING_DEPENDENCY = 6  # an optional package a feature needs is absent (DependencyError)
 
 
 class TuckerCodecError(Exception):
-    """Base class of every error raised by tuckercodec."""
+    """Base class of every error raised by tuckercodec on purpose."""
+
+    #: What the command line exits with when this error stops it.
+    exit_code: int = EXIT_FAILURE
 
 
 class InputError(TuckerCodecError, ValueError):
@@ -20,6 +36,8 @@ class InputError(TuckerCodecError, ValueError):
 
     Attributes are ``None`` where they do not apply.
     """
+
+    exit_code = EXIT_BAD_INPUT
 
     def __init__(
         self,
@@ -42,29 +60,66 @@ class InputError(TuckerCodecError, ValueError):
             where.append(f"frame {frame}")
         super().__init__(f"{', '.join(where)}: {message}" if where else message)
 
+    def __reduce__(self) -> tuple[Any, ...]:
+        # keyword-only arguments: pickle (process pools, Dask) must call the class with them
+        return _rebuild, (type(self), self.args, self.__dict__)
+
+
+class UnreachableTargetError(TuckerCodecError, ValueError):
+    """A target that no file of the format can meet for this sequence: a size below what the
+    coarsest file needs, or an error below what the format's 32-bit integers can resolve."""
+
+    exit_code = EXIT_UNREACHABLE
+
 
 class DependencyError(TuckerCodecError, RuntimeError):
-    """An optional dependency (such as matplotlib for plots) is not installed."""
+    """An optional dependency (such as matplotlib for plots) is not installed; the message names
+    the extra to install."""
+
+    exit_code = EXIT_MISSING_DEPENDENCY
 
 
 class FormatError(TuckerCodecError, ValueError):
-    """A compressed file that breaks a rule of ``spec/FORMAT.md``: names the field or offset.
+    """A compressed file that breaks a rule of ``spec/FORMAT.md``.
 
     Attributes:
+        rule: the identifier of the rule the file breaks (``spec/FORMAT.md`` §11), such as
+            ``"R09-trailing-bytes"``: stable, unlike the message, so test and compare this.
         field: the header field or section at fault (``None`` if none applies).
         offset: the byte offset in the file at fault (``None`` if none applies).
+        path: the file, when it was read from a path (``None`` for bytes in memory).
     """
 
-    def __init__(self, message: str, *, field: str | None = None, offset: int | None = None) -> None:
+    exit_code = EXIT_CORRUPT
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        rule: str,
+        field: str | None = None,
+        offset: int | None = None,
+        path: str | Path | None = None,
+    ) -> None:
         self.reason = message
+        self.rule = rule
         self.field = field
         self.offset = offset
-        where = []
-        if field is not None:
-            where.append(field)
-        if offset is not None:
-            where.append(f"offset {offset}")
-        super().__init__(f"{', '.join(where)}: {message}" if where else message)
+        self.path = None if path is None else str(path)
+        super().__init__(message)
+
+    def __str__(self) -> str:
+        # built on demand: the file opener adds the path after the error was raised
+        location = [] if self.field is None else [self.field]
+        if self.offset is not None:
+            location.append(f"offset {self.offset}")
+        text = f"{', '.join(location)}: {self.reason}" if location else self.reason
+        if self.path is not None:
+            text = f"{self.path}: {text}"
+        return f"{text} [{self.rule}]"
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return _rebuild, (type(self), self.args, self.__dict__)
 
 
 class TruncatedFileError(FormatError):
@@ -82,3 +137,13 @@ class UnsupportedVersionError(FormatError):
 
 class LimitError(FormatError):
     """A declared size beyond this decoder's limits (checked before anything is allocated)."""
+
+
+def _rebuild(
+    cls: type[TuckerCodecError], args: tuple[Any, ...], state: dict[str, Any]
+) -> TuckerCodecError:
+    """Unpickle an error whose constructor takes keyword-only arguments."""
+    error = cls.__new__(cls)
+    Exception.__init__(error, *args)
+    error.__dict__.update(state)
+    return error

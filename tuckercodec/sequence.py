@@ -7,11 +7,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import InputError
-
-
-def default_frame_names(count: int) -> list[str]:
-    """``frame_00000``, ``frame_00001``...: the names of frames that came without any."""
-    return [f"frame_{n:05d}" for n in range(count)]
+from .format.names import default_frame_names
+from .topology import checked_face_table
 
 
 @dataclass(eq=False)
@@ -24,7 +21,8 @@ class MeshSequence:
         faces: int64 array of shape (M, n) with 0-based vertex indices. Every face has n corners,
             except that a polygon with fewer corners than the widest face is padded with -1 at the
             end of its row (a mesh of triangles is simply (M, 3)). May be (0, 3) for a point cloud.
-        frame_names: one name per frame (the source file name, or ``frame_00000``...).
+        frame_names: one name per frame (the source file name, or ``frame_00000``..., the
+            default names of the format, ``spec/FORMAT.md`` §6.5).
         frame_rate: frames per second, if known.
     """
 
@@ -48,16 +46,7 @@ class MeshSequence:
             f, k, _ = np.argwhere(bad)[0]
             raise InputError(f"vertex {k} has a non-finite coordinate", frame=int(f))
 
-        faces = np.asarray(self.faces)
-        if faces.size == 0:
-            faces = np.zeros((0, 3), dtype=np.int64)
-        if faces.ndim != 2 or faces.shape[1] < 3:
-            raise InputError(f"faces must have shape (faces, n >= 3), got {faces.shape}")
-        if not np.issubdtype(faces.dtype, np.integer):
-            raise InputError(f"faces must be integers, got dtype {faces.dtype}")
-        # checked before the cast: uint64 2**64 - 1 would become -1, the padding marker
-        _check_faces(faces, self.vertex_count)
-        self.faces = np.ascontiguousarray(faces, dtype=np.int64)
+        self.faces = checked_face_table(self.faces, self.vertex_count)
 
         if not self.frame_names:
             self.frame_names = default_frame_names(self.frame_count)
@@ -94,23 +83,3 @@ class MeshSequence:
             f"MeshSequence(frames={self.frame_count}, vertices={self.vertex_count}, "
             f"faces={self.faces.shape[0]})"
         )
-
-
-def _check_faces(faces: np.ndarray, vertex_count: int) -> None:
-    """Reject indices out of range and padding anywhere but at the end of a row."""
-    if faces.size == 0:
-        return
-    if faces.max() >= vertex_count or faces.min() < -1:
-        row = int(np.argwhere((faces >= vertex_count) | (faces < -1))[0, 0])
-        raise InputError(
-            f"face {row} has a vertex index outside 0..{vertex_count - 1}: {faces[row].tolist()}"
-        )
-    padded = faces < 0
-    if padded.any():
-        # a row may only be padded at its end, and must keep at least 3 corners
-        bad_order = padded[:, :-1] & ~padded[:, 1:]
-        too_short = (~padded).sum(axis=1) < 3
-        bad_rows = np.flatnonzero(bad_order.any(axis=1) | too_short)
-        if bad_rows.size:
-            row = int(bad_rows[0])
-            raise InputError(f"face {row} is malformed: {faces[row].tolist()}")

@@ -45,7 +45,6 @@ from __future__ import annotations
 import codecs
 import os
 import re
-import stat
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -53,8 +52,10 @@ from typing import BinaryIO
 
 import numpy as np
 
-from .atomic import write_atomic
-from .errors import InputError
+from ..atomic import write_atomic
+from ..errors import InputError
+from ..reading import open_regular_file
+from .registry import MeshFrame, SequenceFormat, WriteOptions
 
 #: The longest line the OBJ reader accepts, in bytes, its line end not counted: 4 MiB, a face of
 #: about half a million corners, far beyond any real mesh. A longer line is refused as soon as
@@ -97,26 +98,6 @@ _ODD_AFTER_KEYWORD = np.frombuffer(b"\t\x0b\x0c#\\\n", dtype=np.uint8)  # "v\t",
 
 
 @dataclass(eq=False)
-class ObjMesh:
-    """One OBJ file as read by :func:`read_obj_frame`.
-
-    Attributes:
-        vertices: (K, 3) float64 positions in the order of the ``v`` lines.
-        faces: (M, n) int64, 0-based, rows shorter than n padded with -1; (0, 3) if none.
-        face_text: the raw ``f`` lines, which lets the next frame of a sequence check that its
-            faces are identical by comparing bytes instead of parsing them again. ``None`` when
-            the same text could mean different faces (negative indices depend on where the line
-            is) or when the file was read by the careful parser.
-        path: the file it was read from, which errors about a later frame name beside their own.
-    """
-
-    vertices: np.ndarray
-    faces: np.ndarray
-    face_text: bytes | None = None
-    path: str | None = None
-
-
-@dataclass(eq=False)
 class _Located:
     """The careful parser's result: the mesh plus the line number of every vertex and face."""
 
@@ -145,7 +126,7 @@ def read_obj(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
     return mesh.vertices, mesh.faces
 
 
-def read_obj_frame(path: str | os.PathLike[str], reference: ObjMesh | None = None) -> ObjMesh:
+def read_obj_frame(path: str | os.PathLike[str], reference: MeshFrame | None = None) -> MeshFrame:
     """Read one OBJ frame of a sequence, checking it against the first frame ``reference``.
 
     With a reference, the frame must have as many vertices and the same faces as the reference;
@@ -161,7 +142,7 @@ def read_obj_frame(path: str | os.PathLike[str], reference: ObjMesh | None = Non
     mesh = _parse_fast(data, reference)
     if mesh is None:
         located = _parse_careful(data, path)
-        mesh = ObjMesh(located.vertices, located.faces)
+        mesh = MeshFrame(located.vertices, located.faces)
     mesh.path = str(path)
     if reference is not None:
         _check_matches(mesh, reference, data, path)
@@ -188,30 +169,6 @@ def _read_text(path: Path) -> bytes:
         # "\r\n" (Windows) and a lone "\r" (old Mac) end a line, as bytes.splitlines() says
         data = data.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
     return data
-
-
-def open_regular_file(path: Path, what: str) -> BinaryIO:
-    """Open ``path`` for reading in binary; a folder, named pipe or device is an InputError.
-
-    ``what`` names what the file should have been ("an OBJ file"). Raises OSError when the file
-    cannot be opened at all.
-    """
-    # O_NONBLOCK: opening a named pipe would otherwise wait for a writer, for ever. It changes
-    # nothing for a regular file.
-    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0)
-    descriptor = os.open(path, flags)
-    try:
-        mode = os.fstat(descriptor).st_mode
-        if stat.S_ISDIR(mode):
-            raise InputError(f"is a folder, not {what}", path=path)
-        if not stat.S_ISREG(mode):
-            raise InputError(
-                f"is not a regular file (a pipe or a device?), so not {what}", path=path
-            )
-        return os.fdopen(descriptor, "rb")
-    except BaseException:
-        os.close(descriptor)
-        raise
 
 
 def _read_checked(stream: BinaryIO, path: Path) -> bytes:
@@ -288,7 +245,7 @@ def _first_line_end(data: bytes) -> int:
 # the fast parser
 
 
-def _parse_fast(data: bytes, reference: ObjMesh | None) -> ObjMesh | None:
+def _parse_fast(data: bytes, reference: MeshFrame | None) -> MeshFrame | None:
     """Parse a tidy file in a few whole-file operations, or return ``None`` to go the careful way."""
     lines = _line_table(data)
     if lines is None:
@@ -309,12 +266,12 @@ def _parse_fast(data: bytes, reference: ObjMesh | None) -> ObjMesh | None:
         and reference.face_text == face_text
         and len(reference.vertices) == len(vertices)
     ):
-        return ObjMesh(vertices, reference.faces, face_text)
+        return MeshFrame(vertices, reference.faces, face_text)
     vertices_before = np.cumsum(is_vertex)[is_face]
     faces = _fast_faces(face_text, vertices_before, len(vertices))
     if faces is None:
         return None
-    return ObjMesh(vertices, faces, face_text if reusable else None)
+    return MeshFrame(vertices, faces, face_text if reusable else None)
 
 
 def _line_table(data: bytes) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
@@ -602,7 +559,7 @@ def _pad_faces(faces: list[list[int]]) -> np.ndarray:
 # checking a frame against the first one
 
 
-def _check_matches(mesh: ObjMesh, reference: ObjMesh, data: bytes, path: Path) -> None:
+def _check_matches(mesh: MeshFrame, reference: MeshFrame, data: bytes, path: Path) -> None:
     """Raise if ``mesh`` has another vertex count or other faces than ``reference``."""
     same_count = len(mesh.vertices) == len(reference.vertices)
     if same_count and (
@@ -725,3 +682,16 @@ def _face_lines(faces: np.ndarray) -> list[str]:
         line = "f " + " ".join(["%d"] * faces.shape[1])
         return [line % tuple(row) for row in rows]
     return ["f " + " ".join(str(index) for index in row if index > 0) for row in rows]
+
+
+def _write_frame(path: Path, vertices: np.ndarray, faces: np.ndarray, options: WriteOptions) -> None:
+    write_obj(path, vertices, faces, precision=options.precision, overwrite=options.overwrite)
+
+
+FORMAT = SequenceFormat(
+    name="obj",
+    suffixes=(".obj",),
+    description="Wavefront OBJ, one frame per file (a folder of them, or a glob)",
+    read_frame=read_obj_frame,
+    write_frame=_write_frame,
+)

@@ -1,4 +1,4 @@
-"""Byte streams of the sections: zigzag integers split into byte planes, compressed with zstd.
+"""§6.1 Integer streams: zigzag integers split into byte planes, compressed with zstd.
 
 ``spec/FORMAT.md`` §6.1 defines the layout: n integers (already in stream order) are mapped to
 unsigned by zigzag (0, -1, 1, -2 ... -> 0, 1, 2, 3 ...), then written as ``planes`` byte planes:
@@ -9,10 +9,13 @@ finder squeeze to nearly nothing. The whole is one zstd frame that declares its 
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
 import numpy as np
 import zstandard
 
-from .errors import FormatError
+from ..errors import FormatError, UnreachableTargetError
 
 #: zstd level of the final file; the size is entropy-coder bound, so higher levels gain little.
 DEFAULT_LEVEL = 19
@@ -70,31 +73,39 @@ def compress(raw: bytes, level: int = DEFAULT_LEVEL) -> bytes:
     return zstandard.ZstdCompressor(level=level, write_content_size=True).compress(raw)
 
 
+class _StreamProblem(Exception):
+    """Why a zstd payload breaks §6.1 step 3; :func:`decompress_exact` reports it as R29."""
+
+
 def decompress_exact(payload: bytes | memoryview, size: int, where: str) -> bytes:
-    """Decompress one zstd frame that must hold exactly ``size`` bytes (§6.1).
+    """Decompress one zstd frame that must hold exactly ``size`` bytes (§6.1 step 3).
 
     The frame's declared content size is checked before anything is allocated, and bytes after
-    the frame are an error.
+    the frame are an error (R29-zstd-content-size).
     """
+    try:
+        return _decompress_exact(payload, size)
+    except _StreamProblem as problem:
+        raise FormatError(str(problem), rule="R29-zstd-content-size", field=where) from None
+
+
+def _decompress_exact(payload: bytes | memoryview, size: int) -> bytes:
     if bytes(payload[:4]) != ZSTD_MAGIC:
-        raise FormatError("the payload does not start with a zstd frame header", field=where)
+        raise _StreamProblem("the payload does not start with a zstd frame header")
     try:
         declared = zstandard.frame_content_size(payload)
     except zstandard.ZstdError:
-        raise FormatError("the payload does not start with a zstd frame header", field=where) from None
+        raise _StreamProblem("the payload does not start with a zstd frame header") from None
     if declared != size:
         what = "no content size" if declared == -1 else f"{declared} bytes"
-        raise FormatError(
-            f"the zstd frame declares {what}, but the section's shape needs {size}", field=where
-        )
+        raise _StreamProblem(f"the zstd frame declares {what}, but the section's shape needs {size}")
     if size > ZSTD_MAX_EXPANSION * len(payload):
         # zstandard allocates the declared size before it reads a block: a 20-byte frame
         # header declaring 4 GiB would cost 4 GiB (or a MemoryError) although no frame this
         # short can hold that much. So the claim is checked against the payload first.
-        raise FormatError(
-            f"the zstd frame declares {size} bytes, more than a {len(payload)}-byte frame can hold "
-            f"(at most {ZSTD_MAX_EXPANSION} bytes per byte)",
-            field=where,
+        raise _StreamProblem(
+            f"the zstd frame declares {size} bytes, more than a {len(payload)}-byte frame can "
+            f"hold (at most {ZSTD_MAX_EXPANSION} bytes per byte)"
         )
     try:
         if size == 0:
@@ -108,10 +119,22 @@ def decompress_exact(payload: bytes | memoryview, size: int, where: str) -> byte
                 payload, max_output_size=size, allow_extra_data=False
             )
     except zstandard.ZstdError as error:
-        raise FormatError(f"the zstd frame does not decompress: {error}", field=where) from None
+        raise _StreamProblem(f"the zstd frame does not decompress: {error}") from None
     if len(raw) != size:
-        raise FormatError(f"the zstd frame holds {len(raw)} bytes, not {size}", field=where)
+        raise _StreamProblem(f"the zstd frame holds {len(raw)} bytes, not {size}")
     return raw
+
+
+def checked_planes(params: Mapping[str, Any], where: str) -> int:
+    """The ``planes`` parameter of a stream section: an int in 1..MAX_PLANES (R30-planes)."""
+    planes = params.get("planes")
+    if not isinstance(planes, int) or isinstance(planes, bool) or not 1 <= planes <= MAX_PLANES:
+        raise FormatError(
+            f"planes must be 1..{MAX_PLANES}, got {planes!r}",
+            rule="R30-planes",
+            field=f"{where}.planes",
+        )
+    return planes
 
 
 def pack_integers(values: np.ndarray, level: int = DEFAULT_LEVEL) -> tuple[bytes, int]:
@@ -119,7 +142,7 @@ def pack_integers(values: np.ndarray, level: int = DEFAULT_LEVEL) -> tuple[bytes
     unsigned = zigzag(values.reshape(-1))
     planes = planes_needed(unsigned)
     if planes > MAX_PLANES:
-        raise ValueError(
+        raise UnreachableTargetError(
             f"a quantized value of {int(np.abs(values).max())} does not fit the format's 32-bit "
             "range: the error target is too small for the size of the coordinates"
         )

@@ -1,4 +1,4 @@
-"""File helpers of the codec: encode a sequence on disk into a file, decode a file onto disk.
+"""The codec on files: encode a sequence on disk into a file, decode a file onto disk.
 
 The in-memory functions are :func:`tuckercodec.encode`, :func:`tuckercodec.decode` and
 :func:`tuckercodec.info`; these helpers add reading, writing (atomically, never replacing a file
@@ -13,10 +13,13 @@ from typing import Literal
 
 from .analysis import Selection
 from .atomic import refuse_existing, write_atomic
-from .container import DEFAULT_LIMITS, HEAD_SIZE, SIGNATURE, Limits, read_preamble, trailing_bytes
 from .decoder import Decoder, FrameSelection
 from .encoder import EncodeReport, encode_with_report
-from .seqio import Source, load_sequence, save_sequence
+from .errors import InputError
+from .format.container import SIGNATURE
+from .format.limits import DEFAULT_LIMITS, Limits
+from .io import Source, load_sequence, save_sequence
+from .reading import open_regular_file
 from .sequence import MeshSequence
 
 #: The suffix of compressed files.
@@ -27,9 +30,9 @@ OutputFormat = Literal["obj", "npz"]
 def is_compressed_file(path: str | os.PathLike[str]) -> bool:
     """Whether ``path`` is a file that starts with the format's signature."""
     try:
-        with open(path, "rb") as handle:
+        with open_regular_file(path, "a tuckercodec file") as handle:
             return handle.read(len(SIGNATURE)) == SIGNATURE
-    except (IsADirectoryError, FileNotFoundError, NotADirectoryError):
+    except (InputError, OSError):  # a folder, a pipe, a missing or unreadable file
         return False
 
 
@@ -59,19 +62,8 @@ def encode_file(
 
 
 def read_compressed(path: str | os.PathLike[str], *, limits: Limits = DEFAULT_LIMITS) -> Decoder:
-    """Open a compressed file from disk.
-
-    Reads no more than the file's preamble declares: a huge file that is not ours is refused
-    after its first 32 bytes, and trailing bytes are counted from the file's size, not read.
-    """
-    with open(path, "rb") as handle:
-        head = handle.read(HEAD_SIZE)
-        total_length = read_preamble(head, limits)[4]  # FormatError for a file that is not ours
-        size = os.fstat(handle.fileno()).st_size
-        if size > total_length:  # the decoder's own check, without reading the excess
-            raise trailing_bytes(size, total_length)
-        data = head + handle.read(max(0, total_length - len(head)))
-    return Decoder(data, limits=limits)
+    """Open a compressed file from disk: the same as ``Decoder(path, limits=limits)``."""
+    return Decoder(path, limits=limits)
 
 
 def decoded_output_path(output: str | os.PathLike[str], output_format: OutputFormat | None) -> Path:
@@ -106,6 +98,6 @@ def decode_file(
     (:func:`decoded_output_path`). Returns the decoded sequence.
     """
     output = decoded_output_path(output, output_format)
-    sequence = read_compressed(path).sequence(frames)
+    sequence = Decoder(path).sequence(frames)
     save_sequence(sequence, output, overwrite=overwrite, precision=precision, progress=progress)
     return sequence

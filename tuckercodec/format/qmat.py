@@ -1,9 +1,9 @@
-"""Quantized matrices: the codec ``qmat`` of ``spec/FORMAT.md`` §6.3.
+"""§6.3 Codec ``qmat``: quantized matrices (U1, U3, CORE and CENT).
 
 A float matrix of shape (rows, cols) is stored as integers ``q`` with one step per column:
 ``value = step[c] * q[r, c]``. Each column either stores ``q`` itself (predictor 0) or each
-entry minus its parent's entry (predictor 1, see :mod:`tuckercodec.prediction`). The residuals
-go column after column into one integer stream (:mod:`tuckercodec.streams`).
+entry minus its parent's entry (predictor 1, see :mod:`.prediction`). The residuals go column
+after column into one integer stream (:mod:`.streams`).
 
 The section entry carries ``shape`` [rows, cols], ``planes``, ``steps`` (cols float32,
 little-endian, as bytes) and ``predict`` (cols uint8, as bytes).
@@ -17,14 +17,14 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import FormatError, UnreachableTargetError
 from . import streams
-from .errors import FormatError
 from .prediction import accumulate, residuals
+from .sections import section_shape
 
-CODEC = "qmat"
 PREDICT_NONE, PREDICT_PARENT = 0, 1
 #: Largest |q| the encoder forms: exact in float64. What is streamed (q, or its residual from
-#: the parent) must also fit 32 bits, which :func:`tuckercodec.streams.pack_integers` checks.
+#: the parent) must also fit 32 bits, which :func:`.streams.pack_integers` checks.
 MAX_QUANTIZED = 2**52
 
 
@@ -51,7 +51,7 @@ def quantize(values: np.ndarray, steps: np.ndarray) -> QuantizedMatrix:
     q = values / steps32.astype(np.float64)[None, :]
     np.rint(q, out=q)
     if q.size and np.abs(q).max() > MAX_QUANTIZED:
-        raise ValueError(
+        raise UnreachableTargetError(
             "the error target is too small for the format's integer range: a quantized value "
             f"would need {int(np.abs(q).max())} > {MAX_QUANTIZED}"
         )
@@ -69,7 +69,7 @@ def encode_matrix(
 ) -> tuple[dict[str, Any], bytes]:
     """``(params, payload)`` of the section, choosing per column whether prediction helps.
 
-    ``parents`` as in :func:`tuckercodec.prediction.residuals` (``None``: the previous row).
+    ``parents`` as in :func:`.prediction.residuals` (``None``: the previous row).
     """
     q = matrix.q
     predict = np.zeros(q.shape[1], dtype=np.uint8)
@@ -89,18 +89,6 @@ def encode_matrix(
     return params, payload
 
 
-def matrix_shape(params: dict[str, Any], where: str) -> tuple[int, int]:
-    """The declared ``shape`` of a qmat section, checked to be two non-negative integers."""
-    shape = params.get("shape")
-    if (
-        not isinstance(shape, list)
-        or len(shape) != 2
-        or not all(isinstance(n, int) and not isinstance(n, bool) and n >= 0 for n in shape)
-    ):
-        raise FormatError(f"shape must be [rows, cols] of non-negative integers, got {shape!r}", field=f"{where}.shape")
-    return shape[0], shape[1]
-
-
 def decode_matrix(
     payload: bytes | memoryview, params: dict[str, Any],
     parents: np.ndarray | Callable[[], np.ndarray] | None, where: str, *, allow_predict: bool = True,
@@ -108,26 +96,35 @@ def decode_matrix(
     """The quantized matrix of a qmat section (§6.3). The caller has checked ``shape`` against
     the header and the limits.
 
-    ``parents`` as in :func:`tuckercodec.prediction.accumulate`, or a function that makes them:
+    ``parents`` as in :func:`.prediction.accumulate`, or a function that makes them:
     it is called only once the stream has decoded and only if a column is predicted, so that
     their cost (an array of ``rows`` entries) is never paid for a payload that turns out bad.
     """
-    rows, cols = matrix_shape(params, where)
-    planes = params.get("planes")
-    if not isinstance(planes, int) or isinstance(planes, bool) or not 1 <= planes <= streams.MAX_PLANES:
-        raise FormatError(f"planes must be 1..{streams.MAX_PLANES}, got {planes!r}", field=f"{where}.planes")
+    rows, cols = section_shape(params, where)
+    planes = streams.checked_planes(params, where)
     steps_raw, predict_raw = params.get("steps"), params.get("predict")
+    # §5 step 16: the lengths and types of steps and predict, then their values
     if not isinstance(steps_raw, bytes) or len(steps_raw) != 4 * cols:
-        raise FormatError(f"steps must be {cols} float32 values as {4 * cols} bytes", field=f"{where}.steps")
+        raise FormatError(
+            f"steps must be {cols} float32 values as {4 * cols} bytes",
+            rule="R31-steps",
+            field=f"{where}.steps",
+        )
     if not isinstance(predict_raw, bytes) or len(predict_raw) != cols:
-        raise FormatError(f"predict must be {cols} bytes", field=f"{where}.predict")
+        raise FormatError(
+            f"predict must be {cols} bytes", rule="R32-predictor", field=f"{where}.predict"
+        )
     steps = np.frombuffer(steps_raw, dtype="<f4").astype(np.float32)
     if not (np.isfinite(steps).all() and (steps > 0).all()):
-        raise FormatError("every step must be a positive finite float32", field=f"{where}.steps")
+        raise FormatError(
+            "every step must be a positive finite float32", rule="R31-steps", field=f"{where}.steps"
+        )
     predict = np.frombuffer(predict_raw, dtype=np.uint8)
     if (predict > PREDICT_PARENT).any() or (not allow_predict and predict.any()):
         allowed = "0 or 1" if allow_predict else "0 (no parent relation here)"
-        raise FormatError(f"every predictor must be {allowed}", field=f"{where}.predict")
+        raise FormatError(
+            f"every predictor must be {allowed}", rule="R32-predictor", field=f"{where}.predict"
+        )
     stream = streams.unpack_integers(payload, rows * cols, planes, where)
     q = np.ascontiguousarray(stream.reshape(cols, rows).T)
     chosen = np.flatnonzero(predict == PREDICT_PARENT)

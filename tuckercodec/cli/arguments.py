@@ -1,0 +1,225 @@
+"""The command line's arguments: the parser of every verb and the types of their options."""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable
+from pathlib import Path
+
+from .._version import __version__
+from ..encoder import DEFAULT_TARGET_KG
+from ..files import SUFFIX
+from ..metrics import KG_DEFINITION
+from ..report import DEFAULT_TARGETS
+from ..perceptual import STED_DEFINITION
+
+
+def _targets(text: str) -> list[float]:
+    try:
+        values = [float(part) for part in text.split(",") if part.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a comma-separated list of numbers: {text!r}") from None
+    if not values or any(not (v > 0 and v < float("inf")) for v in values):
+        raise argparse.ArgumentTypeError(f"targets must be positive numbers, got {text!r}")
+    return values
+
+
+def _positive(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (value > 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"must be a positive number, got {text!r}")
+    return value
+
+
+def _at_least(low: int) -> Callable[[str], int]:
+    """An argparse type: an integer no smaller than ``low``."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+        if value < low:
+            raise argparse.ArgumentTypeError(f"must be at least {low}, got {text}")
+        return value
+
+    return parse
+
+
+def _ranks(text: str) -> tuple[int, int]:
+    parts = text.split(",")
+    try:
+        i, k = (int(part) for part in parts)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"ranks are two integers 'i,k', got {text!r}") from None
+    return i, k
+
+
+def _frames(text: str) -> slice | list[int]:
+    """``a:b`` (either end may be left out; negative numbers count from the end, as in Python)
+    or a single frame ``n``; frames count from 0."""
+    try:
+        if ":" not in text:
+            return [int(text)]
+        start, stop = text.split(":")
+        selection = slice(int(start) if start else None, int(stop) if stop else None)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"frames are 'a:b', 'a:', ':b' or 'n', got {text!r}") from None
+    if (
+        selection.start is not None
+        and selection.stop is not None
+        and (selection.start >= 0) == (selection.stop >= 0)
+        and selection.start >= selection.stop
+    ):
+        raise argparse.ArgumentTypeError(f"the range {text} is empty: frames a to b-1 need a < b")
+    return selection
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The parser of every verb and option."""
+    parser = argparse.ArgumentParser(
+        prog="tuckercodec",
+        description="Compression of animated meshes (fixed connectivity) by truncated HOSVD.",
+        epilog=f"Errors are KG errors in percent: {KG_DEFINITION}.",
+    )
+    parser.add_argument("--version", action="version", version=f"tuckercodec {__version__}")
+    verbs = parser.add_subparsers(dest="verb", metavar="VERB")
+    verbs.required = True
+
+    rd = verbs.add_parser(
+        "rd",
+        help="rate-distortion analysis: exact error of every truncation (i, 3, k)",
+        description=(
+            "Decompose the sequence once and print, for each target KG error, the cheapest "
+            "ranks (i, 3, k) by the exact table and by the seed paper's bound alone."
+        ),
+    )
+    rd.add_argument("input", help="a folder of OBJ frames, a glob, an .npz, or 'sample'")
+    _add_rd_options(rd)
+
+    encode = verbs.add_parser(
+        "encode",
+        help="compress a mesh sequence into one file",
+        description=(
+            "Compress a sequence. One mode: --kg (the decoded KG error never exceeds it; default "
+            f"{DEFAULT_TARGET_KG}), --ranks i,k, or --bpfv (the smallest error that fits)."
+        ),
+    )
+    encode.add_argument("input", help="a folder of OBJ frames, a glob, an .npz, or 'sample'")
+    encode.add_argument("-o", "--output", type=Path, required=True, metavar=f"OUT{SUFFIX}")
+    mode = encode.add_mutually_exclusive_group()
+    mode.add_argument("--kg", type=_positive, metavar="KG", help="target KG error in percent")
+    mode.add_argument("--ranks", type=_ranks, metavar="I,K", help="fixed ranks (i, 3, k)")
+    mode.add_argument("--bpfv", type=_positive, metavar="BPFV", help="target size, bits per frame per vertex")
+    encode.add_argument(
+        "--select",
+        choices=("exact", "bound"),
+        default="exact",
+        help="choose ranks by the exact error table (default) or by the seed paper's bound",
+    )
+    encode.add_argument("--force", action="store_true", help="replace the output if it exists")
+
+    decode = verbs.add_parser(
+        "decode",
+        help="rebuild the frames of a compressed file as OBJ files or an .npz",
+        description="Decode all frames, or a range, to a folder of OBJ files (with faces) or an .npz.",
+    )
+    decode.add_argument("input", help=f"a compressed file ({SUFFIX})")
+    decode.add_argument("-o", "--output", type=Path, required=True, metavar="OUTDIR|OUT.npz")
+    decode.add_argument(
+        "--frames",
+        type=_frames,
+        metavar="A:B",
+        help="frames a to b-1, counted from 0 (negative: from the end; clipped to the file, as Python slices)",
+    )
+    decode.add_argument("--format", choices=("obj", "npz"), help="default: npz if OUT ends in .npz, else obj")
+    decode.add_argument("--reference", metavar="ORIGINAL", help="report the actual error against this sequence")
+    decode.add_argument("--precision", type=int, metavar="DIGITS", help="significant digits in OBJ files (default: exact)")
+    decode.add_argument("--force", action="store_true", help="replace output files that exist")
+
+    info = verbs.add_parser(
+        "info", help="show a compressed file's header", description="Read the header; decode nothing."
+    )
+    info.add_argument("input", help=f"a compressed file ({SUFFIX})")
+    info.add_argument("--json", action="store_true", help="print JSON")
+
+    evaluate = verbs.add_parser(
+        "eval",
+        help="compare two sequences: KG error, STED, relative error, largest displacement",
+        description=(
+            "Compare B with the original A (sequences, or compressed files, which are decoded): "
+            f"KG error, STED on A's faces ({STED_DEFINITION}), relative error, largest vertex "
+            "displacement and the worst frame."
+        ),
+    )
+    evaluate.add_argument("original", help="the original sequence A")
+    evaluate.add_argument("approximation", help="the sequence B to judge")
+    evaluate.add_argument("--json", action="store_true", help="print JSON")
+    evaluate.add_argument(
+        "--sted-width", type=_at_least(1), default=1, metavar="W",
+        help="STED's neighbourhood: vertices within W edges (default: %(default)s)",
+    )
+    evaluate.add_argument(
+        "--sted-window", type=_at_least(0), default=5, metavar="N",
+        help="STED's temporal window: +-N frames (default: %(default)s)",
+    )
+    evaluate.add_argument(
+        "--plot", type=Path, metavar="FILE.png",
+        help="draw each frame's KG share and worst-vertex error over time",
+    )
+    evaluate.add_argument("--force", action="store_true", help="replace the plot if it exists")
+
+    render = verbs.add_parser(
+        "render",
+        help="draw one frame in 3D, coloured by its error against a reference",
+        description=(
+            "Draw frame n of SEQ (a compressed file decodes only that frame) with equal scaling "
+            "on every axis: shaded, or with --reference coloured by each vertex's distance to "
+            "the reference's frame n, in scene units."
+        ),
+    )
+    render.add_argument("input", metavar="SEQ", help="a sequence, a compressed file, or 'sample'")
+    render.add_argument(
+        "--frame", type=int, required=True, metavar="N",
+        help="the frame to draw, counted from 0 (negative: from the end)",
+    )
+    render.add_argument("-o", "--output", type=Path, required=True, metavar="IMG.png")
+    render.add_argument("--reference", metavar="ORIGINAL", help="colour by the error against this sequence")
+    render.add_argument(
+        "--up", choices=("x", "y", "z"), default="y",
+        help="the scene axis drawn upwards (default: %(default)s, as in most OBJ files)",
+    )
+    render.add_argument("--force", action="store_true", help="replace the image if it exists")
+
+    demo = verbs.add_parser(
+        "demo",
+        help="encode and decode the built-in sample (a simulated cloth, 60 frames)",
+        description="Encode the built-in cloth sample at a few KG targets, decode it and measure.",
+    )
+    demo.add_argument(
+        "--targets",
+        type=_targets,
+        default=[1.0, 0.1, 0.02],
+        metavar="KG,KG,...",
+        help="target KG errors in percent (default: %(default)s)",
+    )
+    return parser
+
+
+def _add_rd_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--targets",
+        type=_targets,
+        default=list(DEFAULT_TARGETS),
+        metavar="KG,KG,...",
+        help="target KG errors in percent (default: %(default)s)",
+    )
+    parser.add_argument("--csv", type=Path, metavar="FILE", help="write the whole curves as CSV")
+    parser.add_argument("--plot", type=Path, metavar="FILE.png", help="draw Θ against KG (paper's Fig. 1)")
+    parser.add_argument(
+        "--heatmap", type=Path, metavar="FILE.png", help="draw log KG and log ψ over (i, k) (Fig. 3)"
+    )
+    parser.add_argument("--force", action="store_true", help="replace output files that exist")

@@ -1,0 +1,326 @@
+"""The verbs of the command line: each reads its arguments, does its work and prints.
+
+Every verb returns the exit code of success; failures are exceptions, which
+:func:`tuckercodec.cli.main.main` turns into a one-line message and an exit code.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..analysis import analyze
+from ..atomic import refuse_existing, write_atomic
+from ..decoder import Decoder, decode
+from ..decoder import info as read_info
+from ..encoder import EncodeReport, encode_with_report
+from ..errors import EXIT_OK, InputError
+from ..files import SUFFIX, decode_file, decoded_output_path, is_compressed_file
+from ..io import load_sequence
+from ..metrics import (
+    KG_DEFINITION,
+    kg_error,
+    max_vertex_displacement,
+    per_frame_kg,
+    per_frame_max_displacement,
+    relative_error,
+)
+from ..report import curves_csv, targets_table
+from ..samples import SAMPLE_NAME, sample_path
+from ..sequence import MeshSequence
+from ..perceptual import STED_DEFINITION, sted
+
+PLOT_FORMATS = (".png", ".svg", ".pdf")
+
+
+def _check_plot_names(*named: tuple[str, Path | None]) -> None:
+    """Refuse, before any work, an image name whose format matplotlib would not be asked for."""
+    for option, path in named:
+        if path is not None and path.suffix.lower() not in PLOT_FORMATS:
+            raise ValueError(f"{option} {path}: the file name must end in {', '.join(PLOT_FORMATS)}")
+
+
+def run_rd(args: argparse.Namespace, source: str | Path) -> int:
+    _check_plot_names(("--plot", args.plot), ("--heatmap", args.heatmap))
+    outputs = [p for p in (args.csv, args.plot, args.heatmap) if p is not None]
+    refuse_existing(outputs, args.force)  # before the work, not after it
+
+    start = time.perf_counter()
+    sequence = load_sequence(source)
+    loaded = time.perf_counter()
+    analysis = analyze(sequence)
+    analysed = time.perf_counter()
+
+    r1, r3 = analysis.max_ranks
+    label = f"built-in sample ({SAMPLE_NAME})" if source == sample_path() else source
+    print(f"{label}: {sequence.frame_count} frames, {sequence.vertex_count} vertices, "
+          f"{sequence.faces.shape[0]} faces")
+    print(f"read in {loaded - start:.2f} s; HOSVD and exact table of {r1} x {r3} ranks in "
+          f"{analysed - loaded:.2f} s")
+    print(f"errors: {KG_DEFINITION}; 'est.' is the paper's bound; rate Θ = S/(3KF)")
+    print()
+    print(targets_table(analysis, args.targets))
+
+    if args.csv is not None:
+        write_atomic(args.csv, curves_csv(analysis).encode(), overwrite=args.force)
+        print(f"\nwrote {args.csv}")
+    if args.plot is not None or args.heatmap is not None:
+        from ..plots import plot_heatmaps, plot_rd_curve  # matplotlib only when asked for
+
+        name = Path(str(source)).stem
+        if args.plot is not None:
+            plot_rd_curve(analysis, args.plot, title=f"{name}: rate-distortion", overwrite=args.force)
+            print(f"wrote {args.plot}")
+        if args.heatmap is not None:
+            plot_heatmaps(analysis, args.heatmap, title=f"{name}: error over ranks", overwrite=args.force)
+            print(f"wrote {args.heatmap}")
+    return EXIT_OK
+
+
+def _is_compressed(source: str) -> bool:
+    """Whether ``source`` names a compressed file (by its signature, or by its suffix, so that
+    a damaged one is reported as such)."""
+    return source != "sample" and (is_compressed_file(source) or Path(source).suffix.lower() == SUFFIX)
+
+
+def _load(source: str) -> MeshSequence:
+    """A sequence from a path, 'sample', or a compressed file (decoded); errors name the path."""
+    if source == "sample":
+        return load_sequence(sample_path(), progress=False)
+    if _is_compressed(source):
+        return Decoder(source).sequence()
+    return load_sequence(source)
+
+
+def _print_encode_report(report: EncodeReport) -> None:
+    i, k = report.ranks
+    print(f"ranks (i, 3, k) = ({i}, 3, {k}); decoded KG error {report.kg:.5f} "
+          f"(truncation alone {report.truncation_kg:.5f}; {KG_DEFINITION})")
+    print(f"size {report.total_bytes} bytes = {report.bpfv:.4f} bpfv (whole file; connectivity "
+          f"{report.connectivity_bpfv:.4f} bpfv of it), {report.ratio:.1f}x smaller than raw float32")
+    if report.exact_ranks is not None:
+        print(f"cheapest truncation for the target: exact table {report.exact_ranks}, the paper's "
+              f"bound {report.bound_ranks}; chosen by '{report.select}' with quantization")
+    print(f"time {report.seconds:.2f} s")
+
+
+def run_encode(args: argparse.Namespace) -> int:
+    refuse_existing([args.output], args.force)  # before the work, not after it
+    start = time.perf_counter()
+    sequence = load_sequence(sample_path() if args.input == "sample" else args.input)
+    result = encode_with_report(  # no mode given: the encoder's default target
+        sequence, target_kg=args.kg, ranks=args.ranks, target_bpfv=args.bpfv, select=args.select
+    )
+    write_atomic(args.output, result.data, overwrite=args.force)
+    print(f"{args.input}: {sequence.frame_count} frames, {sequence.vertex_count} vertices "
+          f"-> {args.output}")
+    _print_encode_report(result.report)
+    print(f"total time with reading and writing {time.perf_counter() - start:.2f} s")
+    return EXIT_OK
+
+
+def run_decode(args: argparse.Namespace) -> int:
+    header = read_info(args.input)
+    reference = _load(args.reference) if args.reference else None
+    if reference is not None and (reference.frame_count, reference.vertex_count) != (header.frames, header.vertices):
+        raise InputError(  # before anything is written
+            f"the reference has {reference.frame_count} frames of {reference.vertex_count} vertices, "
+            f"the file {header.frames} of {header.vertices}",
+            path=args.reference,
+        )
+    output = decoded_output_path(args.output, args.format)
+    start = time.perf_counter()
+    decoded = decode_file(
+        args.input,
+        output,
+        frames=args.frames,
+        output_format=args.format,
+        overwrite=args.force,
+        precision=args.precision,
+        progress=True,
+    )
+    elapsed = time.perf_counter() - start
+    print(f"{args.input}: {decoded.frame_count} of {header.frames} frames, "
+          f"{decoded.vertex_count} vertices -> {output} in {elapsed:.2f} s")
+    print(f"file: {header.total_bytes} bytes = {header.bpfv:.4f} bpfv; KG error recorded by the "
+          f"encoder {_number(header.kg)} ({header.kg_definition or 'no definition recorded'})")
+    if reference is not None:
+        selected = reference.vertices[args.frames if args.frames is not None else slice(None)]
+        scope = "" if args.frames is None else (
+            f" (of the {decoded.frame_count} frames decoded, with their own KG denominator; the "
+            "target applies to the whole sequence)"
+        )
+        print(f"actual KG error against {args.reference}: {kg_error(selected, decoded):.5f}{scope} "
+              f"({KG_DEFINITION})")
+    return EXIT_OK
+
+
+def _number(value: float | None) -> str:
+    return "unknown" if value is None else f"{value:.5f}"
+
+
+def run_info(args: argparse.Namespace) -> int:
+    header = read_info(args.input)
+    if args.json:
+        print(json.dumps(header.to_dict(), indent=2))
+        return EXIT_OK
+    i, k = header.ranks
+    print(f"{args.input}: tuckercodec format {header.format_version}")
+    print(f"  {header.frames} frames, {header.vertices} vertices, {header.faces} faces of up to "
+          f"{header.face_width} corners")
+    print(f"  ranks (i, 3, k) = ({i}, 3, {k})")
+    print(f"  {header.total_bytes} bytes = {header.bpfv:.4f} bpfv (whole file)")
+    target = "none (fixed ranks or a size target)" if header.target_kg is None else f"{header.target_kg:g}"
+    print(f"  KG error {_number(header.kg)} ({header.kg_definition or 'no definition recorded'}), "
+          f"target {target}")
+    if header.frame_rate is not None:
+        print(f"  {header.frame_rate:g} frames per second")
+    print(f"  written by {header.encoder or 'an unnamed encoder'}")
+    for section_id, length, codec, critical in header.sections:
+        print(f"  section {section_id:<5} {length:>10} bytes  {codec}{'' if critical else ' (ancillary)'}")
+    return EXIT_OK
+
+
+def run_eval(args: argparse.Namespace) -> int:
+    _check_plot_names(("--plot", args.plot))
+    if args.plot is not None:
+        refuse_existing([args.plot], args.force)  # before the work, not after it
+    original, approximation = _load(args.original), _load(args.approximation)
+    if original.vertices.shape != approximation.vertices.shape:
+        raise InputError(
+            f"{args.original} has {original.frame_count} frames of {original.vertex_count} vertices, "
+            f"{args.approximation} {approximation.frame_count} of {approximation.vertex_count}"
+        )
+    per_frame = per_frame_kg(original, approximation)
+    worst_frame = int(per_frame.argmax())
+    displacement = max_vertex_displacement(original, approximation)
+    if original.faces.shape[0]:  # STED measures edges: on A's faces, the reference's
+        measured = sted(original, approximation, width=args.sted_width, window=args.sted_window)
+        sted_figures = measured.to_dict()
+    else:
+        measured, sted_figures = None, None
+    figures = {
+        "kg": kg_error(original, approximation),
+        "kg_definition": KG_DEFINITION,
+        "sted": sted_figures,  # None where A has no faces: STED needs edges
+        "relative_error": relative_error(original, approximation),
+        "max_vertex_displacement": displacement.distance,
+        "max_displacement_frame": displacement.frame,
+        "max_displacement_vertex": displacement.vertex,
+        "worst_frame": worst_frame,
+        "worst_frame_kg_share": float(per_frame[worst_frame]),
+    }
+    if args.plot is not None:
+        from ..plots import plot_frame_errors  # matplotlib only when asked for
+
+        title = f"{Path(args.approximation).name} against {Path(args.original).name}"
+        worst = per_frame_max_displacement(original, approximation)
+        plot_frame_errors(per_frame, worst, args.plot, title=title, overwrite=args.force)
+    if args.json:
+        print(json.dumps(figures, indent=2))
+        return EXIT_OK
+    print(f"KG error {figures['kg']:.6f} ({KG_DEFINITION})")
+    if measured is None:
+        print(f"STED not measured: {args.original} has no faces, and STED compares edge lengths")
+    else:
+        p = measured
+        print(f"STED {p.value:.6g} (spatial STED_s {p.spatial:.6g}, temporal STED_t {p.temporal:.6g}; "
+              f"width {p.width}, window {p.window}, dt {p.dt:g}, c {p.c:g}, s {p.scale:.6g} = "
+              "1/diagonal of A's first-frame bounding box)")
+        print(f"  {STED_DEFINITION}")
+    print(f"relative error ||A-B||/||A|| {figures['relative_error']:.3e} (uncentred)")
+    print(f"largest vertex displacement {displacement.distance:.6g} (frame {displacement.frame}, "
+          f"vertex {displacement.vertex}), in scene units")
+    print(f"worst frame {worst_frame}: {per_frame[worst_frame]:.6f} of the KG error "
+          "(its share; the squares of all frames' shares sum to KG squared)")
+    if args.plot is not None:
+        print(f"wrote {args.plot}")
+    return EXIT_OK
+
+
+class _Frames:
+    """A sequence opened for drawing single frames: a compressed file decodes only the frame
+    asked for; anything else is read whole. Errors in a compressed file name it."""
+
+    def __init__(self, source: str) -> None:
+        self.source = source
+        self._decoder: Decoder | None = None
+        self._sequence: MeshSequence | None = None
+        if _is_compressed(source):
+            self._decoder = Decoder(source)
+            self.count, self.vertex_count = self._decoder.frame_count, self._decoder.info.vertices
+        else:
+            self._sequence = _load(source)
+            self.count, self.vertex_count = self._sequence.frame_count, self._sequence.vertex_count
+
+    def frame(self, number: int) -> MeshSequence:
+        """Frame ``number`` (negative: from the end) as a one-frame sequence with the faces."""
+        if not -self.count <= number < self.count:
+            raise ValueError(
+                f"frame {number} does not exist: {self.source} has {self.count} frames (0..{self.count - 1})"
+            )
+        if self._decoder is not None:
+            return self._decoder.sequence([number])
+        seq = self._sequence
+        assert seq is not None
+        index = number % self.count
+        return MeshSequence(seq.vertices[index : index + 1], seq.faces, frame_names=[seq.frame_names[index]])
+
+
+def run_render(args: argparse.Namespace) -> int:
+    _check_plot_names(("-o", args.output))
+    refuse_existing([args.output], args.force)  # before the work, not after it
+    frames = _Frames(args.input)
+    shown = frames.frame(args.frame)
+    errors = None
+    if args.reference is not None:
+        reference = _Frames(args.reference)
+        if (reference.count, reference.vertex_count) != (frames.count, frames.vertex_count):
+            raise InputError(  # frames must correspond one to one, as for decode --reference
+                f"the reference has {reference.count} frames of {reference.vertex_count} vertices, "
+                f"{args.input} {frames.count} of {frames.vertex_count}",
+                path=args.reference,
+            )
+        errors = np.linalg.norm(shown.vertices[0] - reference.frame(args.frame).vertices[0], axis=1)
+
+    from ..plots import render_frame  # matplotlib only when asked for
+
+    count = frames.count
+    frame = args.frame % count
+    name = "built-in sample" if args.input == "sample" else Path(args.input).name
+    title = f"{name}, frame {frame} ({shown.frame_names[0]})"
+    if errors is not None:
+        title += f"\nerror against {Path(args.reference).name}: max {errors.max():.4g}, mean {errors.mean():.4g}"
+    render_frame(shown.vertices[0], shown.triangles(), args.output, errors=errors, title=title,
+                 up=args.up, overwrite=args.force)
+    print(f"wrote {args.output}: frame {frame} of {count}, {shown.vertex_count} vertices"
+          + ("" if errors is None else f", vertex error up to {errors.max():.6g} scene units"))
+    return EXIT_OK
+
+
+def run_demo(args: argparse.Namespace) -> int:
+    sequence = load_sequence(sample_path(), progress=False)
+    print(f"built-in sample ({SAMPLE_NAME}): {sequence.frame_count} frames, "
+          f"{sequence.vertex_count} vertices, {sequence.faces.shape[0]} faces")
+    print(f"errors: {KG_DEFINITION}; bpfv counts the whole file")
+    print()
+    header = (f"{'target KG':>9}  {'i':>3}  {'k':>3}  {'bytes':>8}  {'bpfv':>7}  {'ratio':>6}  "
+              f"{'decoded KG':>10}  {'encode s':>8}  {'decode s':>8}")
+    print(header)
+    print("-" * len(header))
+    for target in args.targets:
+        result = encode_with_report(sequence, target_kg=target)
+        start = time.perf_counter()
+        decoded = decode(result.data)
+        decode_seconds = time.perf_counter() - start
+        measured = kg_error(sequence, decoded)  # measured again here, not taken from the report
+        r = result.report
+        print(f"{target:>9g}  {r.ranks[0]:>3}  {r.ranks[1]:>3}  {r.total_bytes:>8}  {r.bpfv:>7.3f}  "
+              f"{r.ratio:>5.0f}x  {measured:>10.5f}  {r.seconds:>8.2f}  {decode_seconds:>8.3f}")
+    print()
+    print("Try: tuckercodec encode sample -o cloth.tkc && tuckercodec decode cloth.tkc -o frames/")
+    return EXIT_OK

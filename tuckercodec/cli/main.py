@@ -1,0 +1,102 @@
+"""The ``tuckercodec`` command line: parse, run one verb, turn failures into exit codes.
+
+Exit codes (also in the README): 0 success; 1 an output that exists (without --force) or
+another I/O failure; 2 a usage error; 3 an invalid or corrupt compressed file; 4 a bad input
+mesh sequence; 5 a target no file can meet; 6 a missing optional dependency; 130 or 143
+interrupted by Ctrl-C or SIGTERM. Every failure is one line on standard error.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import sys
+import threading
+from collections.abc import Callable, Sequence
+
+from ..errors import (
+    EXIT_FAILURE,
+    EXIT_USAGE,
+    DependencyError,
+    FormatError,
+    InputError,
+    TuckerCodecError,
+    UnreachableTargetError,
+)
+from ..samples import sample_path
+from . import commands
+from .arguments import build_parser
+
+_VERBS: dict[str, Callable[[argparse.Namespace], int]] = {
+    "demo": commands.run_demo,
+    "encode": commands.run_encode,
+    "decode": commands.run_decode,
+    "info": commands.run_info,
+    "eval": commands.run_eval,
+    "render": commands.run_render,
+    "rd": lambda args: commands.run_rd(args, sample_path() if args.input == "sample" else args.input),
+}
+
+#: What the one-line message calls each kind of error, after "tuckercodec: ".
+_KINDS: tuple[tuple[type[TuckerCodecError], str], ...] = (
+    (InputError, "bad input: "),
+    (FormatError, "invalid or corrupt file: "),
+    (UnreachableTargetError, "target cannot be met: "),
+    (DependencyError, ""),  # its message names the package and the extra to install
+    (TuckerCodecError, "error: "),
+)
+
+
+class _Terminated(KeyboardInterrupt):
+    """SIGTERM, raised like Ctrl-C so that every half-written output is removed on the way out."""
+
+
+def _raise_terminated(signum: int, frame: object) -> None:
+    raise _Terminated()
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; returns the exit code."""
+    args = build_parser().parse_args(argv)
+    if threading.current_thread() is not threading.main_thread():
+        return _run(args)
+    # Python's default for SIGTERM ends the process without running any cleanup.
+    previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    try:
+        return _run(args)
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _fail(message: str) -> None:
+    print(f"tuckercodec: {message}", file=sys.stderr)
+
+
+def _run(args: argparse.Namespace) -> int:
+    """Run one verb, turning every expected failure into a one-line message and exit code."""
+    try:
+        return _VERBS[args.verb](args)
+    except TuckerCodecError as error:
+        kind = next(label for cls, label in _KINDS if isinstance(error, cls))
+        _fail(f"{kind}{error}")
+        return error.exit_code
+    except FileExistsError as error:
+        _fail(str(error))
+        return EXIT_FAILURE
+    except ValueError as error:  # a rank out of range, a frame that does not exist
+        _fail(str(error))
+        return EXIT_USAGE
+    except BrokenPipeError:  # the reader went away (`| head`): stop quietly, like other tools
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_FAILURE
+    except OSError as error:
+        _fail(f"{error.filename or ''}: {error.strerror or error}")
+        return EXIT_FAILURE
+    except KeyboardInterrupt as interrupt:
+        _fail("interrupted")
+        return 128 + (signal.SIGTERM if isinstance(interrupt, _Terminated) else signal.SIGINT)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

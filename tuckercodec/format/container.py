@@ -1,0 +1,494 @@
+"""§2-5 The container: signature, preamble, header map and section table.
+
+This module knows bytes, not meshes. A file is::
+
+    offset 0   signature       8 bytes  89 54 4B 43 0D 0A 1A 0A  ("\\x89TKC\\r\\n\\x1a\\n")
+    offset 8   preamble       20 bytes  u16 major, u16 minor, u32 flags,
+                                        u32 header_length, u64 total_length (little-endian)
+    offset 28  preamble CRC    4 bytes  CRC-32 of bytes 0..27
+    offset 32  header          header_length bytes, one msgpack map
+               header CRC      4 bytes  CRC-32 of the header bytes
+               data area       the sections, back to back, in the order of the section table
+
+Validation runs in the order of §5 (steps 1-9) and each failure raises the
+:class:`~tuckercodec.errors.FormatError` subclass §11 gives, carrying the rule's identifier
+and naming the field or offset at fault. :func:`read_file` is the one way a file is read from
+a path: only a regular file, only the bytes its preamble declares.
+"""
+
+from __future__ import annotations
+
+import os
+import struct
+import zlib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import msgpack
+
+from ..errors import (
+    ChecksumError,
+    FormatError,
+    LimitError,
+    TruncatedFileError,
+    UnsupportedVersionError,
+)
+from ..reading import open_regular_file
+from .limits import DEFAULT_LIMITS, Limits, check_limit
+
+SIGNATURE = b"\x89TKC\r\n\x1a\n"
+FORMAT_MAJOR = 1
+FORMAT_MINOR = 0
+_PREAMBLE = struct.Struct("<HHIIQ")  # major, minor, flags, header_length, total_length
+_CRC = struct.Struct("<I")
+PREAMBLE_END = len(SIGNATURE) + _PREAMBLE.size  # 28: where the preamble CRC starts
+HEAD_SIZE = PREAMBLE_END + _CRC.size  # 32: where the header starts
+
+#: Bits 0-15 of the preamble flags are critical: a decoder rejects any it does not know.
+CRITICAL_FLAGS_MASK = 0x0000FFFF
+#: Critical flags this decoder knows (none in format 1.0).
+KNOWN_CRITICAL_FLAGS = 0
+
+
+@dataclass(frozen=True)
+class Preamble:
+    """The preamble's fields (§2), checked by :func:`read_preamble`."""
+
+    major: int
+    minor: int
+    flags: int
+    header_length: int
+    total_length: int
+
+    @property
+    def header_end(self) -> int:
+        """Where the header CRC starts: the header runs from byte 32 to here."""
+        return HEAD_SIZE + self.header_length
+
+    @property
+    def data_start(self) -> int:
+        """Where the data area (the first section) starts."""
+        return self.header_end + _CRC.size
+
+
+@dataclass(frozen=True)
+class Section:
+    """One entry of the section table, with the codec parameters it carries."""
+
+    id: str
+    offset: int  # from the start of the data area
+    length: int
+    crc32: int
+    critical: bool
+    codec: str
+    params: dict[str, Any] = field(default_factory=dict)
+
+    def file_offset(self, data_start: int) -> int:
+        """The section's first byte, counted from the start of the file."""
+        return data_start + self.offset
+
+
+@dataclass(frozen=True)
+class Container:
+    """A parsed container: the preamble fields, the header map and the section table.
+
+    The section payloads are not read or checked until :meth:`payload` asks for one.
+    """
+
+    major: int
+    minor: int
+    flags: int
+    header: dict[str, Any]
+    sections: tuple[Section, ...]
+    data_start: int
+    total_length: int
+
+    def section(self, section_id: str) -> Section | None:
+        """The section with this id, or ``None``."""
+        for entry in self.sections:
+            if entry.id == section_id:
+                return entry
+        return None
+
+    def payload(self, data: bytes | memoryview, entry: Section) -> memoryview:
+        """The bytes of a section, after checking its CRC-32 (§5 step 9)."""
+        start = entry.file_offset(self.data_start)
+        view = memoryview(data)[start : start + entry.length]
+        if zlib.crc32(view) != entry.crc32:
+            raise ChecksumError(
+                "the section's CRC-32 does not match its bytes (the file is damaged)",
+                rule="R19-section-crc",
+                field=f"section {entry.id}",
+                offset=start,
+            )
+        return view
+
+
+# ------------------------------------------------------------------------------------------
+# writing
+
+
+def pack_container(
+    header: Mapping[str, Any], sections: list[tuple[dict[str, Any], bytes]], *, flags: int = 0
+) -> bytes:
+    """Assemble a file from its header map and its sections.
+
+    Args:
+        header: every header field except ``sections``, which is built here.
+        sections: ``(entry, payload)`` pairs in file order; each entry holds ``id``,
+            ``critical``, ``codec`` and the codec's parameters. ``offset``, ``length`` and
+            ``crc32`` are filled in from the payload.
+        flags: the preamble flags (0 in format 1.0).
+    """
+    table = []
+    offset = 0
+    for entry, payload in sections:
+        table.append(
+            {**entry, "offset": offset, "length": len(payload), "crc32": zlib.crc32(payload)}
+        )
+        offset += len(payload)
+    header_bytes = msgpack.packb({**header, "sections": table}, use_bin_type=True)
+    total = HEAD_SIZE + len(header_bytes) + _CRC.size + offset
+    head = SIGNATURE + _PREAMBLE.pack(FORMAT_MAJOR, FORMAT_MINOR, flags, len(header_bytes), total)
+    parts = [head, _CRC.pack(zlib.crc32(head)), header_bytes, _CRC.pack(zlib.crc32(header_bytes))]
+    parts.extend(payload for _, payload in sections)
+    return b"".join(parts)
+
+
+# ------------------------------------------------------------------------------------------
+# reading
+
+
+def read_preamble(data: bytes | memoryview, limits: Limits = DEFAULT_LIMITS) -> Preamble:
+    """Check the signature and preamble (§5 steps 1-4). Needs only the first 32 bytes."""
+    if len(data) >= len(SIGNATURE) and bytes(data[: len(SIGNATURE)]) != SIGNATURE:
+        _refuse_signature(bytes(data[: len(SIGNATURE)]))
+    if len(data) < HEAD_SIZE:
+        part = "signature" if len(data) < len(SIGNATURE) else "preamble"
+        raise TruncatedFileError(
+            f"the file is {len(data)} bytes, shorter than the {HEAD_SIZE}-byte signature and "
+            "preamble",
+            rule="R03-preamble-truncated",
+            field=part,
+            offset=0 if part == "signature" else len(data),
+        )
+    (stored_crc,) = _CRC.unpack_from(data, PREAMBLE_END)
+    if zlib.crc32(data[:PREAMBLE_END]) != stored_crc:
+        raise ChecksumError(
+            "the preamble's CRC-32 does not match (the file is damaged)",
+            rule="R04-preamble-crc",
+            field="preamble",
+            offset=PREAMBLE_END,
+        )
+    preamble = Preamble(*_PREAMBLE.unpack_from(data, len(SIGNATURE)))
+    if preamble.major != FORMAT_MAJOR:
+        raise UnsupportedVersionError(
+            f"format version {preamble.major}.{preamble.minor} is not supported: this decoder "
+            f"reads major version {FORMAT_MAJOR}",
+            rule="R05-major-version",
+            field="preamble.major",
+            offset=8,
+        )
+    unknown = preamble.flags & CRITICAL_FLAGS_MASK & ~KNOWN_CRITICAL_FLAGS
+    if unknown:
+        raise UnsupportedVersionError(
+            f"critical flag bits {unknown:#06x} are set, which this decoder does not know",
+            rule="R06-critical-flag",
+            field="preamble.flags",
+            offset=12,
+        )
+    if preamble.header_length > limits.max_header_bytes:
+        raise LimitError(
+            f"a header of {preamble.header_length} bytes exceeds this decoder's limit "
+            f"max_header_bytes = {limits.max_header_bytes}",
+            rule="R07-header-limit",
+            field="preamble.header_length",
+            offset=16,
+        )
+    if preamble.total_length < preamble.data_start:
+        raise FormatError(
+            f"total_length {preamble.total_length} is smaller than the preamble and header it "
+            f"must hold ({preamble.data_start} bytes)",
+            rule="R08-total-length",
+            field="preamble.total_length",
+            offset=20,
+        )
+    return preamble
+
+
+def _refuse_signature(found: bytes) -> None:
+    """Say what kind of damage a wrong signature suggests (the PNG signature's design)."""
+    if found[1:4] != SIGNATURE[1:4]:
+        raise FormatError(
+            f"not a tuckercodec file (signature {found.hex(' ')})",
+            rule="R01-signature",
+            field="signature",
+            offset=0,
+        )
+    if found[0] != SIGNATURE[0]:
+        damage = "high-bit byte was changed: the file went through a 7-bit channel"
+    else:
+        damage = "line-ending bytes were changed: the file was transferred in text mode"
+    raise FormatError(
+        f"the signature's {damage}", rule="R02-signature-transfer", field="signature", offset=0
+    )
+
+
+def _check_not_longer(size: int, total_length: int) -> None:
+    """§5 step 5: a file of ``size`` bytes must not run past its ``total_length``."""
+    if size > total_length:
+        raise FormatError(
+            f"{size - total_length} bytes follow the end of the file that total_length "
+            f"declares ({total_length} bytes)",
+            rule="R09-trailing-bytes",
+            field="preamble.total_length",
+            offset=total_length,
+        )
+
+
+def _check_reaches(size: int, needed: int, what: str, field: str) -> None:
+    """§5 step 6: a file of ``size`` bytes must reach byte ``needed``, the end of ``what``."""
+    if size < needed:
+        raise TruncatedFileError(
+            f"the file ends at byte {size}, inside {what} that ends at byte {needed}: it was "
+            "cut short",
+            rule="R10-file-truncated",
+            field=field,
+            offset=size,
+        )
+
+
+def parse_container(
+    data: bytes | memoryview, limits: Limits = DEFAULT_LIMITS, *, whole: bool = True
+) -> Container:
+    """Parse and check everything but the section payloads (§5 steps 1-8).
+
+    Args:
+        data: the file, or with ``whole=False`` at least its first ``32 + header_length + 4``
+            bytes (enough for :func:`tuckercodec.info` without reading the sections).
+        limits: the decoder's limits.
+        whole: ``data`` is the whole file, so its length must equal ``total_length``.
+    """
+    preamble = read_preamble(data, limits)
+    if whole:
+        _check_not_longer(len(data), preamble.total_length)
+    _check_reaches(len(data), preamble.data_start, "the header", "header")
+    header_bytes = data[HEAD_SIZE : preamble.header_end]
+    (stored_crc,) = _CRC.unpack_from(data, preamble.header_end)
+    if zlib.crc32(header_bytes) != stored_crc:
+        raise ChecksumError(
+            "the header's CRC-32 does not match (the file is damaged)",
+            rule="R11-header-crc",
+            field="header",
+            offset=HEAD_SIZE,
+        )
+    if whole:
+        _check_reaches(
+            len(data), preamble.total_length, "the data area", "preamble.total_length"
+        )
+    header = _unpack_header(bytes(header_bytes))
+    sections = _section_table(header, preamble.total_length - preamble.data_start, limits)
+    return Container(
+        preamble.major,
+        preamble.minor,
+        preamble.flags,
+        header,
+        sections,
+        preamble.data_start,
+        preamble.total_length,
+    )
+
+
+def read_file(
+    path: str | os.PathLike[str], limits: Limits = DEFAULT_LIMITS, *, header_only: bool = False
+) -> bytes:
+    """The bytes of a compressed file on disk, or with ``header_only`` just its preamble and
+    header (for :func:`tuckercodec.info`).
+
+    Only a regular file is opened (a folder or a named pipe is an :class:`InputError`), and no
+    more is read than the preamble declares: a huge file that is not ours is refused after its
+    first 32 bytes, and a file longer or shorter than ``total_length`` is refused from its size
+    before the header's CRC is checked (§5 steps 5 and 6). A :class:`FormatError` raised here
+    names ``path``.
+    """
+    try:
+        with open_regular_file(path, "a tuckercodec file") as handle:
+            head = handle.read(HEAD_SIZE)
+            preamble = read_preamble(head, limits)
+            size = os.fstat(handle.fileno()).st_size
+            _check_not_longer(size, preamble.total_length)
+            _check_reaches(size, preamble.total_length, "the data area", "preamble.total_length")
+            wanted = preamble.data_start if header_only else preamble.total_length
+            return head + handle.read(wanted - len(head))
+    except FormatError as error:
+        error.path = os.fspath(path)
+        raise
+
+
+class _HeaderProblem(Exception):
+    """Why the header bytes are not one valid msgpack map; reported as R12 by
+    :func:`_unpack_header`."""
+
+
+def _reject_ext(code: int, data: bytes) -> None:
+    raise _HeaderProblem(f"msgpack extension type {code} is not allowed in the header")
+
+
+def _strict_map(pairs: list[tuple[Any, Any]]) -> dict[str, Any]:
+    """A map whose keys are all str and all different: otherwise two decoders taking the first
+    or the last of a repeated key would read different files."""
+    out: dict[str, Any] = {}
+    for key, value in pairs:
+        if not isinstance(key, str):
+            raise _HeaderProblem(f"map keys must be strings, got {key!r}")
+        if key in out:
+            raise _HeaderProblem(f"the key {key!r} appears twice in one map")
+        out[key] = value
+    return out
+
+
+def _reject_timestamps(header: dict[str, Any]) -> None:
+    """msgpack decodes its timestamp extension (type -1) itself, past the ext hook. The walk
+    keeps its own stack: msgpack nests up to 1024 deep, beyond Python's recursion limit."""
+    pending: list[Any] = [header]
+    while pending:
+        value = pending.pop()
+        if isinstance(value, msgpack.Timestamp):
+            raise _HeaderProblem("msgpack extension type -1 (timestamp) is not allowed in the header")
+        if isinstance(value, dict):
+            pending.extend(value.values())
+        elif isinstance(value, list):
+            pending.extend(value)
+
+
+def _unpack_header(header_bytes: bytes) -> dict[str, Any]:
+    """The header map (§4): one msgpack map with string keys, each once, no extension types
+    (R12-header-not-map)."""
+    try:
+        header = _unpack_map(header_bytes)
+    except _HeaderProblem as problem:
+        raise FormatError(str(problem), rule="R12-header-not-map", field="header") from None
+    return header
+
+
+def _unpack_map(header_bytes: bytes) -> dict[str, Any]:
+    try:
+        header = msgpack.unpackb(
+            header_bytes,
+            raw=False,
+            strict_map_key=True,
+            ext_hook=_reject_ext,
+            use_list=True,
+            object_pairs_hook=_strict_map,
+            timestamp=0,
+        )
+    except _HeaderProblem:
+        raise
+    except msgpack.StackError:
+        raise _HeaderProblem("the header nests deeper than msgpack's 1024 levels") from None
+    except (ValueError, TypeError, msgpack.UnpackException, RecursionError) as error:
+        # ExtraData, FormatError and invalid UTF-8 all derive from ValueError
+        reason = str(error) or type(error).__name__
+        raise _HeaderProblem(f"the header is not one valid msgpack map ({reason})") from None
+    if not isinstance(header, dict):
+        raise _HeaderProblem(f"the header is a msgpack {type(header).__name__}, not a map")
+    _reject_timestamps(header)
+    return header
+
+
+_SECTION_KEYS: dict[str, type] = {
+    "id": str,
+    "offset": int,
+    "length": int,
+    "crc32": int,
+    "critical": bool,
+    "codec": str,
+}
+
+
+def _section_table(
+    header: dict[str, Any], data_length: int, limits: Limits
+) -> tuple[Section, ...]:
+    """Check the section table (§3, §5 step 8): entries back to back from offset 0 to the end
+    of the file, each id once."""
+    table = header.get("sections")
+    if not isinstance(table, list):
+        raise FormatError(
+            "missing or not an array", rule="R13-section-table-missing", field="header.sections"
+        )
+    check_limit(
+        len(table), limits, "max_sections", what=f"{len(table)} sections", field="header.sections"
+    )
+    sections = []
+    expected_offset = 0
+    seen: set[str] = set()
+    for index, entry in enumerate(table):
+        where = f"header.sections[{index}]"
+        problem = _entry_problem(entry, where)
+        if problem is not None:
+            raise FormatError(problem[1], rule="R14-section-entry-field", field=problem[0])
+        section_id = entry["id"]
+        if section_id in seen:
+            raise FormatError(
+                f"section {section_id!r} appears twice",
+                rule="R15-section-duplicate-id",
+                field=f"{where}.id",
+            )
+        seen.add(section_id)
+        if entry["offset"] != expected_offset:
+            raise FormatError(
+                f"section {section_id!r} starts at {entry['offset']}, but sections are back to "
+                f"back and this one must start at {expected_offset}",
+                rule="R16-section-not-contiguous",
+                field=f"{where}.offset",
+            )
+        if entry["length"] < 0 or entry["offset"] + entry["length"] > data_length:
+            raise FormatError(
+                f"section {section_id!r} ({entry['length']} bytes at {entry['offset']}) runs past "
+                f"the end of the data area ({data_length} bytes)",
+                rule="R17-section-past-end",
+                field=f"{where}.length",
+            )
+        if not 0 <= entry["crc32"] <= 0xFFFFFFFF:
+            raise FormatError(
+                f"not a CRC-32: {entry['crc32']}",
+                rule="R14-section-entry-field",
+                field=f"{where}.crc32",
+            )
+        expected_offset += entry["length"]
+        params = {k: v for k, v in entry.items() if k not in _SECTION_KEYS}
+        sections.append(
+            Section(
+                section_id,
+                entry["offset"],
+                entry["length"],
+                entry["crc32"],
+                entry["critical"],
+                entry["codec"],
+                params,
+            )
+        )
+    if expected_offset != data_length:
+        raise FormatError(
+            f"the sections cover {expected_offset} bytes of a {data_length}-byte data area",
+            rule="R18-section-coverage",
+            field="header.sections",
+        )
+    return tuple(sections)
+
+
+def _entry_problem(entry: object, where: str) -> tuple[str, str] | None:
+    """``(field, reason)`` if an entry lacks one of the six fields or its type, or its id is not
+    1-16 printable ASCII characters; the first part of R14-section-entry-field."""
+    if not isinstance(entry, dict):
+        return where, "a section entry must be a map"
+    for key, kind in _SECTION_KEYS.items():
+        value = entry.get(key)
+        # bool is an int in Python: keep the two apart
+        if not isinstance(value, kind) or (kind is int and isinstance(value, bool)):
+            return f"{where}.{key}", f"missing or not {kind.__name__}: {value!r}"
+    section_id = entry["id"]
+    if not (1 <= len(section_id) <= 16 and section_id.isascii() and section_id.isprintable()):
+        return f"{where}.id", f"a section id is 1 to 16 printable ASCII characters: {section_id!r}"
+    return None

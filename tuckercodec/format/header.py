@@ -1,0 +1,217 @@
+"""§4 The header's fields: written by :func:`header_map`, checked and read by :func:`read_header`.
+
+The header is one msgpack map (its bytes are the container's business, :mod:`.container`); this
+module knows what its keys mean. :class:`FileInfo` is what a reader learns from the header
+alone, without decoding any section.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from ..errors import FormatError
+from ..rate import bpfv
+from .container import Container
+from .limits import Limits, check_limit
+from .reconstruction import factor_value_count
+from .sections import check_sections
+
+#: The error definition id of §4.1: the KG error of Karni and Gotsman (2004), in percent.
+KG_DEFINITION_ID = "karni-gotsman-2004"
+
+
+@dataclass(frozen=True)
+class FileInfo:
+    """What the header of a compressed file says, read without decoding any section."""
+
+    format_version: str
+    vertices: int
+    frames: int
+    ranks: tuple[int, int]
+    faces: int
+    face_width: int
+    total_bytes: int
+    kg: float | None  # the KG error the encoder measured on the decoded result
+    kg_definition: str | None
+    target_kg: float | None
+    frame_rate: float | None
+    encoder: str | None
+    sections: tuple[tuple[str, int, str, bool], ...]  # (id, bytes, codec, critical)
+
+    @property
+    def bpfv(self) -> float:
+        """Bits per frame per vertex of the whole file (header and connectivity included)."""
+        return bpfv(self.total_bytes, self.frames, self.vertices)
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-safe dictionary of every field, and the bpfv. The encoder's claims ``kg`` and
+        ``target_kg`` are any float the file holds (§4.1): NaN or infinity becomes ``None``,
+        since JSON has no such numbers (``json.dumps`` would write a bare ``NaN``)."""
+        return {
+            "format_version": self.format_version,
+            "vertices": self.vertices,
+            "frames": self.frames,
+            "ranks": list(self.ranks),
+            "faces": self.faces,
+            "face_width": self.face_width,
+            "total_bytes": self.total_bytes,
+            "bpfv": self.bpfv,
+            "kg": _json_number(self.kg),
+            "kg_definition": self.kg_definition,
+            "target_kg": _json_number(self.target_kg),
+            "frame_rate": self.frame_rate,
+            "encoder": self.encoder,
+            "sections": [
+                {"id": s, "bytes": n, "codec": c, "critical": crit}
+                for s, n, c, crit in self.sections
+            ],
+        }
+
+
+def _json_number(value: float | None) -> float | None:
+    return value if value is None or math.isfinite(value) else None
+
+
+# ------------------------------------------------------------------------------------------
+# writing
+
+
+def header_map(
+    *,
+    vertices: int,
+    frames: int,
+    ranks: tuple[int, int],
+    u2: list[float],
+    kg: float,
+    truncation_kg: float,
+    target_kg: float | None,
+    encoder: str,
+    frame_rate: float | None,
+) -> dict[str, Any]:
+    """Every header field but the section table, in the order the reference encoder writes
+    them (the order changes the bytes, not the meaning)."""
+    header: dict[str, Any] = {
+        "vertices": vertices,
+        "frames": frames,
+        "ranks": [ranks[0], ranks[1]],
+        "u2": [float(x) for x in u2],
+        "error": {
+            "kg": kg,
+            "definition": KG_DEFINITION_ID,
+            "truncation_kg": truncation_kg,
+            "target_kg": target_kg,
+        },
+        "encoder": encoder,
+    }
+    if frame_rate is not None:
+        header["frame_rate"] = float(frame_rate)  # a msgpack float, never an int (§4)
+    return header
+
+
+# ------------------------------------------------------------------------------------------
+# reading
+
+
+def _is_int(value: object) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def _field(header: dict[str, Any], key: str, valid: Callable[[Any], bool], wanted: str) -> Any:
+    """The value of a header field of R20-header-field, checked by ``valid``."""
+    value = header.get(key)
+    if not valid(value):
+        raise FormatError(
+            f"must be {wanted}, got {value!r}", rule="R20-header-field", field=f"header.{key}"
+        )
+    return value
+
+
+def _is_frame_rate(value: object) -> bool:
+    return value is None or (isinstance(value, float) and math.isfinite(value) and value > 0)
+
+
+def _number(value: object) -> float | None:
+    """An informative number of the ``error`` map: an int or a float, never a bool (§4.1)."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return float(value)
+    return None
+
+
+def read_header(container: Container, limits: Limits) -> FileInfo:
+    """Check the header's fields (§5 steps 10 and 14) and the section table against them
+    (steps 11-13); what the header says."""
+    header = container.header
+    vertices = _field(header, "vertices", lambda v: _is_int(v) and v >= 1, "an integer >= 1")
+    check_limit(vertices, limits, "max_vertices", what=f"{vertices} vertices", field="header.vertices")
+    frames = _field(header, "frames", lambda v: _is_int(v) and v >= 1, "an integer >= 1")
+    check_limit(frames, limits, "max_frames", what=f"{frames} frames", field="header.frames")
+    check_limit(
+        vertices * frames,
+        limits,
+        "max_positions",
+        what=f"{vertices} vertices x {frames} frames of decoded positions",
+        field="header.vertices",
+    )
+    i, k = _ranks(header.get("ranks"), vertices, frames)
+    factor_values = factor_value_count(vertices, frames, i, k)
+    check_limit(
+        factor_values,
+        limits,
+        "max_factor_values",
+        what=f"ranks ({i}, {k}) make {factor_values} factor values, which",
+        field="header.ranks",
+    )
+    u2 = header.get("u2")
+    if not (
+        isinstance(u2, list)
+        and len(u2) == 9
+        and all(isinstance(x, float) and math.isfinite(x) for x in u2)
+    ):
+        raise FormatError("must be 9 finite floats (U2, row-major)", rule="R23-u2", field="header.u2")
+    check_sections(container, vertices, frames, (i, k), limits)
+    frame_rate = _field(header, "frame_rate", _is_frame_rate, "absent, nil or a positive finite float")
+
+    error = header.get("error")
+    error = error if isinstance(error, dict) else {}  # informative only (§4.1): never trusted
+    definition = error.get("definition")
+    encoder = header.get("encoder")
+    face = container.section("FACE")
+    assert face is not None  # check_sections found every required section
+    face_rows, face_width = face.params["shape"]
+    return FileInfo(
+        format_version=f"{container.major}.{container.minor}",
+        vertices=vertices,
+        frames=frames,
+        ranks=(i, k),
+        faces=face_rows,
+        face_width=face_width,
+        total_bytes=container.total_length,
+        kg=_number(error.get("kg")),
+        kg_definition=definition if isinstance(definition, str) else None,
+        target_kg=_number(error.get("target_kg")),
+        frame_rate=frame_rate,
+        encoder=encoder if isinstance(encoder, str) else None,
+        sections=tuple((s.id, s.length, s.codec, s.critical) for s in container.sections),
+    )
+
+
+def _ranks(ranks: object, vertices: int, frames: int) -> tuple[int, int]:
+    """``ranks`` [i, k] with 1 <= i <= min(K, 3F) and 1 <= k <= min(F, 3K) (R22-ranks)."""
+    largest_i, largest_k = min(vertices, 3 * frames), min(frames, 3 * vertices)
+    if not (
+        isinstance(ranks, list)
+        and len(ranks) == 2
+        and all(_is_int(r) for r in ranks)
+        and 1 <= ranks[0] <= largest_i
+        and 1 <= ranks[1] <= largest_k
+    ):
+        raise FormatError(
+            f"must be [i, k], two integers with 1 <= i <= min(K, 3F) = {largest_i} and "
+            f"1 <= k <= min(F, 3K) = {largest_k}: got {ranks!r}",
+            rule="R22-ranks",
+            field="header.ranks",
+        )
+    return ranks[0], ranks[1]

@@ -1,0 +1,124 @@
+"""Reading and writing mesh sequences in the file formats where they live.
+
+:func:`load_sequence` and :func:`save_sequence` choose a format by the file name's suffix from
+the registry (:mod:`.registry`); each format is one module: :mod:`.obj` (one OBJ file per
+frame), :mod:`.npz` (a NumPy archive of the whole sequence), :mod:`.meshes` (other one-frame
+mesh files, through trimesh). Folders, globs and lists of one-frame files are :mod:`.frames`.
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+import re
+from collections.abc import Sequence
+from pathlib import Path
+
+from ..errors import InputError
+from ..sequence import MeshSequence
+from .frames import folder_files, glob_files, natural_sort_key, read_frames, write_frames
+from .registry import SequenceFormat, WriteOptions, format_named, format_of, formats
+
+#: What load_sequence accepts: a folder, glob pattern, mesh or sequence file, or a list of files.
+Source = str | os.PathLike[str] | Sequence[str | os.PathLike[str]]
+
+_GLOB_CHARACTERS = re.compile(r"[*?[]")
+#: The format of a folder of frames when none is named: OBJ, which every tool reads.
+FOLDER_FORMAT = "obj"
+
+
+def load_sequence(source: Source, *, progress: bool = True) -> MeshSequence:
+    """Load a mesh sequence.
+
+    Args:
+        source: one of
+            - a folder: every ``*.obj`` file in it (any case), or if it has none, every mesh file
+              trimesh reads (``.ply``, ``.off``, ``.stl``, ``.glb``...); hidden files (names
+              starting with ``.``) are skipped;
+            - a glob pattern such as ``"frames/*.obj"``;
+            - a list or tuple of files, read in the order given;
+            - a file holding a whole sequence, chosen by its suffix: an ``.npz`` with keys ``V``
+              (F, K, 3) and optionally ``F`` (faces), ``frame_files`` (names) and ``frame_rate``;
+            - a single mesh file, giving a one-frame sequence.
+            Files of a folder or glob are ordered by :func:`natural_sort_key` of their names.
+        progress: draw a progress bar on a terminal while reading many files.
+
+    Returns:
+        The sequence; faces come from the first frame and ``frame_names`` are the file names.
+
+    Raises:
+        InputError: nothing to read, a file that cannot be read, or a frame whose vertex count
+            or faces differ from the first; the error names the file, frame and line.
+    """
+    if isinstance(source, (list, tuple)):
+        files = [Path(item) for item in source]
+        if not files:
+            raise InputError("the list of frame files is empty")
+        return read_frames(files, progress)
+
+    path = Path(source)  # type: ignore[arg-type]  # lists and tuples were handled above
+    if not path.exists() and _GLOB_CHARACTERS.search(str(source)):
+        return read_frames(glob_files(str(source)), progress)
+    if path.is_dir():
+        return read_frames(folder_files(path), progress)
+    if not path.exists():
+        raise InputError("no such file or folder", path=path)
+    found = format_of(path)
+    if found is not None and found.read is not None:
+        return found.read(path)
+    return read_frames([path], progress)
+
+
+def save_sequence(
+    seq: MeshSequence,
+    destination: str | os.PathLike[str],
+    *,
+    overwrite: bool = False,
+    precision: int | None = None,
+    progress: bool = True,
+) -> None:
+    """Save a sequence: a file whose suffix names a sequence format (``.npz``), or a folder of
+    OBJ files.
+
+    Args:
+        seq: the sequence.
+        destination: a path ending in ``.npz`` writes one archive (V float64, F int64,
+            frame_files, and frame_rate if set). Anything else is a folder (created if needed)
+            that receives one OBJ file per frame, named after ``seq.frame_names`` (made safe
+            for file names, with an ``.obj`` suffix, unique). If those names would not sort
+            back into frame order, they are prefixed with the frame number.
+        overwrite: replace existing files; otherwise an existing target file is an error,
+            raised before anything is written.
+        precision: significant digits of OBJ coordinates; ``None`` writes exact round-trip
+            text. Ignored for ``.npz`` (always exact).
+        progress: draw a progress bar on a terminal while writing many files.
+
+    Raises:
+        FileExistsError: a target file exists and ``overwrite`` is False.
+    """
+    destination = Path(destination)
+    options = WriteOptions(overwrite=overwrite, precision=precision, progress=progress)
+    found = format_of(destination)
+    if found is not None and found.write is not None:
+        destination.parent.mkdir(parents=True, exist_ok=True)  # as for a folder of frames
+        found.write(seq, destination, options)
+        return
+    if destination.exists() and not destination.is_dir():
+        raise NotADirectoryError(
+            errno.ENOTDIR,
+            "not a folder: name an .npz file or a folder for OBJ frames",
+            str(destination),
+        )
+    write_frames(seq, destination, format_named(FOLDER_FORMAT), options)
+
+
+__all__ = [
+    "SequenceFormat",
+    "WriteOptions",
+    "format_named",
+    "format_of",
+    "formats",
+    "load_sequence",
+    "natural_sort_key",
+    "save_sequence",
+]

@@ -1,0 +1,175 @@
+"""Sequences stored as one mesh file per frame: a folder, a glob pattern or a list of files.
+
+The files are ordered by natural sort of their names (``frame2`` before ``frame10``), each is
+read by its format's frame reader, and every frame must have the vertex count and faces of the
+first one. Writing makes a folder of one file per frame, staged and moved in whole.
+"""
+
+from __future__ import annotations
+
+import glob
+import os
+import re
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from ..atomic import atomic_folder
+from ..errors import InputError
+from ..progress import progress as progress_bar
+from ..sequence import MeshSequence
+from .registry import MeshFrame, SequenceFormat, WriteOptions, format_of, formats
+
+_UNSAFE_NAME_CHARACTERS = re.compile(r"[^A-Za-z0-9._-]+")
+
+
+def natural_sort_key(name: str) -> tuple[tuple[int | str, ...], str]:
+    """A sort key that orders the digit runs of ``name`` by value: ``f2`` before ``f10``.
+
+    Letters compare without regard to case; names that differ only in case or leading zeros
+    (``f01`` and ``f1``) are then ordered by their plain text so the order is always the same.
+    """
+    parts = re.split(r"([0-9]+)", name)
+    # re.split with a group alternates text, digits, text...: same kinds meet at each position
+    key = tuple(int(part) if i % 2 else part.casefold() for i, part in enumerate(parts))
+    return key, name
+
+
+def folder_files(folder: Path) -> list[Path]:
+    """The OBJ files of a folder, else its other one-frame-per-file mesh files, in natural
+    order of their names. Hidden files are skipped."""
+    # hidden files: editors' backups, macOS "._name.obj" metadata, temporary files
+    files = [e for e in folder.iterdir() if e.is_file() and not e.name.startswith(".")]
+    objs = [entry for entry in files if entry.suffix.lower() == ".obj"]
+    chosen = objs or [entry for entry in files if _frame_format(entry) is not None]
+    if not chosen:
+        raise InputError("the folder holds no .obj (or other mesh) files", path=folder)
+    return sorted(chosen, key=lambda entry: natural_sort_key(entry.name))
+
+
+def glob_files(pattern: str) -> list[Path]:
+    """The files matching a glob pattern, in natural order of their names."""
+    matches = glob.glob(os.path.expanduser(pattern))
+    files = [Path(name) for name in matches if Path(name).is_file()]
+    if not files:
+        raise InputError("the pattern matches no files", path=pattern)
+    return sorted(files, key=lambda entry: (natural_sort_key(entry.name), str(entry)))
+
+
+def _frame_format(path: Path) -> SequenceFormat | None:
+    """The one-frame-per-file format of ``path``, or ``None``."""
+    found = format_of(path)
+    return found if found is not None and found.read_frame is not None else None
+
+
+def read_frames(files: list[Path], show_progress: bool) -> MeshSequence:
+    """Read one frame per file; every frame must match the first one's vertices and faces."""
+    readers = []
+    for file in files:
+        found = _frame_format(file)
+        if found is None or found.read_frame is None:
+            whole = format_of(file)
+            if whole is not None:
+                reason = f"a {whole.name} file holds a whole sequence: load it on its own"
+            else:
+                reason = f"not a mesh file this reads (one frame per file: {_frame_suffixes()})"
+            raise InputError(reason, path=file)
+        readers.append(found.read_frame)
+    label = "reading OBJ" if all(f.suffix.lower() == ".obj" for f in files) else "reading meshes"
+    numbered: Iterable[int] = range(len(files))
+    if show_progress:
+        numbered = progress_bar(numbered, total=len(files), label=label)
+
+    vertices: np.ndarray | None = None
+    reference: MeshFrame | None = None
+    for index in numbered:
+        try:
+            frame = readers[index](files[index], reference)
+            if reference is not None:
+                _check_matches(frame, reference, files[index])
+        except InputError as error:
+            if len(files) == 1:
+                raise
+            # add the frame number to the reader's message (file and line are already there)
+            raise InputError(error.reason, path=error.path, line=error.line, frame=index) from None
+        if reference is None:
+            reference = frame
+            vertices = np.empty((len(files), *frame.vertices.shape), dtype=np.float64)
+        assert vertices is not None
+        vertices[index] = frame.vertices
+
+    assert reference is not None and vertices is not None
+    return MeshSequence(vertices, reference.faces, frame_names=[f.name for f in files])
+
+
+def _frame_suffixes() -> str:
+    return ", ".join(s for f in formats() if f.read_frame is not None for s in f.suffixes)
+
+
+def _check_matches(frame: MeshFrame, reference: MeshFrame, path: Path) -> None:
+    """A frame must have the first frame's vertex count and faces (a reader such as OBJ's
+    checks this itself, naming the line; this catches every other reader)."""
+    first = f" ({reference.path})" if reference.path else ""  # the other file to look at
+    if len(frame.vertices) != len(reference.vertices):
+        raise InputError(
+            f"has {len(frame.vertices)} vertices but the first frame has "
+            f"{len(reference.vertices)}{first}: every frame must have the same vertices",
+            path=path,
+        )
+    if frame.faces is not reference.faces and not np.array_equal(frame.faces, reference.faces):
+        raise InputError(
+            f"its faces differ from the first frame's{first}: every frame must have the same "
+            "faces",
+            path=path,
+        )
+
+
+def write_frames(
+    seq: MeshSequence, destination: Path, frame_format: SequenceFormat, options: WriteOptions
+) -> None:
+    """Write one file per frame into the folder ``destination`` (created if needed), named
+    after the frame names (:func:`frame_file_names`). All frames are written to a staging
+    folder first (existing targets refused before any work), so a failure or an interrupt
+    leaves the destination as it was."""
+    write_frame = frame_format.write_frame
+    if write_frame is None:
+        raise ValueError(f"the {frame_format.name} format cannot write frames")
+    names = frame_file_names(seq.frame_names, frame_format.suffixes[0])
+    destination.parent.mkdir(parents=True, exist_ok=True)
+    numbered: Iterable[int] = range(seq.frame_count)
+    if options.progress:
+        numbered = progress_bar(
+            numbered, total=seq.frame_count, label=f"writing {frame_format.name.upper()}"
+        )
+    with atomic_folder(destination, names, overwrite=options.overwrite) as staging:
+        for index in numbered:
+            write_frame(staging / names[index], seq.vertices[index], seq.faces, options)
+
+
+def frame_file_names(frame_names: Sequence[str], suffix: str) -> list[str]:
+    """Safe, unique file names for the frames, which natural-sort into frame order."""
+    names: list[str] = []
+    taken: set[str] = set()
+    for index, frame_name in enumerate(frame_names):
+        stem = _safe_stem(frame_name) or f"frame_{index:05d}"
+        name = f"{stem}{suffix}"
+        copy = 1
+        while name.casefold() in taken:  # case-insensitive file systems would merge them
+            copy += 1
+            name = f"{stem}_{copy}{suffix}"
+        taken.add(name.casefold())
+        names.append(name)
+    if sorted(names, key=natural_sort_key) != names:
+        # reading the folder back must give the frames in this order
+        width = max(5, len(str(len(names) - 1)))
+        names = [f"{index:0{width}d}_{name}" for index, name in enumerate(names)]
+    return names
+
+
+def _safe_stem(frame_name: str) -> str:
+    """The frame name without folders, mesh suffix or characters unsafe in file names."""
+    name = Path(str(frame_name).replace("\\", "/")).name
+    if format_of(name) is not None:
+        name = Path(name).stem
+    return _UNSAFE_NAME_CHARACTERS.sub("_", name).lstrip(".")

@@ -1,0 +1,105 @@
+"""The registry of sequence file formats, keyed by file-name suffix.
+
+Each format is one module of :mod:`tuckercodec.io` that defines ``FORMAT``, a
+:class:`SequenceFormat`, and is listed in :data:`BUILTIN_MODULES`. A format either holds a
+whole sequence in one file (``read``/``write``: ``.npz``), or one frame per file (``read_frame``
+/``write_frame``: ``.obj``, and the meshes trimesh reads), which a folder, a glob or a list of
+files makes into a sequence (:mod:`.frames`). Modules import their heavy libraries only inside
+their functions, so that looking a format up costs nothing.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+
+from ..sequence import MeshSequence
+
+#: The modules of :mod:`tuckercodec.io` that define a ``FORMAT``, in the order the CLI lists them.
+BUILTIN_MODULES = ("obj", "npz", "meshes")
+
+
+@dataclass(eq=False)
+class MeshFrame:
+    """One frame as a per-frame reader returns it.
+
+    Attributes:
+        vertices: (K, 3) float64 positions in the file's order.
+        faces: (M, n) int64, 0-based, rows shorter than n padded with -1; (0, 3) if none.
+        face_text: a reader's key for "the same faces as the reference frame" that is cheaper
+            to compare than the faces (OBJ: the raw ``f`` lines), or ``None``.
+        path: the file it was read from, which errors about a later frame name beside their own.
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    face_text: bytes | None = None
+    path: str | None = None
+
+
+@dataclass(frozen=True)
+class WriteOptions:
+    """How a sequence is written: ``overwrite`` existing files; ``precision`` significant
+    digits for text formats (``None``: exact); ``progress`` bar on a terminal."""
+
+    overwrite: bool = False
+    precision: int | None = None
+    progress: bool = False
+
+
+#: Reads one frame; the second argument is the sequence's first frame (``None`` for the first
+#: itself), which a reader may use to skip work or to name the first difference it finds.
+FrameReader = Callable[[Path, MeshFrame | None], MeshFrame]
+FrameWriter = Callable[[Path, np.ndarray, np.ndarray, WriteOptions], None]
+
+
+@dataclass(frozen=True)
+class SequenceFormat:
+    """A file format of mesh sequences, and the functions that read and write it."""
+
+    name: str
+    suffixes: tuple[str, ...]  # lower case, with the dot
+    description: str
+    read: Callable[[Path], MeshSequence] | None = None  # a whole sequence from one file
+    write: Callable[[MeshSequence, Path, WriteOptions], None] | None = None
+    read_frame: FrameReader | None = None  # one frame from one file
+    write_frame: FrameWriter | None = None  # one frame (vertices, faces) to one file
+
+
+@cache
+def formats() -> tuple[SequenceFormat, ...]:
+    """Every registered format, in the order of :data:`BUILTIN_MODULES`."""
+    found = []
+    for name in BUILTIN_MODULES:
+        module = importlib.import_module(f"{__package__}.{name}")
+        found.append(module.FORMAT)
+    return tuple(found)
+
+
+def format_named(name: str) -> SequenceFormat:
+    """The format called ``name`` ("obj", "npz"...); ``ValueError`` naming the others."""
+    for candidate in formats():
+        if candidate.name == name:
+            return candidate
+    known = ", ".join(f.name for f in formats())
+    raise ValueError(f"unknown sequence format {name!r}: the formats are {known}")
+
+
+def format_of(path: str | os.PathLike[str]) -> SequenceFormat | None:
+    """The format a file name's suffix names (case-insensitive), or ``None``."""
+    suffix = Path(path).suffix.lower()
+    for candidate in formats():
+        if suffix in candidate.suffixes:
+            return candidate
+    return None
+
+
+def known_suffixes() -> str:
+    """The suffixes of every format, for messages: ``".obj, .npz, .ply..."``."""
+    return ", ".join(suffix for f in formats() for suffix in f.suffixes)

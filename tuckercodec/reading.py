@@ -1,0 +1,38 @@
+"""Opening files to read them: only regular files, never anything that could block or never end.
+
+Every reader of the package (mesh sequences, compressed files) opens its input here, so that a
+folder, a named pipe or a device given by mistake gets a clear :class:`InputError` instead of a
+hang (opening a named pipe waits for a writer for ever) or an endless read (``/dev/zero``).
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+from typing import BinaryIO
+
+from .errors import InputError
+
+
+def open_regular_file(path: str | os.PathLike[str], what: str) -> BinaryIO:
+    """Open ``path`` for reading in binary; a folder, named pipe or device is an InputError.
+
+    ``what`` names what the file should have been ("an OBJ file"). Raises OSError when the file
+    cannot be opened at all.
+    """
+    # O_NONBLOCK: opening a named pipe would otherwise wait for a writer, for ever. It changes
+    # nothing for a regular file.
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0)
+    descriptor = os.open(path, flags)
+    try:
+        mode = os.fstat(descriptor).st_mode
+        if stat.S_ISDIR(mode):
+            raise InputError(f"is a folder, not {what}", path=path)
+        if not stat.S_ISREG(mode):
+            raise InputError(
+                f"is not a regular file (a pipe or a device?), so not {what}", path=path
+            )
+        return os.fdopen(descriptor, "rb")
+    except BaseException:
+        os.close(descriptor)
+        raise
