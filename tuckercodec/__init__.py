@@ -39,9 +39,9 @@ from .files import decode_file, encode_file, read_compressed
 from .format.limits import Limits
 from .io import load_sequence, save_sequence
 from .metrics import kg_error, max_vertex_displacement, relative_error
+from .perceptual import sted
 from .rate import bpfv
 from .sequence import MeshSequence
-from .perceptual import sted
 
 __all__ = [
     "Analysis",

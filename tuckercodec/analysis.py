@@ -61,8 +61,11 @@ class Curve:
 
 def stored_floats(i: np.ndarray | int, k: np.ndarray | int, vertices: int, frames: int):
     """S = i*K + 9 + k*F + 3*i*k: the floats of U1 (K x i), U2 (3 x 3), U3 (F x k), core."""
-    return np.asarray(i, dtype=np.int64) * vertices + 9 + np.asarray(k, dtype=np.int64) * frames + (
-        3 * np.asarray(i, dtype=np.int64) * np.asarray(k, dtype=np.int64)
+    return (
+        np.asarray(i, dtype=np.int64) * vertices
+        + 9
+        + np.asarray(k, dtype=np.int64) * frames
+        + (3 * np.asarray(i, dtype=np.int64) * np.asarray(k, dtype=np.int64))
     )
 
 
@@ -105,7 +108,9 @@ class Analysis:
     def _check(self, i: int, k: int) -> None:
         r1, r3 = self.max_ranks
         if not (1 <= i <= r1 and 1 <= k <= r3):
-            raise ValueError(f"ranks must satisfy 1 <= i <= {r1} and 1 <= k <= {r3}, got ({i}, {k})")
+            raise ValueError(
+                f"ranks must satisfy 1 <= i <= {r1} and 1 <= k <= {r3}, got ({i}, {k})"
+            )
 
     def kg(self, i: int, k: int) -> float:
         """Exact KG error of the truncation (i, 3, k), in percent."""
@@ -132,7 +137,9 @@ class Analysis:
 
     def choice(self, i: int, k: int) -> RankChoice:
         """Everything known about (i, 3, k)."""
-        return RankChoice(i, k, self.floats(i, k), self.rate(i, k), self.kg(i, k), self.kg_bound(i, k))
+        return RankChoice(
+            i, k, self.floats(i, k), self.rate(i, k), self.kg(i, k), self.kg_bound(i, k)
+        )
 
     # ----- whole tables ---------------------------------------------------------------------
     def error_table(self) -> np.ndarray:
@@ -258,7 +265,9 @@ def analyze(sequence: MeshSequence | np.ndarray) -> Analysis:
     if vertices.ndim != 3 or vertices.shape[2] != 3:
         raise InputError(f"positions must have shape (frames, vertices, 3), got {vertices.shape}")
     if vertices.shape[0] < 1 or vertices.shape[1] < 1:
-        raise InputError(f"a sequence needs at least one frame and one vertex, got {vertices.shape}")
+        raise InputError(
+            f"a sequence needs at least one frame and one vertex, got {vertices.shape}"
+        )
     if not np.isfinite(vertices).all():
         raise InputError("the positions contain a non-finite coordinate")
     with np.errstate(over="ignore"):

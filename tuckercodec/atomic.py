@@ -25,7 +25,7 @@ import os
 import shutil
 import tempfile
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import BinaryIO
 
@@ -44,13 +44,17 @@ def refuse_existing(paths: list[Path], overwrite: bool) -> None:
         if not folder.exists():
             raise FileNotFoundError(errno.ENOENT, "the output folder does not exist", str(folder))
         if not folder.is_dir():
-            raise NotADirectoryError(errno.ENOTDIR, "the output's folder is not a folder", str(folder))
+            raise NotADirectoryError(
+                errno.ENOTDIR, "the output's folder is not a folder", str(folder)
+            )
         if not overwrite and Path(path).exists():
             raise _exists(path)
 
 
 def _exists(path: str | Path) -> FileExistsError:
-    return FileExistsError(f"{path} already exists (pass --force, or overwrite=True, to replace it)")
+    return FileExistsError(
+        f"{path} already exists (pass --force, or overwrite=True, to replace it)"
+    )
 
 
 def _umask() -> int:
@@ -130,10 +134,8 @@ def _copy_to_named(descriptor: int, target: Path, overwrite: bool) -> None:
 
 
 def _remove(path: str | Path) -> None:
-    try:
+    with suppress(FileNotFoundError):
         os.unlink(path)
-    except FileNotFoundError:
-        pass
 
 
 @contextmanager
@@ -189,7 +191,9 @@ def _named_output(target: Path, overwrite: bool) -> Iterator[BinaryIO]:
         raise
 
 
-def write_atomic(path: str | Path, data: bytes | Callable[[BinaryIO], None], *, overwrite: bool = False) -> None:
+def write_atomic(
+    path: str | Path, data: bytes | Callable[[BinaryIO], None], *, overwrite: bool = False
+) -> None:
     """Write ``data`` (bytes, or a function that writes to a binary file) to ``path`` atomically."""
     with atomic_output(path, overwrite=overwrite) as handle:
         if callable(data):
@@ -216,7 +220,9 @@ def _move_in(source: Path, target: Path, overwrite: bool) -> None:
 
 
 @contextmanager
-def atomic_folder(destination: str | Path, names: list[str], *, overwrite: bool = False) -> Iterator[Path]:
+def atomic_folder(
+    destination: str | Path, names: list[str], *, overwrite: bool = False
+) -> Iterator[Path]:
     """Write the files ``names`` of a folder as a whole: yield a hidden staging folder beside
     ``destination``; when the block ends without an exception, its files are moved into
     ``destination`` (created if missing), and on any exception the staging folder is removed,
@@ -233,7 +239,9 @@ def atomic_folder(destination: str | Path, names: list[str], *, overwrite: bool 
         raise NotADirectoryError(errno.ENOTDIR, "not a folder", str(target))
     parent = target.parent
     if not parent.is_dir():
-        raise FileNotFoundError(errno.ENOENT, "the output folder's parent does not exist", str(parent))
+        raise FileNotFoundError(
+            errno.ENOENT, "the output folder's parent does not exist", str(parent)
+        )
     if target.is_dir():
         refuse_existing([target / name for name in names], overwrite)
     staging = Path(tempfile.mkdtemp(dir=parent, prefix=f".{target.name}.", suffix=".tmp"))

@@ -156,7 +156,9 @@ class _Workspace:
             top_i = max(i, self._u1.shape[1])
             top_k = max(k, self._core.shape[2])
             self._u1 = decomposition.u1(top_i)
-            self._core = project(decomposition.tensor, self._u1, decomposition.u2, decomposition.u3[:, :top_k])
+            self._core = project(
+                decomposition.tensor, self._u1, decomposition.u2, decomposition.u3[:, :top_k]
+            )
         return self._u1[:, :i], decomposition.u3[:, :k], self._core[:i, :, :k]
 
     def quantize(self, i: int, k: int, step: float) -> _Quantized:
@@ -180,7 +182,9 @@ class _Workspace:
         """The centroids at ``step``, or at the smallest step whose integers fit the format
         (:attr:`centroid_floor_step`) if that is larger: the decoded-error check then makes the
         other factors finer to make up for it."""
-        return qmat.quantize(self.analysis.centroids, np.full(3, max(step, self.centroid_floor_step)))
+        return qmat.quantize(
+            self.analysis.centroids, np.full(3, max(step, self.centroid_floor_step))
+        )
 
     def _centroid_floor(self) -> tuple[float, float]:
         """The smallest centroid step whose integers fit 32 bits (the first frame's values and
@@ -203,8 +207,9 @@ class _Workspace:
             return
         floor_kg = self.kg(self.centroid_floor_error2)
         raise UnreachableTargetError(
-            f"the sequence lies too far from the origin for this error target: its centroids "
-            f"(or their changes from frame to frame) reach {LARGEST_STREAMED * self.centroid_floor_step:.6g}, "
+            "the sequence lies too far from the origin for this error target: its centroids "
+            "(or their changes from frame to frame) reach "
+            f"{LARGEST_STREAMED * self.centroid_floor_step:.6g}, "
             "the format stores them as 32-bit multiples of a step, and the finest step that fits "
             f"already costs a KG error of {floor_kg:.3g}. Move the sequence nearer the origin (the "
             "KG error does not depend on where it is), or ask for a larger KG error"
@@ -256,7 +261,11 @@ class _Workspace:
         return sum(len(payload) for _, payload in self.sections(quantized, streams.SEARCH_LEVEL))
 
     def pack(
-        self, quantized: _Quantized, error2: float, target_kg: float | None, level: int | None = None
+        self,
+        quantized: _Quantized,
+        error2: float,
+        target_kg: float | None,
+        level: int | None = None,
     ) -> tuple[bytes, dict[str, int]]:
         """The file's bytes, and the size of each section (zstd ``level``: the final one unless
         given)."""
@@ -291,7 +300,9 @@ def _initial_step(work: _Workspace, i: int, k: int, budget2: float) -> float:
     return 12.0 * budget2 / factor_value_count(work.vertex_count, work.frame_count, i, k)
 
 
-def _meet(work: _Workspace, i: int, k: int, step: float, limit2: float) -> tuple[_Quantized, float, int]:
+def _meet(
+    work: _Workspace, i: int, k: int, step: float, limit2: float
+) -> tuple[_Quantized, float, int]:
     """Adjust D so that the decoded squared error is at most ``limit2``, as loose as it can be.
 
     Returns the quantization, its decoded squared error and the number of measurements.
@@ -322,7 +333,9 @@ def _meet(work: _Workspace, i: int, k: int, step: float, limit2: float) -> tuple
     )
 
 
-def _search_kg(work: _Workspace, target_kg: float, select: Selection, shares: tuple[float, ...]) -> tuple[_Quantized, float, int]:
+def _search_kg(
+    work: _Workspace, target_kg: float, select: Selection, shares: tuple[float, ...]
+) -> tuple[_Quantized, float, int]:
     """The smallest file found for a target KG error: see the module docstring."""
     limit2 = (target_kg * (1.0 - SAFETY) / 100.0) ** 2 * work.denominator2
     work.check_reachable(limit2)
@@ -352,14 +365,26 @@ def _search_kg(work: _Workspace, target_kg: float, select: Selection, shares: tu
 # the public entry points
 
 
-def _check_modes(target_kg: float | None, ranks: tuple[int, int] | None, target_bpfv: float | None) -> Mode:
-    given = [name for name, value in (("target_kg", target_kg), ("ranks", ranks), ("target_bpfv", target_bpfv)) if value is not None]
+def _check_modes(
+    target_kg: float | None, ranks: tuple[int, int] | None, target_bpfv: float | None
+) -> Mode:
+    given = [
+        name
+        for name, value in (
+            ("target_kg", target_kg),
+            ("ranks", ranks),
+            ("target_bpfv", target_bpfv),
+        )
+        if value is not None
+    ]
     if len(given) > 1:
         raise ValueError(f"give one of target_kg, ranks and target_bpfv, not {' and '.join(given)}")
     for name, value in (("target_kg", target_kg), ("target_bpfv", target_bpfv)):
         if value is not None and not (
-            isinstance(value, (int, float, np.floating)) and not isinstance(value, bool)
-            and math.isfinite(value) and value > 0
+            isinstance(value, (int, float, np.floating))
+            and not isinstance(value, bool)
+            and math.isfinite(value)
+            and value > 0
         ):
             raise ValueError(f"{name} must be a positive finite number, got {value!r}")
     if ranks is not None:
@@ -415,8 +440,12 @@ def encode_with_report(
         i, k = _checked_ranks(ranks, analysis)
         truncation2 = work.truncation_error2(i, k)
         floor2 = (RANKS_FLOOR_KG / 100.0) ** 2 * work.denominator2
-        budget2 = max(RANKS_QUANTIZATION_SHARE * truncation2, floor2, 1.01 * work.centroid_floor_error2)
-        quantized, error2, trials = _meet(work, i, k, _initial_step(work, i, k, budget2), truncation2 + budget2)
+        budget2 = max(
+            RANKS_QUANTIZATION_SHARE * truncation2, floor2, 1.01 * work.centroid_floor_error2
+        )
+        quantized, error2, trials = _meet(
+            work, i, k, _initial_step(work, i, k, budget2), truncation2 + budget2
+        )
         target_for_header = None
     elif mode == "kg":
         target = DEFAULT_TARGET_KG if target_kg is None else float(target_kg)
@@ -453,21 +482,27 @@ def _checked_ranks(ranks: Any, analysis: Analysis) -> tuple[int, int]:
     r1, r3 = analysis.max_ranks
     try:
         i, k = (int(r) for r in ranks)
-        valid = all(float(a) == b for a, b in zip(ranks, (i, k)))
+        valid = all(float(a) == b for a, b in zip(ranks, (i, k), strict=True))
     except (TypeError, ValueError):
         valid = False
     if not valid or not (1 <= i <= r1 and 1 <= k <= r3):
-        raise ValueError(f"ranks must be two integers with 1 <= i <= {r1} and 1 <= k <= {r3}, got {ranks!r}")
+        raise ValueError(
+            f"ranks must be two integers with 1 <= i <= {r1} and 1 <= k <= {r3}, got {ranks!r}"
+        )
     return i, k
 
 
-def _search_bpfv(work: _Workspace, target_bpfv: float, select: Selection) -> tuple[_Quantized, float, int]:
+def _search_bpfv(
+    work: _Workspace, target_bpfv: float, select: Selection
+) -> tuple[_Quantized, float, int]:
     """The smallest KG error whose file fits ``target_bpfv``: bisection on log KG, sizing the
     trials at the fast zstd level, then the final level checked (and the error loosened a step
     at a time in the rare case that it packs larger)."""
     budget = target_bpfv * work.frame_count * work.vertex_count / 8.0
 
-    def attempt(kg: float, shares: tuple[float, ...], level: int | None) -> tuple[_Quantized, float, int, int]:
+    def attempt(
+        kg: float, shares: tuple[float, ...], level: int | None
+    ) -> tuple[_Quantized, float, int, int]:
         quantized, error2, trials = _search_kg(work, kg, select, shares)
         return quantized, error2, trials, len(work.pack(quantized, error2, None, level)[0])
 
@@ -476,10 +511,13 @@ def _search_bpfv(work: _Workspace, target_bpfv: float, select: Selection) -> tup
     best = attempt(100.0, QUICK_SHARES[:1], None)
     trials += best[2]
     if best[3] > budget:
+        faces_bpfv = bits_per_frame_vertex(
+            len(work.face_section[1]), work.frame_count, work.vertex_count
+        )
         raise UnreachableTargetError(
             f"no file fits {target_bpfv} bpfv: even the coarsest one needs "
             f"{bits_per_frame_vertex(best[3], work.frame_count, work.vertex_count):.3f} bpfv "
-            f"(the faces alone take {bits_per_frame_vertex(len(work.face_section[1]), work.frame_count, work.vertex_count):.3f})"
+            f"(the faces alone take {faces_bpfv:.3f})"
         )
     for _ in range(14):  # log KG to within about 1 %
         middle = 0.5 * (low + high)

@@ -6,7 +6,8 @@ does not exist) raises the plain ``TypeError``/``ValueError`` as usual. The clas
 a bad value (:class:`InputError`, :class:`FormatError`, :class:`UnreachableTargetError`) are also
 ``ValueError``\\ s, so that code written against generic exceptions keeps working.
 
-Each class carries the exit code the command line returns for it (:attr:`TuckerCodecError.exit_code`).
+Each class carries the exit code the command line returns for it
+(:attr:`TuckerCodecError.exit_code`).
 """
 
 from __future__ import annotations

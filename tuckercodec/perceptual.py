@@ -67,7 +67,9 @@ def _checked_positions(x: MeshSequence | np.ndarray, name: str) -> np.ndarray:
     except (TypeError, ValueError):
         raise InputError(f"{name}: positions must be an array of real numbers") from None
     if array.ndim != 3 or array.shape[2] != 3 or array.shape[0] < 1 or array.shape[1] < 1:
-        raise InputError(f"{name}: positions must have shape (frames >= 1, vertices >= 1, 3), got {array.shape}")
+        raise InputError(
+            f"{name}: positions must have shape (frames >= 1, vertices >= 1, 3), got {array.shape}"
+        )
     bad = ~np.isfinite(array)
     if bad.any():
         f, k, _ = np.argwhere(bad)[0]
@@ -84,7 +86,9 @@ def _integer(value: int, name: str, low: int) -> int:
 
 
 def _real(value: float, name: str, *, zero: bool) -> float:
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+    if isinstance(value, (bool, np.bool_)) or not isinstance(
+        value, (int, float, np.integer, np.floating)
+    ):
         raise TypeError(f"{name} must be a number, got {value!r}")
     value = float(value)
     if not np.isfinite(value) or value < 0 or (value == 0 and not zero):
@@ -130,7 +134,9 @@ def _edge_lengths(block: np.ndarray, difference: sparse.csr_matrix) -> np.ndarra
     return np.sqrt(np.einsum("exb,exb->eb", delta, delta))
 
 
-def _sted_spatial(a: np.ndarray, b: np.ndarray, edges: np.ndarray, members: sparse.csr_matrix) -> float:
+def _sted_spatial(
+    a: np.ndarray, b: np.ndarray, edges: np.ndarray, members: sparse.csr_matrix
+) -> float:
     frames, vertices = a.shape[:2]
     count = len(edges)
     difference = sparse.csr_matrix(
@@ -140,8 +146,9 @@ def _sted_spatial(a: np.ndarray, b: np.ndarray, edges: np.ndarray, members: spar
     sizes = np.diff(members.indptr)  # edges in each vertex's neighbourhood
     cols = members.indices  # the edge of each membership, grouped by vertex
     # Sums over each vertex's memberships: the membership pattern, one column per membership.
-    selector = sparse.csr_matrix((np.ones(len(cols)), np.arange(len(cols)), members.indptr),
-                                 shape=(vertices, len(cols)))
+    selector = sparse.csr_matrix(
+        (np.ones(len(cols)), np.arange(len(cols)), members.indptr), shape=(vertices, len(cols))
+    )
     step = max(1, _STED_BLOCK_ELEMENTS // max(len(cols), 3 * count))
     total, counted = 0.0, 0
     for start in range(0, frames, step):
@@ -165,7 +172,9 @@ def _sted_spatial(a: np.ndarray, b: np.ndarray, edges: np.ndarray, members: spar
         total += float(np.sqrt(variance[valid]).sum())
         counted += int(valid.sum())
     if counted == 0:
-        raise InputError("STED's spatial part is undefined: every edge of the original has zero length")
+        raise InputError(
+            "STED's spatial part is undefined: every edge of the original has zero length"
+        )
     return total / counted
 
 
@@ -274,7 +283,9 @@ def sted(
         raise InputError(f"the sequences differ in shape: {a.shape} against {b.shape}")
     if faces is None:
         if not isinstance(original, MeshSequence):
-            raise ValueError("faces are required when original is an array rather than a MeshSequence")
+            raise ValueError(
+                "faces are required when original is an array rather than a MeshSequence"
+            )
         faces = original.faces
     edges = mesh_edges(faces, a.shape[1])
     if len(edges) == 0:
@@ -282,7 +293,9 @@ def sted(
     if scale is None:
         diagonal = float(np.linalg.norm(a[0].max(axis=0) - a[0].min(axis=0)))
         if diagonal == 0.0:
-            raise InputError("STED's scale is undefined: the original's first frame is a single point")
+            raise InputError(
+                "STED's scale is undefined: the original's first frame is a single point"
+            )
         scale = 1.0 / diagonal
     else:
         scale = _real(scale, "scale", zero=False)

@@ -30,9 +30,7 @@ def _pyplot():
         matplotlib.use("Agg")  # files only; never needs a display
         import matplotlib.pyplot as plt
     except ImportError as error:  # pragma: no cover - depends on the environment
-        raise DependencyError(
-            "plots need matplotlib: pip install 'tuckercodec[plot]'"
-        ) from error
+        raise DependencyError("plots need matplotlib: pip install 'tuckercodec[plot]'") from error
     return plt
 
 
@@ -40,12 +38,16 @@ def _save(fig, path: str | Path, overwrite: bool) -> None:
     plt = _pyplot()
     suffix = Path(path).suffix.lstrip(".").lower() or "png"
     try:
-        write_atomic(path, lambda handle: fig.savefig(handle, format=suffix, dpi=120), overwrite=overwrite)
+        write_atomic(
+            path, lambda handle: fig.savefig(handle, format=suffix, dpi=120), overwrite=overwrite
+        )
     finally:
         plt.close(fig)
 
 
-def plot_rd_curve(analysis: Analysis, path: str | Path, *, title: str = "", overwrite: bool = False) -> None:
+def plot_rd_curve(
+    analysis: Analysis, path: str | Path, *, title: str = "", overwrite: bool = False
+) -> None:
     """Draw Theta against KG error (log scale): exact front, estimate's front, PCA."""
     plt = _pyplot()
     exact = analysis.rd_curve()
@@ -53,7 +55,13 @@ def plot_rd_curve(analysis: Analysis, path: str | Path, *, title: str = "", over
     pca = analysis.pca_curve()
     fig, ax = plt.subplots(figsize=(7, 4.5))
     ax.plot(exact.kg, exact.rate, "-", lw=1.6, label="HOSVD, exact error (this codec)")
-    ax.plot(estimated.kg_bound, estimated.rate, "--", lw=1.2, label="HOSVD, estimated error (paper's bound)")
+    ax.plot(
+        estimated.kg_bound,
+        estimated.rate,
+        "--",
+        lw=1.2,
+        label="HOSVD, estimated error (paper's bound)",
+    )
     ax.plot(pca.kg, pca.rate, ":", lw=1.6, label="PCA of frames (paper's section 2.4)")
     ax.set_xscale("log")
     ax.set_xlabel("KG error, % (Karni-Gotsman, per-frame centroid)")
@@ -69,7 +77,9 @@ def plot_rd_curve(analysis: Analysis, path: str | Path, *, title: str = "", over
     _save(fig, path, overwrite)
 
 
-def plot_heatmaps(analysis: Analysis, path: str | Path, *, title: str = "", overwrite: bool = False) -> None:
+def plot_heatmaps(
+    analysis: Analysis, path: str | Path, *, title: str = "", overwrite: bool = False
+) -> None:
     """Draw log10 KG error and log10 psi over the mode-1 rank i and the mode-3 rank k."""
     plt = _pyplot()
     kg = analysis.kg_table()[1:, 1:]
@@ -124,19 +134,34 @@ def plot_frame_errors(
     style = "-" if frame_kg.size > 1 else "o"  # a single frame would draw no line at all
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
     panels = [
-        (top, frame_kg, "C0", "KG share of frame, %",
-         "each frame's share of the KG error: 100·‖A_f − B_f‖ / ‖A − E(A)‖, squares sum to KG²"),
-        (bottom, worst_vertex, "C3", "worst vertex, scene units",
-         "worst vertex: largest displacement ‖a_fk − b_fk‖ over the vertices k of frame f"),
+        (
+            top,
+            frame_kg,
+            "C0",
+            "KG share of frame, %",
+            "each frame's share of the KG error: 100·‖A_f − B_f‖ / ‖A − E(A)‖, squares sum to KG²",
+        ),
+        (
+            bottom,
+            worst_vertex,
+            "C3",
+            "worst vertex, scene units",
+            "worst vertex: largest displacement ‖a_fk − b_fk‖ over the vertices k of frame f",
+        ),
     ]
     for ax, values, colour, label, meaning in panels:
         ax.plot(frames, values, style, color=colour, lw=1.2)
         worst = int(np.argmax(values))
         ax.plot([worst], [values[worst]], "o", color=colour, ms=5)
         right = worst > 0.7 * max(frames[-1], 1)  # keep the label inside the panel
-        ax.annotate(f"max {values[worst]:.4g} at frame {worst}", (worst, values[worst]),
-                    textcoords="offset points", xytext=(-6 if right else 6, 4), fontsize=8,
-                    ha="right" if right else "left")
+        ax.annotate(
+            f"max {values[worst]:.4g} at frame {worst}",
+            (worst, values[worst]),
+            textcoords="offset points",
+            xytext=(-6 if right else 6, 4),
+            fontsize=8,
+            ha="right" if right else "left",
+        )
         ax.set_ylabel(label)
         ax.set_title(meaning, fontsize=9)
         ax.set_ylim(0, 1.15 * values.max() if values.max() > 0 else 1.0)
@@ -196,7 +221,9 @@ def render_frame(
     ax = fig.add_subplot(projection="3d")
     ax.view_init(elev=15, azim=-60)
     mappable = None
-    norm = Normalize(vmin=0.0, vmax=float(errors.max()) if errors is not None and errors.max() > 0 else 1.0)
+    norm = Normalize(
+        vmin=0.0, vmax=float(errors.max()) if errors is not None and errors.max() > 0 else 1.0
+    )
     cmap = colormaps["viridis"]
     if len(triangles):
         corners = points[triangles]  # (T, 3, 3)
@@ -213,7 +240,9 @@ def render_frame(
             colours = np.empty((len(triangles), 4))
             colours[:, :3] = intensity[:, None] * np.array([0.70, 0.75, 0.85])
             colours[:, 3] = 1.0
-        ax.add_collection3d(Poly3DCollection(corners, facecolors=colours, edgecolors="none", linewidths=0))
+        ax.add_collection3d(
+            Poly3DCollection(corners, facecolors=colours, edgecolors="none", linewidths=0)
+        )
     else:
         colour = cmap(norm(errors)) if errors is not None else "C0"
         ax.scatter(points[:, 0], points[:, 1], points[:, 2], c=colour, s=2, depthshade=False)

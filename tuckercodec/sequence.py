@@ -34,9 +34,13 @@ class MeshSequence:
     def __post_init__(self) -> None:
         vertices = np.asarray(self.vertices)
         if vertices.ndim != 3 or vertices.shape[2] != 3:
-            raise InputError(f"vertices must have shape (frames, vertices, 3), got {vertices.shape}")
+            raise InputError(
+                f"vertices must have shape (frames, vertices, 3), got {vertices.shape}"
+            )
         if vertices.shape[0] < 1 or vertices.shape[1] < 1:
-            raise InputError(f"a sequence needs at least one frame and one vertex, got {vertices.shape}")
+            raise InputError(
+                f"a sequence needs at least one frame and one vertex, got {vertices.shape}"
+            )
         if not np.issubdtype(vertices.dtype, np.number) or np.iscomplexobj(vertices):
             raise InputError(f"vertices must be real numbers, got dtype {vertices.dtype}")
         with np.errstate(over="ignore"):  # a long double beyond float64 becomes inf, named below
@@ -55,7 +59,9 @@ class MeshSequence:
             raise InputError(
                 f"{len(self.frame_names)} frame names given for {self.frame_count} frames"
             )
-        if self.frame_rate is not None and not (np.isfinite(self.frame_rate) and self.frame_rate > 0):
+        if self.frame_rate is not None and not (
+            np.isfinite(self.frame_rate) and self.frame_rate > 0
+        ):
             raise InputError(f"frame rate must be a positive number, got {self.frame_rate}")
 
     @property

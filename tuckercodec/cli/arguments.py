@@ -10,15 +10,17 @@ from .._version import __version__
 from ..encoder import DEFAULT_TARGET_KG
 from ..files import SUFFIX
 from ..metrics import KG_DEFINITION
-from ..report import DEFAULT_TARGETS
 from ..perceptual import STED_DEFINITION
+from ..report import DEFAULT_TARGETS
 
 
 def _targets(text: str) -> list[float]:
     try:
         values = [float(part) for part in text.split(",") if part.strip()]
     except ValueError:
-        raise argparse.ArgumentTypeError(f"not a comma-separated list of numbers: {text!r}") from None
+        raise argparse.ArgumentTypeError(
+            f"not a comma-separated list of numbers: {text!r}"
+        ) from None
     if not values or any(not (v > 0 and v < float("inf")) for v in values):
         raise argparse.ArgumentTypeError(f"targets must be positive numbers, got {text!r}")
     return values
@@ -67,7 +69,9 @@ def _frames(text: str) -> slice | list[int]:
         start, stop = text.split(":")
         selection = slice(int(start) if start else None, int(stop) if stop else None)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"frames are 'a:b', 'a:', ':b' or 'n', got {text!r}") from None
+        raise argparse.ArgumentTypeError(
+            f"frames are 'a:b', 'a:', ':b' or 'n', got {text!r}"
+        ) from None
     if (
         selection.start is not None
         and selection.stop is not None
@@ -113,7 +117,9 @@ def build_parser() -> argparse.ArgumentParser:
     mode = encode.add_mutually_exclusive_group()
     mode.add_argument("--kg", type=_positive, metavar="KG", help="target KG error in percent")
     mode.add_argument("--ranks", type=_ranks, metavar="I,K", help="fixed ranks (i, 3, k)")
-    mode.add_argument("--bpfv", type=_positive, metavar="BPFV", help="target size, bits per frame per vertex")
+    mode.add_argument(
+        "--bpfv", type=_positive, metavar="BPFV", help="target size, bits per frame per vertex"
+    )
     encode.add_argument(
         "--select",
         choices=("exact", "bound"),
@@ -125,7 +131,9 @@ def build_parser() -> argparse.ArgumentParser:
     decode = verbs.add_parser(
         "decode",
         help="rebuild the frames of a compressed file as OBJ files or an .npz",
-        description="Decode all frames, or a range, to a folder of OBJ files (with faces) or an .npz.",
+        description=(
+            "Decode all frames, or a range, to a folder of OBJ files (with faces) or an .npz."
+        ),
     )
     decode.add_argument("input", help=f"a compressed file ({SUFFIX})")
     decode.add_argument("-o", "--output", type=Path, required=True, metavar="OUTDIR|OUT.npz")
@@ -133,15 +141,29 @@ def build_parser() -> argparse.ArgumentParser:
         "--frames",
         type=_frames,
         metavar="A:B",
-        help="frames a to b-1, counted from 0 (negative: from the end; clipped to the file, as Python slices)",
+        help=(
+            "frames a to b-1, counted from 0 (negative: from the end; clipped to the file, as "
+            "Python slices)"
+        ),
     )
-    decode.add_argument("--format", choices=("obj", "npz"), help="default: npz if OUT ends in .npz, else obj")
-    decode.add_argument("--reference", metavar="ORIGINAL", help="report the actual error against this sequence")
-    decode.add_argument("--precision", type=int, metavar="DIGITS", help="significant digits in OBJ files (default: exact)")
+    decode.add_argument(
+        "--format", choices=("obj", "npz"), help="default: npz if OUT ends in .npz, else obj"
+    )
+    decode.add_argument(
+        "--reference", metavar="ORIGINAL", help="report the actual error against this sequence"
+    )
+    decode.add_argument(
+        "--precision",
+        type=int,
+        metavar="DIGITS",
+        help="significant digits in OBJ files (default: exact)",
+    )
     decode.add_argument("--force", action="store_true", help="replace output files that exist")
 
     info = verbs.add_parser(
-        "info", help="show a compressed file's header", description="Read the header; decode nothing."
+        "info",
+        help="show a compressed file's header",
+        description="Read the header; decode nothing.",
     )
     info.add_argument("input", help=f"a compressed file ({SUFFIX})")
     info.add_argument("--json", action="store_true", help="print JSON")
@@ -159,15 +181,23 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate.add_argument("approximation", help="the sequence B to judge")
     evaluate.add_argument("--json", action="store_true", help="print JSON")
     evaluate.add_argument(
-        "--sted-width", type=_at_least(1), default=1, metavar="W",
+        "--sted-width",
+        type=_at_least(1),
+        default=1,
+        metavar="W",
         help="STED's neighbourhood: vertices within W edges (default: %(default)s)",
     )
     evaluate.add_argument(
-        "--sted-window", type=_at_least(0), default=5, metavar="N",
+        "--sted-window",
+        type=_at_least(0),
+        default=5,
+        metavar="N",
         help="STED's temporal window: +-N frames (default: %(default)s)",
     )
     evaluate.add_argument(
-        "--plot", type=Path, metavar="FILE.png",
+        "--plot",
+        type=Path,
+        metavar="FILE.png",
         help="draw each frame's KG share and worst-vertex error over time",
     )
     evaluate.add_argument("--force", action="store_true", help="replace the plot if it exists")
@@ -183,13 +213,20 @@ def build_parser() -> argparse.ArgumentParser:
     )
     render.add_argument("input", metavar="SEQ", help="a sequence, a compressed file, or 'sample'")
     render.add_argument(
-        "--frame", type=int, required=True, metavar="N",
+        "--frame",
+        type=int,
+        required=True,
+        metavar="N",
         help="the frame to draw, counted from 0 (negative: from the end)",
     )
     render.add_argument("-o", "--output", type=Path, required=True, metavar="IMG.png")
-    render.add_argument("--reference", metavar="ORIGINAL", help="colour by the error against this sequence")
     render.add_argument(
-        "--up", choices=("x", "y", "z"), default="y",
+        "--reference", metavar="ORIGINAL", help="colour by the error against this sequence"
+    )
+    render.add_argument(
+        "--up",
+        choices=("x", "y", "z"),
+        default="y",
         help="the scene axis drawn upwards (default: %(default)s, as in most OBJ files)",
     )
     render.add_argument("--force", action="store_true", help="replace the image if it exists")
@@ -218,8 +255,13 @@ def _add_rd_options(parser: argparse.ArgumentParser) -> None:
         help="target KG errors in percent (default: %(default)s)",
     )
     parser.add_argument("--csv", type=Path, metavar="FILE", help="write the whole curves as CSV")
-    parser.add_argument("--plot", type=Path, metavar="FILE.png", help="draw Θ against KG (paper's Fig. 1)")
     parser.add_argument(
-        "--heatmap", type=Path, metavar="FILE.png", help="draw log KG and log ψ over (i, k) (Fig. 3)"
+        "--plot", type=Path, metavar="FILE.png", help="draw Θ against KG (paper's Fig. 1)"
+    )
+    parser.add_argument(
+        "--heatmap",
+        type=Path,
+        metavar="FILE.png",
+        help="draw log KG and log ψ over (i, k) (Fig. 3)",
     )
     parser.add_argument("--force", action="store_true", help="replace output files that exist")

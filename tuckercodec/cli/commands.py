@@ -29,10 +29,10 @@ from ..metrics import (
     per_frame_max_displacement,
     relative_error,
 )
+from ..perceptual import STED_DEFINITION, sted
 from ..report import curves_csv, targets_table
 from ..samples import SAMPLE_NAME, sample_path
 from ..sequence import MeshSequence
-from ..perceptual import STED_DEFINITION, sted
 
 PLOT_FORMATS = (".png", ".svg", ".pdf")
 
@@ -41,7 +41,9 @@ def _check_plot_names(*named: tuple[str, Path | None]) -> None:
     """Refuse, before any work, an image name whose format matplotlib would not be asked for."""
     for option, path in named:
         if path is not None and path.suffix.lower() not in PLOT_FORMATS:
-            raise ValueError(f"{option} {path}: the file name must end in {', '.join(PLOT_FORMATS)}")
+            raise ValueError(
+                f"{option} {path}: the file name must end in {', '.join(PLOT_FORMATS)}"
+            )
 
 
 def run_rd(args: argparse.Namespace, source: str | Path) -> int:
@@ -57,10 +59,14 @@ def run_rd(args: argparse.Namespace, source: str | Path) -> int:
 
     r1, r3 = analysis.max_ranks
     label = f"built-in sample ({SAMPLE_NAME})" if source == sample_path() else source
-    print(f"{label}: {sequence.frame_count} frames, {sequence.vertex_count} vertices, "
-          f"{sequence.faces.shape[0]} faces")
-    print(f"read in {loaded - start:.2f} s; HOSVD and exact table of {r1} x {r3} ranks in "
-          f"{analysed - loaded:.2f} s")
+    print(
+        f"{label}: {sequence.frame_count} frames, {sequence.vertex_count} vertices, "
+        f"{sequence.faces.shape[0]} faces"
+    )
+    print(
+        f"read in {loaded - start:.2f} s; HOSVD and exact table of {r1} x {r3} ranks in "
+        f"{analysed - loaded:.2f} s"
+    )
     print(f"errors: {KG_DEFINITION}; 'est.' is the paper's bound; rate Θ = S/(3KF)")
     print()
     print(targets_table(analysis, args.targets))
@@ -73,10 +79,14 @@ def run_rd(args: argparse.Namespace, source: str | Path) -> int:
 
         name = Path(str(source)).stem
         if args.plot is not None:
-            plot_rd_curve(analysis, args.plot, title=f"{name}: rate-distortion", overwrite=args.force)
+            plot_rd_curve(
+                analysis, args.plot, title=f"{name}: rate-distortion", overwrite=args.force
+            )
             print(f"wrote {args.plot}")
         if args.heatmap is not None:
-            plot_heatmaps(analysis, args.heatmap, title=f"{name}: error over ranks", overwrite=args.force)
+            plot_heatmaps(
+                analysis, args.heatmap, title=f"{name}: error over ranks", overwrite=args.force
+            )
             print(f"wrote {args.heatmap}")
     return EXIT_OK
 
@@ -84,7 +94,9 @@ def run_rd(args: argparse.Namespace, source: str | Path) -> int:
 def _is_compressed(source: str) -> bool:
     """Whether ``source`` names a compressed file (by its signature, or by its suffix, so that
     a damaged one is reported as such)."""
-    return source != "sample" and (is_compressed_file(source) or Path(source).suffix.lower() == SUFFIX)
+    return source != "sample" and (
+        is_compressed_file(source) or Path(source).suffix.lower() == SUFFIX
+    )
 
 
 def _load(source: str) -> MeshSequence:
@@ -98,13 +110,19 @@ def _load(source: str) -> MeshSequence:
 
 def _print_encode_report(report: EncodeReport) -> None:
     i, k = report.ranks
-    print(f"ranks (i, 3, k) = ({i}, 3, {k}); decoded KG error {report.kg:.5f} "
-          f"(truncation alone {report.truncation_kg:.5f}; {KG_DEFINITION})")
-    print(f"size {report.total_bytes} bytes = {report.bpfv:.4f} bpfv (whole file; connectivity "
-          f"{report.connectivity_bpfv:.4f} bpfv of it), {report.ratio:.1f}x smaller than raw float32")
+    print(
+        f"ranks (i, 3, k) = ({i}, 3, {k}); decoded KG error {report.kg:.5f} "
+        f"(truncation alone {report.truncation_kg:.5f}; {KG_DEFINITION})"
+    )
+    print(
+        f"size {report.total_bytes} bytes = {report.bpfv:.4f} bpfv (whole file; connectivity "
+        f"{report.connectivity_bpfv:.4f} bpfv of it), {report.ratio:.1f}x smaller than raw float32"
+    )
     if report.exact_ranks is not None:
-        print(f"cheapest truncation for the target: exact table {report.exact_ranks}, the paper's "
-              f"bound {report.bound_ranks}; chosen by '{report.select}' with quantization")
+        print(
+            f"cheapest truncation for the target: exact table {report.exact_ranks}, the paper's "
+            f"bound {report.bound_ranks}; chosen by '{report.select}' with quantization"
+        )
     print(f"time {report.seconds:.2f} s")
 
 
@@ -116,8 +134,10 @@ def run_encode(args: argparse.Namespace) -> int:
         sequence, target_kg=args.kg, ranks=args.ranks, target_bpfv=args.bpfv, select=args.select
     )
     write_atomic(args.output, result.data, overwrite=args.force)
-    print(f"{args.input}: {sequence.frame_count} frames, {sequence.vertex_count} vertices "
-          f"-> {args.output}")
+    print(
+        f"{args.input}: {sequence.frame_count} frames, {sequence.vertex_count} vertices "
+        f"-> {args.output}"
+    )
     _print_encode_report(result.report)
     print(f"total time with reading and writing {time.perf_counter() - start:.2f} s")
     return EXIT_OK
@@ -126,10 +146,13 @@ def run_encode(args: argparse.Namespace) -> int:
 def run_decode(args: argparse.Namespace) -> int:
     header = read_info(args.input)
     reference = _load(args.reference) if args.reference else None
-    if reference is not None and (reference.frame_count, reference.vertex_count) != (header.frames, header.vertices):
+    if reference is not None and (reference.frame_count, reference.vertex_count) != (
+        header.frames,
+        header.vertices,
+    ):
         raise InputError(  # before anything is written
-            f"the reference has {reference.frame_count} frames of {reference.vertex_count} vertices, "
-            f"the file {header.frames} of {header.vertices}",
+            f"the reference has {reference.frame_count} frames of {reference.vertex_count} "
+            f"vertices, the file {header.frames} of {header.vertices}",
             path=args.reference,
         )
     output = decoded_output_path(args.output, args.format)
@@ -144,18 +167,28 @@ def run_decode(args: argparse.Namespace) -> int:
         progress=True,
     )
     elapsed = time.perf_counter() - start
-    print(f"{args.input}: {decoded.frame_count} of {header.frames} frames, "
-          f"{decoded.vertex_count} vertices -> {output} in {elapsed:.2f} s")
-    print(f"file: {header.total_bytes} bytes = {header.bpfv:.4f} bpfv; KG error recorded by the "
-          f"encoder {_number(header.kg)} ({header.kg_definition or 'no definition recorded'})")
+    print(
+        f"{args.input}: {decoded.frame_count} of {header.frames} frames, "
+        f"{decoded.vertex_count} vertices -> {output} in {elapsed:.2f} s"
+    )
+    print(
+        f"file: {header.total_bytes} bytes = {header.bpfv:.4f} bpfv; KG error recorded by the "
+        f"encoder {_number(header.kg)} ({header.kg_definition or 'no definition recorded'})"
+    )
     if reference is not None:
         selected = reference.vertices[args.frames if args.frames is not None else slice(None)]
-        scope = "" if args.frames is None else (
-            f" (of the {decoded.frame_count} frames decoded, with their own KG denominator; the "
-            "target applies to the whole sequence)"
+        scope = (
+            ""
+            if args.frames is None
+            else (
+                f" (of the {decoded.frame_count} frames decoded, with their own KG denominator; "
+                "the target applies to the whole sequence)"
+            )
         )
-        print(f"actual KG error against {args.reference}: {kg_error(selected, decoded):.5f}{scope} "
-              f"({KG_DEFINITION})")
+        print(
+            f"actual KG error against {args.reference}: {kg_error(selected, decoded):.5f}{scope} "
+            f"({KG_DEFINITION})"
+        )
     return EXIT_OK
 
 
@@ -170,18 +203,27 @@ def run_info(args: argparse.Namespace) -> int:
         return EXIT_OK
     i, k = header.ranks
     print(f"{args.input}: tuckercodec format {header.format_version}")
-    print(f"  {header.frames} frames, {header.vertices} vertices, {header.faces} faces of up to "
-          f"{header.face_width} corners")
+    print(
+        f"  {header.frames} frames, {header.vertices} vertices, {header.faces} faces of up to "
+        f"{header.face_width} corners"
+    )
     print(f"  ranks (i, 3, k) = ({i}, 3, {k})")
     print(f"  {header.total_bytes} bytes = {header.bpfv:.4f} bpfv (whole file)")
-    target = "none (fixed ranks or a size target)" if header.target_kg is None else f"{header.target_kg:g}"
-    print(f"  KG error {_number(header.kg)} ({header.kg_definition or 'no definition recorded'}), "
-          f"target {target}")
+    target = (
+        "none (fixed ranks or a size target)"
+        if header.target_kg is None
+        else f"{header.target_kg:g}"
+    )
+    print(
+        f"  KG error {_number(header.kg)} ({header.kg_definition or 'no definition recorded'}), "
+        f"target {target}"
+    )
     if header.frame_rate is not None:
         print(f"  {header.frame_rate:g} frames per second")
     print(f"  written by {header.encoder or 'an unnamed encoder'}")
     for section_id, length, codec, critical in header.sections:
-        print(f"  section {section_id:<5} {length:>10} bytes  {codec}{'' if critical else ' (ancillary)'}")
+        kind = "" if critical else " (ancillary)"
+        print(f"  section {section_id:<5} {length:>10} bytes  {codec}{kind}")
     return EXIT_OK
 
 
@@ -192,8 +234,9 @@ def run_eval(args: argparse.Namespace) -> int:
     original, approximation = _load(args.original), _load(args.approximation)
     if original.vertices.shape != approximation.vertices.shape:
         raise InputError(
-            f"{args.original} has {original.frame_count} frames of {original.vertex_count} vertices, "
-            f"{args.approximation} {approximation.frame_count} of {approximation.vertex_count}"
+            f"{args.original} has {original.frame_count} frames of {original.vertex_count} "
+            f"vertices, {args.approximation} {approximation.frame_count} of "
+            f"{approximation.vertex_count}"
         )
     per_frame = per_frame_kg(original, approximation)
     worst_frame = int(per_frame.argmax())
@@ -228,15 +271,22 @@ def run_eval(args: argparse.Namespace) -> int:
         print(f"STED not measured: {args.original} has no faces, and STED compares edge lengths")
     else:
         p = measured
-        print(f"STED {p.value:.6g} (spatial STED_s {p.spatial:.6g}, temporal STED_t {p.temporal:.6g}; "
-              f"width {p.width}, window {p.window}, dt {p.dt:g}, c {p.c:g}, s {p.scale:.6g} = "
-              "1/diagonal of A's first-frame bounding box)")
+        print(
+            f"STED {p.value:.6g} (spatial STED_s {p.spatial:.6g}, "
+            f"temporal STED_t {p.temporal:.6g}; "
+            f"width {p.width}, window {p.window}, dt {p.dt:g}, c {p.c:g}, s {p.scale:.6g} = "
+            "1/diagonal of A's first-frame bounding box)"
+        )
         print(f"  {STED_DEFINITION}")
     print(f"relative error ||A-B||/||A|| {figures['relative_error']:.3e} (uncentred)")
-    print(f"largest vertex displacement {displacement.distance:.6g} (frame {displacement.frame}, "
-          f"vertex {displacement.vertex}), in scene units")
-    print(f"worst frame {worst_frame}: {per_frame[worst_frame]:.6f} of the KG error "
-          "(its share; the squares of all frames' shares sum to KG squared)")
+    print(
+        f"largest vertex displacement {displacement.distance:.6g} (frame {displacement.frame}, "
+        f"vertex {displacement.vertex}), in scene units"
+    )
+    print(
+        f"worst frame {worst_frame}: {per_frame[worst_frame]:.6f} of the KG error "
+        "(its share; the squares of all frames' shares sum to KG squared)"
+    )
     if args.plot is not None:
         print(f"wrote {args.plot}")
     return EXIT_OK
@@ -261,14 +311,17 @@ class _Frames:
         """Frame ``number`` (negative: from the end) as a one-frame sequence with the faces."""
         if not -self.count <= number < self.count:
             raise ValueError(
-                f"frame {number} does not exist: {self.source} has {self.count} frames (0..{self.count - 1})"
+                f"frame {number} does not exist: {self.source} has {self.count} frames "
+                f"(0..{self.count - 1})"
             )
         if self._decoder is not None:
             return self._decoder.sequence([number])
         seq = self._sequence
         assert seq is not None
         index = number % self.count
-        return MeshSequence(seq.vertices[index : index + 1], seq.faces, frame_names=[seq.frame_names[index]])
+        return MeshSequence(
+            seq.vertices[index : index + 1], seq.faces, frame_names=[seq.frame_names[index]]
+        )
 
 
 def run_render(args: argparse.Namespace) -> int:
@@ -294,22 +347,38 @@ def run_render(args: argparse.Namespace) -> int:
     name = "built-in sample" if args.input == "sample" else Path(args.input).name
     title = f"{name}, frame {frame} ({shown.frame_names[0]})"
     if errors is not None:
-        title += f"\nerror against {Path(args.reference).name}: max {errors.max():.4g}, mean {errors.mean():.4g}"
-    render_frame(shown.vertices[0], shown.triangles(), args.output, errors=errors, title=title,
-                 up=args.up, overwrite=args.force)
-    print(f"wrote {args.output}: frame {frame} of {count}, {shown.vertex_count} vertices"
-          + ("" if errors is None else f", vertex error up to {errors.max():.6g} scene units"))
+        title += (
+            f"\nerror against {Path(args.reference).name}: max {errors.max():.4g}, "
+            f"mean {errors.mean():.4g}"
+        )
+    render_frame(
+        shown.vertices[0],
+        shown.triangles(),
+        args.output,
+        errors=errors,
+        title=title,
+        up=args.up,
+        overwrite=args.force,
+    )
+    print(
+        f"wrote {args.output}: frame {frame} of {count}, {shown.vertex_count} vertices"
+        + ("" if errors is None else f", vertex error up to {errors.max():.6g} scene units")
+    )
     return EXIT_OK
 
 
 def run_demo(args: argparse.Namespace) -> int:
     sequence = load_sequence(sample_path(), progress=False)
-    print(f"built-in sample ({SAMPLE_NAME}): {sequence.frame_count} frames, "
-          f"{sequence.vertex_count} vertices, {sequence.faces.shape[0]} faces")
+    print(
+        f"built-in sample ({SAMPLE_NAME}): {sequence.frame_count} frames, "
+        f"{sequence.vertex_count} vertices, {sequence.faces.shape[0]} faces"
+    )
     print(f"errors: {KG_DEFINITION}; bpfv counts the whole file")
     print()
-    header = (f"{'target KG':>9}  {'i':>3}  {'k':>3}  {'bytes':>8}  {'bpfv':>7}  {'ratio':>6}  "
-              f"{'decoded KG':>10}  {'encode s':>8}  {'decode s':>8}")
+    header = (
+        f"{'target KG':>9}  {'i':>3}  {'k':>3}  {'bytes':>8}  {'bpfv':>7}  {'ratio':>6}  "
+        f"{'decoded KG':>10}  {'encode s':>8}  {'decode s':>8}"
+    )
     print(header)
     print("-" * len(header))
     for target in args.targets:
@@ -319,8 +388,10 @@ def run_demo(args: argparse.Namespace) -> int:
         decode_seconds = time.perf_counter() - start
         measured = kg_error(sequence, decoded)  # measured again here, not taken from the report
         r = result.report
-        print(f"{target:>9g}  {r.ranks[0]:>3}  {r.ranks[1]:>3}  {r.total_bytes:>8}  {r.bpfv:>7.3f}  "
-              f"{r.ratio:>5.0f}x  {measured:>10.5f}  {r.seconds:>8.2f}  {decode_seconds:>8.3f}")
+        print(
+            f"{target:>9g}  {r.ranks[0]:>3}  {r.ranks[1]:>3}  {r.total_bytes:>8}  {r.bpfv:>7.3f}  "
+            f"{r.ratio:>5.0f}x  {measured:>10.5f}  {r.seconds:>8.2f}  {decode_seconds:>8.3f}"
+        )
     print()
     print("Try: tuckercodec encode sample -o cloth.tkc && tuckercodec decode cloth.tkc -o frames/")
     return EXIT_OK

@@ -35,7 +35,9 @@ _VERBS: dict[str, Callable[[argparse.Namespace], int]] = {
     "info": commands.run_info,
     "eval": commands.run_eval,
     "render": commands.run_render,
-    "rd": lambda args: commands.run_rd(args, sample_path() if args.input == "sample" else args.input),
+    "rd": lambda args: commands.run_rd(
+        args, sample_path() if args.input == "sample" else args.input
+    ),
 }
 
 #: What the one-line message calls each kind of error, after "tuckercodec: ".

@@ -284,9 +284,7 @@ def parse_container(
             offset=HEAD_SIZE,
         )
     if whole:
-        _check_reaches(
-            len(data), preamble.total_length, "the data area", "preamble.total_length"
-        )
+        _check_reaches(len(data), preamble.total_length, "the data area", "preamble.total_length")
     header = _unpack_header(bytes(header_bytes))
     sections = _section_table(header, preamble.total_length - preamble.data_start, limits)
     return Container(
@@ -355,7 +353,9 @@ def _reject_timestamps(header: dict[str, Any]) -> None:
     while pending:
         value = pending.pop()
         if isinstance(value, msgpack.Timestamp):
-            raise _HeaderProblem("msgpack extension type -1 (timestamp) is not allowed in the header")
+            raise _HeaderProblem(
+                "msgpack extension type -1 (timestamp) is not allowed in the header"
+            )
         if isinstance(value, dict):
             pending.extend(value.values())
         elif isinstance(value, list):
@@ -407,9 +407,7 @@ _SECTION_KEYS: dict[str, type] = {
 }
 
 
-def _section_table(
-    header: dict[str, Any], data_length: int, limits: Limits
-) -> tuple[Section, ...]:
+def _section_table(header: dict[str, Any], data_length: int, limits: Limits) -> tuple[Section, ...]:
     """Check the section table (§3, §5 step 8): entries back to back from offset 0 to the end
     of the file, each id once."""
     table = header.get("sections")

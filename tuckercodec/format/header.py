@@ -145,7 +145,9 @@ def read_header(container: Container, limits: Limits) -> FileInfo:
     (steps 11-13); what the header says."""
     header = container.header
     vertices = _field(header, "vertices", lambda v: _is_int(v) and v >= 1, "an integer >= 1")
-    check_limit(vertices, limits, "max_vertices", what=f"{vertices} vertices", field="header.vertices")
+    check_limit(
+        vertices, limits, "max_vertices", what=f"{vertices} vertices", field="header.vertices"
+    )
     frames = _field(header, "frames", lambda v: _is_int(v) and v >= 1, "an integer >= 1")
     check_limit(frames, limits, "max_frames", what=f"{frames} frames", field="header.frames")
     check_limit(
@@ -170,9 +172,13 @@ def read_header(container: Container, limits: Limits) -> FileInfo:
         and len(u2) == 9
         and all(isinstance(x, float) and math.isfinite(x) for x in u2)
     ):
-        raise FormatError("must be 9 finite floats (U2, row-major)", rule="R23-u2", field="header.u2")
+        raise FormatError(
+            "must be 9 finite floats (U2, row-major)", rule="R23-u2", field="header.u2"
+        )
     check_sections(container, vertices, frames, (i, k), limits)
-    frame_rate = _field(header, "frame_rate", _is_frame_rate, "absent, nil or a positive finite float")
+    frame_rate = _field(
+        header, "frame_rate", _is_frame_rate, "absent, nil or a positive finite float"
+    )
 
     error = header.get("error")
     error = error if isinstance(error, dict) else {}  # informative only (§4.1): never trusted

@@ -60,11 +60,18 @@ def quantize(values: np.ndarray, steps: np.ndarray) -> QuantizedMatrix:
 
 def _cost(columns: np.ndarray) -> np.ndarray:
     """A cheap per-column proxy for the bits of an integer column: mean log2(1 + 2|x|)."""
-    return np.log2(1.0 + 2.0 * np.abs(columns)).mean(axis=0) if columns.size else np.zeros(columns.shape[1])
+    return (
+        np.log2(1.0 + 2.0 * np.abs(columns)).mean(axis=0)
+        if columns.size
+        else np.zeros(columns.shape[1])
+    )
 
 
 def encode_matrix(
-    matrix: QuantizedMatrix, parents: np.ndarray | None, *, allow_predict: bool = True,
+    matrix: QuantizedMatrix,
+    parents: np.ndarray | None,
+    *,
+    allow_predict: bool = True,
     level: int = streams.DEFAULT_LEVEL,
 ) -> tuple[dict[str, Any], bytes]:
     """``(params, payload)`` of the section, choosing per column whether prediction helps.
@@ -90,8 +97,12 @@ def encode_matrix(
 
 
 def decode_matrix(
-    payload: bytes | memoryview, params: dict[str, Any],
-    parents: np.ndarray | Callable[[], np.ndarray] | None, where: str, *, allow_predict: bool = True,
+    payload: bytes | memoryview,
+    params: dict[str, Any],
+    parents: np.ndarray | Callable[[], np.ndarray] | None,
+    where: str,
+    *,
+    allow_predict: bool = True,
 ) -> QuantizedMatrix:
     """The quantized matrix of a qmat section (§6.3). The caller has checked ``shape`` against
     the header and the limits.

@@ -98,7 +98,9 @@ def _decompress_exact(payload: bytes | memoryview, size: int) -> bytes:
         raise _StreamProblem("the payload does not start with a zstd frame header") from None
     if declared != size:
         what = "no content size" if declared == -1 else f"{declared} bytes"
-        raise _StreamProblem(f"the zstd frame declares {what}, but the section's shape needs {size}")
+        raise _StreamProblem(
+            f"the zstd frame declares {what}, but the section's shape needs {size}"
+        )
     if size > ZSTD_MAX_EXPANSION * len(payload):
         # zstandard allocates the declared size before it reads a block: a 20-byte frame
         # header declaring 4 GiB would cost 4 GiB (or a MemoryError) although no frame this

@@ -119,8 +119,7 @@ def _check_matches(frame: MeshFrame, reference: MeshFrame, path: Path) -> None:
         )
     if frame.faces is not reference.faces and not np.array_equal(frame.faces, reference.faces):
         raise InputError(
-            f"its faces differ from the first frame's{first}: every frame must have the same "
-            "faces",
+            f"its faces differ from the first frame's{first}: every frame must have the same faces",
             path=path,
         )
 

@@ -32,7 +32,7 @@ def _read_with_trimesh(path: Path) -> MeshFrame:
         mesh = trimesh.load(path, process=False, maintain_order=True, force="mesh")
         vertices = np.asarray(mesh.vertices, dtype=np.float64)
         faces = np.asarray(mesh.faces, dtype=np.int64)
-    except Exception as error:  # noqa: BLE001 - trimesh raises all kinds for a broken file
+    except Exception as error:
         raise InputError(
             f"trimesh cannot read it as a mesh: {type(error).__name__}: {error}", path=path
         ) from None

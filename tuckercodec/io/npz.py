@@ -200,7 +200,7 @@ def _npy_header(stream: BinaryIO, key: str, path: Path) -> tuple[tuple[int, ...]
         shape, _, dtype = read(stream)
     except _ZIP_ERRORS:
         raise  # turned into an InputError by the caller
-    except Exception as error:  # noqa: BLE001 - see below
+    except Exception as error:
         # The header is a Python literal from the file, and numpy's checks of it let through
         # whatever the literal provokes: TypeError sorting keys of mixed types ({b'x': 1,
         # 'descr': ...}), and who knows what else. Any of them means a bad header.

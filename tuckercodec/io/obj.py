@@ -246,7 +246,7 @@ def _first_line_end(data: bytes) -> int:
 
 
 def _parse_fast(data: bytes, reference: MeshFrame | None) -> MeshFrame | None:
-    """Parse a tidy file in a few whole-file operations, or return ``None`` to go the careful way."""
+    """Parse a tidy file in a few whole-file operations, or ``None``: go the careful way."""
     lines = _line_table(data)
     if lines is None:
         return None
@@ -306,7 +306,9 @@ def _join_lines(data: bytes, starts: np.ndarray, ends: np.ndarray, chosen: np.nd
     first, last = int(rows[0]), int(rows[-1])
     if last - first + 1 == rows.size:
         return data[starts[first] : ends[last]]
-    return b"\n".join(data[s:e] for s, e in zip(starts[rows].tolist(), ends[rows].tolist()))
+    return b"\n".join(
+        data[s:e] for s, e in zip(starts[rows].tolist(), ends[rows].tolist(), strict=True)
+    )
 
 
 def _fast_vertices(text: bytes, count: int) -> np.ndarray | None:
@@ -438,7 +440,7 @@ def _parse_careful(data: bytes, path: Path) -> _Located:
 
     if not vertices:
         raise InputError("no vertices: the file has no 'v' lines", path=path)
-    for face, number in zip(faces, face_lines):
+    for face, number in zip(faces, face_lines, strict=True):
         for index in face:
             if index >= len(vertices):
                 raise InputError(
@@ -684,7 +686,9 @@ def _face_lines(faces: np.ndarray) -> list[str]:
     return ["f " + " ".join(str(index) for index in row if index > 0) for row in rows]
 
 
-def _write_frame(path: Path, vertices: np.ndarray, faces: np.ndarray, options: WriteOptions) -> None:
+def _write_frame(
+    path: Path, vertices: np.ndarray, faces: np.ndarray, options: WriteOptions
+) -> None:
     write_obj(path, vertices, faces, precision=options.precision, overwrite=options.overwrite)
 
 

@@ -1,0 +1,55 @@
+"""The one internal surface that the project's own tools use, beside the public API.
+
+``tools/`` (the benchmarks, the seed paper's experiments, the conformance-vector writer and the
+fuzzer) imports only :mod:`tuckercodec` and this module; a test checks it. What is here is not
+part of the public API and may change in any release; it is listed so that a change to the
+package sees at once what the tools rely on.
+
+* The format's building blocks, for tools that build or take apart files (the vector writer,
+  the fuzzer, the PCA peer written in this codec's container): the container's
+  :func:`pack_container` and :func:`parse_container` with :data:`SIGNATURE` and
+  :data:`HEAD_SIZE`; the modules :mod:`~tuckercodec.format.faces`,
+  :mod:`~tuckercodec.format.qmat`, :mod:`~tuckercodec.format.sections` and
+  :mod:`~tuckercodec.format.streams`; the mesh parents of §6.2.
+* The decomposition and its analysis: :func:`centre_frames`, :func:`reconstruct`, :class:`Curve`.
+* The definitions the reports quote: :data:`KG_DEFINITION`, :data:`STED_DEFINITION`.
+* Files and pictures: :func:`write_atomic`, :func:`refuse_existing`, :func:`plot_rd_curve`.
+* Sample data: :func:`sample_path`, and the synthetic :func:`wave_sheet` with its
+  :func:`sheet_triangles`.
+"""
+
+from __future__ import annotations
+
+from .analysis import Curve
+from .atomic import refuse_existing, write_atomic
+from .format import faces, qmat, sections, streams
+from .format.container import HEAD_SIZE, SIGNATURE, pack_container, parse_container
+from .hosvd import centre_frames, reconstruct
+from .metrics import KG_DEFINITION
+from .perceptual import STED_DEFINITION
+from .plots import plot_rd_curve
+from .samples import sample_path, sheet_triangles, wave_sheet
+from .topology import mesh_parents
+
+__all__ = [
+    "HEAD_SIZE",
+    "KG_DEFINITION",
+    "SIGNATURE",
+    "STED_DEFINITION",
+    "Curve",
+    "centre_frames",
+    "faces",
+    "mesh_parents",
+    "pack_container",
+    "parse_container",
+    "plot_rd_curve",
+    "qmat",
+    "reconstruct",
+    "refuse_existing",
+    "sample_path",
+    "sections",
+    "sheet_triangles",
+    "streams",
+    "wave_sheet",
+    "write_atomic",
+]
