@@ -59,7 +59,9 @@ class Curve:
         return len(self.rate)
 
 
-def stored_floats(i: np.ndarray | int, k: np.ndarray | int, vertices: int, frames: int):
+def stored_floats(
+    i: np.ndarray | int, k: np.ndarray | int, vertices: int, frames: int
+) -> np.ndarray:
     """S = i*K + 9 + k*F + 3*i*k: the floats of U1 (K x i), U2 (3 x 3), U3 (F x k), core."""
     return (
         np.asarray(i, dtype=np.int64) * vertices
@@ -200,10 +202,10 @@ class Analysis:
         if select not in ("exact", "bound"):
             raise ValueError(f"select must be 'exact' or 'bound', got {select!r}")
         judged = self.kg_table() if select == "exact" else self.kg_bound_table()
-        ii, kk = np.meshgrid(
+        i_grid, k_grid = np.meshgrid(
             np.arange(1, self.max_ranks[0] + 1), np.arange(1, self.max_ranks[1] + 1), indexing="ij"
         )
-        ii, kk = ii.ravel(), kk.ravel()
+        ii, kk = i_grid.ravel(), k_grid.ravel()
         floats = self._floats[ii, kk]
         errors = judged[ii, kk]
         order = np.lexsort((errors, floats))  # by size, then by error

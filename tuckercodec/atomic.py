@@ -27,7 +27,7 @@ import tempfile
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
-from typing import BinaryIO
+from typing import BinaryIO, cast
 
 #: errno values meaning "this file system or kernel has no O_TMPFILE": fall back to a named file.
 _NO_TMPFILE = {errno.EOPNOTSUPP, errno.EISDIR, errno.EINVAL, errno.ENOENT}
@@ -139,7 +139,7 @@ def _remove(path: str | Path) -> None:
 
 
 @contextmanager
-def atomic_output(path: str | Path, *, overwrite: bool = False) -> Iterator[BinaryIO]:
+def atomic_output(path: str | os.PathLike[str], *, overwrite: bool = False) -> Iterator[BinaryIO]:
     """Open a hidden file in ``path``'s folder for binary writing; it becomes ``path`` when the
     block ends without an exception, and vanishes otherwise (see the module docstring).
 
@@ -180,7 +180,7 @@ def _named_output(target: Path, overwrite: bool) -> Iterator[BinaryIO]:
     try:
         os.chmod(handle.name, _file_mode())  # mkstemp makes 0600; match a plain open()
         with handle:
-            yield handle
+            yield cast(BinaryIO, handle)  # the wrapper delegates every file method
             handle.flush()
             os.fsync(handle.fileno())
         if not overwrite and target.exists():  # created by someone else while we wrote
@@ -192,7 +192,10 @@ def _named_output(target: Path, overwrite: bool) -> Iterator[BinaryIO]:
 
 
 def write_atomic(
-    path: str | Path, data: bytes | Callable[[BinaryIO], None], *, overwrite: bool = False
+    path: str | os.PathLike[str],
+    data: bytes | Callable[[BinaryIO], None],
+    *,
+    overwrite: bool = False,
 ) -> None:
     """Write ``data`` (bytes, or a function that writes to a binary file) to ``path`` atomically."""
     with atomic_output(path, overwrite=overwrite) as handle:

@@ -15,6 +15,7 @@ from __future__ import annotations
 import operator
 import os
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -29,8 +30,9 @@ from .topology import mesh_parents
 
 #: A compressed file: its bytes, or a path to read it from.
 Source = bytes | bytearray | memoryview | str | os.PathLike[str]
-#: Which frames to decode: one number, a slice, a range, a list of numbers, or all (``None``).
-FrameSelection = int | slice | range | Sequence[int] | None
+#: Which frames to decode: one number, a slice, a range, numbers (a list or an integer array),
+#: or all (``None``).
+FrameSelection = int | slice | range | Sequence[int] | np.ndarray | None
 
 
 def _bytes_of(source: Source, limits: Limits, *, header_only: bool = False) -> bytes | memoryview:
@@ -126,33 +128,22 @@ class Decoder:
         return self.info.frames
 
     def frame_indices(self, frames: FrameSelection) -> np.ndarray:
-        """The frame numbers a selection names, checked to exist."""
+        """The frame numbers a selection names, checked to exist; negative numbers count from
+        the end, and a slice is clipped to the file's frames, like any slice."""
         count = self.frame_count
         if frames is None:
             return np.arange(count)
         if isinstance(frames, slice):
-            return np.arange(count)[frames]  # clipped to the file's frames, like any slice
+            return np.arange(count)[frames]
         if isinstance(frames, (str, bytes)):
             raise TypeError(f"frames must be frame numbers, a range or a slice, not {frames!r}")
-        numbers: np.ndarray
         if isinstance(frames, range):
-            numbers = np.arange(frames.start, frames.stop, frames.step, dtype=object)
-        elif isinstance(frames, np.ndarray) and frames.dtype.kind in "iu":
-            numbers = frames.reshape(-1).astype(object)
-        else:
-            single = [frames] if np.ndim(frames) == 0 else list(frames)  # type: ignore[arg-type]
-            if any(isinstance(n, (bool, np.bool_)) for n in single):
-                raise TypeError(f"frame numbers must be integers, not booleans: {frames!r}")
-            try:  # operator.index refuses floats and strings
-                numbers = np.array([*(operator.index(n) for n in single), 0], dtype=object)[:-1]
-            except TypeError:
-                raise TypeError(f"frame numbers must be integers, got {frames!r}") from None
-        # object arithmetic: a number beyond int64 is reported, not overflowed
-        outside = (numbers < -count) | (numbers >= count)
-        if outside.any():
-            bad = numbers[outside][0]
-            raise ValueError(f"frame {bad} does not exist: the file has frames 0..{count - 1}")
-        return (numbers % count).astype(np.int64)  # negative numbers count from the end
+            ends = [frames[0], frames[-1]] if len(frames) else []
+            _check_frames_exist(ends, count)
+            return np.arange(frames.start, frames.stop, frames.step, dtype=np.int64) % count
+        numbers = _frame_numbers(frames)
+        _check_frames_exist(numbers, count)
+        return np.array(numbers, dtype=np.int64).reshape(-1) % count
 
     def _selected(self, frames: FrameSelection) -> np.ndarray:
         chosen = self.frame_indices(frames)
@@ -193,6 +184,27 @@ class Decoder:
             frame_names=[self.frame_names[n] for n in chosen],
             frame_rate=self.info.frame_rate,
         )
+
+
+def _frame_numbers(frames: int | Sequence[int] | np.ndarray) -> list[int]:
+    """A selection of frame numbers as Python ints (no overflow, whatever their size)."""
+    if isinstance(frames, np.ndarray) and frames.dtype.kind in "iu":
+        values: list[int] = frames.reshape(-1).tolist()
+        return values
+    # anything else is checked one item at a time: Python ints, numpy scalars, nothing else
+    single: list[Any] = [frames] if np.ndim(frames) == 0 else list(frames)  # type: ignore[arg-type]
+    if any(isinstance(n, (bool, np.bool_)) for n in single):
+        raise TypeError(f"frame numbers must be integers, not booleans: {frames!r}")
+    try:  # operator.index refuses floats and strings
+        return [operator.index(n) for n in single]
+    except TypeError:
+        raise TypeError(f"frame numbers must be integers, got {frames!r}") from None
+
+
+def _check_frames_exist(numbers: Sequence[int], count: int) -> None:
+    for number in numbers:
+        if not -count <= number < count:
+            raise ValueError(f"frame {number} does not exist: the file has frames 0..{count - 1}")
 
 
 def decode(

@@ -454,6 +454,7 @@ def encode_with_report(
         quantized, error2, trials = _search_kg(work, target, select, TRUNCATION_SHARES)
         target_for_header = target
     else:
+        assert target_bpfv is not None  # the mode says so
         target = float(target_bpfv)
         quantized, error2, trials = _search_bpfv(work, target, select)
         target_for_header = None

@@ -12,7 +12,7 @@ Each class carries the exit code the command line returns for it
 
 from __future__ import annotations
 
-from pathlib import Path
+import os
 from typing import Any
 
 #: The command line's exit codes (also listed in the README).
@@ -44,12 +44,12 @@ class InputError(TuckerCodecError, ValueError):
         self,
         message: str,
         *,
-        path: str | Path | None = None,
+        path: str | os.PathLike[str] | None = None,
         line: int | None = None,
         frame: int | None = None,
     ) -> None:
         self.reason = message
-        self.path = None if path is None else str(path)
+        self.path = None if path is None else os.fspath(path)
         self.line = line
         self.frame = frame
         where = []
@@ -100,13 +100,13 @@ class FormatError(TuckerCodecError, ValueError):
         rule: str,
         field: str | None = None,
         offset: int | None = None,
-        path: str | Path | None = None,
+        path: str | os.PathLike[str] | None = None,
     ) -> None:
         self.reason = message
         self.rule = rule
         self.field = field
         self.offset = offset
-        self.path = None if path is None else str(path)
+        self.path = None if path is None else os.fspath(path)
         super().__init__(message)
 
     def __str__(self) -> str:

@@ -90,12 +90,14 @@ class HOSVD:
     @property
     def shape(self) -> tuple[int, int, int]:
         """(K, 3, F)."""
-        return self.tensor.shape  # type: ignore[return-value]
+        k, three, f = self.tensor.shape
+        return k, three, f
 
     @property
     def max_ranks(self) -> tuple[int, int]:
         """(R1, R3): the largest meaningful mode-1 and mode-3 ranks."""
-        return self.core_energy.shape  # type: ignore[return-value]
+        r1, r3 = self.core_energy.shape
+        return r1, r3
 
     def u1(self, rank: int) -> np.ndarray:
         """The leading ``rank`` columns of U1, (K, rank), orthonormal to machine precision."""
@@ -104,6 +106,7 @@ class HOSVD:
             raise ValueError(f"mode-1 rank must be in 0..{r1}, got {rank}")
         if self._u1 is not None:
             return self._u1[:, :rank].copy()
+        assert self._v1 is not None  # one of the two is always set (see hosvd())
         k, _, f = self.shape
         x1 = self.tensor.reshape(k, 3 * f)
         scale = np.sqrt(self.mode1_energy[:rank])

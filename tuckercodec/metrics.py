@@ -39,7 +39,9 @@ def _positions(x: MeshSequence | np.ndarray) -> np.ndarray:
     return array
 
 
-def _pair(original: MeshSequence | np.ndarray, approx: MeshSequence | np.ndarray):
+def _pair(
+    original: MeshSequence | np.ndarray, approx: MeshSequence | np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     a, b = _positions(original), _positions(approx)
     if a.shape != b.shape:
         raise InputError(f"the sequences differ in shape: {a.shape} against {b.shape}")

@@ -15,6 +15,8 @@ And pictures of one comparison:
 from __future__ import annotations
 
 from pathlib import Path
+from types import ModuleType
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -22,8 +24,12 @@ from .analysis import Analysis
 from .atomic import write_atomic
 from .errors import DependencyError
 
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
-def _pyplot():
+
+def _pyplot() -> ModuleType:
+    """matplotlib.pyplot on the Agg backend, or a DependencyError naming the extra."""
     try:
         import matplotlib
 
@@ -34,7 +40,7 @@ def _pyplot():
     return plt
 
 
-def _save(fig, path: str | Path, overwrite: bool) -> None:
+def _save(fig: Figure, path: str | Path, overwrite: bool) -> None:
     plt = _pyplot()
     suffix = Path(path).suffix.lstrip(".").lower() or "png"
     try:
@@ -273,7 +279,7 @@ def render_frame(
     _save(fig, path, overwrite)
 
 
-def _camera_direction(ax) -> np.ndarray:
+def _camera_direction(ax: Any) -> np.ndarray:
     """A unit vector from the scene towards matplotlib's camera, in plot coordinates."""
     elev, azim = np.radians(ax.elev), np.radians(ax.azim)
     return np.array([np.cos(elev) * np.cos(azim), np.cos(elev) * np.sin(azim), np.sin(elev)])

@@ -21,8 +21,8 @@ def wave_sheet(frames: int = 24, grid: int = 9) -> np.ndarray:
     """A synthetic animation for tests and examples: a square sheet of grid x grid vertices with
     travelling waves, drifting and turning. Shape (frames, grid*grid, 3); faces from
     :func:`sheet_triangles`."""
-    u, v = np.meshgrid(np.linspace(0, 1, grid), np.linspace(0, 1, grid), indexing="ij")
-    u, v = u.ravel(), v.ravel()
+    u_grid, v_grid = np.meshgrid(np.linspace(0, 1, grid), np.linspace(0, 1, grid), indexing="ij")
+    u, v = u_grid.ravel(), v_grid.ravel()
     out = np.empty((frames, u.size, 3))
     for f in range(frames):
         t = f / frames

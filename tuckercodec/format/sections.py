@@ -64,23 +64,26 @@ def section_shape(
     """The declared ``shape`` [rows, cols] of a stream section (R28-shape): two non-negative
     ints, at least ``min_cols`` columns, and equal to ``expected`` when that is given."""
     shape = params.get("shape")
-    problem = None
+    rows, cols = -1, -1
     if (
-        not isinstance(shape, list)
-        or len(shape) != 2
-        or not all(isinstance(n, int) and not isinstance(n, bool) and n >= 0 for n in shape)
+        isinstance(shape, list)
+        and len(shape) == 2
+        and all(isinstance(n, int) and not isinstance(n, bool) and n >= 0 for n in shape)
     ):
+        rows, cols = shape
+    problem = None
+    if rows < 0:
         problem = f"shape must be [rows, cols] of non-negative integers, got {shape!r}"
-    elif shape[1] < min_cols:
-        problem = f"needs at least {min_cols} columns, the width is {shape[1]}"
-    elif expected is not None and tuple(shape) != expected:
+    elif cols < min_cols:
+        problem = f"needs at least {min_cols} columns, the width is {cols}"
+    elif expected is not None and (rows, cols) != expected:
         problem = (
-            f"shape is {shape}, but the header's vertices, frames and ranks make it "
+            f"shape is [{rows}, {cols}], but the header's vertices, frames and ranks make it "
             f"[{expected[0]}, {expected[1]}]"
         )
     if problem is not None:
         raise FormatError(problem, rule="R28-shape", field=f"{where}.shape")
-    return shape[0], shape[1]
+    return rows, cols
 
 
 def check_sections(

@@ -13,8 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from .frames import MeshFrame
-from .registry import SequenceFormat
+from .registry import MeshFrame, SequenceFormat
 
 
 def read_mesh_frame(path: Path, reference: MeshFrame | None = None) -> MeshFrame:
@@ -30,12 +29,14 @@ def _read_with_trimesh(path: Path) -> MeshFrame:
         raise InputError("no such file", path=path)
     try:
         mesh = trimesh.load(path, process=False, maintain_order=True, force="mesh")
-        vertices = np.asarray(mesh.vertices, dtype=np.float64)
-        faces = np.asarray(mesh.faces, dtype=np.int64)
     except Exception as error:
         raise InputError(
             f"trimesh cannot read it as a mesh: {type(error).__name__}: {error}", path=path
         ) from None
+    if not isinstance(mesh, trimesh.Trimesh):
+        raise InputError(f"trimesh reads it as a {type(mesh).__name__}, not a mesh", path=path)
+    vertices = np.asarray(mesh.vertices, dtype=np.float64)
+    faces = np.asarray(mesh.faces, dtype=np.int64)
     if vertices.ndim != 2 or vertices.shape[1] != 3 or len(vertices) == 0:
         raise InputError("no vertices found", path=path)
     if faces.size == 0:

@@ -15,7 +15,7 @@ import warnings
 import zipfile
 import zlib
 from pathlib import Path
-from typing import BinaryIO
+from typing import IO, Any
 
 import numpy as np
 
@@ -186,7 +186,7 @@ def _check_member_sizes(info: zipfile.ZipInfo, key: str, size: int, path: Path) 
         )
 
 
-def _npy_header(stream: BinaryIO, key: str, path: Path) -> tuple[tuple[int, ...], np.dtype]:
+def _npy_header(stream: IO[bytes], key: str, path: Path) -> tuple[tuple[int, ...], np.dtype]:
     """The shape and dtype in the header of an .npy member, read without its data."""
     version = np.lib.format.read_magic(stream)
     if version not in ((1, 0), (2, 0)):  # 3.0 is for Unicode field names, which V, F... lack
@@ -285,7 +285,7 @@ def _npz_rate(values: np.ndarray, path: Path) -> float:
 
 def write_npz(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
     """Write the sequence as an .npz archive, atomically."""
-    arrays = {
+    arrays: dict[str, Any] = {
         "V": np.asarray(seq.vertices, dtype=np.float64),
         "F": np.asarray(seq.faces, dtype=np.int64),
         "frame_files": np.array(seq.frame_names, dtype=str),
