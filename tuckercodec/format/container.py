@@ -1,4 +1,4 @@
-"""§2-5 The container: signature, preamble, header map and section table.
+"""§2, §4 and §5 The container: signature, preamble, header map, and the validation order.
 
 This module knows bytes, not meshes. A file is::
 
@@ -12,8 +12,9 @@ This module knows bytes, not meshes. A file is::
 
 Validation runs in the order of §5 (steps 1-9) and each failure raises the
 :class:`~tuckercodec.errors.FormatError` subclass §11 gives, carrying the rule's identifier
-and naming the field or offset at fault. :func:`read_file` is the one way a file is read from
-a path: only a regular file, only the bytes its preamble declares.
+and naming the field or offset at fault; the section table (§3) is read by
+:func:`.sections.read_section_table`. :func:`read_file` is the one way a file is read from a
+path: only a regular file, only the bytes its preamble declares.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ import os
 import struct
 import zlib
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import msgpack
@@ -35,7 +36,8 @@ from ..errors import (
     UnsupportedVersionError,
 )
 from ..reading import open_regular_file
-from .limits import DEFAULT_LIMITS, Limits, check_limit
+from .limits import DEFAULT_LIMITS, Limits
+from .sections import Section, read_section_table
 
 SIGNATURE = b"\x89TKC\r\n\x1a\n"
 FORMAT_MAJOR = 1
@@ -70,23 +72,6 @@ class Preamble:
     def data_start(self) -> int:
         """Where the data area (the first section) starts."""
         return self.header_end + _CRC.size
-
-
-@dataclass(frozen=True)
-class Section:
-    """One entry of the section table, with the codec parameters it carries."""
-
-    id: str
-    offset: int  # from the start of the data area
-    length: int
-    crc32: int
-    critical: bool
-    codec: str
-    params: dict[str, Any] = field(default_factory=dict)
-
-    def file_offset(self, data_start: int) -> int:
-        """The section's first byte, counted from the start of the file."""
-        return data_start + self.offset
 
 
 @dataclass(frozen=True)
@@ -286,7 +271,7 @@ def parse_container(
     if whole:
         _check_reaches(len(data), preamble.total_length, "the data area", "preamble.total_length")
     header = _unpack_header(bytes(header_bytes))
-    sections = _section_table(header, preamble.total_length - preamble.data_start, limits)
+    sections = read_section_table(header, preamble.total_length - preamble.data_start, limits)
     return Container(
         preamble.major,
         preamble.minor,
@@ -395,98 +380,3 @@ def _unpack_map(header_bytes: bytes) -> dict[str, Any]:
         raise _HeaderProblem(f"the header is a msgpack {type(header).__name__}, not a map")
     _reject_timestamps(header)
     return header
-
-
-_SECTION_KEYS: dict[str, type] = {
-    "id": str,
-    "offset": int,
-    "length": int,
-    "crc32": int,
-    "critical": bool,
-    "codec": str,
-}
-
-
-def _section_table(header: dict[str, Any], data_length: int, limits: Limits) -> tuple[Section, ...]:
-    """Check the section table (§3, §5 step 8): entries back to back from offset 0 to the end
-    of the file, each id once."""
-    table = header.get("sections")
-    if not isinstance(table, list):
-        raise FormatError(
-            "missing or not an array", rule="R13-section-table-missing", field="header.sections"
-        )
-    check_limit(
-        len(table), limits, "max_sections", what=f"{len(table)} sections", field="header.sections"
-    )
-    sections = []
-    expected_offset = 0
-    seen: set[str] = set()
-    for index, entry in enumerate(table):
-        where = f"header.sections[{index}]"
-        problem = _entry_problem(entry, where)
-        if problem is not None:
-            raise FormatError(problem[1], rule="R14-section-entry-field", field=problem[0])
-        section_id = entry["id"]
-        if section_id in seen:
-            raise FormatError(
-                f"section {section_id!r} appears twice",
-                rule="R15-section-duplicate-id",
-                field=f"{where}.id",
-            )
-        seen.add(section_id)
-        if entry["offset"] != expected_offset:
-            raise FormatError(
-                f"section {section_id!r} starts at {entry['offset']}, but sections are back to "
-                f"back and this one must start at {expected_offset}",
-                rule="R16-section-not-contiguous",
-                field=f"{where}.offset",
-            )
-        if entry["length"] < 0 or entry["offset"] + entry["length"] > data_length:
-            raise FormatError(
-                f"section {section_id!r} ({entry['length']} bytes at {entry['offset']}) runs past "
-                f"the end of the data area ({data_length} bytes)",
-                rule="R17-section-past-end",
-                field=f"{where}.length",
-            )
-        if not 0 <= entry["crc32"] <= 0xFFFFFFFF:
-            raise FormatError(
-                f"not a CRC-32: {entry['crc32']}",
-                rule="R14-section-entry-field",
-                field=f"{where}.crc32",
-            )
-        expected_offset += entry["length"]
-        params = {k: v for k, v in entry.items() if k not in _SECTION_KEYS}
-        sections.append(
-            Section(
-                section_id,
-                entry["offset"],
-                entry["length"],
-                entry["crc32"],
-                entry["critical"],
-                entry["codec"],
-                params,
-            )
-        )
-    if expected_offset != data_length:
-        raise FormatError(
-            f"the sections cover {expected_offset} bytes of a {data_length}-byte data area",
-            rule="R18-section-coverage",
-            field="header.sections",
-        )
-    return tuple(sections)
-
-
-def _entry_problem(entry: object, where: str) -> tuple[str, str] | None:
-    """``(field, reason)`` if an entry lacks one of the six fields or its type, or its id is not
-    1-16 printable ASCII characters; the first part of R14-section-entry-field."""
-    if not isinstance(entry, dict):
-        return where, "a section entry must be a map"
-    for key, kind in _SECTION_KEYS.items():
-        value = entry.get(key)
-        # bool is an int in Python: keep the two apart
-        if not isinstance(value, kind) or (kind is int and isinstance(value, bool)):
-            return f"{where}.{key}", f"missing or not {kind.__name__}: {value!r}"
-    section_id = entry["id"]
-    if not (1 <= len(section_id) <= 16 and section_id.isascii() and section_id.isprintable()):
-        return f"{where}.id", f"a section id is 1 to 16 printable ASCII characters: {section_id!r}"
-    return None

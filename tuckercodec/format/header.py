@@ -175,7 +175,7 @@ def read_header(container: Container, limits: Limits) -> FileInfo:
         raise FormatError(
             "must be 9 finite floats (U2, row-major)", rule="R23-u2", field="header.u2"
         )
-    check_sections(container, vertices, frames, (i, k), limits)
+    check_sections(container.sections, vertices, frames, (i, k), limits)
     frame_rate = _field(
         header, "frame_rate", _is_frame_rate, "absent, nil or a positive finite float"
     )

@@ -1,25 +1,43 @@
-"""§6.6 The sections of format 1.0: ids, codecs, criticality, order and shapes, written once.
+"""§3 The section table, and §6.6 the sections of format 1.0: ids, codecs, criticality, order
+and shapes, written once.
 
-The encoder takes from here the entry of every section it writes (:func:`entry`) and the order
-it writes them in (:data:`WRITE_ORDER`); the decoder checks the section table against the same
-table (:func:`check_sections`, §5 steps 11-13).
+:func:`read_section_table` checks the table's layout (§3, §5 step 8). The encoder takes from here
+the entry of every section it writes (:func:`entry`) and the order it writes them in
+(:data:`WRITE_ORDER`); the decoder checks the table against §6.6 (:func:`check_sections`, §5
+steps 11-13).
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from ..errors import FormatError, UnsupportedVersionError
 from . import streams
-from .container import Container
 from .limits import Limits, check_limit
 
 #: Codec ids (§6.3-6.5).
 QMAT = "qmat"
 FACES_DELTA = "faces-delta"
 MSGPACK_ZSTD = "msgpack-zstd"
+
+
+@dataclass(frozen=True)
+class Section:
+    """One entry of the section table, with the codec parameters it carries."""
+
+    id: str
+    offset: int  # from the start of the data area
+    length: int
+    crc32: int
+    critical: bool
+    codec: str
+    params: dict[str, Any] = field(default_factory=dict)
+
+    def file_offset(self, data_start: int) -> int:
+        """The section's first byte, counted from the start of the file."""
+        return data_start + self.offset
 
 
 @dataclass(frozen=True)
@@ -45,6 +63,103 @@ REQUIRED_SECTIONS = tuple(name for name, kind in KNOWN_SECTIONS.items() if kind.
 #: The order the reference encoder writes (§9): the faces first, which the decoder needs for
 #: U1's mesh parents; the decoder does not depend on it (§3).
 WRITE_ORDER = ("FACE", "CENT", "U3", "CORE", "U1", "NAME")
+
+
+_SECTION_KEYS: dict[str, type] = {
+    "id": str,
+    "offset": int,
+    "length": int,
+    "crc32": int,
+    "critical": bool,
+    "codec": str,
+}
+
+
+def read_section_table(
+    header: dict[str, Any], data_length: int, limits: Limits
+) -> tuple[Section, ...]:
+    """Check the section table (§3, §5 step 8): entries back to back from offset 0 to the end
+    of the file, each id once."""
+    table = header.get("sections")
+    if not isinstance(table, list):
+        raise FormatError(
+            "missing or not an array", rule="R13-section-table-missing", field="header.sections"
+        )
+    check_limit(
+        len(table), limits, "max_sections", what=f"{len(table)} sections", field="header.sections"
+    )
+    sections = []
+    expected_offset = 0
+    seen: set[str] = set()
+    for index, entry in enumerate(table):
+        where = f"header.sections[{index}]"
+        problem = _entry_problem(entry, where)
+        if problem is not None:
+            raise FormatError(problem[1], rule="R14-section-entry-field", field=problem[0])
+        section_id = entry["id"]
+        if section_id in seen:
+            raise FormatError(
+                f"section {section_id!r} appears twice",
+                rule="R15-section-duplicate-id",
+                field=f"{where}.id",
+            )
+        seen.add(section_id)
+        if entry["offset"] != expected_offset:
+            raise FormatError(
+                f"section {section_id!r} starts at {entry['offset']}, but sections are back to "
+                f"back and this one must start at {expected_offset}",
+                rule="R16-section-not-contiguous",
+                field=f"{where}.offset",
+            )
+        if entry["length"] < 0 or entry["offset"] + entry["length"] > data_length:
+            raise FormatError(
+                f"section {section_id!r} ({entry['length']} bytes at {entry['offset']}) runs past "
+                f"the end of the data area ({data_length} bytes)",
+                rule="R17-section-past-end",
+                field=f"{where}.length",
+            )
+        if not 0 <= entry["crc32"] <= 0xFFFFFFFF:
+            raise FormatError(
+                f"not a CRC-32: {entry['crc32']}",
+                rule="R14-section-entry-field",
+                field=f"{where}.crc32",
+            )
+        expected_offset += entry["length"]
+        params = {k: v for k, v in entry.items() if k not in _SECTION_KEYS}
+        sections.append(
+            Section(
+                section_id,
+                entry["offset"],
+                entry["length"],
+                entry["crc32"],
+                entry["critical"],
+                entry["codec"],
+                params,
+            )
+        )
+    if expected_offset != data_length:
+        raise FormatError(
+            f"the sections cover {expected_offset} bytes of a {data_length}-byte data area",
+            rule="R18-section-coverage",
+            field="header.sections",
+        )
+    return tuple(sections)
+
+
+def _entry_problem(entry: object, where: str) -> tuple[str, str] | None:
+    """``(field, reason)`` if an entry lacks one of the six fields or its type, or its id is not
+    1-16 printable ASCII characters; the first part of R14-section-entry-field."""
+    if not isinstance(entry, dict):
+        return where, "a section entry must be a map"
+    for key, kind in _SECTION_KEYS.items():
+        value = entry.get(key)
+        # bool is an int in Python: keep the two apart
+        if not isinstance(value, kind) or (kind is int and isinstance(value, bool)):
+            return f"{where}.{key}", f"missing or not {kind.__name__}: {value!r}"
+    section_id = entry["id"]
+    if not (1 <= len(section_id) <= 16 and section_id.isascii() and section_id.isprintable()):
+        return f"{where}.id", f"a section id is 1 to 16 printable ASCII characters: {section_id!r}"
+    return None
 
 
 def entry(section_id: str, params: Mapping[str, Any]) -> dict[str, Any]:
@@ -87,7 +202,7 @@ def section_shape(
 
 
 def check_sections(
-    container: Container,
+    table: tuple[Section, ...],
     vertices: int,
     frames: int,
     ranks: tuple[int, int],
@@ -96,7 +211,7 @@ def check_sections(
     """§5 steps 11-13: known sections with their codec and criticality, unknown critical ones
     refused, the required ones present, and every shape as the header implies and within the
     limits."""
-    for section in container.sections:
+    for section in table:
         where = f"section {section.id}"
         kind = KNOWN_SECTIONS.get(section.id)
         if kind is None:
@@ -119,7 +234,7 @@ def check_sections(
                 rule="R25-unknown-codec",
                 field=f"{where}.codec",
             )
-    present = {section.id: section for section in container.sections}
+    present = {section.id: section for section in table}
     for section_id in REQUIRED_SECTIONS:
         if section_id not in present:
             raise FormatError(

@@ -1,5 +1,8 @@
 """Reading and writing Wavefront OBJ meshes, fast and exactly.
 
+(At about 700 lines this module is longer than the others on purpose: OBJ's two parsers share
+one set of rules and must agree on every input, so they stay side by side with those rules.)
+
 Only what a mesh sequence needs is read: the ``v`` positions, in file order, and the ``f`` faces.
 Everything else (``vt``, ``vn``, ``vp``, ``o``, ``g``, ``s``, ``usemtl``, ``mtllib``, ``l``,
 comments, unknown statements) is ignored. trimesh is never used for OBJ because it reorders and

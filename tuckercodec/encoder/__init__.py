@@ -1,0 +1,244 @@
+"""The encoder: a mesh sequence to a compressed file that meets the error asked for.
+
+Three modes, one at a time: a target KG error (the default, 0.1), fixed ranks (i, k), or a target
+size in bpfv (the smallest error that fits).
+
+How a target KG error is met (errors are squared norms; E is the KG denominator's square):
+
+1. The exact table (:mod:`tuckercodec.analysis`) gives the truncation error of every (i, k).
+2. Quantization adds error. An error e in column a of U1 reaches the tensor multiplied by the
+   norm of core slice a, so column a gets the step sqrt(D) / ||CORE[a, :, :]||; likewise U3's
+   column b with ||CORE[:, :, b]||, the core gets sqrt(D), the centroids sqrt(D / K) (an error
+   there moves all K vertices). Every stored number then adds about D/12 to the squared error,
+   which is also the split that minimises the bits for a given error (reverse water-filling),
+   so one number D sets the whole quantizer.
+3. For a few splits of the error budget between truncation and quantization, the encoder picks
+   the cheapest ranks whose truncation error fits the truncation share (by the exact table, or by
+   the paper's bound with ``select="bound"``), sets D from the remaining share, and packs the
+   result to count its real bytes. The smallest wins.
+4. It then reconstructs exactly what the decoder will return, measures the KG error, and
+   tightens D (or loosens it once, if there is room) until the decoded error is at most the
+   target. The decoded error is never above the target.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+
+from ..analysis import Analysis, Selection, analyze
+from ..format import streams
+from ..rate import bpfv as bits_per_frame_vertex
+from ..sequence import MeshSequence
+from .search import TRUNCATION_SHARES, initial_step, meet, search_bpfv, search_kg
+from .workspace import Workspace
+
+DEFAULT_TARGET_KG = 0.1
+#: With fixed ranks, quantization may add this much to the truncation's squared error (KG +5 %).
+RANKS_QUANTIZATION_SHARE = 1.05**2 - 1
+#: With fixed ranks that lose nothing, the quantization error aimed for, in KG percent.
+RANKS_FLOOR_KG = 1e-4
+
+Mode = Literal["kg", "ranks", "bpfv"]
+
+
+@dataclass(frozen=True)
+class EncodeReport:
+    """What the encoder did and measured. Errors are KG errors (Karni-Gotsman, per-frame mean)."""
+
+    mode: Mode
+    target: float | None  # the KG target (mode "kg") or bpfv target (mode "bpfv")
+    select: Selection
+    ranks: tuple[int, int]
+    kg: float  # of the decoded sequence against the input
+    truncation_kg: float  # of the truncation alone, before quantization
+    exact_ranks: tuple[int, int] | None  # the cheapest ranks by the exact table (mode "kg")
+    bound_ranks: tuple[int, int] | None  # what the paper's bound alone would pick (mode "kg")
+    total_bytes: int
+    section_bytes: dict[str, int] = field(default_factory=dict)
+    vertices: int = 0
+    frames: int = 0
+    seconds: float = 0.0
+    trials: int = 0
+
+    @property
+    def bpfv(self) -> float:
+        """Bits per frame per vertex of the whole file, header and connectivity included."""
+        return bits_per_frame_vertex(self.total_bytes, self.frames, self.vertices)
+
+    @property
+    def connectivity_bpfv(self) -> float:
+        """The faces section's share of :attr:`bpfv`."""
+        return bits_per_frame_vertex(self.section_bytes.get("FACE", 0), self.frames, self.vertices)
+
+    @property
+    def raw_float32_bytes(self) -> int:
+        """The positions as plain float32: F * K * 3 * 4 bytes (faces not counted)."""
+        return self.frames * self.vertices * 12
+
+    @property
+    def ratio(self) -> float:
+        """:attr:`raw_float32_bytes` over the whole file's size."""
+        return self.raw_float32_bytes / self.total_bytes
+
+
+@dataclass(frozen=True)
+class EncodeResult:
+    """The file's bytes and the report of how they were made."""
+
+    data: bytes
+    report: EncodeReport
+
+
+def _check_modes(
+    target_kg: float | None, ranks: tuple[int, int] | None, target_bpfv: float | None
+) -> Mode:
+    given = [
+        name
+        for name, value in (
+            ("target_kg", target_kg),
+            ("ranks", ranks),
+            ("target_bpfv", target_bpfv),
+        )
+        if value is not None
+    ]
+    if len(given) > 1:
+        raise ValueError(f"give one of target_kg, ranks and target_bpfv, not {' and '.join(given)}")
+    for name, value in (("target_kg", target_kg), ("target_bpfv", target_bpfv)):
+        if value is not None and not (
+            isinstance(value, (int, float, np.floating))
+            and not isinstance(value, bool)
+            and math.isfinite(value)
+            and value > 0
+        ):
+            raise ValueError(f"{name} must be a positive finite number, got {value!r}")
+    if ranks is not None:
+        return "ranks"
+    return "bpfv" if target_bpfv is not None else "kg"
+
+
+def encode_with_report(
+    sequence: MeshSequence,
+    *,
+    target_kg: float | None = None,
+    ranks: tuple[int, int] | None = None,
+    target_bpfv: float | None = None,
+    select: Selection = "exact",
+    level: int = streams.DEFAULT_LEVEL,
+    analysis: Analysis | None = None,
+) -> EncodeResult:
+    """Encode a sequence; the file's bytes and a report of ranks, errors and sizes.
+
+    Args:
+        sequence: the mesh sequence (any number of frames; not every frame a single point).
+        target_kg: the largest KG error allowed for the decoded sequence, in percent (default
+            0.1 when no mode is given).
+        ranks: fixed ranks (i, k); quantization then adds at most about 5 % to the KG error of
+            the truncation.
+        target_bpfv: the largest whole-file size in bits per frame per vertex; the smallest KG
+            error that fits is chosen, down to a KG error of 1e-4 (a larger budget is not filled).
+        select: ``"exact"`` chooses ranks by the exact error table, ``"bound"`` by the seed
+            paper's bound alone.
+        level: zstd level of the sections (1-22).
+        analysis: the sequence's :func:`~tuckercodec.analyze` result, if already computed.
+
+    Raises:
+        InputError: the sequence cannot be encoded (every frame a single point, or coordinates
+            float64 cannot square).
+        UnreachableTargetError: no file of the format meets the target: a ``target_bpfv``
+            below the coarsest file's size, or an error target too small for the format's
+            32-bit integers (centroids far from the origin, or a target within rounding of 0).
+        ValueError: a mode argument that is out of range (ranks, a non-positive target).
+    """
+    start = time.perf_counter()
+    mode = _check_modes(target_kg, ranks, target_bpfv)
+    if select not in ("exact", "bound"):
+        raise ValueError(f"select must be 'exact' or 'bound', got {select!r}")
+    if not isinstance(sequence, MeshSequence):
+        raise TypeError(f"expected a MeshSequence, got {type(sequence).__name__}")
+    analysis = analyze(sequence) if analysis is None else analysis
+    work = Workspace(sequence, analysis, level)
+    exact_ranks = bound_ranks = None
+    target: float | None = None
+
+    if mode == "ranks":
+        i, k = _checked_ranks(ranks, analysis)
+        truncation2 = work.truncation_error2(i, k)
+        floor2 = (RANKS_FLOOR_KG / 100.0) ** 2 * work.denominator2
+        budget2 = max(
+            RANKS_QUANTIZATION_SHARE * truncation2, floor2, 1.01 * work.centroid_floor_error2
+        )
+        quantized, error2, trials = meet(
+            work, i, k, initial_step(work, i, k, budget2), truncation2 + budget2
+        )
+        target_for_header = None
+    elif mode == "kg":
+        target = DEFAULT_TARGET_KG if target_kg is None else float(target_kg)
+        exact, bound = analysis.cheapest(target), analysis.cheapest(target, select="bound")
+        exact_ranks, bound_ranks = (exact.i, exact.k), (bound.i, bound.k)
+        quantized, error2, trials = search_kg(work, target, select, TRUNCATION_SHARES)
+        target_for_header = target
+    else:
+        assert target_bpfv is not None  # the mode says so
+        target = float(target_bpfv)
+        quantized, error2, trials = search_bpfv(work, target, select)
+        target_for_header = None
+
+    data, sizes = work.pack(quantized, error2, target_for_header)
+    report = EncodeReport(
+        mode=mode,
+        target=target,
+        select=select,
+        ranks=(quantized.i, quantized.k),
+        kg=work.kg(error2),
+        truncation_kg=work.kg(work.truncation_error2(quantized.i, quantized.k)),
+        exact_ranks=exact_ranks,
+        bound_ranks=bound_ranks,
+        total_bytes=len(data),
+        section_bytes=sizes,
+        vertices=work.vertex_count,
+        frames=work.frame_count,
+        seconds=time.perf_counter() - start,
+        trials=trials,
+    )
+    return EncodeResult(data, report)
+
+
+def _checked_ranks(ranks: Any, analysis: Analysis) -> tuple[int, int]:
+    r1, r3 = analysis.max_ranks
+    try:
+        i, k = (int(r) for r in ranks)
+        valid = all(float(a) == b for a, b in zip(ranks, (i, k), strict=True))
+    except (TypeError, ValueError):
+        valid = False
+    if not valid or not (1 <= i <= r1 and 1 <= k <= r3):
+        raise ValueError(
+            f"ranks must be two integers with 1 <= i <= {r1} and 1 <= k <= {r3}, got {ranks!r}"
+        )
+    return i, k
+
+
+def encode(
+    sequence: MeshSequence,
+    *,
+    target_kg: float | None = None,
+    ranks: tuple[int, int] | None = None,
+    target_bpfv: float | None = None,
+    select: Selection = "exact",
+) -> bytes:
+    """Encode a sequence into the bytes of a file (``spec/FORMAT.md``).
+
+    One mode at a time: ``target_kg`` (default 0.1, a KG error in percent that the decoded
+    sequence never exceeds), ``ranks`` (i, k), or ``target_bpfv`` (the smallest error that fits).
+    :func:`encode_with_report` also says what was chosen and measured.
+    """
+    return encode_with_report(
+        sequence, target_kg=target_kg, ranks=ranks, target_bpfv=target_bpfv, select=select
+    ).data
+
+
+__all__ = ["EncodeReport", "EncodeResult", "encode", "encode_with_report"]
