@@ -1,0 +1,240 @@
+"""The package's layout and contracts, read from its source: who imports whom, one home per rule
+of spec/FORMAT.md §11, module sizes, and what the tools may use."""
+
+from __future__ import annotations
+
+import ast
+import json
+import re
+from functools import cache
+from pathlib import Path
+
+import pytest
+
+import tuckercodec
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGE = ROOT / "tuckercodec"
+SPEC = ROOT / "spec" / "FORMAT.md"
+FORMAT_ERRORS = {
+    "FormatError",
+    "TruncatedFileError",
+    "ChecksumError",
+    "UnsupportedVersionError",
+    "LimitError",
+}
+
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(ROOT).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+@cache
+def _modules() -> dict[str, Path]:
+    return {_module_name(path): path for path in PACKAGE.rglob("*.py")}
+
+
+@cache
+def _imports(module: str) -> frozenset[str]:
+    """The package modules ``module`` imports directly (``from . import x`` names module x)."""
+    modules = _modules()
+    path = modules[module]
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    found: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            names = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
+                base = ".".join([*anchor, base]) if base else ".".join(anchor)
+            names = [f"{base}.{alias.name}" for alias in node.names]
+            names = [name if name in modules else base for name in names]
+        else:
+            continue
+        found.update(name for name in names if name in modules and name != module)
+    return frozenset(found)
+
+
+def _reachable(module: str) -> set[str]:
+    """Every package module ``module`` imports, directly or through others (not counting the
+    parent packages Python imports first, which only re-export)."""
+    seen: set[str] = set()
+    pending = [module]
+    while pending:
+        for name in _imports(pending.pop()):
+            if name not in seen:
+                seen.add(name)
+                pending.append(name)
+    return seen
+
+
+def _family(reached: set[str], prefix: str) -> set[str]:
+    return {name for name in reached if name == prefix or name.startswith(prefix + ".")}
+
+
+def test_the_encoder_never_imports_the_decoder():
+    for module in _family(set(_modules()), "tuckercodec.encoder"):
+        assert not _family(_reachable(module), "tuckercodec.decoder"), module
+
+
+def test_the_decoder_never_imports_the_encoder_or_the_error_measures():
+    reached = _reachable("tuckercodec.decoder")
+    for forbidden in ("tuckercodec.encoder", "tuckercodec.metrics", "tuckercodec.perceptual"):
+        assert not _family(reached, forbidden), forbidden
+
+
+def test_the_format_package_knows_bytes_not_the_codec_around_it():
+    for module in _family(set(_modules()), "tuckercodec.format"):
+        reached = _reachable(module)
+        for layer in ("encoder", "decoder", "io", "cli", "analysis", "hosvd", "metrics"):
+            assert not _family(reached, f"tuckercodec.{layer}"), (module, layer)
+
+
+def test_package_imports_form_no_cycle():
+    for module in _modules():
+        assert module not in _reachable(module), f"{module} imports itself through others"
+
+
+# ------------------------------------------------------------------------------------------
+# one error contract: every rule of §11 raised from one place, with the class §11 names
+
+
+def _spec_rules() -> dict[str, str]:
+    """rule id -> error class, from the table of spec/FORMAT.md §11."""
+    text = SPEC.read_text()
+    section = text[text.index("## 11. Invalid files") : text.index("## 12.")]
+    rows = re.findall(r"^\| *\d+ *\| *(R\d\d-[a-z0-9-]+) *\|.*\| *(\w+) *\|$", section, re.M)
+    return dict(rows)
+
+
+class _RaiseSites(ast.NodeVisitor):
+    """Every construction of a FormatError class: (rule, class, module:function), where the
+    function is the innermost one around it (``Class.method`` for a method)."""
+
+    def __init__(self, module: str) -> None:
+        self.module = module
+        self.scope: list[str] = []
+        self.sites: list[tuple[str, str, str]] = []
+
+    def _enter(self, node: ast.ClassDef | ast.FunctionDef | ast.AsyncFunctionDef) -> None:
+        self.scope.append(node.name)
+        self.generic_visit(node)
+        self.scope.pop()
+
+    visit_ClassDef = visit_FunctionDef = visit_AsyncFunctionDef = _enter
+
+    def visit_Call(self, node: ast.Call) -> None:
+        if isinstance(node.func, ast.Name) and node.func.id in FORMAT_ERRORS:
+            where = f"{self.module}:{'.'.join(self.scope)}"
+            rule = next((k.value for k in node.keywords if k.arg == "rule"), None)
+            assert isinstance(rule, ast.Constant), f"{where} (line {node.lineno}): no literal rule="
+            self.sites.append((rule.value, node.func.id, where))
+        self.generic_visit(node)
+
+
+def _raise_sites() -> list[tuple[str, str, str]]:
+    sites = []
+    for module, path in _modules().items():
+        visitor = _RaiseSites(module)
+        visitor.visit(ast.parse(path.read_text()))
+        sites += visitor.sites
+    return sites
+
+
+def test_the_spec_lists_36_rules_each_with_its_class():
+    rules = _spec_rules()
+    assert len(rules) == 36
+    assert set(rules.values()) <= FORMAT_ERRORS
+
+
+def test_every_rule_is_raised_from_exactly_one_function_with_the_class_the_spec_gives():
+    rules = _spec_rules()
+    homes: dict[str, set[str]] = {}
+    for rule, error, where in _raise_sites():
+        assert rule in rules, f"{where} raises {rule}, which §11 does not list"
+        assert error == rules[rule], f"{where} raises {rule} as {error}, §11 says {rules[rule]}"
+        homes.setdefault(rule, set()).add(where)
+    scattered = {rule: sorted(places) for rule, places in homes.items() if len(places) > 1}
+    assert not scattered, f"rules raised from more than one function: {scattered}"
+    assert set(homes) == set(rules), f"never raised: {sorted(set(rules) - set(homes))}"
+
+
+def test_every_rule_has_an_invalid_vector_that_raises_it():
+    rules = _spec_rules()
+    vectors = {}
+    for path in (ROOT / "spec" / "vectors").glob("R*.json"):
+        expected = json.loads(path.read_text())
+        vectors[expected["rule"]] = path.parent / expected["file"]
+    assert set(vectors) == set(rules)
+    for rule, path in sorted(vectors.items()):
+        with pytest.raises(tuckercodec.FormatError) as raised:
+            tuckercodec.decode(path.read_bytes())
+        assert raised.value.rule == rule
+        assert type(raised.value).__name__ == rules[rule]
+
+
+# ------------------------------------------------------------------------------------------
+# sizes and surfaces
+
+MODULE_LINES = 420  # "about 400"
+
+
+def test_no_module_is_long_unless_its_first_lines_say_why():
+    for module, path in _modules().items():
+        lines = path.read_text().splitlines()
+        if len(lines) > MODULE_LINES:
+            opening = " ".join(lines[:6]).lower()
+            assert "longer" in opening, f"{module} has {len(lines)} lines and does not say why"
+
+
+def _tool_imports() -> list[tuple[str, str]]:
+    """(tool file, imported tuckercodec module) for every import of the package in tools/."""
+    found = []
+    for path in sorted((ROOT / "tools").rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                found += [
+                    (path.name, a.name) for a in node.names if a.name.startswith("tuckercodec")
+                ]
+            elif isinstance(node, ast.ImportFrom) and (node.module or "").startswith("tuckercodec"):
+                module = node.module or ""
+                names = [a.name for a in node.names]
+                if module == "tuckercodec" and "internal" in names:
+                    found.append((path.name, "tuckercodec.internal"))
+                    names.remove("internal")
+                if names:
+                    found.append((path.name, module))
+    return found
+
+
+def test_tools_use_only_the_public_api_and_the_documented_internal_surface():
+    imports = _tool_imports()
+    assert imports, "tools/ imports nothing from tuckercodec: is the folder there?"
+    strays = [
+        (tool, module)
+        for tool, module in imports
+        if module not in {"tuckercodec", "tuckercodec.internal"}
+    ]
+    assert not strays, f"tools reach past tuckercodec and tuckercodec.internal: {strays}"
+
+
+def test_no_test_or_tool_edits_sys_path():
+    for folder in ("tests", "tools"):
+        for path in (ROOT / folder).rglob("*.py"):
+            for node in ast.walk(ast.parse(path.read_text())):
+                if (
+                    isinstance(node, ast.Attribute)
+                    and node.attr == "path"
+                    and isinstance(node.value, ast.Name)
+                    and node.value.id == "sys"
+                ):
+                    raise AssertionError(f"{path.relative_to(ROOT)}:{node.lineno} uses sys.path")
+
+
+def test_the_package_ships_its_type_information():
+    assert (PACKAGE / "py.typed").exists()
