@@ -29,13 +29,15 @@ from .sequence import MeshSequence
 from .topology import mesh_parents
 
 #: A compressed file: its bytes, or a path to read it from.
-Source = bytes | bytearray | memoryview | str | os.PathLike[str]
+CompressedFile = bytes | bytearray | memoryview | str | os.PathLike[str]
 #: Which frames to decode: one number, a slice, a range, numbers (a list or an integer array),
 #: or all (``None``).
 FrameSelection = int | slice | range | Sequence[int] | np.ndarray | None
 
 
-def _bytes_of(source: Source, limits: Limits, *, header_only: bool = False) -> bytes | memoryview:
+def _bytes_of(
+    source: CompressedFile, limits: Limits, *, header_only: bool = False
+) -> bytes | memoryview:
     """The file's bytes: read from disk for a path (the one way, :func:`read_file`)."""
     if isinstance(source, (str, os.PathLike)):
         return read_file(source, limits, header_only=header_only)
@@ -61,7 +63,7 @@ class Decoder:
         OSError: a path that cannot be read.
     """
 
-    def __init__(self, source: Source, *, limits: Limits = DEFAULT_LIMITS) -> None:
+    def __init__(self, source: CompressedFile, *, limits: Limits = DEFAULT_LIMITS) -> None:
         self.path = os.fspath(source) if isinstance(source, (str, os.PathLike)) else None
         try:
             data = _bytes_of(source, limits)
@@ -208,7 +210,7 @@ def _check_frames_exist(numbers: Sequence[int], count: int) -> None:
 
 
 def decode(
-    source: Source, *, frames: FrameSelection = None, limits: Limits = DEFAULT_LIMITS
+    source: CompressedFile, *, frames: FrameSelection = None, limits: Limits = DEFAULT_LIMITS
 ) -> MeshSequence:
     """Decode a compressed file (its bytes, or a path) into a :class:`MeshSequence`.
 
@@ -227,7 +229,7 @@ def decode(
     return Decoder(source, limits=limits).sequence(frames)
 
 
-def info(source: Source, *, limits: Limits = DEFAULT_LIMITS) -> FileInfo:
+def info(source: CompressedFile, *, limits: Limits = DEFAULT_LIMITS) -> FileInfo:
     """Read a file's header without decoding any section.
 
     ``source`` is the file's bytes, or a path: then only the preamble and header are read from
@@ -242,4 +244,4 @@ def info(source: Source, *, limits: Limits = DEFAULT_LIMITS) -> FileInfo:
         raise
 
 
-__all__ = ["Decoder", "FileInfo", "FrameSelection", "Source", "decode", "info"]
+__all__ = ["CompressedFile", "Decoder", "FileInfo", "FrameSelection", "decode", "info"]
