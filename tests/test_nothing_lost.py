@@ -230,22 +230,3 @@ def test_a_failed_decode_over_an_existing_folder_keeps_every_old_frame(tmp_path,
     assert (tmp_path / "frames" / "notes.txt").read_text() == "not ours"  # never touched
     np.testing.assert_array_equal(tc.load_sequence(tmp_path / "frames", progress=False).vertices,
                                   new.vertices)
-
-
-def test_opening_a_huge_foreign_file_reads_only_its_first_bytes(tmp_path):
-    # A sparse 4 GiB file: refused from its first 32 bytes, never loaded.
-    huge = tmp_path / "huge.tkc"
-    with open(huge, "wb") as handle:
-        handle.truncate(4 << 30)
-    with pytest.raises(tc.FormatError, match="signature"):
-        tc.read_compressed(huge)
-
-
-def test_a_file_with_trailing_bytes_is_refused_without_reading_them_all(tmp_path):
-    data = tc.encode(tc.MeshSequence(wave_sequence(6, 4), grid_faces(4)))
-    padded = tmp_path / "padded.tkc"
-    with open(padded, "wb") as handle:
-        handle.write(data)
-        handle.truncate(len(data) + (4 << 30))  # 4 GiB of zeros after the file
-    with pytest.raises(tc.FormatError, match="follow the end of the file"):
-        tc.read_compressed(padded)
