@@ -1,12 +1,12 @@
 """Rate-distortion benchmark of tuckercodec against its peers, all measured in one run.
 
 For each sequence (default: every one of ../shared/data present) and each coder of
-tools/peers.py that can run here, every encode is decoded again and measured the same way:
+:mod:`tools.peers` that can run here, every encode is decoded again and measured the same way:
 
 * size: the whole file in bytes and in bpfv (8 * bytes / (F * K)), the connectivity stored once
   shown separately ("in frames" where every frame carries its own, as per-frame Draco meshes);
 * error: KG (Karni-Gotsman 2004, per-frame centroid, percent), STED (Vasa and Skala 2011, see
-  tuckercodec.metrics.sted, with its default parameters) and the largest vertex displacement in
+  tuckercodec.sted, with its default parameters) and the largest vertex displacement in
   scene units, all of the decoded positions against the input;
 * time: encode and decode, seconds, the median of ``--repeat`` runs of the setting that
   represents the coder at a target (the search for SZ3/zfp/TTHRESH's bound is not counted,
@@ -24,9 +24,9 @@ Output, in ``--out`` (default results/bench): one markdown table and one rate-di
 (bpfv against KG, both log scale) per sequence, summary.md (the smallest coder per target and
 tuckercodec's ratio to each coder) and results.json (every trial).
 
-    python tools/bench.py                                   # everything present, ~7 minutes
-    python tools/bench.py --repeat 3                        # medians of 3 timings (BENCHMARKS.md)
-    python tools/bench.py ../shared/data/chicken.npz --coders tuckercodec,pca,zfp --targets 1,0.1
+    python -m tools.bench                                   # everything present, ~7 minutes
+    python -m tools.bench --repeat 3                        # medians of 3 timings (BENCHMARKS.md)
+    python -m tools.bench ../shared/data/chicken.npz --coders tuckercodec,pca,zfp --targets 1,0.1
 """
 
 from __future__ import annotations
@@ -36,58 +36,23 @@ import datetime
 import inspect
 import json
 import math
-import os
-import platform
 import statistics
 import sys
 import time
 from pathlib import Path
 
-import numpy as np
+import tuckercodec
+from tools import common, peers
+from tuckercodec import bpfv, max_vertex_displacement, sted
+from tuckercodec.internal import KG_DEFINITION
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-import peers  # noqa: E402  (tools/ is not a package)
-
-import tuckercodec  # noqa: E402
-from tuckercodec import load_sequence  # noqa: E402
-from tuckercodec.atomic import write_atomic  # noqa: E402
-from tuckercodec.metrics import KG_DEFINITION, max_vertex_displacement  # noqa: E402
-from tuckercodec.samples import sample_path  # noqa: E402
-
-try:
-    from tuckercodec import sted
-except ImportError:  # pragma: no cover - older checkouts
-    sted = None
-
-SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 DEFAULT_TARGETS = [2.0, 1.0, 0.5, 0.2, 0.1, 0.05, 0.02]
 DEFAULT_BITS = list(range(8, 17))
-MIB = 1024 * 1024
-
-
-def shared_sequences() -> list[str]:
-    """Every sequence in ../shared/data: its .npz files and its folders of OBJ files."""
-    if not SHARED_DATA.is_dir():
-        return []
-    found = [p for p in sorted(SHARED_DATA.iterdir())
-             if (p.suffix == ".npz" and p.is_file()) or (p.is_dir() and any(p.glob("*.obj")))]
-    return [str(p) for p in found]
-
-
-def _unique(name: str, taken: set[str]) -> str:
-    """``name``, or ``name-2``, ``name-3``... so that two inputs never share result files."""
-    candidate, number = name, 1
-    while candidate in taken:
-        number += 1
-        candidate = f"{name}-{number}"
-    taken.add(candidate)
-    return candidate
 
 
 def _sequence_name(path: str) -> str:
-    if path == "sample":
-        return "sample"
+    if path == common.SAMPLE:
+        return common.SAMPLE
     name = Path(path.rstrip("/")).name
     for suffix in (".npz", ".obj"):
         name = name.removesuffix(suffix)
@@ -108,8 +73,10 @@ class Progress:
         elapsed = time.monotonic() - self.start
         if self.tty:
             filled = 30 * self.done // self.total
-            sys.stderr.write(f"\r[{'#' * filled}{'.' * (30 - filled)}] {self.done}/{self.total} "
-                             f"{elapsed:6.0f} s  {label:<40.40}")
+            sys.stderr.write(
+                f"\r[{'#' * filled}{'.' * (30 - filled)}] {self.done}/{self.total} "
+                f"{elapsed:6.0f} s  {label:<40.40}"
+            )
             if self.done == self.total:
                 sys.stderr.write("\n")
         else:
@@ -125,12 +92,12 @@ def measure(trial: peers.Trial, sequence: tuckercodec.MeshSequence, context: pee
     frames, vertices = sequence.frame_count, sequence.vertex_count
     m: dict[str, float] = {
         "kg": trial.kg,
-        "bpfv": 8.0 * trial.total_bytes / (frames * vertices),
+        "bpfv": bpfv(trial.total_bytes, frames, vertices),
         "max_displacement": max_vertex_displacement(sequence.vertices, decoded).distance,
     }
     if trial.connectivity_bytes is not None:
-        m["connectivity_bpfv"] = 8.0 * trial.connectivity_bytes / (frames * vertices)
-    if sted is not None and sequence.faces.size:  # STED compares edges: none without faces
+        m["connectivity_bpfv"] = bpfv(trial.connectivity_bytes, frames, vertices)
+    if sequence.faces.size:  # STED compares edges: none without faces
         value = sted(sequence.vertices, decoded, sequence.faces)
         m.update(sted=value.value, sted_spatial=value.spatial, sted_temporal=value.temporal)
     trial.metrics = m
@@ -143,19 +110,27 @@ def best_at(trials: list[peers.Trial], target: float) -> peers.Trial | None:
     return min(met, key=lambda t: t.total_bytes) if met else None
 
 
-def retime_chosen(trials_by_coder: dict[str, list[peers.Trial]], targets: list[float], repeat: int) -> None:
+def retime_chosen(
+    trials_by_coder: dict[str, list[peers.Trial]], targets: list[float], repeat: int
+) -> None:
     """Time the trials that represent a coder at some target ``repeat`` times in all and keep
     the medians (the first, measured run included)."""
     if repeat <= 1:
         return
-    chosen = {id(t): t for trials in trials_by_coder.values() for target in targets
-              if (t := best_at(trials, target)) is not None}
+    chosen = {
+        id(t): t
+        for trials in trials_by_coder.values()
+        for target in targets
+        if (t := best_at(trials, target)) is not None
+    }
     for trial in chosen.values():
         runs = [(trial.encode_seconds, trial.decode_seconds, trial.total_bytes)]
         runs += [trial.retime() for _ in range(repeat - 1)]
         if any(size != trial.total_bytes for _, _, size in runs):  # it must time the same encode
-            raise RuntimeError(f"{trial.coder} {trial.setting}: a re-run gave another size: "
-                               f"{[size for _, _, size in runs]}")
+            raise RuntimeError(
+                f"{trial.coder} {trial.setting}: a re-run gave another size: "
+                f"{[size for _, _, size in runs]}"
+            )
         trial.encode_seconds = statistics.median(r[0] for r in runs)
         trial.decode_seconds = statistics.median(r[1] for r in runs)
 
@@ -168,13 +143,13 @@ def encode_seconds(trial: peers.Trial) -> float:
 def _fmt(value: float | None, digits: int = 3) -> str:
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return "n/a"
-    return f"{value:.{digits}g}" if abs(value) < 1e-3 or abs(value) >= 1e4 else f"{value:.{digits}f}"
+    return (
+        f"{value:.{digits}g}" if abs(value) < 1e-3 or abs(value) >= 1e4 else f"{value:.{digits}f}"
+    )
 
 
 def _sted_parameters() -> str:
-    """The STED parameters used (tuckercodec.metrics.sted's defaults), for the table's legend."""
-    if sted is None:
-        return "(not available in this checkout)"
+    """The STED parameters used (tuckercodec.sted's defaults), for the table's legend."""
     defaults = inspect.signature(sted).parameters
     named = ", ".join(f"{name} {defaults[name].default}" for name in ("width", "window", "dt", "c"))
     return f"(Vasa-Skala 2011; {named}; scale 1 / first frame's bounding-box diagonal)"
@@ -182,30 +157,42 @@ def _sted_parameters() -> str:
 
 def sequence_table(name: str, sequence, trials_by_coder, targets, skipped) -> str:
     """The markdown report of one sequence: every coder at every target."""
-    lines = [f"## {name}: {sequence.frame_count} frames, {sequence.vertex_count} vertices, "
-             f"{sequence.faces.shape[0]} faces", ""]
-    lines.append(f"Errors: {KG_DEFINITION}; STED {_sted_parameters()}; largest displacement in "
-                 "scene units. Sizes count the whole file, connectivity included (its share in "
-                 "brackets).")
+    lines = [
+        f"## {name}: {sequence.frame_count} frames, {sequence.vertex_count} vertices, "
+        f"{sequence.faces.shape[0]} faces",
+        "",
+    ]
+    lines.append(
+        f"Errors: {KG_DEFINITION}; STED {_sted_parameters()}; largest displacement in "
+        "scene units. Sizes count the whole file, connectivity included (its share in "
+        "brackets)."
+    )
     lines.append("")
-    header = ("| target KG | coder | setting | bytes | bpfv (conn.) | KG | STED | max disp. | "
-              "enc s | dec s | peak MiB |")
+    header = (
+        "| target KG | coder | setting | bytes | bpfv (conn.) | KG | STED | max disp. | "
+        "enc s | dec s | peak MiB |"
+    )
     lines += [header, "|" + "---|" * 11]
     for target in targets:
         for coder, trials in trials_by_coder.items():
             best = best_at(trials, target)
             if not trials:
-                lines.append(f"| {target:g} | {coder} | not run on this sequence (no faces) | | | | | | | | |")
+                lines.append(
+                    f"| {target:g} | {coder} | not run on this sequence (no faces) "
+                    "| | | | | | | | |"
+                )
                 continue
             if best is None:
                 reach = min((t.kg for t in trials), default=math.nan)
-                lines.append(f"| {target:g} | {coder} | not reached (best KG {_fmt(reach)}) "
-                             "| | | | | | | | |")
+                lines.append(
+                    f"| {target:g} | {coder} | not reached (best KG {_fmt(reach)}) "
+                    "| | | | | | | | |"
+                )
                 continue
             m = best.metrics
             conn = m.get("connectivity_bpfv")
             conn_text = f"({conn:.3f})" if conn is not None else "(in frames)"
-            peak = "n/a" if best.peak_bytes is None else f"{best.peak_bytes / MIB:.0f}"
+            peak = "n/a" if best.peak_bytes is None else f"{best.peak_bytes / common.MIB:.0f}"
             lines.append(
                 f"| {target:g} | {coder} | {best.setting} | {best.total_bytes} | "
                 f"{m['bpfv']:.3f} {conn_text} | {_fmt(m['kg'], 4)} | {_fmt(m.get('sted'))} | "
@@ -232,9 +219,16 @@ def summary_rows(name: str, trials_by_coder, targets) -> list[str]:
         for coder in coders:
             b = best[coder]
             trials = trials_by_coder[coder]
-            # ‡: the coder's coarsest setting, far below the target: the ratio compares unequal errors
-            floor = ("‡" if b is not None and b.setting.endswith(" bits")
-                     and b is max(trials, key=lambda t: t.kg) and b.kg < target / 2 else "")
+            # ‡: the coder's coarsest setting, far below the target: the ratio compares unequal
+            # errors
+            floor = (
+                "‡"
+                if b is not None
+                and b.setting.endswith(" bits")
+                and b is max(trials, key=lambda t: t.kg)
+                and b.kg < target / 2
+                else ""
+            )
             if b is None:
                 cells.append("not reached" if trials else "not run")
             elif ours is None or coder == "tuckercodec":
@@ -246,11 +240,7 @@ def summary_rows(name: str, trials_by_coder, targets) -> list[str]:
 
 
 def plot(name: str, trials_by_coder, targets, path: Path, force: bool) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = common.pyplot()
     fig, ax = plt.subplots(figsize=(8, 5))
     for coder, trials in trials_by_coder.items():
         points = sorted((t.kg, t.metrics["bpfv"]) for t in trials if t.kg > 0 and t.metrics)
@@ -259,7 +249,7 @@ def plot(name: str, trials_by_coder, targets, path: Path, force: bool) -> None:
             ax.axhline(min(exact), ls="--", lw=1.0, color="0.4", label=f"{coder} (KG 0, lossless)")
         if not points:
             continue
-        kg, rate = zip(*points)
+        kg, rate = zip(*points, strict=True)  # pairs: two sequences of equal length
         ax.plot(kg, rate, "o-" if len(points) > 1 else "s", ms=3.5, lw=1.3, label=coder)
     for target in targets:
         ax.axvline(target, color="0.85", lw=0.8, zorder=0)
@@ -271,27 +261,36 @@ def plot(name: str, trials_by_coder, targets, path: Path, force: bool) -> None:
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    try:
-        write_atomic(path, lambda handle: fig.savefig(handle, format="png", dpi=120), overwrite=force)
-    finally:
-        plt.close(fig)
-
-
-def _write_text(path: Path, text: str, force: bool) -> None:
-    write_atomic(path, lambda handle: handle.write(text.encode()), overwrite=force)
+    common.save_png(fig, path, dpi=120, force=force)
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("sequences", nargs="*", help="npz, OBJ folder or 'sample' (default: ../shared/data)")
-    parser.add_argument("--targets", default=",".join(f"{t:g}" for t in DEFAULT_TARGETS),
-                        help="KG targets, comma-separated")
-    parser.add_argument("--coders", default=",".join(c.name for c in peers.CODERS),
-                        help="coders to run, comma-separated")
-    parser.add_argument("--bits", default="8-16", help="quantization bits of Draco and meshoptimizer, A-B")
+    parser.add_argument(
+        "sequences", nargs="*", help="npz, OBJ folder or 'sample' (default: ../shared/data)"
+    )
+    parser.add_argument(
+        "--targets",
+        default=",".join(f"{t:g}" for t in DEFAULT_TARGETS),
+        help="KG targets, comma-separated",
+    )
+    parser.add_argument(
+        "--coders",
+        default=",".join(c.name for c in peers.CODERS),
+        help="coders to run, comma-separated",
+    )
+    parser.add_argument(
+        "--bits",
+        default=f"{DEFAULT_BITS[0]}-{DEFAULT_BITS[-1]}",
+        help="quantization bits of Draco and meshoptimizer, A-B",
+    )
     parser.add_argument("--out", default="results/bench", help="output folder")
-    parser.add_argument("--repeat", type=int, default=1,
-                        help="time each coder's chosen setting this many times and keep the medians")
+    parser.add_argument(
+        "--repeat",
+        type=int,
+        default=1,
+        help="time each coder's chosen setting this many times and keep the medians",
+    )
     parser.add_argument("--force", action="store_true", help="replace earlier results")
     args = parser.parse_args(argv)
 
@@ -303,9 +302,9 @@ def main(argv: list[str] | None = None) -> int:
     if unknown:
         parser.error(f"unknown coders: {', '.join(sorted(unknown))}")
     coders = [c for c in peers.CODERS if c.name in wanted]
-    paths = args.sequences or shared_sequences()
+    paths = args.sequences or common.shared_sequences()
     if not paths:
-        print(f"no sequences given and none found in {SHARED_DATA}", file=sys.stderr)
+        print(f"no sequences given and none found in {common.SHARED_DATA}", file=sys.stderr)
         return 2
     out = Path(args.out)
     if (out / "summary.md").exists() and not args.force:  # refuse now, not after the run
@@ -323,8 +322,8 @@ def main(argv: list[str] | None = None) -> int:
     everything = []
     taken: set[str] = set()
     for path in paths:
-        name = _unique(_sequence_name(path), taken)
-        sequence = load_sequence(sample_path() if path == "sample" else path, progress=False)
+        name = common.unique_name(_sequence_name(path), taken)
+        sequence = common.load(path)
         context = peers.Context.of(sequence, bits)
         trials_by_coder: dict[str, list[peers.Trial]] = {}
         for coder in runnable:
@@ -334,20 +333,34 @@ def main(argv: list[str] | None = None) -> int:
             retime_chosen({coder.name: trials}, targets, args.repeat)
             trials_by_coder[coder.name] = trials
             progress.step(f"{name}: {coder.name}")
-            everything += [{"sequence": name, "coder": t.coder, "setting": t.setting, "target": t.target,
-                            "bytes": t.total_bytes, "connectivity_bytes": t.connectivity_bytes,
-                            "encode_seconds": encode_seconds(t), "decode_seconds": t.decode_seconds,
-                            "peak_bytes": t.peak_bytes, **t.metrics} for t in trials]
-        _write_text(out / f"{name}.md", sequence_table(name, sequence, trials_by_coder, targets, skipped), args.force)
+            everything += [
+                {
+                    "sequence": name,
+                    "coder": t.coder,
+                    "setting": t.setting,
+                    "target": t.target,
+                    "bytes": t.total_bytes,
+                    "connectivity_bytes": t.connectivity_bytes,
+                    "encode_seconds": encode_seconds(t),
+                    "decode_seconds": t.decode_seconds,
+                    "peak_bytes": t.peak_bytes,
+                    **t.metrics,
+                }
+                for t in trials
+            ]
+        common.write_text(
+            out / f"{name}.md",
+            sequence_table(name, sequence, trials_by_coder, targets, skipped),
+            args.force,
+        )
         plot(name, trials_by_coder, targets, out / f"{name}.png", args.force)
         summary += summary_rows(name, trials_by_coder, targets)
 
     names = [c.name for c in runnable]
-    machine = f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, numpy {np.__version__}"
     text = [
         f"# Benchmark summary ({datetime.date.today()}, tuckercodec {tuckercodec.__version__})",
         "",
-        f"Machine: {machine}. Command: `python tools/bench.py {' '.join(argv or sys.argv[1:])}`. "
+        f"Machine: {common.machine()}. Command: `{common.command('tools.bench', argv)}`. "
         f"Wall time {time.monotonic() - started:.0f} s.",
         "",
         "bpfv of the smallest file of each coder whose decoded KG error (Karni-Gotsman) meets the "
@@ -361,8 +374,8 @@ def main(argv: list[str] | None = None) -> int:
         "",
         *(f"{coder}: skipped, {why}." for coder, why in skipped.items()),
     ]
-    _write_text(out / "summary.md", "\n".join(text) + "\n", args.force)
-    _write_text(out / "results.json", json.dumps(everything, indent=1), args.force)
+    common.write_text(out / "summary.md", "\n".join(text) + "\n", args.force)
+    common.write_text(out / "results.json", json.dumps(everything, indent=1), args.force)
     print("\n".join(text))
     return 0
 

@@ -6,38 +6,23 @@ run, the wall time of numpy's SVDs of the mode-1 and mode-3 unfoldings (all sing
 of the thin problem, the plain way to get the same factors); and the peak memory that
 ``analyze`` allocates, as a multiple of the float64 tensor (K * 3 * F * 8 bytes).
 
-    python tools/bench_analysis.py                 # every sequence in ../shared/data present
-    python tools/bench_analysis.py path/to/seq.npz --repeat 7
+    python -m tools.bench_analysis                 # every sequence in ../shared/data present
+    python -m tools.bench_analysis path/to/seq.npz --repeat 7
 """
 
 from __future__ import annotations
 
 import argparse
-import os
-import platform
-import statistics
 import sys
 import time
-import tracemalloc
 from pathlib import Path
+from statistics import median
 
 import numpy as np
 
-from tuckercodec import load_sequence
-from tuckercodec.analysis import analyze
-from tuckercodec.hosvd import reconstruct
-
-SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
-DEFAULT_SEQUENCES = ["samba.npz", "chicken.npz", "horse-gallop", "cloth-vellum.npz"]
-
-
-def median_time(function, repeat: int) -> tuple[float, float, float]:
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times), min(times), max(times)
+from tools import common
+from tuckercodec import analyze
+from tuckercodec.internal import reconstruct
 
 
 def plain_svds(vertices: np.ndarray) -> None:
@@ -47,18 +32,6 @@ def plain_svds(vertices: np.ndarray) -> None:
     k, _, f = tensor.shape
     np.linalg.svd(tensor.reshape(k, 3 * f), full_matrices=False)
     np.linalg.svd(tensor.transpose(2, 0, 1).reshape(f, 3 * k), full_matrices=False)
-
-
-def peak_memory(vertices: np.ndarray) -> int:
-    """Bytes allocated at the peak of one ``analyze`` call, beyond what existed before."""
-    tracemalloc.start()
-    tracemalloc.reset_peak()
-    before = tracemalloc.get_traced_memory()[0]
-    result = analyze(vertices)
-    peak = tracemalloc.get_traced_memory()[1]
-    tracemalloc.stop()
-    del result
-    return peak - before
 
 
 def accuracy(analysis, targets=(1.0, 0.1, 0.02, 0.005)) -> str:
@@ -76,42 +49,44 @@ def accuracy(analysis, targets=(1.0, 0.1, 0.02, 0.005)) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("sequences", nargs="*", help="npz files or OBJ folders (default: shared data)")
+    parser.add_argument(
+        "sequences", nargs="*", help="npz files, OBJ folders or 'sample' (default: shared data)"
+    )
     parser.add_argument("--repeat", type=int, default=5, help="runs per timing (median reported)")
     parser.add_argument("--svd-repeat", type=int, default=3, help="runs of the plain SVDs")
     args = parser.parse_args(argv)
 
-    paths = [Path(p) for p in args.sequences] or [
-        SHARED_DATA / name for name in DEFAULT_SEQUENCES if (SHARED_DATA / name).exists()
-    ]
+    paths = [Path(p) for p in args.sequences] or common.in_shared_data(common.REAL_SEQUENCES)[0]
     if not paths:
-        print(f"no sequences given and none found in {SHARED_DATA}", file=sys.stderr)
+        print(f"no sequences given and none found in {common.SHARED_DATA}", file=sys.stderr)
         return 2
 
-    print(f"machine: {platform.platform()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
-          f"numpy {np.__version__}")
-    print(f"command: python tools/bench_analysis.py {' '.join(argv or sys.argv[1:])}".rstrip())
+    print(f"machine: {common.machine()}")
+    print(f"command: {common.command('tools.bench_analysis', argv)}")
     print()
-    print("| sequence | K | F | table (i x k) | analyze median [min-max] s | first call s "
-          "| plain SVDs median s | speed-up | peak memory / tensor |")
+    print(
+        "| sequence | K | F | table (i x k) | analyze median [min-max] s | first call s "
+        "| plain SVDs median s | speed-up | peak memory / tensor |"
+    )
     print("|---|---|---|---|---|---|---|---|---|")
     gaps: list[str] = []
     for path in paths:
-        sequence = load_sequence(path, progress=False)
+        sequence = common.load(path)
         vertices = sequence.vertices
         frames, count, _ = vertices.shape
         start = time.perf_counter()
         analysis = analyze(vertices)  # the first call of the process, as the CLI sees it
         first = time.perf_counter() - start
         r1, r3 = analysis.max_ranks
-        fast = median_time(lambda v=vertices: analyze(v), args.repeat)
-        slow = median_time(lambda v=vertices: plain_svds(v), args.svd_repeat)
-        peak = peak_memory(vertices)
+        fast = common.timed(lambda v=vertices: analyze(v), args.repeat, warmup=0)
+        slow = common.timed(lambda v=vertices: plain_svds(v), args.svd_repeat, warmup=0)
+        peak = common.traced_peak(lambda v=vertices: analyze(v))
         gaps.append(f"- {path.name}: {accuracy(analysis)}")
         tensor_bytes = count * 3 * frames * 8
         print(
             f"| {path.name} | {count} | {frames} | {r1 + 1} x {r3 + 1} | "
-            f"{fast[0]:.3f} [{fast[1]:.3f}-{fast[2]:.3f}] | {first:.3f} | {slow[0]:.3f} | {slow[0] / fast[0]:.1f}x | "
+            f"{median(fast):.3f} [{min(fast):.3f}-{max(fast):.3f}] | {first:.3f} | "
+            f"{median(slow):.3f} | {median(slow) / median(fast):.1f}x | "
             f"{peak / tensor_bytes:.2f}x ({peak / 2**20:.0f} MiB) |"
         )
     print()

@@ -21,8 +21,8 @@ For each sequence (default: every one of ../shared/data present) three tables:
 
 Errors are KG errors (Karni-Gotsman, per-frame centroid), in percent.
 
-    python tools/bench_codec.py                    # every sequence in ../shared/data present
-    python tools/bench_codec.py ../shared/data/chicken.npz --repeat 1 --targets 1 0.1
+    python -m tools.bench_codec                    # every sequence in ../shared/data present
+    python -m tools.bench_codec ../shared/data/chicken.npz --repeat 1 --targets 1 0.1
 """
 
 from __future__ import annotations
@@ -30,32 +30,28 @@ from __future__ import annotations
 import argparse
 import datetime
 import os
-import platform
 import shutil
 import statistics
 import sys
 import tempfile
 import time
-import tracemalloc
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 import tuckercodec
-from tuckercodec import kg_error, load_sequence
-from tuckercodec.decoder import Decoder, decode
-from tuckercodec.encoder import encode_with_report
+from tools import common
+from tools.common import spread, timed, traced_peak
+from tuckercodec import Decoder, bpfv, decode, encode_with_report, kg_error
 
-SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
-DEFAULT_SEQUENCES = ["samba.npz", "chicken.npz", "horse-gallop", "cloth-vellum.npz"]
 DEFAULT_TARGETS = [1.0, 0.5, 0.1, 0.05, 0.02]
 
 #: ../shared/NOTES.md: geometry-only bpfv of the throwaway script at KG 1, 0.5, 0.1, 0.05, 0.02.
 REFERENCE_GEOMETRY = {
-    "chicken": dict(zip(DEFAULT_TARGETS, [0.55, 0.76, 1.40, 1.74, 2.20])),
-    "samba": dict(zip(DEFAULT_TARGETS, [0.79, 1.36, 3.97, 5.77, 9.09])),
-    "horse": dict(zip(DEFAULT_TARGETS, [0.99, 1.65, 3.94, 5.26, 7.26])),
+    "chicken": dict(zip(DEFAULT_TARGETS, [0.55, 0.76, 1.40, 1.74, 2.20], strict=True)),
+    "samba": dict(zip(DEFAULT_TARGETS, [0.79, 1.36, 3.97, 5.77, 9.09], strict=True)),
+    "horse": dict(zip(DEFAULT_TARGETS, [0.99, 1.65, 3.94, 5.26, 7.26], strict=True)),
 }
 #: ../shared/NOTES.md: zstd level 19 on the plain int32 triangle list, in bpfv.
 REFERENCE_FACES = {"chicken": 0.13, "samba": 0.34, "horse": 1.11, "cloth": 1.40}
@@ -71,42 +67,6 @@ def reference_key(path: Path) -> str | None:
     """The name NOTES.md uses for a sequence (``horse-gallop`` -> ``horse``), if it has one."""
     name = path.name.lower()
     return next((key for key in REFERENCE_FACES if name.startswith(key)), None)
-
-
-def timed(function, repeat: int, warmup: int = 1) -> list[float]:
-    """Wall times of ``repeat`` calls of ``function()``, after ``warmup`` untimed calls."""
-    for _ in range(warmup):
-        function()
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - start)
-    return times
-
-
-def spread(times: list[float], scale: float = 1.0, digits: int = 3) -> str:
-    """``median [min-max]`` of ``times`` multiplied by ``scale``."""
-    median = statistics.median(times) * scale
-    if len(times) == 1:
-        return f"{median:.{digits}f}"
-    return f"{median:.{digits}f} [{min(times) * scale:.{digits}f}-{max(times) * scale:.{digits}f}]"
-
-
-def peak_bytes(function) -> int:
-    """Bytes allocated at the peak of one ``function()`` call, beyond what existed before."""
-    tracemalloc.start()
-    tracemalloc.reset_peak()
-    before = tracemalloc.get_traced_memory()[0]
-    result = function()
-    peak = tracemalloc.get_traced_memory()[1]
-    tracemalloc.stop()
-    del result
-    return peak - before
-
-
-def bpfv(size: int, frames: int, vertices: int) -> float:
-    return 8.0 * size / (frames * vertices)
 
 
 def fmt_target(target: float) -> str:
@@ -128,9 +88,8 @@ class RatePoint:
     face_bpfv: float
     reference: tuple[float, float] | None  # (geometry, faces) from NOTES.md
     seconds: float
-    truncation_picks: tuple[tuple[int, int], tuple[int, int]] | None = (
-        None  # report's exact/bound_ranks
-    )
+    #: the report's exact_ranks and bound_ranks
+    truncation_picks: tuple[tuple[int, int], tuple[int, int]] | None = None
     bound_ranks: tuple[int, int] | None = None
     bound_bpfv: float | None = None
     bound_kg: float | None = None
@@ -237,7 +196,7 @@ def measure_speed(
     output = out_dir / f"{path.stem}.tkc"
 
     def end_to_end() -> None:
-        loaded = load_sequence(path, progress=False)
+        loaded = common.load(path)
         output.write_bytes(encode_with_report(loaded, target_kg=target).data)
 
     end_to_end_times = timed(end_to_end, repeat)
@@ -257,8 +216,8 @@ def measure_speed(
     cold_frames = iter(rng.integers(0, sequence.frame_count, size=repeat + 1))
     cold_times = timed(lambda: Decoder(data).frame(int(next(cold_frames))), repeat)
 
-    encode_peak = peak_bytes(lambda: encode_with_report(sequence, target_kg=target))
-    decode_peak = peak_bytes(lambda: Decoder(data).positions())
+    encode_peak = traced_peak(lambda: encode_with_report(sequence, target_kg=target))
+    decode_peak = traced_peak(lambda: Decoder(data).positions())
     return SpeedResult(
         sequence=path.name,
         vertices=sequence.vertex_count,
@@ -286,7 +245,10 @@ def main(argv: list[str] | None = None) -> int:
     """Run the benchmark and print the result; returns the process exit status."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument(
-        "sequences", nargs="*", type=Path, help="npz files or OBJ folders (default: shared data)"
+        "sequences",
+        nargs="*",
+        type=Path,
+        help="npz files, OBJ folders or 'sample' (default: shared data)",
     )
     parser.add_argument(
         "--targets",
@@ -316,50 +278,39 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("--repeat must be at least 1")
     if args.frames < 1:
         parser.error("--frames must be at least 1")
-    if any(not (t > 0) for t in args.targets + [args.speed_target]):
+    if any(not (t > 0) for t in [*args.targets, args.speed_target]):
         parser.error("KG targets must be positive")
     with_bound = not args.no_bound
 
-    skipped: list[str] = []
     if args.sequences:
-        paths = [path for path in args.sequences if path.exists()]
-        skipped = [f"{path}: not found" for path in args.sequences if not path.exists()]
+        found = [path for path in args.sequences if path.exists() or str(path) == common.SAMPLE]
+        skipped = [f"{path}: not found" for path in args.sequences if path not in found]
     else:
-        paths = [SHARED_DATA / name for name in DEFAULT_SEQUENCES if (SHARED_DATA / name).exists()]
-        skipped = [
-            f"{name}: not in {SHARED_DATA}"
-            for name in DEFAULT_SEQUENCES
-            if not (SHARED_DATA / name).exists()
-        ]
+        found, absent = common.in_shared_data(common.REAL_SEQUENCES)
+        skipped = [f"{path.name}: not in {common.SHARED_DATA}" for path in absent]
+    paths = found
     for message in skipped:
         print(f"skipped {message}", file=sys.stderr)
     if not paths:
         where = (
-            "none of the paths given exists" if args.sequences else f"none found in {SHARED_DATA}"
+            "none of the paths given exists"
+            if args.sequences
+            else f"none found in {common.SHARED_DATA}"
         )
         print(f"no sequences to measure: {where}", file=sys.stderr)
         return 2
 
     started = time.perf_counter()
     load_before = os.getloadavg()
-    print(
-        f"machine: {platform.platform()}, {platform.processor() or platform.machine()}, "
-        f"{os.cpu_count()} cores, Python {platform.python_version()}, numpy {np.__version__}, "
-        f"tuckercodec {tuckercodec.__version__}"
-    )
-    print(
-        f"command: python tools/bench_codec.py {' '.join(sys.argv[1:] if argv is None else argv)}".rstrip()
-    )
+    print(f"machine: {common.machine()}, tuckercodec {tuckercodec.__version__}")
+    print(f"command: {common.command('tools.bench_codec', argv)}")
     print(f"date: {datetime.datetime.now().astimezone().isoformat(timespec='seconds')}")
     print(f"load average at start (1, 5, 15 min): {', '.join(f'{x:.2f}' for x in load_before)}")
     for message in skipped:
         print(f"skipped {message}")
     print()
 
-    sequences = []
-    for path in paths:
-        sequence = load_sequence(path, progress=False)
-        sequences.append((path, sequence))
+    sequences = [(path, common.load(path)) for path in paths]
 
     # 1. rate ------------------------------------------------------------------------------
     print("## Rate: decoded KG error and whole-file size")
@@ -367,9 +318,10 @@ def main(argv: list[str] | None = None) -> int:
     print(
         "Decoded KG measured here as kg_error(original, decode(data)); bpfv counts the whole "
         "file; geometry = bpfv - FACE. Reference (NOTES.md) = geometry of the throwaway "
-        "script + zstd-19 on the plain triangle list. Bound = encode with select='bound' (the paper's "
-        "rank choice). Truncation only = the cheapest ranks whose truncation alone meets the "
-        "whole target, by the exact table / by the bound (the report's exact_ranks, bound_ranks)."
+        "script + zstd-19 on the plain triangle list. Bound = encode with select='bound' "
+        "(the paper's rank choice). Truncation only = the cheapest ranks whose truncation alone "
+        "meets the whole target, by the exact table / by the bound (the report's exact_ranks, "
+        "bound_ranks)."
     )
     print()
     header = (
@@ -442,8 +394,8 @@ def main(argv: list[str] | None = None) -> int:
     print(f"## Speed at KG {fmt_target(args.speed_target)}")
     print()
     print(
-        f"Median [min-max] of {args.repeat} runs after one warm-up. End to end = load_sequence from "
-        "disk + encode + bytes written to /tmp; encode = from the sequence in memory; open = "
+        f"Median [min-max] of {args.repeat} runs after one warm-up. End to end = load_sequence "
+        "from disk + encode + bytes written to /tmp; encode = from the sequence in memory; open = "
         "Decoder(data); decode all = open + positions(); one frame = from an opened decoder, "
         f"median [min-max] over {args.frames} random frames; cold = open + frame()."
     )
@@ -455,7 +407,8 @@ def main(argv: list[str] | None = None) -> int:
     print("|---|---|---|---|---|---|---|---|---|---|")
     for r in results:
         print(
-            f"| {r.sequence} | {r.vertices} | {r.frames} | {r.bpfv:.3f} | {spread(r.end_to_end, digits=2)} | "
+            f"| {r.sequence} | {r.vertices} | {r.frames} | {r.bpfv:.3f} | "
+            f"{spread(r.end_to_end, digits=2)} | "
             f"{spread(r.encode, digits=2)} | {spread(r.open, 1e3, 1)} | {spread(r.decode_all)} | "
             f"{spread(r.one_frame, 1e3, 2)} | {spread(r.one_frame_cold, 1e3, 1)} |"
         )
@@ -491,15 +444,17 @@ def main(argv: list[str] | None = None) -> int:
         one = statistics.median(samba.one_frame)
         cold = statistics.median(samba.one_frame_cold)
         print(
-            f"- samba end to end <= {TARGET_END_TO_END_S:g} s: {e2e:.2f} s, {verdict(e2e, TARGET_END_TO_END_S)}"
+            f"- samba end to end <= {TARGET_END_TO_END_S:g} s: {e2e:.2f} s, "
+            f"{verdict(e2e, TARGET_END_TO_END_S)}"
         )
         print(
             f"- samba decode all frames <= {TARGET_DECODE_ALL_S:g} s: {dec:.3f} s, "
             f"{verdict(dec, TARGET_DECODE_ALL_S)}"
         )
         print(
-            f"- samba one frame <= {TARGET_ONE_FRAME_S * 1e3:g} ms: {one * 1e3:.2f} ms from an opened "
-            f"decoder, {verdict(one, TARGET_ONE_FRAME_S)}; cold (open + frame) {cold * 1e3:.1f} ms, "
+            f"- samba one frame <= {TARGET_ONE_FRAME_S * 1e3:g} ms: {one * 1e3:.2f} ms from an "
+            f"opened decoder, {verdict(one, TARGET_ONE_FRAME_S)}; cold (open + frame) "
+            f"{cold * 1e3:.1f} ms, "
             f"{verdict(cold, TARGET_ONE_FRAME_S)}"
         )
     else:

@@ -5,38 +5,27 @@ frame, checking vertex counts and faces against the first frame, building the Me
 One untimed warm-up run first puts the files in the operating system's cache, so the timings
 measure parsing, not the disk. Prints Markdown ready to paste into BENCHMARKS.md.
 
-    python tools/bench_read.py                        # ../shared/data/horse-gallop
-    python tools/bench_read.py path/to/frames --repeat 9
+    python -m tools.bench_read                        # ../shared/data/horse-gallop
+    python -m tools.bench_read path/to/frames --repeat 9
 """
 
 from __future__ import annotations
 
 import argparse
-import os
-import platform
 import statistics
 import sys
-import time
 from pathlib import Path
 
-import numpy as np
-
+from tools import common
 from tuckercodec import load_sequence
 
-SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
-DEFAULT_FOLDER = SHARED_DATA / "horse-gallop"
+DEFAULT_FOLDER = common.SHARED_DATA / "horse-gallop"
 TARGET_SECONDS = 1.5  # the goal for horse gallop (48 frames, 32 MB) on a 2-core machine
 
 
 def time_loads(folder: Path, repeat: int) -> list[float]:
     """Wall times of ``repeat`` calls of ``load_sequence(folder)``, after one warm-up call."""
-    load_sequence(folder, progress=False)
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        load_sequence(folder, progress=False)
-        times.append(time.perf_counter() - start)
-    return times
+    return common.timed(lambda: load_sequence(folder, progress=False), repeat)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -49,25 +38,20 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if not args.folder.is_dir():
         print(
-            f"{args.folder} is not a folder (the default data lives in {SHARED_DATA})",
+            f"{args.folder} is not a folder (the default data lives in {common.SHARED_DATA})",
             file=sys.stderr,
         )
         return 2
     if args.repeat < 1:
         parser.error("--repeat must be at least 1")
 
-    sequence = load_sequence(args.folder, progress=False)
+    sequence = common.load(args.folder)
     size = sum((args.folder / name).stat().st_size for name in sequence.frame_names)
     times = time_loads(args.folder, args.repeat)
     median = statistics.median(times)
 
-    print(
-        f"machine: {platform.platform()}, {platform.processor() or platform.machine()}, "
-        f"{os.cpu_count()} cores, Python {platform.python_version()}, numpy {np.__version__}"
-    )
-    print(
-        f"command: python tools/bench_read.py {' '.join(sys.argv[1:] if argv is None else argv)}".rstrip()
-    )
+    print(f"machine: {common.machine()}")
+    print(f"command: {common.command('tools.bench_read', argv)}")
     print()
     print("| sequence | frames | vertices | faces | MB | median s | min s | max s | MB/s | runs |")
     print("|---|---|---|---|---|---|---|---|---|---|")

@@ -5,7 +5,7 @@ For each sequence (chicken and samba from ../shared/data by default, skipping ab
 npz / OBJ folder / ``sample`` given on the command line) it writes into the output folder:
 
 * ``NAME-fig1-rd.png``: reduction rate Θ against log KG: exact HOSVD front, the front the paper's
-  bound would build, PCA (drawn by :func:`tuckercodec.plots.plot_rd_curve`);
+  bound would build, PCA (drawn by :func:`tuckercodec.internal.plot_rd_curve`);
 * ``NAME-fig2-psi.png``: ψ = bound − exact KG against Θ in ten windows, as box plots (whiskers are
   min and max), over every truncation and along the exact rate-distortion front;
 * ``NAME-fig3-heatmaps.png``: log10 KG and log10 ψ over (i, k), with both readings of "the
@@ -16,17 +16,15 @@ All errors are KG errors with the Karni-Gotsman denominator (per-frame centroid)
 Rates are the paper's Θ = S / (3KF), S = i*K + 9 + k*F + 3*i*k stored floats, unless the column
 says bytes of a real tuckercodec file.
 
-    python tools/paper.py                          # chicken and samba, into results/paper/
-    python tools/paper.py sample --out /tmp/p      # the built-in cloth
-    python tools/paper.py seq.npz frames/ --force --no-encode
+    python -m tools.paper                          # chicken and samba, into results/paper/
+    python -m tools.paper sample --out /tmp/p      # the built-in cloth
+    python -m tools.paper seq.npz frames/ --force --no-encode
 """
 
 from __future__ import annotations
 
 import argparse
 import datetime
-import os
-import platform
 import re
 import sys
 import time
@@ -36,21 +34,29 @@ from pathlib import Path
 
 import numpy as np
 
-from tuckercodec import decode, load_sequence, metrics
-from tuckercodec.perceptual import STED_DEFINITION
-from tuckercodec.analysis import Analysis, Curve, analyze
-from tuckercodec.atomic import refuse_existing, write_atomic
-from tuckercodec.encoder import encode_with_report
-from tuckercodec.errors import TuckerCodecError
-from tuckercodec.hosvd import reconstruct
-from tuckercodec.plots import plot_rd_curve  # matplotlib itself is imported only to draw
-from tuckercodec.samples import sample_path
-from tuckercodec.sequence import MeshSequence
+from tools import common
+from tuckercodec import (
+    Analysis,
+    InputError,
+    MeshSequence,
+    TuckerCodecError,
+    analyze,
+    decode,
+    encode_with_report,
+    kg_error,
+    sted,
+)
+from tuckercodec.internal import (
+    KG_DEFINITION,
+    STED_DEFINITION,
+    Curve,
+    plot_rd_curve,  # matplotlib itself is imported only to draw
+    reconstruct,
+    refuse_existing,
+)
 
-REPO = Path(__file__).resolve().parents[1]
-SHARED_DATA = REPO.parent / "shared" / "data"
 DEFAULT_SEQUENCES = ("chicken.npz", "samba.npz")
-DEFAULT_OUT = REPO / "results" / "paper"  # /results/ is git-ignored
+DEFAULT_OUT = common.REPO / "results" / "paper"  # /results/ is git-ignored
 KG_TARGETS = (1.0, 0.5, 0.1, 0.05)
 RATE_POINTS = (0.05, 0.10)  # the paper's "acceptable" and "indistinguishable" sizes
 WINDOWS = 10  # Fig. 2: Θ in (0, 1] split into this many equal windows
@@ -213,7 +219,7 @@ class FileCost:
     bpfv: float
     raw_share: float  # bytes / raw float32 positions: the real "share of the original size"
     seconds: float
-    sted: float | str | None = None  # of the decoded file, when asked for and available
+    sted: float | str | None = None  # of the decoded file, when asked for (str: undefined)
 
 
 @dataclass(frozen=True)
@@ -225,10 +231,9 @@ class RateRow:
     floats: int
     rate: float
     kg: float
-    kg_temporal: (
-        float  # the same reconstruction, KG with each vertex's temporal mean (paper's formula)
-    )
-    sted: float | str | None  # None: tuckercodec.metrics has no sted yet
+    #: the same reconstruction, KG with each vertex's temporal mean (the paper's formula)
+    kg_temporal: float
+    sted: float | str  # str: why STED is undefined here (a point cloud has no edges)
     file: FileCost | None
 
 
@@ -244,9 +249,7 @@ def file_cost(
     quantization noise is rough in space, which STED weighs more than KG does)."""
     result = encode_with_report(sequence, target_kg=target, analysis=analysis)
     report = result.report
-    sted = None
-    if with_sted:
-        sted = sted_of(sequence, decode(result.data))
+    file_sted = sted_of(sequence, decode(result.data)) if with_sted else None
     return FileCost(
         report.ranks,
         report.kg,
@@ -254,7 +257,7 @@ def file_cost(
         report.bpfv,
         report.total_bytes / report.raw_float32_bytes,
         report.seconds,
-        sted,
+        file_sted,
     )
 
 
@@ -296,14 +299,13 @@ def reconstruction(sequence: MeshSequence, analysis: Analysis, i: int, k: int) -
     return MeshSequence(vertices=vertices, faces=sequence.faces)
 
 
-def sted_of(original: MeshSequence, approx: MeshSequence) -> float | str | None:
-    """STED if :mod:`tuckercodec.metrics` has it (another engineer is adding it), else None."""
-    from tuckercodec import sted
+def sted_of(original: MeshSequence, approx: MeshSequence) -> float | str:
+    """STED with its default parameters, or why it is undefined for this sequence (no faces,
+    a first frame of zero extent)."""
     try:
-        value = sted(original, approx)
-        return float(getattr(value, "value", value))  # a Sted record, or a plain number
-    except Exception as error:  # noqa: BLE001 - an API still being written: report, never stop the run
-        return f"failed: {type(error).__name__}: {error}"
+        return sted(original, approx).value
+    except InputError as error:
+        return f"n/a ({error})"
 
 
 def rate_rows(
@@ -325,7 +327,7 @@ def rate_rows(
                 int(front.floats[n]),
                 float(front.rate[n]),
                 float(front.kg[n]),
-                metrics.kg_error(sequence, approx, mean="temporal"),
+                kg_error(sequence, approx, mean="temporal"),
                 sted_of(sequence, approx),
                 file_cost(sequence, analysis, float(front.kg[n]), with_sted=True)
                 if encode
@@ -349,9 +351,8 @@ class Result:
     front_boxes: list[Box]
     beyond_one: int  # truncations with Θ > 1, outside the windows
     diagonal: dict[str, list[DiagonalWindow]]
-    front_distance: dict[
-        str, float
-    ]  # median distance of the exact front (Θ <= 1) from each diagonal
+    #: median distance of the exact front (Θ <= 1) from each reading of the diagonal
+    front_distance: dict[str, float]
     targets: list[TargetRow]
     rates: list[RateRow]
     figures: list[str] = field(default_factory=list)
@@ -359,33 +360,14 @@ class Result:
 
 
 # ------------------------------------------------------------------------------------------
-# figures (new plotting lives here: tuckercodec/plots.py is owned elsewhere)
-
-
-def _pyplot():
-    import matplotlib
-
-    matplotlib.use("Agg")  # files only
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def _save(fig, path: Path, force: bool) -> None:
-    plt = _pyplot()
-    try:
-        write_atomic(
-            path, lambda handle: fig.savefig(handle, format="png", dpi=110), overwrite=force
-        )
-    finally:
-        plt.close(fig)
+# figures (Fig. 1 is the package's plot_rd_curve; Fig. 2 and 3 are drawn only here)
 
 
 def draw_fig2(
     path: Path, name: str, all_boxes: list[Box], front_boxes: list[Box], force: bool
 ) -> None:
     """ψ box plots per Θ window; whiskers are min and max, like the printed table."""
-    plt = _pyplot()
+    plt = common.pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
     for ax, rows, label in (
         (axes[0], all_boxes, "every truncation (i, 3, k)"),
@@ -413,12 +395,12 @@ def draw_fig2(
     axes[0].set_ylabel(f"ψ = KG bound − KG exact (floored at {PSI_FLOOR:g})")
     fig.suptitle(f"{name}: ψ against reduction rate (paper's Fig. 2)")
     fig.tight_layout()
-    _save(fig, path, force)
+    common.save_png(fig, path, dpi=110, force=force)
 
 
 def draw_fig3(path: Path, name: str, analysis: Analysis, front: Curve, force: bool) -> None:
     """log10 KG and log10 ψ over (i, k), with i = k, i/R1 = k/R3 and the exact front on top."""
-    plt = _pyplot()
+    plt = common.pyplot()
     r1, r3 = analysis.max_ranks
     kg = analysis.kg_table()[1:, 1:]
     psi = analysis.psi_table()[1:, 1:]
@@ -448,7 +430,7 @@ def draw_fig3(path: Path, name: str, analysis: Analysis, front: Curve, force: bo
     axes[1].legend(loc="upper right", fontsize=7, framealpha=0.6)
     fig.suptitle(f"{name}: error and ψ over the ranks (paper's Fig. 3)")
     fig.tight_layout()
-    _save(fig, path, force)
+    common.save_png(fig, path, dpi=110, force=force)
 
 
 # ------------------------------------------------------------------------------------------
@@ -463,7 +445,8 @@ def _g(value: float | None, digits: int = 6) -> str:
 
 def _box_table(rows: list[Box]) -> list[str]:
     lines = [
-        "| Θ window | points | min ψ | q1 | median ψ | q3 | max ψ | median bound/exact | median KG exact |",
+        "| Θ window | points | min ψ | q1 | median ψ | q3 | max ψ | median bound/exact "
+        "| median KG exact |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
     for b in rows:
@@ -474,16 +457,17 @@ def _box_table(rows: list[Box]) -> list[str]:
     return lines
 
 
-def _sted_cell(value: float | str | None) -> str:
-    if value is None:
-        return "n/a (no tuckercodec.metrics.sted)"
+def _sted_cell(value: float | str) -> str:
     return value if isinstance(value, str) else _g(value, 4)
 
 
 def _file_cells(cost: FileCost | None) -> str:
     if cost is None:
         return "not encoded | | | "
-    return f"({cost.ranks[0]}, {cost.ranks[1]}) KG {_g(cost.kg, 4)} | {cost.total_bytes} | {cost.bpfv:.4f} | {100 * cost.raw_share:.3f} %"
+    return (
+        f"({cost.ranks[0]}, {cost.ranks[1]}) KG {_g(cost.kg, 4)} | {cost.total_bytes} | "
+        f"{cost.bpfv:.4f} | {100 * cost.raw_share:.3f} %"
+    )
 
 
 def summary_section(r: Result) -> list[str]:
@@ -492,8 +476,9 @@ def summary_section(r: Result) -> list[str]:
         f"## {r.name}",
         "",
         (
-            f"Source `{r.source}`: F = {r.frames} frames, K = {r.vertices} vertices; ranks 1..{r.max_ranks[0]} "
-            f"× 1..{r.max_ranks[1]}; analyze {r.seconds_analyze:.2f} s, whole sequence {r.seconds_total:.2f} s."
+            f"Source `{r.source}`: F = {r.frames} frames, K = {r.vertices} vertices; "
+            f"ranks 1..{r.max_ranks[0]} × 1..{r.max_ranks[1]}; analyze {r.seconds_analyze:.2f} s, "
+            f"whole sequence {r.seconds_total:.2f} s."
         ),
         "",
         "Figures: " + ", ".join(f"[{f}]({f})" for f in r.figures),
@@ -517,15 +502,16 @@ def summary_section(r: Result) -> list[str]:
     for t in r.targets:
         extra = 100.0 * (t.bound_floats - t.exact_floats) / t.exact_floats
         lines.append(
-            f"| {_g(t.target)} | ({t.exact[0]}, {t.exact[1]}) | {t.exact_floats} | {_g(t.exact_kg)} | "
-            f"{_g(t.exact_kg_bound)} | {_g(t.exact_kg_bound / t.exact_kg)} | {_g(t.exact_kg_bound - t.exact_kg)} | "
-            f"({t.bound[0]}, {t.bound[1]}) | {t.bound_floats} | {_g(t.bound_kg)} | {extra:+.3f} % |"
+            f"| {_g(t.target)} | ({t.exact[0]}, {t.exact[1]}) | {t.exact_floats} | "
+            f"{_g(t.exact_kg)} | {_g(t.exact_kg_bound)} | {_g(t.exact_kg_bound / t.exact_kg)} | "
+            f"{_g(t.exact_kg_bound - t.exact_kg)} | ({t.bound[0]}, {t.bound[1]}) | "
+            f"{t.bound_floats} | {_g(t.bound_kg)} | {extra:+.3f} % |"
         )
     lines += [
         "",
         (
-            f"### (b) Is ψ small near the diagonal? Per Θ window: nearest {NEAR_SHARE:.0%} of the window's "
-            f"truncations against the farthest {FAR_SHARE:.0%}"
+            f"### (b) Is ψ small near the diagonal? Per Θ window: nearest {NEAR_SHARE:.0%} of "
+            f"the window's truncations against the farthest {FAR_SHARE:.0%}"
         ),
         "",
     ]
@@ -535,8 +521,8 @@ def summary_section(r: Result) -> list[str]:
         lines += [
             (
                 f"Reading `{reading}` (distance {unit}): median ψ is smaller near the diagonal in "
-                f"{smaller} of {len(rows)} windows; the exact front (Θ ≤ 1) lies at median distance "
-                f"{_g(r.front_distance[reading], 4)}."
+                f"{smaller} of {len(rows)} windows; the exact front (Θ ≤ 1) lies at median "
+                f"distance {_g(r.front_distance[reading], 4)}."
             ),
             "",
             (
@@ -563,44 +549,28 @@ def summary_section(r: Result) -> list[str]:
     for row in r.rates:
         file_sted = _sted_cell(row.file.sted) if row.file is not None else ""
         lines.append(
-            f"| {row.theta:.2f} | ({row.ranks[0]}, {row.ranks[1]}) | {row.floats} | {_g(row.rate, 4)} | "
-            f"{_g(row.kg)} | {_g(row.kg_temporal)} | {_sted_cell(row.sted)} | {_file_cells(row.file)} | {file_sted} |"
+            f"| {row.theta:.2f} | ({row.ranks[0]}, {row.ranks[1]}) | {row.floats} | "
+            f"{_g(row.rate, 4)} | {_g(row.kg)} | {_g(row.kg_temporal)} | {_sted_cell(row.sted)} | "
+            f"{_file_cells(row.file)} | {file_sted} |"
         )
     lines += [
         "",
         "### (d) Does HOSVD beat PCA? Cheapest of each at the KG targets",
         "",
         (
-            "| target KG | HOSVD (i, k) | S HOSVD | Θ HOSVD | PCA rank | S PCA | Θ PCA | PCA / HOSVD floats "
-            "| tuckercodec file | bytes | bpfv | file / raw float32 |"
+            "| target KG | HOSVD (i, k) | S HOSVD | Θ HOSVD | PCA rank | S PCA | Θ PCA "
+            "| PCA / HOSVD floats | tuckercodec file | bytes | bpfv | file / raw float32 |"
         ),
         "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for t in r.targets:
         lines.append(
-            f"| {_g(t.target)} | ({t.exact[0]}, {t.exact[1]}) | {t.exact_floats} | {_g(t.exact_rate, 4)} | "
-            f"{t.pca_rank} | {t.pca_floats} | {_g(t.pca_rate, 4)} | {t.pca_floats / t.exact_floats:.3f} | "
-            f"{_file_cells(t.file)} |"
+            f"| {_g(t.target)} | ({t.exact[0]}, {t.exact[1]}) | {t.exact_floats} | "
+            f"{_g(t.exact_rate, 4)} | {t.pca_rank} | {t.pca_floats} | {_g(t.pca_rate, 4)} | "
+            f"{t.pca_floats / t.exact_floats:.3f} | {_file_cells(t.file)} |"
         )
     lines.append("")
     return lines
-
-
-def machine() -> str:
-    """CPU model, cores, OS, Python and numpy versions."""
-    model = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8") as handle:
-            for line in handle:
-                if line.startswith("model name"):
-                    model = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    return (
-        f"{model}, {os.cpu_count()} cores, {platform.system()} {platform.release()}, "
-        f"Python {platform.python_version()}, numpy {np.__version__}"
-    )
 
 
 def summary(results: list[Result], command: str, seconds: float, encode: bool) -> str:
@@ -609,18 +579,17 @@ def summary(results: list[Result], command: str, seconds: float, encode: bool) -
         "# The seed paper's experiments (Romaszewski and Głomb 2016), reproduced",
         "",
         f"- date: {datetime.date.today().isoformat()}",
-        f"- machine: {machine()}",
+        f"- machine: {common.machine()}",
         f"- command: `{command}`",
         f"- total time: {seconds:.1f} s"
         + ("" if encode else " (no real files encoded: --no-encode)"),
-        f"- errors: {metrics.KG_DEFINITION}, in percent, unless a column says otherwise;",
+        f"- errors: {KG_DEFINITION}, in percent, unless a column says otherwise;",
         "  ψ = the paper's bound (discarded mode-1 plus mode-3 energy) minus the exact KG error.",
-        "- rates: Θ = S / (3KF), S = i·K + 9 + k·F + 3·i·k floats (PCA: r·(3K + F)); files are real",
-        "  tuckercodec files (exact ranks, quantized, connectivity included), raw float32 = 12·K·F bytes.",
-        "- STED: "
-        + (
-            STED_DEFINITION
-        ),
+        "- rates: Θ = S / (3KF), S = i·K + 9 + k·F + 3·i·k floats (PCA: r·(3K + F)); "
+        "files are real",
+        "  tuckercodec files (exact ranks, quantized, connectivity included), raw float32 = "
+        "12·K·F bytes.",
+        f"- STED: {STED_DEFINITION}",
         "",
     ]
     for result in results:
@@ -695,24 +664,18 @@ def output_names(name: str) -> tuple[str, str, str]:
 def sources(given: list[str]) -> list[tuple[str, str | Path]]:
     """(name, source) for each sequence to run; absent defaults are skipped with a message."""
     if not given:
-        found = []
-        for file in DEFAULT_SEQUENCES:
-            path = SHARED_DATA / file
-            if path.exists():
-                found.append((path.stem, path))
-            else:
-                print(f"skipping {file}: {path} is absent", file=sys.stderr)
-        return found
+        present, absent = common.in_shared_data(DEFAULT_SEQUENCES)
+        for path in absent:
+            print(f"skipping {path.name}: {path} is absent", file=sys.stderr)
+        return [(path.stem, path) for path in present]
     out: list[tuple[str, str | Path]] = []
+    taken: set[str] = set()
     for item in given:
-        stem = "sample" if item == "sample" else Path(item.rstrip("/")).stem
+        stem = common.SAMPLE if item == common.SAMPLE else Path(item.rstrip("/")).stem
         # File-name safe (a glob's stem is "*"), so figure names are plain.
         name = re.sub(r"[^A-Za-z0-9._-]+", "_", stem).strip("_") or "sequence"
-        taken = {n for n, _ in out}
-        base, n = name, 2
-        while name in taken:  # two inputs with one stem must not share figure names
-            name, n = f"{base}-{n}", n + 1
-        out.append((name, item))
+        # two inputs with one stem must not share figure names
+        out.append((common.unique_name(name, taken), item))
     return out
 
 
@@ -748,12 +711,11 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--no-encode", action="store_true", help="skip the real tuckercodec files")
     args = parser.parse_args(argv)
-    argv_text = " ".join(sys.argv[1:] if argv is None else argv)
-    command = f"python tools/paper.py {argv_text}".rstrip()
+    command = common.command("tools.paper", argv)
 
     todo = sources(args.sequences)
     if not todo:
-        print(f"no sequences given and none found in {SHARED_DATA}", file=sys.stderr)
+        print(f"no sequences given and none found in {common.SHARED_DATA}", file=sys.stderr)
         return 2
     out: Path = args.out
     outputs = [out / "summary.md"] + [out / f for name, _ in todo for f in output_names(name)]
@@ -767,10 +729,9 @@ def main(argv: list[str] | None = None) -> int:
     start = time.perf_counter()
     results = []
     for name, source in todo:
-        path = sample_path() if source == "sample" else source
         print(f"{name}: reading {source}", flush=True)
         try:
-            sequence = load_sequence(path, progress=False)
+            sequence = common.load(source)
             results.append(
                 measure(
                     name, str(source), sequence, out, args.force, not args.no_encode, args.targets
@@ -782,7 +743,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{name}: done in {results[-1].seconds_total:.1f} s", flush=True)
     seconds = time.perf_counter() - start
     text = summary(results, command, seconds, not args.no_encode)
-    write_atomic(out / "summary.md", text.encode("utf-8"), overwrite=args.force)
+    common.write_text(out / "summary.md", text, args.force)
     print(f"wrote {out / 'summary.md'} and {3 * len(results)} figures in {seconds:.1f} s")
     return 0
 

@@ -1,4 +1,4 @@
-"""The coders that tools/bench.py compares, each behind one small interface.
+"""The coders that :mod:`tools.bench` compares, each behind one small interface.
 
 A coder turns a :class:`~tuckercodec.MeshSequence` into bytes and back. Every size counts
 everything a user would have to keep to get the frames back: the positions, the connectivity
@@ -36,8 +36,6 @@ The coders:
 from __future__ import annotations
 
 import atexit
-import ctypes
-import gc
 import io
 import math
 import shutil
@@ -45,8 +43,7 @@ import struct
 import subprocess
 import tempfile
 import time
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -54,15 +51,8 @@ from typing import Any
 import numpy as np
 import zstandard
 
-from tuckercodec import MeshSequence, decode
-from tuckercodec.encoder import encode_with_report
-from tuckercodec.format import faces as connectivity
-from tuckercodec.format import qmat as matrices
-from tuckercodec.format import sections as format_sections
-from tuckercodec.format import streams
-from tuckercodec.format.container import pack_container, parse_container
-from tuckercodec.hosvd import centre_frames
-from tuckercodec.topology import mesh_parents
+from tools.common import resident_peak
+from tuckercodec import MeshSequence, decode, encode_with_report, internal
 
 ZSTD_LEVEL = 19
 #: Bytes of framing per frame for coders that store one buffer per frame: its length, uint32.
@@ -96,51 +86,6 @@ class Trial:
     retime: Callable[[], tuple[float, float, int]] | None = field(repr=False, default=None)
 
 
-def _status_kib(field_name: str) -> int | None:
-    try:
-        with open("/proc/self/status", encoding="ascii") as handle:
-            for line in handle:
-                if line.startswith(field_name + ":"):
-                    return int(line.split()[1])
-    except OSError:
-        return None
-    return None
-
-
-def _release_free_memory() -> None:
-    """Hand freed heap back to the system, so that the next block's allocations show up as new
-    resident memory instead of reusing pages an earlier trial left resident."""
-    gc.collect()
-    try:
-        ctypes.CDLL("libc.so.6").malloc_trim(0)
-    except (OSError, AttributeError):  # not glibc: the figure may then be an underestimate
-        pass
-
-
-@contextmanager
-def peak_memory() -> Iterator[dict[str, int | None]]:
-    """Measure the peak resident memory of the block above the resident memory at its start.
-
-    Linux's high-water mark (VmHWM) is reset by writing 5 to /proc/self/clear_refs, so native
-    allocations (Draco, SZ3, zstd) are counted too, which tracemalloc cannot see. Elsewhere the
-    result is None.
-    """
-    result: dict[str, int | None] = {"peak": None}
-    _release_free_memory()
-    try:
-        with open("/proc/self/clear_refs", "w", encoding="ascii") as handle:
-            handle.write("5")
-        start = _status_kib("VmRSS")
-    except OSError:
-        start = None
-    try:
-        yield result
-    finally:
-        high = _status_kib("VmHWM")
-        if start is not None and high is not None:
-            result["peak"] = max(0, high - start) * 1024
-
-
 def timed_trial(
     coder: str,
     setting: str,
@@ -154,7 +99,7 @@ def timed_trial(
 
     ``untimed``, if given, turns what ``decode_`` returned into positions in the input's vertex
     order outside the timing: work that only the benchmark needs."""
-    with peak_memory() as memory:
+    with resident_peak() as memory:
         start = time.perf_counter()
         encoded, connectivity_bytes, state = encode()
         encode_seconds = time.perf_counter() - start
@@ -170,10 +115,24 @@ def timed_trial(
         size, _, again = encode()
         middle = time.perf_counter()
         decode_(again)
-        return middle - start, time.perf_counter() - middle, size if isinstance(size, int) else len(size)
+        return (
+            middle - start,
+            time.perf_counter() - middle,
+            size if isinstance(size, int) else len(size),
+        )
 
-    return Trial(coder, setting, total, connectivity_bytes, encode_seconds, decode_seconds,
-                 memory["peak"], decoded, target, retime=retime)
+    return Trial(
+        coder,
+        setting,
+        total,
+        connectivity_bytes,
+        encode_seconds,
+        decode_seconds,
+        memory["peak"],
+        decoded,
+        target,
+        retime=retime,
+    )
 
 
 def kg_of(centred_norm: float, original: np.ndarray, decoded: np.ndarray) -> float:
@@ -230,7 +189,7 @@ class Coder:
     """A coder's name, what it needs, and how it produces its trials."""
 
     name: str
-    run: Callable[[MeshSequence, list[float], "Context"], list[Trial]]
+    run: Callable[[MeshSequence, list[float], Context], list[Trial]]
     needs: str = ""  # the import or binary it needs, for the skip message
 
     def unavailable(self) -> str | None:
@@ -258,8 +217,8 @@ class Context:
     bits: list[int]
 
     @classmethod
-    def of(cls, sequence: MeshSequence, bits: list[int]) -> "Context":
-        tensor, centroids = centre_frames(sequence.vertices)
+    def of(cls, sequence: MeshSequence, bits: list[int]) -> Context:
+        tensor, centroids = internal.centre_frames(sequence.vertices)
         return cls(sequence, centroids, tensor, float(np.linalg.norm(tensor)), bits)
 
     def kg(self, decoded: np.ndarray) -> float:
@@ -300,50 +259,80 @@ class _PcaModel:
         self.coefficients = left * self.sigma[None, :]  # F x r: frame f = sum_j A[f, j] * basis_j
         self.basis = right_t  # r x 3K, orthonormal rows
         energy = self.sigma**2
-        self.tails = np.concatenate([np.cumsum(energy[::-1])[::-1], [0.0]])  # tails[r]: rank r's error
-        self.parents = mesh_parents(sequence.faces, vertices)
-        self.faces = connectivity.encode_faces(sequence.faces)
+        # tails[r]: the squared error of rank r
+        self.tails = np.concatenate([np.cumsum(energy[::-1])[::-1], [0.0]])
+        self.parents = internal.mesh_parents(sequence.faces, vertices)
+        self.faces = internal.faces.encode_faces(sequence.faces)
 
-    def quantize(self, rank: int, step: float) -> tuple[matrices.QuantizedMatrix, ...]:
+    def quantize(self, rank: int, step: float) -> tuple[internal.qmat.QuantizedMatrix, ...]:
         root = math.sqrt(step)
         vertices = self.sequence.vertex_count
         sigma = np.maximum(self.sigma[:rank], np.finfo(float).tiny)
         # each basis vector as three columns (x, y, z) of a K-row matrix, predicted over the mesh
-        basis = self.basis[:rank].reshape(rank, vertices, 3).transpose(1, 0, 2).reshape(vertices, 3 * rank)
-        basis_q = matrices.quantize(basis, np.repeat(root / sigma, 3))
-        coefficients_q = matrices.quantize(self.coefficients[:, :rank], np.full(rank, root))
-        centroids_q = matrices.quantize(self.context.centroids, np.full(3, root / math.sqrt(vertices)))
+        basis = (
+            self.basis[:rank]
+            .reshape(rank, vertices, 3)
+            .transpose(1, 0, 2)
+            .reshape(vertices, 3 * rank)
+        )
+        basis_q = internal.qmat.quantize(basis, np.repeat(root / sigma, 3))
+        coefficients_q = internal.qmat.quantize(self.coefficients[:, :rank], np.full(rank, root))
+        centroids_q = internal.qmat.quantize(
+            self.context.centroids, np.full(3, root / math.sqrt(vertices))
+        )
         return basis_q, coefficients_q, centroids_q
 
     def positions(self, rank: int, basis_q, coefficients_q, centroids_q) -> np.ndarray:
         vertices = self.sequence.vertex_count
-        basis = basis_q.values().reshape(vertices, rank, 3).transpose(1, 0, 2).reshape(rank, 3 * vertices)
+        basis = (
+            basis_q.values()
+            .reshape(vertices, rank, 3)
+            .transpose(1, 0, 2)
+            .reshape(rank, 3 * vertices)
+        )
         frames = coefficients_q.values() @ basis
         return frames.reshape(-1, vertices, 3) + centroids_q.values()[:, None, :]
 
     def pack(self, rank: int, parts, level: int) -> bytes:
         basis_q, coefficients_q, centroids_q = parts
         face_params, face_payload = self.faces
-        sections = [(format_sections.entry("FACE", face_params), face_payload)]
-        for section_id, matrix, parents in (("CENT", centroids_q, None), ("COEF", coefficients_q, None),
-                                            ("BASE", basis_q, self.parents)):
-            params, payload = matrices.encode_matrix(matrix, parents, level=level)
-            entry = {"id": section_id, "critical": True, "codec": format_sections.QMAT, **params}
-            sections.append((entry, payload))
-        header = {"vertices": self.sequence.vertex_count, "frames": self.sequence.frame_count,
-                  "pca_rank": rank, "encoder": "tools/peers.py PCA baseline"}
-        return pack_container(header, sections)
+        known = internal.sections.entry  # the entry of a section this codec defines
+        qmat_entry = {"critical": True, "codec": internal.sections.QMAT}  # PCA's own sections
+        centroid_params, centroid_payload = internal.qmat.encode_matrix(
+            centroids_q, None, level=level
+        )
+        sections = [
+            (known("FACE", face_params), face_payload),
+            (known("CENT", centroid_params), centroid_payload),
+        ]
+        for section_id, matrix, parents in (
+            ("COEF", coefficients_q, None),
+            ("BASE", basis_q, self.parents),
+        ):
+            params, payload = internal.qmat.encode_matrix(matrix, parents, level=level)
+            sections.append(({"id": section_id, **qmat_entry, **params}, payload))
+        header = {
+            "vertices": self.sequence.vertex_count,
+            "frames": self.sequence.frame_count,
+            "pca_rank": rank,
+            "encoder": "tools/peers.py PCA baseline",
+        }
+        return internal.pack_container(header, sections)
 
     def unpack(self, data: bytes) -> np.ndarray:
         """Decode a file written by :meth:`pack` from its bytes alone (CRCs checked)."""
-        container = parse_container(data)
+        container = internal.parse_container(data)
         rank = container.header["pca_rank"]
 
-        def matrix(section_id: str, parents: np.ndarray | None) -> matrices.QuantizedMatrix:
+        def matrix(section_id: str, parents: np.ndarray | None) -> internal.qmat.QuantizedMatrix:
             entry = container.section(section_id)
-            return matrices.decode_matrix(container.payload(data, entry), entry.params, parents, section_id)
+            return internal.qmat.decode_matrix(
+                container.payload(data, entry), entry.params, parents, section_id
+            )
 
-        return self.positions(rank, matrix("BASE", self.parents), matrix("COEF", None), matrix("CENT", None))
+        return self.positions(
+            rank, matrix("BASE", self.parents), matrix("COEF", None), matrix("CENT", None)
+        )
 
     def encode(self, target: float) -> bytes:
         """The smallest file found whose decoded KG error is at most ``target``."""
@@ -357,13 +346,13 @@ class _PcaModel:
                 continue
             step = 12.0 * room / (3 * vertices * rank + frames * rank + 3 * frames)
             rank, step, parts = self._meet(rank, step, limit2)
-            size = len(self.pack(rank, parts, streams.SEARCH_LEVEL))
+            size = len(self.pack(rank, parts, internal.streams.SEARCH_LEVEL))
             if best is None or size < best[0]:
                 best = (size, rank, step)
         if best is None:
             raise ValueError(f"PCA cannot meet KG {target} (the target is within rounding of zero)")
         _, rank, step = best
-        return self.pack(rank, self.quantize(rank, step), ZSTD_LEVEL)
+        return self.pack(rank, self.quantize(rank, step), internal.streams.DEFAULT_LEVEL)
 
     def _meet(self, rank: int, step: float, limit2: float):
         """Shrink D until the decoded squared error is within ``limit2``."""
@@ -382,7 +371,7 @@ class _PcaModel:
 def run_pca(sequence: MeshSequence, targets: list[float], context: Context) -> list[Trial]:
     # The SVD is the same for every target: made once, its time added to every encode's, and
     # its peak memory taken into every trial's.
-    with peak_memory() as memory:
+    with resident_peak() as memory:
         start = time.perf_counter()
         model = _PcaModel(sequence, context)
         svd_seconds = time.perf_counter() - start
@@ -392,7 +381,9 @@ def run_pca(sequence: MeshSequence, targets: list[float], context: Context) -> l
             data = model.encode(target)
             return data, len(model.faces[1]), data
 
-        trial = timed_trial("pca", f"KG<={target:g}", encode, lambda data: model.unpack(data), target)
+        trial = timed_trial(
+            "pca", f"KG<={target:g}", encode, lambda data: model.unpack(data), target
+        )
         trial.setup_seconds = svd_seconds
         if trial.peak_bytes is not None and memory["peak"] is not None:
             trial.peak_bytes = max(trial.peak_bytes, memory["peak"])
@@ -418,16 +409,25 @@ def _run_draco(sequence: MeshSequence, context: Context, *, with_faces: bool) ->
     # the fixed connectivity makes the same in every frame (up to vertices at equal positions,
     # which are interchangeable), and pays once for the permutation back: log2(K!) bits, the
     # least any coding of a permutation can take.
-    permutation_bytes = math.ceil(math.lgamma(sequence.vertex_count + 1) / math.log(2) / 8) if with_faces else 0
+    permutation_bytes = (
+        math.ceil(math.lgamma(sequence.vertex_count + 1) / math.log(2) / 8) if with_faces else 0
+    )
 
     def trial_at(bits: int) -> Trial:
         def encode() -> tuple[int, int | None, list[bytes]]:
             buffers = [
-                DracoPy.encode(frame, triangles if with_faces else None, quantization_bits=bits,
-                               compression_level=10, preserve_order=not with_faces)
+                DracoPy.encode(
+                    frame,
+                    triangles if with_faces else None,
+                    quantization_bits=bits,
+                    compression_level=10,
+                    preserve_order=not with_faces,
+                )
                 for frame in vertices
             ]
-            total = sum(len(b) for b in buffers) + FRAME_LENGTH_BYTES * len(buffers) + permutation_bytes
+            total = (
+                sum(len(b) for b in buffers) + FRAME_LENGTH_BYTES * len(buffers) + permutation_bytes
+            )
             faces = None
             if not with_faces:
                 faces = len(faces_once(sequence))
@@ -435,12 +435,16 @@ def _run_draco(sequence: MeshSequence, context: Context, *, with_faces: bool) ->
             return total, faces, buffers
 
         def decode_(buffers: list[bytes]) -> list[np.ndarray]:
-            return [np.asarray(DracoPy.decode(buffer).points, dtype=np.float64) for buffer in buffers]
+            return [
+                np.asarray(DracoPy.decode(buffer).points, dtype=np.float64) for buffer in buffers
+            ]
 
         def in_input_order(frames: list[np.ndarray]) -> np.ndarray:
             if not with_faces:  # kept in order: nothing to match, and no reordering is allowed
                 return np.stack(frames)
-            return np.stack([_match_vertices(vertices[f], points, name) for f, points in enumerate(frames)])
+            return np.stack(
+                [_match_vertices(vertices[f], points, name) for f, points in enumerate(frames)]
+            )
 
         return timed_trial(name, f"{bits} bits", encode, decode_, untimed=in_input_order)
 
@@ -468,8 +472,15 @@ def run_meshopt(sequence: MeshSequence, targets: list[float], context: Context) 
     optimised = np.empty_like(indices)
     if indices.size:
         meshoptimizer.optimize_vertex_cache(optimised, indices, vertex_count=vertices)
-    index_bytes = zstd_bytes(meshoptimizer.encode_index_buffer(np.asarray(optimised, dtype=np.uint32),
-                                                               vertex_count=vertices)) if indices.size else b""
+    index_bytes = (
+        zstd_bytes(
+            meshoptimizer.encode_index_buffer(
+                np.asarray(optimised, dtype=np.uint32), vertex_count=vertices
+            )
+        )
+        if indices.size
+        else b""
+    )
 
     def trial_at(bits: int) -> Trial:
         step = extent / ((1 << bits) - 1)
@@ -497,7 +508,9 @@ def run_meshopt(sequence: MeshSequence, targets: list[float], context: Context) 
                 offset += 4
                 # Ask for the default float32 (vertices, 2) and view it as uint16: the package's
                 # dtype=np.uint16 allocates vertices, not vertices * 4, entries and overruns it.
-                data = meshoptimizer.decode_vertex_buffer(vertices, 8, raw[offset:offset + length])
+                data = meshoptimizer.decode_vertex_buffer(
+                    vertices, 8, raw[offset : offset + length]
+                )
                 offset += length
                 q = np.ascontiguousarray(data).view(np.uint16).reshape(vertices, 4)
                 out[f] = q[:, :3] * unit + np.asarray(origin)
@@ -531,7 +544,9 @@ def _search_bound(
             return len(payload) + len(centroid_bytes) + len(faces) + 64, len(faces), payload
 
         def decode_(payload: bytes) -> np.ndarray:
-            centroids = np.frombuffer(zstandard.ZstdDecompressor().decompress(centroid_bytes), "<f4")
+            centroids = np.frombuffer(
+                zstandard.ZstdDecompressor().decompress(centroid_bytes), "<f4"
+            )
             return uncentre(decompress(payload), centroids.reshape(-1, 3).astype(np.float64))
 
         trial = timed_trial(name, label(bound), encode, decode_, target)
@@ -598,7 +613,9 @@ def run_sz3(sequence: MeshSequence, targets: list[float], context: Context) -> l
     trials = []
     for target in targets:
         guess = target / 100.0 * context.centred_norm  # the L2 norm of the error a KG target allows
-        trial = _search_bound("sz3", target, context, guess, compress, decompress, lambda b: f"L2 <= {b:.3g}")
+        trial = _search_bound(
+            "sz3", target, context, guess, compress, decompress, lambda b: f"L2 <= {b:.3g}"
+        )
         if trial is not None:
             trials.append(trial)
     return trials
@@ -616,7 +633,9 @@ def run_zfp(sequence: MeshSequence, targets: list[float], context: Context) -> l
     trials = []
     for target in targets:
         guess = 4.0 * _rms_error(context, target)
-        trial = _search_bound("zfp", target, context, guess, compress, decompress, lambda b: f"tol {b:.3g}")
+        trial = _search_bound(
+            "zfp", target, context, guess, compress, decompress, lambda b: f"tol {b:.3g}"
+        )
         if trial is not None:
             trials.append(trial)
     return trials
@@ -638,20 +657,48 @@ def run_tthresh(sequence: MeshSequence, targets: list[float], context: Context) 
     context.tensor.tofile(raw)  # C order, time fastest: TTHRESH's first size varies fastest
 
     def compress(bound: float) -> bytes:
-        subprocess.run([binary, "-i", str(raw), "-t", "double", "-s", str(frames), str(three), str(k),
-                        "-e", repr(bound), "-c", str(compressed)],
-                       check=True, capture_output=True, timeout=3600)
+        subprocess.run(
+            [
+                binary,
+                "-i",
+                str(raw),
+                "-t",
+                "double",
+                "-s",
+                str(frames),
+                str(three),
+                str(k),
+                "-e",
+                repr(bound),
+                "-c",
+                str(compressed),
+            ],
+            check=True,
+            capture_output=True,
+            timeout=3600,
+        )
         return compressed.read_bytes()
 
     def decompress(payload: bytes) -> np.ndarray:
         compressed.write_bytes(payload)
-        subprocess.run([binary, "-c", str(compressed), "-o", str(restored)],
-                       check=True, capture_output=True, timeout=3600)
+        subprocess.run(
+            [binary, "-c", str(compressed), "-o", str(restored)],
+            check=True,
+            capture_output=True,
+            timeout=3600,
+        )
         return np.fromfile(restored, dtype=np.float64).reshape(context.tensor.shape)
 
     for target in targets:
-        trial = _search_bound("tthresh", target, context, target / 100.0, compress, decompress,
-                              lambda b: f"-e {b:.3g}")
+        trial = _search_bound(
+            "tthresh",
+            target,
+            context,
+            target / 100.0,
+            compress,
+            decompress,
+            lambda b: f"-e {b:.3g}",
+        )
         if trial is not None:
             trials.append(trial)
     return trials

@@ -1,29 +1,15 @@
-"""tools/paper.py on the built-in sample: it writes its figures and summary, the summary's numbers
+"""tools.paper on the built-in sample: it writes its figures and summary, the summary's numbers
 agree with analyze() (recomputed here, never hard-coded), and it refuses to overwrite."""
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-from tuckercodec import analyze, load_sequence
-from tuckercodec.samples import sample_path
+from tools import common, paper
+from tuckercodec import analyze
 
-TOOL = Path(__file__).resolve().parents[1] / "tools" / "paper.py"
 TARGETS = (0.5,)  # one target: the encode path is covered, the test stays quick
-
-
-def _tool():
-    """Import tools/paper.py (tools/ is not a package)."""
-    spec = importlib.util.spec_from_file_location("paper_tool", TOOL)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up there
-    spec.loader.exec_module(module)
-    return module
 
 
 def _table(summary: str, heading: str) -> list[list[str]]:
@@ -48,33 +34,32 @@ def _ranks(cell: str) -> tuple[int, int]:
 @pytest.fixture(scope="module")
 def run(tmp_path_factory):
     out = tmp_path_factory.mktemp("paper")
-    tool = _tool()
-    code = tool.main(["sample", "--out", str(out), "--targets", ",".join(map(str, TARGETS))])
+    code = paper.main(["sample", "--out", str(out), "--targets", ",".join(map(str, TARGETS))])
     assert code == 0
-    return tool, out, (out / "summary.md").read_text(encoding="utf-8")
+    return out, (out / "summary.md").read_text(encoding="utf-8")
 
 
 @pytest.fixture(scope="module")
 def analysis():
-    return analyze(load_sequence(sample_path(), progress=False))
+    return analyze(common.load(common.SAMPLE))
 
 
 def test_figures_and_summary_written(run):
-    _, out, summary = run
+    out, summary = run
     for name in ("sample-fig1-rd.png", "sample-fig2-psi.png", "sample-fig3-heatmaps.png"):
         data = (out / name).read_bytes()
         assert data.startswith(b"\x89PNG\r\n\x1a\n") and len(data) > 1000, name
-    assert "## sample" in summary and "command: `python tools/paper.py sample" in summary
+    assert "## sample" in summary and "command: `python -m tools.paper sample" in summary
     assert not list(out.glob(".*.tmp"))  # atomic writes leave no temporary file
 
 
 def test_targets_agree_with_analysis(run, analysis):
-    _, _, summary = run
+    _, summary = run
     claim_a = _table(summary, "### (a)")
     claim_d = _table(summary, "### (d)")
     assert len(claim_a) == len(claim_d) == len(TARGETS)
     pca = analysis.pca_curve()
-    for target, row_a, row_d in zip(TARGETS, claim_a, claim_d):
+    for target, row_a, row_d in zip(TARGETS, claim_a, claim_d, strict=True):
         exact, bound = analysis.cheapest(target), analysis.cheapest(target, select="bound")
         assert float(row_a[0]) == target
         assert _ranks(row_a[1]) == (exact.i, exact.k) and int(row_a[2]) == exact.floats
@@ -88,7 +73,7 @@ def test_targets_agree_with_analysis(run, analysis):
 
 
 def test_psi_boxes_agree_with_analysis(run, analysis):
-    _, _, summary = run
+    _, summary = run
     rows = _table(summary, "### Fig. 2: ψ by Θ window, every truncation")
     assert len(rows) == 10
     rate = analysis.rate_table()[1:, 1:].ravel()
@@ -102,7 +87,19 @@ def test_psi_boxes_agree_with_analysis(run, analysis):
 
 
 def test_refuses_to_overwrite(run, capsys):
-    tool, out, summary = run
-    assert tool.main(["sample", "--out", str(out), "--no-encode"]) == 1
+    out, summary = run
+    assert paper.main(["sample", "--out", str(out), "--no-encode"]) == 1
     assert "already exists" in capsys.readouterr().err
     assert (out / "summary.md").read_text(encoding="utf-8") == summary
+
+
+def test_a_point_cloud_has_no_sted_and_says_why(tmp_path):
+    points = tmp_path / "points.npz"
+    sequence = common.load(common.SAMPLE)
+    np.savez(points, V=sequence.vertices[:12, :400], F=np.zeros((0, 3), dtype=np.int32))
+    out = tmp_path / "out"
+    assert paper.main([str(points), "--out", str(out), "--targets", "1"]) == 0
+    rows = _table((out / "summary.md").read_text(encoding="utf-8"), "### (c)")
+    assert rows
+    for row in rows:
+        assert row[6] == row[-1] == "n/a (STED needs a mesh: the faces have no edges)"

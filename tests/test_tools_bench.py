@@ -1,4 +1,4 @@
-"""tools/bench.py and its coders (tools/peers.py): sizes, errors and plumbing, untimed.
+"""tools.bench and its coders (tools.peers): sizes, errors and plumbing, untimed.
 
 The peers that need optional packages (Draco, meshoptimizer, SZ3, zfp: ``pip install
 '.[bench]'``) are tested only where those are installed, and skip saying so elsewhere.
@@ -9,25 +9,18 @@ from __future__ import annotations
 import json
 import os
 import stat
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from tuckercodec import kg_error, load_sequence
-from tuckercodec.samples import sample_path
-
-TOOLS = Path(__file__).resolve().parents[1] / "tools"
-sys.path.insert(0, str(TOOLS))
-
-import bench  # noqa: E402
-import peers  # noqa: E402
+from tools import bench, common, peers
+from tuckercodec import kg_error
 
 
 @pytest.fixture(scope="module")
 def sample():
-    return load_sequence(sample_path(), progress=False)
+    return common.load(common.SAMPLE)
 
 
 @pytest.fixture(scope="module")
@@ -74,7 +67,8 @@ def test_bound_search_keeps_the_smallest_file_that_meets_the_target(sample, cont
 
     def decompress(payload: bytes) -> np.ndarray:
         step = np.frombuffer(payload[:8], np.float64)[0]
-        return np.frombuffer(zlib.decompress(payload[8:]), np.int32).reshape(context.tensor.shape) * step
+        q = np.frombuffer(zlib.decompress(payload[8:]), np.int32)
+        return q.reshape(context.tensor.shape) * step
 
     trial = peers._search_bound("toy", 0.3, context, 1e-6, compress, decompress, str)
     assert trial is not None and trial.kg <= 0.3
@@ -97,7 +91,7 @@ def test_vertex_matching_undoes_a_permutation_of_lattice_points():
 def test_peak_memory_sees_a_large_allocation():
     if not Path("/proc/self/clear_refs").exists():
         pytest.skip("peak memory is measured from Linux's /proc only")
-    with peers.peak_memory() as memory:
+    with common.resident_peak() as memory:
         block = np.ones(64 * 1024 * 1024 // 8)  # 64 MiB, touched
         del block
     assert memory["peak"] is not None and memory["peak"] >= 48 * 1024 * 1024
@@ -111,8 +105,10 @@ def test_tthresh_plumbing_with_a_stand_in_binary(sample, context, tmp_path, monk
     script.write_text(
         "#!/bin/sh\n"
         'case "$*" in\n'
-        '  *"-i "*) while [ $# -gt 0 ]; do case $1 in -i) i=$2;; -c) c=$2;; esac; shift; done; cp "$i" "$c";;\n'
-        '  *) while [ $# -gt 0 ]; do case $1 in -c) c=$2;; -o) o=$2;; esac; shift; done; cp "$c" "$o";;\n'
+        '  *"-i "*) while [ $# -gt 0 ]; do case $1 in -i) i=$2;; -c) c=$2;; esac; shift; done;\n'
+        '    cp "$i" "$c";;\n'
+        "  *) while [ $# -gt 0 ]; do case $1 in -c) c=$2;; -o) o=$2;; esac; shift; done;\n"
+        '    cp "$c" "$o";;\n'
         "esac\n"
     )
     script.chmod(script.stat().st_mode | stat.S_IEXEC)
@@ -124,9 +120,14 @@ def test_tthresh_plumbing_with_a_stand_in_binary(sample, context, tmp_path, monk
 
 
 @pytest.mark.parametrize(
-    "coder, module",
-    [("draco-mesh", "DracoPy"), ("draco-points", "DracoPy"), ("meshopt", "meshoptimizer"),
-     ("sz3", "pysz"), ("zfp", "zfpy")],
+    ("coder", "module"),
+    [
+        ("draco-mesh", "DracoPy"),
+        ("draco-points", "DracoPy"),
+        ("meshopt", "meshoptimizer"),
+        ("sz3", "pysz"),
+        ("zfp", "zfpy"),
+    ],
 )
 def test_optional_peers_round_trip(coder, module, sample, context):
     pytest.importorskip(module, reason=f"{module} is not installed (pip install '.[bench]')")
@@ -145,8 +146,8 @@ def test_optional_peers_round_trip(coder, module, sample, context):
 def test_bench_writes_tables_plots_and_refuses_to_overwrite(sample, tmp_path, capsys):
     pytest.importorskip("matplotlib", reason="plots need matplotlib")
     out = tmp_path / "bench"
-    args = ["sample", "--coders", "tuckercodec,pca,zstd-f32", "--targets", "1,0.2", "--repeat", "2",
-            "--out", str(out)]
+    coders = "tuckercodec,pca,zstd-f32"
+    args = ["sample", "--coders", coders, "--targets", "1,0.2", "--repeat", "2", "--out", str(out)]
     assert bench.main(args) == 0
     for name in ("summary.md", "sample.md", "sample.png", "results.json"):
         assert (out / name).stat().st_size > 0
@@ -155,7 +156,8 @@ def test_bench_writes_tables_plots_and_refuses_to_overwrite(sample, tmp_path, ca
     for row in rows:
         if row["target"] is not None:
             assert row["kg"] <= row["target"]
-        assert row["bpfv"] == pytest.approx(8 * row["bytes"] / (sample.frame_count * sample.vertex_count))
+        frames_vertices = sample.frame_count * sample.vertex_count
+        assert row["bpfv"] == pytest.approx(8 * row["bytes"] / frames_vertices)
     summary = (out / "summary.md").read_text()
     assert "| sample | 1 |" in summary and "| sample | 0.2 |" in summary
     assert bench.main(args) == 2  # results are never replaced without --force
@@ -165,11 +167,11 @@ def test_bench_writes_tables_plots_and_refuses_to_overwrite(sample, tmp_path, ca
 
 def test_bench_runs_on_a_sequence_without_faces(tmp_path):
     points = tmp_path / "points.npz"
-    sequence = load_sequence(sample_path(), progress=False)
+    sequence = common.load(common.SAMPLE)
     np.savez(points, V=sequence.vertices[:10], F=np.zeros((0, 3), dtype=np.int32))
     out = tmp_path / "bench"
-    assert bench.main([str(points), "--coders", "tuckercodec,zstd-f32", "--targets", "1",
-                       "--out", str(out)]) == 0
+    args = [str(points), "--coders", "tuckercodec,zstd-f32", "--targets", "1", "--out", str(out)]
+    assert bench.main(args) == 0
     rows = json.loads((out / "results.json").read_text())
     assert {row["coder"] for row in rows} == {"tuckercodec", "zstd-f32"}
     assert all("sted" not in row for row in rows)  # STED needs edges
