@@ -1,10 +1,10 @@
 """Coverage-guided fuzzing of the decoder with atheris (issue 5).
 
-    python tools/fuzz.py --seconds 600            # a long run, one process
-    python tools/fuzz.py --runs 20000             # a fixed number of inputs
-    python tools/fuzz.py --replay tests/fuzz/regressions/*   # re-check saved inputs
-    python tools/fuzz.py --seconds 600 --merge    # then fold new coverage into the corpus
-    python tools/fuzz.py --merge-from WORK_DIR    # fold an earlier run's scratch corpus in
+    python -m tools.fuzz --seconds 600            # a long run, one process
+    python -m tools.fuzz --runs 20000             # a fixed number of inputs
+    python -m tools.fuzz --replay tests/fuzz/regressions/*   # re-check saved inputs
+    python -m tools.fuzz --seconds 600 --merge    # then fold new coverage into the corpus
+    python -m tools.fuzz --merge-from WORK_DIR    # fold an earlier run's scratch corpus in
 
 Every input goes through :func:`check_input`: ``tuckercodec.decode(data)``,
 ``tuckercodec.info(data)`` and ``Decoder(data).frame(0)``. Each must either succeed or raise
@@ -21,7 +21,8 @@ corpus (``--work``, a temporary folder by default), so the committed corpus only
 tuckercodec that nothing in the corpus does yet, within ``--corpus-kb``. Crashing inputs are
 written to ``tests/fuzz/crashes/``, one per distinct failure (exception type and place). Once
 fixed, move each to ``tests/fuzz/regressions/`` with a name saying what it broke;
-``tests/test_fuzz.py`` replays the corpus, the regressions and anything left in ``crashes/``.
+``tests/test_decoder_fuzz.py`` replays the corpus, the regressions and anything left in
+``crashes/``.
 
 Most random bytes fail a CRC-32 at once, so besides libFuzzer's byte mutations a structural
 mutator rebuilds the file with correct checksums after changing one header value, one
@@ -31,6 +32,10 @@ reached as often as the checksums themselves.
 The fuzzing runs in a child process (``--worker``) so that the driver can stop it on time,
 restart it after a hang or an out-of-memory (libFuzzer exits on those), and sum the inputs
 tried over the restarts from libFuzzer's final statistics.
+
+This module imports tuckercodec (and :mod:`tools.common`, which does) only inside functions:
+the worker must import the package for the first time under atheris' instrumentation, or the
+fuzzer runs blind to its coverage.
 """
 
 from __future__ import annotations
@@ -54,7 +59,7 @@ import zlib
 from pathlib import Path
 from typing import Any
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[1]  # tools.common.REPO, without importing tuckercodec
 VECTORS = ROOT / "spec" / "vectors"
 FUZZ_DIR = ROOT / "tests" / "fuzz"
 CORPUS = FUZZ_DIR / "corpus"
@@ -62,10 +67,6 @@ CRASHES = FUZZ_DIR / "crashes"
 REGRESSIONS = FUZZ_DIR / "regressions"
 #: Files in the fuzz folders that are notes, not inputs.
 NOT_INPUTS = {".md", ".txt", ".json"}
-
-SIGNATURE = b"\x89TKC\r\n\x1a\n"
-_PREAMBLE = struct.Struct("<HHIIQ")
-_CRC = struct.Struct("<I")
 
 
 # ------------------------------------------------------------------------------------------
@@ -101,7 +102,9 @@ def check_input(data: bytes) -> str:
         header = None
     sizes = None if header is None else (header.frames, header.vertices)
     if sequence is not None and sizes is not None and sizes != sequence.vertices.shape[:2]:
-        raise InvariantError(f"info says {sizes[0]} x {sizes[1]}, decode gives {sequence.vertices.shape}")
+        raise InvariantError(
+            f"info says {sizes[0]} x {sizes[1]}, decode gives {sequence.vertices.shape}"
+        )
     try:
         first = Decoder(data).frame(0)
     except FormatError as error:
@@ -134,15 +137,18 @@ def _lenient_parse(data: bytes) -> tuple[list[int], dict[str, Any], bytes] | Non
     ``None``. Nothing is checked: the point is to edit and re-sign."""
     import msgpack
 
+    from tools.common import PREAMBLE
+    from tuckercodec.internal import SIGNATURE
+
     if len(data) < 32 or data[:8] != SIGNATURE:
         return None
-    fields = list(_PREAMBLE.unpack_from(data, 8))
+    fields = list(PREAMBLE.unpack_from(data, 8))
     header_length = fields[3]
     if 32 + header_length + 4 > len(data):
         return None
     try:
         header = msgpack.unpackb(data[32 : 32 + header_length], raw=False, strict_map_key=False)
-    except Exception:  # noqa: BLE001 - any damage means "not parseable", never a crash here
+    except Exception:  # any damage means "not parseable", never a crash here
         return None
     if not isinstance(header, dict):
         return None
@@ -159,16 +165,25 @@ def _sections(header: dict[str, Any], area: bytes) -> list[tuple[dict[str, Any],
         if not isinstance(entry, dict):
             return None
         offset, length = entry.get("offset"), entry.get("length")
-        if not (isinstance(offset, int) and isinstance(length, int) and 0 <= offset and 0 <= length):
+        if not (
+            isinstance(offset, int) and isinstance(length, int) and offset >= 0 and length >= 0
+        ):
             return None
         out.append((dict(entry), area[offset : offset + length]))
     return out
 
 
-def _pack(fields: list[int], header: dict[str, Any], sections: list[tuple[dict[str, Any], bytes]] | None,
-          area: bytes, rng: random.Random) -> bytes:
+def _pack(
+    fields: list[int],
+    header: dict[str, Any],
+    sections: list[tuple[dict[str, Any], bytes]] | None,
+    area: bytes,
+    rng: random.Random,
+) -> bytes:
     """A file with correct CRCs (and mostly correct offsets and lengths) from edited parts."""
     import msgpack
+
+    from tools.common import raw_container
 
     header = dict(header)
     if sections is not None:
@@ -182,16 +197,52 @@ def _pack(fields: list[int], header: dict[str, Any], sections: list[tuple[dict[s
             parts.append(payload)
         header["sections"] = table
         area = b"".join(parts)
-    header_bytes = msgpack.packb(header, use_bin_type=True)
     major, minor, flags, _, _ = fields
-    total = 32 + len(header_bytes) + 4 + len(area)
-    head = SIGNATURE + _PREAMBLE.pack(major, minor, flags, len(header_bytes), total)
-    return b"".join([head, _CRC.pack(zlib.crc32(head)), header_bytes, _CRC.pack(zlib.crc32(header_bytes)), area])
+    return raw_container(major, minor, flags, msgpack.packb(header, use_bin_type=True), area)
 
 
-_EDGE_INTS = [0, 1, -1, 2, 3, 4, 5, 64, 65, 255, 256, 2**16, 2**24, 2**24 + 1, 2**26, 2**26 + 1, 2**27,
-              2**28, 2**31 - 1, 2**31, 2**32 - 1, 2**32, 2**53 + 1, 2**63 - 1, -(2**63), 2**64 - 1, 10**9]
-_EDGE_FLOATS = [0.0, -0.0, 1.0, -1.0, 1e308, -1e308, 5e-324, float("nan"), float("inf"), float("-inf"), 3.4e38]
+_EDGE_INTS = [
+    0,
+    1,
+    -1,
+    2,
+    3,
+    4,
+    5,
+    64,
+    65,
+    255,
+    256,
+    2**16,
+    2**24,
+    2**24 + 1,
+    2**26,
+    2**26 + 1,
+    2**27,
+    2**28,
+    2**31 - 1,
+    2**31,
+    2**32 - 1,
+    2**32,
+    2**53 + 1,
+    2**63 - 1,
+    -(2**63),
+    2**64 - 1,
+    10**9,
+]
+_EDGE_FLOATS = [
+    0.0,
+    -0.0,
+    1.0,
+    -1.0,
+    1e308,
+    -1e308,
+    5e-324,
+    float("nan"),
+    float("inf"),
+    float("-inf"),
+    3.4e38,
+]
 
 
 def _hostile_value(rng: random.Random, current: Any, depth: int = 0) -> Any:
@@ -200,7 +251,9 @@ def _hostile_value(rng: random.Random, current: Any, depth: int = 0) -> Any:
 
     kind = rng.randrange(12)
     if kind == 0 and isinstance(current, int) and not isinstance(current, bool):
-        return max(-(2**63), min(2**64 - 1, current + rng.choice([-1, 1, -2, 2, current, -current])))
+        return max(
+            -(2**63), min(2**64 - 1, current + rng.choice([-1, 1, -2, 2, current, -current]))
+        )
     if kind == 1:
         return rng.choice(_EDGE_INTS)
     if kind == 2:
@@ -208,8 +261,24 @@ def _hostile_value(rng: random.Random, current: Any, depth: int = 0) -> Any:
     if kind == 3:
         return rng.choice([None, True, False])
     if kind == 4:
-        return rng.choice(["", "FACE", "U1", "U3", "CORE", "CENT", "NAME", "qmat", "faces-delta",
-                           "msgpack-zstd", "x" * 17, "\x00", "é", "karni-gotsman-2004"])
+        return rng.choice(
+            [
+                "",
+                "FACE",
+                "U1",
+                "U3",
+                "CORE",
+                "CENT",
+                "NAME",
+                "qmat",
+                "faces-delta",
+                "msgpack-zstd",
+                "x" * 17,
+                "\x00",
+                "é",
+                "karni-gotsman-2004",
+            ]
+        )
     if kind == 5:
         return bytes(rng.randrange(256) for _ in range(rng.choice([0, 1, 3, 4, 8, 12, 24])))
     if kind == 6 and isinstance(current, bytes) and current:
@@ -234,10 +303,10 @@ def _containers_in(value: Any, path: tuple = ()) -> list[tuple[tuple, Any]]:
     out = [(path, value)]
     if isinstance(value, dict):
         for key, item in value.items():
-            out.extend(_containers_in(item, path + (key,)))
+            out.extend(_containers_in(item, (*path, key)))
     elif isinstance(value, list):
         for index, item in enumerate(value):
-            out.extend(_containers_in(item, path + (index,)))
+            out.extend(_containers_in(item, (*path, index)))
     return out
 
 
@@ -251,7 +320,9 @@ def _mutate_header(rng: random.Random, header: dict[str, Any]) -> None:
     """Change, delete or add one value anywhere in the header (the table included)."""
     paths = [p for p, _ in _containers_in(header) if p]
     if not paths or rng.random() < 0.1:
-        header[rng.choice(["vertices", "frames", "ranks", "u2", "frame_rate", "x-new"])] = _hostile_value(rng, None)
+        header[rng.choice(["vertices", "frames", "ranks", "u2", "frame_rate", "x-new"])] = (
+            _hostile_value(rng, None)
+        )
         return
     path = rng.choice(paths)
     parent = header
@@ -278,7 +349,10 @@ def _mutate_table(rng: random.Random, sections: list[tuple[dict[str, Any], bytes
         rng.shuffle(sections)
     elif what == 3:
         entry, payload = sections[index]
-        sections[index] = ({**entry, "id": rng.choice(["FACE", "U1", "U3", "CORE", "CENT", "NAME", "XTRA"])}, payload)
+        sections[index] = (
+            {**entry, "id": rng.choice(["FACE", "U1", "U3", "CORE", "CENT", "NAME", "XTRA"])},
+            payload,
+        )
     else:
         entry, payload = sections[index]
         sections[index] = ({**entry, "critical": not entry.get("critical")}, payload)
@@ -305,7 +379,11 @@ def _mutate_payload(rng: random.Random, sections: list[tuple[dict[str, Any], byt
         start = rng.randrange(len(raw))
         raw[start : start + rng.choice([1, 4, 16])] = b"\xff" * len(raw[start : start + 16])
     elif what == 4:  # grow or shrink the content
-        raw = raw[: rng.randrange(len(raw) + 1)] if rng.random() < 0.5 else raw + bytes(rng.choice([1, 3, 4, 81]))
+        raw = (
+            raw[: rng.randrange(len(raw) + 1)]
+            if rng.random() < 0.5
+            else raw + bytes(rng.choice([1, 3, 4, 81]))
+        )
     elif what == 5 and isinstance(entry.get("planes"), int) and entry["planes"] in (1, 2, 3):
         # the same integers in more planes: still valid, exercises the plane arithmetic
         planes = entry["planes"]
@@ -313,11 +391,14 @@ def _mutate_payload(rng: random.Random, sections: list[tuple[dict[str, Any], byt
         extra = rng.choice([0, 255])
         raw = raw + bytes([extra]) * count
         entry = {**entry, "planes": planes + 1}
-    compressor = zstandard.ZstdCompressor(level=1, write_content_size=rng.random() < 0.9,
-                                          write_checksum=rng.random() < 0.2)
+    compressor = zstandard.ZstdCompressor(
+        level=1, write_content_size=rng.random() < 0.9, write_checksum=rng.random() < 0.2
+    )
     new = compressor.compress(bytes(raw))
     if what == 6:
-        new += rng.choice([b"\x00", new, struct.pack("<II", 0x184D2A50, 0)])  # trailing data, a second frame
+        new += rng.choice(
+            [b"\x00", new, struct.pack("<II", 0x184D2A50, 0)]
+        )  # trailing data, a second frame
     elif what == 7 and len(new) > 6:
         new = new[: rng.randrange(4, len(new))]  # a cut frame
     sections[index] = (entry, new)
@@ -339,20 +420,25 @@ def structural_mutation(data: bytes, rng: random.Random) -> bytes | None:
         _mutate_payload(rng, sections)
     if rng.random() < 0.05:  # the preamble: major, minor (u16) or flags (u32)
         which = rng.randrange(3)
-        fields[which] = rng.choice([0, 1, 2, 0xFFFF] if which < 2 else [0, 1, 0x8000, 0x10000, 0xFFFFFFFF])
+        fields[which] = rng.choice(
+            [0, 1, 2, 0xFFFF] if which < 2 else [0, 1, 0x8000, 0x10000, 0xFFFFFFFF]
+        )
     return _pack(fields, header, sections, area, rng)
 
 
 def resign(data: bytes) -> bytes:
     """Make the preamble's and header's CRC-32 right again after a byte-level mutation, so
     that it is judged on what it changed, not on the checksum."""
+    from tools.common import CRC, PREAMBLE
+    from tuckercodec.internal import SIGNATURE
+
     if len(data) < 32 or data[:8] != SIGNATURE:
         return data
     out = bytearray(data)
-    _CRC.pack_into(out, 28, zlib.crc32(out[:28]))
-    header_length = _PREAMBLE.unpack_from(out, 8)[3]
+    CRC.pack_into(out, 28, zlib.crc32(out[:28]))
+    header_length = PREAMBLE.unpack_from(out, 8)[3]
     if 32 + header_length + 4 <= len(out):
-        _CRC.pack_into(out, 32 + header_length, zlib.crc32(out[32 : 32 + header_length]))
+        CRC.pack_into(out, 32 + header_length, zlib.crc32(out[32 : 32 + header_length]))
     return bytes(out)
 
 
@@ -370,7 +456,7 @@ def mutate(data: bytes, max_size: int, seed: int) -> bytes:
                 return out
         mutated = atheris.Mutate(data, max_size)
         return resign(mutated) if choice < 0.75 else mutated
-    except Exception:  # noqa: BLE001 - the mutator must not stop the run
+    except Exception:  # the mutator must not stop the run
         return atheris.Mutate(data, max_size)
 
 
@@ -387,36 +473,59 @@ def make_seeds(folder: Path = CORPUS) -> list[Path]:
     import numpy as np
 
     import tuckercodec as tc
-    from tuckercodec.format.container import pack_container
-    from tuckercodec.samples import sheet_triangles, wave_sheet
-    from tuckercodec.format.streams import compress
+    from tuckercodec.internal import pack_container, sections, sheet_triangles, streams, wave_sheet
 
     folder.mkdir(parents=True, exist_ok=True)
     frames = wave_sheet(8, 5)
     triangles = sheet_triangles(5)
-    polygons = np.array([[0, 1, 6, 5, -1], [1, 2, 7, -1, -1], [2, 3, 8, 8, 7], [10, 11, 16, 15, 10]])
+    polygons = np.array(
+        [[0, 1, 6, 5, -1], [1, 2, 7, -1, -1], [2, 3, 8, 8, 7], [10, 11, 16, 15, 10]]
+    )
     files = {
         "seed-triangles.tkc": tc.encode(tc.MeshSequence(frames, triangles), target_kg=1.0),
-        "seed-point-cloud.tkc": tc.encode(tc.MeshSequence(frames, np.zeros((0, 3), int)), target_kg=1.0),
+        "seed-point-cloud.tkc": tc.encode(
+            tc.MeshSequence(frames, np.zeros((0, 3), int)), target_kg=1.0
+        ),
         "seed-one-frame.tkc": tc.encode(tc.MeshSequence(frames[:1], triangles), target_kg=1.0),
-        "seed-three-vertices.tkc": tc.encode(tc.MeshSequence(frames[:, :3], np.array([[0, 1, 2]])), target_kg=1.0),
+        "seed-three-vertices.tkc": tc.encode(
+            tc.MeshSequence(frames[:, :3], np.array([[0, 1, 2]])), target_kg=1.0
+        ),
         "seed-polygons.tkc": tc.encode(tc.MeshSequence(frames, polygons), target_kg=1.0),
         "seed-names-rate.tkc": tc.encode(
-            tc.MeshSequence(frames, triangles, frame_names=[f"é{n}" for n in range(8)], frame_rate=30.0), target_kg=1.0),
-        "seed-many-planes.tkc": tc.encode(tc.MeshSequence(frames * 1000, triangles), target_kg=1e-4),
+            tc.MeshSequence(
+                frames, triangles, frame_names=[f"é{n}" for n in range(8)], frame_rate=30.0
+            ),
+            target_kg=1.0,
+        ),
+        "seed-many-planes.tkc": tc.encode(
+            tc.MeshSequence(frames * 1000, triangles), target_kg=1e-4
+        ),
         "seed-fixed-ranks.tkc": tc.encode(tc.MeshSequence(frames, triangles), ranks=(3, 2)),
     }
     one = np.ones(1, "<f4").tobytes()
-    qmat = {"critical": True, "codec": "qmat", "planes": 1}
+    entry, compress = sections.entry, streams.compress
+
+    def qmat(section_id: str, shape: list[int], steps: bytes, predict: bytes) -> dict[str, Any]:
+        return entry(section_id, {"planes": 1, "shape": shape, "steps": steps, "predict": predict})
+
     files["seed-one-vertex.tkc"] = pack_container(
-        {"vertices": 1, "frames": 2, "ranks": [1, 1], "u2": [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]},
-        [({"id": "FACE", "critical": True, "codec": "faces-delta", "shape": [0, 3], "planes": 1}, compress(b"")),
-         ({"id": "U1", **qmat, "shape": [1, 1], "steps": one, "predict": b"\x01"}, compress(b"\x02")),
-         ({"id": "U3", **qmat, "shape": [2, 1], "steps": one, "predict": b"\x01"}, compress(b"\x02\x01")),
-         ({"id": "CORE", **qmat, "shape": [3, 1], "steps": one, "predict": b"\x00"}, compress(b"\x02\x04\x06")),
-         ({"id": "CENT", **qmat, "shape": [2, 3], "steps": np.ones(3, "<f4").tobytes(), "predict": b"\x01\x00\x01"},
-          compress(bytes([2, 1, 3, 3, 5, 0]))),
-         ({"id": "note", "critical": False, "codec": "text"}, b"an ancillary section")],
+        {
+            "vertices": 1,
+            "frames": 2,
+            "ranks": [1, 1],
+            "u2": [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+        },
+        [
+            (entry("FACE", {"shape": [0, 3], "planes": 1}), compress(b"")),
+            (qmat("U1", [1, 1], one, b"\x01"), compress(b"\x02")),
+            (qmat("U3", [2, 1], one, b"\x01"), compress(b"\x02\x01")),
+            (qmat("CORE", [3, 1], one, b"\x00"), compress(b"\x02\x04\x06")),
+            (
+                qmat("CENT", [2, 3], np.ones(3, "<f4").tobytes(), b"\x01\x00\x01"),
+                compress(bytes([2, 1, 3, 3, 5, 0])),
+            ),
+            ({"id": "note", "critical": False, "codec": "text"}, b"an ancillary section"),
+        ],
         flags=0x10000,
     )
     written = []
@@ -435,40 +544,33 @@ def _limit_address_space(memory_mb: int) -> None:
     """Cap the address space at what the process holds now plus ``memory_mb``: a huge
     allocation then fails (and is reported) even if the pages would never be touched, which
     libFuzzer's RSS limit cannot see."""
-    try:
-        import resource
+    from tools.common import MIB, proc_status_kib
 
-        with open("/proc/self/status") as status:
-            vm = next(int(line.split()[1]) * 1024 for line in status if line.startswith("VmSize:"))
-        limit = vm + memory_mb * (1 << 20)
-        resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
-    except (ImportError, OSError, StopIteration, ValueError):
-        pass  # not Linux: the RSS limit alone
-
-
-def _peak_rss_mb() -> float:
-    """The process's high-water resident memory, MiB (0 where getrusage is missing)."""
+    vm = proc_status_kib("VmSize")
     try:
         import resource
     except ImportError:
-        return 0.0
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    return peak / 1024 if sys.platform != "darwin" else peak / 2**20  # KiB on Linux, bytes on macOS
+        return  # not Unix: the RSS limit alone
+    if vm is None:
+        return  # not Linux: the RSS limit alone
+    limit = vm * 1024 + memory_mb * MIB
+    with contextlib.suppress(OSError, ValueError):
+        resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+
+
+def _quiet_check(data: bytes) -> None:
+    """:func:`check_input` with its outcome, warnings and exceptions ignored: for what it
+    allocates or executes, judged elsewhere."""
+    with warnings.catch_warnings(), contextlib.suppress(Exception):
+        warnings.simplefilter("ignore")
+        check_input(data)
 
 
 def _traced_peak_mb(data: bytes) -> float:
     """What one input allocates at its peak under tracemalloc (numpy's buffers included), MiB."""
-    import tracemalloc
+    from tools.common import MIB, traced_peak
 
-    tracemalloc.start()
-    try:
-        # only the memory matters here: the outcome is judged elsewhere
-        with warnings.catch_warnings(), contextlib.suppress(Exception):
-            warnings.simplefilter("ignore")
-            check_input(data)
-        return tracemalloc.get_traced_memory()[1] / 2**20
-    finally:
-        tracemalloc.stop()
+    return traced_peak(lambda: _quiet_check(data)) / MIB
 
 
 def run_worker(crashes: Path, memory_mb: int, report_mb: int, libfuzzer_args: list[str]) -> None:
@@ -481,15 +583,19 @@ def run_worker(crashes: Path, memory_mb: int, report_mb: int, libfuzzer_args: li
     """
     import atheris
 
+    if "tuckercodec" in sys.modules:  # see the module's docstring
+        raise RuntimeError("tuckercodec was imported before atheris could instrument it")
     with atheris.instrument_imports(include=["tuckercodec"]):
         import tuckercodec  # noqa: F401 - instrumented for coverage
 
     import numpy  # noqa: F401 - imported before the address-space cap
 
+    from tools.common import lifetime_peak_rss_mib
+
     crashes.mkdir(parents=True, exist_ok=True)
     seen = {path.name.rsplit("-", 1)[0] for path in crashes.iterdir()}
     _limit_address_space(memory_mb)
-    memory_alarm = [_peak_rss_mb() + report_mb]
+    memory_alarm = [lifetime_peak_rss_mib() + report_mb]
 
     def save(name: str, data: bytes, notes: str) -> None:
         path = crashes / f"{name}-{hashlib.sha1(data).hexdigest()[:12]}"
@@ -503,9 +609,9 @@ def run_worker(crashes: Path, memory_mb: int, report_mb: int, libfuzzer_args: li
             warnings.simplefilter("error")  # as the test suite does (pyproject: filterwarnings)
             try:
                 check_input(data)
-            except Exception as error:  # noqa: BLE001 - anything here is the finding
+            except Exception as error:  # anything here is the finding
                 failure = error
-        peak = _peak_rss_mb()
+        peak = lifetime_peak_rss_mib()
         if peak > memory_alarm[0]:  # the high-water mark only rises: look at each new height once
             memory_alarm[0] = peak + report_mb / 4
             # libFuzzer's own tables grow the process by ~64 MiB steps over millions of runs
@@ -513,10 +619,18 @@ def run_worker(crashes: Path, memory_mb: int, report_mb: int, libfuzzer_args: li
             # allocates that much itself
             traced = _traced_peak_mb(data)
             if traced > report_mb:
-                save(f"bigmem-{int(traced)}MiB", data, f"this input alone allocates {traced:.0f} MiB (traced)\n")
+                save(
+                    f"bigmem-{int(traced)}MiB",
+                    data,
+                    f"this input alone allocates {traced:.0f} MiB (traced)\n",
+                )
             else:
-                print(f"(peak RSS {peak:.0f} MiB: growth over the run; the input at hand allocates "
-                      f"{traced:.1f} MiB)", file=sys.stderr, flush=True)
+                print(
+                    f"(peak RSS {peak:.0f} MiB: growth over the run; the input at hand allocates "
+                    f"{traced:.1f} MiB)",
+                    file=sys.stderr,
+                    flush=True,
+                )
         if failure is None:
             return
         name = f"crash-{signature_of(failure)}"
@@ -557,43 +671,82 @@ def _stat(text: str, name: str) -> int:
 def fuzz(args: argparse.Namespace) -> dict[str, Any]:
     """Run the worker until the time or run budget is spent; restart it after a hang or an
     out-of-memory. Returns the summary."""
-    work = Path(args.work) if args.work else Path(tempfile.mkdtemp(prefix="tkc-fuzz-"))
+    # absolute: the worker runs from the repository's root (python -m tools.fuzz)
+    work = Path(args.work).resolve() if args.work else Path(tempfile.mkdtemp(prefix="tkc-fuzz-"))
     work.mkdir(parents=True, exist_ok=True)
     for path in seed_inputs():
         shutil.copy(path, work / f"seed-{path.name}")
-    crashes = Path(args.crashes)
+    crashes = Path(args.crashes).resolve()
     crashes.mkdir(parents=True, exist_ok=True)
     before = set(crashes.iterdir())
     started = time.monotonic()
     runs = restarts = peak_rss = 0
-    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+    env = {
+        **os.environ,
+        "OPENBLAS_NUM_THREADS": "1",
+        "OMP_NUM_THREADS": "1",
+        "MKL_NUM_THREADS": "1",
+    }
     seed = args.seed
     while True:
         left = args.seconds - (time.monotonic() - started) if args.seconds else None
         if (left is not None and left < 2) or (args.runs and runs >= args.runs):
             break
-        libfuzzer = [f"-timeout={args.timeout}", f"-rss_limit_mb={args.memory_mb}", f"-max_len={args.max_len}",
-                     f"-artifact_prefix={crashes}{os.sep}", "-print_final_stats=1", f"-seed={seed}",
-                     "-reload=0"]
+        libfuzzer = [
+            f"-timeout={args.timeout}",
+            f"-rss_limit_mb={args.memory_mb}",
+            f"-max_len={args.max_len}",
+            f"-artifact_prefix={crashes}{os.sep}",
+            "-print_final_stats=1",
+            f"-seed={seed}",
+            "-reload=0",
+        ]
         if left is not None:
             libfuzzer.append(f"-max_total_time={int(left)}")
         if args.runs:
             libfuzzer.append(f"-runs={args.runs - runs}")
-        command = [sys.executable, str(Path(__file__).resolve()), "--worker", "--crashes", str(crashes),
-                   "--memory-mb", str(args.memory_mb), "--report-mb", str(args.report_mb), "--", *libfuzzer,
-                   str(work)]
+        command = [
+            sys.executable,
+            "-m",
+            "tools.fuzz",
+            "--worker",
+            "--crashes",
+            str(crashes),
+            "--memory-mb",
+            str(args.memory_mb),
+            "--report-mb",
+            str(args.report_mb),
+            "--",
+            *libfuzzer,
+            str(work),
+        ]
         try:
-            child = subprocess.run(command, env=env, capture_output=True, text=True, check=False,
-                                   timeout=None if left is None else left + args.timeout + 60)
+            child = subprocess.run(
+                command,
+                env=env,
+                cwd=ROOT,
+                capture_output=True,
+                text=True,
+                check=False,
+                timeout=None if left is None else left + args.timeout + 60,
+            )
             output = child.stderr
         except subprocess.TimeoutExpired as expired:
-            output = (expired.stderr or b"").decode(errors="replace") if isinstance(expired.stderr, bytes) else (expired.stderr or "")
+            output = (
+                (expired.stderr or b"").decode(errors="replace")
+                if isinstance(expired.stderr, bytes)
+                else (expired.stderr or "")
+            )
             print("the worker overran its time and was stopped", file=sys.stderr)
         if args.verbose:
             sys.stderr.write(output)
         else:
             for line in output.splitlines():
-                if "=== new crash" in line or "ERROR: libFuzzer" in line or line.startswith("Done "):
+                if (
+                    "=== new crash" in line
+                    or "ERROR: libFuzzer" in line
+                    or line.startswith("Done ")
+                ):
                     print(line, file=sys.stderr)
         executed = _stat(output, "number_of_executed_units")
         if not executed:  # no final stats (killed): the last progress line
@@ -651,10 +804,8 @@ def _arcs(data: bytes) -> set[tuple[str, int, int]]:
 
     previous = sys.gettrace()
     sys.settrace(tracer)
-    try:  # a crash still has coverage; it is reported elsewhere
-        with warnings.catch_warnings(), contextlib.suppress(Exception):
-            warnings.simplefilter("ignore")
-            check_input(data)
+    try:
+        _quiet_check(data)  # a crash still has coverage; it is reported elsewhere
     finally:
         sys.settrace(previous)
     return arcs
@@ -696,7 +847,7 @@ def replay(paths: list[Path]) -> int:
             warnings.simplefilter("error")
             try:
                 outcome = check_input(path.read_bytes())
-            except Exception as error:  # noqa: BLE001 - reported, not raised
+            except Exception as error:  # reported, not raised
                 outcome = f"CRASH {signature_of(error)}: {error!r}"
                 failures += 1
         print(f"{path}: {outcome} ({time.perf_counter() - started:.3f} s)")
@@ -704,29 +855,52 @@ def replay(paths: list[Path]) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--seconds", type=float, default=0, help="stop after this long (default: 60 unless --runs)")
+    parser = argparse.ArgumentParser(
+        description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument(
+        "--seconds", type=float, default=0, help="stop after this long (default: 60 unless --runs)"
+    )
     parser.add_argument("--runs", type=int, default=0, help="stop after this many inputs")
-    parser.add_argument("--timeout", type=int, default=10, help="seconds one input may take (a hang beyond)")
+    parser.add_argument(
+        "--timeout", type=int, default=10, help="seconds one input may take (a hang beyond)"
+    )
     parser.add_argument("--memory-mb", type=int, default=2048, help="memory one process may use")
-    parser.add_argument("--report-mb", type=int, default=256,
-                        help="save an input that allocates more than this")
-    parser.add_argument("--max-len", type=int, default=8192, help="largest input libFuzzer makes, bytes")
+    parser.add_argument(
+        "--report-mb", type=int, default=256, help="save an input that allocates more than this"
+    )
+    parser.add_argument(
+        "--max-len", type=int, default=8192, help="largest input libFuzzer makes, bytes"
+    )
     parser.add_argument("--seed", type=int, default=1, help="libFuzzer's random seed")
     parser.add_argument("--work", help="scratch corpus folder (default: a new temporary folder)")
     parser.add_argument("--crashes", default=str(CRASHES), help="where crashing inputs go")
-    parser.add_argument("--merge", action="store_true", help="fold new coverage into tests/fuzz/corpus")
-    parser.add_argument("--merge-from", type=Path, help="only merge this scratch corpus into tests/fuzz/corpus")
-    parser.add_argument("--corpus-kb", type=int, default=300, help="size budget of the committed corpus")
+    parser.add_argument(
+        "--merge", action="store_true", help="fold new coverage into tests/fuzz/corpus"
+    )
+    parser.add_argument(
+        "--merge-from", type=Path, help="only merge this scratch corpus into tests/fuzz/corpus"
+    )
+    parser.add_argument(
+        "--corpus-kb", type=int, default=300, help="size budget of the committed corpus"
+    )
     parser.add_argument("--json", help="also write the summary to this file")
     parser.add_argument("--verbose", action="store_true", help="show libFuzzer's whole output")
-    parser.add_argument("--replay", nargs="*", type=Path, help="check these inputs (default: corpus and regressions)")
-    parser.add_argument("--make-seeds", action="store_true", help="write the hand-made seeds into tests/fuzz/corpus")
+    parser.add_argument(
+        "--replay",
+        nargs="*",
+        type=Path,
+        help="check these inputs (default: corpus and regressions)",
+    )
+    parser.add_argument(
+        "--make-seeds", action="store_true", help="write the hand-made seeds into tests/fuzz/corpus"
+    )
     parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args, rest = parser.parse_known_args(argv)
     if args.worker:
-        run_worker(Path(args.crashes), args.memory_mb, args.report_mb, [a for a in rest if a != "--"])
+        run_worker(
+            Path(args.crashes), args.memory_mb, args.report_mb, [a for a in rest if a != "--"]
+        )
         return 0
     if args.make_seeds:
         for path in make_seeds():

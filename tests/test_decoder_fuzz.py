@@ -2,8 +2,8 @@
 
 - Every saved input (tests/fuzz/corpus, tests/fuzz/regressions, and anything a fuzz run left
   in tests/fuzz/crashes) ends in FormatError or decodes consistently, quickly, in bounded
-  memory, without a warning (tools/fuzz.py's ``check_input`` is the oracle).
-- The structural mutator of tools/fuzz.py, driven by a plain random generator, makes a few
+  memory, without a warning (tools.fuzz's ``check_input`` is the oracle).
+- The structural mutator of tools.fuzz, driven by a plain random generator, makes a few
   hundred re-signed variants of the seeds: this part needs no atheris, so it runs everywhere.
 - A bounded atheris run (``TKC_FUZZ_SECONDS``, 30 s by default) in a subprocess with a hard
   timeout; skipped, saying why, where atheris is not installed (it has no Windows build).
@@ -24,10 +24,9 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tools"))
+from tools import fuzz as fuzz_tool
 
-import fuzz as fuzz_tool  # tools/fuzz.py, from the path set just above
+ROOT = Path(__file__).resolve().parents[1]
 
 SAVED = fuzz_tool.saved_inputs(fuzz_tool.CORPUS, fuzz_tool.REGRESSIONS, fuzz_tool.CRASHES)
 #: What one saved input may cost. The largest, a valid strip of 2**19 vertices, takes about
@@ -96,35 +95,67 @@ def test_resign_makes_the_checksums_right():
         pass
 
 
+def test_importing_the_fuzzer_leaves_tuckercodec_to_its_worker():
+    """The worker imports tuckercodec for the first time under atheris' instrumentation (else it
+    fuzzes blind to the package's coverage): importing tools.fuzz must not import it."""
+    check = "import sys, tools.fuzz; sys.exit('tuckercodec' in sys.modules)"
+    assert subprocess.run([sys.executable, "-c", check], cwd=ROOT, check=False).returncode == 0
+
+
+def test_the_seeds_decode_and_the_hand_made_one_is_as_committed(tmp_path):
+    """make_seeds writes valid files (it decodes each); the one built section by section is
+    byte-stable, unlike the encoder's, so it must equal the committed seed."""
+    written = {path.name: path for path in fuzz_tool.make_seeds(tmp_path)}
+    assert set(written) <= {path.name for path in SAVED if path.parent == fuzz_tool.CORPUS}
+    name = "seed-one-vertex.tkc"
+    assert written[name].read_bytes() == (fuzz_tool.CORPUS / name).read_bytes()
+
+
 def test_a_short_bounded_fuzz_run(tmp_path):
-    """tools/fuzz.py for FUZZ_SECONDS from the seeds, in its own process group, killed if it
-    overruns. Any crash fails the test with its traceback and the input in base64 (to keep
+    """python -m tools.fuzz for FUZZ_SECONDS from the seeds, in its own process group, killed if
+    it overruns. Any crash fails the test with its traceback and the input in base64 (to keep
     it: decode it into tests/fuzz/crashes/)."""
     try:
         import atheris  # noqa: F401
     except ImportError:
-        pytest.skip("atheris is not installed (it has no Windows build): the bounded fuzz run is skipped; "
-                    "the saved inputs and structural mutations above still ran")
+        pytest.skip(
+            "atheris is not installed (it has no Windows build): the bounded fuzz run is skipped; "
+            "the saved inputs and structural mutations above still ran"
+        )
     crashes, summary_path = tmp_path / "crashes", tmp_path / "summary.json"
     seed = int(os.environ.get("TKC_FUZZ_SEED", str(random.SystemRandom().randrange(1, 2**31))))
-    command = [sys.executable, str(ROOT / "tools" / "fuzz.py"), "--seconds", str(FUZZ_SECONDS),
-               "--seed", str(seed), "--work", str(tmp_path / "work"), "--crashes", str(crashes),
-               "--json", str(summary_path), "--memory-mb", "1024"]
-    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                               start_new_session=True)
+    command = [sys.executable, "-m", "tools.fuzz", "--seconds", str(FUZZ_SECONDS)]
+    command += ["--seed", str(seed), "--work", str(tmp_path / "work"), "--crashes", str(crashes)]
+    command += ["--json", str(summary_path), "--memory-mb", "1024"]
+    process = subprocess.Popen(
+        command,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
+        start_new_session=True,
+    )
     try:
         stdout, stderr = process.communicate(timeout=FUZZ_SECONDS + 90)
     except subprocess.TimeoutExpired:
         os.killpg(process.pid, signal.SIGKILL)  # the driver and its libFuzzer worker
         process.communicate()
-        pytest.fail(f"tools/fuzz.py --seconds {FUZZ_SECONDS} (seed {seed}) overran its time and was killed")
-    assert summary_path.exists(), f"no summary (exit {process.returncode}):\n{stdout}\n{stderr[-4000:]}"
+        pytest.fail(
+            f"python -m tools.fuzz --seconds {FUZZ_SECONDS} (seed {seed}) overran its time and "
+            "was killed"
+        )
+    assert summary_path.exists(), (
+        f"no summary (exit {process.returncode}):\n{stdout}\n{stderr[-4000:]}"
+    )
     summary = json.loads(summary_path.read_text())
     found = sorted(p for p in crashes.iterdir() if p.suffix != ".txt") if crashes.exists() else []
     report = []
     for path in found:
         notes = path.with_suffix(".txt")
-        report.append(f"--- {path.name} (seed {seed})\n{notes.read_text() if notes.exists() else '(no traceback: a hang or out-of-memory)'}"
-                      f"\ninput, base64: {base64.b64encode(path.read_bytes()).decode()}")
+        why = notes.read_text() if notes.exists() else "(no traceback: a hang or out-of-memory)"
+        report.append(
+            f"--- {path.name} (seed {seed})\n{why}"
+            f"\ninput, base64: {base64.b64encode(path.read_bytes()).decode()}"
+        )
     assert not found, "the fuzzer found crashes:\n" + "\n".join(report)
     assert summary["inputs_tried"] > 100, summary
