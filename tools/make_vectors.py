@@ -1,16 +1,20 @@
 """Write the conformance vectors of spec/FORMAT.md §12 into spec/vectors/.
 
-    python tools/make_vectors.py [--force]
+    python -m tools.make_vectors [--force]          # spec/vectors/ (never needed again: below)
+    python -m tools.make_vectors --out DIR          # somewhere else, to look at them
 
 Valid vectors: small files encoded from deterministic synthetic sequences, each with a JSON of
 the header fields a decoder must report, SHA-256 digests of the dequantized arrays, and the
 reference reconstruction (an .npy of the decoded positions) with its tolerance.
 
 Invalid vectors: one per rule of §11, each made by breaking exactly that rule in a valid file
-(checksums recomputed, so that nothing else is wrong), with the error it must raise.
+(checksums recomputed, so that nothing else is wrong), with the rule id and the error class it
+must raise. They are a function of the valid file alone: from the committed
+v1-wave-triangles.tkc they come out byte for byte as committed (a test checks it).
 
 The encoder is not byte-identical across machines (the SVD's signs and last bits depend on the
-BLAS), so the vectors are written once and committed; every test run decodes them.
+BLAS), so the vectors are written once and committed; every test run decodes them. Never write
+them into spec/vectors/ again unless the format itself changes.
 """
 
 from __future__ import annotations
@@ -28,18 +32,20 @@ from typing import Any
 import msgpack
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from tools import common
+from tuckercodec import Decoder, MeshSequence, encode
+from tuckercodec.internal import (
+    HEAD_SIZE,
+    faces,
+    parse_container,
+    sheet_triangles,
+    streams,
+    wave_sheet,
+)
 
-from tuckercodec import MeshSequence, encode  # noqa: E402
-from tuckercodec.samples import sheet_triangles as triangles  # noqa: E402
-from tuckercodec.samples import wave_sheet as wave  # noqa: E402
-from tuckercodec.format.faces import encode_faces  # noqa: E402
-from tuckercodec.format.container import HEAD_SIZE, SIGNATURE, parse_container  # noqa: E402
-from tuckercodec import Decoder  # noqa: E402
-from tuckercodec.format.streams import compress  # noqa: E402
-
-VECTORS = ROOT / "spec" / "vectors"
+VECTORS = common.REPO / "spec" / "vectors"
+#: What a vector folder holds: the files, their JSON and the valid ones' reference positions.
+VECTOR_SUFFIXES = (".tkc", ".json", ".npy")
 #: A conforming decoder's positions may differ from the reference by rounding only (§8).
 RELATIVE_TOLERANCE = 1e-9
 
@@ -51,7 +57,9 @@ RELATIVE_TOLERANCE = 1e-9
 def polygons(grid: int) -> np.ndarray:
     """Quads, every third one a triangle padded with -1."""
     index = np.arange(grid * grid).reshape(grid, grid)
-    quads = np.stack([index[:-1, :-1], index[1:, :-1], index[1:, 1:], index[:-1, 1:]], -1).reshape(-1, 4)
+    quads = np.stack([index[:-1, :-1], index[1:, :-1], index[1:, 1:], index[:-1, 1:]], -1).reshape(
+        -1, 4
+    )
     quads[::3, 3] = -1
     return quads
 
@@ -76,21 +84,25 @@ class Parts:
     def fill_table(self) -> None:
         """Offsets, lengths and CRCs of the entries, from the payloads as they are now."""
         offset = 0
-        for entry, payload in zip(self.entries, self.payloads):
+        # strict=False: R18's file keeps a payload whose entry was dropped (it stays in the body)
+        for entry, payload in zip(self.entries, self.payloads, strict=False):
             entry.update(offset=offset, length=len(payload), crc32=zlib.crc32(payload))
             offset += len(payload)
 
-    def pack(self, *, fix_table: bool = True, header_bytes: bytes | None = None, total: int | None = None) -> bytes:
+    def pack(
+        self, *, fix_table: bool = True, header_bytes: bytes | None = None, total: int | None = None
+    ) -> bytes:
         """Bytes of the file; offsets, lengths and CRCs recomputed unless ``fix_table`` is off."""
         if fix_table:
             self.fill_table()
         if header_bytes is None:
-            header_bytes = msgpack.packb({**self.header, "sections": self.entries}, use_bin_type=True)
+            header_bytes = msgpack.packb(
+                {**self.header, "sections": self.entries}, use_bin_type=True
+            )
         body = b"".join(self.payloads)
-        total = HEAD_SIZE + len(header_bytes) + 4 + len(body) if total is None else total
-        head = SIGNATURE + struct.pack("<HHIIQ", self.major, self.minor, self.flags, len(header_bytes), total)
-        return b"".join([head, struct.pack("<I", zlib.crc32(head)), header_bytes,
-                         struct.pack("<I", zlib.crc32(header_bytes)), body])
+        return common.raw_container(
+            self.major, self.minor, self.flags, header_bytes, body, total=total
+        )
 
 
 def _with_crc_fixed(data: bytearray) -> bytes:
@@ -114,6 +126,7 @@ def _edit(data: bytes, change: Callable[[Parts], None], **pack_options: Any) -> 
 def _entry(section_id: str, **fields: Any) -> Callable[[Parts], None]:
     def change(parts: Parts) -> None:
         parts.entries[parts.index(section_id)].update(fields)
+
     return change
 
 
@@ -124,6 +137,7 @@ def _header(**fields: Any) -> Callable[[Parts], None]:
                 del parts.header[key]
             else:
                 parts.header[key] = value
+
     return change
 
 
@@ -135,91 +149,131 @@ def _payload(section_id: str, payload: bytes, **fields: Any) -> Callable[[Parts]
         n = parts.index(section_id)
         parts.payloads[n] = payload
         parts.entries[n].update(fields)
+
     return change
 
 
 def _flip_last_payload_byte(section_id: str) -> Callable[[Parts], None]:
     """Damage a section after its CRC was computed: the table keeps the old CRC."""
+
     def change(parts: Parts) -> None:
         n = parts.index(section_id)
         parts.fill_table()
         damaged = bytearray(parts.payloads[n])
         damaged[-1] ^= 0x01
         parts.payloads[n] = bytes(damaged)
+
     return change
 
 
-def invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str, str]]:
-    """rule id -> (file bytes, error class name, text the message must contain)."""
+def invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
+    """rule id -> (file bytes, error class name): ``good`` with that one rule broken."""
     parts = Parts(good)
     header_length = struct.unpack_from("<I", good, 16)[0]
     faces_shape = parts.entries[parts.index("FACE")]["shape"]
     k_vertices = parts.header["vertices"]
     bad_faces = np.full(faces_shape, 0, dtype=np.int64)
     bad_faces[0, 0] = k_vertices  # one past the last vertex
-    face_params, face_payload = encode_faces(bad_faces)  # the encoder does not check indices
+    face_params, face_payload = faces.encode_faces(bad_faces)  # the encoder does not check indices
     padded = np.zeros(faces_shape, dtype=np.int64)
     padded[:, 1] = -1  # padding before the end of a row
-    padded_params, padded_payload = encode_faces(padded)
+    padded_params, padded_payload = faces.encode_faces(padded)
     core_entry = parts.entries[parts.index("CORE")]
     names = msgpack.packb(["only one name"])
 
     return {
-        "R01-signature": (b"PK\x03\x04" + good[4:], "FormatError", "not a tuckercodec file"),
-        "R02-signature-transfer": (good[:4] + b"\r\r\n" + good[7:], "FormatError", "text mode"),
-        "R03-preamble-truncated": (good[:20], "TruncatedFileError", "preamble"),
-        "R04-preamble-crc": (good[:10] + bytes([good[10] ^ 0x04]) + good[11:], "ChecksumError", "preamble"),
-        "R05-major-version": (_set_preamble(good, 8, "<H", 2), "UnsupportedVersionError", "format version 2"),
-        "R06-critical-flag": (_set_preamble(good, 12, "<I", 0x0001), "UnsupportedVersionError", "critical flag"),
-        "R07-header-limit": (_set_preamble(good, 16, "<I", (16 << 20) + 1), "LimitError", "header"),
-        "R08-total-length": (_set_preamble(good, 20, "<Q", HEAD_SIZE + header_length), "FormatError", "total_length"),
-        "R09-trailing-bytes": (good + b"\x00\x00\x00\x00", "FormatError", "follow the end"),
-        "R10-file-truncated": (good[:-7], "TruncatedFileError", "cut short"),
-        "R11-header-crc": (good[:40] + bytes([good[40] ^ 0x20]) + good[41:], "ChecksumError", "header"),
-        "R12-header-not-map": (parts.pack(header_bytes=msgpack.packb([1, 2, 3])), "FormatError", "not a map"),
-        "R13-section-table-missing": (
-            parts.pack(header_bytes=msgpack.packb({k: v for k, v in parts.header.items() if k != "sections"})),
-            "FormatError", "header.sections",
+        "R01-signature": (b"PK\x03\x04" + good[4:], "FormatError"),
+        "R02-signature-transfer": (good[:4] + b"\r\r\n" + good[7:], "FormatError"),
+        "R03-preamble-truncated": (good[:20], "TruncatedFileError"),
+        "R04-preamble-crc": (good[:10] + bytes([good[10] ^ 0x04]) + good[11:], "ChecksumError"),
+        "R05-major-version": (_set_preamble(good, 8, "<H", 2), "UnsupportedVersionError"),
+        "R06-critical-flag": (_set_preamble(good, 12, "<I", 0x0001), "UnsupportedVersionError"),
+        "R07-header-limit": (_set_preamble(good, 16, "<I", (16 << 20) + 1), "LimitError"),
+        "R08-total-length": (
+            _set_preamble(good, 20, "<Q", HEAD_SIZE + header_length),
+            "FormatError",
         ),
-        "R14-section-entry-field": (_edit(good, _entry("U3", crc32="0"), fix_table=False), "FormatError", "crc32"),
-        "R15-section-duplicate-id": (_edit(good, _entry("U3", id="U1")), "FormatError", "appears twice"),
+        "R09-trailing-bytes": (good + b"\x00\x00\x00\x00", "FormatError"),
+        "R10-file-truncated": (good[:-7], "TruncatedFileError"),
+        "R11-header-crc": (good[:40] + bytes([good[40] ^ 0x20]) + good[41:], "ChecksumError"),
+        "R12-header-not-map": (parts.pack(header_bytes=msgpack.packb([1, 2, 3])), "FormatError"),
+        "R13-section-table-missing": (
+            parts.pack(
+                header_bytes=msgpack.packb(
+                    {k: v for k, v in parts.header.items() if k != "sections"}
+                )
+            ),
+            "FormatError",
+        ),
+        "R14-section-entry-field": (
+            _edit(good, _entry("U3", crc32="0"), fix_table=False),
+            "FormatError",
+        ),
+        "R15-section-duplicate-id": (_edit(good, _entry("U3", id="U1")), "FormatError"),
         "R16-section-not-contiguous": (
-            _edit(good, lambda p: p.entries[1].update(offset=p.entries[1]["offset"] + 1), fix_table=False),
-            "FormatError", "back to back",
+            _edit(
+                good,
+                lambda p: p.entries[1].update(offset=p.entries[1]["offset"] + 1),
+                fix_table=False,
+            ),
+            "FormatError",
         ),
         "R17-section-past-end": (
-            _edit(good, lambda p: p.entries[-1].update(length=p.entries[-1]["length"] + 1), fix_table=False),
-            "FormatError", "runs past the end",
+            _edit(
+                good,
+                lambda p: p.entries[-1].update(length=p.entries[-1]["length"] + 1),
+                fix_table=False,
+            ),
+            "FormatError",
         ),
-        "R18-section-coverage": (_edit(good, _forget_last_entry), "FormatError", "cover"),
-        "R19-section-crc": (_edit(good, _flip_last_payload_byte("U1"), fix_table=False), "ChecksumError", "section U1"),
-        "R20-header-field": (_edit(good, _header(vertices=_DELETE)), "FormatError", "header.vertices"),
-        "R21-header-limit": (_edit(good, _header(vertices=1 << 40)), "LimitError", "header.vertices"),
-        "R22-ranks": (_edit(good, _header(ranks=[parts.header["ranks"][0], 10_000])), "FormatError", "header.ranks"),
-        "R23-u2": (_edit(good, _header(u2=[1.0] * 8)), "FormatError", "header.u2"),
+        "R18-section-coverage": (_edit(good, _forget_last_entry), "FormatError"),
+        "R19-section-crc": (
+            _edit(good, _flip_last_payload_byte("U1"), fix_table=False),
+            "ChecksumError",
+        ),
+        "R20-header-field": (_edit(good, _header(vertices=_DELETE)), "FormatError"),
+        "R21-header-limit": (_edit(good, _header(vertices=1 << 40)), "LimitError"),
+        "R22-ranks": (
+            _edit(good, _header(ranks=[parts.header["ranks"][0], 10_000])),
+            "FormatError",
+        ),
+        "R23-u2": (_edit(good, _header(u2=[1.0] * 8)), "FormatError"),
         "R24-unknown-critical-section": (
             _edit(good, _append_section({"id": "XTRA", "critical": True, "codec": "raw"}, b"?")),
-            "UnsupportedVersionError", "unknown critical section",
+            "UnsupportedVersionError",
         ),
-        "R25-unknown-codec": (_edit(good, _entry("U3", codec="qmat2")), "UnsupportedVersionError", "unknown codec"),
-        "R26-required-section-missing": (_edit(good, lambda p: _drop(p, "CENT")), "FormatError", "section CENT"),
-        "R27-criticality": (_edit(good, _entry("U1", critical=False)), "FormatError", "critical"),
-        "R28-shape": (_edit(good, _entry("U3", shape=[parts.header["frames"] + 1, parts.header["ranks"][1]])), "FormatError", "section U3.shape"),
+        "R25-unknown-codec": (_edit(good, _entry("U3", codec="qmat2")), "UnsupportedVersionError"),
+        "R26-required-section-missing": (_edit(good, lambda p: _drop(p, "CENT")), "FormatError"),
+        "R27-criticality": (_edit(good, _entry("U1", critical=False)), "FormatError"),
+        "R28-shape": (
+            _edit(good, _entry("U3", shape=[parts.header["frames"] + 1, parts.header["ranks"][1]])),
+            "FormatError",
+        ),
         "R29-zstd-content-size": (
-            _edit(good, _payload("CORE", compress(b"\x00" * 3))), "FormatError", "section CORE",
+            _edit(good, _payload("CORE", streams.compress(b"\x00" * 3))),
+            "FormatError",
         ),
-        "R30-planes": (_edit(good, _entry("U1", planes=5)), "FormatError", "planes"),
+        "R30-planes": (_edit(good, _entry("U1", planes=5)), "FormatError"),
         "R31-steps": (
-            _edit(good, _entry("CORE", steps=np.array([0.0], "<f4").tobytes())), "FormatError", "section CORE.steps",
+            _edit(good, _entry("CORE", steps=np.array([0.0], "<f4").tobytes())),
+            "FormatError",
         ),
         "R32-predictor": (
-            _edit(good, _entry("CORE", predict=b"\x01" * len(core_entry["predict"]))), "FormatError", "predictor",
+            _edit(good, _entry("CORE", predict=b"\x01" * len(core_entry["predict"]))),
+            "FormatError",
         ),
-        "R33-face-index": (_edit(good, _payload("FACE", face_payload, **face_params)), "FormatError", "outside"),
-        "R34-face-padding": (_edit(good, _payload("FACE", padded_payload, **padded_params)), "FormatError", "padded"),
-        "R36-reconstruction-finite": (_edit(good, _header(u2=[1e308] * 9)), "FormatError", "overflows"),
+        "R33-face-index": (
+            _edit(good, _payload("FACE", face_payload, **face_params)),
+            "FormatError",
+        ),
+        "R34-face-padding": (
+            _edit(good, _payload("FACE", padded_payload, **padded_params)),
+            "FormatError",
+        ),
+        "R36-reconstruction-finite": (_edit(good, _header(u2=[1e308] * 9)), "FormatError"),
         "R35-names": (
-            _edit(good, lambda p: _add_names(p, names)), "FormatError", "section NAME",
+            _edit(good, lambda p: _add_names(p, names)),
+            "FormatError",
         ),
     }
 
@@ -234,6 +288,7 @@ def _append_section(entry: dict[str, Any], payload: bytes) -> Callable[[Parts], 
     def change(parts: Parts) -> None:
         parts.entries.append(dict(entry))
         parts.payloads.append(payload)
+
     return change
 
 
@@ -246,8 +301,10 @@ def _drop(parts: Parts, section_id: str) -> None:
 def _add_names(parts: Parts, raw: bytes) -> None:
     if any(entry["id"] == "NAME" for entry in parts.entries):
         _drop(parts, "NAME")
-    parts.entries.append({"id": "NAME", "critical": False, "codec": "msgpack-zstd", "size": len(raw)})
-    parts.payloads.append(compress(raw))
+    parts.entries.append(
+        {"id": "NAME", "critical": False, "codec": "msgpack-zstd", "size": len(raw)}
+    )
+    parts.payloads.append(streams.compress(raw))
 
 
 # ------------------------------------------------------------------------------------------
@@ -268,10 +325,13 @@ def digests(decoder: Decoder) -> dict[str, str]:
 
 def valid_vectors() -> dict[str, tuple[bytes, str]]:
     """name -> (file bytes, what it exercises)."""
-    wave_tri = MeshSequence(wave(24, 9), triangles(9))
+    wave_tri = MeshSequence(wave_sheet(24, 9), sheet_triangles(9))
     basic = encode(wave_tri, target_kg=0.5)
     named = MeshSequence(
-        wave(16, 7) * 3.0 + 10.0, polygons(7), [f"walk_{n:03d}.obj" for n in range(16)], frame_rate=30.0
+        wave_sheet(16, 7) * 3.0 + 10.0,
+        polygons(7),
+        [f"walk_{n:03d}.obj" for n in range(16)],
+        frame_rate=30.0,
     )
     extended = Parts(basic)
     extended.flags |= 0x00010000  # an ignorable flag bit
@@ -280,55 +340,77 @@ def valid_vectors() -> dict[str, tuple[bytes, str]]:
     extended.payloads.append(b"unknown ancillary data is skipped unread")
     return {
         "v1-wave-triangles": (basic, "triangles, no names: the basic file"),
-        "v1-polygons-names": (encode(named, target_kg=0.1), "quads padded to triangles, frame names, frame rate, far from the origin"),
-        "v1-ignorable-extensions": (extended.pack(), "v1-wave-triangles plus an ignorable flag, header key and ancillary section"),
+        "v1-polygons-names": (
+            encode(named, target_kg=0.1),
+            "quads padded to triangles, frame names, frame rate, far from the origin",
+        ),
+        "v1-ignorable-extensions": (
+            extended.pack(),
+            "v1-wave-triangles plus an ignorable flag, header key and ancillary section",
+        ),
     }
 
 
-def main() -> int:
+def write_valid(folder: Path, name: str, data: bytes, purpose: str) -> None:
+    """One valid vector: the file, its reference positions and the JSON of what it holds."""
+    decoder = Decoder(data)
+    positions = decoder.positions()
+    (folder / f"{name}.tkc").write_bytes(data)
+    np.save(folder / f"{name}.positions.npy", positions)
+    header = decoder.info
+    expected = {
+        "file": f"{name}.tkc",
+        "valid": True,
+        "purpose": purpose,
+        "header": {
+            "format_version": header.format_version,
+            "vertices": header.vertices,
+            "frames": header.frames,
+            "ranks": list(header.ranks),
+            "faces": header.faces,
+            "face_width": header.face_width,
+            "total_bytes": header.total_bytes,
+            "frame_rate": header.frame_rate,
+            "kg": header.kg,
+        },
+        "frame_names": decoder.frame_names,
+        "sha256": digests(decoder),
+        "reference": f"{name}.positions.npy",
+        "tolerance": {"relative_to_max_abs": RELATIVE_TOLERANCE},
+    }
+    (folder / f"{name}.json").write_text(json.dumps(expected, indent=2) + "\n")
+
+
+def write_invalid(folder: Path, good: bytes) -> int:
+    """The invalid vectors made from the valid file ``good``, with their JSON; how many."""
+    vectors = invalid_vectors(good)
+    for rule, (data, error) in vectors.items():
+        (folder / f"{rule}.tkc").write_bytes(data)
+        expected = {"file": f"{rule}.tkc", "valid": False, "rule": rule, "error": error}
+        (folder / f"{rule}.json").write_text(json.dumps(expected, indent=2) + "\n")
+    return len(vectors)
+
+
+def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument(
+        "--out", type=Path, default=VECTORS, help="where to write them (default: spec/vectors/)"
+    )
     parser.add_argument("--force", action="store_true", help="replace existing vectors")
-    args = parser.parse_args()
-    if VECTORS.exists() and any(VECTORS.iterdir()) and not args.force:
-        print(f"{VECTORS} is not empty: pass --force to write the vectors again", file=sys.stderr)
+    args = parser.parse_args(argv)
+    out: Path = args.out
+    existing = [p for p in out.iterdir() if p.suffix in VECTOR_SUFFIXES] if out.is_dir() else []
+    if existing and not args.force:
+        print(f"{out} holds vectors: pass --force to write the vectors again", file=sys.stderr)
         return 1
-    VECTORS.mkdir(parents=True, exist_ok=True)
-    for old in VECTORS.iterdir():
+    out.mkdir(parents=True, exist_ok=True)
+    for old in existing:  # stale vectors go; anything else in the folder stays
         old.unlink()
     valid = valid_vectors()
     for name, (data, purpose) in valid.items():
-        decoder = Decoder(data)
-        positions = decoder.positions()
-        (VECTORS / f"{name}.tkc").write_bytes(data)
-        np.save(VECTORS / f"{name}.positions.npy", positions)
-        header = decoder.info
-        expected = {
-            "file": f"{name}.tkc",
-            "valid": True,
-            "purpose": purpose,
-            "header": {
-                "format_version": header.format_version,
-                "vertices": header.vertices,
-                "frames": header.frames,
-                "ranks": list(header.ranks),
-                "faces": header.faces,
-                "face_width": header.face_width,
-                "total_bytes": header.total_bytes,
-                "frame_rate": header.frame_rate,
-                "kg": header.kg,
-            },
-            "frame_names": decoder.frame_names,
-            "sha256": digests(decoder),
-            "reference": f"{name}.positions.npy",
-            "tolerance": {"relative_to_max_abs": RELATIVE_TOLERANCE},
-        }
-        (VECTORS / f"{name}.json").write_text(json.dumps(expected, indent=2) + "\n")
-    good = valid["v1-wave-triangles"][0]
-    for rule, (data, error, _) in invalid_vectors(good).items():
-        (VECTORS / f"{rule}.tkc").write_bytes(data)
-        expected = {"file": f"{rule}.tkc", "valid": False, "rule": rule, "error": error}
-        (VECTORS / f"{rule}.json").write_text(json.dumps(expected, indent=2) + "\n")
-    print(f"wrote {len(valid)} valid and {len(invalid_vectors(good))} invalid vectors to {VECTORS}")
+        write_valid(out, name, data, purpose)
+    invalid = write_invalid(out, valid["v1-wave-triangles"][0])
+    print(f"wrote {len(valid)} valid and {invalid} invalid vectors to {out}")
     return 0
 
 

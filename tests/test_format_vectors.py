@@ -5,13 +5,16 @@ from __future__ import annotations
 import hashlib
 import json
 import re
+import struct
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import tuckercodec
+from tools import make_vectors
 from tuckercodec import Decoder, info
+from tuckercodec.internal import HEAD_SIZE
 
 SPEC = Path(__file__).resolve().parents[1] / "spec"
 VECTORS = sorted((SPEC / "vectors").glob("*.json"))
@@ -23,10 +26,12 @@ def _load(path: Path) -> tuple[dict, bytes]:
 
 
 def test_vectors_exist():
-    assert len(VECTORS) >= 3, "spec/vectors/ is empty: run python tools/make_vectors.py"
+    assert len(VECTORS) >= 3, "spec/vectors/ is empty: run python -m tools.make_vectors"
 
 
-@pytest.mark.parametrize("path", [p for p in VECTORS if json.loads(p.read_text())["valid"]], ids=lambda p: p.stem)
+@pytest.mark.parametrize(
+    "path", [p for p in VECTORS if json.loads(p.read_text())["valid"]], ids=lambda p: p.stem
+)
 def test_valid_vector(path):
     expected, data = _load(path)
     decoder = Decoder(data)
@@ -35,8 +40,13 @@ def test_valid_vector(path):
         got = getattr(header, key)
         assert (list(got) if isinstance(got, tuple) else got) == value, key
     assert decoder.frame_names == expected["frame_names"]
-    arrays = {"faces": (decoder.faces, "<i8"), "u1": (decoder.u1, "<f8"), "u3": (decoder.u3, "<f8"),
-              "core": (decoder.core, "<f8"), "centroids": (decoder.centroids, "<f8")}
+    arrays = {
+        "faces": (decoder.faces, "<i8"),
+        "u1": (decoder.u1, "<f8"),
+        "u3": (decoder.u3, "<f8"),
+        "core": (decoder.core, "<f8"),
+        "centroids": (decoder.centroids, "<f8"),
+    }
     for name, (array, dtype) in arrays.items():
         digest = hashlib.sha256(np.ascontiguousarray(array, dtype=dtype).tobytes()).hexdigest()
         assert digest == expected["sha256"][name], f"dequantized {name} differs"
@@ -50,7 +60,9 @@ def test_valid_vector(path):
     np.testing.assert_allclose(decoder.frame(last), reference[last], rtol=0, atol=tolerance)
 
 
-@pytest.mark.parametrize("path", [p for p in VECTORS if not json.loads(p.read_text())["valid"]], ids=lambda p: p.stem)
+@pytest.mark.parametrize(
+    "path", [p for p in VECTORS if not json.loads(p.read_text())["valid"]], ids=lambda p: p.stem
+)
 def test_invalid_vector(path):
     expected, data = _load(path)
     error = getattr(tuckercodec, expected["error"])
@@ -70,12 +82,7 @@ def test_every_rule_of_the_spec_has_a_vector():
 
 def _repacked(header_change) -> bytes:
     """v1-wave-triangles with its header changed and the checksums made right again."""
-    import sys
-
-    sys.path.insert(0, str(SPEC.parent / "tools"))
-    from make_vectors import Parts
-
-    parts = Parts((SPEC / "vectors" / "v1-wave-triangles.tkc").read_bytes())
+    parts = make_vectors.Parts((SPEC / "vectors" / "v1-wave-triangles.tkc").read_bytes())
     header_change(parts.header)
     return parts.pack()
 
@@ -83,19 +90,12 @@ def _repacked(header_change) -> bytes:
 def _with_raw_header_entry(raw_key_and_value: bytes) -> bytes:
     """v1-wave-triangles with one more header entry, given as raw msgpack bytes (Python cannot
     build values nested beyond its recursion limit), checksums made right again."""
-    import struct
-    import zlib
-
     data = (SPEC / "vectors" / "v1-wave-triangles.tkc").read_bytes()
     header_length = struct.unpack_from("<I", data, 16)[0]
-    header = data[32 : 32 + header_length]
+    header = data[HEAD_SIZE : HEAD_SIZE + header_length]
     assert 0x80 <= header[0] < 0x8F  # a fixmap: its low bits count the keys
     new_header = bytes([header[0] + 1]) + header[1:] + raw_key_and_value
-    body = data[32 + header_length + 4 :]
-    head = bytearray(data[:28])
-    struct.pack_into("<IQ", head, 16, len(new_header), 32 + len(new_header) + 4 + len(body))
-    return b"".join([bytes(head), struct.pack("<I", zlib.crc32(bytes(head))), new_header,
-                     struct.pack("<I", zlib.crc32(new_header)), body])
+    return make_vectors.Parts(data).pack(header_bytes=new_header)
 
 
 @pytest.mark.parametrize("depth", [10, 999, 1023, 1100])
@@ -112,3 +112,42 @@ def test_a_reconstruction_that_overflows_is_a_format_error():
     data = _repacked(lambda h: h.__setitem__("u2", [1e308] * 9))
     with pytest.raises(tuckercodec.FormatError, match="overflows"):
         Decoder(data).positions()
+
+
+# ------------------------------------------------------------------------------------------
+# the writer, tools.make_vectors (never run into spec/vectors/ here)
+
+#: Written from a fresh encode of v1-wave-triangles, not from the committed file: the header's
+#: error.kg differs in its last digit, and nothing else (checked below).
+FROM_ANOTHER_ENCODE = {"R36-reconstruction-finite"}
+
+
+def test_the_invalid_vectors_come_from_the_committed_valid_one(tmp_path):
+    """Each invalid vector is the committed v1-wave-triangles with one rule broken: written
+    again from it into a temporary folder, the files and their JSON are the committed ones."""
+    good = (SPEC / "vectors" / "v1-wave-triangles.tkc").read_bytes()
+    count = make_vectors.write_invalid(tmp_path, good)
+    assert count == len([p for p in VECTORS if not json.loads(p.read_text())["valid"]])
+    for path in sorted(tmp_path.iterdir()):
+        committed = (SPEC / "vectors" / path.name).read_bytes()
+        if path.stem in FROM_ANOTHER_ENCODE and path.suffix == ".tkc":
+            parts = make_vectors.Parts(committed)
+            parts.header["error"] = make_vectors.Parts(good).header["error"]
+            committed = parts.pack()
+        assert path.read_bytes() == committed, path.name
+
+
+def test_the_writer_writes_every_vector_elsewhere_and_never_overwrites(tmp_path, capsys):
+    out = tmp_path / "vectors"
+    assert make_vectors.main(["--out", str(out)]) == 0
+    assert sorted(p.name for p in out.iterdir()) == sorted(
+        p.name for p in (SPEC / "vectors").iterdir()
+    )
+    for path in out.glob("*.json"):  # the invalid ones alike; the valid ones' digests may differ
+        written = json.loads(path.read_text())
+        committed = json.loads((SPEC / "vectors" / path.name).read_text())
+        assert written.keys() == committed.keys(), path.name
+        if not committed["valid"]:
+            assert written == committed
+    assert make_vectors.main(["--out", str(out)]) == 1
+    assert "--force" in capsys.readouterr().err
