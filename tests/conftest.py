@@ -34,7 +34,7 @@ from hypothesis import strategies as st
 import tuckercodec
 from tuckercodec import Decoder, FormatError, InputError, MeshSequence
 from tuckercodec.format.container import HEAD_SIZE, SIGNATURE, pack_container, parse_container
-from tuckercodec.samples import sheet_triangles, wave_sheet
+from tuckercodec.samples import sample_path, sheet_triangles, wave_sheet
 
 # ------------------------------------------------------------------------------------------
 # sequences
@@ -69,6 +69,12 @@ def wave_sequence(frames: int = 24, grid: int = 9, seed: int = 0) -> np.ndarray:
 def grid_faces(grid: int = 9) -> np.ndarray:
     """Triangles of the grid sheet used by :func:`wave_sequence`."""
     return sheet_triangles(grid)
+
+
+@pytest.fixture(scope="module")
+def cloth() -> MeshSequence:
+    """The cloth that ships with the package (60 frames of 3101 vertices)."""
+    return tuckercodec.load_sequence(sample_path(), progress=False)
 
 
 # ------------------------------------------------------------------------------------------
