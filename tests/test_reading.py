@@ -1,0 +1,50 @@
+"""Opening inputs (tuckercodec/reading.py): only regular files are read, so a named pipe given
+by mistake is an InputError at once, not a wait for a writer that never comes."""
+
+from __future__ import annotations
+
+import os
+import threading
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from tuckercodec import InputError
+from tuckercodec.io import load_sequence
+from tuckercodec.io.obj import read_obj
+
+
+def refused_without_waiting(call: Callable[[], object], pipe: Path) -> BaseException | None:
+    """Run ``call``, which reads the named pipe ``pipe``, in a thread: what it raised (None if
+    nothing), or fail the test if it is still waiting for a writer after 5 s."""
+    outcome: list[BaseException | None] = []
+
+    def run() -> None:
+        try:
+            call()
+            outcome.append(None)
+        except BaseException as error:  # handed to the test thread
+            outcome.append(error)
+
+    worker = threading.Thread(target=run, daemon=True)
+    worker.start()
+    worker.join(5)
+    if worker.is_alive():  # be the writer it waits for, so that the thread ends, then fail
+        with open(pipe, "wb"):
+            pass
+        pytest.fail(f"reading {pipe.name} waited for a writer")
+    return outcome[0]
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="named pipes are POSIX")
+@pytest.mark.parametrize("name", ["pipe.obj", "pipe.npz"])
+def test_a_named_pipe_is_refused_not_waited_on(tmp_path: Path, name: str) -> None:
+    pipe = tmp_path / name
+    os.mkfifo(pipe)
+    raised = refused_without_waiting(lambda: load_sequence(pipe, progress=False), pipe)
+    assert isinstance(raised, InputError) and "regular file" in str(raised), raised
+    assert raised.path == str(pipe)
+    if name.endswith(".obj"):
+        raised = refused_without_waiting(lambda: read_obj(pipe), pipe)
+        assert isinstance(raised, InputError) and "regular file" in str(raised), raised
