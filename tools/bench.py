@@ -265,7 +265,9 @@ def plot(name: str, trials_by_coder, targets, path: Path, force: bool) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m tools.bench", description=__doc__.split("\n\n")[0]
+    )
     parser.add_argument(
         "sequences", nargs="*", help="npz, OBJ folder or 'sample' (default: ../shared/data)"
     )

@@ -48,7 +48,9 @@ def accuracy(analysis, targets=(1.0, 0.1, 0.02, 0.005)) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m tools.bench_analysis", description=__doc__.splitlines()[0]
+    )
     parser.add_argument(
         "sequences", nargs="*", help="npz files, OBJ folders or 'sample' (default: shared data)"
     )

@@ -243,7 +243,9 @@ def verdict(value: float, limit: float) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the benchmark and print the result; returns the process exit status."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m tools.bench_codec", description=__doc__.splitlines()[0]
+    )
     parser.add_argument(
         "sequences",
         nargs="*",

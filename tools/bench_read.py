@@ -30,7 +30,9 @@ def time_loads(folder: Path, repeat: int) -> list[float]:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the benchmark and print the result; returns the process exit status."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m tools.bench_read", description=__doc__.splitlines()[0]
+    )
     parser.add_argument(
         "folder", nargs="?", type=Path, default=DEFAULT_FOLDER, help="folder of OBJ frames"
     )

@@ -392,7 +392,9 @@ def write_invalid(folder: Path, good: bytes) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m tools.make_vectors", description=__doc__.splitlines()[0]
+    )
     parser.add_argument(
         "--out", type=Path, default=VECTORS, help="where to write them (default: spec/vectors/)"
     )

@@ -693,7 +693,9 @@ def parse_targets(text: str) -> list[float]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m tools.paper", description=__doc__.splitlines()[0]
+    )
     parser.add_argument(
         "sequences",
         nargs="*",

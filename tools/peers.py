@@ -587,6 +587,25 @@ def _search_bound(
     return best
 
 
+def _search_targets(
+    name: str,
+    targets: list[float],
+    context: Context,
+    guess: Callable[[float], float],
+    compress: Callable[[float], bytes],
+    decompress: Callable[[bytes], np.ndarray],
+    label: Callable[[float], str],
+) -> list[Trial]:
+    """:func:`_search_bound` at each target, from the bound ``guess(target)``; a target that no
+    bound tried meets has no trial."""
+    trials = []
+    for target in targets:
+        trial = _search_bound(name, target, context, guess(target), compress, decompress, label)
+        if trial is not None:
+            trials.append(trial)
+    return trials
+
+
 def _rms_error(context: Context, target: float) -> float:
     """The per-entry RMS error that a KG of ``target`` allows: a starting guess for a bound."""
     return target / 100.0 * context.centred_norm / math.sqrt(context.tensor.size)
@@ -610,15 +629,12 @@ def run_sz3(sequence: MeshSequence, targets: list[float], context: Context) -> l
         data, _ = sz.decompress(np.frombuffer(payload, dtype=np.uint8), np.float64, shape)
         return np.asarray(data).reshape(shape).transpose(1, 0, 2)
 
-    trials = []
-    for target in targets:
-        guess = target / 100.0 * context.centred_norm  # the L2 norm of the error a KG target allows
-        trial = _search_bound(
-            "sz3", target, context, guess, compress, decompress, lambda b: f"L2 <= {b:.3g}"
-        )
-        if trial is not None:
-            trials.append(trial)
-    return trials
+    def guess(target: float) -> float:  # the L2 norm of the error a KG target allows
+        return target / 100.0 * context.centred_norm
+
+    return _search_targets(
+        "sz3", targets, context, guess, compress, decompress, lambda b: f"L2 <= {b:.3g}"
+    )
 
 
 def run_zfp(sequence: MeshSequence, targets: list[float], context: Context) -> list[Trial]:
@@ -630,15 +646,12 @@ def run_zfp(sequence: MeshSequence, targets: list[float], context: Context) -> l
     def decompress(payload: bytes) -> np.ndarray:
         return zfpy.decompress_numpy(payload)
 
-    trials = []
-    for target in targets:
-        guess = 4.0 * _rms_error(context, target)
-        trial = _search_bound(
-            "zfp", target, context, guess, compress, decompress, lambda b: f"tol {b:.3g}"
-        )
-        if trial is not None:
-            trials.append(trial)
-    return trials
+    def guess(target: float) -> float:
+        return 4.0 * _rms_error(context, target)
+
+    return _search_targets(
+        "zfp", targets, context, guess, compress, decompress, lambda b: f"tol {b:.3g}"
+    )
 
 
 def run_tthresh(sequence: MeshSequence, targets: list[float], context: Context) -> list[Trial]:
@@ -646,7 +659,6 @@ def run_tthresh(sequence: MeshSequence, targets: list[float], context: Context) 
     binary = shutil.which("tthresh")
     if binary is None:
         return []
-    trials = []
     k, three, frames = context.tensor.shape
     # Not a with-block: the trials' re-timing runs TTHRESH again after this function returns.
     folder = tempfile.mkdtemp(prefix="tkc-tthresh-")
@@ -657,22 +669,10 @@ def run_tthresh(sequence: MeshSequence, targets: list[float], context: Context) 
     context.tensor.tofile(raw)  # C order, time fastest: TTHRESH's first size varies fastest
 
     def compress(bound: float) -> bytes:
+        sizes = [str(frames), str(three), str(k)]
+        arguments = ["-i", str(raw), "-t", "double", "-s", *sizes, "-e", repr(bound)]
         subprocess.run(
-            [
-                binary,
-                "-i",
-                str(raw),
-                "-t",
-                "double",
-                "-s",
-                str(frames),
-                str(three),
-                str(k),
-                "-e",
-                repr(bound),
-                "-c",
-                str(compressed),
-            ],
+            [binary, *arguments, "-c", str(compressed)],
             check=True,
             capture_output=True,
             timeout=3600,
@@ -689,19 +689,12 @@ def run_tthresh(sequence: MeshSequence, targets: list[float], context: Context) 
         )
         return np.fromfile(restored, dtype=np.float64).reshape(context.tensor.shape)
 
-    for target in targets:
-        trial = _search_bound(
-            "tthresh",
-            target,
-            context,
-            target / 100.0,
-            compress,
-            decompress,
-            lambda b: f"-e {b:.3g}",
-        )
-        if trial is not None:
-            trials.append(trial)
-    return trials
+    def guess(target: float) -> float:  # -e is the relative error of the centred tensor
+        return target / 100.0
+
+    return _search_targets(
+        "tthresh", targets, context, guess, compress, decompress, lambda b: f"-e {b:.3g}"
+    )
 
 
 def run_zstd(sequence: MeshSequence, targets: list[float], context: Context) -> list[Trial]:
