@@ -1,5 +1,6 @@
-"""Nothing is lost (issue 5): outputs appear whole or not at all, an interrupted or failed write
-leaves the previous output as it was, and nothing is replaced without --force."""
+"""Nothing is lost (tuckercodec/atomic.py, and every writer that uses it): outputs appear whole
+or not at all, an interrupted or failed write leaves the previous output as it was, and nothing
+is replaced without --force (overwrite=True)."""
 
 from __future__ import annotations
 
@@ -13,12 +14,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import grid_faces, wave_sequence
 
 import tuckercodec as tc
 from tuckercodec import atomic
 from tuckercodec.cli import main
-
-from conftest import grid_faces, wave_sequence
 
 
 def _listing(folder: Path) -> list[str]:
@@ -78,6 +78,28 @@ def test_new_files_get_a_plain_files_permissions(tmp_path):
     assert (tmp_path / "out.bin").stat().st_mode & 0o777 == 0o666 & ~mask
 
 
+def test_atomic_write_never_leaves_half_a_file(tmp_path):
+    target = tmp_path / "out.bin"
+    target.write_bytes(b"old")
+
+    def fail_halfway(handle):
+        handle.write(b"new, partial")
+        raise RuntimeError("disk full")
+
+    with pytest.raises(FileExistsError):
+        atomic.write_atomic(target, b"new")
+    with pytest.raises(RuntimeError, match="disk full"):
+        atomic.write_atomic(target, fail_halfway, overwrite=True)
+    assert target.read_bytes() == b"old"
+    atomic.write_atomic(target, b"new", overwrite=True)
+    assert target.read_bytes() == b"new"
+    assert [p.name for p in tmp_path.iterdir()] == ["out.bin"]
+    # the same permissions as a file written by open(), not mkstemp's private 0600
+    plain = tmp_path / "plain.bin"
+    plain.write_bytes(b"x")
+    assert target.stat().st_mode & 0o777 == plain.stat().st_mode & 0o777
+
+
 _SLOW_WRITER = textwrap.dedent(
     """
     import signal, sys, time
@@ -128,9 +150,20 @@ def test_sigterm_during_an_encode_exits_cleanly_and_keeps_the_old_file(tmp_path)
     out = tmp_path / "out.tkc"
     out.write_bytes(b"old")
     with subprocess.Popen(
-        [sys.executable, "-m", "tuckercodec.cli", "encode", str(source), "-o", str(out),
-         "--kg", "0.0001", "--force"],
-        stderr=subprocess.PIPE, text=True,
+        [
+            sys.executable,
+            "-m",
+            "tuckercodec.cli",
+            "encode",
+            str(source),
+            "-o",
+            str(out),
+            "--kg",
+            "0.0001",
+            "--force",
+        ],
+        stderr=subprocess.PIPE,
+        text=True,
     ) as child:
         time.sleep(1.5)  # inside the encode, which takes several seconds
         assert child.poll() is None, "the encode finished before it could be interrupted"
@@ -159,8 +192,10 @@ def test_an_unwritable_folder_gives_one_line_and_leaves_nothing(tmp_path, monkey
     assert _listing(out_folder) == []
 
 
-@pytest.mark.skipif(os.name != "posix" or os.geteuid() == 0,
-                    reason="a read-only folder does not stop root, which CI may be")
+@pytest.mark.skipif(
+    os.name != "posix" or os.geteuid() == 0,
+    reason="a read-only folder does not stop root, which CI may be",
+)
 def test_a_read_only_folder_gives_one_line_and_leaves_nothing(tmp_path, capsys):
     source = tmp_path / "in.npz"
     np.savez(source, V=wave_sequence(6, 4), F=grid_faces(4))
@@ -228,5 +263,6 @@ def test_a_failed_decode_over_an_existing_folder_keeps_every_old_frame(tmp_path,
     monkeypatch.undo()
     tc.save_sequence(new, tmp_path / "frames", overwrite=True, progress=False)
     assert (tmp_path / "frames" / "notes.txt").read_text() == "not ours"  # never touched
-    np.testing.assert_array_equal(tc.load_sequence(tmp_path / "frames", progress=False).vertices,
-                                  new.vertices)
+    np.testing.assert_array_equal(
+        tc.load_sequence(tmp_path / "frames", progress=False).vertices, new.vertices
+    )
