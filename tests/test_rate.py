@@ -1,0 +1,13 @@
+"""The rate (tuckercodec/rate.py): bits per frame per vertex, from whole bytes."""
+
+from __future__ import annotations
+
+import pytest
+
+from tuckercodec.rate import bpfv
+
+
+def test_bpfv_counts_whole_bytes():
+    assert bpfv(1000, frames=10, vertices=100) == pytest.approx(8.0)
+    with pytest.raises(ValueError, match="must be positive"):
+        bpfv(10, frames=0, vertices=5)
