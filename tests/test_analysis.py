@@ -65,7 +65,7 @@ def check_energy_identity(analysis) -> None:
 # ----- synthetic data -----------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("frames,grid", [(24, 9), (40, 3)])  # K >= 3F and K < 3F paths
+@pytest.mark.parametrize(("frames", "grid"), [(24, 9), (40, 3)])  # K >= 3F and K < 3F paths
 def test_exact_table_matches_reconstruction_synthetic(frames, grid):
     analysis = analyze(wave_sequence(frames, grid))
     check_energy_identity(analysis)
@@ -79,8 +79,12 @@ def test_singular_values_match_numpy_svd():
     k, _, f = tensor.shape
     s1 = np.linalg.svd(tensor.reshape(k, 3 * f), compute_uv=False)
     s3 = np.linalg.svd(tensor.reshape(3 * k, f), compute_uv=False)
-    np.testing.assert_allclose(d.mode1_energy, s1[: len(d.mode1_energy)] ** 2, rtol=1e-9, atol=1e-12 * s1[0] ** 2)
-    np.testing.assert_allclose(d.mode3_energy, s3[: len(d.mode3_energy)] ** 2, rtol=1e-9, atol=1e-12 * s3[0] ** 2)
+    np.testing.assert_allclose(
+        d.mode1_energy, s1[: len(d.mode1_energy)] ** 2, rtol=1e-9, atol=1e-12 * s1[0] ** 2
+    )
+    np.testing.assert_allclose(
+        d.mode3_energy, s3[: len(d.mode3_energy)] ** 2, rtol=1e-9, atol=1e-12 * s3[0] ** 2
+    )
 
 
 def test_bound_is_never_below_exact():
@@ -121,7 +125,7 @@ def test_rd_curve_is_a_pareto_front():
     kg = analysis.kg_table()[1:, 1:]
     sizes = analysis.rate_table()[1:, 1:] * 3 * analysis.vertex_count * analysis.frame_count
     # no truncation is strictly better than the front at the front's own size
-    for floats, error in zip(curve.floats, curve.kg):
+    for floats, error in zip(curve.floats, curve.kg, strict=True):
         assert not np.any((sizes <= floats) & (kg < error - 1e-12))
     bound_curve = analysis.rd_curve(select="bound")
     assert np.all(np.diff(bound_curve.kg_bound) < 0)

@@ -47,6 +47,4 @@ def test_public_surface():
         ]
     )
     assert re.fullmatch(r"\d+\.\d+\.\d+", tuckercodec.__version__)
-    assert issubclass(InputError, tuckercodec.TuckerCodecError) and issubclass(
-        InputError, ValueError
-    )
+    assert all(issubclass(InputError, base) for base in (tuckercodec.TuckerCodecError, ValueError))

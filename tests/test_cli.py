@@ -16,7 +16,7 @@ from tuckercodec import __version__
 from tuckercodec.cli import main
 
 
-@pytest.fixture()
+@pytest.fixture
 def wave_npz(tmp_path):
     path = tmp_path / "wave.npz"
     np.savez(path, V=wave_sequence(20, 8), F=grid_faces(8))
@@ -29,7 +29,12 @@ def test_rd_prints_exact_and_bound_choices(wave_npz, capsys):
     assert "20 frames, 64 vertices, 98 faces" in out
     assert "Karni-Gotsman" in out
     rows = [line.split() for line in out.splitlines() if line.strip()[:1].isdigit()]
-    assert [(r[0], r[1]) for r in rows] == [("1", "exact"), ("1", "bound"), ("0.1", "exact"), ("0.1", "bound")]
+    assert [(r[0], r[1]) for r in rows] == [
+        ("1", "exact"),
+        ("1", "bound"),
+        ("0.1", "exact"),
+        ("0.1", "bound"),
+    ]
     for row in rows:
         assert float(row[6]) <= float(row[0])  # exact KG of the pick meets the target
         assert float(row[7]) >= float(row[6])  # the estimate bounds it
@@ -38,7 +43,16 @@ def test_rd_prints_exact_and_bound_choices(wave_npz, capsys):
 def test_rd_writes_csv_and_plots_and_refuses_to_overwrite(wave_npz, tmp_path, capsys):
     pytest.importorskip("matplotlib")
     table, plot, heatmap = tmp_path / "rd.csv", tmp_path / "rd.png", tmp_path / "heat.png"
-    args = ["rd", str(wave_npz), "--csv", str(table), "--plot", str(plot), "--heatmap", str(heatmap)]
+    args = [
+        "rd",
+        str(wave_npz),
+        "--csv",
+        str(table),
+        "--plot",
+        str(plot),
+        "--heatmap",
+        str(heatmap),
+    ]
     assert main(args) == 0
     with open(table, newline="") as handle:
         rows = list(csv.DictReader(handle))
@@ -54,7 +68,7 @@ def test_rd_writes_csv_and_plots_and_refuses_to_overwrite(wave_npz, tmp_path, ca
     err = capsys.readouterr().err
     assert "already exists" in err and "--force" in err and "Traceback" not in err
     assert table.read_bytes() == before
-    assert main(args + ["--force"]) == 0
+    assert main([*args, "--force"]) == 0
     assert not list(tmp_path.glob(".*.tmp"))
 
 
@@ -77,8 +91,19 @@ def test_a_single_frame_is_a_sequence_like_any_other(tmp_path, capsys):
     np.savez(one, V=wave_sequence(1, 4), F=grid_faces(4))
     assert main(["rd", str(one)]) == 0
     assert main(["encode", str(one), "-o", str(tmp_path / "one.tkc"), "--kg", "0.5"]) == 0
-    assert main(["decode", str(tmp_path / "one.tkc"), "-o", str(tmp_path / "one-back.npz"),
-                 "--reference", str(one)]) == 0
+    assert (
+        main(
+            [
+                "decode",
+                str(tmp_path / "one.tkc"),
+                "-o",
+                str(tmp_path / "one-back.npz"),
+                "--reference",
+                str(one),
+            ]
+        )
+        == 0
+    )
 
 
 def test_usage_errors_exit_2(capsys):
@@ -90,10 +115,12 @@ def test_usage_errors_exit_2(capsys):
     assert exit_info.value.code == 2
 
 
-@pytest.mark.parametrize("verb", [[], ["rd"], ["demo"], ["encode"], ["decode"], ["info"], ["eval"], ["render"]])
+@pytest.mark.parametrize(
+    "verb", [[], ["rd"], ["demo"], ["encode"], ["decode"], ["info"], ["eval"], ["render"]]
+)
 def test_help_on_every_verb(verb, capsys):
     with pytest.raises(SystemExit) as exit_info:
-        main(verb + ["--help"])
+        main([*verb, "--help"])
     assert exit_info.value.code == 0
     assert "usage: tuckercodec" in capsys.readouterr().out
 
@@ -109,7 +136,7 @@ def test_demo_runs_on_the_builtin_sample(capsys):
 def test_console_script_version():
     script = shutil.which("tuckercodec")
     command = [script] if script else [sys.executable, "-m", "tuckercodec.cli"]
-    done = subprocess.run(command + ["--version"], capture_output=True, text=True, check=False)
+    done = subprocess.run([*command, "--version"], capture_output=True, text=True, check=False)
     assert done.returncode == 0
     assert done.stdout.strip() == f"tuckercodec {__version__}"
 
@@ -141,13 +168,33 @@ def test_encode_decode_info_eval(wave_npz, tmp_path, capsys):
     assert header["total_bytes"] == packed.stat().st_size
 
     frames = tmp_path / "frames"
-    assert main(["decode", str(packed), "-o", str(frames), "--frames", "5:8", "--reference", str(wave_npz)]) == 0
+    assert (
+        main(
+            [
+                "decode",
+                str(packed),
+                "-o",
+                str(frames),
+                "--frames",
+                "5:8",
+                "--reference",
+                str(wave_npz),
+            ]
+        )
+        == 0
+    )
     out = capsys.readouterr().out
     assert "3 of 20 frames" in out and "of the 3 frames decoded" in out
     assert len(list(frames.glob("*.obj"))) == 3
-    assert sum(line.startswith("f ") for line in next(frames.glob("*.obj")).read_text().splitlines()) == 98
+    assert (
+        sum(line.startswith("f ") for line in next(frames.glob("*.obj")).read_text().splitlines())
+        == 98
+    )
 
-    assert main(["decode", str(packed), "-o", str(tmp_path / "all.npz"), "--reference", str(wave_npz)]) == 0
+    assert (
+        main(["decode", str(packed), "-o", str(tmp_path / "all.npz"), "--reference", str(wave_npz)])
+        == 0
+    )
     out = capsys.readouterr().out
     actual = float(out.split("actual KG error against")[1].split(":")[1].split()[0])
     assert actual <= 0.5
@@ -178,7 +225,11 @@ def test_corrupt_files_exit_3_naming_the_file(wave_npz, tmp_path, capsys):
     flipped = tmp_path / "flipped.tkc"
     flipped.write_bytes(data[:-5] + bytes([data[-5] ^ 0x10]) + data[-4:])
     capsys.readouterr()
-    for path, verb, words in ((cut, "info", "cut short"), (cut, "decode", "cut short"), (flipped, "decode", "CRC-32")):
+    for path, verb, words in (
+        (cut, "info", "cut short"),
+        (cut, "decode", "cut short"),
+        (flipped, "decode", "CRC-32"),
+    ):
         args = [verb, str(path)] + (["-o", str(tmp_path / "out")] if verb == "decode" else [])
         assert main(args) == 3
         err = capsys.readouterr().err
@@ -188,9 +239,14 @@ def test_corrupt_files_exit_3_naming_the_file(wave_npz, tmp_path, capsys):
 
 def test_encode_usage_errors_exit_2(wave_npz, tmp_path, capsys):
     packed = str(tmp_path / "x.tkc")
-    for args in (["--kg", "0.1", "--ranks", "2,2"], ["--kg", "-1"], ["--ranks", "2"], ["--bpfv", "zero"]):
+    for args in (
+        ["--kg", "0.1", "--ranks", "2,2"],
+        ["--kg", "-1"],
+        ["--ranks", "2"],
+        ["--bpfv", "zero"],
+    ):
         with pytest.raises(SystemExit) as exit_info:
-            main(["encode", str(wave_npz), "-o", packed] + args)
+            main(["encode", str(wave_npz), "-o", packed, *args])
         assert exit_info.value.code == 2
     assert main(["encode", str(wave_npz), "-o", packed, "--ranks", "500,2"]) == 2
     assert "ranks must be" in capsys.readouterr().err
@@ -201,7 +257,12 @@ def test_encode_usage_errors_exit_2(wave_npz, tmp_path, capsys):
 def test_decode_frame_options_and_reference_checks(wave_npz, tmp_path, capsys):
     packed = tmp_path / "wave.tkc"
     assert main(["encode", str(wave_npz), "-o", str(packed), "--kg", "1"]) == 0
-    assert main(["decode", str(packed), "-o", str(tmp_path / "last"), "--frames=-1", "--format", "npz"]) == 0
+    assert (
+        main(
+            ["decode", str(packed), "-o", str(tmp_path / "last"), "--frames=-1", "--format", "npz"]
+        )
+        == 0
+    )
     out = capsys.readouterr().out
     assert "1 of 20 frames" in out and str(tmp_path / "last.npz") in out  # the path really written
     assert (tmp_path / "last.npz").exists()
@@ -210,7 +271,9 @@ def test_decode_frame_options_and_reference_checks(wave_npz, tmp_path, capsys):
     assert exit_info.value.code == 2 and "5:2 is empty" in capsys.readouterr().err
     short = tmp_path / "short.npz"
     np.savez(short, V=wave_sequence(5, 8), F=grid_faces(8))
-    assert main(["decode", str(packed), "-o", str(tmp_path / "r.npz"), "--reference", str(short)]) == 4
+    assert (
+        main(["decode", str(packed), "-o", str(tmp_path / "r.npz"), "--reference", str(short)]) == 4
+    )
     assert "has 5 frames" in capsys.readouterr().err
     assert not (tmp_path / "r.npz").exists()  # checked before anything was written
 
@@ -234,7 +297,7 @@ def test_eval_names_the_file_at_fault(wave_npz, tmp_path, capsys):
 PNG = b"\x89PNG\r\n\x1a\n"
 
 
-@pytest.fixture()
+@pytest.fixture
 def packed(wave_npz, tmp_path):
     path = tmp_path / "wave.tkc"
     assert main(["encode", str(wave_npz), "-o", str(path), "--kg", "1"]) == 0
@@ -254,9 +317,24 @@ def test_eval_reports_sted_with_its_parameters_and_definition(wave_npz, packed, 
     assert (figures["sted"]["width"], figures["sted"]["window"]) == (1, 5)
     assert figures["sted"]["value"] > 0
 
-    assert main(["eval", str(wave_npz), str(packed), "--json", "--sted-width", "2", "--sted-window", "3"]) == 0
+    assert (
+        main(
+            [
+                "eval",
+                str(wave_npz),
+                str(packed),
+                "--json",
+                "--sted-width",
+                "2",
+                "--sted-window",
+                "3",
+            ]
+        )
+        == 0
+    )
     wider = json.loads(capsys.readouterr().out)["sted"]
-    assert (wider["width"], wider["window"]) == (2, 3) and wider["spatial"] != figures["sted"]["spatial"]
+    narrower = figures["sted"]
+    assert (wider["width"], wider["window"]) == (2, 3) and wider["spatial"] != narrower["spatial"]
 
     assert main(["eval", str(wave_npz), str(packed)]) == 0
     out = capsys.readouterr().out
@@ -301,12 +379,20 @@ def test_render_draws_a_frame_with_and_without_a_reference(wave_npz, packed, tmp
     plain, coloured = tmp_path / "plain.png", tmp_path / "error.png"
     assert main(["render", str(wave_npz), "--frame", "3", "-o", str(plain)]) == 0
     assert "frame 3 of 20, 64 vertices" in capsys.readouterr().out
-    assert main(["render", str(packed), "--frame=-1", "-o", str(coloured), "--reference", str(wave_npz)]) == 0
+    assert (
+        main(
+            ["render", str(packed), "--frame=-1", "-o", str(coloured), "--reference", str(wave_npz)]
+        )
+        == 0
+    )
     out = capsys.readouterr().out
     assert "frame 19 of 20" in out and "vertex error up to" in out
     for path in (plain, coloured):
         assert path.read_bytes()[:8] == PNG
-    assert main(["render", "sample", "--frame", "0", "-o", str(tmp_path / "cloth.svg"), "--up", "z"]) == 0
+    assert (
+        main(["render", "sample", "--frame", "0", "-o", str(tmp_path / "cloth.svg"), "--up", "z"])
+        == 0
+    )
     assert (tmp_path / "cloth.svg").read_text().lstrip().startswith("<?xml")
 
 
@@ -349,11 +435,39 @@ def test_render_errors_are_one_line_and_nothing_is_overwritten(wave_npz, packed,
 
     short = tmp_path / "short.npz"
     np.savez(short, V=wave_sequence(5, 8), F=grid_faces(8))
-    assert main(["render", str(packed), "--frame", "2", "-o", str(tmp_path / "r.png"), "--reference", str(short)]) == 4
+    assert (
+        main(
+            [
+                "render",
+                str(packed),
+                "--frame",
+                "2",
+                "-o",
+                str(tmp_path / "r.png"),
+                "--reference",
+                str(short),
+            ]
+        )
+        == 4
+    )
     err = capsys.readouterr().err
     assert str(short) in err and "has 5 frames" in err and len(err.splitlines()) == 1
     # a frame beyond the short reference: still the mismatch, not a missing frame
-    assert main(["render", str(packed), "--frame", "10", "-o", str(tmp_path / "r.png"), "--reference", str(short)]) == 4
+    assert (
+        main(
+            [
+                "render",
+                str(packed),
+                "--frame",
+                "10",
+                "-o",
+                str(tmp_path / "r.png"),
+                "--reference",
+                str(short),
+            ]
+        )
+        == 4
+    )
     assert "has 5 frames" in capsys.readouterr().err
     garbage = tmp_path / "garbage.tkc"
     garbage.write_bytes(b"not a compressed file at all")

@@ -20,7 +20,11 @@ def test_frame_errors_of_one_frame_and_bad_series(tmp_path):
     with pytest.raises(FileExistsError):
         plot_frame_errors(np.array([0.5]), np.array([0.01]), path)
     plot_frame_errors(np.zeros(4), np.zeros(4), path, overwrite=True)  # no error at all
-    for kg, worst in ((np.zeros(3), np.zeros(4)), (np.zeros(0), np.zeros(0)), (np.zeros((2, 2)), np.zeros((2, 2)))):
+    for kg, worst in (
+        (np.zeros(3), np.zeros(4)),
+        (np.zeros(0), np.zeros(0)),
+        (np.zeros((2, 2)), np.zeros((2, 2))),
+    ):
         with pytest.raises(ValueError, match="per-frame"):
             plot_frame_errors(kg, worst, tmp_path / "bad.png")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["one.png"]
