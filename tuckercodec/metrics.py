@@ -25,9 +25,6 @@ from .errors import InputError
 from .sequence import MeshSequence
 
 KG_DEFINITION = "KG (Karni-Gotsman 2004): 100*||A-B||_F / ||A - per-frame vertex mean of A||_F"
-KG_TEMPORAL_DEFINITION = (
-    "KG, temporal-mean variant: 100*||A-B||_F / ||A - per-vertex temporal mean of A||_F"
-)
 
 MeanKind = Literal["frame", "temporal"]
 

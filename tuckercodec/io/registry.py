@@ -98,8 +98,3 @@ def format_of(path: str | os.PathLike[str]) -> SequenceFormat | None:
         if suffix in candidate.suffixes:
             return candidate
     return None
-
-
-def known_suffixes() -> str:
-    """The suffixes of every format, for messages: ``".obj, .npz, .ply..."``."""
-    return ", ".join(suffix for f in formats() for suffix in f.suffixes)
