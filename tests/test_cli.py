@@ -225,16 +225,39 @@ def test_corrupt_files_exit_3_naming_the_file(wave_npz, tmp_path, capsys):
     flipped = tmp_path / "flipped.tkc"
     flipped.write_bytes(data[:-5] + bytes([data[-5] ^ 0x10]) + data[-4:])
     capsys.readouterr()
-    for path, verb, words in (
-        (cut, "info", "cut short"),
-        (cut, "decode", "cut short"),
-        (flipped, "decode", "CRC-32"),
+    for path, verb, words, rule in (
+        (cut, "info", "cut short", "R10-file-truncated"),
+        (cut, "decode", "cut short", "R10-file-truncated"),
+        (flipped, "decode", "CRC-32", "R19-section-crc"),
     ):
         args = [verb, str(path)] + (["-o", str(tmp_path / "out")] if verb == "decode" else [])
         assert main(args) == 3
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and str(path) in err and words in err and "Traceback" not in err
+        assert err.rstrip().endswith(f"[{rule}]")  # the rule of spec/FORMAT.md §11
     assert not (tmp_path / "out").exists()
+
+
+def test_a_target_no_file_can_meet_exits_5(wave_npz, tmp_path, capsys):
+    packed = tmp_path / "tiny.tkc"
+    assert main(["encode", str(wave_npz), "-o", str(packed), "--bpfv", "0.01"]) == 5
+    err = capsys.readouterr().err
+    assert err.startswith("tuckercodec: target cannot be met: no file fits 0.01 bpfv")
+    assert len(err.splitlines()) == 1 and not packed.exists()
+
+
+def test_a_missing_optional_package_exits_6_naming_the_extra(
+    wave_npz, tmp_path, capsys, monkeypatch
+):
+    from tuckercodec import DependencyError, plots
+
+    def no_matplotlib() -> None:
+        raise DependencyError("plots need matplotlib: pip install 'tuckercodec[plot]'")
+
+    monkeypatch.setattr(plots, "_pyplot", no_matplotlib)
+    assert main(["rd", str(wave_npz), "--plot", str(tmp_path / "rd.png")]) == 6
+    err = capsys.readouterr().err
+    assert "tuckercodec[plot]" in err and len(err.splitlines()) == 1
 
 
 def test_encode_usage_errors_exit_2(wave_npz, tmp_path, capsys):

@@ -32,7 +32,14 @@ from conftest import (
 from hypothesis import given
 
 from tuckercodec import InputError, MeshSequence
-from tuckercodec.io import load_sequence, natural_sort_key, save_sequence
+from tuckercodec.io import (
+    format_named,
+    format_of,
+    formats,
+    load_sequence,
+    natural_sort_key,
+    save_sequence,
+)
 from tuckercodec.io.obj import read_obj_frame
 
 
@@ -332,3 +339,25 @@ def teardown_module() -> None:
     """Remove the scratch folder; report how many examples each property test ran (``-s``)."""
     shutil.rmtree(SCRATCH, ignore_errors=True)
     report_examples(EXAMPLES_RUN)
+
+
+def test_formats_are_chosen_by_suffix_from_one_registry(tmp_path: Path) -> None:
+    suffixes = [suffix for found in formats() for suffix in found.suffixes]
+    assert len(suffixes) == len(set(suffixes))  # each suffix names one format
+    assert format_of(tmp_path / "a.OBJ") is format_named("obj")
+    assert format_of(tmp_path / "a.npz").read is not None  # a whole sequence in one file
+    assert format_of(tmp_path / "a.ply").read_frame is not None  # one frame per file
+    assert format_of(tmp_path / "a.txt") is None
+    with pytest.raises(ValueError, match="the formats are obj, npz, mesh"):
+        format_named("abc")
+
+
+def test_a_list_of_frames_refuses_what_is_not_one_frame_per_file(tmp_path: Path) -> None:
+    cube = write_cube_frames(tmp_path, 1)[0]
+    archive = tmp_path / "whole.npz"
+    np.savez(archive, V=np.zeros((2, 8, 3)))
+    notes = write_file(tmp_path / "notes.txt", b"v 0 0 0\n")
+    with pytest.raises(InputError, match=r"whole\.npz: this \.npz file holds a whole sequence"):
+        load_sequence([cube, archive], progress=False)
+    with pytest.raises(InputError, match=r"notes\.txt: not a mesh file this reads .*\.obj"):
+        load_sequence([cube, notes], progress=False)

@@ -69,9 +69,8 @@ def read_frames(files: list[Path], show_progress: bool) -> MeshSequence:
     for file in files:
         found = _frame_format(file)
         if found is None or found.read_frame is None:
-            whole = format_of(file)
-            if whole is not None:
-                reason = f"a {whole.name} file holds a whole sequence: load it on its own"
+            if format_of(file) is not None:
+                reason = f"this {file.suffix} file holds a whole sequence: load it on its own"
             else:
                 reason = f"not a mesh file this reads (one frame per file: {_frame_suffixes()})"
             raise InputError(reason, path=file)
