@@ -140,7 +140,7 @@ class Decoder:
         if isinstance(frames, (str, bytes)):
             raise TypeError(f"frames must be frame numbers, a range or a slice, not {frames!r}")
         if isinstance(frames, range):
-            ends = [frames[0], frames[-1]] if len(frames) else []
+            ends = [frames[0], frames[-1]] if frames else []  # len() overflows past 2**63
             _check_frames_exist(ends, count)
             return np.arange(frames.start, frames.stop, frames.step, dtype=np.int64) % count
         numbers = _frame_numbers(frames)

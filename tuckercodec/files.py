@@ -63,7 +63,7 @@ def encode_file(
 
 def read_compressed(path: str | os.PathLike[str], *, limits: Limits = DEFAULT_LIMITS) -> Decoder:
     """Open a compressed file from disk: the same as ``Decoder(path, limits=limits)``."""
-    return Decoder(path, limits=limits)
+    return Decoder(os.fsdecode(path), limits=limits)  # a bytes path is a path, not a file
 
 
 def decoded_output_path(output: str | os.PathLike[str], output_format: OutputFormat | None) -> Path:
@@ -98,6 +98,6 @@ def decode_file(
     (:func:`decoded_output_path`). Returns the decoded sequence.
     """
     output = decoded_output_path(output, output_format)
-    sequence = Decoder(path).sequence(frames)
+    sequence = Decoder(os.fsdecode(path)).sequence(frames)
     save_sequence(sequence, output, overwrite=overwrite, precision=precision, progress=progress)
     return sequence

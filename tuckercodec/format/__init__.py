@@ -1,9 +1,10 @@
 """The file format of ``spec/FORMAT.md``, one module per part of the spec.
 
-* :mod:`.container` (§2-5): signature, preamble, header map, section table; reading a file
-  from disk;
+* :mod:`.container` (§2, §4, §5): signature, preamble, header map and the validation order;
+  reading a file from disk;
 * :mod:`.header` (§4): the header's fields, and :class:`~.header.FileInfo`;
-* :mod:`.sections` (§6.6): which sections exist, their codecs, criticality, order and shapes;
+* :mod:`.sections` (§3, §6.6): the section table, and which sections exist, with their codecs,
+  criticality, order and shapes;
 * :mod:`.streams` (§6.1): zigzag integers in byte planes, one zstd frame;
 * :mod:`.prediction` (§6.2): residuals from parent rows (the mesh parents are
   :func:`tuckercodec.topology.mesh_parents`);

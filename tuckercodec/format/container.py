@@ -291,22 +291,20 @@ def read_file(
 
     Only a regular file is opened (a folder or a named pipe is an :class:`InputError`), and no
     more is read than the preamble declares: a huge file that is not ours is refused after its
-    first 32 bytes, and a file longer or shorter than ``total_length`` is refused from its size
-    before the header's CRC is checked (§5 steps 5 and 6). A :class:`FormatError` raised here
-    names ``path``.
+    first 32 bytes, and trailing bytes are counted from the file's size, not read (§5 step 5).
+    A header-only read also refuses a file shorter than ``total_length`` from its size, before
+    the header's CRC (§5's note on header-only readers); a whole read leaves that to
+    :func:`parse_container`, in §5's order. The caller names ``path`` in the errors.
     """
-    try:
-        with open_regular_file(path, "a tuckercodec file") as handle:
-            head = handle.read(HEAD_SIZE)
-            preamble = read_preamble(head, limits)
-            size = os.fstat(handle.fileno()).st_size
-            _check_not_longer(size, preamble.total_length)
+    with open_regular_file(path, "a tuckercodec file") as handle:
+        head = handle.read(HEAD_SIZE)
+        preamble = read_preamble(head, limits)
+        size = os.fstat(handle.fileno()).st_size
+        _check_not_longer(size, preamble.total_length)
+        if header_only:
             _check_reaches(size, preamble.total_length, "the data area", "preamble.total_length")
-            wanted = preamble.data_start if header_only else preamble.total_length
-            return head + handle.read(wanted - len(head))
-    except FormatError as error:
-        error.path = os.fspath(path)
-        raise
+            return head + handle.read(preamble.data_start - len(head))
+        return head + handle.read(preamble.total_length - len(head))
 
 
 class _HeaderProblem(Exception):

@@ -29,9 +29,8 @@ class Limits:
     max_face_width: int = 64
     max_sections: int = 64
     max_section_bytes: int = 1 << 32  # decompressed size of one section
-    max_factor_values: int = (
-        1 << 27
-    )  # K*i + F*k + 3*i*k + 3*F, the numbers decoded before any frame
+    # K*i + F*k + 3*i*k + 3*F, the numbers decoded before any frame
+    max_factor_values: int = 1 << 27
 
 
 DEFAULT_LIMITS = Limits()

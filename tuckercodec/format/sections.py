@@ -244,8 +244,12 @@ def check_sections(
             )
 
     i, k = ranks
-    expected_shapes = {"U1": (vertices, i), "U3": (frames, k), "CORE": (i * 3 * k, 1)}
-    expected_shapes["CENT"] = (frames, 3)
+    expected_shapes = {
+        "U1": (vertices, i),
+        "U3": (frames, k),
+        "CORE": (i * 3 * k, 1),
+        "CENT": (frames, 3),
+    }
     for section_id in REQUIRED_SECTIONS:
         where = f"section {section_id}"
         params = present[section_id].params
