@@ -50,13 +50,13 @@ def load_sequence(source: Source, *, progress: bool = True) -> MeshSequence:
         InputError: nothing to read, a file that cannot be read, or a frame whose vertex count
             or faces differ from the first; the error names the file, frame and line.
     """
-    if isinstance(source, (list, tuple)):
+    if not isinstance(source, (str, os.PathLike)):  # a list, tuple or other sequence of files
         files = [Path(item) for item in source]
         if not files:
             raise InputError("the list of frame files is empty")
         return read_frames(files, progress)
 
-    path = Path(source)  # type: ignore[arg-type]  # lists and tuples were handled above
+    path = Path(source)
     if not path.exists() and _GLOB_CHARACTERS.search(str(source)):
         return read_frames(glob_files(str(source)), progress)
     if path.is_dir():

@@ -19,9 +19,12 @@ from ..atomic import atomic_folder
 from ..errors import InputError
 from ..progress import progress as progress_bar
 from ..sequence import MeshSequence
-from .registry import MeshFrame, SequenceFormat, WriteOptions, format_of, formats
+from .registry import MeshFrame, SequenceFormat, WriteOptions, format_named, format_of
 
 _UNSAFE_NAME_CHARACTERS = re.compile(r"[^A-Za-z0-9._-]+")
+#: The format that reads a listed file whose suffix no format claims: trimesh reads far more
+#: kinds of mesh than the registry lists (.xyz, .drc...), and says so when it cannot.
+FALLBACK_FRAME_FORMAT = "mesh"
 
 
 def natural_sort_key(name: str) -> tuple[tuple[int | str, ...], str]:
@@ -66,14 +69,14 @@ def _frame_format(path: Path) -> SequenceFormat | None:
 def read_frames(files: list[Path], show_progress: bool) -> MeshSequence:
     """Read one frame per file; every frame must match the first one's vertices and faces."""
     readers = []
-    for file in files:
-        found = _frame_format(file)
-        if found is None or found.read_frame is None:
-            if format_of(file) is not None:
-                reason = f"this {file.suffix} file holds a whole sequence: load it on its own"
-            else:
-                reason = f"not a mesh file this reads (one frame per file: {_frame_suffixes()})"
-            raise InputError(reason, path=file)
+    for index, file in enumerate(files):
+        found = format_of(file) or format_named(FALLBACK_FRAME_FORMAT)
+        if found.read_frame is None:
+            raise InputError(
+                f"this {file.suffix} file holds a whole sequence: load it on its own",
+                path=file,
+                frame=index if len(files) > 1 else None,
+            )
         readers.append(found.read_frame)
     label = "reading OBJ" if all(f.suffix.lower() == ".obj" for f in files) else "reading meshes"
     numbered: Iterable[int] = range(len(files))
@@ -100,10 +103,6 @@ def read_frames(files: list[Path], show_progress: bool) -> MeshSequence:
 
     assert reference is not None and vertices is not None
     return MeshSequence(vertices, reference.faces, frame_names=[f.name for f in files])
-
-
-def _frame_suffixes() -> str:
-    return ", ".join(s for f in formats() if f.read_frame is not None for s in f.suffixes)
 
 
 def _check_matches(frame: MeshFrame, reference: MeshFrame, path: Path) -> None:

@@ -58,6 +58,7 @@ import numpy as np
 from ..atomic import write_atomic
 from ..errors import InputError
 from ..reading import open_regular_file
+from ..topology import face_table_problem
 from .registry import MeshFrame, SequenceFormat, WriteOptions
 
 #: The longest line the OBJ reader accepts, in bytes, its line end not counted: 4 MiB, a face of
@@ -224,8 +225,8 @@ def _read_checked(stream: BinaryIO, path: Path) -> bytes:
 def _too_long(limit: int) -> str:
     """The message for a line over the limit."""
     return (
-        f"line longer than {limit} bytes (objio.MAX_LINE_BYTES): not an OBJ text file, "
-        "or a damaged one"
+        f"line longer than {limit} bytes (tuckercodec.io.obj.MAX_LINE_BYTES): not an OBJ text "
+        "file, or a damaged one"
     )
 
 
@@ -665,8 +666,9 @@ def _check_writable(vertices: np.ndarray, faces: np.ndarray, precision: int | No
         raise ValueError(f"faces must have shape (M, n >= 3), got {faces.shape}")
     if faces.size and not np.issubdtype(faces.dtype, np.integer):
         raise ValueError(f"faces must be integers, got dtype {faces.dtype}")
-    if faces.size and (faces.min() < -1 or faces.max() >= len(vertices)):
-        raise ValueError(f"face indices must be in -1..{len(vertices) - 1}")
+    problem = face_table_problem(faces, len(vertices))
+    if problem is not None:  # an OBJ reader would refuse the file, this one included
+        raise ValueError(problem.message)
     if precision is not None and (isinstance(precision, bool) or not 1 <= precision <= 17):
         raise ValueError(f"precision must be 1..17 significant digits or None, got {precision!r}")
 
