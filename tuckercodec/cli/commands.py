@@ -46,7 +46,13 @@ def _check_plot_names(*named: tuple[str, Path | None]) -> None:
             )
 
 
-def run_rd(args: argparse.Namespace, source: str | Path) -> int:
+def sequence_source(name: str) -> str | Path:
+    """What a verb's INPUT names: the built-in sample for ``sample``, else the path itself."""
+    return sample_path() if name == "sample" else name
+
+
+def run_rd(args: argparse.Namespace) -> int:
+    source = sequence_source(args.input)
     _check_plot_names(("--plot", args.plot), ("--heatmap", args.heatmap))
     outputs = [p for p in (args.csv, args.plot, args.heatmap) if p is not None]
     refuse_existing(outputs, args.force)  # before the work, not after it
@@ -101,11 +107,9 @@ def _is_compressed(source: str) -> bool:
 
 def _load(source: str) -> MeshSequence:
     """A sequence from a path, 'sample', or a compressed file (decoded); errors name the path."""
-    if source == "sample":
-        return load_sequence(sample_path(), progress=False)
     if _is_compressed(source):
         return Decoder(source).sequence()
-    return load_sequence(source)
+    return load_sequence(sequence_source(source), progress=source != "sample")
 
 
 def _print_encode_report(report: EncodeReport) -> None:
@@ -129,7 +133,7 @@ def _print_encode_report(report: EncodeReport) -> None:
 def run_encode(args: argparse.Namespace) -> int:
     refuse_existing([args.output], args.force)  # before the work, not after it
     start = time.perf_counter()
-    sequence = load_sequence(sample_path() if args.input == "sample" else args.input)
+    sequence = load_sequence(sequence_source(args.input))
     result = encode_with_report(  # no mode given: the encoder's default target
         sequence, target_kg=args.kg, ranks=args.ranks, target_bpfv=args.bpfv, select=args.select
     )

@@ -24,7 +24,6 @@ from ..errors import (
     TuckerCodecError,
     UnreachableTargetError,
 )
-from ..samples import sample_path
 from . import commands
 from .arguments import build_parser
 
@@ -35,9 +34,7 @@ _VERBS: dict[str, Callable[[argparse.Namespace], int]] = {
     "info": commands.run_info,
     "eval": commands.run_eval,
     "render": commands.run_render,
-    "rd": lambda args: commands.run_rd(
-        args, sample_path() if args.input == "sample" else args.input
-    ),
+    "rd": commands.run_rd,
 }
 
 #: What the one-line message calls each kind of error, after "tuckercodec: ".
@@ -98,7 +95,3 @@ def _run(args: argparse.Namespace) -> int:
     except KeyboardInterrupt as interrupt:
         _fail("interrupted")
         return 128 + (signal.SIGTERM if isinstance(interrupt, _Terminated) else signal.SIGINT)
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
