@@ -236,17 +236,17 @@ def _failing_after(count: int, real):
 
 
 def test_a_decode_into_a_new_folder_that_fails_leaves_no_folder(tmp_path, monkeypatch):
-    from tuckercodec.io import obj as seqio
+    from tuckercodec.io import obj as obj_io
 
     sequence = tc.MeshSequence(wave_sequence(6, 4), grid_faces(4))
-    monkeypatch.setattr(seqio, "write_obj", _failing_after(3, seqio.write_obj))
+    monkeypatch.setattr(obj_io, "write_obj", _failing_after(3, obj_io.write_obj))
     with pytest.raises(OSError, match="No space"):
         tc.save_sequence(sequence, tmp_path / "frames", progress=False)
     assert _listing(tmp_path) == []  # neither the folder nor its staging folder
 
 
 def test_a_failed_decode_over_an_existing_folder_keeps_every_old_frame(tmp_path, monkeypatch):
-    from tuckercodec.io import obj as seqio
+    from tuckercodec.io import obj as obj_io
 
     old = tc.MeshSequence(wave_sequence(6, 4), grid_faces(4))
     tc.save_sequence(old, tmp_path / "frames", progress=False)
@@ -255,7 +255,7 @@ def test_a_failed_decode_over_an_existing_folder_keeps_every_old_frame(tmp_path,
     new = tc.MeshSequence(wave_sequence(6, 4, seed=1), grid_faces(4))
     with pytest.raises(FileExistsError):
         tc.save_sequence(new, tmp_path / "frames", progress=False)  # no overwrite: refused first
-    monkeypatch.setattr(seqio, "write_obj", _failing_after(3, seqio.write_obj))
+    monkeypatch.setattr(obj_io, "write_obj", _failing_after(3, obj_io.write_obj))
     with pytest.raises(OSError, match="No space"):
         tc.save_sequence(new, tmp_path / "frames", overwrite=True, progress=False)
     assert {p.name: p.read_bytes() for p in (tmp_path / "frames").iterdir()} == before

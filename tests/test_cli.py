@@ -249,12 +249,8 @@ def test_a_target_no_file_can_meet_exits_5(wave_npz, tmp_path, capsys):
 def test_a_missing_optional_package_exits_6_naming_the_extra(
     wave_npz, tmp_path, capsys, monkeypatch
 ):
-    from tuckercodec import DependencyError, plots
-
-    def no_matplotlib() -> None:
-        raise DependencyError("plots need matplotlib: pip install 'tuckercodec[plot]'")
-
-    monkeypatch.setattr(plots, "_pyplot", no_matplotlib)
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # "import matplotlib" now fails
+    monkeypatch.setitem(sys.modules, "matplotlib.pyplot", None)
     assert main(["rd", str(wave_npz), "--plot", str(tmp_path / "rd.png")]) == 6
     err = capsys.readouterr().err
     assert "tuckercodec[plot]" in err and len(err.splitlines()) == 1

@@ -227,7 +227,9 @@ def test_ranks_beyond_the_tensor_are_refused(ranks):
 
 
 def test_a_size_no_file_can_meet_is_refused_with_the_smallest_size():
-    with pytest.raises(ValueError, match=r"no file fits 0\.001 bpfv: even the coarsest one needs"):
+    with pytest.raises(
+        tc.UnreachableTargetError, match=r"no file fits 0\.001 bpfv: even the coarsest one needs"
+    ):
         tc.encode(_strip(), target_bpfv=0.001)
 
 
