@@ -14,7 +14,6 @@ import contextlib
 import math
 import os
 import signal
-import struct
 import sys
 import tempfile
 import threading
@@ -33,7 +32,15 @@ from hypothesis import strategies as st
 
 import tuckercodec
 from tuckercodec import Decoder, FormatError, InputError, MeshSequence
-from tuckercodec.format.container import HEAD_SIZE, SIGNATURE, pack_container, parse_container
+from tuckercodec.format.container import (
+    CRC,
+    HEAD_SIZE,
+    PREAMBLE,
+    SIGNATURE,
+    pack_container,
+    pack_raw,
+    parse_container,
+)
 from tuckercodec.samples import sample_path, sheet_triangles, wave_sheet
 
 # ------------------------------------------------------------------------------------------
@@ -233,18 +240,7 @@ def raw_file(
     """A file from a header (a map, or raw msgpack bytes) and a data area, with correct
     preamble and header CRCs whatever the header says: the checks behind the CRCs are reached."""
     header_bytes = header if isinstance(header, bytes) else msgpack.packb(header, use_bin_type=True)
-    if total is None:
-        total = HEAD_SIZE + len(header_bytes) + 4 + len(area)
-    head = SIGNATURE + struct.pack("<HHIIQ", major, minor, flags, len(header_bytes), total)
-    return b"".join(
-        [
-            head,
-            struct.pack("<I", zlib.crc32(head)),
-            header_bytes,
-            struct.pack("<I", zlib.crc32(header_bytes)),
-            area,
-        ]
-    )
+    return pack_raw(major, minor, flags, header_bytes, area, total=total)
 
 
 def with_preamble(
@@ -257,12 +253,12 @@ def with_preamble(
     total: int | None = None,
 ) -> bytes:
     """The file with preamble fields changed and the preamble CRC made right again."""
-    fields = list(struct.unpack_from("<HHIIQ", data, 8))
+    fields = list(PREAMBLE.unpack_from(data, len(SIGNATURE)))
     for index, value in enumerate((major, minor, flags, header_length, total)):
         if value is not None:
             fields[index] = value
-    head = SIGNATURE + struct.pack("<HHIIQ", *fields)
-    return head + struct.pack("<I", zlib.crc32(head)) + data[HEAD_SIZE:]
+    head = SIGNATURE + PREAMBLE.pack(*fields)
+    return head + CRC.pack(zlib.crc32(head)) + data[HEAD_SIZE:]
 
 
 def table_file(

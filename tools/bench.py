@@ -43,7 +43,7 @@ from pathlib import Path
 
 import tuckercodec
 from tools import common, peers
-from tuckercodec import bpfv, max_vertex_displacement, sted
+from tuckercodec import bpfv, internal, max_vertex_displacement, sted
 from tuckercodec.internal import KG_DEFINITION
 
 DEFAULT_TARGETS = [2.0, 1.0, 0.5, 0.2, 0.1, 0.05, 0.02]
@@ -240,7 +240,7 @@ def summary_rows(name: str, trials_by_coder, targets) -> list[str]:
 
 
 def plot(name: str, trials_by_coder, targets, path: Path, force: bool) -> None:
-    plt = common.pyplot()
+    plt = internal.pyplot()
     fig, ax = plt.subplots(figsize=(8, 5))
     for coder, trials in trials_by_coder.items():
         points = sorted((t.kg, t.metrics["bpfv"]) for t in trials if t.kg > 0 and t.metrics)
@@ -261,7 +261,7 @@ def plot(name: str, trials_by_coder, targets, path: Path, force: bool) -> None:
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    common.save_png(fig, path, dpi=120, force=force)
+    internal.save_figure(fig, path, dpi=120, overwrite=force)
 
 
 def main(argv: list[str] | None = None) -> int:

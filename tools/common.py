@@ -12,20 +12,17 @@ import gc
 import os
 import platform
 import statistics
-import struct
 import sys
 import time
 import tracemalloc
-import zlib
 from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from tuckercodec import MeshSequence, load_sequence
-from tuckercodec.internal import HEAD_SIZE, SIGNATURE, sample_path, write_atomic
+from tuckercodec.internal import sample_path, write_atomic
 
 REPO = Path(__file__).resolve().parents[1]
 #: The real test sequences, beside the repository (never committed).
@@ -208,53 +205,3 @@ def write_text(path: Path, text: str, force: bool) -> None:
     """Write ``text`` (UTF-8) to ``path`` atomically; an existing file is replaced only with
     ``force`` (FileExistsError otherwise)."""
     write_atomic(path, text.encode("utf-8"), overwrite=force)
-
-
-def pyplot() -> Any:
-    """matplotlib's pyplot on the file-only Agg backend (imported only to draw)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def save_png(fig: Any, path: Path, *, dpi: int, force: bool) -> None:
-    """Write ``fig`` to ``path`` as PNG atomically (replacing a file only with ``force``), then
-    close it."""
-    try:
-        write_atomic(
-            path, lambda handle: fig.savefig(handle, format="png", dpi=dpi), overwrite=force
-        )
-    finally:
-        pyplot().close(fig)
-
-
-# ------------------------------------------------------------------------------------------
-# files built byte by byte
-
-
-#: The preamble after the signature: major, minor, flags, header_length, total_length.
-PREAMBLE = struct.Struct("<HHIIQ")
-CRC = struct.Struct("<I")
-
-
-def raw_container(
-    major: int,
-    minor: int,
-    flags: int,
-    header_bytes: bytes,
-    body: bytes,
-    *,
-    total: int | None = None,
-) -> bytes:
-    """A file from raw parts with both CRCs right and nothing else checked: what the vector
-    writer and the fuzzer need to break exactly one rule (``pack_container`` builds only
-    well-formed files). ``total`` defaults to the true length."""
-    if total is None:
-        total = HEAD_SIZE + len(header_bytes) + CRC.size + len(body)
-    head = SIGNATURE + PREAMBLE.pack(major, minor, flags, len(header_bytes), total)
-    return b"".join(
-        [head, CRC.pack(zlib.crc32(head)), header_bytes, CRC.pack(zlib.crc32(header_bytes)), body]
-    )

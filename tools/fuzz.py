@@ -137,8 +137,7 @@ def _lenient_parse(data: bytes) -> tuple[list[int], dict[str, Any], bytes] | Non
     ``None``. Nothing is checked: the point is to edit and re-sign."""
     import msgpack
 
-    from tools.common import PREAMBLE
-    from tuckercodec.internal import SIGNATURE
+    from tuckercodec.internal import PREAMBLE, SIGNATURE
 
     if len(data) < 32 or data[:8] != SIGNATURE:
         return None
@@ -183,7 +182,7 @@ def _pack(
     """A file with correct CRCs (and mostly correct offsets and lengths) from edited parts."""
     import msgpack
 
-    from tools.common import raw_container
+    from tuckercodec.internal import pack_raw
 
     header = dict(header)
     if sections is not None:
@@ -198,7 +197,7 @@ def _pack(
         header["sections"] = table
         area = b"".join(parts)
     major, minor, flags, _, _ = fields
-    return raw_container(major, minor, flags, msgpack.packb(header, use_bin_type=True), area)
+    return pack_raw(major, minor, flags, msgpack.packb(header, use_bin_type=True), area)
 
 
 _EDGE_INTS = [
@@ -429,8 +428,7 @@ def structural_mutation(data: bytes, rng: random.Random) -> bytes | None:
 def resign(data: bytes) -> bytes:
     """Make the preamble's and header's CRC-32 right again after a byte-level mutation, so
     that it is judged on what it changed, not on the checksum."""
-    from tools.common import CRC, PREAMBLE
-    from tuckercodec.internal import SIGNATURE
+    from tuckercodec.internal import CRC, PREAMBLE, SIGNATURE
 
     if len(data) < 32 or data[:8] != SIGNATURE:
         return data

@@ -33,7 +33,7 @@ import msgpack
 import numpy as np
 
 from tools import common
-from tuckercodec import Decoder, MeshSequence, encode
+from tuckercodec import Decoder, MeshSequence, encode, internal
 from tuckercodec.internal import (
     HEAD_SIZE,
     faces,
@@ -100,7 +100,7 @@ class Parts:
                 {**self.header, "sections": self.entries}, use_bin_type=True
             )
         body = b"".join(self.payloads)
-        return common.raw_container(
+        return internal.pack_raw(
             self.major, self.minor, self.flags, header_bytes, body, total=total
         )
 

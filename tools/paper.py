@@ -43,6 +43,7 @@ from tuckercodec import (
     analyze,
     decode,
     encode_with_report,
+    internal,
     kg_error,
     sted,
 )
@@ -367,7 +368,7 @@ def draw_fig2(
     path: Path, name: str, all_boxes: list[Box], front_boxes: list[Box], force: bool
 ) -> None:
     """ψ box plots per Θ window; whiskers are min and max, like the printed table."""
-    plt = common.pyplot()
+    plt = internal.pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
     for ax, rows, label in (
         (axes[0], all_boxes, "every truncation (i, 3, k)"),
@@ -395,12 +396,12 @@ def draw_fig2(
     axes[0].set_ylabel(f"ψ = KG bound − KG exact (floored at {PSI_FLOOR:g})")
     fig.suptitle(f"{name}: ψ against reduction rate (paper's Fig. 2)")
     fig.tight_layout()
-    common.save_png(fig, path, dpi=110, force=force)
+    internal.save_figure(fig, path, dpi=110, overwrite=force)
 
 
 def draw_fig3(path: Path, name: str, analysis: Analysis, front: Curve, force: bool) -> None:
     """log10 KG and log10 ψ over (i, k), with i = k, i/R1 = k/R3 and the exact front on top."""
-    plt = common.pyplot()
+    plt = internal.pyplot()
     r1, r3 = analysis.max_ranks
     kg = analysis.kg_table()[1:, 1:]
     psi = analysis.psi_table()[1:, 1:]
@@ -430,7 +431,7 @@ def draw_fig3(path: Path, name: str, analysis: Analysis, front: Curve, force: bo
     axes[1].legend(loc="upper right", fontsize=7, framealpha=0.6)
     fig.suptitle(f"{name}: error and ψ over the ranks (paper's Fig. 3)")
     fig.tight_layout()
-    common.save_png(fig, path, dpi=110, force=force)
+    internal.save_figure(fig, path, dpi=110, overwrite=force)
 
 
 # ------------------------------------------------------------------------------------------

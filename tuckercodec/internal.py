@@ -7,13 +7,16 @@ package sees at once what the tools rely on.
 
 * The format's building blocks, for tools that build or take apart files (the vector writer,
   the fuzzer, the PCA peer written in this codec's container): the container's
-  :func:`pack_container` and :func:`parse_container` with :data:`SIGNATURE` and
-  :data:`HEAD_SIZE`; the modules :mod:`~tuckercodec.format.faces`,
-  :mod:`~tuckercodec.format.qmat`, :mod:`~tuckercodec.format.sections` and
-  :mod:`~tuckercodec.format.streams`; the mesh parents of §6.2.
+  :func:`pack_container` and :func:`parse_container`, :func:`pack_raw` for files that break
+  one rule on purpose, and :data:`SIGNATURE`, :data:`HEAD_SIZE`, :data:`PREAMBLE`,
+  :data:`CRC`; the modules :mod:`~tuckercodec.format.faces`, :mod:`~tuckercodec.format.qmat`,
+  :mod:`~tuckercodec.format.sections` and :mod:`~tuckercodec.format.streams`; the mesh parents
+  of §6.2.
 * The decomposition and its analysis: :func:`centre_frames`, :func:`reconstruct`, :class:`Curve`.
 * The definitions the reports quote: :data:`KG_DEFINITION`, :data:`STED_DEFINITION`.
-* Files and pictures: :func:`write_atomic`, :func:`refuse_existing`, :func:`plot_rd_curve`.
+* Files and pictures: :func:`write_atomic`, :func:`refuse_existing`, :func:`plot_rd_curve`,
+  :func:`pyplot` (matplotlib on the Agg backend, or a DependencyError naming the extra) and
+  :func:`save_figure` (atomic, never replacing a file unasked).
 * Sample data: :func:`sample_path`, and the synthetic :func:`wave_sheet` with its
   :func:`sheet_triangles`.
 """
@@ -23,17 +26,27 @@ from __future__ import annotations
 from .analysis import Curve
 from .atomic import refuse_existing, write_atomic
 from .format import faces, qmat, sections, streams
-from .format.container import HEAD_SIZE, SIGNATURE, pack_container, parse_container
+from .format.container import (
+    CRC,
+    HEAD_SIZE,
+    PREAMBLE,
+    SIGNATURE,
+    pack_container,
+    pack_raw,
+    parse_container,
+)
 from .hosvd import centre_frames, reconstruct
 from .metrics import KG_DEFINITION
 from .perceptual import STED_DEFINITION
-from .plots import plot_rd_curve
+from .plots import plot_rd_curve, pyplot, save_figure
 from .samples import sample_path, sheet_triangles, wave_sheet
 from .topology import mesh_parents
 
 __all__ = [
+    "CRC",
     "HEAD_SIZE",
     "KG_DEFINITION",
+    "PREAMBLE",
     "SIGNATURE",
     "STED_DEFINITION",
     "Curve",
@@ -41,12 +54,15 @@ __all__ = [
     "faces",
     "mesh_parents",
     "pack_container",
+    "pack_raw",
     "parse_container",
     "plot_rd_curve",
+    "pyplot",
     "qmat",
     "reconstruct",
     "refuse_existing",
     "sample_path",
+    "save_figure",
     "sections",
     "sheet_triangles",
     "streams",

@@ -28,24 +28,25 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 
-def _pyplot() -> ModuleType:
+def pyplot() -> ModuleType:
     """matplotlib.pyplot on the Agg backend, or a DependencyError naming the extra."""
     try:
         import matplotlib
 
         matplotlib.use("Agg")  # files only; never needs a display
         import matplotlib.pyplot as plt
-    except ImportError as error:  # pragma: no cover - depends on the environment
+    except ImportError as error:  # a test hides matplotlib to see this
         raise DependencyError("plots need matplotlib: pip install 'tuckercodec[plot]'") from error
     return plt
 
 
-def _save(fig: Figure, path: str | Path, overwrite: bool) -> None:
-    plt = _pyplot()
+def save_figure(fig: Figure, path: str | Path, *, overwrite: bool, dpi: int = 120) -> None:
+    """Write ``fig`` to ``path`` (the format from its suffix) atomically, then close it."""
+    plt = pyplot()
     suffix = Path(path).suffix.lstrip(".").lower() or "png"
     try:
         write_atomic(
-            path, lambda handle: fig.savefig(handle, format=suffix, dpi=120), overwrite=overwrite
+            path, lambda handle: fig.savefig(handle, format=suffix, dpi=dpi), overwrite=overwrite
         )
     finally:
         plt.close(fig)
@@ -55,7 +56,7 @@ def plot_rd_curve(
     analysis: Analysis, path: str | Path, *, title: str = "", overwrite: bool = False
 ) -> None:
     """Draw Theta against KG error (log scale): exact front, estimate's front, PCA."""
-    plt = _pyplot()
+    plt = pyplot()
     exact = analysis.rd_curve()
     estimated = analysis.rd_curve(select="bound")
     pca = analysis.pca_curve()
@@ -80,14 +81,14 @@ def plot_rd_curve(
     ax.legend()
     ax.set_title(title or f"Rate-distortion, K={analysis.vertex_count}, F={analysis.frame_count}")
     fig.tight_layout()
-    _save(fig, path, overwrite)
+    save_figure(fig, path, overwrite=overwrite)
 
 
 def plot_heatmaps(
     analysis: Analysis, path: str | Path, *, title: str = "", overwrite: bool = False
 ) -> None:
     """Draw log10 KG error and log10 psi over the mode-1 rank i and the mode-3 rank k."""
-    plt = _pyplot()
+    plt = pyplot()
     kg = analysis.kg_table()[1:, 1:]
     psi = analysis.psi_table()[1:, 1:]
     floor = np.finfo(float).tiny
@@ -114,7 +115,7 @@ def plot_heatmaps(
         fig.colorbar(image, ax=ax)
     fig.suptitle(title or f"K={analysis.vertex_count}, F={analysis.frame_count}")
     fig.tight_layout()
-    _save(fig, path, overwrite)
+    save_figure(fig, path, overwrite=overwrite)
 
 
 def plot_frame_errors(
@@ -135,7 +136,7 @@ def plot_frame_errors(
             f"expected two equal, non-empty series of per-frame values, got {frame_kg.shape} "
             f"and {worst_vertex.shape}"
         )
-    plt = _pyplot()
+    plt = pyplot()
     frames = np.arange(frame_kg.size)
     style = "-" if frame_kg.size > 1 else "o"  # a single frame would draw no line at all
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
@@ -175,7 +176,7 @@ def plot_frame_errors(
     bottom.set_xlabel("frame")
     fig.suptitle(title or f"Error over time, {frame_kg.size} frames")
     fig.tight_layout()
-    _save(fig, path, overwrite)
+    save_figure(fig, path, overwrite=overwrite)
 
 
 #: Where each up axis goes: plot coordinates (x, y, z) as a rotation of the scene's, so that
@@ -214,7 +215,7 @@ def render_frame(
             raise ValueError(f"expected {vertices.shape[0]} per-vertex errors, got {errors.shape}")
     if up not in _UP_AXES:
         raise ValueError(f"up must be one of {', '.join(_UP_AXES)}, got {up!r}")
-    plt = _pyplot()
+    plt = pyplot()
     from matplotlib import colormaps
     from matplotlib.colors import Normalize
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
@@ -276,7 +277,7 @@ def render_frame(
     ax.set_ylabel(names[1])
     ax.set_zlabel(names[2])
     ax.set_title(title or f"{vertices.shape[0]} vertices, {len(triangles)} triangles")
-    _save(fig, path, overwrite)
+    save_figure(fig, path, overwrite=overwrite)
 
 
 def _camera_direction(ax: Any) -> np.ndarray:

@@ -42,10 +42,12 @@ from .sections import Section, read_section_table
 SIGNATURE = b"\x89TKC\r\n\x1a\n"
 FORMAT_MAJOR = 1
 FORMAT_MINOR = 0
-_PREAMBLE = struct.Struct("<HHIIQ")  # major, minor, flags, header_length, total_length
-_CRC = struct.Struct("<I")
-PREAMBLE_END = len(SIGNATURE) + _PREAMBLE.size  # 28: where the preamble CRC starts
-HEAD_SIZE = PREAMBLE_END + _CRC.size  # 32: where the header starts
+#: The preamble after the signature (§2): major, minor, flags, header_length, total_length.
+PREAMBLE = struct.Struct("<HHIIQ")
+#: A CRC-32 as stored (§1).
+CRC = struct.Struct("<I")
+PREAMBLE_END = len(SIGNATURE) + PREAMBLE.size  # 28: where the preamble CRC starts
+HEAD_SIZE = PREAMBLE_END + CRC.size  # 32: where the header starts
 
 #: Bits 0-15 of the preamble flags are critical: a decoder rejects any it does not know.
 CRITICAL_FLAGS_MASK = 0x0000FFFF
@@ -71,7 +73,7 @@ class Preamble:
     @property
     def data_start(self) -> int:
         """Where the data area (the first section) starts."""
-        return self.header_end + _CRC.size
+        return self.header_end + CRC.size
 
 
 @dataclass(frozen=True)
@@ -134,11 +136,30 @@ def pack_container(
         )
         offset += len(payload)
     header_bytes = msgpack.packb({**header, "sections": table}, use_bin_type=True)
-    total = HEAD_SIZE + len(header_bytes) + _CRC.size + offset
-    head = SIGNATURE + _PREAMBLE.pack(FORMAT_MAJOR, FORMAT_MINOR, flags, len(header_bytes), total)
-    parts = [head, _CRC.pack(zlib.crc32(head)), header_bytes, _CRC.pack(zlib.crc32(header_bytes))]
-    parts.extend(payload for _, payload in sections)
-    return b"".join(parts)
+    body = b"".join(payload for _, payload in sections)
+    return pack_raw(FORMAT_MAJOR, FORMAT_MINOR, flags, header_bytes, body)
+
+
+def pack_raw(
+    major: int,
+    minor: int,
+    flags: int,
+    header_bytes: bytes,
+    body: bytes,
+    *,
+    total: int | None = None,
+) -> bytes:
+    """A file from its raw parts, with both CRCs right and nothing else checked (§2's layout).
+
+    :func:`pack_container` builds valid files with it; tests and the vector writer build files
+    that break one rule (``total`` defaults to the true length).
+    """
+    if total is None:
+        total = HEAD_SIZE + len(header_bytes) + CRC.size + len(body)
+    head = SIGNATURE + PREAMBLE.pack(major, minor, flags, len(header_bytes), total)
+    return b"".join(
+        [head, CRC.pack(zlib.crc32(head)), header_bytes, CRC.pack(zlib.crc32(header_bytes)), body]
+    )
 
 
 # ------------------------------------------------------------------------------------------
@@ -158,7 +179,7 @@ def read_preamble(data: bytes | memoryview, limits: Limits = DEFAULT_LIMITS) -> 
             field=part,
             offset=0 if part == "signature" else len(data),
         )
-    (stored_crc,) = _CRC.unpack_from(data, PREAMBLE_END)
+    (stored_crc,) = CRC.unpack_from(data, PREAMBLE_END)
     if zlib.crc32(data[:PREAMBLE_END]) != stored_crc:
         raise ChecksumError(
             "the preamble's CRC-32 does not match (the file is damaged)",
@@ -166,7 +187,7 @@ def read_preamble(data: bytes | memoryview, limits: Limits = DEFAULT_LIMITS) -> 
             field="preamble",
             offset=PREAMBLE_END,
         )
-    preamble = Preamble(*_PREAMBLE.unpack_from(data, len(SIGNATURE)))
+    preamble = Preamble(*PREAMBLE.unpack_from(data, len(SIGNATURE)))
     if preamble.major != FORMAT_MAJOR:
         raise UnsupportedVersionError(
             f"format version {preamble.major}.{preamble.minor} is not supported: this decoder "
@@ -260,7 +281,7 @@ def parse_container(
         _check_not_longer(len(data), preamble.total_length)
     _check_reaches(len(data), preamble.data_start, "the header", "header")
     header_bytes = data[HEAD_SIZE : preamble.header_end]
-    (stored_crc,) = _CRC.unpack_from(data, preamble.header_end)
+    (stored_crc,) = CRC.unpack_from(data, preamble.header_end)
     if zlib.crc32(header_bytes) != stored_crc:
         raise ChecksumError(
             "the header's CRC-32 does not match (the file is damaged)",
