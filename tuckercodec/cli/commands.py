@@ -64,7 +64,7 @@ def run_rd(args: argparse.Namespace) -> int:
     analysed = time.perf_counter()
 
     r1, r3 = analysis.max_ranks
-    label = f"built-in sample ({SAMPLE_NAME})" if source == sample_path() else source
+    label = f"built-in sample ({SAMPLE_NAME})" if args.input == "sample" else source
     print(
         f"{label}: {sequence.frame_count} frames, {sequence.vertex_count} vertices, "
         f"{sequence.faces.shape[0]} faces"
