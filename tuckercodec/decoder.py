@@ -178,13 +178,17 @@ class Decoder:
         return self.positions([index])[0]
 
     def sequence(self, frames: FrameSelection = None) -> MeshSequence:
-        """The selected frames as a :class:`MeshSequence` with the file's faces and names."""
+        """The selected frames as a :class:`MeshSequence` with the file's faces and names; a
+        part of the file, in order, carries its frame numbers as time codes."""
         chosen = self._selected(frames)
+        in_time = chosen.size < self.info.frames and bool(np.all(np.diff(chosen) > 0))
         return MeshSequence(
             self.positions(chosen),
             self.faces,
             frame_names=[self.frame_names[n] for n in chosen],
             frame_rate=self.info.frame_rate,
+            # a part in order keeps its frames' places in time (frame n at time code n)
+            time_codes=np.asarray(chosen, dtype=np.float64) if in_time else None,
         )
 
 

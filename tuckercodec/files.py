@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Literal
 
 from .analysis import Selection
 from .atomic import refuse_existing, write_atomic
@@ -18,13 +17,15 @@ from .encoder import EncodeReport, encode_with_report
 from .errors import InputError
 from .format.container import SIGNATURE
 from .format.limits import DEFAULT_LIMITS, Limits
-from .io import Source, load_sequence, save_sequence
+from .io import Source, format_named, format_of, load_sequence, save_sequence
 from .reading import open_regular_file
 from .sequence import MeshSequence
 
 #: The suffix of compressed files.
 SUFFIX = ".tkc"
-OutputFormat = Literal["obj", "npz"]
+#: The name of a sequence format that can be written ("obj", "npz", "usd"...: see
+#: :func:`tuckercodec.io.formats`).
+OutputFormat = str
 
 
 def is_compressed_file(path: str | os.PathLike[str]) -> bool:
@@ -67,17 +68,24 @@ def read_compressed(path: str | os.PathLike[str], *, limits: Limits = DEFAULT_LI
 
 
 def decoded_output_path(output: str | os.PathLike[str], output_format: OutputFormat | None) -> Path:
-    """Where :func:`decode_file` writes: ``output`` itself, or with ``.npz`` added for the npz
-    format. The format defaults to npz for a name ending in ``.npz`` and to OBJ otherwise."""
+    """Where :func:`decode_file` writes: ``output`` itself, or with the format's suffix added
+    (``.npz`` for the npz format...) when the name lacks it. Without ``output_format``, the
+    format is the one ``output``'s suffix names, else a folder of OBJ files."""
     output = Path(output)
     if output_format is None:
-        output_format = "npz" if output.suffix.lower() == ".npz" else "obj"
-    if output_format not in ("obj", "npz"):
-        raise ValueError(f"output format must be 'obj' or 'npz', got {output_format!r}")
-    if output_format == "obj" and output.suffix.lower() == ".npz":
-        raise ValueError(f"{output}: an OBJ output is a folder, not an .npz file")
-    if output_format == "npz" and output.suffix.lower() != ".npz":
-        return Path(f"{output}.npz")
+        return output
+    chosen = format_named(output_format)  # ValueError naming the formats
+    named = format_of(output)
+    if chosen.write is None:  # one file per frame: a folder
+        if chosen.write_frame is None:
+            raise ValueError(f"the {chosen.name} format can be read but not written")
+        if named is not None and named.write is not None:
+            raise ValueError(
+                f"{output}: an {chosen.name.upper()} output is a folder, not a {output.suffix} file"
+            )
+        return output
+    if output.suffix.lower() not in chosen.suffixes:
+        return Path(f"{output}{chosen.suffixes[0]}")
     return output
 
 
@@ -91,11 +99,12 @@ def decode_file(
     precision: int | None = None,
     progress: bool = False,
 ) -> MeshSequence:
-    """Decode a compressed file and write the frames: a folder of OBJ files, or an ``.npz``.
+    """Decode a compressed file and write the frames: a folder of OBJ files, or a sequence
+    file (``.npz``, ``.usd``...).
 
-    ``output_format`` defaults to ``npz`` when ``output`` ends in ``.npz`` and to ``obj``
-    otherwise, and ``.npz`` is added to the name for the npz format if missing
-    (:func:`decoded_output_path`). Returns the decoded sequence.
+    ``output_format`` defaults to the format ``output``'s suffix names, else a folder of OBJ
+    files; the format's suffix is added to the name if missing (:func:`decoded_output_path`).
+    Returns the decoded sequence.
     """
     output = decoded_output_path(output, output_format)
     sequence = Decoder(os.fsdecode(path)).sequence(frames)

@@ -10,6 +10,10 @@ from .errors import InputError
 from .format.names import default_frame_names
 from .topology import checked_face_table
 
+#: Frames per second assumed where a format needs a rate and the sequence has none: 24, the
+#: default of USD (timeCodesPerSecond), Blender and film.
+DEFAULT_FRAME_RATE = 24.0
+
 
 @dataclass(eq=False)
 class MeshSequence:
@@ -24,12 +28,16 @@ class MeshSequence:
         frame_names: one name per frame (the source file name, or ``frame_00000``..., the
             default names of the format, ``spec/FORMAT.md`` §6.5).
         frame_rate: frames per second, if known.
+        time_codes: each frame's time in frames (USD's time codes, a point cache's frame
+            numbers): float64, strictly increasing; ``None`` means 0, 1, 2... A frame's time in
+            seconds is its time code divided by the frame rate (:meth:`seconds`).
     """
 
     vertices: np.ndarray
     faces: np.ndarray
     frame_names: list[str] = field(default_factory=list)
     frame_rate: float | None = None
+    time_codes: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         vertices = np.asarray(self.vertices)
@@ -63,6 +71,8 @@ class MeshSequence:
             np.isfinite(self.frame_rate) and self.frame_rate > 0
         ):
             raise InputError(f"frame rate must be a positive number, got {self.frame_rate}")
+        if self.time_codes is not None:
+            self.time_codes = _checked_time_codes(self.time_codes, self.frame_count)
 
     @property
     def frame_count(self) -> int:
@@ -73,6 +83,17 @@ class MeshSequence:
     def vertex_count(self) -> int:
         """K, the number of vertices of every frame."""
         return int(self.vertices.shape[1])
+
+    def codes(self) -> np.ndarray:
+        """Each frame's time code: :attr:`time_codes`, or 0, 1, 2... when none are known."""
+        if self.time_codes is not None:
+            return self.time_codes.copy()
+        return np.arange(self.frame_count, dtype=np.float64)
+
+    def seconds(self) -> np.ndarray:
+        """Each frame's time in seconds: its time code over the frame rate
+        (:data:`DEFAULT_FRAME_RATE` when the sequence has none)."""
+        return self.codes() / (self.frame_rate or DEFAULT_FRAME_RATE)
 
     def triangles(self) -> np.ndarray:
         """The faces as triangles, (T, 3): polygons are split into fans from their first corner."""
@@ -89,3 +110,24 @@ class MeshSequence:
             f"MeshSequence(frames={self.frame_count}, vertices={self.vertex_count}, "
             f"faces={self.faces.shape[0]})"
         )
+
+
+def _checked_time_codes(values: np.ndarray, frame_count: int) -> np.ndarray:
+    """Time codes as float64, one per frame, finite and strictly increasing."""
+    codes = np.asarray(values)
+    if codes.shape != (frame_count,) or not np.issubdtype(codes.dtype, np.number):
+        raise InputError(
+            f"time codes must be {frame_count} numbers, one per frame, got dtype "
+            f"{codes.dtype} shape {codes.shape}"
+        )
+    codes = np.array(codes, dtype=np.float64)
+    bad = np.flatnonzero(~np.isfinite(codes))
+    if bad.size:
+        raise InputError(f"time code {codes[bad[0]]} is not finite", frame=int(bad[0]))
+    steps = np.flatnonzero(np.diff(codes) <= 0)
+    if steps.size:
+        frame = int(steps[0]) + 1
+        raise InputError(
+            f"time codes must increase: {codes[frame]} follows {codes[frame - 1]}", frame=frame
+        )
+    return codes

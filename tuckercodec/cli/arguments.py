@@ -9,6 +9,7 @@ from pathlib import Path
 from .._version import __version__
 from ..encoder import DEFAULT_TARGET_KG
 from ..files import SUFFIX
+from ..io.registry import writable_formats
 from ..metrics import KG_DEFINITION
 from ..perceptual import STED_DEFINITION
 from ..report import DEFAULT_TARGETS
@@ -101,8 +102,9 @@ def build_parser() -> argparse.ArgumentParser:
             "ranks (i, 3, k) by the exact table and by the seed paper's bound alone."
         ),
     )
-    rd.add_argument("input", help="a folder of OBJ frames, a glob, an .npz, or 'sample'")
+    rd.add_argument("input", help=_SEQUENCE_HELP)
     _add_rd_options(rd)
+    _add_read_options(rd)
 
     encode = verbs.add_parser(
         "encode",
@@ -112,7 +114,7 @@ def build_parser() -> argparse.ArgumentParser:
             f"{DEFAULT_TARGET_KG}), --ranks i,k, or --bpfv (the smallest error that fits)."
         ),
     )
-    encode.add_argument("input", help="a folder of OBJ frames, a glob, an .npz, or 'sample'")
+    encode.add_argument("input", help=_SEQUENCE_HELP)
     encode.add_argument("-o", "--output", type=Path, required=True, metavar=f"OUT{SUFFIX}")
     mode = encode.add_mutually_exclusive_group()
     mode.add_argument("--kg", type=_positive, metavar="KG", help="target KG error in percent")
@@ -127,16 +129,19 @@ def build_parser() -> argparse.ArgumentParser:
         help="choose ranks by the exact error table (default) or by the seed paper's bound",
     )
     encode.add_argument("--force", action="store_true", help="replace the output if it exists")
+    _add_read_options(encode)
 
     decode = verbs.add_parser(
         "decode",
-        help="rebuild the frames of a compressed file as OBJ files or an .npz",
+        help="rebuild the frames of a compressed file as OBJ files or a sequence file",
         description=(
-            "Decode all frames, or a range, to a folder of OBJ files (with faces) or an .npz."
+            "Decode all frames, or a range, to a folder of OBJ files (with faces) or a "
+            "sequence file chosen by its suffix (.npz, .usd, .abc, .pc2, .mdd, .vtu...); "
+            ".glb/.gltf writes the decomposition as a playable morph-target animation."
         ),
     )
     decode.add_argument("input", help=f"a compressed file ({SUFFIX})")
-    decode.add_argument("-o", "--output", type=Path, required=True, metavar="OUTDIR|OUT.npz")
+    decode.add_argument("-o", "--output", type=Path, required=True, metavar="OUTDIR|OUTFILE")
     decode.add_argument(
         "--frames",
         type=_frames,
@@ -147,7 +152,9 @@ def build_parser() -> argparse.ArgumentParser:
         ),
     )
     decode.add_argument(
-        "--format", choices=("obj", "npz"), help="default: npz if OUT ends in .npz, else obj"
+        "--format",
+        choices=writable_formats(),
+        help="default: the format OUT's suffix names, else a folder of OBJ files",
     )
     decode.add_argument(
         "--reference", metavar="ORIGINAL", help="report the actual error against this sequence"
@@ -159,6 +166,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="significant digits in OBJ files (default: exact)",
     )
     decode.add_argument("--force", action="store_true", help="replace output files that exist")
+    _add_read_options(decode, "--reference")
 
     info = verbs.add_parser(
         "info",
@@ -201,6 +209,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="draw each frame's KG share and worst-vertex error over time",
     )
     evaluate.add_argument("--force", action="store_true", help="replace the plot if it exists")
+    _add_read_options(evaluate, "A and B")
 
     render = verbs.add_parser(
         "render",
@@ -230,6 +239,27 @@ def build_parser() -> argparse.ArgumentParser:
         help="the scene axis drawn upwards (default: %(default)s, as in most OBJ files)",
     )
     render.add_argument("--force", action="store_true", help="replace the image if it exists")
+    _add_read_options(render, "SEQ and the reference")
+
+    convert = verbs.add_parser(
+        "convert",
+        help="convert a mesh sequence between file formats",
+        description=(
+            "Read a sequence (or decode a compressed file) and write it in the format OUT's "
+            "suffix names; a name without one is a folder of OBJ files. Lossless where both "
+            "formats carry the data: what OUT's format cannot hold is listed."
+        ),
+    )
+    convert.add_argument("input", help=_SEQUENCE_HELP)
+    convert.add_argument("output", type=Path, metavar="OUT", help="the file or folder to write")
+    convert.add_argument(
+        "--precision",
+        type=int,
+        metavar="DIGITS",
+        help="significant digits in OBJ files (default: exact)",
+    )
+    convert.add_argument("--force", action="store_true", help="replace output files that exist")
+    _add_read_options(convert)
 
     demo = verbs.add_parser(
         "demo",
@@ -244,6 +274,30 @@ def build_parser() -> argparse.ArgumentParser:
         help="target KG errors in percent (default: %(default)s)",
     )
     return parser
+
+
+_SEQUENCE_HELP = (
+    "a folder of OBJ frames, a glob, a sequence file (.npz, .usd, .abc, .pc2, .mdd, .glb, "
+    ".pvd...), or 'sample'"
+)
+
+
+def _add_read_options(parser: argparse.ArgumentParser, applies_to: str = "INPUT") -> None:
+    """The options some sequence formats need to be read (tuckercodec.io.ReadOptions)."""
+    group = parser.add_argument_group(f"reading {applies_to}")
+    group.add_argument("--prim", metavar="PATH", help="USD: the mesh prim, if several")
+    group.add_argument(
+        "--object", dest="object_path", metavar="PATH", help="Alembic: the mesh object, if several"
+    )
+    group.add_argument(
+        "--faces", type=Path, metavar="MESH", help="PC2/MDD: take the faces from this mesh file"
+    )
+    group.add_argument(
+        "--fps",
+        type=_positive,
+        metavar="RATE",
+        help="glTF: sample the animation at this rate (default: at its keyframes)",
+    )
 
 
 def _add_rd_options(parser: argparse.ArgumentParser) -> None:

@@ -19,7 +19,7 @@ from ..decoder import Decoder, decode
 from ..decoder import info as read_info
 from ..encoder import EncodeReport, encode_with_report
 from ..errors import EXIT_OK, InputError
-from ..files import SUFFIX, decode_file, decoded_output_path, is_compressed_file
+from ..files import decode_file, decoded_output_path
 from ..io import load_sequence
 from ..metrics import (
     KG_DEFINITION,
@@ -33,6 +33,7 @@ from ..perceptual import STED_DEFINITION, sted
 from ..report import curves_csv, targets_table
 from ..samples import SAMPLE_NAME, sample_path
 from ..sequence import MeshSequence
+from .inputs import is_compressed, load_input, read_options, sequence_source
 
 PLOT_FORMATS = (".png", ".svg", ".pdf")
 
@@ -46,11 +47,6 @@ def _check_plot_names(*named: tuple[str, Path | None]) -> None:
             )
 
 
-def sequence_source(name: str) -> str | Path:
-    """What a verb's INPUT names: the built-in sample for ``sample``, else the path itself."""
-    return sample_path() if name == "sample" else name
-
-
 def run_rd(args: argparse.Namespace) -> int:
     source = sequence_source(args.input)
     _check_plot_names(("--plot", args.plot), ("--heatmap", args.heatmap))
@@ -58,7 +54,7 @@ def run_rd(args: argparse.Namespace) -> int:
     refuse_existing(outputs, args.force)  # before the work, not after it
 
     start = time.perf_counter()
-    sequence = load_sequence(source)
+    sequence = load_sequence(source, **read_options(args))
     loaded = time.perf_counter()
     analysis = analyze(sequence)
     analysed = time.perf_counter()
@@ -97,21 +93,6 @@ def run_rd(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _is_compressed(source: str) -> bool:
-    """Whether ``source`` names a compressed file (by its signature, or by its suffix, so that
-    a damaged one is reported as such)."""
-    return source != "sample" and (
-        is_compressed_file(source) or Path(source).suffix.lower() == SUFFIX
-    )
-
-
-def _load(source: str) -> MeshSequence:
-    """A sequence from a path, 'sample', or a compressed file (decoded); errors name the path."""
-    if _is_compressed(source):
-        return Decoder(source).sequence()
-    return load_sequence(sequence_source(source), progress=source != "sample")
-
-
 def _print_encode_report(report: EncodeReport) -> None:
     i, k = report.ranks
     print(
@@ -133,7 +114,7 @@ def _print_encode_report(report: EncodeReport) -> None:
 def run_encode(args: argparse.Namespace) -> int:
     refuse_existing([args.output], args.force)  # before the work, not after it
     start = time.perf_counter()
-    sequence = load_sequence(sequence_source(args.input))
+    sequence = load_sequence(sequence_source(args.input), **read_options(args))
     result = encode_with_report(  # no mode given: the encoder's default target
         sequence, target_kg=args.kg, ranks=args.ranks, target_bpfv=args.bpfv, select=args.select
     )
@@ -149,7 +130,7 @@ def run_encode(args: argparse.Namespace) -> int:
 
 def run_decode(args: argparse.Namespace) -> int:
     header = read_info(args.input)
-    reference = _load(args.reference) if args.reference else None
+    reference = load_input(args.reference, args) if args.reference else None
     if reference is not None and (reference.frame_count, reference.vertex_count) != (
         header.frames,
         header.vertices,
@@ -235,7 +216,7 @@ def run_eval(args: argparse.Namespace) -> int:
     _check_plot_names(("--plot", args.plot))
     if args.plot is not None:
         refuse_existing([args.plot], args.force)  # before the work, not after it
-    original, approximation = _load(args.original), _load(args.approximation)
+    original, approximation = load_input(args.original, args), load_input(args.approximation, args)
     if original.vertices.shape != approximation.vertices.shape:
         raise InputError(
             f"{args.original} has {original.frame_count} frames of {original.vertex_count} "
@@ -300,15 +281,15 @@ class _Frames:
     """A sequence opened for drawing single frames: a compressed file decodes only the frame
     asked for; anything else is read whole. Errors in a compressed file name it."""
 
-    def __init__(self, source: str) -> None:
+    def __init__(self, source: str, args: argparse.Namespace) -> None:
         self.source = source
         self._decoder: Decoder | None = None
         self._sequence: MeshSequence | None = None
-        if _is_compressed(source):
+        if is_compressed(source):
             self._decoder = Decoder(source)
             self.count, self.vertex_count = self._decoder.frame_count, self._decoder.info.vertices
         else:
-            self._sequence = _load(source)
+            self._sequence = load_input(source, args)
             self.count, self.vertex_count = self._sequence.frame_count, self._sequence.vertex_count
 
     def frame(self, number: int) -> MeshSequence:
@@ -331,11 +312,11 @@ class _Frames:
 def run_render(args: argparse.Namespace) -> int:
     _check_plot_names(("-o", args.output))
     refuse_existing([args.output], args.force)  # before the work, not after it
-    frames = _Frames(args.input)
+    frames = _Frames(args.input, args)
     shown = frames.frame(args.frame)
     errors = None
     if args.reference is not None:
-        reference = _Frames(args.reference)
+        reference = _Frames(args.reference, args)
         if (reference.count, reference.vertex_count) != (frames.count, frames.vertex_count):
             raise InputError(  # frames must correspond one to one, as for decode --reference
                 f"the reference has {reference.count} frames of {reference.vertex_count} vertices, "

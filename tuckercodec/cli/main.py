@@ -24,7 +24,7 @@ from ..errors import (
     TuckerCodecError,
     UnreachableTargetError,
 )
-from . import commands
+from . import commands, convert
 from .arguments import build_parser
 
 _VERBS: dict[str, Callable[[argparse.Namespace], int]] = {
@@ -35,6 +35,7 @@ _VERBS: dict[str, Callable[[argparse.Namespace], int]] = {
     "eval": commands.run_eval,
     "render": commands.run_render,
     "rd": commands.run_rd,
+    "convert": convert.run_convert,
 }
 
 #: What the one-line message calls each kind of error, after "tuckercodec: ".

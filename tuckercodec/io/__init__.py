@@ -17,7 +17,15 @@ from pathlib import Path
 from ..errors import InputError
 from ..sequence import MeshSequence
 from .frames import folder_files, glob_files, natural_sort_key, read_frames, write_frames
-from .registry import SequenceFormat, WriteOptions, format_named, format_of, formats
+from .registry import (
+    OPTION_FLAGS,
+    ReadOptions,
+    SequenceFormat,
+    WriteOptions,
+    format_named,
+    format_of,
+    formats,
+)
 
 #: What load_sequence accepts: a folder, glob pattern, mesh or sequence file, or a list of files.
 Source = str | os.PathLike[str] | Sequence[str | os.PathLike[str]]
@@ -27,7 +35,15 @@ _GLOB_CHARACTERS = re.compile(r"[*?[]")
 FOLDER_FORMAT = "obj"
 
 
-def load_sequence(source: Source, *, progress: bool = True) -> MeshSequence:
+def load_sequence(
+    source: Source,
+    *,
+    progress: bool = True,
+    prim: str | None = None,
+    object_path: str | None = None,
+    faces: str | os.PathLike[str] | None = None,
+    fps: float | None = None,
+) -> MeshSequence:
     """Load a mesh sequence.
 
     Args:
@@ -37,36 +53,69 @@ def load_sequence(source: Source, *, progress: bool = True) -> MeshSequence:
               starting with ``.``) are skipped;
             - a glob pattern such as ``"frames/*.obj"``;
             - a list or tuple of files, read in the order given;
-            - a file holding a whole sequence, chosen by its suffix: an ``.npz`` with keys ``V``
-              (F, K, 3) and optionally ``F`` (faces), ``frame_files`` (names) and ``frame_rate``;
+            - a file holding a whole sequence, chosen by its suffix (:func:`formats` lists
+              them): an ``.npz`` with keys ``V`` (F, K, 3) and optionally ``F`` (faces),
+              ``frame_files`` (names), ``frame_rate`` and ``time_codes``; USD, Alembic, PC2,
+              MDD, glTF, VTK series (some need an extra, named by the error if missing);
             - a single mesh file, giving a one-frame sequence.
             Files of a folder or glob are ordered by :func:`natural_sort_key` of their names.
         progress: draw a progress bar on a terminal while reading many files.
+        prim: USD: the mesh prim to read, when the stage holds several.
+        object_path: Alembic: the PolyMesh object to read, when the archive holds several.
+        faces: PC2 and MDD: a mesh file whose faces the points take (without it, points only).
+        fps: glTF: sample the animation at this rate rather than at its keyframes.
 
     Returns:
         The sequence; faces come from the first frame and ``frame_names`` are the file names.
 
     Raises:
-        InputError: nothing to read, a file that cannot be read, or a frame whose vertex count
-            or faces differ from the first; the error names the file, frame and line.
+        InputError: nothing to read, a file that cannot be read, a frame whose vertex count
+            or faces differ from the first, or an option the source's format does not take;
+            the error names the file, frame and line (or object).
+        DependencyError: the format's library is not installed; names the extra to install.
     """
+    options = ReadOptions(
+        prim=prim,
+        object_path=object_path,
+        faces=None if faces is None else Path(faces),
+        fps=fps,
+    )
     if not isinstance(source, (str, os.PathLike)):  # a list, tuple or other sequence of files
         files = [Path(item) for item in source]
         if not files:
             raise InputError("the list of frame files is empty")
+        _refuse_options(options, frozenset(), "a list of frame files")
         return read_frames(files, progress)
 
     path = Path(source)
     if not path.exists() and _GLOB_CHARACTERS.search(str(source)):
+        _refuse_options(options, frozenset(), "frame files", path)
         return read_frames(glob_files(str(source)), progress)
     if path.is_dir():
+        _refuse_options(options, frozenset(), "a folder of frames", path)
         return read_frames(folder_files(path), progress)
     if not path.exists():
         raise InputError("no such file or folder", path=path)
     found = format_of(path)
     if found is not None and found.read is not None:
-        return found.read(path)
+        _refuse_options(options, found.read_options, found.description, path)
+        return found.read(path, options)
+    _refuse_options(options, frozenset(), "a one-frame mesh file", path)
     return read_frames([path], progress)
+
+
+def _refuse_options(
+    options: ReadOptions, accepted: frozenset[str], what: str, path: Path | None = None
+) -> None:
+    """An InputError for a read option the source's format does not use, naming which do."""
+    for name in options.given():
+        if name not in accepted:
+            users = [f.name for f in formats() if name in f.read_options]
+            raise InputError(
+                f"{OPTION_FLAGS[name]} ({name}) does not apply to {what}; it applies to "
+                f"{', '.join(users) or 'no format'} files",
+                path=path,
+            )
 
 
 def save_sequence(
@@ -77,20 +126,22 @@ def save_sequence(
     precision: int | None = None,
     progress: bool = True,
 ) -> None:
-    """Save a sequence: a file whose suffix names a sequence format (``.npz``), or a folder of
-    OBJ files.
+    """Save a sequence: a file whose suffix names a sequence format (``.npz``, ``.usd``,
+    ``.abc``, ``.pc2``, ``.mdd``, ``.glb``...), or a folder of OBJ files.
 
     Args:
         seq: the sequence.
-        destination: a path ending in ``.npz`` writes one archive (V float64, F int64,
-            frame_files, and frame_rate if set). Anything else is a folder (created if needed)
+        destination: a path whose suffix names a whole-sequence format writes one file (or,
+            for a VTK series, an index file beside a folder of frames); an ``.npz`` holds V
+            float64, F int64, frame_files, and frame_rate and time_codes if set. Anything
+            else is a folder (created if needed)
             that receives one OBJ file per frame, named after ``seq.frame_names`` (made safe
             for file names, with an ``.obj`` suffix, unique). If those names would not sort
             back into frame order, they are prefixed with the frame number.
         overwrite: replace existing files; otherwise an existing target file is an error,
             raised before anything is written.
         precision: significant digits of OBJ coordinates; ``None`` writes exact round-trip
-            text. Ignored for ``.npz`` (always exact).
+            text. Ignored by binary formats.
         progress: draw a progress bar on a terminal while writing many files.
 
     Raises:
@@ -106,13 +157,14 @@ def save_sequence(
     if destination.exists() and not destination.is_dir():
         raise NotADirectoryError(
             errno.ENOTDIR,
-            "not a folder: name an .npz file or a folder for OBJ frames",
+            "not a folder: name a sequence file (.npz, .usd, .glb...) or a folder for OBJ frames",
             str(destination),
         )
     write_frames(seq, destination, format_named(FOLDER_FORMAT), options)
 
 
 __all__ = [
+    "ReadOptions",
     "SequenceFormat",
     "WriteOptions",
     "format_named",

@@ -1,9 +1,9 @@
 """The ``.npz`` sequence format: one NumPy archive holding the whole sequence.
 
 Keys: ``V`` positions (frames, vertices, 3), optionally ``F`` faces (0-based, -1 padding),
-``frame_files`` (one name per frame) and ``frame_rate``. It is read with :mod:`zipfile` and
-``numpy.lib.format``, never with pickle, and every declared size is checked against the file
-before anything is allocated.
+``frame_files`` (one name per frame), ``frame_rate`` and ``time_codes``. It is read with
+:mod:`zipfile` and ``numpy.lib.format``, never with pickle, and every declared size is checked
+against the file before anything is allocated.
 """
 
 from __future__ import annotations
@@ -24,11 +24,12 @@ from ..errors import InputError
 from ..reading import open_regular_file
 from ..sequence import MeshSequence
 from ..topology import face_table_problem
-from .registry import SequenceFormat, WriteOptions
+from .registry import ReadOptions, SequenceFormat, WriteOptions
 
 
-def read_npz(path: Path) -> MeshSequence:
-    """A sequence from an .npz archive (keys V, optional F, frame_files, frame_rate).
+def read_npz(path: Path, options: ReadOptions | None = None) -> MeshSequence:
+    """A sequence from an .npz archive (keys V, optional F, frame_files, frame_rate,
+    time_codes); the archive format takes no read options.
 
     The archive is read with :mod:`zipfile` and each array with ``numpy.lib.format``, never
     with pickle. A member must be a ``.npy`` array, stored or deflated (what ``np.savez`` and
@@ -98,8 +99,9 @@ def _read_npz(archive: zipfile.ZipFile, size: int, path: Path) -> MeshSequence:
     rate = None
     if "frame_rate" in members:
         rate = _npz_rate(member("frame_rate"), path)
+    codes = member("time_codes") if "time_codes" in members else None
     try:
-        return MeshSequence(vertices, faces, frame_names=names, frame_rate=rate)
+        return MeshSequence(vertices, faces, frame_names=names, frame_rate=rate, time_codes=codes)
     except InputError as error:
         raise InputError(error.reason, path=path, frame=error.frame) from None
 
@@ -292,6 +294,8 @@ def write_npz(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
     }
     if seq.frame_rate is not None:
         arrays["frame_rate"] = np.float64(seq.frame_rate)
+    if seq.time_codes is not None:
+        arrays["time_codes"] = np.asarray(seq.time_codes, dtype=np.float64)
     # np.savez adds ".npz" to a file *name* without it, so it gets an open file instead
     with atomic_output(path, overwrite=options.overwrite) as stream:
         np.savez(stream, **arrays)
@@ -300,7 +304,10 @@ def write_npz(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
 FORMAT = SequenceFormat(
     name="npz",
     suffixes=(".npz",),
-    description="NumPy archive: V (frames, vertices, 3), F faces, frame_files, frame_rate",
+    description=(
+        "NumPy archive: V (frames, vertices, 3), F faces, frame_files, frame_rate, time_codes"
+    ),
     read=read_npz,
     write=write_npz,
+    carries=frozenset({"float64", "faces", "frame_names", "frame_rate", "time_codes"}),
 )

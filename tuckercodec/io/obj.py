@@ -703,4 +703,6 @@ FORMAT = SequenceFormat(
     description="Wavefront OBJ, one frame per file (a folder of them, or a glob)",
     read_frame=read_obj_frame,
     write_frame=_write_frame,
+    # exact text (repr) unless a precision is asked for; the frame names are the file names
+    carries=frozenset({"float64", "faces", "frame_names"}),
 )

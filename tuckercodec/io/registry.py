@@ -44,6 +44,33 @@ class MeshFrame:
 
 
 @dataclass(frozen=True)
+class ReadOptions:
+    """Choices that some whole-sequence formats need to read a file; ``None`` where not given.
+
+    Attributes:
+        prim: USD: the path of the UsdGeomMesh to read, when the stage holds several.
+        object_path: Alembic: the full name of the PolyMesh object, when the archive holds
+            several.
+        faces: PC2 and MDD (positions only): a mesh file whose faces the points take.
+        fps: glTF: sample the animation at this many frames per second instead of at its
+            keyframes.
+    """
+
+    prim: str | None = None
+    object_path: str | None = None
+    faces: Path | None = None
+    fps: float | None = None
+
+    def given(self) -> list[str]:
+        """The names of the options that are set."""
+        return [name for name, value in vars(self).items() if value is not None]
+
+
+#: How each read option is spelled on the command line, for the errors that name one.
+OPTION_FLAGS = {"prim": "--prim", "object_path": "--object", "faces": "--faces", "fps": "--fps"}
+
+
+@dataclass(frozen=True)
 class WriteOptions:
     """How a sequence is written: ``overwrite`` existing files; ``precision`` significant
     digits for text formats (``None``: exact); ``progress`` bar on a terminal."""
@@ -66,10 +93,17 @@ class SequenceFormat:
     name: str
     suffixes: tuple[str, ...]  # lower case, with the dot
     description: str
-    read: Callable[[Path], MeshSequence] | None = None  # a whole sequence from one file
+    read: Callable[[Path, ReadOptions], MeshSequence] | None = None  # a whole sequence
     write: Callable[[MeshSequence, Path, WriteOptions], None] | None = None
     read_frame: FrameReader | None = None  # one frame from one file
     write_frame: FrameWriter | None = None  # one frame (vertices, faces) to one file
+    #: the :class:`ReadOptions` fields ``read`` uses; giving another one is an error
+    read_options: frozenset[str] = frozenset()
+    #: the optional extra that installs the library the format needs (``None``: core only)
+    extra: str | None = None
+    #: what a file keeps of a sequence beyond float32 positions, of: "float64" (positions
+    #: exactly), "faces", "frame_names", "frame_rate", "time_codes"
+    carries: frozenset[str] = frozenset()
 
 
 @cache
@@ -89,6 +123,11 @@ def format_named(name: str) -> SequenceFormat:
             return candidate
     known = ", ".join(f.name for f in formats())
     raise ValueError(f"unknown sequence format {name!r}: the formats are {known}")
+
+
+def writable_formats() -> tuple[str, ...]:
+    """The names of the formats a sequence can be written in."""
+    return tuple(f.name for f in formats() if f.write is not None or f.write_frame is not None)
 
 
 def format_of(path: str | os.PathLike[str]) -> SequenceFormat | None:
