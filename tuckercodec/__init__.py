@@ -6,6 +6,7 @@ The public API::
     result = analyze(seq)                  # exact rate-distortion table of every (i, 3, k)
     result.cheapest(0.1)                   # the smallest truncation meeting a KG error of 0.1 %
     save_sequence(seq, "out/")             # OBJ frames with their faces, or an .npz
+    save_sequence(seq, "out.usdc")         # or any format of formats(): USD, Alembic, glTF...
 
     data = encode(seq, target_kg=0.1)      # a compressed file (spec/FORMAT.md) as bytes
     decode(data, frames=range(10, 20))     # any frames back, as a MeshSequence (or pass a path)
@@ -37,7 +38,7 @@ from .errors import (
 )
 from .files import decode_file, encode_file, read_compressed
 from .format.limits import Limits
-from .io import load_sequence, save_sequence
+from .io import formats, load_sequence, save_sequence
 from .metrics import kg_error, max_vertex_displacement, relative_error
 from .perceptual import sted
 from .rate import bpfv
@@ -69,6 +70,7 @@ __all__ = [
     "encode",
     "encode_file",
     "encode_with_report",
+    "formats",
     "info",
     "kg_error",
     "load_sequence",

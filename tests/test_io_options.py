@@ -1,0 +1,113 @@
+"""What every format shares: reading options, time codes, convert, and the registry."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import grid_faces, wave_sequence
+
+from tuckercodec import Decoder, InputError, MeshSequence, encode, load_sequence, save_sequence
+from tuckercodec.cli import main
+from tuckercodec.io import formats
+from tuckercodec.io.registry import OPTION_FLAGS, ReadOptions
+
+
+@pytest.fixture
+def wave(tmp_path):
+    path = tmp_path / "wave.npz"
+    np.savez(path, V=wave_sequence(12, 6), F=grid_faces(6))
+    return path
+
+
+def test_time_codes_are_checked_and_give_seconds():
+    vertices = wave_sequence(4, 3)
+    seq = MeshSequence(vertices, grid_faces(3), frame_rate=25.0, time_codes=[10, 11, 12, 14])
+    assert seq.codes().tolist() == [10, 11, 12, 14]
+    assert seq.seconds().tolist() == pytest.approx([0.4, 0.44, 0.48, 0.56])
+    assert MeshSequence(vertices, grid_faces(3)).seconds()[1] == pytest.approx(1 / 24)
+    with pytest.raises(InputError, match=r"frame 2: time codes must increase: 1\.0 follows 2\.0"):
+        MeshSequence(vertices, grid_faces(3), time_codes=[0, 2, 1, 3])
+    with pytest.raises(InputError, match="frame 1: time code nan is not finite"):
+        MeshSequence(vertices, grid_faces(3), time_codes=[0, np.nan, 1, 3])
+    with pytest.raises(InputError, match="must be 4 numbers"):
+        MeshSequence(vertices, grid_faces(3), time_codes=[0, 1])
+
+
+def test_npz_keeps_time_codes_and_frame_rate(tmp_path):
+    seq = MeshSequence(wave_sequence(3, 3), grid_faces(3), frame_rate=30, time_codes=[5, 6, 8])
+    save_sequence(seq, tmp_path / "t.npz")
+    back = load_sequence(tmp_path / "t.npz")
+    assert back.time_codes.tolist() == [5, 6, 8] and back.frame_rate == 30
+
+
+def test_a_decoded_part_keeps_its_place_in_time():
+    decoder = Decoder(encode(MeshSequence(wave_sequence(12, 6), grid_faces(6)), target_kg=1.0))
+    assert decoder.sequence().time_codes is None
+    assert decoder.sequence(slice(3, 6)).time_codes.tolist() == [3, 4, 5]
+    assert decoder.sequence([5, 2]).time_codes is None  # not in time order: no time codes
+
+
+def test_an_option_the_format_does_not_use_is_refused_by_name(wave, tmp_path):
+    with pytest.raises(InputError, match=r"wave\.npz: --prim \(prim\) does not apply to"):
+        load_sequence(wave, prim="/World/mesh")
+    save_sequence(load_sequence(wave), tmp_path / "frames")
+    with pytest.raises(InputError, match=r"--fps \(fps\) does not apply to a folder of frames"):
+        load_sequence(tmp_path / "frames", fps=30)
+
+
+def test_every_option_has_a_flag_and_a_format_that_uses_it():
+    assert set(OPTION_FLAGS) == set(vars(ReadOptions()))
+    used = set().union(*(f.read_options for f in formats()))
+    assert used <= set(OPTION_FLAGS)
+
+
+def test_every_format_is_described_once():
+    names = [f.name for f in formats()]
+    assert len(names) == len(set(names))
+    for found in formats():
+        assert found.suffixes and all(s.startswith(".") and s == s.lower() for s in found.suffixes)
+        assert (found.read is not None) or (found.read_frame is not None), found.name
+        assert found.carries <= {"float64", "faces", "frame_names", "frame_rate", "time_codes"}
+
+
+def test_convert_writes_the_target_format_and_says_what_it_loses(wave, tmp_path, capsys):
+    out = tmp_path / "frames"
+    assert main(["convert", str(wave), str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "12 frames, 36 vertices" in printed and "a folder of OBJ files" in printed
+    assert "not carried" not in printed  # OBJ text is exact and the names are the file names
+    back = load_sequence(out)
+    assert np.array_equal(back.vertices, load_sequence(wave).vertices)
+
+    timed = tmp_path / "timed.npz"
+    save_sequence(MeshSequence(wave_sequence(3, 3), grid_faces(3), frame_rate=30), timed)
+    assert main(["convert", str(timed), str(tmp_path / "timed")]) == 0
+    assert "not carried by the output's format: frame rate" in capsys.readouterr().out
+
+
+def test_convert_never_overwrites_without_force(wave, tmp_path, capsys):
+    target = tmp_path / "copy.npz"
+    target.write_bytes(b"precious")
+    assert main(["convert", str(wave), str(target)]) == 1
+    assert "exists" in capsys.readouterr().err
+    assert target.read_bytes() == b"precious"
+    assert main(["convert", str(wave), str(target), "--force"]) == 0
+    assert load_sequence(target).frame_count == 12
+
+
+def test_convert_reads_a_compressed_file_and_points_to_encode_for_one(wave, tmp_path, capsys):
+    packed = tmp_path / "wave.tkc"
+    assert main(["encode", str(wave), "-o", str(packed)]) == 0
+    assert main(["convert", str(packed), str(tmp_path / "back.npz")]) == 0
+    assert load_sequence(tmp_path / "back.npz").frame_count == 12
+    capsys.readouterr()
+    assert main(["convert", str(wave), str(tmp_path / "x.tkc")]) == 2
+    assert "use 'tuckercodec encode'" in capsys.readouterr().err
+    assert not (tmp_path / "x.tkc").exists()
+
+
+def test_a_read_option_given_to_the_wrong_format_exits_4(wave, tmp_path, capsys):
+    assert main(["encode", str(wave), "-o", str(tmp_path / "x.tkc"), "--object", "/a"]) == 4
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--object (object_path) does not apply" in err
+    assert not (tmp_path / "x.tkc").exists()
