@@ -1,0 +1,139 @@
+"""What the two point-cache formats share (:mod:`.pc2`, :mod:`.mdd`): reading a fixed-size
+header and a block of float32 positions whose size the header declares, the faces the points
+take from ``--faces MESH``, and positions made ready for writing.
+
+A point cache holds positions only: F frames of K points, each a float32 x, y, z. The header
+declares F and K, so the file's size is known before anything is read: a file that is shorter
+(truncated) or longer (trailing bytes) than declared is refused with both sizes, before any
+array is allocated.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import BinaryIO
+
+import numpy as np
+
+from ..errors import InputError
+from ..reading import open_regular_file
+from ..sequence import MeshSequence
+
+#: Bytes of one point: three float32 coordinates.
+POINT_BYTES = 12
+#: The largest count an int32 header field can hold, and so the largest a cache can declare.
+INT32_MAX = 2**31 - 1
+
+
+def open_cache(path: Path, what: str) -> tuple[BinaryIO, int]:
+    """Open a point cache for reading: the stream and the file's size in bytes."""
+    try:
+        stream = open_regular_file(path, what)
+    except OSError as error:
+        raise InputError(f"cannot read: {error.strerror or error}", path=path) from None
+    return stream, os.fstat(stream.fileno()).st_size
+
+
+def read_header(stream: BinaryIO, size: int, file_size: int, what: str, path: Path) -> bytes:
+    """The first ``size`` bytes of the file, or an InputError if it is shorter."""
+    if file_size < size:
+        raise InputError(
+            f"is {file_size} bytes, shorter than the {size}-byte header of {what}: it is "
+            "truncated or not such a file",
+            path=path,
+        )
+    return stream.read(size)
+
+
+def check_counts(frames: int, points: int, path: Path) -> None:
+    """Refuse a header whose frame or point count is negative or zero."""
+    for name, value in (("frame", frames), ("point", points)):
+        if value < 0:
+            raise InputError(f"declares a negative {name} count ({value})", path=path)
+        if value == 0:
+            raise InputError(f"declares 0 {name}s: there is nothing to read", path=path)
+
+
+def check_size(declared: int, actual: int, layout: str, path: Path) -> None:
+    """Refuse a file whose size is not the ``declared`` size (computed from its header, with
+    Python integers so that no count can overflow); ``layout`` says how it was computed."""
+    if actual < declared:
+        raise InputError(
+            f"is truncated: {layout} make {declared} bytes, but the file has {actual} "
+            f"({declared - actual} missing)",
+            path=path,
+        )
+    if actual > declared:
+        raise InputError(
+            f"has {actual - declared} trailing bytes: {layout} make {declared} bytes, but the "
+            f"file has {actual}",
+            path=path,
+        )
+
+
+def read_floats(stream: BinaryIO, count: int, dtype: str, path: Path) -> np.ndarray:
+    """``count`` float32 values of byte order ``dtype`` ('<f4' or '>f4') from the stream's
+    position, as float64; the caller has checked that the file holds them."""
+    data = stream.read(count * 4)
+    if len(data) != count * 4:  # the file shrank after its size was checked
+        raise InputError(f"ended after {len(data)} of the {count * 4} bytes it declares", path=path)
+    return np.frombuffer(data, dtype=dtype).astype(np.float64)
+
+
+def cache_faces(faces_file: Path | None, point_count: int, path: Path) -> np.ndarray:
+    """The faces the cache's points take: those of the mesh file ``faces_file`` (any file
+    :func:`~tuckercodec.io.load_sequence` reads: OBJ, PLY, .npz...), whose vertex count must
+    be the cache's point count; without one, no faces (a point sequence)."""
+    if faces_file is None:
+        return np.zeros((0, 3), dtype=np.int64)
+    from . import load_sequence  # here: the package imports the formats' registry
+
+    mesh = load_sequence(faces_file, progress=False)
+    if mesh.faces.shape[0] == 0:
+        raise InputError(
+            f"has no faces to give the points of the cache {path} (--faces names a mesh file)",
+            path=faces_file,
+        )
+    if mesh.vertex_count != point_count:
+        raise InputError(
+            f"holds {point_count} points but the --faces mesh {faces_file} has "
+            f"{mesh.vertex_count} vertices: it must be the mesh the cache was made from",
+            path=path,
+        )
+    return mesh.faces
+
+
+def cache_sequence(
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    path: Path,
+    *,
+    time_codes: np.ndarray | None = None,
+    frame_rate: float | None = None,
+) -> MeshSequence:
+    """The sequence read from a cache; its checks (finite positions...) name the file."""
+    try:
+        return MeshSequence(vertices, faces, frame_rate=frame_rate, time_codes=time_codes)
+    except InputError as error:
+        raise InputError(error.reason, path=path, frame=error.frame) from None
+
+
+def float32_positions(seq: MeshSequence, dtype: str, path: Path) -> np.ndarray:
+    """The sequence's positions as float32 of byte order ``dtype``, ready to write; a
+    position beyond float32's range (which would become infinite) is an InputError."""
+    if seq.frame_count > INT32_MAX or seq.vertex_count > INT32_MAX:
+        raise InputError(
+            f"{seq.frame_count} frames of {seq.vertex_count} points do not fit the 32-bit "
+            f"counts of {path.name}"
+        )
+    with np.errstate(over="ignore"):
+        values = seq.vertices.astype(dtype)
+    bad = ~np.isfinite(values)
+    if bad.any():
+        frame, vertex, _ = (int(i) for i in np.argwhere(bad)[0])
+        raise InputError(
+            f"vertex {vertex} is beyond the range of float32, which {path.name} stores",
+            frame=frame,
+        )
+    return values
