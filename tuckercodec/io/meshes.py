@@ -49,7 +49,7 @@ def _read_with_trimesh(path: Path) -> MeshFrame:
 
 FORMAT = SequenceFormat(
     name="mesh",
-    suffixes=(".ply", ".off", ".stl", ".glb", ".gltf", ".3mf", ".dae"),
+    suffixes=(".ply", ".off", ".stl", ".3mf", ".dae"),  # .glb/.gltf: the gltf format
     description="one frame per file, read with trimesh in the file's vertex order",
     read_frame=read_mesh_frame,
 )

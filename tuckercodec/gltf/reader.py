@@ -1,0 +1,371 @@
+"""A glTF 2.0 morph animation read as a mesh sequence: what a viewer shows, frame by frame.
+
+Frame t of a mesh node is ``world(t) · (base + Σ_j w_j(t) · T_j)``: the primitive's POSITION
+plus its morph targets' POSITION deltas weighted by the node's ``weights`` (animated, else the
+node's or the mesh's default weights, else zeros), moved by the node's transform and its
+parents' (each a ``matrix``, or translation/rotation/scale, static or animated).
+
+Choices (documented for users in :func:`read_gltf`):
+
+* Which meshes: the mesh nodes of the default scene (all nodes if the file has no scene), in
+  scene order; with ``object_path``, the one node (or the nodes of the one mesh) of that name.
+  Several are merged into one mesh, their vertices one after the other, as a viewer shows them.
+  Skinned meshes are refused (the skinning is not evaluated).
+* Primitives of a mesh are merged the same way (primitives that share a POSITION accessor share
+  its vertices). TRIANGLES give triangles; TRIANGLE_STRIP and TRIANGLE_FAN are converted to
+  triangles (a strip's degenerate joining triangles dropped); POINTS add vertices without faces;
+  line modes are refused.
+* Which times: the first animation (others are ignored), at the union of the keyframe times of
+  the channels that move the chosen nodes (default) or at ``fps`` frames per second from its
+  first to its last keyframe. No animation: one frame.
+* Frame rate and time codes: as the tuckercodec writer recorded them (the asset's
+  ``extras``), when the times are the ones it wrote; else keyframes spaced evenly by 1/r give
+  rate r (rounded to a whole number when within 1e-4 of one) and time codes t·r, which are left
+  out when they are 0, 1, 2...; uneven keyframes give the default rate (24) and time codes t·24;
+  ``fps`` gives that rate.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..sequence import DEFAULT_FRAME_RATE, MeshSequence
+from .animation import PATH_WIDTHS, Sampler, node_matrix, numbers, read_sampler
+from .container import Document, integer, read_document
+from .primitives import MAX_NUMBERS, Mesh, read_mesh
+
+#: Extensions a file may require that this reader understands.
+SUPPORTED_EXTENSIONS = frozenset({"KHR_mesh_quantization", "EXT_meshopt_compression"})
+#: The key of the writer's own record in an animation's ``extras``.
+EXTRAS_KEY = "tuckercodec"
+#: The most frames ``fps`` may ask for (a read also holds at most MAX_NUMBERS numbers, about
+#: 2 GiB of float64): checked against the file's keyframe times before anything is sampled.
+MAX_FRAMES = 1_000_000
+
+
+@dataclass
+class Sampled:
+    """What :func:`sample_gltf` evaluates: positions (n, K, 3), triangles, the times (s)."""
+
+    positions: np.ndarray
+    faces: np.ndarray
+    times: np.ndarray
+    animated: bool
+    extras: dict[str, Any] = field(default_factory=dict)
+
+
+def read_gltf(path: Path, object_path: str | None = None, fps: float | None = None) -> MeshSequence:
+    """A mesh sequence from a ``.glb``/``.gltf`` file: the morph animation as a viewer plays it
+    (see the module docstring for which meshes, primitives and times).
+
+    Raises:
+        InputError: a damaged or unsupported file, naming the file, the mesh/node/accessor and
+            the frame where one is at fault.
+        DependencyError: the file uses EXT_meshopt_compression and meshoptimizer (extra
+            ``gltf``) is missing.
+    """
+    sampled = sample_gltf(path, object_path=object_path, fps=fps)
+    rate, codes, names = _timing(sampled, fps)
+    try:
+        return MeshSequence(
+            sampled.positions, sampled.faces, frame_names=names, frame_rate=rate, time_codes=codes
+        )
+    except InputError as error:
+        raise InputError(error.reason, path=path, frame=error.frame) from None
+
+
+def sample_gltf(
+    path: Path,
+    times: np.ndarray | None = None,
+    *,
+    object_path: str | None = None,
+    fps: float | None = None,
+) -> Sampled:
+    """Evaluate the file's mesh at ``times`` (seconds), or at its keyframes or ``fps``."""
+    doc = read_document(path)
+    required = doc.gltf.get("extensionsRequired", [])
+    if not isinstance(required, list):
+        raise doc.fail("extensionsRequired must be a list")
+    unknown = [name for name in required if name not in SUPPORTED_EXTENSIONS]
+    if unknown:
+        raise doc.fail(
+            f"requires {', '.join(map(str, unknown))}, which this reader does not support "
+            f"(it reads {', '.join(sorted(SUPPORTED_EXTENSIONS))})"
+        )
+    parents = _parents(doc)
+    chosen = _mesh_nodes(doc, parents, object_path)
+    animation, channels = _channels(doc, chosen, parents)
+    keys = [sampler.times for per_node in channels.values() for sampler in per_node.values()]
+    extras: dict[str, Any] = {}
+    record = doc.gltf["asset"].get("extras")
+    if isinstance(record, dict) and isinstance(record.get(EXTRAS_KEY), dict):
+        extras = record[EXTRAS_KEY]
+    if times is None:
+        times = _frame_times(doc, keys, fps)
+    meshes = {index: read_mesh(doc, index) for index in {_mesh_of(doc, n) for n in chosen}}
+    vertex_total = sum(len(meshes[_mesh_of(doc, n)].base) for n in chosen)
+    if len(times) * vertex_total * 3 > MAX_NUMBERS:
+        raise doc.fail(f"{len(times)} frames of {vertex_total} vertices are too many to read")
+
+    positions, faces, offset = [], [], 0
+    for node in chosen:
+        mesh = meshes[_mesh_of(doc, node)]
+        local = _morphed(doc, node, mesh, channels.get(node, {}), times)
+        world = _world(doc, node, parents, channels, times)
+        placed = np.einsum("nij,nkj->nki", world[:, :3, :3], local) + world[:, None, :3, 3]
+        positions.append(placed)
+        faces.append(mesh.faces + offset)
+        offset += len(mesh.base)
+    result = np.concatenate(positions, axis=1)
+    bad = ~np.isfinite(result)
+    if bad.any():
+        frame, vertex, _ = (int(i) for i in np.argwhere(bad)[0])
+        raise doc.fail(f"vertex {vertex} is not finite at {times[frame]:g} s", frame=frame)
+    return Sampled(result, np.concatenate(faces), np.asarray(times), animation is not None, extras)
+
+
+def _parents(doc: Document) -> dict[int, int]:
+    """Each child node's parent; a node with two parents or a cycle is an error."""
+    parents: dict[int, int] = {}
+    for index, node in enumerate(doc.array("nodes")):
+        if not isinstance(node, dict):
+            raise doc.fail(f"nodes[{index}] must be an object")
+        children = node.get("children", [])
+        if not isinstance(children, list):
+            raise doc.fail(f"nodes[{index}].children must be a list")
+        for child in children:
+            doc.item("nodes", child, f"nodes[{index}].children")
+            if child in parents or child == index:
+                raise doc.fail(f"nodes[{child}] has two parents (or is its own): not a tree")
+            parents[child] = index
+    for start in parents:
+        seen, node = {start}, start
+        while node in parents:
+            node = parents[node]
+            if node in seen:
+                raise doc.fail(f"nodes[{start}]'s parents form a cycle")
+            seen.add(node)
+    return parents
+
+
+def _mesh_nodes(doc: Document, parents: dict[int, int], object_path: str | None) -> list[int]:
+    """The mesh nodes to read, in scene order."""
+    nodes = doc.array("nodes")
+    scenes = doc.array("scenes")
+    if scenes:
+        scene = integer(doc, doc.gltf, "scene", "the file", default=0)
+        roots = doc.item("scenes", scene, "the default scene").get("nodes", [])
+        if not isinstance(roots, list):
+            raise doc.fail(f"scenes[{scene}].nodes must be a list")
+    else:
+        roots = [index for index in range(len(nodes)) if index not in parents]
+    order: list[int] = []
+    pending = list(reversed(roots))
+    while pending:
+        index = pending.pop()
+        node = doc.item("nodes", index, "a scene")
+        if index in order:
+            raise doc.fail(f"nodes[{index}] appears twice in the scene")
+        order.append(index)
+        pending.extend(reversed(node.get("children", [])))
+    found = [index for index in order if "mesh" in nodes[index]]
+    if object_path is not None:
+        named = [
+            index
+            for index in found
+            if object_path in (nodes[index].get("name"), _mesh_name(doc, index))
+        ]
+        if not named:
+            names = sorted({str(nodes[i].get("name", f"nodes[{i}]")) for i in found})
+            raise doc.fail(
+                f"no mesh node or mesh named {object_path!r}; the mesh nodes are: "
+                f"{', '.join(names) or 'none'}"
+            )
+        found = named
+    if not found:
+        raise doc.fail("the scene holds no mesh")
+    for index in found:
+        if "skin" in nodes[index]:
+            raise doc.fail(
+                f"nodes[{index}] ({nodes[index].get('name', 'unnamed')}) is skinned: skinning is "
+                "not evaluated here (bake it to morph targets, or pick another mesh with --object)"
+            )
+    return found
+
+
+def _mesh_of(doc: Document, node: int) -> int:
+    index = doc.array("nodes")[node].get("mesh")
+    doc.item("meshes", index, f"nodes[{node}]")
+    return int(index)
+
+
+def _mesh_name(doc: Document, node: int) -> Any:
+    return doc.item("meshes", _mesh_of(doc, node), f"nodes[{node}]").get("name")
+
+
+def _channels(
+    doc: Document, chosen: list[int], parents: dict[int, int]
+) -> tuple[int | None, dict[int, dict[str, Sampler]]]:
+    """The first animation's samplers that move the chosen nodes or their parents, by node and
+    path; (None, {}) if the file has no animation."""
+    animations = doc.array("animations")
+    if not animations:
+        return None, {}
+    relevant = set(chosen)
+    for start in chosen:
+        while start in parents:
+            start = parents[start]
+            relevant.add(start)
+    animation = doc.item("animations", 0, "the file")
+    channels = animation.get("channels")
+    if not isinstance(channels, list):
+        raise doc.fail("animations[0].channels must be a list")
+    found: dict[int, dict[str, Sampler]] = {}
+    for number, channel in enumerate(channels):
+        where = f"animations[0].channels[{number}]"
+        target = channel.get("target") if isinstance(channel, dict) else None
+        if not isinstance(target, dict):
+            raise doc.fail(f"{where} lacks a target")
+        node = target.get("node")
+        path = target.get("path")
+        if node not in relevant or path not in (*PATH_WIDTHS, "weights"):
+            continue  # another node, or a path (pointer...) that does not move vertices
+        if path in found.get(node, {}):
+            raise doc.fail(f"{where}: a second channel for nodes[{node}].{path}")
+        if path == "weights":
+            if node not in chosen:
+                continue
+            width = len(read_mesh(doc, _mesh_of(doc, node)).weights)
+        else:
+            width = PATH_WIDTHS[path]
+        found.setdefault(node, {})[path] = read_sampler(
+            doc, 0, channel.get("sampler"), width, f"{where} ({path})", rotation=path == "rotation"
+        )
+    return 0, found
+
+
+def _frame_times(doc: Document, keys: list[np.ndarray], fps: float | None) -> np.ndarray:
+    if not keys:
+        return np.zeros(1)
+    union = np.unique(np.concatenate(keys))
+    if fps is None:
+        return union
+    count = int(np.floor((union[-1] - union[0]) * fps + 1e-6)) + 1
+    if count > MAX_FRAMES:
+        raise doc.fail(
+            f"{union[-1] - union[0]:g} s at {fps:g} frames per second is {count} frames, more "
+            f"than the {MAX_FRAMES} read at most"
+        )
+    return union[0] + np.arange(count) / fps
+
+
+def _morphed(
+    doc: Document, node: int, mesh: Mesh, channels: dict[str, Sampler], times: np.ndarray
+) -> np.ndarray:
+    """The node's mesh with its morph targets applied at each time, (n, K, 3)."""
+    count = len(mesh.weights)
+    if "weights" in channels:
+        weights = channels["weights"].at(times)
+    else:
+        default = mesh.weights
+        if "weights" in doc.array("nodes")[node]:
+            default = numbers(
+                doc, doc.array("nodes")[node]["weights"], count, f"nodes[{node}].weights"
+            )
+        weights = np.repeat(default[None], len(times), axis=0)
+    shape = mesh.base.shape
+    if count == 0:
+        return np.repeat(mesh.base[None], len(times), axis=0)
+    with np.errstate(over="ignore", invalid="ignore"):  # found as non-finite by the caller
+        moved = weights @ mesh.targets.reshape(count, -1)
+    return mesh.base[None] + moved.reshape(len(times), *shape)
+
+
+def _world(
+    doc: Document,
+    node: int,
+    parents: dict[int, int],
+    channels: dict[int, dict[str, Sampler]],
+    times: np.ndarray,
+) -> np.ndarray:
+    """The node's world transform at each time, (n, 4, 4)."""
+    chain = [node]
+    while chain[-1] in parents:
+        chain.append(parents[chain[-1]])
+    world = np.repeat(np.eye(4)[None], len(times), axis=0)
+    for index in chain:  # child first: world = parent · ... · node
+        moves = {p: s for p, s in channels.get(index, {}).items() if p != "weights"}
+        world = node_matrix(doc, index, times, moves) @ world
+    return world
+
+
+def _timing(
+    sampled: Sampled, fps: float | None
+) -> tuple[float | None, np.ndarray | None, list[str]]:
+    """The frame rate, time codes and names of the frames (see the module docstring)."""
+    times = sampled.times
+    if not sampled.animated:
+        static = dict(sampled.extras)
+        static.pop("time_codes", None)  # one frame at time 0 whatever its time code
+        recorded = _recorded(static, times)
+        return recorded[0] if recorded else None, None, recorded[2] if recorded else []
+    if fps is not None:
+        return fps, _codes(times * fps), []
+    recorded = _recorded(sampled.extras, times)
+    if recorded is not None:
+        return recorded
+    if len(times) > 1:
+        steps = np.diff(times)
+        step = float(np.median(steps))
+        if np.allclose(steps, step, rtol=1e-4, atol=1e-7):
+            rate = 1.0 / step
+            if abs(rate - round(rate)) < 1e-4 * rate:
+                rate = float(round(rate))
+            return rate, _codes(times * rate), []
+    return DEFAULT_FRAME_RATE, _codes(times * DEFAULT_FRAME_RATE), []
+
+
+def _recorded(
+    extras: dict[str, Any], times: np.ndarray
+) -> tuple[float | None, np.ndarray | None, list[str]] | None:
+    """The writer's record of rate, time codes and names, if the keyframes are its times."""
+    if "frame_rate" not in extras:
+        return None
+    rate, codes, names = extras["frame_rate"], extras.get("time_codes"), extras.get("frame_names")
+    if rate is not None and not (
+        isinstance(rate, (int, float)) and not isinstance(rate, bool) and rate > 0
+    ):
+        return None
+    recorded = np.arange(len(times), dtype=np.float64)
+    if codes is not None:
+        if not isinstance(codes, list) or len(codes) != len(times):
+            return None
+        if not all(isinstance(c, (int, float)) and not isinstance(c, bool) for c in codes):
+            return None
+        recorded = np.array(codes, dtype=np.float64)
+    with np.errstate(all="ignore"):
+        seconds = (recorded / (rate or DEFAULT_FRAME_RATE)).astype(np.float32)
+    if not np.array_equal(seconds, times.astype(np.float32)):
+        return None
+    if not (isinstance(names, list) and len(names) == len(times)):
+        names = []
+    return (
+        None if rate is None else float(rate),
+        None if codes is None else recorded,
+        [str(name) for name in names],
+    )
+
+
+def _codes(codes: np.ndarray) -> np.ndarray | None:
+    """Time codes, rounded to whole frames where within float32 noise of them; ``None`` when
+    they are 0, 1, 2..."""
+    whole = np.round(codes)
+    codes = np.where(np.abs(codes - whole) < 1e-4, whole, codes)
+    if np.array_equal(codes, np.arange(len(codes))):
+        return None
+    return codes
