@@ -184,13 +184,18 @@ class BufferBuilder:
     accessors: list[dict[str, Any]] = field(default_factory=list)
     views: list[dict[str, Any]] = field(default_factory=list)
     chunks: list[bytes] = field(default_factory=list)
+    view_data: list[bytes] = field(default_factory=list)  # each view's bytes, for compression
+    view_elements: list[int] = field(default_factory=list)  # each view's element size
     size: int = 0
 
-    def add_view(self, data: bytes, **fields: Any) -> int:
-        """Append ``data`` as a new buffer view (at a 4-byte boundary); returns its index."""
+    def add_view(self, data: bytes, element: int = 4, **fields: Any) -> int:
+        """Append ``data`` as a new buffer view (at a 4-byte boundary) of elements of
+        ``element`` bytes; returns its index."""
         self.size += self._pad()
         self.views.append({"buffer": 0, "byteOffset": self.size, "byteLength": len(data), **fields})
         self.chunks.append(data)
+        self.view_data.append(data)
+        self.view_elements.append(element)
         self.size += len(data)
         return len(self.views) - 1
 
@@ -230,7 +235,7 @@ class BufferBuilder:
                 fields["byteStride"] = stride
             if target is not None:
                 fields["target"] = target
-            view = self.add_view(data, **fields)
+            view = self.add_view(data, element, **fields)
         accessor: dict[str, Any] = {
             "bufferView": view,
             "componentType": CODE_OF[values.dtype.newbyteorder("<")],

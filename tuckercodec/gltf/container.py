@@ -240,7 +240,6 @@ def pack_gltf(gltf: dict[str, Any], binary: bytes) -> bytes:
     if binary:
         gltf = dict(gltf)
         encoded = base64.b64encode(binary).decode("ascii")
-        gltf["buffers"] = [
-            {**gltf["buffers"][0], "uri": f"data:application/octet-stream;base64,{encoded}"}
-        ]
+        first = {**gltf["buffers"][0], "uri": f"data:application/octet-stream;base64,{encoded}"}
+        gltf["buffers"] = [first, *gltf["buffers"][1:]]
     return json.dumps(gltf, indent=1, allow_nan=False).encode()

@@ -6,8 +6,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from .._version import __version__
-from .accessors import BufferBuilder
+from .accessors import ELEMENT_ARRAY_BUFFER, BufferBuilder
 from .container import pack_glb, pack_gltf
 
 
@@ -32,3 +34,18 @@ def file_bytes(gltf: dict[str, Any], builder: BufferBuilder, path: Path) -> byte
     if path.suffix.lower() == ".gltf":
         return pack_gltf(gltf, binary)
     return pack_glb(gltf, binary)
+
+
+def add_triangles(
+    builder: BufferBuilder, primitive: dict[str, Any], triangles: np.ndarray, vertices: int
+) -> None:
+    """Give ``primitive`` the triangles (T, 3) as indices (16-bit where the vertices allow), or
+    make it POINTS when there are none."""
+    if len(triangles) == 0:
+        primitive["mode"] = 0
+        return
+    index_type = np.uint16 if vertices <= 0xFFFF else np.uint32
+    primitive["indices"] = builder.add_accessor(
+        np.asarray(triangles).reshape(-1).astype(index_type), target=ELEMENT_ARRAY_BUFFER
+    )
+    primitive["mode"] = 4

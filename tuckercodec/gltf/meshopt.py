@@ -105,3 +105,54 @@ def encode_triangles(indices: np.ndarray) -> bytes:
     meshopt = _library("writing EXT_meshopt_compression")
     flat = np.ascontiguousarray(indices, dtype=np.uint32).reshape(-1)
     return bytes(meshopt.encode_index_buffer(flat, len(flat), int(flat.max()) + 1))
+
+
+def compress_views(
+    views: list[dict[str, Any]], data: list[bytes], elements: list[int]
+) -> tuple[list[dict[str, Any]], bytes, int]:
+    """Buffer views compressed with EXT_meshopt_compression: (the new views, buffer 0's bytes,
+    the byte length of buffer 1, the uncompressed fallback that holds no data).
+
+    Index views (``target`` 34963) use the TRIANGLES codec, vertex and animation views whose
+    elements are a multiple of 4 bytes the ATTRIBUTES codec; a view neither fits (2-byte
+    elements) stays uncompressed in buffer 0.
+    """
+    compressed: list[dict[str, Any]] = []
+    real = bytearray()
+    fallback = 0
+    for view, raw, element in zip(views, data, elements, strict=True):
+        stride = view.get("byteStride", element)
+        if view.get("target") == 34963:
+            item = element
+            payload = encode_triangles(np.frombuffer(raw, dtype=f"<u{item}"))
+            mode, stride = "TRIANGLES", item
+        elif stride % 4 == 0 and len(raw) % stride == 0:
+            payload = encode_attributes(raw, len(raw) // stride, stride)
+            mode = "ATTRIBUTES"
+        else:
+            real += b"\0" * (-len(real) % 4)
+            compressed.append({**view, "buffer": 0, "byteOffset": len(real)})
+            real += raw
+            continue
+        real += b"\0" * (-len(real) % 4)
+        fallback += -fallback % 4
+        extension = {
+            "buffer": 0,
+            "byteOffset": len(real),
+            "byteLength": len(payload),
+            "byteStride": stride,
+            "count": len(raw) // stride,
+            "mode": mode,
+        }
+        compressed.append(
+            {
+                **view,
+                "buffer": 1,
+                "byteOffset": fallback,
+                "extensions": {EXTENSION: extension},
+            }
+        )
+        real += payload
+        fallback += len(raw)
+    real += b"\0" * (-len(real) % 4)
+    return compressed, bytes(real), fallback

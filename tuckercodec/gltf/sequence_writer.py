@@ -23,11 +23,9 @@ import numpy as np
 
 from ..atomic import write_atomic
 from ..sequence import MeshSequence
-from .accessors import ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER, BufferBuilder
-from .document import file_bytes, new_gltf
+from .accessors import ARRAY_BUFFER, BufferBuilder
+from .document import add_triangles, file_bytes, new_gltf
 from .reader import EXTRAS_KEY
-
-_TRIANGLES, _POINTS = 4, 0
 
 
 def sequence_gltf_bytes(seq: MeshSequence, path: Path) -> bytes:
@@ -41,15 +39,8 @@ def sequence_gltf_bytes(seq: MeshSequence, path: Path) -> bytes:
                 base32, target=ARRAY_BUFFER, bounds=True, vertex_attribute=True
             )
         },
-        "mode": _POINTS,
     }
-    triangles = seq.triangles()
-    if len(triangles):
-        index_type = np.uint16 if seq.vertex_count <= 0xFFFF else np.uint32
-        primitive["indices"] = builder.add_accessor(
-            triangles.reshape(-1).astype(index_type), target=ELEMENT_ARRAY_BUFFER
-        )
-        primitive["mode"] = _TRIANGLES
+    add_triangles(builder, primitive, seq.triangles(), seq.vertex_count)
     mesh: dict[str, Any] = {"name": "sequence", "primitives": [primitive]}
     gltf = new_gltf()
     record: dict[str, Any] = {"frame_rate": seq.frame_rate, "frame_names": list(seq.frame_names)}
