@@ -17,6 +17,7 @@ from .encoder import EncodeReport, encode_with_report
 from .errors import InputError
 from .format.container import SIGNATURE
 from .format.limits import DEFAULT_LIMITS, Limits
+from .gltf.decomposition import DEFAULT_COMPRESSION, Compression, write_decomposition_gltf
 from .io import Source, format_named, format_of, load_sequence, save_sequence
 from .reading import open_regular_file
 from .sequence import MeshSequence
@@ -89,6 +90,12 @@ def decoded_output_path(output: str | os.PathLike[str], output_format: OutputFor
     return output
 
 
+def is_gltf_output(output: Path) -> bool:
+    """Whether ``output`` names a glTF file, which gets the decomposition as morph targets."""
+    found = format_of(output)
+    return found is not None and found.name == "gltf"
+
+
 def decode_file(
     path: str | os.PathLike[str],
     output: str | os.PathLike[str],
@@ -98,15 +105,28 @@ def decode_file(
     overwrite: bool = False,
     precision: int | None = None,
     progress: bool = False,
+    glb_compress: Compression | None = None,
 ) -> MeshSequence:
     """Decode a compressed file and write the frames: a folder of OBJ files, or a sequence
-    file (``.npz``, ``.usd``...).
+    file (``.npz``, ``.usd``...). A glTF output (``.glb``/``.gltf``) holds the decomposition
+    itself as a morph animation (:func:`tuckercodec.gltf.decomposition.write_decomposition_gltf`),
+    compressed as ``glb_compress`` says ("none", "quantize" (default), "meshopt").
 
     ``output_format`` defaults to the format ``output``'s suffix names, else a folder of OBJ
     files; the format's suffix is added to the name if missing (:func:`decoded_output_path`).
     Returns the decoded sequence.
     """
     output = decoded_output_path(output, output_format)
-    sequence = Decoder(os.fsdecode(path)).sequence(frames)
+    decoder = Decoder(os.fsdecode(path))
+    sequence = decoder.sequence(frames)
+    if is_gltf_output(output):
+        output.parent.mkdir(parents=True, exist_ok=True)  # as save_sequence does
+        compress = glb_compress or DEFAULT_COMPRESSION
+        write_decomposition_gltf(
+            decoder, output, frames=frames, compress=compress, overwrite=overwrite
+        )
+        return sequence
+    if glb_compress is not None:
+        raise ValueError(f"{output}: glb_compress applies only to a .glb or .gltf output")
     save_sequence(sequence, output, overwrite=overwrite, precision=precision, progress=progress)
     return sequence

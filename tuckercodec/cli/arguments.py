@@ -9,6 +9,7 @@ from pathlib import Path
 from .._version import __version__
 from ..encoder import DEFAULT_TARGET_KG
 from ..files import SUFFIX
+from ..gltf.decomposition import COMPRESSIONS
 from ..io.registry import writable_formats
 from ..metrics import KG_DEFINITION
 from ..perceptual import STED_DEFINITION
@@ -158,6 +159,16 @@ def build_parser() -> argparse.ArgumentParser:
     )
     decode.add_argument(
         "--reference", metavar="ORIGINAL", help="report the actual error against this sequence"
+    )
+    decode.add_argument(
+        "--glb-compress",
+        choices=COMPRESSIONS,
+        help=(
+            "glTF output: none (float32), quantize (KHR_mesh_quantization, the default: plays "
+            "natively in three.js, Babylon.js, Blender, glTFast) or meshopt "
+            "(EXT_meshopt_compression, smallest; three.js needs its MeshoptDecoder). Keyframes "
+            "at the file's frame rate, 24 fps when it records none"
+        ),
     )
     decode.add_argument(
         "--precision",

@@ -15,11 +15,12 @@ import numpy as np
 
 from ..analysis import analyze
 from ..atomic import refuse_existing, write_atomic
-from ..decoder import Decoder, decode
+from ..decoder import Decoder, FileInfo, decode
 from ..decoder import info as read_info
 from ..encoder import EncodeReport, encode_with_report
 from ..errors import EXIT_OK, InputError
-from ..files import decode_file, decoded_output_path
+from ..files import decode_file, decoded_output_path, is_gltf_output
+from ..gltf.decomposition import DEFAULT_COMPRESSION, write_decomposition_gltf
 from ..io import load_sequence
 from ..metrics import (
     KG_DEFINITION,
@@ -141,6 +142,10 @@ def run_decode(args: argparse.Namespace) -> int:
             path=args.reference,
         )
     output = decoded_output_path(args.output, args.format)
+    if is_gltf_output(output):
+        return _decode_gltf(args, header, reference, output)
+    if args.glb_compress is not None:
+        raise ValueError(f"{output}: --glb-compress applies only to a .glb or .gltf output")
     start = time.perf_counter()
     decoded = decode_file(
         args.input,
@@ -174,6 +179,38 @@ def run_decode(args: argparse.Namespace) -> int:
             f"actual KG error against {args.reference}: {kg_error(selected, decoded):.5f}{scope} "
             f"({KG_DEFINITION})"
         )
+    return EXIT_OK
+
+
+def _decode_gltf(
+    args: argparse.Namespace, header: FileInfo, reference: MeshSequence | None, output: Path
+) -> int:
+    """decode to .glb/.gltf: the decomposition as a morph animation, and the KG error a
+    viewer shows beside the file's."""
+    start = time.perf_counter()
+    output.parent.mkdir(parents=True, exist_ok=True)  # as for every other output
+    decoder = Decoder(args.input)
+    selected = None
+    if reference is not None:
+        selected = reference.vertices[args.frames if args.frames is not None else slice(None)]
+    report = write_decomposition_gltf(
+        decoder,
+        output,
+        frames=args.frames,
+        compress=args.glb_compress or DEFAULT_COMPRESSION,
+        overwrite=args.force,
+        reference=selected,
+    )
+    print(
+        f"{args.input}: {report.frames} of {header.frames} frames, {header.vertices} vertices "
+        f"-> {output} (glTF morph animation: {report.targets} targets, {report.compression}, "
+        f"{report.frame_rate:g} fps) in {time.perf_counter() - start:.2f} s"
+    )
+    print(
+        f"file: {header.total_bytes} bytes = {header.bpfv:.4f} bpfv; KG error recorded by the "
+        f"encoder {_number(header.kg)} ({header.kg_definition or 'no definition recorded'})"
+    )
+    print(f"glTF: {report.size} bytes; {report.summary()}")
     return EXIT_OK
 
 
