@@ -36,6 +36,7 @@ def test_public_surface():
             "encode",
             "encode_file",
             "encode_with_report",
+            "formats",
             "info",
             "kg_error",
             "load_sequence",
