@@ -348,7 +348,9 @@ def test_formats_are_chosen_by_suffix_from_one_registry(tmp_path: Path) -> None:
     assert format_of(tmp_path / "a.npz").read is not None  # a whole sequence in one file
     assert format_of(tmp_path / "a.ply").read_frame is not None  # one frame per file
     assert format_of(tmp_path / "a.txt") is None
-    with pytest.raises(ValueError, match=r"unknown sequence format 'abc': the formats are obj, npz,"):
+    with pytest.raises(
+        ValueError, match=r"unknown sequence format 'abc': the formats are obj, npz,"
+    ):
         format_named("abc")  # a suffix is not a name: Alembic's format is "alembic"
 
 
