@@ -1,0 +1,86 @@
+"""Every glTF the project writes, judged by tools nobody here wrote (tests/js, js_interop): the
+Khronos glTF-Validator finds no error and no warning, and three.js's GLTFLoader plays the
+animation to the positions the package's reader evaluates and to the .tkc's decode within the
+variant's quantization budget."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from js_interop import HINT, INFO, issues, three_positions, validate_gltf_files
+
+from tuckercodec import Decoder, MeshSequence, encode, load_sequence, save_sequence
+from tuckercodec.gltf.decomposition import COMPRESSIONS, write_decomposition_gltf
+from tuckercodec.gltf.quantization import BUDGET_SHARE
+from tuckercodec.gltf.reader import sample_gltf
+from tuckercodec.metrics import kg_error
+from tuckercodec.samples import sample_path
+
+# the validator cannot decode EXT_meshopt_compression: on such a file it says so, as infos
+MESHOPT_INFOS = {"UNSUPPORTED_EXTENSION", "UNUSED_OBJECT"}
+
+
+@pytest.fixture(scope="module")
+def written(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    """The cloth sample as a sequence (.glb, .gltf) and as its decomposition in each variant."""
+    folder = tmp_path_factory.mktemp("gltf")
+    cloth = load_sequence(sample_path())
+    (folder / "cloth.tkc").write_bytes(encode(cloth, target_kg=0.1))
+    decoder = Decoder(str(folder / "cloth.tkc"))
+    files = {}
+    for suffix in (".glb", ".gltf"):
+        files[f"sequence{suffix}"] = folder / f"sequence{suffix}"
+        save_sequence(cloth, files[f"sequence{suffix}"])
+    for compress in COMPRESSIONS:
+        files[compress] = folder / f"{compress}.glb"
+        write_decomposition_gltf(decoder, files[compress], compress=compress)  # type: ignore[arg-type]
+    files["tkc"] = folder / "cloth.tkc"
+    return files
+
+
+def test_the_validator_finds_no_error_and_no_warning_in_any_written_file(
+    written: dict[str, Path],
+) -> None:
+    names = [name for name in written if name != "tkc"]
+    reports = validate_gltf_files([written[name] for name in names])
+    for name, report in zip(names, reports, strict=True):
+        assert report["numErrors"] == report["numWarnings"] == 0, (name, issues(report))
+        print(name, "validator infos and hints:", issues(report, HINT) or "none")
+        infos = {message["code"] for message in report["messages"]}
+        assert infos <= (MESHOPT_INFOS if name == "meshopt" else set()), (name, infos)
+
+
+@pytest.mark.parametrize("compress", COMPRESSIONS)
+def test_three_js_plays_the_decomposition_as_the_reader_and_the_decode_say(
+    written: dict[str, Path], compress: str
+) -> None:
+    decoder = Decoder(str(written["tkc"]))
+    frames = np.array([0, 31, 45, 59])
+    times = (frames / 24).astype(np.float32).astype(np.float64)  # the keyframes, exactly
+    shown = three_positions(written[compress], times)
+    ours = sample_gltf(written[compress], times).positions
+    assert np.abs(shown - ours).max() <= 1e-9 * np.abs(ours).max()
+    decoded = decoder.positions(frames)
+    recorded = decoder.info.kg
+    assert recorded is not None
+    budget = BUDGET_SHARE * recorded if compress != "none" else 1e-4
+    # the budget holds for the whole animation; over four frames allow twice its share
+    assert kg_error(decoded, shown) <= 2 * budget
+
+
+def test_three_js_plays_a_written_sequence_frame_by_frame(written: dict[str, Path]) -> None:
+    cloth = load_sequence(sample_path())
+    frames = np.array([0, 1, 40, 59])
+    shown = three_positions(written["sequence.glb"], cloth.seconds()[frames].astype(np.float32))
+    # three.js sums base + target in float64 from float32 data: within one float32 rounding
+    assert np.allclose(shown, cloth.vertices[frames], rtol=0, atol=1e-6)
+
+
+def test_a_polygon_sequence_and_a_point_sequence_validate(tmp_path: Path) -> None:
+    vertices = np.random.default_rng(4).normal(size=(3, 5, 3))
+    save_sequence(MeshSequence(vertices, [[0, 1, 2, 3], [1, 4, 2, -1]]), tmp_path / "q.glb")
+    save_sequence(MeshSequence(vertices, np.zeros((0, 3))), tmp_path / "p.glb")
+    for report in validate_gltf_files([tmp_path / "q.glb", tmp_path / "p.glb"]):
+        assert not issues(report, INFO), issues(report, INFO)
