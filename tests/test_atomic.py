@@ -91,6 +91,50 @@ def test_an_overwrite_replaces_the_file_with_a_plain_files_permissions(tmp_path)
     assert target.stat().st_mode & 0o777 == plain.stat().st_mode & 0o777
 
 
+def test_a_file_a_library_writes_by_name_appears_only_when_complete(tmp_path):
+    target = tmp_path / "out.usda"
+    with atomic.atomic_path(target) as temporary:
+        # hidden, beside the target, ending in the suffix a library chooses its format by
+        assert temporary.parent == tmp_path and temporary.name.startswith(".out.usda.")
+        assert temporary.name.endswith(".tmp.usda")
+        temporary.write_bytes(b"written by the library")
+        assert not target.exists()
+    assert target.read_bytes() == b"written by the library"
+    assert _listing(tmp_path) == ["out.usda"]
+    plain = tmp_path / "plain.bin"
+    plain.write_bytes(b"x")
+    assert target.stat().st_mode & 0o777 == plain.stat().st_mode & 0o777
+
+
+def test_a_library_write_that_fails_or_meets_an_existing_file_leaves_it(tmp_path):
+    target = tmp_path / "out.abc"
+    target.write_bytes(b"old")
+
+    def write(data: bytes, *, overwrite: bool = False, fail: bool = False) -> None:
+        with atomic.atomic_path(target, overwrite=overwrite, suffix="") as temporary:
+            assert temporary.name.endswith(".tmp")
+            temporary.write_bytes(data)
+            if fail:
+                raise RuntimeError("library failed")
+            if data == b"ours":
+                target.write_bytes(b"theirs")  # someone else's file, created meanwhile
+
+    with pytest.raises(FileExistsError, match="--force"):  # refused before the library runs
+        write(b"new")
+    with pytest.raises(RuntimeError, match="library failed"):
+        write(b"half", overwrite=True, fail=True)
+    assert target.read_bytes() == b"old"
+    assert _listing(tmp_path) == ["out.abc"]
+    target.unlink()
+    with pytest.raises(FileExistsError):
+        write(b"ours")
+    assert target.read_bytes() == b"theirs"
+    assert _listing(tmp_path) == ["out.abc"]
+    write(b"new", overwrite=True)
+    assert target.read_bytes() == b"new"
+    assert _listing(tmp_path) == ["out.abc"]
+
+
 _SLOW_WRITER = textwrap.dedent(
     """
     import signal, sys, time

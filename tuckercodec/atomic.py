@@ -205,6 +205,38 @@ def write_atomic(
             handle.write(data)
 
 
+@contextmanager
+def atomic_path(
+    path: str | os.PathLike[str], *, overwrite: bool = False, suffix: str | None = None
+) -> Iterator[Path]:
+    """For a library that writes a file itself, by name (USD, Alembic): yield a hidden
+    temporary path beside ``path`` (``.<name>.<random>.tmp<suffix>``) to write to; when the
+    block ends without an exception, that file becomes ``path``, and on any exception it is
+    removed.
+
+    ``suffix`` ends the temporary name (default: ``path``'s own suffix), since some libraries
+    choose the file format by it. Raises ``FileExistsError`` if ``path`` exists and
+    ``overwrite`` is False, checked before the block runs and again, atomically where the file
+    system has hard links, when the file is put in place. Unlike :func:`atomic_output`, a hard
+    kill while the library writes leaves the temporary file: it has a name from the start.
+    """
+    target = Path(path)
+    refuse_existing([target], overwrite)
+    descriptor, name = tempfile.mkstemp(
+        dir=target.parent,
+        prefix=f".{target.name}.",
+        suffix=".tmp" + (target.suffix if suffix is None else suffix),
+    )
+    os.close(descriptor)  # the library opens it again by name
+    temporary = Path(name)
+    try:
+        yield temporary
+        os.chmod(temporary, _file_mode())  # mkstemp makes 0600; match a plain open()
+        _move_in(temporary, target, overwrite)
+    finally:
+        _remove(temporary)  # gone already after a successful move
+
+
 def _move_in(source: Path, target: Path, overwrite: bool) -> None:
     """Rename ``source`` to ``target``; without ``overwrite``, never replace an existing file."""
     if overwrite:
