@@ -17,6 +17,9 @@ package sees at once what the tools rely on.
 * Files and pictures: :func:`write_atomic`, :func:`refuse_existing`, :func:`plot_rd_curve`,
   :func:`pyplot` (matplotlib on the Agg backend, or a DependencyError naming the extra) and
   :func:`save_figure` (atomic, never replacing a file unasked).
+* glTF: :func:`write_decomposition_gltf` (a compressed file's decomposition as a morph
+  animation, with the KG error a viewer shows) and :func:`sample_gltf` (a glTF's mesh
+  evaluated at given times, as a viewer does), for the glTF benchmark.
 * Sample data: :func:`sample_path`, and the synthetic :func:`wave_sheet` with its
   :func:`sheet_triangles`.
 """
@@ -35,6 +38,8 @@ from .format.container import (
     pack_raw,
     parse_container,
 )
+from .gltf.decomposition import write_decomposition_gltf
+from .gltf.reader import sample_gltf
 from .hosvd import centre_frames, reconstruct
 from .metrics import KG_DEFINITION
 from .perceptual import STED_DEFINITION
@@ -61,6 +66,7 @@ __all__ = [
     "qmat",
     "reconstruct",
     "refuse_existing",
+    "sample_gltf",
     "sample_path",
     "save_figure",
     "sections",
@@ -68,4 +74,5 @@ __all__ = [
     "streams",
     "wave_sheet",
     "write_atomic",
+    "write_decomposition_gltf",
 ]
