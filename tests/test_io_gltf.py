@@ -345,3 +345,25 @@ def test_a_meshopt_file_without_meshoptimizer_names_the_extra(
     with pytest.raises(DependencyError, match=r"tuckercodec\[gltf\]"):
         write_decomposition_gltf(decoder, tmp_path / "b.glb", compress="meshopt")
     assert not (tmp_path / "b.glb").exists()
+
+
+def test_a_meshopt_view_claiming_more_than_its_codec_can_expand_is_refused(
+    tmp_path: Path,
+) -> None:
+    from tuckercodec import Decoder, encode
+    from tuckercodec.gltf.decomposition import write_decomposition_gltf
+
+    seq = load_sequence(sample_path())
+    (tmp_path / "a.tkc").write_bytes(
+        encode(MeshSequence(seq.vertices[:8], seq.faces), ranks=(4, 3))
+    )
+    path = tmp_path / "a.glb"
+    write_decomposition_gltf(Decoder(str(tmp_path / "a.tkc")), path, compress="meshopt")
+    assert load_sequence(path).frame_count == 8
+
+    def inflate(gltf: dict[str, Any]) -> None:
+        view = gltf["bufferViews"][0]
+        view["extensions"]["EXT_meshopt_compression"]["count"] = 10**9
+        view["byteLength"] = 10**9 * view["extensions"]["EXT_meshopt_compression"]["byteStride"]
+
+    _refused(_edit(path, inflate), r"bufferViews\[0\].*impossible")
