@@ -1,0 +1,353 @@
+"""The USD format (``.usd``, ``.usda``, ``.usdc``): a UsdGeomMesh whose ``points`` carry time
+samples, read and written with Pixar's usd-core (the ``usd`` extra; imported as ``pxr``).
+
+Reading:
+
+* The mesh is the prim ``--prim PATH`` names (:attr:`ReadOptions.prim`); without it, the only
+  Mesh whose points are animated (two or more time samples), else the only Mesh. Several
+  candidates, a path that is not a prim, or a prim that is not a Mesh are errors that list the
+  stage's meshes.
+* Frames are the points' time samples, in time order, and ``time_codes`` their times (stage
+  time, after any layer offsets). Points without time samples give one frame, their default
+  value, and no time codes.
+* ``frame_rate`` is the stage's ``timeCodesPerSecond``, which is what turns a time code into
+  seconds; ``framesPerSecond`` is only a playback hint, so where the two differ
+  ``timeCodesPerSecond`` wins and every frame keeps its time in seconds. USD's own fallbacks
+  apply: unauthored, it is ``framesPerSecond`` if that is authored, else 24.
+* Faces are ``faceVertexCounts``/``faceVertexIndices`` in the file's order, polygons as rows
+  padded with -1. A mesh whose ``orientation`` is ``leftHanded`` has each face's corners
+  reversed (as USD's own Alembic plugin does), so that faces wind counter-clockwise seen from
+  their front, like every other format's. Faces that change over time are refused, naming the
+  first frame (index and time code) where they differ from frame 0.
+* Positions are read as authored: in the prim's own space, without its transform or its
+  parents' (``xformOps``, animated or not). A point cache's deformation lives in ``points``;
+  applying a transform would change every float (so no exact round trip) and mix rigid motion
+  into what the codec compresses. A stage whose mesh moves by an animated transform reads as
+  the mesh standing still in its own space.
+* A file USD cannot read, a time sample whose point count differs from frame 0's, NaN or Inf
+  (naming frame, time code and vertex) are :class:`InputError`\\ s naming the file and prim.
+  pxr's warnings are kept from the terminal. What pxr allocates while it reads is out of our
+  hands: it checks the byte ranges of uncompressed arrays against the file, but a crafted
+  ``.usdc`` can declare a compressed integer array (the faces) of any length, which pxr
+  allocates before the data is found short.
+
+Writing: a stage with ``upAxis`` Y, ``metersPerUnit`` 0.01 (USD's fallback, authored only
+because usdchecker requires it: the file means what an unauthored one would), ``defaultPrim``
+``/Root``, an Xform ``/Root`` holding a Mesh named after the file (``horse.usdc`` gives
+``/Root/horse``) with ``subdivisionScheme`` "none", float32 ``points`` and an ``extent``
+sampled at the sequence's time codes, its faces as counts and indices, and
+``timeCodesPerSecond`` = ``framesPerSecond`` = the frame rate (24, USD's default, for a
+sequence without one, which then reads back at 24) with ``startTimeCode``/``endTimeCode``.
+``.usda`` is text; ``.usdc`` and ``.usd`` are binary crate files. The file is written to a
+hidden temporary name beside the target and put in place when complete
+(:func:`~tuckercodec.atomic.atomic_path`).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+
+from ..atomic import atomic_path
+from ..errors import InputError
+from ..optional import import_optional
+from ..reading import open_regular_file
+from ..sequence import DEFAULT_FRAME_RATE, MeshSequence
+from .polygons import faces_from_polygons, polygons_from_faces, reverse_winding
+from .registry import ReadOptions, SequenceFormat, WriteOptions
+
+#: Where the written mesh lives: the root Xform (also the stage's defaultPrim).
+ROOT = "/Root"
+#: How many prim paths an error lists before "and N more".
+_LISTED = 8
+
+
+def _pxr(purpose: str) -> SimpleNamespace:
+    """The pxr modules this format uses, or DependencyError naming the ``usd`` extra."""
+    names = ("Usd", "UsdGeom", "Sdf", "Tf", "Vt", "UsdUtils")
+    return SimpleNamespace(
+        **{name: import_optional(f"pxr.{name}", "usd", purpose) for name in names}
+    )
+
+
+@contextmanager
+def _quiet(pxr: SimpleNamespace) -> Iterator[None]:
+    """Keep pxr's warnings and status messages of the block from the terminal: the errors that
+    matter reach the caller as exceptions, and the rest is noise to the user of a file."""
+    delegate = pxr.UsdUtils.CoalescingDiagnosticDelegate()
+    try:
+        yield
+    finally:
+        delegate.TakeUncoalescedDiagnostics()
+        del delegate
+
+
+def _tf_message(error: BaseException) -> str:
+    """The commentary of a pxr error, without its C++ function names and source lines."""
+    texts = [str(getattr(item, "commentary", "")) for item in error.args]
+    texts = [text.strip() for text in texts if text.strip()] or [str(error).strip()]
+    return "; ".join(text[:200] for text in texts[:2])
+
+
+def read_usd(path: Path, options: ReadOptions) -> MeshSequence:
+    """A sequence from the time-sampled points of a UsdGeomMesh (see the module docstring)."""
+    pxr = _pxr("reading USD files")
+    try:
+        open_regular_file(path, "a USD file").close()  # a folder or a pipe: a clear error
+    except OSError as error:
+        raise InputError(f"cannot read: {error.strerror or error}", path=path) from None
+    with _quiet(pxr):
+        try:
+            stage = pxr.Usd.Stage.Open(str(path), pxr.Usd.Stage.LoadAll)
+        except pxr.Tf.ErrorException as error:
+            raise InputError(
+                f"cannot read as a USD file: {_tf_message(error)}", path=path
+            ) from None
+        if not stage:
+            raise InputError("cannot read as a USD file", path=path)
+        try:
+            prim = _chosen_mesh(pxr, stage, options.prim, path)
+        except pxr.Tf.ErrorException as error:
+            raise InputError(f"cannot read its prims: {_tf_message(error)}", path=path) from None
+        try:
+            return _read_mesh(pxr, stage, prim, path)
+        except pxr.Tf.ErrorException as error:
+            raise InputError(
+                f"prim {prim.GetPath()}: cannot read: {_tf_message(error)}", path=path
+            ) from None
+
+
+def _listing(paths: list[str]) -> str:
+    """Prim paths for a message: the first few, and how many more."""
+    if not paths:
+        return "none"
+    shown = ", ".join(paths[:_LISTED])
+    return shown + (f" and {len(paths) - _LISTED} more" if len(paths) > _LISTED else "")
+
+
+def _chosen_mesh(pxr: SimpleNamespace, stage: Any, wanted: str | None, path: Path) -> Any:
+    """The Mesh prim to read: the one ``wanted`` names, or the only (animated) one."""
+    meshes = [prim for prim in stage.Traverse() if prim.IsA(pxr.UsdGeom.Mesh)]
+    names = [str(prim.GetPath()) for prim in meshes]
+    if wanted is not None:
+        valid, _ = pxr.Sdf.Path.IsValidPathString(wanted)
+        prim_path = pxr.Sdf.Path(wanted) if valid else None
+        if prim_path is None or not (prim_path.IsAbsolutePath() and prim_path.IsPrimPath()):
+            raise InputError(
+                f"--prim {wanted!r} is not the absolute path of a prim (such as /Root/mesh); "
+                f"the meshes are: {_listing(names)}",
+                path=path,
+            )
+        prim = stage.GetPrimAtPath(prim_path)
+        if not prim:
+            raise InputError(
+                f"there is no prim {wanted}; the meshes are: {_listing(names)}", path=path
+            )
+        if not prim.IsA(pxr.UsdGeom.Mesh):
+            kind = prim.GetTypeName() or "typeless"
+            raise InputError(
+                f"prim {wanted} is a {kind} prim, not a Mesh; the meshes are: {_listing(names)}",
+                path=path,
+            )
+        return prim
+    animated = [
+        prim for prim in meshes if pxr.UsdGeom.Mesh(prim).GetPointsAttr().GetNumTimeSamples() > 1
+    ]
+    candidates = animated or meshes
+    if len(candidates) == 1:
+        return candidates[0]
+    if not candidates:
+        raise InputError("holds no Mesh prim (UsdGeomMesh)", path=path)
+    which = "meshes with animated points" if animated else "meshes"
+    raise InputError(
+        f"holds {len(candidates)} {which}: {_listing([str(p.GetPath()) for p in candidates])}; "
+        "choose one with --prim PATH",
+        path=path,
+    )
+
+
+def _read_mesh(pxr: SimpleNamespace, stage: Any, prim: Any, path: Path) -> MeshSequence:
+    """The sequence of one Mesh prim."""
+    where = f"prim {prim.GetPath()}"
+    mesh = pxr.UsdGeom.Mesh(prim)
+    points = mesh.GetPointsAttr()
+    times = [float(time) for time in points.GetTimeSamples()]
+    # one frame when the points have no samples: their default, which EarliestTime also reads
+    frame_times = times or [pxr.Usd.TimeCode.EarliestTime()]
+    vertices: np.ndarray | None = None
+    for frame, time in enumerate(frame_times):
+        label = f"time code {time}" if times else "its default value"
+        try:
+            value = points.Get(time)
+        except pxr.Tf.ErrorException as error:
+            raise InputError(
+                f"{where}: cannot read the points at {label}: {_tf_message(error)}",
+                path=path,
+                frame=frame,
+            ) from None
+        positions = _points(value, where, label, path, frame)
+        if vertices is None:
+            vertices = np.empty((len(frame_times), len(positions), 3), dtype=np.float64)
+        elif len(positions) != vertices.shape[1]:
+            raise InputError(
+                f"{where}: {len(positions)} points at {label}, where frame 0 has "
+                f"{vertices.shape[1]}: the vertex count must stay the same",
+                path=path,
+                frame=frame,
+            )
+        vertices[frame] = positions
+    assert vertices is not None  # frame_times is never empty
+    faces = _faces(pxr, mesh, frame_times, times, vertices.shape[1], where, path)
+    rate = float(stage.GetTimeCodesPerSecond())
+    if not (np.isfinite(rate) and rate > 0):
+        raise InputError(f"timeCodesPerSecond must be a positive number, got {rate}", path=path)
+    try:
+        return MeshSequence(
+            vertices,
+            faces,
+            frame_rate=rate,
+            time_codes=np.array(times) if times else None,
+        )
+    except InputError as error:
+        raise InputError(f"{where}: {error.reason}", path=path, frame=error.frame) from None
+
+
+def _points(value: Any, where: str, label: str, path: Path, frame: int) -> np.ndarray:
+    """One frame's points as a finite (K, 3) array."""
+    if value is None:
+        raise InputError(
+            f"{where}: no points at {label} (blocked or unset)", path=path, frame=frame
+        )
+    positions = np.asarray(value)
+    if positions.ndim != 2 or positions.shape[1] != 3 or positions.dtype.kind != "f":
+        raise InputError(
+            f"{where}: points at {label} are not 3D points (dtype {positions.dtype}, shape "
+            f"{positions.shape})",
+            path=path,
+            frame=frame,
+        )
+    if len(positions) == 0:
+        raise InputError(f"{where}: no points at {label}", path=path, frame=frame)
+    bad = ~np.isfinite(positions)
+    if bad.any():
+        vertex = int(np.argwhere(bad)[0][0])
+        raise InputError(
+            f"{where}: vertex {vertex} has a non-finite coordinate at {label}",
+            path=path,
+            frame=frame,
+        )
+    return positions
+
+
+def _faces(
+    pxr: SimpleNamespace,
+    mesh: Any,
+    frame_times: list[Any],
+    times: list[float],
+    vertex_count: int,
+    where: str,
+    path: Path,
+) -> np.ndarray:
+    """The faces of frame 0, checked to stay the same in every frame, counter-clockwise."""
+    counts, indices = mesh.GetFaceVertexCountsAttr(), mesh.GetFaceVertexIndicesAttr()
+
+    def topology(time: Any) -> tuple[np.ndarray, np.ndarray]:
+        found, listed = counts.Get(time), indices.Get(time)
+        if (found is None) != (listed is None):
+            missing = "faceVertexCounts" if found is None else "faceVertexIndices"
+            raise InputError(f"{where}: has faces but no {missing}", path=path)
+        if found is None:
+            return np.zeros(0, np.int32), np.zeros(0, np.int32)
+        return np.asarray(found), np.asarray(listed)
+
+    first = topology(frame_times[0])
+    if counts.ValueMightBeTimeVarying() or indices.ValueMightBeTimeVarying():
+        for frame, time in enumerate(frame_times[1:], start=1):
+            now = topology(time)
+            if not (np.array_equal(now[0], first[0]) and np.array_equal(now[1], first[1])):
+                raise InputError(
+                    f"{where}: the faces change at time code {times[frame]} (faceVertexCounts "
+                    "or faceVertexIndices differ from frame 0's); a sequence keeps one set of "
+                    "faces",
+                    path=path,
+                    frame=frame,
+                )
+    try:
+        faces = faces_from_polygons(first[0], first[1], vertex_count)
+    except InputError as error:
+        raise InputError(f"{where}: {error.reason}", path=path) from None
+    if mesh.GetOrientationAttr().Get() == pxr.UsdGeom.Tokens.leftHanded:
+        faces = reverse_winding(faces)
+    return faces
+
+
+def prim_name(stem: str) -> str:
+    """A name for the written prim or object, from a file name's stem: letters, digits and
+    underscores, not starting with a digit; "mesh" if nothing is left."""
+    name = re.sub(r"[^A-Za-z0-9_]", "_", stem)
+    if not name.strip("_"):
+        return "mesh"
+    return "_" + name if name[0].isdigit() else name
+
+
+def write_usd(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
+    """Write the sequence as a USD stage (see the module docstring), atomically."""
+    pxr = _pxr("writing USD files")
+    with _quiet(pxr):
+        stage = _stage(pxr, seq, prim_name(path.stem))
+        # ".usd" may hold either encoding (USD_DEFAULT_FILE_FORMAT picks one): ask for crate
+        arguments = {"format": "usdc"} if path.suffix.lower() == ".usd" else {}
+        with atomic_path(path, overwrite=options.overwrite) as temporary:
+            try:
+                written = stage.GetRootLayer().Export(str(temporary), "", arguments)
+            except pxr.Tf.ErrorException as error:
+                raise OSError(f"{path}: USD could not write it: {_tf_message(error)}") from None
+            if not written:
+                raise OSError(f"{path}: USD could not write it")
+
+
+def _stage(pxr: SimpleNamespace, seq: MeshSequence, name: str) -> Any:
+    """An in-memory stage holding the sequence as a time-sampled Mesh under /Root."""
+    Usd, UsdGeom, Vt = pxr.Usd, pxr.UsdGeom, pxr.Vt
+    stage = Usd.Stage.CreateInMemory()
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.y)
+    UsdGeom.SetStageMetersPerUnit(stage, UsdGeom.LinearUnits.centimeters)
+    root = UsdGeom.Xform.Define(stage, ROOT)
+    stage.SetDefaultPrim(root.GetPrim())
+    mesh = UsdGeom.Mesh.Define(stage, f"{ROOT}/{name}")
+    mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+    counts, indices = polygons_from_faces(seq.faces)
+    mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(counts))
+    mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(indices))
+    points, extent = mesh.CreatePointsAttr(), mesh.CreateExtentAttr()
+    codes = seq.codes()
+    for frame, code in enumerate(codes.tolist()):
+        positions = seq.vertices[frame].astype(np.float32)
+        time = Usd.TimeCode(code)
+        points.Set(Vt.Vec3fArray.FromNumpy(positions), time)
+        bounds = np.stack([positions.min(axis=0), positions.max(axis=0)])
+        extent.Set(Vt.Vec3fArray.FromNumpy(bounds), time)
+    rate = seq.frame_rate or DEFAULT_FRAME_RATE
+    stage.SetTimeCodesPerSecond(rate)
+    stage.SetFramesPerSecond(rate)
+    stage.SetStartTimeCode(float(codes[0]))
+    stage.SetEndTimeCode(float(codes[-1]))
+    return stage
+
+
+FORMAT = SequenceFormat(
+    name="usd",
+    suffixes=(".usd", ".usda", ".usdc"),
+    description="USD stage: a UsdGeomMesh with time-sampled points (--prim to choose one)",
+    read=read_usd,
+    write=write_usd,
+    read_options=frozenset({"prim"}),
+    extra="usd",
+    carries=frozenset({"faces", "frame_rate", "time_codes"}),
+)
