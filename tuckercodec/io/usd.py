@@ -64,7 +64,7 @@ from .registry import ReadOptions, SequenceFormat, WriteOptions
 
 #: Where the written mesh lives: the root Xform (also the stage's defaultPrim).
 ROOT = "/Root"
-#: How many prim paths an error lists before "and N more".
+#: How many prim paths (or Alembic objects) an error lists before "and N more".
 _LISTED = 8
 
 
@@ -123,8 +123,8 @@ def read_usd(path: Path, options: ReadOptions) -> MeshSequence:
             ) from None
 
 
-def _listing(paths: list[str]) -> str:
-    """Prim paths for a message: the first few, and how many more."""
+def listing(paths: list[str]) -> str:
+    """Prim paths or object names for a message: the first few, and how many more."""
     if not paths:
         return "none"
     shown = ", ".join(paths[:_LISTED])
@@ -141,18 +141,18 @@ def _chosen_mesh(pxr: SimpleNamespace, stage: Any, wanted: str | None, path: Pat
         if prim_path is None or not (prim_path.IsAbsolutePath() and prim_path.IsPrimPath()):
             raise InputError(
                 f"--prim {wanted!r} is not the absolute path of a prim (such as /Root/mesh); "
-                f"the meshes are: {_listing(names)}",
+                f"the meshes are: {listing(names)}",
                 path=path,
             )
         prim = stage.GetPrimAtPath(prim_path)
         if not prim:
             raise InputError(
-                f"there is no prim {wanted}; the meshes are: {_listing(names)}", path=path
+                f"there is no prim {wanted}; the meshes are: {listing(names)}", path=path
             )
         if not prim.IsA(pxr.UsdGeom.Mesh):
             kind = prim.GetTypeName() or "typeless"
             raise InputError(
-                f"prim {wanted} is a {kind} prim, not a Mesh; the meshes are: {_listing(names)}",
+                f"prim {wanted} is a {kind} prim, not a Mesh; the meshes are: {listing(names)}",
                 path=path,
             )
         return prim
@@ -166,7 +166,7 @@ def _chosen_mesh(pxr: SimpleNamespace, stage: Any, wanted: str | None, path: Pat
         raise InputError("holds no Mesh prim (UsdGeomMesh)", path=path)
     which = "meshes with animated points" if animated else "meshes"
     raise InputError(
-        f"holds {len(candidates)} {which}: {_listing([str(p.GetPath()) for p in candidates])}; "
+        f"holds {len(candidates)} {which}: {listing([str(p.GetPath()) for p in candidates])}; "
         "choose one with --prim PATH",
         path=path,
     )
