@@ -1,10 +1,12 @@
-"""VTK time series (tuckercodec/io/vtk.py): a ParaView .pvd of .vtu files, through meshio.
+"""VTK time series (tuckercodec/io/vtk.py): a ParaView .pvd of .vtp or .vtu files, read and
+written in plain numpy (no extra library).
 
-Round trips are exact (float32 and float64 positions, mixed polygons, time codes, names); files
-VTK itself wrote (tests/data/vtk, ParaView's default layout) are read exactly, wherever the tests
-run; where pyvista (VTK's Python package) is installed, VTK's own readers read what we write.
-Every broken or hostile collection or frame ends in an InputError naming the file (the .vtu, with
-its frame, where the fault is in one).
+Round trips are exact (float32 and float64 positions, mixed polygons, time codes, names), in
+.vtp (the default) and .vtu; series VTK itself wrote (tests/data/vtk) are read exactly, wherever
+the tests run; where pyvista (VTK's Python package) is installed, VTK's own readers read what we
+write, bit for bit. Every broken or hostile collection or frame ends in an InputError naming the
+file (the frame's file, with its frame, where the fault is in one). The encodings of one file
+are tests/test_io_vtk_xml.py's.
 """
 
 from __future__ import annotations
@@ -17,13 +19,14 @@ import numpy as np
 import pytest
 from conftest import expect_input_error, grid_faces, shared_file, wave_sequence
 
-from tuckercodec import DependencyError, MeshSequence, load_sequence, save_sequence
+from tuckercodec import MeshSequence, load_sequence, save_sequence
 from tuckercodec.cli import main
 from tuckercodec.io import vtk as vtk_format
+from tuckercodec.io.registry import WriteOptions, format_named
+from tuckercodec.io.vtk_xml import DatasetWriter
 
-pytest.importorskip("meshio", reason="the [vtk] extra (meshio) is not installed")
-
-FIXTURE = Path(__file__).parent / "data" / "vtk" / "series.pvd"
+DATA = Path(__file__).parent / "data" / "vtk"
+FIXTURE = DATA / "series.pvd"
 NO_FACES = np.zeros((0, 3), dtype=np.int64)
 
 
@@ -94,7 +97,7 @@ def square_frame(shift: float = 0.0, **changes) -> str:
 def test_the_cloth_round_trips_exactly(cloth, tmp_path):
     path = tmp_path / "out.pvd"
     save_sequence(cloth, path)
-    assert len(list((tmp_path / "out").glob("*.vtu"))) == 60
+    assert len(list((tmp_path / "out").glob("*.vtp"))) == 60  # PolyData: ParaView's surfaces
     back = load_sequence(path)
     assert exact(back.vertices, cloth.vertices) and np.array_equal(back.faces, cloth.faces)
     assert back.codes().tolist() == list(range(60)) and back.frame_names == cloth.frame_names
@@ -196,7 +199,7 @@ def test_writing_never_overwrites_and_checks_every_target_first(tmp_path):
     assert path.read_text() == "precious" and not (tmp_path / "out").exists()
     path.unlink()
     (tmp_path / "out").mkdir()
-    taken = tmp_path / "out" / f"{seq.frame_names[7]}.vtu"
+    taken = tmp_path / "out" / f"{seq.frame_names[7]}.vtp"
     taken.write_text("precious")
     with pytest.raises(FileExistsError):
         save_sequence(seq, path)
@@ -206,31 +209,41 @@ def test_writing_never_overwrites_and_checks_every_target_first(tmp_path):
 
 
 def test_a_failure_while_writing_leaves_nothing(tmp_path, monkeypatch):
-    import meshio
-
     written = []
 
-    def failing_write(name, *args, **kwargs):
+    def failing_write(self, points):
         if len(written) == 2:
             raise OSError("disk full")
-        written.append(name)
-        return real_write(name, *args, **kwargs)
+        written.append(points)
+        return real_write(self, points)
 
-    real_write = meshio.vtu.write
-    monkeypatch.setattr(meshio.vtu, "write", failing_write)
+    real_write = DatasetWriter.__call__
+    monkeypatch.setattr(DatasetWriter, "__call__", failing_write)
     with pytest.raises(OSError, match="disk full"):
         save_sequence(MeshSequence(wave_sequence(5, 3), grid_faces(3)), tmp_path / "x.pvd")
     assert list(tmp_path.iterdir()) == []
 
 
-def test_without_meshio_reading_and_writing_name_the_extra(tmp_path, monkeypatch, capsys):
-    monkeypatch.setitem(sys.modules, "meshio", None)  # import meshio raises ImportError
-    with pytest.raises(DependencyError, match=r"pip install 'tuckercodec\[vtk\]'"):
-        load_sequence(FIXTURE)
-    with pytest.raises(DependencyError, match=r"pip install 'tuckercodec\[vtk\]'"):
-        save_sequence(MeshSequence(wave_sequence(2, 3), grid_faces(3)), tmp_path / "x.pvd")
-    assert main(["convert", str(FIXTURE), str(tmp_path / "x.npz")]) == 6
-    assert "tuckercodec[vtk]" in capsys.readouterr().err
+def test_vtk_series_need_no_extra_library(tmp_path, monkeypatch):
+    for module in ("meshio", "vtk", "pyvista", "h5py"):
+        monkeypatch.setitem(sys.modules, module, None)  # importing any of them fails
+    assert format_named("vtk").extra is None
+    assert load_sequence(FIXTURE).frame_count == 3
+    save_sequence(MeshSequence(wave_sequence(2, 3), grid_faces(3)), tmp_path / "x.pvd")
+    assert main(["convert", str(tmp_path / "x.pvd"), str(tmp_path / "x.npz")]) == 0
+
+
+def test_vtu_frames_round_trip_too(tmp_path):
+    vertices = wave_sequence(3, 3)
+    faces = np.array([[0, 1, 4, -1], [1, 2, 5, 4], [3, 4, 7, 6], [4, 5, 8, 7]])
+    for seq in (MeshSequence(vertices, faces), MeshSequence(vertices, NO_FACES)):
+        path = tmp_path / f"u{len(seq.faces)}.pvd"
+        vtk_format.write_pvd(seq, path, WriteOptions(), frame_suffix=".vtu")
+        assert sorted(p.suffix for p in path.with_suffix("").iterdir()) == [".vtu"] * 3
+        back = load_sequence(path)
+        assert exact(back.vertices, vertices) and np.array_equal(back.faces, seq.faces)
+    with pytest.raises(ValueError, match="frame_suffix"):
+        vtk_format.write_pvd(seq, tmp_path / "v.pvd", WriteOptions(), frame_suffix=".vtk")
 
 
 def test_the_cli_converts_to_and_from_a_vtk_series(tmp_path, capsys):
@@ -262,8 +275,8 @@ def test_the_cli_converts_to_and_from_a_vtk_series(tmp_path, capsys):
         (pvd_text('timestep="0" file="a.vtu"', 'file="b.vtu"'), "DataSet 1 has no timestep"),
         (pvd_text('timestep="1" file="a.vtu"', 'timestep="1.0" file="b.vtu"'), "1.0 twice"),
         (pvd_text('part="0" file="a.vtu"', 'part="1" file="b.vtu"'), r"several parts .*Merge"),
-        (pvd_text('file="a.vtp"'), r"reads \.vtu, not \.vtp"),
-        (pvd_text('file="a.obj"'), "lists .vtu files"),
+        (pvd_text('file="a.pvtp"'), r"a parallel file of pieces: merge"),
+        (pvd_text('file="a.obj"'), "lists .vtp or .vtu files"),
     ],
 )
 def test_a_broken_collection_is_refused_saying_why(tmp_path, text, message):
@@ -316,14 +329,16 @@ def test_a_listed_file_that_is_missing_or_not_vtk_is_named(tmp_path):
     )
 
 
-def test_a_damaged_vtu_is_an_input_error_not_a_library_traceback(tmp_path):
+def test_a_damaged_frame_is_an_input_error_not_a_library_traceback(tmp_path):
     save_sequence(MeshSequence(wave_sequence(3, 3), grid_faces(3)), tmp_path / "d.pvd")
-    frame = tmp_path / "d" / "frame_00001.vtu"
+    frame = tmp_path / "d" / "frame_00001.vtp"
     data = frame.read_bytes()
-    frame.write_bytes(data[: len(data) // 2])
+    frame.write_bytes(data[: data.index(b"<Polys")])
     expect_input_error(
-        lambda: load_sequence(tmp_path / "d.pvd"), frame, frame=1, match="meshio cannot read it"
+        lambda: load_sequence(tmp_path / "d.pvd"), frame, frame=1, match="not well-formed XML"
     )
+    frame.write_bytes(data[:-60])  # into the compressed cells
+    expect_input_error(lambda: load_sequence(tmp_path / "d.pvd"), frame, frame=1, match="truncated")
 
 
 def test_topology_that_changes_is_refused_naming_the_frame(tmp_path):
@@ -349,9 +364,19 @@ def test_cells_that_are_not_surfaces_are_refused_and_none_are_lost(tmp_path):
     expect_input_error(
         lambda: load_sequence(pvd), frame, frame=0, match=r"1 tetra cells: .*Extract"
     )
-    strip = square_frame(cells=[[0, 1, 3, 2]], types=[6])  # a triangle strip, unknown to meshio
-    series(tmp_path, [strip])
-    expect_input_error(lambda: load_sequence(pvd), frame, frame=0, match="declares 1 cells but")
+    lines = square_frame(cells=[[0, 1], [1, 2, 3]], types=[3, 4])
+    series(tmp_path, [lines])
+    expect_input_error(lambda: load_sequence(pvd), frame, frame=0, match="1 line cells")
+    unknown = square_frame(cells=[[0, 1, 2]], types=[77])
+    series(tmp_path, [unknown])
+    expect_input_error(lambda: load_sequence(pvd), frame, frame=0, match="1 type 77 cells")
+
+
+def test_strips_and_pixels_are_read_as_the_faces_they_are(tmp_path):
+    # a strip 0 1 3 2 is the triangles (0 1 3) and (3 1 2): every second one flipped, as VTK
+    # splits strips; a pixel's corners 0 1 3 2 go round the quad 0 1 2 3
+    pvd = series(tmp_path, [square_frame(cells=[[0, 1, 3, 2], [0, 1, 3, 2]], types=[6, 8])])
+    assert load_sequence(pvd).faces.tolist() == [[0, 1, 3, -1], [3, 1, 2, -1], [0, 1, 2, 3]]
 
 
 def test_vertex_cells_alone_give_a_point_sequence(tmp_path):

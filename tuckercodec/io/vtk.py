@@ -1,75 +1,69 @@
-"""VTK time series (``.pvd``): a ParaView collection of one ``.vtu`` file per time step, the
-way simulation codes write a deforming mesh. The ``.vtu`` files are read and written with
-meshio (the ``[vtk]`` extra); the ``.pvd`` index with the standard library's XML parser.
+"""VTK time series (``.pvd``): a ParaView collection of one ``.vtp`` (PolyData) or ``.vtu``
+(UnstructuredGrid) file per time step, the way simulation codes write a deforming mesh. Core:
+the files are read and written by :mod:`.vtk_xml` in plain numpy and the standard library, no
+extra needed; the ``.pvd`` index is read with the standard library's XML parser.
 
 Reading: the ``.pvd`` must be ``<VTKFile type="Collection">`` with a ``<Collection>`` of
 ``<DataSet timestep=".." part=".." file=".."/>``; ``file`` is relative to the ``.pvd``'s folder
 (or absolute). The frames are ordered by ``timestep``, which becomes the time codes, in the
 simulation's own unit (the frame rate stays unknown); without timesteps the listed order holds.
 One mesh per time step: several ``part`` values, or one timestep listed twice, are refused
-(merge the parts first, ParaView's Merge Blocks). Each file must have the first one's points and
-cells. Cells: triangles, quads and polygons become the faces, in the file's order (mixed sizes
-padded with -1); vertex cells only mark points; a file of points only is a point sequence.
-Lines, volume cells (tetrahedra, hexahedra...) and higher-order cells are refused: the codec
-compresses surfaces (ParaView's Extract Surface makes one). Positions keep their precision
-(float64 stays float64). meshio reads ``.vtu`` only: a ``.vtp`` (PolyData) is refused, and
-XDMF is not read (meshio's XDMF time series holds one geometry and per-step data arrays, not a
-moving mesh).
+(merge the parts first, ParaView's Merge Blocks), as are parallel files (``.pvtu``, ``.pvtp``).
+Each file must have the first one's points and faces; what is read of each (every encoding VTK
+writes; triangles, quads, polygons, strips; what is refused) is :mod:`.vtk_xml`'s docstring.
+Positions keep their precision (float64 stays float64). XDMF is not read here.
 
 Hostile input: a ``.pvd`` larger than :data:`MAX_INDEX_BYTES`, or one that declares a DOCTYPE or
 an ENTITY (the way to an entity-expansion attack; a ``.pvd`` needs neither), is refused before it
-is parsed, as is a ``.vtu`` with either in its prolog. A listed file that is missing, not a
-regular file or not VTK XML is named with the DataSet that lists it.
+is parsed, as is a ``.vtu``/``.vtp`` with either in its prolog. A listed file that is missing,
+not a regular file or not VTK XML is named with the DataSet that lists it. Sizes inside a file
+are checked before anything is allocated or inflated (:mod:`.vtk_data`).
 
-Writing ``out.pvd``: one ``.vtu`` per frame in the folder ``out/`` beside it (names from
-:func:`.frames.frame_file_names`), zlib-compressed binary, Float32 when every position is a
-float32 (exact either way), Float64 otherwise. Every target is checked first (never overwritten
-without ``overwrite``), the frames are staged in a hidden folder and moved in whole
-(:func:`~tuckercodec.atomic.atomic_folder`), and the ``.pvd`` is written last, atomically.
+Writing ``out.pvd``: one ``.vtp`` per frame (:data:`FRAME_SUFFIX`; ``.vtu`` on request) in the
+folder ``out/`` beside it (names from :func:`.frames.frame_file_names`), in ParaView's own layout
+(appended raw binary, zlib blocks, UInt64 headers), Float32 when every position is a float32
+(exact either way), Float64 otherwise. PolyData is ParaView's surface type: its surface filters
+(normals, smoothing, decimation) take it directly, where an UnstructuredGrid first needs Extract
+Surface. Every target is checked first (never overwritten without ``overwrite``), the frames are
+staged in a hidden folder and moved in whole (:func:`~tuckercodec.atomic.atomic_folder`), and
+the ``.pvd`` is written last, atomically.
 """
 
 from __future__ import annotations
 
 import itertools
-import re
+import os
 from dataclasses import dataclass
 from pathlib import Path
-from types import ModuleType
-from typing import Any
 from xml.etree import ElementTree
 
 import numpy as np
 
 from ..atomic import atomic_folder, refuse_existing, write_atomic
 from ..errors import InputError
-from ..optional import import_optional
 from ..reading import open_regular_file
 from ..sequence import MeshSequence
-from ..topology import face_table_problem
 from .frames import frame_file_names
 from .registry import ReadOptions, SequenceFormat, WriteOptions
+from .vtk_data import Layout
+from .vtk_xml import DATASETS, DatasetWriter, read_dataset, refuse_declarations
 
 #: The largest .pvd index read: about a million time steps, far beyond any real series.
 MAX_INDEX_BYTES = 64 * 1024 * 1024
-#: meshio's names of the cells kept as faces (one row per cell); "vertex" cells are skipped.
-SURFACE_CELLS = ("triangle", "quad", "polygon")
-_POINT_CELLS = ("vertex",)
-#: XML declarations refused in a .pvd or a .vtu prolog: they open the door to entity expansion.
-_DECLARATIONS = (b"<!DOCTYPE", b"<!ENTITY")
-_PIECE = re.compile(rb"<Piece\b([^>]*)>")
-_CELL_COUNT = re.compile(rb"""\bNumberOfCells\s*=\s*["']\s*(\d+)\s*["']""")
+#: The frames' files written by default: PolyData, ParaView's own type for surfaces.
+FRAME_SUFFIX = ".vtp"
+_PARALLEL = (".pvtu", ".pvtp")
 
 
 def read_pvd(path: Path, options: ReadOptions) -> MeshSequence:
-    """A sequence from a ParaView ``.pvd`` collection of ``.vtu`` files (see the module
-    docstring); the format takes no read options."""
-    meshio = import_optional("meshio", "vtk", "reading VTK time series (.pvd)")
+    """A sequence from a ParaView ``.pvd`` collection of ``.vtp``/``.vtu`` files (see the
+    module docstring); the format takes no read options."""
     entries = _collection(path)
     vertices: np.ndarray | None = None
     faces = np.zeros((0, 3), dtype=np.int64)
     first = entries[0].file
     for index, entry in enumerate(entries):
-        points, cells = _read_vtu(meshio, entry.file, path, index)
+        points, cells = _read_frame(entry.file, path, index)
         if vertices is None:
             vertices = np.empty((len(entries), *points.shape), dtype=np.float64)
             faces = cells
@@ -118,7 +112,9 @@ def _collection(path: Path) -> list[_Entry]:
     except OSError as error:
         raise InputError(f"cannot read: {error.strerror or error}", path=path) from None
     with stream:
-        data = stream.read(MAX_INDEX_BYTES + 1)
+        # read(n) reserves n bytes at once: ask for no more than the file holds
+        size = os.fstat(stream.fileno()).st_size
+        data = stream.read(min(size, MAX_INDEX_BYTES) + 1)
     if len(data) > MAX_INDEX_BYTES:
         raise InputError(
             f"is larger than {MAX_INDEX_BYTES} bytes, far more than an index of time steps needs",
@@ -162,13 +158,10 @@ def _collection(path: Path) -> list[_Entry]:
 
 def _refuse_declarations(data: bytes, path: Path) -> None:
     """Refuse XML whose prolog holds a DOCTYPE or ENTITY declaration."""
-    for declaration in _DECLARATIONS:
-        if declaration in data:
-            raise InputError(
-                f"declares {declaration.decode()[1:]}, which VTK files never need: refused, "
-                "as the way to an entity-expansion attack",
-                path=path,
-            )
+    try:
+        refuse_declarations(data)
+    except InputError as error:
+        raise InputError(error.reason, path=path) from None
 
 
 def _entry(dataset: ElementTree.Element, number: int, path: Path) -> _Entry:
@@ -190,13 +183,18 @@ def _entry(dataset: ElementTree.Element, number: int, path: Path) -> _Entry:
     file = Path(name.replace("\\", "/"))
     file = file if file.is_absolute() else path.parent / file
     suffix = file.suffix.lower()
-    if suffix != ".vtu":
-        hint = (
-            "meshio (the [vtk] extra) reads .vtu, not .vtp: save the series as .vtu (ParaView)"
-            if suffix == ".vtp"
-            else "a .pvd read here lists .vtu files"
+    if suffix in _PARALLEL:
+        raise InputError(
+            f"DataSet {number} names {name!r}, a parallel file of pieces: merge the pieces "
+            "into one mesh first (ParaView: Merge Blocks, then save as .vtp or .vtu)",
+            path=path,
         )
-        raise InputError(f"DataSet {number} names {name!r}: {hint}", path=path)
+    if suffix not in DATASETS:
+        raise InputError(
+            f"DataSet {number} names {name!r}: a .pvd read here lists .vtp or .vtu files "
+            "(VTK XML PolyData or UnstructuredGrid)",
+            path=path,
+        )
     return _Entry(timestep, file, file.stem)
 
 
@@ -211,160 +209,59 @@ def _check_parts(datasets: list[ElementTree.Element], path: Path) -> None:
         )
 
 
-def _read_vtu(
-    meshio: ModuleType, file: Path, pvd: Path, index: int
-) -> tuple[np.ndarray, np.ndarray]:
-    """The points (K, 3) float64 and faces of one .vtu frame, checked."""
+def _read_frame(file: Path, pvd: Path, index: int) -> tuple[np.ndarray, np.ndarray]:
+    """The points (K, 3) float64 and faces of one .vtp/.vtu frame, checked."""
     try:
-        stream = open_regular_file(file, "a .vtu file")
+        stream = open_regular_file(file, "a VTK XML file")
     except OSError as error:
         raise InputError(
             f"cannot read it (listed by {pvd}): {error.strerror or error}", path=file, frame=index
         ) from None
     with stream:
         data = stream.read()
-    start = data.find(b"<VTKFile")
-    if start < 0:
+    if b"<VTKFile" not in data:
         raise InputError(
             f"is not a VTK XML file (listed by {pvd}): it has no <VTKFile> element",
             path=file,
             frame=index,
         )
     try:
-        _refuse_declarations(data[:start], file)
+        return read_dataset(data)
     except InputError as error:
         raise InputError(error.reason, path=file, frame=index) from None
-    appended = data.find(b"<AppendedData")
-    declared = _declared_cells(data if appended < 0 else data[:appended])
-    try:
-        # the format's own reader: meshio.read() prints and calls sys.exit on a ReadError
-        mesh = meshio.vtu.read(str(file))
-    except Exception as error:  # meshio raises anything at all on a damaged file
-        raise InputError(
-            f"meshio cannot read it as a .vtu file: {type(error).__name__}: {error}",
-            path=file,
-            frame=index,
-        ) from None
-    points = _points(mesh, file, index)
-    faces = _faces(mesh, declared, file, index)
-    problem = face_table_problem(faces, len(points))
-    if problem is not None:
-        raise InputError(problem.message, path=file, frame=index)
-    return points, faces
 
 
-def _declared_cells(xml: bytes) -> int | None:
-    """The cells the file's <Piece> elements declare, to notice any meshio leaves out."""
-    counts = []
-    for attributes in _PIECE.findall(xml):
-        match = _CELL_COUNT.search(attributes)
-        if match is None:
-            return None
-        counts.append(int(match.group(1)))
-    return sum(counts) if counts else None
+def write_pvd(
+    seq: MeshSequence,
+    path: Path,
+    options: WriteOptions,
+    *,
+    frame_suffix: str = FRAME_SUFFIX,
+    layout: Layout | None = None,
+) -> None:
+    """Write ``path`` (.pvd) and one file per frame in the folder named after its stem.
 
-
-def _points(mesh: Any, file: Path, index: int) -> np.ndarray:
-    """The mesh's points as float64 (K, 3), finite."""
-    points = np.asarray(mesh.points)
-    if points.ndim != 2 or points.shape[1] != 3 or points.dtype.kind not in "fiu":
-        raise InputError(
-            f"its points have shape {points.shape} and dtype {points.dtype}, not (points, 3) "
-            "numbers",
-            path=file,
-            frame=index,
-        )
-    if len(points) == 0:
-        raise InputError("has no points", path=file, frame=index)
-    points = points.astype(np.float64)
-    bad = ~np.isfinite(points)
-    if bad.any():
-        vertex = int(np.argwhere(bad)[0, 0])
-        raise InputError(f"point {vertex} has a non-finite coordinate", path=file, frame=index)
-    return points
-
-
-def _faces(mesh: Any, declared: int | None, file: Path, index: int) -> np.ndarray:
-    """The 2-D cells as a face table in the file's order, rows padded with -1."""
-    blocks: list[np.ndarray] = []
-    total = 0
-    for block in mesh.cells:
-        data = block.data
-        total += len(data)
-        if block.type in _POINT_CELLS:
-            continue
-        if block.type not in SURFACE_CELLS:
-            raise InputError(
-                f"holds {len(data)} {block.type} cells: only surfaces are read (triangles, "
-                "quads, polygons); extract the surface first (ParaView: Extract Surface)",
-                path=file,
-                frame=index,
-            )
-        block_faces = np.asarray(data, dtype=np.int64)
-        if (block_faces < 0).any():  # -1 would pass for the face table's padding
-            raise InputError(
-                f"a {block.type} cell has a negative point index", path=file, frame=index
-            )
-        blocks.append(block_faces)
-    if declared is not None and total != declared:
-        raise InputError(
-            f"declares {declared} cells but meshio read {total}: it holds cells of a type "
-            "meshio does not know",
-            path=file,
-            frame=index,
-        )
-    if not blocks:
-        return np.zeros((0, 3), dtype=np.int64)
-    width = max(block.shape[1] for block in blocks)
-    rows = sum(len(block) for block in blocks)
-    faces = np.full((rows, width), -1, dtype=np.int64)
-    row = 0
-    for block in blocks:
-        faces[row : row + len(block), : block.shape[1]] = block
-        row += len(block)
-    return faces
-
-
-def write_pvd(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
-    """Write ``path`` (.pvd) and one .vtu per frame in the folder named after its stem.
-
-    Every target is checked before any work; the frames are staged and moved in whole and the
-    .pvd written last, atomically. Time steps are the time codes (0, 1, 2... without them).
+    ``frame_suffix`` is ``".vtp"`` (PolyData, the default) or ``".vtu"`` (UnstructuredGrid);
+    ``layout`` how arrays are stored (ParaView's default layout when ``None``). Every target is
+    checked before any work; the frames are staged and moved in whole and the .pvd written
+    last, atomically. Time steps are the time codes (0, 1, 2... without them).
     """
-    meshio = import_optional("meshio", "vtk", "writing VTK time series (.pvd)")
+    if frame_suffix not in DATASETS:
+        raise ValueError(f"frame_suffix must be one of {sorted(DATASETS)}, not {frame_suffix!r}")
     folder = path.with_suffix("")
     if folder == path:
         raise ValueError(f"{path}: a .pvd needs a name with a suffix, for its frames' folder")
-    names = frame_file_names(seq.frame_names, ".vtu")
+    names = frame_file_names(seq.frame_names, frame_suffix)
     refuse_existing([path], options.overwrite)  # before the frames are written
-    cells = _cell_blocks(seq.faces, seq.vertex_count)
+    writer = DatasetWriter(seq.faces, seq.vertex_count, DATASETS[frame_suffix], layout)
     points = seq.vertices
     single = points.astype(np.float32)
     if np.array_equal(single, points):  # float32 positions: half the size, still exact
         points = single
     with atomic_folder(folder, names, overwrite=options.overwrite) as staging:
         for index, name in enumerate(names):
-            mesh = meshio.Mesh(points[index], cells)
-            meshio.vtu.write(str(staging / name), mesh, binary=True, compression="zlib")
+            (staging / name).write_bytes(writer(points[index]))
     write_atomic(path, _index_xml(folder.name, names, seq.codes()), overwrite=options.overwrite)
-
-
-def _cell_blocks(faces: np.ndarray, vertex_count: int) -> list[tuple[str, np.ndarray]]:
-    """meshio cell blocks of the face table: runs of rows with the same corner count, in
-    order (triangles, quads, or polygons of n corners); for a point sequence, one vertex cell
-    per point (ParaView draws only points that are cells, and meshio reads no cell-less file)."""
-    if faces.shape[0] == 0:
-        return [("vertex", np.arange(vertex_count, dtype=np.int64)[:, np.newaxis])]
-    corners = (faces >= 0).sum(axis=1)
-    breaks = np.flatnonzero(np.diff(corners)) + 1
-    blocks = []
-    for start, stop in zip(
-        np.concatenate([[0], breaks]), np.concatenate([breaks, [len(faces)]]), strict=True
-    ):
-        count = int(corners[start])
-        kind = {3: "triangle", 4: "quad"}.get(count, "polygon")
-        blocks.append((kind, np.ascontiguousarray(faces[start:stop, :count])))
-    return blocks
 
 
 def _index_xml(folder: str, names: list[str], codes: np.ndarray) -> bytes:
@@ -389,9 +286,8 @@ def _index_xml(folder: str, names: list[str], codes: np.ndarray) -> bytes:
 FORMAT = SequenceFormat(
     name="vtk",
     suffixes=(".pvd",),
-    description="VTK time series: a ParaView .pvd of .vtu files (meshio), one per time step",
+    description="VTK time series: a ParaView .pvd of .vtp or .vtu files, one per time step",
     read=read_pvd,
     write=write_pvd,
-    extra="vtk",
     carries=frozenset({"float64", "faces", "frame_names", "time_codes"}),
 )

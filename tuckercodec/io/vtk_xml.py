@@ -1,0 +1,395 @@
+"""One VTK XML dataset file, an UnstructuredGrid (``.vtu``) or a PolyData (``.vtp``): its
+points and surface cells read into a face table, and written back, in plain numpy and the
+standard library (the arrays' encodings are :mod:`.vtk_data`'s).
+
+Reading, by the ``<VTKFile type=..>`` of the file (whatever its name's suffix):
+
+* the points of every ``<Piece>`` (several pieces are joined, in order, as VTK joins them),
+  Float32 or Float64 kept exactly (integers converted), all finite;
+* UnstructuredGrid ``<Cells>`` (connectivity, offsets, types): triangles, quads and polygons
+  become faces in the file's order (rows padded with -1), a pixel the quad it is (corners
+  0, 1, 3, 2), a triangle strip its triangles as VTK splits it (vtkTriangleStrip: every second
+  triangle flipped so all keep the strip's winding), and vertex and poly-vertex cells only mark
+  points. Lines, volume cells and higher-order cells are refused: the codec compresses surfaces;
+* PolyData ``<Polys>`` (faces), then ``<Strips>`` (split as above), in VTK's cell order;
+  ``<Verts>`` only mark points; ``<Lines>`` are refused.
+
+A DOCTYPE or ENTITY declaration (the way to an entity-expansion attack) is refused before the
+XML is parsed. Raw appended data is cut off before parsing, so the XML parser sees only the
+XML. Every error is an :class:`InputError` without a path (the caller names the file).
+
+Writing (:class:`DatasetWriter`): one piece of the points and the faces (Polys, or cells of
+types 5, 9 and 7), or, without faces, one vertex cell per point so that ParaView shows them;
+the cells are encoded once for every frame of a series.
+"""
+
+from __future__ import annotations
+
+import re
+from xml.etree import ElementTree
+
+import numpy as np
+
+from ..errors import InputError
+from .polygons import faces_from_polygons, polygons_from_faces
+from .vtk_data import Encoding, Layout, encode_array, file_encoding, read_array, type_name
+
+#: The dataset types read and written, by the suffix VTK gives their files.
+DATASETS = {".vtu": "UnstructuredGrid", ".vtp": "PolyData"}
+#: XML declarations refused before parsing: they open the door to entity expansion.
+DECLARATIONS = (b"<!DOCTYPE", b"<!ENTITY")
+#: VTK cell types by number, for messages (vtkCellType.h); others are named by number.
+CELL_NAMES = {
+    1: "vertex",
+    2: "poly_vertex",
+    3: "line",
+    4: "poly_line",
+    5: "triangle",
+    6: "triangle_strip",
+    7: "polygon",
+    8: "pixel",
+    9: "quad",
+    10: "tetra",
+    11: "voxel",
+    12: "hexahedron",
+    13: "wedge",
+    14: "pyramid",
+    15: "pentagonal_prism",
+    16: "hexagonal_prism",
+    21: "quadratic_edge",
+    22: "quadratic_triangle",
+    23: "quadratic_quad",
+    24: "quadratic_tetra",
+    25: "quadratic_hexahedron",
+    42: "polyhedron",
+}
+# What each surface cell becomes: nothing (a point marker), a polygon, strip triangles, a quad.
+_MARKER, _POLYGON, _STRIP, _PIXEL = 0, 1, 2, 3
+_KINDS = {1: _MARKER, 2: _MARKER, 5: _POLYGON, 6: _STRIP, 7: _POLYGON, 8: _PIXEL, 9: _POLYGON}
+_EXACT_SIZES = {1: 1, 5: 3, 8: 4, 9: 4}
+_LEAST_SIZES = {2: 1, 6: 3, 7: 3}
+_LOOKUP = np.array([_KINDS.get(code, -1) for code in range(max(_KINDS) + 1)], dtype=np.int8)
+_APPENDED = re.compile(rb"<AppendedData\b([^>]*)>\s*_")
+_ENCODING = re.compile(rb"""\bencoding\s*=\s*["']([^"']*)["']""")
+_INT64_MAX = np.iinfo(np.int64).max
+
+
+def refuse_declarations(data: bytes) -> None:
+    """Refuse XML that holds a DOCTYPE or ENTITY declaration (no VTK file needs one)."""
+    for declaration in DECLARATIONS:
+        if declaration in data:
+            raise InputError(
+                f"declares {declaration.decode()[1:]}, which VTK files never need: refused, "
+                "as the way to an entity-expansion attack"
+            )
+
+
+def read_dataset(data: bytes) -> tuple[np.ndarray, np.ndarray]:
+    """The points ((K, 3) float64, finite) and face table ((M, n) int64, -1 padded; (0, 3)
+    without faces) of the bytes of a ``.vtu`` or ``.vtp`` file (see the module docstring)."""
+    root, encoding = _parse(data)
+    kind = root.get("type", "")
+    if root.tag != "VTKFile" or kind not in DATASETS.values():
+        raise InputError(
+            f'holds <{root.tag} type="{kind}">: the series reads UnstructuredGrid (.vtu) and '
+            "PolyData (.vtp) files"
+        )
+    grid = root.find(kind)
+    pieces = [] if grid is None else grid.findall("Piece")
+    if not pieces:
+        raise InputError(f"has no <{kind}><Piece>: there is nothing to read")
+    points, counts, corners = [], [], []
+    start = 0
+    for number, piece in enumerate(pieces):
+        label = f"piece {number}: " if len(pieces) > 1 else ""
+        try:
+            piece_points = _points(piece, encoding)
+            sizes, flat = (_unstructured if kind == "UnstructuredGrid" else _poly)(piece, encoding)
+        except InputError as error:
+            raise InputError(label + error.reason) from None
+        if flat.size and flat.min() < 0:  # -1 would pass for the face table's padding
+            raise InputError(f"{label}a cell has a negative point index {int(flat.min())}")
+        if len(pieces) > 1 and flat.size and flat.max() >= len(piece_points):
+            raise InputError(  # it would name a point of the next piece
+                f"{label}a cell has the point index {int(flat.max())}, outside "
+                f"0..{len(piece_points) - 1}"
+            )
+        points.append(piece_points)
+        counts.append(sizes)
+        corners.append(flat + start if start else flat)
+        start += len(piece_points)
+    vertices = points[0] if len(points) == 1 else np.concatenate(points)
+    if len(vertices) == 0:
+        raise InputError("has no points")
+    bad = ~np.isfinite(vertices)
+    if bad.any():
+        vertex = int(np.argwhere(bad)[0, 0])
+        raise InputError(f"point {vertex} has a non-finite coordinate")
+    if len(counts) > 1:
+        return vertices, faces_from_polygons(
+            np.concatenate(counts), np.concatenate(corners), len(vertices)
+        )
+    return vertices, faces_from_polygons(counts[0], corners[0], len(vertices))
+
+
+def _parse(data: bytes) -> tuple[ElementTree.Element, Encoding]:
+    """The root element, with raw appended data cut off before the XML parser sees it."""
+    start = data.find(b"<VTKFile")
+    if start < 0:
+        raise InputError("is not a VTK XML file: it has no <VTKFile> element")
+    refuse_declarations(data[:start])
+    cut = data.find(b"<AppendedData", start)
+    appended: memoryview | None = None
+    base64 = False
+    xml = data
+    if cut >= 0:
+        match = _APPENDED.match(data, cut)
+        if match is None:
+            raise InputError("its <AppendedData> does not begin with the _ marker")
+        found = _ENCODING.search(match.group(1))
+        encoding = found.group(1).decode("ascii", "replace") if found else "raw"
+        if encoding not in ("raw", "base64"):
+            raise InputError(f"its <AppendedData> has encoding {encoding!r}, not raw or base64")
+        base64 = encoding == "base64"
+        end = data.rfind(b"</AppendedData>")
+        stop = end if end >= match.end() else len(data)
+        while base64 and stop > match.end() and data[stop - 1] in b" \t\r\n":
+            stop -= 1
+        appended = memoryview(data)[match.end() : stop]  # a view: the data is not copied
+        xml = data[:cut] + b"</VTKFile>"  # the appended data is the root's last child
+    try:
+        root = ElementTree.fromstring(xml)
+    except ElementTree.ParseError as error:
+        raise InputError(f"is not well-formed XML: {error}") from None
+    return root, file_encoding(root, appended, base64)
+
+
+def _count(piece: ElementTree.Element, name: str, default: str | None = "0") -> int:
+    """A count attribute of a <Piece>."""
+    text = piece.get(name, default)
+    if text is None or not text.strip().isdigit():
+        raise InputError(f"<Piece> has {name}={text!r}, not a count")
+    return int(text)
+
+
+def _points(piece: ElementTree.Element, encoding: Encoding) -> np.ndarray:
+    """The piece's points as (K, 3) float64."""
+    count = _count(piece, "NumberOfPoints", None)
+    element = piece.find("Points/DataArray")
+    if element is None:
+        if count:
+            raise InputError(f"declares {count} points but has no <Points><DataArray>")
+        return np.zeros((0, 3), dtype=np.float64)
+    values = read_array(element, encoding, "Points", components=3, count=count)
+    return values.astype(np.float64).reshape(count, 3)
+
+
+def _arrays(
+    parent: ElementTree.Element | None, names: tuple[str, ...], what: str
+) -> list[ElementTree.Element]:
+    """The named <DataArray> children of a cells element."""
+    found = {} if parent is None else {a.get("Name"): a for a in parent.findall("DataArray")}
+    missing = [name for name in names if name not in found]
+    if missing:
+        raise InputError(f"<{what}> has no DataArray named {missing[0]!r}")
+    return [found[name] for name in names]
+
+
+def _ints(values: np.ndarray, what: str) -> np.ndarray:
+    """Integer values as int64 (the values a mesh uses all fit)."""
+    if values.dtype.kind not in "iu":
+        raise InputError(f"{what}: holds {values.dtype.name} values, not integers")
+    if values.dtype == np.uint64 and values.size and values.max() > _INT64_MAX:
+        raise InputError(f"{what}: holds a value beyond the range of Int64")
+    return values.astype(np.int64, copy=False)
+
+
+def _cell_array(
+    parent: ElementTree.Element | None, encoding: Encoding, what: str, cells: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The connectivity, end offsets and sizes of ``cells`` cells, checked."""
+    connectivity_element, offsets_element = _arrays(parent, ("connectivity", "offsets"), what)
+    offsets = _ints(read_array(offsets_element, encoding, f"{what} offsets", count=cells), what)
+    connectivity = _ints(read_array(connectivity_element, encoding, f"{what} connectivity"), what)
+    sizes = np.diff(offsets, prepend=0)
+    if sizes.size and sizes.min() < 0:
+        cell = int(np.flatnonzero(sizes < 0)[0])
+        raise InputError(f"{what}: the offset of cell {cell} is less than the one before it")
+    end = int(offsets[-1]) if offsets.size else 0
+    if end != connectivity.size:
+        raise InputError(
+            f"{what}: the offsets end at {end} but the connectivity holds {connectivity.size} "
+            "point indices"
+        )
+    return connectivity, offsets, sizes
+
+
+def _not_surface(count: int, name: str) -> InputError:
+    return InputError(
+        f"holds {count} {name} cells: only surfaces are read (triangles, quads, polygons); "
+        "extract the surface first (ParaView: Extract Surface)"
+    )
+
+
+def _unstructured(piece: ElementTree.Element, encoding: Encoding) -> tuple[np.ndarray, np.ndarray]:
+    """The face corner counts and corners of an UnstructuredGrid piece."""
+    cells = _count(piece, "NumberOfCells")
+    element = piece.find("Cells")
+    if element is None and cells == 0:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    connectivity, offsets, sizes = _cell_array(element, encoding, "Cells", cells)
+    (types_element,) = _arrays(element, ("types",), "Cells")
+    types = _ints(read_array(types_element, encoding, "Cells types", count=cells), "Cells")
+    known = (types >= 0) & (types < len(_LOOKUP))
+    known[known] = _LOOKUP[types[known]] >= 0
+    if not known.all():
+        code = int(types[np.flatnonzero(~known)[0]])
+        raise _not_surface(int((types == code).sum()), CELL_NAMES.get(code, f"type {code}"))
+    for code, size in _EXACT_SIZES.items():
+        wrong = np.flatnonzero((types == code) & (sizes != size))
+        if wrong.size:
+            cell = int(wrong[0])
+            raise InputError(f"cell {cell} is a {CELL_NAMES[code]} of {sizes[cell]} points")
+    for code, least in _LEAST_SIZES.items():
+        wrong = np.flatnonzero((types == code) & (sizes < least))
+        if wrong.size:
+            cell = int(wrong[0])
+            raise InputError(
+                f"cell {cell} is a {CELL_NAMES[code]} of {sizes[cell]} points, fewer than {least}"
+            )
+    return _corners(connectivity, offsets, sizes, _LOOKUP[types])
+
+
+def _poly(piece: ElementTree.Element, encoding: Encoding) -> tuple[np.ndarray, np.ndarray]:
+    """The face corner counts and corners of a PolyData piece: its polygons, then its strips."""
+    lines = _count(piece, "NumberOfLines")
+    if lines:
+        raise _not_surface(lines, "line")
+    counts, corners = [], []
+    for section, kind, least in (("Polys", _POLYGON, 3), ("Strips", _STRIP, 3)):
+        cells = _count(piece, f"NumberOf{section}")
+        if cells == 0:
+            continue
+        connectivity, offsets, sizes = _cell_array(piece.find(section), encoding, section, cells)
+        if sizes.min() < least:
+            cell = int(np.argmin(sizes))
+            raise InputError(f"{section}: cell {cell} has {sizes[cell]} points, fewer than 3")
+        kinds = np.full(cells, kind, dtype=np.int8)
+        section_counts, section_corners = _corners(connectivity, offsets, sizes, kinds)
+        counts.append(section_counts)
+        corners.append(section_corners)
+    if not counts:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    return np.concatenate(counts), np.concatenate(corners)
+
+
+def _corners(
+    connectivity: np.ndarray, offsets: np.ndarray, sizes: np.ndarray, kinds: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The corner count of each face and the corners of all faces, in the cells' order:
+    markers dropped, strips split into triangles, pixels reordered as quads."""
+    if (kinds == _POLYGON).all():
+        return sizes, connectivity
+    rows = np.where(kinds == _STRIP, sizes - 2, kinds != _MARKER).astype(np.int64)
+    row_cell = np.repeat(np.arange(len(kinds)), rows)
+    step = np.arange(row_cell.size) - (np.cumsum(rows) - rows)[row_cell]  # triangle in strip
+    row_kind = kinds[row_cell]
+    strip = row_kind == _STRIP
+    counts = np.where(strip, 3, sizes[row_cell])
+    base = (offsets - sizes)[row_cell] + np.where(strip, step, 0)
+    corner_row = np.repeat(np.arange(counts.size), counts)
+    corner = np.arange(corner_row.size) - (np.cumsum(counts) - counts)[corner_row]
+    # vtkTriangleStrip::DecomposeStrip: odd triangles (p[i+1], p[i], p[i+2])
+    flip = (strip & (step % 2 == 1))[corner_row] & (corner < 2)
+    corner = np.where(flip, 1 - corner, corner)
+    pixel = (row_kind == _PIXEL)[corner_row] & (corner >= 2)  # pixel corners 0 1 3 2
+    corner = np.where(pixel, 5 - corner, corner)
+    return counts, connectivity[base[corner_row] + corner]
+
+
+# ------------------------------------------------------------------------------------------
+# writing
+
+
+class DatasetWriter:
+    """Writes frames of one mesh as ``.vtu`` or ``.vtp`` files: the cells are encoded once,
+    then each call encodes only the points.
+
+    Args:
+        faces: the face table (-1 padded; no rows for a point sequence).
+        vertex_count: the number of points.
+        kind: ``"PolyData"`` or ``"UnstructuredGrid"``.
+        layout: how arrays are stored (:class:`~.vtk_data.Layout`; ParaView's by default).
+    """
+
+    def __init__(
+        self, faces: np.ndarray, vertex_count: int, kind: str, layout: Layout | None = None
+    ) -> None:
+        if kind not in DATASETS.values():
+            raise ValueError(f"kind must be one of {sorted(DATASETS.values())}, not {kind!r}")
+        self.kind, self.layout = kind, layout or Layout()
+        if len(faces):
+            counts, flat = polygons_from_faces(faces)
+            types = np.where(counts == 3, 5, np.where(counts == 4, 9, 7))
+        else:  # a point sequence: one vertex cell per point
+            counts = np.ones(vertex_count, dtype=np.int32)
+            flat, types = np.arange(vertex_count), np.ones(vertex_count)
+        offsets = np.cumsum(counts, dtype=np.int64)
+        index = np.int32 if offsets.size == 0 or offsets[-1] <= np.iinfo(np.int32).max else np.int64
+        arrays = [("connectivity", flat.astype(index)), ("offsets", offsets.astype(index))]
+        if kind == "UnstructuredGrid":
+            arrays.append(("types", types.astype(np.uint8)))
+            self.section = "Cells"
+            self.counts = f'NumberOfCells="{len(counts)}"'
+        else:
+            self.section = "Polys" if len(faces) else "Verts"
+            sizes = dict.fromkeys(("Verts", "Lines", "Strips", "Polys"), 0)
+            sizes[self.section] = len(counts)
+            self.counts = " ".join(f'NumberOf{name}="{n}"' for name, n in sizes.items())
+        self.cells = [
+            (name, values.dtype, encode_array(values, self.layout)) for name, values in arrays
+        ]
+
+    def __call__(self, points: np.ndarray) -> bytes:
+        """The file of one frame: ``points`` (K, 3), float32 or float64, stored as they are."""
+        layout = self.layout
+        appended: list[bytes] = []
+        offset = 0
+
+        def element(name: str, dtype: np.dtype, data: bytes, extra: str = "") -> str:
+            nonlocal offset
+            head = f'<DataArray type="{type_name(dtype)}" Name="{name}"{extra}'
+            if layout.format == "appended":
+                appended.append(data)
+                head += f' format="appended" offset="{offset}"/>'
+                offset += len(data)
+                return head
+            return f'{head} format="{layout.format}">\n{data.decode("ascii")}\n</DataArray>'
+
+        encoded = encode_array(np.ascontiguousarray(points).reshape(-1), layout)
+        point_xml = element("Points", points.dtype, encoded, ' NumberOfComponents="3"')
+        cell_xml = "\n".join(element(name, dtype, data) for name, dtype, data in self.cells)
+        version = "1.0" if layout.header == "UInt64" else "0.1"  # as VTK writes them
+        compressor = (
+            ' compressor="vtkZLibDataCompressor"'
+            if layout.compress and layout.format != "ascii"
+            else ""
+        )
+        head = (
+            f'<?xml version="1.0"?>\n<VTKFile type="{self.kind}" version="{version}" '
+            f'byte_order="{layout.byte_order}" header_type="{layout.header}"{compressor}>\n'
+            f'<{self.kind}>\n<Piece NumberOfPoints="{len(points)}" {self.counts}>\n'
+            f"<Points>\n{point_xml}\n</Points>\n<{self.section}>\n{cell_xml}\n"
+            f"</{self.section}>\n</Piece>\n</{self.kind}>\n"
+        )
+        if not appended:
+            return (head + "</VTKFile>\n").encode("ascii")
+        encoding = "base64" if layout.base64 else "raw"
+        return b"".join(
+            [
+                head.encode("ascii"),
+                f'<AppendedData encoding="{encoding}">\n_'.encode("ascii"),
+                *appended,
+                b"\n</AppendedData>\n</VTKFile>\n",
+            ]
+        )
