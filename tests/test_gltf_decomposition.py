@@ -150,3 +150,22 @@ def test_the_cli_prints_the_viewer_kg_beside_the_files(
     assert "quantize" in printed and "glTF viewer KG vs the .tkc decode: " in printed
     assert "vs the original: " in printed and KG_DEFINITION in printed
     assert main(["decode", str(tkc), "-o", str(tmp_path / "f"), "--glb-compress", "none"]) == 2
+
+
+def test_the_meshopt_variant_reorders_triangles_never_vertices(tkc: Path, tmp_path: Path) -> None:
+    pytest.importorskip("meshoptimizer", reason="the meshopt variant needs meshoptimizer")
+    decoder = Decoder(str(tkc))
+    write_decomposition_gltf(decoder, tmp_path / "m.glb", compress="meshopt")
+    back = load_sequence(tmp_path / "m.glb")
+
+    def canonical(triangles: np.ndarray) -> np.ndarray:
+        """Each triangle rotated to start at its smallest index (winding kept), sorted."""
+        turn = np.argmin(triangles, axis=1)
+        rows = np.arange(len(triangles))[:, None]
+        rotated = triangles[rows, (turn[:, None] + np.arange(3)) % 3]
+        return rotated[np.lexsort(rotated.T[::-1])]
+
+    assert not np.array_equal(back.faces, decoder.faces)  # the order changed...
+    assert np.array_equal(canonical(back.faces), canonical(np.asarray(decoder.faces)))
+    # ...and each vertex is still the decode's vertex
+    assert np.abs(back.vertices - decoder.positions()).max() < 0.05 * np.ptp(back.vertices)

@@ -16,7 +16,8 @@ glTF holds the same sum as a viewer evaluates it:
 Variants (``compress``): ``none``, float32 everywhere; ``quantize`` (the default),
 KHR_mesh_quantization: mesh and targets as normalized 16-bit integers, dequantized by the
 child node's scale and translation; ``meshopt``, the quantized buffers compressed with
-EXT_meshopt_compression (three.js needs its MeshoptDecoder registered to load it). The
+EXT_meshopt_compression (three.js needs its MeshoptDecoder registered to load it), the
+triangles in vertex cache order (never the vertices). The
 quantization step follows from an error budget, not a fixed bit count (:mod:`.quantization`).
 """
 
@@ -256,9 +257,12 @@ def _file(
             for q in quantized.targets
         ]
     primitive: dict[str, Any] = {"attributes": {"POSITION": position}}
-    add_triangles(
-        builder, primitive, MeshSequence(base[None], decoder.faces).triangles(), len(base)
-    )
+    triangles = MeshSequence(base[None], decoder.faces).triangles()
+    if compress == "meshopt" and len(triangles):
+        from .meshopt import vertex_cache_order  # the index codec takes half the bytes
+
+        triangles = vertex_cache_order(triangles, len(base))
+    add_triangles(builder, primitive, triangles, len(base))
     primitive["targets"] = [{"POSITION": m} for m in morphs]
     first = weights[0].astype(np.float32)
     mesh = {

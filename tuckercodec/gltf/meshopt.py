@@ -107,6 +107,19 @@ def encode_triangles(indices: np.ndarray) -> bytes:
     return bytes(meshopt.encode_index_buffer(flat, len(flat), int(flat.max()) + 1))
 
 
+def vertex_cache_order(triangles: np.ndarray, vertices: int) -> np.ndarray:
+    """The triangles (T, 3) reordered for the GPU's vertex cache (meshoptimizer's
+    optimize_vertex_cache): the index codec then takes about half the bytes. The vertices keep
+    their order, and so their correspondence with the sequence's."""
+    if len(triangles) == 0:
+        return triangles
+    meshopt = _library("writing EXT_meshopt_compression")
+    flat = np.ascontiguousarray(triangles, dtype=np.uint32).reshape(-1)
+    ordered = np.zeros_like(flat)
+    meshopt.optimize_vertex_cache(ordered, flat, len(flat), vertices)
+    return ordered.reshape(-1, 3).astype(triangles.dtype)
+
+
 def compress_views(
     views: list[dict[str, Any]], data: list[bytes], elements: list[int]
 ) -> tuple[list[dict[str, Any]], bytes, int]:
