@@ -169,3 +169,19 @@ def test_the_meshopt_variant_reorders_triangles_never_vertices(tkc: Path, tmp_pa
     assert np.array_equal(canonical(back.faces), canonical(np.asarray(decoder.faces)))
     # ...and each vertex is still the decode's vertex
     assert np.abs(back.vertices - decoder.positions()).max() < 0.05 * np.ptp(back.vertices)
+
+
+@pytest.mark.parametrize("compress", ["quantize", "meshopt"])
+def test_the_quantized_targets_share_one_buffer_view_of_8_byte_rows(
+    tkc: Path, tmp_path: Path, compress: Any
+) -> None:
+    write_decomposition_gltf(Decoder(str(tkc)), tmp_path / "a.glb", compress=compress)
+    gltf = _json(tmp_path / "a.glb")
+    targets = gltf["meshes"][0]["primitives"][0]["targets"]
+    accessors = [gltf["accessors"][t["POSITION"]] for t in targets]
+    assert len({a["bufferView"] for a in accessors}) == 1
+    assert gltf["bufferViews"][accessors[0]["bufferView"]]["byteStride"] == 8
+    count = accessors[0]["count"]
+    assert [a.get("byteOffset", 0) for a in accessors] == [
+        8 * count * b for b in range(len(targets))
+    ]

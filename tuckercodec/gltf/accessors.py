@@ -214,13 +214,14 @@ class BufferBuilder:
         bounds: bool = False,
         vertex_attribute: bool = False,
         view: int | None = None,
+        byte_offset: int = 0,
     ) -> int:
         """Append ``values`` (count, components) in their dtype; returns the accessor index.
 
         ``vertex_attribute`` pads each row to 4 bytes and sets ``byteStride``; ``bounds``
         writes ``min``/``max`` (required for positions and animation inputs). ``view``: an
         existing buffer view to point at instead of writing the data (the caller wrote it,
-        compressed for example).
+        several accessors in one view for example), from its byte ``byte_offset``.
         """
         values = np.ascontiguousarray(values)
         if values.ndim == 1:
@@ -242,6 +243,8 @@ class BufferBuilder:
             "count": count,
             "type": TYPE_OF[components],
         }
+        if byte_offset:
+            accessor["byteOffset"] = byte_offset
         if normalized:
             accessor["normalized"] = True
         if bounds:

@@ -15,10 +15,11 @@ glTF holds the same sum as a viewer evaluates it:
 
 Variants (``compress``): ``none``, float32 everywhere; ``quantize`` (the default),
 KHR_mesh_quantization: mesh and targets as normalized 16-bit integers, dequantized by the
-child node's scale and translation; ``meshopt``, the quantized buffers compressed with
-EXT_meshopt_compression (three.js needs its MeshoptDecoder registered to load it), the
-triangles in vertex cache order (never the vertices). The
-quantization step follows from an error budget, not a fixed bit count (:mod:`.quantization`).
+child node's scale and translation, every target in one buffer view (not k: a smaller JSON);
+``meshopt``, the quantized buffers compressed with EXT_meshopt_compression (three.js needs its
+MeshoptDecoder registered to load it), the triangles in vertex cache order (never the
+vertices). The quantization step follows from an error budget, not a fixed bit count
+(:mod:`.quantization`).
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ from ..atomic import refuse_existing, write_atomic
 from ..format.reconstruction import reconstruction_basis
 from ..metrics import KG_DEFINITION, kg_error
 from ..sequence import DEFAULT_FRAME_RATE, MeshSequence
-from .accessors import ARRAY_BUFFER, BufferBuilder
+from .accessors import ARRAY_BUFFER, BufferBuilder, padded_rows
 from .document import add_triangles, file_bytes, new_gltf
 from .quantization import Quantized, quantize_positions
 from .reader import sample_gltf
@@ -250,12 +251,7 @@ def _file(
         position = builder.add_accessor(
             quantized.base, target=ARRAY_BUFFER, bounds=True, normalized=True, vertex_attribute=True
         )
-        morphs = [
-            builder.add_accessor(
-                q, target=ARRAY_BUFFER, bounds=True, normalized=True, vertex_attribute=True
-            )
-            for q in quantized.targets
-        ]
+        morphs = _shared_targets(builder, quantized.targets)
     primitive: dict[str, Any] = {"attributes": {"POSITION": position}}
     triangles = MeshSequence(base[None], decoder.faces).triangles()
     if compress == "meshopt" and len(triangles):
@@ -312,6 +308,21 @@ def _file(
     if compress == "meshopt":
         return _meshopt_file(gltf, builder, path)
     return file_bytes(gltf, builder, path)
+
+
+def _shared_targets(builder: BufferBuilder, targets: np.ndarray) -> list[int]:
+    """Every target (k, K, 3) int16 in one buffer view of 8-byte rows, an accessor each."""
+    count, vertices = targets.shape[:2]
+    if count == 0:
+        return []
+    rows = padded_rows(targets.reshape(-1, 3), 8)
+    view = builder.add_view(rows, 6, byteStride=8, target=ARRAY_BUFFER)
+    return [
+        builder.add_accessor(
+            target, view=view, byte_offset=b * vertices * 8, normalized=True, bounds=True
+        )
+        for b, target in enumerate(targets)
+    ]
 
 
 def _meshopt_file(gltf: dict[str, Any], builder: BufferBuilder, path: Path) -> bytes:
