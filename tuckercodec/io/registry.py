@@ -22,7 +22,7 @@ import numpy as np
 from ..sequence import MeshSequence
 
 #: The modules of :mod:`tuckercodec.io` that define a ``FORMAT``, in the order the CLI lists them.
-BUILTIN_MODULES = ("obj", "npz", "usd", "alembic", "pc2", "mdd", "gltf", "vtk", "meshes")
+BUILTIN_MODULES = ("obj", "npz", "usd", "alembic", "pc2", "mdd", "gltf", "vtk", "xdmf", "meshes")
 
 
 @dataclass(eq=False)

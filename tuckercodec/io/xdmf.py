@@ -1,0 +1,365 @@
+"""XDMF time series (``.xdmf``, ``.xmf``): a temporal collection of grids, each with its own
+geometry, the way VTK, ParaView and many simulation codes write a moving mesh. The XML is read
+with the standard library; heavy data in HDF5 files through h5py (the ``[xdmf]`` extra, needed
+only where a file names HDF data); data inline in the XML (``Format="XML"``) needs nothing.
+
+Reading: the ``<Domain>``'s ``<Grid GridType="Collection" CollectionType="Temporal">`` (or a
+single uniform grid: one frame), whose child grids are the frames, ordered by time: each
+grid's ``<Time Value=..>``, or the collection's ``<Time TimeType="List">`` or ``"HyperSlab"``;
+the times become the time codes (without any, the listed order holds). ``<Geometry>``: XYZ,
+X_Y_Z, or XY (z = 0); positions keep their precision (``Precision="4"`` floats are float32).
+``<Topology>``: Triangle, Quadrilateral, Polygon, Mixed (of triangles, quadrilaterals, polygons
+and polyvertices) become faces in the file's order, rows padded with -1; Polyvertex gives a
+point sequence; volume, line and higher-order topologies are refused. ``<DataItem>``s are read
+as XML or HDF (``file.h5:/dataset``, relative to the .xdmf's folder), and ``Reference``s to
+other elements (``/Xdmf/...`` paths) followed. ``xi:include`` is not followed.
+
+A series whose time steps share one geometry (the same element, the same HDF dataset, or an
+``xi:include`` of another grid's, as meshio's and FEniCS's time series are) is a static mesh
+with changing point data, not a moving mesh: it is refused saying so. Several temporal
+collections, or a spatial collection per step (several parts), are refused too.
+
+Hostile input: an ENTITY declaration is refused before parsing (a DOCTYPE alone, which XDMF
+files carry, is harmless: the parser never fetches it); every count is checked against the data
+before it is used; an HDF dataset must hold as many values as its ``Dimensions`` and store at
+least 1/1032 of its size (no more than zlib can inflate). Errors name the .xdmf, the frame and
+the grid. Writing is :mod:`.xdmf_write`'s.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+from pathlib import Path
+from xml.etree import ElementTree
+
+import numpy as np
+
+from ..errors import InputError
+from ..reading import open_regular_file
+from ..sequence import MeshSequence
+from .polygons import faces_from_polygons
+from .registry import SequenceFormat
+from .xdmf_data import XINCLUDE, HeavyData, heavy_files, lower, read_item, resolve
+from .xdmf_write import write_xdmf
+
+_FIXED = {"triangle": 3, "quadrilateral": 4}
+#: XDMF's Mixed topology codes: polyvertex and polygon are followed by their point count.
+_POLYVERTEX, _POLYGON, _TRIANGLE, _QUADRILATERAL = 1, 3, 4, 5
+
+
+def read_xdmf(path: Path, options: object = None) -> MeshSequence:
+    """A sequence from an XDMF temporal collection (see the module docstring); the format
+    takes no read options."""
+    root = _parse(path)
+    steps = _steps(root, path)
+    vertices: np.ndarray | None = None
+    faces = np.zeros((0, 3), dtype=np.int64)
+    topology: np.ndarray | None = None
+    sources: dict[object, int] = {}
+    with heavy_files(path) as heavy:
+        for index, step in enumerate(steps):
+            where = f"time step {index} (grid {step.name!r})"
+            try:
+                points, source = _geometry(step.grid, root, heavy)
+                if source in sources:
+                    raise _shared(sources[source], index, source)
+                sources[source] = index
+                values, kind = _topology_values(step.grid, root, heavy)
+                if topology is None or not np.array_equal(values, topology):
+                    step_faces = _faces(values, kind, step.grid, len(points))
+                    if topology is not None and not np.array_equal(step_faces, faces):
+                        raise InputError("its faces differ from the first time step's")
+                    topology, faces = values, step_faces
+                if vertices is None:
+                    vertices = np.empty((len(steps), *points.shape), dtype=np.float64)
+                elif len(points) != vertices.shape[1]:
+                    raise InputError(
+                        f"has {len(points)} points but the first time step has "
+                        f"{vertices.shape[1]}: every step must have the same points"
+                    )
+            except InputError as error:
+                raise InputError(f"{where}: {error.reason}", path=path, frame=index) from None
+            vertices[index] = points
+    assert vertices is not None
+    timed = steps[0].time is not None
+    codes = np.array([step.time for step in steps], dtype=np.float64) if timed else None
+    names = [step.name for step in steps]
+    try:
+        return MeshSequence(
+            vertices,
+            faces,
+            frame_names=names if all(names) and len(set(names)) == len(names) else [],
+            time_codes=codes,
+        )
+    except InputError as error:
+        raise InputError(error.reason, path=path, frame=error.frame) from None
+
+
+def _shared(first: int, index: int, source: object) -> InputError:
+    shown = f"{source[0]}:{source[1]}" if isinstance(source, tuple) else "one <DataItem>"
+    return InputError(
+        f"shares its geometry ({shown}) with time step {first}: a series whose steps share one "
+        "geometry is a static mesh with changing point data, not a moving mesh; a moving mesh "
+        "has a <Geometry> with its own positions at each time step"
+    )
+
+
+@dataclass(frozen=True)
+class _Step:
+    """One frame: its time (``None`` if not given), grid and name."""
+
+    time: float | None
+    grid: ElementTree.Element
+    name: str
+
+
+def _parse(path: Path) -> ElementTree.Element:
+    """The root element, ENTITY declarations refused before parsing."""
+    try:
+        stream = open_regular_file(path, "an XDMF file")
+    except OSError as error:
+        raise InputError(f"cannot read: {error.strerror or error}", path=path) from None
+    with stream:
+        data = stream.read()
+    if b"<!ENTITY" in data:
+        raise InputError(
+            "declares !ENTITY, which XDMF files never need: refused, as the way to an "
+            "entity-expansion attack",
+            path=path,
+        )
+    try:
+        root = ElementTree.fromstring(data)
+    except ElementTree.ParseError as error:
+        raise InputError(f"is not well-formed XML: {error}", path=path) from None
+    if root.tag != "Xdmf" or root.find("Domain") is None:
+        raise InputError(f"is not XDMF: its root is <{root.tag}>, not <Xdmf><Domain>", path=path)
+    return root
+
+
+def _steps(root: ElementTree.Element, path: Path) -> list[_Step]:
+    """The frames' grids in time order."""
+    domain = root.find("Domain")
+    assert domain is not None
+    grids = domain.findall("Grid")
+    temporal = [
+        grid
+        for grid in grids
+        if lower(grid, "GridType") == "collection" and lower(grid, "CollectionType") == "temporal"
+    ]
+    if len(temporal) > 1:
+        raise InputError(
+            f"holds {len(temporal)} temporal collections: one moving mesh is read", path=path
+        )
+    if temporal:
+        children = temporal[0].findall("Grid")
+        if any(child.tag in XINCLUDE for child in temporal[0]):
+            raise InputError("its temporal collection takes grids by xi:include", path=path)
+        times = _listed_times(temporal[0], len(children), path)
+    elif len(grids) == 1 and lower(grids[0], "GridType", default="uniform") == "uniform":
+        children, times = grids, [None]
+    else:
+        raise InputError(
+            'has no <Grid GridType="Collection" CollectionType="Temporal"> (nor one uniform '
+            "grid) in its <Domain>",
+            path=path,
+        )
+    if not children:
+        raise InputError("its temporal collection holds no <Grid>", path=path)
+    steps = []
+    for number, child in enumerate(children):
+        kind = lower(child, "GridType", default="uniform")
+        if kind != "uniform":
+            raise InputError(
+                f"grid {number} of the temporal collection is a {kind} grid: one mesh per time "
+                "step is read; merge the parts first (ParaView: Merge Blocks)",
+                path=path,
+            )
+        time = times[number] if times[number] is not None else _grid_time(child, number, path)
+        steps.append(_Step(time, child, child.get("Name", "")))
+    timed = [step.time is not None for step in steps]
+    if any(timed) and not all(timed):
+        raise InputError(f"grid {timed.index(False)} has no time while others do", path=path)
+    if all(timed):
+        steps.sort(key=lambda step: step.time or 0.0)
+        for before, after in itertools.pairwise(steps):
+            if before.time == after.time:
+                raise InputError(f"lists time {after.time} twice: one mesh per time", path=path)
+    return steps
+
+
+def _number(text: str | None, what: str, path: Path) -> float:
+    try:
+        value = float(text or "")
+    except ValueError:
+        raise InputError(f"{what} {text!r} is not a number", path=path) from None
+    if not np.isfinite(value):
+        raise InputError(f"{what} is {text!r}", path=path)
+    return value
+
+
+def _grid_time(grid: ElementTree.Element, number: int, path: Path) -> float | None:
+    time = grid.find("Time")
+    if time is None:
+        return None
+    if lower(time, "TimeType", "Type", default="single") != "single":
+        raise InputError(f"grid {number}'s <Time> is not a single value", path=path)
+    return _number(time.get("Value"), f"grid {number}'s time", path)
+
+
+def _listed_times(collection: ElementTree.Element, count: int, path: Path) -> list[float | None]:
+    """The times a collection's own <Time> lists (List or HyperSlab), or none."""
+    time = collection.find("Time")
+    kind = "" if time is None else lower(time, "TimeType", "Type", default="single")
+    if time is None or kind == "single":
+        return [None] * count
+    item = time.find("DataItem")
+    if kind not in ("list", "hyperslab") or item is None or lower(item, "Format") == "hdf":
+        raise InputError(
+            f"its collection's <Time> is of type {kind!r}: List and HyperSlab of XML values "
+            "are read",
+            path=path,
+        )
+    values = [_number(text, "a listed time", path) for text in (item.text or "").split()]
+    if kind == "hyperslab":
+        if len(values) != 3:
+            raise InputError("a HyperSlab <Time> needs start, stride and count", path=path)
+        values = [values[0] + values[1] * n for n in range(count)]
+    if len(values) != count:
+        raise InputError(f"its <Time> lists {len(values)} times for {count} grids", path=path)
+    return list(values)
+
+
+def _child(grid: ElementTree.Element, tag: str, root: ElementTree.Element) -> ElementTree.Element:
+    element = grid.find(tag)
+    if element is None:
+        if any(child.tag in XINCLUDE for child in grid):
+            extra = (
+                ": every step takes one geometry from another grid, so this is a static mesh "
+                "with changing point data, not a moving mesh"
+                if tag == "Geometry"
+                else ""
+            )
+            raise InputError(f"takes its <{tag}> by xi:include, which is not followed{extra}")
+        raise InputError(f"has no <{tag}>")
+    return resolve(element, root)
+
+
+def _geometry(
+    grid: ElementTree.Element, root: ElementTree.Element, heavy: HeavyData
+) -> tuple[np.ndarray, object]:
+    """The grid's points (K, 3) float64, finite, and the identity of their source."""
+    geometry = _child(grid, "Geometry", root)
+    kind = lower(geometry, "GeometryType", "Type", default="xyz")
+    items = geometry.findall("DataItem")
+    if kind in ("xyz", "xy"):
+        width = len(kind)
+        if len(items) != 1:
+            raise InputError(f"its {kind.upper()} <Geometry> has {len(items)} DataItems, not 1")
+        values, dims, source = read_item(items[0], root, heavy, "Geometry")
+        if values.size % width or (len(dims) > 1 and dims[-1] != width):
+            raise InputError(f"its Geometry's Dimensions {dims} are not (points, {width})")
+        points = np.zeros((values.size // width, 3))
+        points[:, :width] = values.reshape(-1, width)
+    elif kind == "x_y_z":
+        if len(items) != 3:
+            raise InputError(f"its X_Y_Z <Geometry> has {len(items)} DataItems, not 3")
+        parts = [read_item(item, root, heavy, "Geometry") for item in items]
+        if len({part[0].size for part in parts}) != 1:
+            raise InputError("its X, Y and Z DataItems differ in length")
+        points = np.stack([part[0] for part in parts], axis=1).astype(np.float64)
+        source = tuple(part[2] for part in parts)
+    else:
+        raise InputError(f"has a {kind.upper()} <Geometry>: XYZ, X_Y_Z and XY are read")
+    if len(points) == 0:
+        raise InputError("has no points")
+    bad = ~np.isfinite(points)
+    if bad.any():
+        raise InputError(f"point {int(np.argwhere(bad)[0, 0])} has a non-finite coordinate")
+    return points, source
+
+
+def _topology_values(
+    grid: ElementTree.Element, root: ElementTree.Element, heavy: HeavyData
+) -> tuple[np.ndarray, str]:
+    """The grid's topology type and its values as int64."""
+    topology = _child(grid, "Topology", root)
+    kind = lower(topology, "TopologyType", "Type")
+    item = topology.find("DataItem")
+    if kind == "polyvertex" and item is None:
+        return np.zeros(0, dtype=np.int64), kind
+    if item is None:
+        raise InputError(f"its {kind} <Topology> has no <DataItem>")
+    values = read_item(item, root, heavy, "Topology")[0]
+    if values.dtype.kind not in "iu":
+        raise InputError(f"its Topology holds {values.dtype.name} values, not integers")
+    if values.dtype == np.uint64 and values.size and values.max() > np.iinfo(np.int64).max:
+        raise InputError("its Topology holds a value beyond the range of Int64")
+    offset = lower(topology, "BaseOffset", default="0")
+    values = values.astype(np.int64) - (int(offset) if offset.lstrip("-").isdigit() else 0)
+    return values, kind
+
+
+def _faces(values: np.ndarray, kind: str, grid: ElementTree.Element, count: int) -> np.ndarray:
+    """The face table of a topology's values."""
+    topology = grid.find("Topology")
+    assert topology is not None
+    if kind == "polyvertex":
+        return np.zeros((0, 3), dtype=np.int64)
+    if kind in _FIXED or kind == "polygon":
+        width = _FIXED.get(kind) or int(lower(topology, "NodesPerElement", default="0") or 0)
+        if width < 3 or values.size % width:
+            raise InputError(f"its {kind} Topology of {values.size} values has no {width}-gons")
+        sizes, flat = np.full(values.size // width, width), values
+    elif kind == "mixed":
+        sizes, flat = _mixed(values)
+    else:
+        raise InputError(
+            f"has a {kind} Topology: only surfaces are read (Triangle, Quadrilateral, Polygon, "
+            "Mixed of these); extract the surface first (ParaView: Extract Surface)"
+        )
+    return faces_from_polygons(sizes, flat, count)
+
+
+def _mixed(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Corner counts and corners of a Mixed topology (each cell: its code, for a polygon or
+    polyvertex its point count, then its points); polyvertices only mark points."""
+    for code, size in ((_TRIANGLE, 3), (_QUADRILATERAL, 4)):  # one cell type: at numpy speed
+        if values.size % (size + 1) == 0 and (values[:: size + 1] == code).all():
+            table = values.reshape(-1, size + 1)[:, 1:]
+            return np.full(len(table), size), table.reshape(-1)
+    numbers = values.tolist()
+    sizes, starts = [], []
+    at = 0
+    while at < len(numbers):
+        code = numbers[at]
+        if code in (_POLYGON, _POLYVERTEX):
+            size = numbers[at + 1] if at + 1 < len(numbers) else -1
+            at += 2
+        elif code in (_TRIANGLE, _QUADRILATERAL):
+            size, at = 3 if code == _TRIANGLE else 4, at + 1
+        else:
+            raise InputError(
+                f"its Mixed Topology holds a cell of XDMF type {code}: only surfaces are read "
+                "(triangles, quadrilaterals, polygons); extract the surface first"
+            )
+        if size < 0 or at + size > len(numbers):
+            raise InputError("its Mixed Topology ends inside a cell: truncated")
+        if code != _POLYVERTEX:
+            sizes.append(size)
+            starts.append(at)
+        at += size
+    counts = np.array(sizes, dtype=np.int64)
+    index = np.repeat(np.array(starts, dtype=np.int64) - np.cumsum(counts) + counts, counts)
+    return counts, values[index + np.arange(index.size)]
+
+
+FORMAT = SequenceFormat(
+    name="xdmf",
+    suffixes=(".xdmf", ".xmf"),
+    description="XDMF time series: a temporal collection of grids, HDF5 or XML data (h5py)",
+    read=read_xdmf,
+    write=write_xdmf,
+    extra="xdmf",
+    carries=frozenset({"float64", "faces", "frame_names", "time_codes"}),
+)

@@ -1,0 +1,165 @@
+"""The data of XDMF files: ``<DataItem>``s inline (``Format="XML"``) or in HDF5 files
+(``Format="HDF"``, through h5py, the ``[xdmf]`` extra, imported only when needed), and the
+``Reference``s that lead from one element to another.
+
+Every count is checked before it is used: XML values against the item's ``Dimensions``; an HDF
+dataset must hold exactly as many values, and store at least 1/:data:`~.vtk_data.MAX_INFLATION`
+of its size, so that no compression filter inflates it beyond what zlib could before it is read.
+Errors are :class:`InputError`s without a path (the caller names the .xdmf and the frame).
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+from xml.etree import ElementTree
+
+import numpy as np
+
+from ..errors import InputError
+from ..optional import import_optional
+from .vtk_data import MAX_INFLATION
+
+#: The tags of XInclude elements, which are not followed.
+XINCLUDE = ("{http://www.w3.org/2001/XInclude}include", "{http://www.w3.org/2003/XInclude}include")
+#: XDMF number types and precisions, as numpy types.
+_NUMBERS = {
+    ("float", 4): "f4",
+    ("float", 8): "f8",
+    ("int", 1): "i1",
+    ("int", 2): "i2",
+    ("int", 4): "i4",
+    ("int", 8): "i8",
+    ("uint", 1): "u1",
+    ("uint", 2): "u2",
+    ("uint", 4): "u4",
+    ("uint", 8): "u8",
+    ("char", 1): "i1",
+    ("uchar", 1): "u1",
+}
+_REFERENCE_DEPTH = 8
+
+
+def lower(element: ElementTree.Element, *names: str, default: str = "") -> str:
+    """The first of the attributes ``names`` (XDMF 2 and 3 spellings), lower case."""
+    for name in names:
+        value = element.get(name)
+        if value is not None:
+            return value.strip().lower()
+    return default
+
+
+def resolve(element: ElementTree.Element, root: ElementTree.Element) -> ElementTree.Element:
+    """The element a ``Reference`` leads to (an ``/Xdmf/...`` path, or for
+    ``Reference="XML"`` the path in the element's text)."""
+    for _ in range(_REFERENCE_DEPTH):
+        reference = element.get("Reference")
+        if reference is None:
+            return element
+        target = (element.text or "") if reference.strip().upper() == "XML" else reference
+        target = target.strip()
+        found = None
+        if target.startswith("/Xdmf/"):
+            try:
+                found = root.find("./" + target[len("/Xdmf/") :])
+            except (SyntaxError, KeyError):  # ElementTree's XPath subset
+                found = None
+        if found is None:
+            raise InputError(f"its Reference {target[:80]!r} leads to no element found here")
+        element = found
+    raise InputError("its References nest too deep (a cycle?)")
+
+
+class HeavyData:
+    """The HDF5 files a series names, opened once each."""
+
+    def __init__(self, folder: Path) -> None:
+        self.folder = folder
+        self.files: dict[Path, Any] = {}
+
+    def read(self, text: str, count: int, what: str) -> tuple[np.ndarray, object]:
+        """The values of ``file.h5:/dataset``, and that name as the source's identity."""
+        h5py = import_optional("h5py", "xdmf", "reading XDMF's HDF5 heavy data")
+        name, _, dataset = text.strip().partition(":")
+        if not name or not dataset:
+            raise InputError(f"{what}: HDF data {text.strip()[:80]!r} is not FILE:/DATASET")
+        file = Path(name)
+        file = (file if file.is_absolute() else self.folder / file).resolve()
+        if file not in self.files:
+            try:
+                if not stat.S_ISREG(os.stat(file).st_mode):
+                    raise InputError(f"{what}: {file} is not a regular file")
+                self.files[file] = h5py.File(file, "r")
+            except OSError as error:  # h5py raises OSError for files that are not HDF5 too
+                raise InputError(f"{what}: cannot read {file} as HDF5 ({error})") from None
+        try:
+            found = self.files[file].get(dataset)
+            if not isinstance(found, h5py.Dataset) or found.dtype.kind not in "fiu":
+                raise InputError(f"{what}: {file} has no dataset of numbers named {dataset!r}")
+            if found.size != count:
+                raise InputError(
+                    f"{what}: {file}:{dataset} holds {found.size} values, not the {count} its "
+                    "Dimensions declare"
+                )
+            stored = found.id.get_storage_size()
+            if found.nbytes > MAX_INFLATION * stored:  # before reading: no filter goes further
+                raise InputError(
+                    f"{what}: {file}:{dataset} declares {found.nbytes} bytes but stores "
+                    f"{stored}: refused"
+                )
+            values = np.asarray(found[()]).reshape(-1)
+        except InputError:
+            raise
+        except Exception as error:  # h5py and HDF5 raise many kinds on a damaged file
+            raise InputError(f"{what}: cannot read {file}:{dataset} ({error})") from None
+        return values, (file, dataset)
+
+
+@contextmanager
+def heavy_files(path: Path) -> Iterator[HeavyData]:
+    heavy = HeavyData(path.parent)
+    try:
+        yield heavy
+    finally:
+        for handle in heavy.files.values():
+            handle.close()
+
+
+def read_item(
+    element: ElementTree.Element, root: ElementTree.Element, heavy: HeavyData, what: str
+) -> tuple[np.ndarray, tuple[int, ...], object]:
+    """A <DataItem>'s values (flat, of its number type), dimensions and source identity."""
+    item = resolve(element, root)
+    if lower(item, "ItemType", default="uniform") != "uniform":
+        raise InputError(f"{what}: a {item.get('ItemType')} DataItem is not read (Uniform is)")
+    try:
+        dims = tuple(int(n) for n in (item.get("Dimensions") or "").split())
+    except ValueError:
+        dims = ()
+    if not dims or min(dims) < 0:
+        raise InputError(f"{what}: Dimensions {item.get('Dimensions')!r} are not sizes")
+    number = lower(item, "NumberType", "DataType", default="float")
+    precision = lower(item, "Precision", default="4")
+    code = _NUMBERS.get((number, int(precision) if precision.isdigit() else 0))
+    if code is None:
+        raise InputError(f"{what}: NumberType {number!r} of Precision {precision!r} is unknown")
+    count = int(np.prod(dims, dtype=object))
+    layout = lower(item, "Format", default="xml")
+    if layout == "hdf":
+        values, source = heavy.read(item.text or "", count, what)
+    elif layout == "xml":
+        tokens = (item.text or "").split()
+        if len(tokens) != count:
+            raise InputError(f"{what}: holds {len(tokens)} values, not the {count} declared")
+        try:
+            values = np.array(tokens, dtype=np.float64 if code[0] == "f" else np.int64)
+        except (ValueError, OverflowError) as error:
+            raise InputError(f"{what}: a value is not a number ({error})") from None
+        values, source = values.astype(code), id(item)
+    else:
+        raise InputError(f"{what}: Format {item.get('Format')!r} is not read (XML and HDF are)")
+    return values, dims, source

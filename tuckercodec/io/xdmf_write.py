@@ -1,0 +1,115 @@
+"""Writing XDMF time series: ``out.xdmf`` (the XML) and ``out.h5`` beside it (the heavy data,
+HDF5 through h5py: the ``[xdmf]`` extra).
+
+One temporal collection of one uniform grid per frame, each with its own ``<Geometry>`` (XYZ,
+``Precision="4"`` when every position is a float32, exact either way, else 8), its
+``<Time Value>`` (the time code) and its ``Name`` (the frame's name); every grid's
+``<Topology>`` reads the one ``/topology`` dataset (Triangle, Quadrilateral, Mixed for polygons
+or mixed sizes, Polyvertex for a point sequence). The attribute names are XDMF 2's, which XDMF 3
+readers accept too, so that VTK's and ParaView's XDMF readers read it. Both targets are checked
+first (never overwritten without ``overwrite``); the .h5 is written under a hidden name and put
+in place whole (:func:`~tuckercodec.atomic.atomic_path`), then the .xdmf, atomically.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from xml.etree import ElementTree
+
+import numpy as np
+
+from ..atomic import atomic_path, refuse_existing, write_atomic
+from ..optional import import_optional
+from ..sequence import MeshSequence
+from .registry import WriteOptions
+
+
+def write_xdmf(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
+    """Write ``path`` (.xdmf or .xmf) and its heavy data beside it (same name, ``.h5``)."""
+    h5py = import_optional("h5py", "xdmf", "writing XDMF (its HDF5 heavy data)")
+    heavy = path.with_suffix(".h5")
+    if heavy == path:
+        raise ValueError(f"{path}: an XDMF file needs a name other than its heavy data's (.h5)")
+    refuse_existing([path, heavy], options.overwrite)
+    points = seq.vertices
+    single = points.astype(np.float32)
+    if np.array_equal(single, points):  # float32 positions: half the size, still exact
+        points = single
+    kind, topology, attributes = _topology(seq.faces, seq.vertex_count)
+    with (
+        atomic_path(heavy, overwrite=options.overwrite) as temporary,
+        h5py.File(temporary, "w") as file,
+    ):
+        file.create_dataset("topology", data=topology)
+        for index in range(seq.frame_count):
+            file.create_dataset(f"points/{index:06d}", data=points[index])
+    xml = _xml(seq, heavy.name, kind, topology, attributes, points.dtype)
+    write_atomic(path, xml, overwrite=options.overwrite)
+
+
+def _topology(faces: np.ndarray, vertex_count: int) -> tuple[str, np.ndarray, dict[str, str]]:
+    """The topology type, its values and its attributes for a face table."""
+    if len(faces) == 0:
+        values = np.arange(vertex_count)
+        return "Polyvertex", _narrow(values), {"NumberOfElements": str(vertex_count)}
+    sizes = (faces >= 0).sum(axis=1)
+    count = {"NumberOfElements": str(len(faces))}
+    if (sizes == faces.shape[1]).all() and faces.shape[1] in (3, 4):
+        return ("Triangle" if faces.shape[1] == 3 else "Quadrilateral"), _narrow(faces), count
+    # Mixed: each cell's XDMF code (4 triangle, 5 quadrilateral, 3 polygon + its size), corners
+    polygon = (sizes != 3) & (sizes != 4)
+    head = np.where(polygon, 2, 1)
+    ends = np.cumsum(head + sizes)
+    starts = ends - head - sizes
+    values = np.empty(int(ends[-1]) if len(ends) else 0, dtype=np.int64)
+    values[starts] = np.where(sizes == 3, 4, np.where(sizes == 4, 5, 3))
+    values[starts[polygon] + 1] = sizes[polygon]
+    corners = np.repeat(starts + head - (np.cumsum(sizes) - sizes), sizes)
+    values[corners + np.arange(corners.size)] = faces[faces >= 0]
+    return "Mixed", _narrow(values), count
+
+
+def _narrow(values: np.ndarray) -> np.ndarray:
+    """Int32 where every value fits, as most XDMF writers store topologies."""
+    small = values.size == 0 or values.max() <= np.iinfo(np.int32).max
+    return values.astype(np.int32 if small else np.int64)
+
+
+def _xml(
+    seq: MeshSequence,
+    heavy: str,
+    kind: str,
+    topology: np.ndarray,
+    attributes: dict[str, str],
+    point_type: np.dtype,
+) -> bytes:
+    """The XDMF document of the written heavy data."""
+    root = ElementTree.Element("Xdmf", Version="3.0")
+    domain = ElementTree.SubElement(root, "Domain")
+    collection = ElementTree.SubElement(
+        domain, "Grid", Name="frames", GridType="Collection", CollectionType="Temporal"
+    )
+    topology_item = {
+        "Dimensions": " ".join(map(str, topology.shape)),
+        "NumberType": "Int",
+        "Precision": str(topology.dtype.itemsize),
+        "Format": "HDF",
+    }
+    for index, (name, code) in enumerate(zip(seq.frame_names, seq.codes(), strict=True)):
+        grid = ElementTree.SubElement(collection, "Grid", Name=name, GridType="Uniform")
+        ElementTree.SubElement(grid, "Time", Value=repr(float(code)))
+        element = ElementTree.SubElement(grid, "Topology", {"TopologyType": kind, **attributes})
+        item = ElementTree.SubElement(element, "DataItem", topology_item)
+        item.text = f"{heavy}:/topology"
+        geometry = ElementTree.SubElement(grid, "Geometry", GeometryType="XYZ")
+        item = ElementTree.SubElement(
+            geometry,
+            "DataItem",
+            Dimensions=f"{seq.vertex_count} 3",
+            NumberType="Float",
+            Precision=str(point_type.itemsize),
+            Format="HDF",
+        )
+        item.text = f"{heavy}:/points/{index:06d}"
+    ElementTree.indent(root)
+    return ElementTree.tostring(root, encoding="utf-8", xml_declaration=True) + b"\n"
