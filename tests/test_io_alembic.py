@@ -342,6 +342,14 @@ def test_a_truncated_or_garbage_archive_is_refused_quietly(tmp_path, make, messa
     assert capfd.readouterr().err == ""
 
 
+def test_an_object_name_that_is_not_utf8_is_refused(tmp_path):
+    path = make_archive(tmp_path / "n.abc", {"named": quad_samples(2)})
+    data = path.read_bytes()
+    assert data.count(b"namedShape") == 1
+    path.write_bytes(data.replace(b"namedShape", b"nam\xffdShape"))  # same length: sound file
+    expect_input_error(lambda: load_sequence(path), path, match="cannot read as an Alembic")
+
+
 def test_a_missing_alembic3d_names_the_extra(cloth, tmp_path, monkeypatch):
     path = tmp_path / "c.abc"
     save_sequence(cloth, path)

@@ -341,6 +341,7 @@ def _valid_crate(tmp_path: Path) -> bytes:
         (".usdc", lambda good: b"PXR-USDC" + bytes(range(256)) * 4),  # garbage after the magic
         (".usdc", lambda good: b""),
         (".usda", lambda good: b'#usda 1.0\ndef Mesh "m" {\n point3f[] points = [(0, 0'),
+        (".usda", lambda good: b'#usda 1.0\ndef Mesh "m\xf2x" {\n}\n'),  # pxr quotes non-UTF-8
         (".usd", lambda good: b"\x00\xff" * 100),
     ],
 )

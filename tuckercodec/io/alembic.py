@@ -69,6 +69,9 @@ RATE_KEY = "tuckercodec_frame_rate"
 #: The mesh's user property that holds the exact time codes, written only where no sample
 #: times give them back exactly (time x rate cannot reach every float).
 CODES_KEY = "tuckercodec_time_codes"
+#: What alembic3d raises on a damaged archive: Alembic's exceptions (RuntimeError), names and
+#: metadata that are not UTF-8, and a size it cannot allocate.
+_LIBRARY_ERRORS = (RuntimeError, UnicodeError, MemoryError, OverflowError)
 #: The first bytes of an HDF5 file: an Alembic archive of the old back end.
 _HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 
@@ -106,21 +109,23 @@ def read_alembic(path: Path, options: ReadOptions) -> MeshSequence:
     try:
         archive = abc.Abc.IArchive(str(path))
         meshes, others = _objects(abc, archive)
-    except RuntimeError as error:
+    except _LIBRARY_ERRORS as error:
         raise InputError(
             f"cannot read as an Alembic archive: {_message(error)}", path=path
         ) from None
-    chosen = _chosen_mesh(meshes, others, options.object_path, path)
-    name = chosen.getFullName()
+    name = _chosen_mesh(list(meshes), others, options.object_path, path)
     try:
-        return _read_mesh(abc, archive, chosen, f"object {name}", path)
-    except RuntimeError as error:
+        return _read_mesh(abc, archive, meshes[name], f"object {name}", path)
+    except InputError:
+        raise
+    except _LIBRARY_ERRORS as error:
         raise InputError(f"object {name}: cannot read: {_message(error)}", path=path) from None
 
 
-def _objects(abc: SimpleNamespace, archive: Any) -> tuple[list[Any], dict[str, Any]]:
-    """Every PolyMesh and SubD object of the archive, and every other object by full name."""
-    meshes, others = [], {}
+def _objects(abc: SimpleNamespace, archive: Any) -> tuple[dict[str, Any], dict[str, str]]:
+    """Every PolyMesh and SubD object of the archive by full name, and the schema of every
+    other object by full name."""
+    meshes, others = {}, {}
     stack = [archive.getTop()]
     while stack:  # depth first, children in their order (no recursion: any depth)
         item = stack.pop()
@@ -128,33 +133,32 @@ def _objects(abc: SimpleNamespace, archive: Any) -> tuple[list[Any], dict[str, A
         stack.extend(reversed(children))
         header = item.getHeader()
         if abc.AbcGeom.IPolyMesh.matches(header) or abc.AbcGeom.ISubD.matches(header):
-            meshes.append(item)
+            meshes[item.getFullName()] = item
         else:
-            others[item.getFullName()] = item
+            others[item.getFullName()] = item.getMetaData().get("schema") or "no schema"
     return meshes, others
 
 
-def _chosen_mesh(meshes: list[Any], others: dict[str, Any], wanted: str | None, path: Path) -> Any:
-    """The mesh object to read: the one ``wanted`` names, or the only one."""
-    names = [mesh.getFullName() for mesh in meshes]
+def _chosen_mesh(names: list[str], others: dict[str, str], wanted: str | None, path: Path) -> str:
+    """The full name of the mesh object to read: ``wanted``, or the only one."""
     if wanted is not None:
         if wanted in names:
-            return meshes[names.index(wanted)]
+            return wanted
         if wanted in others:
-            schema = others[wanted].getMetaData().get("schema") or "no schema"
             raise InputError(
-                f"object {wanted} is not a PolyMesh ({schema}); the meshes are: {listing(names)}",
+                f"object {wanted} is not a PolyMesh ({others[wanted]}); the meshes are: "
+                f"{listing(names)}",
                 path=path,
             )
         raise InputError(
             f"there is no object {wanted}; the meshes are: {listing(names)}", path=path
         )
-    if len(meshes) == 1:
-        return meshes[0]
-    if not meshes:
+    if len(names) == 1:
+        return names[0]
+    if not names:
         raise InputError("holds no PolyMesh (or SubD) object", path=path)
     raise InputError(
-        f"holds {len(meshes)} meshes: {listing(names)}; choose one with --object PATH",
+        f"holds {len(names)} meshes: {listing(names)}; choose one with --object PATH",
         path=path,
     )
 
@@ -181,7 +185,7 @@ def _read_mesh(
     for frame, selector in enumerate(selectors):
         try:
             sample = np.asarray(positions.getValue(selector))
-        except RuntimeError as error:
+        except _LIBRARY_ERRORS as error:
             raise InputError(
                 f"{where}: cannot read sample {frame}: {_message(error)}", path=path, frame=frame
             ) from None
@@ -334,7 +338,7 @@ def write_alembic(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
         try:
             _write_archive(abc, seq, temporary, name, rate)
             written = _written_samples(abc, temporary, f"/{name}/{name}Shape")
-        except RuntimeError as error:
+        except _LIBRARY_ERRORS as error:
             raise OSError(f"{path}: Alembic could not write it: {_message(error)}") from None
         if written != seq.frame_count:
             raise OSError(
@@ -375,13 +379,11 @@ def _write_archive(
 
 def _written_samples(abc: SimpleNamespace, path: Path, name: str) -> int:
     """How many position samples the object ``name`` of a written archive holds (0: none)."""
-    archive = abc.Abc.IArchive(str(path))
-    meshes, _ = _objects(abc, archive)
-    for item in meshes:
-        if item.getFullName() == name:
-            schema = abc.AbcGeom.IPolyMesh(item, abc.Abc.WrapExistingFlag.kWrapExisting)
-            return int(schema.getSchema().getPositionsProperty().getNumSamples())
-    return 0
+    meshes, _ = _objects(abc, abc.Abc.IArchive(str(path)))
+    if name not in meshes:
+        return 0
+    schema = abc.AbcGeom.IPolyMesh(meshes[name], abc.Abc.WrapExistingFlag.kWrapExisting)
+    return int(schema.getSchema().getPositionsProperty().getNumSamples())
 
 
 def _time_sampling(abc: SimpleNamespace, codes: np.ndarray, rate: float) -> tuple[Any, bool]:

@@ -88,10 +88,21 @@ def _quiet(pxr: SimpleNamespace) -> Iterator[None]:
         del delegate
 
 
+def _errors(pxr: SimpleNamespace) -> tuple[type[BaseException], ...]:
+    """What pxr raises on a damaged file: its Tf errors, and names or messages quoting bytes
+    that are not UTF-8 (boost.python cannot turn them into ``str``)."""
+    return (pxr.Tf.ErrorException, UnicodeError)
+
+
 def _tf_message(error: BaseException) -> str:
     """The commentary of a pxr error, without its C++ function names and source lines."""
-    texts = [str(getattr(item, "commentary", "")) for item in error.args]
-    texts = [text.strip() for text in texts if text.strip()] or [str(error).strip()]
+    texts = []
+    for item in error.args:
+        try:
+            texts.append(str(getattr(item, "commentary", "")).strip())
+        except UnicodeError:  # the message quotes the damaged bytes
+            texts.append("(a message that is not UTF-8)")
+    texts = [text for text in texts if text] or [str(error).strip() or type(error).__name__]
     return "; ".join(text[:200] for text in texts[:2])
 
 
@@ -105,7 +116,7 @@ def read_usd(path: Path, options: ReadOptions) -> MeshSequence:
     with _quiet(pxr):
         try:
             stage = pxr.Usd.Stage.Open(str(path), pxr.Usd.Stage.LoadAll)
-        except pxr.Tf.ErrorException as error:
+        except _errors(pxr) as error:
             raise InputError(
                 f"cannot read as a USD file: {_tf_message(error)}", path=path
             ) from None
@@ -113,11 +124,11 @@ def read_usd(path: Path, options: ReadOptions) -> MeshSequence:
             raise InputError("cannot read as a USD file", path=path)
         try:
             prim = _chosen_mesh(pxr, stage, options.prim, path)
-        except pxr.Tf.ErrorException as error:
+        except _errors(pxr) as error:
             raise InputError(f"cannot read its prims: {_tf_message(error)}", path=path) from None
         try:
             return _read_mesh(pxr, stage, prim, path)
-        except pxr.Tf.ErrorException as error:
+        except _errors(pxr) as error:
             raise InputError(
                 f"prim {prim.GetPath()}: cannot read: {_tf_message(error)}", path=path
             ) from None
@@ -185,7 +196,7 @@ def _read_mesh(pxr: SimpleNamespace, stage: Any, prim: Any, path: Path) -> MeshS
         label = f"time code {time}" if times else "its default value"
         try:
             value = points.Get(time)
-        except pxr.Tf.ErrorException as error:
+        except _errors(pxr) as error:
             raise InputError(
                 f"{where}: cannot read the points at {label}: {_tf_message(error)}",
                 path=path,
@@ -306,7 +317,7 @@ def write_usd(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
         with atomic_path(path, overwrite=options.overwrite) as temporary:
             try:
                 written = stage.GetRootLayer().Export(str(temporary), "", arguments)
-            except pxr.Tf.ErrorException as error:
+            except _errors(pxr) as error:
                 raise OSError(f"{path}: USD could not write it: {_tf_message(error)}") from None
             if not written:
                 raise OSError(f"{path}: USD could not write it")
