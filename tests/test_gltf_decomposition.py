@@ -152,6 +152,49 @@ def test_the_cli_prints_the_viewer_kg_beside_the_files(
     assert main(["decode", str(tkc), "-o", str(tmp_path / "f"), "--glb-compress", "none"]) == 2
 
 
+def test_the_quantize_variant_stores_weights_in_the_narrowest_type_within_the_budget(
+    tkc: Path, cloth: MeshSequence, tmp_path: Path
+) -> None:
+    (tmp_path / "fine.tkc").write_bytes(encode(cloth, ranks=(40, 17)))  # KG 0.036
+    for source, bits, code in ((tkc, 8, 5121), (tmp_path / "fine.tkc", 16, 5123)):
+        decoder = Decoder(str(source))
+        out = tmp_path / f"{bits}.glb"
+        report = write_decomposition_gltf(decoder, out, compress="quantize")
+        gltf = _json(out)
+        output = gltf["accessors"][gltf["animations"][0]["samplers"][0]["output"]]
+        assert report.weight_bits == bits
+        assert (output["componentType"], output.get("normalized")) == (code, True)
+        assert report.viewer_kg <= BUDGET_SHARE * decoder.info.kg  # type: ignore[operator]
+
+
+def test_the_meshopt_variant_spends_the_budget_with_filtered_floats_and_positive_integers(
+    tkc: Path, tmp_path: Path
+) -> None:
+    pytest.importorskip("meshoptimizer", reason="the meshopt variant needs meshoptimizer")
+    decoder = Decoder(str(tkc))
+    report = write_decomposition_gltf(decoder, tmp_path / "m.glb", compress="meshopt")
+    budget = BUDGET_SHARE * decoder.info.kg  # type: ignore[operator]
+    assert 0.8 * budget <= report.viewer_kg <= budget  # the coarsest step that fits
+    gltf = _json(tmp_path / "m.glb")
+    primitive = gltf["meshes"][0]["primitives"][0]
+    samplers = gltf["animations"][0]["samplers"]
+
+    def codec(accessor: int) -> dict[str, Any]:
+        view = gltf["bufferViews"][gltf["accessors"][accessor]["bufferView"]]
+        result: dict[str, Any] = view["extensions"]["EXT_meshopt_compression"]
+        return result
+
+    for accessor in (primitive["attributes"]["POSITION"], samplers[0]["output"]):
+        assert codec(accessor)["filter"] == "EXPONENTIAL"
+    assert codec(samplers[1]["output"])["filter"] == "EXPONENTIAL"
+    # the weights' codec rows are keyframes: k float32 weights
+    assert codec(samplers[0]["output"])["byteStride"] == 4 * report.targets
+    assert codec(primitive["indices"])["mode"] == "TRIANGLES"
+    for target in primitive["targets"]:
+        accessor = gltf["accessors"][target["POSITION"]]
+        assert accessor["componentType"] == 5122 and min(accessor["min"]) >= 0
+
+
 def test_the_meshopt_variant_reorders_triangles_never_vertices(tkc: Path, tmp_path: Path) -> None:
     pytest.importorskip("meshoptimizer", reason="the meshopt variant needs meshoptimizer")
     decoder = Decoder(str(tkc))
@@ -169,6 +212,20 @@ def test_the_meshopt_variant_reorders_triangles_never_vertices(tkc: Path, tmp_pa
     assert np.array_equal(canonical(back.faces), canonical(np.asarray(decoder.faces)))
     # ...and each vertex is still the decode's vertex
     assert np.abs(back.vertices - decoder.positions()).max() < 0.05 * np.ptp(back.vertices)
+
+
+def test_exponential_words_decode_to_the_values_and_refuse_what_is_not_a_multiple() -> None:
+    meshopt = pytest.importorskip("meshoptimizer", reason="the EXPONENTIAL filter's decoder")
+    from tuckercodec.gltf.meshopt import exponential_words
+
+    values = np.array([[0.75, -3.0, 1e-3 * 2**-10], [0.0, 5.0, -(2**-20)]])
+    exponents = np.array([-2, 0, -40])
+    values[:, 2] = np.round(values[:, 2] / 2.0**-40) * 2.0**-40
+    words = exponential_words(values.astype(np.float32).tobytes(), exponents)
+    decoded = np.asarray(meshopt.decode_filter_exp(np.frombuffer(words, np.uint8), 2, 12))
+    assert np.array_equal(decoded.view(np.float32).reshape(2, 3), values.astype(np.float32))
+    with pytest.raises(ValueError, match="not 24-bit multiples"):
+        exponential_words(np.float32([0.3, 0, 0]).tobytes(), exponents)
 
 
 @pytest.mark.parametrize("compress", ["quantize", "meshopt"])

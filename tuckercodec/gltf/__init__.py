@@ -6,7 +6,9 @@ Modules, one job each: :mod:`.container` (the .glb/.gltf container and its buffe
 and node transforms), :mod:`.reader` (a morph animation sampled into a sequence),
 :mod:`.document` (the shared skeleton of written files), :mod:`.sequence_writer` (a sequence
 as morph targets), :mod:`.decomposition` (a compressed file's Tucker basis as morph targets,
-in three compression variants, with the KG error a viewer shows).
+in three compression variants, with the KG error a viewer shows), :mod:`.quantization` (its
+numbers rounded within the error budget) and :mod:`.decomposition_file` (their layout in the
+file for each variant).
 
 This package imports nothing of the codec; the decomposition writer takes any object with the
 decoder's factor attributes.

@@ -186,16 +186,22 @@ class BufferBuilder:
     chunks: list[bytes] = field(default_factory=list)
     view_data: list[bytes] = field(default_factory=list)  # each view's bytes, for compression
     view_elements: list[int] = field(default_factory=list)  # each view's element size
+    #: how EXT_meshopt_compression should encode each view, where the writer says (its
+    #: ``stride`` and, for the EXPONENTIAL filter, the ``exponents`` of its float32 values)
+    view_codecs: list[dict[str, Any] | None] = field(default_factory=list)
     size: int = 0
 
-    def add_view(self, data: bytes, element: int = 4, **fields: Any) -> int:
+    def add_view(
+        self, data: bytes, element: int = 4, codec: dict[str, Any] | None = None, **fields: Any
+    ) -> int:
         """Append ``data`` as a new buffer view (at a 4-byte boundary) of elements of
-        ``element`` bytes; returns its index."""
+        ``element`` bytes; returns its index. ``codec``: see :attr:`view_codecs`."""
         self.size += self._pad()
         self.views.append({"buffer": 0, "byteOffset": self.size, "byteLength": len(data), **fields})
         self.chunks.append(data)
         self.view_data.append(data)
         self.view_elements.append(element)
+        self.view_codecs.append(codec)
         self.size += len(data)
         return len(self.views) - 1
 
@@ -215,13 +221,15 @@ class BufferBuilder:
         vertex_attribute: bool = False,
         view: int | None = None,
         byte_offset: int = 0,
+        codec: dict[str, Any] | None = None,
     ) -> int:
         """Append ``values`` (count, components) in their dtype; returns the accessor index.
 
         ``vertex_attribute`` pads each row to 4 bytes and sets ``byteStride``; ``bounds``
         writes ``min``/``max`` (required for positions and animation inputs). ``view``: an
         existing buffer view to point at instead of writing the data (the caller wrote it,
-        several accessors in one view for example), from its byte ``byte_offset``.
+        several accessors in one view for example), from its byte ``byte_offset``. ``codec``:
+        how EXT_meshopt_compression should encode the new view (:attr:`view_codecs`).
         """
         values = np.ascontiguousarray(values)
         if values.ndim == 1:
@@ -236,7 +244,7 @@ class BufferBuilder:
                 fields["byteStride"] = stride
             if target is not None:
                 fields["target"] = target
-            view = self.add_view(data, element, **fields)
+            view = self.add_view(data, element, codec, **fields)
         accessor: dict[str, Any] = {
             "bufferView": view,
             "componentType": CODE_OF[values.dtype.newbyteorder("<")],

@@ -105,7 +105,10 @@ def read_sampler(
     times = read_accessor(doc, sampler.get("input"), f"{where} input", width=1)[:, 0]
     if (np.diff(times) <= 0).any() or times[0] < 0:
         raise doc.fail(f"{where}: keyframe times must be >= 0 and increase strictly")
-    flat = read_accessor(doc, sampler.get("output"), f"{where} output")
+    # float32, as viewers keep animation values (three.js de-normalizes integers into a
+    # Float32Array): a normalized weight is then exactly what they interpolate from
+    flat = read_accessor(doc, sampler.get("output"), f"{where} output").astype(np.float32)
+    flat = flat.astype(np.float64)
     per_key = 3 if interpolation == "CUBICSPLINE" else 1
     total = flat.size
     if total != len(times) * per_key * width:

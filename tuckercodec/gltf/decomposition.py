@@ -8,18 +8,20 @@ glTF holds the same sum as a viewer evaluates it:
   over the frames written, so that tools which store weights as normalized 8- or 16-bit
   integers (gltfpack does) keep them; the offsets go into the mesh,
   ``base = Σ_b lo_b · B_b``, and the ranges into the targets, ``T_b = (hi_b - lo_b) · B_b``;
-* the centroids ``c_f`` are the translation track of the root node, the mesh sits on a child
-  node (which holds the dequantization of the quantized variants);
+* the centroids ``c_f`` are the translation track of the root node (in the quantized
+  variants plus the rigid shift of the targets' offsets, :mod:`.quantization`), the mesh sits
+  on a child node (which holds the dequantization of the quantized variants);
 * one keyframe per frame at its time in seconds: the frame's time code (its number in the file,
   or in the part written) over the file's frame rate, 24 when the file records none.
 
 Variants (``compress``): ``none``, float32 everywhere; ``quantize`` (the default),
 KHR_mesh_quantization: mesh and targets as normalized 16-bit integers, dequantized by the
-child node's scale and translation, every target in one buffer view (not k: a smaller JSON);
-``meshopt``, the quantized buffers compressed with EXT_meshopt_compression (three.js needs its
-MeshoptDecoder registered to load it), the triangles in vertex cache order (never the
-vertices). The quantization step follows from an error budget, not a fixed bit count
-(:mod:`.quantization`).
+child node's scale and translation, the weights as normalized 8- or 16-bit integers where the
+budget allows; ``meshopt``, EXT_meshopt_compression (three.js needs its MeshoptDecoder
+registered to load it): the targets as 16-bit integers at the coarsest step the budget allows,
+the base, weights and translation float32 with the EXPONENTIAL filter, the triangles in vertex
+cache order. The rounding follows from an error budget, not a fixed bit count
+(:mod:`.quantization`); the layouts are :mod:`.decomposition_file`'s.
 """
 
 from __future__ import annotations
@@ -35,17 +37,16 @@ from ..atomic import refuse_existing, write_atomic
 from ..format.reconstruction import reconstruction_basis
 from ..metrics import KG_DEFINITION, kg_error
 from ..sequence import DEFAULT_FRAME_RATE, MeshSequence
-from .accessors import ARRAY_BUFFER, BufferBuilder, padded_rows
-from .document import add_triangles, file_bytes, new_gltf
-from .quantization import Quantized, quantize_positions
+from .decomposition_file import decomposition_bytes
+from .quantization import quantize_animation
 from .reader import sample_gltf
 
 Compression = Literal["none", "quantize", "meshopt"]
 COMPRESSIONS: tuple[str, ...] = ("none", "quantize", "meshopt")
 #: The default variant: KHR_mesh_quantization loads natively in three.js, Babylon.js, Blender
 #: and glTFast and takes about two thirds of the float32 size (cloth and chicken at KG 0.1);
-#: meshopt is about half of that again but loads only where a meshopt decoder is registered
-#: (three.js: GLTFLoader.setMeshoptDecoder), so it is asked for by name.
+#: meshopt is a third of that again (chicken, samba, cloth) but loads only where a meshopt
+#: decoder is registered (three.js: GLTFLoader.setMeshoptDecoder), so it is asked for by name.
 DEFAULT_COMPRESSION: Compression = "quantize"
 
 
@@ -78,8 +79,9 @@ class GltfReport:
         compression: the variant ("none", "quantize", "meshopt").
         frames, targets: keyframes and morph targets (the file's rank k).
         frame_rate: the frames per second of the keyframe times.
-        position_step: the quantization step of the positions in scene units (0: float32).
-        weight_bits: bits of the stored weights (32: float32).
+        position_step: the quantization step of the targets in scene units (0: float32).
+        weight_bits: bits of the stored weights (32: float32, with the meshopt variant's
+            EXPONENTIAL filter rounding each target's weights to a power-of-two step).
         viewer_kg: the KG error of the animation as a viewer evaluates it from the written
             file (sampled at each frame's time) against the .tkc's own decode of those frames.
         viewer_kg_reference: the same against a reference sequence, if one was given.
@@ -128,9 +130,10 @@ def write_decomposition_gltf(
         frames: the frames to write (as for :meth:`Decoder.positions`): their times are their
             frame numbers over the file's frame rate (24 when it records none).
         compress: "none" (float32), "quantize" (KHR_mesh_quantization, the default) or
-            "meshopt" (EXT_meshopt_compression on the quantized buffers; needs the extra
-            ``gltf``). The quantization keeps the viewer's KG error against the .tkc decode
-            within 5% of the file's recorded KG error (:mod:`.quantization`).
+            "meshopt" (EXT_meshopt_compression, the smallest; needs the extra ``gltf``). The
+            rounding keeps the viewer's KG error against the .tkc decode within 0.32 times
+            the file's recorded KG error, so about 1.05 times it against the original
+            (:mod:`.quantization`).
         overwrite: replace an existing file.
         reference: the original frames (all of the file's, or those of ``frames``), to report
             the viewer's KG error against them beside the .tkc's.
@@ -157,20 +160,21 @@ def write_decomposition_gltf(
     times = (codes / rate).astype(np.float32)
 
     weights, base, targets = morph_parts(decoder, chosen)
-    recorded = decoder.info.kg
+    centroids = decoder.centroids[chosen]
     quantized = None
     if compress != "none":
-        quantized = quantize_positions(
+        quantized = quantize_animation(
             base,
             targets,
             weights,
-            decoder.centroids[chosen],
+            centroids,
             decoded,
-            recorded,
-            coarse=compress == "meshopt",
+            decoder.info.kg,
+            filters=compress == "meshopt",
         )
-    data = _file(
-        decoder, path, times, weights, base, targets, decoder.centroids[chosen], quantized, compress
+    triangles = MeshSequence(base[None], decoder.faces).triangles()
+    data = decomposition_bytes(
+        path, triangles, times, weights, base, targets, centroids, quantized, compress
     )
     write_atomic(path, data, overwrite=overwrite)
 
@@ -184,7 +188,7 @@ def write_decomposition_gltf(
         targets=len(targets),
         frame_rate=rate,
         position_step=0.0 if quantized is None else quantized.step,
-        weight_bits=32,
+        weight_bits=32 if quantized is None else 8 * quantized.weights.dtype.itemsize,
         viewer_kg=kg_error(decoded, viewer),
         viewer_kg_reference=None
         if report_reference is None
@@ -217,130 +221,3 @@ def morph_parts(
     weights = (u3 - lo) / span
     base = np.einsum("b,bvx->vx", lo, shapes)
     return weights, base, shapes * span[:, None, None]
-
-
-def _file(
-    decoder: Decomposed,
-    path: Path,
-    times: np.ndarray,
-    weights: np.ndarray,
-    base: np.ndarray,
-    targets: np.ndarray,
-    centroids: np.ndarray,
-    quantized: Quantized | None,
-    compress: str,
-) -> bytes:
-    """The bytes of the glTF."""
-    builder = BufferBuilder()
-    extensions = []
-    child: dict[str, Any] = {"name": "decomposition", "mesh": 0}
-    if quantized is None:
-        position = builder.add_accessor(
-            base.astype(np.float32), target=ARRAY_BUFFER, bounds=True, vertex_attribute=True
-        )
-        morphs = [
-            builder.add_accessor(
-                t.astype(np.float32), target=ARRAY_BUFFER, bounds=True, vertex_attribute=True
-            )
-            for t in targets
-        ]
-    else:
-        extensions.append("KHR_mesh_quantization")
-        child["translation"] = [float(v) for v in quantized.offset]
-        child["scale"] = [float(quantized.scale)] * 3
-        position = builder.add_accessor(
-            quantized.base, target=ARRAY_BUFFER, bounds=True, normalized=True, vertex_attribute=True
-        )
-        morphs = _shared_targets(builder, quantized.targets)
-    primitive: dict[str, Any] = {"attributes": {"POSITION": position}}
-    triangles = MeshSequence(base[None], decoder.faces).triangles()
-    if compress == "meshopt" and len(triangles):
-        from .meshopt import vertex_cache_order  # the index codec takes half the bytes
-
-        triangles = vertex_cache_order(triangles, len(base))
-    add_triangles(builder, primitive, triangles, len(base))
-    primitive["targets"] = [{"POSITION": m} for m in morphs]
-    first = weights[0].astype(np.float32)
-    mesh = {
-        "name": "decomposition",
-        "primitives": [primitive],
-        "weights": [float(w) for w in first],
-    }
-    key_times = builder.add_accessor(times, bounds=True)
-    samplers = [
-        {
-            "input": key_times,
-            "output": builder.add_accessor(weights.astype(np.float32).reshape(-1)),
-            "interpolation": "LINEAR",
-        },
-        {
-            "input": key_times,
-            "output": builder.add_accessor(centroids.astype(np.float32)),
-            "interpolation": "LINEAR",
-        },
-    ]
-    gltf = new_gltf(extensions)
-    gltf.update(
-        {
-            "scene": 0,
-            "scenes": [{"nodes": [0]}],
-            "nodes": [
-                {
-                    "name": "tuckercodec",
-                    "children": [1],
-                    "translation": [float(v) for v in centroids[0].astype(np.float32)],
-                },
-                child,
-            ],
-            "meshes": [mesh],
-            "animations": [
-                {
-                    "name": "decomposition",
-                    "samplers": samplers,
-                    "channels": [
-                        {"sampler": 0, "target": {"node": 1, "path": "weights"}},
-                        {"sampler": 1, "target": {"node": 0, "path": "translation"}},
-                    ],
-                }
-            ],
-        }
-    )
-    if compress == "meshopt":
-        return _meshopt_file(gltf, builder, path)
-    return file_bytes(gltf, builder, path)
-
-
-def _shared_targets(builder: BufferBuilder, targets: np.ndarray) -> list[int]:
-    """Every target (k, K, 3) int16 in one buffer view of 8-byte rows, an accessor each."""
-    count, vertices = targets.shape[:2]
-    if count == 0:
-        return []
-    rows = padded_rows(targets.reshape(-1, 3), 8)
-    view = builder.add_view(rows, 6, byteStride=8, target=ARRAY_BUFFER)
-    return [
-        builder.add_accessor(
-            target, view=view, byte_offset=b * vertices * 8, normalized=True, bounds=True
-        )
-        for b, target in enumerate(targets)
-    ]
-
-
-def _meshopt_file(gltf: dict[str, Any], builder: BufferBuilder, path: Path) -> bytes:
-    from .container import pack_glb, pack_gltf
-    from .meshopt import EXTENSION, compress_views
-
-    views, binary, fallback = compress_views(
-        builder.views, builder.view_data, builder.view_elements
-    )
-    gltf = dict(gltf)
-    gltf["extensionsUsed"] = sorted({*gltf.get("extensionsUsed", []), EXTENSION})
-    gltf["extensionsRequired"] = sorted({*gltf.get("extensionsRequired", []), EXTENSION})
-    gltf["accessors"] = builder.accessors
-    gltf["bufferViews"] = views
-    gltf["buffers"] = [
-        {"byteLength": len(binary)},
-        {"byteLength": fallback, "extensions": {EXTENSION: {"fallback": True}}},
-    ]
-    if path.suffix.lower() == ".gltf":
-        return pack_gltf(gltf, binary)
-    return pack_glb(gltf, binary)

@@ -100,6 +100,23 @@ def encode_attributes(rows: bytes, count: int, stride: int) -> bytes:
     return bytes(meshopt.encode_vertex_buffer(data, count, stride))
 
 
+def exponential_words(values: bytes, exponents: np.ndarray) -> bytes:
+    """float32 ``values``, each a multiple of ``2**exponent`` (``exponents``: one per value of
+    a row, the rows following each other), as the EXPONENTIAL filter stores them: a signed
+    8-bit exponent in the top byte over a signed 24-bit mantissa, ``value = mantissa ·
+    2**exponent`` (what the filter decodes)."""
+    flat = np.asarray(exponents, dtype=np.int64).reshape(-1)
+    floats = np.frombuffer(values, dtype="<f4").astype(np.float64).reshape(-1, flat.size)
+    exponents = np.broadcast_to(flat, floats.shape)
+    mantissas = np.round(np.ldexp(floats, -exponents)).astype(np.int64)
+    if np.abs(mantissas).max(initial=0) >= 1 << 23 or not np.array_equal(
+        np.ldexp(mantissas.astype(np.float64), exponents), floats
+    ):
+        raise ValueError("the values are not 24-bit multiples of their power-of-two steps")
+    words = (mantissas & 0xFFFFFF) | ((exponents & 0xFF) << 24)
+    return words.astype("<u4").tobytes()
+
+
 def encode_triangles(indices: np.ndarray) -> bytes:
     """A triangle list (flat) with the index codec (decoded with any index size)."""
     meshopt = _library("writing EXT_meshopt_compression")
@@ -121,26 +138,36 @@ def vertex_cache_order(triangles: np.ndarray, vertices: int) -> np.ndarray:
 
 
 def compress_views(
-    views: list[dict[str, Any]], data: list[bytes], elements: list[int]
+    views: list[dict[str, Any]],
+    data: list[bytes],
+    elements: list[int],
+    codecs: list[dict[str, Any] | None] | None = None,
 ) -> tuple[list[dict[str, Any]], bytes, int]:
     """Buffer views compressed with EXT_meshopt_compression: (the new views, buffer 0's bytes,
     the byte length of buffer 1, the uncompressed fallback that holds no data).
 
     Index views (``target`` 34963) use the TRIANGLES codec, vertex and animation views whose
     elements are a multiple of 4 bytes the ATTRIBUTES codec; a view neither fits (2-byte
-    elements) stays uncompressed in buffer 0.
+    elements) stays uncompressed in buffer 0. ``codecs`` (one per view, or None) may set a
+    view's codec ``stride`` (animation data has none of its own: a stride of one keyframe lets
+    the codec take differences over time) and, with ``exponents``, the EXPONENTIAL filter.
     """
     compressed: list[dict[str, Any]] = []
     real = bytearray()
     fallback = 0
-    for view, raw, element in zip(views, data, elements, strict=True):
-        stride = view.get("byteStride", element)
+    for index, (view, raw, element) in enumerate(zip(views, data, elements, strict=True)):
+        codec = (codecs[index] if codecs else None) or {}
+        stride = codec.get("stride", view.get("byteStride", element))
+        kind = "NONE"
         if view.get("target") == 34963:
             item = element
             payload = encode_triangles(np.frombuffer(raw, dtype=f"<u{item}"))
             mode, stride = "TRIANGLES", item
         elif stride % 4 == 0 and len(raw) % stride == 0:
-            payload = encode_attributes(raw, len(raw) // stride, stride)
+            rows = raw
+            if "exponents" in codec:
+                rows, kind = exponential_words(raw, codec["exponents"]), "EXPONENTIAL"
+            payload = encode_attributes(rows, len(raw) // stride, stride)
             mode = "ATTRIBUTES"
         else:
             real += b"\0" * (-len(real) % 4)
@@ -157,6 +184,8 @@ def compress_views(
             "count": len(raw) // stride,
             "mode": mode,
         }
+        if kind != "NONE":
+            extension["filter"] = kind
         compressed.append(
             {
                 **view,
