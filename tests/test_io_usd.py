@@ -110,6 +110,15 @@ def test_the_written_stage_is_what_the_docstring_says(tmp_path):
     assert np.array_equal(extent, [frame.min(axis=0), frame.max(axis=0)])
 
 
+@pytest.mark.parametrize("suffix", [".usda", ".usdc"])
+def test_a_point_sequence_round_trips(tmp_path, suffix):
+    seq = MeshSequence(np.random.default_rng(3).standard_normal((3, 5, 3)), np.zeros((0, 3)))
+    save_sequence(seq, tmp_path / f"p{suffix}")
+    back = load_sequence(tmp_path / f"p{suffix}")
+    assert exact(back, seq) and back.faces.shape == (0, 3)
+    assert _usdchecker_errors(tmp_path / f"p{suffix}") == []
+
+
 def test_nothing_is_replaced_without_overwrite(cloth, tmp_path):
     path = tmp_path / "out.usdc"
     path.write_bytes(b"old")
