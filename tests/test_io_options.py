@@ -67,7 +67,9 @@ def test_every_format_is_described_once():
     for found in formats():
         assert found.suffixes and all(s.startswith(".") and s == s.lower() for s in found.suffixes)
         assert (found.read is not None) or (found.read_frame is not None), found.name
-        assert found.carries <= {"float64", "faces", "frame_names", "frame_rate", "time_codes"}
+        parts = {"float64", "faces", "polygons", "frame_names", "frame_rate", "time_codes"}
+        assert found.carries <= parts
+        assert "polygons" not in found.carries or "faces" in found.carries
 
 
 def test_convert_writes_the_target_format_and_says_what_it_loses(wave, tmp_path, capsys):
@@ -111,3 +113,23 @@ def test_a_read_option_given_to_the_wrong_format_exits_4(wave, tmp_path, capsys)
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--object (object_path) does not apply" in err
     assert not (tmp_path / "x.tkc").exists()
+
+
+def test_convert_names_polygons_that_a_triangle_format_splits(tmp_path, capsys):
+    square = np.array([[[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]], dtype=np.float64)
+    seq = MeshSequence(np.concatenate([square, square + 0.5]), np.array([[0, 1, 2, 3]]))
+    save_sequence(seq, tmp_path / "quad.npz")
+    assert main(["convert", str(tmp_path / "quad.npz"), str(tmp_path / "quad.glb")]) == 0
+    assert "polygons (split into triangles)" in capsys.readouterr().out
+    assert load_sequence(tmp_path / "quad.glb").faces.shape == (2, 3)
+    assert main(["convert", str(tmp_path / "quad.npz"), str(tmp_path / "quad.pvd")]) == 0
+    assert "not carried" not in capsys.readouterr().out
+
+
+def test_formats_lists_every_format_with_its_options_and_extra(capsys):
+    assert main(["formats"]) == 0
+    out = capsys.readouterr().out
+    for found in formats():
+        assert f"{found.name}: {' '.join(found.suffixes)}" in out
+    assert "reading options: --prim" in out
+    assert "pip install 'tuckercodec[usd]'" in out

@@ -3,9 +3,25 @@
 from __future__ import annotations
 
 import importlib
+import importlib.util
 from types import ModuleType
 
 from .errors import DependencyError
+
+#: The module that tells whether each extra of pyproject.toml is installed.
+EXTRA_MODULES = {
+    "plot": "matplotlib",
+    "usd": "pxr",
+    "alembic": "alembic3d",
+    "gltf": "meshoptimizer",
+    "xdmf": "h5py",
+}
+
+
+def extra_installed(extra: str) -> bool:
+    """Whether the package that the extra ``extra`` installs can be imported (not importing
+    it: some are slow to import)."""
+    return importlib.util.find_spec(EXTRA_MODULES[extra]) is not None
 
 
 def import_optional(module: str, extra: str, purpose: str) -> ModuleType:

@@ -272,6 +272,12 @@ def build_parser() -> argparse.ArgumentParser:
     convert.add_argument("--force", action="store_true", help="replace output files that exist")
     _add_read_options(convert)
 
+    verbs.add_parser(
+        "formats",
+        help="list the sequence formats: suffixes, options, what each keeps, extras",
+        description="List every sequence format this installation knows, and what it needs.",
+    )
+
     demo = verbs.add_parser(
         "demo",
         help="encode and decode the built-in sample (a simulated cloth, 60 frames)",

@@ -1,4 +1,4 @@
-"""The ``convert`` verb: a sequence from one file format to another."""
+"""The ``convert`` verb: a sequence from one file format to another; ``formats`` lists them."""
 
 from __future__ import annotations
 
@@ -11,18 +11,23 @@ from ..atomic import refuse_existing
 from ..errors import EXIT_OK
 from ..files import SUFFIX
 from ..format.names import default_frame_names
-from ..io import FOLDER_FORMAT, format_named, format_of, save_sequence
+from ..io import FOLDER_FORMAT, format_named, format_of, formats, save_sequence
+from ..io.registry import OPTION_FLAGS
+from ..optional import extra_installed
 from ..sequence import MeshSequence
 from .inputs import load_input
 
-#: How the parts a format may not carry (SequenceFormat.carries) are named to the user.
+#: How the parts a format may keep (SequenceFormat.carries) are named to the user.
 _PARTS = {
-    "float64": "positions beyond float32 precision (rounded to float32)",
+    "float64": "float64 positions",
     "faces": "faces",
+    "polygons": "polygons",
     "frame_names": "frame names",
     "frame_rate": "frame rate",
     "time_codes": "time codes",
 }
+#: What becomes of a part that the output's format does not keep.
+_LOSSES = {"float64": " (rounded to float32)", "polygons": " (split into triangles)"}
 
 
 def run_convert(args: argparse.Namespace) -> int:
@@ -44,7 +49,8 @@ def run_convert(args: argparse.Namespace) -> int:
     kept = target.carries if target else format_named(FOLDER_FORMAT).carries
     lost = [what for what, present in _contents(sequence).items() if present and what not in kept]
     if lost:
-        print(f"not carried by the output's format: {', '.join(_PARTS[what] for what in lost)}")
+        named = ", ".join(_PARTS[what] + _LOSSES.get(what, "") for what in lost)
+        print(f"not carried by the output's format: {named}")
     return EXIT_OK
 
 
@@ -54,7 +60,33 @@ def _contents(sequence: MeshSequence) -> dict[str, bool]:
     return {
         "float64": not np.array_equal(vertices.astype(np.float32), vertices),
         "faces": sequence.faces.shape[0] > 0,
+        "polygons": bool((sequence.faces[:, 3:] >= 0).any()),
         "frame_names": sequence.frame_names != default_frame_names(sequence.frame_count),
         "frame_rate": sequence.frame_rate is not None,
         "time_codes": sequence.time_codes is not None,
     }
+
+
+def run_formats(args: argparse.Namespace) -> int:
+    """Print every registered format: suffixes, reading options, what it keeps, its extra."""
+    for found in formats():
+        modes = [
+            m
+            for m, f in (
+                ("read", found.read or found.read_frame),
+                ("write", found.write or found.write_frame),
+            )
+            if f
+        ]
+        print(f"{found.name}: {' '.join(found.suffixes)} ({' and '.join(modes)})")
+        print(f"    {found.description}")
+        if found.read_options:
+            flags = ", ".join(sorted(OPTION_FLAGS[name] for name in found.read_options))
+            print(f"    reading options: {flags}")
+        if found.write is not None or found.write_frame is not None:
+            kept = ", ".join(_PARTS[part] for part in _PARTS if part in found.carries)
+            print(f"    keeps beyond float32 positions: {kept or 'nothing'}")
+        if found.extra is not None:
+            state = "installed" if extra_installed(found.extra) else "NOT installed"
+            print(f"    needs: pip install 'tuckercodec[{found.extra}]' ({state})")
+    return EXIT_OK

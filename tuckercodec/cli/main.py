@@ -36,6 +36,7 @@ _VERBS: dict[str, Callable[[argparse.Namespace], int]] = {
     "render": commands.run_render,
     "rd": commands.run_rd,
     "convert": convert.run_convert,
+    "formats": convert.run_formats,
 }
 
 #: What the one-line message calls each kind of error, after "tuckercodec: ".

@@ -309,5 +309,5 @@ FORMAT = SequenceFormat(
     ),
     read=read_npz,
     write=write_npz,
-    carries=frozenset({"float64", "faces", "frame_names", "frame_rate", "time_codes"}),
+    carries=frozenset({"float64", "faces", "polygons", "frame_names", "frame_rate", "time_codes"}),
 )

@@ -704,5 +704,5 @@ FORMAT = SequenceFormat(
     read_frame=read_obj_frame,
     write_frame=_write_frame,
     # exact text (repr) unless a precision is asked for; the frame names are the file names
-    carries=frozenset({"float64", "faces", "frame_names"}),
+    carries=frozenset({"float64", "faces", "polygons", "frame_names"}),
 )

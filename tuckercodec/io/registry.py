@@ -102,7 +102,8 @@ class SequenceFormat:
     #: the optional extra that installs the library the format needs (``None``: core only)
     extra: str | None = None
     #: what a file keeps of a sequence beyond float32 positions, of: "float64" (positions
-    #: exactly), "faces", "frame_names", "frame_rate", "time_codes"
+    #: exactly), "faces", "polygons" (faces of more than 3 corners, not split into
+    #: triangles), "frame_names", "frame_rate", "time_codes"
     carries: frozenset[str] = frozenset()
 
 

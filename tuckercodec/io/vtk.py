@@ -289,5 +289,5 @@ FORMAT = SequenceFormat(
     description="VTK time series: a ParaView .pvd of .vtp or .vtu files, one per time step",
     read=read_pvd,
     write=write_pvd,
-    carries=frozenset({"float64", "faces", "frame_names", "time_codes"}),
+    carries=frozenset({"float64", "faces", "polygons", "frame_names", "time_codes"}),
 )

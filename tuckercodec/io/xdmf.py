@@ -361,5 +361,5 @@ FORMAT = SequenceFormat(
     read=read_xdmf,
     write=write_xdmf,
     extra="xdmf",
-    carries=frozenset({"float64", "faces", "frame_names", "time_codes"}),
+    carries=frozenset({"float64", "faces", "polygons", "frame_names", "time_codes"}),
 )
