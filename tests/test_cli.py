@@ -116,7 +116,19 @@ def test_usage_errors_exit_2(capsys):
 
 
 @pytest.mark.parametrize(
-    "verb", [[], ["rd"], ["demo"], ["encode"], ["decode"], ["info"], ["eval"], ["render"]]
+    "verb",
+    [
+        [],
+        ["rd"],
+        ["demo"],
+        ["encode"],
+        ["decode"],
+        ["info"],
+        ["eval"],
+        ["render"],
+        ["convert"],
+        ["formats"],
+    ],
 )
 def test_help_on_every_verb(verb, capsys):
     with pytest.raises(SystemExit) as exit_info:
