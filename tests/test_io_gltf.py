@@ -367,3 +367,19 @@ def test_a_meshopt_view_claiming_more_than_its_codec_can_expand_is_refused(
         view["byteLength"] = 10**9 * view["extensions"]["EXT_meshopt_compression"]["byteStride"]
 
     _refused(_edit(path, inflate), r"bufferViews\[0\].*impossible")
+
+
+def _beyond_float32() -> MeshSequence:
+    """A finite float64 sequence one of whose coordinates float32 cannot hold (1e39)."""
+    vertices = np.zeros((2, 4, 3))
+    vertices[:, 1, 0] = vertices[:, 2, 1] = vertices[:, 3, 2] = 1.0
+    vertices[1, 3, 2] = 1e39
+    return MeshSequence(vertices, np.array([[0, 1, 2], [0, 2, 3]]))
+
+
+def test_a_position_beyond_float32_is_refused_naming_the_frame(tmp_path: Path) -> None:
+    # float32 turned it into inf, which json refused with a bare ValueError after a warning
+    with pytest.raises(InputError, match="beyond the range of float32") as caught:
+        save_sequence(_beyond_float32(), tmp_path / "big.glb")
+    assert caught.value.frame == 1
+    assert not (tmp_path / "big.glb").exists()

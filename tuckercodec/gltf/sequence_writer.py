@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..atomic import write_atomic
+from ..errors import InputError
 from ..sequence import MeshSequence
 from .accessors import ARRAY_BUFFER, BufferBuilder
 from .document import add_triangles, file_bytes, new_gltf
@@ -32,7 +33,7 @@ def sequence_gltf_bytes(seq: MeshSequence, path: Path) -> bytes:
     """The bytes of the file (a .glb, or a .gltf when ``path`` says so)."""
     builder = BufferBuilder()
     frames = seq.vertices
-    base32 = frames[0].astype(np.float32)
+    base32 = _float32(frames[0], 0, path)
     primitive: dict[str, Any] = {
         "attributes": {
             "POSITION": builder.add_accessor(
@@ -50,7 +51,7 @@ def sequence_gltf_bytes(seq: MeshSequence, path: Path) -> bytes:
     node: dict[str, Any] = {"name": "sequence", "mesh": 0}
     if seq.frame_count > 1:
         # the target as float32, from the float32 base: base + target then rounds only once
-        deltas = (frames[1:] - base32.astype(np.float64)).astype(np.float32)
+        deltas = _float32(frames[1:] - base32.astype(np.float64), 1, path)
         primitive["targets"] = [
             {
                 "POSITION": builder.add_accessor(
@@ -78,6 +79,24 @@ def sequence_gltf_bytes(seq: MeshSequence, path: Path) -> bytes:
         ]
     gltf.update({"scene": 0, "scenes": [{"nodes": [0]}], "nodes": [node], "meshes": [mesh]})
     return file_bytes(gltf, builder, path)
+
+
+def _float32(values: np.ndarray, first_frame: int, path: Path) -> np.ndarray:
+    """``values`` (a frame, or the targets of frames ``first_frame``...) as float32; a value
+    float32 cannot hold is an InputError naming its frame, not an infinity that JSON's
+    bounds and every viewer would refuse."""
+    with np.errstate(over="ignore"):
+        single = values.astype(np.float32)
+    bad = ~np.isfinite(single)
+    if bad.any():
+        where = np.argwhere(bad)[0]
+        frame = first_frame + (int(where[0]) if single.ndim == 3 else 0)
+        raise InputError(
+            f"vertex {int(where[-2])} is beyond the range of float32, which {path.name} stores "
+            "(as a position or as its offset from frame 0)",
+            frame=frame,
+        )
+    return single
 
 
 def write_sequence_gltf(seq: MeshSequence, path: Path, overwrite: bool = False) -> None:
