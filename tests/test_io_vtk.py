@@ -409,3 +409,14 @@ def test_a_non_finite_point_names_its_frame_and_point(tmp_path):
         frame=1,
         match="point 2 has a non-finite coordinate",
     )
+
+
+def test_positions_beyond_float32_are_written_as_float64_without_a_warning(tmp_path):
+    # the float32 trial cast overflowed with a RuntimeWarning (an error under pytest, and a
+    # stray stderr line in the CLI) although Float64 keeps the value exactly
+    vertices = np.zeros((2, 4, 3))
+    vertices[:, 1, 0] = vertices[:, 2, 1] = vertices[:, 3, 2] = 1.0
+    vertices[1, 3, 2] = 1e39
+    seq = MeshSequence(vertices, np.array([[0, 1, 2], [0, 2, 3]]))
+    save_sequence(seq, tmp_path / "big.pvd")
+    assert np.array_equal(load_sequence(tmp_path / "big.pvd").vertices, vertices)

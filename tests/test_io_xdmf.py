@@ -334,3 +334,14 @@ def teardown_module() -> None:
     """Remove the scratch folder; report how many examples each property test ran (``-s``)."""
     shutil.rmtree(SCRATCH, ignore_errors=True)
     report_examples(EXAMPLES_RUN)
+
+
+def test_positions_beyond_float32_are_written_as_float64_without_a_warning(tmp_path):
+    # as for VTK: the float32 trial cast must not warn (an error under pytest)
+    pytest.importorskip("h5py", reason="h5py (the xdmf extra) writes the heavy data")
+    vertices = np.zeros((2, 4, 3))
+    vertices[:, 1, 0] = vertices[:, 2, 1] = vertices[:, 3, 2] = 1.0
+    vertices[1, 3, 2] = 1e39
+    seq = MeshSequence(vertices, np.array([[0, 1, 2], [0, 2, 3]]))
+    save_sequence(seq, tmp_path / "big.xdmf")
+    assert np.array_equal(load_sequence(tmp_path / "big.xdmf").vertices, vertices)

@@ -255,7 +255,8 @@ def write_pvd(
     refuse_existing([path], options.overwrite)  # before the frames are written
     writer = DatasetWriter(seq.faces, seq.vertex_count, DATASETS[frame_suffix], layout)
     points = seq.vertices
-    single = points.astype(np.float32)
+    with np.errstate(over="ignore"):  # a value beyond float32 stays float64, exactly
+        single = points.astype(np.float32)
     if np.array_equal(single, points):  # float32 positions: half the size, still exact
         points = single
     with atomic_folder(folder, names, overwrite=options.overwrite) as staging:

@@ -32,7 +32,8 @@ def write_xdmf(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
         raise ValueError(f"{path}: an XDMF file needs a name other than its heavy data's (.h5)")
     refuse_existing([path, heavy], options.overwrite)
     points = seq.vertices
-    single = points.astype(np.float32)
+    with np.errstate(over="ignore"):  # a value beyond float32 stays float64, exactly
+        single = points.astype(np.float32)
     if np.array_equal(single, points):  # float32 positions: half the size, still exact
         points = single
     kind, topology, attributes = _topology(seq.faces, seq.vertex_count)
