@@ -133,3 +133,12 @@ def test_formats_lists_every_format_with_its_options_and_extra(capsys):
         assert f"{found.name}: {' '.join(found.suffixes)}" in out
     assert "reading options: --prim" in out
     assert "pip install 'tuckercodec[usd]'" in out
+
+
+def test_convert_of_positions_beyond_float32_names_the_loss_without_a_warning(tmp_path, capsys):
+    vertices = np.zeros((2, 4, 3))
+    vertices[:, 1, 0] = vertices[:, 2, 1] = vertices[:, 3, 2] = 1.0
+    vertices[1, 3, 2] = 1e39
+    save_sequence(MeshSequence(vertices, np.array([[0, 1, 2]])), tmp_path / "big.npz")
+    assert main(["convert", str(tmp_path / "big.npz"), str(tmp_path / "big.pvd")]) == 0
+    assert "float64" not in capsys.readouterr().out  # .pvd keeps float64: nothing lost
