@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 import shutil
 import subprocess
 import sys
@@ -508,3 +509,15 @@ def test_render_errors_are_one_line_and_nothing_is_overwritten(wave_npz, packed,
     assert "must end in .png" in capsys.readouterr().err
     assert not any((tmp_path / name).exists() for name in ("r.png", "g.png", "r.jpeg"))
     assert not list(tmp_path.glob(".*.tmp"))
+
+
+def test_decode_help_names_only_suffixes_it_writes(capsys):
+    # it named .vtu, which no format writes: 'decode -o y.vtu' made a folder of OBJ files
+    from tuckercodec.io import formats
+
+    with pytest.raises(SystemExit):
+        main(["decode", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    listed = text.split("chosen by its suffix (")[1].split(")")[0]
+    written = {s for f in formats() if f.write is not None for s in f.suffixes}
+    assert set(re.findall(r"\.[a-z0-9]+", listed)) <= written

@@ -137,7 +137,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="rebuild the frames of a compressed file as OBJ files or a sequence file",
         description=(
             "Decode all frames, or a range, to a folder of OBJ files (with faces) or a "
-            "sequence file chosen by its suffix (.npz, .usd, .abc, .pc2, .mdd, .vtu...); "
+            "sequence file chosen by its suffix (.npz, .usd, .abc, .pc2, .mdd, .pvd...); "
             ".glb/.gltf writes the decomposition as a playable morph-target animation."
         ),
     )
