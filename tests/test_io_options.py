@@ -142,3 +142,31 @@ def test_convert_of_positions_beyond_float32_names_the_loss_without_a_warning(tm
     save_sequence(MeshSequence(vertices, np.array([[0, 1, 2]])), tmp_path / "big.npz")
     assert main(["convert", str(tmp_path / "big.npz"), str(tmp_path / "big.pvd")]) == 0
     assert "float64" not in capsys.readouterr().out  # .pvd keeps float64: nothing lost
+
+
+@pytest.mark.parametrize("suffix", [".glb", ".mdd"])
+def test_times_that_float32_cannot_tell_apart_are_refused_naming_the_frame(tmp_path, suffix):
+    codes = 1e9 + np.arange(4.0)  # 24 bits of float32 cannot separate these seconds
+    seq = MeshSequence(wave_sequence(4, 3), grid_faces(3), frame_rate=24, time_codes=codes)
+    with pytest.raises(InputError, match="frame 1: frames 0 and 1 fall on the same float32"):
+        save_sequence(seq, tmp_path / f"late{suffix}")
+    assert not (tmp_path / f"late{suffix}").exists()
+
+
+def test_encode_says_the_compressed_file_does_not_keep_time_codes(tmp_path, capsys):
+    timed = tmp_path / "timed.npz"
+    seq = MeshSequence(wave_sequence(12, 6), grid_faces(6), time_codes=np.arange(101.0, 113.0))
+    save_sequence(seq, timed)
+    assert main(["encode", str(timed), "-o", str(tmp_path / "t.tkc"), "--kg", "1"]) == 0
+    assert "not kept in the compressed file: time codes" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("name", ["out.obj", "out.ply", "out.vtu"])
+def test_a_file_name_no_format_writes_is_refused_not_made_a_folder(wave, tmp_path, name, capsys):
+    assert main(["convert", str(wave), str(tmp_path / name)]) == 2
+    assert "no format writes a sequence as one" in capsys.readouterr().err
+    assert not (tmp_path / name).exists()
+    with pytest.raises(ValueError, match="'tuckercodec formats' lists them"):
+        save_sequence(load_sequence(wave), tmp_path / name)
+    with pytest.raises(ValueError, match=r"one \.tkc file"):  # encode_file writes those
+        save_sequence(load_sequence(wave), tmp_path / "out.tkc")

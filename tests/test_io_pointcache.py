@@ -348,7 +348,7 @@ def test_an_option_given_to_the_wrong_format_exits_4(tmp_path, capsys):
     np.savez(mesh, V=moving(1), F=np.array([[0, 1, 2]]))
     packed = tmp_path / "x.tkc"
     assert main(["encode", str(cache), "--prim", "/World/a", "-o", str(packed)]) == 4
-    assert "--prim (prim) does not apply to PC2" in capsys.readouterr().err
+    assert "--prim (prim) does not apply to pc2 files" in capsys.readouterr().err
     assert main(["encode", str(mesh), "--faces", str(mesh), "-o", str(packed)]) == 4
     assert "--faces (faces) does not apply" in capsys.readouterr().err
     assert not packed.exists()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -110,6 +111,31 @@ class MeshSequence:
             f"MeshSequence(frames={self.frame_count}, vertices={self.vertex_count}, "
             f"faces={self.faces.shape[0]})"
         )
+
+
+def float32_seconds(seq: MeshSequence, path: str | os.PathLike[str]) -> np.ndarray:
+    """Each frame's time in seconds as float32, as glTF and MDD store it; an InputError naming
+    the frame where float32 cannot hold a time, or rounds two frames onto the same time (time
+    codes far from 0: float32 has 24 bits)."""
+    with np.errstate(over="ignore"):
+        times = seq.seconds().astype(np.float32)
+    bad = np.flatnonzero(~np.isfinite(times))
+    if bad.size:
+        raise InputError(
+            "its time is beyond the range of float32, in which the file stores times",
+            path=path,
+            frame=int(bad[0]),
+        )
+    same = np.flatnonzero(np.diff(times) <= 0)
+    if same.size:
+        frame = int(same[0]) + 1
+        raise InputError(
+            f"frames {frame - 1} and {frame} fall on the same float32 time, {times[frame]} s, "
+            "in which the file stores times: time codes this far from 0 need more precision",
+            path=path,
+            frame=frame,
+        )
+    return times
 
 
 def _checked_time_codes(values: np.ndarray, frame_count: int) -> np.ndarray:

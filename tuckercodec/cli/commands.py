@@ -1,4 +1,5 @@
-"""The verbs of the command line: each reads its arguments, does its work and prints.
+"""The analysis verbs of the command line (rd, eval, render, demo): each reads its arguments,
+does its work and prints; the codec's verbs are in :mod:`.codec`, convert's in :mod:`.convert`.
 
 Every verb returns the exit code of success; failures are exceptions, which
 :func:`tuckercodec.cli.main.main` turns into a one-line message and an exit code.
@@ -15,12 +16,9 @@ import numpy as np
 
 from ..analysis import analyze
 from ..atomic import refuse_existing, write_atomic
-from ..decoder import Decoder, FileInfo, decode
-from ..decoder import info as read_info
-from ..encoder import EncodeReport, encode_with_report
+from ..decoder import Decoder, decode
+from ..encoder import encode_with_report
 from ..errors import EXIT_OK, InputError
-from ..files import decode_file, decoded_output_path, is_gltf_output
-from ..gltf.decomposition import DEFAULT_COMPRESSION, write_decomposition_gltf
 from ..io import load_sequence
 from ..metrics import (
     KG_DEFINITION,
@@ -91,161 +89,6 @@ def run_rd(args: argparse.Namespace) -> int:
                 analysis, args.heatmap, title=f"{name}: error over ranks", overwrite=args.force
             )
             print(f"wrote {args.heatmap}")
-    return EXIT_OK
-
-
-def _print_encode_report(report: EncodeReport) -> None:
-    i, k = report.ranks
-    print(
-        f"ranks (i, 3, k) = ({i}, 3, {k}); decoded KG error {report.kg:.5f} "
-        f"(truncation alone {report.truncation_kg:.5f}; {KG_DEFINITION})"
-    )
-    print(
-        f"size {report.total_bytes} bytes = {report.bpfv:.4f} bpfv (whole file; connectivity "
-        f"{report.connectivity_bpfv:.4f} bpfv of it), {report.ratio:.1f}x smaller than raw float32"
-    )
-    if report.exact_ranks is not None:
-        print(
-            f"cheapest truncation for the target: exact table {report.exact_ranks}, the paper's "
-            f"bound {report.bound_ranks}; chosen by '{report.select}' with quantization"
-        )
-    print(f"time {report.seconds:.2f} s")
-
-
-def run_encode(args: argparse.Namespace) -> int:
-    refuse_existing([args.output], args.force)  # before the work, not after it
-    start = time.perf_counter()
-    sequence = load_sequence(sequence_source(args.input), **read_options(args))
-    result = encode_with_report(  # no mode given: the encoder's default target
-        sequence, target_kg=args.kg, ranks=args.ranks, target_bpfv=args.bpfv, select=args.select
-    )
-    write_atomic(args.output, result.data, overwrite=args.force)
-    print(
-        f"{args.input}: {sequence.frame_count} frames, {sequence.vertex_count} vertices "
-        f"-> {args.output}"
-    )
-    _print_encode_report(result.report)
-    print(f"total time with reading and writing {time.perf_counter() - start:.2f} s")
-    return EXIT_OK
-
-
-def run_decode(args: argparse.Namespace) -> int:
-    header = read_info(args.input)
-    reference = load_input(args.reference, args) if args.reference else None
-    if reference is not None and (reference.frame_count, reference.vertex_count) != (
-        header.frames,
-        header.vertices,
-    ):
-        raise InputError(  # before anything is written
-            f"the reference has {reference.frame_count} frames of {reference.vertex_count} "
-            f"vertices, the file {header.frames} of {header.vertices}",
-            path=args.reference,
-        )
-    output = decoded_output_path(args.output, args.format)
-    if is_gltf_output(output):
-        return _decode_gltf(args, header, reference, output)
-    if args.glb_compress is not None:
-        raise ValueError(f"{output}: --glb-compress applies only to a .glb or .gltf output")
-    start = time.perf_counter()
-    decoded = decode_file(
-        args.input,
-        output,
-        frames=args.frames,
-        output_format=args.format,
-        overwrite=args.force,
-        precision=args.precision,
-        progress=True,
-    )
-    elapsed = time.perf_counter() - start
-    print(
-        f"{args.input}: {decoded.frame_count} of {header.frames} frames, "
-        f"{decoded.vertex_count} vertices -> {output} in {elapsed:.2f} s"
-    )
-    print(
-        f"file: {header.total_bytes} bytes = {header.bpfv:.4f} bpfv; KG error recorded by the "
-        f"encoder {_number(header.kg)} ({header.kg_definition or 'no definition recorded'})"
-    )
-    if reference is not None:
-        selected = reference.vertices[args.frames if args.frames is not None else slice(None)]
-        scope = (
-            ""
-            if args.frames is None
-            else (
-                f" (of the {decoded.frame_count} frames decoded, with their own KG denominator; "
-                "the target applies to the whole sequence)"
-            )
-        )
-        print(
-            f"actual KG error against {args.reference}: {kg_error(selected, decoded):.5f}{scope} "
-            f"({KG_DEFINITION})"
-        )
-    return EXIT_OK
-
-
-def _decode_gltf(
-    args: argparse.Namespace, header: FileInfo, reference: MeshSequence | None, output: Path
-) -> int:
-    """decode to .glb/.gltf: the decomposition as a morph animation, and the KG error a
-    viewer shows beside the file's."""
-    start = time.perf_counter()
-    output.parent.mkdir(parents=True, exist_ok=True)  # as for every other output
-    decoder = Decoder(args.input)
-    selected = None
-    if reference is not None:
-        selected = reference.vertices[args.frames if args.frames is not None else slice(None)]
-    report = write_decomposition_gltf(
-        decoder,
-        output,
-        frames=args.frames,
-        compress=args.glb_compress or DEFAULT_COMPRESSION,
-        overwrite=args.force,
-        reference=selected,
-    )
-    print(
-        f"{args.input}: {report.frames} of {header.frames} frames, {header.vertices} vertices "
-        f"-> {output} (glTF morph animation: {report.targets} targets, {report.compression}, "
-        f"{report.frame_rate:g} fps) in {time.perf_counter() - start:.2f} s"
-    )
-    print(
-        f"file: {header.total_bytes} bytes = {header.bpfv:.4f} bpfv; KG error recorded by the "
-        f"encoder {_number(header.kg)} ({header.kg_definition or 'no definition recorded'})"
-    )
-    print(f"glTF: {report.size} bytes; {report.summary()}")
-    return EXIT_OK
-
-
-def _number(value: float | None) -> str:
-    return "unknown" if value is None else f"{value:.5f}"
-
-
-def run_info(args: argparse.Namespace) -> int:
-    header = read_info(args.input)
-    if args.json:
-        print(json.dumps(header.to_dict(), indent=2))
-        return EXIT_OK
-    i, k = header.ranks
-    print(f"{args.input}: tuckercodec format {header.format_version}")
-    print(
-        f"  {header.frames} frames, {header.vertices} vertices, {header.faces} faces of up to "
-        f"{header.face_width} corners"
-    )
-    print(f"  ranks (i, 3, k) = ({i}, 3, {k})")
-    print(f"  {header.total_bytes} bytes = {header.bpfv:.4f} bpfv (whole file)")
-    target = (
-        "none (fixed ranks or a size target)"
-        if header.target_kg is None
-        else f"{header.target_kg:g}"
-    )
-    print(
-        f"  KG error {_number(header.kg)} ({header.kg_definition or 'no definition recorded'}), "
-        f"target {target}"
-    )
-    if header.frame_rate is not None:
-        print(f"  {header.frame_rate:g} frames per second")
-    print(f"  written by {header.encoder or 'an unnamed encoder'}")
-    for section_id, length, codec, critical in header.sections:
-        kind = "" if critical else " (ancillary)"
-        print(f"  section {section_id:<5} {length:>10} bytes  {codec}{kind}")
     return EXIT_OK
 
 

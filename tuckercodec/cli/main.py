@@ -24,14 +24,14 @@ from ..errors import (
     TuckerCodecError,
     UnreachableTargetError,
 )
-from . import commands, convert
+from . import codec, commands, convert
 from .arguments import build_parser
 
 _VERBS: dict[str, Callable[[argparse.Namespace], int]] = {
     "demo": commands.run_demo,
-    "encode": commands.run_encode,
-    "decode": commands.run_decode,
-    "info": commands.run_info,
+    "encode": codec.run_encode,
+    "decode": codec.run_decode,
+    "info": codec.run_info,
     "eval": commands.run_eval,
     "render": commands.run_render,
     "rd": commands.run_rd,

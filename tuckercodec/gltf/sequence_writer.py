@@ -23,7 +23,7 @@ import numpy as np
 
 from ..atomic import write_atomic
 from ..errors import InputError
-from ..sequence import MeshSequence
+from ..sequence import MeshSequence, float32_seconds
 from .accessors import ARRAY_BUFFER, BufferBuilder
 from .document import add_triangles, file_bytes, new_gltf
 from .reader import EXTRAS_KEY
@@ -63,7 +63,7 @@ def sequence_gltf_bytes(seq: MeshSequence, path: Path) -> bytes:
         mesh["weights"] = [0.0] * (seq.frame_count - 1)
         mesh["extras"] = {"targetNames": list(seq.frame_names[1:])}
         weights = np.eye(seq.frame_count, seq.frame_count - 1, k=-1, dtype=np.float32)
-        times = seq.seconds().astype(np.float32)
+        times = float32_seconds(seq, path)
         gltf["animations"] = [
             {
                 "name": "frames",

@@ -2,8 +2,11 @@
 
 :func:`load_sequence` and :func:`save_sequence` choose a format by the file name's suffix from
 the registry (:mod:`.registry`); each format is one module: :mod:`.obj` (one OBJ file per
-frame), :mod:`.npz` (a NumPy archive of the whole sequence), :mod:`.meshes` (other one-frame
-mesh files, through trimesh). Folders, globs and lists of one-frame files are :mod:`.frames`.
+frame), :mod:`.npz` (a NumPy archive of the whole sequence), :mod:`.usd`, :mod:`.alembic`,
+:mod:`.pc2` and :mod:`.mdd` (animation caches), :mod:`.gltf` (morph animations, through
+:mod:`tuckercodec.gltf`), :mod:`.vtk` and :mod:`.xdmf` (simulation time series), and
+:mod:`.meshes` (other one-frame mesh files, through trimesh). Folders, globs and lists of
+one-frame files are :mod:`.frames`; ``tuckercodec formats`` lists them all.
 """
 
 from __future__ import annotations
@@ -31,6 +34,9 @@ from .registry import (
 Source = str | os.PathLike[str] | Sequence[str | os.PathLike[str]]
 
 _GLOB_CHARACTERS = re.compile(r"[*?[]")
+#: Suffixes of files that are not sequence files of their own, which a folder is never named:
+#: a series' frames (VTK), XDMF's heavy data, compressed files.
+_NOT_A_FOLDER = frozenset({".vtu", ".vtp", ".vtk", ".h5", ".hdf5", ".tkc"})
 #: The format of a folder of frames when none is named: OBJ, which every tool reads.
 FOLDER_FORMAT = "obj"
 
@@ -48,9 +54,9 @@ def load_sequence(
 
     Args:
         source: one of
-            - a folder: every ``*.obj`` file in it (any case), or if it has none, every mesh file
-              trimesh reads (``.ply``, ``.off``, ``.stl``, ``.glb``...); hidden files (names
-              starting with ``.``) are skipped;
+            - a folder: every ``*.obj`` file in it (any case), or if it has none, every file
+              of a one-frame mesh format (``.ply``, ``.off``, ``.stl``... through trimesh, or
+              static ``.glb``); hidden files (names starting with ``.``) are skipped;
             - a glob pattern such as ``"frames/*.obj"``;
             - a list or tuple of files, read in the order given;
             - a file holding a whole sequence, chosen by its suffix (:func:`formats` lists
@@ -98,7 +104,7 @@ def load_sequence(
         raise InputError("no such file or folder", path=path)
     found = format_of(path)
     if found is not None and found.read is not None:
-        _refuse_options(options, found.read_options, found.description, path)
+        _refuse_options(options, found.read_options, f"{found.name} files", path)
         return found.read(path, options)
     _refuse_options(options, frozenset(), "a one-frame mesh file", path)
     return read_frames([path], progress)
@@ -146,6 +152,8 @@ def save_sequence(
 
     Raises:
         FileExistsError: a target file exists and ``overwrite`` is False.
+        ValueError: ``destination`` names a file of a format that cannot hold a sequence
+            (``.obj``, ``.ply``, ``.vtu``...), where a folder of OBJ frames would surprise.
     """
     destination = Path(destination)
     options = WriteOptions(overwrite=overwrite, precision=precision, progress=progress)
@@ -159,6 +167,14 @@ def save_sequence(
             errno.ENOTDIR,
             "not a folder: name a sequence file (.npz, .usd, .glb...) or a folder for OBJ frames",
             str(destination),
+        )
+    suffix = destination.suffix.lower()
+    if not destination.is_dir() and (found is not None or suffix in _NOT_A_FOLDER):
+        # a file's name, not a folder's: a folder of OBJ frames called "out.ply" is a mistake
+        raise ValueError(
+            f"{destination}: no format writes a sequence as one {suffix} file; name a sequence "
+            "file (.npz, .usdc, .abc, .glb, .pvd...: 'tuckercodec formats' lists them) or a "
+            "folder for OBJ frames"
         )
     write_frames(seq, destination, format_named(FOLDER_FORMAT), options)
 

@@ -33,7 +33,7 @@ import numpy as np
 
 from ..atomic import atomic_output
 from ..errors import InputError
-from ..sequence import DEFAULT_FRAME_RATE, MeshSequence
+from ..sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_seconds
 from .pointcache import (
     POINT_BYTES,
     cache_faces,
@@ -142,14 +142,7 @@ def write_mdd(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
     names are not kept: MDD holds positions only.
     """
     positions = float32_positions(seq, ">f4", path)
-    with np.errstate(over="ignore"):
-        times = (seq.codes() / (seq.frame_rate or DEFAULT_FRAME_RATE)).astype(">f4")
-    bad = np.flatnonzero(~np.isfinite(times))
-    if bad.size:
-        raise InputError(
-            f"its time is beyond the range of the float32 times of {path.name}",
-            frame=int(bad[0]),
-        )
+    times = float32_seconds(seq, path).astype(">f4")
     with atomic_output(path, overwrite=options.overwrite) as stream:
         stream.write(HEADER.pack(seq.frame_count, seq.vertex_count))
         stream.write(times.tobytes())
