@@ -420,3 +420,10 @@ def test_positions_beyond_float32_are_written_as_float64_without_a_warning(tmp_p
     seq = MeshSequence(vertices, np.array([[0, 1, 2], [0, 2, 3]]))
     save_sequence(seq, tmp_path / "big.pvd")
     assert np.array_equal(load_sequence(tmp_path / "big.pvd").vertices, vertices)
+
+
+def test_one_file_listed_for_two_time_steps_is_refused(tmp_path):
+    path = series(tmp_path, [square_frame(), square_frame(0.5)])
+    path.write_text(pvd_text('timestep="0" file="f/0.vtu"', 'timestep="1" file="./f/0.vtu"'))
+    with pytest.raises(InputError, match=r"s\.pvd, frame 1: lists 0\.vtu for frames 0 and 1"):
+        load_sequence(path)

@@ -59,18 +59,20 @@ def read_pvd(path: Path, options: ReadOptions) -> MeshSequence:
     """A sequence from a ParaView ``.pvd`` collection of ``.vtp``/``.vtu`` files (see the
     module docstring); the format takes no read options."""
     entries = _collection(path)
-    vertices: np.ndarray | None = None
+    _refuse_repeated_files(entries, path)
+    # frames are gathered as read, not into one array sized by the index: an index may list
+    # far more frames than its files hold
+    frames: list[np.ndarray] = []
     faces = np.zeros((0, 3), dtype=np.int64)
     first = entries[0].file
     for index, entry in enumerate(entries):
         points, cells = _read_frame(entry.file, path, index)
-        if vertices is None:
-            vertices = np.empty((len(entries), *points.shape), dtype=np.float64)
+        if not frames:
             faces = cells
-        elif len(points) != vertices.shape[1]:
+        elif len(points) != len(frames[0]):
             raise InputError(
                 f"has {len(points)} points but the first frame ({first}) has "
-                f"{vertices.shape[1]}: every frame of {path.name} must have the same points",
+                f"{len(frames[0])}: every frame of {path.name} must have the same points",
                 path=entry.file,
                 frame=index,
             )
@@ -81,8 +83,8 @@ def read_pvd(path: Path, options: ReadOptions) -> MeshSequence:
                 path=entry.file,
                 frame=index,
             )
-        vertices[index] = points
-    assert vertices is not None
+        frames.append(np.asarray(points, dtype=np.float64))
+    vertices = np.stack(frames)
     timed = entries[0].timestep is not None
     codes = np.array([entry.timestep for entry in entries], dtype=np.float64) if timed else None
     try:
@@ -91,6 +93,22 @@ def read_pvd(path: Path, options: ReadOptions) -> MeshSequence:
         )
     except InputError as error:
         raise InputError(error.reason, path=path, frame=error.frame) from None
+
+
+def _refuse_repeated_files(entries: list[_Entry], path: Path) -> None:
+    """Each frame must have a file of its own: an index that lists one file many times would
+    read it again for every listing."""
+    seen: dict[Path, int] = {}
+    for index, entry in enumerate(entries):
+        key = entry.file.resolve()
+        if key in seen:
+            raise InputError(
+                f"lists {entry.file.name} for frames {seen[key]} and {index}: each time step "
+                "must have a file of its own",
+                path=path,
+                frame=index,
+            )
+        seen[key] = index
 
 
 @dataclass(frozen=True)
