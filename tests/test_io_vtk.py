@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 from conftest import expect_input_error, grid_faces, shared_file, wave_sequence
 
-from tuckercodec import MeshSequence, load_sequence, save_sequence
+from tuckercodec import InputError, MeshSequence, load_sequence, save_sequence
 from tuckercodec.cli import main
 from tuckercodec.io import vtk as vtk_format
 from tuckercodec.io.registry import WriteOptions, format_named
