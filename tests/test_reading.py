@@ -85,3 +85,12 @@ def test_the_cli_refuses_a_pipe_as_a_compressed_file_with_exit_4(tmp_path: Path,
 def _exit_code(argv: list[str]) -> None:
     """Run the CLI and hand its exit code back as the SystemExit it would end with."""
     raise SystemExit(main(argv))
+
+
+def test_open_input_names_a_file_that_cannot_be_opened(tmp_path):
+    from tuckercodec.reading import open_input
+
+    with pytest.raises(InputError, match=r"missing\.pc2: cannot read: No such file"):
+        open_input(tmp_path / "missing.pc2", "a PC2 point cache")
+    with pytest.raises(InputError, match="is a folder, not a PC2 point cache"):
+        open_input(tmp_path, "a PC2 point cache")

@@ -36,3 +36,12 @@ def open_regular_file(path: str | os.PathLike[str], what: str) -> BinaryIO:
     except BaseException:
         os.close(descriptor)
         raise
+
+
+def open_input(path: str | os.PathLike[str], what: str) -> BinaryIO:
+    """:func:`open_regular_file` for a reader of input files: a file that cannot be opened at
+    all (missing, unreadable) is an InputError naming it too, not an OSError."""
+    try:
+        return open_regular_file(path, what)
+    except OSError as error:
+        raise InputError(f"cannot read: {error.strerror or error}", path=path) from None

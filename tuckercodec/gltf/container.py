@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import InputError
-from ..reading import open_regular_file
+from ..reading import open_input, open_regular_file
 
 GLB_MAGIC = b"glTF"
 JSON_CHUNK = 0x4E4F534A
@@ -127,11 +127,8 @@ def integer(
 
 def read_document(path: Path) -> Document:
     """Parse a .glb or .gltf file (by its first bytes, not its name); InputError if damaged."""
-    try:
-        with open_regular_file(path, "a glTF file") as stream:
-            data = stream.read()
-    except OSError as error:
-        raise InputError(f"cannot read: {error.strerror or error}", path=path) from None
+    with open_input(path, "a glTF file") as stream:
+        data = stream.read()
     if data[:4] == GLB_MAGIC:
         gltf, glb_bin = _parse_glb(data, path)
     else:

@@ -21,7 +21,7 @@ import numpy as np
 
 from ..atomic import atomic_output
 from ..errors import InputError
-from ..reading import open_regular_file
+from ..reading import open_input
 from ..sequence import MeshSequence
 from ..topology import face_table_problem
 from .registry import ReadOptions, SequenceFormat, WriteOptions
@@ -39,10 +39,7 @@ def read_npz(path: Path, options: ReadOptions | None = None) -> MeshSequence:
     billion vertices in a small file is refused without allocating anything, and reading
     every byte of the member makes zipfile check its CRC.
     """
-    try:
-        stream = open_regular_file(path, "an .npz archive")
-    except OSError as error:
-        raise InputError(f"cannot read: {error.strerror or error}", path=path) from None
+    stream = open_input(path, "an .npz archive")
     with stream:
         if stream.read(2) != b"PK":  # an .npz is a zip archive of .npy arrays
             raise InputError("is not an .npz archive (not a zip file)", path=path)

@@ -17,7 +17,7 @@ from typing import BinaryIO
 import numpy as np
 
 from ..errors import InputError
-from ..reading import open_regular_file
+from ..reading import open_input
 from ..sequence import MeshSequence
 
 #: Bytes of one point: three float32 coordinates.
@@ -28,10 +28,7 @@ INT32_MAX = 2**31 - 1
 
 def open_cache(path: Path, what: str) -> tuple[BinaryIO, int]:
     """Open a point cache for reading: the stream and the file's size in bytes."""
-    try:
-        stream = open_regular_file(path, what)
-    except OSError as error:
-        raise InputError(f"cannot read: {error.strerror or error}", path=path) from None
+    stream = open_input(path, what)
     return stream, os.fstat(stream.fileno()).st_size
 
 

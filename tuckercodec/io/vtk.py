@@ -41,7 +41,7 @@ import numpy as np
 
 from ..atomic import atomic_folder, refuse_existing, write_atomic
 from ..errors import InputError
-from ..reading import open_regular_file
+from ..reading import open_input, open_regular_file
 from ..sequence import MeshSequence
 from .frames import frame_file_names
 from .registry import ReadOptions, SequenceFormat, WriteOptions
@@ -125,10 +125,7 @@ class _Entry:
 
 def _collection(path: Path) -> list[_Entry]:
     """The DataSets of a .pvd, ordered by time step; the index is checked before parsing."""
-    try:
-        stream = open_regular_file(path, "a ParaView .pvd collection")
-    except OSError as error:
-        raise InputError(f"cannot read: {error.strerror or error}", path=path) from None
+    stream = open_input(path, "a ParaView .pvd collection")
     with stream:
         # read(n) reserves n bytes at once: ask for no more than the file holds
         size = os.fstat(stream.fileno()).st_size

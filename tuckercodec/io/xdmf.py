@@ -36,7 +36,7 @@ from xml.etree import ElementTree
 import numpy as np
 
 from ..errors import InputError
-from ..reading import open_regular_file
+from ..reading import open_input
 from ..sequence import MeshSequence
 from .polygons import faces_from_polygons
 from .registry import SequenceFormat
@@ -116,10 +116,7 @@ class _Step:
 
 def _parse(path: Path) -> ElementTree.Element:
     """The root element, ENTITY declarations refused before parsing."""
-    try:
-        stream = open_regular_file(path, "an XDMF file")
-    except OSError as error:
-        raise InputError(f"cannot read: {error.strerror or error}", path=path) from None
+    stream = open_input(path, "an XDMF file")
     with stream:
         data = stream.read()
     if b"<!ENTITY" in data:
