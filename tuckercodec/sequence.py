@@ -113,6 +113,25 @@ class MeshSequence:
         )
 
 
+def float32_vertices(
+    seq: MeshSequence, path: str | os.PathLike[str], dtype: str = "<f4"
+) -> np.ndarray:
+    """The positions as float32 (of byte order ``dtype``), as most formats store them; a
+    position beyond float32's range, which would become infinite, is an InputError naming
+    the frame and vertex."""
+    with np.errstate(over="ignore"):
+        values = seq.vertices.astype(dtype)
+    bad = ~np.isfinite(values)
+    if bad.any():
+        frame, vertex, _ = (int(i) for i in np.argwhere(bad)[0])
+        raise InputError(
+            f"vertex {vertex} is beyond the range of float32, in which the file stores positions",
+            path=path,
+            frame=frame,
+        )
+    return values
+
+
 def float32_seconds(seq: MeshSequence, path: str | os.PathLike[str]) -> np.ndarray:
     """Each frame's time in seconds as float32, as glTF and MDD store it; an InputError naming
     the frame where float32 cannot hold a time, or rounds two frames onto the same time (time

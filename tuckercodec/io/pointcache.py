@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..reading import open_input
-from ..sequence import MeshSequence
+from ..sequence import MeshSequence, float32_vertices
 
 #: Bytes of one point: three float32 coordinates.
 POINT_BYTES = 12
@@ -124,13 +124,4 @@ def float32_positions(seq: MeshSequence, dtype: str, path: Path) -> np.ndarray:
             f"{seq.frame_count} frames of {seq.vertex_count} points do not fit the 32-bit "
             f"counts of {path.name}"
         )
-    with np.errstate(over="ignore"):
-        values = seq.vertices.astype(dtype)
-    bad = ~np.isfinite(values)
-    if bad.any():
-        frame, vertex, _ = (int(i) for i in np.argwhere(bad)[0])
-        raise InputError(
-            f"vertex {vertex} is beyond the range of float32, which {path.name} stores",
-            frame=frame,
-        )
-    return values
+    return float32_vertices(seq, path, dtype)
