@@ -1,0 +1,23 @@
+"""tools.bench_formats: every writable format is written, read back and compared (untimed
+claims only: the timings themselves belong in BENCHMARKS.md)."""
+
+from __future__ import annotations
+
+from tools import bench_formats
+from tuckercodec import formats
+
+
+def test_every_writable_format_reads_the_sample_back(capsys):
+    assert bench_formats.main(["sample", "--repeat", "1"]) == 0  # 1: a read over 1.0 s
+    out = capsys.readouterr().out
+    rows = {line.split("|")[1].strip(): line for line in out.splitlines() if line.count("|") > 8}
+    for found in formats():
+        if found.write is None:
+            continue
+        row = rows[found.name]
+        if "skipped" in row:  # an extra that is not installed says so
+            assert "pip install" in row
+        elif found.name == "gltf":  # morph targets: within the float32 rounding of base + target
+            assert "max deviation" in row and "same faces" in row
+        else:
+            assert "exact" in row and "same faces" in row, row
