@@ -1,0 +1,419 @@
+"""Reading a file with a C++ library in a child process, so that whatever the library does with
+a damaged or crafted file ends as an :class:`InputError` naming the file, never as a dead or
+stuck process.
+
+Why: alembic3d segfaults on about 2 % of randomly damaged archives, and pxr allocates whatever
+a crafted ``.usdc`` declares (8 GiB and 27 s for a 1 KB file declaring 2^31 face indices);
+neither can be caught in the process that runs the library. :func:`read_isolated` runs a
+reader in a fresh Python and turns each way it can end into an outcome in the caller:
+
+* a sequence: sent back through a temporary file (a JSON line, then the arrays in ``.npy``
+  format, read without pickle) and checked again by :class:`MeshSequence`;
+* a :class:`~tuckercodec.errors.TuckerCodecError` (InputError, DependencyError): raised again
+  with its class, message, path and frame (unpickled only from :mod:`tuckercodec.errors`);
+* a crash (a signal; on Windows an NTSTATUS exit code): ``InputError("object /a/aShape: the
+  Alembic library crashed reading it (SIGSEGV): the file is damaged", path=, frame=)``, object
+  and frame being the last the reader announced with :func:`note`;
+* memory: the child may add :data:`MEMORY_BASE` (2 GiB) plus :data:`MEMORY_PER_BYTE` (16) times
+  the file's size to its address space (``RLIMIT_AS``, set once the libraries are imported;
+  where ``/proc/self/statm`` tells its size: Linux). Reading horse gallop adds 0.4 GiB through
+  pxr (its plug-ins), 0.02 GiB through Alembic; the base is for files that store a sample once
+  for many frames, as both formats do. A MemoryError or ``std::bad_alloc`` becomes
+  ``InputError("declares more data than 2 GiB allows")``; pxr turns some failed allocations
+  into a "corrupt asset" error of its own, which comes back as such;
+* time: :data:`TIMEOUT_BASE` (60 s) plus a second per :data:`TIMEOUT_BYTES_PER_SECOND` (8 MiB)
+  of file, wall clock; then the child is killed and the error says so.
+
+``TUCKERCODEC_READ_MEMORY_GIB`` and ``TUCKERCODEC_READ_TIMEOUT`` (seconds) replace those limits
+(0: none). The child's stderr and stdout go to a temporary file: the libraries' messages stay
+off the terminal, and the last line joins a crash's error. Ctrl-C or SIGTERM in the caller
+kills the child; a child whose caller died gets Linux's parent-death signal, or its alarm.
+
+How the child starts, measured reading horse gallop on 2 cores (a first read in a new process,
+then later ones; in process 0.14/0.002 s from ``.abc``, 0.27/0.003 s from ``.usdc``): fork
+0.17/0.16 s and 0.24/0.23 s, forkserver 0.42/0.16 and 0.52/0.24, spawn 0.47/0.42 and
+0.55/0.54, ``subprocess`` 0.40/0.42 and 0.51/0.51. We use ``subprocess`` (``python -P -c``).
+Fork copies a process with threads (2 after ``import numpy``, OpenBLAS's; 5 once pxr has run,
+as it does here when writing), which POSIX leaves to deadlock in the child, Python 3.12 warns
+about, and macOS and Windows do not offer. Forkserver and spawn import the caller's
+``__main__`` again in the child (every user script would need an ``if __name__ ==
+"__main__"`` guard), and their preloads are global state of multiprocessing. A subprocess gets
+the caller's ``sys.path``, its own stderr and exit status, and the same code on every system,
+for about 0.3 s more per read than in process, which the 1 s target allows. Where
+``sys.executable`` cannot run Python (a frozen application) the read runs in process.
+
+Writing is not isolated: the data is ours, and the library only re-reads what it just wrote.
+"""
+
+from __future__ import annotations
+
+import base64
+import contextlib
+import importlib
+import importlib.util
+import io
+import json
+import math
+import os
+import pickle
+import signal
+import subprocess
+import sys
+import tempfile
+import traceback
+from collections.abc import Callable, Iterable
+from pathlib import Path
+from typing import IO, Any
+
+import numpy as np
+
+from .. import errors
+from ..errors import InputError
+from ..optional import import_optional
+from ..sequence import MeshSequence
+from .registry import ReadOptions
+
+GIB = 2**30
+#: The address space a reading child may add to what its interpreter and libraries take.
+MEMORY_BASE = 2 * GIB
+#: ... plus this many times the file's size.
+MEMORY_PER_BYTE = 16
+#: The wall-clock time a read may take: this many seconds...
+TIMEOUT_BASE = 60.0
+#: ... plus one second per this many bytes of file (a slow network disk).
+TIMEOUT_BYTES_PER_SECOND = 8 * 2**20
+MEMORY_VARIABLE = "TUCKERCODEC_READ_MEMORY_GIB"
+TIMEOUT_VARIABLE = "TUCKERCODEC_READ_TIMEOUT"
+#: Thread pools the child does not need, which would reserve address space per core
+#: (glibc's malloc arenas, OpenBLAS's buffers, pxr's workers): one each. The user's own
+#: settings win.
+_CHILD_ENVIRONMENT = {"MALLOC_ARENA_MAX": "2"} | dict.fromkeys(
+    ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "PXR_WORK_THREAD_LIMIT"), "1"
+)
+#: What the child runs: the caller's import path, then :func:`_child`.
+_BOOTSTRAP = (
+    "import json, sys; sys.path[:] = json.loads(sys.argv[1])['sys_path']; "
+    "from tuckercodec.io.isolation import _child; _child(sys.argv[1])"
+)
+#: How Windows reports a crash: the NTSTATUS exit codes of the usual ones.
+_WINDOWS_CRASHES = {0xC0000005: "an access violation", 0xC00000FD: "a stack overflow"}
+#: In the child: where :func:`note` writes (the result file); None in any other process.
+_notes: IO[bytes] | None = None
+
+
+def read_isolated(
+    reader: Callable[[Path, ReadOptions], MeshSequence],
+    path: Path,
+    options: ReadOptions,
+    library: str,
+    extra: str,
+    preload: Iterable[str] = (),
+) -> MeshSequence:
+    """``reader(path, options)`` run in a child process (see the module docstring).
+
+    Args:
+        reader: a module-level function of the package (the child imports it by name).
+        library: the library's name for messages: "Alembic" gives "the Alembic library
+            crashed reading it", and "reading Alembic files needs..." when it is missing.
+        extra: the extra that installs it.
+        preload: the modules the reader imports, imported in the child before its memory is
+            capped, and looked for here first: a missing one is a DependencyError without
+            starting a process.
+
+    Raises:
+        InputError: what the reader raised, or the crash, memory or time that stopped it.
+        DependencyError: what the reader raised, or a ``preload`` module that is absent.
+        RuntimeError: the child could not start, or the reader failed for a reason other
+            than the file (a bug): the child's traceback is in the message.
+    """
+    preload = tuple(preload)
+    for module in filter(_absent, preload):
+        import_optional(module, extra, f"reading {library} files")  # DependencyError
+    if not sys.executable or getattr(sys, "frozen", False):
+        return reader(path, options)  # no interpreter to start: see the module docstring
+    memory, timeout = _limits(path)
+    request = {
+        "sys_path": [entry for entry in sys.path if isinstance(entry, str)],
+        "reader": f"{reader.__module__}:{reader.__qualname__}",
+        "path": os.fspath(path),
+        "options": {
+            name: None if value is None else (os.fspath(value) if name == "faces" else value)
+            for name, value in vars(options).items()
+        },
+        "preload": preload,
+        "memory": memory,
+        "alarm": None if timeout is None else math.ceil(timeout) + 10,
+        "parent": os.getpid(),
+    }
+    with tempfile.TemporaryFile() as result, tempfile.TemporaryFile() as stderr:
+        returncode = _run(request, result, stderr, timeout)
+        result.seek(0)
+        stderr.seek(max(0, stderr.seek(0, io.SEEK_END) - 4096))
+        said = [line.strip() for line in stderr.read().decode(errors="replace").splitlines()]
+        said = [line for line in said if line]
+        return _outcome(result, returncode, said, path, library, memory, timeout)
+
+
+def note(where: str, frame: int | None = None) -> None:
+    """Tell the caller what the reader reads now (``"object /a/aShape"``, and the frame), for
+    the error should the library crash there. Does nothing outside a reading child."""
+    if _notes is not None:
+        _send({"note": where, "frame": frame})
+
+
+def _absent(module: str) -> bool:
+    """Whether ``module`` cannot be imported, found without importing it where possible."""
+    if module in sys.modules:
+        return sys.modules[module] is None
+    try:
+        return importlib.util.find_spec(module.partition(".")[0]) is None
+    except (ImportError, ValueError):
+        return True
+
+
+def _limit(variable: str, default: float) -> float | None:
+    """The limit an environment variable sets (0: none), else ``default``."""
+    text = os.environ.get(variable, "").strip()
+    if not text:
+        return default
+    try:
+        value = float(text)
+    except ValueError:
+        value = -1.0
+    if not (math.isfinite(value) and value >= 0):
+        raise ValueError(f"{variable} must be a number >= 0 (0: no limit), got {text!r}")
+    return value or None
+
+
+def _limits(path: Path) -> tuple[int | None, float | None]:
+    """The address space (bytes) and wall-clock time (s) the child may take for this file."""
+    try:
+        size = os.stat(path).st_size
+    except OSError:
+        size = 0  # the reader will say why
+    gib = _limit(MEMORY_VARIABLE, (MEMORY_BASE + MEMORY_PER_BYTE * size) / GIB)
+    timeout = _limit(TIMEOUT_VARIABLE, TIMEOUT_BASE + size / TIMEOUT_BYTES_PER_SECOND)
+    return (None if gib is None else int(gib * GIB)), timeout
+
+
+def _run(
+    request: dict[str, Any], result: IO[bytes], stderr: IO[bytes], timeout: float | None
+) -> int | None:
+    """Run the child to its end; its exit status, or None if it ran out of time."""
+    environment = {**_CHILD_ENVIRONMENT, **os.environ}
+    environment.pop("PYTHONINSPECT", None)  # would wait at a prompt once the child is done
+    command = [sys.executable, "-P", "-c", _BOOTSTRAP, json.dumps(request)]
+    child = subprocess.Popen(
+        command, stdin=subprocess.DEVNULL, stdout=result, stderr=stderr, env=environment
+    )
+    try:
+        return child.wait(timeout)
+    except subprocess.TimeoutExpired:
+        return None
+    finally:  # out of time, Ctrl-C, SIGTERM raised as an exception: no child left behind
+        if child.returncode is None:
+            child.kill()
+            child.wait()
+
+
+def _outcome(
+    result: IO[bytes],
+    returncode: int | None,
+    said: list[str],
+    path: Path,
+    library: str,
+    memory: int | None,
+    timeout: float | None,
+) -> MeshSequence:
+    """The sequence the child sent, or the exception that says how it ended."""
+    where, frame, started = None, None, False
+    header: dict[str, Any] = {}
+    for line in iter(lambda: result.readline(1 << 20), b""):
+        try:
+            message = json.loads(line)
+        except ValueError:  # torn: the child died while writing it
+            break
+        if "note" in message:
+            where, frame = message["note"], message["frame"]
+        started = started or "started" in message
+        if "result" in message:
+            header = message if returncode == 0 else {}  # believe only a clean exit
+            break
+    kind = header.get("result")
+    if kind == "sequence":
+        try:
+            return _sequence(result, header, path)
+        except (ValueError, OSError, EOFError) as error:  # cut short: the child's disk full?
+            raise RuntimeError(f"{path}: the reading process sent half a result: {error}") from None
+    if kind == "error":
+        raised = _ErrorUnpickler(io.BytesIO(base64.b64decode(header["pickle"]))).load()
+        if isinstance(raised, errors.TuckerCodecError):
+            raise raised
+    if kind in ("bug", "error"):
+        detail = header.get("traceback", "an error that is not tuckercodec's")
+        raise RuntimeError(f"{path}: reading it failed in a child process:\n{detail}")
+    last = f" (it printed: {said[-1][:200]})" if said else ""
+    if returncode is not None and not started:
+        raise RuntimeError(
+            f"{path}: could not start a process to read it with {sys.executable} "
+            f"(exit status {returncode}){last}"
+        )
+    if kind == "memory" or any("bad_alloc" in line for line in said):
+        limit = "there is memory for"  # no cap: none asked for, or not Linux (_cap_memory)
+        if memory is not None and os.path.exists("/proc/self/statm"):
+            limit = f"{memory / GIB:.3g} GiB allows (the memory limit of a read: {MEMORY_VARIABLE})"
+        reason = f"declares more data than {limit}"
+    elif returncode is None:
+        reason = (
+            f"the {library} library did not finish reading it in {timeout:g} s: the file is "
+            f"damaged or far larger than it looks (the time limit of a read: {TIMEOUT_VARIABLE})"
+        )
+    else:
+        how = _how(returncode)
+        reason = f"the {library} library crashed reading it ({how}): the file is damaged{last}"
+    raise InputError(f"{where}: {reason}" if where else reason, path=path, frame=frame)
+
+
+def _how(returncode: int) -> str:
+    """A crashed child's exit status in words: the signal's name, or Windows's crash code."""
+    if returncode < 0:
+        try:
+            return signal.Signals(-returncode).name
+        except ValueError:
+            return f"signal {-returncode}"
+    return _WINDOWS_CRASHES.get(returncode, f"exit status {returncode}")
+
+
+def _sequence(result: IO[bytes], header: dict[str, Any], path: Path) -> MeshSequence:
+    """The sequence whose arrays follow the header in the result file."""
+    arrays = [np.lib.format.read_array(result, allow_pickle=False) for _ in header["arrays"]]
+    named = dict(zip(header["arrays"], arrays, strict=True))
+    try:
+        return MeshSequence(
+            named["vertices"],
+            named["faces"],
+            frame_names=header["frame_names"],
+            frame_rate=header["frame_rate"],
+            time_codes=named.get("time_codes"),
+        )
+    except InputError as error:
+        raise InputError(error.reason, path=path, frame=error.frame) from None
+
+
+class _ErrorUnpickler(pickle.Unpickler):
+    """Unpickles tuckercodec's errors and nothing else: no other class or function runs."""
+
+    def find_class(self, module: str, name: str) -> Any:
+        found = getattr(errors, name, None) if module == errors.__name__ else None
+        if found is errors._rebuild or (
+            isinstance(found, type) and issubclass(found, errors.TuckerCodecError)
+        ):
+            return found
+        raise pickle.UnpicklingError(f"{module}.{name} is not an error of tuckercodec")
+
+
+# ------------------------------------------------------------------------------------------
+# the child
+
+
+def _child(argument: str) -> None:
+    """The child's whole life: read, write the outcome to stdout, exit (never returns)."""
+    request = json.loads(argument)
+    global _notes
+    _notes = os.fdopen(os.dup(1), "wb", buffering=0)  # unbuffered: notes survive a crash
+    os.dup2(2, 1)  # what the libraries print to stdout goes with their stderr
+    try:
+        _guard(request)
+        module, _, name = request["reader"].partition(":")
+        reader = getattr(importlib.import_module(module), name)
+        for library in request["preload"]:  # their own mappings are not the file's doing
+            with contextlib.suppress(ImportError):  # the reader raises DependencyError
+                importlib.import_module(library)
+        _cap_memory(request["memory"])
+        _send({"started": True})
+        options = dict(request["options"])
+        if options["faces"] is not None:
+            options["faces"] = Path(options["faces"])
+        _send_sequence(reader(Path(request["path"]), ReadOptions(**options)))
+    except errors.TuckerCodecError as error:
+        pickled = base64.b64encode(pickle.dumps(error)).decode()
+        _send(_memory(error) or {"result": "error", "pickle": pickled})
+    except BaseException as error:
+        _send(_memory(error) or {"result": "bug", "traceback": traceback.format_exc()})
+    os._exit(0)  # skip the libraries' static destructors: a damaged file may have upset them
+
+
+def _send(message: dict[str, Any]) -> None:
+    """One line of the child's output: a note, or the result's header."""
+    assert _notes is not None
+    _notes.write(json.dumps(message).encode() + b"\n")
+
+
+def _guard(request: dict[str, Any]) -> None:
+    """Signals and limits of the child: Ctrl-C is the caller's to handle (it kills us), no
+    core dump of a crash, death with the caller (Linux) or after the time allowed."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        import resource
+
+        resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
+    except (ImportError, ValueError, OSError):
+        pass  # Windows: no core files to keep from the disk
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGKILL, 0, 0, 0)  # PR_SET_PDEATHSIG: die with the caller
+        if os.getppid() != request["parent"]:  # the caller died before prctl
+            os._exit(1)
+    if request["alarm"] is not None and hasattr(signal, "alarm"):
+        signal.alarm(request["alarm"])  # SIGALRM's default ends the process, even mid-library
+
+
+def _cap_memory(memory: int | None) -> None:
+    """Let the child's address space grow by ``memory`` bytes from here, where the system
+    says how large it is (Linux)."""
+    if memory is None:
+        return
+    try:
+        import resource
+
+        with open("/proc/self/statm", "rb") as statm:
+            now = int(statm.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
+        _, hard = resource.getrlimit(resource.RLIMIT_AS)
+        cap = now + memory if hard == resource.RLIM_INFINITY else min(hard, now + memory)
+        resource.setrlimit(resource.RLIMIT_AS, (cap, hard))
+    except (ImportError, OSError, ValueError, IndexError):
+        pass  # not Linux: isolated, without a cap
+
+
+def _memory(error: BaseException) -> dict[str, Any] | None:
+    """The "memory" outcome if the error, or one it was raised from, is a failed allocation."""
+    seen: BaseException | None = error
+    for _ in range(8):
+        if seen is None:
+            return None
+        try:
+            text = str(seen)
+        except Exception:
+            text = ""
+        if isinstance(seen, MemoryError) or "bad_alloc" in text:
+            return {"result": "memory"}
+        seen = seen.__cause__ or seen.__context__
+    return None
+
+
+def _send_sequence(seq: MeshSequence) -> None:
+    """Write the sequence: its header line, then its arrays in ``.npy`` format."""
+    arrays = {"vertices": seq.vertices, "faces": seq.faces}
+    if seq.time_codes is not None:
+        arrays["time_codes"] = seq.time_codes
+    header = {
+        "result": "sequence",
+        "arrays": list(arrays),
+        "frame_names": seq.frame_names,
+        "frame_rate": seq.frame_rate,
+    }
+    _send(header)
+    for array in arrays.values():
+        np.lib.format.write_array(_notes, array, allow_pickle=False)  # type: ignore[arg-type]
