@@ -29,9 +29,8 @@ Reading:
 * Positions are read as stored, in the object's own space: no Xform is applied (see
   :mod:`.usd` for why).
 * A file Alembic cannot read, a sample whose point count differs, NaN or Inf are
-  :class:`InputError`\\ s naming the file, the object and the frame. The library allocates what
-  the file declares, and a few damaged files crash it (4 of 600 random mutations of a small
-  archive, in IPolyMeshSchema reads): neither can be guarded against in this process.
+  :class:`InputError`\\ s naming the file, the object and the frame; so are the library's crashes
+  and runaway allocations on damaged files, as it reads in a child process (:mod:`.isolation`).
 
 Writing: an Ogawa archive holding an Xform ``/<name>`` (identity) and a PolyMesh
 ``/<name>/<name>Shape`` named after the file (``horse.abc`` gives ``/horse/horseShape``): the
@@ -60,6 +59,7 @@ from ..errors import InputError
 from ..optional import import_optional
 from ..reading import open_regular_file
 from ..sequence import DEFAULT_FRAME_RATE, MeshSequence
+from .isolation import note, read_isolated
 from .polygons import faces_from_polygons, polygons_from_faces, reverse_winding
 from .registry import ReadOptions, SequenceFormat, WriteOptions
 from .usd import listing, prim_name
@@ -74,16 +74,14 @@ CODES_KEY = "tuckercodec_time_codes"
 _LIBRARY_ERRORS = (RuntimeError, UnicodeError, MemoryError, OverflowError)
 #: The first bytes of an HDF5 file: an Alembic archive of the old back end.
 _HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+#: The modules of alembic3d (and the imath it brings) that :func:`_alembic` returns.
+_MODULES = ("alembic3d.Abc", "alembic3d.AbcGeom", "alembic3d.AbcCoreAbstract", "imath")
 
 
 def _alembic(purpose: str) -> SimpleNamespace:
     """The alembic3d modules (and the imath they bring), or DependencyError naming the extra."""
-    return SimpleNamespace(
-        Abc=import_optional("alembic3d.Abc", "alembic", purpose),
-        AbcGeom=import_optional("alembic3d.AbcGeom", "alembic", purpose),
-        AbcA=import_optional("alembic3d.AbcCoreAbstract", "alembic", purpose),
-        imath=import_optional("imath", "alembic", purpose),
-    )
+    Abc, AbcGeom, AbcA, imath = (import_optional(name, "alembic", purpose) for name in _MODULES)
+    return SimpleNamespace(Abc=Abc, AbcGeom=AbcGeom, AbcA=AbcA, imath=imath)
 
 
 def _message(error: BaseException) -> str:
@@ -93,7 +91,12 @@ def _message(error: BaseException) -> str:
 
 
 def read_alembic(path: Path, options: ReadOptions) -> MeshSequence:
-    """A sequence from the position samples of a PolyMesh (see the module docstring)."""
+    """A PolyMesh's position samples (see the module docstring), read in a child process."""
+    return read_isolated(_read_archive, path, options, "Alembic", "alembic", _MODULES)
+
+
+def _read_archive(path: Path, options: ReadOptions) -> MeshSequence:
+    """:func:`read_alembic` in this process."""
     abc = _alembic("reading Alembic files")
     try:
         with open_regular_file(path, "an Alembic archive") as stream:
@@ -183,6 +186,7 @@ def _read_mesh(
     ]
     vertices: np.ndarray | None = None
     for frame, selector in enumerate(selectors):
+        note(where, frame)  # where the library crashed, if it does
         try:
             sample = np.asarray(positions.getValue(selector))
         except _LIBRARY_ERRORS as error:
@@ -215,6 +219,7 @@ def _read_mesh(
             )
         vertices[frame] = sample
     assert vertices is not None  # count >= 1
+    note(where)  # the faces, read from every sample if they may change
     faces = _faces(schema, selectors, times, vertices.shape[1], where, path)
     rate = _frame_rate(abc, archive, sampling)
     codes = _kept_codes(abc, schema, codes_from_times(times, rate or DEFAULT_FRAME_RATE))

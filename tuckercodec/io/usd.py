@@ -29,7 +29,9 @@ Reading:
   pxr's warnings are kept from the terminal. What pxr allocates while it reads is out of our
   hands: it checks the byte ranges of uncompressed arrays against the file, but a crafted
   ``.usdc`` can declare a compressed integer array (the faces) of any length, which pxr
-  allocates before the data is found short.
+  allocates before the data is found short (8 GiB in 27 s for 2^31 indices in a 1 KB file).
+  So the file is read in a child process (:mod:`.isolation`) whose memory and time are
+  capped, and which may crash without taking the caller along: each is an InputError.
 
 Writing: a stage with ``upAxis`` Y, ``metersPerUnit`` 0.01 (USD's fallback, authored only
 because usdchecker requires it: the file means what an unauthored one would), ``defaultPrim``
@@ -40,7 +42,7 @@ sampled at the sequence's time codes, its faces as counts and indices, and
 sequence without one, which then reads back at 24) with ``startTimeCode``/``endTimeCode``.
 ``.usda`` is text; ``.usdc`` and ``.usd`` are binary crate files. The file is written to a
 hidden temporary name beside the target and put in place when complete
-(:func:`~tuckercodec.atomic.atomic_path`).
+(:func:`~tuckercodec.atomic.atomic_path`). Writing runs in this process: the data is ours.
 """
 
 from __future__ import annotations
@@ -59,6 +61,7 @@ from ..errors import InputError
 from ..optional import import_optional
 from ..reading import open_regular_file
 from ..sequence import DEFAULT_FRAME_RATE, MeshSequence
+from .isolation import note, read_isolated
 from .polygons import faces_from_polygons, polygons_from_faces, reverse_winding
 from .registry import ReadOptions, SequenceFormat, WriteOptions
 
@@ -68,11 +71,14 @@ ROOT = "/Root"
 _LISTED = 8
 
 
+#: The pxr modules this format uses.
+_MODULES = ("Usd", "UsdGeom", "Sdf", "Tf", "Vt", "UsdUtils")
+
+
 def _pxr(purpose: str) -> SimpleNamespace:
     """The pxr modules this format uses, or DependencyError naming the ``usd`` extra."""
-    names = ("Usd", "UsdGeom", "Sdf", "Tf", "Vt", "UsdUtils")
     return SimpleNamespace(
-        **{name: import_optional(f"pxr.{name}", "usd", purpose) for name in names}
+        **{name: import_optional(f"pxr.{name}", "usd", purpose) for name in _MODULES}
     )
 
 
@@ -107,7 +113,13 @@ def _tf_message(error: BaseException) -> str:
 
 
 def read_usd(path: Path, options: ReadOptions) -> MeshSequence:
-    """A sequence from the time-sampled points of a UsdGeomMesh (see the module docstring)."""
+    """A UsdGeomMesh's time-sampled points (see the module docstring), read in a child process."""
+    modules = [f"pxr.{name}" for name in _MODULES]
+    return read_isolated(_read_stage, path, options, "USD", "usd", modules)
+
+
+def _read_stage(path: Path, options: ReadOptions) -> MeshSequence:
+    """:func:`read_usd` in this process."""
     pxr = _pxr("reading USD files")
     try:
         open_regular_file(path, "a USD file").close()  # a folder or a pipe: a clear error
@@ -194,6 +206,7 @@ def _read_mesh(pxr: SimpleNamespace, stage: Any, prim: Any, path: Path) -> MeshS
     vertices: np.ndarray | None = None
     for frame, time in enumerate(frame_times):
         label = f"time code {time}" if times else "its default value"
+        note(where, frame)  # where the library crashed, if it does
         try:
             value = points.Get(time)
         except _errors(pxr) as error:
@@ -214,6 +227,7 @@ def _read_mesh(pxr: SimpleNamespace, stage: Any, prim: Any, path: Path) -> MeshS
             )
         vertices[frame] = positions
     assert vertices is not None  # frame_times is never empty
+    note(where)  # the faces, read from every frame if they may change
     faces = _faces(pxr, mesh, frame_times, times, vertices.shape[1], where, path)
     rate = float(stage.GetTimeCodesPerSecond())
     if not (np.isfinite(rate) and rate > 0):
