@@ -150,7 +150,7 @@ def read_isolated(
         result.seek(0)
         stderr.seek(max(0, stderr.seek(0, io.SEEK_END) - 4096))
         said = [line.strip() for line in stderr.read().decode(errors="replace").splitlines()]
-        said = [line for line in said if line]
+        said = [line for line in said if line and not line[0] == line[-1] == "#"]  # pxr's banners
         return _outcome(result, returncode, said, path, library, memory, timeout)
 
 
@@ -269,18 +269,19 @@ def _outcome(
             f"damaged or far larger than it looks (the time limit of a read: {TIMEOUT_VARIABLE})"
         )
     else:
+        given = os.environ.get(MEMORY_VARIABLE, "").strip()  # a low cap can crash pxr too
+        given = f", or {MEMORY_VARIABLE}={given} is too little" if given and memory else ""
         how = _how(returncode)
-        reason = f"the {library} library crashed reading it ({how}): the file is damaged{last}"
+        reason = f"the {library} library crashed reading it ({how}): the file is damaged{given}"
+        reason += last
     raise InputError(f"{where}: {reason}" if where else reason, path=path, frame=frame)
 
 
 def _how(returncode: int) -> str:
     """A crashed child's exit status in words: the signal's name, or Windows's crash code."""
     if returncode < 0:
-        try:
+        with contextlib.suppress(ValueError):
             return signal.Signals(-returncode).name
-        except ValueError:
-            return f"signal {-returncode}"
     return _WINDOWS_CRASHES.get(returncode, f"exit status {returncode}")
 
 
