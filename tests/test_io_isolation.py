@@ -5,6 +5,7 @@ they were raised; no child outlives its read, nor its caller."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import random
 import signal
@@ -38,7 +39,8 @@ def children() -> set[int]:
     """The processes this one started that still exist (Linux's /proc)."""
     found: set[int] = set()
     for task in Path("/proc/self/task").iterdir():
-        found |= {int(pid) for pid in (task / "children").read_text().split()}
+        with contextlib.suppress(FileNotFoundError, ProcessLookupError):  # a thread that ended
+            found |= {int(pid) for pid in (task / "children").read_text().split()}
     return found
 
 
