@@ -170,3 +170,15 @@ def test_a_file_name_no_format_writes_is_refused_not_made_a_folder(wave, tmp_pat
         save_sequence(load_sequence(wave), tmp_path / name)
     with pytest.raises(ValueError, match=r"one \.tkc file"):  # encode_file writes those
         save_sequence(load_sequence(wave), tmp_path / "out.tkc")
+
+
+@pytest.mark.parametrize("suffix", [".usdc", ".abc", ".pc2", ".glb"])
+def test_a_position_beyond_float32_is_refused_by_every_float32_writer(tmp_path, suffix):
+    pytest.importorskip("pxr" if suffix == ".usdc" else "numpy", reason="usd-core is absent")
+    pytest.importorskip("alembic3d" if suffix == ".abc" else "numpy", reason="no alembic3d")
+    vertices = wave_sequence(3, 3)
+    vertices[2, 4, 1] = 1e39  # a float64 that float32 would make infinite
+    seq = MeshSequence(vertices, grid_faces(3))
+    with pytest.raises(InputError, match="frame 2: vertex 4 is beyond the range of float32"):
+        save_sequence(seq, tmp_path / f"far{suffix}")
+    assert list(tmp_path.iterdir()) == []  # nothing written, not even a temporary file

@@ -46,7 +46,6 @@ samples, and put in place when complete (:func:`~tuckercodec.atomic.atomic_path`
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
@@ -58,17 +57,21 @@ from ..atomic import atomic_path
 from ..errors import InputError
 from ..optional import import_optional
 from ..reading import open_regular_file
-from ..sequence import DEFAULT_FRAME_RATE, MeshSequence
+from ..sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_vertices
+from .alembic_time import (
+    CODES_KEY,
+    RATE_KEY,
+    check_times,
+    codes_from_times,
+    frame_rate,
+    kept_codes,
+    time_sampling,
+)
 from .isolation import note, read_isolated
 from .polygons import faces_from_polygons, polygons_from_faces, reverse_winding
 from .registry import ReadOptions, SequenceFormat, WriteOptions
 from .usd import listing, prim_name
 
-#: The archive metadata key that holds the exact frame rate (the DCC FPS key keeps 6 decimals).
-RATE_KEY = "tuckercodec_frame_rate"
-#: The mesh's user property that holds the exact time codes, written only where no sample
-#: times give them back exactly (time x rate cannot reach every float).
-CODES_KEY = "tuckercodec_time_codes"
 #: What alembic3d raises on a damaged archive: Alembic's exceptions (RuntimeError), names and
 #: metadata that are not UTF-8, and a size it cannot allocate.
 _LIBRARY_ERRORS = (RuntimeError, UnicodeError, MemoryError, OverflowError)
@@ -179,7 +182,7 @@ def _read_mesh(
         raise InputError(f"{where}: has no position samples", path=path)
     sampling = positions.getTimeSampling()
     times = np.array([sampling.getSampleTime(index) for index in range(count)], dtype=float)
-    _check_times(sampling, times, where, path)
+    check_times(sampling, times, where, path)
     selectors = [
         abc.Abc.ISampleSelector(time, abc.Abc.ISampleSelector.TimeIndexType.kNearIndex)
         for time in times.tolist()
@@ -221,36 +224,12 @@ def _read_mesh(
     assert vertices is not None  # count >= 1
     note(where)  # the faces, read from every sample if they may change
     faces = _faces(schema, selectors, times, vertices.shape[1], where, path)
-    rate = _frame_rate(abc, archive, sampling)
-    codes = _kept_codes(abc, schema, codes_from_times(times, rate or DEFAULT_FRAME_RATE))
+    rate = frame_rate(abc, archive, sampling)
+    codes = kept_codes(abc, schema, codes_from_times(times, rate or DEFAULT_FRAME_RATE))
     try:
         return MeshSequence(vertices, faces, frame_rate=rate, time_codes=codes)
     except InputError as error:
         raise InputError(f"{where}: {error.reason}", path=path, frame=error.frame) from None
-
-
-def _check_times(sampling: Any, times: np.ndarray, where: str, path: Path) -> None:
-    """Refuse sample times that do not increase, or that do not select their own sample."""
-    bad = np.flatnonzero(~np.isfinite(times))
-    if bad.size:
-        frame = int(bad[0])
-        raise InputError(f"{where}: sample {frame} has the time {times[frame]}", path=path)
-    steps = np.flatnonzero(np.diff(times) <= 0)
-    if steps.size:
-        frame = int(steps[0]) + 1
-        raise InputError(
-            f"{where}: the time of sample {frame} ({times[frame]} s) does not follow sample "
-            f"{frame - 1}'s ({times[frame - 1]} s)",
-            path=path,
-            frame=frame,
-        )
-    for frame, time in enumerate(times.tolist()):
-        if sampling.getNearIndex(time, len(times)) != frame:  # a read by time would miss it
-            raise InputError(
-                f"{where}: the time of sample {frame} ({time} s) selects another sample",
-                path=path,
-                frame=frame,
-            )
 
 
 def _faces(
@@ -284,64 +263,14 @@ def _faces(
         raise InputError(f"{where}: {error.reason}", path=path) from None
 
 
-def _frame_rate(abc: SimpleNamespace, archive: Any, sampling: Any) -> float | None:
-    """Frames per second: ours, the DCC's, or the uniform sampling's (module docstring)."""
-    metadata = archive.getTop().getMetaData()
-    for key, tolerance in ((RATE_KEY, 0.0), ("_ai_DCC_FPS", 5e-7)):  # DCC FPS: 6 decimals
-        try:
-            rate = float(metadata.get(key))
-        except (TypeError, ValueError):
-            continue
-        if math.isfinite(rate) and rate > 0:
-            return _usual_rate(rate, tolerance)
-    kind = sampling.getTimeSamplingType()
-    if not kind.isUniform() or not kind.getTimePerCycle() > 0:
-        return None
-    rate = 1.0 / kind.getTimePerCycle()
-    return _usual_rate(rate, 1e-9 * rate) if math.isfinite(rate) else None
-
-
-def _usual_rate(rate: float, tolerance: float) -> float:
-    """A whole or NTSC (n*1000/1001) rate within ``tolerance`` of ``rate``, else ``rate``."""
-    for candidate in (float(round(rate)), round(rate * 1.001) * 1000 / 1001):
-        if candidate > 0 and abs(rate - candidate) <= tolerance:
-            return candidate
-    return rate
-
-
-def _kept_codes(abc: SimpleNamespace, schema: Any, codes: np.ndarray) -> np.ndarray:
-    """The exact time codes tuckercodec kept beside the times (:data:`CODES_KEY`), where they
-    agree with the times, else ``codes``."""
-    user = schema.getUserProperties()
-    header = user.getPropertyHeader(CODES_KEY) if user.valid() else None
-    if header is None or not abc.Abc.IDoubleArrayProperty.matches(header):
-        return codes
-    kept = np.asarray(abc.Abc.IDoubleArrayProperty(user, CODES_KEY).getValue(), dtype=np.float64)
-    if kept.shape != codes.shape or not np.all(
-        np.abs(kept - codes) <= 1e-6 * np.maximum(1.0, np.abs(codes))
-    ):
-        return codes  # stale or foreign: the times are what the file says
-    return kept
-
-
-def codes_from_times(times: np.ndarray, rate: float) -> np.ndarray:
-    """Time codes of sample times: time x rate, a value within a few units in the last place
-    of a multiple of 1e-6 taken as that multiple, so that frame numbers come out whole (the
-    multiplication and the sampling's own arithmetic round by an ulp or two)."""
-    codes = np.asarray(times, dtype=np.float64) * rate
-    snapped = np.round(codes, 6)
-    close = np.abs(codes - snapped) <= 16 * np.spacing(np.abs(codes))
-    return np.where(close, snapped, codes)
-
-
 def write_alembic(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
     """Write the sequence as an Ogawa Alembic archive (see the module docstring), atomically."""
     abc = _alembic("writing Alembic files")
-    rate = seq.frame_rate or DEFAULT_FRAME_RATE
-    name = prim_name(path.stem)
+    rate, name = seq.frame_rate or DEFAULT_FRAME_RATE, prim_name(path.stem)
+    positions = float32_vertices(seq, path)  # an infinity is refused, not written
     with atomic_path(path, overwrite=options.overwrite) as temporary:
         try:
-            _write_archive(abc, seq, temporary, name, rate)
+            _write_archive(abc, seq, positions, temporary, name, rate)
             written = _written_samples(abc, temporary, f"/{name}/{name}Shape")
         except _LIBRARY_ERRORS as error:
             raise OSError(f"{path}: Alembic could not write it: {_message(error)}") from None
@@ -353,7 +282,12 @@ def write_alembic(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
 
 
 def _write_archive(
-    abc: SimpleNamespace, seq: MeshSequence, path: Path, name: str, rate: float
+    abc: SimpleNamespace,
+    seq: MeshSequence,
+    positions: np.ndarray,
+    path: Path,
+    name: str,
+    rate: float,
 ) -> None:
     """Write the archive; it is complete once every object is released, on return."""
     metadata = abc.AbcA.MetaData()
@@ -362,7 +296,7 @@ def _write_archive(
         str(path), rate, f"tuckercodec {__version__}", "", abc.Abc.Argument(metadata)
     )
     codes = seq.codes()
-    sampling, exact = _time_sampling(abc, codes, rate)
+    sampling, exact = time_sampling(abc, codes, rate)
     xform = abc.AbcGeom.OXform(archive.getTop(), name)
     xform.getSchema().set(abc.AbcGeom.XformSample())  # identity, constant
     mesh = abc.AbcGeom.OPolyMesh(xform, f"{name}Shape", archive.addTimeSampling(sampling))
@@ -371,7 +305,6 @@ def _write_archive(
         kept = abc.Abc.ODoubleArrayProperty(schema.getUserProperties(), CODES_KEY)
         kept.setValue(abc.imath.DoubleArrayFromBuffer(codes))
     counts, indices = polygons_from_faces(reverse_winding(seq.faces))
-    positions = seq.vertices.astype(np.float32)
     for frame in range(seq.frame_count):
         points = abc.imath.V3fArrayFromBuffer(positions[frame])  # a copy
         if frame == 0:
@@ -389,23 +322,6 @@ def _written_samples(abc: SimpleNamespace, path: Path, name: str) -> int:
         return 0
     schema = abc.AbcGeom.IPolyMesh(meshes[name], abc.Abc.WrapExistingFlag.kWrapExisting)
     return int(schema.getSchema().getPositionsProperty().getNumSamples())
-
-
-def _time_sampling(abc: SimpleNamespace, codes: np.ndarray, rate: float) -> tuple[Any, bool]:
-    """A uniform time sampling if it gives back exactly these codes, else an acyclic one; and
-    whether its times give back the codes exactly."""
-    AbcA = abc.AbcA
-    start = float(codes[0]) / rate
-    step = (float(codes[1]) - float(codes[0])) / rate if len(codes) > 1 else 1.0 / rate
-    # what Alembic's TimeSampling::getSampleTime computes for a uniform sampling
-    uniform = start + step * np.arange(len(codes), dtype=np.float64)
-    if step > 0 and np.array_equal(codes_from_times(uniform, rate), codes):
-        return AbcA.TimeSampling(step, start), True
-    times = codes / rate
-    vector = AbcA.TimeVector()
-    vector.extend(times.tolist())
-    kind = AbcA.TimeSamplingType(AbcA.AcyclicFlag.kAcyclic)
-    return AbcA.TimeSampling(kind, vector), np.array_equal(codes_from_times(times, rate), codes)
 
 
 FORMAT = SequenceFormat(

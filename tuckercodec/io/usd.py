@@ -60,7 +60,7 @@ from ..atomic import atomic_path
 from ..errors import InputError
 from ..optional import import_optional
 from ..reading import open_regular_file
-from ..sequence import DEFAULT_FRAME_RATE, MeshSequence
+from ..sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_vertices
 from .isolation import note, read_isolated
 from .polygons import faces_from_polygons, polygons_from_faces, reverse_winding
 from .registry import ReadOptions, SequenceFormat, WriteOptions
@@ -324,8 +324,9 @@ def prim_name(stem: str) -> str:
 def write_usd(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
     """Write the sequence as a USD stage (see the module docstring), atomically."""
     pxr = _pxr("writing USD files")
+    positions = float32_vertices(seq, path)  # an infinity is refused, not written
     with _quiet(pxr):
-        stage = _stage(pxr, seq, prim_name(path.stem))
+        stage = _stage(pxr, seq, positions, prim_name(path.stem))
         # ".usd" may hold either encoding (USD_DEFAULT_FILE_FORMAT picks one): ask for crate
         arguments = {"format": "usdc"} if path.suffix.lower() == ".usd" else {}
         with atomic_path(path, overwrite=options.overwrite) as temporary:
@@ -337,8 +338,9 @@ def write_usd(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
                 raise OSError(f"{path}: USD could not write it")
 
 
-def _stage(pxr: SimpleNamespace, seq: MeshSequence, name: str) -> Any:
-    """An in-memory stage holding the sequence as a time-sampled Mesh under /Root."""
+def _stage(pxr: SimpleNamespace, seq: MeshSequence, vertices: np.ndarray, name: str) -> Any:
+    """An in-memory stage holding the sequence (its float32 ``vertices``) as a time-sampled
+    Mesh under /Root."""
     Usd, UsdGeom, Vt = pxr.Usd, pxr.UsdGeom, pxr.Vt
     stage = Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.y)
@@ -353,7 +355,7 @@ def _stage(pxr: SimpleNamespace, seq: MeshSequence, name: str) -> Any:
     points, extent = mesh.CreatePointsAttr(), mesh.CreateExtentAttr()
     codes = seq.codes()
     for frame, code in enumerate(codes.tolist()):
-        positions = seq.vertices[frame].astype(np.float32)
+        positions = vertices[frame]
         time = Usd.TimeCode(code)
         points.Set(Vt.Vec3fArray.FromNumpy(positions), time)
         bounds = np.stack([positions.min(axis=0), positions.max(axis=0)])
