@@ -1,6 +1,7 @@
 """Benchmark of reading a sequence from each file format (default: horse gallop).
 
-The sequence is written once in every whole-sequence format the registry knows (USD, Alembic,
+The sequence is written once in every whole-sequence format the registry knows, with each of
+its suffixes (USD, Alembic,
 PC2, MDD, glTF, VTK...; a format whose extra is not installed is listed as skipped), then each
 file is read back with ``load_sequence`` ``--repeat`` times after one untimed warm-up that puts
 it in the operating system's cache. Point caches (PC2, MDD) carry no faces and take them from an
@@ -78,10 +79,12 @@ def main(argv: list[str] | None = None) -> int:
         first_frame = MeshSequence(sequence.vertices[:1], sequence.faces)
         save_sequence(first_frame, folder / "faces", progress=False)
         faces_file = next((folder / "faces").glob("*.obj"))
-        for found in formats():
-            if found.write is None:
-                continue
-            path = folder / f"{name}{found.suffixes[0]}"
+        # every suffix: some name another encoding (.usda text, .usdc crate; .gltf JSON, .glb)
+        written = [(f, suffix) for f in formats() if f.write is not None for suffix in f.suffixes]
+        for found, suffix in written:
+            home = folder / suffix.lstrip(".")  # a folder each: what the format writes is all
+            home.mkdir()  # that is in it (a VTK series' frames, XDMF's .h5 beside the .xdmf)
+            path = home / f"{name}{suffix}"
             try:
                 save_sequence(sequence, path, progress=False)
             except DependencyError as error:
@@ -92,11 +95,7 @@ def main(argv: list[str] | None = None) -> int:
                 lambda path=path, options=options: load_sequence(path, **options), args.repeat
             )
             back = load_sequence(path, **options)
-            size = sum(  # the file, and the folder of frames beside it for a VTK series
-                p.stat().st_size
-                for p in folder.rglob("*")
-                if p.is_file() and p.relative_to(folder).parts[0] in (path.name, path.stem)
-            )
+            size = sum(p.stat().st_size for p in home.rglob("*") if p.is_file())
             median = statistics.median(times)
             verdict = "met" if median <= TARGET_SECONDS else "NOT met"
             missed += median > TARGET_SECONDS
