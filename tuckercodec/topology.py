@@ -20,8 +20,6 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-import scipy.sparse as sparse
-from scipy.sparse.csgraph import breadth_first_order, connected_components
 
 from .errors import InputError
 
@@ -145,6 +143,11 @@ def mesh_parents(faces: np.ndarray, vertex_count: int) -> np.ndarray:
     keeps every order the walk depends on, so the graph's size follows the faces, not K (the
     rest costs at most 13 bytes per vertex, the int64 result included).
     """
+    # imported here: scipy.sparse costs about 0.13 s, which every command and every isolated
+    # read would pay at start-up; only the encoder and the decoder need the parents
+    import scipy.sparse as sparse
+    from scipy.sparse.csgraph import breadth_first_order, connected_components
+
     parents = np.full(vertex_count, NO_PARENT, dtype=np.int64)
     a, b = face_edges(faces)
     proper = a != b  # a degenerate face may repeat a vertex
