@@ -182,3 +182,25 @@ def test_a_position_beyond_float32_is_refused_by_every_float32_writer(tmp_path, 
     with pytest.raises(InputError, match="frame 2: vertex 4 is beyond the range of float32"):
         save_sequence(seq, tmp_path / f"far{suffix}")
     assert list(tmp_path.iterdir()) == []  # nothing written, not even a temporary file
+
+
+def test_precision_is_refused_where_the_output_is_not_obj_text(wave, tmp_path, capsys):
+    packed = tmp_path / "w.tkc"
+    assert main(["encode", str(wave), "-o", str(packed), "--kg", "1"]) == 0
+    capsys.readouterr()
+    for argv in (
+        ["decode", str(packed), "-o", str(tmp_path / "w.glb"), "--precision", "5"],
+        ["convert", str(wave), str(tmp_path / "w.abc"), "--precision", "5"],
+    ):
+        assert main(argv) == 2
+        assert "--precision applies to OBJ frames" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["w.tkc", "wave.npz"]
+    assert main(["convert", str(wave), str(tmp_path / "objs"), "--precision", "5"]) == 0
+
+
+@pytest.mark.parametrize("suffix", [".glb", ".gltf", ".pc2", ".mdd", ".pvd", ".xdmf", ".npz"])
+def test_an_empty_file_is_refused_naming_it(tmp_path, suffix):
+    empty = tmp_path / f"empty{suffix}"
+    empty.write_bytes(b"")
+    with pytest.raises(InputError, match=rf"empty\{suffix}: .*(empty|shorter|not)"):
+        load_sequence(empty)

@@ -21,7 +21,7 @@ from ..metrics import (
     kg_error,
 )
 from ..sequence import MeshSequence
-from .inputs import load_input, read_options, sequence_source
+from .inputs import check_precision, load_input, read_options, sequence_source
 
 
 def _print_encode_report(report: EncodeReport) -> None:
@@ -78,6 +78,7 @@ def run_decode(args: argparse.Namespace) -> int:
             path=args.reference,
         )
     output = decoded_output_path(args.output, args.format)
+    check_precision(args.precision, output)
     if is_gltf_output(output):
         return _decode_gltf(args, header, reference, output)
     if args.glb_compress is not None:

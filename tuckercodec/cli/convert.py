@@ -15,7 +15,7 @@ from ..io import FOLDER_FORMAT, format_named, format_of, formats, save_sequence
 from ..io.registry import OPTION_FLAGS
 from ..optional import extra_installed
 from ..sequence import MeshSequence
-from .inputs import load_input
+from .inputs import check_precision, load_input
 
 #: How the parts a format may keep (SequenceFormat.carries) are named to the user.
 _PARTS = {
@@ -34,6 +34,7 @@ def run_convert(args: argparse.Namespace) -> int:
     destination = format_of(args.output)
     if args.output.suffix.lower() == SUFFIX:
         raise ValueError(f"{args.output}: to write a compressed file, use 'tuckercodec encode'")
+    check_precision(args.precision, args.output)
     if destination is not None and destination.write is not None:
         refuse_existing([args.output], args.force)  # before the work, not after it
     start = time.perf_counter()

@@ -1,4 +1,5 @@
-"""What the verbs read: a sequence named on the command line, with its reading options."""
+"""What the verbs read: a sequence named on the command line, with its reading options; and
+the one output option that depends on the format written (--precision)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from typing import Any
 
 from ..decoder import Decoder
 from ..files import SUFFIX, is_compressed_file
-from ..io import load_sequence
+from ..io import format_of, load_sequence
 from ..samples import sample_path
 from ..sequence import MeshSequence
 
@@ -38,3 +39,14 @@ def load_input(source: str, args: argparse.Namespace) -> MeshSequence:
     if is_compressed(source):
         return Decoder(source).sequence()
     return load_sequence(sequence_source(source), progress=source != "sample", **read_options(args))
+
+
+def check_precision(precision: int | None, output: Path) -> None:
+    """Refuse ``--precision`` for an output that is not OBJ text: binary formats store their
+    numbers exactly, and an option that silently does nothing misleads."""
+    found = format_of(output)
+    if precision is not None and found is not None and found.write is not None:
+        raise ValueError(
+            f"{output}: --precision applies to OBJ frames (text); {found.name} files store "
+            "binary numbers exactly"
+        )

@@ -129,6 +129,8 @@ def read_document(path: Path) -> Document:
     """Parse a .glb or .gltf file (by its first bytes, not its name); InputError if damaged."""
     with open_input(path, "a glTF file") as stream:
         data = stream.read()
+    if not data.strip():
+        raise InputError("the file is empty", path=path)
     if data[:4] == GLB_MAGIC:
         gltf, glb_bin = _parse_glb(data, path)
     else:
