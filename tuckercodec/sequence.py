@@ -85,6 +85,13 @@ class MeshSequence:
         """K, the number of vertices of every frame."""
         return int(self.vertices.shape[1])
 
+    def compact_vertices(self) -> np.ndarray:
+        """The positions as float32 where that is exact (half the bytes, the same numbers),
+        else as they are (float64): what a format that can store either should write."""
+        with np.errstate(over="ignore"):  # a value beyond float32 becomes inf: not equal
+            single = self.vertices.astype(np.float32)
+        return single if np.array_equal(single, self.vertices) else self.vertices
+
     def codes(self) -> np.ndarray:
         """Each frame's time code: :attr:`time_codes`, or 0, 1, 2... when none are known."""
         if self.time_codes is not None:

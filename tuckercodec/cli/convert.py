@@ -57,11 +57,8 @@ def run_convert(args: argparse.Namespace) -> int:
 
 def _contents(sequence: MeshSequence) -> dict[str, bool]:
     """Which parts of a sequence hold information an output format might not carry."""
-    vertices = sequence.vertices
-    with np.errstate(over="ignore"):  # a value beyond float32 becomes inf: not equal, lost
-        single = vertices.astype(np.float32)
     return {
-        "float64": not np.array_equal(single, vertices),
+        "float64": sequence.compact_vertices().dtype != np.float32,
         "faces": sequence.faces.shape[0] > 0,
         "polygons": bool((sequence.faces[:, 3:] >= 0).any()),
         "frame_names": sequence.frame_names != default_frame_names(sequence.frame_count),

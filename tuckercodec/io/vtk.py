@@ -269,11 +269,7 @@ def write_pvd(
     names = frame_file_names(seq.frame_names, frame_suffix)
     refuse_existing([path], options.overwrite)  # before the frames are written
     writer = DatasetWriter(seq.faces, seq.vertex_count, DATASETS[frame_suffix], layout)
-    points = seq.vertices
-    with np.errstate(over="ignore"):  # a value beyond float32 stays float64, exactly
-        single = points.astype(np.float32)
-    if np.array_equal(single, points):  # float32 positions: half the size, still exact
-        points = single
+    points = seq.compact_vertices()  # float32 where exact, else float64
     with atomic_folder(folder, names, overwrite=options.overwrite) as staging:
         for index, name in enumerate(names):
             (staging / name).write_bytes(writer(points[index]))

@@ -31,11 +31,7 @@ def write_xdmf(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
     if heavy == path:
         raise ValueError(f"{path}: an XDMF file needs a name other than its heavy data's (.h5)")
     refuse_existing([path, heavy], options.overwrite)
-    points = seq.vertices
-    with np.errstate(over="ignore"):  # a value beyond float32 stays float64, exactly
-        single = points.astype(np.float32)
-    if np.array_equal(single, points):  # float32 positions: half the size, still exact
-        points = single
+    points = seq.compact_vertices()  # float32 where exact, else float64
     kind, topology, attributes = _topology(seq.faces, seq.vertex_count)
     with (
         atomic_path(heavy, overwrite=options.overwrite) as temporary,
