@@ -60,12 +60,20 @@ def test_any_minor_version_is_read(minor):
     assert error is None and sequence is not None
 
 
-@pytest.mark.parametrize("flags", [1, 0x8000, 0xFFFF, 0xFFFFFFFF, 0x00010001])
+@pytest.mark.parametrize("flags", [2, 0x8000, 0xFFFF, 0xFFFFFFFF, 0x00010002])
 def test_critical_flag_bits_are_refused(flags):
     error = expect_error(
         with_preamble(vector("v1-wave-triangles"), flags=flags), UnsupportedVersionError, exact=True
     )
     assert error.rule == "R06-critical-flag"
+
+
+def test_the_segmented_flag_needs_a_segment_index():
+    """Bit 0 is known since format 1.1 (§6.7): a file of 1.0 that sets it lacks the index."""
+    error = expect_error(
+        with_preamble(vector("v1-wave-triangles"), flags=1), FormatError, exact=True
+    )
+    assert error.rule == "R37-segment-index"
 
 
 @pytest.mark.parametrize("flags", [0x10000, 0x80000000, 0xFFFF0000])

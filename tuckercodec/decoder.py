@@ -5,26 +5,32 @@ the header fields (§4), the sections (§6) and the reconstruction (§8)::
 
     positions[f, v, x] = sum_{a,c,b} U1[v, a] * CORE[a, c, b] * U2[x, c] * U3[f, b] + CENT[f, x]
 
-Opening a :class:`Decoder` decodes the small factor matrices once (about K*i + F*k + 3*i*k
-numbers); each frame then costs one (K x i) by (i x 3) product, so any frame range is decoded
-without touching the others.
+A file of format 1.0 is one decomposition; a segmented file (§6.7) is one per segment of frames,
+sharing the faces and, usually, U1. Opening a :class:`Decoder` on a path reads the preamble and
+header only; a frame's segment is read from disk (its sections' byte ranges) and decoded the
+first time one of its frames is asked for, so frame t of a long file costs its segment, never
+the whole file. Each frame then costs one (K x i) by (i x 3) product.
 """
 
 from __future__ import annotations
 
 import operator
 import os
-from collections.abc import Sequence
+from collections import OrderedDict
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from .errors import FormatError
 from .format import faces, names, qmat
-from .format.container import Container, parse_container, read_file
+from .format.container import FileRanges, open_file_container, parse_container, read_file
 from .format.header import FileInfo, read_header
-from .format.limits import DEFAULT_LIMITS, Limits
+from .format.limits import DEFAULT_LIMITS, Limits, check_limit
 from .format.reconstruction import reconstruct_frames, reconstruction_basis
+from .format.segments import BASIS_OWN, BASIS_SHARED, SegmentEntry
 from .sequence import MeshSequence
 from .topology import mesh_parents
 
@@ -35,12 +41,8 @@ CompressedFile = bytes | bytearray | memoryview | str | os.PathLike[str]
 FrameSelection = int | slice | range | Sequence[int] | np.ndarray | None
 
 
-def _bytes_of(
-    source: CompressedFile, limits: Limits, *, header_only: bool = False
-) -> bytes | memoryview:
-    """The file's bytes: read from disk for a path (the one way, :func:`read_file`)."""
-    if isinstance(source, (str, os.PathLike)):
-        return read_file(source, limits, header_only=header_only)
+def _bytes_of(source: CompressedFile) -> bytes | memoryview:
+    """The bytes of a file given in memory."""
     if isinstance(source, bytes):
         return source
     if isinstance(source, (bytearray, memoryview)):
@@ -48,81 +50,216 @@ def _bytes_of(
     raise TypeError(f"expected the bytes of a file or a path, got {type(source).__name__}")
 
 
+@dataclass(frozen=True, eq=False)
+class SegmentFactors:
+    """The dequantized factors of one segment (§6.3): frames ``start .. stop - 1`` are
+    ``U1 (K x i) . CORE (i x 3 x k) x2 U2 x3 U3 (n x k) + CENT (n x 3)`` (§8)."""
+
+    start: int
+    stop: int
+    u1: np.ndarray
+    u3: np.ndarray
+    core: np.ndarray
+    centroids: np.ndarray
+    u2: np.ndarray
+    basis: np.ndarray  # CORE x2 U2, (i, 3, k), formed once for every frame of the segment
+
+
+#: Decoded segments a :class:`Decoder` keeps, most recent first: playback walks forward.
+CACHED_SEGMENTS = 2
+
+
 class Decoder:
-    """An opened compressed file: the header checked and the factor matrices decoded.
+    """An opened compressed file: the header checked, the factors decoded as frames need them.
 
     Args:
-        source: the whole file's bytes, or a path: then the file is read from disk (only a
-            regular file, and no more than its preamble declares), and errors name it.
+        source: the whole file's bytes, or a path: then only the preamble and header are read
+            at first, and each segment's sections when one of its frames is asked for (only a
+            regular file; errors name it). A file of format 1.0 is one segment, decoded and
+            checked whole when it is opened.
         limits: the decoder's limits (§7).
 
     Raises:
         FormatError: or one of its subclasses, with the rule broken and the field or offset at
-            fault (and the path, for a file read from disk).
+            fault (and the path, for a file read from disk). For a segmented file, a damaged
+            segment is found when it is first decoded; :meth:`check` decodes every one.
         InputError: a path that is a folder, a pipe or a device.
         OSError: a path that cannot be read.
     """
 
     def __init__(self, source: CompressedFile, *, limits: Limits = DEFAULT_LIMITS) -> None:
         self.path = os.fspath(source) if isinstance(source, (str, os.PathLike)) else None
+        self.limits = limits
+        self._segments: OrderedDict[int, SegmentFactors] = OrderedDict()
+        self._shared_u1: np.ndarray | None = None
+        self._parents: np.ndarray | None = None
+        self._data: bytes | memoryview | FileRanges
+        with self._naming_path():
+            if isinstance(source, (str, os.PathLike)):
+                self._container, self._data = open_file_container(source, limits)
+            else:
+                data = _bytes_of(source)
+                self._container, self._data = parse_container(data, limits), data
+            self.info = read_header(self._container, limits)
+            self._index = self._segment_index()
+            self._starts = np.array([segment.start for segment in self._index], dtype=np.int64)
+            self.faces = faces.decode_faces(
+                self._payload("FACE"), self._params("FACE"), self.info.vertices, "section FACE"
+            )
+            if not self.segmented:  # §5 steps 16-17 in order: U1, U3, CORE, CENT, then NAME
+                self.segment_factors(0)
+            self.frame_names = self._decode_names()
+
+    @contextmanager
+    def _naming_path(self) -> Iterator[None]:
         try:
-            data = _bytes_of(source, limits)
-            container = parse_container(data, limits)
-            self.info = read_header(container, limits)
-            self._decode_sections(container, data, limits)
+            yield
         except FormatError as error:
             error.path = self.path
             raise
 
-    def _decode_sections(
-        self, container: Container, data: bytes | memoryview, limits: Limits
-    ) -> None:
-        """§5 steps 15-17: FACE, then U1, U3, CORE and CENT, then NAME."""
-        vertices, frames = self.info.vertices, self.info.frames
-        i, k = self.info.ranks
+    def _segment_index(self) -> tuple[SegmentEntry, ...]:
+        """The segments (§6.7); a file of format 1.0 is one segment whose sections are U1, U3,
+        CORE and CENT."""
+        if self.info.segments:
+            return self.info.segments
+        u2 = tuple(float(x) for x in self._container.header["u2"])
+        return (SegmentEntry(0, 0, self.info.frames, self.info.ranks, u2, BASIS_OWN),)
 
-        def payload(section_id: str) -> memoryview:
-            section = container.section(section_id)
-            assert section is not None  # read_header found every required section
-            return container.payload(data, section)
+    @property
+    def segmented(self) -> bool:
+        """Whether the file is segmented (format 1.1, §6.7)."""
+        return bool(self.info.segments)
 
-        def params(section_id: str) -> dict[str, object]:
-            section = container.section(section_id)
-            assert section is not None
-            return section.params
+    @property
+    def segments(self) -> tuple[SegmentEntry, ...]:
+        """The segment index: one entry for a file of format 1.0."""
+        return self._index
 
-        self.faces = faces.decode_faces(payload("FACE"), params("FACE"), vertices, "section FACE")
+    @property
+    def bytes_read(self) -> int | None:
+        """For a file opened from a path, how many of its bytes have been read so far."""
+        return self._data.bytes_read if isinstance(self._data, FileRanges) else None
 
-        def parents() -> np.ndarray:
-            # K entries: made only after U1's payload has passed its CRC and zstd checks,
-            # which bound K by the file's size, and only if a column of U1 is predicted
-            return mesh_parents(self.faces, vertices)
+    def _section_id(self, segment: SegmentEntry, stem: str) -> str:
+        if not self.segmented:
+            return stem
+        return segment.u1_section_id() if stem == "U1" else segment.section_id(stem)
 
-        self.u1 = qmat.decode_matrix(payload("U1"), params("U1"), parents, "section U1").values()
-        # U3 and CENT are predicted from the previous frame (parents None), CORE from nothing
-        self.u3 = qmat.decode_matrix(payload("U3"), params("U3"), None, "section U3").values()
-        core = qmat.decode_matrix(
-            payload("CORE"), params("CORE"), None, "section CORE", allow_predict=False
+    def _payload(self, section_id: str) -> memoryview:
+        section = self._container.section(section_id)
+        assert section is not None  # read_header found every required section
+        return self._container.payload(self._data, section)
+
+    def _params(self, section_id: str) -> dict[str, object]:
+        section = self._container.section(section_id)
+        assert section is not None
+        return section.params
+
+    def _mesh_parents(self) -> np.ndarray:
+        # K entries: made only after a U1 payload has passed its CRC and zstd checks, which
+        # bound K by the file's size, and only if a column of U1 is predicted
+        if self._parents is None:
+            self._parents = mesh_parents(self.faces, self.info.vertices)
+        return self._parents
+
+    def _decode_u1(self, section_id: str) -> np.ndarray:
+        where = f"section {section_id}"
+        matrix = qmat.decode_matrix(
+            self._payload(section_id), self._params(section_id), self._mesh_parents, where
         )
-        self.core = core.values().reshape(i, 3, k)
-        self.centroids = qmat.decode_matrix(
-            payload("CENT"), params("CENT"), None, "section CENT"
-        ).values()
-        self.u2 = np.array(container.header["u2"], dtype=np.float64).reshape(3, 3)
-        name_section = container.section("NAME")
-        if name_section is None:
-            self.frame_names = names.default_frame_names(frames)
-        else:
-            self.frame_names = names.decode_names(
-                name_section.params,
-                lambda: container.payload(data, name_section),
-                frames,
-                limits,
-                "section NAME",
-            )
-        # CORE x2 U2 once: every frame then needs only U3's row and one product with U1.
+        return matrix.values()
+
+    def segment_factors(self, number: int) -> SegmentFactors:
+        """Segment ``number``'s dequantized factors, decoded (§5 step 16, in its order) and
+        kept for the next frames; the shared U1 is decoded once for every segment."""
+        cached = self._segments.get(number)
+        if cached is not None:
+            self._segments.move_to_end(number, last=False)
+            return cached
+        segment = self._index[number]
+        i, k = segment.ranks
+        with self._naming_path():
+            if segment.basis == BASIS_SHARED:
+                if self._shared_u1 is None:
+                    self._shared_u1 = self._decode_u1("U1")
+                u1 = self._shared_u1[:, :i]
+            else:
+                u1 = self._decode_u1(self._section_id(segment, "U1"))
+
+            def matrix(stem: str, allow_predict: bool = True) -> np.ndarray:
+                section_id = self._section_id(segment, stem)
+                return qmat.decode_matrix(
+                    self._payload(section_id),
+                    self._params(section_id),
+                    None,  # U3 and CENT: the previous frame; CORE: nothing
+                    f"section {section_id}",
+                    allow_predict=allow_predict,
+                ).values()
+
+            u3 = matrix("U3")
+            core = matrix("CORE", allow_predict=False).reshape(i, 3, k)
+            centroids = matrix("CENT")
+        u2 = np.array(segment.u2, dtype=np.float64).reshape(3, 3)
         with np.errstate(over="ignore", invalid="ignore"):  # an overflow is R36, found per frame
-            self._basis = reconstruction_basis(self.core, self.u2)
+            basis = reconstruction_basis(core, u2)
+        factors = SegmentFactors(segment.start, segment.stop, u1, u3, core, centroids, u2, basis)
+        self._segments[number] = factors
+        self._segments.move_to_end(number, last=False)
+        while len(self._segments) > CACHED_SEGMENTS:
+            self._segments.popitem(last=True)
+        return factors
+
+    def check(self) -> None:
+        """Decode every segment, so that any damaged section is found now (a file of format
+        1.0 was checked whole when it was opened)."""
+        for number in range(len(self._index)):
+            self.segment_factors(number)
+
+    def _decode_names(self) -> list[str]:
+        name_section = self._container.section("NAME")
+        if name_section is None:
+            return names.default_frame_names(self.info.frames)
+        return names.decode_names(
+            name_section.params,
+            lambda: self._container.payload(self._data, name_section),
+            self.info.frames,
+            self.limits,
+            "section NAME",
+        )
+
+    def _single(self) -> SegmentFactors:
+        if self.segmented:
+            raise ValueError(
+                "a segmented file holds one decomposition per segment: use "
+                "segment_factors(number) for each of Decoder.segments"
+            )
+        return self.segment_factors(0)
+
+    @property
+    def u1(self) -> np.ndarray:
+        """U1 (K x i) of a file of one decomposition (format 1.0)."""
+        return self._single().u1
+
+    @property
+    def u3(self) -> np.ndarray:
+        """U3 (F x k) of a file of one decomposition."""
+        return self._single().u3
+
+    @property
+    def core(self) -> np.ndarray:
+        """The core (i x 3 x k) of a file of one decomposition."""
+        return self._single().core
+
+    @property
+    def centroids(self) -> np.ndarray:
+        """The centroids (F x 3) of a file of one decomposition."""
+        return self._single().centroids
+
+    @property
+    def u2(self) -> np.ndarray:
+        """U2 (3 x 3) of a file of one decomposition."""
+        return self._single().u2
 
     @property
     def frame_count(self) -> int:
@@ -156,19 +293,34 @@ class Decoder:
         return chosen
 
     def positions(self, frames: FrameSelection = None) -> np.ndarray:
-        """Decoded positions of the selected frames, (n, K, 3) float64 (§8)."""
+        """Decoded positions of the selected frames, (n, K, 3) float64 (§8); each segment that
+        holds one of them is read and decoded once."""
         chosen = self._selected(frames)
-        # Overflow is a property of the file, reported below as R36: numpy must not warn (or,
-        # under np.seterr(all="raise"), raise FloatingPointError) before that check runs.
-        with np.errstate(over="ignore", invalid="ignore"):
-            positions = reconstruct_frames(
-                self.u1, self._basis, self.u3[chosen], self.centroids[chosen]
-            )
+        check_limit(
+            chosen.size * self.info.vertices,
+            self.limits,
+            "max_positions",
+            what=f"{chosen.size} frames x {self.info.vertices} vertices of positions asked for",
+            field="frames",
+        )
+        positions = np.empty((chosen.size, self.info.vertices, 3))
+        owners = np.searchsorted(self._starts, chosen, side="right") - 1
+        for number in np.unique(owners).tolist():
+            picked = np.flatnonzero(owners == number)
+            part = self.segment_factors(number)
+            local = chosen[picked] - part.start
+            # Overflow is a property of the file, reported below as R36: numpy must not warn
+            # (or, under np.seterr(all="raise"), raise FloatingPointError) before that check.
+            with np.errstate(over="ignore", invalid="ignore"):
+                positions[picked] = reconstruct_frames(
+                    part.u1, part.basis, part.u3[local], part.centroids[local]
+                )
         if not np.isfinite(positions).all():  # finite factors whose products overflow
+            field = "header.segments" if self.segmented else "header.u2"
             raise FormatError(
                 "the reconstruction overflows float64: the factors are out of range",
                 rule="R36-reconstruction-finite",
-                field="header.u2",
+                field=field,
                 path=self.path,
             )
         return positions
@@ -241,11 +393,22 @@ def info(source: CompressedFile, *, limits: Limits = DEFAULT_LIMITS) -> FileInfo
     """
     path = os.fspath(source) if isinstance(source, (str, os.PathLike)) else None
     try:
-        data = _bytes_of(source, limits, header_only=True)
+        if isinstance(source, (str, os.PathLike)):
+            data: bytes | memoryview = read_file(source, limits, header_only=True)
+        else:
+            data = _bytes_of(source)
         return read_header(parse_container(data, limits, whole=path is None), limits)
     except FormatError as error:
         error.path = path
         raise
 
 
-__all__ = ["CompressedFile", "Decoder", "FileInfo", "FrameSelection", "decode", "info"]
+__all__ = [
+    "CompressedFile",
+    "Decoder",
+    "FileInfo",
+    "FrameSelection",
+    "SegmentFactors",
+    "decode",
+    "info",
+]

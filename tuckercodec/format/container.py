@@ -38,6 +38,7 @@ from ..errors import (
 from ..reading import open_regular_file
 from .limits import DEFAULT_LIMITS, Limits
 from .sections import Section, read_section_table
+from .segments import SEGMENTED
 
 SIGNATURE = b"\x89TKC\r\n\x1a\n"
 FORMAT_MAJOR = 1
@@ -51,8 +52,8 @@ HEAD_SIZE = PREAMBLE_END + CRC.size  # 32: where the header starts
 
 #: Bits 0-15 of the preamble flags are critical: a decoder rejects any it does not know.
 CRITICAL_FLAGS_MASK = 0x0000FFFF
-#: Critical flags this decoder knows (none in format 1.0).
-KNOWN_CRITICAL_FLAGS = 0
+#: Critical flags this decoder knows: bit 0, a segmented file (format 1.1, §6.7).
+KNOWN_CRITICAL_FLAGS = SEGMENTED
 
 
 @dataclass(frozen=True)
@@ -98,10 +99,19 @@ class Container:
                 return entry
         return None
 
-    def payload(self, data: bytes | memoryview, entry: Section) -> memoryview:
-        """The bytes of a section, after checking its CRC-32 (§5 step 9)."""
+    @property
+    def segmented(self) -> bool:
+        """Whether the preamble sets flag bit 0: frames in segments (§6.7)."""
+        return bool(self.flags & SEGMENTED)
+
+    def payload(self, data: bytes | memoryview | FileRanges, entry: Section) -> memoryview:
+        """The bytes of a section, after checking its CRC-32 (§5 step 9); ``data`` is the whole
+        file, or a :class:`FileRanges` that reads just this section from disk."""
         start = entry.file_offset(self.data_start)
-        view = memoryview(data)[start : start + entry.length]
+        if isinstance(data, FileRanges):
+            view = memoryview(data.read(start, entry.length))
+        else:
+            view = memoryview(data)[start : start + entry.length]
         if zlib.crc32(view) != entry.crc32:
             raise ChecksumError(
                 "the section's CRC-32 does not match its bytes (the file is damaged)",
@@ -117,7 +127,11 @@ class Container:
 
 
 def pack_container(
-    header: Mapping[str, Any], sections: list[tuple[dict[str, Any], bytes]], *, flags: int = 0
+    header: Mapping[str, Any],
+    sections: list[tuple[dict[str, Any], bytes]],
+    *,
+    flags: int = 0,
+    minor: int = FORMAT_MINOR,
 ) -> bytes:
     """Assemble a file from its header map and its sections.
 
@@ -126,7 +140,8 @@ def pack_container(
         sections: ``(entry, payload)`` pairs in file order; each entry holds ``id``,
             ``critical``, ``codec`` and the codec's parameters. ``offset``, ``length`` and
             ``crc32`` are filled in from the payload.
-        flags: the preamble flags (0 in format 1.0).
+        flags: the preamble flags (0 in format 1.0; :data:`SEGMENTED` for a segmented file).
+        minor: the format's minor version (0, or 1 for a segmented file).
     """
     table = []
     offset = 0
@@ -137,7 +152,7 @@ def pack_container(
         offset += len(payload)
     header_bytes = msgpack.packb({**header, "sections": table}, use_bin_type=True)
     body = b"".join(payload for _, payload in sections)
-    return pack_raw(FORMAT_MAJOR, FORMAT_MINOR, flags, header_bytes, body)
+    return pack_raw(FORMAT_MAJOR, minor, flags, header_bytes, body)
 
 
 def pack_raw(
@@ -266,7 +281,11 @@ def _check_reaches(size: int, needed: int, what: str, field: str) -> None:
 
 
 def parse_container(
-    data: bytes | memoryview, limits: Limits = DEFAULT_LIMITS, *, whole: bool = True
+    data: bytes | memoryview,
+    limits: Limits = DEFAULT_LIMITS,
+    *,
+    whole: bool = True,
+    size: int | None = None,
 ) -> Container:
     """Parse and check everything but the section payloads (§5 steps 1-8).
 
@@ -275,9 +294,13 @@ def parse_container(
             bytes (enough for :func:`tuckercodec.info` without reading the sections).
         limits: the decoder's limits.
         whole: ``data`` is the whole file, so its length must equal ``total_length``.
+        size: the size of the file on disk when ``data`` holds only its head: the whole-file
+            checks (§5 steps 5 and 6) then use it, in their place in the order.
     """
     preamble = read_preamble(data, limits)
-    if whole:
+    if size is not None:
+        _check_not_longer(size, preamble.total_length)
+    elif whole:
         _check_not_longer(len(data), preamble.total_length)
     _check_reaches(len(data), preamble.data_start, "the header", "header")
     header_bytes = data[HEAD_SIZE : preamble.header_end]
@@ -289,7 +312,9 @@ def parse_container(
             field="header",
             offset=HEAD_SIZE,
         )
-    if whole:
+    if size is not None:
+        _check_reaches(size, preamble.total_length, "the data area", "preamble.total_length")
+    elif whole:
         _check_reaches(len(data), preamble.total_length, "the data area", "preamble.total_length")
     header = _unpack_header(bytes(header_bytes))
     sections = read_section_table(header, preamble.total_length - preamble.data_start, limits)
@@ -326,6 +351,53 @@ def read_file(
             _check_reaches(size, preamble.total_length, "the data area", "preamble.total_length")
             return head + handle.read(preamble.data_start - len(head))
         return head + handle.read(preamble.total_length - len(head))
+
+
+class FileRanges:
+    """A compressed file on disk read a range at a time: a decoder that needs one segment
+    reads that segment's sections, never the whole file (§8, random access).
+
+    Each read opens the file, reads its range and closes it again, so that an opened decoder
+    holds no file handle; a range the file no longer holds (it shrank since it was opened) is
+    a :class:`TruncatedFileError`.
+    """
+
+    def __init__(self, path: str | os.PathLike[str], size: int) -> None:
+        self.path = os.fspath(path)
+        self.size = size
+        self.bytes_read = 0  # for tests and benchmarks: what decoding really read
+
+    def read(self, offset: int, length: int) -> bytes:
+        """``length`` bytes from ``offset``."""
+        with open_regular_file(self.path, "a tuckercodec file") as handle:
+            data: bytes = os.pread(handle.fileno(), length, offset) if length else b""
+        self.bytes_read += len(data)
+        if len(data) != length:
+            raise TruncatedFileError(
+                f"the file ends inside bytes {offset}..{offset + length - 1}: it was cut short "
+                "after it was opened",
+                rule="R10-file-truncated",
+                field="preamble.total_length",
+                offset=offset + len(data),
+            )
+        return data
+
+
+def open_file_container(
+    path: str | os.PathLike[str], limits: Limits = DEFAULT_LIMITS
+) -> tuple[Container, FileRanges]:
+    """Parse a file on disk from its preamble and header alone (§5 steps 1-8, the whole-file
+    checks made from its size), and a reader of its sections' ranges."""
+    with open_regular_file(path, "a tuckercodec file") as handle:
+        head = handle.read(HEAD_SIZE)
+        preamble = read_preamble(head, limits)
+        size = os.fstat(handle.fileno()).st_size
+        _check_not_longer(size, preamble.total_length)
+        head += handle.read(preamble.data_start - len(head))
+    container = parse_container(head, limits, whole=False, size=size)
+    ranges = FileRanges(path, size)
+    ranges.bytes_read = len(head)
+    return container, ranges
 
 
 class _HeaderProblem(Exception):

@@ -18,6 +18,7 @@ from .container import Container
 from .limits import Limits, check_limit
 from .reconstruction import factor_value_count
 from .sections import check_sections
+from .segments import SegmentEntry, check_segmented_sections, read_segment_index
 
 #: The error definition id of §4.1: the KG error of Karni and Gotsman (2004), in percent.
 KG_DEFINITION_ID = "karni-gotsman-2004"
@@ -40,6 +41,9 @@ class FileInfo:
     frame_rate: float | None
     encoder: str | None
     sections: tuple[tuple[str, int, str, bool], ...]  # (id, bytes, codec, critical)
+    #: the segment index of a segmented file (§6.7); empty for a file of one decomposition.
+    #: ``ranks`` is then (the shared basis's columns, or the largest i; the largest k).
+    segments: tuple[SegmentEntry, ...] = ()
 
     @property
     def bpfv(self) -> float:
@@ -67,6 +71,15 @@ class FileInfo:
             "sections": [
                 {"id": s, "bytes": n, "codec": c, "critical": crit}
                 for s, n, c, crit in self.sections
+            ],
+            "segments": [
+                {
+                    "first_frame": s.start,
+                    "frames": s.frames,
+                    "ranks": list(s.ranks),
+                    "basis": s.basis,
+                }
+                for s in self.segments
             ],
         }
 
@@ -150,32 +163,24 @@ def read_header(container: Container, limits: Limits) -> FileInfo:
     )
     frames = _field(header, "frames", lambda v: _is_int(v) and v >= 1, "an integer >= 1")
     check_limit(frames, limits, "max_frames", what=f"{frames} frames", field="header.frames")
-    check_limit(
-        vertices * frames,
-        limits,
-        "max_positions",
-        what=f"{vertices} vertices x {frames} frames of decoded positions",
-        field="header.vertices",
-    )
-    i, k = _ranks(header.get("ranks"), vertices, frames)
-    factor_values = factor_value_count(vertices, frames, i, k)
-    check_limit(
-        factor_values,
-        limits,
-        "max_factor_values",
-        what=f"ranks ({i}, {k}) make {factor_values} factor values, which",
-        field="header.ranks",
-    )
-    u2 = header.get("u2")
-    if not (
-        isinstance(u2, list)
-        and len(u2) == 9
-        and all(isinstance(x, float) and math.isfinite(x) for x in u2)
-    ):
-        raise FormatError(
-            "must be 9 finite floats (U2, row-major)", rule="R23-u2", field="header.u2"
+    if not container.segmented:  # a segmented file is decoded a segment at a time (§6.7)
+        check_limit(
+            vertices * frames,
+            limits,
+            "max_positions",
+            what=f"{vertices} vertices x {frames} frames of decoded positions",
+            field="header.vertices",
         )
-    check_sections(container.sections, vertices, frames, (i, k), limits)
+    segments: tuple[SegmentEntry, ...] = ()
+    if container.segmented:  # §6.7: the index replaces ranks and u2
+        segments = read_segment_index(header, vertices, frames, limits)
+        shared = check_segmented_sections(container.sections, vertices, segments, limits)
+        i = shared or max(segment.ranks[0] for segment in segments)
+        k = max(segment.ranks[1] for segment in segments)
+    else:
+        i, k = _ranks(header.get("ranks"), vertices, frames)
+        _check_single(header, vertices, frames, (i, k), limits)
+        check_sections(container.sections, vertices, frames, (i, k), limits)
     frame_rate = _field(
         header, "frame_rate", _is_frame_rate, "absent, nil or a positive finite float"
     )
@@ -201,7 +206,33 @@ def read_header(container: Container, limits: Limits) -> FileInfo:
         frame_rate=frame_rate,
         encoder=encoder if isinstance(encoder, str) else None,
         sections=tuple((s.id, s.length, s.codec, s.critical) for s in container.sections),
+        segments=segments,
     )
+
+
+def _check_single(
+    header: dict[str, Any], vertices: int, frames: int, ranks: tuple[int, int], limits: Limits
+) -> None:
+    """§5 step 10 after the ranks, for a file of one decomposition: the factor values within
+    the limit, then ``u2``."""
+    i, k = ranks
+    factor_values = factor_value_count(vertices, frames, i, k)
+    check_limit(
+        factor_values,
+        limits,
+        "max_factor_values",
+        what=f"ranks ({i}, {k}) make {factor_values} factor values, which",
+        field="header.ranks",
+    )
+    u2 = header.get("u2")
+    if not (
+        isinstance(u2, list)
+        and len(u2) == 9
+        and all(isinstance(x, float) and math.isfinite(x) for x in u2)
+    ):
+        raise FormatError(
+            "must be 9 finite floats (U2, row-major)", rule="R23-u2", field="header.u2"
+        )
 
 
 def _ranks(ranks: object, vertices: int, frames: int) -> tuple[int, int]:

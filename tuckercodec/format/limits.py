@@ -27,7 +27,8 @@ class Limits:
     max_positions: int = 1 << 28  # K * F, the number of decoded vertex positions
     max_faces: int = 1 << 28
     max_face_width: int = 64
-    max_sections: int = 64
+    max_sections: int = 1 << 18  # a segmented file has up to 4 per segment (§6.7)
+    max_segments: int = 1 << 15
     max_section_bytes: int = 1 << 32  # decompressed size of one section
     # K*i + F*k + 3*i*k + 3*F, the numbers decoded before any frame
     max_factor_values: int = 1 << 27

@@ -53,13 +53,23 @@ DEFAULT_COMPRESSION: Compression = "quantize"
 class Decomposed(Protocol):
     """What the writer needs of a compressed file (a :class:`tuckercodec.Decoder` has it)."""
 
-    u1: np.ndarray
-    core: np.ndarray
-    u2: np.ndarray
-    u3: np.ndarray
-    centroids: np.ndarray
     faces: np.ndarray
     frame_names: list[str]
+
+    @property
+    def u1(self) -> np.ndarray: ...
+
+    @property
+    def core(self) -> np.ndarray: ...
+
+    @property
+    def u2(self) -> np.ndarray: ...
+
+    @property
+    def u3(self) -> np.ndarray: ...
+
+    @property
+    def centroids(self) -> np.ndarray: ...
 
     @property
     def info(self) -> Any: ...

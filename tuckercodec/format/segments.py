@@ -1,0 +1,327 @@
+"""§6.7 Segmented files (format 1.1): the segment index and the sections of each segment.
+
+A file whose preamble sets flag bit 0 (:data:`SEGMENTED`) splits its frames into segments. Each
+segment is a Tucker decomposition of its own frames, with its own U3, CORE, CENT and U2, and
+either its own U1 (``basis = "own"``, section ``U1.s``) or the leading ``i`` columns of one U1
+that every such segment shares (``basis = "shared"``, section ``U1``). The header's ``segments``
+array is the index: a decoder finds frame t's segment from it and reads only that segment's
+sections (and the shared ones) from disk.
+
+This module checks the index (R37-segment-index, R38-segment-ranks) and the sections it implies
+(§5 steps 11-13 of a segmented file), and names the sections of segment s.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from ..errors import FormatError, UnsupportedVersionError
+from . import streams
+from .limits import Limits, check_limit
+from .sections import KNOWN_SECTIONS, Section, section_shape
+
+#: Preamble flag bit 0 (critical): the file is segmented (§6.7). Decoders of 1.0 refuse it.
+SEGMENTED = 0x0001
+#: The format minor version that defines segmented files.
+SEGMENTED_MINOR = 1
+#: The two kinds of basis a segment can use.
+BASIS_SHARED, BASIS_OWN = "shared", "own"
+#: The sections a segmented file shares between its segments (U1 only with a shared basis).
+SHARED_SECTIONS = ("FACE", "U1", "NAME")
+#: The per-segment sections, by stem; ``U1`` only for a segment with its own basis.
+SEGMENT_STEMS = ("U1", "U3", "CORE", "CENT")
+#: The order the reference encoder writes the sections of one segment.
+SEGMENT_WRITE_ORDER = ("CENT", "U3", "CORE", "U1")
+
+
+@dataclass(frozen=True)
+class SegmentEntry:
+    """One entry of the segment index: frames ``start .. start + frames - 1`` of the file."""
+
+    index: int
+    start: int
+    frames: int
+    ranks: tuple[int, int]
+    u2: tuple[float, ...]  # 9 values, row-major
+    basis: str  # BASIS_SHARED or BASIS_OWN
+
+    @property
+    def stop(self) -> int:
+        """One past the segment's last frame."""
+        return self.start + self.frames
+
+    def section_id(self, stem: str) -> str:
+        """The id of this segment's section ``stem`` ("U3" -> "U3.4")."""
+        return segment_section_id(stem, self.index)
+
+    def u1_section_id(self) -> str:
+        """The section holding this segment's U1: its own, or the shared ``U1``."""
+        return self.section_id("U1") if self.basis == BASIS_OWN else "U1"
+
+    def factor_values(self, vertices: int, shared_columns: int) -> int:
+        """The numbers decoded before any frame of this segment: the U1 it uses (all of the
+        shared one), its U3, core and centroids (the ``max_factor_values`` limit, §7)."""
+        i, k = self.ranks
+        u1_columns = i if self.basis == BASIS_OWN else shared_columns
+        return vertices * u1_columns + self.frames * k + 3 * i * k + 3 * self.frames
+
+
+def segment_section_id(stem: str, index: int) -> str:
+    """``stem.index``, the id of a per-segment section (§6.7)."""
+    return f"{stem}.{index}"
+
+
+def segment_map(frames: int, ranks: tuple[int, int], u2: list[float], basis: str) -> dict[str, Any]:
+    """One entry of the header's ``segments`` array, as the encoder writes it."""
+    return {
+        "frames": frames,
+        "ranks": [ranks[0], ranks[1]],
+        "u2": [float(x) for x in u2],  # msgpack floats, never ints (§4)
+        "basis": basis,
+    }
+
+
+def _is_int(value: object) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def read_segment_index(
+    header: Mapping[str, Any], vertices: int, frames: int, limits: Limits
+) -> tuple[SegmentEntry, ...]:
+    """The segment index (§6.7): an array of 1..max_segments maps whose ``frames`` add up to
+    F (R37-segment-index); each segment's ranks in range for its frames (R38-segment-ranks) and
+    its ``u2`` nine finite floats (R23-u2). Shared-basis ranks are checked against the shared
+    U1 later, by :func:`check_segmented_sections`."""
+    index = header.get("segments")
+    if not isinstance(index, list) or not index:
+        raise FormatError(
+            f"a segmented file needs a non-empty array of segments, got {_short(index)}",
+            rule="R37-segment-index",
+            field="header.segments",
+        )
+    check_limit(
+        len(index), limits, "max_segments", what=f"{len(index)} segments", field="header.segments"
+    )
+    entries = []
+    start = 0
+    for number, item in enumerate(index):
+        where = f"header.segments[{number}]"
+        if not isinstance(item, dict):
+            raise FormatError(
+                f"a segment is a map, got {_short(item)}", rule="R37-segment-index", field=where
+            )
+        count: Any = item.get("frames")
+        if not (_is_int(count) and count >= 1):
+            raise FormatError(
+                f"frames must be an integer >= 1, got {_short(count)}",
+                rule="R37-segment-index",
+                field=f"{where}.frames",
+            )
+        if start + count > frames:
+            raise FormatError(
+                f"segment {number} ends at frame {start + count - 1}, past the file's last frame "
+                f"{frames - 1}",
+                rule="R37-segment-index",
+                field=f"{where}.frames",
+            )
+        basis = item.get("basis")
+        if basis not in (BASIS_SHARED, BASIS_OWN):
+            raise FormatError(
+                f"basis must be {BASIS_SHARED!r} or {BASIS_OWN!r}, got {_short(basis)}",
+                rule="R37-segment-index",
+                field=f"{where}.basis",
+            )
+        ranks = _segment_ranks(item.get("ranks"), vertices, count, f"{where}.ranks")
+        u2 = item.get("u2")
+        if not (
+            isinstance(u2, list)
+            and len(u2) == 9
+            and all(isinstance(x, float) and math.isfinite(x) for x in u2)
+        ):
+            raise FormatError(
+                "must be 9 finite floats (U2, row-major)", rule="R23-u2", field=f"{where}.u2"
+            )
+        entries.append(SegmentEntry(number, start, count, ranks, tuple(u2), basis))
+        start += count
+    if start != frames:
+        raise FormatError(
+            f"the segments hold {start} frames, the header declares {frames}",
+            rule="R37-segment-index",
+            field="header.segments",
+        )
+    return tuple(entries)
+
+
+def _segment_ranks(ranks: object, vertices: int, frames: int, field: str) -> tuple[int, int]:
+    """[i, k] with 1 <= i <= min(K, 3F_s) and 1 <= k <= min(F_s, 3K) (R38-segment-ranks)."""
+    largest_i, largest_k = min(vertices, 3 * frames), min(frames, 3 * vertices)
+    if not (
+        isinstance(ranks, list)
+        and len(ranks) == 2
+        and all(_is_int(r) for r in ranks)
+        and 1 <= ranks[0] <= largest_i
+        and 1 <= ranks[1] <= largest_k
+    ):
+        raise FormatError(
+            f"must be [i, k], two integers with 1 <= i <= min(K, 3F) = {largest_i} and "
+            f"1 <= k <= min(F, 3K) = {largest_k} for the segment's {frames} frames: got "
+            f"{_short(ranks)}",
+            rule="R38-segment-ranks",
+            field=field,
+        )
+    return ranks[0], ranks[1]
+
+
+def _short(value: object) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def known_segment_kinds(
+    segments: tuple[SegmentEntry, ...],
+) -> dict[str, tuple[str, int | None]]:
+    """Every section id a segmented file may hold -> (its kind in §6.6's table, its segment);
+    the shared sections have segment ``None``."""
+    known: dict[str, tuple[str, int | None]] = {stem: (stem, None) for stem in SHARED_SECTIONS}
+    for segment in segments:
+        for stem in SEGMENT_STEMS:
+            if stem == "U1" and segment.basis != BASIS_OWN:
+                continue
+            known[segment.section_id(stem)] = (stem, segment.index)
+    return known
+
+
+def check_segmented_sections(
+    table: tuple[Section, ...],
+    vertices: int,
+    segments: tuple[SegmentEntry, ...],
+    limits: Limits,
+) -> int:
+    """§5 steps 11-13 for a segmented file; returns the shared U1's column count (0 if none).
+
+    Known ids are FACE, NAME, U1 (the shared basis) and each segment's ``U3.s``, ``CORE.s``,
+    ``CENT.s`` and, for a segment with its own basis, ``U1.s``; any other critical id is
+    unknown (R24), including ``U3``, ``CORE`` and ``CENT`` without a segment number.
+    """
+    known = known_segment_kinds(segments)
+    present: dict[str, Section] = {}
+    for section in table:
+        where = f"section {section.id}"
+        found = known.get(section.id)
+        if found is None:
+            if section.critical:
+                raise UnsupportedVersionError(
+                    "unknown critical section: this decoder cannot reconstruct the file without it",
+                    rule="R24-unknown-critical-section",
+                    field=where,
+                )
+            continue
+        kind = KNOWN_SECTIONS[found[0]]
+        if section.critical != kind.critical:
+            raise FormatError(
+                f"must be marked critical={kind.critical}",
+                rule="R27-criticality",
+                field=f"{where}.critical",
+            )
+        if section.codec != kind.codec:
+            raise UnsupportedVersionError(
+                f"unknown codec {section.codec!r} (expected {kind.codec!r})",
+                rule="R25-unknown-codec",
+                field=f"{where}.codec",
+            )
+        present[section.id] = section
+
+    shared_needed = any(segment.basis == BASIS_SHARED for segment in segments)
+    required = ["FACE"] + (["U1"] if shared_needed else [])
+    for segment in segments:
+        stems = SEGMENT_STEMS if segment.basis == BASIS_OWN else SEGMENT_STEMS[1:]
+        required += [segment.section_id(stem) for stem in stems]
+    for section_id in required:
+        if section_id not in present:
+            raise FormatError(
+                "a required section is missing",
+                rule="R26-required-section-missing",
+                field=f"section {section_id}",
+            )
+
+    face_rows, face_cols = section_shape(present["FACE"].params, "section FACE", min_cols=3)
+    check_limit(face_rows, limits, "max_faces", what=f"{face_rows} faces", field="section FACE")
+    check_limit(
+        face_cols, limits, "max_face_width", what=f"faces of {face_cols} corners", field="FACE"
+    )
+    _check_stream_size(face_rows, face_cols, limits, "section FACE")
+    shared_columns = 0
+    if "U1" in present:
+        largest = min(vertices, 3 * sum(segment.frames for segment in segments))
+        rows, shared_columns = section_shape(present["U1"].params, "section U1")
+        if rows != vertices or not 1 <= shared_columns <= largest:
+            raise FormatError(
+                f"the shared basis must be [{vertices}, c] with 1 <= c <= {largest}, got "
+                f"[{rows}, {shared_columns}]",
+                rule="R28-shape",
+                field="section U1.shape",
+            )
+        _check_stream_size(rows, shared_columns, limits, "section U1")
+    for segment in segments:
+        i, k = segment.ranks
+        if segment.basis == BASIS_SHARED and i > shared_columns:
+            raise FormatError(
+                f"the segment uses {i} columns of a shared basis of {shared_columns}",
+                rule="R38-segment-ranks",
+                field=f"header.segments[{segment.index}].ranks",
+            )
+        expected = {
+            "U3": (segment.frames, k),
+            "CORE": (i * 3 * k, 1),
+            "CENT": (segment.frames, 3),
+        }
+        if segment.basis == BASIS_OWN:
+            expected["U1"] = (vertices, i)
+        for stem, shape in expected.items():
+            where = f"section {segment.section_id(stem)}"
+            rows, cols = section_shape(
+                present[segment.section_id(stem)].params, where, expected=shape
+            )
+            _check_stream_size(rows, cols, limits, where)
+        values = segment.factor_values(vertices, shared_columns)
+        check_limit(
+            values,
+            limits,
+            "max_factor_values",
+            what=f"segment {segment.index}'s {values} factor values",
+            field=f"header.segments[{segment.index}].ranks",
+        )
+        check_limit(
+            vertices * segment.frames,
+            limits,
+            "max_positions",
+            what=f"{vertices} vertices x {segment.frames} frames of segment {segment.index}",
+            field=f"header.segments[{segment.index}].frames",
+        )
+    return shared_columns
+
+
+def _check_stream_size(rows: int, cols: int, limits: Limits, where: str) -> None:
+    check_limit(
+        rows * cols * streams.MAX_PLANES,
+        limits,
+        "max_section_bytes",
+        what=f"{rows} x {cols} values of up to {streams.MAX_PLANES} bytes",
+        field=f"{where}.shape",
+    )
+
+
+__all__ = [
+    "BASIS_OWN",
+    "BASIS_SHARED",
+    "SEGMENTED",
+    "SEGMENTED_MINOR",
+    "SegmentEntry",
+    "check_segmented_sections",
+    "read_segment_index",
+    "segment_map",
+    "segment_section_id",
+]
