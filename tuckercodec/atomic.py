@@ -13,7 +13,8 @@ A file is written first where no one can see it, and put in place only once comp
   of writing can leave that temporary file (named ``.<target>.<random>.tmp``).
 
 Either way a rename within one folder is atomic, so readers see the old file or the new one.
-A folder of files (decoded OBJ frames) is written as a whole with :func:`atomic_folder`.
+A folder of files (decoded OBJ frames) is written as a whole with :func:`atomic_folder`, and
+a folder that a library writes (a zarr store) with :func:`atomic_store`.
 """
 
 from __future__ import annotations
@@ -294,3 +295,41 @@ def atomic_folder(
             _move_in(staging / name, target / name, overwrite)
     finally:
         shutil.rmtree(staging, ignore_errors=True)
+
+
+@contextmanager
+def atomic_store(destination: str | Path, *, overwrite: bool = False) -> Iterator[Path]:
+    """A folder that a library writes as a whole (a zarr store): yield a hidden, empty staging
+    folder beside ``destination``; when the block ends without an exception it becomes
+    ``destination`` in one rename, and on any exception it is removed.
+
+    An existing ``destination`` is refused before the block runs (``FileExistsError``) unless
+    ``overwrite``; then it is replaced in whole (renamed aside, the new folder renamed in, the
+    old one removed), never merged with the new files, which would mix two stores.
+    """
+    target = Path(destination)
+    refuse_existing([target], overwrite)
+    staging = Path(tempfile.mkdtemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp"))
+    aside: Path | None = None
+    try:
+        yield staging
+        os.chmod(staging, 0o777 & ~_umask())  # mkdtemp makes 0700; match a plain mkdir
+        if os.path.lexists(target):
+            if not overwrite:
+                raise _exists(target)
+            aside = staging.with_suffix(".old")  # the staging folder's random name: free
+            os.rename(target, aside)
+        try:
+            os.rename(staging, target)
+        except OSError:
+            if aside is not None:
+                os.rename(aside, target)  # put the old one back
+                aside = None
+            raise
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+        if aside is not None:
+            if aside.is_dir() and not aside.is_symlink():
+                shutil.rmtree(aside, ignore_errors=True)
+            else:
+                aside.unlink(missing_ok=True)

@@ -73,7 +73,7 @@ class MeshSequence:
         ):
             raise InputError(f"frame rate must be a positive number, got {self.frame_rate}")
         if self.time_codes is not None:
-            self.time_codes = _checked_time_codes(self.time_codes, self.frame_count)
+            self.time_codes = checked_time_codes(self.time_codes, self.frame_count)
 
     @property
     def frame_count(self) -> int:
@@ -164,7 +164,7 @@ def float32_seconds(seq: MeshSequence, path: str | os.PathLike[str]) -> np.ndarr
     return times
 
 
-def _checked_time_codes(values: np.ndarray, frame_count: int) -> np.ndarray:
+def checked_time_codes(values: np.ndarray, frame_count: int) -> np.ndarray:
     """Time codes as float64, one per frame, finite and strictly increasing."""
     codes = np.asarray(values)
     if codes.shape != (frame_count,) or not np.issubdtype(codes.dtype, np.number):

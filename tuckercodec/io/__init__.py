@@ -2,11 +2,13 @@
 
 :func:`load_sequence` and :func:`save_sequence` choose a format by the file name's suffix from
 the registry (:mod:`.registry`); each format is one module: :mod:`.obj` (one OBJ file per
-frame), :mod:`.npz` (a NumPy archive of the whole sequence), :mod:`.usd`, :mod:`.alembic`,
-:mod:`.pc2` and :mod:`.mdd` (animation caches), :mod:`.gltf` (morph animations, through
-:mod:`tuckercodec.gltf`), :mod:`.vtk` and :mod:`.xdmf` (simulation time series), and
-:mod:`.meshes` (other one-frame mesh files, through trimesh). Folders, globs and lists of
-one-frame files are :mod:`.frames`; ``tuckercodec formats`` lists them all.
+frame), :mod:`.npz` (a NumPy archive of the whole sequence), :mod:`.npy` (an array of
+positions), :mod:`.usd`, :mod:`.alembic`, :mod:`.pc2` and :mod:`.mdd` (animation caches),
+:mod:`.gltf` (morph animations, through :mod:`tuckercodec.gltf`), :mod:`.vtk` and :mod:`.xdmf`
+(simulation time series), :mod:`.zarr_store` (zarr arrays), and :mod:`.meshes` (other
+one-frame mesh files, through trimesh). Folders, globs and lists of one-frame files are
+:mod:`.frames`; ``tuckercodec formats`` lists them all. :func:`open_frames` reads any of them a
+range of frames at a time (:mod:`.streaming`).
 """
 
 from __future__ import annotations
@@ -19,7 +21,14 @@ from pathlib import Path
 
 from ..errors import InputError
 from ..sequence import MeshSequence
-from .frames import folder_files, glob_files, natural_sort_key, read_frames, write_frames
+from .frames import (
+    FileFrames,
+    folder_files,
+    glob_files,
+    natural_sort_key,
+    read_frames,
+    write_frames,
+)
 from .registry import (
     OPTION_FLAGS,
     ReadOptions,
@@ -29,6 +38,7 @@ from .registry import (
     format_of,
     formats,
 )
+from .streaming import FrameSource, SequenceFrames
 
 #: What load_sequence accepts: a folder, glob pattern, mesh or sequence file, or a list of files.
 Source = str | os.PathLike[str] | Sequence[str | os.PathLike[str]]
@@ -61,14 +71,16 @@ def load_sequence(
             - a list or tuple of files, read in the order given;
             - a file holding a whole sequence, chosen by its suffix (:func:`formats` lists
               them): an ``.npz`` with keys ``V`` (F, K, 3) and optionally ``F`` (faces),
-              ``frame_files`` (names), ``frame_rate`` and ``time_codes``; USD, Alembic, PC2,
-              MDD, glTF, VTK series (some need an extra, named by the error if missing);
+              ``frame_files`` (names), ``frame_rate`` and ``time_codes``; a ``.npy`` array
+              (F, K, 3); USD, Alembic, PC2, MDD, glTF, VTK series, XDMF, a zarr store (a
+              folder named ``*.zarr``) (some need an extra, named by the error if missing);
             - a single mesh file, giving a one-frame sequence.
             Files of a folder or glob are ordered by :func:`natural_sort_key` of their names.
         progress: draw a progress bar on a terminal while reading many files.
         prim: USD: the mesh prim to read, when the stage holds several.
         object_path: Alembic: the PolyMesh object to read, when the archive holds several.
-        faces: PC2 and MDD: a mesh file whose faces the points take (without it, points only).
+        faces: PC2, MDD and ``.npy``: a mesh file whose faces the points take (without it,
+            points only).
         fps: glTF: sample the animation at this rate rather than at its keyframes.
 
     Returns:
@@ -80,34 +92,95 @@ def load_sequence(
             the error names the file, frame and line (or object).
         DependencyError: the format's library is not installed; names the extra to install.
     """
-    options = ReadOptions(
+    options = _read_options(prim, object_path, faces, fps)
+    resolved = _resolve(source, options)
+    if isinstance(resolved, list):
+        return read_frames(resolved, progress)
+    found, path = resolved
+    assert found.read is not None  # _resolve returns only formats that read
+    return found.read(path, options)
+
+
+def open_frames(
+    source: Source,
+    *,
+    prim: str | None = None,
+    object_path: str | None = None,
+    faces: str | os.PathLike[str] | None = None,
+    fps: float | None = None,
+) -> FrameSource:
+    """Open a mesh sequence to read a range of frames at a time, without loading it whole.
+
+    Takes the sources and options of :func:`load_sequence`; ``source.read(start, stop)`` gives
+    the same numbers as ``load_sequence(source).vertices[start:stop]``. Every built-in format
+    streams: a folder or list of files file by file, ``.npy``/PC2/MDD by offset, ``.npz``
+    member ``V`` by offset or forward decompression, zarr chunk by chunk, USD and Alembic sample
+    by sample (in a child process that stays open), VTK and XDMF step by step, glTF evaluated
+    per range (:mod:`tuckercodec.io.streaming` says how). A format registered without
+    ``open`` is loaded whole.
+
+    The description (frame and vertex counts, faces, names, rate, time codes) is read at once;
+    each frame is checked when read, so an error in frame 900 is raised by the read of a range
+    that holds it. Close the source when done (``with open_frames(...) as source:``). It is
+    picklable: a worker process reopens the file on its first read.
+
+    Raises:
+        InputError: as :func:`load_sequence`, for what the description needs (the first frame
+            of a folder, the header of a file).
+        DependencyError: the format's library is not installed.
+    """
+    options = _read_options(prim, object_path, faces, fps)
+    resolved = _resolve(source, options)
+    if isinstance(resolved, list):
+        where = source if isinstance(source, (str, os.PathLike)) else None
+        return FileFrames(resolved, where)
+    found, path = resolved
+    if found.open is not None:
+        return found.open(path, options)
+    assert found.read is not None  # _resolve returns only formats that read
+    return SequenceFrames(found.read(path, options), path)
+
+
+def _read_options(
+    prim: str | None,
+    object_path: str | None,
+    faces: str | os.PathLike[str] | None,
+    fps: float | None,
+) -> ReadOptions:
+    return ReadOptions(
         prim=prim,
         object_path=object_path,
         faces=None if faces is None else Path(faces),
         fps=fps,
     )
+
+
+def _resolve(source: Source, options: ReadOptions) -> list[Path] | tuple[SequenceFormat, Path]:
+    """What a source is: one-frame files to read in this order, or a file (or a folder, for a
+    format of folders) of a whole-sequence format; options the source does not take are
+    refused."""
     if not isinstance(source, (str, os.PathLike)):  # a list, tuple or other sequence of files
         files = [Path(item) for item in source]
         if not files:
             raise InputError("the list of frame files is empty")
         _refuse_options(options, frozenset(), "a list of frame files")
-        return read_frames(files, progress)
+        return files
 
     path = Path(source)
     if not path.exists() and _GLOB_CHARACTERS.search(str(source)):
         _refuse_options(options, frozenset(), "frame files", path)
-        return read_frames(glob_files(str(source)), progress)
-    if path.is_dir():
+        return glob_files(str(source))
+    found = format_of(path)
+    if path.is_dir() and not (found is not None and found.folder):
         _refuse_options(options, frozenset(), "a folder of frames", path)
-        return read_frames(folder_files(path), progress)
+        return folder_files(path)
     if not path.exists():
         raise InputError("no such file or folder", path=path)
-    found = format_of(path)
     if found is not None and found.read is not None:
         _refuse_options(options, found.read_options, f"{found.name} files", path)
-        return found.read(path, options)
+        return found, path
     _refuse_options(options, frozenset(), "a one-frame mesh file", path)
-    return read_frames([path], progress)
+    return [path]
 
 
 def _refuse_options(
@@ -180,13 +253,16 @@ def save_sequence(
 
 
 __all__ = [
+    "FrameSource",
     "ReadOptions",
     "SequenceFormat",
+    "SequenceFrames",
     "WriteOptions",
     "format_named",
     "format_of",
     "formats",
     "load_sequence",
     "natural_sort_key",
+    "open_frames",
     "save_sequence",
 ]

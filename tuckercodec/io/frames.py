@@ -2,7 +2,8 @@
 
 The files are ordered by natural sort of their names (``frame2`` before ``frame10``), each is
 read by its format's frame reader, and every frame must have the vertex count and faces of the
-first one. Writing makes a folder of one file per frame, staged and moved in whole.
+first one. :class:`FileFrames` reads them file by file, a range of frames at a time. Writing
+makes a folder of one file per frame, staged and moved in whole.
 """
 
 from __future__ import annotations
@@ -19,7 +20,15 @@ from ..atomic import atomic_folder
 from ..errors import InputError
 from ..progress import progress as progress_bar
 from ..sequence import MeshSequence
-from .registry import MeshFrame, SequenceFormat, WriteOptions, format_named, format_of
+from .registry import (
+    FrameReader,
+    MeshFrame,
+    SequenceFormat,
+    WriteOptions,
+    format_named,
+    format_of,
+)
+from .streaming import FrameSource
 
 _UNSAFE_NAME_CHARACTERS = re.compile(r"[^A-Za-z0-9._-]+")
 #: The format that reads a listed file whose suffix no format claims: trimesh reads far more
@@ -68,41 +77,63 @@ def _frame_format(path: Path) -> SequenceFormat | None:
 
 def read_frames(files: list[Path], show_progress: bool) -> MeshSequence:
     """Read one frame per file; every frame must match the first one's vertices and faces."""
-    readers = []
-    for index, file in enumerate(files):
-        found = format_of(file) or format_named(FALLBACK_FRAME_FORMAT)
-        if found.read_frame is None:
-            raise InputError(
-                f"this {file.suffix} file holds a whole sequence: load it on its own",
-                path=file,
-                frame=index if len(files) > 1 else None,
-            )
-        readers.append(found.read_frame)
-    label = "reading OBJ" if all(f.suffix.lower() == ".obj" for f in files) else "reading meshes"
-    numbered: Iterable[int] = range(len(files))
-    if show_progress:
-        numbered = progress_bar(numbered, total=len(files), label=label)
+    source = FileFrames(files)
+    return source.load(show_progress)
 
-    vertices: np.ndarray | None = None
-    reference: MeshFrame | None = None
-    for index in numbered:
+
+class FileFrames(FrameSource):
+    """One frame per file (a folder, a glob, a list), read file by file: the first file at
+    once (for the vertex count and faces), the others when their frames are read, each checked
+    against the first. ``where`` is the folder or pattern the files came from, for errors
+    that are not one file's."""
+
+    def __init__(self, files: list[Path], where: str | os.PathLike[str] | None = None):
+        self._files = list(files)
+        self._readers: list[FrameReader] = []
+        for index, file in enumerate(self._files):
+            found = format_of(file) or format_named(FALLBACK_FRAME_FORMAT)
+            if found.read_frame is None:
+                raise InputError(
+                    f"this {file.suffix} file holds a whole sequence: load it on its own",
+                    path=file,
+                    frame=index if len(files) > 1 else None,
+                )
+            self._readers.append(found.read_frame)
+        self._reference = self._frame(0, None)
+        vertices, faces = self._reference.vertices, self._reference.faces
+        names = [file.name for file in self._files]
+        self._describe(where, len(self._files), len(vertices), faces, names)
+
+    def _frame(self, index: int, reference: MeshFrame | None) -> MeshFrame:
+        """Frame ``index``, checked against ``reference`` (the first frame, if read yet)."""
+        file = self._files[index]
         try:
-            frame = readers[index](files[index], reference)
+            frame = self._readers[index](file, reference)
             if reference is not None:
-                _check_matches(frame, reference, files[index])
+                _check_matches(frame, reference, file)
         except InputError as error:
-            if len(files) == 1:
+            if len(self._files) == 1:
                 raise
             # add the frame number to the reader's message (file and line are already there)
             raise InputError(error.reason, path=error.path, line=error.line, frame=index) from None
-        if reference is None:
-            reference = frame
-            vertices = np.empty((len(files), *frame.vertices.shape), dtype=np.float64)
-        assert vertices is not None
-        vertices[index] = frame.vertices
+        return frame
 
-    assert reference is not None and vertices is not None
-    return MeshSequence(vertices, reference.faces, frame_names=[f.name for f in files])
+    def _read(self, start: int, stop: int, show_progress: bool = False) -> np.ndarray:
+        vertices = np.empty((stop - start, self.vertex_count, 3), dtype=np.float64)
+        numbered: Iterable[int] = range(start, stop)
+        if show_progress:
+            suffixes = {file.suffix.lower() for file in self._files}
+            label = "reading OBJ" if suffixes == {".obj"} else "reading meshes"
+            numbered = progress_bar(numbered, total=stop - start, label=label)
+        for index in numbered:
+            frame = self._reference if index == 0 else self._frame(index, self._reference)
+            vertices[index - start] = frame.vertices
+        return vertices
+
+    def load(self, show_progress: bool = False) -> MeshSequence:
+        """The whole sequence, with a progress bar on a terminal if asked."""
+        vertices = self._read(0, self.frame_count, show_progress)
+        return MeshSequence(vertices, self.faces, frame_names=self.frame_names)
 
 
 def _check_matches(frame: MeshFrame, reference: MeshFrame, path: Path) -> None:

@@ -21,7 +21,8 @@ constant) carry no timing: the frames are read as 0, 1, 2... with no rate.
 Blender's MDD exporter before 2.80 wrote a "rest frame" (a copy of the first frame) before the
 frames, without counting it in numFrames: a file exactly one frame longer than its header says
 is read as that layout, and the uncounted rest frame is skipped. Any other size mismatch is an
-error. The faces come from ``--faces MESH`` (:func:`.pointcache.cache_faces`).
+error. The faces come from ``--faces MESH`` (:func:`.pointcache.cache_faces`). Frames are read
+by offset, a range at a time (:class:`MddFrames`).
 """
 
 from __future__ import annotations
@@ -37,7 +38,6 @@ from ..sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_seconds
 from .pointcache import (
     POINT_BYTES,
     cache_faces,
-    cache_sequence,
     check_counts,
     check_size,
     float32_positions,
@@ -46,6 +46,7 @@ from .pointcache import (
     read_header,
 )
 from .registry import ReadOptions, SequenceFormat, WriteOptions
+from .streaming import RawFrames
 
 HEADER = struct.Struct(">ii")  # numFrames, numPoints
 #: Frame rates tried first when working out the rate of a file's times: film, PAL, NTSC (and
@@ -68,36 +69,44 @@ COMMON_RATES = (
 )
 
 
-def read_mdd(path: Path, options: ReadOptions) -> MeshSequence:
-    """A sequence from an MDD point cache: positions, the frame rate and time codes its
-    times imply (see the module docstring), and the faces of ``options.faces``.
+class MddFrames(RawFrames):
+    """The frames of an MDD point cache, read by offset: positions, the frame rate and time
+    codes its times imply (see the module docstring), and the faces of ``options.faces``.
 
     The header's counts must account for exactly the file's size (or one uncounted rest frame
     more), checked before anything is allocated.
     """
-    stream, file_size = open_cache(path, "an MDD point cache")
-    with stream:
-        raw = read_header(stream, HEADER.size, file_size, "an MDD point cache", path)
-        frames, points = HEADER.unpack(raw)
-        check_counts(frames, points, path)
-        declared = HEADER.size + 4 * frames + frames * points * POINT_BYTES
-        rest_frame = file_size == declared + points * POINT_BYTES
-        if not rest_frame:
-            check_size(
-                declared,
-                file_size,
-                f"an 8-byte header, {frames} times and {frames} frames of {points} points",
-                path,
-            )
-        times = read_floats(stream, frames, ">f4", path)
+
+    _what = "an MDD point cache"
+
+    def __init__(self, path: Path, options: ReadOptions):
+        stream, file_size = open_cache(path, self._what)
+        with stream:
+            raw = read_header(stream, HEADER.size, file_size, self._what, path)
+            frames, points = HEADER.unpack(raw)
+            check_counts(frames, points, path)
+            declared = HEADER.size + 4 * frames + frames * points * POINT_BYTES
+            rest_frame = file_size == declared + points * POINT_BYTES
+            if not rest_frame:
+                check_size(
+                    declared,
+                    file_size,
+                    f"an 8-byte header, {frames} times and {frames} frames of {points} points",
+                    path,
+                )
+            times = read_floats(stream, frames, ">f4", path)
         rate, codes = frame_timing(times, path)
         faces = cache_faces(options.faces, points, path)
-        if rest_frame:  # Blender's old exporter: an uncounted copy of the first frame
-            stream.seek(points * POINT_BYTES, 1)
-        positions = read_floats(stream, frames * points * 3, ">f4", path)
-    return cache_sequence(
-        positions.reshape(frames, points, 3), faces, path, time_codes=codes, frame_rate=rate
-    )
+        self._file, self._dtype = path, np.dtype(">f4")
+        # Blender's old exporter: an uncounted copy of the first frame before the frames
+        self._offset = HEADER.size + 4 * frames + (points * POINT_BYTES if rest_frame else 0)
+        self._describe(path, frames, points, faces, frame_rate=rate, time_codes=codes)
+
+
+def read_mdd(path: Path, options: ReadOptions) -> MeshSequence:
+    """The whole sequence of an MDD point cache (:class:`MddFrames`)."""
+    with MddFrames(path, options) as source:
+        return source.load()
 
 
 def frame_timing(times: np.ndarray, path: Path) -> tuple[float | None, np.ndarray | None]:
@@ -155,6 +164,7 @@ FORMAT = SequenceFormat(
     description="MDD point cache (LightWave, Blender, Houdini): positions, times in seconds",
     read=read_mdd,
     write=write_mdd,
+    open=MddFrames,
     read_options=frozenset({"faces"}),
     carries=frozenset({"frame_rate", "time_codes"}),
 )

@@ -17,7 +17,7 @@ Sample i is at frame ``startFrame + i * sampleRate``: these are the sequence's t
 and the sample rate from the time codes (0, 1, 2... when the sequence has none), so they survive
 a PC2 to PC2 round trip; time codes that are not evenly spaced cannot be written as PC2.
 The faces come from ``--faces MESH`` (:func:`.pointcache.cache_faces`); without it the points
-are a point sequence.
+are a point sequence. Frames are read by offset, a range at a time (:class:`Pc2Frames`).
 """
 
 from __future__ import annotations
@@ -33,15 +33,14 @@ from ..sequence import MeshSequence
 from .pointcache import (
     POINT_BYTES,
     cache_faces,
-    cache_sequence,
     check_counts,
     check_size,
     float32_positions,
     open_cache,
-    read_floats,
     read_header,
 )
 from .registry import ReadOptions, SequenceFormat, WriteOptions
+from .streaming import RawFrames
 
 SIGNATURE = b"POINTCACHE2\0"
 VERSION = 1
@@ -51,16 +50,20 @@ HEADER = struct.Struct("<12siiffi")  # signature, version, numPoints, start, sam
 _SPACING_TOLERANCE = 1e-6
 
 
-def read_pc2(path: Path, options: ReadOptions) -> MeshSequence:
-    """A sequence from a PC2 point cache: positions, time codes ``startFrame + i *
-    sampleRate``, and the faces of ``options.faces`` (none without it).
+class Pc2Frames(RawFrames):
+    """The frames of a PC2 point cache, read by offset: positions, time codes ``startFrame +
+    i * sampleRate``, and the faces of ``options.faces`` (none without it).
 
     The header's counts must account for exactly the file's size, checked before anything
     is allocated; the error says whether the file is truncated or has trailing bytes.
     """
-    stream, file_size = open_cache(path, "a PC2 point cache")
-    with stream:
-        raw = read_header(stream, HEADER.size, file_size, "a PC2 point cache", path)
+
+    _what = "a PC2 point cache"
+
+    def __init__(self, path: Path, options: ReadOptions):
+        stream, file_size = open_cache(path, self._what)
+        with stream:
+            raw = read_header(stream, HEADER.size, file_size, self._what, path)
         signature, version, points, start, step, frames = HEADER.unpack(raw)
         if signature != SIGNATURE:
             raise InputError(
@@ -80,8 +83,14 @@ def read_pc2(path: Path, options: ReadOptions) -> MeshSequence:
         )
         codes = _time_codes(start, step, frames, path)
         faces = cache_faces(options.faces, points, path)
-        positions = read_floats(stream, frames * points * 3, "<f4", path)
-    return cache_sequence(positions.reshape(frames, points, 3), faces, path, time_codes=codes)
+        self._file, self._offset, self._dtype = path, HEADER.size, np.dtype("<f4")
+        self._describe(path, frames, points, faces, time_codes=codes)
+
+
+def read_pc2(path: Path, options: ReadOptions) -> MeshSequence:
+    """The whole sequence of a PC2 point cache (:class:`Pc2Frames`)."""
+    with Pc2Frames(path, options) as source:
+        return source.load()
 
 
 def _time_codes(start: float, step: float, frames: int, path: Path) -> np.ndarray:
@@ -142,6 +151,7 @@ FORMAT = SequenceFormat(
     description="PC2 point cache (Blender, 3ds Max, Maya): positions, start frame, sample rate",
     read=read_pc2,
     write=write_pc2,
+    open=Pc2Frames,
     read_options=frozenset({"faces"}),
     carries=frozenset({"time_codes"}),
 )

@@ -1,6 +1,7 @@
 """What the two point-cache formats share (:mod:`.pc2`, :mod:`.mdd`): reading a fixed-size
-header and a block of float32 positions whose size the header declares, the faces the points
-take from ``--faces MESH``, and positions made ready for writing.
+header and checking the file's size against what it declares (positions are then read by
+offset: :class:`.streaming.RawFrames`), the faces the points take from ``--faces MESH`` (as
+``.npy`` files do too), and positions made ready for writing.
 
 A point cache holds positions only: F frames of K points, each a float32 x, y, z. The header
 declares F and K, so the file's size is known before anything is read: a file that is shorter
@@ -99,21 +100,6 @@ def cache_faces(faces_file: Path | None, point_count: int, path: Path) -> np.nda
             path=path,
         )
     return mesh.faces
-
-
-def cache_sequence(
-    vertices: np.ndarray,
-    faces: np.ndarray,
-    path: Path,
-    *,
-    time_codes: np.ndarray | None = None,
-    frame_rate: float | None = None,
-) -> MeshSequence:
-    """The sequence read from a cache; its checks (finite positions...) name the file."""
-    try:
-        return MeshSequence(vertices, faces, frame_rate=frame_rate, time_codes=time_codes)
-    except InputError as error:
-        raise InputError(error.reason, path=path, frame=error.frame) from None
 
 
 def float32_positions(seq: MeshSequence, dtype: str, path: Path) -> np.ndarray:

@@ -4,7 +4,8 @@ Each format is one module of :mod:`tuckercodec.io` that defines ``FORMAT``, a
 :class:`SequenceFormat`, and is listed in :data:`BUILTIN_MODULES`. A format either holds a
 whole sequence in one file (``read``/``write``: ``.npz``), or one frame per file (``read_frame``
 /``write_frame``: ``.obj``, and the meshes trimesh reads), which a folder, a glob or a list of
-files makes into a sequence (:mod:`.frames`). Modules import their heavy libraries only inside
+files makes into a sequence (:mod:`.frames`). A whole-sequence format may also read a range of
+frames at a time (``open``: :mod:`.streaming`). Modules import their heavy libraries only inside
 their functions, so that looking a format up costs nothing.
 """
 
@@ -20,9 +21,23 @@ from pathlib import Path
 import numpy as np
 
 from ..sequence import MeshSequence
+from .streaming import FrameSource
 
 #: The modules of :mod:`tuckercodec.io` that define a ``FORMAT``, in the order the CLI lists them.
-BUILTIN_MODULES = ("obj", "npz", "usd", "alembic", "pc2", "mdd", "gltf", "vtk", "xdmf", "meshes")
+BUILTIN_MODULES = (
+    "obj",
+    "npz",
+    "npy",
+    "usd",
+    "alembic",
+    "pc2",
+    "mdd",
+    "gltf",
+    "vtk",
+    "xdmf",
+    "zarr_store",
+    "meshes",
+)
 
 
 @dataclass(eq=False)
@@ -51,7 +66,7 @@ class ReadOptions:
         prim: USD: the path of the UsdGeomMesh to read, when the stage holds several.
         object_path: Alembic: the full name of the PolyMesh object, when the archive holds
             several.
-        faces: PC2 and MDD (positions only): a mesh file whose faces the points take.
+        faces: PC2, MDD and ``.npy`` (positions only): a mesh file whose faces the points take.
         fps: glTF: sample the animation at this many frames per second instead of at its
             keyframes.
     """
@@ -105,6 +120,12 @@ class SequenceFormat:
     #: exactly), "faces", "polygons" (faces of more than 3 corners, not split into
     #: triangles), "frame_names", "frame_rate", "time_codes"
     carries: frozenset[str] = frozenset()
+    #: the sequence read a range of frames at a time, taking the same options as ``read``
+    #: (``None``: the format cannot stream, and is read whole)
+    open: Callable[[Path, ReadOptions], FrameSource] | None = None
+    #: its "files" are folders (a zarr store), read by this format rather than as a folder
+    #: of frames
+    folder: bool = False
 
 
 @cache

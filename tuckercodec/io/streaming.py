@@ -1,0 +1,291 @@
+"""Mesh sequences read a range of frames at a time: :class:`FrameSource`, which
+:func:`~tuckercodec.io.open_frames` opens on any source :func:`~tuckercodec.io.load_sequence`
+reads, so that a sequence larger than memory can be encoded in passes.
+
+Which formats stream, and how (a format's :attr:`~.registry.SequenceFormat.open`):
+
+* ``.npy`` (:mod:`.npy`), PC2 and MDD (:mod:`.pc2`, :mod:`.mdd`): by offset in the file
+  (:class:`RawFrames`): a range is read with ``readinto`` in pieces of at most
+  :data:`PIECE_BYTES`, so that reading costs the range's float64 array and no more. Nothing
+  is memory-mapped: the pages of a mapped file count in the process's resident memory.
+* ``.npz`` (:mod:`.npz_frames`): key ``V`` by offset when stored, by decompressing forward when
+  deflated (the member stays open, so a forward read of ranges never starts again from the
+  beginning; a range before the last one does).
+* zarr stores (:mod:`.zarr_store`): chunk by chunk, through zarr.
+* Folders, globs and lists of one-frame files (:mod:`.frames`): file by file.
+* VTK series (:mod:`.vtk`) and XDMF (:mod:`.xdmf`): time step by time step (an XDMF's XML,
+  with any inline data, is held; its HDF5 datasets are read per step).
+* glTF (:mod:`.gltf`): the file is held and the frames of a range evaluated on demand.
+* USD and Alembic (:mod:`.usd`, :mod:`.alembic`): sample by sample, in a child process that
+  stays open for the source's life (:mod:`.isolated_frames`), so that a crash of the library
+  is still an :class:`~tuckercodec.errors.InputError`.
+
+Every built-in format streams. A format registered without ``open`` is loaded whole and
+wrapped in a :class:`SequenceFrames`.
+
+Every source checks what it reads as :class:`~tuckercodec.sequence.MeshSequence` does (finite
+positions, the first frame's vertex count and faces), when it reads it: an error in frame 900
+is raised by the read of a range holding frame 900, naming the file and the frame. A source is
+picklable, so that a process or a Dask worker can read its own ranges: it keeps its path and
+options, and opens its files (or child process) again on first use after unpickling.
+"""
+
+from __future__ import annotations
+
+import abc
+import contextlib
+import operator
+import os
+from collections.abc import Iterator
+from pathlib import Path
+from types import TracebackType
+from typing import IO, Any, BinaryIO, ClassVar
+
+import numpy as np
+
+from ..errors import InputError
+from ..format.names import default_frame_names
+from ..reading import open_input
+from ..sequence import MeshSequence, checked_time_codes
+from ..topology import checked_face_table
+
+#: The most bytes of the file's own type that :class:`RawFrames` reads at a time (a frame more
+#: if one frame is larger): what reading costs beyond the float64 array it returns.
+PIECE_BYTES = 4 * 2**20
+
+
+class FrameSource(abc.ABC):
+    """A mesh sequence read a range of frames at a time.
+
+    Attributes:
+        path: the file or folder read, named in errors (``None`` if there is none).
+        frame_count: F, the number of frames.
+        vertex_count: K, the number of vertices of every frame.
+        faces: (M, n) int64 as :class:`~tuckercodec.sequence.MeshSequence` holds them ((0, 3)
+            for a point sequence).
+        frame_names: F names (``frame_00000``... where the source has none).
+        frame_rate: frames per second, if known.
+        time_codes: each frame's time in frames, or ``None`` (0, 1, 2...).
+
+    A source may hold open files or a child process: close it (or use ``with``) when done.
+    It reads for one caller at a time; several threads need one source each.
+    """
+
+    path: str | None
+    frame_count: int
+    vertex_count: int
+    faces: np.ndarray
+    frame_names: list[str]
+    frame_rate: float | None
+    time_codes: np.ndarray | None
+
+    #: The attributes that hold open files or processes: ``None`` when closed or unpickled,
+    #: opened again on first use (each needs a class-level default of ``None``).
+    _transient: ClassVar[tuple[str, ...]] = ()
+
+    def _describe(
+        self,
+        path: str | os.PathLike[str] | None,
+        frame_count: int,
+        vertex_count: int,
+        faces: object,
+        frame_names: list[str] | None = None,
+        frame_rate: float | None = None,
+        time_codes: object = None,
+    ) -> None:
+        """Set the description, checked as MeshSequence checks it; errors name ``path``."""
+        self.path = None if path is None else os.fspath(path)
+        try:
+            if frame_count < 1 or vertex_count < 1:
+                raise InputError(
+                    f"a sequence needs at least one frame and one vertex, got {frame_count} "
+                    f"frames of {vertex_count} vertices"
+                )
+            self.frame_count, self.vertex_count = int(frame_count), int(vertex_count)
+            self.faces = checked_face_table(faces, self.vertex_count)
+            names = [str(name) for name in frame_names or default_frame_names(frame_count)]
+            if len(names) != frame_count:
+                raise InputError(f"{len(names)} frame names given for {frame_count} frames")
+            self.frame_names = names
+            if frame_rate is not None and not (np.isfinite(frame_rate) and frame_rate > 0):
+                raise InputError(f"frame rate must be a positive number, got {frame_rate}")
+            self.frame_rate = None if frame_rate is None else float(frame_rate)
+            self.time_codes = None
+            if time_codes is not None:
+                self.time_codes = checked_time_codes(np.asarray(time_codes), frame_count)
+        except InputError as error:
+            raise InputError(error.reason, path=error.path or path, frame=error.frame) from None
+
+    def read(self, start: int, stop: int) -> np.ndarray:
+        """Frames ``start`` to ``stop`` (excluded): a C-contiguous (stop - start, K, 3) float64
+        array, the same numbers :func:`~tuckercodec.io.load_sequence` gives for them.
+
+        Raises:
+            ValueError: not a range of the frames (0 <= start <= stop <= frame_count).
+            InputError: a frame of the range cannot be read, or has non-finite positions,
+                another vertex count or other faces; names the file and the frame.
+        """
+        start, stop = operator.index(start), operator.index(stop)
+        if not 0 <= start <= stop <= self.frame_count:
+            raise ValueError(
+                f"frames {start}:{stop} are not a range of the {self.frame_count} frames"
+            )
+        if start == stop:
+            return np.empty((0, self.vertex_count, 3), dtype=np.float64)
+        values = self._read(start, stop)
+        with np.errstate(over="ignore"):  # a long double beyond float64 becomes inf, named below
+            values = np.ascontiguousarray(values, dtype=np.float64)
+        if values.shape != (stop - start, self.vertex_count, 3):  # a reader's bug, not the file's
+            raise RuntimeError(f"{type(self).__name__} read {values.shape} for {start}:{stop}")
+        if not np.isfinite(values).all():
+            frame, vertex, _ = (int(i) for i in np.argwhere(~np.isfinite(values))[0])
+            raise InputError(
+                f"vertex {vertex} has a non-finite coordinate", path=self.path, frame=start + frame
+            )
+        return values
+
+    @abc.abstractmethod
+    def _read(self, start: int, stop: int) -> np.ndarray:
+        """The frames of a valid, non-empty range as an (n, K, 3) array of real numbers;
+        :meth:`read` converts and checks them."""
+
+    def blocks(self, size: int) -> Iterator[tuple[int, np.ndarray]]:
+        """Every frame in order, ``size`` at a time: ``(start, read(start, start + size))``."""
+        if size < 1:
+            raise ValueError(f"a block holds at least one frame, not {size}")
+        for start in range(0, self.frame_count, size):
+            yield start, self.read(start, min(start + size, self.frame_count))
+
+    def load(self) -> MeshSequence:
+        """The whole sequence in memory."""
+        try:
+            return MeshSequence(
+                self.read(0, self.frame_count),
+                self.faces,
+                frame_names=self.frame_names,
+                frame_rate=self.frame_rate,
+                time_codes=self.time_codes,
+            )
+        except InputError as error:
+            raise InputError(
+                error.reason, path=error.path or self.path, frame=error.frame
+            ) from None
+
+    @property
+    def input_bytes(self) -> int:
+        """F x K x 3 x 4: the size of the positions as float32, for throughput figures."""
+        return self.frame_count * self.vertex_count * 12
+
+    def close(self) -> None:
+        """Close what the source holds open (it opens it again if read once more)."""
+        for name in self._transient:
+            handle = self.__dict__.get(name)
+            setattr(self, name, None)
+            if handle is not None and hasattr(handle, "close"):
+                handle.close()
+
+    def __enter__(self) -> FrameSource:
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        error: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    def __del__(self) -> None:
+        with contextlib.suppress(Exception):  # at interpreter exit, or half-built
+            self.close()
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        for name in self._transient:
+            state[name] = None
+        return state
+
+    def __repr__(self) -> str:
+        return (
+            f"{type(self).__name__}({self.path!r}, frames={self.frame_count}, "
+            f"vertices={self.vertex_count}, faces={self.faces.shape[0]})"
+        )
+
+
+class SequenceFrames(FrameSource):
+    """A sequence in memory as a :class:`FrameSource` (for a format that cannot stream, or a
+    sequence made by the program). ``read`` returns copies."""
+
+    def __init__(self, sequence: MeshSequence, path: str | os.PathLike[str] | None = None):
+        self.sequence = sequence
+        self._describe(
+            path,
+            sequence.frame_count,
+            sequence.vertex_count,
+            sequence.faces,
+            sequence.frame_names,
+            sequence.frame_rate,
+            sequence.time_codes,
+        )
+
+    def _read(self, start: int, stop: int) -> np.ndarray:
+        return self.sequence.vertices[start:stop].copy()
+
+    def load(self) -> MeshSequence:
+        return self.sequence
+
+
+class RawFrames(FrameSource):
+    """Frames stored one after the other as a C-ordered array of numbers at an offset of a file
+    (``.npy``, PC2, MDD, a stored ``.npz`` member), read by offset.
+
+    Subclasses describe the file (:meth:`_describe`) and set :attr:`_file` (the file),
+    :attr:`_offset` (where frame 0 starts) and :attr:`_dtype` (the numbers as stored, any byte
+    order); :meth:`_read_at` may be replaced to read from something else than the file itself.
+    """
+
+    _transient: ClassVar[tuple[str, ...]] = ("_stream",)
+    _file: Path
+    _offset: int
+    _dtype: np.dtype
+    _stream: BinaryIO | None = None
+    #: What the file is, for the error when it cannot be opened again ("a PC2 point cache").
+    _what: str = "a file"
+
+    def _read(self, start: int, stop: int) -> np.ndarray:
+        out = np.empty((stop - start, self.vertex_count, 3), dtype=np.float64)
+        frame_bytes = self.vertex_count * 3 * self._dtype.itemsize
+        step = max(1, PIECE_BYTES // frame_bytes)
+        same = self._dtype == out.dtype  # the file's own numbers: straight into the result
+        piece = None if same else np.empty((min(step, len(out)), *out.shape[1:]), self._dtype)
+        for first in range(0, len(out), step):
+            count = min(step, len(out) - first)
+            part = out[first : first + count] if piece is None else piece[:count]
+            into = memoryview(part).cast("B")  # type: ignore[arg-type]  # arrays are buffers
+            self._read_at(self._offset + (start + first) * frame_bytes, into)
+            if piece is not None:
+                with np.errstate(over="ignore"):  # a long double beyond float64: inf, named later
+                    out[first : first + count] = part
+        return out
+
+    def _read_at(self, offset: int, into: memoryview) -> None:
+        """Fill ``into`` with the file's bytes from ``offset``."""
+        if self._stream is None:
+            self._stream = open_input(self._file, self._what)
+        self._stream.seek(offset)
+        read_into(self._stream, into, self._file)
+
+
+def read_into(stream: IO[bytes], into: memoryview, path: str | os.PathLike[str]) -> None:
+    """Fill ``into`` from the stream's position; a stream that ends first (a file that shrank
+    since its size was checked) is an InputError."""
+    done = 0
+    while done < len(into):
+        count = stream.readinto(into[done:])  # type: ignore[attr-defined]  # files have it
+        if not count:
+            raise InputError(
+                f"ended {len(into) - done} bytes short of the data it declares (did it shrink "
+                "while being read?)",
+                path=path,
+            )
+        done += count

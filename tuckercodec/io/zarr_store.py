@@ -1,0 +1,217 @@
+"""Zarr stores (a folder named ``*.zarr``): an array of positions (frames, vertices, 3), read
+and written with zarr (the ``zarr`` extra), zarr format 2 or 3.
+
+Reading: the store's root array, or in a group the array ``vertices``, of real numbers (any
+dtype zarr reads as one); with a group, optionally an integer array ``faces`` (M, n), 0-based,
+-1 padding, and the attributes ``frame_rate`` (a number), ``frame_names`` (one string per
+frame) and ``time_codes`` (one number per frame). Frames are read chunk by chunk: a range reads
+only the chunks it overlaps (:class:`ZarrFrames`), so a store larger than memory streams. A
+chunk larger than :data:`MAX_CHUNK_BYTES` is refused (it would be read whole for one frame).
+A missing chunk reads as the array's fill value, as zarr defines it: the writer here uses NaN,
+so a lost chunk is an error, not zeros.
+
+Writing ``out.zarr``: a zarr format 3 group holding ``vertices`` (float32 where exact, else
+float64; chunked by :data:`CHUNK_FRAMES` frames, each chunk all vertices; zarr's default
+compressor), ``faces`` (int64, when the sequence has faces) and the attributes above. The store
+is written in a hidden folder beside the target and renamed into place when complete
+(:func:`~tuckercodec.atomic.atomic_store`).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any, ClassVar
+
+import numpy as np
+
+from ..atomic import atomic_store
+from ..errors import InputError
+from ..optional import import_optional
+from ..sequence import MeshSequence
+from .registry import ReadOptions, SequenceFormat, WriteOptions
+from .streaming import FrameSource
+
+#: Frames per chunk of a written store.
+CHUNK_FRAMES = 100
+#: The largest chunk read, decompressed: 1 GiB.
+MAX_CHUNK_BYTES = 2**30
+#: The name of the positions in a group.
+VERTICES = "vertices"
+
+
+def _zarr(purpose: str) -> Any:
+    return import_optional("zarr", "zarr", purpose)
+
+
+class ZarrFrames(FrameSource):
+    """The frames of a zarr store, read chunk by chunk (see the module docstring)."""
+
+    _transient: ClassVar[tuple[str, ...]] = ("_array",)
+    _array: Any = None
+
+    def __init__(self, path: Path, options: ReadOptions | None = None):
+        self._file = path
+        node = _open(path)
+        array, group = (node, None) if _is_array(node) else (_member(node, VERTICES, path), node)
+        if not _is_array(array):
+            raise InputError(f"its {VERTICES!r} is a group, not an array", path=path)
+        shape, dtype = tuple(array.shape), np.dtype(array.dtype)
+        name = "its array" if group is None else f"array {VERTICES!r}"
+        if dtype.kind not in "fiu":
+            raise InputError(f"{name} holds {dtype} values, not real numbers", path=path)
+        if len(shape) != 3 or shape[2] != 3:
+            raise InputError(f"{name} has shape {shape}, not (frames, vertices, 3)", path=path)
+        chunk = math.prod(array.chunks) * dtype.itemsize
+        if chunk > MAX_CHUNK_BYTES:
+            raise InputError(
+                f"{name} has chunks {tuple(array.chunks)} of {chunk} bytes, more than the "
+                f"{MAX_CHUNK_BYTES} read at once: rechunk it by frames",
+                path=path,
+            )
+        self._array = array
+        faces: object = np.zeros((0, 3), dtype=np.int64)
+        attributes: dict[str, Any] = {}
+        if group is not None:
+            attributes = dict(group.attrs)
+            if "faces" in group:
+                faces = _faces(_member(group, "faces", path), path)
+        self._describe(
+            path,
+            shape[0],
+            shape[1],
+            faces,
+            _attribute(attributes, "frame_names", path),
+            _attribute(attributes, "frame_rate", path),
+            _attribute(attributes, "time_codes", path),
+        )
+
+    def _read(self, start: int, stop: int) -> np.ndarray:
+        if self._array is None:
+            node = _open(self._file)
+            self._array = node if _is_array(node) else _member(node, VERTICES, self._file)
+        try:
+            return np.asarray(self._array[start:stop])
+        except Exception as error:  # zarr and its codecs raise many kinds on a damaged chunk
+            raise InputError(
+                f"frames {start} to {stop - 1} cannot be read: {type(error).__name__}: {error}",
+                path=self._file,
+                frame=start,
+            ) from None
+
+
+def _open(path: Path) -> Any:
+    """The store's root node (an array or a group), opened read-only."""
+    zarr = _zarr("reading zarr stores")
+    if not path.is_dir():
+        raise InputError("is not a zarr store (a folder)", path=path)
+    try:
+        return zarr.open(store=str(path), mode="r")
+    except Exception as error:  # a missing or damaged zarr.json / .zarray / .zgroup
+        raise InputError(
+            f"cannot read as a zarr store: {type(error).__name__}: {error}", path=path
+        ) from None
+
+
+def _is_array(node: Any) -> bool:
+    return hasattr(node, "chunks") and hasattr(node, "shape")
+
+
+def _member(group: Any, name: str, path: Path) -> Any:
+    try:
+        return group[name]
+    except KeyError:
+        members = sorted(group.keys()) if hasattr(group, "keys") else []
+        raise InputError(
+            f"holds no array {name!r} (positions, frames x vertices x 3); its members are "
+            f"{members}",
+            path=path,
+        ) from None
+    except Exception as error:
+        raise InputError(
+            f"cannot read its {name!r}: {type(error).__name__}: {error}", path=path
+        ) from None
+
+
+def _faces(array: Any, path: Path) -> np.ndarray:
+    """The ``faces`` array, (M, n) integers (checked as faces by the caller)."""
+    if not _is_array(array):
+        raise InputError("its 'faces' is a group, not an array", path=path)
+    if np.dtype(array.dtype).kind not in "iu" or len(array.shape) != 2:
+        raise InputError(
+            f"its 'faces' must be integers of shape (faces, corners), got {array.dtype} "
+            f"{tuple(array.shape)}",
+            path=path,
+        )
+    if math.prod(array.shape) * 8 > MAX_CHUNK_BYTES:
+        raise InputError(f"its 'faces' {tuple(array.shape)} are too many to read", path=path)
+    try:
+        faces = np.asarray(array[...])
+    except Exception as error:
+        raise InputError(
+            f"its 'faces' cannot be read: {type(error).__name__}: {error}", path=path
+        ) from None
+    return faces
+
+
+def _attribute(attributes: dict[str, Any], name: str, path: Path) -> Any:
+    """An attribute's value for the description (checked there), or ``None``."""
+    value = attributes.get(name)
+    if value is None:
+        return None
+    if name == "frame_rate":
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise InputError(f"its attribute frame_rate is {value!r}, not a number", path=path)
+        return float(value)
+    if not isinstance(value, list):
+        raise InputError(f"its attribute {name} is not a list, one item per frame", path=path)
+    if name == "frame_names":
+        return [str(item) for item in value]
+    if not all(isinstance(item, (int, float)) and not isinstance(item, bool) for item in value):
+        raise InputError(f"its attribute {name} holds an item that is not a number", path=path)
+    return np.array(value, dtype=np.float64)
+
+
+def read_zarr(path: Path, options: ReadOptions) -> MeshSequence:
+    """The whole sequence of a zarr store."""
+    with ZarrFrames(path, options) as source:
+        return source.load()
+
+
+def write_zarr(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
+    """Write the sequence as a zarr format 3 group (see the module docstring), atomically."""
+    zarr = _zarr("writing zarr stores")
+    values = seq.compact_vertices()
+    attributes: dict[str, Any] = {"frame_names": seq.frame_names}
+    if seq.frame_rate is not None:
+        attributes["frame_rate"] = seq.frame_rate
+    if seq.time_codes is not None:
+        attributes["time_codes"] = seq.time_codes.tolist()
+    with atomic_store(path, overwrite=options.overwrite) as staging:
+        group = zarr.create_group(store=str(staging), zarr_format=3)
+        frames = min(CHUNK_FRAMES, seq.frame_count)
+        vertices = group.create_array(
+            VERTICES,
+            shape=values.shape,
+            chunks=(frames, seq.vertex_count, 3),
+            dtype=values.dtype,
+            fill_value=np.nan,  # a lost chunk reads as NaN, which reading refuses
+        )
+        for start in range(0, seq.frame_count, frames):
+            vertices[start : start + frames] = values[start : start + frames]
+        if seq.faces.shape[0]:
+            group.create_array("faces", data=np.asarray(seq.faces, dtype=np.int64))
+        group.attrs.update(attributes)
+
+
+FORMAT = SequenceFormat(
+    name="zarr",
+    suffixes=(".zarr",),
+    description="zarr store (a folder): array 'vertices' (frames, vertices, 3), faces, attributes",
+    read=read_zarr,
+    write=write_zarr,
+    open=ZarrFrames,
+    extra="zarr",
+    folder=True,
+    carries=frozenset({"float64", "faces", "polygons", "frame_names", "frame_rate", "time_codes"}),
+)
