@@ -143,8 +143,12 @@ class SmoothNoise:
             position = (start + row) / NOISE_KEY_FRAMES
             j = int(np.floor(position))
             u = position - j
-            weights = ((1 - u) ** 3 / 6, (3 * u**3 - 6 * u**2 + 4) / 6)
-            weights += ((-3 * u**3 + 3 * u**2 + 3 * u + 1) / 6, u**3 / 6)
+            weights = (
+                (1 - u) ** 3 / 6,
+                (3 * u**3 - 6 * u**2 + 4) / 6,
+                (-3 * u**3 + 3 * u**2 + 3 * u + 1) / 6,
+                u**3 / 6,
+            )
             for i, weight in enumerate(weights):
                 out[row] += (weight * self.scale) * self._key(j + i)
 
@@ -298,13 +302,35 @@ _MAIN = (
     (0.82, 1.10, 0.095),
     (1.12, 1.04, 0.040),
 )
-_MAIN_BONES = ("tail5", "tail4", "tail3", "tail2", "tail1", "pelvis", "spine1", "spine2")
-_MAIN_BONES += ("chest", "neck1", "neck2", "head")
+_MAIN_BONES = [
+    "tail5",
+    "tail4",
+    "tail3",
+    "tail2",
+    "tail1",
+    "pelvis",
+    "spine1",
+    "spine2",
+    "chest",
+    "neck1",
+    "neck2",
+    "head",
+]
 # (x, y, z, radius) of a left leg's knots, from inside the body to the toe; z flips for the right
-_HIND = ((-0.35, 0.80, 0.09, 0.07), (-0.35, 0.64, 0.17, 0.08), (-0.27, 0.38, 0.19, 0.05))
-_HIND += ((-0.40, 0.12, 0.19, 0.032), (-0.28, 0.015, 0.20, 0.025))
-_FRONT = ((0.40, 0.80, 0.09, 0.065), (0.40, 0.64, 0.16, 0.07), (0.44, 0.38, 0.18, 0.045))
-_FRONT += ((0.38, 0.11, 0.18, 0.03), (0.50, 0.015, 0.19, 0.022))
+_HIND = (
+    (-0.35, 0.80, 0.09, 0.07),
+    (-0.35, 0.64, 0.17, 0.08),
+    (-0.27, 0.38, 0.19, 0.05),
+    (-0.40, 0.12, 0.19, 0.032),
+    (-0.28, 0.015, 0.20, 0.025),
+)
+_FRONT = (
+    (0.40, 0.80, 0.09, 0.065),
+    (0.40, 0.64, 0.16, 0.07),
+    (0.44, 0.38, 0.18, 0.045),
+    (0.38, 0.11, 0.18, 0.03),
+    (0.50, 0.015, 0.19, 0.022),
+)
 SIDES = (("L", 1.0), ("R", -1.0))
 
 
@@ -348,7 +374,8 @@ def _skeleton() -> tuple[list[_Bone], list[_Tube]]:
             points = np.array([(x, y, z * sign) for x, y, z, _ in knots])
             parent = root
             for j, name in enumerate(names):
-                bone(f"{name}_{side}", parent, tuple(points[j + 1]))  # type: ignore[arg-type]
+                x, y, z = (float(c) for c in points[j + 1])
+                bone(f"{name}_{side}", parent, (x, y, z))
                 parent = f"{name}_{side}"
             segment_bones = (index[root], *(index[f"{name}_{side}"] for name in names))
             tubes.append(_Tube(points, np.array([r for *_, r in knots]), segment_bones))
@@ -380,7 +407,10 @@ class _Motion:
         n = len(bones)
         by_name = {b.name: i for i, b in enumerate(bones)}
         rot = np.zeros((frames, n, 3))
-        smooth = lambda seconds, count=1: _smooth_random(rng, frames, seconds, count)  # noqa: E731
+
+        def smooth(seconds: float, count: int = 1) -> np.ndarray:
+            return _smooth_random(rng, frames, seconds, count)
+
         # walking speed (units/s), gait frequency and phase
         speed = 0.2 + 1.0 * _sigmoid(smooth(5.0)[:, 0])
         gait = 2 * np.pi * np.cumsum(0.5 + 0.6 * speed) / FPS
