@@ -26,6 +26,9 @@ STREAMED = {
     "cloth.pc2": "Pc2Frames",
     "cloth.mdd": "MddFrames",
     "cloth.zarr": "ZarrFrames",
+    "cloth.pvd": "PvdFrames",
+    "cloth.xdmf": "XdmfFrames",
+    "cloth.glb": "GltfFrames",
     "frames": "FileFrames",
 }
 #: Ranges read from the 60 frames of the cloth: forward, backward, single frames, the whole.
@@ -253,3 +256,45 @@ def test_horse_gallop_streams_as_it_loads(tmp_path, suffix):
         copy = pickle.loads(pickle.dumps(source))
         with copy:
             assert np.array_equal(copy.read(0, 48), expected.vertices)
+
+
+# ------------------------------------------------------------------------------------------
+# series and animations
+
+
+def test_a_series_reads_a_frame_file_only_when_its_frame_is_read(cloth, tmp_path):
+    target = tmp_path / "cloth.pvd"
+    save_sequence(cloth, target)
+    missing = sorted((tmp_path / "cloth").iterdir())[40]
+    missing.unlink()
+    with open_frames(target) as source:
+        assert np.array_equal(source.read(0, 40), cloth.vertices[:40])
+        assert np.array_equal(source.read(41, 60), cloth.vertices[41:])
+        expect_input_error(lambda: source.read(30, 50), missing, frame=40, match="cannot read")
+
+
+def test_xdmf_steps_sharing_a_geometry_are_found_across_ranges(cloth, tmp_path):
+    target = tmp_path / "cloth.xdmf"
+    save_sequence(cloth, target)
+    text = target.read_text()
+    target.write_text(text.replace("cloth.h5:/points/000005<", "cloth.h5:/points/000001<"))
+    with open_frames(target) as source:
+        assert np.array_equal(source.read(0, 3), cloth.vertices[:3])
+        error = expect_input_error(lambda: source.read(4, 8), target, frame=5, match="static")
+        assert "time step 1" in error.reason
+    expect_input_error(lambda: load_sequence(target), target, frame=5, match="time step 1")
+
+
+@pytest.mark.parametrize("fps", [None, 7.0])
+@pytest.mark.parametrize("interpolation", ["LINEAR", "CUBICSPLINE"])
+def test_a_foreign_gltf_animation_evaluates_every_range_as_it_loads(tmp_path, fps, interpolation):
+    from test_io_gltf import _animated  # a file built by hand, with weights and a moving node
+
+    path = _animated(tmp_path, interpolation=interpolation)
+    expected = load_sequence(path, fps=fps)
+    with open_frames(path, fps=fps) as source:
+        same_description(source, expected)
+        count = source.frame_count
+        for start in range(count):
+            for stop in range(start + 1, count + 1):
+                assert source.read(start, stop).tobytes() == expected.vertices[start:stop].tobytes()

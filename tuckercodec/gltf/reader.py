@@ -70,7 +70,7 @@ def read_gltf(path: Path, object_path: str | None = None, fps: float | None = No
             ``gltf``) is missing.
     """
     sampled = sample_gltf(path, object_path=object_path, fps=fps)
-    rate, codes, names = _timing(sampled, fps)
+    rate, codes, names = timing(sampled.times, sampled.animated, sampled.extras, fps)
     try:
         return MeshSequence(
             sampled.positions, sampled.faces, frame_names=names, frame_rate=rate, time_codes=codes
@@ -87,46 +87,86 @@ def sample_gltf(
     fps: float | None = None,
 ) -> Sampled:
     """Evaluate the file's mesh at ``times`` (seconds), or at its keyframes or ``fps``."""
-    doc = read_document(path)
-    required = doc.gltf.get("extensionsRequired", [])
-    if not isinstance(required, list):
-        raise doc.fail("extensionsRequired must be a list")
-    unknown = [name for name in required if name not in SUPPORTED_EXTENSIONS]
-    if unknown:
-        raise doc.fail(
-            f"requires {', '.join(map(str, unknown))}, which this reader does not support "
-            f"(it reads {', '.join(sorted(SUPPORTED_EXTENSIONS))})"
-        )
-    parents = _parents(doc)
-    chosen = _mesh_nodes(doc, parents, object_path)
-    animation, channels = _channels(doc, chosen, parents)
-    keys = [sampler.times for per_node in channels.values() for sampler in per_node.values()]
-    extras: dict[str, Any] = {}
-    record = doc.gltf["asset"].get("extras")
-    if isinstance(record, dict) and isinstance(record.get(EXTRAS_KEY), dict):
-        extras = record[EXTRAS_KEY]
-    if times is None:
-        times = _frame_times(doc, keys, fps)
-    meshes = {index: read_mesh(doc, index) for index in {_mesh_of(doc, n) for n in chosen}}
-    vertex_total = sum(len(meshes[_mesh_of(doc, n)].base) for n in chosen)
-    if len(times) * vertex_total * 3 > MAX_NUMBERS:
-        raise doc.fail(f"{len(times)} frames of {vertex_total} vertices are too many to read")
+    scene = Scene(path, times, object_path=object_path, fps=fps)
+    positions = scene.evaluate(0, len(scene.times))
+    return Sampled(positions, scene.faces, scene.times, scene.animated, scene.extras)
 
-    positions, faces, offset = [], [], 0
-    for node in chosen:
-        mesh = meshes[_mesh_of(doc, node)]
-        local = _morphed(doc, node, mesh, channels.get(node, {}), times)
-        world = _world(doc, node, parents, channels, times)
-        placed = np.einsum("nij,nkj->nki", world[:, :3, :3], local) + world[:, None, :3, 3]
-        positions.append(placed)
-        faces.append(mesh.faces + offset)
-        offset += len(mesh.base)
-    result = np.concatenate(positions, axis=1)
-    bad = ~np.isfinite(result)
-    if bad.any():
-        frame, vertex, _ = (int(i) for i in np.argwhere(bad)[0])
-        raise doc.fail(f"vertex {vertex} is not finite at {times[frame]:g} s", frame=frame)
-    return Sampled(result, np.concatenate(faces), np.asarray(times), animation is not None, extras)
+
+class Scene:
+    """A file's chosen meshes and the animation that moves them, read and checked once, to be
+    evaluated a range of frames at a time (:meth:`evaluate`).
+
+    Attributes:
+        times: the frames' times in seconds: ``times`` as given, else the keyframes' or
+            ``fps``'s (:func:`sample_gltf`).
+        faces: the merged meshes' triangles.
+        animated: whether the file has an animation.
+        extras: the tuckercodec writer's record in the asset's ``extras``, if any.
+    """
+
+    def __init__(
+        self,
+        path: Path,
+        times: np.ndarray | None = None,
+        *,
+        object_path: str | None = None,
+        fps: float | None = None,
+    ):
+        doc = read_document(path)
+        required = doc.gltf.get("extensionsRequired", [])
+        if not isinstance(required, list):
+            raise doc.fail("extensionsRequired must be a list")
+        unknown = [name for name in required if name not in SUPPORTED_EXTENSIONS]
+        if unknown:
+            raise doc.fail(
+                f"requires {', '.join(map(str, unknown))}, which this reader does not support "
+                f"(it reads {', '.join(sorted(SUPPORTED_EXTENSIONS))})"
+            )
+        self.doc = doc
+        self.parents = _parents(doc)
+        self.chosen = _mesh_nodes(doc, self.parents, object_path)
+        animation, self.channels = _channels(doc, self.chosen, self.parents)
+        self.animated = animation is not None
+        keys = [s.times for per_node in self.channels.values() for s in per_node.values()]
+        self.extras: dict[str, Any] = {}
+        record = doc.gltf["asset"].get("extras")
+        if isinstance(record, dict) and isinstance(record.get(EXTRAS_KEY), dict):
+            self.extras = record[EXTRAS_KEY]
+        self.times = np.asarray(_frame_times(doc, keys, fps) if times is None else times)
+        mesh_indices = {_mesh_of(doc, node) for node in self.chosen}
+        self.meshes = {index: read_mesh(doc, index) for index in mesh_indices}
+        vertex_total = sum(len(self.meshes[_mesh_of(doc, n)].base) for n in self.chosen)
+        if len(self.times) * vertex_total * 3 > MAX_NUMBERS:
+            raise doc.fail(
+                f"{len(self.times)} frames of {vertex_total} vertices are too many to read"
+            )
+        faces, offset = [], 0
+        for node in self.chosen:
+            mesh = self.meshes[_mesh_of(doc, node)]
+            faces.append(mesh.faces + offset)
+            offset += len(mesh.base)
+        self.faces = np.concatenate(faces)
+
+    def evaluate(self, start: int, stop: int) -> np.ndarray:
+        """The positions (n, K, 3) at ``times[start:stop]``, each frame's numbers the same
+        whatever the range (see :func:`_morphed`); a non-finite one is an InputError naming its
+        frame."""
+        doc, times = self.doc, self.times[start:stop]
+        positions = []
+        for node in self.chosen:
+            mesh = self.meshes[_mesh_of(doc, node)]
+            local = _morphed(doc, node, mesh, self.channels.get(node, {}), times)
+            world = _world(doc, node, self.parents, self.channels, times)
+            placed = np.einsum("nij,nkj->nki", world[:, :3, :3], local) + world[:, None, :3, 3]
+            positions.append(placed)
+        result = np.concatenate(positions, axis=1)
+        bad = ~np.isfinite(result)
+        if bad.any():
+            frame, vertex, _ = (int(i) for i in np.argwhere(bad)[0])
+            raise doc.fail(
+                f"vertex {vertex} is not finite at {times[frame]:g} s", frame=start + frame
+            )
+        return result
 
 
 def _parents(doc: Document) -> dict[int, int]:
@@ -267,7 +307,14 @@ def _frame_times(doc: Document, keys: list[np.ndarray], fps: float | None) -> np
 def _morphed(
     doc: Document, node: int, mesh: Mesh, channels: dict[str, Sampler], times: np.ndarray
 ) -> np.ndarray:
-    """The node's mesh with its morph targets applied at each time, (n, K, 3)."""
+    """The node's mesh with its morph targets applied at each time, (n, K, 3).
+
+    Each frame is its base plus its weighted targets added in order, skipping the targets its
+    weight leaves out (0): elementwise, so a frame's numbers do not depend on which other
+    frames are evaluated with it (a matrix product's rounding does, through the BLAS's
+    blocking and threads), and a file that gives each frame a target of its own (as the
+    writer does) costs one target per frame, not all of them.
+    """
     count = len(mesh.weights)
     if "weights" in channels:
         weights = channels["weights"].at(times)
@@ -278,12 +325,16 @@ def _morphed(
                 doc, doc.array("nodes")[node]["weights"], count, f"nodes[{node}].weights"
             )
         weights = np.repeat(default[None], len(times), axis=0)
-    shape = mesh.base.shape
-    if count == 0:
-        return np.repeat(mesh.base[None], len(times), axis=0)
+    moved = np.repeat(mesh.base[None], len(times), axis=0)
     with np.errstate(over="ignore", invalid="ignore"):  # found as non-finite by the caller
-        moved = weights @ mesh.targets.reshape(count, -1)
-    return mesh.base[None] + moved.reshape(len(times), *shape)
+        for target in range(count):
+            column = weights[:, target]
+            used = column != 0
+            if used.all():
+                moved += column[:, None, None] * mesh.targets[target]
+            elif used.any():
+                moved[used] += column[used, None, None] * mesh.targets[target]
+    return moved
 
 
 def _world(
@@ -304,19 +355,19 @@ def _world(
     return world
 
 
-def _timing(
-    sampled: Sampled, fps: float | None
+def timing(
+    times: np.ndarray, animated: bool, extras: dict[str, Any], fps: float | None
 ) -> tuple[float | None, np.ndarray | None, list[str]]:
-    """The frame rate, time codes and names of the frames (see the module docstring)."""
-    times = sampled.times
-    if not sampled.animated:
-        static = dict(sampled.extras)
+    """The frame rate, time codes and names of frames at ``times`` (see the module
+    docstring)."""
+    if not animated:
+        static = dict(extras)
         static.pop("time_codes", None)  # one frame at time 0 whatever its time code
         recorded = _recorded(static, times)
         return recorded[0] if recorded else None, None, recorded[2] if recorded else []
     if fps is not None:
         return fps, _codes(times * fps), []
-    recorded = _recorded(sampled.extras, times)
+    recorded = _recorded(extras, times)
     if recorded is not None:
         return recorded
     if len(times) > 1:

@@ -5,24 +5,59 @@ or at ``--fps`` (:func:`tuckercodec.gltf.reader.read_gltf`); writing puts frame 
 and every other frame in a morph target, one keyframe per frame
 (:mod:`tuckercodec.gltf.sequence_writer`), exact to within the float32 rounding of base +
 target. A static glTF (no animation) is a one-frame sequence, so a folder of .glb frames still
-reads one frame per file.
+reads one frame per file. :class:`GltfFrames` evaluates the frames a range at a time.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import ClassVar
+
+import numpy as np
 
 from ..errors import InputError
-from ..gltf.reader import read_gltf
+from ..gltf.reader import Scene, read_gltf, timing
 from ..gltf.sequence_writer import write_sequence_gltf
 from ..sequence import MeshSequence
 from .registry import MeshFrame, ReadOptions, SequenceFormat, WriteOptions
+from .streaming import FrameSource
 
 
 def read(path: Path, options: ReadOptions) -> MeshSequence:
     """The sequence of a .glb/.gltf file; ``object_path`` names the mesh node or mesh, ``fps``
     the sampling rate."""
     return read_gltf(path, object_path=options.object_path, fps=options.fps)
+
+
+class GltfFrames(FrameSource):
+    """The frames of a glTF animation, evaluated a range at a time: the file is read and
+    checked once and held (its buffers hold every target anyway), and each range's frames are
+    evaluated when read, the same numbers as :func:`read` gives them."""
+
+    _transient: ClassVar[tuple[str, ...]] = ("_scene",)
+    _scene: Scene | None = None
+
+    def __init__(self, path: Path, options: ReadOptions):
+        self._file, self._options = path, options
+        scene = self._opened()
+        rate, codes, names = timing(scene.times, scene.animated, scene.extras, options.fps)
+        self._describe(
+            path, len(scene.times), _vertex_count(scene), scene.faces, names, rate, codes
+        )
+
+    def _opened(self) -> Scene:
+        if self._scene is None:
+            options = self._options
+            self._scene = Scene(self._file, object_path=options.object_path, fps=options.fps)
+        return self._scene
+
+    def _read(self, start: int, stop: int) -> np.ndarray:
+        return self._opened().evaluate(start, stop)
+
+
+def _vertex_count(scene: Scene) -> int:
+    """The merged meshes' vertex count, without evaluating a frame."""
+    return sum(len(scene.meshes[scene.doc.array("nodes")[n]["mesh"]].base) for n in scene.chosen)
 
 
 def write(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
@@ -48,6 +83,7 @@ FORMAT = SequenceFormat(
     description="glTF 2.0 morph animation (frame 0 the mesh, frames as morph targets)",
     read=read,
     write=write,
+    open=GltfFrames,
     read_frame=read_frame,
     read_options=frozenset({"object_path", "fps"}),
     carries=frozenset({"faces", "frame_names", "frame_rate", "time_codes"}),

@@ -11,7 +11,8 @@ One mesh per time step: several ``part`` values, or one timestep listed twice, a
 (merge the parts first, ParaView's Merge Blocks), as are parallel files (``.pvtu``, ``.pvtp``).
 Each file must have the first one's points and faces; what is read of each (every encoding VTK
 writes; triangles, quads, polygons, strips; what is refused) is :mod:`.vtk_xml`'s docstring.
-Positions keep their precision (float64 stays float64). XDMF is not read here.
+Positions keep their precision (float64 stays float64). :class:`PvdFrames` reads the files as
+their frames are asked for, a range at a time. XDMF is not read here.
 
 Hostile input: a ``.pvd`` larger than :data:`MAX_INDEX_BYTES`, or one that declares a DOCTYPE or
 an ENTITY (the way to an entity-expansion attack; a ``.pvd`` needs neither), is refused before it
@@ -45,6 +46,7 @@ from ..reading import open_input, open_regular_file
 from ..sequence import MeshSequence
 from .frames import frame_file_names
 from .registry import ReadOptions, SequenceFormat, WriteOptions
+from .streaming import FrameSource
 from .vtk_data import Layout
 from .vtk_xml import DATASETS, DatasetWriter, read_dataset, refuse_declarations
 
@@ -55,44 +57,56 @@ FRAME_SUFFIX = ".vtp"
 _PARALLEL = (".pvtu", ".pvtp")
 
 
-def read_pvd(path: Path, options: ReadOptions) -> MeshSequence:
+class PvdFrames(FrameSource):
+    """The frames of a ParaView ``.pvd`` collection, read file by file: the index and the
+    first file at once, each other file when its frame is read, checked against the first
+    (see the module docstring)."""
+
+    def __init__(self, path: Path, options: ReadOptions | None = None):
+        self._entries = _collection(path)
+        _refuse_repeated_files(self._entries, path)
+        points, faces = _read_frame(self._entries[0].file, path, 0)
+        self._points = np.asarray(points, dtype=np.float64)
+        timed = self._entries[0].timestep is not None
+        codes = [entry.timestep for entry in self._entries] if timed else None
+        names = [entry.name for entry in self._entries]
+        self._describe(path, len(self._entries), len(self._points), faces, names, None, codes)
+
+    def _read(self, start: int, stop: int) -> np.ndarray:
+        # frames are gathered as read, not into one array sized by the index: an index may
+        # list far more frames than its files hold
+        frames: list[np.ndarray] = []
+        first = self._entries[0].file
+        pvd = Path(self.path or "")
+        for index in range(start, stop):
+            entry = self._entries[index]
+            if index == 0:
+                frames.append(self._points)
+                continue
+            points, cells = _read_frame(entry.file, pvd, index)
+            if len(points) != self.vertex_count:
+                raise InputError(
+                    f"has {len(points)} points but the first frame ({first}) has "
+                    f"{self.vertex_count}: every frame of {pvd.name} must have the same points",
+                    path=entry.file,
+                    frame=index,
+                )
+            if not np.array_equal(cells, self.faces):
+                raise InputError(
+                    f"its cells differ from the first frame's ({first}): every frame of "
+                    f"{pvd.name} must have the same cells",
+                    path=entry.file,
+                    frame=index,
+                )
+            frames.append(np.asarray(points, dtype=np.float64))
+        return np.stack(frames)
+
+
+def read_pvd(path: Path, options: ReadOptions | None = None) -> MeshSequence:
     """A sequence from a ParaView ``.pvd`` collection of ``.vtp``/``.vtu`` files (see the
     module docstring); the format takes no read options."""
-    entries = _collection(path)
-    _refuse_repeated_files(entries, path)
-    # frames are gathered as read, not into one array sized by the index: an index may list
-    # far more frames than its files hold
-    frames: list[np.ndarray] = []
-    faces = np.zeros((0, 3), dtype=np.int64)
-    first = entries[0].file
-    for index, entry in enumerate(entries):
-        points, cells = _read_frame(entry.file, path, index)
-        if not frames:
-            faces = cells
-        elif len(points) != len(frames[0]):
-            raise InputError(
-                f"has {len(points)} points but the first frame ({first}) has "
-                f"{len(frames[0])}: every frame of {path.name} must have the same points",
-                path=entry.file,
-                frame=index,
-            )
-        elif not np.array_equal(cells, faces):
-            raise InputError(
-                f"its cells differ from the first frame's ({first}): every frame of "
-                f"{path.name} must have the same cells",
-                path=entry.file,
-                frame=index,
-            )
-        frames.append(np.asarray(points, dtype=np.float64))
-    vertices = np.stack(frames)
-    timed = entries[0].timestep is not None
-    codes = np.array([entry.timestep for entry in entries], dtype=np.float64) if timed else None
-    try:
-        return MeshSequence(
-            vertices, faces, frame_names=[entry.name for entry in entries], time_codes=codes
-        )
-    except InputError as error:
-        raise InputError(error.reason, path=path, frame=error.frame) from None
+    with PvdFrames(path) as source:
+        return source.load()
 
 
 def _refuse_repeated_files(entries: list[_Entry], path: Path) -> None:
@@ -301,5 +315,6 @@ FORMAT = SequenceFormat(
     description="VTK time series: a ParaView .pvd of .vtp or .vtu files, one per time step",
     read=read_pvd,
     write=write_pvd,
+    open=PvdFrames,
     carries=frozenset({"float64", "faces", "polygons", "frame_names", "time_codes"}),
 )

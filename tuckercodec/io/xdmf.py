@@ -17,7 +17,9 @@ other elements (``/Xdmf/...`` paths) followed. ``xi:include`` is not followed.
 A series whose time steps share one geometry (the same element, the same HDF dataset, or an
 ``xi:include`` of another grid's, as meshio's and FEniCS's time series are) is a static mesh
 with changing point data, not a moving mesh: it is refused saying so. Several temporal
-collections, or a spatial collection per step (several parts), are refused too.
+collections, or a spatial collection per step (several parts), are refused too. Steps are read
+as their frames are asked for, a range at a time (:class:`XdmfFrames`); the check that no two
+steps share a geometry then covers the steps read so far.
 
 Hostile input: an ENTITY declaration is refused before parsing (a DOCTYPE alone, which XDMF
 files carry, is harmless: the parser never fetches it); every count is checked against the data
@@ -31,6 +33,7 @@ from __future__ import annotations
 import itertools
 from dataclasses import dataclass
 from pathlib import Path
+from typing import ClassVar
 from xml.etree import ElementTree
 
 import numpy as np
@@ -40,7 +43,8 @@ from ..reading import open_input
 from ..sequence import MeshSequence
 from .polygons import faces_from_polygons
 from .registry import SequenceFormat
-from .xdmf_data import XINCLUDE, HeavyData, heavy_files, lower, read_item, resolve
+from .streaming import FrameSource
+from .xdmf_data import XINCLUDE, HeavyData, lower, read_item, resolve
 from .xdmf_write import write_xdmf
 
 _FIXED = {"triangle": 3, "quadrilateral": 4}
@@ -48,52 +52,85 @@ _FIXED = {"triangle": 3, "quadrilateral": 4}
 _POLYVERTEX, _POLYGON, _TRIANGLE, _QUADRILATERAL = 1, 3, 4, 5
 
 
+class XdmfFrames(FrameSource):
+    """The frames of an XDMF temporal collection, read time step by time step (see the module
+    docstring): the XML at once, with the first step's points and faces, each other step's
+    geometry (an HDF5 dataset, or the XML's inline data) when its frame is read."""
+
+    _transient: ClassVar[tuple[str, ...]] = ("_heavy", "_root", "_steps", "_sources")
+    _heavy: HeavyData | None = None
+    _root: ElementTree.Element | None = None
+    _steps: list[_Step] | None = None
+    _sources: dict[object, int] | None = None
+
+    def __init__(self, path: Path, options: object = None):
+        self._file = path
+        _, steps = self._tree()
+        self._topology = np.zeros(0, dtype=np.int64)
+        faces = np.zeros((0, 3), dtype=np.int64)
+        self._points, faces = self._step(0, steps[0], faces, None)
+        timed = steps[0].time is not None
+        codes = [step.time for step in steps] if timed else None
+        names = [step.name for step in steps]
+        if not (all(names) and len(set(names)) == len(names)):
+            names = []
+        self._describe(path, len(steps), len(self._points), faces, names, None, codes)
+
+    def _tree(self) -> tuple[ElementTree.Element, list[_Step]]:
+        """The parsed XML and its steps (parsed again after unpickling)."""
+        if self._root is None or self._steps is None:
+            self._root = _parse(self._file)
+            self._steps = _steps(self._root, self._file)
+        return self._root, self._steps
+
+    def _step(
+        self, index: int, step: _Step, faces: np.ndarray, count: int | None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """A step's points and faces, checked against the first step's ``faces`` and vertex
+        ``count`` (``None``: this is the first step)."""
+        root, _ = self._tree()
+        if self._heavy is None:
+            self._heavy = HeavyData(self._file.parent)
+        if self._sources is None:
+            self._sources = {}
+        try:
+            points, source = _geometry(step.grid, root, self._heavy)
+            first = self._sources.setdefault(source, index)
+            if first != index:
+                raise _shared(first, index, source)
+            values, kind = _topology_values(step.grid, root, self._heavy)
+            if count is None or not np.array_equal(values, self._topology):
+                step_faces = _faces(values, kind, step.grid, len(points))
+                if count is not None and not np.array_equal(step_faces, faces):
+                    raise InputError("its faces differ from the first time step's")
+                self._topology, faces = values, step_faces
+            if count is not None and len(points) != count:
+                raise InputError(
+                    f"has {len(points)} points but the first time step has {count}: every "
+                    "step must have the same points"
+                )
+        except InputError as error:
+            where = f"time step {index} (grid {step.name!r})"
+            raise InputError(f"{where}: {error.reason}", path=self._file, frame=index) from None
+        return points, faces
+
+    def _read(self, start: int, stop: int) -> np.ndarray:
+        _, steps = self._tree()
+        vertices = np.empty((stop - start, self.vertex_count, 3), dtype=np.float64)
+        for index in range(start, stop):
+            if index == 0:
+                vertices[0] = self._points
+            else:
+                step = steps[index]
+                vertices[index - start] = self._step(index, step, self.faces, self.vertex_count)[0]
+        return vertices
+
+
 def read_xdmf(path: Path, options: object = None) -> MeshSequence:
     """A sequence from an XDMF temporal collection (see the module docstring); the format
     takes no read options."""
-    root = _parse(path)
-    steps = _steps(root, path)
-    vertices: np.ndarray | None = None
-    faces = np.zeros((0, 3), dtype=np.int64)
-    topology: np.ndarray | None = None
-    sources: dict[object, int] = {}
-    with heavy_files(path) as heavy:
-        for index, step in enumerate(steps):
-            where = f"time step {index} (grid {step.name!r})"
-            try:
-                points, source = _geometry(step.grid, root, heavy)
-                if source in sources:
-                    raise _shared(sources[source], index, source)
-                sources[source] = index
-                values, kind = _topology_values(step.grid, root, heavy)
-                if topology is None or not np.array_equal(values, topology):
-                    step_faces = _faces(values, kind, step.grid, len(points))
-                    if topology is not None and not np.array_equal(step_faces, faces):
-                        raise InputError("its faces differ from the first time step's")
-                    topology, faces = values, step_faces
-                if vertices is None:
-                    vertices = np.empty((len(steps), *points.shape), dtype=np.float64)
-                elif len(points) != vertices.shape[1]:
-                    raise InputError(
-                        f"has {len(points)} points but the first time step has "
-                        f"{vertices.shape[1]}: every step must have the same points"
-                    )
-            except InputError as error:
-                raise InputError(f"{where}: {error.reason}", path=path, frame=index) from None
-            vertices[index] = points
-    assert vertices is not None
-    timed = steps[0].time is not None
-    codes = np.array([step.time for step in steps], dtype=np.float64) if timed else None
-    names = [step.name for step in steps]
-    try:
-        return MeshSequence(
-            vertices,
-            faces,
-            frame_names=names if all(names) and len(set(names)) == len(names) else [],
-            time_codes=codes,
-        )
-    except InputError as error:
-        raise InputError(error.reason, path=path, frame=error.frame) from None
+    with XdmfFrames(path) as source:
+        return source.load()
 
 
 def _shared(first: int, index: int, source: object) -> InputError:
@@ -357,6 +394,7 @@ FORMAT = SequenceFormat(
     description="XDMF time series: a temporal collection of grids, HDF5 or XML data (h5py)",
     read=read_xdmf,
     write=write_xdmf,
+    open=XdmfFrames,
     extra="xdmf",
     carries=frozenset({"float64", "faces", "polygons", "frame_names", "time_codes"}),
 )

@@ -12,8 +12,6 @@ from __future__ import annotations
 
 import os
 import stat
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 from xml.etree import ElementTree
@@ -81,6 +79,12 @@ class HeavyData:
         self.folder = folder
         self.files: dict[Path, Any] = {}
 
+    def close(self) -> None:
+        """Close every file opened."""
+        for handle in self.files.values():
+            handle.close()
+        self.files.clear()
+
     def read(self, text: str, count: int, what: str) -> tuple[np.ndarray, object]:
         """The values of ``file.h5:/dataset``, and that name as the source's identity."""
         h5py = import_optional("h5py", "xdmf", "reading XDMF's HDF5 heavy data")
@@ -117,16 +121,6 @@ class HeavyData:
         except Exception as error:  # h5py and HDF5 raise many kinds on a damaged file
             raise InputError(f"{what}: cannot read {file}:{dataset} ({error})") from None
         return values, (file, dataset)
-
-
-@contextmanager
-def heavy_files(path: Path) -> Iterator[HeavyData]:
-    heavy = HeavyData(path.parent)
-    try:
-        yield heavy
-    finally:
-        for handle in heavy.files.values():
-            handle.close()
 
 
 def read_item(
