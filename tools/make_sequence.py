@@ -805,7 +805,7 @@ def _write_positions(handle: BinaryIO, sequence: Sequence, report: Callable[[int
     """The positions as an .npy: its header, then the frames block by block."""
     np.lib.format.write_array_header_1_0(handle, _npy_header(sequence))
     for start, block in blocks(sequence):
-        handle.write(memoryview(block).cast("B"))
+        handle.write(block.data)  # C-contiguous: astype made it
         report(start + len(block))
 
 
