@@ -1,0 +1,58 @@
+"""tools.bench_scale's measuring instruments, so that its tables can be trusted: the memory of a
+whole process tree, the kill that protects the machine, and the streamed KG check. The
+benchmark itself is never run here (its figures are timings)."""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+import pytest
+
+from tools import bench_scale, make_sequence
+from tuckercodec import MeshSequence, decode, encode, kg_error
+
+pytestmark = pytest.mark.skipif(sys.platform != "linux", reason="bench_scale reads Linux's /proc")
+
+MB = 1 << 20
+# A child that holds 120 MB and starts a grandchild holding 200 MB, both for a moment (bytes
+# made by repetition are written, so resident; no numpy, so they start fast).
+_HOLD = "import time; a = b'x' * {n}; time.sleep({s})"
+_TREE = (
+    "import subprocess, sys\n"
+    f"grandchild = subprocess.Popen([sys.executable, '-c', {_HOLD.format(n=200 * MB, s=0.5)!r}])\n"
+    f"a = b'x' * {120 * MB}\n"
+    "grandchild.wait()\n"
+)
+
+
+def test_the_memory_of_children_and_grandchildren_is_summed(tmp_path):
+    run = bench_scale.run_measured([sys.executable, "-c", _TREE], cwd=tmp_path, interval=0.02)
+    assert run.ok, run.stderr
+    assert run.main_rss > 120 * MB  # the child's own 120 MB
+    assert run.tree_rss > 320 * MB  # and its grandchild's 200 MB with it
+    assert run.tree_anon > 300 * MB
+    assert run.largest_hwm > 200 * MB  # the kernel's mark: the largest single process
+    assert run.seconds > 0.4
+
+
+def test_a_tree_that_passes_the_limit_is_killed_and_said_to_be(tmp_path):
+    command = [sys.executable, "-c", _HOLD.format(n=480 * MB, s=30)]
+    run = bench_scale.run_measured(command, cwd=tmp_path, interval=0.02, limit=100 * MB)
+    assert not run.ok and run.killed_above == 100 * MB
+    assert run.seconds < 20  # not left to sleep its 30 s
+    assert "passed 0.1 GB" in run.failure()
+
+
+def test_the_streamed_kg_is_the_kg_error(tmp_path, monkeypatch):
+    sequence = make_sequence.make("body", 500, 30)
+    npy = tmp_path / "b.npy"
+    make_sequence.write(npy, sequence)
+    positions = np.load(npy).astype(np.float64)
+    compressed = tmp_path / "b.tkc"
+    compressed.write_bytes(encode(MeshSequence(positions, sequence.faces), target_kg=0.5))
+    expected = kg_error(positions, decode(compressed).vertices)
+    # blocks of 7 frames: the sums over blocks must give the whole sequence's error
+    assert bench_scale.streamed_kg(npy, compressed, block_values=7 * 3 * 500) == pytest.approx(
+        expected, rel=1e-9
+    )
