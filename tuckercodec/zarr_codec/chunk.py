@@ -1,0 +1,321 @@
+"""One chunk in and out: the work both codecs share, with neither numcodecs nor zarr imported.
+
+A chunk is an array of shape (frames, vertices, 3) of floats. :func:`encode_chunk` makes it a
+.tkc file (``spec/FORMAT.md``) of a sequence without faces, or, for a chunk with no shape to
+measure an error against, a lossless *point chunk* (below); :func:`decode_chunk` gives either
+back in the dtype asked for.
+
+A point chunk is one in which every frame is a single point to float64's precision (a chunk of
+one vertex, a constant chunk): its KG denominator is zero, so no error is allowed in it, and the
+encoder refuses it (there is no shape for the KG error to measure). It is stored exactly:
+
+===========  ===========================================================
+bytes 0..7   :data:`POINT_MAGIC`
+bytes 8..15  frames, vertices: two little-endian u32
+bytes 16..   one zstd frame of the positions as little-endian float64, C order
+===========  ===========================================================
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import zstandard
+
+from ..analysis import SMALLEST_COORDINATE, SMALLEST_RELATIVE_SHAPE
+from ..decoder import decode
+from ..encoder import DEFAULT_TARGET_KG, encode_with_report
+from ..errors import InputError, UnreachableTargetError
+from ..format.limits import DEFAULT_LIMITS
+from ..format.streams import compress
+from ..metrics import kg_error
+from ..sequence import MeshSequence
+
+#: The first bytes of a point chunk; never those of a .tkc file, which start with 0x89 "TKC".
+POINT_MAGIC = b"TKCpoint"
+_POINT_HEAD = struct.Struct("<8sII")
+#: A chunk whose spread is below this many times the encoder's own floor is a point chunk: the
+#: margin keeps a chunk at the floor (the two centrings round differently) from being refused.
+POINT_MARGIN = 4.0
+#: How many times a chunk stored below float64 is re-encoded at a tighter target before giving up
+#: (rounding to float32 rarely needs one; float16 may need a few).
+MAX_TIGHTENING = 8
+#: zstd cannot expand one byte into more than this many (a bound that refuses absurd headers).
+_ZSTD_MAX_EXPANSION = 1 << 17
+
+_NO_FACES = np.zeros((0, 3), dtype=np.int64)
+
+
+@dataclass(frozen=True)
+class ChunkMode:
+    """How each chunk is encoded: one of the encoder's three modes, checked.
+
+    Exactly one of the three is set; :func:`chunk_mode` builds it, with a KG error of
+    :data:`~tuckercodec.encoder.DEFAULT_TARGET_KG` when none is given.
+    """
+
+    target_kg: float | None = None
+    ranks: tuple[int, int] | None = None
+    target_bpfv: float | None = None
+
+    def config(self) -> dict[str, Any]:
+        """The one key of the mode in use, JSON-safe (``ranks`` as a list)."""
+        if self.ranks is not None:
+            return {"ranks": list(self.ranks)}
+        if self.target_bpfv is not None:
+            return {"target_bpfv": self.target_bpfv}
+        return {"target_kg": self.target_kg}
+
+
+def chunk_mode(target_kg: Any = None, ranks: Any = None, target_bpfv: Any = None) -> ChunkMode:
+    """Check a codec's configuration (values as they come from JSON) and return its mode.
+
+    Raises:
+        ValueError: two modes at once, a target that is not a positive finite number, or ranks
+            that are not two integers >= 1.
+    """
+    given = [
+        name
+        for name, value in (
+            ("target_kg", target_kg),
+            ("ranks", ranks),
+            ("target_bpfv", target_bpfv),
+        )
+        if value is not None
+    ]
+    if len(given) > 1:
+        raise ValueError(f"give one of target_kg, ranks and target_bpfv, not {' and '.join(given)}")
+    if ranks is not None:
+        return ChunkMode(ranks=_checked_ranks(ranks))
+    if target_bpfv is not None:
+        return ChunkMode(target_bpfv=_positive("target_bpfv", target_bpfv))
+    if target_kg is None:
+        return ChunkMode(target_kg=DEFAULT_TARGET_KG)
+    return ChunkMode(target_kg=_positive("target_kg", target_kg))
+
+
+def _positive(name: str, value: Any) -> float:
+    if (
+        isinstance(value, (int, float, np.integer, np.floating))
+        and not isinstance(value, bool)
+        and math.isfinite(value)
+        and value > 0
+    ):
+        return float(value)
+    raise ValueError(f"{name} must be a positive finite number, got {value!r}")
+
+
+def _checked_ranks(ranks: Any) -> tuple[int, int]:
+    if (
+        isinstance(ranks, (list, tuple))
+        and len(ranks) == 2
+        and all(isinstance(r, (int, np.integer)) and not isinstance(r, bool) for r in ranks)
+        and all(r >= 1 for r in ranks)
+    ):
+        return int(ranks[0]), int(ranks[1])
+    raise ValueError(f"ranks must be two integers >= 1, as [i, k], got {ranks!r}")
+
+
+def checked_dtype(dtype: Any) -> np.dtype[Any]:
+    """``dtype`` as a numpy floating dtype, or a ValueError naming it."""
+    try:
+        parsed = np.dtype(dtype)
+    except TypeError as error:
+        raise ValueError(f"not a numpy dtype: {dtype!r} ({error})") from None
+    if parsed.kind != "f":
+        raise ValueError(f"the tuckercodec codec stores floating-point positions, not {parsed}")
+    return parsed
+
+
+def chunk_positions(chunk: Any) -> np.ndarray:
+    """The chunk as an array of shape (frames, vertices, 3) of floats, or an InputError that
+    names the shape or dtype it has."""
+    array = np.asarray(chunk)
+    if array.ndim != 3 or array.shape[2] != 3 or array.shape[0] < 1 or array.shape[1] < 1:
+        raise InputError(
+            "the tuckercodec codec encodes chunks of shape (frames, vertices, 3), at least one "
+            f"frame and one vertex; this chunk has shape {array.shape} (chunk the array over "
+            "frames and vertices only, with its last axis whole)"
+        )
+    if array.dtype.kind != "f":
+        raise InputError(
+            f"the tuckercodec codec encodes floating-point positions; this chunk is {array.dtype}"
+        )
+    return array
+
+
+def is_point_chunk(positions: np.ndarray) -> bool:
+    """Whether every frame is a single point to float64's precision (the encoder's test, with a
+    margin): such a chunk has a zero KG denominator and is stored exactly."""
+    largest = float(np.abs(positions).max())
+    if largest < POINT_MARGIN * SMALLEST_COORDINATE:
+        return True
+    spread = float(np.abs(positions - positions.mean(axis=1, keepdims=True)).max())
+    return spread < POINT_MARGIN * SMALLEST_RELATIVE_SHAPE * largest
+
+
+def encode_chunk(chunk: Any, mode: ChunkMode) -> bytes:
+    """Encode one chunk: a .tkc file of its positions without faces (a point chunk, stored
+    exactly, when every frame is a single point).
+
+    With a KG target, the positions decoded and rounded to the chunk's own dtype meet it: a
+    chunk stored below float64 is checked after that rounding and re-encoded at a tighter
+    target if the rounding took it over.
+
+    Raises:
+        InputError: a chunk of another shape or dtype, or with a non-finite position (the
+            message names the chunk's shape; for a partial edge chunk it also names zarr's
+            fill value, which pads it).
+        UnreachableTargetError: a target the format cannot meet for this chunk.
+    """
+    positions = chunk_positions(chunk)
+    if np.isfinite(positions).all() and is_point_chunk(positions):
+        return _pack_points(positions)
+    sequence = _sequence(positions)
+    if mode.ranks is not None:
+        i, k = mode.ranks
+        # a short edge chunk may not have that many columns: its ranks are capped at its own
+        ranks = (
+            min(i, sequence.vertex_count, 3 * sequence.frame_count),
+            min(k, sequence.frame_count, 3 * sequence.vertex_count),
+        )
+        return _encode(sequence, ranks=ranks)
+    if mode.target_bpfv is not None:
+        return _encode(sequence, target_bpfv=mode.target_bpfv)
+    assert mode.target_kg is not None  # chunk_mode sets exactly one
+    return _encode_kg(sequence, positions.dtype, mode.target_kg)
+
+
+def _sequence(positions: np.ndarray) -> MeshSequence:
+    try:
+        return MeshSequence(positions, _NO_FACES)
+    except InputError as error:
+        raise _in_chunk(error, positions.shape) from None
+
+
+def _encode(sequence: MeshSequence, **mode: Any) -> bytes:
+    try:
+        return encode_with_report(sequence, **mode).data
+    except (InputError, UnreachableTargetError) as error:
+        raise _in_chunk(error, sequence.vertices.shape) from None
+
+
+def _encode_kg(sequence: MeshSequence, dtype: np.dtype[Any], target: float) -> bytes:
+    """Meet ``target`` for the positions as they will be read back: rounded to ``dtype``."""
+    goal = target
+    for _ in range(MAX_TIGHTENING):
+        data = _encode(sequence, target_kg=goal)
+        if dtype.itemsize >= 8:
+            return data  # float64 (or wider) holds the decoded positions exactly: no rounding
+        read_back = decode(data).vertices.astype(dtype).astype(np.float64)
+        error = kg_error(sequence.vertices, read_back)
+        if error <= target:
+            return data
+        goal *= min(0.95, target / error)
+    raise UnreachableTargetError(
+        f"a chunk of shape {sequence.vertices.shape}: after {MAX_TIGHTENING} tighter encodings, "
+        f"rounding the decoded positions to {dtype} still gives a KG error above {target}"
+    )
+
+
+def _in_chunk(error: InputError | UnreachableTargetError, shape: tuple[int, ...]) -> Exception:
+    """The encoder's error, saying that it concerns a chunk and which shape it has."""
+    message = f"a chunk of shape {shape}: {getattr(error, 'reason', str(error))}"
+    if "non-finite" in message:
+        message += (
+            " (zarr pads a partial edge chunk with the array's fill_value: in zarr format 2 a "
+            "NaN fill_value cannot be encoded, use a finite one such as 0; format 3 cuts trailing "
+            "frames of fill_value, not others)"
+        )
+    if isinstance(error, InputError):
+        return InputError(message, frame=error.frame)
+    return UnreachableTargetError(message)
+
+
+def _pack_points(positions: np.ndarray) -> bytes:
+    frames, vertices, _ = positions.shape
+    values = np.ascontiguousarray(positions, dtype="<f8").tobytes()
+    return _POINT_HEAD.pack(POINT_MAGIC, frames, vertices) + compress(values)
+
+
+def _unpack_points(data: bytes) -> np.ndarray:
+    if len(data) < _POINT_HEAD.size:
+        raise ValueError(f"a point chunk of {len(data)} bytes is shorter than its 16-byte head")
+    _, frames, vertices = _POINT_HEAD.unpack_from(data)
+    if not (frames >= 1 and vertices >= 1 and frames * vertices <= DEFAULT_LIMITS.max_positions):
+        raise ValueError(
+            f"a point chunk declares {frames} frames of {vertices} vertices: outside 1.."
+            f"{DEFAULT_LIMITS.max_positions} positions"
+        )
+    size = frames * vertices * 24
+    payload = data[_POINT_HEAD.size :]
+    if size > _ZSTD_MAX_EXPANSION * len(payload):
+        raise ValueError(f"a point chunk of {len(data)} bytes cannot hold {size} bytes")
+    try:
+        raw = zstandard.ZstdDecompressor().decompress(
+            payload, max_output_size=size, allow_extra_data=False
+        )
+    except zstandard.ZstdError as error:
+        raise ValueError(f"a point chunk's zstd frame does not decompress: {error}") from None
+    if len(raw) != size:
+        raise ValueError(f"a point chunk holds {len(raw)} bytes of positions, not {size}")
+    return np.frombuffer(raw, dtype="<f8").reshape(frames, vertices, 3)
+
+
+def unpadded(positions: np.ndarray, fill_value: Any) -> np.ndarray:
+    """The chunk without its trailing frames and trailing vertices made only of ``fill_value``
+    (NaN included): what zarr pads a partial edge chunk with, which needs no encoding, and which
+    :func:`decode_chunk` puts back. A chunk made only of ``fill_value`` is returned whole."""
+    fill = np.asarray(fill_value, dtype=np.float64)
+    if fill.shape != ():
+        return positions
+    is_fill = (np.isnan(positions) if np.isnan(fill) else positions == fill).all(axis=2)
+    frames = np.flatnonzero(~is_fill.all(axis=1))
+    vertices = np.flatnonzero(~is_fill.all(axis=0))
+    if frames.size == 0:
+        return positions  # zarr does not even store such a chunk unless asked to
+    return positions[: frames[-1] + 1, : vertices[-1] + 1]
+
+
+def decode_chunk(
+    data: Any,
+    dtype: Any,
+    shape: tuple[int, ...] | None = None,
+    fill_value: Any = None,
+) -> np.ndarray:
+    """Decode one chunk (a .tkc file or a point chunk) into a C-ordered array of ``dtype``.
+
+    Args:
+        data: the chunk's bytes (any object with the buffer protocol).
+        dtype: the dtype to return (a floating dtype).
+        shape: the shape the chunk must have, if known (zarr knows it).
+        fill_value: with ``shape``, the value of the trailing frames and vertices that the
+            encoder cut (:func:`unpadded`): a chunk smaller than ``shape`` gets them back.
+
+    Raises:
+        FormatError: the bytes are a damaged .tkc file.
+        ValueError: a damaged point chunk, or a chunk that does not fit ``shape``.
+    """
+    raw = bytes(memoryview(data).cast("B"))
+    if raw[: len(POINT_MAGIC)] == POINT_MAGIC:
+        positions = _unpack_points(raw)
+    else:
+        positions = decode(raw).vertices
+    dtype = checked_dtype(dtype)
+    if shape is None or tuple(positions.shape) == tuple(shape):
+        with np.errstate(over="ignore"):  # float16: a position beyond its range was beyond it
+            return np.ascontiguousarray(positions, dtype=dtype)
+    frames, vertices, _ = positions.shape
+    if fill_value is None or len(shape) != 3 or not (frames <= shape[0] and vertices <= shape[1]):
+        raise ValueError(
+            f"the chunk decodes to shape {positions.shape}, but the array's chunks have shape "
+            f"{tuple(shape)}"
+        )
+    out = np.full(shape, fill_value, dtype=dtype)
+    with np.errstate(over="ignore"):
+        out[:frames, :vertices] = positions
+    return out

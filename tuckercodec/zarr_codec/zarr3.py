@@ -1,0 +1,122 @@
+"""The zarr format 3 codec ``tuckercodec``: an array-to-bytes codec (zarr's public
+:class:`zarr.abc.codec.ArrayBytesCodec`), the array's serializer."""
+
+from __future__ import annotations
+
+import asyncio
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..optional import import_optional
+from .chunk import ChunkMode, chunk_mode, decode_chunk, encode_chunk, unpadded
+
+# a DependencyError naming the extra, rather than an ImportError, when zarr is absent
+import_optional("zarr", "zarr", "the tuckercodec zarr codec")
+
+from zarr.abc.codec import ArrayBytesCodec  # noqa: E402
+from zarr.registry import register_codec  # noqa: E402
+
+if TYPE_CHECKING:  # zarr's types, for the reader: mypy sees zarr as Any (pyproject.toml)
+    from zarr.core.array_spec import ArraySpec
+    from zarr.core.buffer import Buffer, NDBuffer
+
+NAME = "tuckercodec"
+
+
+@dataclass(frozen=True)
+class TuckerZarrCodec(ArrayBytesCodec):  # type: ignore[misc]  # zarr is Any to mypy
+    """Compress a zarr format 3 array of shape (frames, vertices, 3) with a target KG error per
+    chunk; in ``zarr.json`` as ``{"name": "tuckercodec", "configuration": {"target_kg": 0.1}}``.
+
+    Give it as the array's serializer: ``zarr.create_array(..., serializer=TuckerZarrCodec())``
+    (or the dict above, with no import: the codec is found through its entry point).
+
+    Args:
+        target_kg: the KG error each chunk meets, in percent (default 0.1 when no mode is
+            given); the whole array then meets it too (:mod:`tuckercodec.zarr_codec`).
+        ranks: fixed ranks [i, k] for every chunk instead (capped at what a short chunk has).
+        target_bpfv: a size per chunk in bits per frame per vertex instead.
+    """
+
+    is_fixed_size = False
+
+    mode: ChunkMode
+
+    def __init__(
+        self,
+        *,
+        target_kg: float | None = None,
+        ranks: tuple[int, int] | list[int] | None = None,
+        target_bpfv: float | None = None,
+    ) -> None:
+        object.__setattr__(self, "mode", chunk_mode(target_kg, ranks, target_bpfv))
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> TuckerZarrCodec:
+        """The codec of its ``zarr.json`` entry (:meth:`to_dict`)."""
+        if not isinstance(data, dict) or data.get("name") != NAME:
+            raise ValueError(f"expected a codec named {NAME!r}, got {data!r}")
+        unknown = sorted(set(data) - {"name", "configuration"})
+        configuration = data.get("configuration", {})
+        if unknown or not isinstance(configuration, dict):
+            raise ValueError(f"a {NAME} codec entry has only name and configuration: {data!r}")
+        keys = sorted(set(configuration) - {"target_kg", "ranks", "target_bpfv"})
+        if keys:
+            raise ValueError(f"unknown keys in a {NAME} configuration: {keys}")
+        return cls(**configuration)
+
+    def to_dict(self) -> dict[str, Any]:
+        """``{"name": "tuckercodec", "configuration": {<the mode's one key>}}``, JSON-safe."""
+        return {"name": NAME, "configuration": self.mode.config()}
+
+    def validate(self, *, shape: tuple[int, ...], dtype: Any, chunk_grid: Any) -> None:
+        """Refuse, when the array is created, what no chunk of it could be encoded as: another
+        shape than (frames, vertices, 3), a dtype that is not floating point, or chunks that
+        split the xyz axis."""
+        if len(shape) != 3 or shape[2] != 3:
+            raise ValueError(
+                f"the {NAME} codec encodes arrays of shape (frames, vertices, 3), not {shape}"
+            )
+        native = np.dtype(dtype.to_native_dtype())
+        if native.kind != "f":
+            raise ValueError(f"the {NAME} codec encodes floating-point positions, not {native}")
+        chunks = getattr(chunk_grid, "chunk_shape", None)
+        if chunks is None:
+            return  # a grid without one chunk shape: each chunk is checked as it is encoded
+        if chunks[2] != 3:
+            raise ValueError(
+                f"the {NAME} codec needs chunks that hold whole positions (x, y and z): the chunk "
+                f"shape {tuple(chunks)} splits the last axis"
+            )
+
+    def compute_encoded_size(self, input_byte_length: int, chunk_spec: ArraySpec) -> int:
+        """Not known before encoding: the size depends on the chunk's content."""
+        raise NotImplementedError
+
+    def _encode_sync(self, chunk_array: NDBuffer, chunk_spec: ArraySpec) -> Buffer | None:
+        # what zarr padded a partial edge chunk with is not encoded: decoding restores it from
+        # the fill value (so a NaN fill value works, and the padding costs nothing)
+        positions = unpadded(chunk_array.as_numpy_array(), chunk_spec.fill_value)
+        data = encode_chunk(positions, self.mode)
+        return chunk_spec.prototype.buffer.from_bytes(data)
+
+    def _decode_sync(self, chunk_bytes: Buffer, chunk_spec: ArraySpec) -> NDBuffer:
+        positions = decode_chunk(
+            chunk_bytes.as_numpy_array(),
+            chunk_spec.dtype.to_native_dtype(),
+            shape=chunk_spec.shape,
+            fill_value=chunk_spec.fill_value,
+        )
+        return chunk_spec.prototype.nd_buffer.from_numpy_array(positions)
+
+    async def _encode_single(self, chunk_array: NDBuffer, chunk_spec: ArraySpec) -> Buffer | None:
+        # encoding takes long and releases the GIL in BLAS and zstd: off the event loop
+        return await asyncio.to_thread(self._encode_sync, chunk_array, chunk_spec)
+
+    async def _decode_single(self, chunk_bytes: Buffer, chunk_spec: ArraySpec) -> NDBuffer:
+        return await asyncio.to_thread(self._decode_sync, chunk_bytes, chunk_spec)
+
+
+register_codec(NAME, TuckerZarrCodec)
