@@ -15,6 +15,7 @@ EXTRA_MODULES = {
     "alembic": "alembic3d",
     "gltf": "meshoptimizer",
     "xdmf": "h5py",
+    "dask": "distributed",
     "zarr": "zarr",
 }
 
