@@ -131,6 +131,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     encode.add_argument("--force", action="store_true", help="replace the output if it exists")
     _add_read_options(encode)
+    _add_batch(verbs)
 
     decode = verbs.add_parser(
         "decode",
@@ -336,3 +337,52 @@ def _add_rd_options(parser: argparse.ArgumentParser) -> None:
         help="draw log KG and log ψ over (i, k) (Fig. 3)",
     )
     parser.add_argument("--force", action="store_true", help="replace output files that exist")
+
+
+def _add_batch(verbs: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """The ``batch`` verb (tuckercodec.cli.batch): encode's modes and reading options, many
+    inputs, and where the work runs."""
+    batch = verbs.add_parser(
+        "batch",
+        help="compress many mesh sequences the same way, in parallel",
+        description=(
+            f"Encode each INPUT into OUTDIR/<name>{SUFFIX} (name: the input's file or folder "
+            "name), one input per task, as encode would (default: --kg "
+            f"{DEFAULT_TARGET_KG}): in this process, on --jobs N worker processes, or on a Dask "
+            "cluster (--scheduler). A failing input is reported and the others go on; the exit "
+            "code is 0 if every input was written, 7 if some failed."
+        ),
+    )
+    batch.add_argument("inputs", nargs="+", metavar="INPUT", help=_SEQUENCE_HELP)
+    batch.add_argument(
+        "-o", "--output", type=Path, required=True, metavar="OUTDIR", help="made if missing"
+    )
+    mode = batch.add_mutually_exclusive_group()
+    mode.add_argument("--kg", type=_positive, metavar="KG", help="target KG error in percent")
+    mode.add_argument("--ranks", type=_ranks, metavar="I,K", help="fixed ranks (i, 3, k)")
+    mode.add_argument(
+        "--bpfv", type=_positive, metavar="BPFV", help="target size, bits per frame per vertex"
+    )
+    batch.add_argument(
+        "--select",
+        choices=("exact", "bound"),
+        default="exact",
+        help="choose ranks by the exact error table (default) or by the seed paper's bound",
+    )
+    where = batch.add_mutually_exclusive_group()
+    where.add_argument(
+        "--jobs",
+        type=_at_least(1),
+        metavar="N",
+        help="encode N inputs at a time in worker processes on this machine (Dask; extra [dask])",
+    )
+    where.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help=(
+            "run on the Dask cluster of this scheduler (tcp://host:port); its workers need this "
+            "tuckercodec and must read the inputs at the same absolute paths"
+        ),
+    )
+    batch.add_argument("--force", action="store_true", help="replace outputs that exist")
+    _add_read_options(batch)

@@ -2,8 +2,9 @@
 
 Exit codes (also in the README): 0 success; 1 an output that exists (without --force) or
 another I/O failure; 2 a usage error; 3 an invalid or corrupt compressed file; 4 a bad input
-mesh sequence; 5 a target no file can meet; 6 a missing optional dependency; 130 or 143
-interrupted by Ctrl-C or SIGTERM. Every failure is one line on standard error.
+mesh sequence; 5 a target no file can meet; 6 a missing optional dependency; 7 some inputs of
+a batch failed (the others were written); 130 or 143 interrupted by Ctrl-C or SIGTERM. Every
+failure is one line on standard error.
 """
 
 from __future__ import annotations
@@ -15,17 +16,10 @@ import sys
 import threading
 from collections.abc import Callable, Sequence
 
-from ..errors import (
-    EXIT_FAILURE,
-    EXIT_USAGE,
-    DependencyError,
-    FormatError,
-    InputError,
-    TuckerCodecError,
-    UnreachableTargetError,
-)
-from . import codec, commands, convert
+from ..errors import EXIT_FAILURE
+from . import batch, codec, commands, convert
 from .arguments import build_parser
+from .failures import describe_failure
 
 _VERBS: dict[str, Callable[[argparse.Namespace], int]] = {
     "demo": commands.run_demo,
@@ -37,16 +31,8 @@ _VERBS: dict[str, Callable[[argparse.Namespace], int]] = {
     "rd": commands.run_rd,
     "convert": convert.run_convert,
     "formats": convert.run_formats,
+    "batch": batch.run_batch,
 }
-
-#: What the one-line message calls each kind of error, after "tuckercodec: ".
-_KINDS: tuple[tuple[type[TuckerCodecError], str], ...] = (
-    (InputError, "bad input: "),
-    (FormatError, "invalid or corrupt file: "),
-    (UnreachableTargetError, "target cannot be met: "),
-    (DependencyError, ""),  # its message names the package and the extra to install
-    (TuckerCodecError, "error: "),
-)
 
 
 class _Terminated(KeyboardInterrupt):
@@ -78,22 +64,16 @@ def _run(args: argparse.Namespace) -> int:
     """Run one verb, turning every expected failure into a one-line message and exit code."""
     try:
         return _VERBS[args.verb](args)
-    except TuckerCodecError as error:
-        kind = next(label for cls, label in _KINDS if isinstance(error, cls))
-        _fail(f"{kind}{error}")
-        return error.exit_code
-    except FileExistsError as error:
-        _fail(str(error))
-        return EXIT_FAILURE
-    except ValueError as error:  # a rank out of range, a frame that does not exist
-        _fail(str(error))
-        return EXIT_USAGE
     except BrokenPipeError:  # the reader went away (`| head`): stop quietly, like other tools
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return EXIT_FAILURE
-    except OSError as error:
-        _fail(f"{error.filename or ''}: {error.strerror or error}")
-        return EXIT_FAILURE
+    except Exception as error:
+        failure = describe_failure(error)
+        if failure is None:  # a bug: its traceback
+            raise
+        kind, message, code = failure
+        _fail(f"{kind}{message}")
+        return code
     except KeyboardInterrupt as interrupt:
         _fail("interrupted")
         return 128 + (signal.SIGTERM if isinstance(interrupt, _Terminated) else signal.SIGINT)
