@@ -33,7 +33,7 @@ import msgpack
 import numpy as np
 
 from tools import common
-from tuckercodec import Decoder, MeshSequence, encode, internal
+from tuckercodec import Decoder, MeshSequence, encode, encode_with_report, internal
 from tuckercodec.internal import (
     HEAD_SIZE,
     faces,
@@ -312,15 +312,29 @@ def _add_names(parts: Parts, raw: bytes) -> None:
 
 
 def digests(decoder: Decoder) -> dict[str, str]:
-    """SHA-256 of the dequantized arrays as little-endian C-order float64 (faces: int64)."""
-    arrays = {
-        "faces": np.ascontiguousarray(decoder.faces, dtype="<i8"),
-        "u1": np.ascontiguousarray(decoder.u1, dtype="<f8"),
-        "u3": np.ascontiguousarray(decoder.u3, dtype="<f8"),
-        "core": np.ascontiguousarray(decoder.core, dtype="<f8"),
-        "centroids": np.ascontiguousarray(decoder.centroids, dtype="<f8"),
-    }
+    """SHA-256 of the dequantized arrays as little-endian C-order float64 (faces: int64). A
+    segmented file (§6.7) has each segment's arrays, named ``u1.s`` (the U1 it uses: its own,
+    or the shared one's leading columns), ``u3.s``, ``core.s`` and ``centroids.s``."""
+    arrays = {"faces": np.ascontiguousarray(decoder.faces, dtype="<i8")}
+    for segment in decoder.segments:
+        factors = decoder.segment_factors(segment.index)
+        suffix = f".{segment.index}" if decoder.segmented else ""
+        for name, array in (
+            ("u1", factors.u1),
+            ("u3", factors.u3),
+            ("core", factors.core),
+            ("centroids", factors.centroids),
+        ):
+            arrays[name + suffix] = np.ascontiguousarray(array, dtype="<f8")
     return {name: hashlib.sha256(array.tobytes()).hexdigest() for name, array in arrays.items()}
+
+
+def segment_index(decoder: Decoder) -> list[dict[str, Any]]:
+    """The segment index a decoder must report (§6.7): empty for a file of format 1.0."""
+    return [
+        {"first_frame": s.start, "frames": s.frames, "ranks": list(s.ranks), "basis": s.basis}
+        for s in decoder.info.segments
+    ]
 
 
 def valid_vectors() -> dict[str, tuple[bytes, str]]:
@@ -338,8 +352,17 @@ def valid_vectors() -> dict[str, tuple[bytes, str]]:
     extended.header["x-note"] = "an unknown header key is ignored"
     extended.entries.append({"id": "xmeta", "critical": False, "codec": "opaque"})
     extended.payloads.append(b"unknown ancillary data is skipped unread")
+    long_wave = MeshSequence(wave_sheet(40, 9), sheet_triangles(9), frame_rate=25.0)
     return {
         "v1-wave-triangles": (basic, "triangles, no names: the basic file"),
+        "v1.1-segments-shared": (
+            encode_with_report(long_wave, target_kg=0.5, segment_frames=12).data,
+            "format 1.1: three segments of 12, 12 and 16 frames sharing one U1",
+        ),
+        "v1.1-segments-own": (
+            encode_with_report(named, target_kg=0.5, segment_frames=8, basis="own").data,
+            "format 1.1: two segments, each with its own U1 (mesh parents of polygons), names",
+        ),
         "v1-polygons-names": (
             encode(named, target_kg=0.1),
             "quads padded to triangles, frame names, frame rate, far from the origin",
@@ -374,6 +397,7 @@ def write_valid(folder: Path, name: str, data: bytes, purpose: str) -> None:
             "kg": header.kg,
         },
         "frame_names": decoder.frame_names,
+        "segments": segment_index(decoder),
         "sha256": digests(decoder),
         "reference": f"{name}.positions.npy",
         "tolerance": {"relative_to_max_abs": RELATIVE_TOLERANCE},
@@ -381,9 +405,24 @@ def write_valid(folder: Path, name: str, data: bytes, purpose: str) -> None:
     (folder / f"{name}.json").write_text(json.dumps(expected, indent=2) + "\n")
 
 
-def write_invalid(folder: Path, good: bytes) -> int:
-    """The invalid vectors made from the valid file ``good``, with their JSON; how many."""
-    vectors = invalid_vectors(good)
+def segmented_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
+    """rule id -> (file bytes, error class name): the segmented ``good`` with one rule of §6.7
+    broken."""
+    parts = Parts(good)
+    segments = parts.header["segments"]
+    short = [dict(entry) for entry in segments[:-1]]  # the index lost its last entry
+    too_deep = [dict(entry) for entry in segments]
+    too_deep[0]["ranks"] = [too_deep[0]["ranks"][0], too_deep[0]["frames"] + 1]
+    return {
+        "R37-segment-index": (_edit(good, _header(segments=short)), "FormatError"),
+        "R38-segment-ranks": (_edit(good, _header(segments=too_deep)), "FormatError"),
+    }
+
+
+def write_invalid(folder: Path, good: bytes, segmented: bytes) -> int:
+    """The invalid vectors made from the valid files ``good`` (format 1.0) and ``segmented``
+    (1.1), with their JSON; how many."""
+    vectors = {**invalid_vectors(good), **segmented_invalid_vectors(segmented)}
     for rule, (data, error) in vectors.items():
         (folder / f"{rule}.tkc").write_bytes(data)
         expected = {"file": f"{rule}.tkc", "valid": False, "rule": rule, "error": error}
@@ -411,7 +450,9 @@ def main(argv: list[str] | None = None) -> int:
     valid = valid_vectors()
     for name, (data, purpose) in valid.items():
         write_valid(out, name, data, purpose)
-    invalid = write_invalid(out, valid["v1-wave-triangles"][0])
+    invalid = write_invalid(
+        out, valid["v1-wave-triangles"][0], valid["v1.1-segments-shared"][0]
+    )
     print(f"wrote {len(valid)} valid and {invalid} invalid vectors to {out}")
     return 0
 

@@ -91,7 +91,7 @@ class Analysis:
                 "the KG error is undefined: every frame collapses to a single point, so the "
                 "Karni-Gotsman denominator is zero"
             )
-        self._error2 = _discarded_energy(energy)
+        self._error2 = discarded_energy(energy)
         self._kg = 100.0 * np.sqrt(self._error2 / self.total_energy)
         bound2 = _bound_energy(decomposition.mode1_energy, decomposition.mode3_energy)
         self._kg_bound = 100.0 * np.sqrt(np.minimum(bound2, self.total_energy) / self.total_energy)
@@ -312,7 +312,7 @@ def _tail_sums(values: np.ndarray) -> np.ndarray:
     return np.concatenate([np.cumsum(values[::-1])[::-1], [0.0]])
 
 
-def _discarded_energy(energy: np.ndarray) -> np.ndarray:
+def discarded_energy(energy: np.ndarray) -> np.ndarray:
     """err2[i, k] = sum of energy[a, b] over a >= i or b >= k, for i in 0..R1, k in 0..R3.
 
     Split as (rows a >= i) + (rows a < i, columns b >= k): both parts are sums of non-negative

@@ -26,7 +26,8 @@ import numpy as np
 
 from .errors import FormatError
 from .format import faces, names, qmat
-from .format.container import FileRanges, open_file_container, parse_container, read_file
+from .format.container import parse_container
+from .format.disk import FileRanges, open_file_container, read_file
 from .format.header import FileInfo, read_header
 from .format.limits import DEFAULT_LIMITS, Limits, check_limit
 from .format.reconstruction import reconstruct_frames, reconstruction_basis

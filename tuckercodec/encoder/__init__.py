@@ -23,18 +23,19 @@ How a target KG error is met (errors are squared norms; E is the KG denominator'
 
 from __future__ import annotations
 
-import math
 import time
-from dataclasses import dataclass, field
-from typing import Any, Literal
-
-import numpy as np
+from typing import Any
 
 from ..analysis import Analysis, Selection, analyze
 from ..format import streams
-from ..rate import bpfv as bits_per_frame_vertex
+from ..format.segments import BASIS_SHARED
+from ..io.streaming import SequenceFrames
+from ..parallel import Executor
 from ..sequence import MeshSequence
+from .plan import needs_segments
+from .results import EncodeReport, EncodeResult, Mode, check_modes
 from .search import TRUNCATION_SHARES, initial_step, meet, search_bpfv, search_kg
+from .segmented import encode_frames
 from .workspace import Workspace
 
 DEFAULT_TARGET_KG = 0.1
@@ -42,83 +43,6 @@ DEFAULT_TARGET_KG = 0.1
 RANKS_QUANTIZATION_SHARE = 1.05**2 - 1
 #: With fixed ranks that lose nothing, the quantization error aimed for, in KG percent.
 RANKS_FLOOR_KG = 1e-4
-
-Mode = Literal["kg", "ranks", "bpfv"]
-
-
-@dataclass(frozen=True)
-class EncodeReport:
-    """What the encoder did and measured. Errors are KG errors (Karni-Gotsman, per-frame mean)."""
-
-    mode: Mode
-    target: float | None  # the KG target (mode "kg") or bpfv target (mode "bpfv")
-    select: Selection
-    ranks: tuple[int, int]
-    kg: float  # of the decoded sequence against the input
-    truncation_kg: float  # of the truncation alone, before quantization
-    exact_ranks: tuple[int, int] | None  # the cheapest ranks by the exact table (mode "kg")
-    bound_ranks: tuple[int, int] | None  # what the paper's bound alone would pick (mode "kg")
-    total_bytes: int
-    section_bytes: dict[str, int] = field(default_factory=dict)
-    vertices: int = 0
-    frames: int = 0
-    seconds: float = 0.0
-    trials: int = 0
-
-    @property
-    def bpfv(self) -> float:
-        """Bits per frame per vertex of the whole file, header and connectivity included."""
-        return bits_per_frame_vertex(self.total_bytes, self.frames, self.vertices)
-
-    @property
-    def connectivity_bpfv(self) -> float:
-        """The faces section's share of :attr:`bpfv`."""
-        return bits_per_frame_vertex(self.section_bytes.get("FACE", 0), self.frames, self.vertices)
-
-    @property
-    def raw_float32_bytes(self) -> int:
-        """The positions as plain float32: F * K * 3 * 4 bytes (faces not counted)."""
-        return self.frames * self.vertices * 12
-
-    @property
-    def ratio(self) -> float:
-        """:attr:`raw_float32_bytes` over the whole file's size."""
-        return self.raw_float32_bytes / self.total_bytes
-
-
-@dataclass(frozen=True)
-class EncodeResult:
-    """The file's bytes and the report of how they were made."""
-
-    data: bytes
-    report: EncodeReport
-
-
-def _check_modes(
-    target_kg: float | None, ranks: tuple[int, int] | None, target_bpfv: float | None
-) -> Mode:
-    given = [
-        name
-        for name, value in (
-            ("target_kg", target_kg),
-            ("ranks", ranks),
-            ("target_bpfv", target_bpfv),
-        )
-        if value is not None
-    ]
-    if len(given) > 1:
-        raise ValueError(f"give one of target_kg, ranks and target_bpfv, not {' and '.join(given)}")
-    for name, value in (("target_kg", target_kg), ("target_bpfv", target_bpfv)):
-        if value is not None and not (
-            isinstance(value, (int, float, np.floating))
-            and not isinstance(value, bool)
-            and math.isfinite(value)
-            and value > 0
-        ):
-            raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    if ranks is not None:
-        return "ranks"
-    return "bpfv" if target_bpfv is not None else "kg"
 
 
 def encode_with_report(
@@ -130,6 +54,10 @@ def encode_with_report(
     select: Selection = "exact",
     level: int = streams.DEFAULT_LEVEL,
     analysis: Analysis | None = None,
+    segment_frames: int | None = None,
+    max_memory: int | None = None,
+    basis: str = BASIS_SHARED,
+    executor: Executor | None = None,
 ) -> EncodeResult:
     """Encode a sequence; the file's bytes and a report of ranks, errors and sizes.
 
@@ -145,6 +73,14 @@ def encode_with_report(
             paper's bound alone.
         level: zstd level of the sections (1-22).
         analysis: the sequence's :func:`~tuckercodec.analyze` result, if already computed.
+        segment_frames: cut the frames into segments of this many, each its own decomposition
+            (format 1.1; :func:`tuckercodec.encoder.segmented.encode_frames`). Without it,
+            segments are made only when encoding the sequence whole would take more than
+            ``max_memory`` bytes (default: half the machine's memory).
+        max_memory: the memory the encode may use, in bytes.
+        basis: with segments, ``"shared"`` (one U1 for all, the default) or ``"own"``.
+        executor: with segments, where the passes' tasks run (:mod:`tuckercodec.parallel`);
+            the bytes written do not depend on it.
 
     Raises:
         InputError: the sequence cannot be encoded (every frame a single point, or coordinates
@@ -155,11 +91,30 @@ def encode_with_report(
         ValueError: a mode argument that is out of range (ranks, a non-positive target).
     """
     start = time.perf_counter()
-    mode = _check_modes(target_kg, ranks, target_bpfv)
+    mode = check_modes(target_kg, ranks, target_bpfv)
     if select not in ("exact", "bound"):
         raise ValueError(f"select must be 'exact' or 'bound', got {select!r}")
     if not isinstance(sequence, MeshSequence):
         raise TypeError(f"expected a MeshSequence, got {type(sequence).__name__}")
+    if needs_segments(
+        sequence.frame_count,
+        sequence.vertex_count,
+        segment_frames=segment_frames,
+        max_memory=max_memory,
+    ):
+        if select != "exact":
+            raise ValueError("a segmented encode chooses its ranks by the exact error (select)")
+        return encode_frames(
+            SequenceFrames(sequence),
+            target_kg=target_kg,
+            ranks=ranks,
+            target_bpfv=target_bpfv,
+            segment_frames=segment_frames,
+            max_memory=max_memory,
+            basis=basis,
+            executor=executor,
+            level=level,
+        )
     analysis = analyze(sequence) if analysis is None else analysis
     work = Workspace(sequence, analysis, level)
     exact_ranks = bound_ranks = None
@@ -241,4 +196,11 @@ def encode(
     ).data
 
 
-__all__ = ["EncodeReport", "EncodeResult", "encode", "encode_with_report"]
+__all__ = [
+    "EncodeReport",
+    "EncodeResult",
+    "Mode",
+    "encode",
+    "encode_frames",
+    "encode_with_report",
+]

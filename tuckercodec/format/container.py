@@ -13,18 +13,16 @@ This module knows bytes, not meshes. A file is::
 Validation runs in the order of §5 (steps 1-9) and each failure raises the
 :class:`~tuckercodec.errors.FormatError` subclass §11 gives, carrying the rule's identifier
 and naming the field or offset at fault; the section table (§3) is read by
-:func:`.sections.read_section_table`. :func:`read_file` is the one way a file is read from a
-path: only a regular file, only the bytes its preamble declares.
+:func:`.sections.read_section_table`. Files on disk are read by :mod:`.disk`.
 """
 
 from __future__ import annotations
 
-import os
 import struct
 import zlib
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import msgpack
 
@@ -35,7 +33,6 @@ from ..errors import (
     TruncatedFileError,
     UnsupportedVersionError,
 )
-from ..reading import open_regular_file
 from .limits import DEFAULT_LIMITS, Limits
 from .sections import Section, read_section_table
 from .segments import SEGMENTED
@@ -77,6 +74,12 @@ class Preamble:
         return self.header_end + CRC.size
 
 
+class RangeReader(Protocol):
+    """Reads ``length`` bytes of a file from ``offset`` (:class:`.disk.FileRanges`)."""
+
+    def read(self, offset: int, length: int) -> bytes: ...
+
+
 @dataclass(frozen=True)
 class Container:
     """A parsed container: the preamble fields, the header map and the section table.
@@ -104,14 +107,15 @@ class Container:
         """Whether the preamble sets flag bit 0: frames in segments (§6.7)."""
         return bool(self.flags & SEGMENTED)
 
-    def payload(self, data: bytes | memoryview | FileRanges, entry: Section) -> memoryview:
+    def payload(self, data: bytes | memoryview | RangeReader, entry: Section) -> memoryview:
         """The bytes of a section, after checking its CRC-32 (§5 step 9); ``data`` is the whole
-        file, or a :class:`FileRanges` that reads just this section from disk."""
+        file, or a reader of the file's byte ranges (:class:`.disk.FileRanges`) that reads just
+        this section from disk."""
         start = entry.file_offset(self.data_start)
-        if isinstance(data, FileRanges):
-            view = memoryview(data.read(start, entry.length))
-        else:
+        if isinstance(data, (bytes, memoryview)):
             view = memoryview(data)[start : start + entry.length]
+        else:
+            view = memoryview(data.read(start, entry.length))
         if zlib.crc32(view) != entry.crc32:
             raise ChecksumError(
                 "the section's CRC-32 does not match its bytes (the file is damaged)",
@@ -256,7 +260,7 @@ def _refuse_signature(found: bytes) -> None:
     )
 
 
-def _check_not_longer(size: int, total_length: int) -> None:
+def check_not_longer(size: int, total_length: int) -> None:
     """§5 step 5: a file of ``size`` bytes must not run past its ``total_length``."""
     if size > total_length:
         raise FormatError(
@@ -268,7 +272,7 @@ def _check_not_longer(size: int, total_length: int) -> None:
         )
 
 
-def _check_reaches(size: int, needed: int, what: str, field: str) -> None:
+def check_reaches(size: int, needed: int, what: str, field: str) -> None:
     """§5 step 6: a file of ``size`` bytes must reach byte ``needed``, the end of ``what``."""
     if size < needed:
         raise TruncatedFileError(
@@ -299,10 +303,10 @@ def parse_container(
     """
     preamble = read_preamble(data, limits)
     if size is not None:
-        _check_not_longer(size, preamble.total_length)
+        check_not_longer(size, preamble.total_length)
     elif whole:
-        _check_not_longer(len(data), preamble.total_length)
-    _check_reaches(len(data), preamble.data_start, "the header", "header")
+        check_not_longer(len(data), preamble.total_length)
+    check_reaches(len(data), preamble.data_start, "the header", "header")
     header_bytes = data[HEAD_SIZE : preamble.header_end]
     (stored_crc,) = CRC.unpack_from(data, preamble.header_end)
     if zlib.crc32(header_bytes) != stored_crc:
@@ -313,9 +317,9 @@ def parse_container(
             offset=HEAD_SIZE,
         )
     if size is not None:
-        _check_reaches(size, preamble.total_length, "the data area", "preamble.total_length")
+        check_reaches(size, preamble.total_length, "the data area", "preamble.total_length")
     elif whole:
-        _check_reaches(len(data), preamble.total_length, "the data area", "preamble.total_length")
+        check_reaches(len(data), preamble.total_length, "the data area", "preamble.total_length")
     header = _unpack_header(bytes(header_bytes))
     sections = read_section_table(header, preamble.total_length - preamble.data_start, limits)
     return Container(
@@ -327,77 +331,6 @@ def parse_container(
         preamble.data_start,
         preamble.total_length,
     )
-
-
-def read_file(
-    path: str | os.PathLike[str], limits: Limits = DEFAULT_LIMITS, *, header_only: bool = False
-) -> bytes:
-    """The bytes of a compressed file on disk, or with ``header_only`` just its preamble and
-    header (for :func:`tuckercodec.info`).
-
-    Only a regular file is opened (a folder or a named pipe is an :class:`InputError`), and no
-    more is read than the preamble declares: a huge file that is not ours is refused after its
-    first 32 bytes, and trailing bytes are counted from the file's size, not read (§5 step 5).
-    A header-only read also refuses a file shorter than ``total_length`` from its size, before
-    the header's CRC (§5's note on header-only readers); a whole read leaves that to
-    :func:`parse_container`, in §5's order. The caller names ``path`` in the errors.
-    """
-    with open_regular_file(path, "a tuckercodec file") as handle:
-        head = handle.read(HEAD_SIZE)
-        preamble = read_preamble(head, limits)
-        size = os.fstat(handle.fileno()).st_size
-        _check_not_longer(size, preamble.total_length)
-        if header_only:
-            _check_reaches(size, preamble.total_length, "the data area", "preamble.total_length")
-            return head + handle.read(preamble.data_start - len(head))
-        return head + handle.read(preamble.total_length - len(head))
-
-
-class FileRanges:
-    """A compressed file on disk read a range at a time: a decoder that needs one segment
-    reads that segment's sections, never the whole file (§8, random access).
-
-    Each read opens the file, reads its range and closes it again, so that an opened decoder
-    holds no file handle; a range the file no longer holds (it shrank since it was opened) is
-    a :class:`TruncatedFileError`.
-    """
-
-    def __init__(self, path: str | os.PathLike[str], size: int) -> None:
-        self.path = os.fspath(path)
-        self.size = size
-        self.bytes_read = 0  # for tests and benchmarks: what decoding really read
-
-    def read(self, offset: int, length: int) -> bytes:
-        """``length`` bytes from ``offset``."""
-        with open_regular_file(self.path, "a tuckercodec file") as handle:
-            data: bytes = os.pread(handle.fileno(), length, offset) if length else b""
-        self.bytes_read += len(data)
-        if len(data) != length:
-            raise TruncatedFileError(
-                f"the file ends inside bytes {offset}..{offset + length - 1}: it was cut short "
-                "after it was opened",
-                rule="R10-file-truncated",
-                field="preamble.total_length",
-                offset=offset + len(data),
-            )
-        return data
-
-
-def open_file_container(
-    path: str | os.PathLike[str], limits: Limits = DEFAULT_LIMITS
-) -> tuple[Container, FileRanges]:
-    """Parse a file on disk from its preamble and header alone (§5 steps 1-8, the whole-file
-    checks made from its size), and a reader of its sections' ranges."""
-    with open_regular_file(path, "a tuckercodec file") as handle:
-        head = handle.read(HEAD_SIZE)
-        preamble = read_preamble(head, limits)
-        size = os.fstat(handle.fileno()).st_size
-        _check_not_longer(size, preamble.total_length)
-        head += handle.read(preamble.data_start - len(head))
-    container = parse_container(head, limits, whole=False, size=size)
-    ranges = FileRanges(path, size)
-    ranges.bytes_read = len(head)
-    return container, ranges
 
 
 class _HeaderProblem(Exception):

@@ -18,7 +18,7 @@ from .container import Container
 from .limits import Limits, check_limit
 from .reconstruction import factor_value_count
 from .sections import check_sections
-from .segments import SegmentEntry, check_segmented_sections, read_segment_index
+from .segments import SegmentEntry, check_segmented_sections, checked_u2, read_segment_index
 
 #: The error definition id of §4.1: the KG error of Karni and Gotsman (2004), in percent.
 KG_DEFINITION_ID = "karni-gotsman-2004"
@@ -224,15 +224,7 @@ def _check_single(
         what=f"ranks ({i}, {k}) make {factor_values} factor values, which",
         field="header.ranks",
     )
-    u2 = header.get("u2")
-    if not (
-        isinstance(u2, list)
-        and len(u2) == 9
-        and all(isinstance(x, float) and math.isfinite(x) for x in u2)
-    ):
-        raise FormatError(
-            "must be 9 finite floats (U2, row-major)", rule="R23-u2", field="header.u2"
-        )
+    checked_u2(header.get("u2"), "header.u2")
 
 
 def _ranks(ranks: object, vertices: int, frames: int) -> tuple[int, int]:

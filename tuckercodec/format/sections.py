@@ -175,9 +175,12 @@ def section_shape(
     *,
     expected: tuple[int, int] | None = None,
     min_cols: int = 0,
+    max_cols: int | None = None,
+    rows_of: int | None = None,
 ) -> tuple[int, int]:
     """The declared ``shape`` [rows, cols] of a stream section (R28-shape): two non-negative
-    ints, at least ``min_cols`` columns, and equal to ``expected`` when that is given."""
+    ints, at least ``min_cols`` columns (and at most ``max_cols``), ``rows_of`` rows if given,
+    and equal to ``expected`` when that is given."""
     shape = params.get("shape")
     rows, cols = -1, -1
     if (
@@ -191,6 +194,10 @@ def section_shape(
         problem = f"shape must be [rows, cols] of non-negative integers, got {shape!r}"
     elif cols < min_cols:
         problem = f"needs at least {min_cols} columns, the width is {cols}"
+    elif max_cols is not None and cols > max_cols:
+        problem = f"has at most {max_cols} columns, the width is {cols}"
+    elif rows_of is not None and rows != rows_of:
+        problem = f"has {rows_of} rows (one per vertex), not {rows}"
     elif expected is not None and (rows, cols) != expected:
         problem = (
             f"shape is [{rows}, {cols}], but the header's vertices, frames and ranks make it "
@@ -201,19 +208,16 @@ def section_shape(
     return rows, cols
 
 
-def check_sections(
-    table: tuple[Section, ...],
-    vertices: int,
-    frames: int,
-    ranks: tuple[int, int],
-    limits: Limits,
-) -> None:
-    """§5 steps 11-13: known sections with their codec and criticality, unknown critical ones
-    refused, the required ones present, and every shape as the header implies and within the
-    limits."""
+def check_known_sections(
+    table: tuple[Section, ...], known: Mapping[str, SectionKind]
+) -> dict[str, Section]:
+    """§5 step 11: each entry of a known id has its kind's criticality (R27) and codec (R25);
+    an unknown critical id is refused (R24) and an unknown ancillary one skipped. Returns the
+    known sections by id."""
+    present: dict[str, Section] = {}
     for section in table:
         where = f"section {section.id}"
-        kind = KNOWN_SECTIONS.get(section.id)
+        kind = known.get(section.id)
         if kind is None:
             if section.critical:
                 raise UnsupportedVersionError(
@@ -234,8 +238,13 @@ def check_sections(
                 rule="R25-unknown-codec",
                 field=f"{where}.codec",
             )
-    present = {section.id: section for section in table}
-    for section_id in REQUIRED_SECTIONS:
+        present[section.id] = section
+    return present
+
+
+def require_sections(present: Mapping[str, Section], required: list[str]) -> None:
+    """§5 step 12: every id of ``required`` is in the table, checked in that order (R26)."""
+    for section_id in required:
         if section_id not in present:
             raise FormatError(
                 "a required section is missing",
@@ -243,6 +252,41 @@ def check_sections(
                 field=f"section {section_id}",
             )
 
+
+def check_stream_size(rows: int, cols: int, limits: Limits, where: str) -> None:
+    """rows x cols values of up to four bytes fit ``max_section_bytes`` (R21)."""
+    check_limit(
+        rows * cols * streams.MAX_PLANES,
+        limits,
+        "max_section_bytes",
+        what=f"{rows} x {cols} values of up to {streams.MAX_PLANES} bytes",
+        field=f"{where}.shape",
+    )
+
+
+def check_face_shape(params: Mapping[str, Any], limits: Limits) -> None:
+    """§5 step 13 for FACE: at least 3 columns, within max_faces and max_face_width."""
+    where = "section FACE"
+    rows, cols = section_shape(params, where, min_cols=3)
+    check_limit(rows, limits, "max_faces", what=f"{rows} faces", field=f"{where}.shape")
+    check_limit(
+        cols, limits, "max_face_width", what=f"faces of {cols} corners", field=f"{where}.shape"
+    )
+    check_stream_size(rows, cols, limits, where)
+
+
+def check_sections(
+    table: tuple[Section, ...],
+    vertices: int,
+    frames: int,
+    ranks: tuple[int, int],
+    limits: Limits,
+) -> None:
+    """§5 steps 11-13: known sections with their codec and criticality, unknown critical ones
+    refused, the required ones present, and every shape as the header implies and within the
+    limits."""
+    present = check_known_sections(table, KNOWN_SECTIONS)
+    require_sections(present, list(REQUIRED_SECTIONS))
     i, k = ranks
     expected_shapes = {
         "U1": (vertices, i),
@@ -250,25 +294,8 @@ def check_sections(
         "CORE": (i * 3 * k, 1),
         "CENT": (frames, 3),
     }
-    for section_id in REQUIRED_SECTIONS:
+    check_face_shape(present["FACE"].params, limits)
+    for section_id, shape in expected_shapes.items():
         where = f"section {section_id}"
-        params = present[section_id].params
-        if section_id == "FACE":
-            rows, cols = section_shape(params, where, min_cols=3)
-            check_limit(rows, limits, "max_faces", what=f"{rows} faces", field=f"{where}.shape")
-            check_limit(
-                cols,
-                limits,
-                "max_face_width",
-                what=f"faces of {cols} corners",
-                field=f"{where}.shape",
-            )
-        else:
-            rows, cols = section_shape(params, where, expected=expected_shapes[section_id])
-        check_limit(
-            rows * cols * streams.MAX_PLANES,
-            limits,
-            "max_section_bytes",
-            what=f"{rows} x {cols} values of up to {streams.MAX_PLANES} bytes",
-            field=f"{where}.shape",
-        )
+        rows, cols = section_shape(present[section_id].params, where, expected=shape)
+        check_stream_size(rows, cols, limits, where)

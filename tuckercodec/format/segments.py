@@ -16,12 +16,19 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NoReturn
 
-from ..errors import FormatError, UnsupportedVersionError
-from . import streams
+from ..errors import FormatError
 from .limits import Limits, check_limit
-from .sections import KNOWN_SECTIONS, Section, section_shape
+from .sections import (
+    KNOWN_SECTIONS,
+    Section,
+    check_face_shape,
+    check_known_sections,
+    check_stream_size,
+    require_sections,
+    section_shape,
+)
 
 #: Preamble flag bit 0 (critical): the file is segmented (§6.7). Decoders of 1.0 refuse it.
 SEGMENTED = 0x0001
@@ -134,17 +141,9 @@ def read_segment_index(
                 rule="R37-segment-index",
                 field=f"{where}.basis",
             )
-        ranks = _segment_ranks(item.get("ranks"), vertices, count, f"{where}.ranks")
-        u2 = item.get("u2")
-        if not (
-            isinstance(u2, list)
-            and len(u2) == 9
-            and all(isinstance(x, float) and math.isfinite(x) for x in u2)
-        ):
-            raise FormatError(
-                "must be 9 finite floats (U2, row-major)", rule="R23-u2", field=f"{where}.u2"
-            )
-        entries.append(SegmentEntry(number, start, count, ranks, tuple(u2), basis))
+        ranks = _segment_ranks(item.get("ranks"), vertices, count, basis, f"{where}.ranks")
+        u2 = checked_u2(item.get("u2"), f"{where}.u2")
+        entries.append(SegmentEntry(number, start, count, ranks, u2, basis))
         start += count
     if start != frames:
         raise FormatError(
@@ -155,9 +154,14 @@ def read_segment_index(
     return tuple(entries)
 
 
-def _segment_ranks(ranks: object, vertices: int, frames: int, field: str) -> tuple[int, int]:
-    """[i, k] with 1 <= i <= min(K, 3F_s) and 1 <= k <= min(F_s, 3K) (R38-segment-ranks)."""
-    largest_i, largest_k = min(vertices, 3 * frames), min(frames, 3 * vertices)
+def _segment_ranks(
+    ranks: object, vertices: int, frames: int, basis: str, field: str
+) -> tuple[int, int]:
+    """[i, k] with 1 <= k <= min(F_s, 3K), and 1 <= i <= min(K, 3F_s) for an own basis; a
+    shared-basis segment may use any of the shared U1's columns, checked against them later
+    (R38-segment-ranks)."""
+    largest_i = min(vertices, 3 * frames) if basis == BASIS_OWN else vertices
+    largest_k = min(frames, 3 * vertices)
     if not (
         isinstance(ranks, list)
         and len(ranks) == 2
@@ -165,14 +169,29 @@ def _segment_ranks(ranks: object, vertices: int, frames: int, field: str) -> tup
         and 1 <= ranks[0] <= largest_i
         and 1 <= ranks[1] <= largest_k
     ):
-        raise FormatError(
-            f"must be [i, k], two integers with 1 <= i <= min(K, 3F) = {largest_i} and "
-            f"1 <= k <= min(F, 3K) = {largest_k} for the segment's {frames} frames: got "
+        _refuse_ranks(
+            f"must be [i, k], two integers with 1 <= i <= {largest_i} and 1 <= k <= "
+            f"min(F, 3K) = {largest_k} for the segment's {frames} frames and {basis} basis: got "
             f"{_short(ranks)}",
-            rule="R38-segment-ranks",
-            field=field,
+            field,
         )
+    assert isinstance(ranks, list)
     return ranks[0], ranks[1]
+
+
+def _refuse_ranks(message: str, field: str) -> NoReturn:
+    raise FormatError(message, rule="R38-segment-ranks", field=field)
+
+
+def checked_u2(value: object, field: str) -> tuple[float, ...]:
+    """U2 as the header (§4) or a segment (§6.7) holds it: 9 finite floats (R23-u2)."""
+    if not (
+        isinstance(value, list)
+        and len(value) == 9
+        and all(isinstance(x, float) and math.isfinite(x) for x in value)
+    ):
+        raise FormatError("must be 9 finite floats (U2, row-major)", rule="R23-u2", field=field)
+    return tuple(value)
 
 
 def _short(value: object) -> str:
@@ -200,78 +219,38 @@ def check_segmented_sections(
     segments: tuple[SegmentEntry, ...],
     limits: Limits,
 ) -> int:
-    """§5 steps 11-13 for a segmented file; returns the shared U1's column count (0 if none).
+    """§5 steps 11s-13s for a segmented file; returns the shared U1's column count (0 if none).
 
     Known ids are FACE, NAME, U1 (the shared basis) and each segment's ``U3.s``, ``CORE.s``,
     ``CENT.s`` and, for a segment with its own basis, ``U1.s``; any other critical id is
     unknown (R24), including ``U3``, ``CORE`` and ``CENT`` without a segment number.
     """
-    known = known_segment_kinds(segments)
-    present: dict[str, Section] = {}
-    for section in table:
-        where = f"section {section.id}"
-        found = known.get(section.id)
-        if found is None:
-            if section.critical:
-                raise UnsupportedVersionError(
-                    "unknown critical section: this decoder cannot reconstruct the file without it",
-                    rule="R24-unknown-critical-section",
-                    field=where,
-                )
-            continue
-        kind = KNOWN_SECTIONS[found[0]]
-        if section.critical != kind.critical:
-            raise FormatError(
-                f"must be marked critical={kind.critical}",
-                rule="R27-criticality",
-                field=f"{where}.critical",
-            )
-        if section.codec != kind.codec:
-            raise UnsupportedVersionError(
-                f"unknown codec {section.codec!r} (expected {kind.codec!r})",
-                rule="R25-unknown-codec",
-                field=f"{where}.codec",
-            )
-        present[section.id] = section
-
+    kinds = {
+        section_id: KNOWN_SECTIONS[stem]
+        for section_id, (stem, _) in known_segment_kinds(segments).items()
+    }
+    present = check_known_sections(table, kinds)
     shared_needed = any(segment.basis == BASIS_SHARED for segment in segments)
     required = ["FACE"] + (["U1"] if shared_needed else [])
     for segment in segments:
         stems = SEGMENT_STEMS if segment.basis == BASIS_OWN else SEGMENT_STEMS[1:]
         required += [segment.section_id(stem) for stem in stems]
-    for section_id in required:
-        if section_id not in present:
-            raise FormatError(
-                "a required section is missing",
-                rule="R26-required-section-missing",
-                field=f"section {section_id}",
-            )
+    require_sections(present, required)
 
-    face_rows, face_cols = section_shape(present["FACE"].params, "section FACE", min_cols=3)
-    check_limit(face_rows, limits, "max_faces", what=f"{face_rows} faces", field="section FACE")
-    check_limit(
-        face_cols, limits, "max_face_width", what=f"faces of {face_cols} corners", field="FACE"
-    )
-    _check_stream_size(face_rows, face_cols, limits, "section FACE")
+    check_face_shape(present["FACE"].params, limits)
     shared_columns = 0
     if "U1" in present:
         largest = min(vertices, 3 * sum(segment.frames for segment in segments))
-        rows, shared_columns = section_shape(present["U1"].params, "section U1")
-        if rows != vertices or not 1 <= shared_columns <= largest:
-            raise FormatError(
-                f"the shared basis must be [{vertices}, c] with 1 <= c <= {largest}, got "
-                f"[{rows}, {shared_columns}]",
-                rule="R28-shape",
-                field="section U1.shape",
-            )
-        _check_stream_size(rows, shared_columns, limits, "section U1")
+        rows, shared_columns = section_shape(
+            present["U1"].params, "section U1", min_cols=1, max_cols=largest, rows_of=vertices
+        )
+        check_stream_size(rows, shared_columns, limits, "section U1")
     for segment in segments:
         i, k = segment.ranks
         if segment.basis == BASIS_SHARED and i > shared_columns:
-            raise FormatError(
+            _refuse_ranks(
                 f"the segment uses {i} columns of a shared basis of {shared_columns}",
-                rule="R38-segment-ranks",
-                field=f"header.segments[{segment.index}].ranks",
+                f"header.segments[{segment.index}].ranks",
             )
         expected = {
             "U3": (segment.frames, k),
@@ -285,7 +264,7 @@ def check_segmented_sections(
             rows, cols = section_shape(
                 present[segment.section_id(stem)].params, where, expected=shape
             )
-            _check_stream_size(rows, cols, limits, where)
+            check_stream_size(rows, cols, limits, where)
         values = segment.factor_values(vertices, shared_columns)
         check_limit(
             values,
@@ -302,16 +281,6 @@ def check_segmented_sections(
             field=f"header.segments[{segment.index}].frames",
         )
     return shared_columns
-
-
-def _check_stream_size(rows: int, cols: int, limits: Limits, where: str) -> None:
-    check_limit(
-        rows * cols * streams.MAX_PLANES,
-        limits,
-        "max_section_bytes",
-        what=f"{rows} x {cols} values of up to {streams.MAX_PLANES} bytes",
-        field=f"{where}.shape",
-    )
 
 
 __all__ = [

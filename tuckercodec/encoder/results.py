@@ -1,0 +1,92 @@
+"""What an encode returns: the file's bytes and the report of what was chosen and measured, and
+the check of the encoder's modes (shared by the whole and the segmented encoders)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+
+from ..analysis import Selection
+from ..rate import bpfv as bits_per_frame_vertex
+
+Mode = Literal["kg", "ranks", "bpfv"]
+
+
+@dataclass(frozen=True)
+class EncodeReport:
+    """What the encoder did and measured. Errors are KG errors (Karni-Gotsman, per-frame mean)."""
+
+    mode: Mode
+    target: float | None  # the KG target (mode "kg") or bpfv target (mode "bpfv")
+    select: Selection
+    ranks: tuple[int, int]
+    kg: float  # of the decoded sequence against the input
+    truncation_kg: float  # of the truncation alone, before quantization
+    exact_ranks: tuple[int, int] | None  # the cheapest ranks by the exact table (mode "kg")
+    bound_ranks: tuple[int, int] | None  # what the paper's bound alone would pick (mode "kg")
+    total_bytes: int
+    section_bytes: dict[str, int] = field(default_factory=dict)
+    vertices: int = 0
+    frames: int = 0
+    seconds: float = 0.0
+    trials: int = 0
+    segments: int = 1  # segments of frames, each its own decomposition (format 1.1)
+    basis: str | None = None  # "shared" or "own" for a segmented file
+
+    @property
+    def bpfv(self) -> float:
+        """Bits per frame per vertex of the whole file, header and connectivity included."""
+        return bits_per_frame_vertex(self.total_bytes, self.frames, self.vertices)
+
+    @property
+    def connectivity_bpfv(self) -> float:
+        """The faces section's share of :attr:`bpfv`."""
+        return bits_per_frame_vertex(self.section_bytes.get("FACE", 0), self.frames, self.vertices)
+
+    @property
+    def raw_float32_bytes(self) -> int:
+        """The positions as plain float32: F * K * 3 * 4 bytes (faces not counted)."""
+        return self.frames * self.vertices * 12
+
+    @property
+    def ratio(self) -> float:
+        """:attr:`raw_float32_bytes` over the whole file's size."""
+        return self.raw_float32_bytes / self.total_bytes
+
+
+@dataclass(frozen=True)
+class EncodeResult:
+    """The file's bytes and the report of how they were made."""
+
+    data: bytes
+    report: EncodeReport
+
+
+def check_modes(
+    target_kg: float | None, ranks: tuple[int, int] | None, target_bpfv: float | None
+) -> Mode:
+    given = [
+        name
+        for name, value in (
+            ("target_kg", target_kg),
+            ("ranks", ranks),
+            ("target_bpfv", target_bpfv),
+        )
+        if value is not None
+    ]
+    if len(given) > 1:
+        raise ValueError(f"give one of target_kg, ranks and target_bpfv, not {' and '.join(given)}")
+    for name, value in (("target_kg", target_kg), ("target_bpfv", target_bpfv)):
+        if value is not None and not (
+            isinstance(value, (int, float, np.floating))
+            and not isinstance(value, bool)
+            and math.isfinite(value)
+            and value > 0
+        ):
+            raise ValueError(f"{name} must be a positive finite number, got {value!r}")
+    if ranks is not None:
+        return "ranks"
+    return "bpfv" if target_bpfv is not None else "kg"
