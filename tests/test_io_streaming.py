@@ -84,6 +84,14 @@ def test_a_source_reads_the_same_after_a_pickle_round_trip(cloth, tmp_path, name
         assert np.array_equal(source.read(30, 31), expected[30:31])  # the original still reads
 
 
+def test_every_format_that_reads_a_sequence_can_open_one():
+    from tuckercodec.io import formats
+
+    for found in formats():
+        if found.read is not None:
+            assert found.open is not None, f"{found.name} does not stream"
+
+
 def test_a_sequence_in_memory_is_a_source(cloth):
     source = SequenceFrames(cloth)
     same_description(source, cloth)

@@ -31,6 +31,8 @@ Reading:
 * A file Alembic cannot read, a sample whose point count differs, NaN or Inf are
   :class:`InputError`\\ s naming the file, the object and the frame; so are the library's crashes
   and runaway allocations on damaged files, as it reads in a child process (:mod:`.isolation`).
+  :func:`open_alembic` reads the samples a range at a time, in a child that stays open
+  (:mod:`.isolated_frames`; :class:`ArchiveFrames` is what it runs).
 
 Writing: an Ogawa archive holding an Xform ``/<name>`` (identity) and a PolyMesh
 ``/<name>/<name>Shape`` named after the file (``horse.abc`` gives ``/horse/horseShape``): the
@@ -67,9 +69,12 @@ from .alembic_time import (
     kept_codes,
     time_sampling,
 )
-from .isolation import note, read_isolated
+from .isolated_frames import IsolatedFrames
+from .isolation import read_isolated
+from .isolation_child import note
 from .polygons import faces_from_polygons, polygons_from_faces, reverse_winding
 from .registry import ReadOptions, SequenceFormat, WriteOptions
+from .streaming import FrameSource
 from .usd import listing, prim_name
 
 #: What alembic3d raises on a damaged archive: Alembic's exceptions (RuntimeError), names and
@@ -98,34 +103,119 @@ def read_alembic(path: Path, options: ReadOptions) -> MeshSequence:
     return read_isolated(_read_archive, path, options, "Alembic", "alembic", _MODULES)
 
 
+def open_alembic(path: Path, options: ReadOptions) -> FrameSource:
+    """The frames of a PolyMesh, read sample by sample in a child process that stays open
+    (:mod:`.isolated_frames`)."""
+    return IsolatedFrames(ArchiveFrames, path, options, "Alembic", "alembic", _MODULES)
+
+
 def _read_archive(path: Path, options: ReadOptions) -> MeshSequence:
     """:func:`read_alembic` in this process."""
-    abc = _alembic("reading Alembic files")
-    try:
-        with open_regular_file(path, "an Alembic archive") as stream:
-            head = stream.read(len(_HDF5_SIGNATURE))
-    except OSError as error:
-        raise InputError(f"cannot read: {error.strerror or error}", path=path) from None
-    if head == _HDF5_SIGNATURE:
-        raise InputError(
-            "is an HDF5 Alembic archive; only Ogawa archives are read (convert it with "
-            "Alembic's abcconvert -toOgawa)",
-            path=path,
-        )
-    try:
-        archive = abc.Abc.IArchive(str(path))
-        meshes, others = _objects(abc, archive)
-    except _LIBRARY_ERRORS as error:
-        raise InputError(
-            f"cannot read as an Alembic archive: {_message(error)}", path=path
-        ) from None
-    name = _chosen_mesh(list(meshes), others, options.object_path, path)
-    try:
-        return _read_mesh(abc, archive, meshes[name], f"object {name}", path)
-    except InputError:
-        raise
-    except _LIBRARY_ERRORS as error:
-        raise InputError(f"object {name}: cannot read: {_message(error)}", path=path) from None
+    with ArchiveFrames(path, options) as source:
+        return source.load()
+
+
+class ArchiveFrames(FrameSource):
+    """A PolyMesh's position samples read one by one in this process (what the reading child
+    runs): the archive, object, sample times, faces and rate at once, each frame's positions
+    when read."""
+
+    def __init__(self, path: Path, options: ReadOptions):
+        abc = self._abc = _alembic("reading Alembic files")
+        try:
+            with open_regular_file(path, "an Alembic archive") as stream:
+                head = stream.read(len(_HDF5_SIGNATURE))
+        except OSError as error:
+            raise InputError(f"cannot read: {error.strerror or error}", path=path) from None
+        if head == _HDF5_SIGNATURE:
+            raise InputError(
+                "is an HDF5 Alembic archive; only Ogawa archives are read (convert it with "
+                "Alembic's abcconvert -toOgawa)",
+                path=path,
+            )
+        try:
+            archive = abc.Abc.IArchive(str(path))
+            meshes, others = _objects(abc, archive)
+        except _LIBRARY_ERRORS as error:
+            raise InputError(
+                f"cannot read as an Alembic archive: {_message(error)}", path=path
+            ) from None
+        name = _chosen_mesh(list(meshes), others, options.object_path, path)
+        self._file, self._archive, self._where = path, archive, f"object {name}"
+        try:
+            self._open_mesh(meshes[name])
+        except InputError:
+            raise
+        except _LIBRARY_ERRORS as error:
+            raise InputError(f"object {name}: cannot read: {_message(error)}", path=path) from None
+
+    def _open_mesh(self, item: Any) -> None:
+        """The sample times, frame 0 (for the vertex count), the faces, rate and time codes."""
+        abc, where, path = self._abc, self._where, self._file
+        kind = abc.AbcGeom.IPolyMesh if abc.AbcGeom.IPolyMesh.matches(item.getHeader()) else None
+        kind = kind or abc.AbcGeom.ISubD
+        schema = kind(item, abc.Abc.WrapExistingFlag.kWrapExisting).getSchema()
+        self._positions = schema.getPositionsProperty()
+        count = self._positions.getNumSamples()
+        if count < 1:
+            raise InputError(f"{where}: has no position samples", path=path)
+        sampling = self._positions.getTimeSampling()
+        times = np.array([sampling.getSampleTime(index) for index in range(count)], dtype=float)
+        check_times(sampling, times, where, path)
+        self._times = times
+        self._selectors = [
+            abc.Abc.ISampleSelector(time, abc.Abc.ISampleSelector.TimeIndexType.kNearIndex)
+            for time in times.tolist()
+        ]
+        self._first = self._frame(0)
+        note(where)  # the faces, read from every sample if they may change
+        faces = _faces(schema, self._selectors, times, len(self._first), where, path)
+        rate = frame_rate(abc, self._archive, sampling)
+        codes = kept_codes(abc, schema, codes_from_times(times, rate or DEFAULT_FRAME_RATE))
+        try:
+            self._describe(path, count, len(self._first), faces, None, rate, codes)
+        except InputError as error:
+            raise InputError(f"{where}: {error.reason}", path=path, frame=error.frame) from None
+
+    def _frame(self, frame: int) -> np.ndarray:
+        """Frame ``frame``'s positions, (K, 3), finite."""
+        where, path, time = self._where, self._file, self._times[frame]
+        note(where, frame)  # where the library crashed, if it does
+        try:
+            sample = np.asarray(self._positions.getValue(self._selectors[frame]))
+        except _LIBRARY_ERRORS as error:
+            raise InputError(
+                f"{where}: cannot read sample {frame}: {_message(error)}", path=path, frame=frame
+            ) from None
+        if sample.ndim != 2 or sample.shape[1] != 3 or sample.dtype.kind != "f" or not sample.size:
+            raise InputError(
+                f"{where}: sample {frame} holds no 3D positions (dtype {sample.dtype}, shape "
+                f"{sample.shape})",
+                path=path,
+                frame=frame,
+            )
+        if frame and len(sample) != self.vertex_count:
+            raise InputError(
+                f"{where}: {len(sample)} positions at time {time} s, where frame 0 has "
+                f"{self.vertex_count}: the vertex count must stay the same",
+                path=path,
+                frame=frame,
+            )
+        bad = ~np.isfinite(sample)
+        if bad.any():
+            raise InputError(
+                f"{where}: vertex {int(np.argwhere(bad)[0][0])} has a non-finite coordinate "
+                f"at time {time} s",
+                path=path,
+                frame=frame,
+            )
+        return sample
+
+    def _read(self, start: int, stop: int) -> np.ndarray:
+        vertices = np.empty((stop - start, self.vertex_count, 3), dtype=np.float64)
+        for frame in range(start, stop):
+            vertices[frame - start] = self._first if frame == 0 else self._frame(frame)
+        return vertices
 
 
 def _objects(abc: SimpleNamespace, archive: Any) -> tuple[dict[str, Any], dict[str, str]]:
@@ -167,69 +257,6 @@ def _chosen_mesh(names: list[str], others: dict[str, str], wanted: str | None, p
         f"holds {len(names)} meshes: {listing(names)}; choose one with --object PATH",
         path=path,
     )
-
-
-def _read_mesh(
-    abc: SimpleNamespace, archive: Any, item: Any, where: str, path: Path
-) -> MeshSequence:
-    """The sequence of one PolyMesh or SubD object."""
-    kind = abc.AbcGeom.IPolyMesh if abc.AbcGeom.IPolyMesh.matches(item.getHeader()) else None
-    kind = kind or abc.AbcGeom.ISubD
-    schema = kind(item, abc.Abc.WrapExistingFlag.kWrapExisting).getSchema()
-    positions = schema.getPositionsProperty()
-    count = positions.getNumSamples()
-    if count < 1:
-        raise InputError(f"{where}: has no position samples", path=path)
-    sampling = positions.getTimeSampling()
-    times = np.array([sampling.getSampleTime(index) for index in range(count)], dtype=float)
-    check_times(sampling, times, where, path)
-    selectors = [
-        abc.Abc.ISampleSelector(time, abc.Abc.ISampleSelector.TimeIndexType.kNearIndex)
-        for time in times.tolist()
-    ]
-    vertices: np.ndarray | None = None
-    for frame, selector in enumerate(selectors):
-        note(where, frame)  # where the library crashed, if it does
-        try:
-            sample = np.asarray(positions.getValue(selector))
-        except _LIBRARY_ERRORS as error:
-            raise InputError(
-                f"{where}: cannot read sample {frame}: {_message(error)}", path=path, frame=frame
-            ) from None
-        if sample.ndim != 2 or sample.shape[1] != 3 or sample.dtype.kind != "f" or not sample.size:
-            raise InputError(
-                f"{where}: sample {frame} holds no 3D positions (dtype {sample.dtype}, shape "
-                f"{sample.shape})",
-                path=path,
-                frame=frame,
-            )
-        if vertices is None:
-            vertices = np.empty((count, len(sample), 3), dtype=np.float64)
-        elif len(sample) != vertices.shape[1]:
-            raise InputError(
-                f"{where}: {len(sample)} positions at time {times[frame]} s, where frame 0 has "
-                f"{vertices.shape[1]}: the vertex count must stay the same",
-                path=path,
-                frame=frame,
-            )
-        bad = ~np.isfinite(sample)
-        if bad.any():
-            raise InputError(
-                f"{where}: vertex {int(np.argwhere(bad)[0][0])} has a non-finite coordinate "
-                f"at time {times[frame]} s",
-                path=path,
-                frame=frame,
-            )
-        vertices[frame] = sample
-    assert vertices is not None  # count >= 1
-    note(where)  # the faces, read from every sample if they may change
-    faces = _faces(schema, selectors, times, vertices.shape[1], where, path)
-    rate = frame_rate(abc, archive, sampling)
-    codes = kept_codes(abc, schema, codes_from_times(times, rate or DEFAULT_FRAME_RATE))
-    try:
-        return MeshSequence(vertices, faces, frame_rate=rate, time_codes=codes)
-    except InputError as error:
-        raise InputError(f"{where}: {error.reason}", path=path, frame=error.frame) from None
 
 
 def _faces(
@@ -330,6 +357,7 @@ FORMAT = SequenceFormat(
     description="Alembic archive (Ogawa): a PolyMesh's position samples (--object to choose one)",
     read=read_alembic,
     write=write_alembic,
+    open=open_alembic,
     read_options=frozenset({"object_path"}),
     extra="alembic",
     carries=frozenset({"faces", "frame_rate", "time_codes"}),

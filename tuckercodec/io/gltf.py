@@ -16,8 +16,9 @@ from typing import ClassVar
 import numpy as np
 
 from ..errors import InputError
-from ..gltf.reader import Scene, read_gltf, timing
+from ..gltf.reader import Scene, read_gltf
 from ..gltf.sequence_writer import write_sequence_gltf
+from ..gltf.timing import timing
 from ..sequence import MeshSequence
 from .registry import MeshFrame, ReadOptions, SequenceFormat, WriteOptions
 from .streaming import FrameSource

@@ -43,6 +43,8 @@ for about 0.3 s more per read than in process, which the 1 s target allows. Wher
 ``sys.executable`` cannot run Python (a frozen application) the read runs in process.
 
 Writing is not isolated: the data is ours, and the library only re-reads what it just wrote.
+What runs in the child is :mod:`.isolation_child`; a child that serves many reads of ranges,
+for streaming, is :mod:`.isolated_frames`.
 """
 
 from __future__ import annotations
@@ -60,8 +62,8 @@ import signal
 import subprocess
 import sys
 import tempfile
-import traceback
 from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
 
@@ -71,6 +73,7 @@ from .. import errors
 from ..errors import InputError
 from ..optional import import_optional
 from ..sequence import MeshSequence
+from .isolation_child import note as note  # the readers' and hooks' name for it
 from .registry import ReadOptions
 
 GIB = 2**30
@@ -87,18 +90,17 @@ TIMEOUT_VARIABLE = "TUCKERCODEC_READ_TIMEOUT"
 #: Thread pools the child does not need, which would reserve address space per core
 #: (glibc's malloc arenas, OpenBLAS's buffers, pxr's workers): one each. The user's own
 #: settings win.
-_CHILD_ENVIRONMENT = {"MALLOC_ARENA_MAX": "2"} | dict.fromkeys(
+CHILD_ENVIRONMENT = {"MALLOC_ARENA_MAX": "2"} | dict.fromkeys(
     ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "PXR_WORK_THREAD_LIMIT"), "1"
 )
-#: What the child runs: the caller's import path, then :func:`_child`.
+#: What the child runs: the caller's import path, then a function of :mod:`.isolation_child`
+#: (:func:`~.isolation_child.read_child`, or ``serve_child`` for :mod:`.isolated_frames`).
 _BOOTSTRAP = (
     "import json, sys; sys.path[:] = json.loads(sys.argv[1])['sys_path']; "
-    "from tuckercodec.io.isolation import _child; _child(sys.argv[1])"
+    "from tuckercodec.io.isolation_child import {0}; {0}(sys.argv[1])"
 )
 #: How Windows reports a crash: the NTSTATUS exit codes of the usual ones.
 _WINDOWS_CRASHES = {0xC0000005: "an access violation", 0xC00000FD: "a stack overflow"}
-#: In the child: where :func:`note` writes (the result file); None in any other process.
-_notes: IO[bytes] | None = None
 
 
 def read_isolated(
@@ -127,14 +129,24 @@ def read_isolated(
             than the file (a bug): the child's traceback is in the message.
     """
     preload = tuple(preload)
-    for module in filter(_absent, preload):
-        import_optional(module, extra, f"reading {library} files")  # DependencyError
-    if not sys.executable or getattr(sys, "frozen", False):
+    if not can_isolate(preload, library, extra):
         return reader(path, options)  # no interpreter to start: see the module docstring
+    request = child_request(reader, path, options, preload)
+    memory, timeout = request["memory"], request["timeout"]
+    with tempfile.TemporaryFile() as result, tempfile.TemporaryFile() as stderr:
+        returncode = _run(request, result, stderr, timeout)
+        result.seek(0)
+        return _outcome(result, returncode, last_words(stderr), path, library, memory, timeout)
+
+
+def child_request(
+    function: Callable[..., Any], path: Path, options: ReadOptions, preload: tuple[str, ...]
+) -> dict[str, Any]:
+    """What a child needs to run ``function(path, options)``, as JSON, with its limits."""
     memory, timeout = _limits(path)
-    request = {
+    return {
         "sys_path": [entry for entry in sys.path if isinstance(entry, str)],
-        "reader": f"{reader.__module__}:{reader.__qualname__}",
+        "reader": f"{function.__module__}:{function.__qualname__}",
         "path": os.fspath(path),
         "options": {
             name: None if value is None else (os.fspath(value) if name == "faces" else value)
@@ -142,23 +154,25 @@ def read_isolated(
         },
         "preload": preload,
         "memory": memory,
+        "timeout": timeout,
         "alarm": None if timeout is None else math.ceil(timeout) + 10,
         "parent": os.getpid(),
     }
-    with tempfile.TemporaryFile() as result, tempfile.TemporaryFile() as stderr:
-        returncode = _run(request, result, stderr, timeout)
-        result.seek(0)
-        stderr.seek(max(0, stderr.seek(0, io.SEEK_END) - 4096))
-        said = [line.strip() for line in stderr.read().decode(errors="replace").splitlines()]
-        said = [line for line in said if line and not line[0] == line[-1] == "#"]  # pxr's banners
-        return _outcome(result, returncode, said, path, library, memory, timeout)
 
 
-def note(where: str, frame: int | None = None) -> None:
-    """Tell the caller what the reader reads now (``"object /a/aShape"``, and the frame), for
-    the error should the library crash there. Does nothing outside a reading child."""
-    if _notes is not None:
-        _send({"note": where, "frame": frame})
+def last_words(stderr: IO[bytes]) -> list[str]:
+    """The lines of the last 4 KiB a child printed, without pxr's banners of ``#``."""
+    stderr.seek(max(0, stderr.seek(0, io.SEEK_END) - 4096))
+    said = [line.strip() for line in stderr.read().decode(errors="replace").splitlines()]
+    return [line for line in said if line and not line[0] == line[-1] == "#"]
+
+
+def can_isolate(preload: tuple[str, ...], library: str, extra: str) -> bool:
+    """Whether a child can be started (not where ``sys.executable`` cannot run Python: a
+    frozen application); first, a DependencyError for a ``preload`` module that is absent."""
+    for module in filter(_absent, preload):
+        import_optional(module, extra, f"reading {library} files")  # DependencyError
+    return bool(sys.executable) and not getattr(sys, "frozen", False)
 
 
 def _absent(module: str) -> bool:
@@ -200,12 +214,7 @@ def _run(
     request: dict[str, Any], result: IO[bytes], stderr: IO[bytes], timeout: float | None
 ) -> int | None:
     """Run the child to its end; its exit status, or None if it ran out of time."""
-    environment = {**_CHILD_ENVIRONMENT, **os.environ}
-    environment.pop("PYTHONINSPECT", None)  # would wait at a prompt once the child is done
-    command = [sys.executable, "-P", "-c", _BOOTSTRAP, json.dumps(request)]
-    child = subprocess.Popen(
-        command, stdin=subprocess.DEVNULL, stdout=result, stderr=stderr, env=environment
-    )
+    child = spawn("read_child", request, subprocess.DEVNULL, result, stderr)
     try:
         return child.wait(timeout)
     except subprocess.TimeoutExpired:
@@ -214,6 +223,17 @@ def _run(
         if child.returncode is None:
             child.kill()
             child.wait()
+
+
+def spawn(
+    entry: str, request: dict[str, Any], stdin: Any, stdout: Any, stderr: Any
+) -> subprocess.Popen[bytes]:
+    """Start ``python -P -c`` running :mod:`.isolation_child`'s function ``entry`` on the
+    request, with the caller's import path and :data:`CHILD_ENVIRONMENT`."""
+    environment = {**CHILD_ENVIRONMENT, **os.environ}
+    environment.pop("PYTHONINSPECT", None)  # would wait at a prompt once the child is done
+    command = [sys.executable, "-P", "-c", _BOOTSTRAP.format(entry), json.dumps(request)]
+    return subprocess.Popen(command, stdin=stdin, stdout=stdout, stderr=stderr, env=environment)
 
 
 def _outcome(
@@ -239,42 +259,70 @@ def _outcome(
         if "result" in message:
             header = message if returncode == 0 else {}  # believe only a clean exit
             break
-    kind = header.get("result")
-    if kind == "sequence":
+    if header.get("result") == "sequence":
         try:
             return _sequence(result, header, path)
         except (ValueError, OSError, EOFError) as error:  # cut short: the child's disk full?
             raise RuntimeError(f"{path}: the reading process sent half a result: {error}") from None
-    if kind == "error":
-        raised = _ErrorUnpickler(io.BytesIO(base64.b64decode(header["pickle"]))).load()
-        if isinstance(raised, errors.TuckerCodecError):
-            raise raised
-    if kind in ("bug", "error"):
-        detail = header.get("traceback", "an error that is not tuckercodec's")
-        raise RuntimeError(f"{path}: reading it failed in a child process:\n{detail}")
-    last = f" (it printed: {said[-1][:200]})" if said else ""
-    if returncode is not None and not started:
-        raise RuntimeError(
-            f"{path}: could not start a process to read it with {sys.executable} "
-            f"(exit status {returncode}){last}"
-        )
-    if kind == "memory" or any("bad_alloc" in line for line in said):
-        limit = "there is memory for"  # no cap: none asked for, or not Linux (_cap_memory)
-        if memory is not None and os.path.exists("/proc/self/statm"):
-            limit = f"{memory / GIB:.3g} GiB allows (the memory limit of a read: {MEMORY_VARIABLE})"
-        reason = f"declares more data than {limit}"
-    elif returncode is None:
-        reason = (
-            f"the {library} library did not finish reading it in {timeout:g} s: the file is "
-            f"damaged or far larger than it looks (the time limit of a read: {TIMEOUT_VARIABLE})"
-        )
-    else:
-        given = os.environ.get(MEMORY_VARIABLE, "").strip()  # a low cap can crash pxr too
-        given = f", or {MEMORY_VARIABLE}={given} is too little" if given and memory else ""
-        how = _how(returncode)
-        reason = f"the {library} library crashed reading it ({how}): the file is damaged{given}"
-        reason += last
-    raise InputError(f"{where}: {reason}" if where else reason, path=path, frame=frame)
+    ending = Ending(path, library, memory, timeout, returncode, said, where, frame, started)
+    raise ending.error(header)
+
+
+@dataclass
+class Ending:
+    """How a reading child ended (or a request to it did), for :meth:`error`: the file, the
+    library and the limits; the exit status (``None``: killed at the time limit), its last
+    words on stderr, the last place it noted, and whether it started at all."""
+
+    path: Path
+    library: str
+    memory: int | None
+    timeout: float | None
+    returncode: int | None = None
+    said: list[str] = field(default_factory=list)
+    where: str | None = None
+    frame: int | None = None
+    started: bool = True
+
+    def error(self, header: dict[str, Any]) -> Exception:
+        """What to raise: what the child's result ``header`` says (its error, a bug, memory),
+        or what its exit status says (a crash, the time limit)."""
+        path, said, returncode, memory = self.path, self.said, self.returncode, self.memory
+        kind = header.get("result")
+        if kind == "error":
+            raised = _ErrorUnpickler(io.BytesIO(base64.b64decode(header["pickle"]))).load()
+            if isinstance(raised, errors.TuckerCodecError):
+                return raised
+        if kind in ("bug", "error"):
+            detail = header.get("traceback", "an error that is not tuckercodec's")
+            return RuntimeError(f"{path}: reading it failed in a child process:\n{detail}")
+        last = f" (it printed: {said[-1][:200]})" if said else ""
+        if returncode is not None and not self.started:
+            return RuntimeError(
+                f"{path}: could not start a process to read it with {sys.executable} "
+                f"(exit status {returncode}){last}"
+            )
+        if kind == "memory" or any("bad_alloc" in line for line in said):
+            limit = "there is memory for"  # no cap: none asked for, or not Linux (_cap_memory)
+            if memory is not None and os.path.exists("/proc/self/statm"):
+                limit = (
+                    f"{memory / GIB:.3g} GiB allows (the memory limit of a read: {MEMORY_VARIABLE})"
+                )
+            reason = f"declares more data than {limit}"
+        elif returncode is None:
+            reason = (
+                f"the {self.library} library did not finish reading it in {self.timeout:g} s: the "
+                f"file is damaged or far larger than it looks (the time limit of a read: "
+                f"{TIMEOUT_VARIABLE})"
+            )
+        else:
+            given = os.environ.get(MEMORY_VARIABLE, "").strip()  # a low cap can crash pxr too
+            given = f", or {MEMORY_VARIABLE}={given} is too little" if given and memory else ""
+            how = _how(returncode)
+            reason = f"the {self.library} library crashed reading it ({how}): the file is damaged"
+            reason += given + last
+        where = self.where
+        return InputError(f"{where}: {reason}" if where else reason, path=path, frame=self.frame)
 
 
 def _how(returncode: int) -> str:
@@ -311,110 +359,3 @@ class _ErrorUnpickler(pickle.Unpickler):
         ):
             return found
         raise pickle.UnpicklingError(f"{module}.{name} is not an error of tuckercodec")
-
-
-# ------------------------------------------------------------------------------------------
-# the child
-
-
-def _child(argument: str) -> None:
-    """The child's whole life: read, write the outcome to stdout, exit (never returns)."""
-    request = json.loads(argument)
-    global _notes
-    _notes = os.fdopen(os.dup(1), "wb", buffering=0)  # unbuffered: notes survive a crash
-    os.dup2(2, 1)  # what the libraries print to stdout goes with their stderr
-    try:
-        _guard(request)
-        module, _, name = request["reader"].partition(":")
-        reader = getattr(importlib.import_module(module), name)
-        for library in request["preload"]:  # their own mappings are not the file's doing
-            with contextlib.suppress(ImportError):  # the reader raises DependencyError
-                importlib.import_module(library)
-        _cap_memory(request["memory"])
-        _send({"started": True})
-        options = dict(request["options"])
-        if options["faces"] is not None:
-            options["faces"] = Path(options["faces"])
-        _send_sequence(reader(Path(request["path"]), ReadOptions(**options)))
-    except errors.TuckerCodecError as error:
-        pickled = base64.b64encode(pickle.dumps(error)).decode()
-        _send(_memory(error) or {"result": "error", "pickle": pickled})
-    except BaseException as error:
-        _send(_memory(error) or {"result": "bug", "traceback": traceback.format_exc()})
-    os._exit(0)  # skip the libraries' static destructors: a damaged file may have upset them
-
-
-def _send(message: dict[str, Any]) -> None:
-    """One line of the child's output: a note, or the result's header."""
-    assert _notes is not None
-    _notes.write(json.dumps(message).encode() + b"\n")
-
-
-def _guard(request: dict[str, Any]) -> None:
-    """Signals and limits of the child: Ctrl-C is the caller's to handle (it kills us), no
-    core dump of a crash, death with the caller (Linux) or after the time allowed."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        import resource
-
-        resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
-    except (ImportError, ValueError, OSError):
-        pass  # Windows: no core files to keep from the disk
-    if sys.platform.startswith("linux"):
-        import ctypes
-
-        libc = ctypes.CDLL(None, use_errno=True)
-        libc.prctl(1, signal.SIGKILL, 0, 0, 0)  # PR_SET_PDEATHSIG: die with the caller
-        if os.getppid() != request["parent"]:  # the caller died before prctl
-            os._exit(1)
-    if request["alarm"] is not None and hasattr(signal, "alarm"):
-        signal.alarm(request["alarm"])  # SIGALRM's default ends the process, even mid-library
-
-
-def _cap_memory(memory: int | None) -> None:
-    """Let the child's address space grow by ``memory`` bytes from here, where the system
-    says how large it is (Linux)."""
-    if memory is None:
-        return
-    try:
-        import resource
-
-        with open("/proc/self/statm", "rb") as statm:
-            now = int(statm.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
-        _, hard = resource.getrlimit(resource.RLIMIT_AS)
-        cap = now + memory if hard == resource.RLIM_INFINITY else min(hard, now + memory)
-        resource.setrlimit(resource.RLIMIT_AS, (cap, hard))
-    except (ImportError, OSError, ValueError, IndexError):
-        pass  # not Linux: isolated, without a cap
-
-
-def _memory(error: BaseException) -> dict[str, Any] | None:
-    """The "memory" outcome if the error, or one it was raised from, is a failed allocation."""
-    seen: BaseException | None = error
-    for _ in range(8):
-        if seen is None:
-            return None
-        try:
-            text = str(seen)
-        except Exception:
-            text = ""
-        if isinstance(seen, MemoryError) or "bad_alloc" in text:
-            return {"result": "memory"}
-        seen = seen.__cause__ or seen.__context__
-    return None
-
-
-def _send_sequence(seq: MeshSequence) -> None:
-    """Write the sequence: its header line, then its arrays in ``.npy`` format."""
-    arrays = {"vertices": seq.vertices, "faces": seq.faces}
-    if seq.time_codes is not None:
-        arrays["time_codes"] = seq.time_codes
-    header = {
-        "result": "sequence",
-        "arrays": list(arrays),
-        "frame_names": seq.frame_names,
-        "frame_rate": seq.frame_rate,
-    }
-    _send(header)
-    for array in arrays.values():
-        np.lib.format.write_array(_notes, array, allow_pickle=False)  # type: ignore[arg-type]

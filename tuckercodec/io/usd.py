@@ -32,6 +32,8 @@ Reading:
   allocates before the data is found short (8 GiB in 27 s for 2^31 indices in a 1 KB file).
   So the file is read in a child process (:mod:`.isolation`) whose memory and time are
   capped, and which may crash without taking the caller along: each is an InputError.
+  :func:`open_usd` reads the frames sample by sample, a range at a time, in a child that stays
+  open (:mod:`.isolated_frames`; :class:`StageFrames` is what it runs).
 
 Writing: a stage with ``upAxis`` Y, ``metersPerUnit`` 0.01 (USD's fallback, authored only
 because usdchecker requires it: the file means what an unauthored one would), ``defaultPrim``
@@ -61,9 +63,12 @@ from ..errors import InputError
 from ..optional import import_optional
 from ..reading import open_regular_file
 from ..sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_vertices
-from .isolation import note, read_isolated
+from .isolated_frames import IsolatedFrames
+from .isolation import read_isolated
+from .isolation_child import note
 from .polygons import faces_from_polygons, polygons_from_faces, reverse_winding
 from .registry import ReadOptions, SequenceFormat, WriteOptions
+from .streaming import FrameSource
 
 #: Where the written mesh lives: the root Xform (also the stage's defaultPrim).
 ROOT = "/Root"
@@ -73,6 +78,8 @@ _LISTED = 8
 
 #: The pxr modules this format uses.
 _MODULES = ("Usd", "UsdGeom", "Sdf", "Tf", "Vt", "UsdUtils")
+#: ... as the reading child imports them, before its memory is capped.
+_PRELOAD = tuple(f"pxr.{name}" for name in _MODULES)
 
 
 def _pxr(purpose: str) -> SimpleNamespace:
@@ -114,36 +121,105 @@ def _tf_message(error: BaseException) -> str:
 
 def read_usd(path: Path, options: ReadOptions) -> MeshSequence:
     """A UsdGeomMesh's time-sampled points (see the module docstring), read in a child process."""
-    modules = [f"pxr.{name}" for name in _MODULES]
-    return read_isolated(_read_stage, path, options, "USD", "usd", modules)
+    return read_isolated(_read_stage, path, options, "USD", "usd", _PRELOAD)
+
+
+def open_usd(path: Path, options: ReadOptions) -> FrameSource:
+    """The frames of a UsdGeomMesh, read sample by sample in a child process that stays open
+    (:mod:`.isolated_frames`)."""
+    return IsolatedFrames(StageFrames, path, options, "USD", "usd", _PRELOAD)
 
 
 def _read_stage(path: Path, options: ReadOptions) -> MeshSequence:
     """:func:`read_usd` in this process."""
-    pxr = _pxr("reading USD files")
-    try:
-        open_regular_file(path, "a USD file").close()  # a folder or a pipe: a clear error
-    except OSError as error:
-        raise InputError(f"cannot read: {error.strerror or error}", path=path) from None
-    with _quiet(pxr):
+    with StageFrames(path, options) as source:
+        return source.load()
+
+
+class StageFrames(FrameSource):
+    """A UsdGeomMesh's points read sample by sample in this process (what the reading child
+    runs): the stage, prim, time samples and faces at once, each frame's points when read."""
+
+    def __init__(self, path: Path, options: ReadOptions):
+        pxr = self._pxr = _pxr("reading USD files")
         try:
-            stage = pxr.Usd.Stage.Open(str(path), pxr.Usd.Stage.LoadAll)
-        except _errors(pxr) as error:
+            open_regular_file(path, "a USD file").close()  # a folder or a pipe: a clear error
+        except OSError as error:
+            raise InputError(f"cannot read: {error.strerror or error}", path=path) from None
+        self._file = path
+        with _quiet(pxr):
+            try:
+                stage = pxr.Usd.Stage.Open(str(path), pxr.Usd.Stage.LoadAll)
+            except _errors(pxr) as error:
+                raise InputError(
+                    f"cannot read as a USD file: {_tf_message(error)}", path=path
+                ) from None
+            if not stage:
+                raise InputError("cannot read as a USD file", path=path)
+            try:
+                prim = _chosen_mesh(pxr, stage, options.prim, path)
+            except _errors(pxr) as error:
+                raise InputError(
+                    f"cannot read its prims: {_tf_message(error)}", path=path
+                ) from None
+            self._stage, self._where = stage, f"prim {prim.GetPath()}"
+            try:
+                self._open_mesh(prim)
+            except _errors(pxr) as error:
+                raise InputError(
+                    f"{self._where}: cannot read: {_tf_message(error)}", path=path
+                ) from None
+
+    def _open_mesh(self, prim: Any) -> None:
+        """The time samples, frame 0 (for the vertex count), the faces and the rate."""
+        pxr, where, path = self._pxr, self._where, self._file
+        mesh = pxr.UsdGeom.Mesh(prim)
+        self._points = mesh.GetPointsAttr()
+        times = [float(time) for time in self._points.GetTimeSamples()]
+        self._times = times
+        # one frame when the points have no samples: their default, which EarliestTime reads
+        self._frame_times = times or [pxr.Usd.TimeCode.EarliestTime()]
+        self._first = self._frame(0)
+        note(where)  # the faces, read from every frame if they may change
+        faces = _faces(pxr, mesh, self._frame_times, times, len(self._first), where, path)
+        rate = float(self._stage.GetTimeCodesPerSecond())
+        if not (np.isfinite(rate) and rate > 0):
+            raise InputError(f"timeCodesPerSecond must be a positive number, got {rate}", path=path)
+        codes = np.array(times) if times else None
+        try:
+            self._describe(path, len(self._frame_times), len(self._first), faces, None, rate, codes)
+        except InputError as error:
+            raise InputError(f"{where}: {error.reason}", path=path, frame=error.frame) from None
+
+    def _frame(self, frame: int) -> np.ndarray:
+        """Frame ``frame``'s points, (K, 3), finite."""
+        where, path = self._where, self._file
+        label = f"time code {self._times[frame]}" if self._times else "its default value"
+        note(where, frame)  # where the library crashed, if it does
+        try:
+            value = self._points.Get(self._frame_times[frame])
+        except _errors(self._pxr) as error:
             raise InputError(
-                f"cannot read as a USD file: {_tf_message(error)}", path=path
+                f"{where}: cannot read the points at {label}: {_tf_message(error)}",
+                path=path,
+                frame=frame,
             ) from None
-        if not stage:
-            raise InputError("cannot read as a USD file", path=path)
-        try:
-            prim = _chosen_mesh(pxr, stage, options.prim, path)
-        except _errors(pxr) as error:
-            raise InputError(f"cannot read its prims: {_tf_message(error)}", path=path) from None
-        try:
-            return _read_mesh(pxr, stage, prim, path)
-        except _errors(pxr) as error:
+        positions = _points(value, where, label, path, frame)
+        if frame and len(positions) != self.vertex_count:
             raise InputError(
-                f"prim {prim.GetPath()}: cannot read: {_tf_message(error)}", path=path
-            ) from None
+                f"{where}: {len(positions)} points at {label}, where frame 0 has "
+                f"{self.vertex_count}: the vertex count must stay the same",
+                path=path,
+                frame=frame,
+            )
+        return positions
+
+    def _read(self, start: int, stop: int) -> np.ndarray:
+        vertices = np.empty((stop - start, self.vertex_count, 3), dtype=np.float64)
+        with _quiet(self._pxr):
+            for frame in range(start, stop):
+                vertices[frame - start] = self._first if frame == 0 else self._frame(frame)
+        return vertices
 
 
 def listing(paths: list[str]) -> str:
@@ -193,54 +269,6 @@ def _chosen_mesh(pxr: SimpleNamespace, stage: Any, wanted: str | None, path: Pat
         "choose one with --prim PATH",
         path=path,
     )
-
-
-def _read_mesh(pxr: SimpleNamespace, stage: Any, prim: Any, path: Path) -> MeshSequence:
-    """The sequence of one Mesh prim."""
-    where = f"prim {prim.GetPath()}"
-    mesh = pxr.UsdGeom.Mesh(prim)
-    points = mesh.GetPointsAttr()
-    times = [float(time) for time in points.GetTimeSamples()]
-    # one frame when the points have no samples: their default, which EarliestTime also reads
-    frame_times = times or [pxr.Usd.TimeCode.EarliestTime()]
-    vertices: np.ndarray | None = None
-    for frame, time in enumerate(frame_times):
-        label = f"time code {time}" if times else "its default value"
-        note(where, frame)  # where the library crashed, if it does
-        try:
-            value = points.Get(time)
-        except _errors(pxr) as error:
-            raise InputError(
-                f"{where}: cannot read the points at {label}: {_tf_message(error)}",
-                path=path,
-                frame=frame,
-            ) from None
-        positions = _points(value, where, label, path, frame)
-        if vertices is None:
-            vertices = np.empty((len(frame_times), len(positions), 3), dtype=np.float64)
-        elif len(positions) != vertices.shape[1]:
-            raise InputError(
-                f"{where}: {len(positions)} points at {label}, where frame 0 has "
-                f"{vertices.shape[1]}: the vertex count must stay the same",
-                path=path,
-                frame=frame,
-            )
-        vertices[frame] = positions
-    assert vertices is not None  # frame_times is never empty
-    note(where)  # the faces, read from every frame if they may change
-    faces = _faces(pxr, mesh, frame_times, times, vertices.shape[1], where, path)
-    rate = float(stage.GetTimeCodesPerSecond())
-    if not (np.isfinite(rate) and rate > 0):
-        raise InputError(f"timeCodesPerSecond must be a positive number, got {rate}", path=path)
-    try:
-        return MeshSequence(
-            vertices,
-            faces,
-            frame_rate=rate,
-            time_codes=np.array(times) if times else None,
-        )
-    except InputError as error:
-        raise InputError(f"{where}: {error.reason}", path=path, frame=error.frame) from None
 
 
 def _points(value: Any, where: str, label: str, path: Path, frame: int) -> np.ndarray:
@@ -374,6 +402,7 @@ FORMAT = SequenceFormat(
     description="USD stage: a UsdGeomMesh with time-sampled points (--prim to choose one)",
     read=read_usd,
     write=write_usd,
+    open=open_usd,
     read_options=frozenset({"prim"}),
     extra="usd",
     carries=frozenset({"faces", "frame_rate", "time_codes"}),

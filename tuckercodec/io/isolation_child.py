@@ -1,0 +1,217 @@
+"""The reading child of :mod:`.isolation`: what runs in the child process, started with
+``python -P -c`` and given its request (reader, file, options, limits) as JSON.
+
+The child writes to its stdout, unbuffered so that nothing is lost in a crash, one JSON line at
+a time: ``{"started": true}`` once its libraries are imported and its memory capped, the
+reader's notes (:func:`note`: where it reads, for the error should it crash there), then a
+result: ``{"result": "sequence", ...}`` followed by the arrays in ``.npy`` format, or an error
+(our own errors pickled; a failed allocation; a bug's traceback). What the libraries print goes
+to stderr. :mod:`.isolated_frames` uses the same pieces for a child that serves many reads.
+"""
+
+from __future__ import annotations
+
+import base64
+import contextlib
+import importlib
+import json
+import os
+import pickle
+import signal
+import sys
+import traceback
+from pathlib import Path
+from typing import IO, Any
+
+import numpy as np
+
+from .. import errors
+from ..sequence import MeshSequence
+from .registry import ReadOptions
+
+#: In the child: where :func:`note` writes (the result file); None in any other process.
+_notes: IO[bytes] | None = None
+
+
+def note(where: str, frame: int | None = None) -> None:
+    """Tell the caller what the reader reads now (``"object /a/aShape"``, and the frame), for
+    the error should the library crash there. Does nothing outside a reading child."""
+    if _notes is not None:
+        send({"note": where, "frame": frame})
+
+
+def read_child(argument: str) -> None:
+    """The child's whole life: read, write the outcome to stdout, exit (never returns)."""
+    request = json.loads(argument)
+    try:
+        reader = start_child(request)
+        _send_sequence(reader(Path(request["path"]), child_options(request)))
+    except BaseException as error:
+        send_failure(error)
+    os._exit(0)  # skip the libraries' static destructors: a damaged file may have upset them
+
+
+def start_child(request: dict[str, Any]) -> Any:
+    """Make this process a reading child (notes and results on stdout, the libraries' prints
+    to stderr, signals, limits), and return the function the request names."""
+    global _notes
+    _notes = os.fdopen(os.dup(1), "wb", buffering=0)  # unbuffered: notes survive a crash
+    os.dup2(2, 1)  # what the libraries print to stdout goes with their stderr
+    _guard(request)
+    module, _, name = request["reader"].partition(":")
+    reader = getattr(importlib.import_module(module), name)
+    for library in request["preload"]:  # their own mappings are not the file's doing
+        with contextlib.suppress(ImportError):  # the reader raises DependencyError
+            importlib.import_module(library)
+    _cap_memory(request["memory"])
+    send({"started": True})
+    return reader
+
+
+def child_options(request: dict[str, Any]) -> ReadOptions:
+    """The request's read options."""
+    options = dict(request["options"])
+    if options["faces"] is not None:
+        options["faces"] = Path(options["faces"])
+    return ReadOptions(**options)
+
+
+def send_failure(error: BaseException) -> None:
+    """Send what stopped the reader: our error (pickled), a failed allocation, or a bug."""
+    if isinstance(error, errors.TuckerCodecError):
+        pickled = base64.b64encode(pickle.dumps(error)).decode()
+        send(_memory(error) or {"result": "error", "pickle": pickled})
+    else:
+        send(_memory(error) or {"result": "bug", "traceback": traceback.format_exc()})
+
+
+def send(message: dict[str, Any]) -> None:
+    """One line of the child's output: a note, or the result's header."""
+    assert _notes is not None
+    _notes.write(json.dumps(message).encode() + b"\n")
+
+
+def _guard(request: dict[str, Any]) -> None:
+    """Signals and limits of the child: Ctrl-C is the caller's to handle (it kills us), no
+    core dump of a crash, death with the caller (Linux) or after the time allowed."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        import resource
+
+        resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
+    except (ImportError, ValueError, OSError):
+        pass  # Windows: no core files to keep from the disk
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGKILL, 0, 0, 0)  # PR_SET_PDEATHSIG: die with the caller
+        if os.getppid() != request["parent"]:  # the caller died before prctl
+            os._exit(1)
+    if request["alarm"] is not None and hasattr(signal, "alarm"):
+        signal.alarm(request["alarm"])  # SIGALRM's default ends the process, even mid-library
+
+
+def _cap_memory(memory: int | None) -> None:
+    """Let the child's address space grow by ``memory`` bytes from here, where the system
+    says how large it is (Linux)."""
+    if memory is None:
+        return
+    try:
+        import resource
+
+        with open("/proc/self/statm", "rb") as statm:
+            now = int(statm.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
+        _, hard = resource.getrlimit(resource.RLIMIT_AS)
+        cap = now + memory if hard == resource.RLIM_INFINITY else min(hard, now + memory)
+        resource.setrlimit(resource.RLIMIT_AS, (cap, hard))
+    except (ImportError, OSError, ValueError, IndexError):
+        pass  # not Linux: isolated, without a cap
+
+
+def _memory(error: BaseException) -> dict[str, Any] | None:
+    """The "memory" outcome if the error, or one it was raised from, is a failed allocation."""
+    seen: BaseException | None = error
+    for _ in range(8):
+        if seen is None:
+            return None
+        try:
+            text = str(seen)
+        except Exception:
+            text = ""
+        if isinstance(seen, MemoryError) or "bad_alloc" in text:
+            return {"result": "memory"}
+        seen = seen.__cause__ or seen.__context__
+    return None
+
+
+def _send_sequence(seq: MeshSequence) -> None:
+    """Write the sequence: its header line, then its arrays in ``.npy`` format."""
+    arrays = {"vertices": seq.vertices, "faces": seq.faces}
+    if seq.time_codes is not None:
+        arrays["time_codes"] = seq.time_codes
+    header = {
+        "result": "sequence",
+        "arrays": list(arrays),
+        "frame_names": seq.frame_names,
+        "frame_rate": seq.frame_rate,
+    }
+    send(header)
+    for array in arrays.values():
+        np.lib.format.write_array(_notes, array, allow_pickle=False)  # type: ignore[arg-type]
+
+
+def serve_child(argument: str) -> None:
+    """The life of a child that serves reads (:mod:`.isolated_frames`): open the request's
+    source (a :class:`~.streaming.FrameSource` class), send its description, then for each
+    line ``{"read": [start, stop]}`` on stdin send the frames, until stdin ends (never
+    returns). Our own errors are sent and the child serves on; anything else ends it. The time
+    limit (``alarm``) runs while the child opens the file or reads, not while it waits."""
+    request = json.loads(argument)
+    try:
+        opener = start_child(request)
+        source = opener(Path(request["path"]), child_options(request))
+        arrays = {"faces": source.faces}
+        if source.time_codes is not None:
+            arrays["time_codes"] = source.time_codes
+        description = {
+            "frame_count": source.frame_count,
+            "vertex_count": source.vertex_count,
+            "frame_names": source.frame_names,
+            "frame_rate": source.frame_rate,
+        }
+        send_arrays({"result": "description", **description}, arrays)
+    except BaseException as error:
+        send_failure(error)
+        os._exit(0)
+    alarm = request["alarm"] if hasattr(signal, "alarm") else None
+    if alarm is not None:
+        signal.alarm(0)  # waiting for the caller is not reading
+    for line in sys.stdin.buffer:
+        start, stop = json.loads(line)["read"]
+        if alarm is not None:
+            signal.alarm(alarm)
+        try:
+            send_arrays({"result": "frames"}, {"vertices": source.read(start, stop)})
+        except errors.TuckerCodecError as error:
+            send_failure(error)  # the file's fault in these frames: others may still be read
+        except BaseException as error:
+            send_failure(error)
+            os._exit(0)
+        if alarm is not None:
+            signal.alarm(0)
+    os._exit(0)
+
+
+def send_arrays(header: dict[str, Any], arrays: dict[str, np.ndarray]) -> None:
+    """A result header listing the arrays (name, dtype, shape), then their bytes, raw: the
+    caller reads them into arrays it allocates, from a pipe that cannot seek."""
+    contiguous = {name: np.ascontiguousarray(array) for name, array in arrays.items()}
+    listed = [[name, a.dtype.str, list(a.shape)] for name, a in contiguous.items()]
+    send({**header, "arrays": listed})
+    assert _notes is not None
+    for array in contiguous.values():
+        data = memoryview(array).cast("B")  # type: ignore[arg-type]  # arrays are buffers
+        while data:
+            written = _notes.write(data) or 0
+            data = data[written:]
