@@ -7,6 +7,8 @@ The public API::
     result.cheapest(0.1)                   # the smallest truncation meeting a KG error of 0.1 %
     save_sequence(seq, "out/")             # OBJ frames with their faces, or an .npz
     save_sequence(seq, "out.usdc")         # or any format of formats(): USD, Alembic, glTF...
+    with open_frames("big.npy") as src:   # any of them, a range of frames at a time
+        block = src.read(0, 64)            # (64, K, 3) float64, without loading the rest
 
     data = encode(seq, target_kg=0.1)      # a compressed file (spec/FORMAT.md) as bytes
     decode(data, frames=range(10, 20))     # any frames back, as a MeshSequence (or pass a path)
@@ -38,7 +40,7 @@ from .errors import (
 )
 from .files import decode_file, encode_file, read_compressed
 from .format.limits import Limits
-from .io import formats, load_sequence, save_sequence
+from .io import FrameSource, formats, load_sequence, open_frames, save_sequence
 from .metrics import kg_error, max_vertex_displacement, relative_error
 from .perceptual import sted
 from .rate import bpfv
@@ -53,6 +55,7 @@ __all__ = [
     "EncodeResult",
     "FileInfo",
     "FormatError",
+    "FrameSource",
     "InputError",
     "LimitError",
     "Limits",
@@ -75,6 +78,7 @@ __all__ = [
     "kg_error",
     "load_sequence",
     "max_vertex_displacement",
+    "open_frames",
     "read_compressed",
     "relative_error",
     "save_sequence",
