@@ -317,8 +317,9 @@ def _start_cluster(distributed: Any, jobs: int) -> Any:
     which stops the workers. The cluster starts in a thread meanwhile; once the processes exist
     (a few milliseconds), a Ctrl-C is held rather than lost, as a SIGTERM is from the start,
     until the cluster is up (interrupted half way, it could not be closed); then it is delivered
-    to the handler that was there, and the cluster closed if that raises. Only from the main
-    thread (the only one that can set signal handlers); elsewhere the cluster just starts.
+    to the handler that was there, and the cluster closed if that raises. A second signal gives
+    up waiting for a start that hangs. Only from the main thread (the only one that can set
+    signal handlers); elsewhere the cluster just starts.
     """
     previous = {number: signal.getsignal(number) for number in (signal.SIGINT, signal.SIGTERM)}
     if (
@@ -352,9 +353,14 @@ def _start_cluster(distributed: Any, jobs: int) -> Any:
             if not spawned and len(set(multiprocessing.active_children()) - before) >= jobs:
                 spawned = True  # every worker has been started (exec included)
                 signal.signal(signal.SIGINT, hold)
+            if len(held) > 1:  # asked twice: give up a start that does not end
+                break
     finally:
         for number, handler in previous.items():
             signal.signal(number, handler)
+    if not outcome:  # still starting, in a thread that ends with this process
+        signal.raise_signal(held[0])
+        raise KeyboardInterrupt  # the handler let it go on: there is no cluster to go on with
     cluster = outcome[0]
     if cluster is None:
         raise outcome[1]
