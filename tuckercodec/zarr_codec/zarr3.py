@@ -67,6 +67,10 @@ class TuckerZarrCodec(ArrayBytesCodec):  # type: ignore[misc]  # zarr is Any to 
             raise ValueError(f"unknown keys in a {NAME} configuration: {keys}")
         return cls(**configuration)
 
+    def __repr__(self) -> str:
+        settings = ", ".join(f"{key}={value!r}" for key, value in self.mode.config().items())
+        return f"TuckerZarrCodec({settings})"
+
     def to_dict(self) -> dict[str, Any]:
         """``{"name": "tuckercodec", "configuration": {<the mode's one key>}}``, JSON-safe."""
         return {"name": NAME, "configuration": self.mode.config()}
