@@ -7,7 +7,7 @@ The public API::
     result.cheapest(0.1)                   # the smallest truncation meeting a KG error of 0.1 %
     save_sequence(seq, "out/")             # OBJ frames with their faces, or an .npz
     save_sequence(seq, "out.usdc")         # or any format of formats(): USD, Alembic, glTF...
-    with open_frames("big.npy") as src:   # any of them, a range of frames at a time
+    with open_frames("big.npy") as src:    # any of them, a range of frames at a time
         block = src.read(0, 64)            # (64, K, 3) float64, without loading the rest
 
     data = encode(seq, target_kg=0.1)      # a compressed file (spec/FORMAT.md) as bytes

@@ -137,11 +137,17 @@ class FrameSource(abc.ABC):
             values = np.ascontiguousarray(values, dtype=np.float64)
         if values.shape != (stop - start, self.vertex_count, 3):  # a reader's bug, not the file's
             raise RuntimeError(f"{type(self).__name__} read {values.shape} for {start}:{stop}")
-        if not np.isfinite(values).all():
-            frame, vertex, _ = (int(i) for i in np.argwhere(~np.isfinite(values))[0])
-            raise InputError(
-                f"vertex {vertex} has a non-finite coordinate", path=self.path, frame=start + frame
-            )
+        with np.errstate(over="ignore", invalid="ignore"):
+            total = values.sum()  # not finite if a coordinate is not (or, rarely, on overflow)
+        if not np.isfinite(total):  # then look, with an array of the range's size
+            bad = ~np.isfinite(values)
+            if bad.any():
+                frame, vertex, _ = (int(i) for i in np.argwhere(bad)[0])
+                raise InputError(
+                    f"vertex {vertex} has a non-finite coordinate",
+                    path=self.path,
+                    frame=start + frame,
+                )
         return values
 
     @abc.abstractmethod
