@@ -248,7 +248,10 @@ def test_npz_metadata_is_checked_when_opened(tmp_path):
 # real sequences
 
 
-@pytest.mark.parametrize("suffix", ["", ".npy", ".npz", ".pc2", ".zarr"])
+# USD and Alembic: tests/test_io_isolated_frames.py, on the cloth (each costs a child or two)
+@pytest.mark.parametrize(
+    "suffix", ["", ".npy", ".npz", ".pc2", ".mdd", ".zarr", ".pvd", ".xdmf", ".glb"]
+)
 def test_horse_gallop_streams_as_it_loads(tmp_path, suffix):
     folder = shared_file("horse-gallop")
     expected = load_sequence(folder, progress=False)
