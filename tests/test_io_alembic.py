@@ -8,7 +8,6 @@ from __future__ import annotations
 import shutil
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -92,14 +91,11 @@ def test_polygons_rates_and_time_codes_round_trip_exactly(tmp_path, rate, codes)
     assert np.array_equal(back.time_codes, seq.codes())
 
 
-def test_horse_gallop_round_trips_exactly_and_reads_fast(horse, tmp_path):
+def test_horse_gallop_round_trips_exactly(horse, tmp_path):
+    """(Its reading speed is measured by tools.bench_formats, not asserted here.)"""
     path = tmp_path / "horse.abc"
     save_sequence(horse, path)
-    start = time.perf_counter()
-    back = load_sequence(path)
-    elapsed = time.perf_counter() - start
-    assert exact(back, horse)
-    assert elapsed < 1.0, f"reading horse gallop from .abc took {elapsed:.2f} s"
+    assert exact(load_sequence(path), horse)
 
 
 def test_the_written_archive_is_what_the_docstring_says(tmp_path):

@@ -76,14 +76,11 @@ def test_polygons_rates_and_uneven_time_codes_round_trip_exactly(tmp_path, suffi
 
 
 @pytest.mark.parametrize("suffix", [".usda", ".usdc"])
-def test_horse_gallop_round_trips_exactly_and_reads_fast(horse, tmp_path, suffix):
+def test_horse_gallop_round_trips_exactly(horse, tmp_path, suffix):
+    """(Its reading speed is measured by tools.bench_formats, not asserted here.)"""
     path = tmp_path / f"horse{suffix}"
     save_sequence(horse, path)
-    start = time.perf_counter()
-    back = load_sequence(path)
-    elapsed = time.perf_counter() - start
-    assert exact(back, horse)
-    assert elapsed < 1.0, f"reading horse gallop from {suffix} took {elapsed:.2f} s"
+    assert exact(load_sequence(path), horse)
 
 
 def test_the_written_stage_is_what_the_docstring_says(tmp_path):

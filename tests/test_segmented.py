@@ -181,3 +181,45 @@ def test_chicken_in_segments_of_100_frames():
     assert result.report.segments == 4
     assert result.report.total_bytes <= 1.3 * whole.total_bytes
     assert kg_error(chicken.vertices, Decoder(result.data).positions()) <= 0.1
+
+
+# ------------------------------------------------------------------------------------------
+# where the passes run, and the command line
+
+
+def test_the_bytes_do_not_depend_on_the_workers(cloth, shared_file):
+    """In process, one worker and two workers of a LocalCluster (loopback only) write the same
+    file: the blocks and the order of every sum are the plan's, not the executor's."""
+    pytest.importorskip("distributed", reason="the LocalCluster needs the extra [dask]")
+    from tuckercodec.parallel import open_executor
+
+    for jobs in (1, 2):
+        with open_executor(jobs) as executor:
+            data = encode_with_report(
+                cloth, target_kg=0.1, segment_frames=20, executor=executor
+            ).data
+        assert data == shared_file, f"--jobs {jobs} wrote other bytes"
+
+
+def test_encode_in_segments_on_the_command_line(tmp_path, capsys):
+    from tuckercodec.cli import main
+
+    out = tmp_path / "cloth.tkc"
+    assert main(["encode", str(sample_path()), "-o", str(out), "--segment-frames", "20"]) == 0
+    printed = capsys.readouterr().out
+    assert "3 segments of frames with one shared U1 (format 1.1)" in printed
+    assert "of the whole sequence" in printed
+    assert main(["info", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "format 1.1" in printed and "segment 2: frames 40..59" in printed
+    decoded = tmp_path / "back.npz"
+    assert main(["decode", str(out), "-o", str(decoded), "--frames", "45:50"]) == 0
+    assert tuckercodec.load_sequence(decoded, progress=False).frame_count == 5
+    # without segments asked for, the sample fits memory: a file of format 1.0
+    plain = tmp_path / "plain.tkc"
+    assert main(["encode", str(sample_path()), "-o", str(plain), "--max-memory", "4GB"]) == 0
+    assert not Decoder(plain).segmented
+    # a size the encode cannot work in is a usage error
+    with pytest.raises(SystemExit) as raised:
+        main(["encode", str(sample_path()), "-o", str(plain), "--max-memory", "lots"])
+    assert raised.value.code == 2

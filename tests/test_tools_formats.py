@@ -8,7 +8,9 @@ from tuckercodec import formats
 
 
 def test_every_writable_format_reads_the_sample_back(capsys):
-    assert bench_formats.main(["sample", "--repeat", "1"]) == 0  # 1: a read over 1.0 s
+    # the exit status says whether every read met its time target: timing is the benchmark's
+    # business, not a unit test's (a loaded machine would fail it)
+    assert bench_formats.main(["sample", "--repeat", "1"]) in (0, 1)
     out = capsys.readouterr().out
     rows = {line.split("|")[1].strip(): line for line in out.splitlines() if line.count("|") > 8}
     for found in formats():

@@ -1,4 +1,8 @@
-"""The command line's arguments: the parser of every verb and the types of their options."""
+"""The command line's arguments: the parser of every verb and the types of their options.
+
+It is longer than the other modules because every verb's options live here together, where a
+reader compares them (the same mode, read and executor options recur across verbs).
+"""
 
 from __future__ import annotations
 
@@ -8,6 +12,8 @@ from pathlib import Path
 
 from .._version import __version__
 from ..encoder import DEFAULT_TARGET_KG
+from ..encoder.plan import DEFAULT_SEGMENT_FRAMES, parse_size
+from ..encoder.segment_work import BASES
 from ..files import SUFFIX
 from ..gltf.decomposition import COMPRESSIONS
 from ..io.registry import writable_formats
@@ -130,6 +136,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="choose ranks by the exact error table (default) or by the seed paper's bound",
     )
     encode.add_argument("--force", action="store_true", help="replace the output if it exists")
+    _add_segment_options(encode)
     _add_read_options(encode)
     _add_batch(verbs)
 
@@ -337,6 +344,55 @@ def _add_rd_options(parser: argparse.ArgumentParser) -> None:
         help="draw log KG and log ψ over (i, k) (Fig. 3)",
     )
     parser.add_argument("--force", action="store_true", help="replace output files that exist")
+
+
+def _size(text: str) -> int:
+    try:
+        return parse_size(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
+def _add_segment_options(encode: argparse.ArgumentParser) -> None:
+    """encode's options for sequences larger than memory (format 1.1's segments)."""
+    large = encode.add_argument_group(
+        "large sequences",
+        "A sequence whose whole encode would not fit --max-memory is read in passes and written "
+        "in segments of frames (format 1.1); otherwise the file is one decomposition (1.0).",
+    )
+    large.add_argument(
+        "--segment-frames",
+        type=_at_least(1),
+        metavar="N",
+        help="segments of N frames, each its own decomposition (default: only when needed, "
+        f"then {DEFAULT_SEGMENT_FRAMES})",
+    )
+    large.add_argument(
+        "--max-memory",
+        type=_size,
+        metavar="SIZE",
+        help="memory the encode may use, e.g. 2GB or 512MiB (default: half the machine's)",
+    )
+    large.add_argument(
+        "--basis",
+        choices=BASES,
+        default=BASES[0],
+        help="with segments: one U1 shared by all (default, smaller) or one per segment",
+    )
+    where = large.add_mutually_exclusive_group()
+    where.add_argument(
+        "--jobs",
+        type=_at_least(1),
+        metavar="N",
+        help="with segments: run the passes on N worker processes (Dask; extra [dask]); the "
+        "file is the same bytes",
+    )
+    where.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="with segments: run the passes on the Dask cluster of this scheduler "
+        "(tcp://host:port); its workers must read the input at the same absolute path",
+    )
 
 
 def _add_batch(verbs: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:

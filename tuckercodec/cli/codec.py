@@ -5,30 +5,42 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from pathlib import Path
 
 from ..atomic import refuse_existing, write_atomic
 from ..decoder import Decoder, FileInfo
 from ..decoder import info as read_info
-from ..encoder import EncodeReport, encode_with_report
+from ..encoder import EncodeReport
+from ..encoder.plan import needs_segments
 from ..errors import EXIT_OK, InputError
-from ..files import decode_file, decoded_output_path, is_gltf_output
+from ..files import decode_file, decoded_output_path, encode_frames_source, is_gltf_output
 from ..gltf.decomposition import DEFAULT_COMPRESSION, write_decomposition_gltf
-from ..io import load_sequence
+from ..io import open_frames
 from ..metrics import (
     KG_DEFINITION,
     kg_error,
 )
+from ..parallel import Executor, InProcessExecutor, open_executor
 from ..sequence import MeshSequence
 from .inputs import check_precision, load_input, read_options, sequence_source
 
 
 def _print_encode_report(report: EncodeReport) -> None:
     i, k = report.ranks
+    if report.basis is not None:  # a segmented file
+        basis = "one shared U1" if report.basis == "shared" else "a U1 each"
+        print(
+            f"{report.segments} segments of frames with {basis} (format 1.1), read in "
+            f"{report.trials} passes and trials; largest ranks (i, 3, k) = ({i}, 3, {k})"
+        )
     print(
         f"ranks (i, 3, k) = ({i}, 3, {k}); decoded KG error {report.kg:.5f} "
         f"(truncation alone {report.truncation_kg:.5f}; {KG_DEFINITION})"
+        if report.basis is None
+        else f"decoded KG error {report.kg:.5f} of the whole sequence (truncation alone "
+        f"{report.truncation_kg:.5f}; {KG_DEFINITION})"
     )
     print(
         f"size {report.total_bytes} bytes = {report.bpfv:.4f} bpfv (whole file; connectivity "
@@ -45,24 +57,63 @@ def _print_encode_report(report: EncodeReport) -> None:
 def run_encode(args: argparse.Namespace) -> int:
     refuse_existing([args.output], args.force)  # before the work, not after it
     start = time.perf_counter()
-    sequence = load_sequence(sequence_source(args.input), **read_options(args))
-    result = encode_with_report(  # no mode given: the encoder's default target
-        sequence, target_kg=args.kg, ranks=args.ranks, target_bpfv=args.bpfv, select=args.select
-    )
-    write_atomic(args.output, result.data, overwrite=args.force)
-    print(
-        f"{args.input}: {sequence.frame_count} frames, {sequence.vertex_count} vertices "
-        f"-> {args.output}"
-    )
-    _print_encode_report(result.report)
-    if sequence.time_codes is not None:  # the format keeps a frame rate, not times
-        codes = sequence.time_codes
-        print(
-            f"not kept in the compressed file: time codes ({codes[0]:g}..{codes[-1]:g} decode "
-            f"as frames 0..{sequence.frame_count - 1})"
+    with open_frames(sequence_source(args.input), **read_options(args)) as frames:
+        segmented = needs_segments(
+            frames.frame_count,
+            frames.vertex_count,
+            segment_frames=args.segment_frames,
+            max_memory=args.max_memory,
         )
-    print(f"total time with reading and writing {time.perf_counter() - start:.2f} s")
+        if not segmented and (args.jobs is not None or args.scheduler is not None):
+            print(
+                "note: --jobs and --scheduler run the passes of a segmented encode; this "
+                "sequence is encoded whole, in this process (give --segment-frames to segment it)",
+                file=sys.stderr,
+            )
+        with _executor(args, segmented) as executor:
+            result = encode_frames_source(  # no mode given: the encoder's default target
+                frames,
+                target_kg=args.kg,
+                ranks=args.ranks,
+                target_bpfv=args.bpfv,
+                select=args.select,
+                segment_frames=args.segment_frames,
+                max_memory=args.max_memory,
+                basis=args.basis,
+                executor=executor,
+                progress=_say,
+            )
+        write_atomic(args.output, result.data, overwrite=args.force)
+        print(
+            f"{args.input}: {frames.frame_count} frames, {frames.vertex_count} vertices "
+            f"-> {args.output}"
+        )
+        _print_encode_report(result.report)
+        if frames.time_codes is not None:  # the format keeps a frame rate, not times
+            codes = frames.time_codes
+            print(
+                f"not kept in the compressed file: time codes ({codes[0]:g}..{codes[-1]:g} "
+                f"decode as frames 0..{frames.frame_count - 1})"
+            )
+    elapsed = time.perf_counter() - start
+    megabytes = frames.frame_count * frames.vertex_count * 12 / 1e6
+    print(
+        f"total time with reading and writing {elapsed:.2f} s "
+        f"({megabytes / elapsed:.1f} MB/s of float32 positions)"
+    )
     return EXIT_OK
+
+
+def _executor(args: argparse.Namespace, segmented: bool) -> Executor:
+    """Where a segmented encode's passes run: --jobs workers, a --scheduler's cluster, or here."""
+    if not segmented:
+        return InProcessExecutor()
+    return open_executor(args.jobs, args.scheduler)
+
+
+def _say(line: str) -> None:
+    """A segmented encode's progress, one line per pass, on standard error."""
+    print(line, file=sys.stderr, flush=True)
 
 
 def run_decode(args: argparse.Namespace) -> int:
@@ -166,7 +217,21 @@ def run_info(args: argparse.Namespace) -> int:
         f"  {header.frames} frames, {header.vertices} vertices, {header.faces} faces of up to "
         f"{header.face_width} corners"
     )
-    print(f"  ranks (i, 3, k) = ({i}, 3, {k})")
+    if header.segments:
+        shared = sum(segment.basis == "shared" for segment in header.segments)
+        basis = "one shared U1" if shared == len(header.segments) else "a U1 each"
+        print(
+            f"  {len(header.segments)} segments with {basis}; largest ranks (i, 3, k) = "
+            f"({i}, 3, {k})"
+        )
+        for segment in header.segments:
+            si, sk = segment.ranks
+            print(
+                f"    segment {segment.index}: frames {segment.start}..{segment.stop - 1}, "
+                f"ranks ({si}, 3, {sk}), {segment.basis} basis"
+            )
+    else:
+        print(f"  ranks (i, 3, k) = ({i}, 3, {k})")
     print(f"  {header.total_bytes} bytes = {header.bpfv:.4f} bpfv (whole file)")
     target = (
         "none (fixed ranks or a size target)"
@@ -182,5 +247,5 @@ def run_info(args: argparse.Namespace) -> int:
     print(f"  written by {header.encoder or 'an unnamed encoder'}")
     for section_id, length, codec, critical in header.sections:
         kind = "" if critical else " (ancillary)"
-        print(f"  section {section_id:<5} {length:>10} bytes  {codec}{kind}")
+        print(f"  section {section_id:<8} {length:>10} bytes  {codec}{kind}")
     return EXIT_OK

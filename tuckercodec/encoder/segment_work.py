@@ -85,7 +85,7 @@ class SegmentedEncode:
 
     def _read_and_model(self) -> None:
         columns, shared = self.plan.sketch_columns, self.basis == BASIS_SHARED
-        self.say(f"pass 1 of 3: sketching {len(self.ranges)} segments ({columns} columns)")
+        self.say(f"pass 1: sketching {len(self.ranges)} segments ({columns} columns)")
         centroids, energies = [], []
         total: np.ndarray | None = None
         own_bases: list[np.ndarray] = []
@@ -106,7 +106,7 @@ class SegmentedEncode:
                 "KG error has no denominator",
                 path=self.source.path,
             )
-        self.say("pass 2 of 3: projecting every frame on the sketch's basis")
+        self.say("pass 2: projecting every frame on the sketch's basis")
         self.shared_q = orthonormal_columns(total) if total is not None else None
         del total
         jobs = [(r, None if shared else own_bases[s]) for s, r in enumerate(self.ranges)]
@@ -244,6 +244,7 @@ class SegmentedEncode:
 
     def measured_error2(self, quantized: Quantized) -> float:
         """A pass over the input: the decoded sequence's exact squared error."""
+        self.say(f"pass {self.passes + 1}: measuring the decoded error on the input")
         shared = None if quantized.shared_u1 is None else quantized.shared_u1.values()
         parts = self.decoded(quantized)
         total = sum(self._in_order(measure_segment, parts, self.source, shared))
