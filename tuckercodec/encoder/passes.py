@@ -21,6 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg.blas
 
 from ..format.reconstruction import reconstruct_frames
 from ..hosvd import centre_frames
@@ -56,14 +57,20 @@ def random_test_matrix(frames: range, columns: int, seed: int) -> np.ndarray:
 def sketch_segment(segment: SegmentRange, source: FrameSource, columns: int, seed: int) -> Sketch:
     """Pass 1 over one segment (see the module docstring)."""
     centroids, energies = [], []
-    sketch = np.zeros((source.vertex_count, columns))
+    # Fortran order: BLAS adds each block's product into it in place (no K x r temporary), and
+    # the QR that orthonormalises the sum works on it in place too
+    sketch = np.zeros((source.vertex_count, columns), order="F")
     for start, stop in blocks(segment.start, segment.stop, segment.block_frames):
         tensor, block_centroids = centre_frames(source.read(start, stop))
         count = stop - start
         centroids.append(block_centroids)
         energies.append(np.einsum("vxt,vxt->t", tensor, tensor))
         flat = tensor.reshape(tensor.shape[0], 3 * count)
-        sketch += flat @ random_test_matrix(range(start, stop), columns, seed)
+        omega = random_test_matrix(range(start, stop), columns, seed)
+        # sketch += flat @ omega, as BLAS's C = A B + C on the transposed views
+        scipy.linalg.blas.dgemm(
+            1.0, flat.T, omega.T, beta=1.0, c=sketch, trans_a=1, trans_b=1, overwrite_c=1
+        )
     return Sketch(np.concatenate(centroids), np.concatenate(energies), sketch)
 
 

@@ -31,7 +31,7 @@ SKETCH_SHARE, BLOCK_SHARE = 0.5, 0.2
 BLOCK_COPIES = 4
 #: The most frames read at once, whatever the memory: keeps the blocks, and so the sums, the same
 #: on machines of different sizes (the output does not depend on the machine).
-MAX_BLOCK_FRAMES = 64
+MAX_BLOCK_FRAMES = 16
 
 _SIZE = re.compile(r"^\s*([0-9]*\.?[0-9]+)\s*([kmgt]?i?b?)?\s*$", re.IGNORECASE)
 _UNITS = {"": 1, "b": 1, "k": 10**3, "m": 10**6, "g": 10**9, "t": 10**12}

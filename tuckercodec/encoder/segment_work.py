@@ -95,7 +95,10 @@ class SegmentedEncode:
             centroids.append(sketch.centroids)
             energies.append(sketch.energies)
             if shared:
-                total = sketch.sketch if total is None else total + sketch.sketch
+                if total is None:
+                    total = sketch.sketch
+                else:
+                    total += sketch.sketch  # in place: the sum is K x r
             else:
                 own_bases.append(orthonormal_columns(sketch.sketch))
         self.passes += 1
