@@ -215,6 +215,12 @@ def test_encode_in_segments_on_the_command_line(tmp_path, capsys):
     decoded = tmp_path / "back.npz"
     assert main(["decode", str(out), "-o", str(decoded), "--frames", "45:50"]) == 0
     assert tuckercodec.load_sequence(decoded, progress=False).frame_count == 5
+    # glTF: one decomposition per segment, so the decoded frames as morph targets
+    animation = tmp_path / "back.glb"
+    assert main(["decode", str(out), "-o", str(animation)]) == 0
+    assert "decoded frames as morph targets" in capsys.readouterr().err
+    shown = tuckercodec.load_sequence(animation, progress=False).vertices
+    np.testing.assert_allclose(shown, Decoder(out).positions(), atol=1e-5)
     # without segments asked for, the sample fits memory: a file of format 1.0
     plain = tmp_path / "plain.tkc"
     assert main(["encode", str(sample_path()), "-o", str(plain), "--max-memory", "4GB"]) == 0

@@ -169,7 +169,9 @@ def decode_file(
     """Decode a compressed file and write the frames: a folder of OBJ files, or a sequence
     file (``.npz``, ``.usd``...). A glTF output (``.glb``/``.gltf``) holds the decomposition
     itself as a morph animation (:func:`tuckercodec.gltf.decomposition.write_decomposition_gltf`),
-    compressed as ``glb_compress`` says ("none", "quantize" (default), "meshopt").
+    compressed as ``glb_compress`` says ("none", "quantize" (default), "meshopt"); a segmented
+    file (format 1.1) has one decomposition per segment, so its glTF holds the decoded frames as
+    any sequence written to glTF does (frame 0 the mesh, each other frame a morph target).
 
     ``output_format`` defaults to the format ``output``'s suffix names, else a folder of OBJ
     files; the format's suffix is added to the name if missing (:func:`decoded_output_path`).
@@ -178,7 +180,7 @@ def decode_file(
     output = decoded_output_path(output, output_format)
     decoder = Decoder(os.fsdecode(path))
     sequence = decoder.sequence(frames)
-    if is_gltf_output(output):
+    if is_gltf_output(output) and not decoder.segmented:
         output.parent.mkdir(parents=True, exist_ok=True)  # as save_sequence does
         compress = glb_compress or DEFAULT_COMPRESSION
         write_decomposition_gltf(
@@ -186,6 +188,9 @@ def decode_file(
         )
         return sequence
     if glb_compress is not None:
-        raise ValueError(f"{output}: glb_compress applies only to a .glb or .gltf output")
+        raise ValueError(
+            f"{output}: glb_compress applies only to the decomposition of a file of one segment "
+            "written as .glb or .gltf"
+        )
     save_sequence(sequence, output, overwrite=overwrite, precision=precision, progress=progress)
     return sequence

@@ -130,10 +130,19 @@ def run_decode(args: argparse.Namespace) -> int:
         )
     output = decoded_output_path(args.output, args.format)
     check_precision(args.precision, output)
-    if is_gltf_output(output):
+    if is_gltf_output(output) and not header.segments:
         return _decode_gltf(args, header, reference, output)
     if args.glb_compress is not None:
-        raise ValueError(f"{output}: --glb-compress applies only to a .glb or .gltf output")
+        raise ValueError(
+            f"{output}: --glb-compress applies only to the decomposition of a file of one "
+            "segment written as .glb or .gltf"
+        )
+    if is_gltf_output(output):
+        print(
+            "note: a segmented file has one decomposition per segment; the glTF holds the "
+            "decoded frames as morph targets (frame 0 the mesh, each other frame a target)",
+            file=sys.stderr,
+        )
     start = time.perf_counter()
     decoded = decode_file(
         args.input,
