@@ -173,9 +173,10 @@ def encode_chunk(chunk: Any, mode: ChunkMode) -> bytes:
         UnreachableTargetError: a target the format cannot meet for this chunk.
     """
     positions = chunk_positions(chunk)
-    if np.isfinite(positions).all() and is_point_chunk(positions):
-        return _pack_points(positions)
-    sequence = _sequence(positions)
+    values = positions.astype(np.float64, copy=False)  # float16 would measure the spread coarsely
+    if np.isfinite(values).all() and is_point_chunk(values):
+        return _pack_points(values)
+    sequence = _sequence(values)
     if mode.ranks is not None:
         i, k = mode.ranks
         # a short edge chunk may not have that many columns: its ranks are capped at its own
