@@ -187,18 +187,21 @@ def test_chicken_in_segments_of_100_frames():
 # where the passes run, and the command line
 
 
-def test_the_bytes_do_not_depend_on_the_workers(cloth, shared_file):
-    """In process, one worker and two workers of a LocalCluster (loopback only) write the same
-    file: the blocks and the order of every sum are the plan's, not the executor's."""
+def test_the_bytes_do_not_depend_on_the_workers(cloth):
+    """One worker and two workers of a LocalCluster (loopback only) write the same file: the
+    blocks and the order of every sum are the plan's, not the executor's. (In process, BLAS may
+    run on several threads and round its products differently, so that file may differ in its
+    last bits; it meets the same target.)"""
     pytest.importorskip("distributed", reason="the LocalCluster needs the extra [dask]")
     from tuckercodec.parallel import open_executor
 
+    written = []
     for jobs in (1, 2):
         with open_executor(jobs) as executor:
-            data = encode_with_report(
-                cloth, target_kg=0.1, segment_frames=20, executor=executor
-            ).data
-        assert data == shared_file, f"--jobs {jobs} wrote other bytes"
+            result = encode_with_report(cloth, target_kg=0.1, segment_frames=20, executor=executor)
+        written.append(result.data)
+        assert kg_error(cloth.vertices, Decoder(result.data).positions()) <= 0.1
+    assert written[0] == written[1], "--jobs 1 and --jobs 2 wrote other bytes"
 
 
 def test_encode_in_segments_on_the_command_line(tmp_path, capsys):

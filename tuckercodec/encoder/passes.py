@@ -21,7 +21,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg.blas
 
 from ..format.reconstruction import reconstruct_frames
 from ..hosvd import centre_frames
@@ -54,12 +53,24 @@ def random_test_matrix(frames: range, columns: int, seed: int) -> np.ndarray:
     return np.stack(parts, axis=1).reshape(3 * len(frames), columns)
 
 
-def sketch_segment(segment: SegmentRange, source: FrameSource, columns: int, seed: int) -> Sketch:
-    """Pass 1 over one segment (see the module docstring)."""
+def sketch_segment(
+    segment: SegmentRange,
+    source: FrameSource,
+    columns: int,
+    seed: int,
+    into: np.ndarray | None = None,
+) -> Sketch:
+    """Pass 1 over one segment (see the module docstring). The sketch is added ``into`` a
+    Fortran-order K x r array when one is given (the caller's running sum, in process: no
+    second K x r array), else into a new one that is returned."""
+    # imported here: scipy.linalg costs 0.17 s, which every command (and every isolated read's
+    # child) would pay at start-up; only a segmented encode needs it
+    from scipy.linalg import blas
+
     centroids, energies = [], []
     # Fortran order: BLAS adds each block's product into it in place (no K x r temporary), and
     # the QR that orthonormalises the sum works on it in place too
-    sketch = np.zeros((source.vertex_count, columns), order="F")
+    sketch = np.zeros((source.vertex_count, columns), order="F") if into is None else into
     for start, stop in blocks(segment.start, segment.stop, segment.block_frames):
         tensor, block_centroids = centre_frames(source.read(start, stop))
         count = stop - start
@@ -68,9 +79,7 @@ def sketch_segment(segment: SegmentRange, source: FrameSource, columns: int, see
         flat = tensor.reshape(tensor.shape[0], 3 * count)
         omega = random_test_matrix(range(start, stop), columns, seed)
         # sketch += flat @ omega, as BLAS's C = A B + C on the transposed views
-        scipy.linalg.blas.dgemm(
-            1.0, flat.T, omega.T, beta=1.0, c=sketch, trans_a=1, trans_b=1, overwrite_c=1
-        )
+        blas.dgemm(1.0, flat.T, omega.T, beta=1.0, c=sketch, trans_a=1, trans_b=1, overwrite_c=1)
     return Sketch(np.concatenate(centroids), np.concatenate(energies), sketch)
 
 

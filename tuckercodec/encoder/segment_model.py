@@ -25,7 +25,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 
 from ..analysis import discarded_energy
 
@@ -36,6 +35,8 @@ LAMBDA_STEPS = 60
 def orthonormal_columns(sketch: np.ndarray) -> np.ndarray:
     """Q with orthonormal columns spanning ``sketch``'s (Householder QR, in place: the sketch is
     consumed)."""
+    import scipy.linalg  # here: 0.17 s at start-up that only a segmented encode needs
+
     q: np.ndarray = scipy.linalg.qr(sketch, mode="economic", overwrite_a=True, check_finite=False)[
         0
     ]

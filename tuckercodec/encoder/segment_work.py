@@ -20,7 +20,7 @@ from ..format.segments import (
     BASIS_SHARED,
 )
 from ..io.streaming import FrameSource
-from ..parallel import Executor
+from ..parallel import Executor, InProcessExecutor
 from ..topology import mesh_parents
 from .passes import DecodedSegment, SegmentRange, measure_segment, project_segment, sketch_segment
 from .plan import SegmentPlan
@@ -89,18 +89,21 @@ class SegmentedEncode:
         centroids, energies = [], []
         total: np.ndarray | None = None
         own_bases: list[np.ndarray] = []
+        if shared and isinstance(self.executor, InProcessExecutor):
+            # in process, every segment adds into one sum: one K x r array, not two (workers
+            # return their segment's sketch, summed here in segment order)
+            total = np.zeros((self.vertex_count, columns), order="F")
         for sketch in self._in_order(
-            sketch_segment, self.ranges, self.source, columns, SKETCH_SEED
+            sketch_segment, self.ranges, self.source, columns, SKETCH_SEED, total
         ):
             centroids.append(sketch.centroids)
             energies.append(sketch.energies)
-            if shared:
-                if total is None:
-                    total = sketch.sketch
-                else:
-                    total += sketch.sketch  # in place: the sum is K x r
-            else:
+            if not shared:
                 own_bases.append(orthonormal_columns(sketch.sketch))
+            elif total is None:
+                total = sketch.sketch
+            elif sketch.sketch is not total:
+                total += sketch.sketch  # in place: the sum is K x r
         self.passes += 1
         self.denominator2 = float(sum(float(e.sum()) for e in energies))
         if not (math.isfinite(self.denominator2) and self.denominator2 > 0):
