@@ -232,3 +232,23 @@ def test_encode_in_segments_on_the_command_line(tmp_path, capsys):
     with pytest.raises(SystemExit) as raised:
         main(["encode", str(sample_path()), "-o", str(plain), "--max-memory", "lots"])
     assert raised.value.code == 2
+
+
+# ------------------------------------------------------------------------------------------
+# a basis fitted once, shared by files encoded apart (the zarr codec's chunks)
+
+
+def test_a_fitted_basis_serves_every_segment_on_its_own(cloth):
+    from tuckercodec.encoder.segmented import encode_frames, fit_basis, shared_basis_of
+    from tuckercodec.io.streaming import SequenceFrames
+
+    basis = fit_basis(SequenceFrames(cloth), target_kg=0.1, segment_frames=20)
+    for start in range(0, 60, 20):
+        part = MeshSequence(cloth.vertices[start : start + 20], cloth.faces)
+        data = encode_frames(
+            SequenceFrames(part), target_kg=0.1, segment_frames=20, shared_basis=basis
+        ).data
+        assert shared_basis_of(data) == basis  # the basis's section, byte for byte
+        assert kg_error(part.vertices, Decoder(data).positions()) <= 0.1
+    with pytest.raises(ValueError, match="no shared basis"):
+        shared_basis_of(encode_with_report(cloth, target_kg=0.1).data)

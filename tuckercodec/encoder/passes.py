@@ -77,6 +77,8 @@ def sketch_segment(
         centroids.append(block_centroids)
         energies.append(np.einsum("vxt,vxt->t", tensor, tensor))
         flat = tensor.reshape(tensor.shape[0], 3 * count)
+        if columns == 0:  # only the centroids and energies are wanted
+            continue
         omega = random_test_matrix(range(start, stop), columns, seed)
         # sketch += flat @ omega, as BLAS's C = A B + C on the transposed views
         blas.dgemm(1.0, flat.T, omega.T, beta=1.0, c=sketch, trans_a=1, trans_b=1, overwrite_c=1)

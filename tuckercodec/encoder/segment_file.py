@@ -31,7 +31,9 @@ def segment_sections(
     out: list[tuple[dict[str, Any], bytes]] = [
         (_entry("FACE", work.face_section[0]), work.face_section[1])
     ]
-    if quantized.shared_u1 is not None:
+    if work.fixed_basis is not None:  # a given basis: its section, byte for byte
+        out.append((_entry("U1", work.fixed_basis.params), work.fixed_basis.payload))
+    elif quantized.shared_u1 is not None:
         params, payload = qmat.encode_matrix(quantized.shared_u1, work.parents, level=level)
         out.append((_entry("U1", params), payload))
     for s in range(len(work.models)):

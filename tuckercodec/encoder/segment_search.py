@@ -20,6 +20,9 @@ from .segment_file import segment_sections
 from .segment_model import RankChoice, cheapest_ranks, fixed_ranks
 from .segment_work import Quantized, SegmentedEncode
 
+#: Truncation shares tried when none of the usual ones fits: a basis that leaves little room
+#: (a given one, or a small sketch) spends most of the budget on truncation.
+LATE_SHARES = (0.8, 0.9, 0.95, 0.98)
 #: Measuring passes before giving up on the target (each one tightens D to what it measured).
 MAX_MEASURING_PASSES = 6
 #: Quantization may add this much to a fixed-ranks truncation's squared error (as unsegmented).
@@ -96,7 +99,7 @@ def search_kg(
     seen: set[tuple[int, tuple[tuple[int, int], ...]]] = set()
     shared = work.basis == BASIS_SHARED
     for share in shares:
-        choice = cheapest_ranks(work.models, work.vertex_count, shared, share * limit2)
+        choice = cheapest_ranks(work.models, work.basis_vertices, shared, share * limit2)
         if choice is None or (choice.shared, choice.ranks) in seen:
             continue
         seen.add((choice.shared, choice.ranks))
@@ -105,19 +108,23 @@ def search_kg(
             continue
         step = work.initial_step(choice, room)
         trials.append((trial_bytes(work, work.quantize(choice, step)), choice, step))
+    if not trials and shares != LATE_SHARES:  # most of the budget goes to the truncation
+        return search_kg(work, target_kg, LATE_SHARES)
     if not trials:
-        largest = cheapest_ranks(work.models, work.vertex_count, shared, math.inf)
-        if largest is None:  # pragma: no cover - an infinite budget always fits
-            raise UnreachableTargetError("no ranks fit the error target")
-        room = max(limit2 - largest.truncation2 - work.floor_error2, 1e-300)
+        largest = fixed_ranks(work.models, shared, work.vertex_count, work.frame_count)
         if largest.truncation2 + work.floor_error2 >= limit2:
-            raise UnreachableTargetError(
-                f"a KG error of {target_kg:g} is below what the sketch of "
-                f"{work.plan.sketch_columns} columns (what the memory allowed for "
-                f"{work.vertex_count} vertices) resolves: KG "
-                f"{work.kg(largest.truncation2):.3g} at its largest ranks. Allow more "
-                "memory (max_memory, --max-memory) or ask for a larger error"
+            resolved = (
+                "the given basis"
+                if work.fixed_basis is not None
+                else f"the sketch of {work.plan.sketch_columns} columns (what the memory "
+                f"allowed for {work.vertex_count} vertices)"
             )
+            raise UnreachableTargetError(
+                f"a KG error of {target_kg:g} is below what {resolved} resolves: KG "
+                f"{work.kg(largest.truncation2):.3g} at its largest ranks. Allow more memory "
+                "(max_memory, --max-memory) or ask for a larger error"
+            )
+        room = limit2 - largest.truncation2 - work.floor_error2
         trials.append((0, largest, work.initial_step(largest, room)))
     _, choice, step = min(trials, key=lambda trial: trial[0])
     quantized, error2 = meet(work, choice, step, limit2)
@@ -144,7 +151,7 @@ def search_bpfv(work: SegmentedEncode, target_bpfv: float) -> tuple[Quantized, f
         best = None
         for share in QUICK_SHARES:
             choice = cheapest_ranks(
-                work.models, work.vertex_count, work.basis == BASIS_SHARED, share * limit2
+                work.models, work.basis_vertices, work.basis == BASIS_SHARED, share * limit2
             )
             room = 0.0 if choice is None else limit2 - choice.truncation2 - work.floor_error2
             if choice is None or room <= 0:

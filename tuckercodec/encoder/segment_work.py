@@ -57,6 +57,21 @@ class Quantized:
     centroids: list[QuantizedMatrix]
 
 
+@dataclass(frozen=True)
+class SharedBasis:
+    """A shared U1 given rather than found: the U1 section of a segmented file, as stored
+    (``params`` of its table entry and its ``payload``). Encoding with it writes that section
+    unchanged, so that files encoded with one basis share those bytes exactly (the zarr codec
+    keeps them once, in its configuration)."""
+
+    params: dict[str, Any]
+    payload: bytes
+
+    def matrix(self, parents: np.ndarray) -> QuantizedMatrix:
+        """The quantized U1, its mesh-parent prediction undone with ``parents``."""
+        return qmat.decode_matrix(self.payload, self.params, parents, "the shared basis (U1)")
+
+
 class SegmentedEncode:
     """A segmented encode of one source: the passes' results and the choices made from them."""
 
@@ -68,6 +83,7 @@ class SegmentedEncode:
         executor: Executor,
         level: int,
         progress: Callable[[str], None] | None,
+        fixed_basis: SharedBasis | None = None,
     ) -> None:
         self.source, self.plan, self.basis = source, plan, basis
         self.executor, self.level = executor, level
@@ -75,8 +91,18 @@ class SegmentedEncode:
         self.vertex_count, self.frame_count = source.vertex_count, source.frame_count
         self.ranges = [SegmentRange(a, b, plan.block_frames) for a, b in plan.bounds]
         self.passes = 0
-        self._read_and_model()
         self.parents = mesh_parents(source.faces, self.vertex_count)
+        self.fixed_basis = fixed_basis
+        self.fixed_u1: QuantizedMatrix | None = None
+        self.fixed_r: np.ndarray | None = None
+        if fixed_basis is not None:
+            self.fixed_u1 = fixed_basis.matrix(self.parents)
+            if self.fixed_u1.q.shape[0] != self.vertex_count or basis != BASIS_SHARED:
+                raise ValueError(
+                    f"the shared basis is for {self.fixed_u1.q.shape[0]} vertices and a shared "
+                    f"basis; this encode has {self.vertex_count} and basis {basis!r}"
+                )
+        self._read_and_model()
         self.face_section = faces.encode_faces(source.faces, level)
         self.name_section = names.encode_names(source.frame_names, level)
         self.floor_step, self.floor_error2 = self._centroid_floor()
@@ -85,6 +111,8 @@ class SegmentedEncode:
 
     def _read_and_model(self) -> None:
         columns, shared = self.plan.sketch_columns, self.basis == BASIS_SHARED
+        if self.fixed_u1 is not None:
+            columns = 0  # the basis is given: pass 1 only measures centroids and energies
         self.say(f"pass 1: sketching {len(self.ranges)} segments ({columns} columns)")
         centroids, energies = [], []
         total: np.ndarray | None = None
@@ -113,13 +141,21 @@ class SegmentedEncode:
                 path=self.source.path,
             )
         self.say("pass 2: projecting every frame on the sketch's basis")
-        self.shared_q = orthonormal_columns(total) if total is not None else None
+        if self.fixed_u1 is None:
+            self.shared_q = orthonormal_columns(total) if total is not None else None
         del total
+        if self.fixed_u1 is not None:
+            # U~1 = Q R: the first i columns of Q span the first i of U~1, so the error table in
+            # Q's coordinates (rotation I) is the table of U~1's columns; cores convert by R
+            basis = self.fixed_u1.values()
+            self.shared_q, self.fixed_r = np.linalg.qr(basis)
         jobs = [(r, None if shared else own_bases[s]) for s, r in enumerate(self.ranges)]
         coefficients = list(self._in_order(project_segment, jobs, self.source, self.shared_q))
         self.passes += 1
         self.own_q = own_bases
-        if shared:
+        if self.fixed_r is not None:
+            rotations = [np.eye(self.fixed_r.shape[0])] * len(coefficients)
+        elif shared:
             rotation = mode1_rotation(np.concatenate(coefficients, axis=2))
             rotations = [rotation] * len(coefficients)
         else:
@@ -169,6 +205,12 @@ class SegmentedEncode:
         )
         return step, self.vertex_count * error2
 
+    @property
+    def basis_vertices(self) -> int:
+        """K where the ranks' cost counts a shared U1's columns (K each); 0 when the basis is
+        given, and so already paid for."""
+        return 0 if self.fixed_u1 is not None else self.vertex_count
+
     def kg(self, error2: float) -> float:
         return 100.0 * math.sqrt(error2 / self.denominator2)
 
@@ -185,12 +227,18 @@ class SegmentedEncode:
         root = math.sqrt(step)
         shared_u1 = None
         own_u1: list[QuantizedMatrix | None] = []
-        if self.basis == BASIS_SHARED:
+        if self.fixed_u1 is not None:
+            shared_u1 = self.fixed_u1  # given: stored as it is
+        elif self.basis == BASIS_SHARED:
             norms = column_norms(self.models, choice.ranks, choice.shared)
             shared_u1 = qmat.quantize(self._basis(0, choice.shared), column_steps(root, norms))
         u3, core, centroids = [], [], []
         for s, (model, (i, k)) in enumerate(zip(self.models, choice.ranks, strict=True)):
             block = model.core[:i, :, :k]
+            if self.fixed_r is not None:  # the core in the given U~1's coordinates: R^-1 core
+                block = np.linalg.solve(self.fixed_r[:i, :i], block.reshape(i, -1)).reshape(
+                    block.shape
+                )
             if self.basis == BASIS_OWN:
                 norms = np.sqrt(np.square(block).sum(axis=(1, 2)))
                 own_u1.append(qmat.quantize(self._basis(s, i), column_steps(root, norms)))
@@ -260,8 +308,8 @@ class SegmentedEncode:
     # -- the search ------------------------------------------------------------------------------
 
     def stored_values(self, choice: RankChoice) -> int:
-        """The numbers the factors hold."""
-        total = self.vertex_count * choice.shared
+        """The numbers the factors hold (that this encode quantizes: not a given basis)."""
+        total = 0 if self.fixed_u1 is not None else self.vertex_count * choice.shared
         for model, (i, k) in zip(self.models, choice.ranks, strict=True):
             total += factor_value_count(
                 0 if choice.shared else self.vertex_count, model.frames, i, k
