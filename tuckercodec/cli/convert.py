@@ -83,6 +83,10 @@ def run_formats(args: argparse.Namespace) -> int:
         if found.read_options:
             flags = ", ".join(sorted(OPTION_FLAGS[name] for name in found.read_options))
             print(f"    reading options: {flags}")
+        if found.open is not None:
+            print("    streams: read a range of frames at a time (encodes larger than memory)")
+        elif found.read_frame is not None:
+            print("    streams: a folder or list of these files is read file by file")
         if found.write is not None or found.write_frame is not None:
             kept = ", ".join(_PARTS[part] for part in _PARTS if part in found.carries)
             print(f"    keeps beyond float32 positions: {kept or 'nothing'}")
