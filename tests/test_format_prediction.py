@@ -29,10 +29,19 @@ def test_accumulate_inverts_residuals_on_any_forest():
         values = rng.integers(-1000, 1000, size=(count, 4))
         np.testing.assert_array_equal(accumulate(residuals(values, parents), parents), values)
         np.testing.assert_array_equal(accumulate(residuals(values, None), None), values)
-    # a chain 100 000 deep takes about 17 passes, not 100 000
-    chain = np.arange(-1, 99_999)
-    values = rng.integers(-5, 5, size=(100_000, 1))
-    np.testing.assert_array_equal(accumulate(residuals(values, chain), chain), values)
+        # in place: the same sums, in the array given
+        stored = residuals(values, parents)
+        assert accumulate(stored, parents, in_place=True) is stored
+        np.testing.assert_array_equal(stored, values)
+    # a chain 100 000 deep takes about 17 passes, not 100 000 (pointer jumping: too many levels
+    # for a loop over them); a chain 4000 deep is restored level by level
+    for depth in (100_000, 4_000):
+        chain = np.arange(-1, depth - 1)
+        values = rng.integers(-5, 5, size=(depth, 2))
+        np.testing.assert_array_equal(accumulate(residuals(values, chain), chain), values)
+        stored = residuals(values, chain)
+        accumulate(stored, chain, in_place=True)
+        np.testing.assert_array_equal(stored, values)
 
 
 def test_a_deep_strip_of_faces_decodes_quickly():

@@ -28,7 +28,9 @@ def residuals(values: np.ndarray, parents: np.ndarray | None) -> np.ndarray:
     return out
 
 
-def accumulate(residual: np.ndarray, parents: np.ndarray | None) -> np.ndarray:
+def accumulate(
+    residual: np.ndarray, parents: np.ndarray | None, *, in_place: bool = False
+) -> np.ndarray:
     """The inverse of :func:`residuals`: each row plus all its ancestors' residuals.
 
     Along a tree the rows are restored a level at a time, from the roots down: a row's parent,
@@ -37,14 +39,15 @@ def accumulate(residual: np.ndarray, parents: np.ndarray | None) -> np.ndarray:
     for 70 columns, against 0.4 s by pointer jumping). A tree so deep that a Python loop over its
     levels would cost more (a long strip of faces) is restored by pointer jumping instead: after
     pass p every row holds the sum over its 2**p nearest ancestors, about log2(depth) passes.
+    With ``in_place`` the residuals are overwritten (no copy of a large U1).
     """
     if parents is None:
-        return np.cumsum(residual, axis=0)
+        return np.cumsum(residual, axis=0, out=residual if in_place else None)
     depth = _depths(parents)
     levels = int(depth.max(initial=0)) + 1
+    total = residual if in_place else residual.copy()
     if levels > MAX_LEVELS:
-        return _pointer_jumping(residual, parents)
-    total = residual.copy()
+        return _pointer_jumping(total, parents)
     order = np.argsort(depth, kind="stable")
     ends = np.cumsum(np.bincount(depth, minlength=levels))
     for level in range(1, levels):
@@ -70,8 +73,8 @@ def _depths(parents: np.ndarray) -> np.ndarray:
     return depth
 
 
-def _pointer_jumping(residual: np.ndarray, parents: np.ndarray) -> np.ndarray:
-    total = residual.copy()
+def _pointer_jumping(total: np.ndarray, parents: np.ndarray) -> np.ndarray:
+    """Restores ``total`` in place."""
     ancestor = parents.copy()
     live = np.flatnonzero(ancestor >= 0)
     while live.size:

@@ -142,5 +142,8 @@ def decode_matrix(
     if chosen.size:
         if callable(parents):
             parents = parents()
-        q[:, chosen] = accumulate(q[:, chosen], parents)
+        if chosen.size == cols:  # every column (U1's usual case): restored where it lies
+            accumulate(q, parents, in_place=True)
+        else:
+            q[:, chosen] = accumulate(q[:, chosen], parents)
     return QuantizedMatrix(q, steps)
