@@ -2,13 +2,16 @@
 
 The cloth sample as an array of 60 frames chunked by 20: every round trip's decoded KG over the
 whole array is at most the target; dask reads one chunk for a slice inside it; a fresh process
-opens the arrays without importing tuckercodec (entry points). Needs the ``[zarr]`` extra; dask
-for its one test.
+opens the arrays without importing tuckercodec (entry points). The fitted mode (one basis in the
+configuration) the same way, and every chunk on its own within the target. Needs the ``[zarr]``
+extra; dask for its tests.
 """
 
 from __future__ import annotations
 
+import base64
 import json
+import math
 import subprocess
 import sys
 import textwrap
@@ -23,11 +26,13 @@ numcodecs = pytest.importorskip(
 
 import tuckercodec  # noqa: E402
 from tuckercodec import InputError  # noqa: E402
+from tuckercodec.encoder.segmented import SharedBasis  # noqa: E402
 from tuckercodec.metrics import kg_error  # noqa: E402
 from tuckercodec.samples import sample_path  # noqa: E402
-from tuckercodec.zarr_codec import TuckerNumcodec, TuckerZarrCodec, chunk  # noqa: E402
+from tuckercodec.zarr_codec import FittedBasis, TuckerNumcodec, TuckerZarrCodec, chunk  # noqa: E402
 from tuckercodec.zarr_codec import numcodec as numcodec_module  # noqa: E402
 from tuckercodec.zarr_codec import zarr3 as zarr3_module  # noqa: E402
+from tuckercodec.zarr_codec.fitted import ArrayFrames, fitted_gap  # noqa: E402
 
 TARGET = 0.1
 FRAMES_PER_CHUNK = 20
@@ -53,14 +58,14 @@ def _write_v3(path, positions, chunks=FRAMES_PER_CHUNK, codec=None):
     return array
 
 
-def _write_v2(path, positions, chunks=FRAMES_PER_CHUNK):
+def _write_v2(path, positions, chunks=FRAMES_PER_CHUNK, codec=None):
     array = zarr.create_array(
         str(path),
         shape=positions.shape,
         chunks=(chunks, positions.shape[1], 3),
         dtype=positions.dtype,
         zarr_format=2,
-        compressors=TuckerNumcodec(target_kg=TARGET, dtype=positions.dtype.str),
+        compressors=codec or TuckerNumcodec(target_kg=TARGET, dtype=positions.dtype.str),
     )
     array[:] = positions
     return array
@@ -405,3 +410,245 @@ def test_the_zarr_benchmark_measures_what_it_stores(tmp_path):
     assert result.ratio == result.chunk_bytes / result.tkc_bytes
     table = bench_zarr.report("sheet", sheet, 8, [result])
     assert f"| 1 | all | 24 | | {result.chunk_bytes} |" in table
+
+
+# ------------------------------------------------------------------------------------------
+# the fitted mode: one basis in the configuration, each chunk its own part
+
+
+@pytest.fixture(scope="module")
+def fitted(cloth, tmp_path_factory):
+    """The cloth written by codecs fitted to it, in each zarr format (float32, as shipped)."""
+    root = tmp_path_factory.mktemp("fitted")
+    v3 = TuckerZarrCodec.fit(cloth, target_kg=TARGET, chunk_frames=FRAMES_PER_CHUNK)
+    v2 = TuckerNumcodec.fit(cloth, target_kg=TARGET, chunk_frames=FRAMES_PER_CHUNK)
+    _write_v3(root / "v3.zarr", cloth, codec=v3)
+    _write_v2(root / "v2.zarr", cloth, codec=v2)
+    return {3: root / "v3.zarr", 2: root / "v2.zarr", "v3": v3, "v2": v2}
+
+
+def _chunk_kgs(original, decoded, frames=FRAMES_PER_CHUNK):
+    return [
+        kg_error(original[a : a + frames], decoded[a : a + frames])
+        for a in range(0, len(original), frames)
+    ]
+
+
+@pytest.mark.parametrize("zarr_format", [2, 3])
+def test_a_fitted_codec_meets_the_target_in_every_chunk_with_chunks_a_fraction_of_the_size(
+    cloth, stores, fitted, zarr_format
+):
+    decoded = zarr.open_array(str(fitted[zarr_format]))[:]
+    assert decoded.dtype == cloth.dtype and decoded.shape == cloth.shape
+    assert 0 < kg_error(cloth, decoded) <= TARGET
+    assert max(_chunk_kgs(cloth, decoded)) <= TARGET  # each chunk on its own
+    files = _chunk_files(fitted[zarr_format])
+    assert len(files) == 3
+    assert all(fitted_gap(f.read_bytes()) is not None for f in files)  # none fell back
+    own = sum(f.stat().st_size for f in _chunk_files(stores[zarr_format, "float32"]))
+    assert sum(f.stat().st_size for f in files) < own / 4  # about 1/6 here: no U1 in them
+    # a chunk and the basis make the whole .tkc, which tuckercodec reads and checks
+    basis = fitted["v3"].basis
+    whole = basis.complete(files[0].read_bytes())
+    assert tuckercodec.info(whole).frames == FRAMES_PER_CHUNK
+    tuckercodec.Decoder(whole).check()
+
+
+def test_both_codecs_fit_the_same_basis_and_keep_it_in_the_metadata(fitted):
+    v3, v2 = fitted["v3"], fitted["v2"]
+    assert v3.basis == v2.basis and v3.basis.vertices == 3101
+    entry = json.loads((fitted[3] / "zarr.json").read_text())["codecs"][0]
+    assert entry["configuration"] == {"target_kg": TARGET, **v3.basis.config()}
+    compressor = json.loads((fitted[2] / ".zarray").read_text())["compressor"]
+    assert compressor == {"id": "tuckercodec", "target_kg": TARGET, "dtype": "<f4"} | (
+        v2.basis.config()
+    )
+    assert len(v3.basis.text) == 4 * math.ceil(len(base64.b64decode(v3.basis.text)) / 3)
+
+
+def test_a_fitted_configuration_round_trips_through_json(fitted):
+    v3, v2 = fitted["v3"], fitted["v2"]
+    entry = json.loads(json.dumps(v3.to_dict()))
+    assert TuckerZarrCodec.from_dict(entry) == v3
+    assert TuckerZarrCodec.from_dict(entry) != TuckerZarrCodec(target_kg=TARGET)
+    assert hash(TuckerZarrCodec.from_dict(entry)) == hash(v3)
+    saved = json.loads(json.dumps(v2.get_config()))
+    assert numcodecs.get_codec(saved) == v2
+    assert numcodecs.get_codec(saved) != TuckerNumcodec(target_kg=TARGET, dtype="<f4")
+    assert repr(v3).startswith("TuckerZarrCodec(target_kg=0.1, basis=<basis of 3101 x ")
+    assert repr(v2).endswith(f"sha256 {v2.basis.sha256[:12]}...>, dtype='<f4')")
+
+
+def test_a_fresh_process_reads_fitted_arrays_without_importing_tuckercodec(fitted, tmp_path):
+    names = [str(fitted[3]), str(fitted[2])]
+    done = subprocess.run(
+        [sys.executable, "-c", READER, *names],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    for name in names:
+        np.testing.assert_array_equal(np.load(name + ".npy"), zarr.open_array(name)[:])
+
+
+def _other_basis(basis: FittedBasis) -> FittedBasis:
+    """The basis with one payload byte changed, its SHA-256 made right again."""
+    payload = bytearray(basis.payload)
+    payload[len(payload) // 2] ^= 0x10
+    return FittedBasis.of(SharedBasis(basis.shared.params, bytes(payload)))
+
+
+def test_a_damaged_basis_in_the_configuration_is_refused_naming_it(fitted, tmp_path):
+    v3, v2 = fitted["v3"], fitted["v2"]
+    text = v3.basis.text
+    damaged = text[:100] + ("A" if text[100] != "A" else "B") + text[101:]
+    config = {"target_kg": TARGET, "basis": damaged, "basis_sha256": v3.basis.sha256}
+    with pytest.raises(ValueError, match="does not match its basis_sha256"):
+        TuckerZarrCodec.from_dict({"name": "tuckercodec", "configuration": config})
+    with pytest.raises(ValueError, match="does not match its basis_sha256"):
+        numcodecs.get_codec({"id": "tuckercodec", **config})
+    with pytest.raises(ValueError, match="not base64"):
+        TuckerNumcodec(basis="not base64!", basis_sha256="00")
+    # a basis that is consistent but another: the chunks' U1 entries say it is not theirs
+    other = _other_basis(v2.basis)
+    chunk_bytes = _chunk_files(fitted[2])[0].read_bytes()
+    with pytest.raises(ValueError, match="another basis than the codec's"):
+        TuckerNumcodec(target_kg=TARGET, dtype="<f4", **other.config()).decode(chunk_bytes)
+    with pytest.raises(ValueError, match="written by a fitted tuckercodec codec"):
+        TuckerNumcodec(target_kg=TARGET, dtype="<f4").decode(chunk_bytes)
+    # and through zarr, with the configuration of zarr.json edited
+    store = tmp_path / "edited.zarr"
+    _write_v3(store, np.load(sample_path())["V"][:20], codec=v3)
+    metadata = json.loads((store / "zarr.json").read_text())
+    metadata["codecs"][0]["configuration"].update(_other_basis(v3.basis).config())
+    (store / "zarr.json").write_text(json.dumps(metadata))
+    with pytest.raises(ValueError, match="another basis than the codec's"):
+        zarr.open_array(str(store))[:]
+
+
+@pytest.mark.parametrize(
+    ("config", "message"),
+    [
+        ({"ranks": [3, 2]}, "serves a KG target"),
+        ({"target_bpfv": 2.0}, "serves a KG target"),
+        ({"basis_sha256": None}, "both 'basis'"),
+    ],
+)
+def test_a_fitted_configuration_without_a_kg_target_or_its_hash_is_refused(fitted, config, message):
+    settings = {**fitted["v2"].basis.config(), **config}
+    with pytest.raises(ValueError, match=message):
+        TuckerNumcodec(**settings)
+
+
+@pytest.mark.parametrize("zarr_format", [2, 3])
+def test_a_chunk_the_basis_does_not_serve_is_stored_whole_and_meets_the_target(
+    cloth, tmp_path, zarr_format
+):
+    # fitted on the first 40 frames: the last 20 move in ways its columns do not span
+    positions = cloth[:, :1000]
+    if zarr_format == 3:
+        codec = TuckerZarrCodec.fit(positions[:40], target_kg=TARGET, chunk_frames=20)
+        _write_v3(tmp_path / "a.zarr", positions, codec=codec)
+    else:
+        codec = TuckerNumcodec.fit(positions[:40], target_kg=TARGET, chunk_frames=20)
+        _write_v2(tmp_path / "a.zarr", positions, codec=codec)
+    decoded = zarr.open_array(str(tmp_path / "a.zarr"))[:]
+    assert max(_chunk_kgs(positions, decoded)) <= TARGET
+    first, second, last = (f.read_bytes() for f in _chunk_files(tmp_path / "a.zarr"))
+    assert fitted_gap(first) is not None and fitted_gap(second) is not None
+    assert fitted_gap(last) is None
+    assert tuckercodec.info(last).frames == 20  # a whole .tkc, with its own U1
+
+
+def test_a_chunk_too_short_to_hold_the_basis_is_stored_whole(cloth):
+    positions = cloth[:, :1000]
+    codec = TuckerNumcodec.fit(positions, target_kg=TARGET, chunk_frames=20)
+    shortest = math.ceil(codec.basis.columns / 3)  # the format's c <= 3F
+    for frames, held in ((shortest - 1, False), (shortest, True)):
+        data = codec.encode(positions[:frames])
+        assert (fitted_gap(data) is not None) is held
+        assert kg_error(positions[:frames], codec.decode(data)) <= TARGET
+
+
+@pytest.mark.parametrize("zarr_format", [2, 3])
+def test_a_short_edge_chunk_uses_the_basis(cloth, tmp_path, zarr_format):
+    # 60 frames in chunks of 22: the last holds 16 (format 2 pads it to 22 with zeros)
+    positions = cloth[:, :1000]
+    if zarr_format == 3:
+        codec = TuckerZarrCodec.fit(positions, target_kg=TARGET, chunk_frames=22)
+        _write_v3(tmp_path / "a.zarr", positions, chunks=22, codec=codec)
+    else:
+        codec = TuckerNumcodec.fit(positions, target_kg=TARGET, chunk_frames=22)
+        _write_v2(tmp_path / "a.zarr", positions, chunks=22, codec=codec)
+    decoded = zarr.open_array(str(tmp_path / "a.zarr"))[:]
+    assert kg_error(positions, decoded) <= TARGET
+    assert kg_error(positions[44:], decoded[44:]) <= TARGET
+    edge = max(_chunk_files(tmp_path / "a.zarr"), key=str)
+    whole = codec.basis.complete(edge.read_bytes())
+    assert edge.stat().st_size < len(whole) / 4
+    assert tuckercodec.info(whole).frames == (16 if zarr_format == 3 else 22)
+
+
+def test_a_fitted_codec_refuses_chunks_that_split_the_vertices(cloth, tmp_path):
+    positions = cloth[:20, :300]
+    codec = TuckerZarrCodec.fit(positions, target_kg=TARGET, chunk_frames=20)
+    with pytest.raises(ValueError, match="splits the 300 vertices"):
+        zarr.create_array(
+            str(tmp_path / "split.zarr"),
+            shape=positions.shape,
+            chunks=(20, 100, 3),
+            dtype=positions.dtype,
+            serializer=codec,
+            compressors=None,
+        )
+    with pytest.raises(ValueError, match="fitted to 300 vertices, not the array's 400"):
+        _write_v3(tmp_path / "other.zarr", cloth[:20, :400], codec=codec)
+    numcodec = TuckerNumcodec.fit(positions, target_kg=TARGET, chunk_frames=20)
+    with pytest.raises(InputError, match="fitted to 300 vertices"):
+        numcodec.encode(cloth[:20, :100])
+
+
+class _CountingArray:
+    """An array with zarr's ``chunks`` that records the frames of every read."""
+
+    def __init__(self, values, frames_per_chunk):
+        self.values, self.shape, self.dtype = values, values.shape, values.dtype
+        self.chunks = (frames_per_chunk, *values.shape[1:])
+        self.reads: list[tuple[int, int]] = []
+
+    def __getitem__(self, key):
+        self.reads.append((key.start, key.stop))
+        return self.values[key]
+
+
+def test_the_fit_reads_a_zarr_or_dask_array_a_chunk_at_a_time(cloth):
+    da = pytest.importorskip("dask.array", reason="reading a dask array needs dask")
+    positions = cloth[:, :500]
+    expected = TuckerZarrCodec.fit(positions, target_kg=TARGET, chunk_frames=20)
+    counting = _CountingArray(positions, 25)  # chunks of 25: reads of 16-frame blocks cross them
+    assert TuckerZarrCodec.fit(counting, target_kg=TARGET, chunk_frames=20) == expected
+    assert set(counting.reads) == {(0, 25), (25, 50), (50, 60)}
+    passes = len(counting.reads) // 3
+    assert counting.reads == [(0, 25), (25, 50), (50, 60)] * passes  # each once a pass
+    lazy = da.from_array(positions, chunks=(7, -1, -1))
+    assert TuckerNumcodec.fit(lazy, target_kg=TARGET, chunk_frames=20).basis == expected.basis
+    frames = ArrayFrames(lazy)
+    np.testing.assert_array_equal(frames.read(5, 30), positions[5:30].astype(np.float64))
+
+
+def test_the_fit_names_what_it_cannot_read(cloth):
+    with pytest.raises(InputError, match=r"shape \(frames, vertices, 3\), not \(60, 3101\)"):
+        TuckerZarrCodec.fit(cloth[:, :, 0], chunk_frames=20)
+    with pytest.raises(InputError, match="floating-point positions, not int32"):
+        TuckerNumcodec.fit(cloth.astype(np.int32), chunk_frames=20)
+    bad = cloth[:, :200].copy()
+    bad[33, 7, 1] = np.nan
+    with pytest.raises(InputError, match="frame 33"):
+        TuckerNumcodec.fit(bad, chunk_frames=20)
+    with pytest.raises(ValueError, match="chunk_frames must be an integer >= 1"):
+        TuckerNumcodec.fit(cloth[:, :200], chunk_frames=0)
+    with pytest.raises(ValueError, match="positive finite"):
+        TuckerNumcodec.fit(cloth[:, :200], target_kg=-1.0, chunk_frames=20)

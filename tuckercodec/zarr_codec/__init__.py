@@ -14,6 +14,15 @@ array written with them opens without importing tuckercodec first. Each chunk is
 chunk in which every frame is a single point, which has nothing for a KG error to measure and
 is stored exactly (:mod:`~tuckercodec.zarr_codec.chunk`).
 
+Fitted mode (:meth:`TuckerZarrCodec.fit`, :meth:`TuckerNumcodec.fit`): most of a chunk's .tkc is
+its per-vertex basis U1, which every chunk would store again. A codec fitted to the array before
+it is written holds one basis in its configuration (base64 in ``zarr.json`` or ``.zarray``,
+with its SHA-256), chosen so that every chunk of the fitted length meets the target with it on
+its own; each chunk is then its .tkc without the U1 section's payload, put back when decoding
+(:mod:`~tuckercodec.zarr_codec.fitted`). A chunk the basis cannot serve (frames added later whose
+motion it does not span; an edge chunk too short to hold it) is stored whole with its own basis,
+so the target holds for every chunk whatever was fitted.
+
 Why a KG target met by every chunk is met by the whole array. Write E for the squared error and
 D for the square of the KG denominator ||A - E(A)||, so that KG <= t means E <= (t/100)^2 D.
 E is a sum over positions, so the array's E is the sum of its chunks'. D is a sum over frames,
@@ -46,12 +55,20 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 from .chunk import ChunkMode, decode_chunk, encode_chunk
+from .fitted import FittedBasis
 
 if TYPE_CHECKING:
     from .numcodec import TuckerNumcodec
     from .zarr3 import TuckerZarrCodec
 
-__all__ = ["ChunkMode", "TuckerNumcodec", "TuckerZarrCodec", "decode_chunk", "encode_chunk"]
+__all__ = [
+    "ChunkMode",
+    "FittedBasis",
+    "TuckerNumcodec",
+    "TuckerZarrCodec",
+    "decode_chunk",
+    "encode_chunk",
+]
 
 
 def __getattr__(name: str) -> Any:

@@ -3,7 +3,9 @@
 A chunk is an array of shape (frames, vertices, 3) of floats. :func:`encode_chunk` makes it a
 .tkc file (``spec/FORMAT.md``) of a sequence without faces, or, for a chunk with no shape to
 measure an error against, a lossless *point chunk* (below); :func:`decode_chunk` gives either
-back in the dtype asked for.
+back in the dtype asked for. With a fitted basis (:mod:`.fitted`), a chunk is that .tkc without
+its U1 section's payload, which the codec's configuration holds (or, if the basis cannot serve
+it, a whole .tkc of its own).
 
 A point chunk is one in which every frame is a single point to float64's precision (a chunk of
 one vertex, a constant chunk): its KG denominator is zero, so no error is allowed in it, and the
@@ -20,6 +22,7 @@ from __future__ import annotations
 
 import math
 import struct
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -34,6 +37,7 @@ from ..format.limits import DEFAULT_LIMITS
 from ..format.streams import compress
 from ..metrics import kg_error
 from ..sequence import MeshSequence
+from .fitted import FittedBasis, complete_file, fit_array
 
 #: The first bytes of a point chunk; never those of a .tkc file, which start with 0x89 "TKC".
 POINT_MAGIC = b"TKCpoint"
@@ -98,6 +102,42 @@ def chunk_mode(target_kg: Any = None, ranks: Any = None, target_bpfv: Any = None
     return ChunkMode(target_kg=_positive("target_kg", target_kg))
 
 
+def codec_settings(
+    target_kg: Any = None,
+    ranks: Any = None,
+    target_bpfv: Any = None,
+    basis: Any = None,
+    basis_sha256: Any = None,
+) -> tuple[ChunkMode, FittedBasis | None]:
+    """Check a codec's configuration, fitted or not: its mode and its basis (or ``None``).
+
+    Raises:
+        ValueError: as :func:`chunk_mode`; a basis with ranks or a size (it serves a KG
+            target), or a basis that :meth:`.FittedBasis.parse` refuses.
+    """
+    mode = chunk_mode(target_kg, ranks, target_bpfv)
+    if basis is None and basis_sha256 is None:
+        return mode, None
+    if mode.target_kg is None:
+        raise ValueError(
+            "a fitted basis serves a KG target: give target_kg with it, not ranks or target_bpfv"
+        )
+    return mode, FittedBasis.parse(basis, basis_sha256)
+
+
+def fit_settings(
+    array: Any, target_kg: Any, chunk_frames: Any, max_memory: int | None
+) -> dict[str, Any]:
+    """The configuration of a codec fitted to ``array`` (:func:`.fitted.fit_array`):
+    ``target_kg``, ``basis`` and ``basis_sha256``."""
+    mode = chunk_mode(target_kg)
+    assert mode.target_kg is not None
+    fitted = fit_array(
+        array, target_kg=mode.target_kg, chunk_frames=chunk_frames, max_memory=max_memory
+    )
+    return {"target_kg": mode.target_kg, **fitted.config()}
+
+
 def _positive(name: str, value: Any) -> float:
     if (
         isinstance(value, (int, float, np.integer, np.floating))
@@ -158,7 +198,7 @@ def is_point_chunk(positions: np.ndarray) -> bool:
     return spread < POINT_MARGIN * SMALLEST_RELATIVE_SHAPE * largest
 
 
-def encode_chunk(chunk: Any, mode: ChunkMode) -> bytes:
+def encode_chunk(chunk: Any, mode: ChunkMode, basis: FittedBasis | None = None) -> bytes:
     """Encode one chunk: a .tkc file of its positions without faces (a point chunk, stored
     exactly, when every frame is a single point).
 
@@ -166,10 +206,13 @@ def encode_chunk(chunk: Any, mode: ChunkMode) -> bytes:
     chunk stored below float64 is checked after that rounding and re-encoded at a tighter
     target if the rounding took it over.
 
+    With a fitted ``basis`` (a KG target only), the .tkc is encoded with it as its U1 and
+    stored without it (:mod:`.fitted`); a chunk it cannot serve gets a whole .tkc of its own.
+
     Raises:
         InputError: a chunk of another shape or dtype, or with a non-finite position (the
             message names the chunk's shape; for a partial edge chunk it also names zarr's
-            fill value, which pads it).
+            fill value, which pads it); with a basis, a chunk of other vertices than its.
         UnreachableTargetError: a target the format cannot meet for this chunk.
     """
     positions = chunk_positions(chunk)
@@ -177,6 +220,18 @@ def encode_chunk(chunk: Any, mode: ChunkMode) -> bytes:
     if np.isfinite(values).all() and is_point_chunk(values):
         return _pack_points(values)
     sequence = _sequence(values)
+    if basis is not None:
+        if mode.target_kg is None:
+            raise ValueError("a fitted basis serves a KG target, not ranks or a size")
+        if sequence.vertex_count != basis.vertices:
+            raise InputError(
+                f"a chunk of shape {positions.shape}: the codec's basis was fitted to "
+                f"{basis.vertices} vertices; chunk the array over frames only, every chunk "
+                "holding all the vertices"
+            )
+        fitted = _encode_fitted(sequence, positions.dtype, mode.target_kg, basis)
+        if fitted is not None:
+            return fitted
     if mode.ranks is not None:
         i, k = mode.ranks
         # a short edge chunk may not have that many columns: its ranks are capped at its own
@@ -205,11 +260,32 @@ def _encode(sequence: MeshSequence, **mode: Any) -> bytes:
         raise _in_chunk(error, sequence.vertices.shape) from None
 
 
-def _encode_kg(sequence: MeshSequence, dtype: np.dtype[Any], target: float) -> bytes:
-    """Meet ``target`` for the positions as they will be read back: rounded to ``dtype``."""
+def _encode_fitted(
+    sequence: MeshSequence, dtype: np.dtype[Any], target: float, basis: FittedBasis
+) -> bytes | None:
+    """The fitted chunk (the .tkc without the basis's payload), or ``None`` when the basis
+    cannot serve it: too few frames to hold it (R28: c <= 3F) or not enough for the target."""
+    if not basis.holds(sequence.frame_count, sequence.vertex_count):
+        return None
+    try:
+        data = _encode_kg(sequence, dtype, target, basis.encode)
+    except UnreachableTargetError:
+        return None
+    return basis.cut(data)
+
+
+def _encode_kg(
+    sequence: MeshSequence,
+    dtype: np.dtype[Any],
+    target: float,
+    encode: Callable[[MeshSequence, float], bytes] | None = None,
+) -> bytes:
+    """Meet ``target`` for the positions as they will be read back: rounded to ``dtype``.
+    ``encode(sequence, goal)`` makes a whole .tkc (default: the encoder, with its errors said
+    to concern a chunk)."""
     goal = target
     for _ in range(MAX_TIGHTENING):
-        data = _encode(sequence, target_kg=goal)
+        data = _encode(sequence, target_kg=goal) if encode is None else encode(sequence, goal)
         if dtype.itemsize >= 8:
             return data  # float64 (or wider) holds the decoded positions exactly: no rounding
         read_back = decode(data).vertices.astype(dtype).astype(np.float64)
@@ -267,19 +343,22 @@ def _unpack_points(data: bytes) -> np.ndarray:
     return np.frombuffer(raw, dtype="<f8").reshape(frames, vertices, 3)
 
 
-def unpadded(positions: np.ndarray, fill_value: Any) -> np.ndarray:
+def unpadded(positions: np.ndarray, fill_value: Any, *, vertices: bool = True) -> np.ndarray:
     """The chunk without its trailing frames and trailing vertices made only of ``fill_value``
     (NaN included): what zarr pads a partial edge chunk with, which needs no encoding, and which
-    :func:`decode_chunk` puts back. A chunk made only of ``fill_value`` is returned whole."""
+    :func:`decode_chunk` puts back. A chunk made only of ``fill_value`` is returned whole.
+    With ``vertices=False`` only frames are cut (a fitted basis needs every vertex)."""
     fill = np.asarray(fill_value, dtype=np.float64)
     if fill.shape != ():
         return positions
     is_fill = (np.isnan(positions) if np.isnan(fill) else positions == fill).all(axis=2)
     frames = np.flatnonzero(~is_fill.all(axis=1))
-    vertices = np.flatnonzero(~is_fill.all(axis=0))
     if frames.size == 0:
         return positions  # zarr does not even store such a chunk unless asked to
-    return positions[: frames[-1] + 1, : vertices[-1] + 1]
+    if not vertices:
+        return positions[: frames[-1] + 1]
+    kept = np.flatnonzero(~is_fill.all(axis=0))
+    return positions[: frames[-1] + 1, : kept[-1] + 1]
 
 
 def decode_chunk(
@@ -287,8 +366,10 @@ def decode_chunk(
     dtype: Any,
     shape: tuple[int, ...] | None = None,
     fill_value: Any = None,
+    basis: FittedBasis | None = None,
 ) -> np.ndarray:
-    """Decode one chunk (a .tkc file or a point chunk) into a C-ordered array of ``dtype``.
+    """Decode one chunk (a .tkc file, a fitted chunk or a point chunk) into a C-ordered array
+    of ``dtype``.
 
     Args:
         data: the chunk's bytes (any object with the buffer protocol).
@@ -296,16 +377,18 @@ def decode_chunk(
         shape: the shape the chunk must have, if known (zarr knows it).
         fill_value: with ``shape``, the value of the trailing frames and vertices that the
             encoder cut (:func:`unpadded`): a chunk smaller than ``shape`` gets them back.
+        basis: the codec's fitted basis, which a fitted chunk's U1 is (:mod:`.fitted`).
 
     Raises:
         FormatError: the bytes are a damaged .tkc file.
-        ValueError: a damaged point chunk, or a chunk that does not fit ``shape``.
+        ValueError: a damaged point chunk, a chunk that does not fit ``shape``, or a fitted
+            chunk without its basis or with another (the message names the basis).
     """
     raw = bytes(memoryview(data).cast("B"))
     if raw[: len(POINT_MAGIC)] == POINT_MAGIC:
         positions = _unpack_points(raw)
     else:
-        positions = decode(raw).vertices
+        positions = decode(complete_file(raw, basis)).vertices
     dtype = checked_dtype(dtype)
     if shape is None or tuple(positions.shape) == tuple(shape):
         with np.errstate(over="ignore"):  # float16: a position beyond its range was beyond it

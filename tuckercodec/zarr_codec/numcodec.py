@@ -1,4 +1,8 @@
-"""The numcodecs codec ``tuckercodec``: zarr format 2 arrays, and plain numcodecs use."""
+"""The numcodecs codec ``tuckercodec``: zarr format 2 arrays, and plain numcodecs use.
+
+Fitted (:meth:`TuckerNumcodec.fit`), its configuration (the ``compressor`` of ``.zarray``) also
+holds the basis that every chunk shares (:mod:`.fitted`): ``basis`` and ``basis_sha256``.
+"""
 
 from __future__ import annotations
 
@@ -6,9 +10,19 @@ from typing import Any
 
 import numpy as np
 
+from ..encoder import DEFAULT_TARGET_KG
 from ..errors import InputError
 from ..optional import import_optional
-from .chunk import ChunkMode, checked_dtype, chunk_mode, chunk_positions, decode_chunk, encode_chunk
+from .chunk import (
+    ChunkMode,
+    checked_dtype,
+    chunk_positions,
+    codec_settings,
+    decode_chunk,
+    encode_chunk,
+    fit_settings,
+)
+from .fitted import BASIS_KEYS, FittedBasis
 
 # a DependencyError naming the extra, rather than an ImportError, when numcodecs is absent
 import_optional("numcodecs", "zarr", "the tuckercodec numcodecs codec")
@@ -34,6 +48,8 @@ class TuckerNumcodec(Codec):  # type: ignore[misc]  # numcodecs is untyped (Any)
             ``"<f8"``). numcodecs hands a codec's decoded bytes to zarr without the array's
             dtype, so it must be in the configuration: give the array's dtype (``"<f4"`` for a
             float32 array).
+        basis, basis_sha256: the basis of a fitted codec, as :meth:`fit` makes it (base64
+            text and its SHA-256); with ``target_kg`` only.
     """
 
     codec_id = "tuckercodec"
@@ -44,9 +60,39 @@ class TuckerNumcodec(Codec):  # type: ignore[misc]  # numcodecs is untyped (Any)
         ranks: tuple[int, int] | list[int] | None = None,
         target_bpfv: float | None = None,
         dtype: Any = "<f8",
+        basis: str | None = None,
+        basis_sha256: str | None = None,
     ) -> None:
-        self._mode: ChunkMode = chunk_mode(target_kg, ranks, target_bpfv)
+        self._mode: ChunkMode
+        self._basis: FittedBasis | None
+        self._mode, self._basis = codec_settings(target_kg, ranks, target_bpfv, basis, basis_sha256)
         self._dtype: np.dtype[Any] = checked_dtype(dtype)
+
+    @classmethod
+    def fit(
+        cls,
+        array: Any,
+        *,
+        target_kg: float = DEFAULT_TARGET_KG,
+        chunk_frames: int,
+        dtype: Any = None,
+        max_memory: int | None = None,
+    ) -> TuckerNumcodec:
+        """A fitted codec for ``array`` (frames, vertices, 3) chunked by ``chunk_frames``
+        frames: its configuration holds one per-vertex basis with which every such chunk meets
+        ``target_kg`` on its own, and each chunk stores only its own part (:mod:`.fitted`).
+
+        ``array`` is a numpy, zarr or dask array (read a chunk of frames at a time, never whole
+        as float64); ``dtype`` defaults to its dtype. Give the new array chunks of
+        ``chunk_frames`` frames and all vertices. ``max_memory`` bounds the fit's memory, in
+        bytes (default: half the machine's).
+
+        Raises:
+            InputError: an array of another shape or dtype, or with a non-finite position.
+            ValueError: a target or ``chunk_frames`` that is not positive.
+        """
+        settings = fit_settings(array, target_kg, chunk_frames, max_memory)
+        return cls(**settings, dtype=np.dtype(array.dtype if dtype is None else dtype).str)
 
     @property
     def mode(self) -> ChunkMode:
@@ -58,14 +104,23 @@ class TuckerNumcodec(Codec):  # type: ignore[misc]  # numcodecs is untyped (Any)
         """The dtype of decoded chunks."""
         return self._dtype
 
+    @property
+    def basis(self) -> FittedBasis | None:
+        """A fitted codec's basis, ``None`` otherwise."""
+        return self._basis
+
     def get_config(self) -> dict[str, Any]:
-        """JSON-safe: ``id``, the one mode's key, ``dtype``."""
-        return {"id": self.codec_id, **self._mode.config(), "dtype": self._dtype.str}
+        """JSON-safe: ``id``, the one mode's key, ``dtype`` (and a fitted codec's ``basis``
+        and ``basis_sha256``)."""
+        config = {"id": self.codec_id, **self._mode.config(), "dtype": self._dtype.str}
+        if self._basis is not None:
+            config.update(self._basis.config())
+        return config
 
     @classmethod
     def from_config(cls, config: dict[str, Any]) -> TuckerNumcodec:
         """The codec of a :meth:`get_config` dict (``id`` already removed, as numcodecs does)."""
-        known = {"target_kg", "ranks", "target_bpfv", "dtype"}
+        known = {"target_kg", "ranks", "target_bpfv", "dtype", *BASIS_KEYS}
         unknown = sorted(set(config) - known - {"id"})
         if unknown:
             raise ValueError(f"unknown keys in a tuckercodec configuration: {unknown}")
@@ -73,6 +128,8 @@ class TuckerNumcodec(Codec):  # type: ignore[misc]  # numcodecs is untyped (Any)
 
     def __repr__(self) -> str:
         settings = ", ".join(f"{key}={value!r}" for key, value in self._mode.config().items())
+        if self._basis is not None:  # its text is hundreds of kB: what it is, not all of it
+            settings += f", basis={self._basis.describe()}"
         return f"TuckerNumcodec({settings}, dtype={self._dtype.str!r})"
 
     def encode(self, buf: Any) -> bytes:
@@ -96,17 +153,17 @@ class TuckerNumcodec(Codec):  # type: ignore[misc]  # numcodecs is untyped (Any)
                 "the chunk is in Fortran order (a zarr array with order='F'), which numcodecs "
                 "cannot tell the decoder: use order='C' (or np.ascontiguousarray)"
             )
-        return encode_chunk(array, self._mode)
+        return encode_chunk(array, self._mode, self._basis)
 
     def decode(self, buf: Any, out: Any = None) -> Any:
         """The chunk's positions: an array of shape (frames, vertices, 3) of :attr:`dtype`, or
         written into ``out`` (of exactly the chunk's size; a float ``out`` gets its own dtype)
         and ``out`` returned."""
         if out is None:
-            return decode_chunk(buf, self._dtype)
+            return decode_chunk(buf, self._dtype, basis=self._basis)
         target = ensure_ndarray_like(out)
         dtype = target.dtype if target.dtype.kind == "f" else self._dtype
-        positions = decode_chunk(buf, dtype)
+        positions = decode_chunk(buf, dtype, basis=self._basis)
         if target.nbytes != positions.nbytes:
             raise ValueError(
                 f"out has {target.nbytes} bytes, but the chunk decodes to {positions.nbytes} "
