@@ -408,8 +408,18 @@ def test_the_zarr_benchmark_measures_what_it_stores(tmp_path):
     assert result.chunk_bytes == sum(p.stat().st_size for p in chunk_objects)
     assert result.store_bytes > result.chunk_bytes  # zarr.json too
     assert result.ratio == result.chunk_bytes / result.tkc_bytes
-    table = bench_zarr.report("sheet", sheet, 8, [result])
+    assert result.kg <= result.worst_chunk_kg <= 1.0  # chunks meet it alone, the whole too
+    fitted = bench_zarr.measure_fitted(sheet, 1.0, 8, 1, tmp_path)
+    assert fitted.kg <= 1.0 and fitted.worst_chunk_kg <= 1.0
+    objects = bench_zarr._chunk_objects(tmp_path / "fitted-kg1.zarr")
+    assert fitted.chunk_bytes == sum(p.stat().st_size for p in objects)
+    assert fitted.data_bytes == fitted.chunk_bytes + fitted.basis_bytes
+    assert fitted.basis_text_bytes > 4 / 3 * fitted.basis_bytes  # base64 of it and its params
+    assert fitted.store_bytes > fitted.chunk_bytes + fitted.basis_text_bytes  # zarr.json holds it
+    assert fitted.whole_chunks == 0 and all(c.u1_bytes == 0 for c in fitted.chunks)
+    table = bench_zarr.report("sheet", sheet, 8, [result], [fitted])
     assert f"| 1 | all | 24 | | {result.chunk_bytes} |" in table
+    assert f"| 1 | {fitted.chunk_bytes} | {fitted.basis_columns} | {fitted.basis_bytes} |" in table
 
 
 # ------------------------------------------------------------------------------------------

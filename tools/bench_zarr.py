@@ -2,11 +2,18 @@
 
 For each KG target: the sequence written as a zarr format 3 array (frames chunked by
 ``--frames-per-chunk``, the codec named in zarr.json and found through its entry point), its
-chunks' bytes and the whole store's, the decoded KG over the whole array, and the ratio to the
-.tkc of the whole sequence at the same target, with its faces (what ``tuckercodec encode``
-writes) and without (like for like: the zarr array has no faces). Then each chunk: its ranks and
-how much of it is U1, the per-vertex basis that every chunk stores for itself. Timings are
-medians of ``--repeat`` runs after one untimed run. Prints Markdown.
+chunks' bytes and the whole store's, the decoded KG over the whole array and of its worst chunk,
+and the ratio to the .tkc of the whole sequence at the same target, with its faces (what
+``tuckercodec encode`` writes) and without (like for like: the zarr array has no faces). Then
+each chunk: its ranks and how much of it is U1, the per-vertex basis that every chunk stores for
+itself.
+
+Then the fitted mode (``TuckerZarrCodec.fit``): one basis fitted to the array, held by the
+codec's configuration, each chunk its .tkc without it. Its sizes are given two ways: the chunks
+plus the binary basis (what the data costs), and the store on disk (zarr.json holds the basis
+as base64, 4/3 of its binary size), each over the .tkc. Timings are medians of ``--repeat`` runs
+after one untimed run; the load average before and after is printed (timings taken on a busy
+machine are not figures). Prints Markdown.
 
     python -m tools.bench_zarr                                # chicken, 100 frames a chunk
     python -m tools.bench_zarr sample --frames-per-chunk 20 --targets 0.1 --repeat 1
@@ -15,16 +22,19 @@ medians of ``--repeat`` runs after one untimed run. Prints Markdown.
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import sys
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from tools import common
 from tuckercodec import MeshSequence, encode_with_report, info, kg_error
+from tuckercodec.internal import parse_container
 
 DEFAULT_INPUT = common.SHARED_DATA / "chicken.npz"
 #: The issue's target: the zarr array within this many times the .tkc's size.
@@ -52,6 +62,7 @@ class Result:
     chunk_bytes: int  # the chunks' objects in the store
     store_bytes: int  # every object of the store (zarr.json too)
     kg: float  # decoded from the store, over the whole array
+    worst_chunk_kg: float  # the largest of the chunks' own decoded KG errors
     write_seconds: list[float]
     read_seconds: list[float]
     chunks: list[ChunkFigures]
@@ -67,7 +78,33 @@ class Result:
         return self.chunk_bytes / self.tkc_bytes_without_faces
 
 
-def _write(path: Path, positions: np.ndarray, frames_per_chunk: int, target: float) -> None:
+@dataclass(frozen=True)
+class FittedResult:
+    """One target's measurements of the fitted mode."""
+
+    target: float
+    basis_bytes: int  # the binary basis: the U1 section's payload
+    basis_text_bytes: int  # its base64 in zarr.json
+    basis_columns: int
+    chunk_bytes: int
+    store_bytes: int  # every object of the store: zarr.json (with the basis) too
+    kg: float
+    worst_chunk_kg: float
+    fit_seconds: list[float]
+    write_seconds: list[float]
+    read_seconds: list[float]
+    chunks: list[ChunkFigures]  # u1_bytes: 0 for a fitted chunk, its own U1 for a whole one
+    whole_chunks: int  # chunks the basis could not serve, stored with their own U1
+
+    @property
+    def data_bytes(self) -> int:
+        """The chunks and the binary basis: what the array's data costs."""
+        return self.chunk_bytes + self.basis_bytes
+
+
+def _write(
+    path: Path, positions: np.ndarray, frames_per_chunk: int, serializer: dict[str, object]
+) -> None:
     import zarr
 
     array = zarr.create_array(
@@ -76,11 +113,22 @@ def _write(path: Path, positions: np.ndarray, frames_per_chunk: int, target: flo
         chunks=(frames_per_chunk, positions.shape[1], 3),
         dtype=positions.dtype,
         # by name: zarr finds the codec through its entry point, no tuckercodec import
-        serializer={"name": "tuckercodec", "configuration": {"target_kg": target}},
+        serializer=serializer,
         compressors=None,
         overwrite=True,
     )
     array[:] = positions
+
+
+def _by_target(target: float) -> dict[str, object]:
+    return {"name": "tuckercodec", "configuration": {"target_kg": target}}
+
+
+def _worst_chunk_kg(positions: np.ndarray, decoded: np.ndarray, frames_per_chunk: int) -> float:
+    return max(
+        kg_error(positions[a : a + frames_per_chunk], decoded[a : a + frames_per_chunk])
+        for a in range(0, len(positions), frames_per_chunk)
+    )
 
 
 def _read(path: Path) -> np.ndarray:
@@ -105,7 +153,10 @@ def measure(
     without_faces = encode_with_report(bare, target_kg=target).data
 
     path = folder / f"kg{target:g}.zarr"
-    write_seconds = common.timed(lambda: _write(path, positions, frames_per_chunk, target), repeat)
+    serializer = _by_target(target)
+    write_seconds = common.timed(
+        lambda: _write(path, positions, frames_per_chunk, serializer), repeat
+    )
     read_seconds = common.timed(lambda: _read(path), repeat)
     decoded = _read(path)
 
@@ -123,13 +174,70 @@ def measure(
         chunk_bytes=sum(c.total_bytes for c in chunks),
         store_bytes=sum(p.stat().st_size for p in store),
         kg=kg_error(positions, decoded),
+        worst_chunk_kg=_worst_chunk_kg(positions, decoded, frames_per_chunk),
         write_seconds=write_seconds,
         read_seconds=read_seconds,
         chunks=chunks,
     )
 
 
-def report(name: str, sequence: MeshSequence, frames_per_chunk: int, results: list[Result]) -> str:
+def measure_fitted(
+    sequence: MeshSequence, target: float, frames_per_chunk: int, repeat: int, folder: Path
+) -> FittedResult:
+    """Fit a codec to the sequence's positions, write and read the array with it."""
+    import zarr
+
+    codec_class = zarr.registry.get_codec_class("tuckercodec")  # found by its entry point
+    positions = sequence.vertices
+
+    def fit() -> Any:  # TuckerZarrCodec, from zarr's registry
+        return codec_class.fit(positions, target_kg=target, chunk_frames=frames_per_chunk)
+
+    fit_seconds = common.timed(fit, repeat)
+    codec = fit()
+    path = folder / f"fitted-kg{target:g}.zarr"
+    write_seconds = common.timed(
+        lambda: _write(path, positions, frames_per_chunk, codec.to_dict()), repeat
+    )
+    read_seconds = common.timed(lambda: _read(path), repeat)
+    decoded = _read(path)
+
+    chunks, whole_chunks = [], 0
+    for item in _chunk_objects(path):
+        data = item.read_bytes()
+        is_whole = parse_container(data, whole=False).total_length == len(data)
+        whole_chunks += is_whole
+        header = info(codec.basis.complete(data))  # the chunk's .tkc, basis put back
+        sizes = {name: size for name, size, _, _ in header.sections}
+        own_u1 = sizes["U1"] if is_whole else 0
+        # a fitted chunk is one segment: its ranks, not the basis's columns (header.ranks)
+        ranks = header.segments[0].ranks if header.segments else header.ranks
+        chunks.append(ChunkFigures(header.frames, ranks, len(data), own_u1))
+    store = [p for p in path.rglob("*") if p.is_file()]
+    return FittedResult(
+        target=target,
+        basis_bytes=len(codec.basis.payload),
+        basis_text_bytes=len(codec.basis.text),
+        basis_columns=codec.basis.columns,
+        chunk_bytes=sum(c.total_bytes for c in chunks),
+        store_bytes=sum(p.stat().st_size for p in store),
+        kg=kg_error(positions, decoded),
+        worst_chunk_kg=_worst_chunk_kg(positions, decoded, frames_per_chunk),
+        fit_seconds=fit_seconds,
+        write_seconds=write_seconds,
+        read_seconds=read_seconds,
+        chunks=chunks,
+        whole_chunks=whole_chunks,
+    )
+
+
+def report(
+    name: str,
+    sequence: MeshSequence,
+    frames_per_chunk: int,
+    results: list[Result],
+    fitted: list[FittedResult] | None = None,
+) -> str:
     """The Markdown tables of :func:`main`."""
     lines = [
         f"{name}: {sequence.frame_count} frames of {sequence.vertex_count} vertices, "
@@ -137,14 +245,14 @@ def report(name: str, sequence: MeshSequence, frames_per_chunk: int, results: li
         f"sizes in bytes; seconds are median [min-max]",
         "",
         "| target KG | .tkc | .tkc without faces | zarr chunks | zarr store | chunks / .tkc "
-        "| chunks / .tkc without faces | decoded KG (whole array) | .tkc encode s "
-        "| zarr write s | zarr read s |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "| chunks / .tkc without faces | decoded KG (whole array) | worst chunk KG "
+        "| .tkc encode s | zarr write s | zarr read s |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     lines.extend(
         f"| {r.target:g} | {r.tkc_bytes} | {r.tkc_bytes_without_faces} | {r.chunk_bytes} "
         f"| {r.store_bytes} | {r.ratio:.2f} | {r.ratio_without_faces:.2f} | {r.kg:.4f} "
-        f"| {common.spread(r.tkc_seconds, digits=2)} "
+        f"| {r.worst_chunk_kg:.4f} | {common.spread(r.tkc_seconds, digits=2)} "
         f"| {common.spread(r.write_seconds, digits=2)} "
         f"| {common.spread(r.read_seconds, digits=3)} |"
         for r in results
@@ -162,7 +270,57 @@ def report(name: str, sequence: MeshSequence, frames_per_chunk: int, results: li
             f"| {r.target:g} | all | {sum(c.frames for c in r.chunks)} | | {r.chunk_bytes} "
             f"| {u1} | {u1 / r.chunk_bytes:.0%} |"
         )
+    if fitted:
+        lines += ["", _fitted_report(results, fitted)]
     return "\n".join(lines)
+
+
+def _fitted_report(results: list[Result], fitted: list[FittedResult]) -> str:
+    """The fitted mode's tables: sizes against the same target's .tkc, then each chunk."""
+    tkc = {r.target: r for r in results}
+    lines = [
+        "Fitted mode (one basis in the codec's configuration): sizes in bytes; ratios over the "
+        ".tkc with faces (without faces in brackets)",
+        "",
+        "| target KG | chunks | basis columns | basis (binary) | basis (base64) | chunks + basis "
+        "| store on disk | (chunks + basis) / .tkc | store / .tkc | chunks stored whole "
+        "| decoded KG (whole array) | worst chunk KG | fit s | zarr write s | zarr read s |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for f in fitted:
+        r = tkc[f.target]
+        lines.append(
+            f"| {f.target:g} | {f.chunk_bytes} | {f.basis_columns} | {f.basis_bytes} "
+            f"| {f.basis_text_bytes} "
+            f"| {f.data_bytes} | {f.store_bytes} "
+            f"| {f.data_bytes / r.tkc_bytes:.2f} ({f.data_bytes / r.tkc_bytes_without_faces:.2f}) "
+            f"| {f.store_bytes / r.tkc_bytes:.2f} "
+            f"({f.store_bytes / r.tkc_bytes_without_faces:.2f}) "
+            f"| {f.whole_chunks} of {len(f.chunks)} | {f.kg:.4f} | {f.worst_chunk_kg:.4f} "
+            f"| {common.spread(f.fit_seconds, digits=2)} "
+            f"| {common.spread(f.write_seconds, digits=2)} "
+            f"| {common.spread(f.read_seconds, digits=3)} |"
+        )
+    lines += [
+        "",
+        "| target KG | chunk | frames | ranks (i, k) | bytes | own U1 bytes |",
+        "|---|---|---|---|---|---|",
+    ]
+    for f in fitted:
+        for number, c in enumerate(f.chunks):
+            lines.append(
+                f"| {f.target:g} | {number} | {c.frames} | {c.ranks} | {c.total_bytes} "
+                f"| {c.u1_bytes} |"
+            )
+    return "\n".join(lines)
+
+
+def _load() -> str:
+    """The load average over 1, 5 and 15 minutes, where the system says."""
+    try:
+        return " ".join(f"{value:.2f}" for value in os.getloadavg())
+    except OSError:
+        return "unknown"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -179,6 +337,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--frames-per-chunk", type=int, default=100)
     parser.add_argument("--targets", type=float, nargs="+", default=[0.1, 1.0])
     parser.add_argument("--repeat", type=int, default=3, help="timed runs (median reported)")
+    parser.add_argument(
+        "--no-fitted", action="store_true", help="measure the usual mode only, not the fitted"
+    )
     args = parser.parse_args(argv)
     if args.repeat < 1 or args.frames_per_chunk < 1:
         parser.error("--repeat and --frames-per-chunk must be at least 1")
@@ -196,15 +357,21 @@ def main(argv: list[str] | None = None) -> int:
 
     sequence = common.load(args.input)
     name = common.SAMPLE if args.input == common.SAMPLE else Path(args.input).stem
+    load_before = _load()
     with tempfile.TemporaryDirectory(prefix="bench_zarr-") as folder:
         results = [
             measure(sequence, target, args.frames_per_chunk, args.repeat, Path(folder))
             for target in args.targets
         ]
+        fitted = [
+            measure_fitted(sequence, target, args.frames_per_chunk, args.repeat, Path(folder))
+            for target in ([] if args.no_fitted else args.targets)
+        ]
     print(f"machine: {common.machine()}")
+    print(f"load average (1, 5, 15 min) before: {load_before}; after: {_load()}")
     print(f"command: {common.command('tools.bench_zarr', argv)}")
     print()
-    print(report(name, sequence, args.frames_per_chunk, results))
+    print(report(name, sequence, args.frames_per_chunk, results, fitted))
     print()
     worst = max(r.ratio for r in results)
     verdict = "meets" if worst <= TARGET_RATIO else "misses"
@@ -212,6 +379,15 @@ def main(argv: list[str] | None = None) -> int:
         f"largest chunks / .tkc: {worst:.2f} ({verdict} the target of {TARGET_RATIO}); "
         f"median .tkc encode {statistics.median(results[0].tkc_seconds):.2f} s"
     )
+    if fitted:
+        by_target = {r.target: r for r in results}
+        data = max(f.data_bytes / by_target[f.target].tkc_bytes for f in fitted)
+        store = max(f.store_bytes / by_target[f.target].tkc_bytes for f in fitted)
+        print(
+            f"fitted: largest (chunks + basis) / .tkc {data:.2f} "
+            f"({'meets' if data <= TARGET_RATIO else 'misses'} the target); largest store on "
+            f"disk / .tkc {store:.2f} ({'meets' if store <= TARGET_RATIO else 'misses'} it)"
+        )
     return 0
 
 
