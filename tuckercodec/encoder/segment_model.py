@@ -32,15 +32,54 @@ from ..analysis import discarded_energy
 LAMBDA_STEPS = 60
 
 
-def orthonormal_columns(sketch: np.ndarray) -> np.ndarray:
-    """Q with orthonormal columns spanning ``sketch``'s (Householder QR, in place: the sketch is
-    consumed)."""
-    import scipy.linalg  # here: 0.17 s at start-up that only a segmented encode needs
+#: Directions of the sketch weaker than this, relative to its strongest (in squared norm), are
+#: dropped: the Gram matrix's eigenvalues are exact only to about 1e-16 of the largest, so
+#: weaker ones are rounding (the sequence's energy there is below 1e-13 of the total, far below
+#: any KG target's square).
+NEGLIGIBLE_DIRECTION = 1e-13
+#: Rows of the sketch transformed at once (a small scratch array, whatever K).
+ROWS_AT_ONCE = 8192
 
-    q: np.ndarray = scipy.linalg.qr(sketch, mode="economic", overwrite_a=True, check_finite=False)[
-        0
-    ]
+
+def orthonormal_columns(sketch: np.ndarray) -> np.ndarray:
+    """Q with orthonormal columns spanning ``sketch``'s strong directions (the sketch is
+    consumed: Q is computed in its memory).
+
+    By the eigenvectors of the small Gram matrix, twice (CholeskyQR2 with the weak directions
+    dropped): Q1 = Y V L^-1/2 keeps every direction above :data:`NEGLIGIBLE_DIRECTION`, and a
+    second pass makes Q1 orthonormal to rounding. Both passes are matrix products (0.8 s each
+    for 200,000 x 256, against 10 s for Householder QR, whose panels are not), and each
+    transforms the rows a block at a time in place, so that no second K x r array is made.
+    """
+    values, vectors = np.linalg.eigh(sketch.T @ sketch)
+    keep = values > NEGLIGIBLE_DIRECTION * max(float(values.max(initial=0.0)), 1e-300)
+    if not keep.any():  # a sketch of nothing: one column, any direction
+        q = np.zeros((sketch.shape[0], 1))
+        q[0, 0] = 1.0
+        return q
+    transform = vectors[:, keep] / np.sqrt(values[keep])
+    q = _rows_times(sketch, transform)
+    for _ in range(2):  # each pass squares the loss of orthogonality: two reach rounding
+        try:
+            factor = np.linalg.cholesky(q.T @ q)  # Q'Q = L L', and Q L^-T is orthonormal
+        except np.linalg.LinAlgError:  # not expected once weak directions are gone
+            import scipy.linalg  # here: 0.17 s at start-up that only this fallback needs
+
+            householder: np.ndarray = scipy.linalg.qr(q, mode="economic", check_finite=False)[0]
+            return householder
+        q = _rows_times(q, np.linalg.inv(factor).T)
     return q
+
+
+def _rows_times(matrix: np.ndarray, transform: np.ndarray) -> np.ndarray:
+    """``matrix @ transform`` written over ``matrix``'s own rows, a block of rows at a time (each
+    block is read whole before its rows are written), returned as a view of its first columns:
+    the result has at most as many columns as ``matrix``."""
+    columns = transform.shape[1]
+    for start in range(0, matrix.shape[0], ROWS_AT_ONCE):
+        rows = slice(start, start + ROWS_AT_ONCE)
+        matrix[rows, :columns] = matrix[rows] @ transform
+    return matrix[:, :columns]
 
 
 @dataclass(eq=False)
