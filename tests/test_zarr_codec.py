@@ -472,6 +472,25 @@ def test_a_fitted_codec_meets_the_target_in_every_chunk_with_chunks_a_fraction_o
     tuckercodec.Decoder(whole).check()
 
 
+def test_dask_writes_and_reads_a_fitted_array(cloth, fitted, tmp_path):
+    da = pytest.importorskip("dask.array", reason="the lazy read needs dask: pip install dask")
+    store = zarr.create_array(
+        str(tmp_path / "d.zarr"),
+        shape=cloth.shape,
+        chunks=(FRAMES_PER_CHUNK, cloth.shape[1], 3),
+        dtype=cloth.dtype,
+        serializer=fitted["v3"],
+        compressors=None,
+    )
+    da.from_array(cloth, chunks=(FRAMES_PER_CHUNK, -1, -1)).to_zarr(store)
+    assert all(fitted_gap(f.read_bytes()) for f in _chunk_files(tmp_path / "d.zarr"))
+    lazy = da.from_zarr(str(tmp_path / "d.zarr"))
+    assert lazy.chunks[0] == (20, 20, 20)
+    decoded = lazy.compute()
+    assert max(_chunk_kgs(cloth, decoded)) <= TARGET
+    np.testing.assert_array_equal(lazy[25:35].compute(), decoded[25:35])
+
+
 def test_both_codecs_fit_the_same_basis_and_keep_it_in_the_metadata(fitted):
     v3, v2 = fitted["v3"], fitted["v2"]
     assert v3.basis == v2.basis and v3.basis.vertices == 3101
