@@ -8,21 +8,18 @@ without ``overwrite=True``) and the choice of output format.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
 from pathlib import Path
 
 from .analysis import Selection
 from .atomic import refuse_existing, write_atomic
 from .decoder import Decoder, FrameSelection
-from .encoder import EncodeReport, EncodeResult, encode_frames, encode_with_report
-from .encoder.plan import needs_segments
+from .encoder import EncodeReport, encode_source
 from .errors import InputError
 from .format.container import SIGNATURE
 from .format.limits import DEFAULT_LIMITS, Limits
 from .format.segments import BASIS_SHARED
 from .gltf.decomposition import DEFAULT_COMPRESSION, Compression, write_decomposition_gltf
 from .io import Source, format_named, format_of, open_frames, save_sequence
-from .io.streaming import FrameSource
 from .parallel import Executor
 from .reading import open_regular_file
 from .sequence import MeshSequence
@@ -67,7 +64,7 @@ def encode_file(
     """
     refuse_existing([Path(output)], overwrite)
     with open_frames(source) as frames:
-        result = encode_frames_source(
+        result = encode_source(
             frames,
             target_kg=target_kg,
             ranks=ranks,
@@ -80,46 +77,6 @@ def encode_file(
         )
     write_atomic(output, result.data, overwrite=overwrite)
     return result.report
-
-
-def encode_frames_source(
-    frames: FrameSource,
-    *,
-    target_kg: float | None = None,
-    ranks: tuple[int, int] | None = None,
-    target_bpfv: float | None = None,
-    select: Selection = "exact",
-    segment_frames: int | None = None,
-    max_memory: int | None = None,
-    basis: str = BASIS_SHARED,
-    executor: Executor | None = None,
-    progress: Callable[[str], None] | None = None,
-) -> EncodeResult:
-    """Encode an opened sequence: whole (loaded, format 1.0) when that fits ``max_memory``
-    (default half the machine's memory) and no ``segment_frames`` is given, else in segments
-    read a range at a time (:func:`tuckercodec.encoder.segmented.encode_frames`)."""
-    if needs_segments(
-        frames.frame_count,
-        frames.vertex_count,
-        segment_frames=segment_frames,
-        max_memory=max_memory,
-    ):
-        if select != "exact":
-            raise ValueError("a segmented encode chooses its ranks by the exact error (select)")
-        return encode_frames(
-            frames,
-            target_kg=target_kg,
-            ranks=ranks,
-            target_bpfv=target_bpfv,
-            segment_frames=segment_frames,
-            max_memory=max_memory,
-            basis=basis,
-            executor=executor,
-            progress=progress,
-        )
-    return encode_with_report(
-        frames.load(), target_kg=target_kg, ranks=ranks, target_bpfv=target_bpfv, select=select
-    )
 
 
 def read_compressed(path: str | os.PathLike[str], *, limits: Limits = DEFAULT_LIMITS) -> Decoder:

@@ -12,10 +12,10 @@ from pathlib import Path
 from ..atomic import refuse_existing, write_atomic
 from ..decoder import Decoder, FileInfo
 from ..decoder import info as read_info
-from ..encoder import EncodeReport
+from ..encoder import EncodeReport, encode_source
 from ..encoder.plan import needs_segments
 from ..errors import EXIT_OK, InputError
-from ..files import decode_file, decoded_output_path, encode_frames_source, is_gltf_output
+from ..files import decode_file, decoded_output_path, is_gltf_output
 from ..gltf.decomposition import DEFAULT_COMPRESSION, write_decomposition_gltf
 from ..io import open_frames
 from ..metrics import (
@@ -71,7 +71,7 @@ def run_encode(args: argparse.Namespace) -> int:
                 file=sys.stderr,
             )
         with _executor(args, segmented) as executor:
-            result = encode_frames_source(  # no mode given: the encoder's default target
+            result = encode_source(  # no mode given: the encoder's default target
                 frames,
                 target_kg=args.kg,
                 ranks=args.ranks,

@@ -24,12 +24,13 @@ How a target KG error is met (errors are squared norms; E is the KG denominator'
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from typing import Any
 
 from ..analysis import Analysis, Selection, analyze
 from ..format import streams
 from ..format.segments import BASIS_SHARED
-from ..io.streaming import SequenceFrames
+from ..io.streaming import FrameSource, SequenceFrames
 from ..parallel import Executor
 from ..sequence import MeshSequence
 from .plan import needs_segments
@@ -102,13 +103,12 @@ def encode_with_report(
         segment_frames=segment_frames,
         max_memory=max_memory,
     ):
-        if select != "exact":
-            raise ValueError("a segmented encode chooses its ranks by the exact error (select)")
-        return encode_frames(
+        return encode_source(
             SequenceFrames(sequence),
             target_kg=target_kg,
             ranks=ranks,
             target_bpfv=target_bpfv,
+            select=select,
             segment_frames=segment_frames,
             max_memory=max_memory,
             basis=basis,
@@ -163,6 +163,55 @@ def encode_with_report(
     return EncodeResult(data, report)
 
 
+def encode_source(
+    frames: FrameSource,
+    *,
+    target_kg: float | None = None,
+    ranks: tuple[int, int] | None = None,
+    target_bpfv: float | None = None,
+    select: Selection = "exact",
+    segment_frames: int | None = None,
+    max_memory: int | None = None,
+    basis: str = BASIS_SHARED,
+    executor: Executor | None = None,
+    level: int = streams.DEFAULT_LEVEL,
+    progress: Callable[[str], None] | None = None,
+) -> EncodeResult:
+    """Encode an opened sequence (:func:`tuckercodec.io.open_frames`): whole (loaded, format
+    1.0) when that fits ``max_memory`` (default half the machine's memory) and no
+    ``segment_frames`` is given, else in segments read a range at a time (format 1.1,
+    :func:`tuckercodec.encoder.segmented.encode_frames`). Arguments as for
+    :func:`encode_with_report`; ``progress`` is called with a line as each pass starts."""
+    if not needs_segments(
+        frames.frame_count,
+        frames.vertex_count,
+        segment_frames=segment_frames,
+        max_memory=max_memory,
+    ):
+        return encode_with_report(
+            frames.load(),
+            target_kg=target_kg,
+            ranks=ranks,
+            target_bpfv=target_bpfv,
+            select=select,
+            level=level,
+        )
+    if select != "exact":
+        raise ValueError("a segmented encode chooses its ranks by the exact error (select)")
+    return encode_frames(
+        frames,
+        target_kg=target_kg,
+        ranks=ranks,
+        target_bpfv=target_bpfv,
+        segment_frames=segment_frames,
+        max_memory=max_memory,
+        basis=basis,
+        executor=executor,
+        level=level,
+        progress=progress,
+    )
+
+
 def _checked_ranks(ranks: Any, analysis: Analysis) -> tuple[int, int]:
     r1, r3 = analysis.max_ranks
     try:
@@ -202,5 +251,6 @@ __all__ = [
     "Mode",
     "encode",
     "encode_frames",
+    "encode_source",
     "encode_with_report",
 ]

@@ -61,16 +61,10 @@ MAX_LEVELS = 4096
 
 
 def _depths(parents: np.ndarray) -> np.ndarray:
-    """Each row's distance from its root (0 for a root), by pointer jumping on the indices."""
-    depth = (parents >= 0).astype(np.int64)
-    ancestor = parents.copy()
-    live = np.flatnonzero(ancestor >= 0)
-    while live.size:
-        jump = ancestor[live]
-        depth[live] += depth[jump]  # the right side is read before any row is written
-        ancestor[live] = ancestor[jump]
-        live = live[ancestor[live] >= 0]
-    return depth
+    """Each row's distance from its root (0 for a root): the sum of one per ancestor edge."""
+    edges = (parents >= 0).astype(np.int64)[:, None]
+    depths: np.ndarray = _pointer_jumping(edges, parents)[:, 0]
+    return depths
 
 
 def _pointer_jumping(total: np.ndarray, parents: np.ndarray) -> np.ndarray:
