@@ -600,14 +600,15 @@ def test_a_chunk_the_basis_does_not_serve_is_stored_whole_and_meets_the_target(
     assert tuckercodec.info(last).frames == 20  # a whole .tkc, with its own U1
 
 
-def test_a_chunk_too_short_to_hold_the_basis_is_stored_whole(cloth):
+def test_a_chunk_of_fewer_frames_than_the_basis_has_columns_uses_it(cloth):
     positions = cloth[:, :1000]
     codec = TuckerNumcodec.fit(positions, target_kg=TARGET, chunk_frames=20)
-    shortest = math.ceil(codec.basis.columns / 3)  # the format's c <= 3F
-    for frames, held in ((shortest - 1, False), (shortest, True)):
-        data = codec.encode(positions[:frames])
-        assert (fitted_gap(data) is not None) is held
-        assert kg_error(positions[:frames], codec.decode(data)) <= TARGET
+    assert codec.basis.columns > 3 * 2  # wider than two frames' U1 could be (spec §6.7)
+    for start, frames in ((0, 1), (40, 2), (50, 7)):
+        part = positions[start : start + frames]
+        data = codec.encode(part)
+        assert fitted_gap(data) is not None
+        assert kg_error(part, codec.decode(data)) <= TARGET
 
 
 @pytest.mark.parametrize("zarr_format", [2, 3])

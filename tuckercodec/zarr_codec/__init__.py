@@ -20,8 +20,8 @@ it is written holds one basis in its configuration (base64 in ``zarr.json`` or `
 with its SHA-256), chosen so that every chunk of the fitted length meets the target with it on
 its own; each chunk is then its .tkc without the U1 section's payload, put back when decoding
 (:mod:`~tuckercodec.zarr_codec.fitted`). A chunk the basis cannot serve (frames added later whose
-motion it does not span; an edge chunk too short to hold it) is stored whole with its own basis,
-so the target holds for every chunk whatever was fitted.
+motion it does not span) is stored whole with its own basis, so the target holds for every chunk
+whatever was fitted.
 
 Why a KG target met by every chunk is met by the whole array. Write E for the squared error and
 D for the square of the KG denominator ||A - E(A)||, so that KG <= t means E <= (t/100)^2 D.

@@ -264,9 +264,7 @@ def _encode_fitted(
     sequence: MeshSequence, dtype: np.dtype[Any], target: float, basis: FittedBasis
 ) -> bytes | None:
     """The fitted chunk (the .tkc without the basis's payload), or ``None`` when the basis
-    cannot serve it: too few frames to hold it (R28: c <= 3F) or not enough for the target."""
-    if not basis.holds(sequence.frame_count, sequence.vertex_count):
-        return None
+    cannot meet the target for it."""
     try:
         data = _encode_kg(sequence, dtype, target, basis.encode)
     except UnreachableTargetError:

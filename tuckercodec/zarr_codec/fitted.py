@@ -21,11 +21,12 @@ after checking that the table's length, CRC-32 and parameters are the basis's: a
 with another basis is refused with a ValueError that names the configuration's basis, and the
 completed file is checked by the decoder like any other (its section CRCs included).
 
-A chunk that cannot meet the target with the basis (frames added after the fit whose motion it
-does not span; an edge chunk of fewer than c/3 frames, c the basis's columns, which the format's
-rule R28 (c <= 3F) does not let hold it) is stored as the usual mode stores it, a whole .tkc
-with its own U1: the guarantee never depends on the fit. A whole file is told apart by its
-``total_length``, which equals its byte count. Point chunks stay point chunks (:mod:`.chunk`).
+A chunk of any length can use the basis (a shared U1 may have up to K columns, more than 3F:
+spec §6.7), an edge chunk shorter than the others too. A chunk that cannot meet the target with
+it (frames added after the fit whose motion it does not span) is stored as the usual mode stores
+it, a whole .tkc with its own U1: the guarantee never depends on the fit. A whole file is told
+apart by its ``total_length``, which equals its byte count. Point chunks stay point chunks
+(:mod:`.chunk`).
 
 In the configuration the basis is ``basis``, the base64 of one msgpack map ``{"params": the U1
 table entry's codec parameters, "payload": its bytes}``, and ``basis_sha256``, the SHA-256 of
@@ -124,7 +125,7 @@ class FittedBasis:
 
     @property
     def columns(self) -> int:
-        """c, the basis's columns: a chunk of F frames can hold it when c <= 3F."""
+        """c, the basis's columns (a chunk's segment uses its leading ones)."""
         return _shape(self.shared)[1]
 
     @property
@@ -139,10 +140,6 @@ class FittedBasis:
     def describe(self) -> str:
         """A short form for a codec's repr: its size and the start of its SHA-256."""
         return f"<basis of {self.vertices} x {self.columns}, sha256 {self.sha256[:12]}...>"
-
-    def holds(self, frames: int, vertices: int) -> bool:
-        """Whether a chunk of this many frames and vertices can be encoded with the basis."""
-        return vertices == self.vertices and self.columns <= 3 * frames
 
     def encode(self, sequence: MeshSequence, target_kg: float) -> bytes:
         """The whole segmented .tkc of ``sequence`` (one segment) with this basis as its U1.
