@@ -450,9 +450,7 @@ def main(argv: list[str] | None = None) -> int:
     valid = valid_vectors()
     for name, (data, purpose) in valid.items():
         write_valid(out, name, data, purpose)
-    invalid = write_invalid(
-        out, valid["v1-wave-triangles"][0], valid["v1.1-segments-shared"][0]
-    )
+    invalid = write_invalid(out, valid["v1-wave-triangles"][0], valid["v1.1-segments-shared"][0])
     print(f"wrote {len(valid)} valid and {invalid} invalid vectors to {out}")
     return 0
 
