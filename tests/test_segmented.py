@@ -252,3 +252,19 @@ def test_a_fitted_basis_serves_every_segment_on_its_own(cloth):
         assert kg_error(part.vertices, Decoder(data).positions()) <= 0.1
     with pytest.raises(ValueError, match="no shared basis"):
         shared_basis_of(encode_with_report(cloth, target_kg=0.1).data)
+
+
+def test_encode_file_streams_a_npy_with_its_faces(cloth, tmp_path):
+    """encode_file reads a positions-only cache a range at a time, with faces from a mesh."""
+    cache = tmp_path / "cloth.npy"
+    tuckercodec.save_sequence(cloth, cache)
+    rest = tmp_path / "rest"
+    tuckercodec.save_sequence(MeshSequence(cloth.vertices[:1], cloth.faces), rest)
+    out = tmp_path / "cloth.tkc"
+    report = tuckercodec.encode_file(
+        cache, out, faces=next(rest.glob("*.obj")), target_kg=0.1, segment_frames=20
+    )
+    assert report.segments == 3
+    decoder = Decoder(out)
+    np.testing.assert_array_equal(decoder.faces, cloth.faces)
+    assert kg_error(cloth.vertices, decoder.positions()) <= 0.1

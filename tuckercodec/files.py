@@ -8,6 +8,7 @@ without ``overwrite=True``) and the choice of output format.
 from __future__ import annotations
 
 import os
+import sys
 from pathlib import Path
 
 from .analysis import Selection
@@ -54,16 +55,23 @@ def encode_file(
     max_memory: int | None = None,
     basis: str = BASIS_SHARED,
     executor: Executor | None = None,
+    prim: str | None = None,
+    object_path: str | None = None,
+    faces: str | os.PathLike[str] | None = None,
+    fps: float | None = None,
 ) -> EncodeReport:
     """Read a sequence (folder of OBJ files, glob, .npz...), encode it and write ``output``.
 
     The output is checked before any work (it must not exist unless ``overwrite``) and written
     atomically. A sequence whose whole encode would not fit ``max_memory`` (or given
     ``segment_frames``) is read a range of frames at a time and written in segments (format
-    1.1, :func:`encode_frames_source`). Returns the encoder's report.
+    1.1, :func:`tuckercodec.encoder.encode_source`). ``prim``, ``object_path``, ``faces`` and
+    ``fps`` are the reading options of :func:`tuckercodec.io.load_sequence` (``faces`` gives a
+    ``.npy``, PC2 or MDD cache its faces). ``progress`` prints a line on standard error as
+    each pass of a segmented encode starts. Returns the encoder's report.
     """
     refuse_existing([Path(output)], overwrite)
-    with open_frames(source) as frames:
+    with open_frames(source, prim=prim, object_path=object_path, faces=faces, fps=fps) as frames:
         result = encode_source(
             frames,
             target_kg=target_kg,
@@ -74,9 +82,14 @@ def encode_file(
             max_memory=max_memory,
             basis=basis,
             executor=executor,
+            progress=_say if progress else None,
         )
     write_atomic(output, result.data, overwrite=overwrite)
     return result.report
+
+
+def _say(line: str) -> None:
+    print(line, file=sys.stderr, flush=True)
 
 
 def read_compressed(path: str | os.PathLike[str], *, limits: Limits = DEFAULT_LIMITS) -> Decoder:
