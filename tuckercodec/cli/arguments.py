@@ -123,18 +123,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     encode.add_argument("input", help=_SEQUENCE_HELP)
     encode.add_argument("-o", "--output", type=Path, required=True, metavar=f"OUT{SUFFIX}")
-    mode = encode.add_mutually_exclusive_group()
-    mode.add_argument("--kg", type=_positive, metavar="KG", help="target KG error in percent")
-    mode.add_argument("--ranks", type=_ranks, metavar="I,K", help="fixed ranks (i, 3, k)")
-    mode.add_argument(
-        "--bpfv", type=_positive, metavar="BPFV", help="target size, bits per frame per vertex"
-    )
-    encode.add_argument(
-        "--select",
-        choices=("exact", "bound"),
-        default="exact",
-        help="choose ranks by the exact error table (default) or by the seed paper's bound",
-    )
+    _add_mode_options(encode)
     encode.add_argument("--force", action="store_true", help="replace the output if it exists")
     _add_segment_options(encode)
     _add_read_options(encode)
@@ -315,7 +304,7 @@ def _add_read_options(parser: argparse.ArgumentParser, applies_to: str = "INPUT"
         "--object", dest="object_path", metavar="PATH", help="Alembic: the mesh object, if several"
     )
     group.add_argument(
-        "--faces", type=Path, metavar="MESH", help="PC2/MDD: take the faces from this mesh file"
+        "--faces", type=Path, metavar="MESH", help="PC2/MDD/.npy: take the faces from this mesh file"
     )
     group.add_argument(
         "--fps",
@@ -379,20 +368,38 @@ def _add_segment_options(encode: argparse.ArgumentParser) -> None:
         default=BASES[0],
         help="with segments: one U1 shared by all (default, smaller) or one per segment",
     )
-    where = large.add_mutually_exclusive_group()
-    where.add_argument(
-        "--jobs",
-        type=_at_least(1),
-        metavar="N",
-        help="with segments: run the passes on N worker processes (Dask; extra [dask]); the "
-        "file is the same bytes",
+    _add_executor_options(
+        large,
+        "with segments: run the passes on N worker processes (Dask; extra [dask]); the file is "
+        "the same bytes",
+        "with segments: run the passes on the Dask cluster of this scheduler (tcp://host:port); "
+        "its workers must read the input at the same absolute path",
     )
-    where.add_argument(
-        "--scheduler",
-        metavar="ADDRESS",
-        help="with segments: run the passes on the Dask cluster of this scheduler "
-        "(tcp://host:port); its workers must read the input at the same absolute path",
+
+
+def _add_mode_options(parser: argparse.ArgumentParser) -> None:
+    """The encoder's three modes, one at a time, and how ranks are selected."""
+    mode = parser.add_mutually_exclusive_group()
+    mode.add_argument("--kg", type=_positive, metavar="KG", help="target KG error in percent")
+    mode.add_argument("--ranks", type=_ranks, metavar="I,K", help="fixed ranks (i, 3, k)")
+    mode.add_argument(
+        "--bpfv", type=_positive, metavar="BPFV", help="target size, bits per frame per vertex"
     )
+    parser.add_argument(
+        "--select",
+        choices=("exact", "bound"),
+        default="exact",
+        help="choose ranks by the exact error table (default) or by the seed paper's bound",
+    )
+
+
+def _add_executor_options(
+    parser: argparse.ArgumentParser | argparse._ArgumentGroup, jobs_help: str, scheduler_help: str
+) -> None:
+    """Where tasks run: --jobs N workers on this machine or a --scheduler's cluster."""
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument("--jobs", type=_at_least(1), metavar="N", help=jobs_help)
+    where.add_argument("--scheduler", metavar="ADDRESS", help=scheduler_help)
 
 
 def _add_batch(verbs: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -413,32 +420,12 @@ def _add_batch(verbs: argparse._SubParsersAction[argparse.ArgumentParser]) -> No
     batch.add_argument(
         "-o", "--output", type=Path, required=True, metavar="OUTDIR", help="made if missing"
     )
-    mode = batch.add_mutually_exclusive_group()
-    mode.add_argument("--kg", type=_positive, metavar="KG", help="target KG error in percent")
-    mode.add_argument("--ranks", type=_ranks, metavar="I,K", help="fixed ranks (i, 3, k)")
-    mode.add_argument(
-        "--bpfv", type=_positive, metavar="BPFV", help="target size, bits per frame per vertex"
-    )
-    batch.add_argument(
-        "--select",
-        choices=("exact", "bound"),
-        default="exact",
-        help="choose ranks by the exact error table (default) or by the seed paper's bound",
-    )
-    where = batch.add_mutually_exclusive_group()
-    where.add_argument(
-        "--jobs",
-        type=_at_least(1),
-        metavar="N",
-        help="encode N inputs at a time in worker processes on this machine (Dask; extra [dask])",
-    )
-    where.add_argument(
-        "--scheduler",
-        metavar="ADDRESS",
-        help=(
-            "run on the Dask cluster of this scheduler (tcp://host:port); its workers need this "
-            "tuckercodec and must read the inputs at the same absolute paths"
-        ),
+    _add_mode_options(batch)
+    _add_executor_options(
+        batch,
+        "encode N inputs at a time in worker processes on this machine (Dask; extra [dask])",
+        "run on the Dask cluster of this scheduler (tcp://host:port); its workers need this "
+        "tuckercodec and must read the inputs at the same absolute paths",
     )
     batch.add_argument("--force", action="store_true", help="replace outputs that exist")
     _add_read_options(batch)
