@@ -304,7 +304,10 @@ def _add_read_options(parser: argparse.ArgumentParser, applies_to: str = "INPUT"
         "--object", dest="object_path", metavar="PATH", help="Alembic: the mesh object, if several"
     )
     group.add_argument(
-        "--faces", type=Path, metavar="MESH", help="PC2/MDD/.npy: take the faces from this mesh file"
+        "--faces",
+        type=Path,
+        metavar="MESH",
+        help="PC2/MDD/.npy: take the faces from this mesh file",
     )
     group.add_argument(
         "--fps",
