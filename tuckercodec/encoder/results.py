@@ -65,9 +65,8 @@ class EncodeResult:
     report: EncodeReport
 
 
-def check_modes(
-    target_kg: float | None, ranks: tuple[int, int] | None, target_bpfv: float | None
-) -> Mode:
+def refuse_two_modes(target_kg: object, ranks: object, target_bpfv: object) -> None:
+    """``ValueError`` naming them if more than one of the three modes is given."""
     given = [
         name
         for name, value in (
@@ -79,6 +78,13 @@ def check_modes(
     ]
     if len(given) > 1:
         raise ValueError(f"give one of target_kg, ranks and target_bpfv, not {' and '.join(given)}")
+
+
+def check_modes(
+    target_kg: float | None, ranks: tuple[int, int] | None, target_bpfv: float | None
+) -> Mode:
+    """The mode the arguments name, each checked (``ValueError`` otherwise)."""
+    refuse_two_modes(target_kg, ranks, target_bpfv)
     for name, value in (("target_kg", target_kg), ("target_bpfv", target_bpfv)):
         if value is not None and not (
             isinstance(value, (int, float, np.floating))

@@ -32,6 +32,7 @@ import zstandard
 from ..analysis import SMALLEST_COORDINATE, SMALLEST_RELATIVE_SHAPE
 from ..decoder import decode
 from ..encoder import DEFAULT_TARGET_KG, encode_with_report
+from ..encoder.results import refuse_two_modes
 from ..errors import InputError, UnreachableTargetError
 from ..format.limits import DEFAULT_LIMITS
 from ..format.streams import compress
@@ -82,17 +83,7 @@ def chunk_mode(target_kg: Any = None, ranks: Any = None, target_bpfv: Any = None
         ValueError: two modes at once, a target that is not a positive finite number, or ranks
             that are not two integers >= 1.
     """
-    given = [
-        name
-        for name, value in (
-            ("target_kg", target_kg),
-            ("ranks", ranks),
-            ("target_bpfv", target_bpfv),
-        )
-        if value is not None
-    ]
-    if len(given) > 1:
-        raise ValueError(f"give one of target_kg, ranks and target_bpfv, not {' and '.join(given)}")
+    refuse_two_modes(target_kg, ranks, target_bpfv)
     if ranks is not None:
         return ChunkMode(ranks=_checked_ranks(ranks))
     if target_bpfv is not None:
