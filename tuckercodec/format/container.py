@@ -49,8 +49,14 @@ HEAD_SIZE = PREAMBLE_END + CRC.size  # 32: where the header starts
 
 #: Bits 0-15 of the preamble flags are critical: a decoder rejects any it does not know.
 CRITICAL_FLAGS_MASK = 0x0000FFFF
-#: Critical flags this decoder knows: bit 0, a segmented file (format 1.1, §6.7).
-KNOWN_CRITICAL_FLAGS = SEGMENTED
+#: Critical flag bit 1 (format 1.2): the file uses a coding tool of 1.2 (the connectivity codec
+#: ``faces-traverse`` or a qmat predictor above 1), which a decoder of 1.0 or 1.1 cannot undo.
+CODING_TOOLS = 0x0002
+#: The minor version of a file that sets :data:`CODING_TOOLS`.
+CODING_TOOLS_MINOR = 2
+#: Critical flags this decoder knows: bit 0, a segmented file (format 1.1, §6.7), and bit 1,
+#: the coding tools of format 1.2.
+KNOWN_CRITICAL_FLAGS = SEGMENTED | CODING_TOOLS
 
 
 @dataclass(frozen=True)
