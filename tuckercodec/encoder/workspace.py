@@ -26,6 +26,7 @@ from ..format.reconstruction import reconstruct_frames, reconstruction_basis
 from ..hosvd import project
 from ..sequence import MeshSequence
 from ..topology import mesh_parents
+from . import rdo
 
 #: The largest |integer| a section may stream: after zigzag it must fit streams.MAX_PLANES bytes.
 LARGEST_STREAMED = 2 ** (8 * streams.MAX_PLANES - 1) - 1
@@ -63,6 +64,9 @@ class Workspace:
         self.centroid_floor_step, self.centroid_floor_error2 = self._centroid_floor()
         self._u1 = np.zeros((self.vertex_count, 0))
         self._core = np.zeros((0, 3, 0))
+        # how factors are rounded (rdo.py); the prediction trees it needs are made on first use
+        self.rdo = rdo.DEFAULT
+        self._u1_levels: rdo.Levels | None = None
 
     def truncation_error2(self, i: int, k: int) -> float:
         return float(self.analysis.error_table()[i, k])
@@ -94,11 +98,26 @@ class Workspace:
             i,
             k,
             step,
-            qmat.quantize(u1, column_steps(root, row_norms)),
-            qmat.quantize(u3, column_steps(root, column_norms)),
-            qmat.quantize(core.reshape(-1, 1), np.array([root])),
+            self._rounded(u1, column_steps(root, row_norms), "U1"),
+            self._rounded(u3, column_steps(root, column_norms), "U3"),
+            self._rounded(core.reshape(-1, 1), np.array([root]), "CORE"),
             centroids,
         )
+
+    def _rounded(self, values: np.ndarray, steps: np.ndarray, section: str) -> QuantizedMatrix:
+        """qmat.quantize, or with :attr:`rdo` the rate-distortion choice of :mod:`.rdo`,
+        under the prediction ``section`` will be stored with (§6.6)."""
+        if self.rdo.lam is None:
+            return qmat.quantize(values, steps)
+        if section == "U1":
+            if self._u1_levels is None:
+                self._u1_levels = rdo.Levels(self.parents)
+            levels = self._u1_levels
+        elif section == "U3":
+            levels = rdo.Levels.chain(values.shape[0])
+        else:
+            levels = rdo.Levels.flat(values.shape[0])
+        return rdo.quantize(values, steps, levels, self.rdo)
 
     def _quantized_centroids(self, step: float) -> QuantizedMatrix:
         """The centroids at ``step``, or at the smallest step whose integers fit the format

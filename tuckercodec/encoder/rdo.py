@@ -1,0 +1,225 @@
+"""Rate-distortion optimized quantization: each factor entry rounded to the cheaper neighbour.
+
+Plain quantization rounds ``x / step`` to the nearest integer. Either neighbour of ``x / step``
+(its floor or its ceiling) is a valid integer for the file; the nearer one has the smaller error,
+but the other may be much cheaper to code: its residual after prediction (§6.2: the mesh parent's
+integer for U1, the previous frame's for U3, zero for the core) may be smaller. :func:`quantize`
+chooses, entry by entry, the neighbour that minimises
+
+    J = (x / step - q) ** 2 + lam * bits(q - prediction)
+
+(the error in units of step**2, the rate in bits). ``bits`` is a per-column model: minus log2 of
+the frequency of each residual in the nearest rounding's residuals, then in the previous pass's.
+With no prediction the rule is a dead zone whose width follows the column's statistics: a value
+just over 0.5 steps goes to 0 when a 1 there costs enough bits more than a 0.
+
+Because parents (or the previous frame) are final before their children are chosen, rows are
+chosen a tree level at a time, as the decoder restores them (:func:`tuckercodec.format
+.prediction.accumulate`): each level is one vectorised choice over all its rows and columns.
+
+The choice moves only between the two integers either side of ``x / step``, so each entry's
+error is below one step; the extra error is paid for by the encoder's search, which measures the
+decoded error after quantizing and lowers D until the target holds (the closed loop of
+:func:`tuckercodec.encoder.search.meet` is unchanged). ``lam`` near 2 ln 2 / 12 ~ 0.116 is the
+slope of the high-rate rate-distortion curve D(R) = step**2 / 12, where trading error for bits at
+this price is break-even; the measurements in ``tools/bench_entropy.py --rdo`` chose
+:data:`DEFAULT_LAMBDA`.
+
+Nothing here changes the format: the file stores the same kind of integers, chosen differently.
+The result is deterministic (pure numpy, ties to the nearest integer).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..format import qmat
+from ..format.qmat import QuantizedMatrix
+
+#: Rate weight (step**2 per bit) used by the encoder; ``None`` in :class:`Settings` turns RDO off.
+DEFAULT_LAMBDA = 0.05
+#: Passes of choose-then-remodel (a second pass, which sees the statistics RDO itself makes,
+#: gained nothing measurable and costs as much again).
+DEFAULT_PASSES = 1
+#: Residuals coded by their own table entry; larger ones share a log-scale escape cost.
+TABLE_SIZE = 512
+
+
+@dataclass(frozen=True)
+class Settings:
+    """How the encoder quantizes: ``lam`` None is plain nearest rounding (qmat.quantize)."""
+
+    lam: float | None = DEFAULT_LAMBDA
+    passes: int = DEFAULT_PASSES
+    #: A fixed dead zone instead of the rate model: the residual from the prediction,
+    #: r = x / step - prediction, becomes sign(r) * floor(|r| + 1 - dead_zone) (0.5: nearest).
+    dead_zone: float | None = None
+
+
+#: The encoder's default (read when a Workspace is made, so a benchmark can patch it).
+DEFAULT = Settings()
+#: Nearest rounding, as before RDO.
+NEAREST = Settings(lam=None)
+
+
+class Levels:
+    """The rows of a prediction tree grouped by depth: rows at one depth depend only on rows
+    above them, so each group is chosen at once. ``parents`` as in :mod:`.format.prediction`
+    (``parents[r] < 0``: a root, predicted by 0)."""
+
+    def __init__(self, parents: np.ndarray) -> None:
+        self.parents = np.asarray(parents, dtype=np.int64)
+        depth = _depths(self.parents)
+        order = np.argsort(depth, kind="stable")
+        ends = np.cumsum(np.bincount(depth, minlength=int(depth.max(initial=0)) + 1))
+        self.groups = [
+            order[start:end] for start, end in zip(np.r_[0, ends[:-1]], ends, strict=True)
+        ]
+
+    @classmethod
+    def chain(cls, rows: int) -> Levels:
+        """Previous-row prediction (U3, CENT): row r's parent is r - 1."""
+        return cls(np.arange(-1, rows - 1, dtype=np.int64))
+
+    @classmethod
+    def flat(cls, rows: int) -> Levels:
+        """No prediction (CORE): every row a root."""
+        return cls(np.full(rows, -1, dtype=np.int64))
+
+
+def _depths(parents: np.ndarray) -> np.ndarray:
+    """Each row's distance from its root, by pointer jumping (about log2(depth) passes)."""
+    depth = (parents >= 0).astype(np.int64)
+    ancestor = parents.copy()
+    live = np.flatnonzero(ancestor >= 0)
+    while live.size:
+        jump = ancestor[live]
+        depth[live] += depth[jump]
+        ancestor[live] = ancestor[jump]
+        live = live[ancestor[live] >= 0]
+    return depth
+
+
+def quantize(
+    values: np.ndarray, steps: np.ndarray, levels: Levels, settings: Settings = DEFAULT
+) -> QuantizedMatrix:
+    """Quantize ``values`` (rows, cols) with per-column ``steps`` (see the module docstring).
+
+    ``levels`` gives the prediction the file will use for these rows; a column for which
+    prediction would not pay (by the same proxy :func:`.format.qmat.encode_matrix` uses) is
+    modelled without it. With ``settings.lam`` None this is :func:`.format.qmat.quantize`.
+    """
+    nearest = qmat.quantize(values, steps)  # checks the steps and the integer range
+    if settings.lam is None or nearest.q.size == 0:
+        return nearest
+    scaled = values / nearest.steps.astype(np.float64)[None, :]
+    low = np.floor(scaled)
+    error_low = np.square(scaled - low)
+    error_high = np.square(low + 1.0 - scaled)
+    q = nearest.q
+    predicted = _predicted_columns(q, levels)
+    if settings.dead_zone is not None:
+        return QuantizedMatrix(
+            _dead_zone(scaled, levels, predicted, settings.dead_zone), nearest.steps
+        )
+    for _ in range(settings.passes):
+        table = _bit_table(_residuals(q, levels, predicted))
+        q = _choose(low, error_low, error_high, table, levels, predicted, settings.lam)
+    return QuantizedMatrix(q, nearest.steps)
+
+
+def _dead_zone(
+    scaled: np.ndarray, levels: Levels, predicted: np.ndarray, zone: float
+) -> np.ndarray:
+    q = np.empty(scaled.shape, dtype=np.int64)
+    for rows in levels.groups:
+        parents = levels.parents[rows]
+        prediction = np.zeros((rows.size, scaled.shape[1]), dtype=np.int64)
+        has = np.flatnonzero(parents >= 0)
+        if has.size:
+            prediction[has] = q[parents[has]] * predicted
+        residual = scaled[rows] - prediction
+        magnitude = np.floor(np.abs(residual) + (1.0 - zone))
+        q[rows] = prediction + (np.copysign(magnitude, residual)).astype(np.int64)
+    return q
+
+
+def _residuals(q: np.ndarray, levels: Levels, predicted: np.ndarray) -> np.ndarray:
+    out = q.copy()
+    has = np.flatnonzero(levels.parents >= 0)
+    out[has] -= q[levels.parents[has]] * predicted  # a column not predicted subtracts 0
+    return out
+
+
+def _proxy_cost(columns: np.ndarray) -> np.ndarray:
+    # the rule of qmat.encode_matrix: mean log2(1 + 2|x|) per column
+    return np.asarray(np.log2(1.0 + 2.0 * np.abs(columns)).mean(axis=0))
+
+
+def _predicted_columns(q: np.ndarray, levels: Levels) -> np.ndarray:
+    """Columns whose nearest rounding codes cheaper as residuals than as values."""
+    if not (levels.parents >= 0).any():
+        return np.zeros(q.shape[1], dtype=bool)
+    everything = np.ones(q.shape[1], dtype=bool)
+    return np.asarray(_proxy_cost(_residuals(q, levels, everything)) < _proxy_cost(q))
+
+
+def _bit_table(residual: np.ndarray) -> np.ndarray:
+    """(cols, TABLE_SIZE + 1) bits of each zigzag residual per column; the last entry is the
+    escape's base cost, to which larger residuals add 2 log2 of their size over the table's."""
+    cols = residual.shape[1]
+    zig = np.minimum(_zigzag(residual), TABLE_SIZE)
+    zig += np.arange(cols) * (TABLE_SIZE + 1)  # one histogram per column, side by side
+    counts = np.bincount(zig.reshape(-1), minlength=cols * (TABLE_SIZE + 1)).astype(np.float64)
+    counts = counts.reshape(cols, TABLE_SIZE + 1)
+    # Laplace-style smoothing keeps an unseen residual finite but dear
+    counts += 0.05
+    bits: np.ndarray = np.log2(counts.sum(axis=1, keepdims=True)) - np.log2(counts)
+    return bits
+
+
+def _zigzag(values: np.ndarray) -> np.ndarray:
+    out: np.ndarray = (values << 1) ^ (values >> 63)  # as streams.zigzag, kept signed
+    return out
+
+
+def _bits(residual: np.ndarray, table: np.ndarray, columns: np.ndarray) -> np.ndarray:
+    zig = _zigzag(residual)
+    clipped = np.minimum(zig, TABLE_SIZE)
+    bits: np.ndarray = table[columns, clipped]
+    over = zig > TABLE_SIZE
+    if over.any():
+        bits = bits + np.where(over, 2.0 * np.log2(np.maximum(zig, 1) / TABLE_SIZE), 0.0)
+    return bits
+
+
+def _choose(
+    low: np.ndarray,
+    error_low: np.ndarray,
+    error_high: np.ndarray,
+    table: np.ndarray,
+    levels: Levels,
+    predicted: np.ndarray,
+    lam: float,
+) -> np.ndarray:
+    q = np.empty(low.shape, dtype=np.int64)
+    columns = np.arange(low.shape[1])[None, :]
+    for rows in levels.groups:
+        parents = levels.parents[rows]
+        base = low[rows].astype(np.int64)
+        residual = base.copy()
+        has = np.flatnonzero(parents >= 0)
+        if has.size:
+            residual[has] -= q[parents[has]] * predicted
+        below, above = error_low[rows], error_high[rows]
+        cost_low = below + lam * _bits(residual, table, columns)
+        cost_high = above + lam * _bits(residual + 1, table, columns)
+        # ties go to the nearer integer (the plain rounding), so lam -> 0 is nearest rounding
+        high = (cost_high < cost_low) | ((cost_high == cost_low) & (above < below))
+        q[rows] = base + high
+    return q
+
+
+__all__ = ["DEFAULT", "DEFAULT_LAMBDA", "NEAREST", "Levels", "Settings", "quantize"]
