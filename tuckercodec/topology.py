@@ -17,7 +17,8 @@ module is the one home of its rules:
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
+from functools import cached_property
+from typing import Any, Literal
 
 import numpy as np
 
@@ -129,6 +130,160 @@ def mesh_parents(faces: np.ndarray, vertex_count: int) -> np.ndarray:
     Of the simple rules tried on the shared sequences this was the most robust: "the largest
     earlier neighbour" was 7 % smaller on chicken but 12 % larger on the cloth, whose vertex
     order leaves a fifth of the vertices without an earlier neighbour.
+    """
+    return _mesh_forest(faces, vertex_count).parents(vertex_count)
+
+
+#: Predictor 2's phases: a vertex's rank among the vertices of its depth, in the order of the
+#: walk, modulo this; a vertex is also predicted from its neighbours of the same depth and a
+#: lower phase (``spec/FORMAT.md`` §6.2).
+MEAN_PHASES = 2
+#: The deepest forest predictor 2 may be used on (levels, the roots' included): restoring it
+#: costs a step per phase and level, so a strip of faces would be slow.
+MAX_MEAN_LEVELS = 4096
+
+
+@dataclass(frozen=True)
+class MeanSteps:
+    """The order and sources of predictor 2 (``spec/FORMAT.md`` §6.2), for one mesh.
+
+    ``rows`` lists every vertex of depth >= 1 by (depth, phase, walk order); step s restores
+    ``rows[step_ends[s]:step_ends[s + 1]]`` (depth 1 + s // MEAN_PHASES, phase s % MEAN_PHASES;
+    a step may be empty). Row j's *sources* (its parent among them, so at least one) are
+    ``sources[source_ends[j]:source_ends[j + 1]]``, each with its *anchor* (the source's parent
+    for a source one level up that has one, else the source itself) in ``anchors``.
+    """
+
+    rows: np.ndarray  # (R,) int64
+    step_ends: np.ndarray  # (steps + 1,) int64
+    sources: np.ndarray  # (E,) int64
+    anchors: np.ndarray  # (E,) int64
+    source_ends: np.ndarray  # (R + 1,) int64
+    levels: int  # depths, 0 included
+
+    @property
+    def counts(self) -> np.ndarray:
+        """Each row's number of sources (at least 1)."""
+        return np.diff(self.source_ends)
+
+    @cached_property
+    def matrix(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(indptr, indices, data) of the float64 CSR matrix whose row j sums 4 q[w] - q[anchor]
+        over row j's sources: 4 at each source, -1 at each anchor, repeats summed."""
+        import scipy.sparse as sparse
+
+        counts = self.counts
+        owner = np.repeat(np.arange(self.rows.size), counts)
+        weights = np.concatenate([np.full(counts.sum(), 4.0), np.full(counts.sum(), -1.0)])
+        matrix = sparse.csr_matrix(
+            (
+                weights,
+                (np.concatenate([owner, owner]), np.concatenate([self.sources, self.anchors])),
+            ),
+            shape=(
+                self.rows.size,
+                int(max(self.sources.max(initial=-1), self.anchors.max(initial=-1))) + 1,
+            ),
+        )
+        matrix.sum_duplicates()
+        return (
+            matrix.indptr.astype(np.int64),
+            matrix.indices.astype(np.int64),
+            matrix.data.astype(np.float64),
+        )
+
+
+class MeshPrediction:
+    """What U1's mesh predictors need (``spec/FORMAT.md`` §6.2), built once per mesh: the
+    ``parents`` of predictor 1 at once, and the :class:`MeanSteps` of predictor 2 when first
+    asked for (they cost about as much again)."""
+
+    def __init__(self, faces: np.ndarray, vertex_count: int) -> None:
+        self._forest = _mesh_forest(faces, vertex_count)
+        self.vertex_count = vertex_count
+        self.parents = self._forest.parents(vertex_count)
+        self._mean: MeanSteps | None = None
+
+    @property
+    def levels(self) -> int:
+        """The forest's number of depths, 0 included (1 for a mesh without edges)."""
+        return self.mean_steps.levels
+
+    @property
+    def mean_steps(self) -> MeanSteps:
+        if self._mean is None:
+            self._mean = self._forest.mean_steps()
+        return self._mean
+
+
+def mesh_prediction(faces: np.ndarray, vertex_count: int) -> MeshPrediction:
+    """The :class:`MeshPrediction` of a face table (one breadth-first walk, as
+    :func:`mesh_parents`)."""
+    return MeshPrediction(faces, vertex_count)
+
+
+@dataclass(frozen=True)
+class _Forest:
+    """The breadth-first walk of :func:`mesh_parents` in the numbering of the vertices on an
+    edge (``used[j]`` is vertex j's index in the mesh)."""
+
+    used: np.ndarray  # (n,) int64, ascending
+    adjacency: Any  # scipy.sparse.csr_matrix (n, n), one entry per edge, ascending; None if n = 0
+    walk: np.ndarray  # (n,) the vertices in the order the walk reaches them
+    found: np.ndarray  # (n,) int64: each vertex's parent, or -1
+
+    def parents(self, vertex_count: int) -> np.ndarray:
+        parents = np.full(vertex_count, NO_PARENT, dtype=np.int64)
+        has_parent = self.found >= 0
+        parents[self.used[has_parent]] = self.used[self.found[has_parent]]
+        return parents
+
+    def mean_steps(self) -> MeanSteps:
+        count = self.used.size
+        walk, found = self.walk, self.found
+        position = np.empty(count, dtype=np.int64)
+        position[walk] = np.arange(count, dtype=np.int64)
+        # the walk is first in, first out: a vertex is queued when its parent leaves the queue,
+        # so the parents' positions never decrease along the walk, and the vertices of depth
+        # d + 1 are the run whose parents lie among those of depth d
+        parent_position = np.where(found[walk] >= 0, position[np.maximum(found[walk], 0)], -1)
+        ends = [0, int(np.searchsorted(parent_position, 0))]  # the roots come first
+        while ends[-1] < count:
+            ends.append(int(np.searchsorted(parent_position, ends[-1])))
+        level_ends = np.array(ends, dtype=np.int64)
+        levels = level_ends.size - 1
+        depth_in_walk = np.repeat(np.arange(levels, dtype=np.int64), np.diff(level_ends))
+        rank = np.arange(count, dtype=np.int64) - level_ends[depth_in_walk]
+        step_in_walk = depth_in_walk * MEAN_PHASES + rank % MEAN_PHASES
+        step = np.empty(count, dtype=np.int64)
+        step[walk] = step_in_walk
+        first_step = MEAN_PHASES  # depth 0 (the roots) is not predicted
+        steps = max(levels - 1, 0) * MEAN_PHASES
+        order = walk[level_ends[1] :][np.argsort(step_in_walk[level_ends[1] :], kind="stable")]
+        step_ends = np.zeros(steps + 1, dtype=np.int64)
+        np.cumsum(np.bincount(step[order] - first_step, minlength=steps)[:steps], out=step_ends[1:])
+        lists = self.adjacency[order] if order.size else None
+        if lists is None:
+            empty = np.zeros(0, dtype=np.int64)
+            return MeanSteps(empty, step_ends, empty, empty, np.zeros(1, np.int64), levels)
+        owner = np.repeat(order, np.diff(lists.indptr))
+        neighbour = lists.indices.astype(np.int64)
+        mine, theirs = step[owner], step[neighbour]
+        depth_of = mine // MEAN_PHASES
+        upper = theirs // MEAN_PHASES == depth_of - 1
+        keep = upper | ((theirs // MEAN_PHASES == depth_of) & (theirs < mine))
+        anchor = np.where(upper & (found[neighbour] >= 0), found[neighbour], neighbour)[keep]
+        source_ends = np.zeros(order.size + 1, dtype=np.int64)
+        row_of = np.repeat(np.arange(order.size), np.diff(lists.indptr))
+        np.cumsum(np.bincount(row_of[keep], minlength=order.size), out=source_ends[1:])
+        used = self.used
+        return MeanSteps(
+            used[order], step_ends, used[neighbour[keep]], used[anchor], source_ends, levels
+        )
+
+
+def _mesh_forest(faces: np.ndarray, vertex_count: int) -> _Forest:
+    """The breadth-first forest of §6.2 over the vertices on an edge.
 
     The queue walk runs in scipy's compiled breadth-first search, which pops a first-in-first-out
     queue and scans each vertex's row of a sorted CSR matrix in order: the neighbours in
@@ -148,12 +303,12 @@ def mesh_parents(faces: np.ndarray, vertex_count: int) -> np.ndarray:
     import scipy.sparse as sparse
     from scipy.sparse.csgraph import breadth_first_order, connected_components
 
-    parents = np.full(vertex_count, NO_PARENT, dtype=np.int64)
     a, b = face_edges(faces)
     proper = a != b  # a degenerate face may repeat a vertex
     a, b = a[proper], b[proper]
     if a.size == 0:
-        return parents
+        empty = np.zeros(0, dtype=np.int64)
+        return _Forest(empty, None, empty, empty)  # no edges: no adjacency
     present = np.zeros(vertex_count, dtype=bool)
     present[a] = True
     present[b] = True
@@ -182,8 +337,8 @@ def mesh_parents(faces: np.ndarray, vertex_count: int) -> np.ndarray:
     forest = sparse.csr_matrix(
         (np.ones(indices.size, dtype=np.int8), indices, indptr), shape=(count + 1, count + 1)
     )
-    _, predecessors = breadth_first_order(forest, count, directed=True, return_predecessors=True)
+    walk, predecessors = breadth_first_order(forest, count, directed=True, return_predecessors=True)
     found = predecessors[:count].astype(np.int64)
-    has_parent = (found >= 0) & (found != count)  # the roots hang from the virtual root
-    parents[used[has_parent]] = used[found[has_parent]]
-    return parents
+    found[found == count] = NO_PARENT  # the roots hang from the virtual root
+    found[found < 0] = NO_PARENT
+    return _Forest(used.astype(np.int64), adjacency, walk[1:].astype(np.int64), found)
