@@ -20,6 +20,8 @@ package sees at once what the tools rely on.
 * glTF: :func:`write_decomposition_gltf` (a compressed file's decomposition as a morph
   animation, with the KG error a viewer shows) and :func:`sample_gltf` (a glTF's mesh
   evaluated at given times, as a viewer does), for the glTF benchmark.
+* The encoder's quantizer choice, :mod:`~tuckercodec.encoder.rdo`, which
+  ``tools/bench_entropy.py --rdo`` switches off to measure what it gains.
 * Sample data: :func:`sample_path`, and the synthetic :func:`wave_sheet` with its
   :func:`sheet_triangles`.
 """
@@ -28,6 +30,7 @@ from __future__ import annotations
 
 from .analysis import Curve
 from .atomic import refuse_existing, write_atomic
+from .encoder import rdo
 from .format import faces, qmat, sections, streams
 from .format.container import (
     CRC,
@@ -64,6 +67,7 @@ __all__ = [
     "plot_rd_curve",
     "pyplot",
     "qmat",
+    "rdo",
     "reconstruct",
     "refuse_existing",
     "sample_gltf",
