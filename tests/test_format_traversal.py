@@ -1,0 +1,256 @@
+"""§6.8 Codec faces-traverse: every face table of §6.4 round-trips (faces, corners, orientation
+and vertex order kept; face order the walk's), and every broken stream is R39-traversal."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tuckercodec import FormatError, load_sequence
+from tuckercodec.format import traversal
+from tuckercodec.format.faces import decode_faces, encode_face_section, encode_faces
+from tuckercodec.format.sections import FACES_TRAVERSE
+from tuckercodec.topology import mesh_edges, mesh_parents
+
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+
+
+def grid(n: int, quads: bool = False) -> np.ndarray:
+    index = np.arange(n * n).reshape(n, n)
+    a, b, c, d = index[:-1, :-1], index[1:, :-1], index[1:, 1:], index[:-1, 1:]
+    if quads:
+        return np.stack([a, b, c, d], -1).reshape(-1, 4)
+    return np.concatenate([np.stack([a, b, c], -1), np.stack([a, c, d], -1)]).reshape(-1, 3)
+
+
+def scrambled(faces: np.ndarray, vertex_count: int, seed: int) -> np.ndarray:
+    """The same mesh with its vertices renumbered, its faces shuffled and each face's corners
+    rotated (orientation kept): what an arbitrary exporter writes."""
+    rng = np.random.default_rng(seed)
+    relabel = np.append(rng.permutation(vertex_count), -1)
+    out = relabel[faces][rng.permutation(len(faces))]
+    for row in out:
+        n = int((row >= 0).sum())
+        row[:n] = np.roll(row[:n], int(rng.integers(n)))
+    return out
+
+
+def pad(rows: list[list[int]]) -> np.ndarray:
+    width = max(len(row) for row in rows)
+    return np.array([row + [-1] * (width - len(row)) for row in rows], dtype=np.int64)
+
+
+def sorted_rows(faces: np.ndarray) -> list[tuple[int, ...]]:
+    return sorted(tuple(int(v) for v in row) for row in faces)
+
+
+def round_trip(faces: np.ndarray, vertex_count: int) -> np.ndarray:
+    params, payload, walked = traversal.encode_traversal(faces, vertex_count)
+    decoded = traversal.decode_traversal(payload, params, vertex_count, "section FACE")
+    assert np.array_equal(decoded, walked)  # the encoder knows the order the decoder gives
+    assert decoded.shape == np.asarray(faces).shape
+    assert sorted_rows(decoded) == sorted_rows(np.asarray(faces))  # rows exactly, corners kept
+    return decoded
+
+
+TETRAHEDRON = [[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]]
+
+
+def torus(n: int = 6, m: int = 5) -> np.ndarray:
+    """A closed surface with a handle (genus 1)."""
+    faces = []
+    for i in range(n):
+        for j in range(m):
+            a, b = i * m + j, ((i + 1) % n) * m + j
+            c, d = ((i + 1) % n) * m + (j + 1) % m, i * m + (j + 1) % m
+            faces += [[a, b, c], [a, c, d]]
+    return np.array(faces)
+
+
+@pytest.mark.parametrize(
+    ("faces", "vertex_count"),
+    [
+        (grid(6), 36),
+        (scrambled(grid(9), 81, 1), 81),
+        (scrambled(grid(7, quads=True), 49, 2), 49),
+        (np.array(TETRAHEDRON), 4),  # closed, no boundary
+        (scrambled(torus(), 30, 3), 30),  # a handle
+        (pad([[0, 1, 2], [2, 1, 3, 4], [4, 3, 5, 6, 7], [9, 8, 10]]), 12),  # polygons, isolated
+        (np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4], [1, 0, 5]]), 6),  # one edge, four faces
+        (np.array([[0, 1, 2], [0, 1, 3], [3, 1, 4]]), 5),  # a face of the other orientation
+        (np.array([[0, 1, 2], [0, 3, 4], [0, 5, 6]]), 7),  # faces meeting at one vertex only
+        (np.array([[0, 1, 1], [1, 2, 2], [0, 0, 0], [2, 1, 0]]), 3),  # repeated vertices
+        (np.array([[0, 1, 2], [0, 1, 2], [2, 1, 0]]), 3),  # the same face twice
+        (np.concatenate([grid(4), grid(4) + 16, grid(3) + 40]), 49),  # components
+        (np.array([[4, 2, 0]]), 5),
+    ],
+    ids=lambda value: None if isinstance(value, int) else f"{len(value)}faces",
+)
+def test_every_face_table_round_trips(faces, vertex_count):
+    round_trip(np.asarray(faces, dtype=np.int64), vertex_count)
+
+
+def test_random_triangle_soups_round_trip():
+    """Faces with no structure at all: every tip a NEW or FAR, every gate closed or empty."""
+    rng = np.random.default_rng(7)
+    for _trial in range(30):
+        k = int(rng.integers(3, 12))
+        faces = rng.integers(0, k, size=(int(rng.integers(1, 25)), 3))
+        round_trip(faces, k)
+
+
+def test_no_faces():
+    empty = np.zeros((0, 3), dtype=np.int64)
+    params, payload, walked = traversal.encode_traversal(empty, 5)
+    assert walked.shape == (0, 3)
+    assert traversal.decode_traversal(payload, params, 5, "FACE").shape == (0, 3)
+
+
+def test_the_mesh_parents_do_not_depend_on_the_face_order():
+    """U1's prediction (§6.2) is made from the decoded faces: the walk's order must give the
+    same forest as the input's."""
+    faces = scrambled(grid(12), 144, 4)
+    decoded = round_trip(faces, 144)
+    assert np.array_equal(mesh_parents(decoded, 144), mesh_parents(faces, 144))
+    assert np.array_equal(mesh_edges(decoded, 144), mesh_edges(faces, 144))
+
+
+def test_a_mesh_whose_faces_and_vertices_are_scrambled_costs_far_less_than_faces_delta():
+    faces = scrambled(grid(40), 1600, 5)
+    codec, _, payload, decoded = encode_face_section(faces, 1600)
+    delta_payload = encode_faces(faces)[1]
+    assert codec == FACES_TRAVERSE
+    assert len(payload) < 0.6 * len(delta_payload)
+    assert sorted_rows(decoded) == sorted_rows(faces)
+
+
+def test_the_encoder_keeps_faces_delta_where_it_is_smaller():
+    faces = grid(6)  # rows in order: the deltas are tiny
+    codec, params, payload, decoded = encode_face_section(faces, 36)
+    assert len(payload) <= len(traversal.encode_traversal(faces, 36)[1])
+    if codec != FACES_TRAVERSE:
+        assert np.array_equal(decoded, faces)
+        assert np.array_equal(decode_faces(payload, params, 36, "FACE"), faces)
+
+
+# ---------------------------------------------------------------------------- broken streams
+
+
+def coded(
+    ops: list[int],
+    vertices: list[int],
+    references: list[int] = (),  # type: ignore[assignment]
+    degrees: list[int] = (),  # type: ignore[assignment]
+    count: int = 1,
+    width: int = 3,
+    corner_order: int = 0,
+) -> tuple[dict, bytes]:
+    return traversal._pack(
+        [list(ops), list(degrees), list(vertices), list(references)], count, width, corner_order, 3
+    )
+
+
+def decode(params: dict, payload: bytes, vertex_count: int = 5) -> np.ndarray:
+    return traversal.decode_traversal(payload, params, vertex_count, "section FACE")
+
+
+def test_a_hand_written_stream_decodes_as_the_spec_says():
+    """A seed (0, 1, 2); across the gate 2 -> 0 (the last pushed) the face walked (0, 2, 3), its
+    first tip NEW, stored with corner 0 of the walk at position 2: (2, 3, 0). The walk ends
+    there, at M faces: the gates left are never read."""
+    ops = [0, 0, 0, 1 + 8 * 2 + 0]
+    params, payload = coded(ops, [0, 0, 0, 0], count=2)
+    assert decode(params, payload).tolist() == [[0, 1, 2], [2, 3, 0]]
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"corner_order": 2}, "corner_order"),
+        ({"ops": [0, 0, 0, 9 * 8 + 1], "count": 2}, "gate operation"),
+        ({"ops": [0, 1, 0]}, "names no vertex"),  # PREV on the seed's second corner
+        ({"ops": [1, 0, 0]}, "names no vertex"),  # PREV on a first corner
+        ({"ops": [0, 0, 3], "references": [-1]}, "not one seen"),  # FAR to vertex 0 is fine...
+        ({"ops": [0, 0, 0], "vertices": [0, 0, -1]}, "outside"),  # ...a NEW one placed is not
+        ({"ops": [0, 0, 0], "vertices": [0, 0, 9]}, "outside"),
+        ({"ops": [0, 0, 0, 0], "vertices": [0, 0, 0, 0]}, "values left"),
+        ({"ops": [0, 0], "vertices": [0, 0]}, "ends early"),
+        (
+            {
+                "ops": [0, 0, 0, 1 + 8 * 3],
+                "vertices": [0, 0, 0, 0],
+                "degrees": [0, 0],
+                "count": 2,
+                "width": 4,
+            },
+            "rotation",
+        ),
+        ({"degrees": [1]}, "corners in a table of width 3"),
+    ],
+)
+def test_every_broken_walk_is_r39(change, message):
+    arguments = {"ops": [0, 0, 0], "vertices": [0, 0, 0]}
+    if change.get("references") == [-1]:
+        arguments["vertices"] = [0, 0]  # the third corner is FAR: vertex 1 + (-1) = 0
+        change = {**change, "references": [5]}  # 1 + 5 = 6: not a vertex seen
+    arguments.update(change)
+    params, payload = coded(**arguments)
+    with pytest.raises(FormatError, match=message) as raised:
+        decode(params, payload)
+    assert raised.value.rule == "R39-traversal"
+
+
+@pytest.mark.parametrize(
+    "streams",
+    [None, [], [[1, 1, 1]] * 3, [[1, 1, 1]] * 3 + [[1, 1]], [[True, 1, 1]] * 4, [[99, 1, 9]] * 4],
+)
+def test_a_broken_stream_table_is_r39(streams):
+    params, payload = coded([0, 0, 0], [0, 0, 0])
+    params["streams"] = streams
+    with pytest.raises(FormatError) as raised:
+        decode(params, payload)
+    assert raised.value.rule == "R39-traversal"
+
+
+def test_bytes_after_the_streams_are_r39():
+    params, payload = coded([0, 0, 0], [0, 0, 0])
+    with pytest.raises(FormatError, match="bytes of a") as raised:
+        decode(params, payload + b"\0")
+    assert raised.value.rule == "R39-traversal"
+
+
+def test_random_damage_to_a_real_walk_is_always_a_format_error():
+    faces = scrambled(grid(10, quads=True), 100, 6)
+    params, payload, _ = traversal.encode_traversal(faces, 100)
+    rng = np.random.default_rng(8)
+    for _ in range(150):
+        values, corner_order = traversal.read_streams(payload, params, *faces.shape, "FACE")
+        stream = int(rng.integers(4))
+        if not values[stream]:
+            continue
+        position = int(rng.integers(len(values[stream])))
+        values[stream][position] += int(rng.choice([-2, -1, 1, 2, 7]))
+        broken, data = traversal._pack(values, *faces.shape, corner_order, 1)
+        rule = None
+        try:
+            decoded = traversal.decode_traversal(data, broken, 100, "FACE")
+        except FormatError as error:
+            rule = error.rule
+        if rule is None:  # a change the walk can absorb still gives a valid table
+            assert decoded.shape == faces.shape
+            assert ((decoded >= -1) & (decoded < 100)).all()
+        else:
+            assert rule == "R39-traversal"
+
+
+@pytest.mark.skipif(not (DATA / "chicken.npz").exists(), reason=f"{DATA} is absent")
+@pytest.mark.parametrize("name", ["chicken.npz", "cloth-vellum.npz", "horse-gallop"])
+def test_the_shared_meshes_round_trip_and_shrink(name):
+    sequence = load_sequence(DATA / name)
+    k = sequence.vertex_count
+    _params, payload, _ = traversal.encode_traversal(sequence.faces, k)
+    round_trip(sequence.faces, k)
+    assert len(payload) < 0.5 * len(encode_faces(sequence.faces)[1])
+    assert len(payload) * 8 / k < 21  # bits per vertex, vertex order kept (today 10.5-20)
