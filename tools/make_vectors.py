@@ -187,7 +187,7 @@ def invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
         "R03-preamble-truncated": (good[:20], "TruncatedFileError"),
         "R04-preamble-crc": (good[:10] + bytes([good[10] ^ 0x04]) + good[11:], "ChecksumError"),
         "R05-major-version": (_set_preamble(good, 8, "<H", 2), "UnsupportedVersionError"),
-        "R06-critical-flag": (_set_preamble(good, 12, "<I", 0x0002), "UnsupportedVersionError"),
+        "R06-critical-flag": (_set_preamble(good, 12, "<I", 0x0004), "UnsupportedVersionError"),
         "R07-header-limit": (_set_preamble(good, 16, "<I", (16 << 20) + 1), "LimitError"),
         "R08-total-length": (
             _set_preamble(good, 20, "<Q", HEAD_SIZE + header_length),

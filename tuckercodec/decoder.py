@@ -104,8 +104,12 @@ class Decoder:
             self.info = read_header(self._container, limits)
             self._index = self._segment_index()
             self._starts = np.array([segment.start for segment in self._index], dtype=np.int64)
-            self.faces = faces.decode_faces(
-                self._payload("FACE"), self._params("FACE"), self.info.vertices, "section FACE"
+            self.faces = faces.decode_face_section(
+                self._face_codec(),
+                self._payload("FACE"),
+                self._params("FACE"),
+                self.info.vertices,
+                "section FACE",
             )
             if not self.segmented:  # §5 steps 16-17 in order: U1, U3, CORE, CENT, then NAME
                 self.segment_factors(0)
@@ -151,6 +155,11 @@ class Decoder:
         section = self._container.section(section_id)
         assert section is not None  # read_header found every required section
         return self._container.payload(self._data, section)
+
+    def _face_codec(self) -> str:
+        entry = self._container.section("FACE")
+        assert entry is not None  # required: the header check has found it
+        return entry.codec
 
     def _params(self, section_id: str) -> dict[str, object]:
         section = self._container.section(section_id)

@@ -13,6 +13,7 @@ from ..format.container import pack_container
 from ..format.header import KG_DEFINITION_ID
 from ..format.qmat import QuantizedMatrix
 from ..format.sections import KNOWN_SECTIONS
+from ..format.sections import entry as section_entry
 from ..format.segments import (
     SEGMENT_WRITE_ORDER,
     SEGMENTED,
@@ -29,7 +30,7 @@ def segment_sections(
     """The file's sections: FACE, the shared U1, each segment's CENT, U3, CORE (and U1),
     then NAME."""
     out: list[tuple[dict[str, Any], bytes]] = [
-        (_entry("FACE", work.face_section[0]), work.face_section[1])
+        (section_entry("FACE", work.face_section[0], work.face_codec), work.face_section[1])
     ]
     if work.fixed_basis is not None:  # a given basis: its section, byte for byte
         out.append((_entry("U1", work.fixed_basis.params), work.fixed_basis.payload))

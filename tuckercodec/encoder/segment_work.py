@@ -103,7 +103,11 @@ class SegmentedEncode:
                     f"basis; this encode has {self.vertex_count} and basis {basis!r}"
                 )
         self._read_and_model()
-        self.face_section = faces.encode_faces(source.faces, level)
+        # the smaller connectivity codec; faces-traverse reorders the faces (§6.8)
+        self.face_codec, *face_section, _ = faces.encode_face_section(
+            source.faces, self.vertex_count, level
+        )
+        self.face_section: tuple[dict[str, Any], bytes] = (face_section[0], face_section[1])
         self.name_section = names.encode_names(source.frame_names, level)
         self.floor_step, self.floor_error2 = self._centroid_floor()
 

@@ -34,7 +34,13 @@ from ..errors import (
     UnsupportedVersionError,
 )
 from .limits import DEFAULT_LIMITS, Limits
-from .sections import Section, read_section_table
+from .sections import (
+    CODING_TOOLS,
+    CODING_TOOLS_MINOR,
+    Section,
+    read_section_table,
+    uses_coding_tools,
+)
 from .segments import SEGMENTED
 
 SIGNATURE = b"\x89TKC\r\n\x1a\n"
@@ -49,11 +55,6 @@ HEAD_SIZE = PREAMBLE_END + CRC.size  # 32: where the header starts
 
 #: Bits 0-15 of the preamble flags are critical: a decoder rejects any it does not know.
 CRITICAL_FLAGS_MASK = 0x0000FFFF
-#: Critical flag bit 1 (format 1.2): the file uses a coding tool of 1.2 (the connectivity codec
-#: ``faces-traverse`` or a qmat predictor above 1), which a decoder of 1.0 or 1.1 cannot undo.
-CODING_TOOLS = 0x0002
-#: The minor version of a file that sets :data:`CODING_TOOLS`.
-CODING_TOOLS_MINOR = 2
 #: Critical flags this decoder knows: bit 0, a segmented file (format 1.1, §6.7), and bit 1,
 #: the coding tools of format 1.2.
 KNOWN_CRITICAL_FLAGS = SEGMENTED | CODING_TOOLS
@@ -113,6 +114,11 @@ class Container:
         """Whether the preamble sets flag bit 0: frames in segments (§6.7)."""
         return bool(self.flags & SEGMENTED)
 
+    @property
+    def coding_tools(self) -> bool:
+        """Whether the preamble sets flag bit 1: the coding tools of format 1.2 (§6.8)."""
+        return bool(self.flags & CODING_TOOLS)
+
     def payload(self, data: bytes | memoryview | RangeReader, entry: Section) -> memoryview:
         """The bytes of a section, after checking its CRC-32 (§5 step 9); ``data`` is the whole
         file, or a reader of the file's byte ranges (:class:`.disk.FileRanges`) that reads just
@@ -142,6 +148,7 @@ def pack_container(
     *,
     flags: int = 0,
     minor: int = FORMAT_MINOR,
+    coding_tools: bool | None = None,
 ) -> bytes:
     """Assemble a file from its header map and its sections.
 
@@ -152,7 +159,15 @@ def pack_container(
             ``crc32`` are filled in from the payload.
         flags: the preamble flags (0 in format 1.0; :data:`SEGMENTED` for a segmented file).
         minor: the format's minor version (0, or 1 for a segmented file).
+        coding_tools: whether to set flag bit 1 and minor version 2 (§6.8); by default, when a
+            section needs it (:func:`.sections.uses_coding_tools`). Only files that break the
+            rules on purpose (conformance vectors) say ``False`` for such sections.
     """
+    if coding_tools is None:
+        coding_tools = uses_coding_tools([entry for entry, _ in sections])
+    if coding_tools:
+        flags |= CODING_TOOLS
+        minor = max(minor, CODING_TOOLS_MINOR)
     table = []
     offset = 0
     for entry, payload in sections:

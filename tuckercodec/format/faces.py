@@ -1,4 +1,5 @@
-"""§6.4 Codec ``faces-delta``: the connectivity, stored once for the whole sequence.
+"""§6.4 Codec ``faces-delta``: the connectivity, stored once for the whole sequence; and the
+choice between it and §6.8's ``faces-traverse`` (:mod:`.traversal`).
 
 The faces are the (M, n) index array with 0-based vertex indices and -1 padding. Each entry plus
 one (so padding is 0) is taken in row-major order and replaced by its difference from the entry
@@ -17,7 +18,36 @@ import numpy as np
 from ..errors import FormatError
 from ..topology import face_table_problem
 from . import streams
-from .sections import section_shape
+from .sections import FACES_DELTA, FACES_TRAVERSE, section_shape
+from .traversal import decode_traversal, encode_traversal
+
+
+def encode_face_section(
+    faces: np.ndarray, vertex_count: int, level: int = streams.DEFAULT_LEVEL
+) -> tuple[str, dict[str, Any], bytes, np.ndarray]:
+    """``(codec, params, payload, decoded faces)``: the smaller of faces-traverse (format 1.2,
+    the face order becomes the walk's) and faces-delta (format 1.0, faces as given). Either way
+    every face keeps its corners, their order and its orientation."""
+    table = np.asarray(faces, dtype=np.int64)
+    delta_params, delta_payload = encode_faces(table, level)
+    walk_params, walk_payload, walked = encode_traversal(table, vertex_count, level)
+    if len(walk_payload) < len(delta_payload):
+        return FACES_TRAVERSE, walk_params, walk_payload, walked
+    return FACES_DELTA, delta_params, delta_payload, table
+
+
+def decode_face_section(
+    codec: str,
+    payload: bytes | memoryview,
+    params: Mapping[str, Any],
+    vertex_count: int,
+    where: str,
+) -> np.ndarray:
+    """The faces of a FACE section of either codec (the caller has checked that the codec is
+    allowed in this file)."""
+    if codec == FACES_TRAVERSE:
+        return decode_traversal(payload, params, vertex_count, where)
+    return decode_faces(payload, params, vertex_count, where)
 
 
 def encode_faces(

@@ -174,13 +174,22 @@ def read_header(container: Container, limits: Limits) -> FileInfo:
     segments: tuple[SegmentEntry, ...] = ()
     if container.segmented:  # §6.7: the index replaces ranks and u2
         segments = read_segment_index(header, vertices, frames, limits)
-        shared = check_segmented_sections(container.sections, vertices, segments, limits)
+        shared = check_segmented_sections(
+            container.sections, vertices, segments, limits, coding_tools=container.coding_tools
+        )
         i = shared or max(segment.ranks[0] for segment in segments)
         k = max(segment.ranks[1] for segment in segments)
     else:
         i, k = _ranks(header.get("ranks"), vertices, frames)
         _check_single(header, vertices, frames, (i, k), limits)
-        check_sections(container.sections, vertices, frames, (i, k), limits)
+        check_sections(
+            container.sections,
+            vertices,
+            frames,
+            (i, k),
+            limits,
+            coding_tools=container.coding_tools,
+        )
     frame_rate = _field(
         header, "frame_rate", _is_frame_rate, "absent, nil or a positive finite float"
     )

@@ -17,10 +17,16 @@ from ..errors import FormatError, UnsupportedVersionError
 from . import streams
 from .limits import Limits, check_limit
 
-#: Codec ids (§6.3-6.5).
+#: Codec ids (§6.3-6.5, §6.8).
 QMAT = "qmat"
 FACES_DELTA = "faces-delta"
+FACES_TRAVERSE = "faces-traverse"
 MSGPACK_ZSTD = "msgpack-zstd"
+#: Preamble flag bit 1 (critical, format 1.2): the file uses a coding tool of 1.2, the codec
+#: faces-traverse (§6.8) or a qmat predictor above 1, which decoders of 1.0 and 1.1 cannot undo.
+CODING_TOOLS = 0x0002
+#: The minor version of a file that sets :data:`CODING_TOOLS`.
+CODING_TOOLS_MINOR = 2
 
 
 @dataclass(frozen=True)
@@ -47,12 +53,16 @@ class SectionKind:
     codec: str
     critical: bool
     required: bool
+    #: Codecs format 1.2 adds for the section, allowed only when the preamble sets CODING_TOOLS.
+    coding_tools_codecs: tuple[str, ...] = ()
 
 
 #: The sections of §6.6, in the order the decoder checks them (FACE first: U1's parents
 #: come from the faces).
 KNOWN_SECTIONS: dict[str, SectionKind] = {
-    "FACE": SectionKind(FACES_DELTA, critical=True, required=True),
+    "FACE": SectionKind(
+        FACES_DELTA, critical=True, required=True, coding_tools_codecs=(FACES_TRAVERSE,)
+    ),
     "U1": SectionKind(QMAT, critical=True, required=True),
     "U3": SectionKind(QMAT, critical=True, required=True),
     "CORE": SectionKind(QMAT, critical=True, required=True),
@@ -162,11 +172,25 @@ def _entry_problem(entry: object, where: str) -> tuple[str, str] | None:
     return None
 
 
-def entry(section_id: str, params: Mapping[str, Any]) -> dict[str, Any]:
-    """The section-table entry of a known section: its id, criticality, codec and parameters
-    (the container adds offset, length and CRC)."""
-    kind = KNOWN_SECTIONS[section_id]
-    return {"id": section_id, "critical": kind.critical, "codec": kind.codec, **params}
+def entry(section_id: str, params: Mapping[str, Any], codec: str | None = None) -> dict[str, Any]:
+    """The section-table entry of a known section: its id, criticality, codec (its kind's, unless
+    given) and parameters (the container adds offset, length and CRC). A segment's section
+    (``U3.2``) has the kind of its stem."""
+    kind = KNOWN_SECTIONS[section_id.split(".")[0]]
+    return {"id": section_id, "critical": kind.critical, "codec": codec or kind.codec, **params}
+
+
+def uses_coding_tools(entries: list[dict[str, Any]]) -> bool:
+    """Whether any of these section entries needs preamble flag bit 1 (format 1.2): a codec of
+    1.2, or a qmat predictor above 1."""
+    for item in entries:
+        kind = KNOWN_SECTIONS.get(str(item["id"]).split(".")[0])
+        if kind is not None and item["codec"] in kind.coding_tools_codecs:
+            return True
+        predict = item.get("predict")
+        if item["codec"] == QMAT and isinstance(predict, bytes) and any(b > 1 for b in predict):
+            return True
+    return False
 
 
 def section_shape(
@@ -209,11 +233,12 @@ def section_shape(
 
 
 def check_known_sections(
-    table: tuple[Section, ...], known: Mapping[str, SectionKind]
+    table: tuple[Section, ...], known: Mapping[str, SectionKind], *, coding_tools: bool = False
 ) -> dict[str, Section]:
     """§5 step 11: each entry of a known id has its kind's criticality (R27) and codec (R25);
     an unknown critical id is refused (R24) and an unknown ancillary one skipped. Returns the
-    known sections by id."""
+    known sections by id. With ``coding_tools`` (preamble flag bit 1), the codecs of format 1.2
+    are known too."""
     present: dict[str, Section] = {}
     for section in table:
         where = f"section {section.id}"
@@ -232,7 +257,9 @@ def check_known_sections(
                 rule="R27-criticality",
                 field=f"{where}.critical",
             )
-        if section.codec != kind.codec:
+        if section.codec != kind.codec and not (
+            coding_tools and section.codec in kind.coding_tools_codecs
+        ):
             raise UnsupportedVersionError(
                 f"unknown codec {section.codec!r} (expected {kind.codec!r})",
                 rule="R25-unknown-codec",
@@ -281,11 +308,13 @@ def check_sections(
     frames: int,
     ranks: tuple[int, int],
     limits: Limits,
+    *,
+    coding_tools: bool = False,
 ) -> None:
     """§5 steps 11-13: known sections with their codec and criticality, unknown critical ones
     refused, the required ones present, and every shape as the header implies and within the
     limits."""
-    present = check_known_sections(table, KNOWN_SECTIONS)
+    present = check_known_sections(table, KNOWN_SECTIONS, coding_tools=coding_tools)
     require_sections(present, list(REQUIRED_SECTIONS))
     i, k = ranks
     expected_shapes = {

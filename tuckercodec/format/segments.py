@@ -218,6 +218,8 @@ def check_segmented_sections(
     vertices: int,
     segments: tuple[SegmentEntry, ...],
     limits: Limits,
+    *,
+    coding_tools: bool = False,
 ) -> int:
     """§5 steps 11s-13s for a segmented file; returns the shared U1's column count (0 if none).
 
@@ -229,7 +231,7 @@ def check_segmented_sections(
         section_id: KNOWN_SECTIONS[stem]
         for section_id, (stem, _) in known_segment_kinds(segments).items()
     }
-    present = check_known_sections(table, kinds)
+    present = check_known_sections(table, kinds, coding_tools=coding_tools)
     shared_needed = any(segment.basis == BASIS_SHARED for segment in segments)
     required = ["FACE"] + (["U1"] if shared_needed else [])
     for segment in segments:
