@@ -59,11 +59,7 @@ class Workspace:
         # The KG denominator: each frame is centred, so ||A - E(A)|| is the centred tensor's norm.
         self.denominator2 = analysis.total_energy
         self.parents = mesh_parents(sequence.faces, self.vertex_count)
-        # the smaller connectivity codec; faces-traverse reorders the faces (§6.8)
-        self.face_codec, *face_section, _ = faces.encode_face_section(
-            sequence.faces, self.vertex_count, level
-        )
-        self.face_section: tuple[dict[str, Any], bytes] = (face_section[0], face_section[1])
+        self.face_section = faces.encode_faces(sequence.faces, level)
         self.name_section = names.encode_names(sequence.frame_names, level)
         self.centroid_floor_step, self.centroid_floor_error2 = self._centroid_floor()
         self._u1 = np.zeros((self.vertex_count, 0))
@@ -91,8 +87,13 @@ class Workspace:
             )
         return self._u1[:, :i], decomposition.u3[:, :k], self._core[:i, :, :k]
 
-    def quantize(self, i: int, k: int, step: float) -> Quantized:
-        """Quantize the truncation (i, k) with the single parameter D = ``step`` (see above)."""
+    def quantize(
+        self, i: int, k: int, step: float, rounding: rdo.Settings | None = None
+    ) -> Quantized:
+        """Quantize the truncation (i, k) with the single parameter D = ``step`` (see above),
+        rounding as ``rounding`` says (default :attr:`rdo`; the search's trials, which only
+        rank truncations, may pass :data:`.rdo.NEAREST`, which costs nothing)."""
+        rounding = self.rdo if rounding is None else rounding
         u1, u3, core = self.factors(i, k)
         root = math.sqrt(step)
         row_norms = np.sqrt(np.square(core).sum(axis=(1, 2)))
@@ -102,16 +103,18 @@ class Workspace:
             i,
             k,
             step,
-            self._rounded(u1, column_steps(root, row_norms), "U1"),
-            self._rounded(u3, column_steps(root, column_norms), "U3"),
-            self._rounded(core.reshape(-1, 1), np.array([root]), "CORE"),
+            self._rounded(u1, column_steps(root, row_norms), "U1", rounding),
+            self._rounded(u3, column_steps(root, column_norms), "U3", rounding),
+            self._rounded(core.reshape(-1, 1), np.array([root]), "CORE", rounding),
             centroids,
         )
 
-    def _rounded(self, values: np.ndarray, steps: np.ndarray, section: str) -> QuantizedMatrix:
-        """qmat.quantize, or with :attr:`rdo` the rate-distortion choice of :mod:`.rdo`,
-        under the prediction ``section`` will be stored with (§6.6)."""
-        if self.rdo.lam is None:
+    def _rounded(
+        self, values: np.ndarray, steps: np.ndarray, section: str, rounding: rdo.Settings
+    ) -> QuantizedMatrix:
+        """qmat.quantize, or the rate-distortion choice of :mod:`.rdo` under the prediction
+        ``section`` will be stored with (§6.6)."""
+        if rounding.lam is None:
             return qmat.quantize(values, steps)
         if section == "U1":
             if self._u1_levels is None:
@@ -121,7 +124,7 @@ class Workspace:
             levels = rdo.Levels.chain(values.shape[0])
         else:
             levels = rdo.Levels.flat(values.shape[0])
-        return rdo.quantize(values, steps, levels, self.rdo)
+        return rdo.quantize(values, steps, levels, rounding)
 
     def _quantized_centroids(self, step: float) -> QuantizedMatrix:
         """The centroids at ``step``, or at the smallest step whose integers fit the format
@@ -196,14 +199,7 @@ class Workspace:
         if self.name_section is not None:
             coded["NAME"] = self.name_section
         return [
-            (
-                sections.entry(
-                    section_id,
-                    coded[section_id][0],
-                    self.face_codec if section_id == "FACE" else None,
-                ),
-                coded[section_id][1],
-            )
+            (sections.entry(section_id, coded[section_id][0]), coded[section_id][1])
             for section_id in sections.WRITE_ORDER
             if section_id in coded
         ]
