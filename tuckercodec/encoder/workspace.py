@@ -59,7 +59,11 @@ class Workspace:
         # The KG denominator: each frame is centred, so ||A - E(A)|| is the centred tensor's norm.
         self.denominator2 = analysis.total_energy
         self.parents = mesh_parents(sequence.faces, self.vertex_count)
-        self.face_section = faces.encode_faces(sequence.faces, level)
+        # the smaller connectivity codec; faces-traverse reorders the faces (§6.8)
+        self.face_codec, *face_section, _ = faces.encode_face_section(
+            sequence.faces, self.vertex_count, level
+        )
+        self.face_section: tuple[dict[str, Any], bytes] = (face_section[0], face_section[1])
         self.name_section = names.encode_names(sequence.frame_names, level)
         self.centroid_floor_step, self.centroid_floor_error2 = self._centroid_floor()
         self._u1 = np.zeros((self.vertex_count, 0))
@@ -199,7 +203,14 @@ class Workspace:
         if self.name_section is not None:
             coded["NAME"] = self.name_section
         return [
-            (sections.entry(section_id, coded[section_id][0]), coded[section_id][1])
+            (
+                sections.entry(
+                    section_id,
+                    coded[section_id][0],
+                    self.face_codec if section_id == "FACE" else None,
+                ),
+                coded[section_id][1],
+            )
             for section_id in sections.WRITE_ORDER
             if section_id in coded
         ]
