@@ -326,6 +326,14 @@ def expect_error(
     return error
 
 
+def assert_same_faces(decoded: np.ndarray, original: np.ndarray) -> None:
+    """The same faces, each with its corners in the same order, in any face order: what a file
+    keeps (faces-traverse, §6.8, lists them in its walk's order)."""
+    decoded, original = np.asarray(decoded), np.asarray(original)
+    assert decoded.shape == original.shape
+    assert sorted(map(tuple, decoded.tolist())) == sorted(map(tuple, original.tolist()))
+
+
 def check_decoded(data: bytes, sequence: MeshSequence) -> None:
     """A file that decodes must agree with itself: info, random access (§8), finite values."""
     header = tuckercodec.info(data)

@@ -147,7 +147,7 @@ def coded(
     width: int = 3,
     corner_order: int = 0,
 ) -> tuple[dict, bytes]:
-    return traversal._pack(
+    return traversal.pack_streams(
         [list(ops), list(degrees), list(vertices), list(references)], count, width, corner_order, 3
     )
 
@@ -232,7 +232,7 @@ def test_random_damage_to_a_real_walk_is_always_a_format_error():
             continue
         position = int(rng.integers(len(values[stream])))
         values[stream][position] += int(rng.choice([-2, -1, 1, 2, 7]))
-        broken, data = traversal._pack(values, *faces.shape, corner_order, 1)
+        broken, data = traversal.pack_streams(values, *faces.shape, corner_order, 1)
         rule = None
         try:
             decoded = traversal.decode_traversal(data, broken, 100, "FACE")

@@ -124,7 +124,8 @@ def test_the_invalid_vectors_come_from_the_committed_valid_one(tmp_path):
     again from it into a temporary folder, the files and their JSON are the committed ones."""
     good = (SPEC / "vectors" / "v1-wave-triangles.tkc").read_bytes()
     segmented = (SPEC / "vectors" / "v1.1-segments-shared.tkc").read_bytes()
-    count = make_vectors.write_invalid(tmp_path, good, segmented)
+    traversed = (SPEC / "vectors" / "v1.2-traverse-triangles.tkc").read_bytes()
+    count = make_vectors.write_invalid(tmp_path, good, segmented, traversed)
     assert count == len([p for p in VECTORS if not json.loads(p.read_text())["valid"]])
     for path in sorted(tmp_path.iterdir()):
         committed = (SPEC / "vectors" / path.name).read_bytes()

@@ -38,6 +38,7 @@ from tuckercodec.internal import (
     HEAD_SIZE,
     faces,
     parse_container,
+    traversal,
     sheet_triangles,
     streams,
     wave_sheet,
@@ -62,6 +63,22 @@ def polygons(grid: int) -> np.ndarray:
     )
     quads[::3, 3] = -1
     return quads
+
+
+def scrambled(sequence: MeshSequence, seed: int) -> MeshSequence:
+    """The same animation with its vertices renumbered, its faces shuffled and each face's
+    corners rotated (orientation kept), as an arbitrary exporter writes: faces-traverse (§6.8)
+    is then the smaller FACE codec, and the file is of format 1.2."""
+    rng = np.random.default_rng(seed)
+    k = sequence.vertex_count
+    relabel = rng.permutation(k)
+    vertices = np.empty_like(sequence.vertices)
+    vertices[:, relabel] = sequence.vertices
+    faces_out = np.append(relabel, -1)[sequence.faces][rng.permutation(len(sequence.faces))]
+    for row in faces_out:
+        n = int((row >= 0).sum())
+        row[:n] = np.roll(row[:n], int(rng.integers(n)))
+    return MeshSequence(vertices, faces_out, sequence.frame_names, frame_rate=sequence.frame_rate)
 
 
 # ------------------------------------------------------------------------------------------
@@ -354,6 +371,7 @@ def valid_vectors() -> dict[str, tuple[bytes, str]]:
     extended.payloads.append(b"unknown ancillary data is skipped unread")
     long_wave = MeshSequence(wave_sheet(40, 9), sheet_triangles(9), frame_rate=25.0)
     return {
+        **traverse_vectors(),
         "v1-wave-triangles": (basic, "triangles, no names: the basic file"),
         "v1.1-segments-shared": (
             encode_with_report(long_wave, target_kg=0.5, segment_frames=12).data,
@@ -372,6 +390,45 @@ def valid_vectors() -> dict[str, tuple[bytes, str]]:
             "v1-wave-triangles plus an ignorable flag, header key and ancillary section",
         ),
     }
+
+
+def traverse_vectors() -> dict[str, tuple[bytes, str]]:
+    """The valid vectors of format 1.2 (§6.8): faces-traverse, alone and with segments."""
+    triangles = scrambled(MeshSequence(wave_sheet(24, 9), sheet_triangles(9)), seed=12)
+    polygons_in_segments = scrambled(  # larger than `named`, for the walk to beat faces-delta
+        MeshSequence(
+            wave_sheet(16, 12) * 3.0 + 10.0,
+            polygons(12),
+            [f"walk_{n:03d}.obj" for n in range(16)],
+            frame_rate=30.0,
+        ),
+        seed=13,
+    )
+    return {
+        "v1.2-traverse-triangles": (
+            encode(triangles, target_kg=0.5),
+            "format 1.2: faces-traverse, triangles shuffled, vertices renumbered, corners rotated",
+        ),
+        "v1.2-traverse-polygons-segments": (
+            encode_with_report(polygons_in_segments, target_kg=0.5, segment_frames=8).data,
+            "format 1.2 and 1.1 together: faces-traverse of scrambled polygons (degrees), two "
+            "segments sharing U1, names",
+        ),
+    }
+
+
+def traverse_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
+    """rule id -> (file bytes, error class name): the 1.2 file ``good`` with a rule of §6.8
+    broken: the walk's first op (the first seed's first corner) made PREV, which names no
+    vertex before any corner exists."""
+    parts = Parts(good)
+    entry = parts.entries[parts.index("FACE")]
+    count, width = entry["shape"]
+    payload = parts.payloads[parts.index("FACE")]
+    values, corner_order = traversal.read_streams(payload, entry, count, width, "FACE")
+    values[0][0] = traversal.TIP_PREV
+    params, broken = traversal.pack_streams(values, count, width, corner_order, 19)
+    return {"R39-traversal": (_edit(good, _payload("FACE", broken, **params)), "FormatError")}
 
 
 def write_valid(folder: Path, name: str, data: bytes, purpose: str) -> None:
@@ -419,10 +476,14 @@ def segmented_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
     }
 
 
-def write_invalid(folder: Path, good: bytes, segmented: bytes) -> int:
-    """The invalid vectors made from the valid files ``good`` (format 1.0) and ``segmented``
-    (1.1), with their JSON; how many."""
-    vectors = {**invalid_vectors(good), **segmented_invalid_vectors(segmented)}
+def write_invalid(folder: Path, good: bytes, segmented: bytes, traversed: bytes) -> int:
+    """The invalid vectors made from the valid files ``good`` (format 1.0), ``segmented``
+    (1.1) and ``traversed`` (1.2), with their JSON; how many."""
+    vectors = {
+        **invalid_vectors(good),
+        **segmented_invalid_vectors(segmented),
+        **traverse_invalid_vectors(traversed),
+    }
     for rule, (data, error) in vectors.items():
         (folder / f"{rule}.tkc").write_bytes(data)
         expected = {"file": f"{rule}.tkc", "valid": False, "rule": rule, "error": error}
@@ -450,7 +511,12 @@ def main(argv: list[str] | None = None) -> int:
     valid = valid_vectors()
     for name, (data, purpose) in valid.items():
         write_valid(out, name, data, purpose)
-    invalid = write_invalid(out, valid["v1-wave-triangles"][0], valid["v1.1-segments-shared"][0])
+    invalid = write_invalid(
+        out,
+        valid["v1-wave-triangles"][0],
+        valid["v1.1-segments-shared"][0],
+        valid["v1.2-traverse-triangles"][0],
+    )
     print(f"wrote {len(valid)} valid and {invalid} invalid vectors to {out}")
     return 0
 

@@ -10,8 +10,8 @@ package sees at once what the tools rely on.
   :func:`pack_container` and :func:`parse_container`, :func:`pack_raw` for files that break
   one rule on purpose, and :data:`SIGNATURE`, :data:`HEAD_SIZE`, :data:`PREAMBLE`,
   :data:`CRC`; the modules :mod:`~tuckercodec.format.faces`, :mod:`~tuckercodec.format.qmat`,
-  :mod:`~tuckercodec.format.sections` and :mod:`~tuckercodec.format.streams`; the mesh parents
-  of §6.2.
+  :mod:`~tuckercodec.format.sections`, :mod:`~tuckercodec.format.streams` and
+  :mod:`~tuckercodec.format.traversal` (§6.8); the mesh parents of §6.2.
 * The decomposition and its analysis: :func:`centre_frames`, :func:`reconstruct`, :class:`Curve`.
 * The definitions the reports quote: :data:`KG_DEFINITION`, :data:`STED_DEFINITION`.
 * Files and pictures: :func:`write_atomic`, :func:`refuse_existing`, :func:`plot_rd_curve`,
@@ -31,7 +31,7 @@ from __future__ import annotations
 from .analysis import Curve
 from .atomic import refuse_existing, write_atomic
 from .encoder import rdo
-from .format import faces, qmat, sections, streams
+from .format import faces, qmat, sections, streams, traversal
 from .format.container import (
     CRC,
     HEAD_SIZE,
@@ -76,6 +76,7 @@ __all__ = [
     "sections",
     "sheet_triangles",
     "streams",
+    "traversal",
     "wave_sheet",
     "write_atomic",
     "write_decomposition_gltf",

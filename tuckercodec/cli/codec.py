@@ -27,12 +27,12 @@ from ..sequence import MeshSequence
 from .inputs import check_precision, load_input, read_options, sequence_source
 
 
-def _print_encode_report(report: EncodeReport) -> None:
+def _print_encode_report(report: EncodeReport, format_version: str) -> None:
     i, k = report.ranks
     if report.basis is not None:  # a segmented file
         basis = "one shared U1" if report.basis == "shared" else "a U1 each"
         print(
-            f"{report.segments} segments of frames with {basis} (format 1.1), read in "
+            f"{report.segments} segments of frames with {basis} (format {format_version}), read in "
             f"{report.trials} passes and trials; largest ranks (i, 3, k) = ({i}, 3, {k})"
         )
     print(
@@ -43,7 +43,8 @@ def _print_encode_report(report: EncodeReport) -> None:
         f"{report.truncation_kg:.5f}; {KG_DEFINITION})"
     )
     print(
-        f"size {report.total_bytes} bytes = {report.bpfv:.4f} bpfv (whole file; connectivity "
+        f"format {format_version}; size {report.total_bytes} bytes = {report.bpfv:.4f} bpfv "
+        f"(whole file; connectivity "
         f"{report.connectivity_bpfv:.4f} bpfv of it), {report.ratio:.1f}x smaller than raw float32"
     )
     if report.exact_ranks is not None:
@@ -88,7 +89,7 @@ def run_encode(args: argparse.Namespace) -> int:
             f"{args.input}: {frames.frame_count} frames, {frames.vertex_count} vertices "
             f"-> {args.output}"
         )
-        _print_encode_report(result.report)
+        _print_encode_report(result.report, read_info(result.data).format_version)
         if frames.time_codes is not None:  # the format keeps a frame rate, not times
             codes = frames.time_codes
             print(

@@ -1,5 +1,8 @@
 """§6.8 Codec ``faces-traverse`` (format 1.2): connectivity by traversal, vertex order kept.
 
+Longer than most modules (about 430 lines): the walk's encoder and decoder mirror each other
+step by step, and they are kept side by side so that a change to one is read against the other.
+
 The faces are coded by walking across their edges, as Edgebreaker and the cut-border machine do,
 instead of as a table of indices. The walk keeps a *boundary*: the directed edges of the faces
 decoded so far whose opposite edge no decoded face has yet. It pops *gates* (boundary edges
@@ -124,7 +127,7 @@ def encode_traversal(
     best: tuple[dict[str, Any], bytes] | None = None
     for corner_order in (ROTATE_FROM_GATE, ROTATE_FROM_SMALLEST):
         coded = [walk.ops_for(corner_order), walk.degrees, walk.new_residuals, walk.references]
-        params, payload = _pack(coded, count, width, corner_order, level)
+        params, payload = pack_streams(coded, count, width, corner_order, level)
         if best is None or len(payload) < len(best[1]):
             best = params, payload
     assert best is not None
@@ -132,9 +135,10 @@ def encode_traversal(
     return best[0], best[1], walked
 
 
-def _pack(
+def pack_streams(
     coded: list[list[int]], count: int, width: int, corner_order: int, level: int
 ) -> tuple[dict[str, Any], bytes]:
+    """``(params, payload)`` of the four streams ``coded`` (ops, degrees, vertices, references)."""
     parts, table = [], []
     for values in coded:
         payload, planes = streams.pack_integers(np.asarray(values, dtype=np.int64), level)
