@@ -8,6 +8,7 @@ import subprocess
 import pytest
 
 from tools import bench_size, common
+from tuckercodec.samples import sample_path
 
 
 def _has_baseline() -> bool:
@@ -22,9 +23,9 @@ def _has_baseline() -> bool:
 
 @pytest.mark.skipif(not _has_baseline(), reason="needs git and the repository's history")
 def test_the_sample_is_compared_with_the_baseline_revision(capsys):
-    assert bench_size.main([str(common.SAMPLE), "--targets", "1"]) == 0
+    assert bench_size.main([str(sample_path()), "--targets", "1"]) == 0
     out = capsys.readouterr().out
-    row = next(line for line in out.splitlines() if line.startswith(f"| {common.SAMPLE.name} |"))
+    row = next(line for line in out.splitlines() if line.startswith(f"| {sample_path().name} |"))
     cells = [cell.strip() for cell in row.strip("|").split("|")]
     before, now = (int(cell.split()[0]) for cell in cells[2:4])
     assert now < before  # the sample (the cloth) is far smaller with faces-traverse

@@ -93,7 +93,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--targets", type=float, nargs="+", default=DEFAULT_TARGETS)
     parser.add_argument("--baseline", default=DEFAULT_BASELINE, help="a git revision")
     args = parser.parse_args(argv)
-    paths = [Path(p) for p in args.sequences] or [
+    paths = [Path(p).resolve() for p in args.sequences] or [
         common.SHARED_DATA / name for name in common.shared_sequences()
     ]
     if not paths:
