@@ -85,6 +85,7 @@ def torus(n: int = 6, m: int = 5) -> np.ndarray:
         (np.array([[0, 1, 2], [0, 1, 2], [2, 1, 0]]), 3),  # the same face twice
         (np.concatenate([grid(4), grid(4) + 16, grid(3) + 40]), 49),  # components
         (np.array([[4, 2, 0]]), 5),
+        (np.array([[0, 1, 2, -1], [2, 1, 3, -1]]), 4),  # triangles in a table of width 4
     ],
     ids=lambda value: None if isinstance(value, int) else f"{len(value)}faces",
 )

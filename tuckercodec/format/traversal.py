@@ -72,12 +72,9 @@ class _Boundary:
         """Add the face ``cycle`` (in walk order): each edge x -> y closes an open y -> x, or
         opens; the edges from ``first_gate`` on become gates, the last one popped first."""
         k, count, into, out_of, gates = self.k, self.count, self.into, self.out_of, self.gates
-        n = len(cycle)
-        for j in range(n):
-            x = cycle[j]
-            y = cycle[j + 1] if j + 1 < n else cycle[0]
+        for j, (x, y) in enumerate(zip(cycle, cycle[1:] + cycle[:1], strict=True)):
             opposite = y * k + x
-            open_count = count.get(opposite, 0)
+            open_count = count.get(opposite)
             if open_count:
                 if open_count == 1:
                     del count[opposite]
@@ -85,28 +82,14 @@ class _Boundary:
                     count[opposite] = open_count - 1
                 into[x].remove(y)
                 out_of[y].remove(x)
+                key = x * k + y
             else:
                 key = x * k + y
                 count[key] = count.get(key, 0) + 1
                 into[y].append(x)
                 out_of[x].append(y)
             if j >= first_gate:
-                gates.append(x * k + y)
-
-
-def _rotation_offset(cycle: list[int], rotation: int, corner_order: int) -> int:
-    """Where the walk's corner 0 lands in the stored face."""
-    if corner_order == ROTATE_FROM_SMALLEST:
-        return rotation - cycle.index(min(cycle))
-    return rotation
-
-
-def _stored(cycle: list[int], offset: int) -> list[int]:
-    n = len(cycle)
-    stored = [0] * n
-    for j, vertex in enumerate(cycle):
-        stored[(offset + j) % n] = vertex
-    return stored
+                gates.append(key)
 
 
 # ---------------------------------------------------------------------------------- encoding
@@ -333,7 +316,7 @@ def decode_traversal(
     boundary = _Boundary(k)
     gates, into, out_of, open_edges = boundary.gates, boundary.into, boundary.out_of, boundary.count
     last_new = -1
-    out = np.full((count, width), -1, dtype=np.int64)
+    rows: list[list[int]] = []  # the stored faces, in walk order
     decoded = 0
     try:
         while decoded < count:
@@ -407,9 +390,8 @@ def decode_traversal(
             offset = rotation
             if corner_order == ROTATE_FROM_SMALLEST and first_gate:
                 offset -= cycle.index(min(cycle))
-            row = out[decoded]
-            for j in range(n):
-                row[(offset + j) % n] = cycle[j]
+            offset %= n  # stored[(offset + j) % n] = cycle[j]: cycle turned right by offset
+            rows.append(cycle[n - offset :] + cycle[: n - offset] if offset else cycle)
             decoded += 1
             boundary.attach(cycle, first_gate)
     except StopIteration:  # a stream read past its end
@@ -419,6 +401,11 @@ def decode_traversal(
             raise _problem(
                 where, f"the traversal breaks: stream {name} has values left, or ends early"
             )
+    if width == 3:
+        return np.array(rows, dtype=np.int64).reshape(count, 3)
+    out = np.full((count, width), -1, dtype=np.int64)
+    for row, stored in zip(out, rows, strict=True):
+        row[: len(stored)] = stored
     return out
 
 
