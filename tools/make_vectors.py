@@ -38,9 +38,9 @@ from tuckercodec.internal import (
     HEAD_SIZE,
     faces,
     parse_container,
-    traversal,
     sheet_triangles,
     streams,
+    traversal,
     wave_sheet,
 )
 

@@ -350,7 +350,8 @@ def _add_segment_options(encode: argparse.ArgumentParser) -> None:
     large = encode.add_argument_group(
         "large sequences",
         "A sequence whose whole encode would not fit --max-memory is read in passes and written "
-        "in segments of frames (format 1.1 or, with 1.2's coding tools, 1.2); otherwise the file is one decomposition (1.0, or 1.2).",
+        "in segments of frames (format 1.1); otherwise the file is one decomposition (1.0). "
+        "Either is 1.2 when it uses that version's coding tools.",
     )
     large.add_argument(
         "--segment-frames",

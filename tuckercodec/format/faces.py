@@ -11,7 +11,7 @@ instead of 1.11 bpfv).
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -22,18 +22,27 @@ from .sections import FACES_DELTA, FACES_TRAVERSE, section_shape
 from .traversal import decode_traversal, encode_traversal
 
 
+class FaceSection(NamedTuple):
+    """A coded FACE section, and the faces a decoder gives back from it."""
+
+    codec: str
+    params: dict[str, Any]
+    payload: bytes
+    faces: np.ndarray
+
+
 def encode_face_section(
     faces: np.ndarray, vertex_count: int, level: int = streams.DEFAULT_LEVEL
-) -> tuple[str, dict[str, Any], bytes, np.ndarray]:
-    """``(codec, params, payload, decoded faces)``: the smaller of faces-traverse (format 1.2,
-    the face order becomes the walk's) and faces-delta (format 1.0, faces as given). Either way
-    every face keeps its corners, their order and its orientation."""
+) -> FaceSection:
+    """The smaller of faces-traverse (format 1.2, the face order becomes the walk's) and
+    faces-delta (format 1.0, faces as given). Either way every face keeps its corners, their
+    order and its orientation."""
     table = np.asarray(faces, dtype=np.int64)
     delta_params, delta_payload = encode_faces(table, level)
     walk_params, walk_payload, walked = encode_traversal(table, vertex_count, level)
     if len(walk_payload) < len(delta_payload):
-        return FACES_TRAVERSE, walk_params, walk_payload, walked
-    return FACES_DELTA, delta_params, delta_payload, table
+        return FaceSection(FACES_TRAVERSE, walk_params, walk_payload, walked)
+    return FaceSection(FACES_DELTA, delta_params, delta_payload, table)
 
 
 def decode_face_section(

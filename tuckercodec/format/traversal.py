@@ -396,8 +396,8 @@ def decode_traversal(
             boundary.attach(cycle, first_gate)
     except StopIteration:  # a stream read past its end
         raise _problem(where, "the traversal breaks: a stream ends early") from None
-    for name, rest in zip(STREAM_NAMES, (ops, degrees, new_residuals, references), strict=True):
-        if next(rest, None) is not None:
+    for name, stream in zip(STREAM_NAMES, (ops, degrees, new_residuals, references), strict=True):
+        if next(stream, None) is not None:
             raise _problem(
                 where, f"the traversal breaks: stream {name} has values left, or ends early"
             )
