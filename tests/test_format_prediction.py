@@ -1,20 +1,30 @@
 """Prediction (spec/FORMAT.md §6.2): residuals along a forest of parents and their sums back,
-on any forest and on a mesh whose breadth-first walk is 2**18 levels deep;
-tuckercodec/format/prediction.py. (The parents of a mesh are tests/test_topology.py's.)"""
+on any forest and on a mesh whose breadth-first walk is 2**18 levels deep; predictor 2 (the
+mean of the decoded neighbours, format 1.2) against its spec text written out in Python
+integers; tuckercodec/format/prediction.py. (The parents of a mesh are tests/test_topology.py's.)"""
 
 from __future__ import annotations
 
 import time
 
 import numpy as np
+import pytest
 from conftest import IDENTITY_U2, deadline
 
 from tuckercodec import Decoder
+from tuckercodec.format import prediction
 from tuckercodec.format.container import pack_container
 from tuckercodec.format.faces import encode_faces
-from tuckercodec.format.prediction import accumulate, residuals
+from tuckercodec.format.prediction import (
+    MEAN_LIMIT,
+    accumulate,
+    mean_accumulate,
+    mean_predictions,
+    mean_residuals,
+    residuals,
+)
 from tuckercodec.format.streams import compress, pack_integers
-from tuckercodec.topology import mesh_parents
+from tuckercodec.topology import MAX_MEAN_LEVELS, mesh_parents, mesh_prediction
 
 
 def test_accumulate_inverts_residuals_on_any_forest():
@@ -119,3 +129,140 @@ def test_a_deep_strip_of_faces_decodes_quickly():
     expected[0] = 1
     np.testing.assert_array_equal(decoder.u1, expected)  # every residual summed along the strip
     assert decoder.frame(0)[0].tolist() == [1.0, 0.0, 0.0]
+
+
+# -- predictor 2: the mean of the decoded neighbours (format 1.2) ------------------------------
+
+
+def _spec_mean_restore(residual: np.ndarray, faces: np.ndarray, count: int) -> np.ndarray:
+    """Predictor 2's restoration as /work/notes/spec13_prediction.md words it, vertex by vertex
+    in Python integers (no overflow, no float)."""
+    neighbours: list[set[int]] = [set() for _ in range(count)]
+    for face in faces.tolist():
+        for j, a in enumerate(face):
+            if a < 0:
+                continue
+            b = face[j + 1] if j + 1 < len(face) and face[j + 1] >= 0 else face[0]
+            if a != b:
+                neighbours[a].add(b)
+                neighbours[b].add(a)
+    parent, depth, reached_order = [-1] * count, [0] * count, []
+    reached = [False] * count
+    for s in range(count):
+        if reached[s]:
+            continue
+        reached[s] = True
+        reached_order.append(s)
+        queue, head = [s], 0
+        while head < len(queue):
+            u = queue[head]
+            head += 1
+            for w in sorted(neighbours[u]):
+                if not reached[w]:
+                    reached[w], parent[w], depth[w] = True, u, depth[u] + 1
+                    reached_order.append(w)
+                    queue.append(w)
+    rank, seen = [0] * count, [0] * (count + 1)
+    for v in reached_order:
+        rank[v], seen[depth[v]] = seen[depth[v]], seen[depth[v]] + 1
+    phase = [r % 2 for r in rank]
+    q = [[int(x) for x in row] for row in residual]
+    order = sorted(
+        (v for v in range(count) if depth[v] >= 1),
+        key=lambda v: (depth[v], phase[v], reached_order.index(v)),
+    )
+    for v in order:
+        sources = [
+            w
+            for w in neighbours[v]
+            if depth[w] == depth[v] - 1 or (depth[w] == depth[v] and phase[w] < phase[v])
+        ]
+        c = len(sources)
+        for col in range(residual.shape[1]):
+            u = 0
+            for w in sources:
+                anchor = parent[w] if depth[w] == depth[v] - 1 and parent[w] >= 0 else w
+                u += 4 * q[w][col] - q[anchor][col]
+            q[v][col] += (2 * u + 3 * c) // (6 * c)
+    return np.array(q, dtype=np.int64).reshape(residual.shape)
+
+
+def _random_mesh(rng: np.random.Generator, count: int) -> np.ndarray:
+    """Triangles, quads padded to 4 corners, degenerate faces and some vertices on no face,
+    in several components."""
+    faces = []
+    for _ in range(rng.integers(1, 2 * count)):
+        corners = int(rng.choice([3, 4]))
+        row = rng.integers(0, count - count // 5, size=4)  # the last fifth on no face
+        if rng.random() < 0.1:
+            row[1] = row[0]  # degenerate
+        if corners == 3:
+            row[3] = -1
+        faces.append(row)
+    return np.array(faces, dtype=np.int64)
+
+
+def test_predictor_2_follows_the_spec_text_exactly():
+    rng = np.random.default_rng(13)
+    for count in (5, 12, 40, 90):
+        for _ in range(6):
+            faces = _random_mesh(rng, count)
+            steps = mesh_prediction(faces, count).mean_steps
+            # values anywhere within the limit, and small ones (ties of the rounding are common)
+            for values in (
+                rng.integers(-MEAN_LIMIT, MEAN_LIMIT, size=(count, 3), endpoint=True),
+                rng.integers(-3, 4, size=(count, 3)),
+            ):
+                residual = mean_residuals(values, steps)
+                if residual is None:  # a prediction left the limit with these values
+                    continue
+                np.testing.assert_array_equal(_spec_mean_restore(residual, faces, count), values)
+                np.testing.assert_array_equal(mean_accumulate(residual, steps), values)
+
+
+def test_predictor_2_rounds_half_up():
+    # one edge: vertex 1's only source is root 0, its own anchor: U = 3 q[0], U / 3c = q[0]
+    # a triangle: vertex 2 (depth 1, phase 1) has sources 0 (up) and 1 (same depth, phase 0)
+    faces = np.array([[0, 1, 2]])
+    steps = mesh_prediction(faces, 3).mean_steps
+    assert steps.rows.tolist() == [1, 2]
+    assert steps.sources.tolist() == [0, 0, 1] and steps.anchors.tolist() == [0, 0, 1]
+    # U = 3 q0 + 3 q1 over 3c = 6: the mean of q0 and q1, ties up (also below zero)
+    q = np.array([[0, 0, -1], [1, 2, 0], [0, 0, 0]])
+    assert mean_predictions(q, steps).tolist() == [[0, 0, -1], [1, 1, 0]]  # -0.5 -> 0
+    q = np.array([[0], [-3], [0]])
+    assert mean_predictions(q, steps)[1].tolist() == [-1]  # -1.5 rounds up to -1
+
+
+def test_predictor_2_int64_path_for_a_vertex_with_many_sources(monkeypatch):
+    """A vertex with 2**18 sources sums in int64 rather than float64: both give the spec's
+    integers (the int64 path is forced here on a small mesh)."""
+    rng = np.random.default_rng(5)
+    faces = _random_mesh(rng, 60)
+    steps = mesh_prediction(faces, 60).mean_steps
+    values = rng.integers(-MEAN_LIMIT, MEAN_LIMIT, size=(60, 2), endpoint=True)
+    residual = mean_residuals(values, steps)
+    assert residual is not None
+    monkeypatch.setattr(prediction, "_FLOAT_SOURCES", 1)
+    assert mean_residuals(values, steps).tolist() == residual.tolist()
+    np.testing.assert_array_equal(mean_accumulate(residual, steps), values)
+    with pytest.raises(ValueError, match="range of predictor 2"):
+        mean_accumulate(residual * 2**20, steps)
+
+
+def test_predictor_2_refuses_values_beyond_its_range():
+    faces = np.array([[0, 1, 2], [1, 2, 3]])
+    steps = mesh_prediction(faces, 4).mean_steps
+    assert mean_residuals(np.full((4, 1), MEAN_LIMIT + 1), steps) is None
+    residual = np.full((4, 1), 2**31 - 1)  # each level adds 2**31 - 1 to its sources' mean
+    with pytest.raises(ValueError, match="range of predictor 2"):
+        mean_accumulate(residual * 3, steps)
+
+
+def test_mesh_prediction_steps_on_a_strip_and_without_edges():
+    assert mesh_prediction(np.zeros((0, 3), np.int64), 4).mean_steps.rows.size == 0
+    count = 2 * MAX_MEAN_LEVELS + 10  # one strip: about count / 2 levels
+    row = np.arange(count - 2)
+    mesh = mesh_prediction(np.stack([row, row + 1, row + 2], 1), count)
+    assert mesh.levels == MAX_MEAN_LEVELS + 1  # counted no further than "too deep"
+    assert mesh.mean_steps.levels > MAX_MEAN_LEVELS + 1

@@ -33,7 +33,7 @@ from .format.limits import DEFAULT_LIMITS, Limits, check_limit
 from .format.reconstruction import reconstruct_frames, reconstruction_basis
 from .format.segments import BASIS_OWN, BASIS_SHARED, SegmentEntry
 from .sequence import MeshSequence
-from .topology import mesh_parents
+from .topology import MeshPrediction
 
 #: A compressed file: its bytes, or a path to read it from.
 CompressedFile = bytes | bytearray | memoryview | str | os.PathLike[str]
@@ -93,7 +93,7 @@ class Decoder:
         self.limits = limits
         self._segments: OrderedDict[int, SegmentFactors] = OrderedDict()
         self._shared_u1: np.ndarray | None = None
-        self._parents: np.ndarray | None = None
+        self._mesh: MeshPrediction | None = None
         self._data: bytes | memoryview | FileRanges
         with self._naming_path():
             if isinstance(source, (str, os.PathLike)):
@@ -166,17 +166,22 @@ class Decoder:
         assert section is not None
         return section.params
 
-    def _mesh_parents(self) -> np.ndarray:
+    def _mesh_prediction(self) -> MeshPrediction:
         # K entries: made only after a U1 payload has passed its CRC and zstd checks, which
         # bound K by the file's size, and only if a column of U1 is predicted
-        if self._parents is None:
-            self._parents = mesh_parents(self.faces, self.info.vertices)
-        return self._parents
+        # (the parents of predictor 1 at once; predictor 2's steps only if a column uses it)
+        if self._mesh is None:
+            self._mesh = MeshPrediction(self.faces, self.info.vertices)
+        return self._mesh
 
     def _decode_u1(self, section_id: str) -> np.ndarray:
         where = f"section {section_id}"
         matrix = qmat.decode_matrix(
-            self._payload(section_id), self._params(section_id), self._mesh_parents, where
+            self._payload(section_id),
+            self._params(section_id),
+            self._mesh_prediction,
+            where,
+            coding_tools=self._container.coding_tools,  # predictor 2 only in format 1.2
         )
         return matrix.values()
 

@@ -206,8 +206,12 @@ class MeshPrediction:
 
     @property
     def levels(self) -> int:
-        """The forest's number of depths, 0 included (1 for a mesh without edges)."""
-        return self.mean_steps.levels
+        """The forest's number of depths, 0 included (1 for a mesh without edges); counted
+        only up to MAX_MEAN_LEVELS + 1, so that a strip of faces, on which predictor 2 is not
+        allowed, is not walked level by level."""
+        if self._mean is not None:
+            return self._mean.levels
+        return self._forest.level_ends(MAX_MEAN_LEVELS + 1).size - 1
 
     @property
     def mean_steps(self) -> MeanSteps:
@@ -238,7 +242,9 @@ class _Forest:
         parents[self.used[has_parent]] = self.used[self.found[has_parent]]
         return parents
 
-    def mean_steps(self) -> MeanSteps:
+    def level_ends(self, most: int | None = None) -> np.ndarray:
+        """Where each depth ends in the walk, ``[0, end of depth 0, end of depth 1, ...]``:
+        all of them, or the first ``most``."""
         count = self.used.size
         walk, found = self.walk, self.found
         position = np.empty(count, dtype=np.int64)
@@ -248,9 +254,14 @@ class _Forest:
         # d + 1 are the run whose parents lie among those of depth d
         parent_position = np.where(found[walk] >= 0, position[np.maximum(found[walk], 0)], -1)
         ends = [0, int(np.searchsorted(parent_position, 0))]  # the roots come first
-        while ends[-1] < count:
+        while ends[-1] < count and (most is None or len(ends) <= most):
             ends.append(int(np.searchsorted(parent_position, ends[-1])))
-        level_ends = np.array(ends, dtype=np.int64)
+        return np.array(ends, dtype=np.int64)
+
+    def mean_steps(self) -> MeanSteps:
+        count = self.used.size
+        walk, found = self.walk, self.found
+        level_ends = self.level_ends()
         levels = level_ends.size - 1
         depth_in_walk = np.repeat(np.arange(levels, dtype=np.int64), np.diff(level_ends))
         rank = np.arange(count, dtype=np.int64) - level_ends[depth_in_walk]

@@ -5,8 +5,6 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
-
 from .._version import __version__
 from ..format import qmat
 from ..format.container import pack_container
@@ -21,6 +19,7 @@ from ..format.segments import (
     segment_map,
     segment_section_id,
 )
+from ..topology import MeshPrediction
 from .segment_work import Quantized, SegmentedEncode
 
 
@@ -35,17 +34,17 @@ def segment_sections(
     if work.fixed_basis is not None:  # a given basis: its section, byte for byte
         out.append((_entry("U1", work.fixed_basis.params), work.fixed_basis.payload))
     elif quantized.shared_u1 is not None:
-        params, payload = qmat.encode_matrix(quantized.shared_u1, work.parents, level=level)
+        params, payload = qmat.encode_matrix(quantized.shared_u1, work.mesh, level=level)
         out.append((_entry("U1", params), payload))
     for s in range(len(work.models)):
-        matrices: dict[str, tuple[QuantizedMatrix, np.ndarray | None, bool]] = {
+        matrices: dict[str, tuple[QuantizedMatrix, MeshPrediction | None, bool]] = {
             "CENT": (quantized.centroids[s], None, True),
             "U3": (quantized.u3[s], None, True),
             "CORE": (quantized.core[s], None, False),
         }
         own = quantized.own_u1[s]
         if own is not None:
-            matrices["U1"] = (own, work.parents, True)
+            matrices["U1"] = (own, work.mesh, True)
         for stem in SEGMENT_WRITE_ORDER:
             if stem not in matrices:
                 continue

@@ -21,7 +21,7 @@ from ..format.segments import (
 )
 from ..io.streaming import FrameSource
 from ..parallel import Executor, InProcessExecutor
-from ..topology import mesh_parents
+from ..topology import MeshPrediction
 from .passes import DecodedSegment, SegmentRange, measure_segment, project_segment, sketch_segment
 from .plan import SegmentPlan
 from .segment_model import (
@@ -67,9 +67,12 @@ class SharedBasis:
     params: dict[str, Any]
     payload: bytes
 
-    def matrix(self, parents: np.ndarray) -> QuantizedMatrix:
-        """The quantized U1, its mesh-parent prediction undone with ``parents``."""
-        return qmat.decode_matrix(self.payload, self.params, parents, "the shared basis (U1)")
+    def matrix(self, mesh: MeshPrediction) -> QuantizedMatrix:
+        """The quantized U1, its mesh prediction undone (any predictor: the file that held it
+        set the coding tools flag if it needed it, and so will this encode's)."""
+        return qmat.decode_matrix(
+            self.payload, self.params, mesh, "the shared basis (U1)", coding_tools=True
+        )
 
 
 class SegmentedEncode:
@@ -91,12 +94,14 @@ class SegmentedEncode:
         self.vertex_count, self.frame_count = source.vertex_count, source.frame_count
         self.ranges = [SegmentRange(a, b, plan.block_frames) for a, b in plan.bounds]
         self.passes = 0
-        self.parents = mesh_parents(source.faces, self.vertex_count)
+        # U1's predictors: the mesh parents (1) and the decoded neighbours' mean (2)
+        self.mesh = MeshPrediction(source.faces, self.vertex_count)
+        self.parents = self.mesh.parents
         self.fixed_basis = fixed_basis
         self.fixed_u1: QuantizedMatrix | None = None
         self.fixed_r: np.ndarray | None = None
         if fixed_basis is not None:
-            self.fixed_u1 = fixed_basis.matrix(self.parents)
+            self.fixed_u1 = fixed_basis.matrix(self.mesh)
             if self.fixed_u1.q.shape[0] != self.vertex_count or basis != BASIS_SHARED:
                 raise ValueError(
                     f"the shared basis is for {self.fixed_u1.q.shape[0]} vertices and a shared "

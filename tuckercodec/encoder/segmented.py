@@ -189,7 +189,7 @@ def fit_basis(
         work.shared_q @ work.models[0].rotation[:, :columns],
         column_steps(math.sqrt(step), np.sqrt(column_energy)),
     )
-    params, payload = qmat.encode_matrix(matrix, work.parents, level=level)
+    params, payload = qmat.encode_matrix(matrix, work.mesh, level=level)
     return SharedBasis(params, payload)
 
 

@@ -25,7 +25,7 @@ from ..format.qmat import QuantizedMatrix
 from ..format.reconstruction import reconstruct_frames, reconstruction_basis
 from ..hosvd import project
 from ..sequence import MeshSequence
-from ..topology import mesh_parents
+from ..topology import MeshPrediction
 from . import rdo
 
 #: The largest |integer| a section may stream: after zigzag it must fit streams.MAX_PLANES bytes.
@@ -58,7 +58,9 @@ class Workspace:
         self.frame_count = sequence.frame_count
         # The KG denominator: each frame is centred, so ||A - E(A)|| is the centred tensor's norm.
         self.denominator2 = analysis.total_energy
-        self.parents = mesh_parents(sequence.faces, self.vertex_count)
+        # U1's predictors: the mesh parents (1) and the decoded neighbours' mean (2)
+        self.mesh = MeshPrediction(sequence.faces, self.vertex_count)
+        self.parents = self.mesh.parents
         # the smaller connectivity codec; faces-traverse reorders the faces (§6.8)
         self.face_codec, *face_section, _ = faces.encode_face_section(
             sequence.faces, self.vertex_count, level
@@ -195,7 +197,7 @@ class Workspace:
             ("CENT", quantized.centroids, None, True),
             ("U3", quantized.u3, None, True),
             ("CORE", quantized.core, None, False),
-            ("U1", quantized.u1, self.parents, True),
+            ("U1", quantized.u1, self.mesh, True),
         ):
             coded[section_id] = qmat.encode_matrix(
                 matrix, parents, allow_predict=predict, level=level

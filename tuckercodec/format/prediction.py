@@ -151,7 +151,7 @@ def mean_accumulate(residual: np.ndarray, steps: MeanSteps) -> np.ndarray:
                 if np.abs(total[rows[start:stop]]).max() > MEAN_LIMIT:
                     raise ValueError("a restored value leaves the range of predictor 2")
         return total
-    work = residual.astype(np.float64)
+    work = np.array(residual, dtype=np.float64, order="C")  # C: the product reads it flat
     for step in range(ends.size - 1):
         start, stop = int(ends[step]), int(ends[step + 1])
         if start < stop:

@@ -1,9 +1,11 @@
 """§6.3 Codec ``qmat``: quantized matrices (U1, U3, CORE and CENT).
 
 A float matrix of shape (rows, cols) is stored as integers ``q`` with one step per column:
-``value = step[c] * q[r, c]``. Each column either stores ``q`` itself (predictor 0) or each
-entry minus its parent's entry (predictor 1, see :mod:`.prediction`). The residuals go column
-after column into one integer stream (:mod:`.streams`).
+``value = step[c] * q[r, c]``. Each column either stores ``q`` itself (predictor 0), each
+entry minus its parent's entry (predictor 1), or, in U1 of a file with the coding tools of
+format 1.2, each entry minus the mean of its vertex's decoded neighbours (predictor 2); see
+:mod:`.prediction`. The residuals go column after column into one integer stream
+(:mod:`.streams`).
 
 The section entry carries ``shape`` [rows, cols], ``planes``, ``steps`` (cols float32,
 little-endian, as bytes) and ``predict`` (cols uint8, as bytes).
@@ -13,16 +15,21 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
 
 from ..errors import FormatError, UnreachableTargetError
+from ..topology import MAX_MEAN_LEVELS, MeshPrediction
 from . import streams
-from .prediction import accumulate, residuals
+from .prediction import accumulate, mean_accumulate, mean_residuals, residuals
 from .sections import section_shape
 
-PREDICT_NONE, PREDICT_PARENT = 0, 1
+PREDICT_NONE, PREDICT_PARENT, PREDICT_MEAN = 0, 1, 2
+#: The largest predictor of format 1.0 and 1.1; a larger one needs the coding tools flag.
+LAST_PLAIN_PREDICTOR = PREDICT_PARENT
+#: What a U1 section is restored with: the mesh parents alone, or the mesh's whole structure.
+Mesh = np.ndarray | MeshPrediction
 #: Largest |q| the encoder forms: exact in float64. What is streamed (q, or its residual from
 #: the parent) must also fit 32 bits, which :func:`.streams.pack_integers` checks.
 MAX_QUANTIZED = 2**52
@@ -69,23 +76,39 @@ def _cost(columns: np.ndarray) -> np.ndarray:
 
 def encode_matrix(
     matrix: QuantizedMatrix,
-    parents: np.ndarray | None,
+    parents: np.ndarray | MeshPrediction | None,
     *,
     allow_predict: bool = True,
+    coding_tools: bool = True,
     level: int = streams.DEFAULT_LEVEL,
 ) -> tuple[dict[str, Any], bytes]:
-    """``(params, payload)`` of the section, choosing per column whether prediction helps.
+    """``(params, payload)`` of the section, choosing per column the predictor whose residuals
+    look cheapest.
 
-    ``parents`` as in :func:`.prediction.residuals` (``None``: the previous row).
+    ``parents`` as in :func:`.prediction.residuals` (``None``: the previous row), or a mesh's
+    :class:`~tuckercodec.topology.MeshPrediction`, which also offers predictor 2 (the mean of
+    the decoded neighbours) when ``coding_tools`` allows it and the mesh is not too deep
+    (:data:`~tuckercodec.topology.MAX_MEAN_LEVELS`). :func:`uses_coding_tools` tells from the
+    params whether the file needs the coding tools flag.
     """
     q = matrix.q
     predict = np.zeros(q.shape[1], dtype=np.uint8)
     stream = q
     if allow_predict and q.shape[0] > 1:
-        stream = residuals(q, parents)
-        predict = (_cost(stream) < _cost(q)).astype(np.uint8)
-        plain = np.flatnonzero(predict == PREDICT_NONE)
-        stream[:, plain] = q[:, plain]  # in place: these columns store q itself
+        mesh = parents if isinstance(parents, MeshPrediction) else None
+        stream = residuals(q, parents.parents if isinstance(parents, MeshPrediction) else parents)
+        choices = [(PREDICT_NONE, q), (PREDICT_PARENT, stream)]
+        if mesh is not None and coding_tools and mesh.levels <= MAX_MEAN_LEVELS:
+            mean = mean_residuals(q, mesh.mean_steps)
+            if mean is not None:
+                choices.append((PREDICT_MEAN, mean))
+        costs = np.stack([_cost(columns) for _, columns in choices])
+        best = costs.argmin(axis=0)  # ties go to the lower predictor
+        predict = np.array([choices[j][0] for j in best], dtype=np.uint8)
+        for j, (value, columns) in enumerate(choices):
+            if value != PREDICT_PARENT:
+                chosen = np.flatnonzero(best == j)
+                stream[:, chosen] = columns[:, chosen]  # in place: stream is a fresh array
     payload, planes = streams.pack_integers(np.ascontiguousarray(stream.T), level)
     params = {
         "shape": [int(q.shape[0]), int(q.shape[1])],
@@ -96,20 +119,31 @@ def encode_matrix(
     return params, payload
 
 
+def uses_coding_tools(params: dict[str, Any]) -> bool:
+    """Whether a qmat section's params need the preamble's coding tools flag (format 1.2): a
+    predictor above 1."""
+    predict = params.get("predict", b"")
+    return isinstance(predict, bytes) and any(value > LAST_PLAIN_PREDICTOR for value in predict)
+
+
 def decode_matrix(
     payload: bytes | memoryview,
     params: dict[str, Any],
-    parents: np.ndarray | Callable[[], np.ndarray] | None,
+    parents: Mesh | Callable[[], Mesh] | None,
     where: str,
     *,
     allow_predict: bool = True,
+    coding_tools: bool = False,
 ) -> QuantizedMatrix:
     """The quantized matrix of a qmat section (§6.3). The caller has checked ``shape`` against
     the header and the limits.
 
-    ``parents`` as in :func:`.prediction.accumulate`, or a function that makes them:
-    it is called only once the stream has decoded and only if a column is predicted, so that
-    their cost (an array of ``rows`` entries) is never paid for a payload that turns out bad.
+    ``parents`` as in :func:`.prediction.accumulate`, a mesh's
+    :class:`~tuckercodec.topology.MeshPrediction`, or a function that makes either: it is
+    called only once the stream has decoded and only if a column is predicted, so that their
+    cost (arrays of ``rows`` entries) is never paid for a payload that turns out bad.
+    Predictor 2 (the mean of the decoded neighbours) is accepted only with ``coding_tools``
+    (the preamble's flag bit 1, format 1.2) and a mesh (``parents`` not ``None``).
     """
     rows, cols = section_shape(params, where)
     planes = streams.checked_planes(params, where)
@@ -122,28 +156,52 @@ def decode_matrix(
             field=f"{where}.steps",
         )
     if not isinstance(predict_raw, bytes) or len(predict_raw) != cols:
-        raise FormatError(
-            f"predict must be {cols} bytes", rule="R32-predictor", field=f"{where}.predict"
-        )
+        _refuse_predictor(f"predict must be {cols} bytes", where)
     steps = np.frombuffer(steps_raw, dtype="<f4").astype(np.float32)
     if not (np.isfinite(steps).all() and (steps > 0).all()):
         raise FormatError(
             "every step must be a positive finite float32", rule="R31-steps", field=f"{where}.steps"
         )
     predict = np.frombuffer(predict_raw, dtype=np.uint8)
-    if (predict > PREDICT_PARENT).any() or (not allow_predict and predict.any()):
-        allowed = "0 or 1" if allow_predict else "0 (no parent relation here)"
-        raise FormatError(
-            f"every predictor must be {allowed}", rule="R32-predictor", field=f"{where}.predict"
-        )
+    largest = PREDICT_MEAN if coding_tools and parents is not None else PREDICT_PARENT
+    if (predict > largest).any() or (not allow_predict and predict.any()):
+        allowed = f"at most {largest}" if allow_predict else "0 (no parent relation here)"
+        if allow_predict and (predict == PREDICT_MEAN).any() and parents is not None:
+            allowed += " (2 needs the coding tools flag of format 1.2)"
+        _refuse_predictor(f"every predictor must be {allowed}", where)
     stream = streams.unpack_integers(payload, rows * cols, planes, where)
     q = np.ascontiguousarray(stream.reshape(cols, rows).T)
     chosen = np.flatnonzero(predict == PREDICT_PARENT)
-    if chosen.size:
+    meaned = np.flatnonzero(predict == PREDICT_MEAN)
+    if chosen.size or meaned.size:
         if callable(parents):
             parents = parents()
+        mesh = parents if isinstance(parents, MeshPrediction) else None
+        tree = parents.parents if isinstance(parents, MeshPrediction) else parents
         if chosen.size == cols:  # every column (U1's usual case): restored where it lies
-            accumulate(q, parents, in_place=True)
-        else:
-            q[:, chosen] = accumulate(q[:, chosen], parents)
+            accumulate(q, tree, in_place=True)
+        elif chosen.size:
+            q[:, chosen] = accumulate(q[:, chosen], tree)
+        if meaned.size:
+            q[:, meaned] = _restore_mean(q[:, meaned], mesh, where)
     return QuantizedMatrix(q, steps)
+
+
+def _restore_mean(residual: np.ndarray, mesh: MeshPrediction | None, where: str) -> np.ndarray:
+    """Predictor 2's columns restored (§6.2), or R32 when its conditions fail."""
+    if mesh is None:
+        raise ValueError("predictor 2 needs the mesh's MeshPrediction, not only its parents")
+    if mesh.levels > MAX_MEAN_LEVELS:
+        _refuse_predictor(
+            f"predictor 2 is allowed only on a mesh whose breadth-first forest has at most "
+            f"{MAX_MEAN_LEVELS} levels; this one has {mesh.levels}",
+            where,
+        )
+    try:
+        return mean_accumulate(residual, mesh.mean_steps)
+    except ValueError:
+        _refuse_predictor("a value restored with predictor 2 is outside -2**32..2**32", where)
+
+
+def _refuse_predictor(message: str, where: str) -> NoReturn:
+    raise FormatError(message, rule="R32-predictor", field=f"{where}.predict")
