@@ -109,10 +109,9 @@ class SegmentedEncode:
                 )
         self._read_and_model()
         # the smaller connectivity codec; faces-traverse reorders the faces (§6.8)
-        self.face_codec, *face_section, _ = faces.encode_face_section(
-            source.faces, self.vertex_count, level
-        )
-        self.face_section: tuple[dict[str, Any], bytes] = (face_section[0], face_section[1])
+        face = faces.encode_face_section(source.faces, self.vertex_count, level)
+        self.face_codec = face.codec
+        self.face_section = (face.params, face.payload)
         self.name_section = names.encode_names(source.frame_names, level)
         self.floor_step, self.floor_error2 = self._centroid_floor()
 

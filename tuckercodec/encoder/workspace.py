@@ -62,10 +62,9 @@ class Workspace:
         self.mesh = MeshPrediction(sequence.faces, self.vertex_count)
         self.parents = self.mesh.parents
         # the smaller connectivity codec; faces-traverse reorders the faces (§6.8)
-        self.face_codec, *face_section, _ = faces.encode_face_section(
-            sequence.faces, self.vertex_count, level
-        )
-        self.face_section: tuple[dict[str, Any], bytes] = (face_section[0], face_section[1])
+        face = faces.encode_face_section(sequence.faces, self.vertex_count, level)
+        self.face_codec = face.codec
+        self.face_section = (face.params, face.payload)
         self.name_section = names.encode_names(sequence.frame_names, level)
         self.centroid_floor_step, self.centroid_floor_error2 = self._centroid_floor()
         self._u1 = np.zeros((self.vertex_count, 0))
