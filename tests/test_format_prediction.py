@@ -266,3 +266,19 @@ def test_mesh_prediction_steps_on_a_strip_and_without_edges():
     mesh = mesh_prediction(np.stack([row, row + 1, row + 2], 1), count)
     assert mesh.levels == MAX_MEAN_LEVELS + 1  # counted no further than "too deep"
     assert mesh.mean_steps.levels > MAX_MEAN_LEVELS + 1
+
+
+def test_the_public_sparse_product_gives_what_scipys_private_one_gives():
+    """The mean predictor's restore uses scipy's private csr_matvecs; its fallback, through the
+    public API, must give the same sums."""
+    from tuckercodec.format.prediction import _csr_matvecs, _public_csr_matvecs
+
+    rng = np.random.default_rng(3)
+    ptr = np.array([0, 2, 2, 5], dtype=np.int64)
+    idx = np.array([0, 3, 1, 2, 3], dtype=np.int64)
+    weights = rng.integers(-4, 5, size=5).astype(np.float64)  # integers, as the restore's are
+    x = rng.integers(-1000, 1000, size=(4, 6)).astype(np.float64)
+    expected, got = np.ones((3, 6)), np.ones((3, 6))
+    _csr_matvecs()(3, 4, 6, ptr, idx, weights, x.reshape(-1), expected.reshape(-1))
+    _public_csr_matvecs(3, 4, 6, ptr, idx, weights, x.reshape(-1), got.reshape(-1))
+    np.testing.assert_array_equal(got, expected)

@@ -186,7 +186,28 @@ def _float_predictions(work: np.ndarray, steps: MeanSteps, start: int, stop: int
 
 def _csr_matvecs() -> Any:
     """scipy's compiled y += A X for a CSR matrix A given as arrays (its ``@`` costs tens of
-    microseconds per call in checks, and restoring runs one per step)."""
-    from scipy.sparse import _sparsetools  # imported here: scipy.sparse is slow to import
+    microseconds per call in checks, and restoring runs one per step). It is private to scipy:
+    should a release drop it, the same product is made through the public API, slower."""
+    try:  # imported here: scipy.sparse is slow to import
+        from scipy.sparse import _sparsetools
 
-    return _sparsetools.csr_matvecs
+        return _sparsetools.csr_matvecs
+    except (ImportError, AttributeError):  # pragma: no cover - scipy's layout of 1.11-1.16 has it
+        return _public_csr_matvecs
+
+
+def _public_csr_matvecs(
+    rows: int,
+    columns: int,
+    vectors: int,
+    ptr: np.ndarray,
+    idx: np.ndarray,
+    weights: np.ndarray,
+    x: np.ndarray,
+    y: np.ndarray,
+) -> None:
+    """``y += A x`` as :func:`_csr_matvecs` does it, with ``scipy.sparse.csr_matrix``."""
+    import scipy.sparse as sparse
+
+    matrix = sparse.csr_matrix((weights, idx, ptr), shape=(rows, columns))
+    y.reshape(rows, vectors)[:] += matrix @ x.reshape(columns, vectors)
