@@ -17,8 +17,8 @@ from tuckercodec.format.qmat import (
     decode_matrix,
     encode_matrix,
     quantize,
-    uses_coding_tools,
 )
+from tuckercodec.format.sections import uses_coding_tools
 from tuckercodec.format.streams import compress, pack_integers
 from tuckercodec.samples import sample_path
 from tuckercodec.topology import MAX_MEAN_LEVELS, mesh_prediction
@@ -75,7 +75,7 @@ def test_predictor_2_round_trip_needs_the_coding_tools_flag():
     params, payload = encode_matrix(matrix, mesh)
     predict = np.frombuffer(params["predict"], np.uint8).tolist()
     assert predict[:2] == [PREDICT_MEAN, PREDICT_MEAN] and predict[2] != PREDICT_MEAN
-    assert uses_coding_tools(params)
+    assert uses_coding_tools([{"id": "U1", "codec": "qmat", **params}])
     for given in (mesh, lambda: mesh):
         decoded = decode_matrix(payload, params, given, "test", coding_tools=True)
         np.testing.assert_array_equal(decoded.q, matrix.q)
@@ -87,7 +87,7 @@ def test_predictor_2_round_trip_needs_the_coding_tools_flag():
     assert raised.value.rule == "R32-predictor"
     # without the coding tools, the encoder keeps to predictors 0 and 1 (format 1.0 and 1.1)
     plain_params, plain_payload = encode_matrix(matrix, mesh, coding_tools=False)
-    assert not uses_coding_tools(plain_params)
+    assert not uses_coding_tools([{"id": "U1", "codec": "qmat", **plain_params}])
     assert set(np.frombuffer(plain_params["predict"], np.uint8).tolist()) <= {0, 1}
     plain = decode_matrix(plain_payload, plain_params, mesh.parents, "test")
     np.testing.assert_array_equal(plain.q, matrix.q)
@@ -139,7 +139,7 @@ def test_a_file_with_predictor_2_and_no_coding_tools_flag_is_refused():
     params, payload = encode_matrix(
         quantize(values, np.full(3, 1e-3)), mesh_prediction(faces, count)
     )
-    assert uses_coding_tools(params)
+    assert uses_coding_tools([{"id": "U1", "codec": "qmat", **params}])
     face_params, face_payload = encode_faces(faces)
     one = np.ones(1, "<f4").tobytes()
     sections = [

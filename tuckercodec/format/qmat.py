@@ -88,8 +88,8 @@ def encode_matrix(
     ``parents`` as in :func:`.prediction.residuals` (``None``: the previous row), or a mesh's
     :class:`~tuckercodec.topology.MeshPrediction`, which also offers predictor 2 (the mean of
     the decoded neighbours) when ``coding_tools`` allows it and the mesh is not too deep
-    (:data:`~tuckercodec.topology.MAX_MEAN_LEVELS`). :func:`uses_coding_tools` tells from the
-    params whether the file needs the coding tools flag.
+    (:data:`~tuckercodec.topology.MAX_MEAN_LEVELS`). :func:`.sections.uses_coding_tools` tells
+    from the section entries whether the file needs the coding tools flag.
     """
     q = matrix.q
     predict = np.zeros(q.shape[1], dtype=np.uint8)
@@ -117,13 +117,6 @@ def encode_matrix(
         "predict": predict.tobytes(),
     }
     return params, payload
-
-
-def uses_coding_tools(params: dict[str, Any]) -> bool:
-    """Whether a qmat section's params need the preamble's coding tools flag (format 1.2): a
-    predictor above 1."""
-    predict = params.get("predict", b"")
-    return isinstance(predict, bytes) and any(value > LAST_PLAIN_PREDICTOR for value in predict)
 
 
 def decode_matrix(
