@@ -9,8 +9,9 @@ reference reconstruction (an .npy of the decoded positions) with its tolerance.
 
 Invalid vectors: one per rule of §11, each made by breaking exactly that rule in a valid file
 (checksums recomputed, so that nothing else is wrong), with the rule id and the error class it
-must raise. They are a function of the valid file alone: from the committed
-v1-wave-triangles.tkc they come out byte for byte as committed (a test checks it).
+must raise. They are a function of the valid files alone: from the committed
+v1-wave-triangles.tkc (format 1.0), v1.1-segments-shared.tkc (1.1) and
+v1.2-traverse-triangles.tkc (1.2) they come out byte for byte as committed (a test checks it).
 
 The encoder is not byte-identical across machines (the SVD's signs and last bits depend on the
 BLAS), so the vectors are written once and committed; every test run decodes them. Never write
