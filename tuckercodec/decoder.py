@@ -31,6 +31,7 @@ from .format.disk import FileRanges, open_file_container, read_file
 from .format.header import FileInfo, read_header
 from .format.limits import DEFAULT_LIMITS, Limits, check_limit
 from .format.reconstruction import reconstruct_frames, reconstruction_basis
+from .format.sections import Section
 from .format.segments import BASIS_OWN, BASIS_SHARED, SegmentEntry
 from .sequence import MeshSequence
 from .topology import MeshPrediction
@@ -104,12 +105,9 @@ class Decoder:
             self.info = read_header(self._container, limits)
             self._index = self._segment_index()
             self._starts = np.array([segment.start for segment in self._index], dtype=np.int64)
+            face = self._section("FACE")
             self.faces = faces.decode_face_section(
-                self._face_codec(),
-                self._payload("FACE"),
-                self._params("FACE"),
-                self.info.vertices,
-                "section FACE",
+                face.codec, self._payload("FACE"), face.params, self.info.vertices, "section FACE"
             )
             if not self.segmented:  # §5 steps 16-17 in order: U1, U3, CORE, CENT, then NAME
                 self.segment_factors(0)
@@ -151,20 +149,13 @@ class Decoder:
             return stem
         return segment.u1_section_id() if stem == "U1" else segment.section_id(stem)
 
-    def _payload(self, section_id: str) -> memoryview:
+    def _section(self, section_id: str) -> Section:
         section = self._container.section(section_id)
         assert section is not None  # read_header found every required section
-        return self._container.payload(self._data, section)
+        return section
 
-    def _face_codec(self) -> str:
-        entry = self._container.section("FACE")
-        assert entry is not None  # required: the header check has found it
-        return entry.codec
-
-    def _params(self, section_id: str) -> dict[str, object]:
-        section = self._container.section(section_id)
-        assert section is not None
-        return section.params
+    def _payload(self, section_id: str) -> memoryview:
+        return self._container.payload(self._data, self._section(section_id))
 
     def _mesh_prediction(self) -> MeshPrediction:
         # K entries: made only after a U1 payload has passed its CRC and zstd checks, which
@@ -178,7 +169,7 @@ class Decoder:
         where = f"section {section_id}"
         matrix = qmat.decode_matrix(
             self._payload(section_id),
-            self._params(section_id),
+            self._section(section_id).params,
             self._mesh_prediction,
             where,
             coding_tools=self._container.coding_tools,  # predictor 2 only in format 1.2
@@ -206,7 +197,7 @@ class Decoder:
                 section_id = self._section_id(segment, stem)
                 return qmat.decode_matrix(
                     self._payload(section_id),
-                    self._params(section_id),
+                    self._section(section_id).params,
                     None,  # U3 and CENT: the previous frame; CORE: nothing
                     f"section {section_id}",
                     allow_predict=allow_predict,

@@ -34,13 +34,7 @@ from ..errors import (
     UnsupportedVersionError,
 )
 from .limits import DEFAULT_LIMITS, Limits
-from .sections import (
-    CODING_TOOLS,
-    CODING_TOOLS_MINOR,
-    Section,
-    read_section_table,
-    uses_coding_tools,
-)
+from .sections import CODING_TOOLS, Section, read_section_table, with_coding_tools
 from .segments import SEGMENTED
 
 SIGNATURE = b"\x89TKC\r\n\x1a\n"
@@ -163,11 +157,7 @@ def pack_container(
             section needs it (:func:`.sections.uses_coding_tools`). Only files that break the
             rules on purpose (conformance vectors) say ``False`` for such sections.
     """
-    if coding_tools is None:
-        coding_tools = uses_coding_tools([entry for entry, _ in sections])
-    if coding_tools:
-        flags |= CODING_TOOLS
-        minor = max(minor, CODING_TOOLS_MINOR)
+    flags, minor = with_coding_tools([entry for entry, _ in sections], flags, minor, coding_tools)
     table = []
     offset = 0
     for entry, payload in sections:

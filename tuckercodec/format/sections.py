@@ -180,6 +180,18 @@ def entry(section_id: str, params: Mapping[str, Any], codec: str | None = None) 
     return {"id": section_id, "critical": kind.critical, "codec": codec or kind.codec, **params}
 
 
+def with_coding_tools(
+    entries: list[dict[str, Any]], flags: int, minor: int, coding_tools: bool | None
+) -> tuple[int, int]:
+    """The preamble's ``(flags, minor)`` for a file of these section entries: with flag bit 1
+    and minor version 2 if ``coding_tools`` says so, or (``None``) if a section needs it."""
+    if coding_tools is None:
+        coding_tools = uses_coding_tools(entries)
+    if coding_tools:
+        return flags | CODING_TOOLS, max(minor, CODING_TOOLS_MINOR)
+    return flags, minor
+
+
 def uses_coding_tools(entries: list[dict[str, Any]]) -> bool:
     """Whether any of these section entries needs preamble flag bit 1 (format 1.2): a codec of
     1.2, or a qmat predictor above 1."""
