@@ -1,9 +1,13 @@
 """Meeting a target: the ranks and the quantization parameter D for an error or a size.
 
+Longer than most modules because the size target's search lives beside the error target's
+it builds on: its budget fillers (:func:`fill`, :func:`fill_erratic`) and its candidates.
+
 :func:`search_kg` tries a few splits of the error budget between truncation and quantization
 and keeps the smallest packed file; :func:`meet` then adjusts D until the decoded error is at
-most the target; :func:`search_bpfv` bisects the error for the smallest one whose file fits a
-size. The package docstring (:mod:`tuckercodec.encoder`) gives the method.
+most the target; :func:`search_bpfv` ranks candidate truncations by the error they reach when
+their D fills the size budget (trial sizes), then fills the budget with the winner's D on the
+real file. The package docstring (:mod:`tuckercodec.encoder`) gives the method.
 """
 
 from __future__ import annotations
@@ -109,7 +113,7 @@ FILL_LEAST = 0.98
 TRIAL_WINDOW = 0.006
 #: Sizes measured to fill one budget at one choice of ranks: trial sizes, then real files.
 TRIAL_FILLS = 6
-FINAL_FILLS = 5
+FINAL_FILLS = 6
 #: The sections whose size D sets; the others (faces, names) are coded once.
 QUANTIZED_SECTIONS = ("CENT", "U3", "CORE", "U1")
 #: Final bytes of those sections per trial byte (level 19 with rate-distortion rounding, over
@@ -161,30 +165,34 @@ def fill(
     least, most = window
     aim = 0.5 * (least + most)
     low_limit, high_limit = (math.log(x) for x in limits)
-    fits: Filled[Item] | None = None
+    prior = slope
+    points: list[tuple[float, float]] = []
+    fits: tuple[float, float, Item] | None = None  # ln D, size, item: the smallest D that fits
     over: tuple[float, float] | None = None  # (ln D, size): the largest D found too large
-    last: tuple[float, float] | None = None
     at = min(max(math.log(step), low_limit), high_limit)
-    for tried in range(1, tries + 1):
+    tried = 0
+    while tried < tries:
+        tried += 1
         size, item = size_of(math.exp(at))
-        if last is not None and at != last[0] and math.isfinite(size + last[1]):
-            measured = (size - last[1]) / (at - last[0])
-            if measured < 0:
-                slope = measured
-        last = (at, size)
+        if math.isfinite(size):
+            if points and at != points[-1][0]:
+                measured = (size - points[-1][1]) / (at - points[-1][0])
+                if measured < 0:
+                    slope = measured
+            points.append((at, size))
         if size <= most:
-            if fits is None or at < math.log(fits.step):
-                fits = Filled(math.exp(at), size, item, slope)
+            if fits is None or at < fits[0]:
+                fits = (at, size, item)
             if size >= least:
-                return fits, tried
+                break
         elif over is None or at > over[0]:
             over = (at, size)
         if fits is not None and over is not None:
-            low, high = over[0], math.log(fits.step)
+            low, high = over[0], fits[0]
             if high - low < 1e-6:  # not monotone here: keep the smallest D that fits
-                return fits, tried
+                break
             if math.isfinite(over[1]):
-                share = (over[1] - aim) / (over[1] - fits.size)
+                share = (over[1] - aim) / (over[1] - fits[1])
                 at = low + min(0.9, max(0.1, share)) * (high - low)
             else:
                 at = 0.5 * (low + high)
@@ -192,9 +200,34 @@ def fill(
             move = (aim - size) / slope if math.isfinite(size) else 2.0
             moved = min(max(at + min(3.0, max(-3.0, move)), low_limit), high_limit)
             if moved == at:  # against a limit
-                return fits, tried
+                break
             at = moved
-    return fits, tries
+    if fits is None:
+        return None, tried
+    return Filled(math.exp(fits[0]), fits[1], fits[2], _slope(points, fits[0], prior)), tried
+
+
+def _slope(points: list[tuple[float, float]], at: float, prior: float) -> float:
+    """The size's slope in ln D near ``at``: the least-squares line's through the points
+    (ln D, size) within 0.7 of it, or else through all of them, when they span at least 0.05
+    (sizes a hair apart in D differ by noise alone), fitted again without the points more
+    than 3 % below the line (lucky ones), and kept within a factor 3 of ``prior``."""
+    for chosen in (_near(points, at), points):
+        xs = np.array([x for x, _ in chosen])
+        ys = np.array([y for _, y in chosen])
+        if len(chosen) < 2 or np.ptp(xs) < 0.05:
+            continue
+        line = np.polyfit(xs, ys, 1)
+        kept = ys >= 0.97 * np.polyval(line, xs)
+        if kept.sum() >= 2 and np.ptp(xs[kept]) >= 0.05:
+            line = np.polyfit(xs[kept], ys[kept], 1)
+        fitted = float(line[0])
+        return prior if fitted >= 0 else min(max(fitted, 3.0 * prior), prior / 3.0)
+    return prior
+
+
+def _near(points: list[tuple[float, float]], at: float) -> list[tuple[float, float]]:
+    return [point for point in points if abs(point[0] - at) <= 0.7]
 
 
 def fill_erratic(
@@ -205,7 +238,8 @@ def fill_erratic(
     tries: int,
 ) -> tuple[Filled[Item] | None, int]:
     """As :func:`fill`, for a size that is erratic in D: the smallest D found whose size is
-    at most ``window[1]``, stopping at the first size within the window.
+    at most ``window[1]`` (the smallest error: a lucky D may fit below the window), stopping
+    at the first size within the window.
 
     zstd's strongest levels jump by several per cent between nearly equal inputs (samba's U1
     at 4 bpfv packs at level 19 to about 0.92 of its level-3 size, or, for about one D in
@@ -236,12 +270,8 @@ def fill_erratic(
             at += 1.0
             continue
         points.append((at, size))
-        recent = np.array(points[-4:])
-        slope = prior
-        if np.ptp(recent[:, 0]) >= 0.1:
-            fitted = float(np.polyfit(recent[:, 0], recent[:, 1], 1)[0])
-            slope = fitted if fitted < 0 else prior
-        top = float((recent[:, 1] - slope * recent[:, 0]).max())
+        slope = _slope(points, at, prior)
+        top = max(y - slope * x for x, y in _near(points, at))
         at = (aim - top) / slope
     return fits, tries
 
