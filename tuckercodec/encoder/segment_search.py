@@ -4,19 +4,35 @@ counterpart of :mod:`.search`).
 :func:`search_kg` tries a few shares of the error budget for truncation, each with the cheapest
 ranks that fit it (:func:`.segment_model.cheapest_ranks`), and keeps the smallest file;
 :func:`meet` finds D on the model of the decoded error, then measures the error on the input
-(a pass) and tightens D until the measured error meets the target. :func:`search_bpfv` bisects
-the error for a size, on the model.
+(a pass) and tightens D until the measured error meets the target. :func:`search_bpfv` fills
+a size budget as the unsegmented search does: candidates on the model, D on the real file.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 from ..errors import UnreachableTargetError
 from ..format import streams
 from ..format.segments import BASIS_SHARED
-from .search import QUICK_SHARES, SAFETY
-from .segment_file import segment_sections
+from .search import (
+    FILL_LEAST,
+    FINAL_FILLS,
+    HIGHEST_KG,
+    KG_SLOPE_PER_VALUE,
+    LOWEST_KG,
+    SAFETY,
+    SIZE_SHARES,
+    SLOPE_PER_VALUE,
+    TRIAL_FILLS,
+    TRIAL_RATIO,
+    TRIAL_WINDOW,
+    Filled,
+    fill,
+    fill_erratic,
+)
+from .segment_file import pack_segmented, segment_sections
 from .segment_model import RankChoice, cheapest_ranks, fixed_ranks
 from .segment_work import Quantized, SegmentedEncode
 
@@ -140,46 +156,114 @@ def encode_ranks(work: SegmentedEncode, i: int, k: int) -> tuple[Quantized, floa
 
 
 def search_bpfv(work: SegmentedEncode, target_bpfv: float) -> tuple[Quantized, float]:
-    """The smallest KG error whose file fits: bisection on log KG over the model (sizes at
-    the fast level), then the measuring pass, which only makes the file smaller."""
-    budget = target_bpfv * work.frame_count * work.vertex_count / 8.0
+    """The smallest error found whose whole file fits ``target_bpfv`` (as the unsegmented
+    :func:`.search.search_bpfv`): a first KG error whose trial file fills the budget, then the
+    ranks for shares of it (:data:`.search.SIZE_SHARES`), each with the D whose trial file
+    fills it and ranked by the model's error there, then the winner's D filled on the real
+    file (the final level, every section and the header), and one pass to measure the error
+    the header states."""
+    pixels = work.frame_count * work.vertex_count
+    budget = target_bpfv * pixels / 8.0
+    aim = 0.5 * (FILL_LEAST + 1.0) * budget
+    shared = work.basis == BASIS_SHARED
+    fixed = len(work.face_section[1]) + (
+        0 if work.name_section is None else len(work.name_section[1])
+    )
+    if work.fixed_basis is not None:
+        fixed += len(work.fixed_basis.payload)
     # the header beside the payloads: the section table and the segment index
     overhead = 400 + 300 * len(work.ranges)
+    lowest2 = (LOWEST_KG / 100.0) ** 2 * work.denominator2
 
-    def size(kg: float) -> tuple[int, RankChoice, float] | None:
+    def trial_sizes(choice: RankChoice) -> Callable[[float], tuple[float, Quantized | None]]:
+        def size_of(step: float) -> tuple[float, Quantized | None]:
+            try:
+                quantized = work.quantize(choice, step)
+                variable = trial_bytes(work, quantized) - fixed
+            except (UnreachableTargetError, ValueError):  # D too small for the format
+                return math.inf, None
+            return overhead + fixed + TRIAL_RATIO * variable, quantized
+
+        return size_of
+
+    def limits(choice: RankChoice) -> tuple[float, float]:
+        top2 = (HIGHEST_KG / 10.0) ** 2 * work.denominator2
+        return work.initial_step(choice, 0.01 * lowest2), work.initial_step(choice, top2)
+
+    def ranks_for(kg: float, share: float) -> RankChoice | None:
         limit2 = (kg / 100.0) ** 2 * work.denominator2
-        best = None
-        for share in QUICK_SHARES:
-            choice = cheapest_ranks(
-                work.models, work.basis_vertices, work.basis == BASIS_SHARED, share * limit2
-            )
-            room = 0.0 if choice is None else limit2 - choice.truncation2 - work.floor_error2
-            if choice is None or room <= 0:
-                continue
-            quantized, _ = meet_in_model(work, choice, work.initial_step(choice, room), limit2)
-            bytes_ = trial_bytes(work, quantized) + overhead
-            if best is None or bytes_ < best[0]:
-                best = (bytes_, choice, quantized.step)
-        return best
+        return cheapest_ranks(work.models, work.basis_vertices, shared, share * limit2)
 
-    low, high = math.log(1e-4), math.log(100.0)
-    coarsest = size(100.0)
-    if coarsest is None or coarsest[0] > budget:
-        pixels = work.frame_count * work.vertex_count
-        needs = "" if coarsest is None else f" needs {coarsest[0] * 8 / pixels:.3f} bpfv"
+    def kg_size(kg: float) -> tuple[float, float]:
+        choice = ranks_for(kg, 0.3)
+        if choice is None:
+            return math.inf, kg
+        room = max((kg / 100.0) ** 2 * work.denominator2 * 0.7 - work.floor_error2, lowest2)
+        return trial_sizes(choice)(work.initial_step(choice, room))[0], kg
+
+    first, _ = fill(
+        kg_size,
+        1.0,
+        KG_SLOPE_PER_VALUE * work.vertex_count * work.frame_count,
+        (0.8 * aim, aim),
+        (LOWEST_KG, HIGHEST_KG),
+        8,
+    )
+    if first is None:
+        coarsest = kg_size(HIGHEST_KG)[0]
+        needs = (
+            "" if not math.isfinite(coarsest) else f" needs about {coarsest * 8 / pixels:.3f} bpfv"
+        )
         raise UnreachableTargetError(
             f"no file fits {target_bpfv} bpfv: even the coarsest one{needs} (the faces "
             f"alone take {len(work.face_section[1]) * 8 / pixels:.3f})"
         )
-    for _ in range(14):
-        middle = 0.5 * (low + high)
-        found = size(math.exp(middle))
-        if found is not None and found[0] <= budget:
-            high = middle
-        else:
-            low = middle
-    kg = math.exp(high)
-    limit2 = (kg * (1.0 - SAFETY) / 100.0) ** 2 * work.denominator2
-    found = size(kg)
-    assert found is not None
-    return meet(work, found[1], found[2], limit2)
+    kg = first.item
+    best: tuple[float, RankChoice, Filled[Quantized | None]] | None = None
+    seen: set[tuple[int, tuple[tuple[int, int], ...]]] = set()
+    for share in SIZE_SHARES:
+        choice = ranks_for(kg, share)
+        if choice is None or (choice.shared, choice.ranks) in seen:
+            continue
+        seen.add((choice.shared, choice.ranks))
+        fixed2 = choice.truncation2 + work.floor_error2
+        if best is not None and fixed2 >= best[0]:
+            continue  # its truncation alone loses
+        room = max((kg / 100.0) ** 2 * work.denominator2 - fixed2, 0.1 * fixed2, lowest2)
+        filled, _ = fill(
+            trial_sizes(choice),
+            work.initial_step(choice, room),
+            SLOPE_PER_VALUE * work.stored_values(choice),
+            (aim * (1.0 - TRIAL_WINDOW), aim),
+            limits(choice),
+            TRIAL_FILLS,
+        )
+        if filled is None or filled.item is None:
+            continue
+        quantization2 = work.model_error2(filled.item) - fixed2
+        quantization2 *= math.exp((aim - filled.size) / filled.slope)  # at the aim
+        error2 = fixed2 + max(quantization2, 0.0)
+        if best is None or error2 < best[0]:
+            best = (error2, choice, filled)
+    if best is None:
+        raise UnreachableTargetError(f"no file fits {target_bpfv} bpfv")
+    estimate2, choice, trial = best
+
+    def real_size(step: float) -> tuple[float, Quantized | None]:
+        try:
+            quantized = work.quantize(choice, step)
+        except (UnreachableTargetError, ValueError):
+            return math.inf, None
+        return len(pack_segmented(work, quantized, estimate2, None)[0]), quantized
+
+    filled, _ = fill_erratic(
+        real_size,
+        (trial.step, aim, trial.slope),
+        (FILL_LEAST * budget, budget),
+        limits(choice),
+        FINAL_FILLS,
+    )
+    if filled is None or filled.item is None:
+        raise UnreachableTargetError(f"no file fits {target_bpfv} bpfv")
+    # the header holds the measured error, a float: the file keeps its size
+    return filled.item, work.measured_error2(filled.item)
