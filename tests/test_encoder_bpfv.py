@@ -90,3 +90,12 @@ def test_a_filler_reports_none_when_no_step_within_the_limits_fits():
         size_of, (1.0, 10_000.0, -800.0), (4_900.0, 5_000.0), (1e-3, 10.0), 4
     )
     assert filled is None
+
+
+def test_the_segmented_encoder_fills_its_budget_too(cloth):
+    result = tc.encode_with_report(cloth, target_bpfv=1.0, segment_frames=30)
+    assert result.report.segments == 2
+    size = 8 * len(result.data) / (cloth.frame_count * cloth.vertex_count)
+    assert search.FILL_LEAST <= size <= 1.0
+    decoded = tc.Decoder(result.data).positions()
+    assert tc.kg_error(cloth.vertices, decoded) == pytest.approx(result.report.kg, rel=1e-6)
