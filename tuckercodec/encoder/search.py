@@ -93,7 +93,8 @@ def search_kg(
         if room <= 0:
             continue
         step = initial_step(work, i, k, room)
-        trials[(i, k)] = (work.trial_bytes(work.quantize(i, k, step)), step)
+        # trials only rank truncations: nearest rounding, RDO is for the final meet()
+        trials[(i, k)] = (work.trial_bytes(work.quantize(i, k, step, rdo.NEAREST)), step)
     if not trials:  # the target is within rounding of zero error
         r1, r3 = work.analysis.max_ranks
         trials[(r1, r3)] = (0, initial_step(work, r1, r3, max(limit2, 1e-300)))
