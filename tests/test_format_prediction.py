@@ -165,7 +165,7 @@ def _spec_mean_restore(residual: np.ndarray, faces: np.ndarray, count: int) -> n
     rank, seen = [0] * count, [0] * (count + 1)
     for v in reached_order:
         rank[v], seen[depth[v]] = seen[depth[v]], seen[depth[v]] + 1
-    phase = [r % 2 for r in rank]
+    phase = [r % 8 for r in rank]
     q = [[int(x) for x in row] for row in residual]
     order = sorted(
         (v for v in range(count) if depth[v] >= 1),

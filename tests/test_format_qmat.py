@@ -103,7 +103,7 @@ def test_predictor_2_is_refused_on_a_mesh_too_deep_or_out_of_range():
     # a section that says 2 anyway
     payload, planes = pack_integers(np.zeros((1, count), np.int64))
     forced = {**params, "predict": bytes([PREDICT_MEAN]), "planes": planes}
-    with pytest.raises(FormatError, match="at most 4096 levels") as raised:
+    with pytest.raises(FormatError, match=f"{MAX_MEAN_LEVELS} levels") as raised:
         decode_matrix(payload, forced, strip, "test", coding_tools=True)
     assert raised.value.rule == "R32-predictor"
     # residuals that carry a value beyond +-2**32 (each one adds 2**31 - 1 to its sources)
