@@ -12,6 +12,7 @@ from tuckercodec import Decoder, FormatError, encode, load_sequence
 from tuckercodec.format.container import pack_container, parse_container
 from tuckercodec.format.faces import encode_faces
 from tuckercodec.format.qmat import (
+    PREDICT_LINEAR,
     PREDICT_MEAN,
     PREDICT_PARENT,
     decode_matrix,
@@ -82,7 +83,7 @@ def test_predictor_2_round_trip_needs_the_coding_tools_flag():
     with pytest.raises(FormatError, match="coding tools flag") as raised:
         decode_matrix(payload, params, mesh, "test")  # a file of format 1.0 or 1.1
     assert raised.value.rule == "R32-predictor"
-    with pytest.raises(FormatError, match="at most 1") as raised:  # U3: no mesh
+    with pytest.raises(FormatError, match=r"in \[0, 1, 3\]") as raised:  # U3: no mesh
         decode_matrix(payload, params, None, "test", coding_tools=True)
     assert raised.value.rule == "R32-predictor"
     # without the coding tools, the encoder keeps to predictors 0 and 1 (format 1.0 and 1.1)
@@ -166,4 +167,39 @@ def test_a_file_with_predictor_2_and_no_coding_tools_flag_is_refused():
     np.testing.assert_allclose(decoded, values, atol=1e-3)
     with pytest.raises(FormatError, match="coding tools flag") as raised:
         Decoder(pack_container(header, sections, coding_tools=False))
+    assert raised.value.rule == "R32-predictor"
+
+
+def test_predictor_3_extrapolates_along_time_and_needs_the_flag():
+    """U3 and CENT (previous-row sections) may store second differences (format 1.2): a smooth
+    column is then nearly all zeros."""
+    t = np.arange(50, dtype=np.float64)
+    values = np.stack([3.0 * t + 7.0, np.sin(t / 5.0), np.zeros(50)], axis=1)
+    matrix = quantize(values, np.array([0.5, 1e-3, 1.0]))
+    params, payload = encode_matrix(matrix, None)
+    predict = np.frombuffer(params["predict"], np.uint8).tolist()
+    assert predict[0] == PREDICT_LINEAR  # a straight line: second differences all 0
+    assert uses_coding_tools([{"id": "U3", "codec": "qmat", **params}])
+    decoded = decode_matrix(payload, params, None, "test", coding_tools=True)
+    np.testing.assert_array_equal(decoded.q, matrix.q)
+    with pytest.raises(FormatError, match="3 needs the coding tools flag") as raised:
+        decode_matrix(payload, params, None, "test")
+    assert raised.value.rule == "R32-predictor"
+    plain, _ = encode_matrix(matrix, None, coding_tools=False)
+    assert PREDICT_LINEAR not in np.frombuffer(plain["predict"], np.uint8)
+
+
+def test_predictor_3_refuses_values_out_of_range():
+    residual = np.zeros((4, 1), np.int64)
+    residual[0, 0] = 2**31 - 1  # then 2**31 - 1 more each row: 3 * (2**31 - 1) > 2**32
+    residual[1, 0] = 2**31 - 1
+    payload, planes = pack_integers(np.ascontiguousarray(residual.T))
+    params = {
+        "shape": [4, 1],
+        "planes": planes,
+        "steps": np.array([1.0], "<f4").tobytes(),
+        "predict": bytes([PREDICT_LINEAR]),
+    }
+    with pytest.raises(FormatError, match="leaves the range") as raised:
+        decode_matrix(payload, params, None, "test", coding_tools=True)
     assert raised.value.rule == "R32-predictor"

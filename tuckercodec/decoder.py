@@ -166,15 +166,13 @@ class Decoder:
         return self._mesh
 
     def _decode_u1(self, section_id: str) -> np.ndarray:
-        where = f"section {section_id}"
-        matrix = qmat.decode_matrix(
+        return qmat.decode_matrix(
             self._payload(section_id),
             self._section(section_id).params,
             self._mesh_prediction,
-            where,
+            f"section {section_id}",
             coding_tools=self._container.coding_tools,  # predictor 2 only in format 1.2
-        )
-        return matrix.values()
+        ).values()
 
     def segment_factors(self, number: int) -> SegmentFactors:
         """Segment ``number``'s dequantized factors, decoded (§5 step 16, in its order) and
@@ -201,6 +199,7 @@ class Decoder:
                     None,  # U3 and CENT: the previous frame; CORE: nothing
                     f"section {section_id}",
                     allow_predict=allow_predict,
+                    coding_tools=self._container.coding_tools,  # predictor 3 only in 1.2
                 ).values()
 
             u3 = matrix("U3")

@@ -211,3 +211,29 @@ def _public_csr_matvecs(
 
     matrix = sparse.csr_matrix((weights, idx, ptr), shape=(rows, columns))
     y.reshape(rows, vectors)[:] += matrix @ x.reshape(columns, vectors)
+
+
+#: Predictor 3 (format 1.2, previous-row sections): the restored values and their first
+#: differences must stay within these, so that int64 holds every running sum (§6.2).
+LINEAR_LIMIT = 2**32
+LINEAR_STEP_LIMIT = 2**33
+
+
+def linear_residuals(values: np.ndarray) -> np.ndarray:
+    """Predictor 3 along the rows (time): each row minus ``2 q[t-1] - q[t-2]`` (rows before the
+    first count as 0), that is the second difference."""
+    first = np.diff(values, axis=0, prepend=np.zeros((1, *values.shape[1:]), values.dtype))
+    return np.diff(first, axis=0, prepend=np.zeros((1, *values.shape[1:]), values.dtype))
+
+
+def linear_accumulate(residual: np.ndarray) -> np.ndarray:
+    """The inverse of :func:`linear_residuals`: two running sums. Raises ``ValueError`` when a
+    first difference leaves +-2**33 or a value +-2**32 (R32 for the caller): within those the
+    int64 sums are exact (F <= 2**24 rows of at most 2**33)."""
+    first = np.cumsum(residual, axis=0)
+    if first.size and np.abs(first).max() > LINEAR_STEP_LIMIT:
+        raise ValueError("a difference restored with predictor 3 leaves the range")
+    values: np.ndarray = np.cumsum(first, axis=0)
+    if values.size and np.abs(values).max() > LINEAR_LIMIT:
+        raise ValueError("a value restored with predictor 3 leaves the range")
+    return values

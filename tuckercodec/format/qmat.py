@@ -22,10 +22,17 @@ import numpy as np
 from ..errors import FormatError, UnreachableTargetError
 from ..topology import MAX_MEAN_LEVELS, MeshPrediction
 from . import streams
-from .prediction import accumulate, mean_accumulate, mean_residuals, residuals
+from .prediction import (
+    accumulate,
+    linear_accumulate,
+    linear_residuals,
+    mean_accumulate,
+    mean_residuals,
+    residuals,
+)
 from .sections import section_shape
 
-PREDICT_NONE, PREDICT_PARENT, PREDICT_MEAN = 0, 1, 2
+PREDICT_NONE, PREDICT_PARENT, PREDICT_MEAN, PREDICT_LINEAR = 0, 1, 2, 3
 #: The largest predictor of format 1.0 and 1.1; a larger one needs the coding tools flag.
 LAST_PLAIN_PREDICTOR = PREDICT_PARENT
 #: What a U1 section is restored with: the mesh parents alone, or the mesh's whole structure.
@@ -102,6 +109,11 @@ def encode_matrix(
             mean = mean_residuals(q, mesh.mean_steps)
             if mean is not None:
                 choices.append((PREDICT_MEAN, mean))
+        elif parents is None and coding_tools and q.shape[0] > 2:
+            linear = linear_residuals(q)  # along time: the second difference
+            fits = np.abs(linear).max(axis=0) < 2**31  # what is streamed must fit 32 bits
+            if fits.any():
+                choices.append((PREDICT_LINEAR, np.where(fits[None, :], linear, q)))
         costs = np.stack([_cost(columns) for _, columns in choices])
         best = costs.argmin(axis=0)  # ties go to the lower predictor
         predict = np.array([choices[j][0] for j in best], dtype=np.uint8)
@@ -156,12 +168,16 @@ def decode_matrix(
             "every step must be a positive finite float32", rule="R31-steps", field=f"{where}.steps"
         )
     predict = np.frombuffer(predict_raw, dtype=np.uint8)
-    largest = PREDICT_MEAN if coding_tools and parents is not None else PREDICT_PARENT
-    if (predict > largest).any() or (not allow_predict and predict.any()):
-        allowed = f"at most {largest}" if allow_predict else "0 (no parent relation here)"
-        if allow_predict and (predict == PREDICT_MEAN).any() and parents is not None:
-            allowed += " (2 needs the coding tools flag of format 1.2)"
-        _refuse_predictor(f"every predictor must be {allowed}", where)
+    # 2 (mesh mean) for a mesh relation, 3 (linear) for the previous row, both only in 1.2
+    extra = PREDICT_MEAN if parents is not None else PREDICT_LINEAR
+    allowed = {PREDICT_NONE, PREDICT_PARENT} | ({extra} if coding_tools else set())
+    if not allow_predict:
+        allowed = {PREDICT_NONE}
+    if not set(predict.tolist()) <= allowed:
+        named = "0 (no parent relation here)" if not allow_predict else f"in {sorted(allowed)}"
+        if allow_predict and not coding_tools and (predict == extra).any():
+            named += f" ({extra} needs the coding tools flag of format 1.2)"
+        _refuse_predictor(f"every predictor must be {named}", where)
     stream = streams.unpack_integers(payload, rows * cols, planes, where)
     q = np.ascontiguousarray(stream.reshape(cols, rows).T)
     chosen = np.flatnonzero(predict == PREDICT_PARENT)
@@ -177,6 +193,12 @@ def decode_matrix(
             q[:, chosen] = accumulate(q[:, chosen], tree)
         if meaned.size:
             q[:, meaned] = _restore_mean(q[:, meaned], mesh, where)
+    linear = np.flatnonzero(predict == PREDICT_LINEAR)
+    if linear.size:
+        try:
+            q[:, linear] = linear_accumulate(q[:, linear])
+        except ValueError as error:
+            _refuse_predictor(f"{error} (-2**33..2**33 for differences, -2**32..2**32)", where)
     return QuantizedMatrix(q, steps)
 
 
