@@ -327,7 +327,11 @@ class _PcaModel:
         def matrix(section_id: str, parents: np.ndarray | None) -> internal.qmat.QuantizedMatrix:
             entry = container.section(section_id)
             return internal.qmat.decode_matrix(
-                container.payload(data, entry), entry.params, parents, section_id
+                container.payload(data, entry),
+                entry.params,
+                parents,
+                section_id,
+                coding_tools=container.coding_tools,  # COEF's predictor 3 (format 1.2)
             )
 
         return self.positions(
