@@ -102,6 +102,11 @@ def _depths(parents: np.ndarray) -> np.ndarray:
     return depth
 
 
+#: Columns chosen at once: each column is chosen alone, and a block bounds the temporaries
+#: (a dozen arrays of rows x block floats) rather than letting them grow with U1's width.
+COLUMN_BLOCK = 16
+
+
 def quantize(
     values: np.ndarray, steps: np.ndarray, levels: Levels, settings: Settings = DEFAULT
 ) -> QuantizedMatrix:
@@ -111,6 +116,28 @@ def quantize(
     prediction would not pay (by the same proxy :func:`.format.qmat.encode_matrix` uses) is
     modelled without it. With ``settings.lam`` None this is :func:`.format.qmat.quantize`.
     """
+    columns = values.shape[1]
+    if settings.lam is None or columns <= COLUMN_BLOCK:
+        return _quantize_block(values, steps, levels, settings)
+    steps = np.broadcast_to(np.asarray(steps), (columns,))
+    blocks = [
+        _quantize_block(
+            values[:, start : start + COLUMN_BLOCK],
+            steps[start : start + COLUMN_BLOCK],
+            levels,
+            settings,
+        )
+        for start in range(0, columns, COLUMN_BLOCK)
+    ]
+    return QuantizedMatrix(
+        np.concatenate([block.q for block in blocks], axis=1),
+        np.concatenate([block.steps for block in blocks]),
+    )
+
+
+def _quantize_block(
+    values: np.ndarray, steps: np.ndarray, levels: Levels, settings: Settings
+) -> QuantizedMatrix:
     nearest = qmat.quantize(values, steps)  # checks the steps and the integer range
     if settings.lam is None or nearest.q.size == 0:
         return nearest

@@ -114,11 +114,28 @@ def mean_predictions(
     return total
 
 
+#: Columns whose predictor-2 residuals the encoder forms at once.
+_MEAN_COLUMN_BLOCK = 16
+
+
+def _checked(block: np.ndarray | None) -> np.ndarray:
+    assert block is not None  # the whole was checked against MEAN_LIMIT before the blocks
+    return block
+
+
 def mean_residuals(values: np.ndarray, steps: MeanSteps) -> np.ndarray | None:
     """Each row minus predictor 2's prediction of it (rows of depth 0 as they are), or
     ``None`` if a value leaves +-MEAN_LIMIT (predictor 2 cannot hold such a column)."""
     if values.size and np.abs(values).max() > MEAN_LIMIT:
         return None
+    if values.shape[1] > _MEAN_COLUMN_BLOCK:  # blocks of columns: smaller float temporaries
+        return np.concatenate(
+            [
+                _checked(mean_residuals(values[:, start : start + _MEAN_COLUMN_BLOCK], steps))
+                for start in range(0, values.shape[1], _MEAN_COLUMN_BLOCK)
+            ],
+            axis=1,
+        )
     out = values.copy()
     if steps.rows.size:
         if int(steps.counts.max()) >= _FLOAT_SOURCES:  # only a crafted mesh

@@ -72,13 +72,18 @@ def quantize(values: np.ndarray, steps: np.ndarray) -> QuantizedMatrix:
     return QuantizedMatrix(q.astype(np.int64), steps32)
 
 
-def _cost(columns: np.ndarray) -> np.ndarray:
-    """A cheap per-column proxy for the bits of an integer column: mean log2(1 + 2|x|)."""
-    return (
-        np.log2(1.0 + 2.0 * np.abs(columns)).mean(axis=0)
-        if columns.size
-        else np.zeros(columns.shape[1])
-    )
+def _cost(columns: np.ndarray, block: int = 16) -> np.ndarray:
+    """A cheap per-column proxy for the bits of an integer column: mean log2(1 + 2|x|),
+    ``block`` columns at a time (its float temporaries stay small beside a wide U1)."""
+    out = np.zeros(columns.shape[1])
+    if columns.shape[0]:
+        for start in range(0, columns.shape[1], block):
+            part = np.abs(columns[:, start : start + block]).astype(np.float64)
+            part *= 2.0
+            part += 1.0
+            np.log2(part, out=part)
+            out[start : start + block] = part.mean(axis=0)
+    return out
 
 
 def encode_matrix(
@@ -102,25 +107,8 @@ def encode_matrix(
     predict = np.zeros(q.shape[1], dtype=np.uint8)
     stream = q
     if allow_predict and q.shape[0] > 1:
-        mesh = parents if isinstance(parents, MeshPrediction) else None
-        stream = residuals(q, parents.parents if isinstance(parents, MeshPrediction) else parents)
-        choices = [(PREDICT_NONE, q), (PREDICT_PARENT, stream)]
-        if mesh is not None and coding_tools and mesh.levels <= MAX_MEAN_LEVELS:
-            mean = mean_residuals(q, mesh.mean_steps)
-            if mean is not None:
-                choices.append((PREDICT_MEAN, mean))
-        elif parents is None and coding_tools and q.shape[0] > 2:
-            linear = linear_residuals(q)  # along time: the second difference
-            fits = np.abs(linear).max(axis=0) < 2**31  # what is streamed must fit 32 bits
-            if fits.any():
-                choices.append((PREDICT_LINEAR, np.where(fits[None, :], linear, q)))
-        costs = np.stack([_cost(columns) for _, columns in choices])
-        best = costs.argmin(axis=0)  # ties go to the lower predictor
-        predict = np.array([choices[j][0] for j in best], dtype=np.uint8)
-        for j, (value, columns) in enumerate(choices):
-            if value != PREDICT_PARENT:
-                chosen = np.flatnonzero(best == j)
-                stream[:, chosen] = columns[:, chosen]  # in place: stream is a fresh array
+        # in a function of its own: the other predictors' residuals are freed before packing
+        stream, predict = _predicted_stream(q, parents, coding_tools)
     payload, planes = streams.pack_integers(np.ascontiguousarray(stream.T), level)
     params = {
         "shape": [int(q.shape[0]), int(q.shape[1])],
@@ -129,6 +117,33 @@ def encode_matrix(
         "predict": predict.tobytes(),
     }
     return params, payload
+
+
+def _predicted_stream(
+    q: np.ndarray, parents: Mesh | None, coding_tools: bool
+) -> tuple[np.ndarray, np.ndarray]:
+    """The residuals to stream and each column's predictor: per column, the predictor whose
+    residuals :func:`_cost` finds cheapest (ties to the lower one)."""
+    mesh = parents if isinstance(parents, MeshPrediction) else None
+    stream = residuals(q, parents.parents if isinstance(parents, MeshPrediction) else parents)
+    choices = [(PREDICT_NONE, q), (PREDICT_PARENT, stream)]
+    if mesh is not None and coding_tools and mesh.levels <= MAX_MEAN_LEVELS:
+        mean = mean_residuals(q, mesh.mean_steps)
+        if mean is not None:
+            choices.append((PREDICT_MEAN, mean))
+    elif parents is None and coding_tools and q.shape[0] > 2:
+        linear = linear_residuals(q)  # along time: the second difference
+        fits = np.abs(linear).max(axis=0) < 2**31  # what is streamed must fit 32 bits
+        if fits.any():
+            choices.append((PREDICT_LINEAR, np.where(fits[None, :], linear, q)))
+    costs = np.stack([_cost(columns) for _, columns in choices])
+    best = costs.argmin(axis=0)  # ties go to the lower predictor
+    predict = np.array([choices[j][0] for j in best], dtype=np.uint8)
+    for j, (value, columns) in enumerate(choices):
+        if value != PREDICT_PARENT:
+            chosen = np.flatnonzero(best == j)
+            stream[:, chosen] = columns[:, chosen]  # in place: stream is a fresh array
+    return stream, predict
 
 
 def decode_matrix(
