@@ -30,7 +30,7 @@ from io import BytesIO
 from pathlib import Path
 
 from tools import common
-from tuckercodec import Decoder, bpfv, encode, info, kg_error
+from tuckercodec import Decoder, bpfv, encode, info, internal, kg_error
 
 DEFAULT_TARGETS = [2.0, 1.0, 0.5, 0.1, 0.05, 0.02]
 #: The last commit before issue 13: format 1.1, faces-delta, mesh-parent prediction.
@@ -85,6 +85,23 @@ def baseline_sizes(revision: str, jobs: list[tuple[str, list[float]]]) -> dict[s
     return sizes
 
 
+def face_row(path: Path) -> str:
+    """One table row: the FACE section of ``path`` encoded at KG 1, in bits per vertex, whole
+    and per stream of faces-traverse (§6.8)."""
+    sequence = common.load(path)
+    data = encode(sequence, target_kg=1.0)
+    container = internal.parse_container(data)
+    entry = container.section("FACE")
+    assert entry is not None
+    per_vertex = 8.0 / sequence.vertex_count
+    cells = [f"{entry.length * per_vertex:.1f}"]
+    if entry.codec == internal.sections.FACES_TRAVERSE:
+        cells += [f"{length * per_vertex:.1f}" for _, _, length in entry.params["streams"]]
+    else:
+        cells += ["-"] * 4
+    return f"| {path.name} | {entry.codec} | " + " | ".join(cells) + " |"
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m tools.bench_size", description=__doc__.splitlines()[0]
@@ -132,6 +149,12 @@ def main(argv: list[str] | None = None) -> int:
                 f"{change:+.1%} | {face_old:.1f} -> {face_now:.1f} | {measured:.4f} | "
                 f"{'ok' if measured <= target else 'FAIL'} | {info(data).format_version} |"
             )
+    print()
+    print("Connectivity (section FACE of the last file of each sequence), bits per vertex:")
+    print("| sequence | codec | total | ops (gates, tips, rotations) | degrees | order map | far |")
+    print("|---|---|---|---|---|---|---|")
+    for path in paths:
+        print(face_row(path))
     print()
     for (stem, target), limit in ABSOLUTE_TARGETS.items():
         print(f"target: {stem} at KG {target:g} at most {limit} bpfv")
