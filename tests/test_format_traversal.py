@@ -255,3 +255,12 @@ def test_the_shared_meshes_round_trip_and_shrink(name):
     round_trip(sequence.faces, k)
     assert len(payload) < 0.5 * len(encode_faces(sequence.faces)[1])
     assert len(payload) * 8 / k < 21  # bits per vertex, vertex order kept (today 10.5-20)
+
+
+def test_a_huge_vertex_count_in_the_header_allocates_nothing_by_it():
+    """K is only the header's claim when FACE is decoded: the walk's tables grow with the
+    vertices it meets, so a tiny section claiming 2**26 vertices decodes at once."""
+    faces = scrambled(grid(4), 16, 9)
+    params, payload, walked = traversal.encode_traversal(faces, 16)
+    decoded = traversal.decode_traversal(payload, params, 2**26, "section FACE")
+    assert decoded.tolist() == walked.tolist()
