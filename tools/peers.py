@@ -261,8 +261,10 @@ class _PcaModel:
         energy = self.sigma**2
         # tails[r]: the squared error of rank r
         self.tails = np.concatenate([np.cumsum(energy[::-1])[::-1], [0.0]])
-        self.parents = internal.mesh_parents(sequence.faces, vertices)
-        self.faces = internal.faces.encode_faces(sequence.faces)
+        # the same connectivity codec and mesh prediction as tuckercodec's (format 1.2)
+        self.mesh = internal.mesh_prediction(sequence.faces, vertices)
+        self.parents = self.mesh.parents
+        self.faces = internal.faces.encode_face_section(sequence.faces, vertices)
 
     def quantize(self, rank: int, step: float) -> tuple[internal.qmat.QuantizedMatrix, ...]:
         root = math.sqrt(step)
@@ -295,19 +297,19 @@ class _PcaModel:
 
     def pack(self, rank: int, parts, level: int) -> bytes:
         basis_q, coefficients_q, centroids_q = parts
-        face_params, face_payload = self.faces
+        face = self.faces
         known = internal.sections.entry  # the entry of a section this codec defines
         qmat_entry = {"critical": True, "codec": internal.sections.QMAT}  # PCA's own sections
         centroid_params, centroid_payload = internal.qmat.encode_matrix(
             centroids_q, None, level=level
         )
         sections = [
-            (known("FACE", face_params), face_payload),
+            (known("FACE", face.params, face.codec), face.payload),
             (known("CENT", centroid_params), centroid_payload),
         ]
         for section_id, matrix, parents in (
             ("COEF", coefficients_q, None),
-            ("BASE", basis_q, self.parents),
+            ("BASE", basis_q, self.mesh),
         ):
             params, payload = internal.qmat.encode_matrix(matrix, parents, level=level)
             sections.append(({"id": section_id, **qmat_entry, **params}, payload))
@@ -324,18 +326,18 @@ class _PcaModel:
         container = internal.parse_container(data)
         rank = container.header["pca_rank"]
 
-        def matrix(section_id: str, parents: np.ndarray | None) -> internal.qmat.QuantizedMatrix:
+        def matrix(section_id: str, parents: Any) -> internal.qmat.QuantizedMatrix:
             entry = container.section(section_id)
             return internal.qmat.decode_matrix(
                 container.payload(data, entry),
                 entry.params,
                 parents,
                 section_id,
-                coding_tools=container.coding_tools,  # COEF's predictor 3 (format 1.2)
+                coding_tools=container.coding_tools,  # predictors 2 and 3 (format 1.2)
             )
 
         return self.positions(
-            rank, matrix("BASE", self.parents), matrix("COEF", None), matrix("CENT", None)
+            rank, matrix("BASE", self.mesh), matrix("COEF", None), matrix("CENT", None)
         )
 
     def encode(self, target: float) -> bytes:

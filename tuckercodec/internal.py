@@ -11,7 +11,8 @@ package sees at once what the tools rely on.
   one rule on purpose, and :data:`SIGNATURE`, :data:`HEAD_SIZE`, :data:`PREAMBLE`,
   :data:`CRC`; the modules :mod:`~tuckercodec.format.faces`, :mod:`~tuckercodec.format.qmat`,
   :mod:`~tuckercodec.format.sections`, :mod:`~tuckercodec.format.streams` and
-  :mod:`~tuckercodec.format.traversal` (§6.8); the mesh parents of §6.2.
+  :mod:`~tuckercodec.format.traversal` (§6.8); the mesh parents of §6.2 and
+  :func:`mesh_prediction` (its predictor 2).
 * The decomposition and its analysis: :func:`centre_frames`, :func:`reconstruct`, :class:`Curve`.
 * The definitions the reports quote: :data:`KG_DEFINITION`, :data:`STED_DEFINITION`.
 * Files and pictures: :func:`write_atomic`, :func:`refuse_existing`, :func:`plot_rd_curve`,
@@ -48,7 +49,7 @@ from .metrics import KG_DEFINITION
 from .perceptual import STED_DEFINITION
 from .plots import plot_rd_curve, pyplot, save_figure
 from .samples import sample_path, sheet_triangles, wave_sheet
-from .topology import mesh_parents
+from .topology import mesh_parents, mesh_prediction
 
 __all__ = [
     "CRC",
@@ -61,6 +62,7 @@ __all__ = [
     "centre_frames",
     "faces",
     "mesh_parents",
+    "mesh_prediction",
     "pack_container",
     "pack_raw",
     "parse_container",
