@@ -52,7 +52,7 @@ from unittest import mock
 import numpy as np
 
 from tuckercodec import Decoder, encode_with_report
-from tuckercodec.internal import mesh_parents, parse_container, qmat, rdo, streams
+from tuckercodec.internal import mesh_parents, parse_container, qmat, rdo, streams, tree_depths
 
 from .common import REAL_SEQUENCES, in_shared_data, load
 
@@ -124,15 +124,7 @@ def order0_bits(symbol: np.ndarray, column: np.ndarray) -> float:
 
 def depth_order(parents: np.ndarray) -> np.ndarray:
     """Rows in an order where each parent comes before its children (by tree depth)."""
-    depth = (parents >= 0).astype(np.int64)
-    ancestor = parents.copy()
-    live = np.flatnonzero(ancestor >= 0)
-    while live.size:
-        jump = ancestor[live]
-        depth[live] += depth[jump]
-        ancestor[live] = ancestor[jump]
-        live = live[ancestor[live] >= 0]
-    return np.argsort(depth, kind="stable")
+    return np.argsort(tree_depths(parents), kind="stable")
 
 
 def section_streams(data: bytes) -> dict[str, tuple[np.ndarray, np.ndarray, int]]:

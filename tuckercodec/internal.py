@@ -12,7 +12,7 @@ package sees at once what the tools rely on.
   :data:`CRC`; the modules :mod:`~tuckercodec.format.faces`, :mod:`~tuckercodec.format.qmat`,
   :mod:`~tuckercodec.format.sections`, :mod:`~tuckercodec.format.streams` and
   :mod:`~tuckercodec.format.traversal` (§6.8); the mesh parents of §6.2 and
-  :func:`mesh_prediction` (its predictor 2).
+  :func:`mesh_prediction` (its predictor 2), and :func:`tree_depths` of a parent forest.
 * The decomposition and its analysis: :func:`centre_frames`, :func:`reconstruct`, :class:`Curve`.
 * The definitions the reports quote: :data:`KG_DEFINITION`, :data:`STED_DEFINITION`.
 * Files and pictures: :func:`write_atomic`, :func:`refuse_existing`, :func:`plot_rd_curve`,
@@ -42,6 +42,7 @@ from .format.container import (
     pack_raw,
     parse_container,
 )
+from .format.prediction import tree_depths
 from .gltf.decomposition import write_decomposition_gltf
 from .gltf.reader import sample_gltf
 from .hosvd import centre_frames, reconstruct
@@ -79,6 +80,7 @@ __all__ = [
     "sheet_triangles",
     "streams",
     "traversal",
+    "tree_depths",
     "wave_sheet",
     "write_atomic",
     "write_decomposition_gltf",

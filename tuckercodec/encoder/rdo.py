@@ -36,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..format import qmat
+from ..format.prediction import tree_depths
 from ..format.qmat import QuantizedMatrix
 
 #: Rate weight (step**2 per bit) used by the encoder; ``None`` in :class:`Settings` turns RDO off.
@@ -71,7 +72,7 @@ class Levels:
 
     def __init__(self, parents: np.ndarray) -> None:
         self.parents = np.asarray(parents, dtype=np.int64)
-        depth = _depths(self.parents)
+        depth = tree_depths(self.parents)
         order = np.argsort(depth, kind="stable")
         ends = np.cumsum(np.bincount(depth, minlength=int(depth.max(initial=0)) + 1))
         self.groups = [
@@ -87,19 +88,6 @@ class Levels:
     def flat(cls, rows: int) -> Levels:
         """No prediction (CORE): every row a root."""
         return cls(np.full(rows, -1, dtype=np.int64))
-
-
-def _depths(parents: np.ndarray) -> np.ndarray:
-    """Each row's distance from its root, by pointer jumping (about log2(depth) passes)."""
-    depth = (parents >= 0).astype(np.int64)
-    ancestor = parents.copy()
-    live = np.flatnonzero(ancestor >= 0)
-    while live.size:
-        jump = ancestor[live]
-        depth[live] += depth[jump]
-        ancestor[live] = ancestor[jump]
-        live = live[ancestor[live] >= 0]
-    return depth
 
 
 #: Columns chosen at once: each column is chosen alone, and a block bounds the temporaries

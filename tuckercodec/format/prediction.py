@@ -47,7 +47,7 @@ def accumulate(
     """
     if parents is None:
         return np.cumsum(residual, axis=0, out=residual if in_place else None)
-    depth = _depths(parents)
+    depth = tree_depths(parents)
     levels = int(depth.max(initial=0)) + 1
     total = residual if in_place else residual.copy()
     if levels > MAX_LEVELS:
@@ -64,7 +64,7 @@ def accumulate(
 MAX_LEVELS = 4096
 
 
-def _depths(parents: np.ndarray) -> np.ndarray:
+def tree_depths(parents: np.ndarray) -> np.ndarray:
     """Each row's distance from its root (0 for a root): the sum of one per ancestor edge."""
     edges = (parents >= 0).astype(np.int64)[:, None]
     depths: np.ndarray = _pointer_jumping(edges, parents)[:, 0]
