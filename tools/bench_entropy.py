@@ -52,7 +52,7 @@ from unittest import mock
 import numpy as np
 
 from tuckercodec import Decoder, encode_with_report
-from tuckercodec.internal import mesh_parents, parse_container, qmat, rdo, streams, tree_depths
+from tuckercodec.internal import mesh_parents, parse_container, rdo, streams, tree_depths
 
 from .common import REAL_SEQUENCES, in_shared_data, load
 
@@ -128,7 +128,8 @@ def depth_order(parents: np.ndarray) -> np.ndarray:
 
 
 def section_streams(data: bytes) -> dict[str, tuple[np.ndarray, np.ndarray, int]]:
-    """Per section: (streamed integers (rows, cols), parent of each row, stored bytes)."""
+    """Per section: (the integers its zstd frame holds, as (rows, cols): residuals of whichever
+    predictor each column uses; the parent of each row, for the contexts; stored bytes)."""
     container = parse_container(data)
     decoder = Decoder(data)
     mesh = mesh_parents(decoder.faces, decoder.info.vertices)
@@ -137,18 +138,12 @@ def section_streams(data: bytes) -> dict[str, tuple[np.ndarray, np.ndarray, int]
         entry = container.section(section_id)
         if entry is None:
             continue
-        payload = container.payload(data, entry)
-        parents_of: np.ndarray | None = mesh if section_id == "U1" else None
-        matrix = qmat.decode_matrix(
-            payload, entry.params, parents_of, section_id, allow_predict=section_id != "CORE"
+        rows, cols = entry.params["shape"]
+        stored = streams.unpack_integers(
+            container.payload(data, entry), rows * cols, entry.params["planes"], section_id
         )
-        q = matrix.q
-        rows = q.shape[0]
+        stream = np.ascontiguousarray(stored.reshape(cols, rows).T)
         parents = mesh if section_id == "U1" else np.arange(-1, rows - 1)
-        predict = np.frombuffer(entry.params["predict"], dtype=np.uint8).astype(bool)
-        stream = q.copy()
-        has = np.flatnonzero(parents >= 0)
-        stream[has] -= q[parents[has]] * predict
         out[section_id] = (stream, parents, entry.length)
     return out
 
