@@ -15,6 +15,7 @@ from tuckercodec.format.qmat import (
     PREDICT_LINEAR,
     PREDICT_MEAN,
     PREDICT_PARENT,
+    QuantizedMatrix,
     decode_matrix,
     encode_matrix,
     quantize,
@@ -203,3 +204,15 @@ def test_predictor_3_refuses_values_out_of_range():
     with pytest.raises(FormatError, match="leaves the range") as raised:
         decode_matrix(payload, params, None, "test", coding_tools=True)
     assert raised.value.rule == "R32-predictor"
+
+
+def test_the_encoder_uses_predictor_3_only_where_a_decoder_accepts_it():
+    """A column that grows past 2**32 in small steps (a fast-moving centroid at a tight target)
+    fits predictor 1 but not 3's range (R32): the encoder must not choose 3 for it."""
+    t = np.arange(40, dtype=np.int64)
+    q = np.stack([t * 2**30, t * 3], axis=1)
+    matrix = QuantizedMatrix(q, np.array([1.0, 1.0], np.float32))
+    params, payload = encode_matrix(matrix, None)
+    assert np.frombuffer(params["predict"], np.uint8)[0] != PREDICT_LINEAR
+    decoded = decode_matrix(payload, params, None, "test", coding_tools=True)
+    np.testing.assert_array_equal(decoded.q, q)

@@ -40,9 +40,27 @@ def encode_face_section(
     table = np.asarray(faces, dtype=np.int64)
     delta_params, delta_payload = encode_faces(table, level)
     walk_params, walk_payload, walked = encode_traversal(table, vertex_count, level)
-    if len(walk_payload) < len(delta_payload):
+    if len(walk_payload) < len(delta_payload) and _walk_holds(
+        walk_params, walk_payload, walked, table, vertex_count
+    ):
         return FaceSection(FACES_TRAVERSE, walk_params, walk_payload, walked)
     return FaceSection(FACES_DELTA, delta_params, delta_payload, table)
+
+
+def _walk_holds(
+    params: dict[str, Any],
+    payload: bytes,
+    walked: np.ndarray,
+    table: np.ndarray,
+    vertex_count: int,
+) -> bool:
+    """Whether the walk decodes to the faces given (in its order), as §6.8 promises: checked
+    once per encode, so that a walk the encoder got wrong costs size (faces-delta), never faces."""
+    decoded = decode_traversal(payload, params, vertex_count, "section FACE")
+    same_rows = np.lexsort(decoded.T[::-1]), np.lexsort(table.T[::-1])
+    return np.array_equal(decoded, walked) and np.array_equal(
+        decoded[same_rows[0]], table[same_rows[1]]
+    )
 
 
 def decode_face_section(

@@ -90,7 +90,7 @@ def _pointer_jumping(total: np.ndarray, parents: np.ndarray) -> np.ndarray:
 MEAN_LIMIT = 2**32
 #: Below this many sources per row, the sums of (4 q[w] - q[anchor]) (each within 5 * 2**32
 #: while the values are within MEAN_LIMIT) stay below 2**53: exact in float64.
-_FLOAT_SOURCES = 2**18
+_FLOAT_SOURCES = 2**17
 
 
 def mean_predictions(
@@ -180,7 +180,7 @@ def mean_accumulate(residual: np.ndarray, steps: MeanSteps) -> np.ndarray:
 
 def _float_predictions(work: np.ndarray, steps: MeanSteps, start: int, stop: int) -> np.ndarray:
     """:func:`mean_predictions` in float64 (exact while ``work`` is within MEAN_LIMIT and each
-    row has fewer than 2**18 sources)."""
+    row has fewer than 2**17 sources: every partial sum, a half-integer, stays below 2**52)."""
     ptr, idx, weights = steps.matrix
     counts = steps.counts[start:stop, None]
     first, last = int(ptr[start]), int(ptr[stop])

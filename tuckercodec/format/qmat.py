@@ -23,6 +23,8 @@ from ..errors import FormatError, UnreachableTargetError
 from ..topology import MAX_MEAN_LEVELS, MeshPrediction
 from . import streams
 from .prediction import (
+    LINEAR_LIMIT,
+    LINEAR_STEP_LIMIT,
     accumulate,
     linear_accumulate,
     linear_residuals,
@@ -129,11 +131,18 @@ def _predicted_stream(
     choices = [(PREDICT_NONE, q), (PREDICT_PARENT, stream)]
     if mesh is not None and coding_tools and mesh.levels <= MAX_MEAN_LEVELS:
         mean = mean_residuals(q, mesh.mean_steps)
-        if mean is not None:
-            choices.append((PREDICT_MEAN, mean))
+        if mean is not None:  # a column whose residuals would not fit 32 bits keeps to 0 or 1
+            fits = np.abs(mean).max(axis=0) < 2**31
+            choices.append((PREDICT_MEAN, np.where(fits[None, :], mean, q)))
     elif parents is None and coding_tools and q.shape[0] > 2:
         linear = linear_residuals(q)  # along time: the second difference
-        fits = np.abs(linear).max(axis=0) < 2**31  # what is streamed must fit 32 bits
+        # a column may use 3 only if its residuals fit 32 bits and its values and running
+        # differences stay in the ranges a decoder accepts (R32: 2**32 and 2**33)
+        fits = (
+            (np.abs(linear).max(axis=0) < 2**31)
+            & (np.abs(q).max(axis=0) <= LINEAR_LIMIT)
+            & (np.abs(np.cumsum(linear, axis=0)).max(axis=0) <= LINEAR_STEP_LIMIT)
+        )
         if fits.any():
             choices.append((PREDICT_LINEAR, np.where(fits[None, :], linear, q)))
     costs = np.stack([_cost(columns) for _, columns in choices])

@@ -58,8 +58,10 @@ class _Boundary:
     """The directed edges of the decoded faces whose opposite edge is not decoded yet.
 
     ``count[x * K + y]`` is how many times x -> y is open (more than once only where faces
-    overlap); ``into[v]`` lists the u of every open u -> v and ``out_of[v]`` every w of an open
-    v -> w, most recent last. :meth:`attach` adds a face and pushes its new gates.
+    overlap); ``into[v]`` holds each u with an open u -> v once and ``out_of[v]`` each w with an
+    open v -> w, in the order those edges became open (ordered dicts used as sets, so that
+    adding, removing and reading the newest are O(1) whatever a file does; lists cost a crafted
+    file quadratic time). :meth:`attach` adds a face and pushes its new gates.
     """
 
     def __init__(self, vertex_count: int) -> None:
@@ -67,8 +69,8 @@ class _Boundary:
         self.count: dict[int, int] = {}
         # by vertex, made as vertices are touched: a header's vertex count is not yet checked
         # against anything when FACE is decoded, and must not size an allocation
-        self.into: defaultdict[int, list[int]] = defaultdict(list)
-        self.out_of: defaultdict[int, list[int]] = defaultdict(list)
+        self.into: defaultdict[int, dict[int, None]] = defaultdict(dict)
+        self.out_of: defaultdict[int, dict[int, None]] = defaultdict(dict)
         self.gates: list[int] = []
 
     def attach(self, cycle: list[int], first_gate: int) -> None:
@@ -79,18 +81,21 @@ class _Boundary:
             opposite = y * k + x
             open_count = count.get(opposite)
             if open_count:
-                if open_count == 1:
+                if open_count == 1:  # y -> x is closed: no longer a neighbour on the boundary
                     del count[opposite]
+                    del into[x][y]
+                    del out_of[y][x]
                 else:
                     count[opposite] = open_count - 1
-                into[x].remove(y)
-                out_of[y].remove(x)
                 key = x * k + y
             else:
                 key = x * k + y
-                count[key] = count.get(key, 0) + 1
-                into[y].append(x)
-                out_of[x].append(y)
+                if key in count:
+                    count[key] += 1
+                else:  # x -> y becomes open: the newest neighbour of both ends
+                    count[key] = 1
+                    into[y][x] = None
+                    out_of[x][y] = None
             if j >= first_gate:
                 gates.append(key)
 
@@ -176,9 +181,9 @@ class _Walk:
             self.ops.append(TIP_NEW)
             self.new_residuals.append(w - self.last_new - 1)
             self.last_new = w
-        elif not is_first and into[previous] and into[previous][-1] == w:
+        elif not is_first and into[previous] and next(reversed(into[previous])) == w:
             self.ops.append(TIP_PREV)
-        elif not is_first and out_of[first] and out_of[first][-1] == w:
+        elif not is_first and out_of[first] and next(reversed(out_of[first])) == w:
             self.ops.append(TIP_NEXT)
         else:
             self.ops.append(TIP_FAR)
@@ -367,21 +372,21 @@ def decode_traversal(
                             f"the traversal breaks: referenced vertex {w} is not one seen before",
                         )
                 else:
-                    candidates = (
-                        []
+                    candidates: dict[int, None] = (
+                        {}
                         if not cycle
                         else into[previous]
                         if tip_op == TIP_PREV
                         else out_of[cycle[0]]
                         if tip_op == TIP_NEXT
-                        else []
+                        else {}
                     )
                     if not candidates:
                         raise _problem(
                             where,
                             f"the traversal breaks: tip operation {tip_op} names no vertex here",
                         )
-                    w = candidates[-1]
+                    w = next(reversed(candidates))  # the newest
                 cycle.append(w)
                 previous = w
                 if len(cycle) < n:
@@ -403,16 +408,19 @@ def decode_traversal(
                 open_count = open_edges.get(opposite)
                 key = x * k + y
                 if open_count:
-                    if open_count == 1:
+                    if open_count == 1:  # y -> x is closed: no longer a neighbour on the boundary
                         del open_edges[opposite]
+                        del into[x][y]
+                        del out_of[y][x]
                     else:
                         open_edges[opposite] = open_count - 1
-                    into[x].remove(y)
-                    out_of[y].remove(x)
                 else:
-                    open_edges[key] = open_edges.get(key, 0) + 1
-                    into[y].append(x)
-                    out_of[x].append(y)
+                    if key in open_edges:
+                        open_edges[key] += 1
+                    else:
+                        open_edges[key] = 1
+                        into[y][x] = None
+                        out_of[x][y] = None
                 if j >= first_gate:
                     gates.append(key)
     except StopIteration:  # a stream read past its end
