@@ -21,6 +21,7 @@ import time
 import tracemalloc
 import zlib
 from collections.abc import Callable, Iterator
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -324,6 +325,47 @@ def expect_error(
     with deadline(), contextlib.suppress(FormatError):
         tuckercodec.info(data)
     return error
+
+
+@dataclass
+class SpecWalk:
+    """The breadth-first walk of spec/FORMAT.md §6.2, literally: each vertex's neighbours,
+    parent and depth, and the order in which the walk reaches the vertices."""
+
+    neighbours: list[set[int]]
+    parent: list[int]
+    depth: list[int]
+    reached_order: list[int]
+
+
+def spec_walk(faces: np.ndarray, count: int) -> SpecWalk:
+    """§6.2's pseudocode in plain Python, for tests to hold the reference to."""
+    neighbours: list[set[int]] = [set() for _ in range(count)]
+    for face in faces.tolist():
+        for j, a in enumerate(face):
+            if a < 0:
+                continue
+            b = face[j + 1] if j + 1 < len(face) and face[j + 1] >= 0 else face[0]
+            if a != b:
+                neighbours[a].add(b)
+                neighbours[b].add(a)
+    parent, depth, reached_order = [-1] * count, [0] * count, []
+    reached = [False] * count
+    for s in range(count):
+        if reached[s]:
+            continue
+        reached[s] = True
+        reached_order.append(s)
+        queue, head = [s], 0
+        while head < len(queue):
+            u = queue[head]
+            head += 1
+            for w in sorted(neighbours[u]):
+                if not reached[w]:
+                    reached[w], parent[w], depth[w] = True, u, depth[u] + 1
+                    reached_order.append(w)
+                    queue.append(w)
+    return SpecWalk(neighbours, parent, depth, reached_order)
 
 
 def assert_same_faces(decoded: np.ndarray, original: np.ndarray) -> None:

@@ -9,7 +9,7 @@ import time
 
 import numpy as np
 import pytest
-from conftest import IDENTITY_U2, deadline
+from conftest import IDENTITY_U2, deadline, spec_walk
 
 from tuckercodec import Decoder
 from tuckercodec.format import prediction
@@ -137,31 +137,13 @@ def test_a_deep_strip_of_faces_decodes_quickly():
 def _spec_mean_restore(residual: np.ndarray, faces: np.ndarray, count: int) -> np.ndarray:
     """Predictor 2's restoration as /work/notes/spec13_prediction.md words it, vertex by vertex
     in Python integers (no overflow, no float)."""
-    neighbours: list[set[int]] = [set() for _ in range(count)]
-    for face in faces.tolist():
-        for j, a in enumerate(face):
-            if a < 0:
-                continue
-            b = face[j + 1] if j + 1 < len(face) and face[j + 1] >= 0 else face[0]
-            if a != b:
-                neighbours[a].add(b)
-                neighbours[b].add(a)
-    parent, depth, reached_order = [-1] * count, [0] * count, []
-    reached = [False] * count
-    for s in range(count):
-        if reached[s]:
-            continue
-        reached[s] = True
-        reached_order.append(s)
-        queue, head = [s], 0
-        while head < len(queue):
-            u = queue[head]
-            head += 1
-            for w in sorted(neighbours[u]):
-                if not reached[w]:
-                    reached[w], parent[w], depth[w] = True, u, depth[u] + 1
-                    reached_order.append(w)
-                    queue.append(w)
+    walk = spec_walk(faces, count)
+    neighbours, parent, depth, reached_order = (
+        walk.neighbours,
+        walk.parent,
+        walk.depth,
+        walk.reached_order,
+    )
     rank, seen = [0] * count, [0] * (count + 1)
     for v in reached_order:
         rank[v], seen[depth[v]] = seen[depth[v]], seen[depth[v]] + 1

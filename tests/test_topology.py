@@ -5,7 +5,7 @@ literally, on random faces and on faces hypothesis makes (repeated, degenerate, 
 from __future__ import annotations
 
 import numpy as np
-from conftest import HYPOTHESIS_SETTINGS
+from conftest import HYPOTHESIS_SETTINGS, spec_walk
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -13,30 +13,8 @@ from tuckercodec.topology import face_edges, mesh_parents
 
 
 def _spec_walk(faces: np.ndarray, count: int) -> list[int]:
-    """The pseudocode of spec/FORMAT.md §6.2, literally."""
-    neighbours: list[set[int]] = [set() for _ in range(count)]
-    for face in faces.tolist():
-        for j, a in enumerate(face):
-            if a < 0:
-                continue
-            b = face[j + 1] if j + 1 < len(face) and face[j + 1] >= 0 else face[0]
-            if a != b:
-                neighbours[a].add(b)
-                neighbours[b].add(a)
-    parent, reached = [-1] * count, [False] * count
-    for s in range(count):
-        if reached[s]:
-            continue
-        reached[s] = True
-        queue, head = [s], 0
-        while head < len(queue):
-            u = queue[head]
-            head += 1
-            for w in sorted(neighbours[u]):
-                if not reached[w]:
-                    reached[w], parent[w] = True, u
-                    queue.append(w)
-    return parent
+    """The pseudocode of spec/FORMAT.md §6.2, literally: the parents."""
+    return spec_walk(faces, count).parent
 
 
 def test_polygon_edges_close_at_the_last_real_corner():
