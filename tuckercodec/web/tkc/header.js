@@ -1,0 +1,252 @@
+// The header's fields and the sections' table entries (spec/FORMAT.md §4, §6.6, §6.7; §5 steps
+// 10-14, or 10s-13s and 14 for a segmented file). Nothing here reads a payload: the result says
+// which section holds what, with every declared size checked against the limits (§7).
+
+import { TkcError, formatError, limitError } from './errors.js';
+import { MsgFloat, describe, isInt } from './msgpack.js';
+import { FLAG_CODING_TOOLS, FLAG_SEGMENTED } from './container.js';
+
+const unsupported = (rule, message) => new TkcError('UnsupportedVersionError', rule, message);
+
+// §6.6: id -> [codec, critical]
+const KINDS = {
+  FACE: ['faces-delta', true],
+  U1: ['qmat', true],
+  U3: ['qmat', true],
+  CORE: ['qmat', true],
+  CENT: ['qmat', true],
+  NAME: ['msgpack-zstd', false],
+};
+
+/**
+ * Steps 10-14 (or 10s-14): the layout of the file.
+ * @returns {{vertices, frames, frameRate, segmented, codingTools, segments, face, name, sharedU1, sharedColumns}}
+ *   segments: [{start, frames, ranks: [i, k], u2: Float64Array(9), basis, u1, u3, core, cent}],
+ *   where u1 ... cent are section entries (for a shared basis, u1 is the shared U1's entry).
+ */
+export function readLayout(container, limits) {
+  const { header, sections, flags } = container;
+  const segmented = (flags & FLAG_SEGMENTED) !== 0;
+  const codingTools = (flags & FLAG_CODING_TOOLS) !== 0;
+  // step 10 / 10s
+  const K = count(header, 'vertices', limits.max_vertices, 'max_vertices');
+  const F = count(header, 'frames', limits.max_frames, 'max_frames');
+  let segments;
+  if (segmented) {
+    segments = readSegmentIndex(header, K, F, limits);
+  } else {
+    if (K * F > limits.max_positions) {
+      throw limitError('R21-header-limit', `vertices × frames = ${K * F} exceeds max_positions = ${limits.max_positions}`);
+    }
+    const [i, k] = ranks(header.get('ranks'), K, F, 'R22-ranks', 'ranks', Math.min(K, 3 * F));
+    const factorValues = K * i + F * k + 3 * i * k + 3 * F;
+    if (factorValues > limits.max_factor_values) {
+      throw limitError('R21-header-limit', `the factors hold ${factorValues} values, max_factor_values = ${limits.max_factor_values}`);
+    }
+    segments = [{ start: 0, frames: F, ranks: [i, k], u2: u2(header.get('u2'), 'u2'), basis: 'whole' }];
+  }
+  // step 11: every entry known, critical as it should be, with its codec
+  const known = new Map();
+  for (const section of sections) {
+    const kind = kindOf(section.id, segmented, segments.length);
+    if (kind === null) {
+      if (section.critical) {
+        throw unsupported('R24-unknown-critical-section', `section '${section.id}' is critical and unknown to this decoder`);
+      }
+      continue;
+    }
+    const [codec, critical] = KINDS[kind];
+    if (section.critical !== critical) {
+      throw formatError('R27-criticality', `section '${section.id}' has critical = ${section.critical}; §6.6 says ${critical}`);
+    }
+    const allowed = kind === 'FACE' && codingTools ? [codec, 'faces-traverse'] : [codec];
+    if (!allowed.includes(section.codec)) {
+      throw unsupported('R25-unknown-codec', `section '${section.id}' has codec '${section.codec}'; this decoder reads ${allowed.map((c) => `'${c}'`).join(' or ')}`);
+    }
+    known.set(section.id, section);
+  }
+  // step 12 / 12s: the required sections
+  const need = (id) => {
+    const section = known.get(id);
+    if (section === undefined) throw formatError('R26-required-section-missing', `the file has no section '${id}'`);
+    return section;
+  };
+  const face = need('FACE');
+  let sharedU1 = null;
+  if (segmented) {
+    if (segments.some((s) => s.basis === 'shared')) sharedU1 = need('U1');
+    segments.forEach((segment, s) => {
+      segment.u3 = need(`U3.${s}`);
+      segment.core = need(`CORE.${s}`);
+      segment.cent = need(`CENT.${s}`);
+      if (segment.basis === 'own') segment.u1 = need(`U1.${s}`);
+    });
+  } else {
+    const [segment] = segments;
+    segment.u1 = need('U1');
+    segment.u3 = need('U3');
+    segment.core = need('CORE');
+    segment.cent = need('CENT');
+  }
+  // step 13 / 13s: shapes and sizes
+  const [M, n] = faceShape(face, limits);
+  let sharedColumns = 0;
+  if (segmented) {
+    if (sharedU1 !== null) {
+      const [rows, cols] = shape(sharedU1);
+      if (rows !== K || cols < 1 || cols > K) {
+        throw formatError('R28-shape', `section 'U1' has shape [${rows}, ${cols}]; a shared basis is [${K}, c] with 1 <= c <= ${K}`);
+      }
+      sectionBytes(sharedU1, rows, cols, limits);
+      sharedColumns = cols;
+      for (const segment of segments) {
+        if (segment.basis === 'shared') segment.u1 = sharedU1;
+      }
+    }
+    segments.forEach((segment, s) => {
+      const [i, k] = segment.ranks;
+      if (segment.basis === 'shared' && i > sharedColumns) {
+        throw formatError('R38-segment-ranks', `segment ${s} uses ${i} columns of a shared U1 of ${sharedColumns}`);
+      }
+      if (segment.basis === 'own') expectShape(segment.u1, K, i, limits);
+      expectShape(segment.u3, segment.frames, k, limits);
+      expectShape(segment.core, i * 3 * k, 1, limits);
+      expectShape(segment.cent, segment.frames, 3, limits);
+      const basisColumns = segment.basis === 'shared' ? sharedColumns : i;
+      const factorValues = K * basisColumns + segment.frames * k + 3 * i * k + 3 * segment.frames;
+      if (factorValues > limits.max_factor_values) {
+        throw limitError('R21-header-limit', `segment ${s}'s factors hold ${factorValues} values, max_factor_values = ${limits.max_factor_values}`);
+      }
+      if (K * segment.frames > limits.max_positions) {
+        throw limitError('R21-header-limit', `segment ${s} decodes ${K * segment.frames} positions, max_positions = ${limits.max_positions}`);
+      }
+    });
+  } else {
+    const [segment] = segments;
+    const [i, k] = segment.ranks;
+    expectShape(segment.u1, K, i, limits);
+    expectShape(segment.u3, F, k, limits);
+    expectShape(segment.core, i * 3 * k, 1, limits);
+    expectShape(segment.cent, F, 3, limits);
+  }
+  // step 14: the frame rate
+  let frameRate = null;
+  if (header.has('frame_rate')) {
+    const rate = header.get('frame_rate');
+    if (rate !== null) {
+      if (!(rate instanceof MsgFloat) || !Number.isFinite(rate.value) || !(rate.value > 0)) {
+        throw formatError('R20-header-field', `"frame_rate" is ${describe(rate)}; it must be nil or a finite float > 0`);
+      }
+      frameRate = rate.value;
+    }
+  }
+  return { vertices: K, frames: F, frameRate, segmented, codingTools, segments, face, faceShape: [M, n], name: known.get('NAME') ?? null, sharedU1, sharedColumns };
+}
+
+function count(header, key, limit, limitName) {
+  if (!header.has(key)) throw formatError('R20-header-field', `the header has no "${key}"`);
+  const value = header.get(key);
+  if (!isInt(value)) throw formatError('R20-header-field', `"${key}" is ${describe(value)}, not an int`);
+  if (value > limit) throw limitError('R21-header-limit', `"${key}" is ${value}, ${limitName} = ${limit}`);
+  if (value < 1) throw formatError('R20-header-field', `"${key}" is ${value}; it must be at least 1`);
+  return Number(value);
+}
+
+function ranks(value, K, frames, rule, where, maxI) {
+  if (!Array.isArray(value) || value.length !== 2 || !value.every((v) => isInt(v))) {
+    throw formatError(rule, `${where} is ${describe(value)}, not an array of two ints`);
+  }
+  const [i, k] = value;
+  const maxK = Math.min(frames, 3 * K);
+  if (!(i >= 1 && i <= maxI)) throw formatError(rule, `${where}: i = ${i} is outside 1..${maxI}`);
+  if (!(k >= 1 && k <= maxK)) throw formatError(rule, `${where}: k = ${k} is outside 1..${maxK}`);
+  return [Number(i), Number(k)];
+}
+
+function u2(value, where) {
+  if (!Array.isArray(value) || value.length !== 9) {
+    throw formatError('R23-u2', `${where} is ${value === undefined ? 'missing' : describe(value)}, not an array of 9 floats`);
+  }
+  const out = new Float64Array(9);
+  value.forEach((v, j) => {
+    if (!(v instanceof MsgFloat)) throw formatError('R23-u2', `${where}[${j}] is ${describe(v)}, not a float`);
+    if (!Number.isFinite(v.value)) throw formatError('R23-u2', `${where}[${j}] is ${v.value}, not finite`);
+    out[j] = v.value;
+  });
+  return out;
+}
+
+function readSegmentIndex(header, K, F, limits) {
+  const index = header.get('segments');
+  if (!Array.isArray(index) || index.length === 0) {
+    throw formatError('R37-segment-index', `"segments" is ${index === undefined ? 'missing' : describe(index)}, not a non-empty array`);
+  }
+  if (index.length > limits.max_segments) {
+    throw limitError('R21-header-limit', `the file has ${index.length} segments, max_segments = ${limits.max_segments}`);
+  }
+  let start = 0;
+  const segments = index.map((entry, s) => {
+    const where = `segment ${s}`;
+    if (!(entry instanceof Map)) throw formatError('R37-segment-index', `${where} is ${describe(entry)}, not a map`);
+    const frames = entry.get('frames');
+    if (!isInt(frames) || frames < 1) {
+      throw formatError('R37-segment-index', `${where}: "frames" is ${frames === undefined ? 'missing' : describe(frames)}, not an int >= 1`);
+    }
+    if (start + Number(frames) > F) {
+      throw formatError('R37-segment-index', `${where} ends at frame ${start + Number(frames) - 1}, after the file's last frame ${F - 1}`);
+    }
+    const basis = entry.get('basis');
+    if (basis !== 'shared' && basis !== 'own') {
+      throw formatError('R37-segment-index', `${where}: "basis" is ${basis === undefined ? 'missing' : describe(basis)}, not "shared" or "own"`);
+    }
+    const Fs = Number(frames);
+    const maxI = basis === 'own' ? Math.min(K, 3 * Fs) : K;
+    const segmentRanks = ranks(entry.get('ranks'), K, Fs, 'R38-segment-ranks', `${where}: "ranks"`, maxI);
+    const segment = { start, frames: Fs, ranks: segmentRanks, u2: u2(entry.get('u2'), `${where}: "u2"`), basis };
+    start += Fs;
+    return segment;
+  });
+  if (start !== F) throw formatError('R37-segment-index', `the segments hold ${start} frames, the file ${F}`);
+  return segments;
+}
+
+function kindOf(id, segmented, segmentCount) {
+  if (id === 'FACE' || id === 'NAME' || id === 'U1') return id;
+  if (!segmented) return id in KINDS ? id : null;
+  const match = /^(U1|U3|CORE|CENT)\.(0|[1-9][0-9]*)$/.exec(id);
+  if (match === null || Number(match[2]) >= segmentCount) return null;
+  return match[1];
+}
+
+function shape(section) {
+  const value = section.entry.get('shape');
+  if (!Array.isArray(value) || value.length !== 2 || !value.every((v) => isInt(v) && v >= 0)) {
+    throw formatError('R28-shape', `section '${section.id}': "shape" is ${value === undefined ? 'missing' : describe(value)}, not an array of two ints >= 0`);
+  }
+  return value.map((v) => (typeof v === 'bigint' ? Infinity : v));
+}
+
+function faceShape(face, limits) {
+  const [M, n] = shape(face);
+  if (n < 3) throw formatError('R28-shape', `section 'FACE' has ${n} columns; faces have at least 3`);
+  if (M > limits.max_faces) throw limitError('R21-header-limit', `section 'FACE' has ${M} faces, max_faces = ${limits.max_faces}`);
+  if (n > limits.max_face_width) {
+    throw limitError('R21-header-limit', `section 'FACE' is ${n} wide, max_face_width = ${limits.max_face_width}`);
+  }
+  sectionBytes(face, M, n, limits);
+  return [M, n];
+}
+
+function expectShape(section, rows, cols, limits) {
+  const [r, c] = shape(section);
+  if (r !== rows || c !== cols) {
+    throw formatError('R28-shape', `section '${section.id}' has shape [${r}, ${c}]; the header makes it [${rows}, ${cols}]`);
+  }
+  sectionBytes(section, rows, cols, limits);
+}
+
+function sectionBytes(section, rows, cols, limits) {
+  if (rows * cols * 4 > limits.max_section_bytes) {
+    throw limitError('R21-header-limit', `section '${section.id}' decodes to ${rows * cols * 4} bytes, max_section_bytes = ${limits.max_section_bytes}`);
+  }
+}

@@ -1,0 +1,110 @@
+// Codec `qmat` (spec/FORMAT.md §6.3): a matrix stored as integers with one quantization step per
+// column, each column optionally predicted (§6.2). Checked in the order of §5 step 16: planes,
+// the length and type of steps, of predict, the values of steps, of predict, then the stream.
+
+import { formatError } from './errors.js';
+import { describe, isInt } from './msgpack.js';
+import { decodeIntStream } from './streams.js';
+import { restoreMeshColumn } from './topology.js';
+
+const EXACT = 2 ** 53; // float64 holds every integer up to here
+const LINEAR_VALUE = 2 ** 32; // §6.2 predictor 3: the restored values ...
+const LINEAR_STEP = 2 ** 33; // ... and the running differences
+
+/**
+ * Decodes a qmat section into its dequantized matrix, row-major (C order).
+ * @param {object} section the section entry (readContainer)
+ * @param {Uint8Array} payload its bytes, CRC already checked
+ * @param {number} rows
+ * @param {number} cols
+ * @param {'mesh'|'time'|'none'} relation the parents §6.6 assigns: U1 mesh, U3/CENT time, CORE none
+ * @param {boolean} codingTools preamble flag bit 1 (version 1.2)
+ * @param {() => object} topology the mesh topology, built on first use (for U1 only)
+ * @returns {Float64Array} rows*cols values
+ */
+export function decodeQmat(section, payload, rows, cols, relation, codingTools, topology) {
+  const where = `section '${section.id}'`;
+  const entry = section.entry;
+  const planes = entry.get('planes');
+  if (!isInt(planes) || planes < 1 || planes > 4) {
+    throw formatError('R30-planes', `${where}: "planes" is ${planes === undefined ? 'missing' : describe(planes)}, not an int in 1..4`);
+  }
+  const steps = entry.get('steps');
+  if (!(steps instanceof Uint8Array) || steps.length !== 4 * cols) {
+    throw formatError('R31-steps', `${where}: "steps" is ${steps === undefined ? 'missing' : describe(steps)}, not a bin of ${4 * cols} bytes`);
+  }
+  const predict = entry.get('predict');
+  if (!(predict instanceof Uint8Array) || predict.length !== cols) {
+    throw formatError('R32-predictor', `${where}: "predict" is ${predict === undefined ? 'missing' : describe(predict)}, not a bin of ${cols} bytes`);
+  }
+  const stepView = new DataView(steps.buffer, steps.byteOffset, steps.byteLength);
+  const step = new Float64Array(cols);
+  for (let c = 0; c < cols; c++) {
+    step[c] = stepView.getFloat32(4 * c, true); // the exact widening of the stored f32
+    if (!Number.isFinite(step[c]) || !(step[c] > 0)) {
+      throw formatError('R31-steps', `${where}: step ${c} is ${step[c]}; steps are finite and > 0`);
+    }
+  }
+  const allowed = relation === 'none' ? [0] : [0, 1];
+  if (codingTools && relation === 'mesh') allowed.push(2);
+  if (codingTools && relation === 'time') allowed.push(3);
+  for (let c = 0; c < cols; c++) {
+    if (!allowed.includes(predict[c])) {
+      throw formatError('R32-predictor', `${where}: column ${c} has predictor ${predict[c]}; this section allows ${allowed.join(', ')}`);
+    }
+  }
+  const stream = decodeIntStream(payload, rows * cols, Number(planes), where);
+  const out = new Float64Array(rows * cols);
+  for (let c = 0; c < cols; c++) {
+    const offset = c * rows; // stream order is column-major (§6.3)
+    let q;
+    const p = predict[c];
+    if (p === 0) q = stream.subarray(offset, offset + rows);
+    else if (relation === 'mesh') q = restoreMeshColumn(stream, offset, p, topology(), `${where} column ${c}`);
+    else if (p === 1) q = restoreRunningSum(stream, offset, rows);
+    else q = restoreLinear(stream, offset, rows, `${where} column ${c}`);
+    const s = step[c];
+    for (let r = 0; r < rows; r++) out[r * cols + c] = s * q[r];
+  }
+  return out;
+}
+
+/** Previous-row parents (§6.2): q[f] = r[f] + q[f − 1], exact; BigInt when past 2^53. */
+function restoreRunningSum(stream, offset, rows) {
+  const q = new Float64Array(rows);
+  let sum = 0;
+  let exact = true;
+  for (let f = 0; f < rows; f++) {
+    sum += stream[offset + f];
+    if (sum > EXACT || sum < -EXACT) exact = false;
+    q[f] = sum;
+  }
+  if (!exact) {
+    // a crafted column: 64-bit sums, then float64(q) rounded to nearest as §6.3 says
+    let big = 0n;
+    for (let f = 0; f < rows; f++) {
+      big += BigInt(stream[offset + f]);
+      q[f] = Number(big);
+    }
+  }
+  return q;
+}
+
+/** Predictor 3 (§6.2): two running sums, each checked against its range (R32-predictor). */
+function restoreLinear(stream, offset, rows, where) {
+  const q = new Float64Array(rows);
+  let difference = 0;
+  let value = 0;
+  for (let f = 0; f < rows; f++) {
+    difference += stream[offset + f];
+    if (difference > LINEAR_STEP || difference < -LINEAR_STEP) {
+      throw formatError('R32-predictor', `${where}: the running difference at row ${f} is ${difference}, outside ±2^33`);
+    }
+    value += difference;
+    if (value > LINEAR_VALUE || value < -LINEAR_VALUE) {
+      throw formatError('R32-predictor', `${where}: the value at row ${f} is ${value}, outside ±2^32`);
+    }
+    q[f] = value;
+  }
+  return q;
+}

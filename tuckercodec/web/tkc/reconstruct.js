@@ -1,0 +1,84 @@
+// Reconstruction (spec/FORMAT.md §8): positions[f, v, x] =
+//   Σ_a Σ_c Σ_b U1[v, a] · CORE[a, c, b] · U2[x, c] · U3[f, b] + CENT[f, x],
+// grouped as the reference groups it: B[a, x, b] = Σ_c CORE[a, c, b] · U2[x, c] once per
+// segment, then per frame W[a, x] = Σ_b B[a, x, b] · U3[f, b] and U1 · W + CENT[f]. All binary64.
+
+import { formatError } from './errors.js';
+
+/** The per-segment product B (i × 3 × k, C order) of the core and U2. */
+export function coreTimesU2(core, u2, i, k) {
+  const B = new Float64Array(i * 3 * k);
+  for (let a = 0; a < i; a++) {
+    for (let x = 0; x < 3; x++) {
+      for (let b = 0; b < k; b++) {
+        let sum = 0;
+        for (let c = 0; c < 3; c++) sum += core[(a * 3 + c) * k + b] * u2[3 * x + c];
+        B[(a * 3 + x) * k + b] = sum;
+      }
+    }
+  }
+  return B;
+}
+
+/**
+ * Frame t of a segment into `out` (K*3, any array type: Float64Array, or Float32Array for the
+ * GPU, which rounds each binary64 position once). Every position must be finite (R36).
+ * @param {{u1, columns, i, k, B, u3, cent}} factors u1 is K × columns row-major (a shared basis
+ *   may have more columns than the segment uses)
+ * @param {number} t the frame within the segment
+ * @param {Float64Array} W scratch of i*3
+ */
+export function reconstructFrame(factors, t, out, W, frameNumber) {
+  const { u1, columns, i, k, B, u3, cent } = factors;
+  for (let a = 0; a < i; a++) {
+    for (let x = 0; x < 3; x++) {
+      let sum = 0;
+      const row = (a * 3 + x) * k;
+      for (let b = 0; b < k; b++) sum += B[row + b] * u3[t * k + b];
+      W[a * 3 + x] = sum;
+    }
+  }
+  const cx = cent[t * 3];
+  const cy = cent[t * 3 + 1];
+  const cz = cent[t * 3 + 2];
+  const K = out.length / 3;
+  let finite = true;
+  for (let v = 0; v < K; v++) {
+    let px = 0;
+    let py = 0;
+    let pz = 0;
+    const base = v * columns;
+    for (let a = 0, w = 0; a < i; a++, w += 3) {
+      const u = u1[base + a];
+      px += u * W[w];
+      py += u * W[w + 1];
+      pz += u * W[w + 2];
+    }
+    px += cx;
+    py += cy;
+    pz += cz;
+    // x − x is 0 for every finite x and NaN for ±∞ and NaN: one test for the three values
+    if (px - px + (py - py) + (pz - pz) !== 0) finite = false;
+    out[3 * v] = px;
+    out[3 * v + 1] = py;
+    out[3 * v + 2] = pz;
+  }
+  if (!finite) {
+    for (let v = 0; v < K; v++) {
+      for (let x = 0; x < 3; x++) {
+        const p = reconstructAgain(factors, t, v, x, W);
+        if (!Number.isFinite(p)) {
+          throw formatError('R36-reconstruction-finite', `frame ${frameNumber}, vertex ${v}, axis ${'xyz'[x]}: the reconstruction is ${p}, not finite`);
+        }
+      }
+    }
+  }
+  return out;
+}
+
+function reconstructAgain(factors, t, v, x, W) {
+  const { u1, columns, i, cent } = factors;
+  let p = 0;
+  for (let a = 0; a < i; a++) p += u1[v * columns + a] * W[a * 3 + x];
+  return p + cent[t * 3 + x];
+}
