@@ -48,11 +48,24 @@ export function reconstructFrame(factors, t, out, W, frameNumber) {
     let py = 0;
     let pz = 0;
     const base = v * columns;
-    for (let a = 0, w = 0; a < i; a++, w += 3) {
+    let a = 0;
+    // four columns a step: a quarter of the loop's overhead, the same sum order
+    for (; a + 3 < i; a += 4) {
+      const w = 3 * a;
+      const u0 = u1[base + a];
+      const u1_ = u1[base + a + 1];
+      const u2_ = u1[base + a + 2];
+      const u3_ = u1[base + a + 3];
+      px += u0 * W[w]; py += u0 * W[w + 1]; pz += u0 * W[w + 2];
+      px += u1_ * W[w + 3]; py += u1_ * W[w + 4]; pz += u1_ * W[w + 5];
+      px += u2_ * W[w + 6]; py += u2_ * W[w + 7]; pz += u2_ * W[w + 8];
+      px += u3_ * W[w + 9]; py += u3_ * W[w + 10]; pz += u3_ * W[w + 11];
+    }
+    for (; a < i; a++) {
       const u = u1[base + a];
-      px += u * W[w];
-      py += u * W[w + 1];
-      pz += u * W[w + 2];
+      px += u * W[3 * a];
+      py += u * W[3 * a + 1];
+      pz += u * W[3 * a + 2];
     }
     px += cx;
     py += cy;
