@@ -1,0 +1,217 @@
+"""The JavaScript decoder (tuckercodec/web/tkc/) against the Python decoder, in node: the same
+faces and frames on real sequences (the built-in sample and ../shared/data, whole and in
+segments), and the same verdict, rule for rule, on files damaged in every part (the vectors'
+own checks are in test_js_conformance.py)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from conftest import Parts, deadline, shared_file, vector
+from js_decoder import run_node
+
+import tuckercodec
+from tuckercodec import FormatError
+from tuckercodec.format.container import HEAD_SIZE, PREAMBLE, SIGNATURE, pack_raw
+from tuckercodec.samples import sample_path
+
+TOLERANCE = 1e-9  # spec/FORMAT.md §8, relative to the largest |position|
+
+
+def _js_decode(data: bytes, tmp_path: Path) -> tuple[dict[str, Any], np.ndarray, np.ndarray]:
+    source, output = tmp_path / "in.tkc", tmp_path / "out.bin"
+    source.write_bytes(data)
+    facts = run_node("decode_file.mjs", source, output)
+    assert facts["accepted"], facts["message"]
+    raw = output.read_bytes()
+    face_bytes = facts["faces"] * facts["face_width"] * 4
+    faces = np.frombuffer(raw[:face_bytes], "<i4").reshape(facts["faces"], facts["face_width"])
+    frames = np.frombuffer(raw[face_bytes:], "<f8").reshape(facts["frames"], facts["vertices"], 3)
+    return facts, faces, frames
+
+
+def _same_as_python(data: bytes, tmp_path: Path) -> dict[str, Any]:
+    facts, faces, frames = _js_decode(data, tmp_path)
+    expected = tuckercodec.decode(data)
+    assert facts["version"] == tuckercodec.info(data).format_version
+    assert facts["names"] == list(expected.frame_names)
+    assert np.array_equal(faces, expected.faces)  # the same table, row for row
+    scale = np.abs(expected.vertices).max()
+    worst = np.abs(frames - expected.vertices).max()
+    assert worst <= TOLERANCE * scale + 1e-12, f"largest difference {worst:.3g} of {scale:.3g}"
+    return facts
+
+
+@pytest.mark.parametrize("segment_frames", [None, 16], ids=["whole", "segments"])
+def test_sample(tmp_path, segment_frames):
+    """The built-in cloth at KG 0.1, whole (format 1.2) and in shared-basis segments."""
+    sequence = tuckercodec.load_sequence(sample_path())
+    data = tuckercodec.encode_with_report(
+        sequence, target_kg=0.1, segment_frames=segment_frames
+    ).data
+    facts = _same_as_python(data, tmp_path)
+    assert facts["frames"] == 60
+
+
+def test_sample_own_bases(tmp_path):
+    sequence = tuckercodec.load_sequence(sample_path())
+    data = tuckercodec.encode_with_report(
+        sequence, target_kg=0.5, segment_frames=20, basis="own"
+    ).data
+    _same_as_python(data, tmp_path)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["samba.npz", "chicken.npz", "horse-gallop", "cloth-vellum.npz"])
+def test_shared_sequences(tmp_path, name):
+    """The real sequences at KG 0.1: polygons, boundaries, 1.2's predictors on real meshes."""
+    sequence = tuckercodec.load_sequence(shared_file(name))
+    _same_as_python(tuckercodec.encode(sequence, target_kg=0.1), tmp_path)
+
+
+# ------------------------------------------------------------------------------------------
+# damaged files: the same verdict from both decoders
+
+BASES = [
+    "v1-wave-triangles",
+    "v1-polygons-names",
+    "v1.1-segments-shared",
+    "v1.1-segments-own",
+    "v1.2-traverse-triangles",
+    "v1.2-traverse-polygons-segments",
+]
+CASES_PER_BASE = 80
+
+
+def _mutate_payload(parts: Parts, rng: np.random.Generator) -> bytes:
+    """A few bits of one section flipped, its CRC made right: the codecs' own checks."""
+    index = int(rng.integers(len(parts.sections)))
+    entry, payload = parts.sections[index]
+    damaged = bytearray(payload)
+    if damaged:
+        for _ in range(int(rng.integers(1, 4))):
+            damaged[int(rng.integers(len(damaged)))] ^= 1 << int(rng.integers(8))
+    parts.sections[index] = (entry, bytes(damaged))
+    return parts.pack()
+
+
+def _mutate_parameter(parts: Parts, rng: np.random.Generator) -> bytes:
+    """One codec parameter of one section changed."""
+    index = int(rng.integers(len(parts.sections)))
+    entry, payload = parts.sections[index]
+    entry = dict(entry)
+    key = str(rng.choice([k for k in entry if k not in ("id", "critical", "codec")] or ["id"]))
+    value = entry.get(key)
+    if isinstance(value, bytes) and value:
+        damaged = bytearray(value)
+        damaged[int(rng.integers(len(damaged)))] = int(rng.integers(256))
+        entry[key] = bytes(damaged)
+    elif isinstance(value, int) and not isinstance(value, bool):
+        entry[key] = value + int(rng.choice([-2, -1, 1, 2, 1 << 20]))
+    elif isinstance(value, list):
+        flat = json.loads(json.dumps(value))
+        target = flat
+        while isinstance(target, list) and target and isinstance(target[0], list):
+            target = target[int(rng.integers(len(target)))]
+        if target:
+            target[int(rng.integers(len(target)))] += int(rng.choice([-1, 1, 7]))
+        entry[key] = flat
+    else:
+        entry[key] = None
+    parts.sections[index] = (entry, payload)
+    return parts.pack()
+
+
+def _mutate_header(data: bytes, rng: np.random.Generator) -> bytes:
+    """Bytes of the msgpack header changed, both CRCs made right: the header's own checks."""
+    major, minor, flags, header_length, _ = PREAMBLE.unpack_from(data, len(SIGNATURE))
+    header = bytearray(data[HEAD_SIZE : HEAD_SIZE + header_length])
+    for _ in range(int(rng.integers(1, 3))):
+        header[int(rng.integers(len(header)))] = int(rng.integers(256))
+    body = data[HEAD_SIZE + header_length + 4 :]
+    return pack_raw(major, minor, flags, bytes(header), body)
+
+
+def _mutate_fields(parts: Parts, rng: np.random.Generator) -> bytes:
+    """A header field changed in type or value."""
+    key = str(rng.choice([k for k in parts.header if k != "error"]))
+    value = parts.header[key]
+    choices: list[Any] = [None, 0, -1, 2**40, 1.5, "x", [1, 2]]
+    if isinstance(value, list) and value:
+        value = list(value)
+        at = int(rng.integers(len(value)))
+        value[at] = choices[int(rng.integers(len(choices)))] if rng.random() < 0.5 else 0
+        parts.header[key] = value
+    else:
+        parts.header[key] = choices[int(rng.integers(len(choices)))]
+    return parts.pack()
+
+
+def _python_verdict(data: bytes) -> dict[str, Any]:
+    with deadline():
+        try:
+            tuckercodec.decode(data)
+        except FormatError as error:
+            return {"accepted": False, "rule": error.rule, "kind": type(error).__name__}
+    return {"accepted": True}
+
+
+def _damaged_files() -> list[bytes]:
+    rng = np.random.default_rng(14)
+    files = []
+    for name in BASES:
+        base = vector(name)
+        for case in range(CASES_PER_BASE):
+            kind = case % 4
+            if kind == 0:
+                files.append(_mutate_payload(Parts(base), rng))
+            elif kind == 1:
+                files.append(_mutate_parameter(Parts(base), rng))
+            elif kind == 2:
+                files.append(_mutate_header(base, rng))
+            else:
+                files.append(_mutate_fields(Parts(base), rng))
+    return files
+
+
+def test_damaged_files_same_verdict(tmp_path):
+    files = _damaged_files()
+    paths = []
+    for n, data in enumerate(files):
+        path = tmp_path / f"case{n:04d}.tkc"
+        path.write_bytes(data)
+        paths.append(path)
+    javascript = run_node("outcomes.mjs", *paths)
+    crashed = [
+        (p.name, o["message"]) for p, o in zip(paths, javascript, strict=True) if o.get("crashed")
+    ]
+    assert not crashed, crashed
+    differ, zstd_only = [], []
+    rejected = 0
+    for path, data, js in zip(paths, files, javascript, strict=True):
+        python = _python_verdict(data)
+        rejected += not python["accepted"]
+        mine = {k: js[k] for k in python}
+        if mine == python:
+            continue
+        if _zstd_strictness(python, js):
+            zstd_only.append(path.name)
+        else:
+            differ.append((path.name, python, js))
+    assert not differ, f"{len(differ)} of {len(files)} verdicts differ: {differ[:5]}"
+    assert len(zstd_only) <= len(files) // 50, f"zstd disagrees too often: {zstd_only}"
+    assert rejected > len(files) // 2  # the damage reaches the checks, not only valid edits
+
+
+def _zstd_strictness(python: dict[str, Any], javascript: dict[str, Any]) -> bool:
+    """A corrupt Zstandard frame that one decoder's zstd notices and the other's does not
+    (libzstd accepts some entropy-coded streams that do not end where RFC 8878 says, which fzstd
+    refuses): spec/FORMAT.md §6.1 says both verdicts can occur; any other difference is a bug."""
+    verdicts = [python, javascript]
+    return any(v["accepted"] for v in verdicts) and any(
+        v.get("rule") == "R29-zstd-content-size" for v in verdicts
+    )
