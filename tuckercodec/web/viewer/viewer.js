@@ -1,0 +1,728 @@
+// The viewer: plays a .tkc file in the browser, decoding it with the JavaScript decoder.
+//
+//   index.html?file=URL[&reference=URL]
+//
+// `file` is the compressed file; `reference` (optional) a small JSON describing the original's
+// positions, {vertices, frames, dtype: "float32", data: "reference.bin", ...}, `data` being
+// F*K*3 little-endian float32 (relative to the JSON's URL): the original rounded to float32.
+//
+// Every frame is reconstructed when it is shown: X_t = file.frameFloat32(t, positions) writes
+// straight into the position attribute of one indexed BufferGeometry, in the file's vertex order,
+// whose index is file.triangles(); nothing is allocated per frame. Playback follows the real
+// clock: the frame shown is floor(elapsed * rate), so it never runs slow; a frame index skipped
+// on the way counts as dropped.
+//
+// window.tkcViewer is the page's contract with its tests (tests/ and tools/ drive it in
+// headless Chromium): ready, info, setFrame, drawnPositions, decodedPositions, frameError,
+// play, pause, stats.
+
+import {
+  FRAME_KG_DEFINITION, colourScale, computeNormals, emptyBox, extendBox, frameError,
+  paintDistances,
+} from './measure.js';
+
+/** The rate a file that records none plays at. */
+const DEFAULT_RATE = 24;
+/** Frames sampled to frame the camera: the box holding them, not just frame 0. */
+const FRAMING_SAMPLES = 9;
+/** Reconstruction times kept by stats() (the oldest half is dropped beyond it). */
+const MAX_TIMINGS = 100000;
+
+const $ = (id) => document.getElementById(id);
+
+let resolveReady, rejectReady;
+const ready = new Promise((resolve, reject) => { resolveReady = resolve; rejectReady = reject; });
+ready.catch(() => {}); // shown on the page and logged; not also an "uncaught" rejection
+
+const state = {
+  THREE: null, file: null, renderer: null, scene: null, camera: null, controls: null,
+  group: null, geometry: null, material: null, mesh: null, wire: null,
+  positions: null, normals: null, index: null, colours: null,
+  reference: null, // {positions: Float32Array F*K*3, maxDistance, kg, note}
+  refGeometry: null, refMesh: null, refWire: null, refPositions: null, refNormals: null,
+  distances: null, lut: null, scale: 0, scaleFixed: false,
+  frame: 0, rate: DEFAULT_RATE, rateNote: '', bytes: 0,
+  playing: false, clockStart: 0, lastTick: 0, rafPending: false, dirty: false,
+  frameMs: [], updateMs: [], renderMs: [], played: 0, dropped: 0, openMs: null, error: null,
+  lastError: null, box: null, offset: 0,
+};
+
+const info = {
+  version: null, vertices: null, frames: null, frameRate: null, faces: null, openMs: null,
+};
+
+window.tkcViewer = {
+  ready,
+  info,
+  async setFrame(t) {
+    await ready;
+    if (!Number.isInteger(t) || t < 0 || t >= state.file.frames) {
+      throw new RangeError(`frame ${t} does not exist: the file has ${state.file.frames} frames`);
+    }
+    pause();
+    showFrame(t);
+    render();
+    await nextPaint();
+  },
+  drawnPositions() {
+    return state.positions ? state.positions.slice() : null;
+  },
+  decodedPositions(t) {
+    return state.file.frame(t);
+  },
+  frameError() {
+    return state.lastError;
+  },
+  play() { play(); },
+  pause() { pause(); },
+  stats() {
+    // frameMs: file.frameFloat32 alone, per frame shown; updateMs: all the page's work for a
+    // frame (reconstruction, normals, the original's positions, error colours); renderMs: the
+    // renderer.render calls (the GPU's work is not in it)
+    return {
+      openMs: state.openMs, frameMs: state.frameMs.slice(), played: state.played,
+      dropped: state.dropped, updateMs: state.updateMs.slice(), renderMs: state.renderMs.slice(),
+    };
+  },
+};
+
+start().then(
+  () => resolveReady(),
+  (error) => { fail(error); rejectReady(error); },
+);
+
+// ---------------------------------------------------------------------------------------------
+// opening
+
+async function start() {
+  const params = new URLSearchParams(location.search);
+  const fileUrl = params.get('file');
+  if (!fileUrl) {
+    throw new Error('no file to show: open this page as index.html?file=URL-of-a-.tkc-file');
+  }
+  const referenceUrl = params.get('reference');
+  $('file-name').textContent = decodeURIComponent(fileUrl.split('/').pop() || fileUrl);
+  status('loading…');
+  // Loaded here rather than imported at the top, so that a missing or broken script is
+  // reported on the page like any other failure.
+  const [THREE, controls, decoder, bytes, reference] = await Promise.all([
+    import('three'),
+    import('../vendor/three/OrbitControls.js'),
+    import('../tkc/decoder.js'),
+    fetchBytes(fileUrl, 'the file'),
+    referenceUrl ? fetchReference(referenceUrl) : null,
+  ]);
+  const began = performance.now(); // openMs: everything fetched -> first frame drawn
+  state.THREE = THREE;
+  state.bytes = bytes.byteLength;
+  status('decoding…');
+  const file = decoder.openTkc(bytes);
+  const opened = performance.now();
+  state.file = file;
+  if (reference) checkReference(reference, file, referenceUrl);
+  state.reference = reference;
+  setupRate(file);
+  setupScene(THREE, controls.OrbitControls, file);
+  if (reference) setupReference(THREE, file);
+  const built = performance.now();
+  frameCamera();
+  const framed = performance.now();
+  showFacts(file);
+  showFrame(0);
+  render();
+  const drawn = performance.now();
+  state.openMs = drawn - began;
+  Object.assign(info, {
+    version: file.version, vertices: file.vertices, frames: file.frames,
+    frameRate: file.frameRate, faces: file.faceCount, openMs: state.openMs,
+    // where openMs went: openTkc; the scene (triangles, buffers); sampling frames to frame the
+    // camera; frame 0 and the first render (which compiles the shaders)
+    openParts: {
+      decodeMs: opened - began, sceneMs: built - opened, framingMs: framed - built,
+      firstFrameMs: drawn - framed,
+    },
+  });
+  $('open-ms').textContent = `${state.openMs.toFixed(1)} ms (fetched → first frame drawn)`;
+  setupControls();
+  status('');
+  await nextPaint();
+}
+
+async function fetchBytes(url, what) {
+  let response;
+  try {
+    response = await fetch(url);
+  } catch (error) {
+    throw new Error(`could not fetch ${what} ${url}: ${error.message}`);
+  }
+  if (!response.ok) {
+    throw new Error(`could not fetch ${what} ${url}: HTTP ${response.status} ${response.statusText}`);
+  }
+  return new Uint8Array(await response.arrayBuffer());
+}
+
+/** The reference's JSON description and its positions (F*K*3 float32). */
+async function fetchReference(url) {
+  const text = new TextDecoder().decode(await fetchBytes(url, 'the reference'));
+  let meta;
+  try {
+    meta = JSON.parse(text);
+  } catch (error) {
+    throw new Error(`the reference ${url} is not JSON: ${error.message}`);
+  }
+  const bad = (why) => new Error(`the reference ${url}: ${why}`);
+  if (meta === null || typeof meta !== 'object') throw bad('expected a JSON object');
+  for (const key of ['vertices', 'frames']) {
+    if (!Number.isSafeInteger(meta[key]) || meta[key] < 1) throw bad(`"${key}" must be a positive integer`);
+  }
+  if (meta.dtype !== 'float32') throw bad(`"dtype" must be "float32", got ${JSON.stringify(meta.dtype)}`);
+  if (typeof meta.data !== 'string') throw bad('"data" must name the file of positions');
+  const dataUrl = new URL(meta.data, new URL(url, location.href)).href;
+  const raw = await fetchBytes(dataUrl, 'the reference positions');
+  const expected = meta.frames * meta.vertices * 12;
+  if (raw.byteLength !== expected) {
+    throw bad(`${meta.data} holds ${raw.byteLength} bytes, ${meta.frames} frames of ${meta.vertices} vertices need ${expected}`);
+  }
+  return {
+    vertices: meta.vertices, frames: meta.frames, positions: littleEndianFloat32(raw),
+    maxDistance: Number.isFinite(meta.maxDistance) ? meta.maxDistance : null,
+    kg: Number.isFinite(meta.kg) ? meta.kg : null,
+    source: typeof meta.source === 'string' ? meta.source : url,
+  };
+}
+
+function littleEndianFloat32(raw) {
+  const aligned = raw.byteOffset % 4 === 0 ? raw : raw.slice();
+  const values = new Float32Array(aligned.buffer, aligned.byteOffset, aligned.byteLength / 4);
+  if (new Uint8Array(new Uint16Array([1]).buffer)[0] === 1) return values;
+  const view = new DataView(aligned.buffer, aligned.byteOffset, aligned.byteLength);
+  const swapped = new Float32Array(values.length); // a big-endian machine: read each value
+  for (let i = 0; i < swapped.length; i++) swapped[i] = view.getFloat32(i * 4, true);
+  return swapped;
+}
+
+function checkReference(reference, file, url) {
+  if (reference.vertices !== file.vertices || reference.frames !== file.frames) {
+    throw new Error(
+      `the reference ${url} has ${reference.frames} frames of ${reference.vertices} vertices, ` +
+      `the file ${file.frames} of ${file.vertices}`);
+  }
+}
+
+function setupRate(file) {
+  const rate = file.frameRate;
+  if (typeof rate === 'number' && Number.isFinite(rate) && rate > 0) {
+    state.rate = rate;
+    state.rateNote = `plays at ${formatNumber(rate)} frames per second (the file's rate)`;
+  } else {
+    state.rate = DEFAULT_RATE;
+    state.rateNote = `plays at ${DEFAULT_RATE} frames per second: the file records no frame rate`;
+  }
+  $('rate-label').textContent = state.rateNote;
+}
+
+// ---------------------------------------------------------------------------------------------
+// the scene
+
+function setupScene(THREE, OrbitControls, file) {
+  const canvas = $('canvas');
+  const antialias = chooseAntialias();
+  const renderer = new THREE.WebGLRenderer({
+    canvas, antialias: antialias.on, preserveDrawingBuffer: true, // the tests read the picture back
+  });
+  $('renderer').textContent = antialias.why;
+  renderer.setPixelRatio(window.devicePixelRatio || 1);
+  renderer.setClearColor(0x101114);
+  const scene = new THREE.Scene();
+  const camera = new THREE.PerspectiveCamera(40, 1, 0.01, 100);
+  scene.add(camera);
+  scene.add(new THREE.HemisphereLight(0xffffff, 0x404048, 1.2));
+  const headlight = new THREE.DirectionalLight(0xffffff, 2.2); // follows the camera
+  headlight.position.set(0.4, 0.6, 1);
+  camera.add(headlight, headlight.target);
+
+  const K = file.vertices;
+  const index = file.triangles();
+  const geometry = new THREE.BufferGeometry();
+  state.positions = new Float32Array(K * 3);
+  state.normals = new Float32Array(K * 3);
+  geometry.setAttribute('position', dynamic(new THREE.BufferAttribute(state.positions, 3), THREE));
+  geometry.setAttribute('normal', dynamic(new THREE.BufferAttribute(state.normals, 3), THREE));
+  geometry.setIndex(new THREE.BufferAttribute(index, 1));
+  const material = new THREE.MeshStandardMaterial({
+    color: 0xd8d2c4, roughness: 0.65, metalness: 0, side: THREE.DoubleSide,
+  });
+  const mesh = new THREE.Mesh(geometry, material);
+  const wire = new THREE.Mesh(geometry, new THREE.MeshBasicMaterial({
+    color: 0x000000, wireframe: true, transparent: true, opacity: 0.35,
+  }));
+  // The bounding sphere three.js computes once (from frame 0) would cull later frames wrongly.
+  mesh.frustumCulled = wire.frustumCulled = false;
+  wire.visible = false;
+  const group = new THREE.Group();
+  group.add(mesh, wire);
+  scene.add(group);
+
+  const controls = new OrbitControls(camera, canvas);
+  controls.enableDamping = false;
+  controls.addEventListener('change', requestRender);
+
+  Object.assign(state, { renderer, scene, camera, controls, group, geometry, material, mesh, wire, index });
+  const resize = () => {
+    const { clientWidth: width, clientHeight: height } = canvas;
+    if (!width || !height) return;
+    renderer.setSize(width, height, false);
+    camera.aspect = width / height;
+    camera.updateProjectionMatrix();
+    if (state.openMs !== null) render(); // a resized canvas is blank until drawn again
+  };
+  new ResizeObserver(resize).observe(canvas);
+  resize();
+  setUp('y');
+}
+
+/**
+ * Whether to antialias (multisampling): yes on a graphics card, no on a software renderer
+ * (SwiftShader, llvmpipe), where multisampling costs more than drawing and playback would drop
+ * frames; the URL's `antialias=on|off` decides instead when given.
+ */
+function chooseAntialias() {
+  const asked = new URLSearchParams(location.search).get('antialias');
+  if (asked === 'on' || asked === 'off') {
+    return { on: asked === 'on', why: `antialiasing ${asked} (asked for in the URL)` };
+  }
+  let name = '';
+  try {
+    const gl = document.createElement('canvas').getContext('webgl2');
+    if (gl) {
+      const debug = gl.getExtension('WEBGL_debug_renderer_info');
+      name = String(gl.getParameter(debug ? debug.UNMASKED_RENDERER_WEBGL : gl.RENDERER));
+      const lose = gl.getExtension('WEBGL_lose_context');
+      if (lose) lose.loseContext();
+    }
+  } catch {
+    name = '';
+  }
+  const software = /swiftshader|llvmpipe|softpipe|software/i.test(name);
+  return software
+    ? { on: false, why: `antialiasing off: a software renderer (${name})` }
+    : { on: true, why: `antialiasing on${name ? ` (${name})` : ''}` };
+}
+
+function dynamic(attribute, THREE) {
+  attribute.setUsage(THREE.DynamicDrawUsage);
+  return attribute;
+}
+
+function setupReference(THREE, file) {
+  const K = file.vertices;
+  state.refPositions = new Float32Array(K * 3);
+  state.refNormals = new Float32Array(K * 3);
+  state.distances = new Float32Array(K);
+  state.colours = new Float32Array(K * 3);
+  const geometry = new THREE.BufferGeometry();
+  geometry.setAttribute('position', dynamic(new THREE.BufferAttribute(state.refPositions, 3), THREE));
+  geometry.setAttribute('normal', dynamic(new THREE.BufferAttribute(state.refNormals, 3), THREE));
+  geometry.setIndex(state.geometry.getIndex());
+  const material = new THREE.MeshStandardMaterial({
+    color: 0x9fb4c8, roughness: 0.7, metalness: 0, side: THREE.DoubleSide, transparent: true, opacity: 1,
+  });
+  const refMesh = new THREE.Mesh(geometry, material);
+  const refWire = new THREE.Mesh(geometry, state.wire.material);
+  refMesh.frustumCulled = refWire.frustumCulled = false;
+  refWire.visible = false;
+  state.group.add(refMesh, refWire);
+  Object.assign(state, { refGeometry: geometry, refMesh, refWire });
+
+  state.geometry.setAttribute('color', dynamic(new THREE.BufferAttribute(state.colours, 3), THREE));
+  state.material.vertexColors = true;
+  state.material.color.set(0xffffff);
+  // the scale's colours are sRGB; the renderer takes vertex colours in linear RGB
+  const scale = colourScale(256);
+  state.lut = new Float32Array(scale.length * 3);
+  const colour = new THREE.Color();
+  scale.forEach(([r, g, b], s) => {
+    colour.setRGB(r, g, b, THREE.SRGBColorSpace);
+    state.lut.set([colour.r, colour.g, colour.b], s * 3);
+  });
+  drawLegendBar(scale);
+  state.colourByError = true;
+  const ref = state.reference;
+  if (ref.maxDistance !== null) {
+    state.scale = ref.maxDistance;
+    state.scaleFixed = true;
+    $('legend-scale').textContent =
+      'Colours: distance to the original on a fixed scale, from 0 (pale yellow) to the largest ' +
+      'distance over all frames (dark red), measured when this page was made (the Python ' +
+      'decoder against the original rounded to float32).';
+  } else {
+    $('legend-scale').textContent =
+      'Colours: distance to the original, from 0 (pale yellow) to the largest distance over the ' +
+      'frames shown so far (dark red; the scale only grows).';
+  }
+  $('legend').hidden = false;
+  $('reference-controls').hidden = false;
+  $('frame-error').hidden = false;
+  $('frame-kg-definition').textContent = FRAME_KG_DEFINITION +
+    '. Original: the reference rounded to float32; decoded: the drawn float32 positions.';
+  setLayout('beside');
+}
+
+function drawLegendBar(scale) {
+  const bar = $('legend-bar');
+  const context = bar.getContext('2d');
+  for (let y = 0; y < bar.height; y++) {
+    const s = Math.round((1 - y / (bar.height - 1)) * (scale.length - 1));
+    const [r, g, b] = scale[s].map((c) => Math.round(c * 255));
+    context.fillStyle = `rgb(${r}, ${g}, ${b})`;
+    context.fillRect(0, y, bar.width, 1);
+  }
+}
+
+function updateLegend() {
+  $('legend-max').textContent = formatNumber(state.scale);
+  $('legend-mid').textContent = formatNumber(state.scale / 2);
+}
+
+/** The box of frames sampled over the first segment (the whole file if it has one), so that a
+ * moving mesh stays in view; sampling costs a few reconstructions at opening, no more. */
+function sampledBox() {
+  const file = state.file;
+  const first = file.segments && file.segments.length ? file.segments[0] : { start: 0, frames: file.frames };
+  const count = Math.min(FRAMING_SAMPLES, first.frames);
+  const box = emptyBox();
+  const scratch = state.positions; // overwritten by showFrame(0) right after
+  for (let s = 0; s < count; s++) {
+    const t = first.start + (count === 1 ? 0 : Math.round((s * (first.frames - 1)) / (count - 1)));
+    extendBox(box, file.frameFloat32(t, scratch));
+  }
+  if (state.reference) extendBox(box, state.reference.positions.subarray(0, file.vertices * 3));
+  return box;
+}
+
+function frameCamera() {
+  const THREE = state.THREE;
+  if (!state.box) state.box = sampledBox();
+  const [x0, y0, z0, x1, y1, z1] = state.box;
+  const finite = [x0, y0, z0, x1, y1, z1].every(Number.isFinite);
+  const min = finite ? new THREE.Vector3(x0, y0, z0) : new THREE.Vector3(-1, -1, -1);
+  const max = finite ? new THREE.Vector3(x1, y1, z1) : new THREE.Vector3(1, 1, 1);
+  const size = new THREE.Vector3().subVectors(max, min);
+  // the original stands beside the decoded mesh at +x, one box width and a gap away
+  state.offset = Math.max(size.x, 1e-9) * 1.15;
+  if (state.refMesh) placeReference();
+  const box = new THREE.Box3(min, max);
+  if (state.refMesh && state.layout === 'beside') box.max.x += state.offset;
+  // the box in the scene: the group turns the file's up axis to the screen's
+  state.group.updateMatrixWorld(true);
+  box.applyMatrix4(state.group.matrixWorld);
+  const centre = box.getCenter(new THREE.Vector3());
+  const radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 1e-9);
+  const camera = state.camera;
+  const distance = radius / Math.sin(THREE.MathUtils.degToRad(camera.fov) / 2) * 1.05;
+  camera.near = distance / 100;
+  camera.far = distance * 100;
+  camera.position.copy(centre).add(new THREE.Vector3(0.35, 0.25, 1).normalize().multiplyScalar(distance));
+  camera.updateProjectionMatrix();
+  state.controls.target.copy(centre);
+  state.controls.update();
+  requestRender();
+}
+
+function setUp(axis) {
+  const group = state.group;
+  group.rotation.set(0, 0, 0);
+  if (axis === 'z') group.rotation.x = -Math.PI / 2;
+  if (axis === 'x') group.rotation.z = Math.PI / 2;
+  state.up = axis;
+}
+
+function setLayout(layout) {
+  state.layout = layout;
+  if (!state.refMesh) return;
+  placeReference();
+  requestRender();
+}
+
+function placeReference() {
+  const { refMesh, refWire } = state;
+  const layout = state.layout;
+  refMesh.visible = layout !== 'hidden';
+  refWire.visible = refMesh.visible && state.wire.visible;
+  refMesh.position.x = refWire.position.x = layout === 'beside' ? state.offset : 0;
+  const overlay = layout === 'overlay';
+  refMesh.material.opacity = overlay ? 0.35 : 1;
+  refMesh.material.depthWrite = !overlay;
+  refMesh.renderOrder = overlay ? 1 : 0; // drawn after the decoded mesh, through it
+  refMesh.material.needsUpdate = true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// one frame
+
+/** Reconstruct frame t into the drawn geometry (and the original's, and the error colours). */
+function showFrame(t) {
+  const file = state.file;
+  const began = performance.now();
+  file.frameFloat32(t, state.positions);
+  const took = performance.now() - began;
+  if (state.frameMs.length >= MAX_TIMINGS) {
+    for (const list of [state.frameMs, state.updateMs, state.renderMs]) list.splice(0, MAX_TIMINGS / 2);
+  }
+  state.frameMs.push(took);
+  state.frame = t;
+  const geometry = state.geometry;
+  geometry.attributes.position.needsUpdate = true;
+  const smooth = state.shading !== 'flat';
+  if (smooth) {
+    computeNormals(state.positions, state.index, state.normals);
+    geometry.attributes.normal.needsUpdate = true;
+  }
+  if (state.reference) {
+    const K = file.vertices;
+    const original = state.reference.positions.subarray(t * K * 3, (t + 1) * K * 3);
+    state.refPositions.set(original);
+    state.refGeometry.attributes.position.needsUpdate = true;
+    if (smooth) {
+      computeNormals(state.refPositions, state.index, state.refNormals);
+      state.refGeometry.attributes.normal.needsUpdate = true;
+    }
+    const { kg, maxError } = frameError(original, state.positions, state.distances);
+    state.lastError = { kg, maxError, definition: FRAME_KG_DEFINITION };
+    if (!state.scaleFixed && maxError > state.scale) state.scale = maxError;
+    if (state.colourByError) {
+      paintDistances(state.distances, state.scale, state.lut, state.colours);
+      geometry.attributes.color.needsUpdate = true;
+    }
+    updateLegend();
+    $('frame-kg').textContent = kg === null ? 'undefined (the frame has no spread)' : `${formatNumber(kg)} %`;
+    $('frame-max').textContent = `${formatNumber(maxError)} scene units`;
+  }
+  state.updateMs.push(performance.now() - began);
+  const slider = $('slider');
+  slider.value = String(t);
+  const name = file.names && file.names[t] ? ` — ${file.names[t]}` : '';
+  $('frame-label').textContent = `frame ${t} of 0–${file.frames - 1}${name}`;
+  $('frame-ms').textContent = `${took.toFixed(2)} ms (frame ${t})`;
+  requestRender();
+}
+
+function render() {
+  state.dirty = false;
+  const began = performance.now();
+  state.renderer.render(state.scene, state.camera);
+  state.renderMs.push(performance.now() - began);
+}
+
+function requestRender() {
+  state.dirty = true;
+  schedule();
+}
+
+function schedule() {
+  if (state.rafPending || !state.renderer) return;
+  state.rafPending = true;
+  requestAnimationFrame(tick);
+}
+
+/** Resolves once the browser has had a chance to paint (or after 100 ms in a hidden page,
+ * where animation frames never come). */
+function nextPaint() {
+  return new Promise((resolve) => {
+    const timer = setTimeout(resolve, 100);
+    requestAnimationFrame(() => { clearTimeout(timer); resolve(); });
+  });
+}
+
+// ---------------------------------------------------------------------------------------------
+// playback
+
+function tick(now) {
+  state.rafPending = false;
+  if (state.playing) {
+    // frames since play() began, on the real clock; the frame shown is this count past the
+    // frame playback started from
+    const count = Math.floor(((now - state.clockStart) / 1000) * state.rate);
+    if (count > state.lastTick) {
+      const skipped = count - state.lastTick - 1;
+      state.lastTick = count;
+      const F = state.file.frames;
+      let t = state.startFrame + count;
+      if (t >= F && !$('loop').checked) {
+        showFrame(F - 1);
+        pause();
+      } else {
+        if (skipped > 0) state.dropped += skipped;
+        t %= F;
+        showFrame(t);
+        state.played += 1;
+      }
+      updatePlayed();
+    }
+  }
+  if (state.dirty) render();
+  if (state.playing) schedule();
+}
+
+function play() {
+  if (!state.file || state.playing) return;
+  let from = state.frame;
+  if (from >= state.file.frames - 1 && !$('loop').checked) from = 0;
+  if (from !== state.frame) showFrame(from);
+  state.playing = true;
+  state.startFrame = from;
+  state.lastTick = 0;
+  state.clockStart = performance.now();
+  $('play').textContent = 'pause';
+  schedule();
+}
+
+function pause() {
+  if (!state.playing) return;
+  state.playing = false;
+  $('play').textContent = 'play';
+}
+
+function updatePlayed() {
+  $('played').textContent = `${state.played} / ${state.dropped}`;
+}
+
+// ---------------------------------------------------------------------------------------------
+// controls and facts
+
+function setupControls() {
+  const file = state.file;
+  const slider = $('slider');
+  slider.max = String(file.frames - 1);
+  for (const id of ['play', 'step-back', 'step-forward', 'slider', 'reframe']) $(id).disabled = false;
+  $('play').addEventListener('click', () => (state.playing ? pause() : play()));
+  const step = (delta) => {
+    pause();
+    showFrame((state.frame + delta + file.frames) % file.frames);
+  };
+  $('step-back').addEventListener('click', () => step(-1));
+  $('step-forward').addEventListener('click', () => step(1));
+  slider.addEventListener('input', () => {
+    const t = Number(slider.value);
+    const wasPlaying = state.playing;
+    pause();
+    showFrame(t);
+    if (wasPlaying) play(); // scrubbing while playing goes on from the new frame
+  });
+  $('shading').addEventListener('change', (event) => {
+    state.shading = event.target.value;
+    const flat = state.shading === 'flat';
+    state.material.flatShading = flat;
+    state.material.needsUpdate = true;
+    if (state.refMesh) {
+      state.refMesh.material.flatShading = flat;
+      state.refMesh.material.needsUpdate = true;
+    }
+    showFrame(state.frame); // smooth normals are only kept up to date while they are used
+  });
+  $('wireframe').addEventListener('change', (event) => {
+    state.wire.visible = event.target.checked;
+    if (state.refWire) state.refWire.visible = event.target.checked && state.refMesh.visible;
+    requestRender();
+  });
+  $('up').addEventListener('change', (event) => {
+    setUp(event.target.value);
+    frameCamera();
+  });
+  $('layout').addEventListener('change', (event) => {
+    setLayout(event.target.value);
+    frameCamera();
+  });
+  $('colour').addEventListener('change', (event) => {
+    state.colourByError = event.target.checked;
+    state.material.vertexColors = state.colourByError;
+    state.material.color.set(state.colourByError ? 0xffffff : 0xd8d2c4);
+    state.material.needsUpdate = true;
+    $('legend').hidden = !state.colourByError;
+    showFrame(state.frame);
+  });
+  $('reframe').addEventListener('click', frameCamera);
+  window.addEventListener('keydown', (event) => {
+    if (event.target instanceof HTMLInputElement && event.target.type !== 'range' && event.target.type !== 'checkbox') return;
+    if (event.target instanceof HTMLSelectElement) return;
+    if (event.key === ' ') { event.preventDefault(); state.playing ? pause() : play(); }
+    else if (event.key === 'ArrowRight') { event.preventDefault(); step(1); }
+    else if (event.key === 'ArrowLeft') { event.preventDefault(); step(-1); }
+  });
+  updatePlayed();
+}
+
+function showFacts(file) {
+  const bytes = state.bytes;
+  const bpfv = (8 * bytes) / (file.frames * file.vertices);
+  const error = file.error;
+  const rows = [
+    ['format', file.version],
+    ['vertices (K)', file.vertices.toLocaleString('en')],
+    ['frames (F)', file.frames.toLocaleString('en')],
+    ['faces', `${file.faceCount.toLocaleString('en')} of up to ${file.faceWidth} corners`],
+    ['size', `${bytes.toLocaleString('en')} bytes`],
+    ['bpfv', `${bpfv.toFixed(4)} bits per frame per vertex (8·bytes / (F·K), the whole file)`],
+    ['frame rate', file.frameRate ? `${formatNumber(file.frameRate)} fps` : `none recorded (plays at ${DEFAULT_RATE})`],
+    ['segments', segmentsText(file.segments)],
+    ['KG error', error && Number.isFinite(error.kg) ? `${formatNumber(error.kg)} % (the encoder's claim, in the header)` : 'not recorded in the header'],
+  ];
+  if (error && Number.isFinite(error.targetKg)) rows.push(['target KG', `${formatNumber(error.targetKg)} %`]);
+  const ref = state.reference;
+  if (ref) {
+    rows.push(['original', `${ref.source}, positions rounded to float32`]);
+    if (ref.kg !== null) rows.push(['measured KG', `${formatNumber(ref.kg)} % over the whole sequence, against the original (float32)`]);
+  }
+  const list = $('facts-list');
+  list.replaceChildren();
+  for (const [term, value] of rows) {
+    const dt = document.createElement('dt');
+    dt.textContent = term;
+    const dd = document.createElement('dd');
+    dd.textContent = value;
+    list.append(dt, dd);
+  }
+  $('facts-note').textContent = error && error.definition ? `KG: ${error.definition}` : '';
+}
+
+function segmentsText(segments) {
+  if (!segments || segments.length <= 1) {
+    const ranks = segments && segments[0] ? segments[0].ranks : null;
+    return ranks ? `one; ranks (i, 3, k) = (${ranks[0]}, 3, ${ranks[1]})` : 'one';
+  }
+  const bases = new Set(segments.map((s) => s.basis));
+  return `${segments.length} (${[...bases].join(', ')} U1)`;
+}
+
+// ---------------------------------------------------------------------------------------------
+// messages
+
+function status(text) {
+  $('status').textContent = text;
+}
+
+function fail(error) {
+  state.error = error;
+  pause();
+  console.error(error);
+  const box = $('error');
+  const message = error && error.message ? error.message : String(error);
+  // a TkcError's message already ends with its rule, "[R10-file-truncated]"
+  const rule = error && error.rule && !message.includes(error.rule) ? ` [${error.rule}]` : '';
+  const kind = error && error.kind ? `${error.kind}: ` : '';
+  box.textContent = `Cannot show this file. ${kind}${message}${rule}`;
+  box.hidden = false;
+  status('');
+}
+
+function formatNumber(value) {
+  if (!Number.isFinite(value)) return String(value);
+  if (value === 0) return '0';
+  const magnitude = Math.abs(value);
+  if (magnitude >= 1e5 || magnitude < 1e-3) return value.toExponential(3);
+  return value.toPrecision(4).replace(/(\.\d*?)0+$/, '$1').replace(/\.$/, '');
+}
+
+window.addEventListener('error', (event) => {
+  if (!state.error) fail(event.error || new Error(event.message));
+});
