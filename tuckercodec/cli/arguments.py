@@ -269,6 +269,8 @@ def build_parser() -> argparse.ArgumentParser:
     convert.add_argument("--force", action="store_true", help="replace output files that exist")
     _add_read_options(convert)
 
+    _add_view(verbs)
+
     verbs.add_parser(
         "formats",
         help="list the sequence formats: suffixes, options, what each keeps, extras",
@@ -433,3 +435,53 @@ def _add_batch(verbs: argparse._SubParsersAction[argparse.ArgumentParser]) -> No
     )
     batch.add_argument("--force", action="store_true", help="replace outputs that exist")
     _add_read_options(batch)
+
+
+def _port(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a port number: {text!r}") from None
+    if not 0 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f"a port is 0 to 65535, got {text}")
+    return value
+
+
+def _add_view(verbs: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """The ``view`` verb (tuckercodec.cli.view): serve the viewer page, or export it."""
+    view = verbs.add_parser(
+        "view",
+        help="play a compressed file in a web browser (served on 127.0.0.1, or exported)",
+        description=(
+            "Check FILE with the Python decoder, then serve, on 127.0.0.1 only, a page that "
+            "decodes it in the browser (the JavaScript decoder) and plays it: play/pause, frame "
+            "slider, the file's frame rate, orbit camera, shading, wireframe. With --reference, "
+            "the original beside it or overlaid, vertices coloured by their distance to it, and "
+            "each frame's KG error. Ctrl-C stops the server (exit 0). Nothing is fetched from "
+            "the network: three.js and the decoder ship with the package."
+        ),
+    )
+    view.add_argument("input", metavar=f"FILE{SUFFIX}", help=f"a compressed file ({SUFFIX})")
+    view.add_argument(
+        "--reference",
+        metavar="ORIGINAL",
+        help="the original sequence (same frames and vertices), to compare with",
+    )
+    view.add_argument(
+        "--port",
+        type=_port,
+        metavar="N",
+        help="the port to listen on (default: a free one, chosen by the system)",
+    )
+    view.add_argument("--open", action="store_true", help="open the page in a web browser")
+    view.add_argument(
+        "--export-html",
+        type=Path,
+        metavar="DIR",
+        help=(
+            "write the page, its scripts, the file (and the reference) to the folder DIR, for "
+            "any static web server, instead of serving"
+        ),
+    )
+    view.add_argument("--force", action="store_true", help="with --export-html: replace DIR")
+    _add_read_options(view, "the reference")

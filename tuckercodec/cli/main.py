@@ -3,8 +3,9 @@
 Exit codes (also in the README): 0 success; 1 an output that exists (without --force) or
 another I/O failure; 2 a usage error; 3 an invalid or corrupt compressed file; 4 a bad input
 mesh sequence; 5 a target no file can meet; 6 a missing optional dependency; 7 some inputs of
-a batch failed (the others were written); 130 or 143 interrupted by Ctrl-C or SIGTERM. Every
-failure is one line on standard error.
+a batch failed (the others were written); 130 or 143 interrupted by Ctrl-C or SIGTERM (but
+``view`` exits 0 on Ctrl-C, the way its server is meant to stop). Every failure is one line on
+standard error.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ import threading
 from collections.abc import Callable, Sequence
 
 from ..errors import EXIT_FAILURE
-from . import batch, codec, commands, convert
+from . import batch, codec, commands, convert, view
 from .arguments import build_parser
 from .failures import describe_failure
 
@@ -32,6 +33,7 @@ _VERBS: dict[str, Callable[[argparse.Namespace], int]] = {
     "convert": convert.run_convert,
     "formats": convert.run_formats,
     "batch": batch.run_batch,
+    "view": view.run_view,
 }
 
 

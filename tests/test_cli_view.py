@@ -1,0 +1,371 @@
+"""``tuckercodec view``: the viewer's folder, the server on 127.0.0.1, the exported folder, the
+checks before serving and Ctrl-C. The page itself runs in headless Chromium in the browser
+tests; here node runs only its arithmetic (measure.js)."""
+
+from __future__ import annotations
+
+import base64
+import hashlib
+import http.client
+import json
+import re
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tomllib
+from fnmatch import fnmatch
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import grid_faces, wave_sequence
+
+from tuckercodec import MeshSequence, decode, encode
+from tuckercodec.cli import main
+from tuckercodec.metrics import kg_error
+from tuckercodec.web.server import ViewerServer
+from tuckercodec.web.site import build_site, page_files, web_root
+
+ROOT = Path(__file__).resolve().parents[1]
+TYPES = {
+    ".html": "text/html; charset=utf-8",
+    ".js": "text/javascript; charset=utf-8",
+    ".mjs": "text/javascript; charset=utf-8",
+    ".css": "text/css; charset=utf-8",
+    ".json": "application/json",
+    ".bin": "application/octet-stream",
+    ".tkc": "application/octet-stream",
+    ".md": "text/markdown; charset=utf-8",
+    "": "text/plain; charset=utf-8",
+}
+
+
+@pytest.fixture(scope="module")
+def wave() -> MeshSequence:
+    return MeshSequence(wave_sequence(12, 6), grid_faces(6))
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory, wave) -> dict[str, Path]:
+    """A compressed file of a small wave, and its original as .npz (and one frame short)."""
+    folder = tmp_path_factory.mktemp("view")
+    tkc = folder / "wave one.tkc"  # a space: the folder's name for it must be URL-safe
+    tkc.write_bytes(encode(wave, target_kg=0.5))
+    original = folder / "wave.npz"
+    np.savez(original, V=wave.vertices, F=wave.faces)
+    short = folder / "short.npz"
+    np.savez(short, V=wave.vertices[:-1], F=wave.faces)
+    return {"tkc": tkc, "original": original, "short": short}
+
+
+def _get(
+    server: ViewerServer, path: str, method: str = "GET", host: str | None = None
+) -> tuple[int, dict[str, str], bytes]:
+    connection = http.client.HTTPConnection("127.0.0.1", server.port, timeout=10)
+    try:
+        # the path is sent exactly as given: no client-side clean-up of "..", as a hostile
+        # client would not do any
+        connection.putrequest(method, path, skip_host=True, skip_accept_encoding=True)
+        connection.putheader("Host", host or f"127.0.0.1:{server.port}")
+        connection.endheaders()
+        response = connection.getresponse()
+        return response.status, dict(response.getheaders()), response.read()
+    finally:
+        connection.close()
+
+
+@pytest.fixture
+def served(tmp_path, files, wave):
+    """The viewer's folder for the wave with its reference, served on a free port."""
+    with np.load(files["original"]) as loaded:
+        positions = loaded["V"]
+
+    class Frames:
+        frame_count, vertex_count = positions.shape[:2]
+
+        def read(self, start: int, stop: int) -> np.ndarray:
+            return positions[start:stop]
+
+    site = build_site(
+        tmp_path, files["tkc"].read_bytes(), "wave_one.tkc", reference=Frames(), reference_name="w"
+    )
+    with ViewerServer(tmp_path, site.files, 0) as server:
+        yield server, site, tmp_path
+
+
+def test_the_server_listens_on_127_0_0_1_only_and_serves_each_file_with_its_type(served):
+    server, site, folder = served
+    assert server.server_address[0] == "127.0.0.1"
+    assert server.socket.getsockname()[0] == "127.0.0.1"
+    assert {Path(name).suffix for name in site.files} >= {".html", ".js", ".css", ".json", ".tkc"}
+    for name in site.files:
+        status, headers, body = _get(server, "/" + name)
+        assert status == 200, name
+        assert headers["Content-Type"] == TYPES[Path(name).suffix], name
+        assert headers["Cache-Control"] == "no-store"
+        assert headers["X-Content-Type-Options"] == "nosniff"
+        assert body == (folder / name).read_bytes(), name
+    status, headers, body = _get(server, "/")
+    assert (status, body) == (200, (folder / "index.html").read_bytes())
+    status, headers, body = _get(server, "/" + site.files[0], method="HEAD")
+    assert (status, body) == (200, b"")
+    assert int(headers["Content-Length"]) == (folder / site.files[0]).stat().st_size
+
+
+@pytest.mark.parametrize(
+    "path",
+    [
+        "/nothing.html",
+        "/viewer",  # folders: no listing
+        "/viewer/",
+        "/data/",
+        "/../wave.npz",  # out of the folder
+        "/data/../../wave.npz",
+        "/viewer/../data/wave_one.tkc",  # a file of the list, but not by its own name
+        "/viewer/%2e%2e/data/wave_one.tkc",
+        "/%2e%2e/%2e%2e/etc/passwd",
+        "//etc/passwd",
+        "/data/wave_one.tkc/",
+        "/DATA/WAVE_ONE.TKC",
+    ],
+)
+def test_anything_but_the_listed_files_is_404(served, path):
+    server, _, _ = served
+    status, headers, _ = _get(server, path)
+    assert status == 404
+    assert headers["Cache-Control"] == "no-store"
+
+
+def test_a_request_for_another_host_name_is_refused(served):
+    """A page elsewhere reaching the server through a name that resolves to 127.0.0.1."""
+    server, _, _ = served
+    assert _get(server, "/index.html", host=f"localhost:{server.port}")[0] == 200
+    assert _get(server, "/index.html", host=f"evil.example:{server.port}")[0] == 403
+    assert _get(server, "/index.html", host="127.0.0.1")[0] == 403
+
+
+def test_the_page_loads_only_shipped_files_and_its_policy_allows_its_import_map():
+    """Every relative import of every shipped module names a shipped file (a module the
+    decoder imports but the package lacks breaks the page), the import map points into the
+    package, and the Content-Security-Policy's hash is that of the import map."""
+    shipped = set(page_files())
+    root = web_root()
+    for name in shipped:
+        if not name.endswith((".js", ".mjs")):
+            continue
+        text = (root / name).read_text(encoding="utf-8")
+        specifiers = re.findall(
+            r"""(?:^|\n)\s*(?:import|export)\b[^'";]*?from\s*['"]([^'"]+)['"]""", text
+        )
+        specifiers += re.findall(r"""\bimport\(\s*['"]([^'"]+)['"]\s*\)""", text)
+        for specifier in specifiers:
+            if specifier == "three":
+                continue
+            target = (Path("/") / name).parent / specifier
+            resolved = str(Path(*target.parts).resolve().relative_to("/"))
+            assert resolved in shipped, f"{name} imports {specifier}, which is not shipped"
+    page = (root / "viewer/index.html").read_text(encoding="utf-8")
+    imports = re.search(r'<script type="importmap">(.*?)</script>', page, re.S)
+    assert imports is not None
+    mapped = json.loads(imports.group(1))["imports"]["three"]
+    assert "vendor/three/three.module.js" in shipped and mapped == "../vendor/three/three.module.js"
+    digest = base64.b64encode(hashlib.sha256(imports.group(1).encode()).digest()).decode()
+    policy = re.search(r'http-equiv="Content-Security-Policy" content="([^"]+)"', page)
+    assert policy is not None and f"'sha256-{digest}'" in policy.group(1)
+    assert "default-src 'self'" in policy.group(1)
+
+
+def test_the_web_files_are_package_data():
+    """pyproject's package data covers every file the folder takes from the package, so that a
+    non-editable install ships the page."""
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    patterns = config["tool"]["setuptools"]["package-data"]["tuckercodec"]
+    for name in page_files():
+        assert any(fnmatch(f"web/{name}", pattern) for pattern in patterns), name
+    for licence in ("vendor/three/LICENSE", "vendor/fzstd/LICENSE"):
+        assert licence in page_files()
+
+
+def test_export_writes_the_folder_and_refuses_an_existing_one_without_force(
+    files, tmp_path, capsys
+):
+    out = tmp_path / "site"
+    assert main(["view", str(files["tkc"]), "--export-html", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "python -m http.server -d" in printed
+    written = sorted(str(p.relative_to(out)) for p in out.rglob("*") if p.is_file())
+    assert written == sorted([*page_files(), "data/wave_one.tkc", "index.html"])
+    assert (out / "data/wave_one.tkc").read_bytes() == files["tkc"].read_bytes()
+    index = (out / "index.html").read_text()
+    assert "viewer/index.html?file=../data/wave_one.tkc" in index
+    assert "reference=" not in index
+
+    (out / "stray.txt").write_text("mine")
+    assert main(["view", str(files["tkc"]), "--export-html", str(out)]) == 1
+    assert "already exists" in capsys.readouterr().err
+    assert (out / "stray.txt").exists()  # untouched
+
+    assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 0
+    assert not (out / "stray.txt").exists()  # replaced whole, never merged
+    assert (out / "data/wave_one.tkc").read_bytes() == files["tkc"].read_bytes()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no staging left
+
+
+def test_export_with_a_reference_writes_its_float32_positions_and_the_measures(
+    files, wave, tmp_path, capsys
+):
+    out = tmp_path / "site"
+    args = ["view", str(files["tkc"]), "--reference", str(files["original"])]
+    assert main([*args, "--export-html", str(out)]) == 0
+    assert "KG error" in capsys.readouterr().out
+    meta = json.loads((out / "data/reference.json").read_text())
+    assert (meta["vertices"], meta["frames"], meta["dtype"]) == (36, 12, "float32")
+    assert meta["data"] == "reference.bin"
+    rounded = np.fromfile(out / "data/reference.bin", dtype="<f4").reshape(12, 36, 3)
+    np.testing.assert_array_equal(rounded, wave.vertices.astype(np.float32))
+    decoded = decode(files["tkc"].read_bytes()).vertices
+    original = rounded.astype(np.float64)
+    largest = np.linalg.norm(original - decoded, axis=2).max()
+    assert meta["maxDistance"] == pytest.approx(largest, rel=1e-12)
+    assert meta["kg"] == pytest.approx(kg_error(original, decoded), rel=1e-9)
+    index = (out / "index.html").read_text()
+    assert "reference=../data/reference.json" in index
+
+
+def test_a_bad_file_is_exit_3_with_one_line(files, tmp_path, capsys):
+    damaged = tmp_path / "damaged.tkc"
+    data = bytearray(files["tkc"].read_bytes())
+    data[len(data) // 2] ^= 0xFF  # inside a section: its CRC no longer matches
+    damaged.write_bytes(bytes(data))
+    not_ours = tmp_path / "frames.obj"
+    not_ours.write_text("v 0 0 0\n")
+    for bad in (damaged, not_ours):
+        assert main(["view", str(bad), "--export-html", str(tmp_path / "out")]) == 3
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("tuckercodec: invalid or corrupt file: ") and "\n" not in err
+        assert str(bad) in err and re.search(r"\[R\d\d-[a-z0-9-]+\]$", err)
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_reference_of_another_shape_is_exit_4_naming_both(files, tmp_path, capsys):
+    args = ["view", str(files["tkc"]), "--reference", str(files["short"])]
+    assert main([*args, "--export-html", str(tmp_path / "out")]) == 4
+    err = capsys.readouterr().err.strip()
+    assert "11 frames of 36 vertices" in err and "12 of 36" in err and "\n" not in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_options_that_do_not_apply_are_usage_errors(files, tmp_path, capsys):
+    assert main(["view", str(files["tkc"]), "--force"]) == 2
+    assert "--force applies to --export-html" in capsys.readouterr().err
+    assert main(["view", str(files["tkc"]), "--open", "--export-html", str(tmp_path / "o")]) == 2
+    capsys.readouterr()
+    with pytest.raises(SystemExit):
+        main(["view", str(files["tkc"]), "--port", "70000"])
+    assert "a port is 0 to 65535" in capsys.readouterr().err
+
+
+def test_a_port_in_use_is_exit_1_naming_it(files, capsys):
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        assert main(["view", str(files["tkc"]), "--port", str(port)]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"tuckercodec: 127.0.0.1:{port}: ") and "\n" not in err
+
+
+def test_the_view_command_serves_until_ctrl_c_then_exits_0(files):
+    """The real command in a child process: the URL it prints serves the file, byte for byte;
+    SIGINT stops it cleanly (exit 0, no traceback) and the port is closed."""
+    arguments = ["view", str(files["tkc"]), "--reference", str(files["original"])]
+    # Python's own Ctrl-C handler, even where this test runs with SIGINT ignored (a shell's
+    # background job), which the child would inherit
+    start = (
+        "import runpy, signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
+        f"sys.argv = ['tuckercodec', *{arguments!r}]; "
+        "runpy.run_module('tuckercodec', run_name='__main__')"
+    )
+    command = [sys.executable, "-c", start]
+    child = subprocess.Popen(
+        command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT
+    )
+    try:
+        assert child.stdout is not None
+        url = ""
+        while not url:
+            line = child.stdout.readline()
+            assert line, f"the command ended early: {child.communicate(timeout=30)}"
+            if line.startswith("http://127.0.0.1:"):
+                url = line.strip()
+        match = re.fullmatch(r"http://127\.0\.0\.1:(\d+)/viewer/index\.html\?file=(.+)", url)
+        assert match is not None, url
+        port = int(match.group(1))
+        connection = http.client.HTTPConnection("127.0.0.1", port, timeout=10)
+        connection.request("GET", "/data/wave_one.tkc")
+        response = connection.getresponse()
+        assert response.status == 200
+        assert response.read() == files["tkc"].read_bytes()
+        connection.close()
+        child.send_signal(signal.SIGINT)
+        out, err = child.communicate(timeout=30)
+    finally:
+        if child.poll() is None:
+            child.kill()
+            child.communicate()
+    assert child.returncode == 0, err
+    assert "stopped the server" in out
+    assert err == ""
+    with socket.socket() as probe, pytest.raises(ConnectionRefusedError):
+        probe.connect(("127.0.0.1", port))
+
+
+def test_measure_js_gives_the_frame_error_python_gives(files, wave, tmp_path):
+    """The page's per-frame KG error and largest distance (measure.js, in node) against numpy,
+    on one decoded frame of the wave and its float32 original."""
+    node = shutil.which("node")
+    if node is None:
+        pytest.skip("node is not installed (needed to run the page's measure.js)")
+    decoded = decode(files["tkc"].read_bytes()).vertices[5].astype(np.float32)
+    original = wave.vertices[5].astype(np.float32)
+    (tmp_path / "a.bin").write_bytes(original.tobytes())
+    (tmp_path / "b.bin").write_bytes(decoded.tobytes())
+    measure = Path(str(web_root() / "viewer/measure.js")).as_uri()
+    triangles = json.dumps(wave.triangles().ravel().tolist())
+    script = f"""
+        import {{ readFileSync }} from 'node:fs';
+        import {{ frameError, computeNormals }} from '{measure}';
+        const load = (name) => {{
+          const b = readFileSync(name);
+          return new Float32Array(b.buffer, b.byteOffset, b.length / 4);
+        }};
+        const a = load('{tmp_path / "a.bin"}'), b = load('{tmp_path / "b.bin"}');
+        const distances = new Float32Array(a.length / 3);
+        const result = frameError(a, b, distances);
+        const normals = new Float32Array(a.length);
+        computeNormals(a, Uint32Array.from({triangles}), normals);
+        const out = {{ ...result, distances: [...distances], normals: [...normals] }};
+        console.log(JSON.stringify(out));
+    """
+    done = subprocess.run(
+        [node, "--input-type=module", "-e", script], capture_output=True, text=True, timeout=60
+    )
+    assert done.returncode == 0, done.stderr
+    result = json.loads(done.stdout)
+    a, b = original.astype(np.float64), decoded.astype(np.float64)
+    distances = np.linalg.norm(a - b, axis=1)
+    assert result["kg"] == pytest.approx(kg_error(a[None], b[None]), rel=1e-12)
+    assert result["maxError"] == pytest.approx(distances.max(), rel=1e-12)
+    np.testing.assert_allclose(result["distances"], distances, rtol=1e-6)
+    normals = np.array(result["normals"]).reshape(-1, 3)
+    np.testing.assert_allclose(np.linalg.norm(normals, axis=1), 1.0, rtol=1e-6)
+    # area-weighted vertex normals, as numpy forms them
+    triangles = wave.triangles()
+    e1, e2 = a[triangles[:, 1]] - a[triangles[:, 0]], a[triangles[:, 2]] - a[triangles[:, 0]]
+    sums = np.zeros_like(a)
+    for corner in range(3):
+        np.add.at(sums, triangles[:, corner], np.cross(e1, e2))
+    expected = sums / np.linalg.norm(sums, axis=1, keepdims=True)
+    np.testing.assert_allclose(normals, expected, atol=1e-5)

@@ -1,0 +1,183 @@
+"""The ``view`` verb: play a compressed file in a web browser.
+
+``tuckercodec view FILE.tkc`` checks the file with the Python decoder (every section, so that a
+damaged file is reported here, exit 3, not half-played in the browser), builds the viewer's
+folder (:mod:`tuckercodec.web.site`) in a temporary folder and serves it on 127.0.0.1
+(:mod:`tuckercodec.web.server`) until Ctrl-C; the browser decodes the file itself, with the
+JavaScript decoder. ``--reference ORIGINAL`` adds the original's positions (its frame and vertex
+counts must be the file's, else exit 4). ``--export-html DIR`` writes the same folder instead,
+for any static web server.
+
+Ctrl-C is how a server is stopped, not a failure: it shuts the server down, removes the
+temporary folder and exits 0 (other verbs exit 130, since Ctrl-C cut their work short).
+SIGTERM still ends it as every verb: the same clean-up, then exit 143.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+import threading
+import webbrowser
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+import numpy as np
+
+from ..atomic import atomic_store, refuse_existing
+from ..decoder import Decoder
+from ..errors import EXIT_OK, FormatError, InputError
+from ..format.disk import read_file
+from ..io import open_frames
+from ..web.server import ViewerServer
+from ..web.site import ReferenceFrames, Site, build_site, data_name
+from .inputs import is_compressed, read_options, sequence_source
+
+
+def run_view(args: argparse.Namespace) -> int:
+    _check_options(args)
+    if args.export_html is not None:
+        refuse_existing([args.export_html], args.force)  # before the work, not after it
+    data, decoder = _validated(args.input)
+    name = data_name(args.input)
+    if args.export_html is not None:
+        with _reference(args, decoder) as reference:
+            return _export(args, data, name, decoder, reference)
+    with tempfile.TemporaryDirectory(prefix="tuckercodec-view-") as folder:
+        with _reference(args, decoder) as reference:  # closed before the server starts
+            site = build_site(
+                Path(folder),
+                data,
+                name,
+                decoder=decoder,
+                reference=reference,
+                reference_name=_shown(args),
+            )
+        return _serve(args, Path(folder), site)
+
+
+def _check_options(args: argparse.Namespace) -> None:
+    if args.export_html is not None and (args.port is not None or args.open):
+        raise ValueError("--port and --open are for serving; --export-html writes a folder only")
+    if args.export_html is None and args.force:
+        raise ValueError("--force applies to --export-html (replace the folder if it exists)")
+
+
+def _validated(path: str) -> tuple[bytes, Decoder]:
+    """The file's bytes, decoded whole by the Python decoder: the bytes served are the bytes
+    checked. A FormatError names the file."""
+    try:
+        data = read_file(path)
+        decoder = Decoder(data)
+        decoder.check()
+    except FormatError as error:
+        error.path = os.fspath(path)
+        raise
+    return data, decoder
+
+
+class _DecodedFrames:
+    """A compressed file as a reference, read a few frames at a time."""
+
+    def __init__(self, source: str) -> None:
+        self._decoder = Decoder(source)
+        self.frame_count = self._decoder.frame_count
+        self.vertex_count = self._decoder.info.vertices
+
+    def read(self, start: int, stop: int) -> np.ndarray:
+        return self._decoder.positions(range(start, stop))
+
+
+@contextmanager
+def _reference(args: argparse.Namespace, decoder: Decoder) -> Iterator[ReferenceFrames | None]:
+    """The reference, opened and its shape checked against the file's; None without one."""
+    if args.reference is None:
+        yield None
+        return
+    if is_compressed(args.reference):
+        source: ReferenceFrames = _DecodedFrames(args.reference)
+        _check_shape(args, source, decoder)
+        yield source
+        return
+    with open_frames(sequence_source(args.reference), **read_options(args)) as frames:
+        _check_shape(args, frames, decoder)
+        yield frames
+
+
+def _check_shape(args: argparse.Namespace, reference: ReferenceFrames, decoder: Decoder) -> None:
+    header = decoder.info
+    if (reference.frame_count, reference.vertex_count) != (header.frames, header.vertices):
+        raise InputError(  # frames must correspond one to one, as for decode --reference
+            f"the reference has {reference.frame_count} frames of {reference.vertex_count} "
+            f"vertices, {args.input} {header.frames} of {header.vertices}",
+            path=args.reference,
+        )
+
+
+def _shown(args: argparse.Namespace) -> str | None:
+    if args.reference is None:
+        return None
+    return "the built-in sample" if args.reference == "sample" else Path(args.reference).name
+
+
+def _summary(site: Site) -> None:
+    if site.reference is not None:
+        kg = "undefined" if site.reference.kg is None else f"{site.reference.kg:.5f}"
+        print(
+            f"against the reference (rounded to float32): KG error {kg}, largest vertex "
+            f"distance {site.reference.max_distance:.6g} scene units"
+        )
+
+
+def _export(
+    args: argparse.Namespace,
+    data: bytes,
+    name: str,
+    decoder: Decoder,
+    reference: ReferenceFrames | None,
+) -> int:
+    destination = Path(args.export_html)
+    with atomic_store(destination, overwrite=args.force) as staging:
+        site = build_site(
+            staging,
+            data,
+            name,
+            decoder=decoder,
+            reference=reference,
+            reference_name=_shown(args),
+        )
+    size = sum((destination / file).stat().st_size for file in site.files)
+    print(f"wrote {destination}: the viewer and {name} ({len(site.files)} files, {size} bytes)")
+    _summary(site)
+    print(
+        "serve it with any static web server, then open its index.html, e.g.:\n"
+        f"  python -m http.server -d {destination} --bind 127.0.0.1 8000\n"
+        "  http://127.0.0.1:8000/\n"
+        "(opened from the disk as a file:// URL the page cannot load its modules or the file)"
+    )
+    return EXIT_OK
+
+
+def _serve(args: argparse.Namespace, folder: Path, site: Site) -> int:
+    try:
+        server = ViewerServer(folder, site.files, 0 if args.port is None else args.port)
+    except OSError as error:
+        raise OSError(error.errno, error.strerror, f"127.0.0.1:{args.port}") from None
+    with server:
+        url = server.url + site.entry
+        _summary(site)
+        print(f"serving {args.input} on {server.url} (this machine only); open:", flush=True)
+        print(url, flush=True)
+        if args.open and not webbrowser.open(url):
+            print("note: no web browser could be started; open the URL above", file=sys.stderr)
+        print("press Ctrl-C to stop", flush=True)
+        try:
+            threading.Event().wait()  # the server answers in its own thread until Ctrl-C
+        except KeyboardInterrupt as interrupt:
+            if type(interrupt) is not KeyboardInterrupt:  # SIGTERM: exit as every verb does
+                raise
+    print("stopped the server", flush=True)
+    return EXIT_OK

@@ -1,0 +1,155 @@
+"""A small web server for the viewer's folder (:mod:`tuckercodec.web.site`), on this machine only.
+
+It listens on 127.0.0.1 and nowhere else, and serves exactly the files the folder was built
+with, by their exact paths: anything else is 404, so there is no directory listing and no way
+out of the folder (``..``, encoded or not, names no file of the list). ``/`` is the folder's
+index.html. Every response says ``Cache-Control: no-store`` (a page reopened after the file
+changed must not run stale scripts or show a stale file) and ``X-Content-Type-Options:
+nosniff`` with the right type for each file: browsers refuse to run an ES module served as
+anything but JavaScript. A request whose ``Host`` is not this server's address is refused
+(403), which stops a web page elsewhere from reaching it through a name that resolves to
+127.0.0.1 (DNS rebinding).
+
+Use it as a context manager: the server answers in a background thread from ``__enter__`` until
+``__exit__`` shuts it down.
+"""
+
+from __future__ import annotations
+
+import shutil
+import sys
+import threading
+from http import HTTPStatus
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from pathlib import Path, PurePosixPath
+from types import TracebackType
+from urllib.parse import unquote, urlsplit
+
+#: The only address the server listens on.
+HOST = "127.0.0.1"
+
+#: How often the serving thread looks for a shutdown request: what stopping can take.
+POLL_SECONDS = 0.05
+
+#: Content-Type by suffix; a file without a suffix (LICENSE) is plain text.
+CONTENT_TYPES = {
+    ".html": "text/html; charset=utf-8",
+    ".js": "text/javascript; charset=utf-8",
+    ".mjs": "text/javascript; charset=utf-8",
+    ".css": "text/css; charset=utf-8",
+    ".json": "application/json",
+    ".bin": "application/octet-stream",
+    ".tkc": "application/octet-stream",
+    ".md": "text/markdown; charset=utf-8",
+    "": "text/plain; charset=utf-8",
+}
+
+
+def content_type(name: str) -> str:
+    """The Content-Type of a file of the folder, by its suffix."""
+    return CONTENT_TYPES.get(PurePosixPath(name).suffix.lower(), "application/octet-stream")
+
+
+class ViewerServer(ThreadingHTTPServer):
+    """Serve ``files`` (POSIX paths relative to ``folder``) on 127.0.0.1:``port`` (0: a free
+    port, chosen by the system); :attr:`url` is its address.
+
+    Raises:
+        OSError: the port cannot be had (in use, or a privileged port).
+    """
+
+    daemon_threads = True  # a browser's open connection must not hold up the shutdown
+
+    def __init__(self, folder: str | Path, files: list[str] | tuple[str, ...], port: int = 0):
+        root = Path(folder)
+        self.routes: dict[str, Path] = {"/" + name: root / name for name in files}
+        if "/index.html" in self.routes:
+            self.routes["/"] = self.routes["/index.html"]
+        self._thread: threading.Thread | None = None
+        super().__init__((HOST, port), _Handler)
+
+    @property
+    def port(self) -> int:
+        """The port the server listens on."""
+        return int(self.server_address[1])
+
+    @property
+    def url(self) -> str:
+        """``http://127.0.0.1:PORT/``."""
+        return f"http://{HOST}:{self.port}/"
+
+    def allowed_hosts(self) -> set[str]:
+        """The ``Host`` headers this server answers: its own address, by number or name."""
+        return {f"{HOST}:{self.port}", f"localhost:{self.port}"}
+
+    def __enter__(self) -> ViewerServer:
+        self._thread = threading.Thread(
+            target=self.serve_forever,
+            args=(POLL_SECONDS,),
+            name="tuckercodec-view",
+            daemon=True,
+        )
+        self._thread.start()
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        error: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        if self._thread is not None:
+            self.shutdown()  # stops serve_forever and waits for it
+            self._thread.join()
+            self._thread = None
+        self.server_close()
+
+    def handle_error(self, request: object, client_address: object) -> None:
+        """A browser that goes away mid-response is no error; anything else is reported."""
+        if isinstance(sys.exception(), ConnectionError):
+            return
+        super().handle_error(request, client_address)  # type: ignore[arg-type]
+
+
+class _Handler(BaseHTTPRequestHandler):
+    server: ViewerServer
+    server_version = "tuckercodec-view"
+    sys_version = ""
+
+    def do_GET(self) -> None:
+        self._respond(body=True)
+
+    def do_HEAD(self) -> None:
+        self._respond(body=False)
+
+    def _respond(self, body: bool) -> None:
+        if self.headers.get("Host", "") not in self.server.allowed_hosts():
+            self.send_error(HTTPStatus.FORBIDDEN, "unknown host")
+            return
+        path = self.server.routes.get(unquote(urlsplit(self.path).path))
+        if path is None:
+            self.send_error(HTTPStatus.NOT_FOUND)
+            return
+        try:
+            handle = path.open("rb")
+        except OSError:
+            self.send_error(HTTPStatus.NOT_FOUND)
+            return
+        with handle:
+            size = path.stat().st_size
+            self.send_response(HTTPStatus.OK)
+            self.send_header("Content-Type", content_type(path.name))
+            self.send_header("Content-Length", str(size))
+            self.end_headers()
+            if body:
+                shutil.copyfileobj(handle, self.wfile, 1 << 20)
+
+    def end_headers(self) -> None:
+        # on every response, errors included
+        self.send_header("Cache-Control", "no-store")
+        self.send_header("X-Content-Type-Options", "nosniff")
+        self.send_header("Cross-Origin-Resource-Policy", "same-origin")
+        super().end_headers()
+
+    def log_message(self, format: str, *args: object) -> None:
+        """Quiet: the terminal shows the URL and the stop message, not every request."""
