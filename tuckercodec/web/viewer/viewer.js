@@ -101,7 +101,7 @@ async function start() {
     throw new Error('no file to show: open this page as index.html?file=URL-of-a-.tkc-file');
   }
   const referenceUrl = params.get('reference');
-  $('file-name').textContent = decodeURIComponent(fileUrl.split('/').pop() || fileUrl);
+  $('file-name').textContent = fileUrl.split('/').pop() || fileUrl; // already decoded once
   status('loading…');
   // Loaded here rather than imported at the top, so that a missing or broken script is
   // reported on the page like any other failure.
