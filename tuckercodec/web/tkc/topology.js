@@ -1,0 +1,293 @@
+// U1's mesh prediction (spec/FORMAT.md §6.2): the mesh parents (predictor 1) and the mesh mean
+// (predictor 2, version 1.2), both from the breadth-first forest of the face edges.
+//
+//   const topo = meshTopology(faces, M, n, K);           // once per file (FACE is shared)
+//   const q = restoreMeshColumn(stream, c * K, predictor, topo, "section 'U1' column c");
+//
+// No DOM: runs in node and in browsers. Every restored value is the exact integer the spec
+// defines (float64 where the bounds below prove it exact, BigInt otherwise).
+
+import { formatError } from './errors.js';
+
+const EXACT = 2 ** 53; // float64 holds every integer of magnitude below this
+const MEAN_RANGE = 2 ** 32; // §6.2: a predictor-2 value lies in −2^32..2^32 (R32-predictor)
+const MAX_DEPTHS = 2048; // §6.2: predictor 2 only on a forest of at most 2048 depths
+// The largest source count c for which one vertex's mean is computed in float64; see meanPlan.
+const FLOAT_SOURCES = 2 ** 17;
+
+/**
+ * The structure of the face edges that U1's prediction needs (§6.2).
+ * @param {Int32Array} faces M*n vertex indices, row-major, −1 padded (already valid: R33, R34)
+ * @param {number} M faces
+ * @param {number} n face width
+ * @param {number} K vertices
+ * @returns {{K: number, start: Int32Array, neighbours: Int32Array, parent: Int32Array,
+ *   order: Int32Array, depth: Int32Array, rank: Int32Array, maxDepth: number}}
+ *   `neighbours[start[v] .. start[v+1]−1]` is N(v), ascending and without repeats; `order` lists
+ *   every vertex in the order the walk reaches it (a parent before its children); the predictor-2
+ *   plan is built on first use.
+ */
+export function meshTopology(faces, M, n, K) {
+  const { start, neighbours } = neighbourLists(faces, M, n, K);
+  const parent = new Int32Array(K).fill(-1);
+  const depth = new Int32Array(K);
+  const rank = new Int32Array(K);
+  const order = new Int32Array(K); // the reach order, which is also the queue of every tree
+  const reached = new Uint8Array(K);
+  const atDepth = new Int32Array(K + 1); // vertices reached so far at each depth (for rank)
+  let tail = 0;
+  let maxDepth = 0;
+  for (let s = 0; s < K; s++) {
+    if (reached[s]) continue;
+    reached[s] = 1; // a root: depth 0
+    rank[s] = atDepth[0]++;
+    let head = tail;
+    order[tail++] = s;
+    while (head < tail) {
+      const u = order[head++];
+      const d = depth[u] + 1;
+      for (let e = start[u], end = start[u + 1]; e < end; e++) {
+        const w = neighbours[e];
+        if (reached[w]) continue;
+        reached[w] = 1;
+        parent[w] = u;
+        depth[w] = d;
+        rank[w] = atDepth[d]++;
+        order[tail++] = w;
+        if (d > maxDepth) maxDepth = d;
+      }
+    }
+  }
+  return { K, start, neighbours, parent, order, depth, rank, maxDepth, plan: null };
+}
+
+/**
+ * N(v) for every vertex as compressed lists: the edges of §6.2 (each corner to the next real
+ * corner, the last real corner back to corner 0), both directions, bucketed by vertex, each
+ * bucket sorted (insertion sort for the short lists of a surface, the native sort for long ones,
+ * so no degree makes it quadratic) and its repeats dropped.
+ */
+function neighbourLists(faces, M, n, K) {
+  const start = new Int32Array(K + 1);
+  for (let r = 0; r < M; r++) {
+    const row = r * n;
+    for (let j = 0; j < n; j++) {
+      const a = faces[row + j];
+      if (a < 0) continue;
+      const b = j + 1 < n && faces[row + j + 1] >= 0 ? faces[row + j + 1] : faces[row];
+      if (b < 0 || a === b) continue; // a = b: a degenerate corner, ignored
+      start[a + 1]++;
+      start[b + 1]++;
+    }
+  }
+  for (let v = 0; v < K; v++) start[v + 1] += start[v];
+  const sorted = new Int32Array(start[K]);
+  const fill = start.slice(0, K);
+  for (let r = 0; r < M; r++) {
+    const row = r * n;
+    for (let j = 0; j < n; j++) {
+      const a = faces[row + j];
+      if (a < 0) continue;
+      const b = j + 1 < n && faces[row + j + 1] >= 0 ? faces[row + j + 1] : faces[row];
+      if (b < 0 || a === b) continue;
+      sorted[fill[a]++] = b;
+      sorted[fill[b]++] = a;
+    }
+  }
+  let out = 0;
+  let from = 0;
+  for (let v = 0; v < K; v++) {
+    const end = start[v + 1];
+    if (end - from > 16) {
+      sorted.subarray(from, end).sort();
+    } else {
+      for (let t = from + 1; t < end; t++) {
+        const w = sorted[t];
+        let u = t - 1;
+        while (u >= from && sorted[u] > w) {
+          sorted[u + 1] = sorted[u];
+          u--;
+        }
+        sorted[u + 1] = w;
+      }
+    }
+    start[v] = out;
+    let previous = -1;
+    for (let t = from; t < end; t++) {
+      const w = sorted[t];
+      if (w !== previous) sorted[out++] = w;
+      previous = w;
+    }
+    from = end;
+  }
+  start[K] = out;
+  return { start, neighbours: sorted.subarray(0, out) };
+}
+
+/**
+ * The mesh mean's plan (§6.2 predictor 2), built once per topology: the vertices of depth ≥ 1
+ * in restoring order (by depth, then phase = rank mod 8), and for each its sources S(v) and their
+ * anchors as compressed lists in that same order, so each column is one pass over flat arrays.
+ */
+function meanPlan(topo) {
+  if (topo.plan !== null) return topo.plan;
+  const { K, start, neighbours, parent, order, depth, rank, maxDepth } = topo;
+  const buckets = maxDepth * 8; // key (depth − 1)·8 + phase for depth ≥ 1
+  const slot = new Int32Array(buckets + 1);
+  let rows = 0;
+  for (let v = 0; v < K; v++) {
+    if (depth[v] > 0) {
+      slot[(depth[v] - 1) * 8 + (rank[v] & 7) + 1]++;
+      rows++;
+    }
+  }
+  for (let b = 0; b < buckets; b++) slot[b + 1] += slot[b];
+  const restore = new Int32Array(rows);
+  for (let t = 0; t < K; t++) {
+    const v = order[t]; // any order within a bucket is allowed; the reach order is as good as any
+    if (depth[v] > 0) restore[slot[(depth[v] - 1) * 8 + (rank[v] & 7)]++] = v;
+  }
+  let total = 0;
+  const first = new Int32Array(rows + 1);
+  for (let i = 0; i < rows; i++) {
+    const v = restore[i];
+    const d = depth[v];
+    const phase = rank[v] & 7;
+    let c = 0;
+    for (let e = start[v], end = start[v + 1]; e < end; e++) {
+      const w = neighbours[e];
+      if (depth[w] === d - 1 || (depth[w] === d && (rank[w] & 7) < phase)) c++;
+    }
+    total += c;
+    first[i + 1] = total;
+  }
+  const source = new Int32Array(total);
+  const anchor = new Int32Array(total);
+  let big = false;
+  for (let i = 0, t = 0; i < rows; i++) {
+    const v = restore[i];
+    const d = depth[v];
+    const phase = rank[v] & 7;
+    for (let e = start[v], end = start[v + 1]; e < end; e++) {
+      const w = neighbours[e];
+      if (depth[w] === d - 1) {
+        source[t] = w;
+        anchor[t++] = parent[w] >= 0 ? parent[w] : w;
+      } else if (depth[w] === d && (rank[w] & 7) < phase) {
+        source[t] = w;
+        anchor[t++] = w;
+      }
+    }
+    if (first[i + 1] - first[i] >= FLOAT_SOURCES) big = true;
+  }
+  topo.plan = { restore, first, source, anchor, big };
+  return topo.plan;
+}
+
+/**
+ * Restores one predicted U1 column (§6.2) from its residuals.
+ * @param {Int32Array} residuals the section's decoded stream
+ * @param {number} offset where the column starts in it (column-major: c·K)
+ * @param {number} predictor 1 (mesh parents) or 2 (mesh mean)
+ * @param {object} topo meshTopology(...) of the file's faces
+ * @param {string} where the section and column, for messages
+ * @returns {Float64Array} K values: float64(q), exact while |q| <= 2^53, else rounded to nearest
+ *   (ties to even) from the exact integer, as §6.3's dequantization needs
+ * @throws {TkcError} R32-predictor: predictor 2 on a forest deeper than 2048 depths, or a restored
+ *   value outside −2^32..2^32
+ */
+export function restoreMeshColumn(residuals, offset, predictor, topo, where) {
+  if (predictor === 1) return restoreParents(residuals, offset, topo);
+  if (predictor !== 2) throw formatError('R32-predictor', `${where}: predictor ${predictor} is not a mesh predictor`);
+  if (topo.maxDepth >= MAX_DEPTHS) {
+    throw formatError(
+      'R32-predictor',
+      `${where}: predictor 2 needs a forest of at most ${MAX_DEPTHS} depths; this mesh has ${topo.maxDepth + 1}`,
+    );
+  }
+  return restoreMean(residuals, offset, topo, meanPlan(topo), where);
+}
+
+/** Predictor 1: q[v] = r[v] + q[parent[v]], in the reach order (a parent before its child). */
+function restoreParents(residuals, offset, topo) {
+  const { K, order, parent } = topo;
+  const q = new Float64Array(K);
+  let exact = true;
+  for (let t = 0; t < K; t++) {
+    const v = order[t];
+    const p = parent[v];
+    const x = p < 0 ? residuals[offset + v] : residuals[offset + v] + q[p];
+    // Exact while every value so far is below 2^53 in magnitude (an int32 plus such a value is
+    // at most 2^53 + 2^31, and rounding never takes a value of magnitude ≥ 2^53 below it, so
+    // the first inexact sum is caught here).
+    if (x >= EXACT || x <= -EXACT) exact = false;
+    q[v] = x;
+  }
+  if (exact) return q;
+  // A crafted column (depths of int32 steps): 64-bit sums, then Number() rounds to nearest, ties
+  // to even. K < 2^32 vertices of int32 residuals keep every sum below 2^63.
+  const big = new BigInt64Array(K);
+  for (let t = 0; t < K; t++) {
+    const v = order[t];
+    const p = parent[v];
+    big[v] = p < 0 ? BigInt(residuals[offset + v]) : BigInt(residuals[offset + v]) + big[p];
+    q[v] = Number(big[v]);
+  }
+  return q;
+}
+
+/**
+ * Predictor 2, the mesh mean: q[v] = r[v] + floor((2U + 3c) / (6c)) with
+ * U = Σ_{w in S(v)} (4·q[w] − q[anchor(w)]), restored by depth and phase, each value checked
+ * against ±2^32 as soon as it is restored (so every source and anchor read is within ±2^32).
+ *
+ * Why float64 is exact here: each term 4·q[w] − q[a] is an integer of magnitude at most
+ * 5·2^32, so for c < 2^17 sources every partial sum of U and 2U + 3c is an integer below
+ * 10·2^32·2^17 + 3·2^17 < 2^53: exact. The quotient (2U + 3c)/(6c) is below 2^33 in magnitude,
+ * where half an ulp is at most 2^−21, while a quotient that is not an integer is at least
+ * 1/(6c) > 2^−20 away from every integer; so the correctly rounded division never crosses an
+ * integer and Math.floor of it is the exact floor. Vertices with c ≥ 2^17 sources use BigInt.
+ */
+function restoreMean(residuals, offset, topo, plan, where) {
+  const { K } = topo;
+  const { restore, first, source, anchor, big } = plan;
+  const q = new Float64Array(K);
+  for (let v = 0; v < K; v++) q[v] = residuals[offset + v]; // depth 0: q = r (others overwritten)
+  const rows = restore.length;
+  for (let i = 0; i < rows; i++) {
+    const s0 = first[i];
+    const s1 = first[i + 1];
+    const c = s1 - s0;
+    let pred;
+    if (big && c >= FLOAT_SOURCES) {
+      pred = bigMean(q, source, anchor, s0, s1);
+    } else {
+      let u = 0;
+      for (let t = s0; t < s1; t++) u += 4 * q[source[t]] - q[anchor[t]];
+      pred = Math.floor((2 * u + 3 * c) / (6 * c));
+    }
+    const v = restore[i];
+    const x = q[v] + pred; // q[v] still holds r[v]
+    if (x > MEAN_RANGE || x < -MEAN_RANGE) {
+      throw formatError(
+        'R32-predictor',
+        `${where}: vertex ${v} restores to ${x} with predictor 2, outside −2^32..2^32`,
+      );
+    }
+    q[v] = x;
+  }
+  return q;
+}
+
+/** The mean of one vertex with very many sources, in BigInt (floor division toward −∞). */
+function bigMean(q, source, anchor, s0, s1) {
+  let u = 0n;
+  // each term is an integer below 5·2^32 in magnitude: exact in float64
+  for (let t = s0; t < s1; t++) u += BigInt(4 * q[source[t]] - q[anchor[t]]);
+  const c = BigInt(s1 - s0);
+  const numerator = 2n * u + 3n * c;
+  const denominator = 6n * c;
+  let quotient = numerator / denominator; // truncates toward zero
+  if (numerator % denominator !== 0n && numerator < 0n) quotient -= 1n;
+  return Number(quotient);
+}
