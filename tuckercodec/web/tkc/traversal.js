@@ -1,0 +1,312 @@
+// Codec `faces-traverse` (spec/FORMAT.md §6.8, version 1.2): the faces coded by a walk over
+// them. Four integer streams (ops, degrees, vertices, references) drive the walk; the decoded
+// table lists the faces in walk order. Every failure is R39-traversal (R30/R29 for a stream's
+// planes and zstd frame), checked in the order of §5 step 15.
+//
+// Linear in every input: the boundary is a hash table of directed edges (random multipliers, so
+// no file can aim at collisions), into(v) and out(v) are stacks with lazy deletion (an entry is
+// live while its edge is present and entered the boundary at that entry), the gates a stack.
+
+import { formatError } from './errors.js';
+import { describe, isInt } from './msgpack.js';
+import { decodeIntStream } from './streams.js';
+
+const WHERE = "section 'FACE' (faces-traverse)";
+const STREAMS = ['ops', 'degrees', 'vertices', 'references'];
+const NEW = 0;
+const PREV = 1;
+const NEXT = 2;
+const FAR = 3;
+
+function fail(message) {
+  return formatError('R39-traversal', `${WHERE}: ${message}`);
+}
+
+/** An int ≥ 0 as the msgpack reader returns it (a number, or a BigInt beyond 2^53). */
+function isNonNegativeInt(value) {
+  return isInt(value) && value >= 0;
+}
+
+/**
+ * Decodes a FACE section coded with faces-traverse.
+ * @param {Map} entry the section-table entry (codec parameters corner_order, streams)
+ * @param {Uint8Array} payload the section's bytes, CRC already checked
+ * @param {number} K vertices
+ * @param {number} M faces (the checked `shape`)
+ * @param {number} n face width
+ * @returns {Int32Array} M*n vertex indices, row-major, in walk order, −1 padded
+ * @throws {TkcError} R39-traversal, R30-planes or R29-zstd-content-size
+ */
+export function decodeTraverse(entry, payload, K, M, n) {
+  const cornerOrder = entry.get('corner_order');
+  if (cornerOrder !== 0 && cornerOrder !== 1) {
+    throw fail(`"corner_order" is ${cornerOrder === undefined ? 'missing' : describe(cornerOrder)}, not 0 or 1`);
+  }
+  const table = entry.get('streams');
+  if (!Array.isArray(table) || table.length !== 4) {
+    throw fail(`"streams" is ${table === undefined ? 'missing' : describe(table)}, not an array of 4 [count, planes, length] arrays`);
+  }
+  const most = 2 * M * n;
+  let total = 0;
+  for (let s = 0; s < 4; s++) {
+    const item = table[s];
+    if (!Array.isArray(item) || item.length !== 3 || !item.every(isNonNegativeInt)) {
+      throw fail(`stream ${s} (${STREAMS[s]}) is ${describe(item)}, not an array [count, planes, length] of 3 ints >= 0`);
+    }
+    if (!(item[0] <= most)) throw fail(`stream ${s} (${STREAMS[s]}) has count ${item[0]}, above 2·M·n = ${most}`);
+    total += Number(item[2]); // a BigInt length is past any payload: the sum cannot match
+  }
+  if (total !== payload.length) {
+    const lengths = table.map((item) => String(item[2])).join(' + ');
+    throw fail(`the stream lengths ${lengths} add up to ${total}, not the payload's ${payload.length} bytes`);
+  }
+  const streams = [];
+  let at = 0;
+  for (let s = 0; s < 4; s++) {
+    const [count, planes, length] = table[s];
+    const where = `${WHERE} stream ${s} (${STREAMS[s]})`;
+    if (!(planes >= 1 && planes <= 4)) {
+      throw formatError('R30-planes', `${where}: "planes" is ${planes}, not an int in 1..4`);
+    }
+    streams.push(decodeIntStream(payload.subarray(at, at + Number(length)), Number(count), Number(planes), where));
+    at += Number(length);
+  }
+  return walk(streams, cornerOrder, K, M, n);
+}
+
+/**
+ * Directed edges of the boundary with their copy counts: open addressing keyed by (a, b) with
+ * a multiply-add-shift hash of random multipliers. An edge keeps its id once created (count 0
+ * when absent), so nothing is ever deleted from the table and ids stay valid for the stacks.
+ */
+class EdgeTable {
+  constructor() {
+    this.bits = 10;
+    this.slots = new Int32Array(1 << this.bits).fill(-1);
+    this.size = 0;
+    this.from = new Int32Array(512);
+    this.to = new Int32Array(512);
+    this.count = new Int32Array(512);
+    this.entered = new Int32Array(512); // the entry number of the edge's latest 0 → 1
+    this.m1 = (Math.random() * 2 ** 32) | 1;
+    this.m2 = (Math.random() * 2 ** 32) | 1;
+    this.m3 = (Math.random() * 2 ** 32) | 0;
+  }
+
+  slot(a, b) {
+    return (Math.imul(a, this.m1) + Math.imul(b, this.m2) + this.m3) >>> (32 - this.bits);
+  }
+
+  /** The edge a → b's id, or −1 if it never entered the boundary. */
+  find(a, b) {
+    const mask = (1 << this.bits) - 1;
+    for (let h = this.slot(a, b); ; h = (h + 1) & mask) {
+      const e = this.slots[h];
+      if (e < 0 || (this.from[e] === a && this.to[e] === b)) return e;
+    }
+  }
+
+  /** The edge a → b's id, created (count 0) if new. */
+  add(a, b) {
+    const mask = (1 << this.bits) - 1;
+    let h = this.slot(a, b);
+    for (; ; h = (h + 1) & mask) {
+      const e = this.slots[h];
+      if (e < 0) break;
+      if (this.from[e] === a && this.to[e] === b) return e;
+    }
+    const e = this.size++;
+    if (e === this.from.length) {
+      this.from = grow(this.from);
+      this.to = grow(this.to);
+      this.count = grow(this.count);
+      this.entered = grow(this.entered);
+    }
+    this.from[e] = a;
+    this.to[e] = b;
+    this.count[e] = 0;
+    this.slots[h] = e;
+    if (2 * this.size > this.slots.length) this.rehash();
+    return e;
+  }
+
+  rehash() {
+    this.bits++;
+    const mask = (1 << this.bits) - 1;
+    this.slots = new Int32Array(1 << this.bits).fill(-1);
+    for (let e = 0; e < this.size; e++) {
+      let h = this.slot(this.from[e], this.to[e]);
+      while (this.slots[h] >= 0) h = (h + 1) & mask;
+      this.slots[h] = e;
+    }
+  }
+}
+
+function grow(array) {
+  const bigger = new Int32Array(2 * array.length);
+  bigger.set(array);
+  return bigger;
+}
+
+/** The walk of §6.8 over decoded streams. */
+function walk(streams, cornerOrder, K, M, n) {
+  const [ops, degrees, vertices, references] = streams;
+  let opsAt = 0;
+  let degreesAt = 0;
+  let verticesAt = 0;
+  let referencesAt = 0;
+  const faces = new Int32Array(M * n).fill(-1);
+  const seen = new Uint8Array(K);
+  let last = -1;
+  const edges = new EdgeTable();
+  // into(v) and out(v): stacks of entries; entry t (one per 0 → 1 of an edge) is node 2t in
+  // into(to) and node 2t + 1 in out(from). It is live while its edge is present and entered == t.
+  let entryEdge = new Int32Array(512);
+  let below = new Int32Array(1024); // the node under each node in its stack
+  let entries = 0;
+  const topInto = new Int32Array(K).fill(-1);
+  const topOut = new Int32Array(K).fill(-1);
+  let gates = new Int32Array(1024); // pairs a, b
+  let gateCount = 0;
+  const corners = new Int32Array(n); // the face being decoded, in walk order
+  let face = 0;
+
+  /** The last live entry of into(v) (other = from) or out(v) (other = to), or −1. */
+  const lastOf = (tops, v, other) => {
+    let node = tops[v];
+    while (node >= 0) {
+      const t = node >> 1;
+      const e = entryEdge[t];
+      if (edges.count[e] > 0 && edges.entered[e] === t) break;
+      node = below[node]; // stale: drop it for good
+    }
+    tops[v] = node;
+    return node < 0 ? -1 : other[entryEdge[node >> 1]];
+  };
+
+  const nextOp = (what) => {
+    if (opsAt === ops.length) throw fail(`face ${face}: the ops stream ends before the ${what}`);
+    return ops[opsAt++];
+  };
+
+  const readDegree = () => {
+    if (degrees.length === 0) return 3;
+    if (degreesAt === degrees.length) throw fail(`face ${face}: the degrees stream ends before its degree`);
+    const m = 3 + degrees[degreesAt++];
+    if (m < 3 || m > n) throw fail(`face ${face}: degree ${m} is outside 3..${n}`);
+    return m;
+  };
+
+  /** The vertex named by tip j (c_0 .. c_{j−1} in corners) with operation op. */
+  const tip = (op, j) => {
+    const p = j === 0 ? 0 : corners[j - 1];
+    if (op === NEW) {
+      if (verticesAt === vertices.length) throw fail(`face ${face} corner ${j}: the vertices stream ends before this NEW`);
+      const w = last + 1 + vertices[verticesAt++];
+      if (w < 0 || w >= K) throw fail(`face ${face} corner ${j}: NEW names vertex ${w}, outside 0..${K - 1}`);
+      if (seen[w]) throw fail(`face ${face} corner ${j}: NEW names vertex ${w}, which is already seen`);
+      seen[w] = 1;
+      last = w;
+      return w;
+    }
+    if (op === PREV || op === NEXT) {
+      const name = op === PREV ? 'PREV' : 'NEXT';
+      if (j === 0) throw fail(`face ${face} corner 0: ${name} at the first corner of a face`);
+      const w = op === PREV ? lastOf(topInto, p, edges.from) : lastOf(topOut, corners[0], edges.to);
+      if (w < 0) {
+        const list = op === PREV ? `into(${p})` : `out(${corners[0]})`;
+        throw fail(`face ${face} corner ${j}: ${name} on an empty ${list}`);
+      }
+      return w;
+    }
+    if (op === FAR) {
+      if (referencesAt === references.length) throw fail(`face ${face} corner ${j}: the references stream ends before this FAR`);
+      const w = p + references[referencesAt++];
+      if (w < 0 || w >= K) throw fail(`face ${face} corner ${j}: FAR names vertex ${w}, outside 0..${K - 1}`);
+      if (!seen[w]) throw fail(`face ${face} corner ${j}: FAR names vertex ${w}, which is not seen yet`);
+      return w;
+    }
+    throw fail(`face ${face} corner ${j}: operation ${op} is not 0..3`);
+  };
+
+  /** Adds corners[0..m−1] to the boundary and pushes its gates from corner g on. */
+  const addFace = (m, g) => {
+    if (gateCount + 2 * m > gates.length) gates = grow(gates);
+    for (let j = 0; j < m; j++) {
+      const x = corners[j];
+      const y = corners[j + 1 === m ? 0 : j + 1];
+      const back = edges.find(y, x);
+      if (back >= 0 && edges.count[back] > 0) {
+        edges.count[back]--; // its last copy gone: its entries in into(x), out(y) go stale
+      } else {
+        const e = edges.add(x, y);
+        if (edges.count[e]++ === 0) {
+          if (entries === entryEdge.length) {
+            entryEdge = grow(entryEdge);
+            below = grow(below);
+          }
+          const t = entries++;
+          entryEdge[t] = e;
+          edges.entered[e] = t;
+          below[2 * t] = topInto[y];
+          topInto[y] = 2 * t;
+          below[2 * t + 1] = topOut[x];
+          topOut[x] = 2 * t + 1;
+        }
+      }
+      if (j >= g) {
+        gates[gateCount++] = x;
+        gates[gateCount++] = y;
+      }
+    }
+  };
+
+  while (face < M) {
+    const row = face * n;
+    if (gateCount === 0) {
+      // a seed: the degree, then m tips; stored as decoded
+      const m = readDegree();
+      for (let j = 0; j < m; j++) corners[j] = tip(nextOp(`operation of seed corner ${j}`), j);
+      for (let j = 0; j < m; j++) faces[row + j] = corners[j];
+      addFace(m, 0);
+      face++;
+      continue;
+    }
+    const b = gates[--gateCount];
+    const a = gates[--gateCount];
+    const gate = edges.find(a, b);
+    if (gate < 0 || edges.count[gate] === 0) continue; // closed meanwhile: nothing is read
+    const o = nextOp(`gate ${a} → ${b}`);
+    if (o === 0) continue;
+    if (o < 0 || o > 8 * n) throw fail(`face ${face}: operation ${o} across gate ${a} → ${b} is outside 0..${8 * n}`);
+    const v = o - 1;
+    const q = v >> 3;
+    const flipped = (v & 7) >= 4;
+    const m = readDegree();
+    if (q >= m) throw fail(`face ${face}: rotation ${q} is not below its degree ${m}`);
+    corners[0] = flipped ? a : b;
+    corners[1] = flipped ? b : a;
+    corners[2] = tip(v & 3, 2);
+    for (let j = 3; j < m; j++) corners[j] = tip(nextOp(`operation of corner ${j}`), j);
+    let s = q;
+    if (cornerOrder === 1) {
+      let h = 0;
+      for (let j = 1; j < m; j++) if (corners[j] < corners[h]) h = j;
+      s = q - h + m; // the same place mod m, kept non-negative
+    }
+    for (let j = 0; j < m; j++) faces[row + ((s + j) % m)] = corners[j];
+    addFace(m, 1);
+    face++;
+  }
+  for (const [s, stream, used] of [
+    [0, ops, opsAt],
+    [1, degrees, degrees.length === 0 ? 0 : degreesAt],
+    [2, vertices, verticesAt],
+    [3, references, referencesAt],
+  ]) {
+    if (used !== stream.length) {
+      throw fail(`stream ${s} (${STREAMS[s]}) has ${stream.length - used} values left after the ${M} faces`);
+    }
+  }
+  return faces;
+}
