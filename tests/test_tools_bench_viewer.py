@@ -1,0 +1,46 @@
+"""tools/bench_viewer.py on the built-in sample: it serves the file with ``tuckercodec view``,
+measures the page in headless Chromium and prints one row per sequence (no timing is judged
+here). Skips, naming what is missing, where chromium is not installed."""
+
+from __future__ import annotations
+
+import pytest
+
+from tools import bench_viewer
+from tools.browser import find_chromium
+
+pytestmark = pytest.mark.skipif(
+    find_chromium() is None,
+    reason="chromium not found (at /usr/bin/chromium, or chromium, chromium-browser or "
+    "google-chrome on PATH): the viewer benchmark runs it; Debian: apt-get install chromium",
+)
+
+
+def test_bench_viewer_on_the_sample(capsys):
+    code = bench_viewer.main(["sample", "--loads", "2", "--play-seconds", "0.5", "--reference"])
+    out = capsys.readouterr().out
+    assert code == 0
+    lines = out.splitlines()
+    assert lines[0].startswith("machine: ") and lines[1].startswith("browser: Chrome/")
+    assert lines[2] == (
+        "command: python -m tools.bench_viewer sample --loads 2 --play-seconds 0.5 --reference"
+    )
+    header, rule, row = lines[-3:]
+    assert header.startswith("| sequence (KG 0.1) |") and rule.startswith("|---|")
+    cells = [cell.strip() for cell in row.strip("|").split("|")]
+    assert cells[:3] == ["sample + reference", "3101", "60"]
+    assert int(cells[3]) > 0  # the file's bytes
+    assert cells[4].endswith("(2)")  # two page loads
+    opening = float(cells[4].split()[0])
+    assert opening > 0
+    frame = [float(x) for x in cells[6].split(" / ")]
+    assert len(frame) == 3 and frame[0] <= frame[1] <= frame[2]
+    rate, seconds, counts = (part.strip() for part in cells[8].rsplit(",", 2))
+    assert rate == "none (page: 24)" and seconds == "0.5"
+    shown, dropped = (int(x) for x in counts.split(" / "))
+    assert shown + dropped > 0
+
+
+def test_bench_viewer_without_a_sequence(capsys):
+    assert bench_viewer.main(["no-such-sequence.npz"]) == 2
+    assert "skipped no-such-sequence.npz: not found" in capsys.readouterr().err
