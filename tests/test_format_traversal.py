@@ -203,6 +203,16 @@ def test_every_broken_walk_is_r39(change, message):
     assert raised.value.rule == "R39-traversal"
 
 
+@pytest.mark.parametrize("value", [1.0, 0.0, True, None])
+def test_corner_order_is_an_int(value):
+    """§1: an int is never a float, even 1.0 (the JavaScript decoder found this let through)."""
+    params, payload = coded([0, 0, 0], [0, 0, 0])
+    params["corner_order"] = value
+    with pytest.raises(FormatError, match="corner_order") as raised:
+        decode(params, payload)
+    assert raised.value.rule == "R39-traversal"
+
+
 @pytest.mark.parametrize(
     "streams",
     [None, [], [[1, 1, 1]] * 3, [[1, 1, 1]] * 3 + [[1, 1]], [[True, 1, 1]] * 4, [[99, 1, 9]] * 4],

@@ -258,8 +258,11 @@ def read_streams(
 ) -> tuple[list[list[int]], int]:
     """The four streams of a faces-traverse payload (§6.8), and ``corner_order``."""
     corner_order = params.get("corner_order")
-    if corner_order not in (ROTATE_FROM_GATE, ROTATE_FROM_SMALLEST) or isinstance(
-        corner_order, bool
+    # an int, not a float that equals 0 or 1 (§1: an int is never a float): found by the
+    # JavaScript decoder, which refused a float 1.0 that this check let through
+    if type(corner_order) is not int or corner_order not in (
+        ROTATE_FROM_GATE,
+        ROTATE_FROM_SMALLEST,
     ):
         raise _problem(
             f"{where}.corner_order", f"corner_order must be 0 or 1, got {corner_order!r}"

@@ -76,7 +76,7 @@ function restoreRunningSum(stream, offset, rows) {
   let exact = true;
   for (let f = 0; f < rows; f++) {
     sum += stream[offset + f];
-    if (sum > EXACT || sum < -EXACT) exact = false;
+    if (sum >= EXACT || sum <= -EXACT) exact = false; // 2^53 + 1 rounds to 2^53: >= catches it
     q[f] = sum;
   }
   if (!exact) {
