@@ -167,14 +167,16 @@ def _serve(args: argparse.Namespace, folder: Path, site: Site) -> int:
     except OSError as error:
         raise OSError(error.errno, error.strerror, f"127.0.0.1:{args.port}") from None
     with server:
-        url = server.url + site.entry
-        _summary(site)
-        print(f"serving {args.input} on {server.url} (this machine only); open:", flush=True)
-        print(url, flush=True)
-        if args.open and not webbrowser.open(url):
-            print("note: no web browser could be started; open the URL above", file=sys.stderr)
-        print("press Ctrl-C to stop", flush=True)
+        # Ctrl-C is awaited from the first line printed: a caller that reads the URL and stops
+        # the server at once must not catch it before the wait (that exited 130)
         try:
+            url = server.url + site.entry
+            _summary(site)
+            print(f"serving {args.input} on {server.url} (this machine only); open:", flush=True)
+            print(url, flush=True)
+            if args.open and not webbrowser.open(url):
+                print("note: no web browser could be started; open the URL above", file=sys.stderr)
+            print("press Ctrl-C to stop", flush=True)
             threading.Event().wait()  # the server answers in its own thread until Ctrl-C
         except KeyboardInterrupt as interrupt:
             if type(interrupt) is not KeyboardInterrupt:  # SIGTERM: exit as every verb does
