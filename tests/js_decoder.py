@@ -1,7 +1,9 @@
 """Runs the JavaScript decoder (tuckercodec/web/tkc/) in node, for the tests that compare it with
-the Python decoder. Test modules import it as ``from js_decoder import run_node``; a test that
-calls it where node (18 or newer) is missing is skipped, naming what is missing. The decoder
-needs no npm package (its two dependencies are vendored), so nothing is installed.
+the Python decoder, and judges what it makes of the conformance vectors (in node or in a
+browser: tests/js/conformance_observe.mjs). Test modules import it as
+``from js_decoder import run_node``; a test that calls it where node (18 or newer) is missing is
+skipped, naming what is missing. The decoder needs no npm package (its two dependencies are
+vendored), so nothing is installed.
 """
 
 from __future__ import annotations
@@ -15,6 +17,11 @@ from typing import Any
 import pytest
 
 JS = Path(__file__).resolve().parent / "js"
+VECTORS = Path(__file__).resolve().parents[1] / "spec" / "vectors"
+#: every vector's JSON (spec/FORMAT.md §12), by file name
+EXPECTED = {p.name: json.loads(p.read_text()) for p in sorted(VECTORS.glob("*.json"))}
+VALID = [name for name, e in EXPECTED.items() if e["valid"]]
+INVALID = [name for name, e in EXPECTED.items() if not e["valid"]]
 MIN_NODE = 18
 RUN_TIMEOUT = 300.0
 
@@ -47,3 +54,26 @@ def run_node(script: str, *args: str | Path) -> Any:
     )
     assert done.returncode == 0, f"node {script} failed:\n{done.stderr[-3000:]}"
     return json.loads(done.stdout)
+
+
+def check_valid_observation(observed: dict[str, Any], name: str) -> None:
+    """A valid vector: the digests, header facts, names, segment index and reconstruction its
+    JSON gives."""
+    expected, got = EXPECTED[name], observed[name]
+    assert got["accepted"], got.get("message")
+    for key, value in expected["header"].items():
+        assert got["header"][key] == value, key
+    assert got["frame_names"] == expected["frame_names"]
+    assert got["segments"] == expected.get("segments", [])
+    assert got["sha256"] == expected["sha256"]  # bit for bit (§6.3)
+    reference = got["reference"]
+    tolerance = expected["tolerance"]["relative_to_max_abs"] * reference["max_abs_reference"]
+    assert reference["max_abs_difference"] <= tolerance + 1e-12  # §8
+
+
+def check_invalid_observation(observed: dict[str, Any], name: str) -> None:
+    """An invalid vector: refused with its rule and error class."""
+    expected, got = EXPECTED[name], observed[name]
+    assert not got["accepted"], f"accepted a file that breaks {expected['rule']}"
+    assert (got["rule"], got["kind"]) == (expected["rule"], expected["error"]), got["message"]
+    assert got["message"].endswith(f"[{expected['rule']}]")

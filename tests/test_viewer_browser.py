@@ -30,9 +30,13 @@ from typing import Any
 import numpy as np
 import pytest
 from conftest import shared_file
-from test_js_conformance import EXPECTED, INVALID, VALID
-from test_js_conformance import test_invalid_vector as check_invalid_vector
-from test_js_conformance import test_valid_vector as check_valid_vector
+from js_decoder import (
+    EXPECTED,
+    INVALID,
+    VALID,
+    check_invalid_observation,
+    check_valid_observation,
+)
 
 import tuckercodec
 from tools.browser import Browser, Page, find_chromium
@@ -249,9 +253,9 @@ def test_every_vector_observed_in_the_browser(observed):
 
 @pytest.mark.parametrize("name", VALID)
 def test_valid_vector_in_the_browser(observed, name):
-    check_valid_vector(observed, name)
+    check_valid_observation(observed, name)
 
 
 @pytest.mark.parametrize("name", INVALID)
 def test_invalid_vector_in_the_browser(observed, name):
-    check_invalid_vector(observed, name)
+    check_invalid_observation(observed, name)
