@@ -12,6 +12,9 @@ free port of 127.0.0.1) and opened in Chromium (tools/browser.py):
   reconstruction alone (``file.frameFloat32``), the first frame of each segment included;
   ``page`` is all the page's work for a frame (``stats().updateMs``: reconstruction, normals,
   the original's positions and colours with ``--reference``);
+- frame alone: every frame reconstructed again, three passes, with nothing drawn meanwhile
+  (``decodedPositions(t, out)``, the decoder's binary64 frame into one buffer): the decoder's own time, apart from
+  the renderer that shares the machine's cores while the page plays;
 - playback: ``play()`` for ``--play-seconds`` from frame 0; the frames shown and dropped (a
   frame the clock passed without it being shown) the page counts.
 
@@ -60,6 +63,7 @@ class Result:
     open_parts: dict[str, float]
     frame_ms: list[float]
     update_ms: list[float]
+    alone_ms: list[float]
     rate: float | None
     seconds: float
     shown: int
@@ -118,6 +122,23 @@ STEP_ALL = """(async () => {
   return {frameMs: s.frameMs.slice(before), updateMs: s.updateMs.slice(before)};
 })()"""
 
+#: Every frame reconstructed again, three passes, with nothing drawn meanwhile: the decoder's
+#: own time per frame (decodedPositions is file.frame(t), binary64, into one buffer), apart from
+#: the renderer, which shares this machine's two cores with the page while it plays.
+RECONSTRUCT_ONLY = """(async () => {
+  const v = window.tkcViewer; await v.ready; v.pause();
+  const times = [];
+  const out = new Float64Array(3 * v.info.vertices);
+  for (let pass = 0; pass < 3; pass++) {
+    for (let t = 0; t < v.info.frames; t++) {
+      const started = performance.now();
+      v.decodedPositions(t, out);
+      times.push(performance.now() - started);
+    }
+  }
+  return times;
+})()"""
+
 #: Plays from frame 0 for SECONDS; the frames shown and dropped meanwhile.
 PLAY = """(async () => {
   const v = window.tkcViewer; await v.ready; await v.setFrame(0);
@@ -145,6 +166,7 @@ def measure(
             parts.setdefault(part, []).append(float(value))
     assert page is not None
     steps = page.evaluate(STEP_ALL, timeout=300)
+    alone = page.evaluate(RECONSTRUCT_ONLY, timeout=300)
     played = page.evaluate(PLAY.replace("SECONDS", repr(play_seconds)), play_seconds + 60)
     renderer = page.evaluate("document.getElementById('renderer').textContent")
     problems = page.problems()
@@ -160,6 +182,7 @@ def measure(
         open_parts={part: statistics.median(values) for part, values in parts.items()},
         frame_ms=[float(x) for x in steps["frameMs"]],
         update_ms=[float(x) for x in steps["updateMs"]],
+        alone_ms=[float(x) for x in alone],
         rate=info["frameRate"],
         seconds=play_seconds,
         shown=int(played["shown"]),
@@ -173,8 +196,9 @@ def table(results: list[Result], target_kg: float) -> str:
     lines = [
         f"| sequence (KG {target_kg}) | K | F | .tkc bytes | open ms: median [min-max] (loads) "
         "| open parts ms: decode / scene / framing / first frame | frame ms: median / p90 / max "
-        "| page per frame ms: median / max | playback: fps, s, shown / dropped |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| page per frame ms: median / max | frame alone ms: median / p90 / max "
+        "| playback: fps, s, shown / dropped |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in results:
         parts = " / ".join(
@@ -188,9 +212,14 @@ def table(results: list[Result], target_kg: float) -> str:
             f"| {common.spread(r.open_ms, digits=1)} ({len(r.open_ms)}) | {parts} "
             f"| {statistics.median(frame):.2f} / {_p90(frame):.2f} / {max(frame):.2f} "
             f"| {statistics.median(r.update_ms):.2f} / {max(r.update_ms):.2f} "
+            f"| {_spread3(r.alone_ms)} "
             f"| {rate}, {r.seconds:g}, {r.shown} / {r.dropped} |"
         )
     return "\n".join(lines)
+
+
+def _spread3(values: list[float]) -> str:
+    return f"{statistics.median(values):.2f} / {_p90(values):.2f} / {max(values):.2f}"
 
 
 def _p90(values: list[float]) -> float:

@@ -67,8 +67,9 @@ window.tkcViewer = {
   drawnPositions() {
     return state.positions ? state.positions.slice() : null;
   },
-  decodedPositions(t) {
-    return state.file.frame(t);
+  decodedPositions(t, out) {
+    // `out` (a Float64Array of K*3) is reused when given, as file.frame's is
+    return out === undefined ? state.file.frame(t) : state.file.frame(t, out);
   },
   frameError() {
     return state.lastError;
