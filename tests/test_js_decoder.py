@@ -20,6 +20,16 @@ from tuckercodec.format.container import HEAD_SIZE, PREAMBLE, SIGNATURE, pack_ra
 from tuckercodec.samples import sample_path
 
 TOLERANCE = 1e-9  # spec/FORMAT.md §8, relative to the largest |position|
+VECTORS = Path(__file__).resolve().parents[1] / "spec" / "vectors"
+VALID_VECTORS = [
+    "v1-wave-triangles",
+    "v1-polygons-names",
+    "v1-ignorable-extensions",
+    "v1.1-segments-shared",
+    "v1.1-segments-own",
+    "v1.2-traverse-triangles",
+    "v1.2-traverse-polygons-segments",
+]
 
 
 def _js_decode(data: bytes, tmp_path: Path) -> tuple[dict[str, Any], np.ndarray, np.ndarray]:
@@ -71,6 +81,22 @@ def test_shared_sequences(tmp_path, name):
     """The real sequences at KG 0.1: polygons, boundaries, 1.2's predictors on real meshes."""
     sequence = tuckercodec.load_sequence(shared_file(name))
     _same_as_python(tuckercodec.encode(sequence, target_kg=0.1), tmp_path)
+
+
+def test_simd_and_the_javascript_loop_give_the_same_bits(tmp_path):
+    """reconstruct.js: WebAssembly SIMD (two vertices a lane each) and the plain loop add the
+    same products in the same order, so every frame is the same bits either way: the valid
+    vectors (a shared basis with fewer columns used, own bases, polygons) and the sample."""
+    paths = [VECTORS / f"{name}.tkc" for name in VALID_VECTORS]
+    sample = tmp_path / "sample.tkc"
+    sequence = tuckercodec.load_sequence(sample_path())
+    sample.write_bytes(
+        tuckercodec.encode_with_report(sequence, target_kg=0.1, segment_frames=16).data
+    )  # four segments of one shared basis
+    results = run_node("simd_same.mjs", *paths, sample)
+    assert all(r["simd"] for r in results), "node runs WebAssembly SIMD (node 16 and newer)"
+    assert [r["differ"] for r in results] == [0] * len(results)
+    assert all(r["values"] > 0 for r in results)
 
 
 # ------------------------------------------------------------------------------------------

@@ -18,6 +18,7 @@ import { MsgFloat, isInt } from './msgpack.js';
 import { decodeNames, defaultNames, nameSize } from './names.js';
 import { decodeQmat } from './qmat.js';
 import { coreTimesU2, reconstructFrame } from './reconstruct.js';
+import { simdBasis } from './simd.js';
 import { meshTopology } from './topology.js';
 
 export { TkcError } from './errors.js';
@@ -26,19 +27,22 @@ export { DEFAULT_LIMITS } from './limits.js';
 /**
  * Opens a .tkc file held in memory.
  * @param {Uint8Array|ArrayBuffer} bytes the whole file
- * @param {{limits?: object}} options decoder limits (§7) to use instead of the defaults
+ * @param {{limits?: object, simd?: boolean}} options decoder limits (§7) to use instead of the
+ *   defaults; `simd: false` reconstructs frames with the JavaScript loop instead of WebAssembly
+ *   SIMD (the same bits, five times slower: for tests and engines that misbehave)
  * @returns {TkcFile}
  * @throws {TkcError} when the file breaks a rule of §11
  */
 export function openTkc(bytes, options = {}) {
   const data = bytes instanceof Uint8Array ? bytes : new Uint8Array(bytes);
-  return new TkcFile(data, resolveLimits(options.limits));
+  return new TkcFile(data, resolveLimits(options.limits), options.simd !== false);
 }
 
 /** An opened file: its header facts, faces and names, and its frames on demand. */
 export class TkcFile {
-  constructor(bytes, limits) {
+  constructor(bytes, limits, simd = true) {
     this.bytes = bytes;
+    this._useSimd = simd;
     this.limits = limits;
     const container = readContainer(bytes, limits);
     const layout = readLayout(container, limits);
@@ -121,8 +125,17 @@ export class TkcFile {
     if (out.length !== 3 * this.vertices) throw new RangeError(`out must hold ${3 * this.vertices} values`);
     const s = this._segmentOfFrame[f];
     const d = this._segment(s);
+    if (d.simd === undefined) d.simd = this._simdOnce(d); // on the first frame, not at open
     if (this._scratch.length < 3 * d.i) this._scratch = new Float64Array(3 * d.i);
     return reconstructFrame(d, f - this.layout.segments[s].start, out, this._scratch, f);
+  }
+
+  /** The segment's U1 for simd.js, made once per basis (a shared U1 serves every segment). */
+  _simdOnce(d) {
+    if (!this._useSimd) return null;
+    if (d.u1 !== this._sharedU1) return simdBasis(d.u1, this.vertices, d.columns);
+    if (this._sharedSimd === undefined) this._sharedSimd = simdBasis(d.u1, this.vertices, d.columns);
+    return this._sharedSimd;
   }
 
   _payload(section) {
