@@ -105,7 +105,9 @@ export function simdBasis(u1, K, columns) {
     memory = new WebAssembly.Memory({ initial: pages });
     frame = new WebAssembly.Instance(new WebAssembly.Module(BYTES), { m: { memory } }).exports.frame;
   } catch (error) {
-    if (error instanceof RangeError) return null; // no memory for it: the JavaScript loop
+    // no memory for it (RangeError), or a page whose Content-Security-Policy does not allow
+    // 'wasm-unsafe-eval' (CompileError): the JavaScript loop does the same, slower
+    if (error instanceof RangeError || error instanceof WebAssembly.CompileError) return null;
     throw error;
   }
   const heap = new Float64Array(memory.buffer);
