@@ -33,9 +33,13 @@ def test_bench_viewer_on_the_sample(capsys):
     assert cells[4].endswith("(2)")  # two page loads
     opening = float(cells[4].split()[0])
     assert opening > 0
-    frame = [float(x) for x in cells[6].split(" / ")]
-    assert len(frame) == 3 and frame[0] <= frame[1] <= frame[2]
-    rate, seconds, counts = (part.strip() for part in cells[8].rsplit(",", 2))
+    for column in (6, 8):  # while drawing, and the decoder alone
+        times, over = cells[column].split(" (")
+        frame = [float(x) for x in times.split(" / ")]
+        assert len(frame) == 3 and frame[0] <= frame[1] <= frame[2]
+        count, total = over.removesuffix(" > 2)").split(" of ")
+        assert 0 <= int(count) <= int(total) and int(total) >= 60
+    rate, seconds, counts = (part.strip() for part in cells[9].rsplit(",", 2))
     assert rate == "none (page: 24)" and seconds == "0.5"
     shown, dropped = (int(x) for x in counts.split(" / "))
     assert shown + dropped > 0
