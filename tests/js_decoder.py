@@ -56,6 +56,13 @@ def run_node(script: str, *args: str | Path) -> Any:
     return json.loads(done.stdout)
 
 
+def check_every_vector_observed(observed: dict[str, Any]) -> None:
+    """One observation per vector, and none a crash (anything but a TkcError)."""
+    assert sorted(observed) == sorted(EXPECTED)
+    crashed = {name: o["message"] for name, o in observed.items() if o.get("crashed")}
+    assert not crashed, f"the decoder threw something other than a TkcError: {crashed}"
+
+
 def check_valid_observation(observed: dict[str, Any], name: str) -> None:
     """A valid vector: the digests, header facts, names, segment index and reconstruction its
     JSON gives."""
