@@ -9,7 +9,7 @@ import math
 import pytest
 
 import tuckercodec as tc
-from tuckercodec.encoder import search
+from tuckercodec.encoder import fill, search
 from tuckercodec.samples import sample_path
 
 
@@ -55,7 +55,7 @@ def test_the_erratic_filler_lands_in_the_window_without_exceeding_it(size, aim):
         return measured[-1][1], step
 
     # a model whose slope is half the truth, from a D far from the answer
-    filled, tried = search.fill_erratic(size_of, (1.0, 10_000.0, -400.0), window, (1e-9, 1e9), 8)
+    filled, tried = fill.fill_erratic(size_of, (1.0, 10_000.0, -400.0), window, (1e-9, 1e9), 8)
     assert tried == len(measured)
     assert window[0] <= measured[-1][1] <= window[1]  # it stopped in the window
     # and keeps the smallest D that fits (the smallest error): a lucky one may pack smaller
@@ -72,7 +72,7 @@ def test_the_trial_filler_keeps_the_smallest_step_that_fits(size):
         seen.append((step, size(step)))
         return seen[-1][1], None
 
-    filled, _ = search.fill(size_of, 1.0, -100.0, window, (1e-9, 1e9), 6)
+    filled, _ = fill.fill(size_of, 1.0, -100.0, window, (1e-9, 1e9), 6)
     assert filled is not None and filled.size <= window[1]
     fitting = [step for step, bytes_ in seen if bytes_ <= window[1]]
     assert filled.step == min(fitting)
@@ -84,9 +84,9 @@ def test_a_filler_reports_none_when_no_step_within_the_limits_fits():
         return _line(step), None
 
     # the line reaches 5,000 bytes only at D = e**6.25, beyond the upper limit
-    filled, tried = search.fill(size_of, 1.0, -800.0, (4_900.0, 5_000.0), (1e-3, 10.0), 6)
+    filled, tried = fill.fill(size_of, 1.0, -800.0, (4_900.0, 5_000.0), (1e-3, 10.0), 6)
     assert filled is None and tried <= 6
-    filled, _ = search.fill_erratic(
+    filled, _ = fill.fill_erratic(
         size_of, (1.0, 10_000.0, -800.0), (4_900.0, 5_000.0), (1e-3, 10.0), 4
     )
     assert filled is None

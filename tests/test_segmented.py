@@ -240,7 +240,8 @@ def test_encode_in_segments_on_the_command_line(tmp_path, capsys):
 
 
 def test_a_fitted_basis_serves_every_segment_on_its_own(cloth):
-    from tuckercodec.encoder.segmented import encode_frames, fit_basis, shared_basis_of
+    from tuckercodec.encoder import encode_frames
+    from tuckercodec.encoder.segmented import fit_basis, shared_basis_of
     from tuckercodec.io.streaming import SequenceFrames
 
     basis = fit_basis(SequenceFrames(cloth), target_kg=0.1, segment_frames=20)

@@ -11,6 +11,8 @@ The public API::
         block = src.read(0, 64)            # (64, K, 3) float64, without loading the rest
 
     data = encode(seq, target_kg=0.1)      # a compressed file (spec/FORMAT.md) as bytes
+    encoder = Encoder(EncodeOptions(target_bpfv=2.0, level=19))  # every option in one object
+    data = encoder.encode(seq)             # ... for as many sequences as you like
     decode(data, frames=range(10, 20))     # any frames back, as a MeshSequence (or pass a path)
     info(data)                             # the header, without decoding anything
 
@@ -26,7 +28,14 @@ Errors are KG errors (Karni-Gotsman, per-frame centroid) unless a name says othe
 from ._version import __version__
 from .analysis import Analysis, RankChoice, analyze
 from .decoder import Decoder, FileInfo, decode, info
-from .encoder import EncodeReport, EncodeResult, encode, encode_with_report
+from .encoder import (
+    EncodeOptions,
+    Encoder,
+    EncodeReport,
+    EncodeResult,
+    encode,
+    encode_with_report,
+)
 from .errors import (
     ChecksumError,
     DependencyError,
@@ -51,8 +60,10 @@ __all__ = [
     "ChecksumError",
     "Decoder",
     "DependencyError",
+    "EncodeOptions",
     "EncodeReport",
     "EncodeResult",
+    "Encoder",
     "FileInfo",
     "FormatError",
     "FrameSource",

@@ -9,12 +9,16 @@ from __future__ import annotations
 
 import os
 import sys
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
+
+import numpy as np
 
 from .analysis import Selection
 from .atomic import refuse_existing, write_atomic
 from .decoder import Decoder, FrameSelection
-from .encoder import EncodeReport, encode_source
+from .encoder import EncodeOptions, Encoder, EncodeReport, resolve_options
 from .errors import InputError
 from .format.container import SIGNATURE
 from .format.limits import DEFAULT_LIMITS, Limits
@@ -59,33 +63,65 @@ def encode_file(
     object_path: str | None = None,
     faces: str | os.PathLike[str] | None = None,
     fps: float | None = None,
+    options: EncodeOptions | None = None,
 ) -> EncodeReport:
     """Read a sequence (folder of OBJ files, glob, .npz...), encode it and write ``output``.
 
     The output is checked before any work (it must not exist unless ``overwrite``) and written
-    atomically. A sequence whose whole encode would not fit ``max_memory`` (or given
+    atomically. The encoder's options are given whole (``options``, an
+    :class:`~tuckercodec.encoder.EncodeOptions`) or as its keywords (``target_kg`` to
+    ``basis``); a sequence whose whole encode would not fit ``max_memory`` (or given
     ``segment_frames``) is read a range of frames at a time and written in segments (format
-    1.1, :func:`tuckercodec.encoder.encode_source`). ``prim``, ``object_path``, ``faces`` and
-    ``fps`` are the reading options of :func:`tuckercodec.io.load_sequence` (``faces`` gives a
-    ``.npy``, PC2 or MDD cache its faces). ``progress`` prints a line on standard error as
-    each pass of a segmented encode starts. Returns the encoder's report.
+    1.1, :meth:`tuckercodec.encoder.Encoder.encode_source`). ``prim``, ``object_path``,
+    ``faces`` and ``fps`` are the reading options of :func:`tuckercodec.io.load_sequence`
+    (``faces`` gives a ``.npy``, PC2 or MDD cache its faces). ``progress`` prints a line on
+    standard error as each pass of a segmented encode starts. Returns the encoder's report.
     """
+    options = resolve_options(
+        options,
+        target_kg=target_kg,
+        ranks=ranks,
+        target_bpfv=target_bpfv,
+        select=select,
+        segment_frames=segment_frames,
+        max_memory=max_memory,
+        basis=basis,
+    )
+    encoder = Encoder(options, executor=executor, progress=_say if progress else None)
+    reading = {"prim": prim, "object_path": object_path, "faces": faces, "fps": fps}
+    return write_encoded(encoder, source, output, overwrite=overwrite, **reading).report
+
+
+def write_encoded(
+    encoder: Encoder,
+    source: Source,
+    output: str | os.PathLike[str],
+    *,
+    overwrite: bool = False,
+    **reading: Any,
+) -> EncodedFile:
+    """Read ``source`` (``reading``: the options of :func:`tuckercodec.io.open_frames`),
+    encode it with ``encoder`` and write ``output`` atomically, refused before any work if it
+    exists and not ``overwrite``. The encoder's result, and what was read."""
     refuse_existing([Path(output)], overwrite)
-    with open_frames(source, prim=prim, object_path=object_path, faces=faces, fps=fps) as frames:
-        result = encode_source(
-            frames,
-            target_kg=target_kg,
-            ranks=ranks,
-            target_bpfv=target_bpfv,
-            select=select,
-            segment_frames=segment_frames,
-            max_memory=max_memory,
-            basis=basis,
-            executor=executor,
-            progress=_say if progress else None,
+    with open_frames(source, **reading) as frames:
+        result = encoder.encode_source(frames)
+        write_atomic(output, result.data, overwrite=overwrite)
+        return EncodedFile(
+            result.data, result.report, frames.frame_count, frames.vertex_count, frames.time_codes
         )
-    write_atomic(output, result.data, overwrite=overwrite)
-    return result.report
+
+
+@dataclass(frozen=True)
+class EncodedFile:
+    """What :func:`write_encoded` wrote: the file's bytes and report, and the source's frames,
+    vertices and time codes (which the format does not keep)."""
+
+    data: bytes
+    report: EncodeReport
+    frame_count: int
+    vertex_count: int
+    time_codes: np.ndarray | None
 
 
 def _say(line: str) -> None:

@@ -12,8 +12,8 @@ from pathlib import Path
 
 from .._version import __version__
 from ..encoder import DEFAULT_TARGET_KG
+from ..encoder.options import BASES
 from ..encoder.plan import DEFAULT_SEGMENT_FRAMES, parse_size
-from ..encoder.segment_work import BASES
 from ..files import SUFFIX
 from ..gltf.decomposition import COMPRESSIONS
 from ..io.registry import writable_formats

@@ -25,12 +25,13 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from ..atomic import write_atomic
-from ..encoder import EncodeReport, encode_with_report
+from ..encoder import EncodeOptions, Encoder, EncodeReport
 from ..errors import EXIT_OK
 from ..files import SUFFIX
 from ..io import format_of, load_sequence
 from ..metrics import KG_DEFINITION
 from ..parallel import open_executor
+from .codec import encode_options
 from .failures import describe_failure
 from .inputs import read_options, sequence_source
 
@@ -45,11 +46,8 @@ class Job:
     """One input's task: what to read and how to encode it (picklable, sent to a worker)."""
 
     source: str
-    options: dict[str, Any]
-    target_kg: float | None
-    ranks: tuple[int, int] | None
-    target_bpfv: float | None
-    select: str
+    reading: dict[str, Any]  # the reading options of tuckercodec.io.load_sequence
+    encoding: dict[str, Any]  # EncodeOptions.to_config(): plain data, for any worker
 
 
 @dataclass(frozen=True)
@@ -64,14 +62,8 @@ class Encoded:
 def encode_job(job: Job) -> Encoded:
     """Read and encode one input in this process (a worker's task)."""
     start = time.perf_counter()
-    sequence = load_sequence(sequence_source(job.source), progress=False, **job.options)
-    result = encode_with_report(
-        sequence,
-        target_kg=job.target_kg,
-        ranks=job.ranks,
-        target_bpfv=job.target_bpfv,
-        select=job.select,  # type: ignore[arg-type]  # argparse's choices check it
-    )
+    sequence = load_sequence(sequence_source(job.source), progress=False, **job.reading)
+    result = Encoder(EncodeOptions.from_config(job.encoding)).encode_with_report(sequence)
     return Encoded(result.data, result.report, time.perf_counter() - start)
 
 
@@ -118,17 +110,8 @@ def run_batch(args: argparse.Namespace) -> int:
     options = read_options(args)
     if remote and "faces" in options:
         options["faces"] = os.path.abspath(options["faces"])
-    jobs = [
-        Job(
-            _task_source(row.source, remote),
-            options,
-            args.kg,
-            args.ranks,
-            args.bpfv,
-            args.select,
-        )
-        for row in rows
-    ]
+    encoding = encode_options(args, passes=False).to_config()
+    jobs = [Job(_task_source(row.source, remote), options, encoding) for row in rows]
     workers = None if args.jobs is None else min(args.jobs, len(rows))  # no idle process
     display = _Display(len(rows))
     display.start("starting workers" if workers or args.scheduler else "in this process")

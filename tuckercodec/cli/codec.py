@@ -9,20 +9,17 @@ import sys
 import time
 from pathlib import Path
 
-from ..atomic import refuse_existing, write_atomic
 from ..decoder import Decoder, FileInfo
 from ..decoder import info as read_info
-from ..encoder import EncodeReport, encode_source
-from ..encoder.plan import needs_segments
+from ..encoder import EncodeOptions, Encoder, EncodeReport
 from ..errors import EXIT_OK, InputError
-from ..files import decode_file, decoded_output_path, is_gltf_output
+from ..files import decode_file, decoded_output_path, is_gltf_output, write_encoded
+from ..format.segments import BASIS_SHARED
 from ..gltf.decomposition import DEFAULT_COMPRESSION, write_decomposition_gltf
-from ..io import open_frames
 from ..metrics import (
     KG_DEFINITION,
     kg_error,
 )
-from ..parallel import Executor, InProcessExecutor, open_executor
 from ..sequence import MeshSequence
 from .inputs import check_precision, load_input, read_options, sequence_source
 
@@ -56,48 +53,28 @@ def _print_encode_report(report: EncodeReport, format_version: str) -> None:
 
 
 def run_encode(args: argparse.Namespace) -> int:
-    refuse_existing([args.output], args.force)  # before the work, not after it
     start = time.perf_counter()
-    with open_frames(sequence_source(args.input), **read_options(args)) as frames:
-        segmented = needs_segments(
-            frames.frame_count,
-            frames.vertex_count,
-            segment_frames=args.segment_frames,
-            max_memory=args.max_memory,
-        )
-        if not segmented and (args.jobs is not None or args.scheduler is not None):
-            print(
-                "note: --jobs and --scheduler run the passes of a segmented encode; this "
-                "sequence is encoded whole, in this process (give --segment-frames to segment it)",
-                file=sys.stderr,
-            )
-        with _executor(args, segmented) as executor:
-            result = encode_source(  # no mode given: the encoder's default target
-                frames,
-                target_kg=args.kg,
-                ranks=args.ranks,
-                target_bpfv=args.bpfv,
-                select=args.select,
-                segment_frames=args.segment_frames,
-                max_memory=args.max_memory,
-                basis=args.basis,
-                executor=executor,
-                progress=_say,
-            )
-        write_atomic(args.output, result.data, overwrite=args.force)
+    encoder = Encoder(encode_options(args), progress=_say)
+    encoded = write_encoded(
+        encoder,
+        sequence_source(args.input),
+        args.output,
+        overwrite=args.force,
+        **read_options(args),
+    )
+    print(
+        f"{args.input}: {encoded.frame_count} frames, {encoded.vertex_count} vertices "
+        f"-> {args.output}"
+    )
+    _print_encode_report(encoded.report, read_info(encoded.data).format_version)
+    if encoded.time_codes is not None:  # the format keeps a frame rate, not times
+        codes = encoded.time_codes
         print(
-            f"{args.input}: {frames.frame_count} frames, {frames.vertex_count} vertices "
-            f"-> {args.output}"
+            f"not kept in the compressed file: time codes ({codes[0]:g}..{codes[-1]:g} "
+            f"decode as frames 0..{encoded.frame_count - 1})"
         )
-        _print_encode_report(result.report, read_info(result.data).format_version)
-        if frames.time_codes is not None:  # the format keeps a frame rate, not times
-            codes = frames.time_codes
-            print(
-                f"not kept in the compressed file: time codes ({codes[0]:g}..{codes[-1]:g} "
-                f"decode as frames 0..{frames.frame_count - 1})"
-            )
     elapsed = time.perf_counter() - start
-    megabytes = frames.frame_count * frames.vertex_count * 12 / 1e6
+    megabytes = encoded.frame_count * encoded.vertex_count * 12 / 1e6
     print(
         f"total time with reading and writing {elapsed:.2f} s "
         f"({megabytes / elapsed:.1f} MB/s of float32 positions)"
@@ -105,11 +82,21 @@ def run_encode(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _executor(args: argparse.Namespace, segmented: bool) -> Executor:
-    """Where a segmented encode's passes run: --jobs workers, a --scheduler's cluster, or here."""
-    if not segmented:
-        return InProcessExecutor()
-    return open_executor(args.jobs, args.scheduler)
+def encode_options(args: argparse.Namespace, *, passes: bool = True) -> EncodeOptions:
+    """The encoder's options from ``encode``'s or ``batch``'s arguments (no mode given: the
+    encoder's default target). ``passes``: whether ``--jobs`` and ``--scheduler`` say where a
+    segmented encode's passes run (``batch``'s say where its tasks run)."""
+    return EncodeOptions(
+        target_kg=args.kg,
+        ranks=args.ranks,
+        target_bpfv=args.bpfv,
+        select=args.select,
+        segment_frames=getattr(args, "segment_frames", None),
+        max_memory=getattr(args, "max_memory", None),
+        basis=getattr(args, "basis", BASIS_SHARED),
+        jobs=args.jobs if passes else None,
+        scheduler=args.scheduler if passes else None,
+    )
 
 
 def _say(line: str) -> None:

@@ -1,18 +1,12 @@
-"""What an encode returns: the file's bytes and the report of what was chosen and measured, and
-the check of the encoder's modes (shared by the whole and the segmented encoders)."""
+"""What an encode returns: the file's bytes and the report of what was chosen and measured."""
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
-from typing import Literal
-
-import numpy as np
 
 from ..analysis import Selection
 from ..rate import bpfv as bits_per_frame_vertex
-
-Mode = Literal["kg", "ranks", "bpfv"]
+from .options import Mode
 
 
 @dataclass(frozen=True)
@@ -63,36 +57,3 @@ class EncodeResult:
 
     data: bytes
     report: EncodeReport
-
-
-def refuse_two_modes(target_kg: object, ranks: object, target_bpfv: object) -> None:
-    """``ValueError`` naming them if more than one of the three modes is given."""
-    given = [
-        name
-        for name, value in (
-            ("target_kg", target_kg),
-            ("ranks", ranks),
-            ("target_bpfv", target_bpfv),
-        )
-        if value is not None
-    ]
-    if len(given) > 1:
-        raise ValueError(f"give one of target_kg, ranks and target_bpfv, not {' and '.join(given)}")
-
-
-def check_modes(
-    target_kg: float | None, ranks: tuple[int, int] | None, target_bpfv: float | None
-) -> Mode:
-    """The mode the arguments name, each checked (``ValueError`` otherwise)."""
-    refuse_two_modes(target_kg, ranks, target_bpfv)
-    for name, value in (("target_kg", target_kg), ("target_bpfv", target_bpfv)):
-        if value is not None and not (
-            isinstance(value, (int, float, np.floating))
-            and not isinstance(value, bool)
-            and math.isfinite(value)
-            and value > 0
-        ):
-            raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-    if ranks is not None:
-        return "ranks"
-    return "bpfv" if target_bpfv is not None else "kg"

@@ -20,7 +20,6 @@ bytes 16..   one zstd frame of the positions as little-endian float64, C order
 
 from __future__ import annotations
 
-import math
 import struct
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -31,8 +30,7 @@ import zstandard
 
 from ..analysis import SMALLEST_COORDINATE, SMALLEST_RELATIVE_SHAPE
 from ..decoder import decode
-from ..encoder import DEFAULT_TARGET_KG, encode_with_report
-from ..encoder.results import refuse_two_modes
+from ..encoder import EncodeOptions, Encoder
 from ..errors import InputError, UnreachableTargetError
 from ..format.limits import DEFAULT_LIMITS
 from ..format.streams import compress
@@ -67,6 +65,13 @@ class ChunkMode:
     ranks: tuple[int, int] | None = None
     target_bpfv: float | None = None
 
+    @property
+    def options(self) -> EncodeOptions:
+        """The encoder's options for a chunk."""
+        return EncodeOptions(
+            target_kg=self.target_kg, ranks=self.ranks, target_bpfv=self.target_bpfv
+        )
+
     def config(self) -> dict[str, Any]:
         """The one key of the mode in use, JSON-safe (``ranks`` as a list)."""
         if self.ranks is not None:
@@ -83,14 +88,14 @@ def chunk_mode(target_kg: Any = None, ranks: Any = None, target_bpfv: Any = None
         ValueError: two modes at once, a target that is not a positive finite number, or ranks
             that are not two integers >= 1.
     """
-    refuse_two_modes(target_kg, ranks, target_bpfv)
-    if ranks is not None:
-        return ChunkMode(ranks=_checked_ranks(ranks))
-    if target_bpfv is not None:
-        return ChunkMode(target_bpfv=_positive("target_bpfv", target_bpfv))
-    if target_kg is None:
-        return ChunkMode(target_kg=DEFAULT_TARGET_KG)
-    return ChunkMode(target_kg=_positive("target_kg", target_kg))
+    options = EncodeOptions(  # checks the mode and the targets
+        target_kg=target_kg,
+        ranks=None if ranks is None else _checked_ranks(ranks),
+        target_bpfv=target_bpfv,
+    )
+    if options.mode == "kg":
+        return ChunkMode(target_kg=options.kg_target)
+    return ChunkMode(ranks=options.ranks, target_bpfv=options.target_bpfv)
 
 
 def codec_settings(
@@ -127,17 +132,6 @@ def fit_settings(
         array, target_kg=mode.target_kg, chunk_frames=chunk_frames, max_memory=max_memory
     )
     return {"target_kg": mode.target_kg, **fitted.config()}
-
-
-def _positive(name: str, value: Any) -> float:
-    if (
-        isinstance(value, (int, float, np.integer, np.floating))
-        and not isinstance(value, bool)
-        and math.isfinite(value)
-        and value > 0
-    ):
-        return float(value)
-    raise ValueError(f"{name} must be a positive finite number, got {value!r}")
 
 
 def _checked_ranks(ranks: Any) -> tuple[int, int]:
@@ -230,9 +224,9 @@ def encode_chunk(chunk: Any, mode: ChunkMode, basis: FittedBasis | None = None) 
             min(i, sequence.vertex_count, 3 * sequence.frame_count),
             min(k, sequence.frame_count, 3 * sequence.vertex_count),
         )
-        return _encode(sequence, ranks=ranks)
+        return _encode(sequence, EncodeOptions(ranks=ranks))
     if mode.target_bpfv is not None:
-        return _encode(sequence, target_bpfv=mode.target_bpfv)
+        return _encode(sequence, mode.options)
     assert mode.target_kg is not None  # chunk_mode sets exactly one
     return _encode_kg(sequence, positions.dtype, mode.target_kg)
 
@@ -244,9 +238,9 @@ def _sequence(positions: np.ndarray) -> MeshSequence:
         raise _in_chunk(error, positions.shape) from None
 
 
-def _encode(sequence: MeshSequence, **mode: Any) -> bytes:
+def _encode(sequence: MeshSequence, options: EncodeOptions) -> bytes:
     try:
-        return encode_with_report(sequence, **mode).data
+        return Encoder(options).encode(sequence)
     except (InputError, UnreachableTargetError) as error:
         raise _in_chunk(error, sequence.vertices.shape) from None
 
@@ -274,7 +268,10 @@ def _encode_kg(
     to concern a chunk)."""
     goal = target
     for _ in range(MAX_TIGHTENING):
-        data = _encode(sequence, target_kg=goal) if encode is None else encode(sequence, goal)
+        if encode is None:
+            data = _encode(sequence, EncodeOptions(target_kg=goal))
+        else:
+            data = encode(sequence, goal)
         if dtype.itemsize >= 8:
             return data  # float64 (or wider) holds the decoded positions exactly: no rounding
         read_back = decode(data).vertices.astype(dtype).astype(np.float64)

@@ -6,8 +6,8 @@ A chunk of the usual mode is a whole .tkc file, and 86-90 % of it is its own U1 
 array before it is written (:func:`fit_array`, behind ``TuckerZarrCodec.fit`` and
 ``TuckerNumcodec.fit``): :func:`tuckercodec.encoder.segmented.fit_basis` finds a U1 with which
 every chunk of ``chunk_frames`` frames meets the target on its own. Each chunk is then encoded
-with it (``encode_frames(..., shared_basis=...)``): a segmented .tkc (format 1.1) whose U1
-section is the basis's, byte for byte.
+with it (:meth:`tuckercodec.encoder.Encoder.encode_segments`, ``shared_basis=...``): a
+segmented .tkc (format 1.1) whose U1 section is the basis's, byte for byte.
 
 Layout of a fitted chunk: that .tkc with the payload bytes of its U1 section cut out, and
 nothing else changed::
@@ -47,7 +47,8 @@ from typing import Any, ClassVar
 import msgpack
 import numpy as np
 
-from ..encoder.segmented import SharedBasis, encode_frames, fit_basis
+from ..encoder import EncodeOptions, Encoder
+from ..encoder.segmented import SharedBasis, fit_basis
 from ..errors import FormatError, InputError
 from ..format.container import parse_container
 from ..io.streaming import FrameSource, SequenceFrames
@@ -148,12 +149,9 @@ class FittedBasis:
             UnreachableTargetError: the basis does not span the sequence's motion well enough
                 for ``target_kg`` (the caller then stores the chunk with its own basis).
         """
-        return encode_frames(
-            SequenceFrames(sequence),
-            target_kg=target_kg,
-            segment_frames=sequence.frame_count,
-            shared_basis=self.shared,
-        ).data
+        options = EncodeOptions(target_kg=target_kg, segment_frames=sequence.frame_count)
+        encoder = Encoder(options)
+        return encoder.encode_segments(SequenceFrames(sequence), shared_basis=self.shared).data
 
     def cut(self, data: bytes) -> bytes:
         """A file encoded by :meth:`encode`, without its U1 payload: the fitted chunk."""

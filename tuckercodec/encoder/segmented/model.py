@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..analysis import discarded_energy
+from ...analysis import discarded_energy
 
 #: Bisection steps of the Lagrange multiplier (on its logarithm, from 1e-12 to 1e12).
 LAMBDA_STEPS = 60
@@ -160,7 +160,7 @@ def segment_model(
 
 
 @dataclass(frozen=True)
-class RankChoice:
+class SegmentRanks:
     """Ranks for every segment: ``shared`` columns of a shared U1 (0 with a basis per segment)
     and each segment's (i, k)."""
 
@@ -218,7 +218,7 @@ def _lagrange_choice(
 
 def cheapest_ranks(
     models: list[SegmentModel], vertices: int, shared: bool, budget2: float
-) -> RankChoice | None:
+) -> SegmentRanks | None:
     """The ranks that store the fewest numbers with a total truncation error within
     ``budget2``; ``None`` if even the largest ranks do not fit."""
     errors, costs = _segment_tables(models, vertices, shared)
@@ -235,7 +235,7 @@ def cheapest_ranks(
             return None
         i = int(np.argmin(totals))
         ranks = tuple((i, int(k_of[s, i])) for s in range(segments))
-        return RankChoice(i, ranks, float(picked_errors[:, i].sum()), int(totals[i]))
+        return SegmentRanks(i, ranks, float(picked_errors[:, i].sum()), int(totals[i]))
     flat_errors = errors.reshape(segments, 1, -1)
     flat_costs = costs.reshape(segments, 1, -1)
     chosen, feasible = _lagrange_choice(flat_errors, flat_costs, budget2)
@@ -244,10 +244,10 @@ def cheapest_ranks(
     ranks = tuple(divmod(int(chosen[s, 0]), largest_k) for s in range(segments))
     error2 = sum(float(errors[s, i, k]) for s, (i, k) in enumerate(ranks))
     stored = sum(float(costs[s, i, k]) for s, (i, k) in enumerate(ranks))
-    return RankChoice(0, ranks, error2, int(stored))
+    return SegmentRanks(0, ranks, error2, int(stored))
 
 
-def fixed_ranks(models: list[SegmentModel], shared: bool, i: int, k: int) -> RankChoice:
+def fixed_ranks(models: list[SegmentModel], shared: bool, i: int, k: int) -> SegmentRanks:
     """Ranks (i, k) everywhere, each cut to what its segment can hold."""
     ranks = []
     for model in models:
@@ -255,7 +255,7 @@ def fixed_ranks(models: list[SegmentModel], shared: bool, i: int, k: int) -> Ran
         ranks.append((min(i, rows - 1), min(k, cols - 1)))
     error2 = sum(float(m.error_table[r]) for m, r in zip(models, ranks, strict=True))
     shared_columns = max(r[0] for r in ranks) if shared else 0
-    return RankChoice(shared_columns, tuple(ranks), error2, 0)
+    return SegmentRanks(shared_columns, tuple(ranks), error2, 0)
 
 
 def model_error2(
@@ -302,8 +302,8 @@ def column_norms(
 
 
 __all__ = [
-    "RankChoice",
     "SegmentModel",
+    "SegmentRanks",
     "cheapest_ranks",
     "column_norms",
     "fixed_ranks",

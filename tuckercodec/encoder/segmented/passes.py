@@ -22,10 +22,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..format.reconstruction import reconstruct_frames
-from ..hosvd import centre_frames
-from ..io.streaming import FrameSource
-from .plan import blocks
+from ...format.reconstruction import reconstruct_frames
+from ...hosvd import centre_frames
+from ...io.streaming import FrameSource
+from ..plan import blocks
 
 
 @dataclass(frozen=True)

@@ -1,32 +1,34 @@
-"""One trial of the encoder's search: a truncation quantized with the single parameter D.
+"""The search's workspace for a sequence encoded whole: one decomposition, format 1.0.
 
-:class:`Workspace` holds the input, its analysis and everything every trial shares (the mesh
-parents, the coded faces and names); :meth:`Workspace.quantize` turns ranks (i, k) and D into
-the integers a file stores, :meth:`Workspace.decoded_error2` measures what a decoder will return
-(with the format's own reconstruction, §8), and :meth:`Workspace.pack` makes the file. The
-package docstring (:mod:`tuckercodec.encoder`) says how D sets every step.
+:class:`WholeWorkspace` implements the trial protocol (:class:`.trial.Workspace`) for a sequence
+in memory. It holds the input, its analysis and everything every trial shares (the mesh parents,
+the coded faces and names); :meth:`~WholeWorkspace.quantize` turns ranks (i, k) and D into the
+integers a file stores, :meth:`~WholeWorkspace.decoded_error2` measures what a decoder will
+return (with the format's own reconstruction, §8), and :meth:`~WholeWorkspace.pack` makes the
+file. The package docstring (:mod:`tuckercodec.encoder`) says how D sets every step.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
 from .._version import __version__
-from ..analysis import Analysis
+from ..analysis import Analysis, Selection
 from ..errors import UnreachableTargetError
 from ..format import faces, names, qmat, sections, streams
 from ..format.container import pack_container
 from ..format.header import header_map
 from ..format.qmat import QuantizedMatrix
-from ..format.reconstruction import reconstruct_frames, reconstruction_basis
+from ..format.reconstruction import factor_value_count, reconstruct_frames, reconstruction_basis
 from ..hosvd import project
 from ..sequence import MeshSequence
 from ..topology import MeshPrediction
 from . import rdo
+from .trial import TRIAL_RATIO, Quantized, QuantizedSegment
 
 #: The largest |integer| a section may stream: after zigzag it must fit streams.MAX_PLANES bytes.
 LARGEST_STREAMED = 2 ** (8 * streams.MAX_PLANES - 1) - 1
@@ -34,26 +36,31 @@ LARGEST_STREAMED = 2 ** (8 * streams.MAX_PLANES - 1) - 1
 BLOCK_BYTES = 2 << 20
 
 
-@dataclass
-class Quantized:
-    """One quantization of one truncation: everything the file stores but the faces."""
-
-    i: int
-    k: int
-    step: float  # D
-    u1: QuantizedMatrix
-    u3: QuantizedMatrix
-    core: QuantizedMatrix
-    centroids: QuantizedMatrix
+#: A whole file's choice of ranks: (i, k).
+Ranks = tuple[int, int]
+#: The sections whose size D sets; the others (faces, names) are coded once.
+QUANTIZED_SECTIONS = ("CENT", "U3", "CORE", "U1")
+#: The least room a size target's first trials leave quantization, as a share of the lowest
+#: error's square (:class:`.trial.Workspace`; the segmented workspace's is 1).
+FIRST_ROOM_FLOOR = 1e-3
 
 
-class Workspace:
+class WholeWorkspace:
     """The input, its analysis and the parts shared by every trial of the search."""
 
-    def __init__(self, sequence: MeshSequence, analysis: Analysis, level: int) -> None:
+    #: the decoded error is measured on every trial: no model to confirm
+    exact_model = True
+    #: none: the exact table always leaves quantization room, but within rounding of zero error
+    late_shares: tuple[float, ...] = ()
+    first_room_floor = FIRST_ROOM_FLOOR
+
+    def __init__(
+        self, sequence: MeshSequence, analysis: Analysis, level: int, select: Selection = "exact"
+    ) -> None:
         self.sequence = sequence
         self.analysis = analysis
         self.level = level
+        self.select: Selection = select
         self.vertex_count = sequence.vertex_count
         self.frame_count = sequence.frame_count
         # The KG denominator: each frame is centred, so ||A - E(A)|| is the centred tensor's norm.
@@ -66,15 +73,61 @@ class Workspace:
         self.face_codec = face.codec
         self.face_section = (face.params, face.payload)
         self.name_section = names.encode_names(sequence.frame_names, level)
-        self.centroid_floor_step, self.centroid_floor_error2 = self._centroid_floor()
+        self.centroid_floor_step, self.floor_error2 = self._centroid_floor()
+        r1, r3 = analysis.max_ranks
+        self.first_fill_values = factor_value_count(self.vertex_count, self.frame_count, r1, r3)
         self._u1 = np.zeros((self.vertex_count, 0))
         self._core = np.zeros((0, 3, 0))
         # how factors are rounded (rdo.py); the prediction trees it needs are made on first use
         self.rdo = rdo.DEFAULT
         self._u1_levels: rdo.Levels | None = None
 
-    def truncation_error2(self, i: int, k: int) -> float:
+    # -- choosing ranks ------------------------------------------------------------------------
+
+    def truncation_error2(self, choice: Ranks) -> float:
+        i, k = choice
         return float(self.analysis.error_table()[i, k])
+
+    def ranks_for(self, kg: float, share: float) -> Ranks:
+        """The cheapest (i, k) whose KG error is at most ``kg`` sqrt(``share``), by the exact
+        table or the paper's bound (:attr:`select`)."""
+        choice = self.analysis.cheapest(kg * math.sqrt(share), select=self.select)
+        return choice.i, choice.k
+
+    def fixed_choice(self, ranks: tuple[int, int]) -> Ranks:
+        r1, r3 = self.analysis.max_ranks
+        i, k = ranks
+        if not (1 <= i <= r1 and 1 <= k <= r3):
+            raise ValueError(
+                f"ranks must be two integers with 1 <= i <= {r1} and 1 <= k <= {r3}, got {ranks!r}"
+            )
+        return i, k
+
+    def largest_choice(self, limit2: float, target_kg: float) -> tuple[Ranks, float]:
+        """The full ranks, which lose nothing, with D for the whole limit."""
+        largest = self.analysis.max_ranks
+        return largest, self.initial_step(largest, max(limit2, 1e-300))
+
+    def prepare(self, choices: Sequence[Ranks]) -> None:
+        """Form the factors once, for the largest ranks, rather than growing them."""
+        if choices:
+            self.factors(max(i for i, _ in choices), max(k for _, k in choices))
+
+    def neighbours(self, choice: Ranks, fraction: float) -> list[Ranks]:
+        """i and k moved by ``fraction`` of themselves (at least 1), within the ranks."""
+        i, k = choice
+        r1, r3 = self.analysis.max_ranks
+        di, dk = max(1, round(fraction * i)), max(1, round(fraction * k))
+        moves = ((i + di, k), (i - di, k), (i, k + dk), (i, k - dk))
+        return [(a, b) for a, b in moves if 1 <= a <= r1 and 1 <= b <= r3]
+
+    def stored_values(self, choice: Ranks) -> int:
+        return factor_value_count(self.vertex_count, self.frame_count, *choice)
+
+    def initial_step(self, choice: Ranks, room2: float) -> float:
+        return 12.0 * room2 / self.stored_values(choice)
+
+    # -- quantizing ------------------------------------------------------------------------------
 
     def factors(self, i: int, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """U1 (K, i), U3 (F, k) and the core (i, 3, k) of the truncation.
@@ -92,27 +145,24 @@ class Workspace:
             )
         return self._u1[:, :i], decomposition.u3[:, :k], self._core[:i, :, :k]
 
-    def quantize(
-        self, i: int, k: int, step: float, rounding: rdo.Settings | None = None
-    ) -> Quantized:
+    def quantize(self, choice: Ranks, step: float, *, trial: bool = False) -> Quantized[Ranks]:
         """Quantize the truncation (i, k) with the single parameter D = ``step`` (see above),
-        rounding as ``rounding`` says (default :attr:`rdo`; the search's trials, which only
-        rank truncations, may pass :data:`.rdo.NEAREST`, which costs nothing)."""
-        rounding = self.rdo if rounding is None else rounding
+        rounding as :attr:`rdo` says, or, for a ``trial`` (which only ranks truncations), to the
+        nearest integer, which costs nothing."""
+        rounding = rdo.NEAREST if trial else self.rdo
+        i, k = choice
         u1, u3, core = self.factors(i, k)
         root = math.sqrt(step)
         row_norms = np.sqrt(np.square(core).sum(axis=(1, 2)))
         column_norms = np.sqrt(np.square(core).sum(axis=(0, 1)))
         centroids = self._quantized_centroids(root / math.sqrt(self.vertex_count))
-        return Quantized(
-            i,
-            k,
-            step,
+        segment = QuantizedSegment(
             self._rounded(u1, column_steps(root, row_norms), "U1", rounding),
             self._rounded(u3, column_steps(root, column_norms), "U3", rounding),
             self._rounded(core.reshape(-1, 1), np.array([root]), "CORE", rounding),
             centroids,
         )
+        return Quantized((i, k), step, [segment])
 
     def _rounded(
         self, values: np.ndarray, steps: np.ndarray, section: str, rounding: rdo.Settings
@@ -156,9 +206,9 @@ class Workspace:
     def check_reachable(self, limit2: float) -> None:
         """Refuse a target below what the centroids alone cost at their coarsest usable step:
         a sequence far from the origin, relative to its size, at a tight target."""
-        if self.centroid_floor_error2 < limit2:
+        if self.floor_error2 < limit2:
             return
-        floor_kg = self.kg(self.centroid_floor_error2)
+        floor_kg = self.kg(self.floor_error2)
         raise UnreachableTargetError(
             "the sequence lies too far from the origin for this error target: its centroids "
             "(or their changes from frame to frame) reach "
@@ -168,12 +218,16 @@ class Workspace:
             "KG error does not depend on where it is), or ask for a larger KG error"
         )
 
-    def decoded_error2(self, quantized: Quantized) -> float:
+    # -- its error -------------------------------------------------------------------------------
+
+    def decoded_error2(self, quantized: Quantized[Ranks]) -> float:
         """||decoded - input||**2, computed with the decoder's own reconstruction."""
-        u1 = quantized.u1.values()
-        u3 = quantized.u3.values()
-        centroids = quantized.centroids.values()
-        core = quantized.core.values().reshape(quantized.i, 3, quantized.k)
+        (i, k), (factors,) = quantized.choice, quantized.segments
+        assert factors.u1 is not None  # a whole file's U1 is its own
+        u1 = factors.u1.values()
+        u3 = factors.u3.values()
+        centroids = factors.centroids.values()
+        core = factors.core.values().reshape(i, 3, k)
         basis = reconstruction_basis(core, self.analysis.decomposition.u2)
         total = 0.0
         vertices = self.sequence.vertices
@@ -186,18 +240,47 @@ class Workspace:
             total += float(flat @ flat)
         return total
 
+    # the whole workspace measures every trial: its model is the decoded error
+    modelled_error2 = decoded_error2
+    measured_error2 = decoded_error2
+
+    def estimated_error2(self, quantized: Quantized[Ranks]) -> float:
+        """The decoded squared error, from the truncation's and each factor's rounding errors
+        weighted as the reconstruction weighs them (U1 and U3 orthonormal; the cross terms,
+        averaging out, left out). Cheap next to reconstructing every frame; ranks candidates."""
+        (i, k), (factors,) = quantized.choice, quantized.segments
+        assert factors.u1 is not None
+        u1, u3, core = self.factors(i, k)
+        rows = np.square(core).sum(axis=(1, 2))
+        columns = np.square(core).sum(axis=(0, 1))
+        error2 = self.truncation_error2((i, k))
+        error2 += float(np.square(factors.u1.values() - u1).sum(axis=0) @ rows)
+        error2 += float(np.square(factors.u3.values() - u3).sum(axis=0) @ columns)
+        error2 += float(np.square(factors.core.values().reshape(-1) - core.reshape(-1)).sum())
+        centroids = factors.centroids.values() - self.analysis.centroids
+        return error2 + self.vertex_count * float(np.square(centroids).sum())
+
     def kg(self, error2: float) -> float:
         return 100.0 * math.sqrt(error2 / self.denominator2)
 
-    def sections(self, quantized: Quantized, level: int) -> list[tuple[dict[str, Any], bytes]]:
+    def say(self, message: str) -> None:
+        """A whole encode makes no passes to report."""
+
+    # -- the file ----------------------------------------------------------------------------------
+
+    def sections(
+        self, quantized: Quantized[Ranks], level: int
+    ) -> list[tuple[dict[str, Any], bytes]]:
         """The file's sections, in the order of :data:`~.format.sections.WRITE_ORDER`."""
+        (factors,) = quantized.segments
         coded = {"FACE": self.face_section}
         for section_id, matrix, parents, predict in (
-            ("CENT", quantized.centroids, None, True),
-            ("U3", quantized.u3, None, True),
-            ("CORE", quantized.core, None, False),
-            ("U1", quantized.u1, self.mesh, True),
+            ("CENT", factors.centroids, None, True),
+            ("U3", factors.u3, None, True),
+            ("CORE", factors.core, None, False),
+            ("U1", factors.u1, self.mesh, True),
         ):
+            assert matrix is not None  # a whole file's U1 is its own
             coded[section_id] = qmat.encode_matrix(
                 matrix, parents, allow_predict=predict, level=level
             )
@@ -216,13 +299,20 @@ class Workspace:
             if section_id in coded
         ]
 
-    def trial_bytes(self, quantized: Quantized) -> int:
+    def trial_bytes(self, quantized: Quantized[Ranks]) -> int:
         """The payload bytes at the fast search level: to compare trials, not the final size."""
         return sum(len(payload) for _, payload in self.sections(quantized, streams.SEARCH_LEVEL))
 
+    def trial_size(self, quantized: Quantized[Ranks]) -> float:
+        """The file packed at the fast level, its quantized sections scaled by
+        :data:`TRIAL_RATIO` to what the final level and rounding make of them."""
+        data, sizes = self.pack(quantized, 0.0, None, streams.SEARCH_LEVEL)
+        variable = sum(sizes.get(name, 0) for name in QUANTIZED_SECTIONS)
+        return len(data) - (1.0 - TRIAL_RATIO) * variable
+
     def pack(
         self,
-        quantized: Quantized,
+        quantized: Quantized[Ranks],
         error2: float,
         target_kg: float | None,
         level: int | None = None,
@@ -232,10 +322,10 @@ class Workspace:
         header = header_map(
             vertices=self.vertex_count,
             frames=self.frame_count,
-            ranks=(quantized.i, quantized.k),
+            ranks=quantized.choice,
             u2=self.analysis.decomposition.u2.reshape(-1).tolist(),
             kg=self.kg(error2),
-            truncation_kg=self.kg(self.truncation_error2(quantized.i, quantized.k)),
+            truncation_kg=self.kg(self.truncation_error2(quantized.choice)),
             target_kg=target_kg,
             encoder=f"tuckercodec {__version__}",
             frame_rate=self.sequence.frame_rate,

@@ -1,0 +1,221 @@
+"""The :class:`Encoder`: one set of options, any number of sequences, and the one place that
+decides whether a sequence is encoded whole (format 1.0) or in segments (format 1.1).
+
+Every way into the encoder goes through here: :func:`tuckercodec.encode` and
+:func:`~tuckercodec.encode_with_report`, :func:`tuckercodec.encode_file`, ``batch``, the zarr
+codecs and the ``encode`` command all build an :class:`Encoder` from
+:class:`~.options.EncodeOptions`. The choice made, a workspace (:mod:`.whole` or
+:mod:`.segmented`) goes through the one search (:mod:`.search`) and packs the file.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import time
+from collections.abc import Callable, Iterator
+from typing import Any
+
+from ..analysis import Analysis, analyze
+from ..io.streaming import FrameSource, SequenceFrames
+from ..parallel import Executor, InProcessExecutor, open_executor
+from ..sequence import MeshSequence
+from . import search
+from .options import EncodeOptions
+from .plan import default_max_memory, needs_segments, plan_segments
+from .results import EncodeReport, EncodeResult
+from .segmented import SegmentedWorkspace, SharedBasis
+from .trial import Quantized, Workspace
+from .whole import WholeWorkspace
+
+Progress = Callable[[str], None]
+
+
+class Encoder:
+    """Encodes mesh sequences as its :class:`~.options.EncodeOptions` say.
+
+    Args:
+        options: what to encode for (default: a KG error of 0.1).
+        executor: where a segmented encode's passes run, if not where ``options.jobs`` or
+            ``options.scheduler`` say (the bytes written do not depend on it).
+        progress: called with a line of text as each pass of a segmented encode starts.
+    """
+
+    def __init__(
+        self,
+        options: EncodeOptions | None = None,
+        *,
+        executor: Executor | None = None,
+        progress: Progress | None = None,
+    ) -> None:
+        self.options = EncodeOptions() if options is None else options
+        if not isinstance(self.options, EncodeOptions):
+            raise TypeError(f"expected EncodeOptions, got {type(self.options).__name__}")
+        self.executor = executor
+        self.progress = progress
+
+    def segments(self, frame_count: int, vertex_count: int) -> bool:
+        """Whether a sequence of this size is encoded in segments: when ``segment_frames`` is
+        given, or when encoding it whole would not fit ``max_memory``."""
+        return needs_segments(
+            frame_count,
+            vertex_count,
+            segment_frames=self.options.segment_frames,
+            max_memory=self.options.max_memory,
+        )
+
+    def encode(self, sequence: MeshSequence) -> bytes:
+        """The bytes of a file (``spec/FORMAT.md``) holding ``sequence``."""
+        return self.encode_with_report(sequence).data
+
+    def encode_with_report(
+        self, sequence: MeshSequence, *, analysis: Analysis | None = None
+    ) -> EncodeResult:
+        """The file's bytes and a report of ranks, errors and sizes; ``analysis``: the
+        sequence's :func:`~tuckercodec.analyze` result, if already computed (used whole)."""
+        if not isinstance(sequence, MeshSequence):
+            raise TypeError(f"expected a MeshSequence, got {type(sequence).__name__}")
+        return self.encode_source(SequenceFrames(sequence), analysis=analysis)
+
+    def encode_source(
+        self, frames: FrameSource, *, analysis: Analysis | None = None
+    ) -> EncodeResult:
+        """Encode an opened sequence (:func:`tuckercodec.io.open_frames`): whole when
+        :meth:`segments` says no, else in segments read a range of frames at a time."""
+        if self.segments(frames.frame_count, frames.vertex_count):
+            return self.encode_segments(frames)
+        if self.options.jobs is not None or self.options.scheduler is not None:
+            self._say(
+                "note: --jobs and --scheduler run the passes of a segmented encode; this "
+                "sequence is encoded whole, in this process (give --segment-frames to segment it)"
+            )
+        return self._encode_whole(frames.load(), analysis)
+
+    def encode_segments(
+        self, frames: FrameSource, *, shared_basis: SharedBasis | None = None
+    ) -> EncodeResult:
+        """Encode in segments (format 1.1), however small the sequence: ``segment_frames``
+        frames each (default 250). With ``shared_basis`` (the U1 section of another segmented
+        file, :func:`~.segmented.shared_basis_of`), every segment uses its leading columns and
+        the file holds the section byte for byte."""
+        start = time.perf_counter()
+        options = self.options
+        if options.select != "exact":
+            raise ValueError("a segmented encode chooses its ranks by the exact error (select)")
+        memory = default_max_memory() if options.max_memory is None else options.max_memory
+        plan = plan_segments(
+            frames.frame_count,
+            frames.vertex_count,
+            segment_frames=options.segment_frames,
+            max_memory=memory,
+        )
+        with self._executor() as executor:
+            work = SegmentedWorkspace(
+                frames, plan, options.basis, executor, options.level, self.progress, shared_basis
+            )
+            quantized, error2, trials = self._search(work)
+            data, sizes = work.pack(quantized, error2, self._header_target())
+        choice = quantized.choice
+        largest_i = choice.shared or max(i for i, _ in choice.ranks)
+        return self._result(
+            work,
+            quantized,
+            error2,
+            data,
+            sizes,
+            start,
+            ranks=(largest_i, max(k for _, k in choice.ranks)),
+            truncation2=choice.truncation2,
+            select="exact",
+            trials=trials + work.passes,
+            segments=len(work.models),
+            basis=options.basis,
+        )
+
+    def _encode_whole(self, sequence: MeshSequence, analysis: Analysis | None) -> EncodeResult:
+        """One decomposition of the sequence in memory (format 1.0)."""
+        start = time.perf_counter()
+        options = self.options
+        analysis = analyze(sequence) if analysis is None else analysis
+        work = WholeWorkspace(sequence, analysis, options.level, options.select)
+        quantized, error2, trials = self._search(work)
+        data, sizes = work.pack(quantized, error2, self._header_target())
+        extra: dict[str, Any] = {}
+        if options.mode == "kg":  # what each way of choosing ranks alone would pick
+            exact = analysis.cheapest(options.kg_target)
+            bound = analysis.cheapest(options.kg_target, select="bound")
+            extra = {"exact_ranks": (exact.i, exact.k), "bound_ranks": (bound.i, bound.k)}
+        return self._result(
+            work,
+            quantized,
+            error2,
+            data,
+            sizes,
+            start,
+            ranks=quantized.choice,
+            truncation2=work.truncation_error2(quantized.choice),
+            select=options.select,
+            trials=trials,
+            **extra,
+        )
+
+    def _search(self, work: Workspace[Any]) -> tuple[Quantized[Any], float, int]:
+        """The mode's search, the same for either workspace."""
+        options = self.options
+        if options.ranks is not None:
+            return search.encode_ranks(work, options.ranks)
+        if options.target_bpfv is not None:
+            return search.search_bpfv(work, options.target_bpfv)
+        return search.search_kg(work, options.kg_target)
+
+    def _header_target(self) -> float | None:
+        """The KG target the header states: only an error target's."""
+        return self.options.kg_target if self.options.mode == "kg" else None
+
+    def _result(
+        self,
+        work: Workspace[Any],
+        quantized: Quantized[Any],
+        error2: float,
+        data: bytes,
+        sizes: dict[str, int],
+        start: float,
+        *,
+        ranks: tuple[int, int],
+        truncation2: float,
+        **report: Any,
+    ) -> EncodeResult:
+        options = self.options
+        mode = options.mode
+        target = {"kg": options.kg_target, "bpfv": options.target_bpfv, "ranks": None}[mode]
+        return EncodeResult(
+            data,
+            EncodeReport(
+                mode=mode,
+                target=target,
+                ranks=ranks,
+                kg=work.kg(error2),
+                truncation_kg=work.kg(truncation2),
+                total_bytes=len(data),
+                section_bytes=sizes,
+                vertices=work.vertex_count,
+                frames=work.frame_count,
+                seconds=time.perf_counter() - start,
+                **{"exact_ranks": None, "bound_ranks": None, **report},
+            ),
+        )
+
+    def _say(self, line: str) -> None:
+        if self.progress is not None:
+            self.progress(line)
+
+    @contextlib.contextmanager
+    def _executor(self) -> Iterator[Executor]:
+        """The executor given, or one for ``jobs``/``scheduler`` (closed after), or this
+        process."""
+        if self.executor is not None:
+            yield self.executor
+        elif self.options.jobs is None and self.options.scheduler is None:
+            yield InProcessExecutor()
+        else:
+            with open_executor(self.options.jobs, self.options.scheduler) as executor:
+                yield executor

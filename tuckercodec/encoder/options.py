@@ -1,0 +1,182 @@
+"""Everything an encode is asked to do, in one frozen, JSON-safe object.
+
+:class:`EncodeOptions` is the encoder's whole configuration, checked once when it is made:
+the mode (a target KG error, fixed ranks or a target size), how ranks are selected, the zstd
+level, when and how to segment, and where a segmented encode's passes run. The one-shot
+functions (:func:`tuckercodec.encode`, :func:`tuckercodec.encode_file`), the zarr codecs,
+``batch`` and the command line all build one and hand it to :class:`~tuckercodec.encoder.Encoder`.
+:meth:`EncodeOptions.to_config` and :meth:`EncodeOptions.from_config` carry it as a plain dict
+(JSON's types only), for a task sent to a worker or a codec's stored configuration.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, fields
+from typing import Any, Literal
+
+import numpy as np
+
+from ..analysis import Selection
+from ..format import streams
+from ..format.segments import BASIS_OWN, BASIS_SHARED
+
+Mode = Literal["kg", "ranks", "bpfv"]
+
+#: The KG error (percent) met when no mode is given.
+DEFAULT_TARGET_KG = 0.1
+#: The bases of a segmented file: one U1 shared by every segment, or one per segment.
+BASES = (BASIS_SHARED, BASIS_OWN)
+SELECTIONS = ("exact", "bound")
+#: The zstd levels a section may be compressed at.
+LEVELS = range(1, 23)
+
+
+@dataclass(frozen=True)
+class EncodeOptions:
+    """What to encode for, and how.
+
+    Attributes:
+        target_kg: the largest KG error allowed for the decoded sequence, in percent (the
+            default mode, :data:`DEFAULT_TARGET_KG`, when no mode is given).
+        ranks: fixed ranks (i, k); quantization then adds at most about 5 % to the KG error of
+            the truncation.
+        target_bpfv: the largest whole-file size in bits per frame per vertex; the smallest KG
+            error that fits is chosen, down to a KG error of 1e-4.
+        select: ``"exact"`` chooses ranks by the exact error table, ``"bound"`` by the seed
+            paper's bound alone (an encode in one piece only).
+        level: zstd level of the sections (1-22).
+        segment_frames: cut the frames into segments of this many, each its own decomposition
+            (format 1.1). Without it, segments are made only when encoding the sequence whole
+            would take more than ``max_memory``.
+        max_memory: the memory the encode may use, in bytes (default: half the machine's).
+        basis: with segments, ``"shared"`` (one U1 for all, the default) or ``"own"``.
+        jobs: with segments, run the passes on this many worker processes (extra ``dask``).
+        scheduler: with segments, run the passes on the Dask cluster of this scheduler.
+
+    At most one of ``target_kg``, ``ranks`` and ``target_bpfv``; ``jobs`` or ``scheduler``, not
+    both. A bad value raises ``ValueError`` naming it. Whether ranks fit the sequence is known
+    only with the sequence: the encoder checks that.
+    """
+
+    target_kg: float | None = None
+    ranks: tuple[int, int] | None = None
+    target_bpfv: float | None = None
+    select: Selection = "exact"
+    level: int = streams.DEFAULT_LEVEL
+    segment_frames: int | None = None
+    max_memory: int | None = None
+    basis: str = BASIS_SHARED
+    jobs: int | None = None
+    scheduler: str | None = None
+
+    def __post_init__(self) -> None:
+        _refuse_two_modes(self.target_kg, self.ranks, self.target_bpfv)
+        for name in ("target_kg", "target_bpfv"):
+            value = getattr(self, name)
+            if value is not None:
+                object.__setattr__(self, name, _positive_number(name, value))
+        if self.ranks is not None:
+            object.__setattr__(self, "ranks", _two_ranks(self.ranks))
+        if self.select not in SELECTIONS:
+            raise ValueError(f"select must be 'exact' or 'bound', got {self.select!r}")
+        if self.basis not in BASES:
+            raise ValueError(f"basis must be one of {', '.join(BASES)}, got {self.basis!r}")
+        if not (_is_integer(self.level) and int(self.level) in LEVELS):
+            raise ValueError(f"level must be an integer from 1 to 22, got {self.level!r}")
+        object.__setattr__(self, "level", int(self.level))
+        for name in ("segment_frames", "max_memory", "jobs"):
+            value = getattr(self, name)
+            if value is not None:
+                if not (_is_integer(value) and int(value) >= 1):
+                    raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
+                object.__setattr__(self, name, int(value))
+        if self.scheduler is not None and not isinstance(self.scheduler, str):
+            raise ValueError(f"scheduler must be an address, got {self.scheduler!r}")
+        if self.jobs is not None and self.scheduler is not None:
+            raise ValueError("give jobs or scheduler, not both")
+
+    @property
+    def mode(self) -> Mode:
+        """``"ranks"``, ``"bpfv"`` or ``"kg"`` (the default)."""
+        if self.ranks is not None:
+            return "ranks"
+        return "bpfv" if self.target_bpfv is not None else "kg"
+
+    @property
+    def kg_target(self) -> float:
+        """The KG target of mode ``"kg"``: the one given, or :data:`DEFAULT_TARGET_KG`."""
+        return DEFAULT_TARGET_KG if self.target_kg is None else self.target_kg
+
+    def to_config(self) -> dict[str, Any]:
+        """Every field, as JSON's types (ranks as a list)."""
+        config = asdict(self)
+        if self.ranks is not None:
+            config["ranks"] = list(self.ranks)
+        return config
+
+    @classmethod
+    def from_config(cls, config: dict[str, Any]) -> EncodeOptions:
+        """The options of a :meth:`to_config` dict (missing fields take their defaults);
+        ``ValueError`` naming a field it does not know."""
+        known = {field.name for field in fields(cls)}
+        unknown = sorted(set(config) - known)
+        if unknown:
+            raise ValueError(f"unknown encode options: {', '.join(map(str, unknown))}")
+        values = dict(config)
+        if isinstance(values.get("ranks"), list):
+            values["ranks"] = tuple(values["ranks"])
+        return cls(**values)
+
+
+def _refuse_two_modes(target_kg: object, ranks: object, target_bpfv: object) -> None:
+    given = [
+        name
+        for name, value in (
+            ("target_kg", target_kg),
+            ("ranks", ranks),
+            ("target_bpfv", target_bpfv),
+        )
+        if value is not None
+    ]
+    if len(given) > 1:
+        raise ValueError(f"give one of target_kg, ranks and target_bpfv, not {' and '.join(given)}")
+
+
+def _positive_number(name: str, value: object) -> float:
+    if not (
+        isinstance(value, (int, float, np.integer, np.floating))
+        and not isinstance(value, bool)
+        and math.isfinite(value)
+        and value > 0
+    ):
+        raise ValueError(f"{name} must be a positive finite number, got {value!r}")
+    return float(value)
+
+
+def _is_integer(value: object) -> bool:
+    """An int or a float without a fraction (2.0, as JSON may carry it), never a bool."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        return False
+    return math.isfinite(value) and float(value) == int(value)
+
+
+def _two_ranks(ranks: object) -> tuple[int, int]:
+    """(i, k) as ints; the range is checked against the sequence by the encoder."""
+    pair: tuple[Any, ...] = tuple(ranks) if isinstance(ranks, (tuple, list, np.ndarray)) else ()
+    if not (len(pair) == 2 and all(_is_integer(r) and int(r) >= 1 for r in pair)):
+        raise ValueError(f"ranks must be two integers, each at least 1, got {ranks!r}")
+    return int(pair[0]), int(pair[1])
+
+
+def resolve_options(options: EncodeOptions | None, **keywords: object) -> EncodeOptions:
+    """``options``, or the options the keywords name (fields of :class:`EncodeOptions` left at
+    their defaults are not counted): what the one-shot functions accept. Both at once is a
+    ``ValueError``, since one would silently lose to the other."""
+    defaults = EncodeOptions()
+    changed = {name: value for name, value in keywords.items() if value != getattr(defaults, name)}
+    if options is None:
+        return EncodeOptions(**changed)  # type: ignore[arg-type]  # each field checks its value
+    if changed:
+        raise ValueError(f"give options or {', '.join(sorted(changed))}, not both")
+    return options
