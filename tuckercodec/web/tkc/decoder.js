@@ -10,7 +10,7 @@
 // No DOM and no build step: the same modules run in node and in browsers.
 
 import { readContainer, sectionPayload } from './container.js';
-import { TkcError, formatError } from './errors.js';
+import { formatError } from './errors.js';
 import { decodeFaces, fanTriangles } from './faces.js';
 import { readLayout } from './header.js';
 import { resolveLimits } from './limits.js';
@@ -64,7 +64,8 @@ export class TkcFile {
     this.frames = layout.frames;
     this.frameRate = layout.frameRate;
     this.header = container.header;
-    this.encoder = typeof container.header.get('encoder') === 'string' ? container.header.get('encoder') : null;
+    const encoder = container.header.get('encoder');
+    this.encoder = typeof encoder === 'string' ? encoder : null;
     this.error = errorClaims(container.header.get('error'));
     // step 15: the faces
     const [M, n] = layout.faceShape;
@@ -102,6 +103,7 @@ export class TkcFile {
   /**
    * Frame f's positions (§8), K*3 binary64 values; `out` is reused when given.
    * @param {number} f
+   * @param {Float64Array} [out]
    */
   frame(f, out = new Float64Array(3 * this.vertices)) {
     return this._reconstruct(f, out);
@@ -110,6 +112,7 @@ export class TkcFile {
   /**
    * Frame f's positions rounded to float32 (for a GPU buffer), into `out` (K*3).
    * @param {number} f
+   * @param {Float32Array} [out]
    */
   frameFloat32(f, out = new Float32Array(3 * this.vertices)) {
     return this._reconstruct(f, out);
