@@ -12,15 +12,37 @@ export const FLAG_CODING_TOOLS = 1 << 1; // §6.8, version 1.2
 const KNOWN_CRITICAL_FLAGS = FLAG_SEGMENTED | FLAG_CODING_TOOLS;
 const PREAMBLE_END = 32;
 
+/**
+ * @typedef {import('./msgpack.js').MsgValue} MsgValue
+ * @typedef {import('./limits.js').Limits} Limits
+ */
+
+/**
+ * An entry of the section table (§3), every field checked; `entry` is the whole msgpack map,
+ * parameters included.
+ * @typedef {{id: string, offset: number, length: number, crc32: number, critical: boolean,
+ *   codec: string, entry: Map<string, MsgValue>}} Section
+ */
+
+/**
+ * What steps 1-8 read.
+ * @typedef {{major: number, minor: number, flags: number, headerLength: number,
+ *   totalLength: number, header: Map<string, MsgValue>, sections: Section[],
+ *   dataStart: number}} Container
+ */
+
+/** @type {(rule: string, message: string) => TkcError} */
 const truncated = (rule, message) => new TkcError('TruncatedFileError', rule, message);
+/** @type {(rule: string, message: string) => TkcError} */
 const checksum = (rule, message) => new TkcError('ChecksumError', rule, message);
+/** @type {(rule: string, message: string) => TkcError} */
 const unsupported = (rule, message) => new TkcError('UnsupportedVersionError', rule, message);
 
 /**
  * Steps 1-8 of §5 on the whole file.
  * @param {Uint8Array} bytes
- * @param {object} limits
- * @returns {{major, minor, flags, headerLength, totalLength, header: Map, sections: object[], dataStart}}
+ * @param {Limits} limits
+ * @returns {Container}
  */
 export function readContainer(bytes, limits) {
   const size = bytes.length;
@@ -100,6 +122,7 @@ export function readContainer(bytes, limits) {
   return { major, minor, flags, headerLength, totalLength, header, sections, dataStart };
 }
 
+/** @type {[string, (value: MsgValue | undefined) => boolean, string][]} */
 const ENTRY_FIELDS = [
   ['id', (v) => typeof v === 'string', 'a str'],
   ['offset', isIntValue, 'an int'],
@@ -109,10 +132,17 @@ const ENTRY_FIELDS = [
   ['codec', (v) => typeof v === 'string', 'a str'],
 ];
 
+/** @param {MsgValue | undefined} value */
 function isIntValue(value) {
   return (typeof value === 'number' && Number.isInteger(value)) || typeof value === 'bigint';
 }
 
+/**
+ * @param {Map<string, MsgValue>} header
+ * @param {number} dataLength
+ * @param {Limits} limits
+ * @returns {Section[]}
+ */
 function readSectionTable(header, dataLength, limits) {
   const table = header.get('sections');
   if (!Array.isArray(table)) {
@@ -122,6 +152,7 @@ function readSectionTable(header, dataLength, limits) {
     throw limitError('R21-header-limit', `the section table has ${table.length} entries, max_sections = ${limits.max_sections}`);
   }
   const seen = new Set();
+  /** @type {Section[]} */
   const sections = [];
   let expectedOffset = 0;
   table.forEach((entry, index) => {
@@ -133,27 +164,30 @@ function readSectionTable(header, dataLength, limits) {
         throw formatError('R14-section-entry-field', `${where}: "${field}" is ${describe(entry.get(field))}, not ${kind}`);
       }
     }
-    const id = entry.get('id');
+    // the types ENTRY_FIELDS checked
+    const id = /** @type {string} */ (entry.get('id'));
     if (id.length < 1 || id.length > 16 || !/^[\x20-\x7e]+$/.test(id)) {
       throw formatError('R14-section-entry-field', `${where}: the id '${id}' is not 1 to 16 printable ASCII characters`);
     }
     const named = `section '${id}'`;
     if (seen.has(id)) throw formatError('R15-section-duplicate-id', `${named} appears twice in the section table`);
     seen.add(id);
-    const offset = entry.get('offset');
+    const offset = /** @type {number | bigint} */ (entry.get('offset'));
     if (offset !== expectedOffset) {
       throw formatError('R16-section-not-contiguous', `${named} starts at offset ${offset}, the sections before it end at ${expectedOffset}`);
     }
-    const length = entry.get('length');
+    const length = /** @type {number | bigint} */ (entry.get('length'));
     if (typeof length === 'bigint' || length < 0 || offset + length > dataLength) {
       throw formatError('R17-section-past-end', `${named} (offset ${offset}, length ${length}) does not lie inside the data area of ${dataLength} bytes`);
     }
-    const crc = entry.get('crc32');
+    const crc = /** @type {number | bigint} */ (entry.get('crc32'));
     if (typeof crc === 'bigint' || crc < 0 || crc > 0xffffffff) {
       throw formatError('R14-section-entry-field', `${named}: crc32 ${crc} is not in 0..2^32-1`);
     }
     expectedOffset = offset + length;
-    sections.push({ id, offset, length, crc32: crc, critical: entry.get('critical'), codec: entry.get('codec'), entry });
+    const critical = /** @type {boolean} */ (entry.get('critical'));
+    const codec = /** @type {string} */ (entry.get('codec'));
+    sections.push({ id, offset, length, crc32: crc, critical, codec, entry });
   });
   if (expectedOffset !== dataLength) {
     throw formatError('R18-section-coverage', `the sections cover ${expectedOffset} bytes of a data area of ${dataLength}`);
@@ -165,7 +199,8 @@ function readSectionTable(header, dataLength, limits) {
  * A section's payload, its CRC checked first (§5 step 9, R19-section-crc).
  * @param {Uint8Array} bytes the whole file
  * @param {number} dataStart where the data area starts
- * @param {object} section an entry of readContainer's `sections`
+ * @param {Section} section an entry of readContainer's `sections`
+ * @returns {Uint8Array}
  */
 export function sectionPayload(bytes, dataStart, section) {
   const start = dataStart + section.offset;
@@ -177,6 +212,7 @@ export function sectionPayload(bytes, dataStart, section) {
   return payload;
 }
 
+/** @param {number} value */
 function hex(value) {
   return value.toString(16).toUpperCase().padStart(8, '0');
 }

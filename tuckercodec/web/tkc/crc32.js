@@ -18,7 +18,10 @@ const TABLE = (() => {
   return table;
 })();
 
-/** The CRC-32 of `bytes` (a Uint8Array), as an unsigned 32-bit number. */
+/**
+ * The CRC-32 of `bytes`, as an unsigned 32-bit number.
+ * @param {Uint8Array} bytes
+ */
 export function crc32(bytes) {
   let c = 0xffffffff;
   let i = 0;

@@ -10,7 +10,7 @@
 // No DOM and no build step: the same modules run in node and in browsers.
 
 import { readContainer, sectionPayload } from './container.js';
-import { TkcError, formatError } from './errors.js';
+import { formatError } from './errors.js';
 import { decodeFaces, fanTriangles } from './faces.js';
 import { readLayout } from './header.js';
 import { resolveLimits } from './limits.js';
@@ -25,9 +25,15 @@ export { TkcError } from './errors.js';
 export { DEFAULT_LIMITS } from './limits.js';
 
 /**
+ * @typedef {import('./reconstruct.js').Factors} Factors
+ * @typedef {import('./simd.js').SimdBasis} SimdBasis
+ * @typedef {import('./topology.js').Topology} Topology
+ */
+
+/**
  * Opens a .tkc file held in memory.
  * @param {Uint8Array|ArrayBuffer} bytes the whole file
- * @param {{limits?: object, simd?: boolean}} options decoder limits (§7) to use instead of the
+ * @param {{limits?: {[name: string]: number}, simd?: boolean}} [options] decoder limits (§7) to use instead of the
  *   defaults; `simd: false` reconstructs frames with the JavaScript loop instead of WebAssembly
  *   SIMD (the same bits, five times slower: for tests and engines that misbehave)
  * @returns {TkcFile}
@@ -40,6 +46,10 @@ export function openTkc(bytes, options = {}) {
 
 /** An opened file: its header facts, faces and names, and its frames on demand. */
 export class TkcFile {
+  /**
+   * @param {Uint8Array} bytes
+   * @param {import('./limits.js').Limits} limits
+   */
   constructor(bytes, limits, simd = true) {
     this.bytes = bytes;
     this._useSimd = simd;
@@ -54,19 +64,26 @@ export class TkcFile {
     this.frames = layout.frames;
     this.frameRate = layout.frameRate;
     this.header = container.header;
-    this.encoder = typeof container.header.get('encoder') === 'string' ? container.header.get('encoder') : null;
+    const encoder = container.header.get('encoder');
+    this.encoder = typeof encoder === 'string' ? encoder : null;
     this.error = errorClaims(container.header.get('error'));
     // step 15: the faces
     const [M, n] = layout.faceShape;
     this.faceCount = M;
     this.faceWidth = n;
     this.faces = decodeFaces(layout.face, this._payload(layout.face), this.vertices, M, n);
+    /** @type {Topology | null} */
     this._topology = null;
+    /** @type {Float64Array | null} */
     this._sharedU1 = null;
+    /** @type {SimdBasis | null | undefined} */
+    this._sharedSimd = undefined;
+    /** @type {(Factors | null)[]} */
     this._decoded = new Array(layout.segments.length).fill(null);
     this.segments = layout.segments.map(({ start, frames, ranks, basis }) => ({ start, frames, ranks: [...ranks], basis }));
     // [i, k]; for a segmented file the summary §12 reports: the shared U1's columns (else the
     // largest i_s) and the largest k_s
+    /** @param {number} j */
     const largest = (j) => Math.max(...this.segments.map((s) => s.ranks[j]));
     this.ranks = layout.segmented ? [layout.sharedColumns || largest(0), largest(1)] : [...this.segments[0].ranks];
     this._segmentOfFrame = new Int32Array(this.frames);
@@ -83,12 +100,20 @@ export class TkcFile {
     this._scratch = new Float64Array(0);
   }
 
-  /** Frame f's positions (§8), K*3 binary64 values; `out` is reused when given. */
+  /**
+   * Frame f's positions (§8), K*3 binary64 values; `out` is reused when given.
+   * @param {number} f
+   * @param {Float64Array} [out]
+   */
   frame(f, out = new Float64Array(3 * this.vertices)) {
     return this._reconstruct(f, out);
   }
 
-  /** Frame f's positions rounded to float32 (for a GPU buffer), into `out` (K*3). */
+  /**
+   * Frame f's positions rounded to float32 (for a GPU buffer), into `out` (K*3).
+   * @param {number} f
+   * @param {Float32Array} [out]
+   */
   frameFloat32(f, out = new Float32Array(3 * this.vertices)) {
     return this._reconstruct(f, out);
   }
@@ -118,6 +143,12 @@ export class TkcFile {
     return this;
   }
 
+  /**
+   * @template {Float64Array | Float32Array} T
+   * @param {number} f
+   * @param {T} out
+   * @returns {T}
+   */
   _reconstruct(f, out) {
     if (!Number.isInteger(f) || f < 0 || f >= this.frames) {
       throw new RangeError(`frame ${f} does not exist: the file has frames 0..${this.frames - 1}`);
@@ -130,7 +161,10 @@ export class TkcFile {
     return reconstructFrame(d, f - this.layout.segments[s].start, out, this._scratch, f);
   }
 
-  /** The segment's U1 for simd.js, made once per basis (a shared U1 serves every segment). */
+  /**
+   * The segment's U1 for simd.js, made once per basis (a shared U1 serves every segment).
+   * @param {Factors} d
+   */
   _simdOnce(d) {
     if (!this._useSimd) return null;
     if (d.u1 !== this._sharedU1) return simdBasis(d.u1, this.vertices, d.columns);
@@ -138,6 +172,7 @@ export class TkcFile {
     return this._sharedSimd;
   }
 
+  /** @param {import('./container.js').Section} section */
   _payload(section) {
     return sectionPayload(this.bytes, this.container.dataStart, section);
   }
@@ -147,6 +182,10 @@ export class TkcFile {
     return this._topology;
   }
 
+  /**
+   * @param {number} s
+   * @returns {Factors}
+   */
   _segment(s) {
     if (this._decoded[s] !== null) return this._decoded[s];
     const segment = this.layout.segments[s];
@@ -175,9 +214,13 @@ export class TkcFile {
   }
 }
 
-/** The header's informative `error` map (§4.1): used only where its types are right. */
+/**
+ * The header's informative `error` map (§4.1): used only where its types are right.
+ * @param {import('./msgpack.js').MsgValue | undefined} error
+ */
 function errorClaims(error) {
   if (!(error instanceof Map)) return null;
+  /** @param {import('./msgpack.js').MsgValue | undefined} value */
   const number = (value) => (value instanceof MsgFloat ? value.value : isInt(value) ? Number(value) : null);
   const definition = error.get('definition');
   return {

@@ -29,12 +29,20 @@ export class TkcError extends Error {
   }
 }
 
-/** A FormatError (the class of most rules). */
+/**
+ * A FormatError (the class of most rules).
+ * @param {string} rule
+ * @param {string} message
+ */
 export function formatError(rule, message) {
   return new TkcError('FormatError', rule, message);
 }
 
-/** A LimitError: the file declares more than this decoder's limits allow (§7). */
+/**
+ * A LimitError: the file declares more than this decoder's limits allow (§7).
+ * @param {string} rule
+ * @param {string} message
+ */
 export function limitError(rule, message) {
   return new TkcError('LimitError', rule, message);
 }

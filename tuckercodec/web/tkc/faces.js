@@ -7,7 +7,7 @@ import { decodeIntStream } from './streams.js';
 import { decodeTraverse } from './traversal.js';
 
 /**
- * @param {object} section the FACE entry
+ * @param {import('./container.js').Section} section the FACE entry
  * @param {Uint8Array} payload its bytes, CRC already checked
  * @param {number} K vertices
  * @param {number} M faces
@@ -35,7 +35,12 @@ export function decodeFaces(section, payload, K, M, n) {
   return faces;
 }
 
-/** R34: in every row −1 only after the real corners, and at least 3 real corners. */
+/**
+ * R34: in every row −1 only after the real corners, and at least 3 real corners.
+ * @param {Int32Array} faces
+ * @param {number} M
+ * @param {number} n
+ */
 function checkPadding(faces, M, n) {
   for (let r = 0; r < M; r++) {
     let real = 0;
@@ -49,7 +54,12 @@ function checkPadding(faces, M, n) {
   }
 }
 
-/** A fan triangulation of the faces, for drawing: (c0, cj, cj+1) for each polygon. */
+/**
+ * A fan triangulation of the faces, for drawing: (c0, cj, cj+1) for each polygon.
+ * @param {Int32Array} faces
+ * @param {number} M
+ * @param {number} n
+ */
 export function fanTriangles(faces, M, n) {
   let count = 0;
   for (let r = 0; r < M; r++) {

@@ -6,9 +6,35 @@ import { TkcError, formatError, limitError } from './errors.js';
 import { MsgFloat, describe, isInt } from './msgpack.js';
 import { FLAG_CODING_TOOLS, FLAG_SEGMENTED } from './container.js';
 
+/**
+ * @typedef {import('./msgpack.js').MsgValue} MsgValue
+ * @typedef {import('./limits.js').Limits} Limits
+ * @typedef {import('./container.js').Container} Container
+ * @typedef {import('./container.js').Section} Section
+ */
+
+/**
+ * A segment of the file (the whole file when it is not segmented) and its sections (for a
+ * shared basis, u1 is the shared U1's entry).
+ * @typedef {{start: number, frames: number, ranks: number[], u2: Float64Array,
+ *   basis: 'whole' | 'shared' | 'own', u1: Section, u3: Section, core: Section,
+ *   cent: Section}} Segment
+ */
+
+/**
+ * The layout of the file: which section holds what, every size checked.
+ * @typedef {{vertices: number, frames: number, frameRate: number | null, segmented: boolean,
+ *   codingTools: boolean, segments: Segment[], face: Section, faceShape: number[],
+ *   name: Section | null, sharedU1: Section | null, sharedColumns: number}} Layout
+ */
+
+/** @type {(rule: string, message: string) => TkcError} */
 const unsupported = (rule, message) => new TkcError('UnsupportedVersionError', rule, message);
 
-// §6.6: id -> [codec, critical]
+/**
+ * §6.6: id -> [codec, critical]
+ * @type {{[id: string]: [string, boolean]}}
+ */
 const KINDS = {
   FACE: ['faces-delta', true],
   U1: ['qmat', true],
@@ -20,9 +46,9 @@ const KINDS = {
 
 /**
  * Steps 10-14 (or 10s-14): the layout of the file.
- * @returns {{vertices, frames, frameRate, segmented, codingTools, segments, face, name, sharedU1, sharedColumns}}
- *   segments: [{start, frames, ranks: [i, k], u2: Float64Array(9), basis, u1, u3, core, cent}],
- *   where u1 ... cent are section entries (for a shared basis, u1 is the shared U1's entry).
+ * @param {Container} container
+ * @param {Limits} limits
+ * @returns {Layout}
  */
 export function readLayout(container, limits) {
   const { header, sections, flags } = container;
@@ -31,6 +57,7 @@ export function readLayout(container, limits) {
   // step 10 / 10s
   const K = count(header, 'vertices', limits.max_vertices, 'max_vertices');
   const F = count(header, 'frames', limits.max_frames, 'max_frames');
+  /** @type {Segment[]} (their sections are set at step 12) */
   let segments;
   if (segmented) {
     segments = readSegmentIndex(header, K, F, limits);
@@ -43,9 +70,10 @@ export function readLayout(container, limits) {
     if (factorValues > limits.max_factor_values) {
       throw limitError('R21-header-limit', `the factors hold ${factorValues} values, max_factor_values = ${limits.max_factor_values}`);
     }
-    segments = [{ start: 0, frames: F, ranks: [i, k], u2: u2(header.get('u2'), 'u2'), basis: 'whole' }];
+    segments = [/** @type {Segment} */ ({ start: 0, frames: F, ranks: [i, k], u2: u2(header.get('u2'), 'u2'), basis: 'whole' })];
   }
   // step 11: every entry known, critical as it should be, with its codec
+  /** @type {Map<string, Section>} */
   const known = new Map();
   for (const section of sections) {
     const kind = kindOf(section.id, segmented, segments.length);
@@ -66,6 +94,7 @@ export function readLayout(container, limits) {
     known.set(section.id, section);
   }
   // step 12 / 12s: the required sections
+  /** @param {string} id */
   const need = (id) => {
     const section = known.get(id);
     if (section === undefined) throw formatError('R26-required-section-missing', `the file has no section '${id}'`);
@@ -143,6 +172,12 @@ export function readLayout(container, limits) {
   return { vertices: K, frames: F, frameRate, segmented, codingTools, segments, face, faceShape: [M, n], name: known.get('NAME') ?? null, sharedU1, sharedColumns };
 }
 
+/**
+ * @param {Map<string, MsgValue>} header
+ * @param {string} key
+ * @param {number} limit
+ * @param {string} limitName
+ */
 function count(header, key, limit, limitName) {
   if (!header.has(key)) throw formatError('R20-header-field', `the header has no "${key}"`);
   const value = header.get(key);
@@ -152,17 +187,29 @@ function count(header, key, limit, limitName) {
   return Number(value);
 }
 
+/**
+ * @param {MsgValue | undefined} value
+ * @param {number} K
+ * @param {number} frames
+ * @param {string} rule
+ * @param {string} where
+ * @param {number} maxI
+ */
 function ranks(value, K, frames, rule, where, maxI) {
   if (!Array.isArray(value) || value.length !== 2 || !value.every((v) => isInt(v))) {
     throw formatError(rule, `${where} is ${describe(value)}, not an array of two ints`);
   }
-  const [i, k] = value;
+  const [i, k] = /** @type {(number | bigint)[]} */ (value);
   const maxK = Math.min(frames, 3 * K);
   if (!(i >= 1 && i <= maxI)) throw formatError(rule, `${where}: i = ${i} is outside 1..${maxI}`);
   if (!(k >= 1 && k <= maxK)) throw formatError(rule, `${where}: k = ${k} is outside 1..${maxK}`);
   return [Number(i), Number(k)];
 }
 
+/**
+ * @param {MsgValue | undefined} value
+ * @param {string} where
+ */
 function u2(value, where) {
   if (!Array.isArray(value) || value.length !== 9) {
     throw formatError('R23-u2', `${where} is ${value === undefined ? 'missing' : describe(value)}, not an array of 9 floats`);
@@ -176,6 +223,13 @@ function u2(value, where) {
   return out;
 }
 
+/**
+ * @param {Map<string, MsgValue>} header
+ * @param {number} K
+ * @param {number} F
+ * @param {Limits} limits
+ * @returns {Segment[]} (their sections are set by readLayout)
+ */
 function readSegmentIndex(header, K, F, limits) {
   const index = header.get('segments');
   if (!Array.isArray(index) || index.length === 0) {
@@ -202,7 +256,7 @@ function readSegmentIndex(header, K, F, limits) {
     const Fs = Number(frames);
     const maxI = basis === 'own' ? Math.min(K, 3 * Fs) : K;
     const segmentRanks = ranks(entry.get('ranks'), K, Fs, 'R38-segment-ranks', `${where}: "ranks"`, maxI);
-    const segment = { start, frames: Fs, ranks: segmentRanks, u2: u2(entry.get('u2'), `${where}: "u2"`), basis };
+    const segment = /** @type {Segment} */ ({ start, frames: Fs, ranks: segmentRanks, u2: u2(entry.get('u2'), `${where}: "u2"`), basis });
     start += Fs;
     return segment;
   });
@@ -210,6 +264,12 @@ function readSegmentIndex(header, K, F, limits) {
   return segments;
 }
 
+/**
+ * @param {string} id
+ * @param {boolean} segmented
+ * @param {number} segmentCount
+ * @returns {string | null}
+ */
 function kindOf(id, segmented, segmentCount) {
   if (id === 'FACE' || id === 'NAME' || id === 'U1') return id;
   if (!segmented) return id in KINDS ? id : null;
@@ -218,14 +278,22 @@ function kindOf(id, segmented, segmentCount) {
   return match[1];
 }
 
+/**
+ * @param {Section} section
+ * @returns {number[]}
+ */
 function shape(section) {
   const value = section.entry.get('shape');
   if (!Array.isArray(value) || value.length !== 2 || !value.every((v) => isInt(v) && v >= 0)) {
     throw formatError('R28-shape', `section '${section.id}': "shape" is ${value === undefined ? 'missing' : describe(value)}, not an array of two ints >= 0`);
   }
-  return value.map((v) => (typeof v === 'bigint' ? Infinity : v));
+  return /** @type {(number | bigint)[]} */ (value).map((v) => (typeof v === 'bigint' ? Infinity : v));
 }
 
+/**
+ * @param {Section} face
+ * @param {Limits} limits
+ */
 function faceShape(face, limits) {
   const [M, n] = shape(face);
   if (n < 3) throw formatError('R28-shape', `section 'FACE' has ${n} columns; faces have at least 3`);
@@ -237,6 +305,12 @@ function faceShape(face, limits) {
   return [M, n];
 }
 
+/**
+ * @param {Section} section
+ * @param {number} rows
+ * @param {number} cols
+ * @param {Limits} limits
+ */
 function expectShape(section, rows, cols, limits) {
   const [r, c] = shape(section);
   if (r !== rows || c !== cols) {
@@ -245,6 +319,12 @@ function expectShape(section, rows, cols, limits) {
   sectionBytes(section, rows, cols, limits);
 }
 
+/**
+ * @param {Section} section
+ * @param {number} rows
+ * @param {number} cols
+ * @param {Limits} limits
+ */
 function sectionBytes(section, rows, cols, limits) {
   if (rows * cols * 4 > limits.max_section_bytes) {
     throw limitError('R21-header-limit', `section '${section.id}' decodes to ${rows * cols * 4} bytes, max_section_bytes = ${limits.max_section_bytes}`);

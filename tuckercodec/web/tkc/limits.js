@@ -15,7 +15,13 @@ export const DEFAULT_LIMITS = Object.freeze({
   max_section_bytes: 2 ** 32,
 });
 
-/** The defaults with the caller's overrides; unknown names are refused (a typo is a bug). */
+/** @typedef {{readonly [name in keyof typeof DEFAULT_LIMITS]: number}} Limits */
+
+/**
+ * The defaults with the caller's overrides; unknown names are refused (a typo is a bug).
+ * @param {{[name: string]: number}} [overrides]
+ * @returns {Limits}
+ */
 export function resolveLimits(overrides = {}) {
   for (const name of Object.keys(overrides)) {
     if (!(name in DEFAULT_LIMITS)) throw new TypeError(`unknown decoder limit '${name}'`);

@@ -8,8 +8,15 @@
 // ±(2^53 − 1) and BigInts beyond, floats are MsgFloat objects (never plain numbers), bool is
 // boolean, nil is null, str is string, bin is a Uint8Array (a view into the input).
 
+/**
+ * A value as `unpack` returns it.
+ * @typedef {number | bigint | MsgFloat | boolean | null | string | Uint8Array | MsgValue[]
+ *   | Map<string, MsgValue>} MsgValue
+ */
+
 /** A msgpack float (float 32 or float 64); `value` is its number. */
 export class MsgFloat {
+  /** @param {number} value */
   constructor(value) {
     this.value = value;
   }
@@ -23,7 +30,11 @@ export const MAX_DEPTH = 1024;
 
 const utf8 = new TextDecoder('utf-8', { fatal: true });
 
-/** True for a msgpack int (a number or a BigInt as this reader returns them). */
+/**
+ * True for a msgpack int (a number or a BigInt as this reader returns them).
+ * @param {unknown} value
+ * @returns {value is number | bigint}
+ */
 export function isInt(value) {
   return (typeof value === 'number' && Number.isInteger(value)) || typeof value === 'bigint';
 }
@@ -31,7 +42,7 @@ export function isInt(value) {
 /**
  * Reads `bytes` as exactly one msgpack object.
  * @param {Uint8Array} bytes
- * @returns the value, as described above
+ * @returns {MsgValue} the value, as described above
  * @throws {MsgpackProblem} when the bytes are not one valid object
  */
 export function unpack(bytes) {
@@ -44,12 +55,14 @@ export function unpack(bytes) {
 }
 
 class Reader {
+  /** @param {Uint8Array} bytes */
   constructor(bytes) {
     this.bytes = bytes;
     this.view = new DataView(bytes.buffer, bytes.byteOffset, bytes.byteLength);
     this.position = 0;
   }
 
+  /** @param {number} count */
   take(count) {
     const start = this.position;
     if (count > this.bytes.length - start) {
@@ -59,6 +72,7 @@ class Reader {
     return start;
   }
 
+  /** @param {number} size */
   uint(size) {
     const at = this.take(size);
     const v = this.view;
@@ -68,6 +82,15 @@ class Reader {
     return narrow(v.getBigUint64(at, false));
   }
 
+  /**
+   * A length or a count, stored in 1, 2 or 4 bytes: always a number.
+   * @param {number} size 1, 2 or 4
+   */
+  length(size) {
+    return /** @type {number} */ (this.uint(size));
+  }
+
+  /** @param {number} size */
   int(size) {
     const at = this.take(size);
     const v = this.view;
@@ -77,6 +100,7 @@ class Reader {
     return narrow(v.getBigInt64(at, false));
   }
 
+  /** @param {number} length */
   str(length) {
     const at = this.take(length);
     try {
@@ -86,6 +110,10 @@ class Reader {
     }
   }
 
+  /**
+   * @param {number} depth
+   * @returns {MsgValue}
+   */
   value(depth) {
     const at = this.take(1);
     const type = this.bytes[at];
@@ -104,7 +132,7 @@ class Reader {
       case 0xc4:
       case 0xc5:
       case 0xc6: {
-        const length = this.uint(1 << (type - 0xc4));
+        const length = this.length(1 << (type - 0xc4));
         const start = this.take(length);
         return this.bytes.subarray(start, start + length);
       }
@@ -125,13 +153,13 @@ class Reader {
       case 0xd9:
       case 0xda:
       case 0xdb:
-        return this.str(this.uint(1 << (type - 0xd9)));
+        return this.str(this.length(1 << (type - 0xd9)));
       case 0xdc:
       case 0xdd:
-        return this.array(this.uint(type === 0xdc ? 2 : 4), depth);
+        return this.array(this.length(type === 0xdc ? 2 : 4), depth);
       case 0xde:
       case 0xdf:
-        return this.map(this.uint(type === 0xde ? 2 : 4), depth);
+        return this.map(this.length(type === 0xde ? 2 : 4), depth);
       case 0xc7:
       case 0xc8:
       case 0xc9:
@@ -140,7 +168,7 @@ class Reader {
       case 0xd6:
       case 0xd7:
       case 0xd8: {
-        const size = type >= 0xd4 ? 1 << (type - 0xd4) : this.uint(1 << (type - 0xc7));
+        const size = type >= 0xd4 ? 1 << (type - 0xd4) : this.length(1 << (type - 0xc7));
         const code = this.int(1);
         this.take(size);
         const name = code === -1 ? ' (timestamp)' : '';
@@ -151,6 +179,10 @@ class Reader {
     }
   }
 
+  /**
+   * @param {number} length
+   * @param {number} depth
+   */
   array(length, depth) {
     if (depth + 1 > MAX_DEPTH) throw new MsgpackProblem(`msgpack nests deeper than ${MAX_DEPTH} levels`);
     // every element takes at least one byte: a declared length beyond the data is refused
@@ -158,16 +190,22 @@ class Reader {
     if (length > this.bytes.length - this.position) {
       throw new MsgpackProblem(`a msgpack array declares ${length} elements past the data's end`);
     }
+    /** @type {MsgValue[]} */
     const out = new Array(length);
     for (let i = 0; i < length; i++) out[i] = this.value(depth + 1);
     return out;
   }
 
+  /**
+   * @param {number} length
+   * @param {number} depth
+   */
   map(length, depth) {
     if (depth + 1 > MAX_DEPTH) throw new MsgpackProblem(`msgpack nests deeper than ${MAX_DEPTH} levels`);
     if (2 * length > this.bytes.length - this.position) {
       throw new MsgpackProblem(`a msgpack map declares ${length} entries past the data's end`);
     }
+    /** @type {Map<string, MsgValue>} */
     const out = new Map();
     for (let i = 0; i < length; i++) {
       const key = this.value(depth + 1);
@@ -179,11 +217,15 @@ class Reader {
   }
 }
 
+/** @param {bigint} big */
 function narrow(big) {
   return big >= -(2n ** 53n) + 1n && big <= 2n ** 53n - 1n ? Number(big) : big;
 }
 
-/** A short description of a value for messages ("an int", "a str 'x'"...). */
+/**
+ * A short description of a value for messages ("an int", "a str 'x'"...).
+ * @param {unknown} value
+ */
 export function describe(value) {
   if (value === null) return 'nil';
   if (value instanceof MsgFloat) return `a float ${value.value}`;

@@ -5,7 +5,11 @@ import { formatError, limitError } from './errors.js';
 import { MsgpackProblem, describe, isInt, unpack } from './msgpack.js';
 import { decompressExact } from './zstd.js';
 
-/** The `size` parameter (checked before the CRC, §5 step 17). */
+/**
+ * The `size` parameter (checked before the CRC, §5 step 17).
+ * @param {import('./container.js').Section} section
+ * @param {import('./limits.js').Limits} limits
+ */
 export function nameSize(section, limits) {
   const size = section.entry.get('size');
   if (!isInt(size) || size < 0) {
@@ -17,7 +21,13 @@ export function nameSize(section, limits) {
   return Number(size);
 }
 
-/** The names in the payload (CRC already checked). */
+/**
+ * The names in the payload (CRC already checked).
+ * @param {Uint8Array} payload
+ * @param {number} size
+ * @param {number} F
+ * @returns {string[]}
+ */
 export function decodeNames(payload, size, F) {
   const raw = decompressExact(payload, size, "section 'NAME'");
   let names;
@@ -30,10 +40,13 @@ export function decodeNames(payload, size, F) {
   if (!Array.isArray(names) || names.length !== F || !names.every((name) => typeof name === 'string')) {
     throw formatError('R35-names', `section 'NAME' holds ${describe(names)}; it must be an array of ${F} str`);
   }
-  return names;
+  return /** @type {string[]} */ (names);
 }
 
-/** The names of a file without NAME. */
+/**
+ * The names of a file without NAME.
+ * @param {number} F
+ */
 export function defaultNames(F) {
   return Array.from({ length: F }, (_, f) => `frame_${String(f).padStart(5, '0')}`);
 }

@@ -13,13 +13,14 @@ const LINEAR_STEP = 2 ** 33; // ... and the running differences
 
 /**
  * Decodes a qmat section into its dequantized matrix, row-major (C order).
- * @param {object} section the section entry (readContainer)
+ * @param {import('./container.js').Section} section the section entry (readContainer)
  * @param {Uint8Array} payload its bytes, CRC already checked
  * @param {number} rows
  * @param {number} cols
  * @param {'mesh'|'time'|'none'} relation the parents §6.6 assigns: U1 mesh, U3/CENT time, CORE none
  * @param {boolean} codingTools preamble flag bit 1 (version 1.2)
- * @param {() => object} topology the mesh topology, built on first use (for U1 only)
+ * @param {() => import('./topology.js').Topology} topology the mesh topology, built on first
+ *   use (for U1 only)
  * @returns {Float64Array} rows*cols values
  */
 export function decodeQmat(section, payload, rows, cols, relation, codingTools, topology) {
@@ -69,7 +70,12 @@ export function decodeQmat(section, payload, rows, cols, relation, codingTools, 
   return out;
 }
 
-/** Previous-row parents (§6.2): q[f] = r[f] + q[f − 1], exact; BigInt when past 2^53. */
+/**
+ * Previous-row parents (§6.2): q[f] = r[f] + q[f − 1], exact; BigInt when past 2^53.
+ * @param {Int32Array} stream
+ * @param {number} offset
+ * @param {number} rows
+ */
 function restoreRunningSum(stream, offset, rows) {
   const q = new Float64Array(rows);
   let sum = 0;
@@ -90,7 +96,13 @@ function restoreRunningSum(stream, offset, rows) {
   return q;
 }
 
-/** Predictor 3 (§6.2): two running sums, each checked against its range (R32-predictor). */
+/**
+ * Predictor 3 (§6.2): two running sums, each checked against its range (R32-predictor).
+ * @param {Int32Array} stream
+ * @param {number} offset
+ * @param {number} rows
+ * @param {string} where
+ */
 function restoreLinear(stream, offset, rows, where) {
   const q = new Float64Array(rows);
   let difference = 0;

@@ -5,7 +5,20 @@
 
 import { formatError } from './errors.js';
 
-/** The per-segment product B (i × 3 × k, C order) of the core and U2. */
+/**
+ * A decoded segment's factors, as reconstructFrame reads them (decoder.js makes them).
+ * @typedef {{u1: Float64Array, columns: number, i: number, k: number, B: Float64Array,
+ *   u3: Float64Array, core: Float64Array, cent: Float64Array, u2: Float64Array,
+ *   simd?: import('./simd.js').SimdBasis | null}} Factors
+ */
+
+/**
+ * The per-segment product B (i × 3 × k, C order) of the core and U2.
+ * @param {Float64Array} core
+ * @param {Float64Array} u2
+ * @param {number} i
+ * @param {number} k
+ */
 export function coreTimesU2(core, u2, i, k) {
   const B = new Float64Array(i * 3 * k);
   for (let a = 0; a < i; a++) {
@@ -23,11 +36,15 @@ export function coreTimesU2(core, u2, i, k) {
 /**
  * Frame t of a segment into `out` (K*3, any array type: Float64Array, or Float32Array for the
  * GPU, which rounds each binary64 position once). Every position must be finite (R36).
- * @param {{u1, columns, i, k, B, u3, cent, simd}} factors u1 is K × columns row-major (a shared
- *   basis may have more columns than the segment uses); simd, when not null, the same U1 laid
- *   out for WebAssembly SIMD (simd.js)
+ * @template {Float64Array | Float32Array} T
+ * @param {Factors} factors u1 is K × columns row-major (a shared basis may have more columns
+ *   than the segment uses); simd, when not null, the same U1 laid out for WebAssembly SIMD
+ *   (simd.js)
  * @param {number} t the frame within the segment
+ * @param {T} out
  * @param {Float64Array} W scratch of i*3
+ * @param {number} frameNumber the frame within the file, for messages
+ * @returns {T}
  */
 export function reconstructFrame(factors, t, out, W, frameNumber) {
   const { u1, columns, i, k, B, u3, cent, simd } = factors;
@@ -104,6 +121,13 @@ export function reconstructFrame(factors, t, out, W, frameNumber) {
   return out;
 }
 
+/**
+ * @param {Factors} factors
+ * @param {number} t
+ * @param {number} v
+ * @param {number} x
+ * @param {Float64Array} W
+ */
 function reconstructAgain(factors, t, v, x, W) {
   const { u1, columns, i, cent } = factors;
   let p = 0;

@@ -14,13 +14,22 @@ const op = {
   block: 0x02, loop: 0x03, end: 0x0b, br: 0x0c, brIf: 0x0d, void: 0x40,
   get: 0x20, set: 0x21, i32Const: 0x41, i32Add: 0x6a, i32GeU: 0x4f, f64Store: 0x39,
 };
+/** @typedef {{product(W: Float64Array, i: number): Float64Array}} SimdBasis */
+
+/** @type {(code: number) => number[]} */
 const simd = (code) => [0xfd, ...uleb(code)];
+/** @type {(offset: number) => number[]} */
 const v128Load = (offset) => [...simd(0x00), 4, ...uleb(offset)]; // align 2^4
 const f64x2Add = simd(0xf0);
 const f64x2Mul = simd(0xf2);
+/** @type {(lane: number) => number[]} */
 const extract = (lane) => [...simd(0x21), lane];
 const v128Zero = [...simd(0x0c), ...new Array(16).fill(0)];
 
+/**
+ * @param {number} value
+ * @returns {number[]}
+ */
 function uleb(value) {
   const out = [];
   do {
@@ -31,19 +40,27 @@ function uleb(value) {
   } while (value);
   return out;
 }
+/** @type {(id: number, bytes: number[]) => number[]} */
 const section = (id, bytes) => [id, ...uleb(bytes.length), ...bytes];
+/** @type {(items: (number | number[])[]) => number[]} */
 const vector = (items) => [...uleb(items.length), ...items.flat()];
+/** @type {(text: string) => number[]} */
 const name = (text) => [...uleb(text.length), ...Array.from(text, (c) => c.charCodeAt(0))];
 
 // parameters and locals
 const [U1, W, OUT, PAIRS, COLUMNS, SKIP] = [0, 1, 2, 3, 4, 5];
 const [P, A, PU, PW, PO] = [6, 7, 8, 9, 10];
 const [X, Y, Z, U] = [11, 12, 13, 14];
+/** @type {(i: number) => number[]} */
 const get = (i) => [op.get, i];
+/** @type {(i: number) => number[]} */
 const set = (i) => [op.set, i];
+/** @type {(local: number, n: number) => number[]} */
 const addConst = (local, n) => [...get(local), op.i32Const, ...uleb(n), op.i32Add, ...set(local)];
 // accumulator += u · W-pair at byte offset `offset` of PW
+/** @type {(acc: number, offset: number) => number[]} */
 const multiplyAdd = (acc, offset) => [...get(acc), ...get(U), ...get(PW), ...v128Load(offset), ...f64x2Mul, ...f64x2Add, ...set(acc)];
+/** @type {(acc: number, lane: number, offset: number) => number[]} */
 const store = (acc, lane, offset) => [...get(PO), ...get(acc), ...extract(lane), op.f64Store, 3, ...uleb(offset)];
 
 const body = [
@@ -90,6 +107,9 @@ const MAX_PAGES = 65536;
  * (u[2p, a], u[2p+1, a]) for every column. Returns null where the module cannot run or its
  * memory cannot be had (the caller then uses the JavaScript loop).
  * @param {Float64Array} u1
+ * @param {number} K
+ * @param {number} columns
+ * @returns {SimdBasis | null}
  */
 export function simdBasis(u1, K, columns) {
   if (!SIMD_AVAILABLE) return null;
@@ -103,7 +123,8 @@ export function simdBasis(u1, K, columns) {
   let frame;
   try {
     memory = new WebAssembly.Memory({ initial: pages });
-    frame = new WebAssembly.Instance(new WebAssembly.Module(BYTES), { m: { memory } }).exports.frame;
+    const exports = new WebAssembly.Instance(new WebAssembly.Module(BYTES), { m: { memory } }).exports;
+    frame = /** @type {(...args: number[]) => void} */ (exports.frame);
   } catch (error) {
     // no memory for it (RangeError), or a page whose Content-Security-Policy does not allow
     // 'wasm-unsafe-eval' (CompileError): the JavaScript loop does the same, slower
@@ -125,6 +146,8 @@ export function simdBasis(u1, K, columns) {
     /**
      * U1[:, :i] · W (W: i × 3, row-major), as a K*3 view of the module's memory, valid until
      * the next call.
+     * @param {Float64Array} W
+     * @param {number} i
      */
     product(W, i) {
       for (let a = 0; a < i; a++) {

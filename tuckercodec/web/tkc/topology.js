@@ -16,13 +16,25 @@ const MAX_DEPTHS = 2048; // §6.2: predictor 2 only on a forest of at most 2048 
 const FLOAT_SOURCES = 2 ** 17;
 
 /**
+ * The mesh mean's plan (meanPlan).
+ * @typedef {{restore: Int32Array, first: Int32Array, source: Int32Array, anchor: Int32Array,
+ *   big: boolean}} MeanPlan
+ */
+
+/**
+ * The face edges' structure (meshTopology).
+ * @typedef {{K: number, start: Int32Array, neighbours: Int32Array, parent: Int32Array,
+ *   order: Int32Array, depth: Int32Array, rank: Int32Array, maxDepth: number,
+ *   plan: MeanPlan | null}} Topology
+ */
+
+/**
  * The structure of the face edges that U1's prediction needs (§6.2).
  * @param {Int32Array} faces M*n vertex indices, row-major, −1 padded (already valid: R33, R34)
  * @param {number} M faces
  * @param {number} n face width
  * @param {number} K vertices
- * @returns {{K: number, start: Int32Array, neighbours: Int32Array, parent: Int32Array,
- *   order: Int32Array, depth: Int32Array, rank: Int32Array, maxDepth: number}}
+ * @returns {Topology}
  *   `neighbours[start[v] .. start[v+1]−1]` is N(v), ascending and without repeats; `order` lists
  *   every vertex in the order the walk reaches it (a parent before its children); the predictor-2
  *   plan is built on first use.
@@ -66,6 +78,10 @@ export function meshTopology(faces, M, n, K) {
  * corner, the last real corner back to corner 0), both directions, bucketed by vertex, each
  * bucket sorted (insertion sort for the short lists of a surface, the native sort for long ones,
  * so no degree makes it quadratic) and its repeats dropped.
+ * @param {Int32Array} faces
+ * @param {number} M
+ * @param {number} n
+ * @param {number} K
  */
 function neighbourLists(faces, M, n, K) {
   const start = new Int32Array(K + 1);
@@ -128,6 +144,8 @@ function neighbourLists(faces, M, n, K) {
  * The mesh mean's plan (§6.2 predictor 2), built once per topology: the vertices of depth ≥ 1
  * in restoring order (by depth, then phase = rank mod 8), and for each its sources S(v) and their
  * anchors as compressed lists in that same order, so each column is one pass over flat arrays.
+ * @param {Topology} topo
+ * @returns {MeanPlan}
  */
 function meanPlan(topo) {
   if (topo.plan !== null) return topo.plan;
@@ -189,7 +207,7 @@ function meanPlan(topo) {
  * @param {Int32Array} residuals the section's decoded stream
  * @param {number} offset where the column starts in it (column-major: c·K)
  * @param {number} predictor 1 (mesh parents) or 2 (mesh mean)
- * @param {object} topo meshTopology(...) of the file's faces
+ * @param {Topology} topo meshTopology(...) of the file's faces
  * @param {string} where the section and column, for messages
  * @returns {Float64Array} K values: float64(q), exact while |q| <= 2^53, else rounded to nearest
  *   (ties to even) from the exact integer, as §6.3's dequantization needs
@@ -208,7 +226,12 @@ export function restoreMeshColumn(residuals, offset, predictor, topo, where) {
   return restoreMean(residuals, offset, topo, meanPlan(topo), where);
 }
 
-/** Predictor 1: q[v] = r[v] + q[parent[v]], in the reach order (a parent before its child). */
+/**
+ * Predictor 1: q[v] = r[v] + q[parent[v]], in the reach order (a parent before its child).
+ * @param {Int32Array} residuals
+ * @param {number} offset
+ * @param {Topology} topo
+ */
 function restoreParents(residuals, offset, topo) {
   const { K, order, parent } = topo;
   const q = new Float64Array(K);
@@ -247,6 +270,11 @@ function restoreParents(residuals, offset, topo) {
  * where half an ulp is at most 2^−21, while a quotient that is not an integer is at least
  * 1/(6c) > 2^−20 away from every integer; so the correctly rounded division never crosses an
  * integer and Math.floor of it is the exact floor. Vertices with c ≥ 2^17 sources use BigInt.
+ * @param {Int32Array} residuals
+ * @param {number} offset
+ * @param {Topology} topo
+ * @param {MeanPlan} plan
+ * @param {string} where
  */
 function restoreMean(residuals, offset, topo, plan, where) {
   const { K } = topo;
@@ -279,7 +307,14 @@ function restoreMean(residuals, offset, topo, plan, where) {
   return q;
 }
 
-/** The mean of one vertex with very many sources, in BigInt (floor division toward −∞). */
+/**
+ * The mean of one vertex with very many sources, in BigInt (floor division toward −∞).
+ * @param {Float64Array} q
+ * @param {Int32Array} source
+ * @param {Int32Array} anchor
+ * @param {number} s0
+ * @param {number} s1
+ */
 function bigMean(q, source, anchor, s0, s1) {
   let u = 0n;
   // each term is an integer below 5·2^32 in magnitude: exact in float64

@@ -11,6 +11,8 @@ import { formatError } from './errors.js';
 import { describe, isInt } from './msgpack.js';
 import { decodeIntStream } from './streams.js';
 
+/** @typedef {import('./msgpack.js').MsgValue} MsgValue */
+
 const WHERE = "section 'FACE' (faces-traverse)";
 const STREAMS = ['ops', 'degrees', 'vertices', 'references'];
 const NEW = 0;
@@ -18,18 +20,23 @@ const PREV = 1;
 const NEXT = 2;
 const FAR = 3;
 
+/** @param {string} message */
 function fail(message) {
   return formatError('R39-traversal', `${WHERE}: ${message}`);
 }
 
-/** An int ≥ 0 as the msgpack reader returns it (a number, or a BigInt beyond 2^53). */
+/**
+ * An int ≥ 0 as the msgpack reader returns it (a number, or a BigInt beyond 2^53).
+ * @param {unknown} value
+ * @returns {value is number | bigint}
+ */
 function isNonNegativeInt(value) {
   return isInt(value) && value >= 0;
 }
 
 /**
  * Decodes a FACE section coded with faces-traverse.
- * @param {Map} entry the section-table entry (codec parameters corner_order, streams)
+ * @param {Map<string, MsgValue>} entry the section-table entry (codec parameters corner_order, streams)
  * @param {Uint8Array} payload the section's bytes, CRC already checked
  * @param {number} K vertices
  * @param {number} M faces (the checked `shape`)
@@ -57,13 +64,13 @@ export function decodeTraverse(entry, payload, K, M, n) {
     total += Number(item[2]); // a BigInt length is past any payload: the sum cannot match
   }
   if (total !== payload.length) {
-    const lengths = table.map((item) => String(item[2])).join(' + ');
+    const lengths = table.map((item) => String(/** @type {MsgValue[]} */ (item)[2])).join(' + ');
     throw fail(`the stream lengths ${lengths} add up to ${total}, not the payload's ${payload.length} bytes`);
   }
   const streams = [];
   let at = 0;
   for (let s = 0; s < 4; s++) {
-    const [count, planes, length] = table[s];
+    const [count, planes, length] = /** @type {(number | bigint)[]} */ (table[s]); // checked above
     const where = `${WHERE} stream ${s} (${STREAMS[s]})`;
     if (!(planes >= 1 && planes <= 4)) {
       throw formatError('R30-planes', `${where}: "planes" is ${planes}, not an int in 1..4`);
@@ -93,11 +100,19 @@ class EdgeTable {
     this.m3 = (Math.random() * 2 ** 32) | 0;
   }
 
+  /**
+   * @param {number} a
+   * @param {number} b
+   */
   slot(a, b) {
     return (Math.imul(a, this.m1) + Math.imul(b, this.m2) + this.m3) >>> (32 - this.bits);
   }
 
-  /** The edge a → b's id, or −1 if it never entered the boundary. */
+  /**
+   * The edge a → b's id, or −1 if it never entered the boundary.
+   * @param {number} a
+   * @param {number} b
+   */
   find(a, b) {
     const mask = (1 << this.bits) - 1;
     for (let h = this.slot(a, b); ; h = (h + 1) & mask) {
@@ -106,7 +121,11 @@ class EdgeTable {
     }
   }
 
-  /** The edge a → b's id, created (count 0) if new. */
+  /**
+   * The edge a → b's id, created (count 0) if new.
+   * @param {number} a
+   * @param {number} b
+   */
   add(a, b) {
     const mask = (1 << this.bits) - 1;
     let h = this.slot(a, b);
@@ -142,13 +161,21 @@ class EdgeTable {
   }
 }
 
+/** @param {Int32Array} array */
 function grow(array) {
   const bigger = new Int32Array(2 * array.length);
   bigger.set(array);
   return bigger;
 }
 
-/** The walk of §6.8 over decoded streams. */
+/**
+ * The walk of §6.8 over decoded streams.
+ * @param {Int32Array[]} streams
+ * @param {0 | 1} cornerOrder
+ * @param {number} K
+ * @param {number} M
+ * @param {number} n
+ */
 function walk(streams, cornerOrder, K, M, n) {
   const [ops, degrees, vertices, references] = streams;
   let opsAt = 0;
@@ -171,7 +198,12 @@ function walk(streams, cornerOrder, K, M, n) {
   const corners = new Int32Array(n); // the face being decoded, in walk order
   let face = 0;
 
-  /** The last live entry of into(v) (other = from) or out(v) (other = to), or −1. */
+  /**
+   * The last live entry of into(v) (other = from) or out(v) (other = to), or −1.
+   * @param {Int32Array} tops
+   * @param {number} v
+   * @param {Int32Array} other
+   */
   const lastOf = (tops, v, other) => {
     let node = tops[v];
     while (node >= 0) {
@@ -184,6 +216,7 @@ function walk(streams, cornerOrder, K, M, n) {
     return node < 0 ? -1 : other[entryEdge[node >> 1]];
   };
 
+  /** @param {string} what */
   const nextOp = (what) => {
     if (opsAt === ops.length) throw fail(`face ${face}: the ops stream ends before the ${what}`);
     return ops[opsAt++];
@@ -197,7 +230,11 @@ function walk(streams, cornerOrder, K, M, n) {
     return m;
   };
 
-  /** The vertex named by tip j (c_0 .. c_{j−1} in corners) with operation op. */
+  /**
+   * The vertex named by tip j (c_0 .. c_{j−1} in corners) with operation op.
+   * @param {number} op
+   * @param {number} j
+   */
   const tip = (op, j) => {
     const p = j === 0 ? 0 : corners[j - 1];
     if (op === NEW) {
@@ -229,7 +266,11 @@ function walk(streams, cornerOrder, K, M, n) {
     throw fail(`face ${face} corner ${j}: operation ${op} is not 0..3`);
   };
 
-  /** Adds corners[0..m−1] to the boundary and pushes its gates from corner g on. */
+  /**
+   * Adds corners[0..m−1] to the boundary and pushes its gates from corner g on.
+   * @param {number} m
+   * @param {number} g
+   */
   const addFace = (m, g) => {
     if (gateCount + 2 * m > gates.length) gates = grow(gates);
     for (let j = 0; j < m; j++) {
@@ -298,12 +339,12 @@ function walk(streams, cornerOrder, K, M, n) {
     addFace(m, 1);
     face++;
   }
-  for (const [s, stream, used] of [
+  for (const [s, stream, used] of /** @type {[number, Int32Array, number][]} */ ([
     [0, ops, opsAt],
     [1, degrees, degrees.length === 0 ? 0 : degreesAt],
     [2, vertices, verticesAt],
     [3, references, referencesAt],
-  ]) {
+  ])) {
     if (used !== stream.length) {
       throw fail(`stream ${s} (${STREAMS[s]}) has ${stream.length - used} values left after the ${M} faces`);
     }

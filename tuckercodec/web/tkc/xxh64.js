@@ -9,11 +9,17 @@ const P3 = 1609587929392839161n;
 const P4 = 9650029242287828579n;
 const P5 = 2870177450012600261n;
 
+/** @type {(x: bigint, r: bigint) => bigint} */
 const rotl = (x, r) => ((x << r) | (x >> (64n - r))) & MASK;
+/** @type {(acc: bigint, lane: bigint) => bigint} */
 const round = (acc, lane) => (rotl((acc + lane * P2) & MASK, 31n) * P1) & MASK;
+/** @type {(acc: bigint, value: bigint) => bigint} */
 const merge = (acc, value) => (((acc ^ round(0n, value)) * P1) & MASK) + P4 & MASK;
 
-/** The low 32 bits of XXH64(bytes, seed 0), as an unsigned number. */
+/**
+ * The low 32 bits of XXH64(bytes, seed 0), as an unsigned number.
+ * @param {Uint8Array} bytes
+ */
 export function xxh64Low32(bytes) {
   const view = new DataView(bytes.buffer, bytes.byteOffset, bytes.byteLength);
   const n = bytes.length;

@@ -15,6 +15,10 @@ const MAX_BLOCK = 128 * 1024;
 // 128 KiB and takes at least 4 bytes.
 const MAX_EXPANSION = 32768;
 
+/**
+ * @param {string} where
+ * @param {string} message
+ */
 function fail(where, message) {
   return formatError(RULE, `${where}: ${message}`);
 }
@@ -95,7 +99,7 @@ export function decompressExact(payload, size, where) {
   try {
     produced = decompressFrameInto(payload.subarray(0, position), output);
   } catch (error) {
-    throw fail(where, `the Zstandard frame is corrupt (${error && error.message})`);
+    throw fail(where, `the Zstandard frame is corrupt (${error && /** @type {Error} */ (error).message})`);
   }
   if (produced !== size) {
     throw fail(where, `the frame regenerates ${produced} bytes, it declares ${size}`);

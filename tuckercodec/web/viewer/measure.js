@@ -43,6 +43,8 @@ export function computeNormals(positions, index, normals) {
 /**
  * Grow `box` ([minx, miny, minz, maxx, maxy, maxz], start from emptyBox()) by the positions.
  * Non-finite values are skipped.
+ * @param {number[]} box
+ * @param {ArrayLike<number>} positions
  */
 export function extendBox(box, positions) {
   for (let v = 0, n = positions.length; v < n; v += 3) {
@@ -116,6 +118,10 @@ export function colourScale(steps = 256) {
 /**
  * Write each vertex's colour for its distance: `lut` a Float32Array steps*3 (linear RGB, as the
  * renderer wants vertex colours), distances at or beyond `scale` take the last colour.
+ * @param {Float32Array} distances K
+ * @param {number} scale
+ * @param {Float32Array} lut
+ * @param {Float32Array} colours K*3, overwritten
  */
 export function paintDistances(distances, scale, lut, colours) {
   const top = lut.length / 3 - 1;

@@ -28,13 +28,54 @@ const FRAMING_SAMPLES = 9;
 /** Reconstruction times kept by stats() (the oldest half is dropped beyond it). */
 const MAX_TIMINGS = 100000;
 
-const $ = (id) => document.getElementById(id);
+/**
+ * @typedef {typeof import('three')} Three
+ * @typedef {import('../tkc/decoder.js').TkcFile} TkcFile
+ * @typedef {import('three').Mesh<import('three').BufferGeometry, import('three').MeshStandardMaterial>} SolidMesh
+ * @typedef {import('three').Mesh<import('three').BufferGeometry, import('three').MeshBasicMaterial>} WireMesh
+ * @typedef {{vertices: number, frames: number, positions: Float32Array, maxDistance: number | null,
+ *   kg: number | null, source: string}} Reference
+ */
 
-let resolveReady, rejectReady;
+/**
+ * The page's element of that id (every id asked for is in index.html).
+ * @type {(id: string) => HTMLElement}
+ */
+const $ = (id) => /** @type {HTMLElement} */ (document.getElementById(id));
+
+/** @type {(value?: any) => void} */
+let resolveReady;
+/** @type {(reason?: any) => void} */
+let rejectReady;
 const ready = new Promise((resolve, reject) => { resolveReady = resolve; rejectReady = reject; });
 ready.catch(() => {}); // shown on the page and logged; not also an "uncaught" rejection
 
-const state = {
+/**
+ * The page's state. The file and the scene's fields (THREE ... index) are set in start(), the
+ * original's (refGeometry ... lut) by setupReference when there is one, before anything reads
+ * them; what may be read before (file, positions, renderer) or without an original (refMesh,
+ * refWire) is tested first where it is read.
+ * @type {{
+ *   THREE: Three, file: TkcFile, renderer: import('three').WebGLRenderer,
+ *   scene: import('three').Scene, camera: import('three').PerspectiveCamera,
+ *   controls: import('../vendor/three/OrbitControls.js').OrbitControls,
+ *   group: import('three').Group, geometry: import('three').BufferGeometry,
+ *   material: import('three').MeshStandardMaterial, mesh: SolidMesh, wire: WireMesh,
+ *   positions: Float32Array, normals: Float32Array, index: Uint32Array,
+ *   colours: Float32Array, reference: Reference | null,
+ *   refGeometry: import('three').BufferGeometry, refMesh: SolidMesh,
+ *   refWire: WireMesh, refPositions: Float32Array, refNormals: Float32Array,
+ *   distances: Float32Array, lut: Float32Array, scale: number, scaleFixed: boolean,
+ *   colourByError: boolean, layout: string, up: string, shading: string,
+ *   frame: number, startFrame: number, rate: number, rateNote: string, bytes: number,
+ *   playing: boolean, clockStart: number, lastTick: number, rafPending: boolean, dirty: boolean,
+ *   frameMs: number[], updateMs: number[], renderMs: number[], played: number, dropped: number,
+ *   openMs: number | null, error: unknown,
+ *   lastError: {kg: number | null, maxError: number, definition: string} | null,
+ *   box: number[] | null, offset: number,
+ * }}
+ */
+const state = /** @type {any} */ ({
   THREE: null, file: null, renderer: null, scene: null, camera: null, controls: null,
   group: null, geometry: null, material: null, mesh: null, wire: null,
   positions: null, normals: null, index: null, colours: null,
@@ -45,15 +86,18 @@ const state = {
   playing: false, clockStart: 0, lastTick: 0, rafPending: false, dirty: false,
   frameMs: [], updateMs: [], renderMs: [], played: 0, dropped: 0, openMs: null, error: null,
   lastError: null, box: null, offset: 0,
-};
+  // set when the controls first change (undefined before, which read as these)
+  colourByError: false, layout: 'beside', up: 'y', shading: 'smooth', startFrame: 0,
+});
 
 const info = {
   version: null, vertices: null, frames: null, frameRate: null, faces: null, openMs: null,
 };
 
-window.tkcViewer = {
+/** @type {Window & {tkcViewer?: object}} */ (window).tkcViewer = {
   ready,
   info,
+  /** @param {number} t */
   async setFrame(t) {
     await ready;
     if (!Number.isInteger(t) || t < 0 || t >= state.file.frames) {
@@ -67,6 +111,10 @@ window.tkcViewer = {
   drawnPositions() {
     return state.positions ? state.positions.slice() : null;
   },
+  /**
+   * @param {number} t
+   * @param {Float64Array} [out]
+   */
   decodedPositions(t, out) {
     // `out` (a Float64Array of K*3) is reused when given, as file.frame's is
     return out === undefined ? state.file.frame(t) : state.file.frame(t, out);
@@ -120,7 +168,7 @@ async function start() {
   const file = decoder.openTkc(bytes);
   const opened = performance.now();
   state.file = file;
-  if (reference) checkReference(reference, file, referenceUrl);
+  if (reference) checkReference(reference, file, /** @type {string} */ (referenceUrl));
   state.reference = reference;
   setupRate(file);
   setupScene(THREE, controls.OrbitControls, file);
@@ -149,12 +197,16 @@ async function start() {
   await nextPaint();
 }
 
+/**
+ * @param {string} url
+ * @param {string} what
+ */
 async function fetchBytes(url, what) {
   let response;
   try {
     response = await fetch(url);
   } catch (error) {
-    throw new Error(`could not fetch ${what} ${url}: ${error.message}`);
+    throw new Error(`could not fetch ${what} ${url}: ${/** @type {Error} */ (error).message}`);
   }
   if (!response.ok) {
     throw new Error(`could not fetch ${what} ${url}: HTTP ${response.status} ${response.statusText}`);
@@ -162,15 +214,20 @@ async function fetchBytes(url, what) {
   return new Uint8Array(await response.arrayBuffer());
 }
 
-/** The reference's JSON description and its positions (F*K*3 float32). */
+/**
+ * The reference's JSON description and its positions (F*K*3 float32).
+ * @param {string} url
+ * @returns {Promise<Reference>}
+ */
 async function fetchReference(url) {
   const text = new TextDecoder().decode(await fetchBytes(url, 'the reference'));
   let meta;
   try {
     meta = JSON.parse(text);
   } catch (error) {
-    throw new Error(`the reference ${url} is not JSON: ${error.message}`);
+    throw new Error(`the reference ${url} is not JSON: ${/** @type {Error} */ (error).message}`);
   }
+  /** @param {string} why */
   const bad = (why) => new Error(`the reference ${url}: ${why}`);
   if (meta === null || typeof meta !== 'object') throw bad('expected a JSON object');
   for (const key of ['vertices', 'frames']) {
@@ -192,6 +249,7 @@ async function fetchReference(url) {
   };
 }
 
+/** @param {Uint8Array} raw */
 function littleEndianFloat32(raw) {
   const aligned = raw.byteOffset % 4 === 0 ? raw : raw.slice();
   const values = new Float32Array(aligned.buffer, aligned.byteOffset, aligned.byteLength / 4);
@@ -202,6 +260,11 @@ function littleEndianFloat32(raw) {
   return swapped;
 }
 
+/**
+ * @param {Reference} reference
+ * @param {TkcFile} file
+ * @param {string} url
+ */
 function checkReference(reference, file, url) {
   if (reference.vertices !== file.vertices || reference.frames !== file.frames) {
     throw new Error(
@@ -210,6 +273,7 @@ function checkReference(reference, file, url) {
   }
 }
 
+/** @param {TkcFile} file */
 function setupRate(file) {
   const rate = file.frameRate;
   if (typeof rate === 'number' && Number.isFinite(rate) && rate > 0) {
@@ -225,8 +289,13 @@ function setupRate(file) {
 // ---------------------------------------------------------------------------------------------
 // the scene
 
+/**
+ * @param {Three} THREE
+ * @param {typeof import('../vendor/three/OrbitControls.js').OrbitControls} OrbitControls
+ * @param {TkcFile} file
+ */
 function setupScene(THREE, OrbitControls, file) {
-  const canvas = $('canvas');
+  const canvas = /** @type {HTMLCanvasElement} */ ($('canvas'));
   const antialias = chooseAntialias();
   const renderer = new THREE.WebGLRenderer({
     canvas, antialias: antialias.on, preserveDrawingBuffer: true, // the tests read the picture back
@@ -310,11 +379,19 @@ function chooseAntialias() {
     : { on: true, why: `antialiasing on${name ? ` (${name})` : ''}` };
 }
 
+/**
+ * @param {import('three').BufferAttribute} attribute
+ * @param {Three} THREE
+ */
 function dynamic(attribute, THREE) {
   attribute.setUsage(THREE.DynamicDrawUsage);
   return attribute;
 }
 
+/**
+ * @param {Three} THREE
+ * @param {TkcFile} file
+ */
 function setupReference(THREE, file) {
   const K = file.vertices;
   state.refPositions = new Float32Array(K * 3);
@@ -348,7 +425,7 @@ function setupReference(THREE, file) {
   });
   drawLegendBar(scale);
   state.colourByError = true;
-  const ref = state.reference;
+  const ref = /** @type {Reference} */ (state.reference); // called only with one
   if (ref.maxDistance !== null) {
     state.scale = ref.maxDistance;
     state.scaleFixed = true;
@@ -369,9 +446,10 @@ function setupReference(THREE, file) {
   setLayout('beside');
 }
 
+/** @param {number[][]} scale */
 function drawLegendBar(scale) {
-  const bar = $('legend-bar');
-  const context = bar.getContext('2d');
+  const bar = /** @type {HTMLCanvasElement} */ ($('legend-bar'));
+  const context = /** @type {CanvasRenderingContext2D} */ (bar.getContext('2d'));
   for (let y = 0; y < bar.height; y++) {
     const s = Math.round((1 - y / (bar.height - 1)) * (scale.length - 1));
     const [r, g, b] = scale[s].map((c) => Math.round(c * 255));
@@ -430,6 +508,7 @@ function frameCamera() {
   requestRender();
 }
 
+/** @param {string} axis */
 function setUp(axis) {
   const group = state.group;
   group.rotation.set(0, 0, 0);
@@ -438,6 +517,7 @@ function setUp(axis) {
   state.up = axis;
 }
 
+/** @param {string} layout */
 function setLayout(layout) {
   state.layout = layout;
   if (!state.refMesh) return;
@@ -461,7 +541,10 @@ function placeReference() {
 // ---------------------------------------------------------------------------------------------
 // one frame
 
-/** Reconstruct frame t into the drawn geometry (and the original's, and the error colours). */
+/**
+ * Reconstruct frame t into the drawn geometry (and the original's, and the error colours).
+ * @param {number} t
+ */
 function showFrame(t) {
   const file = state.file;
   const began = performance.now();
@@ -500,7 +583,7 @@ function showFrame(t) {
     $('frame-max').textContent = `${formatNumber(maxError)} scene units`;
   }
   state.updateMs.push(performance.now() - began);
-  const slider = $('slider');
+  const slider = /** @type {HTMLInputElement} */ ($('slider'));
   slider.value = String(t);
   const name = file.names && file.names[t] ? ` — ${file.names[t]}` : '';
   $('frame-label').textContent = `frame ${t} of 0–${file.frames - 1}${name}`;
@@ -529,7 +612,7 @@ function schedule() {
 /** Resolves once the browser has had a chance to paint (or after 100 ms in a hidden page,
  * where animation frames never come). */
 function nextPaint() {
-  return new Promise((resolve) => {
+  return new Promise(/** @param {(value?: unknown) => void} resolve */ (resolve) => {
     const timer = setTimeout(resolve, 100);
     requestAnimationFrame(() => { clearTimeout(timer); resolve(); });
   });
@@ -538,6 +621,7 @@ function nextPaint() {
 // ---------------------------------------------------------------------------------------------
 // playback
 
+/** @param {number} now */
 function tick(now) {
   state.rafPending = false;
   if (state.playing) {
@@ -549,7 +633,7 @@ function tick(now) {
       state.lastTick = count;
       const F = state.file.frames;
       let t = state.startFrame + count;
-      if (t >= F && !$('loop').checked) {
+      if (t >= F && !loopChecked()) {
         showFrame(F - 1);
         pause();
       } else {
@@ -568,7 +652,7 @@ function tick(now) {
 function play() {
   if (!state.file || state.playing) return;
   let from = state.frame;
-  if (from >= state.file.frames - 1 && !$('loop').checked) from = 0;
+  if (from >= state.file.frames - 1 && !loopChecked()) from = 0;
   if (from !== state.frame) showFrame(from);
   state.playing = true;
   state.startFrame = from;
@@ -584,6 +668,11 @@ function pause() {
   $('play').textContent = 'play';
 }
 
+/** Whether playback starts again after the last frame. */
+function loopChecked() {
+  return /** @type {HTMLInputElement} */ ($('loop')).checked;
+}
+
 function updatePlayed() {
   $('played').textContent = `${state.played} / ${state.dropped}`;
 }
@@ -593,10 +682,13 @@ function updatePlayed() {
 
 function setupControls() {
   const file = state.file;
-  const slider = $('slider');
+  const slider = /** @type {HTMLInputElement} */ ($('slider'));
   slider.max = String(file.frames - 1);
-  for (const id of ['play', 'step-back', 'step-forward', 'slider', 'reframe']) $(id).disabled = false;
+  for (const id of ['play', 'step-back', 'step-forward', 'slider', 'reframe']) {
+    /** @type {HTMLButtonElement | HTMLInputElement} */ ($(id)).disabled = false;
+  }
   $('play').addEventListener('click', () => (state.playing ? pause() : play()));
+  /** @param {number} delta */
   const step = (delta) => {
     pause();
     showFrame((state.frame + delta + file.frames) % file.frames);
@@ -611,7 +703,7 @@ function setupControls() {
     if (wasPlaying) play(); // scrubbing while playing goes on from the new frame
   });
   $('shading').addEventListener('change', (event) => {
-    state.shading = event.target.value;
+    state.shading = selected(event);
     const flat = state.shading === 'flat';
     state.material.flatShading = flat;
     state.material.needsUpdate = true;
@@ -622,20 +714,20 @@ function setupControls() {
     showFrame(state.frame); // smooth normals are only kept up to date while they are used
   });
   $('wireframe').addEventListener('change', (event) => {
-    state.wire.visible = event.target.checked;
-    if (state.refWire) state.refWire.visible = event.target.checked && state.refMesh.visible;
+    state.wire.visible = ticked(event);
+    if (state.refWire) state.refWire.visible = ticked(event) && state.refMesh.visible;
     requestRender();
   });
   $('up').addEventListener('change', (event) => {
-    setUp(event.target.value);
+    setUp(selected(event));
     frameCamera();
   });
   $('layout').addEventListener('change', (event) => {
-    setLayout(event.target.value);
+    setLayout(selected(event));
     frameCamera();
   });
   $('colour').addEventListener('change', (event) => {
-    state.colourByError = event.target.checked;
+    state.colourByError = ticked(event);
     state.material.vertexColors = state.colourByError;
     state.material.color.set(state.colourByError ? 0xffffff : 0xd8d2c4);
     state.material.needsUpdate = true;
@@ -653,6 +745,23 @@ function setupControls() {
   updatePlayed();
 }
 
+/**
+ * The value of the select element an event came from.
+ * @param {Event} event
+ */
+function selected(event) {
+  return /** @type {HTMLSelectElement} */ (event.target).value;
+}
+
+/**
+ * Whether the checkbox an event came from is ticked.
+ * @param {Event} event
+ */
+function ticked(event) {
+  return /** @type {HTMLInputElement} */ (event.target).checked;
+}
+
+/** @param {TkcFile} file */
 function showFacts(file) {
   const bytes = state.bytes;
   const bpfv = (8 * bytes) / (file.frames * file.vertices);
@@ -666,9 +775,9 @@ function showFacts(file) {
     ['bpfv', `${bpfv.toFixed(4)} bits per frame per vertex (8·bytes / (F·K), the whole file)`],
     ['frame rate', file.frameRate ? `${formatNumber(file.frameRate)} fps` : `none recorded (plays at ${DEFAULT_RATE})`],
     ['segments', segmentsText(file.segments)],
-    ['KG error', error && Number.isFinite(error.kg) ? `${formatNumber(error.kg)} % (the encoder's claim, in the header)` : 'not recorded in the header'],
+    ['KG error', error && Number.isFinite(error.kg) ? `${formatNumber(/** @type {number} */ (error.kg))} % (the encoder's claim, in the header)` : 'not recorded in the header'],
   ];
-  if (error && Number.isFinite(error.targetKg)) rows.push(['target KG', `${formatNumber(error.targetKg)} %`]);
+  if (error && Number.isFinite(error.targetKg)) rows.push(['target KG', `${formatNumber(/** @type {number} */ (error.targetKg))} %`]);
   const ref = state.reference;
   if (ref) {
     rows.push(['original', `${ref.source}, positions rounded to float32`]);
@@ -686,6 +795,7 @@ function showFacts(file) {
   $('facts-note').textContent = error && error.definition ? `KG: ${error.definition}` : '';
 }
 
+/** @param {TkcFile['segments']} segments */
 function segmentsText(segments) {
   if (!segments || segments.length <= 1) {
     const ranks = segments && segments[0] ? segments[0].ranks : null;
@@ -698,10 +808,12 @@ function segmentsText(segments) {
 // ---------------------------------------------------------------------------------------------
 // messages
 
+/** @param {string} text */
 function status(text) {
   $('status').textContent = text;
 }
 
+/** @param {any} error whatever was thrown */
 function fail(error) {
   state.error = error;
   pause();
@@ -716,6 +828,7 @@ function fail(error) {
   status('');
 }
 
+/** @param {number} value */
 function formatNumber(value) {
   if (!Number.isFinite(value)) return String(value);
   if (value === 0) return '0';
