@@ -27,7 +27,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import zstandard
 
 from ..analysis import SMALLEST_COORDINATE, SMALLEST_RELATIVE_SHAPE
 from ..decoder import decode
@@ -35,7 +34,7 @@ from ..encoder import DEFAULT_TARGET_KG, encode_with_report
 from ..encoder.results import refuse_two_modes
 from ..errors import InputError, UnreachableTargetError
 from ..format.limits import DEFAULT_LIMITS
-from ..format.streams import compress
+from ..format.streams import ZstdFrameProblem, compress, zstd_exact
 from ..metrics import kg_error
 from ..sequence import MeshSequence
 from .fitted import FittedBasis, complete_file, fit_array
@@ -49,8 +48,6 @@ POINT_MARGIN = 4.0
 #: How many times a chunk stored below float64 is re-encoded at a tighter target before giving up
 #: (rounding to float32 rarely needs one; float16 may need a few).
 MAX_TIGHTENING = 8
-#: zstd cannot expand one byte into more than this many (a bound that refuses absurd headers).
-_ZSTD_MAX_EXPANSION = 1 << 17
 
 _NO_FACES = np.zeros((0, 3), dtype=np.int64)
 
@@ -317,18 +314,10 @@ def _unpack_points(data: bytes) -> np.ndarray:
             f"a point chunk declares {frames} frames of {vertices} vertices: outside 1.."
             f"{DEFAULT_LIMITS.max_positions} positions"
         )
-    size = frames * vertices * 24
-    payload = data[_POINT_HEAD.size :]
-    if size > _ZSTD_MAX_EXPANSION * len(payload):
-        raise ValueError(f"a point chunk of {len(data)} bytes cannot hold {size} bytes")
     try:
-        raw = zstandard.ZstdDecompressor().decompress(
-            payload, max_output_size=size, allow_extra_data=False
-        )
-    except zstandard.ZstdError as error:
-        raise ValueError(f"a point chunk's zstd frame does not decompress: {error}") from None
-    if len(raw) != size:
-        raise ValueError(f"a point chunk holds {len(raw)} bytes of positions, not {size}")
+        raw = zstd_exact(data[_POINT_HEAD.size :], frames * vertices * 24)
+    except ZstdFrameProblem as problem:
+        raise ValueError(f"a point chunk's positions: {problem}") from None
     return np.frombuffer(raw, dtype="<f8").reshape(frames, vertices, 3)
 
 
