@@ -37,7 +37,7 @@ from ..format.limits import DEFAULT_LIMITS
 from ..format.streams import ZstdFrameProblem, compress, zstd_exact
 from ..metrics import kg_error
 from ..sequence import MeshSequence
-from .fitted import FittedBasis, complete_file, fit_array
+from .fitted import BASIS_KEYS, FittedBasis, complete_file, fit_array
 
 #: The first bytes of a point chunk; never those of a .tkc file, which start with 0x89 "TKC".
 POINT_MAGIC = b"TKCpoint"
@@ -111,6 +111,19 @@ def codec_settings(
             "a fitted basis serves a KG target: give target_kg with it, not ranks or target_bpfv"
         )
     return mode, FittedBasis.parse(basis, basis_sha256)
+
+
+#: The configuration keys :func:`codec_settings` takes, both codecs': the mode's and a basis's.
+SETTINGS_KEYS = frozenset({"target_kg", "ranks", "target_bpfv", *BASIS_KEYS})
+
+
+def describe_settings(mode: ChunkMode, basis: FittedBasis | None) -> str:
+    """A codec's settings as its repr shows them, ``target_kg=0.1, basis=...``: the mode's key,
+    and what a fitted basis is (its text is hundreds of kB), not all of it."""
+    settings = ", ".join(f"{key}={value!r}" for key, value in mode.config().items())
+    if basis is not None:
+        settings += f", basis={basis.describe()}"
+    return settings
 
 
 def fit_settings(
