@@ -207,8 +207,9 @@ def _function_lengths(source: str, file: str) -> list[tuple[int, str]]:
 def test_function_length_counts_from_def_to_the_end_of_the_body():
     source = (
         "import functools\n"
-        "@functools.cache\n"
-        "@staticmethod\n"
+        "@functools.lru_cache(\n"
+        "    maxsize=None,\n"
+        ")\n"
         "def f():\n"
         '    """Doc."""\n'
         "\n"
