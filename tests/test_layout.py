@@ -1,5 +1,5 @@
 """The package's layout and contracts, read from its source: who imports whom, one home per rule
-of spec/FORMAT.md §11, module sizes, and what the tools may use."""
+of spec/FORMAT.md §11, function sizes, and what the tools may use."""
 
 from __future__ import annotations
 
@@ -164,15 +164,89 @@ def test_every_rule_is_raised_from_exactly_one_function_with_the_class_the_spec_
 # ------------------------------------------------------------------------------------------
 # sizes and surfaces
 
-MODULE_LINES = 420  # "about 400"
+#: The length rule (issue 21): what a reader must hold at once is a function, not a module, so
+#: the package caps functions and leaves a module to be as long as its one concern.
+FUNCTION_LINES = 120
+LONG_FUNCTION_LINES = 80
+LONG_FUNCTIONS_ALLOWED = 2
 
 
-def test_no_module_is_long_unless_its_first_lines_say_why():
-    for module, path in _modules().items():
-        lines = path.read_text().splitlines()
-        if len(lines) > MODULE_LINES:
-            opening = " ".join(lines[:6]).lower()
-            assert "longer" in opening, f"{module} has {len(lines)} lines and does not say why"
+class _FunctionLengths(ast.NodeVisitor):
+    """(lines, where) of every function and method, nested ones included (each counted alone
+    and inside the function around it): ``where`` is ``file:Class.method`` or ``file:outer.inner``.
+    A function's lines run from its ``def`` line to the last line of its body, docstring and
+    comments included, decorators excluded."""
+
+    def __init__(self, file: str) -> None:
+        self.file = file
+        self.scope: list[str] = []
+        self.lengths: list[tuple[int, str]] = []
+
+    def visit_ClassDef(self, node: ast.ClassDef) -> None:
+        self.scope.append(node.name)
+        self.generic_visit(node)
+        self.scope.pop()
+
+    def _function(self, node: ast.FunctionDef | ast.AsyncFunctionDef) -> None:
+        self.scope.append(node.name)
+        assert node.end_lineno is not None
+        lines = node.end_lineno - node.lineno + 1  # lineno is the def's, after any decorator
+        self.lengths.append((lines, f"{self.file}:{'.'.join(self.scope)}"))
+        self.generic_visit(node)
+        self.scope.pop()
+
+    visit_FunctionDef = visit_AsyncFunctionDef = _function
+
+
+def _function_lengths(source: str, file: str) -> list[tuple[int, str]]:
+    visitor = _FunctionLengths(file)
+    visitor.visit(ast.parse(source))
+    return visitor.lengths
+
+
+def test_function_length_counts_from_def_to_the_end_of_the_body():
+    source = (
+        "import functools\n"
+        "@functools.lru_cache(\n"
+        "    maxsize=None,\n"
+        ")\n"
+        "def f():\n"
+        '    """Doc."""\n'
+        "\n"
+        "    # a comment\n"
+        "    return 1\n"
+        "class C:\n"
+        "    async def g(self):\n"
+        "        def h():\n"
+        "            pass\n"
+        "        return h\n"
+    )
+    assert sorted(_function_lengths(source, "m.py")) == [
+        (2, "m.py:C.g.h"),
+        (4, "m.py:C.g"),
+        (5, "m.py:f"),
+    ]
+
+
+def test_no_function_is_long():
+    """No function of the package over FUNCTION_LINES (120) lines, and no more than
+    LONG_FUNCTIONS_ALLOWED (2) over LONG_FUNCTION_LINES (80). A function's lines are counted from
+    its ``def`` line to the last line of its body: decorators excluded, its docstring, comments,
+    blank lines and nested functions included."""
+    lengths: list[tuple[int, str]] = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        lengths += _function_lengths(path.read_text(), str(path.relative_to(ROOT)))
+    assert len(lengths) > 500, "too few functions found: is the package there?"
+    listed = sorted(lengths, reverse=True)
+    over_cap = [f"{where} ({lines} lines)" for lines, where in listed if lines > FUNCTION_LINES]
+    assert not over_cap, (
+        f"functions longer than {FUNCTION_LINES} lines, split them: {', '.join(over_cap)}"
+    )
+    long = [f"{where} ({lines} lines)" for lines, where in listed if lines > LONG_FUNCTION_LINES]
+    assert len(long) <= LONG_FUNCTIONS_ALLOWED, (
+        f"{len(long)} functions longer than {LONG_FUNCTION_LINES} lines, at most "
+        f"{LONG_FUNCTIONS_ALLOWED} may be: {', '.join(long)}"
+    )
 
 
 def _tool_imports() -> list[tuple[str, str]]:

@@ -284,31 +284,41 @@ def sted(
     window = _integer(window, "window", 0)
     dt = _real(dt, "dt", zero=False)
     c = _real(c, "c", zero=True)
-    a = _checked_positions(original, "original")
-    b = _checked_positions(approx, "approx")
-    if a.shape != b.shape:
-        raise InputError(f"the sequences differ in shape: {a.shape} against {b.shape}")
-    if faces is None:
-        if not isinstance(original, MeshSequence):
-            raise ValueError(
-                "faces are required when original is an array rather than a MeshSequence"
-            )
-        faces = original.faces
-    edges = mesh_edges(faces, a.shape[1])
+    a, b = _checked_pair(original, approx)
+    edges = mesh_edges(_faces_of(original, faces), a.shape[1])
     if len(edges) == 0:
         raise InputError("STED needs a mesh: the faces have no edges")
-    if scale is None:
-        diagonal = float(np.linalg.norm(a[0].max(axis=0) - a[0].min(axis=0)))
-        if diagonal == 0.0:
-            raise InputError(
-                "STED's scale is undefined: the original's first frame is a single point"
-            )
-        scale = 1.0 / diagonal
-    else:
-        scale = _real(scale, "scale", zero=False)
-
+    scale = _first_frame_scale(a) if scale is None else _real(scale, "scale", zero=False)
     members = neighbourhood_edges(edges, a.shape[1], width)
     spatial = _sted_spatial(a, b, edges, members)
     temporal = _sted_temporal(a, b, window, dt, scale)
     value = float(np.hypot(spatial, c * temporal))
     return Sted(value, spatial, temporal, width, window, dt, c, scale)
+
+
+def _checked_pair(
+    original: MeshSequence | np.ndarray, approx: MeshSequence | np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Both sequences' positions, checked, of one shape (InputError otherwise)."""
+    a = _checked_positions(original, "original")
+    b = _checked_positions(approx, "approx")
+    if a.shape != b.shape:
+        raise InputError(f"the sequences differ in shape: {a.shape} against {b.shape}")
+    return a, b
+
+
+def _faces_of(original: MeshSequence | np.ndarray, faces: np.ndarray | None) -> np.ndarray:
+    """``faces``, or by default the original's (ValueError for an array, which has none)."""
+    if faces is not None:
+        return faces
+    if not isinstance(original, MeshSequence):
+        raise ValueError("faces are required when original is an array rather than a MeshSequence")
+    return original.faces
+
+
+def _first_frame_scale(a: np.ndarray) -> float:
+    """STED's default s: 1 / the diagonal of the first frame's bounding box."""
+    diagonal = float(np.linalg.norm(a[0].max(axis=0) - a[0].min(axis=0)))
+    if diagonal == 0.0:
+        raise InputError("STED's scale is undefined: the original's first frame is a single point")
+    return 1.0 / diagonal

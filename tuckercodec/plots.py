@@ -205,16 +205,7 @@ def render_frame(
     errors, unshaded so that the colour reads true against the colour bar. A mesh without
     faces is drawn as points. ``up`` names the scene axis drawn upwards.
     """
-    vertices = np.asarray(vertices, dtype=np.float64)
-    triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
-    if vertices.ndim != 2 or vertices.shape[1] != 3 or vertices.shape[0] == 0:
-        raise ValueError(f"expected positions of shape (vertices, 3), got {vertices.shape}")
-    if errors is not None:
-        errors = np.asarray(errors, dtype=np.float64)
-        if errors.shape != (vertices.shape[0],):
-            raise ValueError(f"expected {vertices.shape[0]} per-vertex errors, got {errors.shape}")
-    if up not in _UP_AXES:
-        raise ValueError(f"up must be one of {', '.join(_UP_AXES)}, got {up!r}")
+    vertices, triangles, errors = _checked_frame(vertices, triangles, errors, up)
     plt = pyplot()
     from matplotlib import colormaps
     from matplotlib.colors import Normalize
@@ -227,7 +218,6 @@ def render_frame(
     fig = plt.figure(figsize=(7, 7))
     ax = fig.add_subplot(projection="3d")
     ax.view_init(elev=15, azim=-60)
-    mappable = None
     norm = Normalize(
         vmin=0.0, vmax=float(errors.max()) if errors is not None and errors.max() > 0 else 1.0
     )
@@ -237,16 +227,7 @@ def render_frame(
         if errors is not None:
             colours = cmap(norm(errors[triangles].mean(axis=1)))
         else:
-            normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-            size = np.linalg.norm(normal, axis=1, keepdims=True)
-            normal = np.divide(normal, size, out=np.zeros_like(normal), where=size > 0)
-            light = _camera_direction(ax) + np.array([0.3, 0.0, 0.5])
-            light /= np.linalg.norm(light)
-            # Two-sided: a face turned away still shows, as the far side of a thin sheet would.
-            intensity = 0.3 + 0.7 * np.abs(normal @ light)
-            colours = np.empty((len(triangles), 4))
-            colours[:, :3] = intensity[:, None] * np.array([0.70, 0.75, 0.85])
-            colours[:, 3] = 1.0
+            colours = _shaded(corners, _camera_direction(ax))
         ax.add_collection3d(
             Poly3DCollection(corners, facecolors=colours, edgecolors="none", linewidths=0)
         )
@@ -259,8 +240,48 @@ def render_frame(
         mappable = ScalarMappable(norm=norm, cmap=cmap)
         bar = fig.colorbar(mappable, ax=ax, shrink=0.6, pad=0.1)  # clear of the axis labels
         bar.set_label("vertex error ‖SEQ − REFERENCE‖, scene units (face: mean of its corners)")
+    _scale_equally(ax, points, names)
+    ax.set_title(title or f"{vertices.shape[0]} vertices, {len(triangles)} triangles")
+    save_figure(fig, path, overwrite=overwrite)
 
-    # Equal scaling: every axis spans its own extent, and the box's sides are in proportion.
+
+def _checked_frame(
+    vertices: np.ndarray, triangles: np.ndarray, errors: np.ndarray | None, up: str
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """render_frame's arguments as float64 (K, 3), int64 (T, 3) and float64 (K,) arrays, or
+    a ValueError naming the one that does not fit."""
+    vertices = np.asarray(vertices, dtype=np.float64)
+    triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    if vertices.ndim != 2 or vertices.shape[1] != 3 or vertices.shape[0] == 0:
+        raise ValueError(f"expected positions of shape (vertices, 3), got {vertices.shape}")
+    if errors is not None:
+        errors = np.asarray(errors, dtype=np.float64)
+        if errors.shape != (vertices.shape[0],):
+            raise ValueError(f"expected {vertices.shape[0]} per-vertex errors, got {errors.shape}")
+    if up not in _UP_AXES:
+        raise ValueError(f"up must be one of {', '.join(_UP_AXES)}, got {up!r}")
+    return vertices, triangles, errors
+
+
+def _shaded(corners: np.ndarray, camera: np.ndarray) -> np.ndarray:
+    """(T, 4) RGBA colours of the faces ``corners`` (T, 3, 3), lit by a light beside the
+    ``camera`` direction (a unit vector towards it, in plot coordinates)."""
+    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    size = np.linalg.norm(normal, axis=1, keepdims=True)
+    normal = np.divide(normal, size, out=np.zeros_like(normal), where=size > 0)
+    light = camera + np.array([0.3, 0.0, 0.5])
+    light /= np.linalg.norm(light)
+    # Two-sided: a face turned away still shows, as the far side of a thin sheet would.
+    intensity = 0.3 + 0.7 * np.abs(normal @ light)
+    colours = np.empty((len(corners), 4))
+    colours[:, :3] = intensity[:, None] * np.array([0.70, 0.75, 0.85])
+    colours[:, 3] = 1.0
+    return colours
+
+
+def _scale_equally(ax: Any, points: np.ndarray, names: list[str]) -> None:
+    """Equal scaling: every axis spans its own extent, and the box's sides are in proportion;
+    a thin side gets one tick, at its middle. ``names`` label the axes."""
     low, high = points.min(axis=0), points.max(axis=0)
     extent = np.maximum(high - low, 0.02 * max(float((high - low).max()), 1e-12))
     centre = (low + high) / 2
@@ -276,8 +297,6 @@ def render_frame(
     ax.set_xlabel(names[0])
     ax.set_ylabel(names[1])
     ax.set_zlabel(names[2])
-    ax.set_title(title or f"{vertices.shape[0]} vertices, {len(triangles)} triangles")
-    save_figure(fig, path, overwrite=overwrite)
 
 
 def _camera_direction(ax: Any) -> np.ndarray:

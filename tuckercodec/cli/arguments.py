@@ -1,7 +1,7 @@
 """The command line's arguments: the parser of every verb and the types of their options.
 
-It is longer than the other modules because every verb's options live here together, where a
-reader compares them (the same mode, read and executor options recur across verbs).
+Every verb's options live here together, one function a verb, where a reader compares them (the
+same mode, read and executor options recur across verbs).
 """
 
 from __future__ import annotations
@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from .._version import __version__
 from ..encoder import DEFAULT_TARGET_KG
@@ -20,6 +21,9 @@ from ..io.registry import writable_formats
 from ..metrics import KG_DEFINITION
 from ..perceptual import STED_DEFINITION
 from ..report import DEFAULT_TARGETS
+
+if TYPE_CHECKING:
+    _Verbs = argparse._SubParsersAction[argparse.ArgumentParser]
 
 
 def _targets(text: str) -> list[float]:
@@ -90,8 +94,25 @@ def _frames(text: str) -> slice | list[int]:
     return selection
 
 
+def _size(text: str) -> int:
+    try:
+        return parse_size(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
+def _port(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a port number: {text!r}") from None
+    if not 0 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f"a port is 0 to 65535, got {text}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
-    """The parser of every verb and option."""
+    """The parser of every verb and option, the verbs in the order ``--help`` lists them."""
     parser = argparse.ArgumentParser(
         prog="tuckercodec",
         description="Compression of animated meshes (fixed connectivity) by truncated HOSVD.",
@@ -100,7 +121,25 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"tuckercodec {__version__}")
     verbs = parser.add_subparsers(dest="verb", metavar="VERB")
     verbs.required = True
+    for add_verb in (
+        _add_rd,
+        _add_encode,
+        _add_batch,
+        _add_decode,
+        _add_info,
+        _add_eval,
+        _add_render,
+        _add_convert,
+        _add_view,
+        _add_formats,
+        _add_demo,
+    ):
+        add_verb(verbs)
+    return parser
 
+
+def _add_rd(verbs: _Verbs) -> None:
+    """The ``rd`` verb (tuckercodec.cli.commands): the exact rate-distortion table."""
     rd = verbs.add_parser(
         "rd",
         help="rate-distortion analysis: exact error of every truncation (i, 3, k)",
@@ -110,9 +149,29 @@ def build_parser() -> argparse.ArgumentParser:
         ),
     )
     rd.add_argument("input", help=_SEQUENCE_HELP)
-    _add_rd_options(rd)
+    rd.add_argument(
+        "--targets",
+        type=_targets,
+        default=list(DEFAULT_TARGETS),
+        metavar="KG,KG,...",
+        help="target KG errors in percent (default: %(default)s)",
+    )
+    rd.add_argument("--csv", type=Path, metavar="FILE", help="write the whole curves as CSV")
+    rd.add_argument(
+        "--plot", type=Path, metavar="FILE.png", help="draw Θ against KG (paper's Fig. 1)"
+    )
+    rd.add_argument(
+        "--heatmap",
+        type=Path,
+        metavar="FILE.png",
+        help="draw log KG and log ψ over (i, k) (Fig. 3)",
+    )
+    rd.add_argument("--force", action="store_true", help="replace output files that exist")
     _add_read_options(rd)
 
+
+def _add_encode(verbs: _Verbs) -> None:
+    """The ``encode`` verb (tuckercodec.cli.codec): one sequence into one file."""
     encode = verbs.add_parser(
         "encode",
         help="compress a mesh sequence into one file",
@@ -127,8 +186,39 @@ def build_parser() -> argparse.ArgumentParser:
     encode.add_argument("--force", action="store_true", help="replace the output if it exists")
     _add_segment_options(encode)
     _add_read_options(encode)
-    _add_batch(verbs)
 
+
+def _add_batch(verbs: _Verbs) -> None:
+    """The ``batch`` verb (tuckercodec.cli.batch): encode's modes and reading options, many
+    inputs, and where the work runs."""
+    batch = verbs.add_parser(
+        "batch",
+        help="compress many mesh sequences the same way, in parallel",
+        description=(
+            f"Encode each INPUT into OUTDIR/<name>{SUFFIX} (name: the input's file or folder "
+            "name), one input per task, as encode would (default: --kg "
+            f"{DEFAULT_TARGET_KG}): in this process, on --jobs N worker processes, or on a Dask "
+            "cluster (--scheduler). A failing input is reported and the others go on; the exit "
+            "code is 0 if every input was written, 7 if some failed."
+        ),
+    )
+    batch.add_argument("inputs", nargs="+", metavar="INPUT", help=_SEQUENCE_HELP)
+    batch.add_argument(
+        "-o", "--output", type=Path, required=True, metavar="OUTDIR", help="made if missing"
+    )
+    _add_mode_options(batch)
+    _add_executor_options(
+        batch,
+        "encode N inputs at a time in worker processes on this machine (Dask; extra [dask])",
+        "run on the Dask cluster of this scheduler (tcp://host:port); its workers need this "
+        "tuckercodec and must read the inputs at the same absolute paths",
+    )
+    batch.add_argument("--force", action="store_true", help="replace outputs that exist")
+    _add_read_options(batch)
+
+
+def _add_decode(verbs: _Verbs) -> None:
+    """The ``decode`` verb (tuckercodec.cli.codec): frames out of a file, in any written format."""
     decode = verbs.add_parser(
         "decode",
         help="rebuild the frames of a compressed file as OBJ files or a sequence file",
@@ -167,15 +257,13 @@ def build_parser() -> argparse.ArgumentParser:
             "at the file's frame rate, 24 fps when it records none"
         ),
     )
-    decode.add_argument(
-        "--precision",
-        type=int,
-        metavar="DIGITS",
-        help="significant digits in OBJ files (default: exact)",
-    )
+    _add_precision(decode)
     decode.add_argument("--force", action="store_true", help="replace output files that exist")
     _add_read_options(decode, "--reference")
 
+
+def _add_info(verbs: _Verbs) -> None:
+    """The ``info`` verb (tuckercodec.cli.codec): a file's header."""
     info = verbs.add_parser(
         "info",
         help="show a compressed file's header",
@@ -184,6 +272,9 @@ def build_parser() -> argparse.ArgumentParser:
     info.add_argument("input", help=f"a compressed file ({SUFFIX})")
     info.add_argument("--json", action="store_true", help="print JSON")
 
+
+def _add_eval(verbs: _Verbs) -> None:
+    """The ``eval`` verb (tuckercodec.cli.commands): the error measures of B against A."""
     evaluate = verbs.add_parser(
         "eval",
         help="compare two sequences: KG error, STED, relative error, largest displacement",
@@ -219,6 +310,9 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate.add_argument("--force", action="store_true", help="replace the plot if it exists")
     _add_read_options(evaluate, "A and B")
 
+
+def _add_render(verbs: _Verbs) -> None:
+    """The ``render`` verb (tuckercodec.cli.commands): one frame drawn in 3D."""
     render = verbs.add_parser(
         "render",
         help="draw one frame in 3D, coloured by its error against a reference",
@@ -249,6 +343,9 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--force", action="store_true", help="replace the image if it exists")
     _add_read_options(render, "SEQ and the reference")
 
+
+def _add_convert(verbs: _Verbs) -> None:
+    """The ``convert`` verb (tuckercodec.cli.convert): a sequence from one format to another."""
     convert = verbs.add_parser(
         "convert",
         help="convert a mesh sequence between file formats",
@@ -260,23 +357,62 @@ def build_parser() -> argparse.ArgumentParser:
     )
     convert.add_argument("input", help=_SEQUENCE_HELP)
     convert.add_argument("output", type=Path, metavar="OUT", help="the file or folder to write")
-    convert.add_argument(
-        "--precision",
-        type=int,
-        metavar="DIGITS",
-        help="significant digits in OBJ files (default: exact)",
-    )
+    _add_precision(convert)
     convert.add_argument("--force", action="store_true", help="replace output files that exist")
     _add_read_options(convert)
 
-    _add_view(verbs)
 
+def _add_view(verbs: _Verbs) -> None:
+    """The ``view`` verb (tuckercodec.cli.view): serve the viewer page, or export it."""
+    view = verbs.add_parser(
+        "view",
+        help="play a compressed file in a web browser (served on 127.0.0.1, or exported)",
+        description=(
+            "Check FILE with the Python decoder, then serve, on 127.0.0.1 only, a page that "
+            "decodes it in the browser (the JavaScript decoder) and plays it: play/pause, frame "
+            "slider, the file's frame rate, orbit camera, shading, wireframe. With --reference, "
+            "the original beside it or overlaid, vertices coloured by their distance to it, and "
+            "each frame's KG error. Ctrl-C stops the server (exit 0). Nothing is fetched from "
+            "the network: three.js and the decoder ship with the package."
+        ),
+    )
+    view.add_argument("input", metavar=f"FILE{SUFFIX}", help=f"a compressed file ({SUFFIX})")
+    view.add_argument(
+        "--reference",
+        metavar="ORIGINAL",
+        help="the original sequence (same frames and vertices), to compare with",
+    )
+    view.add_argument(
+        "--port",
+        type=_port,
+        metavar="N",
+        help="the port to listen on (default: a free one, chosen by the system)",
+    )
+    view.add_argument("--open", action="store_true", help="open the page in a web browser")
+    view.add_argument(
+        "--export-html",
+        type=Path,
+        metavar="DIR",
+        help=(
+            "write the page, its scripts, the file (and the reference) to the folder DIR, for "
+            "any static web server, instead of serving"
+        ),
+    )
+    view.add_argument("--force", action="store_true", help="with --export-html: replace DIR")
+    _add_read_options(view, "the reference")
+
+
+def _add_formats(verbs: _Verbs) -> None:
+    """The ``formats`` verb (tuckercodec.cli.convert): what this installation reads and writes."""
     verbs.add_parser(
         "formats",
         help="list the sequence formats: suffixes, options, what each keeps, extras",
         description="List every sequence format this installation knows, and what it needs.",
     )
 
+
+def _add_demo(verbs: _Verbs) -> None:
+    """The ``demo`` verb (tuckercodec.cli.commands): the built-in sample at a few targets."""
     demo = verbs.add_parser(
         "demo",
         help="encode and decode the built-in sample (a simulated cloth, 60 frames)",
@@ -289,7 +425,10 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="KG,KG,...",
         help="target KG errors in percent (default: %(default)s)",
     )
-    return parser
+
+
+# ------------------------------------------------------------------------------------------
+# option groups several verbs share
 
 
 _SEQUENCE_HELP = (
@@ -319,32 +458,14 @@ def _add_read_options(parser: argparse.ArgumentParser, applies_to: str = "INPUT"
     )
 
 
-def _add_rd_options(parser: argparse.ArgumentParser) -> None:
+def _add_precision(parser: argparse.ArgumentParser) -> None:
+    """OBJ output's digits (decode and convert)."""
     parser.add_argument(
-        "--targets",
-        type=_targets,
-        default=list(DEFAULT_TARGETS),
-        metavar="KG,KG,...",
-        help="target KG errors in percent (default: %(default)s)",
+        "--precision",
+        type=int,
+        metavar="DIGITS",
+        help="significant digits in OBJ files (default: exact)",
     )
-    parser.add_argument("--csv", type=Path, metavar="FILE", help="write the whole curves as CSV")
-    parser.add_argument(
-        "--plot", type=Path, metavar="FILE.png", help="draw Θ against KG (paper's Fig. 1)"
-    )
-    parser.add_argument(
-        "--heatmap",
-        type=Path,
-        metavar="FILE.png",
-        help="draw log KG and log ψ over (i, k) (Fig. 3)",
-    )
-    parser.add_argument("--force", action="store_true", help="replace output files that exist")
-
-
-def _size(text: str) -> int:
-    try:
-        return parse_size(text)
-    except ValueError as error:
-        raise argparse.ArgumentTypeError(str(error)) from None
 
 
 def _add_segment_options(encode: argparse.ArgumentParser) -> None:
@@ -406,82 +527,3 @@ def _add_executor_options(
     where = parser.add_mutually_exclusive_group()
     where.add_argument("--jobs", type=_at_least(1), metavar="N", help=jobs_help)
     where.add_argument("--scheduler", metavar="ADDRESS", help=scheduler_help)
-
-
-def _add_batch(verbs: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    """The ``batch`` verb (tuckercodec.cli.batch): encode's modes and reading options, many
-    inputs, and where the work runs."""
-    batch = verbs.add_parser(
-        "batch",
-        help="compress many mesh sequences the same way, in parallel",
-        description=(
-            f"Encode each INPUT into OUTDIR/<name>{SUFFIX} (name: the input's file or folder "
-            "name), one input per task, as encode would (default: --kg "
-            f"{DEFAULT_TARGET_KG}): in this process, on --jobs N worker processes, or on a Dask "
-            "cluster (--scheduler). A failing input is reported and the others go on; the exit "
-            "code is 0 if every input was written, 7 if some failed."
-        ),
-    )
-    batch.add_argument("inputs", nargs="+", metavar="INPUT", help=_SEQUENCE_HELP)
-    batch.add_argument(
-        "-o", "--output", type=Path, required=True, metavar="OUTDIR", help="made if missing"
-    )
-    _add_mode_options(batch)
-    _add_executor_options(
-        batch,
-        "encode N inputs at a time in worker processes on this machine (Dask; extra [dask])",
-        "run on the Dask cluster of this scheduler (tcp://host:port); its workers need this "
-        "tuckercodec and must read the inputs at the same absolute paths",
-    )
-    batch.add_argument("--force", action="store_true", help="replace outputs that exist")
-    _add_read_options(batch)
-
-
-def _port(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a port number: {text!r}") from None
-    if not 0 <= value <= 65535:
-        raise argparse.ArgumentTypeError(f"a port is 0 to 65535, got {text}")
-    return value
-
-
-def _add_view(verbs: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    """The ``view`` verb (tuckercodec.cli.view): serve the viewer page, or export it."""
-    view = verbs.add_parser(
-        "view",
-        help="play a compressed file in a web browser (served on 127.0.0.1, or exported)",
-        description=(
-            "Check FILE with the Python decoder, then serve, on 127.0.0.1 only, a page that "
-            "decodes it in the browser (the JavaScript decoder) and plays it: play/pause, frame "
-            "slider, the file's frame rate, orbit camera, shading, wireframe. With --reference, "
-            "the original beside it or overlaid, vertices coloured by their distance to it, and "
-            "each frame's KG error. Ctrl-C stops the server (exit 0). Nothing is fetched from "
-            "the network: three.js and the decoder ship with the package."
-        ),
-    )
-    view.add_argument("input", metavar=f"FILE{SUFFIX}", help=f"a compressed file ({SUFFIX})")
-    view.add_argument(
-        "--reference",
-        metavar="ORIGINAL",
-        help="the original sequence (same frames and vertices), to compare with",
-    )
-    view.add_argument(
-        "--port",
-        type=_port,
-        metavar="N",
-        help="the port to listen on (default: a free one, chosen by the system)",
-    )
-    view.add_argument("--open", action="store_true", help="open the page in a web browser")
-    view.add_argument(
-        "--export-html",
-        type=Path,
-        metavar="DIR",
-        help=(
-            "write the page, its scripts, the file (and the reference) to the folder DIR, for "
-            "any static web server, instead of serving"
-        ),
-    )
-    view.add_argument("--force", action="store_true", help="with --export-html: replace DIR")
-    _add_read_options(view, "the reference")

@@ -18,7 +18,14 @@ from .container import Container
 from .limits import Limits, check_limit
 from .reconstruction import factor_value_count
 from .sections import check_sections
-from .segments import SegmentEntry, check_segmented_sections, checked_u2, read_segment_index
+from .segments import (
+    SegmentEntry,
+    check_segmented_sections,
+    checked_u2,
+    is_int,
+    ranks_within,
+    read_segment_index,
+)
 
 #: The error definition id of §4.1: the KG error of Karni and Gotsman (2004), in percent.
 KG_DEFINITION_ID = "karni-gotsman-2004"
@@ -128,10 +135,6 @@ def header_map(
 # reading
 
 
-def _is_int(value: object) -> bool:
-    return isinstance(value, int) and not isinstance(value, bool)
-
-
 def _field(header: dict[str, Any], key: str, valid: Callable[[Any], bool], wanted: str) -> Any:
     """The value of a header field of R20-header-field, checked by ``valid``."""
     value = header.get(key)
@@ -157,11 +160,11 @@ def read_header(container: Container, limits: Limits) -> FileInfo:
     """Check the header's fields (§5 steps 10 and 14) and the section table against them
     (steps 11-13); what the header says."""
     header = container.header
-    vertices = _field(header, "vertices", lambda v: _is_int(v) and v >= 1, "an integer >= 1")
+    vertices = _field(header, "vertices", lambda v: is_int(v) and v >= 1, "an integer >= 1")
     check_limit(
         vertices, limits, "max_vertices", what=f"{vertices} vertices", field="header.vertices"
     )
-    frames = _field(header, "frames", lambda v: _is_int(v) and v >= 1, "an integer >= 1")
+    frames = _field(header, "frames", lambda v: is_int(v) and v >= 1, "an integer >= 1")
     check_limit(frames, limits, "max_frames", what=f"{frames} frames", field="header.frames")
     if not container.segmented:  # a segmented file is decoded a segment at a time (§6.7)
         check_limit(
@@ -239,17 +242,12 @@ def _check_single(
 def _ranks(ranks: object, vertices: int, frames: int) -> tuple[int, int]:
     """``ranks`` [i, k] with 1 <= i <= min(K, 3F) and 1 <= k <= min(F, 3K) (R22-ranks)."""
     largest_i, largest_k = min(vertices, 3 * frames), min(frames, 3 * vertices)
-    if not (
-        isinstance(ranks, list)
-        and len(ranks) == 2
-        and all(_is_int(r) for r in ranks)
-        and 1 <= ranks[0] <= largest_i
-        and 1 <= ranks[1] <= largest_k
-    ):
+    checked = ranks_within(ranks, largest_i, largest_k)
+    if checked is None:
         raise FormatError(
             f"must be [i, k], two integers with 1 <= i <= min(K, 3F) = {largest_i} and "
             f"1 <= k <= min(F, 3K) = {largest_k}: got {ranks!r}",
             rule="R22-ranks",
             field="header.ranks",
         )
-    return ranks[0], ranks[1]
+    return checked

@@ -91,8 +91,24 @@ def segment_map(frames: int, ranks: tuple[int, int], u2: list[float], basis: str
     }
 
 
-def _is_int(value: object) -> bool:
+def is_int(value: object) -> bool:
+    """An integer as msgpack gives it, not a bool (which Python counts as an int)."""
     return isinstance(value, int) and not isinstance(value, bool)
+
+
+def ranks_within(ranks: object, largest_i: int, largest_k: int) -> tuple[int, int] | None:
+    """``(i, k)`` if ``ranks`` is [i, k], two integers with 1 <= i <= largest_i and
+    1 <= k <= largest_k, else None: the shape of a header's ranks and of a segment's, whose
+    bounds and rules (R22-ranks, R38-segment-ranks) differ."""
+    if (
+        isinstance(ranks, list)
+        and len(ranks) == 2
+        and all(is_int(r) for r in ranks)
+        and 1 <= ranks[0] <= largest_i
+        and 1 <= ranks[1] <= largest_k
+    ):
+        return ranks[0], ranks[1]
+    return None
 
 
 def read_segment_index(
@@ -121,7 +137,7 @@ def read_segment_index(
                 f"a segment is a map, got {_short(item)}", rule="R37-segment-index", field=where
             )
         count: Any = item.get("frames")
-        if not (_is_int(count) and count >= 1):
+        if not (is_int(count) and count >= 1):
             raise FormatError(
                 f"frames must be an integer >= 1, got {_short(count)}",
                 rule="R37-segment-index",
@@ -162,21 +178,15 @@ def _segment_ranks(
     (R38-segment-ranks)."""
     largest_i = min(vertices, 3 * frames) if basis == BASIS_OWN else vertices
     largest_k = min(frames, 3 * vertices)
-    if not (
-        isinstance(ranks, list)
-        and len(ranks) == 2
-        and all(_is_int(r) for r in ranks)
-        and 1 <= ranks[0] <= largest_i
-        and 1 <= ranks[1] <= largest_k
-    ):
+    checked = ranks_within(ranks, largest_i, largest_k)
+    if checked is None:
         _refuse_ranks(
             f"must be [i, k], two integers with 1 <= i <= {largest_i} and 1 <= k <= "
             f"min(F, 3K) = {largest_k} for the segment's {frames} frames and {basis} basis: got "
             f"{_short(ranks)}",
             field,
         )
-    assert isinstance(ranks, list)
-    return ranks[0], ranks[1]
+    return checked
 
 
 def _refuse_ranks(message: str, field: str) -> NoReturn:

@@ -73,8 +73,9 @@ def compress(raw: bytes, level: int = DEFAULT_LEVEL) -> bytes:
     return zstandard.ZstdCompressor(level=level, write_content_size=True).compress(raw)
 
 
-class _StreamProblem(Exception):
-    """Why a zstd payload breaks §6.1 step 3; :func:`decompress_exact` reports it as R29."""
+class ZstdFrameProblem(ValueError):
+    """Why a payload is not one zstd frame of exactly the size wanted (§6.1 step 3):
+    :func:`decompress_exact` reports it as R29, the zarr codec's point chunks as damage."""
 
 
 def decompress_exact(payload: bytes | memoryview, size: int, where: str) -> bytes:
@@ -84,28 +85,30 @@ def decompress_exact(payload: bytes | memoryview, size: int, where: str) -> byte
     the frame are an error (R29-zstd-content-size).
     """
     try:
-        return _decompress_exact(payload, size)
-    except _StreamProblem as problem:
+        return zstd_exact(payload, size)
+    except ZstdFrameProblem as problem:
         raise FormatError(str(problem), rule="R29-zstd-content-size", field=where) from None
 
 
-def _decompress_exact(payload: bytes | memoryview, size: int) -> bytes:
+def zstd_exact(payload: bytes | memoryview, size: int) -> bytes:
+    """The content of the one zstd frame ``payload``, which must declare and hold exactly
+    ``size`` bytes, checked before anything is allocated; ZstdFrameProblem otherwise."""
     if bytes(payload[:4]) != ZSTD_MAGIC:
-        raise _StreamProblem("the payload does not start with a zstd frame header")
+        raise ZstdFrameProblem("the payload does not start with a zstd frame header")
     try:
         declared = zstandard.frame_content_size(payload)
     except zstandard.ZstdError:
-        raise _StreamProblem("the payload does not start with a zstd frame header") from None
+        raise ZstdFrameProblem("the payload does not start with a zstd frame header") from None
     if declared != size:
         what = "no content size" if declared == -1 else f"{declared} bytes"
-        raise _StreamProblem(
+        raise ZstdFrameProblem(
             f"the zstd frame declares {what}, but the section's shape needs {size}"
         )
     if size > ZSTD_MAX_EXPANSION * len(payload):
         # zstandard allocates the declared size before it reads a block: a 20-byte frame
         # header declaring 4 GiB would cost 4 GiB (or a MemoryError) although no frame this
         # short can hold that much. So the claim is checked against the payload first.
-        raise _StreamProblem(
+        raise ZstdFrameProblem(
             f"the zstd frame declares {size} bytes, more than a {len(payload)}-byte frame can "
             f"hold (at most {ZSTD_MAX_EXPANSION} bytes per byte)"
         )
@@ -121,9 +124,9 @@ def _decompress_exact(payload: bytes | memoryview, size: int) -> bytes:
                 payload, max_output_size=size, allow_extra_data=False
             )
     except zstandard.ZstdError as error:
-        raise _StreamProblem(f"the zstd frame does not decompress: {error}") from None
+        raise ZstdFrameProblem(f"the zstd frame does not decompress: {error}") from None
     if len(raw) != size:
-        raise _StreamProblem(f"the zstd frame holds {len(raw)} bytes, not {size}")
+        raise ZstdFrameProblem(f"the zstd frame holds {len(raw)} bytes, not {size}")
     return raw
 
 

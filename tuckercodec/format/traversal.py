@@ -1,7 +1,7 @@
 """§6.8 Codec ``faces-traverse`` (format 1.2): connectivity by traversal, vertex order kept.
 
-Longer than most modules (about 430 lines): the walk's encoder and decoder mirror each other
-step by step, and they are kept side by side so that a change to one is read against the other.
+The walk's encoder and decoder mirror each other step by step, and they are kept side by side
+so that a change to one is read against the other.
 
 The faces are coded by walking across their edges, as Edgebreaker and the cut-border machine do,
 instead of as a table of indices. The walk keeps a *boundary*: the directed edges of the faces
@@ -31,7 +31,7 @@ runs the same walk with the mesh to answer each question. Both share :class:`_Bo
 from __future__ import annotations
 
 from collections import defaultdict
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from typing import Any
 
 import numpy as np
@@ -313,132 +313,117 @@ def decode_traversal(
 ) -> np.ndarray:
     """The (M, n) faces of a FACE section with codec faces-traverse (§6.8), in walk order.
 
-    Longer than most functions here: it is the decoder's inner loop, written inline because a
-    call per value would double its time (samba's 19,938 triangles decode in about 40 ms).
+    In §5 step 15's order: the streams' table is checked and the streams read
+    (:func:`read_streams`), then the walk rebuilds the faces from them (:func:`_walk`).
     """
     count, width = section_shape(params, where, min_cols=3)
     values, corner_order = read_streams(payload, params, count, width, where)
-    polygons = bool(values[1])
-    if polygons and len(values[1]) != count:
-        raise _problem(where, f"the traversal breaks: {len(values[1])} degrees for {count} faces")
-    ops, degrees, new_residuals, references = (iter(source) for source in values)
-    k = vertex_count
-    seen: set[int] = set()  # not a table of k entries: k is the header's claim (see _Boundary)
-    boundary = _Boundary(k)
-    gates, into, out_of, open_edges = boundary.gates, boundary.into, boundary.out_of, boundary.count
-    last_new = -1
-    rows: list[list[int]] = []  # the stored faces, in walk order
-    decoded = 0
+    if values[1] and len(values[1]) != count:
+        raise _broken(where, f"{len(values[1])} degrees for {count} faces")
     try:
-        while decoded < count:
-            if gates:
-                gate = gates.pop()
-                if gate not in open_edges:
-                    continue
-                op = next(ops)
-                if op == GATE_NONE:
-                    continue
-                if not 1 <= op <= 8 * width:
-                    raise _problem(
-                        where,
-                        f"the traversal breaks: gate operation {op} is outside 0..{8 * width}",
-                    )
-                rotation, rest = divmod(op - 1, 8)
-                a, b = divmod(gate, k)
-                cycle = [a, b] if rest >= 4 else [b, a]
-                tip_op = rest & 3
-                first_gate = 1
-            else:  # a seed: every corner is a tip
-                cycle, tip_op, rotation, first_gate = [], next(ops), 0, 0
-            n = 3 + next(degrees) if polygons else 3
-            if not 3 <= n <= width:
-                raise _problem(
-                    where,
-                    f"the traversal breaks: a face of {n} corners in a table of width {width}",
-                )
-            previous = cycle[-1] if cycle else 0
-            while len(cycle) < n:
-                if tip_op == TIP_NEW:
-                    w = last_new + 1 + next(new_residuals)
-                    if not 0 <= w < k or w in seen:
-                        raise _problem(
-                            where,
-                            f"the traversal breaks: new vertex {w} is outside 0..{k - 1} or placed",
-                        )
-                    seen.add(w)
-                    last_new = w
-                elif tip_op == TIP_FAR:
-                    w = previous + next(references)
-                    if not 0 <= w < k or w not in seen:
-                        raise _problem(
-                            where,
-                            f"the traversal breaks: referenced vertex {w} is not one seen before",
-                        )
-                else:
-                    candidates: dict[int, None] = (
-                        {}
-                        if not cycle
-                        else into[previous]
-                        if tip_op == TIP_PREV
-                        else out_of[cycle[0]]
-                        if tip_op == TIP_NEXT
-                        else {}
-                    )
-                    if not candidates:
-                        raise _problem(
-                            where,
-                            f"the traversal breaks: tip operation {tip_op} names no vertex here",
-                        )
-                    w = next(reversed(candidates))  # the newest
-                cycle.append(w)
-                previous = w
-                if len(cycle) < n:
-                    tip_op = next(ops)
-            if rotation >= n:
-                raise _problem(
-                    where, f"the traversal breaks: rotation {rotation} of a face of {n} corners"
-                )
-            offset = rotation
-            if corner_order == ROTATE_FROM_SMALLEST and first_gate:
-                offset -= cycle.index(min(cycle))
-            offset %= n  # stored[(offset + j) % n] = cycle[j]: cycle turned right by offset
-            rows.append(cycle[n - offset :] + cycle[: n - offset] if offset else cycle)
-            decoded += 1
-            # _Boundary.attach, written out: the hottest lines of the decoder (a call per face
-            # costs 10 % of its time); the round-trip tests hold the two to the same rule
-            for j, (x, y) in enumerate(zip(cycle, cycle[1:] + cycle[:1], strict=True)):
-                opposite = y * k + x
-                open_count = open_edges.get(opposite)
-                key = x * k + y
-                if open_count:
-                    if open_count == 1:  # y -> x is closed: no longer a neighbour on the boundary
-                        del open_edges[opposite]
-                        del into[x][y]
-                        del out_of[y][x]
-                    else:
-                        open_edges[opposite] = open_count - 1
-                else:
-                    if key in open_edges:
-                        open_edges[key] += 1
-                    else:
-                        open_edges[key] = 1
-                        into[y][x] = None
-                        out_of[x][y] = None
-                if j >= first_gate:
-                    gates.append(key)
+        rows = _walk(values, count, width, vertex_count, corner_order, where)
     except StopIteration:  # a stream read past its end
-        raise _problem(where, "the traversal breaks: a stream ends early") from None
-    for name, stream in zip(STREAM_NAMES, (ops, degrees, new_residuals, references), strict=True):
-        if next(stream, None) is not None:
-            raise _problem(
-                where, f"the traversal breaks: stream {name} has values left, or ends early"
-            )
+        raise _broken(where, "a stream ends early") from None
     if width == 3:
         return np.array(rows, dtype=np.int64).reshape(count, 3)
     out = np.full((count, width), -1, dtype=np.int64)
     for row, stored in zip(out, rows, strict=True):
         row[: len(stored)] = stored
     return out
+
+
+def _walk(
+    values: list[list[int]], count: int, width: int, k: int, corner_order: int, where: str
+) -> list[list[int]]:
+    """The ``count`` stored faces the walk decodes from the streams ``values``, in walk order,
+    spending each (StopIteration where one ends early). A face starts at a gate or a seed, takes
+    its tips, turns to its stored rotation and joins the boundary: one loop, inline, since a call
+    per value would double its time (samba's 19,938 triangles take about 40 ms)."""
+    polygons = bool(values[1])
+    sources = [iter(source) for source in values]
+    ops, degrees, new_residuals, references = sources
+    seen: set[int] = set()  # not a table of k entries: k is the header's claim (see _Boundary)
+    boundary = _Boundary(k)
+    gates, into, out_of, open_edges = boundary.gates, boundary.into, boundary.out_of, boundary.count
+    last_new = -1
+    rows: list[list[int]] = []  # the stored faces, in walk order
+    while len(rows) < count:
+        if gates:
+            gate = gates.pop()
+            # a gate closed since it was pushed reads no op; GATE_NONE: no face across it
+            if gate not in open_edges or (op := next(ops)) == GATE_NONE:
+                continue
+            if not 1 <= op <= 8 * width:
+                raise _broken(where, f"gate operation {op} is outside 0..{8 * width}")
+            rotation, rest = divmod(op - 1, 8)
+            a, b = divmod(gate, k)
+            cycle = [a, b] if rest >= 4 else [b, a]
+            tip_op, first_gate = rest & 3, 1
+        else:  # a seed: every corner is a tip
+            cycle, tip_op, rotation, first_gate = [], next(ops), 0, 0
+        n = 3 + next(degrees) if polygons else 3
+        if not 3 <= n <= width:
+            raise _broken(where, f"a face of {n} corners in a table of width {width}")
+        previous = cycle[-1] if cycle else 0
+        while len(cycle) < n:
+            if tip_op == TIP_NEW:
+                w = last_new + 1 + next(new_residuals)
+                if not 0 <= w < k or w in seen:
+                    raise _broken(where, f"new vertex {w} is outside 0..{k - 1} or placed")
+                seen.add(w)
+                last_new = w
+            elif tip_op == TIP_FAR:
+                w = previous + next(references)
+                if not 0 <= w < k or w not in seen:
+                    raise _broken(where, f"referenced vertex {w} is not one seen before")
+            elif cycle and tip_op == TIP_PREV and (candidates := into[previous]):
+                w = next(reversed(candidates))  # the newest
+            elif cycle and tip_op == TIP_NEXT and (candidates := out_of[cycle[0]]):
+                w = next(reversed(candidates))
+            else:
+                raise _broken(where, f"tip operation {tip_op} names no vertex here")
+            cycle.append(w)
+            previous = w
+            if len(cycle) < n:
+                tip_op = next(ops)
+        if rotation >= n:
+            raise _broken(where, f"rotation {rotation} of a face of {n} corners")
+        offset = rotation
+        if corner_order == ROTATE_FROM_SMALLEST and first_gate:
+            offset -= cycle.index(min(cycle))
+        offset %= n  # stored[(offset + j) % n] = cycle[j]: cycle turned right by offset
+        rows.append(cycle[n - offset :] + cycle[: n - offset] if offset else cycle)
+        # _Boundary.attach written out: a call per face costs 10 % of the decoder's time (the
+        # round-trip tests hold the two to the same rule); new edges, the most, tested first
+        for j, (x, y) in enumerate(zip(cycle, cycle[1:] + cycle[:1], strict=True)):
+            opposite, key = y * k + x, x * k + y
+            open_count = open_edges.get(opposite)
+            if not open_count:
+                if key in open_edges:
+                    open_edges[key] += 1
+                else:  # x -> y becomes open: the newest neighbour of both ends
+                    open_edges[key] = 1
+                    into[y][x] = out_of[x][y] = None
+            elif open_count == 1:  # y -> x is closed: no longer a neighbour on the boundary
+                del open_edges[opposite], into[x][y], out_of[y][x]
+            else:
+                open_edges[opposite] = open_count - 1
+            if j >= first_gate:
+                gates.append(key)
+    _check_spent(sources, where)
+    return rows
+
+
+def _check_spent(sources: list[Iterator[int]], where: str) -> None:
+    """R39-traversal unless the walk read every value of the four streams."""
+    for name, stream in zip(STREAM_NAMES, sources, strict=True):
+        if next(stream, None) is not None:
+            raise _broken(where, f"stream {name} has values left, or ends early")
+
+
+def _broken(where: str, detail: str) -> FormatError:
+    """R39-traversal for a walk that cannot go on: ``the traversal breaks: {detail}``."""
+    return _problem(where, f"the traversal breaks: {detail}")
 
 
 def _problem(field: str, message: str) -> FormatError:

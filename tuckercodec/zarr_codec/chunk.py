@@ -26,17 +26,16 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import zstandard
 
 from ..analysis import SMALLEST_COORDINATE, SMALLEST_RELATIVE_SHAPE
 from ..decoder import decode
 from ..encoder import EncodeOptions, Encoder
 from ..errors import InputError, UnreachableTargetError
 from ..format.limits import DEFAULT_LIMITS
-from ..format.streams import compress
+from ..format.streams import ZstdFrameProblem, compress, zstd_exact
 from ..metrics import kg_error
 from ..sequence import MeshSequence
-from .fitted import FittedBasis, complete_file, fit_array
+from .fitted import BASIS_KEYS, FittedBasis, complete_file, fit_array
 
 #: The first bytes of a point chunk; never those of a .tkc file, which start with 0x89 "TKC".
 POINT_MAGIC = b"TKCpoint"
@@ -47,8 +46,6 @@ POINT_MARGIN = 4.0
 #: How many times a chunk stored below float64 is re-encoded at a tighter target before giving up
 #: (rounding to float32 rarely needs one; float16 may need a few).
 MAX_TIGHTENING = 8
-#: zstd cannot expand one byte into more than this many (a bound that refuses absurd headers).
-_ZSTD_MAX_EXPANSION = 1 << 17
 
 _NO_FACES = np.zeros((0, 3), dtype=np.int64)
 
@@ -119,6 +116,19 @@ def codec_settings(
             "a fitted basis serves a KG target: give target_kg with it, not ranks or target_bpfv"
         )
     return mode, FittedBasis.parse(basis, basis_sha256)
+
+
+#: The configuration keys :func:`codec_settings` takes, both codecs': the mode's and a basis's.
+SETTINGS_KEYS = frozenset({"target_kg", "ranks", "target_bpfv", *BASIS_KEYS})
+
+
+def describe_settings(mode: ChunkMode, basis: FittedBasis | None) -> str:
+    """A codec's settings as its repr shows them, ``target_kg=0.1, basis=...``: the mode's key,
+    and what a fitted basis is (its text is hundreds of kB), not all of it."""
+    settings = ", ".join(f"{key}={value!r}" for key, value in mode.config().items())
+    if basis is not None:
+        settings += f", basis={basis.describe()}"
+    return settings
 
 
 def fit_settings(
@@ -314,18 +324,10 @@ def _unpack_points(data: bytes) -> np.ndarray:
             f"a point chunk declares {frames} frames of {vertices} vertices: outside 1.."
             f"{DEFAULT_LIMITS.max_positions} positions"
         )
-    size = frames * vertices * 24
-    payload = data[_POINT_HEAD.size :]
-    if size > _ZSTD_MAX_EXPANSION * len(payload):
-        raise ValueError(f"a point chunk of {len(data)} bytes cannot hold {size} bytes")
     try:
-        raw = zstandard.ZstdDecompressor().decompress(
-            payload, max_output_size=size, allow_extra_data=False
-        )
-    except zstandard.ZstdError as error:
-        raise ValueError(f"a point chunk's zstd frame does not decompress: {error}") from None
-    if len(raw) != size:
-        raise ValueError(f"a point chunk holds {len(raw)} bytes of positions, not {size}")
+        raw = zstd_exact(data[_POINT_HEAD.size :], frames * vertices * 24)
+    except ZstdFrameProblem as problem:
+        raise ValueError(f"a point chunk's positions: {problem}") from None
     return np.frombuffer(raw, dtype="<f8").reshape(frames, vertices, 3)
 
 

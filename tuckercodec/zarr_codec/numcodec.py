@@ -14,15 +14,17 @@ from ..encoder import DEFAULT_TARGET_KG
 from ..errors import InputError
 from ..optional import import_optional
 from .chunk import (
+    SETTINGS_KEYS,
     ChunkMode,
     checked_dtype,
     chunk_positions,
     codec_settings,
     decode_chunk,
+    describe_settings,
     encode_chunk,
     fit_settings,
 )
-from .fitted import BASIS_KEYS, FittedBasis
+from .fitted import FittedBasis
 
 # a DependencyError naming the extra, rather than an ImportError, when numcodecs is absent
 import_optional("numcodecs", "zarr", "the tuckercodec numcodecs codec")
@@ -120,16 +122,14 @@ class TuckerNumcodec(Codec):  # type: ignore[misc]  # numcodecs is untyped (Any)
     @classmethod
     def from_config(cls, config: dict[str, Any]) -> TuckerNumcodec:
         """The codec of a :meth:`get_config` dict (``id`` already removed, as numcodecs does)."""
-        known = {"target_kg", "ranks", "target_bpfv", "dtype", *BASIS_KEYS}
+        known = {*SETTINGS_KEYS, "dtype"}
         unknown = sorted(set(config) - known - {"id"})
         if unknown:
             raise ValueError(f"unknown keys in a tuckercodec configuration: {unknown}")
         return cls(**{key: value for key, value in config.items() if key in known})
 
     def __repr__(self) -> str:
-        settings = ", ".join(f"{key}={value!r}" for key, value in self._mode.config().items())
-        if self._basis is not None:  # its text is hundreds of kB: what it is, not all of it
-            settings += f", basis={self._basis.describe()}"
+        settings = describe_settings(self._mode, self._basis)
         return f"TuckerNumcodec({settings}, dtype={self._dtype.str!r})"
 
     def encode(self, buf: Any) -> bytes:

@@ -16,8 +16,17 @@ import numpy as np
 
 from ..encoder import DEFAULT_TARGET_KG
 from ..optional import import_optional
-from .chunk import ChunkMode, codec_settings, decode_chunk, encode_chunk, fit_settings, unpadded
-from .fitted import BASIS_KEYS, FittedBasis
+from .chunk import (
+    SETTINGS_KEYS,
+    ChunkMode,
+    codec_settings,
+    decode_chunk,
+    describe_settings,
+    encode_chunk,
+    fit_settings,
+    unpadded,
+)
+from .fitted import FittedBasis
 
 # a DependencyError naming the extra, rather than an ImportError, when zarr is absent
 import_optional("zarr", "zarr", "the tuckercodec zarr codec")
@@ -99,16 +108,13 @@ class TuckerZarrCodec(ArrayBytesCodec):  # type: ignore[misc]  # zarr is Any to 
         configuration = data.get("configuration", {})
         if unknown or not isinstance(configuration, dict):
             raise ValueError(f"a {NAME} codec entry has only name and configuration: {data!r}")
-        keys = sorted(set(configuration) - {"target_kg", "ranks", "target_bpfv", *BASIS_KEYS})
+        keys = sorted(set(configuration) - SETTINGS_KEYS)
         if keys:
             raise ValueError(f"unknown keys in a {NAME} configuration: {keys}")
         return cls(**configuration)
 
     def __repr__(self) -> str:
-        settings = ", ".join(f"{key}={value!r}" for key, value in self.mode.config().items())
-        if self.basis is not None:  # its text is hundreds of kB: what it is, not all of it
-            settings += f", basis={self.basis.describe()}"
-        return f"TuckerZarrCodec({settings})"
+        return f"TuckerZarrCodec({describe_settings(self.mode, self.basis)})"
 
     def to_dict(self) -> dict[str, Any]:
         """``{"name": "tuckercodec", "configuration": {<the mode's one key>}}``, JSON-safe;
