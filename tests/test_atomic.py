@@ -14,9 +14,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import grid_faces, wave_sequence
 
 import tuckercodec as tc
+from tests.support.sequences import grid_faces, wave_sequence
 from tuckercodec import atomic
 from tuckercodec.cli import main
 

@@ -13,9 +13,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import grid_faces, wave_sequence, write_cube_frames
 
 import tuckercodec
+from tests.support.inputs import write_cube_frames
+from tests.support.sequences import grid_faces, wave_sequence
 from tuckercodec.cli import batch, main
 from tuckercodec.cli.batch import EXIT_SOME_FAILED, output_name
 from tuckercodec.parallel import open_executor

@@ -11,9 +11,10 @@ import re
 
 import numpy as np
 import pytest
-from conftest import assert_same_faces, grid_faces, load_shared_npz, shared_file, wave_sequence
 
 import tuckercodec as tc
+from tests.support.compressed import assert_same_faces
+from tests.support.sequences import grid_faces, load_shared_npz, shared_file, wave_sequence
 from tuckercodec import MeshSequence, decode, encode, encode_with_report, info, kg_error
 
 

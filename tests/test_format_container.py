@@ -14,26 +14,24 @@ from collections.abc import Callable
 from typing import Any
 
 import pytest
-from conftest import (
-    HOSTILE,
-    HYPOTHESIS_SETTINGS,
-    MISSING,
-    VALID,
-    Parts,
-    expect_error,
-    grid_faces,
-    msgpack_leaves,
-    outcome,
-    raw_file,
-    table_file,
-    vector,
-    wave_sequence,
-    with_preamble,
-)
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import tuckercodec
+from tests.support.compressed import (
+    HOSTILE,
+    MISSING,
+    VALID,
+    Parts,
+    expect_error,
+    outcome,
+    raw_file,
+    table_file,
+    vector,
+    with_preamble,
+)
+from tests.support.properties import HYPOTHESIS_SETTINGS, msgpack_leaves
+from tests.support.sequences import grid_faces, wave_sequence
 from tuckercodec import (
     ChecksumError,
     FormatError,

@@ -12,11 +12,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import HYPOTHESIS_SETTINGS, VALID, assert_same_faces, expect_error, vector
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import tuckercodec
+from tests.support.compressed import VALID, assert_same_faces, expect_error, vector
+from tests.support.properties import HYPOTHESIS_SETTINGS
 from tuckercodec import ChecksumError, Decoder, FormatError, TruncatedFileError
 from tuckercodec.format.container import HEAD_SIZE, parse_container
 from tuckercodec.format.sections import KNOWN_SECTIONS

@@ -14,23 +14,22 @@ import json
 from typing import Any
 
 import pytest
-from conftest import (
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import tuckercodec
+from tests.support.compressed import (
     HOSTILE,
-    HYPOTHESIS_SETTINGS,
     MISSING,
     VALID,
     Parts,
     accept_either,
     check_decoded,
-    msgpack_values,
     outcome,
     raw_file,
     vector,
 )
-from hypothesis import given, settings
-from hypothesis import strategies as st
-
-import tuckercodec
+from tests.support.properties import HYPOTHESIS_SETTINGS, msgpack_values
 from tuckercodec import LimitError
 from tuckercodec.format.container import pack_container
 

@@ -9,8 +9,8 @@ import time
 
 import numpy as np
 import pytest
-from conftest import IDENTITY_U2, deadline, spec_walk
 
+from tests.support.compressed import IDENTITY_U2, deadline, spec_walk
 from tuckercodec import Decoder
 from tuckercodec.format import prediction
 from tuckercodec.format.container import pack_container

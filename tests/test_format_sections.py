@@ -15,24 +15,23 @@ from collections.abc import Callable
 import numpy as np
 import pytest
 import zstandard
-from conftest import (
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import tuckercodec
+from tests.support.compressed import (
     HOSTILE,
-    HYPOTHESIS_SETTINGS,
     MISSING,
     VALID,
     Parts,
     accept_either,
     check_decoded,
     expect_error,
-    msgpack_values,
     outcome,
     table_file,
     vector,
 )
-from hypothesis import given, settings
-from hypothesis import strategies as st
-
-import tuckercodec
+from tests.support.properties import HYPOTHESIS_SETTINGS, msgpack_values
 from tuckercodec import FormatError, UnsupportedVersionError
 from tuckercodec.format.sections import KNOWN_SECTIONS
 

@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 import pytest
-from js_interop import HINT, INFO, issues, three_positions, validate_gltf_files
 
+from tests.support.js_interop import HINT, INFO, issues, three_positions, validate_gltf_files
 from tuckercodec import Decoder, MeshSequence, encode, load_sequence, save_sequence
 from tuckercodec.gltf.accessors import view_bytes
 from tuckercodec.gltf.container import pack_glb, read_document

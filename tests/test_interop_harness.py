@@ -12,10 +12,18 @@ import struct
 from pathlib import Path
 from typing import Any
 
-import js_interop
 import numpy as np
 import pytest
-from js_interop import ERROR, INFO, issues, three_evaluate, three_positions, validate_gltf
+
+from tests.support import js_interop
+from tests.support.js_interop import (
+    ERROR,
+    INFO,
+    issues,
+    three_evaluate,
+    three_positions,
+    validate_gltf,
+)
 
 FLOAT, SHORT = 5126, 5122
 ARRAY_BUFFER = 34962

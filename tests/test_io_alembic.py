@@ -12,8 +12,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import expect_input_error, shared_file
 
+from tests.support.inputs import expect_input_error
+from tests.support.sequences import shared_file
 from tuckercodec import DependencyError, InputError, MeshSequence
 from tuckercodec.cli import main
 from tuckercodec.io import load_sequence, save_sequence

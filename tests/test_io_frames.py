@@ -14,23 +14,20 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import (
+from hypothesis import given
+
+from tests.support.inputs import (
     CUBE_VERTICES,
     OBJ_TOKENS,
-    PROPERTY,
     VALID_OBJ,
     check_sequence,
     expect_input_error,
-    mutations,
     obj_text,
-    report_examples,
-    scratch_folder,
-    shared_file,
     write_cube_frames,
     write_file,
 )
-from hypothesis import given
-
+from tests.support.properties import PROPERTY, mutations, report_examples, scratch_folder
+from tests.support.sequences import shared_file
 from tuckercodec import InputError, MeshSequence
 from tuckercodec.io import (
     format_named,

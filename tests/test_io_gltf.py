@@ -14,8 +14,8 @@ from typing import Any
 
 import numpy as np
 import pytest
-from conftest import shared_file
 
+from tests.support.sequences import shared_file
 from tuckercodec import DependencyError, InputError, MeshSequence, load_sequence, save_sequence
 from tuckercodec.gltf import container
 from tuckercodec.gltf.container import pack_glb

@@ -14,11 +14,11 @@ import time
 
 import numpy as np
 import pytest
-import streaming_hooks as hooks
-from conftest import expect_input_error
-from test_io_isolation import CRASHING, LINUX, children, gone
-from test_io_streaming import check_ranges, same_description
 
+from tests.support import streaming_hooks as hooks
+from tests.support.inputs import expect_input_error
+from tests.test_io_isolation import CRASHING, LINUX, children, gone
+from tests.test_io_streaming import check_ranges, same_description
 from tuckercodec import InputError, load_sequence, save_sequence
 from tuckercodec.io import open_frames
 from tuckercodec.io.isolated_frames import IsolatedFrames

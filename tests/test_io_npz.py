@@ -23,21 +23,18 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import (
-    CUBE_VERTICES,
-    PROPERTY,
-    check_sequence,
-    expect_input_error,
-    measure,
-    mutations,
-    report_examples,
-    scratch_folder,
-    shared_file,
-    write_file,
-)
 from hypothesis import given
 from hypothesis import strategies as st
 
+from tests.support.inputs import (
+    CUBE_VERTICES,
+    check_sequence,
+    expect_input_error,
+    measure,
+    write_file,
+)
+from tests.support.properties import PROPERTY, mutations, report_examples, scratch_folder
+from tests.support.sequences import shared_file
 from tuckercodec import InputError, MeshSequence
 from tuckercodec.io import load_sequence, save_sequence
 

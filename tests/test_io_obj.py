@@ -19,23 +19,20 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import (
+from hypothesis import given
+from hypothesis import strategies as st
+
+from tests.support.inputs import (
     CUBE_VERTICES,
     OBJ_TOKENS,
-    PROPERTY,
     TRIANGLE,
     VALID_OBJ,
     expect_input_error,
     measure,
-    mutations,
     obj_text,
-    report_examples,
-    scratch_folder,
     write_file,
 )
-from hypothesis import given
-from hypothesis import strategies as st
-
+from tests.support.properties import PROPERTY, mutations, report_examples, scratch_folder
 from tuckercodec import InputError, MeshSequence
 from tuckercodec.io import load_sequence
 from tuckercodec.io import obj as objio

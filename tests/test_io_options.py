@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import grid_faces, wave_sequence
 
+from tests.support.sequences import grid_faces, wave_sequence
 from tuckercodec import Decoder, InputError, MeshSequence, encode, load_sequence, save_sequence
 from tuckercodec.cli import main
 from tuckercodec.io import formats

@@ -16,17 +16,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import (
-    PROPERTY,
-    expect_input_error,
-    grid_faces,
-    measure,
-    shared_file,
-    wave_sequence,
-)
 from hypothesis import given
 from hypothesis import strategies as st
 
+from tests.support.inputs import expect_input_error, measure
+from tests.support.properties import PROPERTY
+from tests.support.sequences import grid_faces, shared_file, wave_sequence
 from tuckercodec import InputError, MeshSequence, load_sequence, save_sequence
 from tuckercodec.cli import main
 from tuckercodec.io.mdd import frame_timing

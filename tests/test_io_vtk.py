@@ -17,8 +17,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import expect_input_error, grid_faces, shared_file, wave_sequence
 
+from tests.support.inputs import expect_input_error
+from tests.support.sequences import grid_faces, shared_file, wave_sequence
 from tuckercodec import InputError, MeshSequence, load_sequence, save_sequence
 from tuckercodec.cli import main
 from tuckercodec.io import vtk as vtk_format

@@ -19,18 +19,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import (
-    PROPERTY,
-    expect_input_error,
-    measure,
-    mutations,
-    report_examples,
-    scratch_folder,
-    wave_sequence,
-)
 from hypothesis import given
 from hypothesis import strategies as st
 
+from tests.support.inputs import expect_input_error, measure
+from tests.support.properties import PROPERTY, mutations, report_examples, scratch_folder
+from tests.support.sequences import wave_sequence
 from tuckercodec import InputError, load_sequence
 from tuckercodec.io.vtk_data import MAX_INFLATION, Layout
 from tuckercodec.io.vtk_xml import DatasetWriter, read_dataset

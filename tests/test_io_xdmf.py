@@ -16,19 +16,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import (
-    PROPERTY,
-    expect_input_error,
-    grid_faces,
-    measure,
-    mutations,
-    report_examples,
-    scratch_folder,
-    shared_file,
-    wave_sequence,
-)
 from hypothesis import given
 
+from tests.support.inputs import expect_input_error, measure
+from tests.support.properties import PROPERTY, mutations, report_examples, scratch_folder
+from tests.support.sequences import grid_faces, shared_file, wave_sequence
 from tuckercodec import DependencyError, InputError, MeshSequence, load_sequence, save_sequence
 from tuckercodec.cli import main
 

@@ -8,8 +8,8 @@ import shutil
 
 import numpy as np
 import pytest
-from conftest import expect_input_error
 
+from tests.support.inputs import expect_input_error
 from tuckercodec import MeshSequence, load_sequence, save_sequence
 from tuckercodec.io import open_frames
 

@@ -22,10 +22,10 @@ from typing import Any
 import msgpack
 import numpy as np
 import pytest
-from conftest import shared_file
-from js_decoder import node
 
 import tuckercodec
+from tests.support.js_decoder import node
+from tests.support.sequences import shared_file
 from tuckercodec import FormatError
 from tuckercodec.format import streams, traversal
 from tuckercodec.format.container import parse_container

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import wave_sequence
 
+from tests.support.sequences import wave_sequence
 from tuckercodec import InputError, MeshSequence
 from tuckercodec.metrics import (
     kg_denominator,

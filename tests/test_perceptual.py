@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import grid_faces, load_shared_npz, wave_sequence
 
+from tests.support.sequences import grid_faces, load_shared_npz, wave_sequence
 from tuckercodec import InputError, MeshSequence
 from tuckercodec.perceptual import STED_DEFINITION, Sted, neighbourhood_edges, sted
 from tuckercodec.topology import mesh_edges

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import pytest
 
+from tests.support.browser import find_chromium
 from tools import bench_viewer
-from tools.browser import find_chromium
 
 pytestmark = pytest.mark.skipif(
     find_chromium() is None,

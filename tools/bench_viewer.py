@@ -3,7 +3,7 @@ frame's reconstruction, and playback at the file's rate, all measured by the pag
 
 Each sequence is encoded at the target KG error into a temporary folder (never into the
 repository), served by ``python -m tuckercodec view FILE.tkc`` (the command a user runs, on a
-free port of 127.0.0.1) and opened in Chromium (tools/browser.py):
+free port of 127.0.0.1) and opened in Chromium (tests/support/browser.py):
 
 - open: ``tkcViewer.info.openMs``, the page's time from the file fetched to frame 0 drawn
   (openTkc, the scene, framing the camera, the first render), over ``--loads`` page loads in
@@ -43,8 +43,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
+from tests.support.browser import Browser, BrowserError, find_chromium
 from tools import common
-from tools.browser import Browser, BrowserError, find_chromium
 from tuckercodec import encode
 
 DEFAULT_SEQUENCES = ("samba.npz", common.SAMPLE)

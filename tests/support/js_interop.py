@@ -1,12 +1,11 @@
 """Tools nobody here wrote, run from the tests: the Khronos glTF-Validator and three.js's
 GLTFLoader, both in node, from the npm packages pinned in tests/js/package-lock.json.
 
-Test modules import it as ``from js_interop import validate_gltf, three_positions`` (pytest puts
-tests/ on the import path, as for conftest). The first call installs the packages with
-``npm ci`` into tests/js/node_modules, once (a file lock makes parallel runs wait for it; a
-marker holding the lockfile's hash makes an interrupted or outdated install run again); a test
-that calls either function where node or npm is missing, too old, or the install fails is
-skipped with a message naming what is missing.
+Test modules import it as ``from tests.support.js_interop import validate_gltf``. The first call
+installs the packages with ``npm ci`` into tests/js/node_modules, once (a file lock makes parallel
+runs wait for it; a marker holding the lockfile's hash makes an interrupted or outdated install run
+again); a test that calls either function where node or npm is missing, too old, or the install
+fails is skipped with a message naming what is missing.
 """
 
 from __future__ import annotations
@@ -25,7 +24,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-JS = Path(__file__).resolve().parent / "js"
+JS = Path(__file__).resolve().parents[1] / "js"
 NODE_MODULES = JS / "node_modules"
 MARKER = NODE_MODULES / ".tuckercodec-installed"
 LOCK = JS / ".install.lock"

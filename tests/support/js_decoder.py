@@ -1,9 +1,9 @@
 """Runs the JavaScript decoder (tuckercodec/web/tkc/) in node, for the tests that compare it with
-the Python decoder, and judges what it makes of the conformance vectors (in node or in a
-browser: tests/js/conformance_observe.mjs). Test modules import it as
-``from js_decoder import run_node``; a test that calls it where node (18 or newer) is missing is
-skipped, naming what is missing. The decoder needs no npm package (its two dependencies are
-vendored), so nothing is installed.
+the Python decoder, and judges what it makes of the conformance vectors (in node or in a browser:
+tests/js/conformance_observe.mjs). Test modules import it as
+``from tests.support.js_decoder import run_node``; a test that calls it where node (18 or newer)
+is missing is skipped, naming what is missing. The decoder needs no npm package (its two
+dependencies are vendored), so nothing is installed.
 """
 
 from __future__ import annotations
@@ -16,8 +16,8 @@ from typing import Any
 
 import pytest
 
-JS = Path(__file__).resolve().parent / "js"
-VECTORS = Path(__file__).resolve().parents[1] / "spec" / "vectors"
+JS = Path(__file__).resolve().parents[1] / "js"
+VECTORS = Path(__file__).resolve().parents[2] / "spec" / "vectors"
 #: every vector's JSON (spec/FORMAT.md §12), by file name
 EXPECTED = {p.name: json.loads(p.read_text()) for p in sorted(VECTORS.glob("*.json"))}
 VALID = [name for name, e in EXPECTED.items() if e["valid"]]

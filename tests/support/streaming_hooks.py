@@ -1,7 +1,8 @@
 """Sources for tests/test_io_isolated_frames.py, each a FrameSource that does one thing a C++
 library may do while serving reads in a child: crash at a frame, hang, refuse a frame, fail
 for a bug. The serving child of tuckercodec.io.isolated_frames imports this module by name
-from the caller's import path, where pytest puts tests/ (as for conftest)."""
+(tests.support.streaming_hooks) from the caller's import path, where pytest puts the
+repository's root."""
 
 from __future__ import annotations
 

@@ -2,22 +2,22 @@
 Longer than the usual 400 lines because it owns the browser's whole life, each step with its
 deadline and its error: launching, talking, a browser that dies, and the clean-up.
 
-The viewer's browser tests and ``tools/bench_viewer.py`` drive Debian's ``chromium`` with it;
-nothing is installed for it (no Playwright, no websocket library). Chromium started with
-``--remote-debugging-pipe`` reads CDP messages, JSON each ended by a NUL byte, on its file
-descriptor 3 and writes its answers and events the same way on descriptor 4::
+The viewer's browser tests and the viewer benchmark (``tools/bench_viewer.py``) drive Debian's
+``chromium`` with it; nothing is installed for it (no Playwright, no websocket library). Chromium
+started with ``--remote-debugging-pipe`` reads CDP messages, JSON each ended by a NUL byte, on its
+file descriptor 3 and writes its answers and events the same way on descriptor 4::
 
     with Browser.launch() as browser:
         page = browser.new_page("http://127.0.0.1:8000/viewer/index.html?file=...")
         page.evaluate("window.tkcViewer.ready")           # awaits a promise
         positions = page.typed_array("window.tkcViewer.drawnPositions()")
-        png = page.screenshot()                            # tools.png.decode_png(png)
+        png = page.screenshot()                            # png.decode_png(png)
         assert not page.problems()                         # console errors, exceptions
 
 Every wait has a deadline (:class:`BrowserTimeout`), a browser that dies or closes its pipe
 raises :class:`BrowserDied` with the end of its stderr, and closing (also on any error, the
 ``with`` block's exit) kills the browser's whole process group and removes its profile folder.
-:func:`tools.png.decode_png` reads a screenshot into a numpy array.
+:func:`tests.support.png.decode_png` reads a screenshot into a numpy array.
 """
 
 from __future__ import annotations

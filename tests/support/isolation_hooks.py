@@ -1,7 +1,7 @@
 """Readers for tests/test_io_isolation.py that each do one thing a C++ library may do to the
 process reading a file: crash, allocate without end, hang, print, raise. The reading child of
-tuckercodec.io.isolation imports this module by name from the caller's import path, where
-pytest puts tests/ (as for conftest)."""
+tuckercodec.io.isolation imports this module by name (tests.support.isolation_hooks) from the
+caller's import path, where pytest puts the repository's root."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """Reading a PNG into a numpy array with zlib alone (no imaging library is a dependency): the
 8-bit, non-interlaced greyscale, RGB and RGBA images Chromium's screenshots are
-(tools/browser.py), for the tests and tools that look at what a page drew."""
+(tests/support/browser.py), for the tests and tools that look at what a page drew."""
 
 from __future__ import annotations
 
