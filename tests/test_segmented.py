@@ -9,7 +9,7 @@ import pytest
 import tuckercodec
 from tests.support.compressed import assert_same_faces
 from tests.support.sequences import shared_file as shared_data
-from tools import make_vectors
+from tools.generate import vectors as make_vectors
 from tuckercodec import Decoder, FormatError, LimitError, Limits, MeshSequence, encode_with_report
 from tuckercodec.encoder.plan import needs_segments, parse_size, plan_segments
 from tuckercodec.format.segments import SEGMENTED

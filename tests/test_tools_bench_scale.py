@@ -9,7 +9,8 @@ import sys
 import numpy as np
 import pytest
 
-from tools import bench_scale, make_sequence
+from tools import bench_scale
+from tools.generate import sequence as make_sequence
 from tuckercodec import MeshSequence, decode, encode, kg_error
 
 pytestmark = pytest.mark.skipif(sys.platform != "linux", reason="bench_scale reads Linux's /proc")

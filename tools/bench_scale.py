@@ -13,7 +13,7 @@ anonymous memory passes ``--kill-above`` (half the machine's memory) is killed a
 such, so that an encoder that does not stream cannot starve the machine. Each figure is the
 median of ``--runs`` runs (``--big-runs`` for the large sequence), with [min-max].
 
-1. **Encode** the generated sequence (``tools.make_sequence``, by default a 200,000-vertex,
+1. **Encode** the generated sequence (``tools.generate.sequence``, by default a 200,000-vertex,
    2,000-frame body, 4.8 GB as float32 ``.npy``, made once and kept in ``--workdir``): wall
    time, MB/s of float32 input, peak memory, size, bpfv, the KG error the encoder reports
    (``info --json``) and the KG error measured here, independently, by streaming the ``.npy``
@@ -71,7 +71,8 @@ from typing import Any
 
 import numpy as np
 
-from tools import common, make_sequence
+from tools import common
+from tools.generate import sequence as make_sequence
 from tuckercodec import Decoder, kg_error, load_sequence
 
 DEFAULT_WORKDIR = Path("~/.cache/tuckercodec-bench").expanduser()

@@ -30,8 +30,8 @@ The frames are made and written in blocks, so memory stays bounded (a few hundre
 ``load_sequence`` reads, its members streamed. Files are written atomically and never replace
 an existing one without ``--force``.
 
-    python -m tools.make_sequence --kind body --vertices 200000 --frames 2000 -o /tmp/body.npy
-    python -m tools.make_sequence --kind cloth --vertices 5000 --frames 300 -o cloth.npz --seed 3
+    python -m tools.generate.sequence --kind body --vertices 200000 --frames 2000 -o /tmp/body.npy
+    python -m tools.generate.sequence --kind cloth --vertices 5000 --frames 300 -o c.npz --seed 3
 """
 
 from __future__ import annotations
@@ -832,7 +832,7 @@ def write(
     npz: bool = False,
     force: bool = False,
     progress: Callable[[int], None] | None = None,
-    title: str = "tools.make_sequence",
+    title: str = "tools.generate.sequence",
 ) -> list[Path]:
     """Write ``sequence`` to ``output`` (.npy and ``OUT.faces.obj``, or with ``npz`` one
     .npz), atomically, never replacing a file unless ``force``; returns the paths written.
@@ -857,7 +857,7 @@ def write(
 def main(argv: list[str] | None = None) -> int:
     """Make and write one sequence; returns the exit status."""
     parser = argparse.ArgumentParser(
-        prog="python -m tools.make_sequence", description=__doc__.splitlines()[0]
+        prog="python -m tools.generate.sequence", description=__doc__.splitlines()[0]
     )
     parser.add_argument("--kind", choices=KINDS, default="body", help="what moves (default body)")
     parser.add_argument("--vertices", type=int, default=200_000, help="K (default 200000)")
@@ -887,7 +887,7 @@ def main(argv: list[str] | None = None) -> int:
             elapsed = time.perf_counter() - start
             print(f"  {done}/{args.frames} frames, {elapsed:.0f} s", file=sys.stderr, flush=True)
 
-    command = common.command("tools.make_sequence", argv)
+    command = common.command("tools.generate.sequence", argv)
     try:
         paths = write(output, sequence, npz=npz, force=args.force, progress=progress, title=command)
     except (FileExistsError, FileNotFoundError, NotADirectoryError) as error:

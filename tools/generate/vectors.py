@@ -1,7 +1,7 @@
 """Write the conformance vectors of spec/FORMAT.md §12 into spec/vectors/.
 
-    python -m tools.make_vectors [--force]          # spec/vectors/ (never needed again: below)
-    python -m tools.make_vectors --out DIR          # somewhere else, to look at them
+    python -m tools.generate.vectors [--force]          # spec/vectors/ (never needed again: below)
+    python -m tools.generate.vectors --out DIR          # somewhere else, to look at them
 
 Valid vectors: small files encoded from deterministic synthetic sequences, each with a JSON of
 the header fields a decoder must report, SHA-256 digests of the dequantized arrays, and the
@@ -494,7 +494,7 @@ def write_invalid(folder: Path, good: bytes, segmented: bytes, traversed: bytes)
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m tools.make_vectors", description=__doc__.splitlines()[0]
+        prog="python -m tools.generate.vectors", description=__doc__.splitlines()[0]
     )
     parser.add_argument(
         "--out", type=Path, default=VECTORS, help="where to write them (default: spec/vectors/)"

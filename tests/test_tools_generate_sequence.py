@@ -1,4 +1,4 @@
-"""tools.make_sequence: the generated sequences are what the scale benchmarks assume they are:
+"""tools.generate.sequence: the generated sequences are what the scale benchmarks assume they are:
 deterministic, of the size asked, with valid faces, made the same whatever the blocks, written
 as readable .npy/.obj/.npz files, and neither trivial nor incompressible for the codec."""
 
@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tools import make_sequence
+from tools.generate import sequence as make_sequence
 from tuckercodec import MeshSequence, decode, encode_with_report, kg_error, load_sequence
 
 KINDS = make_sequence.KINDS
