@@ -93,7 +93,7 @@ def test_polygons_rates_and_time_codes_round_trip_exactly(tmp_path, rate, codes)
 
 
 def test_horse_gallop_round_trips_exactly(horse, tmp_path):
-    """(Its reading speed is measured by tools.bench_formats, not asserted here.)"""
+    """(Its reading speed is measured by tools.bench read --formats, not asserted here.)"""
     path = tmp_path / "horse.abc"
     save_sequence(horse, path)
     assert exact(load_sequence(path), horse)

@@ -78,7 +78,7 @@ def test_polygons_rates_and_uneven_time_codes_round_trip_exactly(tmp_path, suffi
 
 @pytest.mark.parametrize("suffix", [".usda", ".usdc"])
 def test_horse_gallop_round_trips_exactly(horse, tmp_path, suffix):
-    """(Its reading speed is measured by tools.bench_formats, not asserted here.)"""
+    """(Its reading speed is measured by tools.bench read --formats, not asserted here.)"""
     path = tmp_path / f"horse{suffix}"
     save_sequence(horse, path)
     assert exact(load_sequence(path), horse)

@@ -1,4 +1,4 @@
-"""tools.bench and its coders (tools.peers): sizes, errors and plumbing, untimed.
+"""The peers suite of tools.bench and its coders: sizes, errors and plumbing, untimed.
 
 The peers that need optional packages (Draco, meshoptimizer, SZ3, zfp: ``pip install
 '.[bench]'``) are tested only where those are installed, and skip saying so elsewhere.
@@ -14,7 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tools import bench, common, peers
+from tools import bench, common
+from tools.bench import peers
+from tools.bench.peers import base
 from tuckercodec import kg_error
 
 
@@ -25,7 +27,7 @@ def sample():
 
 @pytest.fixture(scope="module")
 def context(sample):
-    return peers.Context.of(sample, [10, 14])
+    return base.Context.of(sample, [10, 14])
 
 
 def _decoded_kg(trial, sample) -> float:
@@ -70,7 +72,7 @@ def test_bound_search_keeps_the_smallest_file_that_meets_the_target(sample, cont
         q = np.frombuffer(zlib.decompress(payload[8:]), np.int32)
         return q.reshape(context.tensor.shape) * step
 
-    trial = peers._search_bound("toy", 0.3, context, 1e-6, compress, decompress, str)
+    trial = base.search_bound("toy", 0.3, context, 1e-6, compress, decompress, str)
     assert trial is not None and trial.kg <= 0.3
     assert abs(_decoded_kg(trial, sample) - trial.kg) < 1e-9
     # the search got close to the target, from below: a coarser step would fail
@@ -82,10 +84,10 @@ def test_vertex_matching_undoes_a_permutation_of_lattice_points():
     original = rng.random((500, 3))
     lattice = np.rint(original * 255) / 255  # what a quantizing coder decodes
     order = rng.permutation(500)
-    matched = peers._match_vertices(original, lattice[order], "test")
+    matched = base.match_vertices(original, lattice[order], "test")
     np.testing.assert_array_equal(matched, lattice)
     with pytest.raises(RuntimeError, match="drops vertices"):
-        peers._match_vertices(original, lattice[:-1], "test")
+        base.match_vertices(original, lattice[:-1], "test")
 
 
 def test_peak_memory_sees_a_large_allocation():
@@ -147,7 +149,18 @@ def test_bench_writes_tables_plots_and_refuses_to_overwrite(sample, tmp_path, ca
     pytest.importorskip("matplotlib", reason="plots need matplotlib")
     out = tmp_path / "bench"
     coders = "tuckercodec,pca,zstd-f32"
-    args = ["sample", "--coders", coders, "--targets", "1,0.2", "--repeat", "2", "--out", str(out)]
+    args = [
+        "peers",
+        "sample",
+        "--coders",
+        coders,
+        "--targets",
+        "1,0.2",
+        "--repeat",
+        "2",
+        "--out",
+        str(out),
+    ]
     assert bench.main(args) == 0
     for name in ("summary.md", "sample.md", "sample.png", "results.json"):
         assert (out / name).stat().st_size > 0
@@ -170,7 +183,16 @@ def test_bench_runs_on_a_sequence_without_faces(tmp_path):
     sequence = common.load(common.SAMPLE)
     np.savez(points, V=sequence.vertices[:10], F=np.zeros((0, 3), dtype=np.int32))
     out = tmp_path / "bench"
-    args = [str(points), "--coders", "tuckercodec,zstd-f32", "--targets", "1", "--out", str(out)]
+    args = [
+        "peers",
+        str(points),
+        "--coders",
+        "tuckercodec,zstd-f32",
+        "--targets",
+        "1",
+        "--out",
+        str(out),
+    ]
     assert bench.main(args) == 0
     rows = json.loads((out / "results.json").read_text())
     assert {row["coder"] for row in rows} == {"tuckercodec", "zstd-f32"}
@@ -179,7 +201,7 @@ def test_bench_runs_on_a_sequence_without_faces(tmp_path):
 
 def test_draco_points_keep_the_vertex_order(sample, context):
     pytest.importorskip("DracoPy", reason="DracoPy is not installed (pip install '.[bench]')")
-    (trial,) = peers.run_draco_points(sample, [], peers.Context.of(sample, [14]))
+    (trial,) = peers.run_draco_points(sample, [], base.Context.of(sample, [14]))
     # no matching was needed: every decoded vertex is within half a 14-bit step of its own
     extent = np.ptp(sample.vertices, axis=1).max()
     assert np.abs(trial.decoded - sample.vertices).max() <= extent / (2**14 - 1)

@@ -405,7 +405,7 @@ def test_a_chunk_of_another_shape_than_the_arrays_is_refused(cloth):
 
 
 def test_the_zarr_benchmark_measures_what_it_stores(tmp_path):
-    from tools import bench_zarr
+    from tools.bench import zarr as bench_zarr
     from tuckercodec.samples import sheet_triangles, wave_sheet
 
     sheet = tuckercodec.MeshSequence(wave_sheet(frames=24, grid=9), sheet_triangles(9))

@@ -2,7 +2,7 @@
 Longer than the usual 400 lines because it owns the browser's whole life, each step with its
 deadline and its error: launching, talking, a browser that dies, and the clean-up.
 
-The viewer's browser tests and the viewer benchmark (``tools/bench_viewer.py``) drive Debian's
+The viewer's browser tests and the viewer benchmark (``tools/bench/viewer.py``) drive Debian's
 ``chromium`` with it; nothing is installed for it (no Playwright, no websocket library). Chromium
 started with ``--remote-debugging-pipe`` reads CDP messages, JSON each ended by a NUL byte, on its
 file descriptor 3 and writes its answers and events the same way on descriptor 4::

@@ -8,7 +8,7 @@ analysis included, as ``tuckercodec encode --bpfv B`` does) and the tool prints:
   their ratio, the fill; the target is 0.98 <= fill <= 1 wherever B is reachable;
 * the decoded KG error: Karni-Gotsman, in percent, each frame centred on its own centroid
   (``tuckercodec.kg_error``), measured here on the decoder's positions;
-* the encode time, the median of ``--runs`` encodes (and their range), and for comparison the
+* the encode time, the median of ``--repeat`` encodes (and their range), and for comparison the
   median time of ``encode(seq, target_kg=K)`` at the KG error K the size target reached, with
   the ratio of the two (the brief: a size target within about twice a KG target's time).
 
@@ -16,8 +16,8 @@ A budget below the coarsest file is reported as unreachable (the codec's own mes
 larger than B is a bug: the tool then exits with 1. ``--segment-frames N`` measures the
 segmented encoder's size target instead (format 1.1/1.2 segments of N frames).
 
-    python -m tools.bench_bpfv
-    python -m tools.bench_bpfv sample --bpfv 1 2 --runs 3
+    python -m tools.bench bpfv
+    python -m tools.bench bpfv sample --bpfv 1 2 --repeat 3
 """
 
 from __future__ import annotations
@@ -30,6 +30,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from tools import common
+from tools.bench import arguments
 from tuckercodec import (
     Decoder,
     MeshSequence,
@@ -94,19 +95,16 @@ def encode_kg(sequence: MeshSequence, kg: float, segment_frames: int | None) -> 
     return encode_with_report(sequence, target_kg=kg, segment_frames=segment_frames).data
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m tools.bench_bpfv", description=__doc__.splitlines()[0]
-    )
-    parser.add_argument(
-        "sequences", nargs="*", help="paths, or 'sample' (default: every one of ../shared/data)"
-    )
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The bpfv suite's options."""
+    arguments.sequences(parser, "every sequence of ../shared/data")
     parser.add_argument("--bpfv", type=float, nargs="+", default=DEFAULT_BUDGETS)
-    parser.add_argument("--runs", type=int, default=1, help="encodes timed per point (median)")
+    arguments.repeat(parser, 1, "encodes timed per point, the median reported")
     parser.add_argument("--segment-frames", type=int, default=None)
-    args = parser.parse_args(argv)
-    if args.runs < 1:
-        parser.error("--runs must be at least 1")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Measure and print; the exit status."""
     sources = args.sequences or common.shared_sequences()
     if not sources:
         print(f"no sequences: {common.SHARED_DATA} is absent", file=sys.stderr)
@@ -114,7 +112,7 @@ def main(argv: list[str] | None = None) -> int:
     mode = "" if args.segment_frames is None else f", segments of {args.segment_frames} frames"
     print(
         f"size targets{mode}; decoded KG: Karni-Gotsman, per-frame centroid, percent "
-        f"(tuckercodec.kg_error); times: median of {args.runs} encode(s) from scratch"
+        f"(tuckercodec.kg_error); times: median of {args.repeat} encode(s) from scratch"
     )
     print(
         "| sequence | asked bpfv | file bpfv | fill | bytes | decoded KG | encode s "
@@ -126,7 +124,7 @@ def main(argv: list[str] | None = None) -> int:
         name = common.SAMPLE if source == common.SAMPLE else Path(source).name
         sequence = common.load(source)
         for budget in args.bpfv:
-            row = measure(sequence, budget, args.runs, args.segment_frames)
+            row = measure(sequence, budget, args.repeat, args.segment_frames)
             if isinstance(row, str):
                 print(f"| {name} | {budget:g} | {row} | | | | | | |")
                 continue
@@ -135,7 +133,7 @@ def main(argv: list[str] | None = None) -> int:
             elif row["fill"] < LEAST_FILL:
                 short.append(f"{name} B={budget:g}: fill {row['fill']:.4f}")
             spread = f"{row['seconds']:.2f}"
-            if args.runs > 1:
+            if args.repeat > 1:
                 spread += f" [{row['low']:.2f}-{row['high']:.2f}]"
             print(
                 f"| {name} | {budget:g} | {row['bpfv']:.4f} | {row['fill']:.4f} "
@@ -145,7 +143,3 @@ def main(argv: list[str] | None = None) -> int:
     print(f"fills below {LEAST_FILL}: {', '.join(short) or 'none'}")
     print(f"files over their budget: {', '.join(over) or 'none'}")
     return 1 if over else 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -15,8 +15,8 @@ as base64, 4/3 of its binary size), each over the .tkc. Timings are medians of `
 after one untimed run; the load average before and after is printed (timings taken on a busy
 machine are not figures). Prints Markdown.
 
-    python -m tools.bench_zarr                                # chicken, 100 frames a chunk
-    python -m tools.bench_zarr sample --frames-per-chunk 20 --targets 0.1 --repeat 1
+    python -m tools.bench zarr                                # chicken, 100 frames a chunk
+    python -m tools.bench zarr sample --frames-per-chunk 20 --targets 0.1 --repeat 1
 """
 
 from __future__ import annotations
@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from tools import common
+from tools.bench import arguments
 from tuckercodec import MeshSequence, encode_with_report, info, kg_error
 from tuckercodec.internal import parse_container
 
@@ -323,29 +324,22 @@ def _load() -> str:
         return "unknown"
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Run the benchmark and print the result; returns the process exit status."""
-    parser = argparse.ArgumentParser(
-        prog="python -m tools.bench_zarr", description=__doc__.splitlines()[0]
-    )
-    parser.add_argument(
-        "input",
-        nargs="?",
-        default=str(DEFAULT_INPUT),
-        help="a sequence (.npz, OBJ folder...) or 'sample' (default: chicken)",
-    )
-    parser.add_argument("--frames-per-chunk", type=int, default=100)
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The zarr suite's options."""
+    arguments.sequence(parser, str(DEFAULT_INPUT), "chicken")
+    parser.add_argument("--frames-per-chunk", type=arguments.positive_int, default=100)
     parser.add_argument("--targets", type=float, nargs="+", default=[0.1, 1.0])
-    parser.add_argument("--repeat", type=int, default=3, help="timed runs (median reported)")
+    arguments.repeat(parser, 3)
     parser.add_argument(
         "--no-fitted", action="store_true", help="measure the usual mode only, not the fitted"
     )
-    args = parser.parse_args(argv)
-    if args.repeat < 1 or args.frames_per_chunk < 1:
-        parser.error("--repeat and --frames-per-chunk must be at least 1")
-    if args.input != common.SAMPLE and not Path(args.input).exists():
+
+
+def run(args: argparse.Namespace) -> int:
+    """Measure and print; the exit status."""
+    if args.sequence != common.SAMPLE and not Path(args.sequence).exists():
         print(
-            f"{args.input} is absent (the real sequences live in {common.SHARED_DATA})",
+            f"{args.sequence} is absent (the real sequences live in {common.SHARED_DATA})",
             file=sys.stderr,
         )
         return 2
@@ -355,8 +349,8 @@ def main(argv: list[str] | None = None) -> int:
         print("the zarr benchmark needs zarr: pip install '.[zarr]'", file=sys.stderr)
         return 2
 
-    sequence = common.load(args.input)
-    name = common.SAMPLE if args.input == common.SAMPLE else Path(args.input).stem
+    sequence = common.load(args.sequence)
+    name = common.SAMPLE if args.sequence == common.SAMPLE else Path(args.sequence).stem
     load_before = _load()
     with tempfile.TemporaryDirectory(prefix="bench_zarr-") as folder:
         results = [
@@ -369,7 +363,7 @@ def main(argv: list[str] | None = None) -> int:
         ]
     print(f"machine: {common.machine()}")
     print(f"load average (1, 5, 15 min) before: {load_before}; after: {_load()}")
-    print(f"command: {common.command('tools.bench_zarr', argv)}")
+    print(f"command: {args.command}")
     print()
     print(report(name, sequence, args.frames_per_chunk, results, fitted))
     print()
@@ -389,7 +383,3 @@ def main(argv: list[str] | None = None) -> int:
             f"disk / .tkc {store:.2f} ({'meets' if store <= TARGET_RATIO else 'misses'} it)"
         )
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -9,7 +9,7 @@ and the process's peak (``ru_maxrss``), and the peak less what one range's float
 (the result the caller asked for) takes. "warm" runs read a file the page cache holds (it was
 just read); "cold" ones first ask the kernel to drop the file's pages
 (``posix_fadvise(DONTNEED)``), so they read from the disk. Each figure is the median of
-``--runs`` runs, with [min-max]. Prints Markdown for BENCHMARKS.md. Linux (``ru_maxrss`` in
+``--repeat`` runs, with [min-max]. Prints Markdown for BENCHMARKS.md. Linux (``ru_maxrss`` in
 KiB, ``posix_fadvise``).
 
 With ``--isolated``, it measures instead what reading USD and Alembic range by range costs,
@@ -19,9 +19,9 @@ the built-in cloth sample (or ``--sequence``, any file ``load_sequence`` reads) 
 opens the file), reads each frame alone, then every frame in one range, and for comparison
 loads it whole (``load_sequence``: one child for one read).
 
-    python -m tools.bench_streaming                                 # 1 GB .npy, 64 frames
-    python -m tools.bench_streaming --formats npy pc2 npz zarr --runs 3
-    python -m tools.bench_streaming --isolated --sequence ../shared/data/horse-gallop
+    python -m tools.bench streaming                                 # 1 GB .npy, 64 frames
+    python -m tools.bench streaming --formats npy pc2 npz zarr --repeat 3
+    python -m tools.bench streaming --isolated --sequence ../shared/data/horse-gallop
 """
 
 from __future__ import annotations
@@ -38,6 +38,8 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
+
+from tools.bench import arguments
 
 FORMATS = ("npy", "pc2", "npz", "npz-deflated", "zarr")
 SUFFIXES = {"npy": ".npy", "pc2": ".pc2", "npz": ".npz", "npz-deflated": ".npz", "zarr": ".zarr"}
@@ -178,7 +180,7 @@ def write(kind: str, path: Path, vertices: int, frames: int) -> None:
     os.replace(temporary, path)
 
 
-def run(path: Path, frames: int, mode: str) -> dict[str, float]:
+def read_once(path: Path, frames: int, mode: str) -> dict[str, float]:
     """One read of ``path`` in a fresh Python: what its CHILD reports."""
     done = subprocess.run(
         [sys.executable, "-c", CHILD, str(path), str(frames), mode],
@@ -198,31 +200,31 @@ def spread(values: list[float], scale: float, digits: int = 0) -> str:
     return f"{middle:.{digits}f} [{min(scaled):.{digits}f}-{max(scaled):.{digits}f}]"
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Run the benchmark and print the result; returns the process exit status."""
-    parser = argparse.ArgumentParser(
-        prog="python -m tools.bench_streaming", description=__doc__.splitlines()[0]
-    )
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The streaming suite's options."""
     parser.add_argument("--gigabytes", type=float, default=1.0, help="float32 size (default 1)")
     parser.add_argument("--vertices", type=int, default=200_000, help="K (default 200000)")
     parser.add_argument("--frames", type=int, default=64, help="frames per range (default 64)")
     parser.add_argument("--formats", nargs="+", choices=FORMATS, default=["npy"])
-    parser.add_argument("--runs", type=int, default=3, help="runs of each (median reported)")
+    arguments.repeat(parser, 3, "runs of each, the median reported")
     parser.add_argument("--modes", nargs="+", choices=("warm", "cold"), default=["warm", "cold"])
     parser.add_argument("--workdir", type=Path, default=Path("/tmp/tuckercodec-bench-streaming"))
     parser.add_argument("--isolated", action="store_true", help="measure USD and Alembic instead")
     parser.add_argument("--sequence", type=Path, help="with --isolated: the sequence to write")
-    args = parser.parse_args(argv)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Measure and print; the exit status."""
     if args.isolated:
         args.workdir.mkdir(parents=True, exist_ok=True)
-        isolated(args.sequence, args.workdir, args.runs)
+        isolated(args.sequence, args.workdir, args.repeat)
         return 0
     count = max(1, round(args.gigabytes * 1e9 / (args.vertices * 12)))
     args.workdir.mkdir(parents=True, exist_ok=True)
     mib = 2**20
     print(
         f"{count} frames of {args.vertices} vertices ({count * args.vertices * 12 / 1e9:.2f} GB "
-        f"as float32), read in ranges of {args.frames} frames; {args.runs} runs each\n"
+        f"as float32), read in ranges of {args.frames} frames; {args.repeat} runs each\n"
     )
     print(
         "| format | source | page cache | MB/s | RSS after import (MiB) | peak RSS (MiB) "
@@ -236,8 +238,8 @@ def main(argv: list[str] | None = None) -> int:
             write(kind, path, args.vertices, count)
         for mode in args.modes:
             if mode == "warm":
-                run(path, args.frames, "warm")  # into the page cache
-            results = [run(path, args.frames, mode) for _ in range(args.runs)]
+                read_once(path, args.frames, "warm")  # into the page cache
+            results = [read_once(path, args.frames, mode) for _ in range(args.repeat)]
             rates = [r["input_bytes"] / r["seconds"] for r in results]
             beyond = [r["peak"] - r["range_bytes"] for r in results]
             print(
@@ -246,7 +248,3 @@ def main(argv: list[str] | None = None) -> int:
                 f"| {spread([r['peak'] for r in results], mib)} | {spread(beyond, mib)} |"
             )
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -21,8 +21,8 @@ For each sequence (default: every one of ../shared/data present) three tables:
 
 Errors are KG errors (Karni-Gotsman, per-frame centroid), in percent.
 
-    python -m tools.bench_codec                    # every sequence in ../shared/data present
-    python -m tools.bench_codec ../shared/data/chicken.npz --repeat 1 --targets 1 0.1
+    python -m tools.bench codec                    # every sequence in ../shared/data present
+    python -m tools.bench codec ../shared/data/chicken.npz --repeat 1 --targets 1 0.1
 """
 
 from __future__ import annotations
@@ -42,6 +42,8 @@ import numpy as np
 
 import tuckercodec
 from tools import common
+from tools.bench import arguments
+from tools.bench.arguments import UsageError
 from tools.common import spread, timed, traced_peak
 from tuckercodec import Decoder, bpfv, decode, encode_with_report, kg_error
 
@@ -241,17 +243,9 @@ def verdict(value: float, limit: float) -> str:
 # ------------------------------------------------------------------------------------------
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Run the benchmark and print the result; returns the process exit status."""
-    parser = argparse.ArgumentParser(
-        prog="python -m tools.bench_codec", description=__doc__.splitlines()[0]
-    )
-    parser.add_argument(
-        "sequences",
-        nargs="*",
-        type=Path,
-        help="npz files, OBJ folders or 'sample' (default: shared data)",
-    )
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The codec suite's options."""
+    arguments.sequences(parser, "the real sequences of ../shared/data present")
     parser.add_argument(
         "--targets",
         type=float,
@@ -259,7 +253,7 @@ def main(argv: list[str] | None = None) -> int:
         default=DEFAULT_TARGETS,
         help="KG targets of the rate table, in percent",
     )
-    parser.add_argument("--repeat", type=int, default=5, help="runs per timing (median reported)")
+    arguments.repeat(parser, 5, "runs per timing, the median reported")
     parser.add_argument(
         "--speed-target", type=float, default=0.1, help="KG target of the speed and memory tables"
     )
@@ -275,18 +269,20 @@ def main(argv: list[str] | None = None) -> int:
         help="skip the extra encode per point with the paper's bound (select='bound')",
     )
     parser.add_argument("--seed", type=int, default=0, help="seed of the random frame choice")
-    args = parser.parse_args(argv)
-    if args.repeat < 1:
-        parser.error("--repeat must be at least 1")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Measure and print; the exit status."""
     if args.frames < 1:
-        parser.error("--frames must be at least 1")
+        raise UsageError("--frames must be at least 1")
     if any(not (t > 0) for t in [*args.targets, args.speed_target]):
-        parser.error("KG targets must be positive")
+        raise UsageError("KG targets must be positive")
     with_bound = not args.no_bound
 
-    if args.sequences:
-        found = [path for path in args.sequences if path.exists() or str(path) == common.SAMPLE]
-        skipped = [f"{path}: not found" for path in args.sequences if path not in found]
+    given = [Path(name) for name in args.sequences]
+    if given:
+        found = [path for path in given if path.exists() or str(path) == common.SAMPLE]
+        skipped = [f"{path}: not found" for path in given if path not in found]
     else:
         found, absent = common.in_shared_data(common.REAL_SEQUENCES)
         skipped = [f"{path.name}: not in {common.SHARED_DATA}" for path in absent]
@@ -294,18 +290,14 @@ def main(argv: list[str] | None = None) -> int:
     for message in skipped:
         print(f"skipped {message}", file=sys.stderr)
     if not paths:
-        where = (
-            "none of the paths given exists"
-            if args.sequences
-            else f"none found in {common.SHARED_DATA}"
-        )
+        where = "none of the paths given exists" if given else f"none found in {common.SHARED_DATA}"
         print(f"no sequences to measure: {where}", file=sys.stderr)
         return 2
 
     started = time.perf_counter()
     load_before = os.getloadavg()
     print(f"machine: {common.machine()}, tuckercodec {tuckercodec.__version__}")
-    print(f"command: {common.command('tools.bench_codec', argv)}")
+    print(f"command: {args.command}")
     print(f"date: {datetime.datetime.now().astimezone().isoformat(timespec='seconds')}")
     print(f"load average at start (1, 5, 15 min): {', '.join(f'{x:.2f}' for x in load_before)}")
     for message in skipped:
@@ -481,7 +473,3 @@ def main(argv: list[str] | None = None) -> int:
         f"benchmark wall time {time.perf_counter() - started:.0f} s"
     )
     return 1 if failures else 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -36,9 +36,9 @@ encoder's rate-distortion optimized quantization (:mod:`tuckercodec.encoder.rdo`
 KG target (each encode meets it, measured with the decoder's reconstruction): sizes, the decoded
 KG and the encode time.
 
-    python -m tools.bench_entropy                       # the four shared sequences, KG 1 0.1 0.02
-    python -m tools.bench_entropy --rdo
-    python -m tools.bench_entropy --targets 0.1 --verify ../shared/data/chicken.npz
+    python -m tools.bench entropy                       # the four shared sequences, KG 1 0.1 0.02
+    python -m tools.bench entropy --rdo
+    python -m tools.bench entropy --targets 0.1 --verify ../shared/data/chicken.npz
 """
 
 from __future__ import annotations
@@ -51,10 +51,10 @@ from unittest import mock
 
 import numpy as np
 
+from tools.bench import arguments
+from tools.common import REAL_SEQUENCES, in_shared_data, load
 from tuckercodec import Decoder, encode_with_report
 from tuckercodec.internal import mesh_parents, parse_container, rdo, streams, tree_depths
-
-from .common import REAL_SEQUENCES, in_shared_data, load
 
 SECTIONS = ("U1", "U3", "CORE", "CENT")
 DIRECT = 16  # zigzag values below this are symbols of their own
@@ -253,13 +253,16 @@ def compare_rdo(paths: list[Path], targets: list[float]) -> int:
     return 0
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("sequences", nargs="*", help="default: the shared sequences present")
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The entropy suite's options."""
+    arguments.sequences(parser, "the real sequences of ../shared/data present")
     parser.add_argument("--targets", type=float, nargs="+", default=[1.0, 0.1, 0.02])
     parser.add_argument("--verify", action="store_true", help="code U1 with constriction")
     parser.add_argument("--rdo", action="store_true", help="nearest rounding against RDO")
-    args = parser.parse_args(argv)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Measure and print; the exit status."""
     paths = [Path(p) for p in args.sequences]
     if not paths:
         paths, absent = in_shared_data(REAL_SEQUENCES)
@@ -299,7 +302,3 @@ def main(argv: list[str] | None = None) -> int:
                 f"zctx {100 * zgain / len(data):.1f} %"
             )
     return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

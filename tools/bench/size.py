@@ -13,8 +13,8 @@ bits per vertex before and after, the decoded KG error of the new file measured 
 ``kg_error`` (Karni-Gotsman, per-frame centroid, in percent) against the target, and the new
 file's format version. Then the issue's absolute targets.
 
-    python -m tools.bench_size
-    python -m tools.bench_size ../shared/data/chicken.npz --targets 0.1
+    python -m tools.bench size
+    python -m tools.bench size ../shared/data/chicken.npz --targets 0.1
 """
 
 from __future__ import annotations
@@ -30,6 +30,7 @@ from io import BytesIO
 from pathlib import Path
 
 from tools import common
+from tools.bench import arguments
 from tuckercodec import Decoder, bpfv, encode, info, internal, kg_error
 
 DEFAULT_TARGETS = [2.0, 1.0, 0.5, 0.1, 0.05, 0.02]
@@ -102,14 +103,15 @@ def face_row(path: Path) -> str:
     return f"| {path.name} | {entry.codec} | " + " | ".join(cells) + " |"
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m tools.bench_size", description=__doc__.splitlines()[0]
-    )
-    parser.add_argument("sequences", nargs="*", help="default: every sequence of ../shared/data")
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The size suite's options."""
+    arguments.sequences(parser, "every sequence of ../shared/data")
     parser.add_argument("--targets", type=float, nargs="+", default=DEFAULT_TARGETS)
     parser.add_argument("--baseline", default=DEFAULT_BASELINE, help="a git revision")
-    args = parser.parse_args(argv)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Measure and print; the exit status."""
     paths = [Path(p).resolve() for p in args.sequences] or [
         common.SHARED_DATA / name for name in common.shared_sequences()
     ]
@@ -163,7 +165,3 @@ def main(argv: list[str] | None = None) -> int:
     over = {s: round(b, 1) for s, b in face_bits.items() if b > CONNECTIVITY_BITS_PER_VERTEX}
     print(f"connectivity above {CONNECTIVITY_BITS_PER_VERTEX:g} bits per vertex: {over or 'none'}")
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

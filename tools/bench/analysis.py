@@ -6,8 +6,8 @@ run, the wall time of numpy's SVDs of the mode-1 and mode-3 unfoldings (all sing
 of the thin problem, the plain way to get the same factors); and the peak memory that
 ``analyze`` allocates, as a multiple of the float64 tensor (K * 3 * F * 8 bytes).
 
-    python -m tools.bench_analysis                 # every sequence in ../shared/data present
-    python -m tools.bench_analysis path/to/seq.npz --repeat 7
+    python -m tools.bench analysis                 # every sequence in ../shared/data present
+    python -m tools.bench analysis path/to/seq.npz --repeat 7
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ from statistics import median
 import numpy as np
 
 from tools import common
+from tools.bench import arguments
 from tuckercodec import analyze
 from tuckercodec.internal import reconstruct
 
@@ -47,16 +48,17 @@ def accuracy(analysis, targets=(1.0, 0.1, 0.02, 0.005)) -> str:
     return "; ".join(parts)
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m tools.bench_analysis", description=__doc__.splitlines()[0]
-    )
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The analysis suite's options."""
+    arguments.sequences(parser, "the real sequences of ../shared/data present")
+    arguments.repeat(parser, 5, "runs per timing, the median reported")
     parser.add_argument(
-        "sequences", nargs="*", help="npz files, OBJ folders or 'sample' (default: shared data)"
+        "--svd-repeat", type=arguments.positive_int, default=3, help="runs of the plain SVDs"
     )
-    parser.add_argument("--repeat", type=int, default=5, help="runs per timing (median reported)")
-    parser.add_argument("--svd-repeat", type=int, default=3, help="runs of the plain SVDs")
-    args = parser.parse_args(argv)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Measure and print; the exit status."""
 
     paths = [Path(p) for p in args.sequences] or common.in_shared_data(common.REAL_SEQUENCES)[0]
     if not paths:
@@ -64,7 +66,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
 
     print(f"machine: {common.machine()}")
-    print(f"command: {common.command('tools.bench_analysis', argv)}")
+    print(f"command: {args.command}")
     print()
     print(
         "| sequence | K | F | table (i x k) | analyze median [min-max] s | first call s "
@@ -95,7 +97,3 @@ def main(argv: list[str] | None = None) -> int:
     print("Table against explicit reconstruction, relative gap in the squared error:")
     print("\n".join(gaps))
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

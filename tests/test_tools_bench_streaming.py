@@ -1,4 +1,4 @@
-"""tools/bench_streaming.py: the files it writes block by block (a zip64 .npz member among
+"""tools/bench/streaming.py: the files it writes block by block (a zip64 .npz member among
 them) read back through open_frames as the frames it generated, so that its figures measure
 reading the data it claims."""
 
@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tools import bench_streaming
+from tools.bench import streaming as bench_streaming
 from tuckercodec import open_frames
 
 

@@ -11,7 +11,7 @@ anonymous part alone (resident memory less the pages of mapped files, such as a 
 input, which the kernel can drop at any time), and the main process's own peak. A tree whose
 anonymous memory passes ``--kill-above`` (half the machine's memory) is killed and reported as
 such, so that an encoder that does not stream cannot starve the machine. Each figure is the
-median of ``--runs`` runs (``--big-runs`` for the large sequence), with [min-max].
+median of ``--repeat`` runs (``--big-repeat`` for the large sequence), with [min-max].
 
 1. **Encode** the generated sequence (``tools.generate.sequence``, by default a 200,000-vertex,
    2,000-frame body, 4.8 GB as float32 ``.npy``, made once and kept in ``--workdir``): wall
@@ -42,9 +42,9 @@ same generator; the KG check still streams the .npy).
 
 Linux only (/proc, wait4). The figures depend on the machine and on anything else it runs.
 
-    python -m tools.bench_scale                              # everything, 200,000 x 2,000
-    python -m tools.bench_scale --quick                      # 20,000 x 200, one run each
-    python -m tools.bench_scale --only encode frame --vertices 20000 --frames 200 \
+    python -m tools.bench scale                              # everything, 200,000 x 2,000
+    python -m tools.bench scale --quick                      # 20,000 x 200, one run each
+    python -m tools.bench scale --only encode frame --vertices 20000 --frames 200 \
         --input-format npz --encoder-ref ff92b12              # today's encoder, for comparison
 """
 
@@ -72,6 +72,8 @@ from typing import Any
 import numpy as np
 
 from tools import common
+from tools.bench import arguments
+from tools.bench.arguments import UsageError
 from tools.generate import sequence as make_sequence
 from tuckercodec import Decoder, kg_error, load_sequence
 
@@ -718,17 +720,21 @@ def _physical_memory() -> int:
     return int(16 * GB)
 
 
-def parse(argv: list[str] | None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(
-        prog="python -m tools.bench_scale", description=__doc__.splitlines()[0]
-    )
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The scale suite's options."""
     parser.add_argument("--kind", choices=make_sequence.KINDS, default="body")
     parser.add_argument("--vertices", type=int, help="K (default 200000; --quick 20000)")
     parser.add_argument("--frames", type=int, help="F (default 2000; --quick 200)")
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--kg", type=float, default=0.1, help="target of the large encodes")
-    parser.add_argument("--runs", type=int, help="runs per measure (default 3; --quick 1)")
-    parser.add_argument("--big-runs", type=int, help="runs of each large encode (default --runs)")
+    parser.add_argument(
+        "--repeat", type=arguments.positive_int, help="runs per measure (default 3; --quick 1)"
+    )
+    parser.add_argument(
+        "--big-repeat",
+        type=arguments.positive_int,
+        help="runs of each large encode (default --repeat)",
+    )
     parser.add_argument("--quick", action="store_true", help="small sizes, one run: a smoke run")
     parser.add_argument("--only", nargs="+", choices=SECTIONS, default=list(SECTIONS))
     parser.add_argument("--input-format", choices=("npy", "npz"), default="npy")
@@ -763,25 +769,27 @@ def parse(argv: list[str] | None) -> argparse.Namespace:
         "this machine's memory), so that an encoder that does not stream cannot starve the "
         "machine",
     )
-    parser.add_argument("--out", type=Path, help="also write the Markdown to this file")
-    parser.add_argument("--force", action="store_true", help="replace --out")
-    args = parser.parse_args(argv)
+    arguments.output(parser, "also write the Markdown to this file")
+
+
+def settle(args: argparse.Namespace) -> None:
+    """The defaults that depend on other options, and the checks of what was given."""
     args.vertices = args.vertices or (20_000 if args.quick else 200_000)
     args.frames = args.frames or (200 if args.quick else 2_000)
-    args.runs = args.runs or (1 if args.quick else 3)
-    args.big_runs = args.big_runs or args.runs
+    args.repeat = args.repeat or (1 if args.quick else 3)
+    args.big_repeat = args.big_repeat or args.repeat
     args.kill_above = int(args.kill_above * GB)
     args.workdir = args.workdir.expanduser().resolve()  # children run from other folders
     if sys.platform != "linux":
-        parser.error("this benchmark reads /proc: Linux only")
+        raise UsageError("this benchmark reads /proc: Linux only")
+    args.out = None if args.out is None else Path(args.out)
     if args.out is not None and args.out.exists() and not args.force:
-        parser.error(f"{args.out} exists; give --force to replace it")
-    return args
+        raise UsageError(f"{args.out} exists; give --force to replace it")
 
 
-def main(argv: list[str] | None = None) -> int:
+def run(args: argparse.Namespace) -> int:
     """Run the chosen measures and print their tables; returns the exit status."""
-    args = parse(argv)
+    settle(args)
     with ExitStack() as stack:
         package = Package(args.workdir)
         if args.encoder_ref:
@@ -798,7 +806,7 @@ def main(argv: list[str] | None = None) -> int:
 
 def measure(args: argparse.Namespace, package: Package) -> list[str]:
     """Every measure ``--only`` names, as lines of Markdown."""
-    text = [f"machine: {common.machine()}", f"command: {common.command('tools.bench_scale', None)}"]
+    text = [f"machine: {common.machine()}", f"command: {args.command}"]
     if package.folder is not None:
         text.append(f"encoder: tuckercodec of {args.encoder_ref} (git archive)")
     data = prepare_input(args) if {"encode", "frame", "jobs"} & set(args.only) else None
@@ -811,19 +819,19 @@ def measure(args: argparse.Namespace, package: Package) -> list[str]:
     if data is not None and {"encode", "frame"} & set(args.only):
         options = shlex.split(args.encode_options)
         label = " ".join(["encode", *options])
-        result = encode_runs(data, args, package, label, options, args.big_runs)
+        result = encode_runs(data, args, package, label, options, args.big_repeat)
         check_kg(result, data)
         if "encode" in args.only:
             text += [*encode_table([result], data, args.kg), ""]
         if "frame" in args.only:
             if result.failed is None and result.output is not None:
-                frames = frame_runs(result.output, data.frames, args.runs, package)
+                frames = frame_runs(result.output, data.frames, args.repeat, package)
                 text += [*frame_table(frames, result.output), ""]
             else:
                 text += ["One frame from disk: not measured, the encode failed", ""]
     if data is not None and "jobs" in args.only:
-        one = encode_runs(data, args, package, "--jobs 1", ["--jobs", "1"], args.big_runs)
-        two = encode_runs(data, args, package, "--jobs 2", ["--jobs", "2"], args.big_runs)
+        one = encode_runs(data, args, package, "--jobs 1", ["--jobs", "1"], args.big_repeat)
+        two = encode_runs(data, args, package, "--jobs 2", ["--jobs", "2"], args.big_repeat)
         text += [*jobs_table(one, two, data), ""]
     if "real" in args.only:
         _, absent = common.in_shared_data(REAL)
@@ -832,7 +840,3 @@ def measure(args: argparse.Namespace, package: Package) -> list[str]:
         text += real_table(results, absent, args.segment_frames)
         text.append(f"baseline: the encoder of {args.baseline_ref[:12]}")
     return text
-
-
-if __name__ == "__main__":
-    sys.exit(main())

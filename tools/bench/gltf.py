@@ -18,9 +18,9 @@
 
 Every KG figure uses the Karni-Gotsman definition (printed). Prints Markdown.
 
-    python -m tools.bench_gltf                         # chicken, horse gallop
-    python -m tools.bench_gltf sample --read sample
-    python -m tools.bench_gltf samba.npz --no-gltfpack
+    python -m tools.bench gltf                         # chicken, horse gallop
+    python -m tools.bench gltf sample --read sample
+    python -m tools.bench gltf samba.npz --no-gltfpack
 """
 
 from __future__ import annotations
@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from tools import common
+from tools.bench import arguments
 from tuckercodec import Decoder, MeshSequence, encode, kg_error, load_sequence, save_sequence
 from tuckercodec.internal import KG_DEFINITION, sample_gltf, write_decomposition_gltf
 
@@ -215,27 +216,23 @@ def bench_read(source: str, repeat: int, folder: Path) -> None:
     )
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Run the benchmark and print the result; returns the process exit status."""
-    parser = argparse.ArgumentParser(
-        prog="python -m tools.bench_gltf", description=__doc__.splitlines()[0]
-    )
-    parser.add_argument("source", nargs="?", default="chicken.npz", help="sequence to encode")
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The glTF suite's options."""
+    arguments.sequence(parser, "chicken.npz", "chicken.npz of ../shared/data")
     parser.add_argument("--kg", type=float, default=0.1, help="target KG of the .tkc")
     parser.add_argument("--read", default="horse-gallop", help="sequence to read back as .glb")
-    parser.add_argument("--repeat", type=int, default=5, help="timed reads (median reported)")
+    arguments.repeat(parser, 5, "timed reads, the median reported")
     parser.add_argument(
         "--no-gltfpack", dest="gltfpack", action="store_false", help="leave out the gltfpack peer"
     )
-    args = parser.parse_args(argv)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Measure and print; the exit status."""
     print(f"machine: {common.machine()}")
-    print(f"command: {common.command('tools.bench_gltf', argv)}")
+    print(f"command: {args.command}")
     print()
     with tempfile.TemporaryDirectory(prefix="bench-gltf-") as scratch:
-        bench_variants(args.source, args.kg, Path(scratch), args.gltfpack)
+        bench_variants(args.sequence, args.kg, Path(scratch), args.gltfpack)
         bench_read(args.read, args.repeat, Path(scratch))
     return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

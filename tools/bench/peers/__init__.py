@@ -1,7 +1,8 @@
 """Rate-distortion benchmark of tuckercodec against its peers, all measured in one run.
 
 For each sequence (default: every one of ../shared/data present) and each coder of
-:mod:`tools.peers` that can run here, every encode is decoded again and measured the same way:
+:data:`CODERS` (a module each in this package) that can run here, every encode is decoded again
+and measured the same way:
 
 * size: the whole file in bytes and in bpfv (8 * bytes / (F * K)), the connectivity stored once
   shown separately ("in frames" where every frame carries its own, as per-frame Draco meshes);
@@ -24,9 +25,9 @@ Output, in ``--out`` (default results/bench): one markdown table and one rate-di
 (bpfv against KG, both log scale) per sequence, summary.md (the smallest coder per target and
 tuckercodec's ratio to each coder) and results.json (every trial).
 
-    python -m tools.bench                                   # everything present, ~7 minutes
-    python -m tools.bench --repeat 3                        # medians of 3 timings (BENCHMARKS.md)
-    python -m tools.bench ../shared/data/chicken.npz --coders tuckercodec,pca,zfp --targets 1,0.1
+    python -m tools.bench peers                             # everything present, ~7 minutes
+    python -m tools.bench peers --repeat 3                  # medians of 3 timings (BENCHMARKS.md)
+    python -m tools.bench peers ../shared/data/chicken.npz --coders tuckercodec,pca --targets 1
 """
 
 from __future__ import annotations
@@ -42,9 +43,33 @@ import time
 from pathlib import Path
 
 import tuckercodec
-from tools import common, peers
+from tools import common
+from tools.bench import arguments
+from tools.bench.arguments import UsageError
+from tools.bench.peers import base
+from tools.bench.peers.draco import run_draco_mesh, run_draco_points
+from tools.bench.peers.meshopt import run_meshopt
+from tools.bench.peers.pca import run_pca
+from tools.bench.peers.sz3 import run_sz3
+from tools.bench.peers.tkc import run_tuckercodec
+from tools.bench.peers.tthresh import run_tthresh
+from tools.bench.peers.zfp import run_zfp
+from tools.bench.peers.zstd import run_zstd
 from tuckercodec import bpfv, internal, max_vertex_displacement, sted
 from tuckercodec.internal import KG_DEFINITION
+
+#: Every coder, in the order of the tables.
+CODERS: list[base.Coder] = [
+    base.Coder("tuckercodec", run_tuckercodec),
+    base.Coder("pca", run_pca),
+    base.Coder("draco-mesh", run_draco_mesh, "DracoPy"),
+    base.Coder("draco-points", run_draco_points, "DracoPy"),
+    base.Coder("meshopt", run_meshopt, "meshoptimizer"),
+    base.Coder("sz3", run_sz3, "pysz"),
+    base.Coder("zfp", run_zfp, "zfpy"),
+    base.Coder("zstd-f32", run_zstd),
+    base.Coder("tthresh", run_tthresh, "binary:tthresh"),
+]
 
 DEFAULT_TARGETS = [2.0, 1.0, 0.5, 0.2, 0.1, 0.05, 0.02]
 DEFAULT_BITS = list(range(8, 17))
@@ -84,7 +109,7 @@ class Progress:
         sys.stderr.flush()
 
 
-def measure(trial: peers.Trial, sequence: tuckercodec.MeshSequence, context: peers.Context) -> None:
+def measure(trial: base.Trial, sequence: tuckercodec.MeshSequence, context: base.Context) -> None:
     """Fill ``trial.metrics`` from its decoded positions, then drop them."""
     decoded = trial.decoded
     if math.isnan(trial.kg):
@@ -104,14 +129,14 @@ def measure(trial: peers.Trial, sequence: tuckercodec.MeshSequence, context: pee
     trial.decoded = None
 
 
-def best_at(trials: list[peers.Trial], target: float) -> peers.Trial | None:
+def best_at(trials: list[base.Trial], target: float) -> base.Trial | None:
     """The smallest trial whose decoded KG meets ``target``."""
     met = [t for t in trials if t.kg <= target]
     return min(met, key=lambda t: t.total_bytes) if met else None
 
 
 def retime_chosen(
-    trials_by_coder: dict[str, list[peers.Trial]], targets: list[float], repeat: int
+    trials_by_coder: dict[str, list[base.Trial]], targets: list[float], repeat: int
 ) -> None:
     """Time the trials that represent a coder at some target ``repeat`` times in all and keep
     the medians (the first, measured run included)."""
@@ -135,7 +160,7 @@ def retime_chosen(
         trial.decode_seconds = statistics.median(r[1] for r in runs)
 
 
-def encode_seconds(trial: peers.Trial) -> float:
+def encode_seconds(trial: base.Trial) -> float:
     """The encode's time, with its share of work done once for every setting (PCA's SVD)."""
     return trial.encode_seconds + trial.setup_seconds
 
@@ -264,13 +289,9 @@ def plot(name: str, trials_by_coder, targets, path: Path, force: bool) -> None:
     internal.save_figure(fig, path, dpi=120, overwrite=force)
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m tools.bench", description=__doc__.split("\n\n")[0]
-    )
-    parser.add_argument(
-        "sequences", nargs="*", help="npz, OBJ folder or 'sample' (default: ../shared/data)"
-    )
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The peers suite's options."""
+    arguments.sequences(parser, "every sequence of ../shared/data")
     parser.add_argument(
         "--targets",
         default=",".join(f"{t:g}" for t in DEFAULT_TARGETS),
@@ -278,7 +299,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument(
         "--coders",
-        default=",".join(c.name for c in peers.CODERS),
+        default=",".join(c.name for c in CODERS),
         help="coders to run, comma-separated",
     )
     parser.add_argument(
@@ -286,24 +307,21 @@ def main(argv: list[str] | None = None) -> int:
         default=f"{DEFAULT_BITS[0]}-{DEFAULT_BITS[-1]}",
         help="quantization bits of Draco and meshoptimizer, A-B",
     )
-    parser.add_argument("--out", default="results/bench", help="output folder")
-    parser.add_argument(
-        "--repeat",
-        type=int,
-        default=1,
-        help="time each coder's chosen setting this many times and keep the medians",
-    )
-    parser.add_argument("--force", action="store_true", help="replace earlier results")
-    args = parser.parse_args(argv)
+    arguments.repeat(parser, 1, "timings of each coder's chosen setting, the medians kept")
+    arguments.output(parser, "output folder (default results/bench)", default="results/bench")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Measure and print; the exit status."""
 
     targets = sorted({float(t) for t in args.targets.split(",")}, reverse=True)
     low, _, high = args.bits.partition("-")
     bits = list(range(int(low), int(high or low) + 1))
     wanted = args.coders.split(",")
-    unknown = set(wanted) - {c.name for c in peers.CODERS}
+    unknown = set(wanted) - {c.name for c in CODERS}
     if unknown:
-        parser.error(f"unknown coders: {', '.join(sorted(unknown))}")
-    coders = [c for c in peers.CODERS if c.name in wanted]
+        raise UsageError(f"unknown coders: {', '.join(sorted(unknown))}")
+    coders = [c for c in CODERS if c.name in wanted]
     paths = args.sequences or common.shared_sequences()
     if not paths:
         print(f"no sequences given and none found in {common.SHARED_DATA}", file=sys.stderr)
@@ -326,8 +344,8 @@ def main(argv: list[str] | None = None) -> int:
     for path in paths:
         name = common.unique_name(_sequence_name(path), taken)
         sequence = common.load(path)
-        context = peers.Context.of(sequence, bits)
-        trials_by_coder: dict[str, list[peers.Trial]] = {}
+        context = base.Context.of(sequence, bits)
+        trials_by_coder: dict[str, list[base.Trial]] = {}
         for coder in runnable:
             trials = coder.run(sequence, targets, context)
             for trial in trials:
@@ -362,7 +380,7 @@ def main(argv: list[str] | None = None) -> int:
     text = [
         f"# Benchmark summary ({datetime.date.today()}, tuckercodec {tuckercodec.__version__})",
         "",
-        f"Machine: {common.machine()}. Command: `{common.command('tools.bench', argv)}`. "
+        f"Machine: {common.machine()}. Command: `{args.command}`. "
         f"Wall time {time.monotonic() - started:.0f} s.",
         "",
         "bpfv of the smallest file of each coder whose decoded KG error (Karni-Gotsman) meets the "
@@ -380,7 +398,3 @@ def main(argv: list[str] | None = None) -> int:
     common.write_text(out / "results.json", json.dumps(everything, indent=1), args.force)
     print("\n".join(text))
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -3,7 +3,8 @@ frame's reconstruction, and playback at the file's rate, all measured by the pag
 
 Each sequence is encoded at the target KG error into a temporary folder (never into the
 repository), served by ``python -m tuckercodec view FILE.tkc`` (the command a user runs, on a
-free port of 127.0.0.1) and opened in Chromium (tests/support/browser.py):
+free port of 127.0.0.1) and opened in Chromium with the browser tests' driver
+(tests/support/browser.py: the page measured is the one those tests check, driven the same way):
 
 - open: ``tkcViewer.info.openMs``, the page's time from the file fetched to frame 0 drawn
   (openTkc, the scene, framing the camera, the first render), over ``--loads`` page loads in
@@ -23,8 +24,8 @@ Prints Markdown ready to paste into BENCHMARKS.md, with the machine, Chromium's 
 command. Chromium coarsens ``performance.now()`` to 0.1 ms on a page that is not cross-origin
 isolated, so a frame's time is a multiple of about 0.1 ms.
 
-    python -m tools.bench_viewer                          # samba (../shared/data), the sample
-    python -m tools.bench_viewer sample --loads 3 --play-seconds 2 --reference
+    python -m tools.bench viewer                          # samba (../shared/data), the sample
+    python -m tools.bench viewer sample --loads 3 --play-seconds 2 --reference
 """
 
 from __future__ import annotations
@@ -45,6 +46,8 @@ from pathlib import Path
 
 from tests.support.browser import Browser, BrowserError, find_chromium
 from tools import common
+from tools.bench import arguments
+from tools.bench.arguments import UsageError
 from tuckercodec import encode
 
 DEFAULT_SEQUENCES = ("samba.npz", common.SAMPLE)
@@ -236,17 +239,9 @@ def _p90(values: list[float]) -> float:
     return statistics.quantiles(values, n=10)[-1] if len(values) > 1 else values[0]
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Run the benchmark and print the result; returns the process exit status."""
-    parser = argparse.ArgumentParser(
-        prog="python -m tools.bench_viewer", description=__doc__.splitlines()[0]
-    )
-    parser.add_argument(
-        "sequences",
-        nargs="*",
-        default=list(DEFAULT_SEQUENCES),
-        help="sequences: 'sample', a path, or a name in ../shared/data (default: samba, sample)",
-    )
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The viewer suite's options."""
+    arguments.sequences(parser, "samba, sample", initial=list(DEFAULT_SEQUENCES))
     parser.add_argument("--target-kg", type=float, default=0.1, help="encode at this KG error")
     parser.add_argument("--loads", type=int, default=5, help="page loads timed for opening")
     parser.add_argument("--play-seconds", type=float, default=5.0, help="seconds of playback")
@@ -254,9 +249,12 @@ def main(argv: list[str] | None = None) -> int:
         "--reference", action="store_true", help="serve with the original (view --reference)"
     )
     parser.add_argument("--chromium", help="the browser to run (default: found on PATH)")
-    args = parser.parse_args(argv)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Measure and print; the exit status."""
     if args.loads < 1 or args.play_seconds <= 0:
-        parser.error("--loads must be at least 1 and --play-seconds positive")
+        raise UsageError("--loads must be at least 1 and --play-seconds positive")
     chromium = args.chromium or find_chromium()
     if chromium is None:
         print("no chromium found (Debian: apt-get install chromium)", file=sys.stderr)
@@ -288,7 +286,7 @@ def main(argv: list[str] | None = None) -> int:
                 )
     print(f"machine: {common.machine()}")
     print(f"browser: {version['product']}, headless; the page: {results[0].renderer}")
-    print(f"command: {common.command('tools.bench_viewer', argv)}")
+    print(f"command: {args.command}")
     print()
     print(table(results, args.target_kg))
     return 0
@@ -299,7 +297,3 @@ def _source(name: str) -> str | None:
         if candidate.exists():
             return str(candidate)
     return None
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())
