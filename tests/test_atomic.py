@@ -162,6 +162,7 @@ def test_killing_the_writer_mid_write_keeps_the_old_file(tmp_path, how):
     with subprocess.Popen(
         [sys.executable, "-c", _SLOW_WRITER, str(tmp_path)], stdout=subprocess.PIPE, text=True
     ) as child:
+        assert child.stdout is not None
         try:
             mode = child.stdout.readline().strip()
             assert child.stdout.readline().strip() == "writing"

@@ -178,7 +178,9 @@ def _shift(entry: dict[str, Any], by: int) -> None:
 
 
 #: What each edit of v1-wave-triangles' section table breaks: the error class and rule of §11.
-TABLE_CASES: dict[str, tuple[Callable[[list, Parts], object], type[FormatError], str]] = {
+TABLE_CASES: dict[
+    str, tuple[Callable[[list[dict[str, Any]], Parts], object], type[FormatError], str]
+] = {
     "two sections overlap": (
         lambda t, p: _shift(t[1], -10),
         FormatError,
@@ -275,7 +277,7 @@ TABLE_CASES: dict[str, tuple[Callable[[list, Parts], object], type[FormatError],
         "R14-section-entry-field",
     ),
     "an entry that is a list": (
-        lambda t, p: t.__setitem__(0, list(t[0].items())),
+        lambda t, p: t.__setitem__(0, list(t[0].items())),  # type: ignore[call-overload]  # refused
         FormatError,
         "R14-section-entry-field",
     ),

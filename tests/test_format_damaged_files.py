@@ -70,9 +70,9 @@ def test_every_single_bit_flip_is_caught_or_harmless(name):
     for start, end, what in _regions(data):
         for position in range(start, end):
             for bit in range(8):
-                damaged = bytearray(data)
-                damaged[position] ^= 1 << bit
-                damaged = bytes(damaged)
+                flipped = bytearray(data)
+                flipped[position] ^= 1 << bit
+                damaged = bytes(flipped)
                 if what.startswith("section ") and what.split(" ", 1)[1] not in known:
                     decoder = Decoder(damaged)  # skipped unread: must decode, identically
                     np.testing.assert_array_equal(decoder.positions(), reference)

@@ -34,8 +34,8 @@ from tuckercodec import LimitError
 from tuckercodec.format.container import pack_container
 
 
-def _set(header: dict[str, Any], path: tuple, value: Any) -> None:
-    target = header
+def _set(header: dict[str, Any], path: tuple[str | int, ...], value: Any) -> None:
+    target: Any = header  # maps and lists, as the path goes down
     for key in path[:-1]:
         target = target[key]
     if value is MISSING:
@@ -49,7 +49,7 @@ EVERYTHING = set(HOSTILE) | {"missing"}
 
 #: Header paths -> (hostile values, by HOSTILE's names, under which the file stays valid;
 #: values that may or may not make the reconstruction overflow, R36). All others must fail.
-HEADER_FIELDS: dict[tuple, tuple[set[str], set[str]]] = {
+HEADER_FIELDS: dict[tuple[str | int, ...], tuple[set[str], set[str]]] = {
     ("vertices",): (set(), set()),
     ("frames",): (set(), set()),
     ("ranks",): (set(), set()),
@@ -89,7 +89,7 @@ def test_every_header_field_set_to_every_hostile_value(path):
             data = parts.pack()
         error, sequence = outcome(data)
         if label in allowed:
-            assert error is None, f"{path} = {label}: {error}"
+            assert error is None and sequence is not None, f"{path} = {label}: {error}"
             check_decoded(data, sequence)
         elif label in either:
             if sequence is not None:

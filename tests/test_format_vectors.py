@@ -7,6 +7,7 @@ import json
 import re
 import struct
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -20,7 +21,7 @@ SPEC = Path(__file__).resolve().parents[1] / "spec"
 VECTORS = sorted((SPEC / "vectors").glob("*.json"))
 
 
-def _load(path: Path) -> tuple[dict, bytes]:
+def _load(path: Path) -> tuple[dict[str, Any], bytes]:
     expected = json.loads(path.read_text())
     return expected, (path.parent / expected["file"]).read_bytes()
 

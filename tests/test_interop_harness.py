@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import base64
 import json
+import shutil
 import struct
 from pathlib import Path
 from typing import Any
@@ -329,5 +330,5 @@ def test_what_three_warns_about_fails_the_evaluation(tmp_path: Path) -> None:
 def test_a_machine_without_node_skips_naming_what_is_missing(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    monkeypatch.setattr(js_interop.shutil, "which", lambda name: None)
+    monkeypatch.setattr(shutil, "which", lambda name: None)
     assert js_interop._setup.__wrapped__() == (None, "node and npm not found on PATH")

@@ -255,6 +255,7 @@ def test_a_sequence_comes_back_whole_and_the_libraries_messages_stay_in_the_chil
     capfd.readouterr()  # what the hook printed here, in this process
     assert np.array_equal(seq.vertices, expected.vertices)
     assert np.array_equal(seq.faces, expected.faces) and seq.faces.dtype == np.int64
+    assert seq.time_codes is not None and expected.time_codes is not None
     assert np.array_equal(seq.time_codes, expected.time_codes)
     assert seq.frame_rate == 30000 / 1001 and seq.frame_names[:2] == ["a", "b"]
     read(hooks.chatty, data_file)
@@ -298,6 +299,7 @@ def test_the_child_dies_with_its_interrupted_or_killed_caller(data_file, how, st
     with subprocess.Popen(
         [sys.executable, "-c", CALLER, str(data_file)], env=environment, stderr=subprocess.PIPE
     ) as caller:
+        assert caller.stderr is not None
         deadline = time.monotonic() + 30
         while not pid_file.exists() or not pid_file.read_text():
             assert caller.poll() is None and time.monotonic() < deadline, caller.stderr.read()

@@ -44,6 +44,7 @@ def same_description(source: FrameSource, seq: MeshSequence) -> None:
     if seq.time_codes is None:
         assert source.time_codes is None
     else:
+        assert source.time_codes is not None and seq.time_codes is not None
         assert np.array_equal(source.time_codes, seq.time_codes)
     assert source.input_bytes == seq.frame_count * seq.vertex_count * 12
 

@@ -4,6 +4,8 @@ one moved vertex), on a real sequence, and on bad arguments."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -176,8 +178,9 @@ def test_sted_refuses_bad_arguments():
         ("scale", 0.0, ValueError),
         ("scale", "big", TypeError),
     ):
+        options: dict[str, Any] = {keyword: value}
         with pytest.raises(error, match=keyword):
-            sted(original, original, faces, **{keyword: value})
+            sted(original, original, faces, **options)
 
 
 def test_sted_on_samba_against_a_noisy_copy():

@@ -16,7 +16,7 @@ import pytest
 
 from tools import bench, common
 from tools.bench import peers
-from tools.bench.peers import base
+from tools.bench.peers import base, draco, pca, tkc, tthresh, zstd
 from tuckercodec import kg_error
 
 
@@ -34,28 +34,37 @@ def _decoded_kg(trial, sample) -> float:
     return kg_error(sample.vertices, trial.decoded)
 
 
+def _size_again(trial: base.Trial) -> int:
+    """The total bytes of the trial's encode run again, as --repeat runs it."""
+    assert trial.retime is not None
+    return trial.retime()[2]
+
+
 def test_pca_baseline_meets_each_target_and_decodes_from_its_bytes(sample, context):
-    trials = peers.run_pca(sample, [1.0, 0.1], context)
+    trials = pca.run_pca(sample, [1.0, 0.1], context)
     assert [t.target for t in trials] == [1.0, 0.1]
     for trial in trials:
+        assert trial.target is not None and trial.connectivity_bytes is not None
         assert _decoded_kg(trial, sample) <= trial.target
         assert trial.connectivity_bytes > 0
     assert trials[1].total_bytes > trials[0].total_bytes  # a tighter target costs more
     # re-timing runs the same encode (each trial keeps its own target, not the loop's last)
-    assert [t.retime()[2] for t in trials] == [t.total_bytes for t in trials]
+    assert [_size_again(t) for t in trials] == [t.total_bytes for t in trials]
 
 
 def test_tuckercodec_trial_counts_the_whole_file(sample, context):
-    trial, tighter = peers.run_tuckercodec(sample, [0.5, 0.1], context)
-    assert trial.retime()[2] == trial.total_bytes < tighter.total_bytes
+    trial, tighter = tkc.run_tuckercodec(sample, [0.5, 0.1], context)
+    assert _size_again(trial) == trial.total_bytes < tighter.total_bytes
     assert _decoded_kg(trial, sample) <= 0.5
+    assert trial.connectivity_bytes is not None
     assert 0 < trial.connectivity_bytes < trial.total_bytes
     assert trial.encode_seconds > 0 and trial.decode_seconds > 0
 
 
 def test_lossless_reference_is_float32_exact(sample, context):
-    (trial,) = peers.run_zstd(sample, [], context)
+    (trial,) = zstd.run_zstd(sample, [], context)
     np.testing.assert_array_equal(trial.decoded, sample.vertices.astype(np.float32))
+    assert trial.connectivity_bytes is not None
     assert trial.total_bytes > trial.connectivity_bytes > 0
 
 
@@ -115,10 +124,10 @@ def test_tthresh_plumbing_with_a_stand_in_binary(sample, context, tmp_path, monk
     )
     script.chmod(script.stat().st_mode | stat.S_IEXEC)
     monkeypatch.setenv("PATH", f"{script.parent}{os.pathsep}{os.environ['PATH']}")
-    (trial,) = peers.run_tthresh(sample, [1.0], context)
+    (trial,) = tthresh.run_tthresh(sample, [1.0], context)
     assert trial.kg < 1e-4  # lossless but for the float32 centroids (about 2e-6 here)
     assert trial.total_bytes > context.tensor.nbytes
-    assert trial.retime()[2] == trial.total_bytes  # --repeat runs it again, after run_tthresh
+    assert _size_again(trial) == trial.total_bytes  # --repeat runs it again, after run_tthresh
 
 
 @pytest.mark.parametrize(
@@ -136,8 +145,9 @@ def test_optional_peers_round_trip(coder, module, sample, context):
     run = next(c.run for c in peers.CODERS if c.name == coder)
     trials = run(sample, [1.0], context)
     assert trials
-    assert trials[0].retime()[2] == trials[0].total_bytes
+    assert _size_again(trials[0]) == trials[0].total_bytes
     for trial in trials:
+        assert trial.decoded is not None
         assert trial.decoded.shape == sample.vertices.shape
         measured = _decoded_kg(trial, sample)
         if not np.isnan(trial.kg):
@@ -201,7 +211,7 @@ def test_bench_runs_on_a_sequence_without_faces(tmp_path):
 
 def test_draco_points_keep_the_vertex_order(sample, context):
     pytest.importorskip("DracoPy", reason="DracoPy is not installed (pip install '.[bench]')")
-    (trial,) = peers.run_draco_points(sample, [], base.Context.of(sample, [14]))
+    (trial,) = draco.run_draco_points(sample, [], base.Context.of(sample, [14]))
     # no matching was needed: every decoded vertex is within half a 14-bit step of its own
     extent = np.ptp(sample.vertices, axis=1).max()
     assert np.abs(trial.decoded - sample.vertices).max() <= extent / (2**14 - 1)

@@ -102,7 +102,7 @@ def frame_kg(original: np.ndarray, drawn: np.ndarray) -> tuple[float, float]:
     b = drawn.astype(np.float64).reshape(-1, 3)
     difference = np.linalg.norm(a - b)
     spread = np.linalg.norm(a - a.mean(axis=0))
-    return 100.0 * difference / spread, float(np.sqrt(np.square(a - b).sum(axis=1)).max())
+    return float(100.0 * difference / spread), float(np.sqrt(np.square(a - b).sum(axis=1)).max())
 
 
 def mesh_pixels(page: Page) -> np.ndarray:

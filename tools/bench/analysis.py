@@ -13,6 +13,7 @@ of the thin problem, the plain way to get the same factors); and the peak memory
 from __future__ import annotations
 
 import argparse
+import functools
 import sys
 import time
 from pathlib import Path
@@ -82,9 +83,9 @@ def run(args: argparse.Namespace) -> int:
         analysis = analyze(vertices)  # the first call of the process, as the CLI sees it
         first = time.perf_counter() - start
         r1, r3 = analysis.max_ranks
-        fast = common.timed(lambda v=vertices: analyze(v), args.repeat, warmup=0)
-        slow = common.timed(lambda v=vertices: plain_svds(v), args.svd_repeat, warmup=0)
-        peak = common.traced_peak(lambda v=vertices: analyze(v))
+        fast = common.timed(functools.partial(analyze, vertices), args.repeat, warmup=0)
+        slow = common.timed(functools.partial(plain_svds, vertices), args.svd_repeat, warmup=0)
+        peak = common.traced_peak(functools.partial(analyze, vertices))
         gaps.append(f"- {path.name}: {accuracy(analysis)}")
         tensor_bytes = count * 3 * frames * 8
         print(

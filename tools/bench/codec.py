@@ -107,21 +107,24 @@ def rate_point(sequence, path: Path, target: float, with_bound: bool) -> RatePoi
 
     result = encode_with_report(sequence, target_kg=target)
     report = result.report
+    exact, bound_ranks = report.exact_ranks, report.bound_ranks  # None for fixed ranks
     point = RatePoint(
         sequence=path.name,
         target=target,
-        ranks=tuple(report.ranks),
+        ranks=report.ranks,
         kg=kg_error(sequence, decode(result.data)),
         encoder_kg=report.kg,
         bpfv=bpfv(len(result.data), frames, vertices),
         face_bpfv=report.connectivity_bpfv,
         reference=reference,
         seconds=report.seconds,
-        truncation_picks=(tuple(report.exact_ranks), tuple(report.bound_ranks)),
+        truncation_picks=(
+            (exact, bound_ranks) if exact is not None and bound_ranks is not None else None
+        ),
     )
     if with_bound:
         bound = encode_with_report(sequence, target_kg=target, select="bound")
-        point.bound_ranks = tuple(bound.report.ranks)
+        point.bound_ranks = bound.report.ranks
         point.bound_bpfv = bpfv(len(bound.data), frames, vertices)
         point.bound_kg = kg_error(sequence, decode(bound.data))
         point.bound_seconds = bound.report.seconds
@@ -151,13 +154,17 @@ def rate_row(p: RatePoint, with_bound: bool) -> str:
         verdict,
     ]
     if with_bound:
+        assert p.bound_kg is not None and p.bound_ranks is not None and p.bound_bpfv is not None
         bound_check = "" if p.bound_kg <= p.target else " **FAIL**"
         cells += [
             f"({p.bound_ranks[0]}, {p.bound_ranks[1]})",
             f"{p.bound_bpfv:.3f} ({100.0 * (p.bound_bpfv / p.bpfv - 1.0):+.1f} %){bound_check}",
         ]
-    (ei, ek), (bi, bk) = p.truncation_picks
-    cells.append(f"({ei}, {ek}) / ({bi}, {bk})")
+    if p.truncation_picks is None:
+        cells.append("-")
+    else:
+        (ei, ek), (bi, bk) = p.truncation_picks
+        cells.append(f"({ei}, {ek}) / ({bi}, {bk})")
     cells.append(f"{p.seconds:.2f}" + (f" / {p.bound_seconds:.2f}" if with_bound else ""))
     return "| " + " | ".join(cells) + " |"
 
@@ -342,7 +349,7 @@ def run(args: argparse.Namespace) -> int:
                     f"{path.name} at KG {fmt_target(target)}: decoded KG {point.kg:.6f} "
                     f"is above the target"
                 )
-            if with_bound and point.bound_kg > point.target:
+            if point.bound_kg is not None and point.bound_kg > point.target:
                 failures.append(
                     f"{path.name} at KG {fmt_target(target)} (select='bound'): decoded KG "
                     f"{point.bound_kg:.6f} is above the target"
@@ -352,7 +359,7 @@ def run(args: argparse.Namespace) -> int:
                     f"{path.name} at KG {fmt_target(target)}: the encoder reports KG "
                     f"{point.encoder_kg:.8f}, measured here {point.kg:.8f}"
                 )
-            if with_bound and point.bound_bpfv < point.bpfv:
+            if point.bound_bpfv is not None and point.bound_bpfv < point.bpfv:
                 notes.append(
                     f"{path.name} at KG {fmt_target(target)}: select='bound' gives a smaller "
                     f"file than 'exact' ({point.bound_bpfv:.3f} < {point.bpfv:.3f} bpfv)"

@@ -166,6 +166,7 @@ def bench_variants(source: str, target_kg: float, folder: Path, peer: bool) -> N
         if command is None:
             print(f"\ngltfpack: skipped, {missing}")
         for options in GLTFPACK_RUNS if command else ():
+            assert command is not None
             path = folder / f"gltfpack{''.join(options)}.glb"
             run = [*command, "-i", str(folder / "none.glb"), "-o", str(path), *options]
             seconds = common.timed(

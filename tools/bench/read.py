@@ -25,10 +25,12 @@ ready to paste into BENCHMARKS.md.
 from __future__ import annotations
 
 import argparse
+import functools
 import statistics
 import sys
 import tempfile
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -142,10 +144,8 @@ def read_formats(args: argparse.Namespace) -> int:
             except DependencyError as error:
                 print(f"| {found.name} | skipped: {error} | | | | | | |")
                 continue
-            options = {"faces": faces_file} if "faces" in found.read_options else {}
-            times = common.timed(
-                lambda path=path, options=options: load_sequence(path, **options), args.repeat
-            )
+            options: dict[str, Any] = {"faces": faces_file} if "faces" in found.read_options else {}
+            times = common.timed(functools.partial(load_sequence, path, **options), args.repeat)
             back = load_sequence(path, **options)
             size = sum(p.stat().st_size for p in home.rglob("*") if p.is_file())
             median = statistics.median(times)

@@ -28,6 +28,7 @@ import tarfile
 import tempfile
 from io import BytesIO
 from pathlib import Path
+from typing import Any
 
 from tools import common
 from tools.bench import arguments
@@ -63,7 +64,7 @@ print(json.dumps(out))
 """
 
 
-def baseline_sizes(revision: str, jobs: list[tuple[str, list[float]]]) -> dict[str, dict]:
+def baseline_sizes(revision: str, jobs: list[tuple[str, list[float]]]) -> dict[str, dict[str, Any]]:
     """``"path|target" -> {"bytes", "sections"}`` from the package at ``revision``."""
     archive = subprocess.run(
         ["git", "-C", str(common.REPO), "archive", revision, "tuckercodec"],
@@ -82,7 +83,7 @@ def baseline_sizes(revision: str, jobs: list[tuple[str, list[float]]]) -> dict[s
             env=environment,
             cwd=folder,  # not the checkout: its tuckercodec must not shadow the baseline's
         )
-    sizes: dict[str, dict] = json.loads(result.stdout)
+    sizes: dict[str, dict[str, Any]] = json.loads(result.stdout)
     return sizes
 
 

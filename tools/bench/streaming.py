@@ -132,7 +132,9 @@ def isolated(sequence: Path | None, workdir: Path, runs: int) -> None:
 def positions(vertices: int, frames: int, block: int = 16) -> Iterator[np.ndarray]:
     """A deterministic float32 animation (a rippling sheet), ``block`` frames at a time."""
     side = int(np.ceil(np.sqrt(vertices)))
-    grid = np.stack(np.meshgrid(np.arange(side), np.arange(side)), axis=-1).reshape(-1, 2)
+    grid: np.ndarray = np.stack(np.meshgrid(np.arange(side), np.arange(side)), axis=-1).reshape(
+        -1, 2
+    )
     grid = grid[:vertices].astype(np.float32) / side
     for start in range(0, frames, block):
         t = np.arange(start, min(start + block, frames), dtype=np.float32)[:, None] / 30

@@ -112,6 +112,7 @@ class Progress:
 def measure(trial: base.Trial, sequence: tuckercodec.MeshSequence, context: base.Context) -> None:
     """Fill ``trial.metrics`` from its decoded positions, then drop them."""
     decoded = trial.decoded
+    assert decoded is not None, f"{trial.coder} {trial.setting} was measured already"
     if math.isnan(trial.kg):
         trial.kg = context.kg(decoded)
     frames, vertices = sequence.frame_count, sequence.vertex_count
@@ -150,7 +151,9 @@ def retime_chosen(
     }
     for trial in chosen.values():
         runs = [(trial.encode_seconds, trial.decode_seconds, trial.total_bytes)]
-        runs += [trial.retime() for _ in range(repeat - 1)]
+        retime = trial.retime
+        assert retime is not None, f"{trial.coder} {trial.setting} cannot run again"
+        runs += [retime() for _ in range(repeat - 1)]
         if any(size != trial.total_bytes for _, _, size in runs):  # it must time the same encode
             raise RuntimeError(
                 f"{trial.coder} {trial.setting}: a re-run gave another size: "
@@ -238,7 +241,7 @@ def summary_rows(name: str, trials_by_coder, targets) -> list[str]:
         sizes = {c: b.total_bytes for c, b in best.items() if b is not None}
         if not sizes:
             continue
-        smallest = min(sizes, key=sizes.get)
+        smallest = min(sizes, key=lambda coder: sizes[coder])
         ours = sizes.get("tuckercodec")
         cells = []
         for coder in coders:
@@ -333,8 +336,8 @@ def run(args: argparse.Namespace) -> int:
     out.mkdir(parents=True, exist_ok=True)
 
     skipped = {c.name: c.unavailable() for c in coders if c.unavailable()}
-    for coder, why in skipped.items():
-        print(f"{coder}: skipped, {why}", file=sys.stderr)
+    for name, why in skipped.items():
+        print(f"{name}: skipped, {why}", file=sys.stderr)
     runnable = [c for c in coders if c.name not in skipped]
     progress = Progress(len(paths) * len(runnable))
     started = time.monotonic()

@@ -226,6 +226,7 @@ def search_bound(
             return uncentre(decompress(payload), centroids.reshape(-1, 3).astype(np.float64))
 
         trial = timed_trial(name, label(bound), encode, decode_, target)
+        assert trial.decoded is not None  # timed_trial keeps what it decoded
         trial.kg = context.kg(trial.decoded)
         return trial
 

@@ -101,6 +101,7 @@ class _PcaModel:
 
         def matrix(section_id: str, parents: Any) -> internal.qmat.QuantizedMatrix:
             entry = container.section(section_id)
+            assert entry is not None, f"pack() writes a {section_id} section"
             return internal.qmat.decode_matrix(
                 container.payload(data, entry),
                 entry.params,
