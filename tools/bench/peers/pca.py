@@ -90,6 +90,8 @@ class _PcaModel:
             "vertices": self.sequence.vertex_count,
             "frames": self.sequence.frame_count,
             "pca_rank": rank,
+            # the module's old name, kept: the string is part of every PCA file measured, so
+            # another would change the sizes BENCHMARKS.md gives
             "encoder": "tools/peers.py PCA baseline",
         }
         return internal.pack_container(header, sections)
