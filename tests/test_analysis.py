@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import load_shared_npz, wave_sequence
 
+from tests.support.sequences import load_shared_npz, wave_sequence
 from tuckercodec import InputError, load_sequence
 from tuckercodec.analysis import analyze, stored_floats
 from tuckercodec.hosvd import centre_frames, hosvd, reconstruct

@@ -14,9 +14,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import grid_faces, wave_sequence
 
 import tuckercodec as tc
+from tests.support.sequences import grid_faces, wave_sequence
 from tuckercodec import atomic
 from tuckercodec.cli import main
 
@@ -162,6 +162,7 @@ def test_killing_the_writer_mid_write_keeps_the_old_file(tmp_path, how):
     with subprocess.Popen(
         [sys.executable, "-c", _SLOW_WRITER, str(tmp_path)], stdout=subprocess.PIPE, text=True
     ) as child:
+        assert child.stdout is not None
         try:
             mode = child.stdout.readline().strip()
             assert child.stdout.readline().strip() == "writing"

@@ -11,8 +11,8 @@ import sys
 
 import numpy as np
 import pytest
-from conftest import grid_faces, wave_sequence
 
+from tests.support.sequences import grid_faces, wave_sequence
 from tuckercodec import __version__
 from tuckercodec.cli import main
 

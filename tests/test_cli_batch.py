@@ -13,12 +13,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import grid_faces, wave_sequence, write_cube_frames
 
 import tuckercodec
+from tests.support.inputs import write_cube_frames
+from tests.support.sequences import grid_faces, wave_sequence
 from tuckercodec.cli import batch, main
 from tuckercodec.cli.batch import EXIT_SOME_FAILED, output_name
-from tuckercodec.parallel import open_executor
+from tuckercodec.parallel import DaskExecutor, open_executor
 from tuckercodec.samples import sample_path
 
 #: One BLAS thread, as each Dask worker has (tuckercodec.parallel.WORKER_ENVIRONMENT): the
@@ -87,7 +88,8 @@ def test_the_same_bytes_in_process_and_on_one_or_two_workers(tmp_path, capfd):
     assert _outputs(tmp_path / "jobs1") == written
     assert _outputs(tmp_path / "jobs2") == written
     for name in written:
-        assert tuckercodec.info(tmp_path / "here" / name).kg <= 0.5
+        kg = tuckercodec.info(tmp_path / "here" / name).kg
+        assert kg is not None and kg <= 0.5
     assert lines["jobs 1"] == lines["jobs 2"] == lines["in process"]
     assert len(lines["in process"]) == 1 and "bad.npz" in lines["in process"][0]
 
@@ -98,6 +100,7 @@ def test_a_running_cluster_reads_the_inputs_by_their_absolute_paths(
     pytest.importorskip("distributed", reason="dask.distributed is not installed (extra [dask])")
     with open_executor(1) as running:  # its worker keeps the working folder it started in
         monkeypatch.chdir(tmp_path)
+        assert isinstance(running, DaskExecutor) and running.cluster is not None
         address = running.cluster.scheduler_address
         inputs = [str(path.relative_to(tmp_path)) for path in wave_inputs]
         assert main(["batch", *inputs, "sample", "-o", "out", "--scheduler", address]) == 0

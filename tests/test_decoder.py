@@ -33,7 +33,7 @@ def test_frame_selections(cloth):
     assert decoder.frame_indices(slice(-3, None)).tolist() == [57, 58, 59]
     for bad in ([1.5], "12", np.array([True, False])):
         with pytest.raises(TypeError):
-            decoder.positions(bad)
+            decoder.positions(bad)  # type: ignore[arg-type]  # what is refused
     with pytest.raises(ValueError, match="names no frame"):
         decoder.positions(slice(5, 2))
     with pytest.raises(ValueError, match="does not exist"):

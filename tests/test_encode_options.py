@@ -7,9 +7,9 @@ import json
 
 import numpy as np
 import pytest
-from conftest import grid_faces, wave_sequence
 
 import tuckercodec as tc
+from tests.support.sequences import grid_faces, wave_sequence
 from tuckercodec.encoder import encode_frames, encode_source
 from tuckercodec.io.streaming import SequenceFrames
 
@@ -44,9 +44,10 @@ def test_options_travel_as_json_and_come_back_equal(fields):
 
 
 def test_values_are_normalized_once():
-    options = tc.EncodeOptions(ranks=[3.0, np.int64(4)], level=7.0)
+    # JSON and numpy hand over lists, floats and numpy scalars: each is made the declared type
+    options = tc.EncodeOptions(ranks=[3.0, np.int64(4)], level=7.0)  # type: ignore[arg-type]
     assert options.ranks == (3, 4) and type(options.ranks[0]) is int and options.level == 7
-    assert type(tc.EncodeOptions(target_kg=np.float32(0.5)).target_kg) is float
+    assert type(tc.EncodeOptions(target_kg=np.float32(0.5)).target_kg) is float  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize(

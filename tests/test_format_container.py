@@ -14,26 +14,24 @@ from collections.abc import Callable
 from typing import Any
 
 import pytest
-from conftest import (
-    HOSTILE,
-    HYPOTHESIS_SETTINGS,
-    MISSING,
-    VALID,
-    Parts,
-    expect_error,
-    grid_faces,
-    msgpack_leaves,
-    outcome,
-    raw_file,
-    table_file,
-    vector,
-    wave_sequence,
-    with_preamble,
-)
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import tuckercodec
+from tests.support.compressed import (
+    HOSTILE,
+    MISSING,
+    VALID,
+    Parts,
+    expect_error,
+    outcome,
+    raw_file,
+    table_file,
+    vector,
+    with_preamble,
+)
+from tests.support.properties import HYPOTHESIS_SETTINGS, msgpack_leaves
+from tests.support.sequences import grid_faces, wave_sequence
 from tuckercodec import (
     ChecksumError,
     FormatError,
@@ -180,7 +178,9 @@ def _shift(entry: dict[str, Any], by: int) -> None:
 
 
 #: What each edit of v1-wave-triangles' section table breaks: the error class and rule of §11.
-TABLE_CASES: dict[str, tuple[Callable[[list, Parts], object], type[FormatError], str]] = {
+TABLE_CASES: dict[
+    str, tuple[Callable[[list[dict[str, Any]], Parts], object], type[FormatError], str]
+] = {
     "two sections overlap": (
         lambda t, p: _shift(t[1], -10),
         FormatError,
@@ -277,7 +277,7 @@ TABLE_CASES: dict[str, tuple[Callable[[list, Parts], object], type[FormatError],
         "R14-section-entry-field",
     ),
     "an entry that is a list": (
-        lambda t, p: t.__setitem__(0, list(t[0].items())),
+        lambda t, p: t.__setitem__(0, list(t[0].items())),  # type: ignore[call-overload]  # refused
         FormatError,
         "R14-section-entry-field",
     ),

@@ -12,11 +12,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import HYPOTHESIS_SETTINGS, VALID, assert_same_faces, expect_error, vector
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import tuckercodec
+from tests.support.compressed import VALID, assert_same_faces, expect_error, vector
+from tests.support.properties import HYPOTHESIS_SETTINGS
 from tuckercodec import ChecksumError, Decoder, FormatError, TruncatedFileError
 from tuckercodec.format.container import HEAD_SIZE, parse_container
 from tuckercodec.format.sections import KNOWN_SECTIONS
@@ -69,9 +70,9 @@ def test_every_single_bit_flip_is_caught_or_harmless(name):
     for start, end, what in _regions(data):
         for position in range(start, end):
             for bit in range(8):
-                damaged = bytearray(data)
-                damaged[position] ^= 1 << bit
-                damaged = bytes(damaged)
+                flipped = bytearray(data)
+                flipped[position] ^= 1 << bit
+                damaged = bytes(flipped)
                 if what.startswith("section ") and what.split(" ", 1)[1] not in known:
                     decoder = Decoder(damaged)  # skipped unread: must decode, identically
                     np.testing.assert_array_equal(decoder.positions(), reference)

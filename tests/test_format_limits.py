@@ -16,9 +16,9 @@ from typing import Any
 
 import numpy as np
 import pytest
-from conftest import IDENTITY_U2, Parts, deadline, vector, with_preamble
 
 import tuckercodec
+from tests.support.compressed import IDENTITY_U2, Parts, deadline, vector, with_preamble
 from tuckercodec import FormatError, LimitError, TruncatedFileError
 from tuckercodec.format.container import pack_container
 from tuckercodec.format.faces import encode_faces

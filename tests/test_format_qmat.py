@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import IDENTITY_U2
 
+from tests.support.compressed import IDENTITY_U2
 from tuckercodec import Decoder, FormatError, encode, load_sequence
 from tuckercodec.format.container import pack_container, parse_container
 from tuckercodec.format.faces import encode_faces

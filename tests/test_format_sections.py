@@ -11,28 +11,28 @@ not use, a value equal to the original, an unknown ancillary section (skipped un
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import pytest
 import zstandard
-from conftest import (
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import tuckercodec
+from tests.support.compressed import (
     HOSTILE,
-    HYPOTHESIS_SETTINGS,
     MISSING,
     VALID,
     Parts,
     accept_either,
     check_decoded,
     expect_error,
-    msgpack_values,
     outcome,
     table_file,
     vector,
 )
-from hypothesis import given, settings
-from hypothesis import strategies as st
-
-import tuckercodec
+from tests.support.properties import HYPOTHESIS_SETTINGS, msgpack_values
 from tuckercodec import FormatError, UnsupportedVersionError
 from tuckercodec.format.sections import KNOWN_SECTIONS
 
@@ -61,6 +61,7 @@ def test_every_section_parameter_set_to_every_hostile_value(section, key):
         if unused or same or renamed:
             assert error is None, f"{section}.{key} = {label}: {error}"
             if renamed:
+                assert sequence is not None
                 assert sequence.frame_names[0] == "frame_00000"  # NAME gone: the default names
         else:
             assert error is not None, f"{section}.{key} = {label} was accepted"
@@ -73,7 +74,7 @@ def test_an_unknown_ancillary_section_is_skipped_whatever_it_holds():
     )
     data = parts.pack()
     error, sequence = outcome(data)
-    assert error is None
+    assert error is None and sequence is not None
     np.testing.assert_array_equal(
         sequence.vertices, tuckercodec.decode(vector("v1-wave-triangles")).vertices
     )
@@ -96,7 +97,9 @@ def test_a_critical_name_section_is_refused():
 
 #: Section-table entries that name sections the decoder does not know, or known sections with
 #: another codec or criticality than §6.6 gives them: the error class and rule of §11.
-SECTION_ENTRY_CASES: dict[str, tuple[Callable[[list, Parts], object], type[FormatError], str]] = {
+SECTION_ENTRY_CASES: dict[
+    str, tuple[Callable[[list[dict[str, Any]], Parts], object], type[FormatError], str]
+] = {
     "an unknown critical section": (
         lambda t, p: t.append(
             {**t[-1], "id": "XTRA", "offset": t[-1]["offset"] + t[-1]["length"], "length": 0}

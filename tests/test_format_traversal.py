@@ -4,6 +4,7 @@ and vertex order kept; face order the walk's), and every broken stream is R39-tr
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -147,13 +148,13 @@ def coded(
     count: int = 1,
     width: int = 3,
     corner_order: int = 0,
-) -> tuple[dict, bytes]:
+) -> tuple[dict[str, Any], bytes]:
     return traversal.pack_streams(
         [list(ops), list(degrees), list(vertices), list(references)], count, width, corner_order, 3
     )
 
 
-def decode(params: dict, payload: bytes, vertex_count: int = 5) -> np.ndarray:
+def decode(params: dict[str, Any], payload: bytes, vertex_count: int = 5) -> np.ndarray:
     return traversal.decode_traversal(payload, params, vertex_count, "section FACE")
 
 
@@ -192,7 +193,7 @@ def test_a_hand_written_stream_decodes_as_the_spec_says():
     ],
 )
 def test_every_broken_walk_is_r39(change, message):
-    arguments = {"ops": [0, 0, 0], "vertices": [0, 0, 0]}
+    arguments: dict[str, Any] = {"ops": [0, 0, 0], "vertices": [0, 0, 0]}
     if change.get("references") == [-1]:
         arguments["vertices"] = [0, 0]  # the third corner is FAR: vertex 1 + (-1) = 0
         change = {**change, "references": [5]}  # 1 + 5 = 6: not a vertex seen
@@ -237,13 +238,14 @@ def test_random_damage_to_a_real_walk_is_always_a_format_error():
     params, payload, _ = traversal.encode_traversal(faces, 100)
     rng = np.random.default_rng(8)
     for _ in range(150):
-        values, corner_order = traversal.read_streams(payload, params, *faces.shape, "FACE")
+        count, corners = faces.shape
+        values, corner_order = traversal.read_streams(payload, params, count, corners, "FACE")
         stream = int(rng.integers(4))
         if not values[stream]:
             continue
         position = int(rng.integers(len(values[stream])))
         values[stream][position] += int(rng.choice([-2, -1, 1, 2, 7]))
-        broken, data = traversal.pack_streams(values, *faces.shape, corner_order, 1)
+        broken, data = traversal.pack_streams(values, count, corners, corner_order, 1)
         rule = None
         try:
             decoded = traversal.decode_traversal(data, broken, 100, "FACE")

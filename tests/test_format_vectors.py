@@ -7,12 +7,13 @@ import json
 import re
 import struct
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 
 import tuckercodec
-from tools import make_vectors
+from tools.generate import vectors as make_vectors
 from tuckercodec import Decoder, info
 from tuckercodec.internal import HEAD_SIZE
 
@@ -20,13 +21,13 @@ SPEC = Path(__file__).resolve().parents[1] / "spec"
 VECTORS = sorted((SPEC / "vectors").glob("*.json"))
 
 
-def _load(path: Path) -> tuple[dict, bytes]:
+def _load(path: Path) -> tuple[dict[str, Any], bytes]:
     expected = json.loads(path.read_text())
     return expected, (path.parent / expected["file"]).read_bytes()
 
 
 def test_vectors_exist():
-    assert len(VECTORS) >= 3, "spec/vectors/ is empty: run python -m tools.make_vectors"
+    assert len(VECTORS) >= 3, "spec/vectors/ is empty: run python -m tools.generate.vectors"
 
 
 @pytest.mark.parametrize(
@@ -112,7 +113,7 @@ def test_a_reconstruction_that_overflows_is_a_format_error():
 
 
 # ------------------------------------------------------------------------------------------
-# the writer, tools.make_vectors (never run into spec/vectors/ here)
+# the writer, tools.generate.vectors (never run into spec/vectors/ here)
 
 #: Written from a fresh encode of v1-wave-triangles, not from the committed file: the header's
 #: error.kg differs in its last digit, and nothing else (checked below).

@@ -225,7 +225,7 @@ def test_exponential_words_decode_to_the_values_and_refuse_what_is_not_a_multipl
     decoded = np.asarray(meshopt.decode_filter_exp(np.frombuffer(words, np.uint8), 2, 12))
     assert np.array_equal(decoded.view(np.float32).reshape(2, 3), values.astype(np.float32))
     with pytest.raises(ValueError, match="not 24-bit multiples"):
-        exponential_words(np.float32([0.3, 0, 0]).tobytes(), exponents)
+        exponential_words(np.array([0.3, 0, 0], np.float32).tobytes(), exponents)
 
 
 @pytest.mark.parametrize("compress", ["quantize", "meshopt"])

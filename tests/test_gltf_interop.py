@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 import pytest
-from js_interop import HINT, INFO, issues, three_positions, validate_gltf_files
 
+from tests.support.js_interop import HINT, INFO, issues, three_positions, validate_gltf_files
 from tuckercodec import Decoder, MeshSequence, encode, load_sequence, save_sequence
 from tuckercodec.gltf.accessors import view_bytes
 from tuckercodec.gltf.container import pack_glb, read_document
@@ -117,7 +117,9 @@ def test_three_js_plays_a_written_sequence_frame_by_frame(written: dict[str, Pat
 
 def test_a_polygon_sequence_and_a_point_sequence_validate(tmp_path: Path) -> None:
     vertices = np.random.default_rng(4).normal(size=(3, 5, 3))
-    save_sequence(MeshSequence(vertices, [[0, 1, 2, 3], [1, 4, 2, -1]]), tmp_path / "q.glb")
+    save_sequence(
+        MeshSequence(vertices, np.array([[0, 1, 2, 3], [1, 4, 2, -1]])), tmp_path / "q.glb"
+    )
     save_sequence(MeshSequence(vertices, np.zeros((0, 3))), tmp_path / "p.glb")
     for report in validate_gltf_files([tmp_path / "q.glb", tmp_path / "p.glb"]):
         assert not issues(report, INFO), issues(report, INFO)

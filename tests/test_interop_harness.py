@@ -8,14 +8,23 @@ from __future__ import annotations
 
 import base64
 import json
+import shutil
 import struct
 from pathlib import Path
 from typing import Any
 
-import js_interop
 import numpy as np
 import pytest
-from js_interop import ERROR, INFO, issues, three_evaluate, three_positions, validate_gltf
+
+from tests.support import js_interop
+from tests.support.js_interop import (
+    ERROR,
+    INFO,
+    issues,
+    three_evaluate,
+    three_positions,
+    validate_gltf,
+)
 
 FLOAT, SHORT = 5126, 5122
 ARRAY_BUFFER = 34962
@@ -321,5 +330,5 @@ def test_what_three_warns_about_fails_the_evaluation(tmp_path: Path) -> None:
 def test_a_machine_without_node_skips_naming_what_is_missing(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    monkeypatch.setattr(js_interop.shutil, "which", lambda name: None)
+    monkeypatch.setattr(shutil, "which", lambda name: None)
     assert js_interop._setup.__wrapped__() == (None, "node and npm not found on PATH")

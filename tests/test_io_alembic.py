@@ -5,19 +5,22 @@ the file, the object and the frame."""
 
 from __future__ import annotations
 
+import functools
 import shutil
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
-from conftest import expect_input_error, shared_file
 
+from tests.support.inputs import expect_input_error
+from tests.support.sequences import shared_file
 from tuckercodec import DependencyError, InputError, MeshSequence
 from tuckercodec.cli import main
 from tuckercodec.io import load_sequence, save_sequence
-from tuckercodec.io.alembic import CODES_KEY, RATE_KEY, codes_from_times
+from tuckercodec.io.alembic_time import CODES_KEY, RATE_KEY, codes_from_times
 
 pytest.importorskip("alembic3d", reason="alembic3d (the 'alembic' extra) is not installed")
 import imath
@@ -46,7 +49,7 @@ def polygon_sequence(rate: float | None = 30000 / 1001, codes=(-2.0, 0.5, 1.0, 7
     return MeshSequence(vertices, faces, frame_rate=rate, time_codes=np.array(codes))
 
 
-def raw_mesh(path: Path, name: str) -> tuple[np.ndarray, np.ndarray, int, object]:
+def raw_mesh(path: Path, name: str) -> tuple[np.ndarray, np.ndarray, int, Any]:
     """Face counts, face indices and sample count of an object as stored, and its sampling."""
     archive = Abc.IArchive(str(path))
     item = archive.getTop()
@@ -68,6 +71,7 @@ def test_the_cloth_round_trips_exactly(cloth, tmp_path):
     back = load_sequence(path)
     assert exact(back, cloth)
     assert back.frame_rate == 24.0  # the sequence has none: the default, written and read
+    assert back.time_codes is not None
     assert np.array_equal(back.time_codes, cloth.codes())
     assert path.read_bytes()[:5] == b"Ogawa"
 
@@ -88,11 +92,12 @@ def test_polygons_rates_and_time_codes_round_trip_exactly(tmp_path, rate, codes)
     back = load_sequence(path)
     assert exact(back, seq)
     assert back.frame_rate == (rate or 24.0)
+    assert back.time_codes is not None
     assert np.array_equal(back.time_codes, seq.codes())
 
 
 def test_horse_gallop_round_trips_exactly(horse, tmp_path):
-    """(Its reading speed is measured by tools.bench_formats, not asserted here.)"""
+    """(Its reading speed is measured by tools.bench read --formats, not asserted here.)"""
     path = tmp_path / "horse.abc"
     save_sequence(horse, path)
     assert exact(load_sequence(path), horse)
@@ -142,7 +147,7 @@ def test_nothing_is_replaced_without_overwrite(cloth, tmp_path):
 
 def make_archive(
     path: Path,
-    meshes: dict[str, list],
+    meshes: dict[str, list[Any]],
     *,
     rate: float | None = None,
     sampling: object | None = None,
@@ -176,9 +181,9 @@ def make_archive(
     return path
 
 
-def quad_samples(count: int, **changes: tuple) -> list:
+def quad_samples(count: int, **changes: Any) -> list[Any]:
     """``count`` samples of a moving quad (two triangles, clockwise as Alembic stores them)."""
-    samples: list = [(QUAD, [3, 3], [2, 1, 0, 3, 2, 0])]
+    samples: list[Any] = [(QUAD, [3, 3], [2, 1, 0, 3, 2, 0])]
     samples += [QUAD + frame for frame in range(1, count)]
     for frame, replacement in changes.items():
         samples[int(frame.lstrip("f"))] = replacement
@@ -201,9 +206,11 @@ def test_rates_from_other_writers(tmp_path):
             tmp_path / "a.abc", {"q": quad_samples(3)}, rate=30000 / 1001, sampling=sampling
         )
     )
+    assert ntsc.time_codes is not None
     assert ntsc.frame_rate == 30000 / 1001 and ntsc.time_codes.tolist() == [1.0, 2.0, 3.0]
     sampling = AbcCoreAbstract.TimeSampling(1 / 25, 4 / 25)
     pal = load_sequence(make_archive(tmp_path / "b.abc", {"q": quad_samples(2)}, sampling=sampling))
+    assert pal.time_codes is not None
     assert pal.frame_rate == 25.0 and pal.time_codes.tolist() == [4.0, 5.0]
     times = AbcCoreAbstract.TimeVector()
     times.extend([0.5, 0.75, 2.0])
@@ -213,6 +220,7 @@ def test_rates_from_other_writers(tmp_path):
     loose = load_sequence(
         make_archive(tmp_path / "c.abc", {"q": quad_samples(3)}, sampling=acyclic)
     )
+    assert loose.time_codes is not None
     assert loose.frame_rate is None and loose.time_codes.tolist() == [12.0, 18.0, 48.0]
     assert loose.seconds().tolist() == [0.5, 0.75, 2.0]
 
@@ -223,12 +231,14 @@ def test_kept_time_codes_are_used_only_where_they_agree_with_the_times(tmp_path)
     save_sequence(polygon_sequence(24.0, tuple(codes)), path)
     data = path.read_bytes()
     assert CODES_KEY.encode() in data and RATE_KEY.encode() in data
-    assert np.array_equal(load_sequence(path).time_codes, codes)
+    kept = load_sequence(path).time_codes
+    assert kept is not None and np.array_equal(kept, codes)
     # a kept code that disagrees with its sample's time is not believed: the times rule
     at = data.find(codes.tobytes())
     assert at > 0
     path.write_bytes(data[:at] + np.array([0.0, 999.0]).tobytes() + data[at + 16 :])
     back = load_sequence(path).time_codes
+    assert back is not None
     assert back[1] == 1 / 3 and abs(back[4] - codes[4]) < 1e-9 * codes[4]
 
 
@@ -250,7 +260,7 @@ def test_several_meshes_need_object_and_object_chooses(tmp_path):
         ("bShape", "there is no object bShape"),
     ]:
         error = expect_input_error(
-            lambda wanted=wanted: load_sequence(path, object_path=wanted), path, match=message
+            functools.partial(load_sequence, path, object_path=wanted), path, match=message
         )
         assert "the meshes are: /a/aShape, /b/bShape" in str(error)
 

@@ -8,29 +8,27 @@ number (and the first frame's file where they are compared).
 
 from __future__ import annotations
 
+import functools
 import shutil
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import (
+from hypothesis import given
+
+from tests.support.inputs import (
     CUBE_VERTICES,
     OBJ_TOKENS,
-    PROPERTY,
     VALID_OBJ,
     check_sequence,
     expect_input_error,
-    mutations,
     obj_text,
-    report_examples,
-    scratch_folder,
-    shared_file,
     write_cube_frames,
     write_file,
 )
-from hypothesis import given
-
+from tests.support.properties import PROPERTY, mutations, report_examples, scratch_folder
+from tests.support.sequences import shared_file
 from tuckercodec import InputError, MeshSequence
 from tuckercodec.io import (
     format_named,
@@ -240,7 +238,7 @@ def test_a_bad_middle_frame_is_named(
     write_file(paths[2], damage(paths[2].read_text()))
     for source in (tmp_path / "seq", str(tmp_path / "seq" / "*.obj"), paths):
         expect_input_error(
-            lambda source=source: load_sequence(source, progress=False),
+            functools.partial(load_sequence, source, progress=False),
             paths[2],
             line=line,
             frame=2,
@@ -345,8 +343,9 @@ def test_formats_are_chosen_by_suffix_from_one_registry(tmp_path: Path) -> None:
     suffixes = [suffix for found in formats() for suffix in found.suffixes]
     assert len(suffixes) == len(set(suffixes))  # each suffix names one format
     assert format_of(tmp_path / "a.OBJ") is format_named("obj")
-    assert format_of(tmp_path / "a.npz").read is not None  # a whole sequence in one file
-    assert format_of(tmp_path / "a.ply").read_frame is not None  # one frame per file
+    whole, framed = format_of(tmp_path / "a.npz"), format_of(tmp_path / "a.ply")
+    assert whole is not None and whole.read is not None  # a whole sequence in one file
+    assert framed is not None and framed.read_frame is not None  # one frame per file
     assert format_of(tmp_path / "a.txt") is None
     with pytest.raises(
         ValueError, match=r"unknown sequence format 'abc': the formats are obj, npz,"

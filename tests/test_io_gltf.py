@@ -14,8 +14,8 @@ from typing import Any
 
 import numpy as np
 import pytest
-from conftest import shared_file
 
+from tests.support.sequences import shared_file
 from tuckercodec import DependencyError, InputError, MeshSequence, load_sequence, save_sequence
 from tuckercodec.gltf import container
 from tuckercodec.gltf.container import pack_glb
@@ -195,6 +195,7 @@ def test_a_foreign_morph_animation_reads_as_a_viewer_shows_it(tmp_path: Path) ->
     moves = np.array([[0, 0, 0], [0, 0, 0], [5, 0, 0], [5, 0, 0]])
     expected = 2 * (BASE + weights[:, None, None] * TARGET + moves[:, None, :])
     assert np.allclose(seq.vertices, expected, atol=1e-12)
+    assert seq.time_codes is not None
     assert seq.frame_rate == 24.0 and np.allclose(seq.time_codes, [0, 24, 36, 48])
 
 
@@ -235,7 +236,9 @@ def test_object_picks_one_of_several_meshes_and_an_unknown_name_lists_them(
 
 @pytest.fixture
 def good(tmp_path: Path) -> Path:
-    seq = MeshSequence(np.random.default_rng(3).normal(size=(3, 4, 3)), [[0, 1, 2], [0, 2, 3]])
+    seq = MeshSequence(
+        np.random.default_rng(3).normal(size=(3, 4, 3)), np.array([[0, 1, 2], [0, 2, 3]])
+    )
     save_sequence(seq, tmp_path / "good.glb")
     return tmp_path / "good.glb"
 
@@ -293,7 +296,7 @@ def test_non_finite_positions_are_refused_naming_the_accessor(good: Path) -> Non
 
 
 def test_a_missing_external_buffer_and_uris_out_of_the_folder_are_refused(tmp_path: Path) -> None:
-    gltf = {
+    gltf: dict[str, Any] = {
         "asset": {"version": "2.0"},
         "buffers": [{"uri": "frames.bin", "byteLength": 48}],
         "bufferViews": [{"buffer": 0, "byteLength": 48}],
@@ -313,7 +316,7 @@ def test_a_missing_external_buffer_and_uris_out_of_the_folder_are_refused(tmp_pa
 
 
 def test_a_data_uri_beyond_the_limit_is_refused(tmp_path: Path, monkeypatch: Any) -> None:
-    save_sequence(MeshSequence(np.ones((2, 3, 3)), [[0, 1, 2]]), tmp_path / "a.gltf")
+    save_sequence(MeshSequence(np.ones((2, 3, 3)), np.array([[0, 1, 2]])), tmp_path / "a.gltf")
     monkeypatch.setattr(container, "MAX_DATA_URI", 100)
     _refused(tmp_path / "a.gltf", "data: URI of .* characters")
 

@@ -14,11 +14,11 @@ import time
 
 import numpy as np
 import pytest
-import streaming_hooks as hooks
-from conftest import expect_input_error
-from test_io_isolation import CRASHING, LINUX, children, gone
-from test_io_streaming import check_ranges, same_description
 
+from tests.support import streaming_hooks as hooks
+from tests.support.inputs import expect_input_error
+from tests.test_io_isolation import CRASHING, LINUX, children, gone
+from tests.test_io_streaming import check_ranges, same_description
 from tuckercodec import InputError, load_sequence, save_sequence
 from tuckercodec.io import open_frames
 from tuckercodec.io.isolated_frames import IsolatedFrames
@@ -58,6 +58,7 @@ def test_one_child_serves_every_read_and_leaves_when_closed(data_file):
         assert (source.frame_count, source.vertex_count) == (10, 5)
         assert source.faces.tolist() == [[0, 1, 2, 3], [2, 3, 4, -1]]
         assert source.frame_names[3] == "f3" and source.frame_rate == 30.0
+        assert source.time_codes is not None
         assert np.array_equal(source.time_codes, np.arange(10) * 2.0 + 1)
         for start, stop in [(0, 10), (3, 4), (2, 9), (0, 1)]:
             assert np.array_equal(source.read(start, stop), hooks.expected(start, stop))

@@ -16,11 +16,11 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-import isolation_hooks as hooks
 import numpy as np
 import pytest
-from conftest import check_sequence, expect_input_error
 
+from tests.support import isolation_hooks as hooks
+from tests.support.inputs import check_sequence, expect_input_error
 from tuckercodec import DependencyError, InputError, MeshSequence
 from tuckercodec.cli import main
 from tuckercodec.io import isolation, load_sequence
@@ -255,6 +255,7 @@ def test_a_sequence_comes_back_whole_and_the_libraries_messages_stay_in_the_chil
     capfd.readouterr()  # what the hook printed here, in this process
     assert np.array_equal(seq.vertices, expected.vertices)
     assert np.array_equal(seq.faces, expected.faces) and seq.faces.dtype == np.int64
+    assert seq.time_codes is not None and expected.time_codes is not None
     assert np.array_equal(seq.time_codes, expected.time_codes)
     assert seq.frame_rate == 30000 / 1001 and seq.frame_names[:2] == ["a", "b"]
     read(hooks.chatty, data_file)
@@ -279,7 +280,7 @@ def test_a_frozen_application_reads_in_process(data_file, monkeypatch):
 CALLER = """
 import sys
 from pathlib import Path
-import isolation_hooks
+from tests.support import isolation_hooks
 from tuckercodec.io.isolation import read_isolated
 from tuckercodec.io.registry import ReadOptions
 try:
@@ -292,12 +293,13 @@ except KeyboardInterrupt:
 @pytest.mark.skipif(not LINUX, reason="checks processes through Linux's /proc")
 @pytest.mark.parametrize(("how", "status"), [(signal.SIGINT, 130), (signal.SIGKILL, -9)])
 def test_the_child_dies_with_its_interrupted_or_killed_caller(data_file, how, status):
-    search = [str(TESTS), *filter(None, [os.environ.get("PYTHONPATH")])]  # for isolation_hooks
+    search = [str(TESTS.parent), *filter(None, [os.environ.get("PYTHONPATH")])]  # for tests.support
     environment = {**os.environ, "PYTHONPATH": os.pathsep.join(search)}
     pid_file = hooks.pid_file(data_file)
     with subprocess.Popen(
         [sys.executable, "-c", CALLER, str(data_file)], env=environment, stderr=subprocess.PIPE
     ) as caller:
+        assert caller.stderr is not None
         deadline = time.monotonic() + 30
         while not pid_file.exists() or not pid_file.read_text():
             assert caller.poll() is None and time.monotonic() < deadline, caller.stderr.read()

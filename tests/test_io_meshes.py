@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import CUBE_VERTICES, write_file
 
+from tests.support.inputs import CUBE_VERTICES, write_file
 from tuckercodec import InputError
 from tuckercodec.io import load_sequence
 

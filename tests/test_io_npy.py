@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import expect_input_error, measure, write_cube_frames
 
+from tests.support.inputs import expect_input_error, measure, write_cube_frames
 from tuckercodec import MeshSequence, load_sequence, save_sequence
 from tuckercodec.cli import main
 from tuckercodec.io import open_frames, streaming

@@ -10,6 +10,7 @@ property tests feed random bytes, mutated archives, mutated .npy members in a so
 
 from __future__ import annotations
 
+import functools
 import io
 import math
 import pickle
@@ -20,36 +21,34 @@ import warnings
 import zipfile
 import zlib
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
-from conftest import (
-    CUBE_VERTICES,
-    PROPERTY,
-    check_sequence,
-    expect_input_error,
-    measure,
-    mutations,
-    report_examples,
-    scratch_folder,
-    shared_file,
-    write_file,
-)
 from hypothesis import given
 from hypothesis import strategies as st
 
+from tests.support.inputs import (
+    CUBE_VERTICES,
+    check_sequence,
+    expect_input_error,
+    measure,
+    write_file,
+)
+from tests.support.properties import PROPERTY, mutations, report_examples, scratch_folder
+from tests.support.sequences import shared_file
 from tuckercodec import InputError, MeshSequence
 from tuckercodec.io import load_sequence, save_sequence
 
 
-def npz_bytes(compressed: bool = False, **arrays: np.ndarray) -> bytes:
+def npz_bytes(compressed: bool = False, /, **arrays: Any) -> bytes:
     """The bytes of an .npz archive of ``arrays`` (stored, or deflated like savez_compressed)."""
     buffer = io.BytesIO()
     (np.savez_compressed if compressed else np.savez)(buffer, **arrays)
     return buffer.getvalue()
 
 
-def npy_bytes(header: dict, payload: bytes) -> bytes:
+def npy_bytes(header: dict[str, Any], payload: bytes) -> bytes:
     """A .npy member with any header at all (numpy's own writer would refuse some) and payload."""
     text = repr(header).encode("latin1")
     size = len(text) + 1  # the newline
@@ -195,7 +194,9 @@ def test_shared_npz_sequences(name: str, shape: tuple[int, int, int]) -> None:
         ({"V": np.zeros((2, 3, 3)), "frame_rate": np.array(-1.0)}, "'frame_rate'", "positive"),
     ],
 )
-def test_bad_npz_names_file_and_key(tmp_path: Path, arrays: dict, key: str, message: str) -> None:
+def test_bad_npz_names_file_and_key(
+    tmp_path: Path, arrays: dict[str, Any], key: str, message: str
+) -> None:
     path = tmp_path / "bad.npz"
     np.savez(path, **arrays)
     with pytest.raises(InputError, match=message) as caught:
@@ -292,7 +293,7 @@ class _Trap:
     def __init__(self, target: str) -> None:
         self.target = target
 
-    def __reduce__(self) -> tuple:
+    def __reduce__(self) -> tuple[Any, ...]:
         return (open, (self.target, "w"))
 
 
@@ -306,7 +307,7 @@ def test_pickles_are_never_loaded(tmp_path: Path) -> None:
         }
         members[f"{key}.npy"] = npy_bytes(header, payload)
         path = write_file(tmp_path / f"{key}.npz", zip_bytes(members))
-        expect_input_error(lambda path=path: load_sequence(path), path, match="Python objects")
+        expect_input_error(functools.partial(load_sequence, path), path, match="Python objects")
         assert not trap.exists()
     # a structured dtype with an object field is just as much a pickle
     header = {"descr": [("a", "|O")], "fortran_order": False, "shape": (1,)}
@@ -357,7 +358,7 @@ def test_a_truncated_npz_at_every_offset(tmp_path: Path) -> None:
         path = tmp_path / "cut.npz"
         for end in range(len(whole)):
             write_file(path, whole[:end])
-            expect_input_error(lambda path=path: load_sequence(path), path)
+            expect_input_error(functools.partial(load_sequence, path), path)
         write_file(path, whole)
         check_sequence(load_sequence(path))
 
@@ -445,13 +446,13 @@ def test_a_key_stored_twice(tmp_path: Path) -> None:
     ],
 )
 def test_hostile_npy_headers_allocate_nothing(
-    tmp_path: Path, header: dict, payload: bytes, message: str
+    tmp_path: Path, header: dict[str, Any], payload: bytes, message: str
 ) -> None:
     for compression in (zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED):
         path = write_file(
             tmp_path / "huge.npz", zip_bytes({"V.npy": npy_bytes(header, payload)}, compression)
         )
-        raised, elapsed, peak = measure(lambda path=path: load_sequence(path))
+        raised, elapsed, peak = measure(functools.partial(load_sequence, path))
         assert isinstance(raised, InputError) and raised.path == str(path), raised
         assert re.search(message, str(raised)), raised
         assert elapsed < 1.0 and peak < 4 * 2**20, (elapsed, peak)
@@ -657,7 +658,9 @@ DESCRS = [
     payload=st.just(-1) | st.integers(0, 300),  # -1: exactly the bytes the header declares
     key=st.sampled_from(["V", "F", "frame_files", "frame_rate"]),
 )
-def test_any_npy_header(descr: str, shape: tuple, fortran: bool, payload: int, key: str) -> None:
+def test_any_npy_header(
+    descr: str, shape: tuple[int, ...], fortran: bool, payload: int, key: str
+) -> None:
     """Any dtype and shape in a header, with any amount of data behind it: an InputError or a
     valid sequence, in small memory."""
     EXAMPLES_RUN["any .npy header"] = EXAMPLES_RUN.get("any .npy header", 0) + 1

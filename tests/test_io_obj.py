@@ -10,6 +10,7 @@ mesh, the one the careful parser reads.
 
 from __future__ import annotations
 
+import functools
 import io
 import random
 import shutil
@@ -19,23 +20,20 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import (
+from hypothesis import given
+from hypothesis import strategies as st
+
+from tests.support.inputs import (
     CUBE_VERTICES,
     OBJ_TOKENS,
-    PROPERTY,
     TRIANGLE,
     VALID_OBJ,
     expect_input_error,
     measure,
-    mutations,
     obj_text,
-    report_examples,
-    scratch_folder,
     write_file,
 )
-from hypothesis import given
-from hypothesis import strategies as st
-
+from tests.support.properties import PROPERTY, mutations, report_examples, scratch_folder
 from tuckercodec import InputError, MeshSequence
 from tuckercodec.io import load_sequence
 from tuckercodec.io import obj as objio
@@ -93,23 +91,23 @@ def test_write_read_round_trip_is_exact(tmp_path: Path) -> None:
 
 def test_write_with_precision(tmp_path: Path) -> None:
     path = tmp_path / "mesh.obj"
-    write_obj(path, [[1 / 3, 2 / 3, 1.0]], np.zeros((0, 3), dtype=int), precision=4)
+    write_obj(path, np.array([[1 / 3, 2 / 3, 1.0]]), np.zeros((0, 3), dtype=int), precision=4)
     assert path.read_text().splitlines()[0] == "v 0.3333 0.6667 1"
     with pytest.raises(ValueError, match="precision"):
-        write_obj(tmp_path / "other.obj", [[0.0, 0.0, 0.0]], [], precision=0)
+        write_obj(tmp_path / "other.obj", np.zeros((1, 3)), np.zeros((0, 3), int), precision=0)
 
 
 def test_write_obj_refuses_to_overwrite_and_leaves_no_temporary_files(tmp_path: Path) -> None:
     path = tmp_path / "mesh.obj"
-    write_obj(path, CUBE_VERTICES, [[0, 1, 2]])
+    write_obj(path, CUBE_VERTICES, np.array([[0, 1, 2]]))
     before = path.read_bytes()
     with pytest.raises(FileExistsError, match=r"mesh\.obj"):
-        write_obj(path, CUBE_VERTICES * 2, [[0, 1, 2]])
+        write_obj(path, CUBE_VERTICES * 2, np.array([[0, 1, 2]]))
     assert path.read_bytes() == before
     with pytest.raises(ValueError, match="finite"):
-        write_obj(path, np.full((3, 3), np.nan), [[0, 1, 2]], overwrite=True)
+        write_obj(path, np.full((3, 3), np.nan), np.array([[0, 1, 2]]), overwrite=True)
     assert path.read_bytes() == before
-    write_obj(path, CUBE_VERTICES * 2, [[0, 1, 2]], overwrite=True)
+    write_obj(path, CUBE_VERTICES * 2, np.array([[0, 1, 2]]), overwrite=True)
     np.testing.assert_array_equal(read_obj(path)[0], CUBE_VERTICES * 2)
     assert [p.name for p in tmp_path.iterdir()] == ["mesh.obj"]
 
@@ -558,7 +556,7 @@ def test_line_length_limit_is_exact_across_chunks(
         too_long[number] += b" " * (17 - len(too_long[number]))  # 17 bytes: one too many
         path = write_file(tmp_path / f"long{number}.obj", ending.join(too_long) + ending)
         expect_input_error(
-            lambda path=path: read_obj(path), path, line=number + 1, match="longer than 16"
+            functools.partial(read_obj, path), path, line=number + 1, match="longer than 16"
         )
     # the last line, without a line end
     path = write_file(tmp_path / "last.obj", ending.join(lines) + ending + b"#" * 17)

@@ -16,17 +16,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import (
-    PROPERTY,
-    expect_input_error,
-    grid_faces,
-    measure,
-    shared_file,
-    wave_sequence,
-)
 from hypothesis import given
 from hypothesis import strategies as st
 
+from tests.support.inputs import expect_input_error, measure
+from tests.support.properties import PROPERTY
+from tests.support.sequences import grid_faces, shared_file, wave_sequence
 from tuckercodec import InputError, MeshSequence, load_sequence, save_sequence
 from tuckercodec.cli import main
 from tuckercodec.io.mdd import frame_timing
@@ -117,6 +112,7 @@ def test_pc2_keeps_its_start_frame_and_sample_rate(tmp_path):
     original = pc2_bytes(moving(6), start=10.5, rate=0.25)  # Blender: sub-frame sampling
     (tmp_path / "in.pc2").write_bytes(original)
     seq = load_sequence(tmp_path / "in.pc2")
+    assert seq.time_codes is not None
     assert seq.time_codes.tolist() == [10.5, 10.75, 11.0, 11.25, 11.5, 11.75]
     assert seq.frame_rate is None  # PC2 has no frames per second
     save_sequence(seq, tmp_path / "out.pc2")
@@ -150,18 +146,21 @@ def test_an_mdd_round_trip_keeps_the_times_bit_for_bit(tmp_path, times):
 def test_any_increasing_times_are_kept_bit_for_bit(times):
     stamps = np.sort(np.array(times, dtype=np.float32))
     rate, codes = frame_timing(stamps.astype(np.float64), Path("t.mdd"))
-    back = (codes / (rate or DEFAULT_FRAME_RATE)).astype(np.float32)
+    assert codes is not None
+    back = np.asarray(codes / (rate or DEFAULT_FRAME_RATE)).astype(np.float32)
     assert np.array_equal(back.view(np.uint32), stamps.view(np.uint32))
 
 
 def test_mdd_times_give_the_frame_rate_and_whole_frame_numbers(tmp_path):
     (tmp_path / "a.mdd").write_bytes(mdd_bytes(moving(4), np.array([i / 25 for i in range(4)])))
     seq = load_sequence(tmp_path / "a.mdd")
+    assert seq.time_codes is not None
     assert seq.frame_rate == 25.0 and seq.time_codes.tolist() == [0, 1, 2, 3]
     ntsc = np.array([(10 + i) * 1001 / 30000 for i in range(4)])
     (tmp_path / "b.mdd").write_bytes(mdd_bytes(moving(4), ntsc))
     seq = load_sequence(tmp_path / "b.mdd")
     assert seq.frame_rate == pytest.approx(29.97, abs=1e-3)
+    assert seq.time_codes is not None
     assert seq.time_codes.tolist() == [10, 11, 12, 13]
 
 
@@ -190,18 +189,20 @@ def test_writing_without_time_codes_numbers_the_frames_from_0(tmp_path):
     save_sequence(seq, tmp_path / "a.mdd")
     data = (tmp_path / "a.mdd").read_bytes()
     assert struct.unpack(">2i3f", data[:20]) == (3, 7, 0.0, np.float32(1 / 24), np.float32(2 / 24))
-    one = MeshSequence(moving(1), np.zeros((0, 3), int), time_codes=[7.0])
+    one = MeshSequence(moving(1), np.zeros((0, 3), int), time_codes=np.array([7.0]))
     save_sequence(one, tmp_path / "one.pc2")
-    assert load_sequence(tmp_path / "one.pc2").time_codes.tolist() == [7.0]
+    kept = load_sequence(tmp_path / "one.pc2").time_codes
+    assert kept is not None and kept.tolist() == [7.0]
 
 
 def test_time_codes_pc2_cannot_hold_are_refused_naming_the_frame(tmp_path):
-    seq = MeshSequence(moving(4), np.zeros((0, 3), int), time_codes=[0, 1, 2, 4])
+    seq = MeshSequence(moving(4), np.zeros((0, 3), int), time_codes=np.array([0, 1, 2, 4]))
     with pytest.raises(InputError, match=r"frame 3: time code 4\.0 is not 3\.0: .* evenly"):
         save_sequence(seq, tmp_path / "a.pc2")
     assert not (tmp_path / "a.pc2").exists()
     save_sequence(seq, tmp_path / "a.mdd")  # MDD keeps each frame's time
-    assert load_sequence(tmp_path / "a.mdd").time_codes.tolist() == [0, 1, 2, 4]
+    kept = load_sequence(tmp_path / "a.mdd").time_codes
+    assert kept is not None and kept.tolist() == [0, 1, 2, 4]
 
 
 @pytest.mark.parametrize("suffix", [".pc2", ".mdd"])

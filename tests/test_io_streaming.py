@@ -14,8 +14,9 @@ import zipfile
 
 import numpy as np
 import pytest
-from conftest import expect_input_error, shared_file, write_cube_frames
 
+from tests.support.inputs import expect_input_error, write_cube_frames
+from tests.support.sequences import shared_file
 from tuckercodec import InputError, MeshSequence, load_sequence, save_sequence
 from tuckercodec.io import FrameSource, SequenceFrames, format_of, open_frames
 
@@ -43,6 +44,7 @@ def same_description(source: FrameSource, seq: MeshSequence) -> None:
     if seq.time_codes is None:
         assert source.time_codes is None
     else:
+        assert source.time_codes is not None and seq.time_codes is not None
         assert np.array_equal(source.time_codes, seq.time_codes)
     assert source.input_bytes == seq.frame_count * seq.vertex_count * 12
 
@@ -299,7 +301,7 @@ def test_xdmf_steps_sharing_a_geometry_are_found_across_ranges(cloth, tmp_path):
 @pytest.mark.parametrize("fps", [None, 7.0])
 @pytest.mark.parametrize("interpolation", ["LINEAR", "CUBICSPLINE"])
 def test_a_foreign_gltf_animation_evaluates_every_range_as_it_loads(tmp_path, fps, interpolation):
-    from test_io_gltf import _animated  # a file built by hand, with weights and a moving node
+    from tests.test_io_gltf import _animated  # a file built by hand, with weights and a moving node
 
     path = _animated(tmp_path, interpolation=interpolation)
     expected = load_sequence(path, fps=fps)

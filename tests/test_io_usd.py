@@ -12,8 +12,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import expect_input_error, shared_file
 
+from tests.support.inputs import expect_input_error
+from tests.support.sequences import shared_file
 from tuckercodec import DependencyError, InputError, MeshSequence
 from tuckercodec.cli import main
 from tuckercodec.io import load_sequence, save_sequence
@@ -60,6 +61,7 @@ def test_the_cloth_round_trips_exactly(cloth, tmp_path, suffix):
     back = load_sequence(path)
     assert exact(back, cloth)
     assert back.frame_rate == 24.0  # the sequence has none: USD's default, written and read
+    assert back.time_codes is not None
     assert np.array_equal(back.time_codes, cloth.codes())
     expected = b"#usda 1.0" if suffix == ".usda" else b"PXR-USDC"
     assert path.read_bytes().startswith(expected)
@@ -72,12 +74,13 @@ def test_polygons_rates_and_uneven_time_codes_round_trip_exactly(tmp_path, suffi
     save_sequence(seq, path)
     back = load_sequence(path)
     assert exact(back, seq)
+    assert back.time_codes is not None and seq.time_codes is not None
     assert back.frame_rate == 30.0 and np.array_equal(back.time_codes, seq.time_codes)
 
 
 @pytest.mark.parametrize("suffix", [".usda", ".usdc"])
 def test_horse_gallop_round_trips_exactly(horse, tmp_path, suffix):
-    """(Its reading speed is measured by tools.bench_formats, not asserted here.)"""
+    """(Its reading speed is measured by tools.bench read --formats, not asserted here.)"""
     path = tmp_path / f"horse{suffix}"
     save_sequence(horse, path)
     assert exact(load_sequence(path), horse)
@@ -195,6 +198,7 @@ def make_stage(path: Path, meshes: dict[str, int], **extra: object) -> Path:
 def test_without_prim_the_only_animated_mesh_is_read(tmp_path):
     path = make_stage(tmp_path / "s.usda", {"/World/ground": 0, "/World/cloth": 3})
     seq = load_sequence(path)
+    assert seq.time_codes is not None
     assert seq.frame_count == 3 and np.array_equal(seq.time_codes, [10.0, 11.0, 12.0])
     assert seq.vertices[2, 0, 0] == 2.0
 

@@ -14,11 +14,13 @@ from __future__ import annotations
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
-from conftest import expect_input_error, grid_faces, shared_file, wave_sequence
 
+from tests.support.inputs import expect_input_error
+from tests.support.sequences import grid_faces, shared_file, wave_sequence
 from tuckercodec import InputError, MeshSequence, load_sequence, save_sequence
 from tuckercodec.cli import main
 from tuckercodec.io import vtk as vtk_format
@@ -111,11 +113,12 @@ def test_float64_positions_time_codes_names_and_polygons_are_kept(tmp_path):
         vertices,
         faces,
         frame_names=["a", "b", "c", "d"],
-        time_codes=[0.1, 0.2, 0.30000000000000004, 7.5],
+        time_codes=np.array([0.1, 0.2, 0.30000000000000004, 7.5]),
     )
     save_sequence(seq, tmp_path / "p.pvd")
     back = load_sequence(tmp_path / "p.pvd")
     assert exact(back.vertices, vertices) and np.array_equal(back.faces, faces)
+    assert back.time_codes is not None
     assert back.time_codes.tolist() == [0.1, 0.2, 0.30000000000000004, 7.5]
     assert back.frame_names == ["a", "b", "c", "d"]
 
@@ -154,6 +157,7 @@ def test_files_vtk_itself_wrote_are_read_exactly():
         ],
         dtype=np.float64,
     )
+    assert seq.time_codes is not None
     assert seq.time_codes.tolist() == [0.0, 0.25, 0.5]  # sorted: the .pvd lists 0.25 first
     assert seq.frame_names == ["step0", "step1", "step2"]
     for number, step in enumerate([0.0, 0.25, 0.5]):
@@ -174,7 +178,7 @@ def test_vtks_own_readers_read_what_is_written(tmp_path):
     )
     vertices = wave_sequence(3, 3)
     faces = np.array([[0, 1, 4, -1], [1, 2, 5, 4], [3, 4, 7, 6], [4, 5, 8, 7]])
-    seq = MeshSequence(vertices, faces, time_codes=[0.5, 1.5, 4.0])
+    seq = MeshSequence(vertices, faces, time_codes=np.array([0.5, 1.5, 4.0]))
     save_sequence(seq, tmp_path / "w.pvd")
     reader = pyvista.PVDReader(tmp_path / "w.pvd")
     assert reader.time_values == [0.5, 1.5, 4.0]
@@ -209,7 +213,7 @@ def test_writing_never_overwrites_and_checks_every_target_first(tmp_path):
 
 
 def test_a_failure_while_writing_leaves_nothing(tmp_path, monkeypatch):
-    written = []
+    written: list[np.ndarray] = []
 
     def failing_write(self, points):
         if len(written) == 2:
@@ -380,7 +384,7 @@ def test_strips_and_pixels_are_read_as_the_faces_they_are(tmp_path):
 
 
 def test_vertex_cells_alone_give_a_point_sequence(tmp_path):
-    markers = {"cells": [[0], [1], [2], [3]], "types": [1] * 4}
+    markers: dict[str, Any] = {"cells": [[0], [1], [2], [3]], "types": [1] * 4}
     pvd = series(tmp_path, [square_frame(**markers), square_frame(1.0, **markers)])
     seq = load_sequence(pvd)
     assert seq.faces.shape == (0, 3) and exact(seq.vertices[1], SQUARE + 1.0)

@@ -19,18 +19,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import (
-    PROPERTY,
-    expect_input_error,
-    measure,
-    mutations,
-    report_examples,
-    scratch_folder,
-    wave_sequence,
-)
 from hypothesis import given
 from hypothesis import strategies as st
 
+from tests.support.inputs import expect_input_error, measure
+from tests.support.properties import PROPERTY, mutations, report_examples, scratch_folder
+from tests.support.sequences import wave_sequence
 from tuckercodec import InputError, load_sequence
 from tuckercodec.io.vtk_data import MAX_INFLATION, Layout
 from tuckercodec.io.vtk_xml import DatasetWriter, read_dataset
@@ -132,6 +126,7 @@ def test_the_layouts_vtk_wrote_are_all_there():
 
 def test_a_vtp_series_vtk_wrote_is_read_exactly():
     seq = load_sequence(DATA / "surface.pvd")
+    assert seq.time_codes is not None
     assert seq.time_codes.tolist() == [0.0, 0.1, 0.2]
     for number, step in enumerate([0.0, 0.1, 0.2]):
         moved = (SURFACE + np.array([0.5, -0.25, 1.0]) * step).astype(np.float32)
@@ -214,7 +209,9 @@ def test_several_pieces_are_joined_in_order(tmp_path):
     one = written(SURFACE[:4], np.array([[0, 1, 2, 3]]), "PolyData", Layout("ascii"))
     two = written(SURFACE[4:], np.array([[0, 1, 2]]), "PolyData", Layout("ascii"))
     piece = re.compile(rb"<Piece.*</Piece>", re.S)
-    both = piece.sub(lambda _: piece.search(one)[0] + piece.search(two)[0], one)
+    first, second = piece.search(one), piece.search(two)
+    assert first is not None and second is not None
+    both = piece.sub(lambda _: first[0] + second[0], one)
     points, faces = read_dataset(both)
     assert exact(points, SURFACE) and faces.tolist() == [[0, 1, 2, 3], [4, 5, 6, -1]]
     stray = both.replace(b"0 1 2 3", b"0 1 2 4", 1)  # a point of the next piece

@@ -13,22 +13,15 @@ from __future__ import annotations
 import shutil
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
-from conftest import (
-    PROPERTY,
-    expect_input_error,
-    grid_faces,
-    measure,
-    mutations,
-    report_examples,
-    scratch_folder,
-    shared_file,
-    wave_sequence,
-)
 from hypothesis import given
 
+from tests.support.inputs import expect_input_error, measure
+from tests.support.properties import PROPERTY, mutations, report_examples, scratch_folder
+from tests.support.sequences import grid_faces, shared_file, wave_sequence
 from tuckercodec import DependencyError, InputError, MeshSequence, load_sequence, save_sequence
 from tuckercodec.cli import main
 
@@ -45,7 +38,7 @@ def exact(a: np.ndarray, b: np.ndarray) -> bool:
     return a.dtype == b.dtype and a.tobytes() == b.tobytes()
 
 
-def item(values: object, dims: str, number: str = "Float", precision: int = 8) -> str:
+def item(values: Any, dims: str, number: str = "Float", precision: int = 8) -> str:
     text = " ".join(str(v) for v in np.ravel(values))
     return (
         f'<DataItem Dimensions="{dims}" NumberType="{number}" Precision="{precision}" '
@@ -98,10 +91,13 @@ def test_the_cloth_round_trips_exactly(cloth, tmp_path):
 def test_float64_polygons_points_and_time_codes_are_kept(tmp_path, faces):
     pytest.importorskip("h5py", reason=H5PY_MISSING)
     vertices = wave_sequence(3, 3)  # float64 values float32 cannot hold
-    seq = MeshSequence(vertices, faces, frame_names=["a", "b", "c"], time_codes=[0.1, 0.2, 7.5])
+    seq = MeshSequence(
+        vertices, faces, frame_names=["a", "b", "c"], time_codes=np.array([0.1, 0.2, 7.5])
+    )
     save_sequence(seq, tmp_path / "p.xmf")
     back = load_sequence(tmp_path / "p.xmf")
     assert exact(back.vertices, vertices) and np.array_equal(back.faces, seq.faces)
+    assert back.time_codes is not None
     assert back.time_codes.tolist() == [0.1, 0.2, 7.5] and back.frame_names == ["a", "b", "c"]
 
 
@@ -131,7 +127,9 @@ def test_vtks_own_xdmf_reader_reads_what_we_write_bit_for_bit(tmp_path):
     pyvista = pytest.importorskip("pyvista", reason="pyvista (VTK's XDMF reader) is absent")
     for number, faces in enumerate((POLYGONS, POLYGONS[:, :4][1:3], NO_FACES)):
         for vertices in (wave_sequence(3, 3), wave_sequence(3, 3).astype(np.float32)):
-            seq = MeshSequence(vertices.astype(np.float64), faces, time_codes=[0.5, 1.5, 4.0])
+            seq = MeshSequence(
+                vertices.astype(np.float64), faces, time_codes=np.array([0.5, 1.5, 4.0])
+            )
             path = tmp_path / f"w{number}{vertices.dtype.itemsize}.xdmf"
             save_sequence(seq, path)
             reader = pyvista.XdmfReader(str(path))
@@ -150,6 +148,7 @@ def test_the_cli_converts_a_vtk_series_to_xdmf_and_back(tmp_path):
     assert main(["convert", str(DATA / "moving.xmf"), str(tmp_path / "m.pvd")]) == 0
     assert main(["convert", str(tmp_path / "m.pvd"), str(tmp_path / "m.xdmf")]) == 0
     back = load_sequence(tmp_path / "m.xdmf")
+    assert back.time_codes is not None
     assert back.faces.tolist() == VTK_FACES and back.time_codes.tolist() == [0.0, 0.5, 1.25]
 
 
@@ -162,6 +161,7 @@ def test_series_vtk_wrote_are_read_exactly():
         if name == "moving.xmf":
             pytest.importorskip("h5py", reason=H5PY_MISSING)
         seq = load_sequence(DATA / name)
+        assert seq.time_codes is not None
         assert seq.time_codes.tolist() == [0.0, 0.5, 1.25] and seq.faces.tolist() == VTK_FACES
         for step, time in enumerate([0.0, 0.5, 1.25]):
             assert exact(seq.vertices[step], POINTS + time / 8)
@@ -202,11 +202,13 @@ def test_times_listed_by_the_collection_and_geometries_of_other_types(tmp_path):
     listing = f'<Time TimeType="List">{item([3.0, 1.5], "2")}</Time>'
     (tmp_path / "t.xdmf").write_text(document(split, flat, collection=listing))
     seq = load_sequence(tmp_path / "t.xdmf")
+    assert seq.time_codes is not None
     assert seq.time_codes.tolist() == [1.5, 3.0]  # the flat grid's time comes first
     assert exact(seq.vertices[0], POINTS * [1, 1, 0]) and exact(seq.vertices[1], POINTS)
     slab = f'<Time TimeType="HyperSlab">{item([2.0, 0.5, 2], "3")}</Time>'
     (tmp_path / "t.xdmf").write_text(document(split, flat, collection=slab))
-    assert load_sequence(tmp_path / "t.xdmf").time_codes.tolist() == [2.0, 2.5]
+    kept = load_sequence(tmp_path / "t.xdmf").time_codes
+    assert kept is not None and kept.tolist() == [2.0, 2.5]
     (tmp_path / "t.xdmf").write_text(document(grid(POINTS, None), grid(POINTS + 1, None)))
     assert load_sequence(tmp_path / "t.xdmf").time_codes is None  # the listed order
 

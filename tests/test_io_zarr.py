@@ -8,8 +8,8 @@ import shutil
 
 import numpy as np
 import pytest
-from conftest import expect_input_error
 
+from tests.support.inputs import expect_input_error
 from tuckercodec import MeshSequence, load_sequence, save_sequence
 from tuckercodec.io import open_frames
 
@@ -33,6 +33,7 @@ def test_the_cloth_round_trips_with_faces_names_rate_and_time_codes(cloth, tmp_p
     assert np.array_equal(back.vertices, seq.vertices)
     assert np.array_equal(back.faces, seq.faces)
     assert back.frame_names == seq.frame_names and back.frame_rate == 30.0
+    assert back.time_codes is not None and seq.time_codes is not None
     assert np.array_equal(back.time_codes, seq.time_codes)
 
 

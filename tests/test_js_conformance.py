@@ -9,7 +9,8 @@ from __future__ import annotations
 from typing import Any
 
 import pytest
-from js_decoder import (
+
+from tests.support.js_decoder import (
     INVALID,
     VALID,
     VECTORS,

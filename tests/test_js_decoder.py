@@ -11,10 +11,11 @@ from typing import Any
 
 import numpy as np
 import pytest
-from conftest import Parts, deadline, shared_file, vector
-from js_decoder import run_node
 
 import tuckercodec
+from tests.support.compressed import Parts, deadline, vector
+from tests.support.js_decoder import run_node
+from tests.support.sequences import shared_file
 from tuckercodec import FormatError
 from tuckercodec.format.container import HEAD_SIZE, PREAMBLE, SIGNATURE, pack_raw
 from tuckercodec.samples import sample_path

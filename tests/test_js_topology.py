@@ -22,10 +22,10 @@ from typing import Any
 import msgpack
 import numpy as np
 import pytest
-from conftest import shared_file
-from js_decoder import node
 
 import tuckercodec
+from tests.support.js_decoder import node
+from tests.support.sequences import shared_file
 from tuckercodec import FormatError
 from tuckercodec.format import streams, traversal
 from tuckercodec.format.container import parse_container
@@ -273,8 +273,9 @@ def test_traverse_hand_made_tables(tmp_path):
         params, payload, walk = traversal.encode_traversal(faces, vertices)
         cases.traverse(name, params, payload, vertices)
         walked[name] = _sha(walk, "<i4")
-        coded, order = traversal.read_streams(payload, params, *faces.shape, "FACE")
-        other, other_payload = traversal.pack_streams(coded, *faces.shape, 1 - order, 19)
+        count, corners = faces.shape
+        coded, order = traversal.read_streams(payload, params, count, corners, "FACE")
+        other, other_payload = traversal.pack_streams(coded, count, corners, 1 - order, 19)
         cases.traverse(f"{name}-corner-order-{1 - order}", other, other_payload, vertices)
     results = cases.check()
     for name, sha in walked.items():
@@ -285,7 +286,8 @@ def test_traverse_hand_made_tables(tmp_path):
 def _base(name: str) -> tuple[list[list[int]], int, int, int, np.ndarray]:
     faces, vertices = _tables()[name]
     params, payload, _ = traversal.encode_traversal(faces, vertices)
-    coded, order = traversal.read_streams(payload, params, *faces.shape, "FACE")
+    count, corners = faces.shape
+    coded, order = traversal.read_streams(payload, params, count, corners, "FACE")
     return coded, order, vertices, faces.shape[1], faces
 
 

@@ -128,7 +128,7 @@ class _RaiseSites(ast.NodeVisitor):
             where = f"{self.module}:{'.'.join(self.scope)}"
             rule = next((k.value for k in node.keywords if k.arg == "rule"), None)
             assert isinstance(rule, ast.Constant), f"{where} (line {node.lineno}): no literal rule="
-            self.sites.append((rule.value, node.func.id, where))
+            self.sites.append((str(rule.value), node.func.id, where))
         self.generic_visit(node)
 
 

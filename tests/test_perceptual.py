@@ -4,10 +4,12 @@ one moved vertex), on a real sequence, and on bad arguments."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
-from conftest import grid_faces, load_shared_npz, wave_sequence
 
+from tests.support.sequences import grid_faces, load_shared_npz, wave_sequence
 from tuckercodec import InputError, MeshSequence
 from tuckercodec.perceptual import STED_DEFINITION, Sted, neighbourhood_edges, sted
 from tuckercodec.topology import mesh_edges
@@ -176,8 +178,9 @@ def test_sted_refuses_bad_arguments():
         ("scale", 0.0, ValueError),
         ("scale", "big", TypeError),
     ):
+        options: dict[str, Any] = {keyword: value}
         with pytest.raises(error, match=keyword):
-            sted(original, original, faces, **{keyword: value})
+            sted(original, original, faces, **options)
 
 
 def test_sted_on_samba_against_a_noisy_copy():

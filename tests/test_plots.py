@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import grid_faces, wave_sequence
 
+from tests.support.sequences import grid_faces, wave_sequence
 from tuckercodec.plots import plot_frame_errors, render_frame  # matplotlib is imported on use
 
 pytest.importorskip("matplotlib")

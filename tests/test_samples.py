@@ -4,9 +4,9 @@ sequence, unchanged, with its licence."""
 from __future__ import annotations
 
 import numpy as np
-from conftest import load_shared_npz
 
 import tuckercodec
+from tests.support.sequences import load_shared_npz
 from tuckercodec.samples import sample_path
 
 

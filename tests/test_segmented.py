@@ -5,11 +5,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import assert_same_faces
-from conftest import shared_file as shared_data
 
 import tuckercodec
-from tools import make_vectors
+from tests.support.compressed import assert_same_faces
+from tests.support.sequences import shared_file as shared_data
+from tools.generate import vectors as make_vectors
 from tuckercodec import Decoder, FormatError, LimitError, Limits, MeshSequence, encode_with_report
 from tuckercodec.encoder.plan import needs_segments, parse_size, plan_segments
 from tuckercodec.format.segments import SEGMENTED

@@ -1,4 +1,4 @@
-"""tools.bench and its coders (tools.peers): sizes, errors and plumbing, untimed.
+"""The peers suite of tools.bench and its coders: sizes, errors and plumbing, untimed.
 
 The peers that need optional packages (Draco, meshoptimizer, SZ3, zfp: ``pip install
 '.[bench]'``) are tested only where those are installed, and skip saying so elsewhere.
@@ -14,7 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tools import bench, common, peers
+from tools import bench, common
+from tools.bench import peers
+from tools.bench.peers import base, draco, pca, tkc, tthresh, zstd
 from tuckercodec import kg_error
 
 
@@ -25,35 +27,44 @@ def sample():
 
 @pytest.fixture(scope="module")
 def context(sample):
-    return peers.Context.of(sample, [10, 14])
+    return base.Context.of(sample, [10, 14])
 
 
 def _decoded_kg(trial, sample) -> float:
     return kg_error(sample.vertices, trial.decoded)
 
 
+def _size_again(trial: base.Trial) -> int:
+    """The total bytes of the trial's encode run again, as --repeat runs it."""
+    assert trial.retime is not None
+    return trial.retime()[2]
+
+
 def test_pca_baseline_meets_each_target_and_decodes_from_its_bytes(sample, context):
-    trials = peers.run_pca(sample, [1.0, 0.1], context)
+    trials = pca.run_pca(sample, [1.0, 0.1], context)
     assert [t.target for t in trials] == [1.0, 0.1]
     for trial in trials:
+        assert trial.target is not None and trial.connectivity_bytes is not None
         assert _decoded_kg(trial, sample) <= trial.target
         assert trial.connectivity_bytes > 0
     assert trials[1].total_bytes > trials[0].total_bytes  # a tighter target costs more
     # re-timing runs the same encode (each trial keeps its own target, not the loop's last)
-    assert [t.retime()[2] for t in trials] == [t.total_bytes for t in trials]
+    assert [_size_again(t) for t in trials] == [t.total_bytes for t in trials]
 
 
 def test_tuckercodec_trial_counts_the_whole_file(sample, context):
-    trial, tighter = peers.run_tuckercodec(sample, [0.5, 0.1], context)
-    assert trial.retime()[2] == trial.total_bytes < tighter.total_bytes
+    trial, tighter = tkc.run_tuckercodec(sample, [0.5, 0.1], context)
+    assert _size_again(trial) == trial.total_bytes < tighter.total_bytes
     assert _decoded_kg(trial, sample) <= 0.5
+    assert trial.connectivity_bytes is not None
     assert 0 < trial.connectivity_bytes < trial.total_bytes
     assert trial.encode_seconds > 0 and trial.decode_seconds > 0
 
 
 def test_lossless_reference_is_float32_exact(sample, context):
-    (trial,) = peers.run_zstd(sample, [], context)
+    (trial,) = zstd.run_zstd(sample, [], context)
     np.testing.assert_array_equal(trial.decoded, sample.vertices.astype(np.float32))
+    assert trial.connectivity_bytes is not None
     assert trial.total_bytes > trial.connectivity_bytes > 0
 
 
@@ -70,7 +81,7 @@ def test_bound_search_keeps_the_smallest_file_that_meets_the_target(sample, cont
         q = np.frombuffer(zlib.decompress(payload[8:]), np.int32)
         return q.reshape(context.tensor.shape) * step
 
-    trial = peers._search_bound("toy", 0.3, context, 1e-6, compress, decompress, str)
+    trial = base.search_bound("toy", 0.3, context, 1e-6, compress, decompress, str)
     assert trial is not None and trial.kg <= 0.3
     assert abs(_decoded_kg(trial, sample) - trial.kg) < 1e-9
     # the search got close to the target, from below: a coarser step would fail
@@ -82,10 +93,10 @@ def test_vertex_matching_undoes_a_permutation_of_lattice_points():
     original = rng.random((500, 3))
     lattice = np.rint(original * 255) / 255  # what a quantizing coder decodes
     order = rng.permutation(500)
-    matched = peers._match_vertices(original, lattice[order], "test")
+    matched = base.match_vertices(original, lattice[order], "test")
     np.testing.assert_array_equal(matched, lattice)
     with pytest.raises(RuntimeError, match="drops vertices"):
-        peers._match_vertices(original, lattice[:-1], "test")
+        base.match_vertices(original, lattice[:-1], "test")
 
 
 def test_peak_memory_sees_a_large_allocation():
@@ -113,10 +124,10 @@ def test_tthresh_plumbing_with_a_stand_in_binary(sample, context, tmp_path, monk
     )
     script.chmod(script.stat().st_mode | stat.S_IEXEC)
     monkeypatch.setenv("PATH", f"{script.parent}{os.pathsep}{os.environ['PATH']}")
-    (trial,) = peers.run_tthresh(sample, [1.0], context)
+    (trial,) = tthresh.run_tthresh(sample, [1.0], context)
     assert trial.kg < 1e-4  # lossless but for the float32 centroids (about 2e-6 here)
     assert trial.total_bytes > context.tensor.nbytes
-    assert trial.retime()[2] == trial.total_bytes  # --repeat runs it again, after run_tthresh
+    assert _size_again(trial) == trial.total_bytes  # --repeat runs it again, after run_tthresh
 
 
 @pytest.mark.parametrize(
@@ -134,8 +145,9 @@ def test_optional_peers_round_trip(coder, module, sample, context):
     run = next(c.run for c in peers.CODERS if c.name == coder)
     trials = run(sample, [1.0], context)
     assert trials
-    assert trials[0].retime()[2] == trials[0].total_bytes
+    assert _size_again(trials[0]) == trials[0].total_bytes
     for trial in trials:
+        assert trial.decoded is not None
         assert trial.decoded.shape == sample.vertices.shape
         measured = _decoded_kg(trial, sample)
         if not np.isnan(trial.kg):
@@ -147,7 +159,18 @@ def test_bench_writes_tables_plots_and_refuses_to_overwrite(sample, tmp_path, ca
     pytest.importorskip("matplotlib", reason="plots need matplotlib")
     out = tmp_path / "bench"
     coders = "tuckercodec,pca,zstd-f32"
-    args = ["sample", "--coders", coders, "--targets", "1,0.2", "--repeat", "2", "--out", str(out)]
+    args = [
+        "peers",
+        "sample",
+        "--coders",
+        coders,
+        "--targets",
+        "1,0.2",
+        "--repeat",
+        "2",
+        "--out",
+        str(out),
+    ]
     assert bench.main(args) == 0
     for name in ("summary.md", "sample.md", "sample.png", "results.json"):
         assert (out / name).stat().st_size > 0
@@ -170,7 +193,16 @@ def test_bench_runs_on_a_sequence_without_faces(tmp_path):
     sequence = common.load(common.SAMPLE)
     np.savez(points, V=sequence.vertices[:10], F=np.zeros((0, 3), dtype=np.int32))
     out = tmp_path / "bench"
-    args = [str(points), "--coders", "tuckercodec,zstd-f32", "--targets", "1", "--out", str(out)]
+    args = [
+        "peers",
+        str(points),
+        "--coders",
+        "tuckercodec,zstd-f32",
+        "--targets",
+        "1",
+        "--out",
+        str(out),
+    ]
     assert bench.main(args) == 0
     rows = json.loads((out / "results.json").read_text())
     assert {row["coder"] for row in rows} == {"tuckercodec", "zstd-f32"}
@@ -179,7 +211,7 @@ def test_bench_runs_on_a_sequence_without_faces(tmp_path):
 
 def test_draco_points_keep_the_vertex_order(sample, context):
     pytest.importorskip("DracoPy", reason="DracoPy is not installed (pip install '.[bench]')")
-    (trial,) = peers.run_draco_points(sample, [], peers.Context.of(sample, [14]))
+    (trial,) = draco.run_draco_points(sample, [], base.Context.of(sample, [14]))
     # no matching was needed: every decoded vertex is within half a 14-bit step of its own
     extent = np.ptp(sample.vertices, axis=1).max()
     assert np.abs(trial.decoded - sample.vertices).max() <= extent / (2**14 - 1)

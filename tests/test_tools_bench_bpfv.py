@@ -1,12 +1,13 @@
-"""tools.bench_bpfv: the size target's table on the built-in sample, untimed."""
+"""tools.bench bpfv: the size target's table on the built-in sample, untimed."""
 
 from __future__ import annotations
 
-from tools import bench_bpfv
+from tools import bench
+from tools.bench import bpfv as bench_bpfv
 
 
 def test_the_sample_row_reports_a_filled_budget_and_the_kg_definition(capsys):
-    assert bench_bpfv.main(["sample", "--bpfv", "1", "0.001"]) == 0
+    assert bench.main(["bpfv", "sample", "--bpfv", "1", "0.001"]) == 0
     out = capsys.readouterr().out
     assert "Karni-Gotsman" in out
     row = next(line for line in out.splitlines() if line.startswith("| sample | 1 |"))

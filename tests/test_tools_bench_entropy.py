@@ -1,8 +1,9 @@
-"""tools.bench_entropy on the built-in sample: it reads files of every format version, untimed."""
+"""tools.bench entropy on the built-in sample: it reads files of every format version, untimed."""
 
 from __future__ import annotations
 
-from tools import bench_entropy
+from tools import bench
+from tools.bench import entropy as bench_entropy
 from tuckercodec import encode_with_report, load_sequence
 from tuckercodec.internal import parse_container, streams
 from tuckercodec.samples import sample_path
@@ -23,7 +24,7 @@ def test_the_measured_integers_are_those_the_file_stores():
 
 def test_the_tool_prints_both_tables(capsys):
     path = str(sample_path())
-    assert bench_entropy.main([path, "--targets", "1"]) == 0
+    assert bench.main(["entropy", path, "--targets", "1"]) == 0
     assert "A3 saves" in capsys.readouterr().out
-    assert bench_entropy.main([path, "--targets", "1", "--rdo"]) == 0
+    assert bench.main(["entropy", path, "--targets", "1", "--rdo"]) == 0
     assert "rdo" in capsys.readouterr().out

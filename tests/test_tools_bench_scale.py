@@ -1,4 +1,4 @@
-"""tools.bench_scale's measuring instruments, so that its tables can be trusted: the memory of a
+"""tools.bench scale's measuring instruments, so that its tables can be trusted: the memory of a
 whole process tree, the kill that protects the machine, and the streamed KG check. The
 benchmark itself is never run here (its figures are timings)."""
 
@@ -9,10 +9,13 @@ import sys
 import numpy as np
 import pytest
 
-from tools import bench_scale, make_sequence
+from tools.bench import scale as bench_scale
+from tools.generate import sequence as make_sequence
 from tuckercodec import MeshSequence, decode, encode, kg_error
 
-pytestmark = pytest.mark.skipif(sys.platform != "linux", reason="bench_scale reads Linux's /proc")
+pytestmark = pytest.mark.skipif(
+    sys.platform != "linux", reason="the scale suite reads Linux's /proc"
+)
 
 MB = 1 << 20
 # A child that holds 120 MB and starts a grandchild holding 200 MB, both for a moment (bytes

@@ -1,4 +1,4 @@
-"""tools.bench_size: this checkout against the package at a baseline revision, untimed."""
+"""tools.bench size: this checkout against the package at a baseline revision, untimed."""
 
 from __future__ import annotations
 
@@ -7,7 +7,8 @@ import subprocess
 
 import pytest
 
-from tools import bench_size, common
+from tools import bench, common
+from tools.bench import size as bench_size
 from tuckercodec.samples import sample_path
 
 
@@ -23,7 +24,7 @@ def _has_baseline() -> bool:
 
 @pytest.mark.skipif(not _has_baseline(), reason="needs git and the repository's history")
 def test_the_sample_is_compared_with_the_baseline_revision(capsys):
-    assert bench_size.main([str(sample_path()), "--targets", "1"]) == 0
+    assert bench.main(["size", str(sample_path()), "--targets", "1"]) == 0
     out = capsys.readouterr().out
     row = next(line for line in out.splitlines() if line.startswith(f"| {sample_path().name} |"))
     cells = [cell.strip() for cell in row.strip("|").split("|")]

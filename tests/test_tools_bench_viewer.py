@@ -1,4 +1,4 @@
-"""tools/bench_viewer.py on the built-in sample: it serves the file with ``tuckercodec view``,
+"""tools/bench/viewer.py on the built-in sample: it serves the file with ``tuckercodec view``,
 measures the page in headless Chromium and prints one row per sequence (no timing is judged
 here). Skips, naming what is missing, where chromium is not installed."""
 
@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import pytest
 
-from tools import bench_viewer
-from tools.browser import find_chromium
+from tests.support.browser import find_chromium
+from tools import bench
 
 pytestmark = pytest.mark.skipif(
     find_chromium() is None,
@@ -17,13 +17,13 @@ pytestmark = pytest.mark.skipif(
 
 
 def test_bench_viewer_on_the_sample(capsys):
-    code = bench_viewer.main(["sample", "--loads", "2", "--play-seconds", "0.5", "--reference"])
+    code = bench.main(["viewer", "sample", "--loads", "2", "--play-seconds", "0.5", "--reference"])
     out = capsys.readouterr().out
     assert code == 0
     lines = out.splitlines()
     assert lines[0].startswith("machine: ") and lines[1].startswith("browser: Chrome/")
     assert lines[2] == (
-        "command: python -m tools.bench_viewer sample --loads 2 --play-seconds 0.5 --reference"
+        "command: python -m tools.bench viewer sample --loads 2 --play-seconds 0.5 --reference"
     )
     header, rule, row = lines[-3:]
     assert header.startswith("| sequence (KG 0.1) |") and rule.startswith("|---|")
@@ -46,5 +46,5 @@ def test_bench_viewer_on_the_sample(capsys):
 
 
 def test_bench_viewer_without_a_sequence(capsys):
-    assert bench_viewer.main(["no-such-sequence.npz"]) == 2
+    assert bench.main(["viewer", "no-such-sequence.npz"]) == 2
     assert "skipped no-such-sequence.npz: not found" in capsys.readouterr().err

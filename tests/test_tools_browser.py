@@ -1,6 +1,6 @@
-"""tools/png.py reads every PNG row filter; tools/browser.py drives Chromium over the DevTools
-pipe: values, exact typed arrays, thrown errors, console messages, deadlines, a browser that
-dies, and closing that leaves no process and no profile behind. The browser tests skip, naming
+"""tests/support/png.py reads every PNG row filter; tests/support/browser.py drives Chromium over
+the DevTools pipe: values, exact typed arrays, thrown errors, console messages, deadlines, a browser
+that dies, and closing that leaves no process and no profile behind. The browser tests skip, naming
 what is missing, where chromium is not installed."""
 
 from __future__ import annotations
@@ -13,8 +13,8 @@ import zlib
 import numpy as np
 import pytest
 
-from tools.browser import Browser, BrowserDied, BrowserError, BrowserTimeout, find_chromium
-from tools.png import decode_png
+from tests.support.browser import Browser, BrowserDied, BrowserError, BrowserTimeout, find_chromium
+from tests.support.png import decode_png
 
 CHROMIUM = find_chromium()
 needs_chromium = pytest.mark.skipif(

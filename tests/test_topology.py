@@ -5,10 +5,11 @@ literally, on random faces and on faces hypothesis makes (repeated, degenerate, 
 from __future__ import annotations
 
 import numpy as np
-from conftest import HYPOTHESIS_SETTINGS, spec_walk
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from tests.support.compressed import spec_walk
+from tests.support.properties import HYPOTHESIS_SETTINGS
 from tuckercodec.topology import face_edges, mesh_parents
 
 

@@ -1,4 +1,4 @@
-"""The viewer page in a real browser (headless Chromium, driven by tools/browser.py over the
+"""The viewer page in a real browser (headless Chromium, driven by tests/support/browser.py over the
 DevTools protocol), served by the project's own server, as ``tuckercodec view`` serves it.
 
 For the built-in cloth and for samba (../shared/data), both encoded at KG 0.1 with the original
@@ -29,8 +29,10 @@ from typing import Any
 
 import numpy as np
 import pytest
-from conftest import shared_file
-from js_decoder import (
+
+import tuckercodec
+from tests.support.browser import Browser, Page, find_chromium
+from tests.support.js_decoder import (
     EXPECTED,
     INVALID,
     VALID,
@@ -38,10 +40,8 @@ from js_decoder import (
     check_invalid_observation,
     check_valid_observation,
 )
-
-import tuckercodec
-from tools.browser import Browser, Page, find_chromium
-from tools.png import decode_png
+from tests.support.png import decode_png
+from tests.support.sequences import shared_file
 from tuckercodec import Decoder, FormatError, MeshSequence
 from tuckercodec.web.server import ViewerServer
 from tuckercodec.web.site import build_site
@@ -102,7 +102,7 @@ def frame_kg(original: np.ndarray, drawn: np.ndarray) -> tuple[float, float]:
     b = drawn.astype(np.float64).reshape(-1, 3)
     difference = np.linalg.norm(a - b)
     spread = np.linalg.norm(a - a.mean(axis=0))
-    return 100.0 * difference / spread, float(np.sqrt(np.square(a - b).sum(axis=1)).max())
+    return float(100.0 * difference / spread), float(np.sqrt(np.square(a - b).sum(axis=1)).max())
 
 
 def mesh_pixels(page: Page) -> np.ndarray:

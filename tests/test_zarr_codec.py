@@ -15,6 +15,7 @@ import math
 import subprocess
 import sys
 import textwrap
+from typing import Any
 
 import numpy as np
 import pytest
@@ -30,6 +31,7 @@ from tuckercodec.encoder.segmented import SharedBasis  # noqa: E402
 from tuckercodec.metrics import kg_error  # noqa: E402
 from tuckercodec.samples import sample_path  # noqa: E402
 from tuckercodec.zarr_codec import FittedBasis, TuckerNumcodec, TuckerZarrCodec, chunk  # noqa: E402
+from tuckercodec.zarr_codec import chunk as chunk_module  # noqa: E402
 from tuckercodec.zarr_codec import numcodec as numcodec_module  # noqa: E402
 from tuckercodec.zarr_codec import zarr3 as zarr3_module  # noqa: E402
 from tuckercodec.zarr_codec.fitted import ArrayFrames, fitted_gap  # noqa: E402
@@ -147,7 +149,7 @@ def test_zarr3_cuts_the_padding_of_vertex_chunks_too(cloth, tmp_path):
 def test_dask_reads_lazily_decoding_only_the_chunks_a_slice_needs(cloth, stores, monkeypatch):
     da = pytest.importorskip("dask.array", reason="the lazy read needs dask: pip install dask")
     calls: list[tuple[int, ...] | None] = []
-    original = zarr3_module.decode_chunk
+    original = chunk_module.decode_chunk
 
     def counting(*args, **kwargs):
         calls.append(kwargs.get("shape"))
@@ -405,7 +407,7 @@ def test_a_chunk_of_another_shape_than_the_arrays_is_refused(cloth):
 
 
 def test_the_zarr_benchmark_measures_what_it_stores(tmp_path):
-    from tools import bench_zarr
+    from tools.bench import zarr as bench_zarr
     from tuckercodec.samples import sheet_triangles, wave_sheet
 
     sheet = tuckercodec.MeshSequence(wave_sheet(frames=24, grid=9), sheet_triangles(9))
@@ -552,8 +554,9 @@ def test_a_damaged_basis_in_the_configuration_is_refused_naming_it(fitted, tmp_p
     # a basis that is consistent but another: the chunks' U1 entries say it is not theirs
     other = _other_basis(v2.basis)
     chunk_bytes = _chunk_files(fitted[2])[0].read_bytes()
+    other_config: dict[str, Any] = other.config()
     with pytest.raises(ValueError, match="another basis than the codec's"):
-        TuckerNumcodec(target_kg=TARGET, dtype="<f4", **other.config()).decode(chunk_bytes)
+        TuckerNumcodec(target_kg=TARGET, dtype="<f4", **other_config).decode(chunk_bytes)
     with pytest.raises(ValueError, match="written by a fitted tuckercodec codec"):
         TuckerNumcodec(target_kg=TARGET, dtype="<f4").decode(chunk_bytes)
     # and through zarr, with the configuration of zarr.json edited
@@ -603,6 +606,7 @@ def test_a_chunk_the_basis_does_not_serve_is_stored_whole_and_meets_the_target(
 def test_a_chunk_of_fewer_frames_than_the_basis_has_columns_uses_it(cloth):
     positions = cloth[:, :1000]
     codec = TuckerNumcodec.fit(positions, target_kg=TARGET, chunk_frames=20)
+    assert codec.basis is not None
     assert codec.basis.columns > 3 * 2  # wider than two frames' U1 could be (spec §6.7)
     for start, frames in ((0, 1), (40, 2), (50, 7)):
         part = positions[start : start + frames]
@@ -625,6 +629,7 @@ def test_a_short_edge_chunk_uses_the_basis(cloth, tmp_path, zarr_format):
     assert kg_error(positions, decoded) <= TARGET
     assert kg_error(positions[44:], decoded[44:]) <= TARGET
     edge = max(_chunk_files(tmp_path / "a.zarr"), key=str)
+    assert codec.basis is not None
     whole = codec.basis.complete(edge.read_bytes())
     assert edge.stat().st_size < len(whole) / 4
     assert tuckercodec.info(whole).frames == (16 if zarr_format == 3 else 22)

@@ -1,5 +1,10 @@
-"""The project's own tools: benchmarks, the seed paper's experiments, the conformance-vector
-writer and the decoder fuzzer. Run each from the repository root as ``python -m tools.NAME``.
+"""The project's own tools, each run from the repository root:
+
+- :mod:`tools.bench`: the benchmarks, ``python -m tools.bench SUITE [options]``;
+- :mod:`tools.generate`: generated sequences and the conformance vectors,
+  ``python -m tools.generate.sequence`` and ``python -m tools.generate.vectors``;
+- :mod:`tools.paper`: the seed paper's experiments, ``python -m tools.paper``;
+- :mod:`tools.fuzz`: the decoder fuzzer, ``python -m tools.fuzz``.
 
 They import only the public API (:mod:`tuckercodec`) and :mod:`tuckercodec.internal`; what
 several of them share (the shared data, timing, memory, the machine, writing results) lives in

@@ -58,7 +58,7 @@ def shared_sequences() -> list[str]:
 def load(source: str | Path) -> MeshSequence:
     """The sequence at ``source`` (an .npz, a folder of OBJ files...), or the built-in sample
     for ``"sample"``; no progress bar."""
-    return load_sequence(sample_path() if source == SAMPLE else source, progress=False)
+    return load_sequence(sample_path() if str(source) == SAMPLE else source, progress=False)
 
 
 def unique_name(name: str, taken: set[str]) -> str:

@@ -291,13 +291,13 @@ def _hostile_value(rng: random.Random, current: Any, depth: int = 0) -> Any:
     if kind == 9:
         return msgpack.ExtType(rng.choice([1, 5, 127]), b"\x00" * rng.choice([0, 4]))
     if kind == 10 and isinstance(current, list) and current:
-        out = list(current)
-        out[rng.randrange(len(out))] = _hostile_value(rng, None, depth + 1)
-        return out
+        items = list(current)
+        items[rng.randrange(len(items))] = _hostile_value(rng, None, depth + 1)
+        return items
     return rng.choice(_EDGE_INTS + _EDGE_FLOATS)
 
 
-def _containers_in(value: Any, path: tuple = ()) -> list[tuple[tuple, Any]]:
+def _containers_in(value: Any, path: tuple[Any, ...] = ()) -> list[tuple[tuple[Any, ...], Any]]:
     """Every (path, value) in a header tree, to pick one to change."""
     out = [(path, value)]
     if isinstance(value, dict):
@@ -309,7 +309,7 @@ def _containers_in(value: Any, path: tuple = ()) -> list[tuple[tuple, Any]]:
     return out
 
 
-def _set_path(root: Any, path: tuple, value: Any) -> None:
+def _set_path(root: Any, path: tuple[Any, ...], value: Any) -> None:
     for key in path[:-1]:
         root = root[key]
     root[path[-1]] = value

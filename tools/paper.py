@@ -458,7 +458,7 @@ def _box_table(rows: list[Box]) -> list[str]:
     return lines
 
 
-def _sted_cell(value: float | str) -> str:
+def _sted_cell(value: float | str | None) -> str:
     return value if isinstance(value, str) else _g(value, 4)
 
 

@@ -22,7 +22,7 @@ package sees at once what the tools rely on.
   animation, with the KG error a viewer shows) and :func:`sample_gltf` (a glTF's mesh
   evaluated at given times, as a viewer does), for the glTF benchmark.
 * The encoder's quantizer choice, :mod:`~tuckercodec.encoder.rdo`, which
-  ``tools/bench_entropy.py --rdo`` switches off to measure what it gains.
+  ``python -m tools.bench entropy --rdo`` switches off to measure what it gains.
 * Sample data: :func:`sample_path`, and the synthetic :func:`wave_sheet` with its
   :func:`sheet_triangles`.
 """

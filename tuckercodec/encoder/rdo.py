@@ -22,7 +22,7 @@ error is below one step; the extra error is paid for by the encoder's search, wh
 decoded error after quantizing and lowers D until the target holds (the closed loop of
 :func:`tuckercodec.encoder.search.meet` is unchanged). ``lam`` near 2 ln 2 / 12 ~ 0.116 is the
 slope of the high-rate rate-distortion curve D(R) = step**2 / 12, where trading error for bits at
-this price is break-even; the measurements in ``tools/bench_entropy.py --rdo`` chose
+this price is break-even; the measurements in ``python -m tools.bench entropy --rdo`` chose
 :data:`DEFAULT_LAMBDA`.
 
 Nothing here changes the format: the file stores the same kind of integers, chosen differently.

@@ -41,7 +41,7 @@ def groups(data: bytes) -> list[tuple[int, tuple[int, ...]]]:
     return found
 
 
-def size(data: bytes, child: int) -> int:
+def size(data: bytes | bytearray, child: int) -> int:
     """The size of a data child (0 for the empty one)."""
     offset = child & ~DATA
     return struct.unpack_from("<Q", data, offset)[0] if offset else 0

@@ -7,6 +7,7 @@ holds). Needs VTK (``pip install vtk``, or pyvista, which brings it); run from a
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import vtk
@@ -107,7 +108,7 @@ def surface(points: np.ndarray, double: bool) -> vtk.vtkPolyData:
     return out
 
 
-def write(writer: vtk.vtkXMLWriter, data: object, path: Path, layout: tuple) -> None:
+def write(writer: vtk.vtkXMLWriter, data: object, path: Path, layout: tuple[Any, ...]) -> None:
     """ParaView's default layout is ("appended", True, True, 64, "little")."""
     mode, raw, compress, header, order = layout
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -22,7 +22,7 @@ CELLS = [(5, [0, 1, 2]), (7, [1, 4, 2, 0, 3]), (5, [0, 2, 3])]
 STEPS = [0.0, 0.5, 1.25]
 
 
-class Moving(VTKPythonAlgorithmBase):
+class Moving(VTKPythonAlgorithmBase):  # type: ignore[misc]  # VTK has no type information
     """A VTK source of an UnstructuredGrid whose points move by time / 8 (exact in 6 digits,
     as VTK writes inline XML values)."""
 

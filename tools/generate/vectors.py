@@ -1,0 +1,526 @@
+"""Write the conformance vectors of spec/FORMAT.md §12 into spec/vectors/.
+
+    python -m tools.generate.vectors [--force]          # spec/vectors/ (never needed again: below)
+    python -m tools.generate.vectors --out DIR          # somewhere else, to look at them
+
+Valid vectors: small files encoded from deterministic synthetic sequences, each with a JSON of
+the header fields a decoder must report, SHA-256 digests of the dequantized arrays, and the
+reference reconstruction (an .npy of the decoded positions) with its tolerance.
+
+Invalid vectors: one per rule of §11, each made by breaking exactly that rule in a valid file
+(checksums recomputed, so that nothing else is wrong), with the rule id and the error class it
+must raise. They are a function of the valid files alone: from the committed
+v1-wave-triangles.tkc (format 1.0), v1.1-segments-shared.tkc (1.1) and
+v1.2-traverse-triangles.tkc (1.2) they come out byte for byte as committed (a test checks it).
+
+The encoder is not byte-identical across machines (the SVD's signs and last bits depend on the
+BLAS), so the vectors are written once and committed; every test run decodes them. Never write
+them into spec/vectors/ again unless the format itself changes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import struct
+import sys
+import zlib
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import msgpack
+import numpy as np
+
+from tools import common
+from tuckercodec import Decoder, MeshSequence, encode, encode_with_report, internal
+from tuckercodec.internal import (
+    HEAD_SIZE,
+    faces,
+    parse_container,
+    sheet_triangles,
+    streams,
+    traversal,
+    wave_sheet,
+)
+
+VECTORS = common.REPO / "spec" / "vectors"
+#: What a vector folder holds: the files, their JSON and the valid ones' reference positions.
+VECTOR_SUFFIXES = (".tkc", ".json", ".npy")
+#: A conforming decoder's positions may differ from the reference by rounding only (§8).
+RELATIVE_TOLERANCE = 1e-9
+
+
+# ------------------------------------------------------------------------------------------
+# sequences
+
+
+def polygons(grid: int) -> np.ndarray:
+    """Quads, every third one a triangle padded with -1."""
+    index = np.arange(grid * grid).reshape(grid, grid)
+    quads = np.stack([index[:-1, :-1], index[1:, :-1], index[1:, 1:], index[:-1, 1:]], -1).reshape(
+        -1, 4
+    )
+    quads[::3, 3] = -1
+    return quads
+
+
+def scrambled(sequence: MeshSequence, seed: int) -> MeshSequence:
+    """The same animation with its vertices renumbered, its faces shuffled and each face's
+    corners rotated (orientation kept), as an arbitrary exporter writes: faces-traverse (§6.8)
+    is then the smaller FACE codec, and the file is of format 1.2."""
+    rng = np.random.default_rng(seed)
+    k = sequence.vertex_count
+    relabel = rng.permutation(k)
+    vertices = np.empty_like(sequence.vertices)
+    vertices[:, relabel] = sequence.vertices
+    faces_out = np.append(relabel, -1)[sequence.faces][rng.permutation(len(sequence.faces))]
+    for row in faces_out:
+        n = int((row >= 0).sum())
+        row[:n] = np.roll(row[:n], int(rng.integers(n)))
+    return MeshSequence(vertices, faces_out, sequence.frame_names, frame_rate=sequence.frame_rate)
+
+
+# ------------------------------------------------------------------------------------------
+# taking a file apart and putting it back with one thing changed
+
+
+class Parts:
+    """A file as editable parts: preamble fields, header map, section payloads."""
+
+    def __init__(self, data: bytes) -> None:
+        container = parse_container(data)
+        self.major, self.minor, self.flags = container.major, container.minor, container.flags
+        self.header = dict(container.header)
+        self.entries = [dict(entry) for entry in container.header["sections"]]
+        self.payloads = [bytes(container.payload(data, s)) for s in container.sections]
+
+    def index(self, section_id: str) -> int:
+        return next(n for n, entry in enumerate(self.entries) if entry["id"] == section_id)
+
+    def fill_table(self) -> None:
+        """Offsets, lengths and CRCs of the entries, from the payloads as they are now."""
+        offset = 0
+        # strict=False: R18's file keeps a payload whose entry was dropped (it stays in the body)
+        for entry, payload in zip(self.entries, self.payloads, strict=False):
+            entry.update(offset=offset, length=len(payload), crc32=zlib.crc32(payload))
+            offset += len(payload)
+
+    def pack(
+        self, *, fix_table: bool = True, header_bytes: bytes | None = None, total: int | None = None
+    ) -> bytes:
+        """Bytes of the file; offsets, lengths and CRCs recomputed unless ``fix_table`` is off."""
+        if fix_table:
+            self.fill_table()
+        if header_bytes is None:
+            header_bytes = msgpack.packb(
+                {**self.header, "sections": self.entries}, use_bin_type=True
+            )
+        body = b"".join(self.payloads)
+        return internal.pack_raw(
+            self.major, self.minor, self.flags, header_bytes, body, total=total
+        )
+
+
+def _with_crc_fixed(data: bytearray) -> bytes:
+    """Recompute the preamble CRC after editing preamble fields in place."""
+    data[28:32] = struct.pack("<I", zlib.crc32(bytes(data[:28])))
+    return bytes(data)
+
+
+def _set_preamble(data: bytes, offset: int, fmt: str, value: int) -> bytes:
+    edited = bytearray(data)
+    struct.pack_into(fmt, edited, offset, value)
+    return _with_crc_fixed(edited)
+
+
+def _edit(data: bytes, change: Callable[[Parts], None], **pack_options: Any) -> bytes:
+    parts = Parts(data)
+    change(parts)
+    return parts.pack(**pack_options)
+
+
+def _entry(section_id: str, **fields: Any) -> Callable[[Parts], None]:
+    def change(parts: Parts) -> None:
+        parts.entries[parts.index(section_id)].update(fields)
+
+    return change
+
+
+def _header(**fields: Any) -> Callable[[Parts], None]:
+    def change(parts: Parts) -> None:
+        for key, value in fields.items():
+            if value is _DELETE:
+                del parts.header[key]
+            else:
+                parts.header[key] = value
+
+    return change
+
+
+_DELETE = object()
+
+
+def _payload(section_id: str, payload: bytes, **fields: Any) -> Callable[[Parts], None]:
+    def change(parts: Parts) -> None:
+        n = parts.index(section_id)
+        parts.payloads[n] = payload
+        parts.entries[n].update(fields)
+
+    return change
+
+
+def _flip_last_payload_byte(section_id: str) -> Callable[[Parts], None]:
+    """Damage a section after its CRC was computed: the table keeps the old CRC."""
+
+    def change(parts: Parts) -> None:
+        n = parts.index(section_id)
+        parts.fill_table()
+        damaged = bytearray(parts.payloads[n])
+        damaged[-1] ^= 0x01
+        parts.payloads[n] = bytes(damaged)
+
+    return change
+
+
+def invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
+    """rule id -> (file bytes, error class name): ``good`` with that one rule broken."""
+    parts = Parts(good)
+    header_length = struct.unpack_from("<I", good, 16)[0]
+    faces_shape = parts.entries[parts.index("FACE")]["shape"]
+    k_vertices = parts.header["vertices"]
+    bad_faces = np.full(faces_shape, 0, dtype=np.int64)
+    bad_faces[0, 0] = k_vertices  # one past the last vertex
+    face_params, face_payload = faces.encode_faces(bad_faces)  # the encoder does not check indices
+    padded = np.zeros(faces_shape, dtype=np.int64)
+    padded[:, 1] = -1  # padding before the end of a row
+    padded_params, padded_payload = faces.encode_faces(padded)
+    core_entry = parts.entries[parts.index("CORE")]
+    names = msgpack.packb(["only one name"])
+
+    return {
+        "R01-signature": (b"PK\x03\x04" + good[4:], "FormatError"),
+        "R02-signature-transfer": (good[:4] + b"\r\r\n" + good[7:], "FormatError"),
+        "R03-preamble-truncated": (good[:20], "TruncatedFileError"),
+        "R04-preamble-crc": (good[:10] + bytes([good[10] ^ 0x04]) + good[11:], "ChecksumError"),
+        "R05-major-version": (_set_preamble(good, 8, "<H", 2), "UnsupportedVersionError"),
+        "R06-critical-flag": (_set_preamble(good, 12, "<I", 0x0004), "UnsupportedVersionError"),
+        "R07-header-limit": (_set_preamble(good, 16, "<I", (16 << 20) + 1), "LimitError"),
+        "R08-total-length": (
+            _set_preamble(good, 20, "<Q", HEAD_SIZE + header_length),
+            "FormatError",
+        ),
+        "R09-trailing-bytes": (good + b"\x00\x00\x00\x00", "FormatError"),
+        "R10-file-truncated": (good[:-7], "TruncatedFileError"),
+        "R11-header-crc": (good[:40] + bytes([good[40] ^ 0x20]) + good[41:], "ChecksumError"),
+        "R12-header-not-map": (parts.pack(header_bytes=msgpack.packb([1, 2, 3])), "FormatError"),
+        "R13-section-table-missing": (
+            parts.pack(
+                header_bytes=msgpack.packb(
+                    {k: v for k, v in parts.header.items() if k != "sections"}
+                )
+            ),
+            "FormatError",
+        ),
+        "R14-section-entry-field": (
+            _edit(good, _entry("U3", crc32="0"), fix_table=False),
+            "FormatError",
+        ),
+        "R15-section-duplicate-id": (_edit(good, _entry("U3", id="U1")), "FormatError"),
+        "R16-section-not-contiguous": (
+            _edit(
+                good,
+                lambda p: p.entries[1].update(offset=p.entries[1]["offset"] + 1),
+                fix_table=False,
+            ),
+            "FormatError",
+        ),
+        "R17-section-past-end": (
+            _edit(
+                good,
+                lambda p: p.entries[-1].update(length=p.entries[-1]["length"] + 1),
+                fix_table=False,
+            ),
+            "FormatError",
+        ),
+        "R18-section-coverage": (_edit(good, _forget_last_entry), "FormatError"),
+        "R19-section-crc": (
+            _edit(good, _flip_last_payload_byte("U1"), fix_table=False),
+            "ChecksumError",
+        ),
+        "R20-header-field": (_edit(good, _header(vertices=_DELETE)), "FormatError"),
+        "R21-header-limit": (_edit(good, _header(vertices=1 << 40)), "LimitError"),
+        "R22-ranks": (
+            _edit(good, _header(ranks=[parts.header["ranks"][0], 10_000])),
+            "FormatError",
+        ),
+        "R23-u2": (_edit(good, _header(u2=[1.0] * 8)), "FormatError"),
+        "R24-unknown-critical-section": (
+            _edit(good, _append_section({"id": "XTRA", "critical": True, "codec": "raw"}, b"?")),
+            "UnsupportedVersionError",
+        ),
+        "R25-unknown-codec": (_edit(good, _entry("U3", codec="qmat2")), "UnsupportedVersionError"),
+        "R26-required-section-missing": (_edit(good, lambda p: _drop(p, "CENT")), "FormatError"),
+        "R27-criticality": (_edit(good, _entry("U1", critical=False)), "FormatError"),
+        "R28-shape": (
+            _edit(good, _entry("U3", shape=[parts.header["frames"] + 1, parts.header["ranks"][1]])),
+            "FormatError",
+        ),
+        "R29-zstd-content-size": (
+            _edit(good, _payload("CORE", streams.compress(b"\x00" * 3))),
+            "FormatError",
+        ),
+        "R30-planes": (_edit(good, _entry("U1", planes=5)), "FormatError"),
+        "R31-steps": (
+            _edit(good, _entry("CORE", steps=np.array([0.0], "<f4").tobytes())),
+            "FormatError",
+        ),
+        "R32-predictor": (
+            _edit(good, _entry("CORE", predict=b"\x01" * len(core_entry["predict"]))),
+            "FormatError",
+        ),
+        "R33-face-index": (
+            _edit(good, _payload("FACE", face_payload, **face_params)),
+            "FormatError",
+        ),
+        "R34-face-padding": (
+            _edit(good, _payload("FACE", padded_payload, **padded_params)),
+            "FormatError",
+        ),
+        "R36-reconstruction-finite": (_edit(good, _header(u2=[1e308] * 9)), "FormatError"),
+        "R35-names": (
+            _edit(good, lambda p: _add_names(p, names)),
+            "FormatError",
+        ),
+    }
+
+
+def _forget_last_entry(parts: Parts) -> None:
+    """Keep the last section's bytes in the file but drop its entry from the table (pack()
+    lays out only the sections that have entries, then appends every payload)."""
+    parts.entries.pop()
+
+
+def _append_section(entry: dict[str, Any], payload: bytes) -> Callable[[Parts], None]:
+    def change(parts: Parts) -> None:
+        parts.entries.append(dict(entry))
+        parts.payloads.append(payload)
+
+    return change
+
+
+def _drop(parts: Parts, section_id: str) -> None:
+    n = parts.index(section_id)
+    parts.entries.pop(n)
+    parts.payloads.pop(n)
+
+
+def _add_names(parts: Parts, raw: bytes) -> None:
+    if any(entry["id"] == "NAME" for entry in parts.entries):
+        _drop(parts, "NAME")
+    parts.entries.append(
+        {"id": "NAME", "critical": False, "codec": "msgpack-zstd", "size": len(raw)}
+    )
+    parts.payloads.append(streams.compress(raw))
+
+
+# ------------------------------------------------------------------------------------------
+# valid vectors
+
+
+def digests(decoder: Decoder) -> dict[str, str]:
+    """SHA-256 of the dequantized arrays as little-endian C-order float64 (faces: int64). A
+    segmented file (§6.7) has each segment's arrays, named ``u1.s`` (the U1 it uses: its own,
+    or the shared one's leading columns), ``u3.s``, ``core.s`` and ``centroids.s``."""
+    arrays = {"faces": np.ascontiguousarray(decoder.faces, dtype="<i8")}
+    for segment in decoder.segments:
+        factors = decoder.segment_factors(segment.index)
+        suffix = f".{segment.index}" if decoder.segmented else ""
+        for name, array in (
+            ("u1", factors.u1),
+            ("u3", factors.u3),
+            ("core", factors.core),
+            ("centroids", factors.centroids),
+        ):
+            arrays[name + suffix] = np.ascontiguousarray(array, dtype="<f8")
+    return {name: hashlib.sha256(array.tobytes()).hexdigest() for name, array in arrays.items()}
+
+
+def segment_index(decoder: Decoder) -> list[dict[str, Any]]:
+    """The segment index a decoder must report (§6.7): empty for a file of format 1.0."""
+    return [
+        {"first_frame": s.start, "frames": s.frames, "ranks": list(s.ranks), "basis": s.basis}
+        for s in decoder.info.segments
+    ]
+
+
+def valid_vectors() -> dict[str, tuple[bytes, str]]:
+    """name -> (file bytes, what it exercises)."""
+    wave_tri = MeshSequence(wave_sheet(24, 9), sheet_triangles(9))
+    basic = encode(wave_tri, target_kg=0.5)
+    named = MeshSequence(
+        wave_sheet(16, 7) * 3.0 + 10.0,
+        polygons(7),
+        [f"walk_{n:03d}.obj" for n in range(16)],
+        frame_rate=30.0,
+    )
+    extended = Parts(basic)
+    extended.flags |= 0x00010000  # an ignorable flag bit
+    extended.header["x-note"] = "an unknown header key is ignored"
+    extended.entries.append({"id": "xmeta", "critical": False, "codec": "opaque"})
+    extended.payloads.append(b"unknown ancillary data is skipped unread")
+    long_wave = MeshSequence(wave_sheet(40, 9), sheet_triangles(9), frame_rate=25.0)
+    return {
+        **traverse_vectors(),
+        "v1-wave-triangles": (basic, "triangles, no names: the basic file"),
+        "v1.1-segments-shared": (
+            encode_with_report(long_wave, target_kg=0.5, segment_frames=12).data,
+            "format 1.1: three segments of 12, 12 and 16 frames sharing one U1",
+        ),
+        "v1.1-segments-own": (
+            encode_with_report(named, target_kg=0.5, segment_frames=8, basis="own").data,
+            "format 1.1: two segments, each with its own U1 (mesh parents of polygons), names",
+        ),
+        "v1-polygons-names": (
+            encode(named, target_kg=0.1),
+            "quads padded to triangles, frame names, frame rate, far from the origin",
+        ),
+        "v1-ignorable-extensions": (
+            extended.pack(),
+            "v1-wave-triangles plus an ignorable flag, header key and ancillary section",
+        ),
+    }
+
+
+def traverse_vectors() -> dict[str, tuple[bytes, str]]:
+    """The valid vectors of format 1.2 (§6.8): faces-traverse, alone and with segments."""
+    triangles = scrambled(MeshSequence(wave_sheet(24, 9), sheet_triangles(9)), seed=12)
+    polygons_in_segments = scrambled(  # larger than `named`, for the walk to beat faces-delta
+        MeshSequence(
+            wave_sheet(16, 12) * 3.0 + 10.0,
+            polygons(12),
+            [f"walk_{n:03d}.obj" for n in range(16)],
+            frame_rate=30.0,
+        ),
+        seed=13,
+    )
+    return {
+        "v1.2-traverse-triangles": (
+            encode(triangles, target_kg=0.5),
+            "format 1.2: faces-traverse, triangles shuffled, vertices renumbered, corners rotated",
+        ),
+        "v1.2-traverse-polygons-segments": (
+            encode_with_report(polygons_in_segments, target_kg=0.5, segment_frames=8).data,
+            "format 1.2 and 1.1 together: faces-traverse of scrambled polygons (degrees), two "
+            "segments sharing U1, names",
+        ),
+    }
+
+
+def traverse_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
+    """rule id -> (file bytes, error class name): the 1.2 file ``good`` with a rule of §6.8
+    broken: the walk's first op (the first seed's first corner) made PREV, which names no
+    vertex before any corner exists."""
+    parts = Parts(good)
+    entry = parts.entries[parts.index("FACE")]
+    count, width = entry["shape"]
+    payload = parts.payloads[parts.index("FACE")]
+    values, corner_order = traversal.read_streams(payload, entry, count, width, "FACE")
+    values[0][0] = traversal.TIP_PREV
+    params, broken = traversal.pack_streams(values, count, width, corner_order, 19)
+    return {"R39-traversal": (_edit(good, _payload("FACE", broken, **params)), "FormatError")}
+
+
+def write_valid(folder: Path, name: str, data: bytes, purpose: str) -> None:
+    """One valid vector: the file, its reference positions and the JSON of what it holds."""
+    decoder = Decoder(data)
+    positions = decoder.positions()
+    (folder / f"{name}.tkc").write_bytes(data)
+    np.save(folder / f"{name}.positions.npy", positions)
+    header = decoder.info
+    expected = {
+        "file": f"{name}.tkc",
+        "valid": True,
+        "purpose": purpose,
+        "header": {
+            "format_version": header.format_version,
+            "vertices": header.vertices,
+            "frames": header.frames,
+            "ranks": list(header.ranks),
+            "faces": header.faces,
+            "face_width": header.face_width,
+            "total_bytes": header.total_bytes,
+            "frame_rate": header.frame_rate,
+            "kg": header.kg,
+        },
+        "frame_names": decoder.frame_names,
+        "segments": segment_index(decoder),
+        "sha256": digests(decoder),
+        "reference": f"{name}.positions.npy",
+        "tolerance": {"relative_to_max_abs": RELATIVE_TOLERANCE},
+    }
+    (folder / f"{name}.json").write_text(json.dumps(expected, indent=2) + "\n")
+
+
+def segmented_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
+    """rule id -> (file bytes, error class name): the segmented ``good`` with one rule of §6.7
+    broken."""
+    parts = Parts(good)
+    segments = parts.header["segments"]
+    short = [dict(entry) for entry in segments[:-1]]  # the index lost its last entry
+    too_deep = [dict(entry) for entry in segments]
+    too_deep[0]["ranks"] = [too_deep[0]["ranks"][0], too_deep[0]["frames"] + 1]
+    return {
+        "R37-segment-index": (_edit(good, _header(segments=short)), "FormatError"),
+        "R38-segment-ranks": (_edit(good, _header(segments=too_deep)), "FormatError"),
+    }
+
+
+def write_invalid(folder: Path, good: bytes, segmented: bytes, traversed: bytes) -> int:
+    """The invalid vectors made from the valid files ``good`` (format 1.0), ``segmented``
+    (1.1) and ``traversed`` (1.2), with their JSON; how many."""
+    vectors = {
+        **invalid_vectors(good),
+        **segmented_invalid_vectors(segmented),
+        **traverse_invalid_vectors(traversed),
+    }
+    for rule, (data, error) in vectors.items():
+        (folder / f"{rule}.tkc").write_bytes(data)
+        expected = {"file": f"{rule}.tkc", "valid": False, "rule": rule, "error": error}
+        (folder / f"{rule}.json").write_text(json.dumps(expected, indent=2) + "\n")
+    return len(vectors)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="python -m tools.generate.vectors", description=__doc__.splitlines()[0]
+    )
+    parser.add_argument(
+        "--out", type=Path, default=VECTORS, help="where to write them (default: spec/vectors/)"
+    )
+    parser.add_argument("--force", action="store_true", help="replace existing vectors")
+    args = parser.parse_args(argv)
+    out: Path = args.out
+    existing = [p for p in out.iterdir() if p.suffix in VECTOR_SUFFIXES] if out.is_dir() else []
+    if existing and not args.force:
+        print(f"{out} holds vectors: pass --force to write the vectors again", file=sys.stderr)
+        return 1
+    out.mkdir(parents=True, exist_ok=True)
+    for old in existing:  # stale vectors go; anything else in the folder stays
+        old.unlink()
+    valid = valid_vectors()
+    for name, (data, purpose) in valid.items():
+        write_valid(out, name, data, purpose)
+    invalid = write_invalid(
+        out,
+        valid["v1-wave-triangles"][0],
+        valid["v1.1-segments-shared"][0],
+        valid["v1.2-traverse-triangles"][0],
+    )
+    print(f"wrote {len(valid)} valid and {invalid} invalid vectors to {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
