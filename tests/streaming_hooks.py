@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from tuckercodec import InputError
-from tuckercodec.io.isolation_child import note
+from tuckercodec.io.isolation.child import note
 from tuckercodec.io.registry import ReadOptions
 from tuckercodec.io.streaming import FrameSource
 

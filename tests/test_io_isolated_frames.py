@@ -21,8 +21,8 @@ from test_io_streaming import check_ranges, same_description
 
 from tuckercodec import InputError, load_sequence, save_sequence
 from tuckercodec.io import open_frames
-from tuckercodec.io.isolated_frames import IsolatedFrames
 from tuckercodec.io.isolation import TIMEOUT_VARIABLE
+from tuckercodec.io.isolation.frames import IsolatedFrames
 from tuckercodec.io.registry import ReadOptions
 
 

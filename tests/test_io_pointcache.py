@@ -29,7 +29,7 @@ from hypothesis import strategies as st
 
 from tuckercodec import InputError, MeshSequence, load_sequence, save_sequence
 from tuckercodec.cli import main
-from tuckercodec.io.mdd import frame_timing
+from tuckercodec.io.pointcache.mdd import frame_timing
 from tuckercodec.samples import sample_path
 from tuckercodec.sequence import DEFAULT_FRAME_RATE
 

@@ -32,8 +32,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from tuckercodec import InputError, load_sequence
-from tuckercodec.io.vtk_data import MAX_INFLATION, Layout
-from tuckercodec.io.vtk_xml import DatasetWriter, read_dataset
+from tuckercodec.io.vtk.arrays import MAX_INFLATION, Layout
+from tuckercodec.io.vtk.datasets import DatasetWriter, read_dataset
 
 DATA = Path(__file__).parent / "data" / "vtk"
 # tests/data/vtk/make.py's PolyData: sevenths, which float32 cannot hold

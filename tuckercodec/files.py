@@ -23,7 +23,7 @@ from .errors import InputError
 from .format.container import SIGNATURE
 from .format.limits import DEFAULT_LIMITS, Limits
 from .format.segments import BASIS_SHARED
-from .gltf.decomposition import DEFAULT_COMPRESSION, Compression, write_decomposition_gltf
+from .gltf_export import DEFAULT_COMPRESSION, Compression, write_decomposition_gltf
 from .io import Source, format_named, format_of, open_frames, save_sequence
 from .parallel import Executor
 from .reading import open_regular_file

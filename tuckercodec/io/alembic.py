@@ -69,9 +69,9 @@ from .alembic_time import (
     kept_codes,
     time_sampling,
 )
-from .isolated_frames import IsolatedFrames
 from .isolation import read_isolated
-from .isolation_child import note
+from .isolation.child import note
+from .isolation.frames import IsolatedFrames
 from .polygons import faces_from_polygons, polygons_from_faces, reverse_winding
 from .registry import ReadOptions, SequenceFormat, WriteOptions
 from .streaming import FrameSource

@@ -63,9 +63,9 @@ from ..errors import InputError
 from ..optional import import_optional
 from ..reading import open_regular_file
 from ..sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_vertices
-from .isolated_frames import IsolatedFrames
 from .isolation import read_isolated
-from .isolation_child import note
+from .isolation.child import note
+from .isolation.frames import IsolatedFrames
 from .polygons import faces_from_polygons, polygons_from_faces, reverse_winding
 from .registry import ReadOptions, SequenceFormat, WriteOptions
 from .streaming import FrameSource

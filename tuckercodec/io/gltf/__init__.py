@@ -15,13 +15,13 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..errors import InputError
-from ..gltf.reader import Scene, read_gltf
-from ..gltf.sequence_writer import write_sequence_gltf
-from ..gltf.timing import timing
-from ..sequence import MeshSequence
-from .registry import MeshFrame, ReadOptions, SequenceFormat, WriteOptions
-from .streaming import FrameSource
+from ...errors import InputError
+from ...sequence import MeshSequence
+from ..registry import MeshFrame, ReadOptions, SequenceFormat, WriteOptions
+from ..streaming import FrameSource
+from .reader import Scene, read_gltf
+from .timing import timing
+from .writer import write_sequence_gltf
 
 
 def read(path: Path, options: ReadOptions) -> MeshSequence:

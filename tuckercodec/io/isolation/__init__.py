@@ -69,12 +69,12 @@ from typing import IO, Any
 
 import numpy as np
 
-from .. import errors
-from ..errors import InputError
-from ..optional import import_optional
-from ..sequence import MeshSequence
-from .isolation_child import note as note  # the readers' and hooks' name for it
-from .registry import ReadOptions
+from ... import errors
+from ...errors import InputError
+from ...optional import import_optional
+from ...sequence import MeshSequence
+from ..registry import ReadOptions
+from .child import note as note  # the readers' and hooks' name for it
 
 GIB = 2**30
 #: The address space a reading child may add to what its interpreter and libraries take.
@@ -97,7 +97,7 @@ CHILD_ENVIRONMENT = {"MALLOC_ARENA_MAX": "2"} | dict.fromkeys(
 #: (:func:`~.isolation_child.read_child`, or ``serve_child`` for :mod:`.isolated_frames`).
 _BOOTSTRAP = (
     "import json, sys; sys.path[:] = json.loads(sys.argv[1])['sys_path']; "
-    "from tuckercodec.io.isolation_child import {0}; {0}(sys.argv[1])"
+    "from tuckercodec.io.isolation.child import {0}; {0}(sys.argv[1])"
 )
 #: How Windows reports a crash: the NTSTATUS exit codes of the usual ones.
 _WINDOWS_CRASHES = {0xC0000005: "an access violation", 0xC00000FD: "a stack overflow"}

@@ -14,13 +14,13 @@ from typing import Any
 
 import numpy as np
 
-from ..atomic import atomic_output
-from ..errors import InputError
-from ..sequence import MeshSequence
-from .npz_archive import NpzArchive
-from .npz_frames import NpzFrames, Scattered
-from .registry import ReadOptions, SequenceFormat, WriteOptions
-from .streaming import FrameSource, SequenceFrames
+from ...atomic import atomic_output
+from ...errors import InputError
+from ...sequence import MeshSequence
+from ..registry import ReadOptions, SequenceFormat, WriteOptions
+from ..streaming import FrameSource, SequenceFrames
+from .archive import NpzArchive
+from .frames import NpzFrames, Scattered
 
 
 def read_npz(path: Path, options: ReadOptions | None = None) -> MeshSequence:

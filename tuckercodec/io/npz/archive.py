@@ -19,9 +19,9 @@ from typing import IO
 
 import numpy as np
 
-from ..errors import InputError
-from ..reading import open_input
-from ..topology import face_table_problem
+from ...errors import InputError
+from ...reading import open_input
+from ...topology import face_table_problem
 
 # What zipfile and numpy.lib.format raise on a damaged archive or member (ValueError: numpy's
 # header checks; NotImplementedError: a zip feature such as strong encryption; TokenError: numpy

@@ -23,14 +23,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..atomic import atomic_output
-from ..errors import InputError
-from ..reading import open_input
-from ..sequence import MeshSequence
-from .npz_archive import npy_header
-from .pointcache import cache_faces, check_size
-from .registry import ReadOptions, SequenceFormat, WriteOptions
-from .streaming import RawFrames
+from ...atomic import atomic_output
+from ...errors import InputError
+from ...reading import open_input
+from ...sequence import MeshSequence
+from ..pointcache import cache_faces, check_size
+from ..registry import ReadOptions, SequenceFormat, WriteOptions
+from ..streaming import RawFrames
+from .archive import npy_header
 
 #: The numbers a .npy of positions may hold (either byte order).
 _KINDS = ("f4", "f8")

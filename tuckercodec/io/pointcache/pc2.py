@@ -27,10 +27,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ..atomic import atomic_output
-from ..errors import InputError
-from ..sequence import MeshSequence
-from .pointcache import (
+from ...atomic import atomic_output
+from ...errors import InputError
+from ...sequence import MeshSequence
+from ..registry import ReadOptions, SequenceFormat, WriteOptions
+from ..streaming import RawFrames
+from . import (
     POINT_BYTES,
     cache_faces,
     check_counts,
@@ -39,8 +41,6 @@ from .pointcache import (
     open_cache,
     read_header,
 )
-from .registry import ReadOptions, SequenceFormat, WriteOptions
-from .streaming import RawFrames
 
 SIGNATURE = b"POINTCACHE2\0"
 VERSION = 1

@@ -18,9 +18,9 @@ from xml.etree import ElementTree
 
 import numpy as np
 
-from ..errors import InputError
-from ..optional import import_optional
-from .vtk_data import MAX_INFLATION
+from ...errors import InputError
+from ...optional import import_optional
+from ..vtk.arrays import MAX_INFLATION
 
 #: The tags of XInclude elements, which are not followed.
 XINCLUDE = ("{http://www.w3.org/2001/XInclude}include", "{http://www.w3.org/2003/XInclude}include")

@@ -18,10 +18,10 @@ import zipfile
 from pathlib import Path
 from typing import IO, ClassVar
 
-from ..errors import InputError
-from ..reading import open_input
-from .npz_archive import ZIP_ERRORS, NpzArchive, member_header
-from .streaming import RawFrames, read_into
+from ...errors import InputError
+from ...reading import open_input
+from ..streaming import RawFrames, read_into
+from .archive import ZIP_ERRORS, NpzArchive, member_header
 
 #: A zip local file header: signature, 22 bytes, then the lengths of the name and extra field.
 _LOCAL_HEADER = struct.Struct("<4s22xHH")

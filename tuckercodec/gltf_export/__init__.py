@@ -35,11 +35,11 @@ import numpy as np
 
 from ..atomic import refuse_existing, write_atomic
 from ..format.reconstruction import reconstruction_basis
+from ..io.gltf.reader import sample_gltf
 from ..metrics import KG_DEFINITION, kg_error
 from ..sequence import DEFAULT_FRAME_RATE, MeshSequence
-from .decomposition_file import decomposition_bytes
+from .layout import decomposition_bytes
 from .quantization import quantize_animation
-from .reader import sample_gltf
 
 Compression = Literal["none", "quantize", "meshopt"]
 COMPRESSIONS: tuple[str, ...] = ("none", "quantize", "meshopt")

@@ -38,14 +38,14 @@ from xml.etree import ElementTree
 
 import numpy as np
 
-from ..errors import InputError
-from ..reading import open_input
-from ..sequence import MeshSequence
-from .polygons import faces_from_polygons
-from .registry import SequenceFormat
-from .streaming import FrameSource
-from .xdmf_data import XINCLUDE, HeavyData, lower, read_item, resolve
-from .xdmf_write import write_xdmf
+from ...errors import InputError
+from ...reading import open_input
+from ...sequence import MeshSequence
+from ..polygons import faces_from_polygons
+from ..registry import SequenceFormat
+from ..streaming import FrameSource
+from .items import XINCLUDE, HeavyData, lower, read_item, resolve
+from .writer import write_xdmf
 
 _FIXED = {"triangle": 3, "quadrilateral": 4}
 #: XDMF's Mixed topology codes: polyvertex and polygon are followed by their point count.

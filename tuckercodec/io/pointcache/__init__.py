@@ -17,9 +17,9 @@ from typing import BinaryIO
 
 import numpy as np
 
-from ..errors import InputError
-from ..reading import open_input
-from ..sequence import MeshSequence, float32_vertices
+from ...errors import InputError
+from ...reading import open_input
+from ...sequence import MeshSequence, float32_vertices
 
 #: Bytes of one point: three float32 coordinates.
 POINT_BYTES = 12
@@ -85,7 +85,7 @@ def cache_faces(faces_file: Path | None, point_count: int, path: Path) -> np.nda
     be the cache's point count; without one, no faces (a point sequence)."""
     if faces_file is None:
         return np.zeros((0, 3), dtype=np.int64)
-    from . import load_sequence  # here: the package imports the formats' registry
+    from .. import load_sequence  # here: the package imports the formats' registry
 
     mesh = load_sequence(faces_file, progress=False)
     if mesh.faces.shape[0] == 0:

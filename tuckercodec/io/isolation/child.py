@@ -25,9 +25,9 @@ from typing import IO, Any
 
 import numpy as np
 
-from .. import errors
-from ..sequence import MeshSequence
-from .registry import ReadOptions
+from ... import errors
+from ...sequence import MeshSequence
+from ..registry import ReadOptions
 
 #: In the child: where :func:`note` writes (the result file); None in any other process.
 _notes: IO[bytes] | None = None

@@ -30,9 +30,9 @@ from xml.etree import ElementTree
 
 import numpy as np
 
-from ..errors import InputError
-from .polygons import faces_from_polygons, polygons_from_faces
-from .vtk_data import Encoding, Layout, encode_array, file_encoding, read_array, type_name
+from ...errors import InputError
+from ..polygons import faces_from_polygons, polygons_from_faces
+from .arrays import Encoding, Layout, encode_array, file_encoding, read_array, type_name
 
 #: The dataset types read and written, by the suffix VTK gives their files.
 DATASETS = {".vtu": "UnstructuredGrid", ".vtp": "PolyData"}

@@ -32,10 +32,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ..atomic import atomic_output
-from ..errors import InputError
-from ..sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_seconds
-from .pointcache import (
+from ...atomic import atomic_output
+from ...errors import InputError
+from ...sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_seconds
+from ..registry import ReadOptions, SequenceFormat, WriteOptions
+from ..streaming import RawFrames
+from . import (
     POINT_BYTES,
     cache_faces,
     check_counts,
@@ -45,8 +47,6 @@ from .pointcache import (
     read_floats,
     read_header,
 )
-from .registry import ReadOptions, SequenceFormat, WriteOptions
-from .streaming import RawFrames
 
 HEADER = struct.Struct(">ii")  # numFrames, numPoints
 #: Frame rates tried first when working out the rate of a file's times: film, PAL, NTSC (and

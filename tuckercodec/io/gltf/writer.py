@@ -21,9 +21,9 @@ from typing import Any
 
 import numpy as np
 
-from ..atomic import write_atomic
-from ..errors import InputError
-from ..sequence import MeshSequence, float32_seconds
+from ...atomic import write_atomic
+from ...errors import InputError
+from ...sequence import MeshSequence, float32_seconds
 from .accessors import ARRAY_BUFFER, BufferBuilder
 from .document import add_triangles, file_bytes, new_gltf
 from .reader import EXTRAS_KEY

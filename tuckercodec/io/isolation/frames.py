@@ -32,10 +32,10 @@ from typing import IO, Any, ClassVar
 
 import numpy as np
 
-from ..errors import InputError
-from .isolation import Ending, can_isolate, child_request, last_words, spawn
-from .registry import ReadOptions
-from .streaming import FrameSource
+from ...errors import InputError
+from ..registry import ReadOptions
+from ..streaming import FrameSource
+from . import Ending, can_isolate, child_request, last_words, spawn
 
 #: How long a child may take to leave once told to (its stdin closed), before it is killed.
 _GOODBYE_SECONDS = 2.0

@@ -26,8 +26,8 @@ from typing import Any
 
 import numpy as np
 
-from .accessors import ARRAY_BUFFER, BufferBuilder, padded_rows
-from .document import add_triangles, file_bytes, new_gltf
+from ..io.gltf.accessors import ARRAY_BUFFER, BufferBuilder, padded_rows
+from ..io.gltf.document import add_triangles, file_bytes, new_gltf
 from .quantization import Quantized, weight_values
 
 _MAX_CODEC_STRIDE = 256  # EXT_meshopt_compression's ATTRIBUTES mode
@@ -86,7 +86,7 @@ def decomposition_bytes(
         translation_codec = _exponential(quantized.translation_exponents, 12)
     primitive: dict[str, Any] = {"attributes": {"POSITION": position}}
     if filtered and len(triangles):
-        from .meshopt import vertex_cache_order
+        from ..io.gltf.meshopt import vertex_cache_order
 
         triangles = vertex_cache_order(triangles, len(base))
     add_triangles(builder, primitive, triangles, len(base))
@@ -178,8 +178,8 @@ def _weight_codec(exponents: np.ndarray | None, frames: int) -> dict[str, Any] |
 
 
 def _meshopt_file(gltf: dict[str, Any], builder: BufferBuilder, path: Path) -> bytes:
-    from .container import pack_glb, pack_gltf
-    from .meshopt import EXTENSION, compress_views
+    from ..io.gltf.container import pack_glb, pack_gltf
+    from ..io.gltf.meshopt import EXTENSION, compress_views
 
     views, binary, fallback = compress_views(
         builder.views, builder.view_data, builder.view_elements, builder.view_codecs

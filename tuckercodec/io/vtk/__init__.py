@@ -40,15 +40,15 @@ from xml.etree import ElementTree
 
 import numpy as np
 
-from ..atomic import atomic_folder, refuse_existing, write_atomic
-from ..errors import InputError
-from ..reading import open_input, open_regular_file
-from ..sequence import MeshSequence
-from .frames import frame_file_names
-from .registry import ReadOptions, SequenceFormat, WriteOptions
-from .streaming import FrameSource
-from .vtk_data import Layout
-from .vtk_xml import DATASETS, DatasetWriter, read_dataset, refuse_declarations
+from ...atomic import atomic_folder, refuse_existing, write_atomic
+from ...errors import InputError
+from ...reading import open_input, open_regular_file
+from ...sequence import MeshSequence
+from ..frames import frame_file_names
+from ..registry import ReadOptions, SequenceFormat, WriteOptions
+from ..streaming import FrameSource
+from .arrays import Layout
+from .datasets import DATASETS, DatasetWriter, read_dataset, refuse_declarations
 
 #: The largest .pvd index read: about a million time steps, far beyond any real series.
 MAX_INDEX_BYTES = 64 * 1024 * 1024
