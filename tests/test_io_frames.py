@@ -345,7 +345,7 @@ def test_formats_are_chosen_by_suffix_from_one_registry(tmp_path: Path) -> None:
     suffixes = [suffix for found in formats() for suffix in found.suffixes]
     assert len(suffixes) == len(set(suffixes))  # each suffix names one format
     assert format_of(tmp_path / "a.OBJ") is format_named("obj")
-    assert format_of(tmp_path / "a.npz").read is not None  # a whole sequence in one file
+    assert format_of(tmp_path / "a.npz").open is not None  # a whole sequence in one file
     assert format_of(tmp_path / "a.ply").read_frame is not None  # one frame per file
     assert format_of(tmp_path / "a.txt") is None
     with pytest.raises(

@@ -69,9 +69,7 @@ from .alembic_time import (
     kept_codes,
     time_sampling,
 )
-from .isolation import read_isolated
-from .isolation.child import note
-from .isolation.frames import IsolatedFrames
+from .isolation import IsolatedFrames, note
 from .polygons import faces_from_polygons, polygons_from_faces, reverse_winding
 from .registry import ReadOptions, SequenceFormat, WriteOptions
 from .streaming import FrameSource
@@ -98,21 +96,10 @@ def _message(error: BaseException) -> str:
     return text[:300] or type(error).__name__
 
 
-def read_alembic(path: Path, options: ReadOptions) -> MeshSequence:
-    """A PolyMesh's position samples (see the module docstring), read in a child process."""
-    return read_isolated(_read_archive, path, options, "Alembic", "alembic", _MODULES)
-
-
 def open_alembic(path: Path, options: ReadOptions) -> FrameSource:
     """The frames of a PolyMesh, read sample by sample in a child process that stays open
-    (:mod:`.isolated_frames`)."""
+    (:mod:`.isolation`)."""
     return IsolatedFrames(ArchiveFrames, path, options, "Alembic", "alembic", _MODULES)
-
-
-def _read_archive(path: Path, options: ReadOptions) -> MeshSequence:
-    """:func:`read_alembic` in this process."""
-    with ArchiveFrames(path, options) as source:
-        return source.load()
 
 
 class ArchiveFrames(FrameSource):
@@ -355,7 +342,6 @@ FORMAT = SequenceFormat(
     name="alembic",
     suffixes=(".abc",),
     description="Alembic archive (Ogawa): a PolyMesh's position samples (--object to choose one)",
-    read=read_alembic,
     write=write_alembic,
     open=open_alembic,
     read_options=frozenset({"object_path"}),

@@ -20,8 +20,8 @@ Which formats stream, and how (a format's :attr:`~.registry.SequenceFormat.open`
   stays open for the source's life (:mod:`.isolated_frames`), so that a crash of the library
   is still an :class:`~tuckercodec.errors.InputError`.
 
-Every built-in format streams. A format registered without ``open`` is loaded whole and
-wrapped in a :class:`SequenceFrames`.
+Every format streams: ``open`` is the one way a whole-sequence format reads (``load()`` reads
+all the frames). :class:`SequenceFrames` is a sequence in memory as a source.
 
 Every source checks what it reads as :class:`~tuckercodec.sequence.MeshSequence` does (finite
 positions, the first frame's vertex count and faces), when it reads it: an error in frame 900
@@ -82,6 +82,8 @@ class FrameSource(abc.ABC):
     #: The attributes that hold open files or processes: ``None`` when closed or unpickled,
     #: opened again on first use (each needs a class-level default of ``None``).
     _transient: ClassVar[tuple[str, ...]] = ()
+    #: How errors name the positions, before "vertex 5 has...": "key 'V': " in an .npz.
+    _vertex_label: ClassVar[str] = ""
 
     def _describe(
         self,
@@ -144,7 +146,7 @@ class FrameSource(abc.ABC):
             if bad.any():
                 frame, vertex, _ = (int(i) for i in np.argwhere(bad)[0])
                 raise InputError(
-                    f"vertex {vertex} has a non-finite coordinate",
+                    f"{self._vertex_label}vertex {vertex} has a non-finite coordinate",
                     path=self.path,
                     frame=start + frame,
                 )
@@ -162,8 +164,10 @@ class FrameSource(abc.ABC):
         for start in range(0, self.frame_count, size):
             yield start, self.read(start, min(start + size, self.frame_count))
 
-    def load(self) -> MeshSequence:
-        """The whole sequence in memory."""
+    def load(self, progress: bool = False) -> MeshSequence:
+        """The whole sequence in memory; ``progress`` draws a progress bar on a terminal where
+        the source reads many files (:class:`~.frames.FileFrames`), others read too fast to
+        need one."""
         try:
             return MeshSequence(
                 self.read(0, self.frame_count),
@@ -237,7 +241,7 @@ class SequenceFrames(FrameSource):
     def _read(self, start: int, stop: int) -> np.ndarray:
         return self.sequence.vertices[start:stop].copy()
 
-    def load(self) -> MeshSequence:
+    def load(self, progress: bool = False) -> MeshSequence:
         return self.sequence
 
 

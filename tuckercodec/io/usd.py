@@ -63,9 +63,7 @@ from ..errors import InputError
 from ..optional import import_optional
 from ..reading import open_regular_file
 from ..sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_vertices
-from .isolation import read_isolated
-from .isolation.child import note
-from .isolation.frames import IsolatedFrames
+from .isolation import IsolatedFrames, note
 from .polygons import faces_from_polygons, polygons_from_faces, reverse_winding
 from .registry import ReadOptions, SequenceFormat, WriteOptions
 from .streaming import FrameSource
@@ -119,21 +117,10 @@ def _tf_message(error: BaseException) -> str:
     return "; ".join(text[:200] for text in texts[:2])
 
 
-def read_usd(path: Path, options: ReadOptions) -> MeshSequence:
-    """A UsdGeomMesh's time-sampled points (see the module docstring), read in a child process."""
-    return read_isolated(_read_stage, path, options, "USD", "usd", _PRELOAD)
-
-
 def open_usd(path: Path, options: ReadOptions) -> FrameSource:
     """The frames of a UsdGeomMesh, read sample by sample in a child process that stays open
-    (:mod:`.isolated_frames`)."""
+    (:mod:`.isolation`)."""
     return IsolatedFrames(StageFrames, path, options, "USD", "usd", _PRELOAD)
-
-
-def _read_stage(path: Path, options: ReadOptions) -> MeshSequence:
-    """:func:`read_usd` in this process."""
-    with StageFrames(path, options) as source:
-        return source.load()
 
 
 class StageFrames(FrameSource):
@@ -400,7 +387,6 @@ FORMAT = SequenceFormat(
     name="usd",
     suffixes=(".usd", ".usda", ".usdc"),
     description="USD stage: a UsdGeomMesh with time-sampled points (--prim to choose one)",
-    read=read_usd,
     write=write_usd,
     open=open_usd,
     read_options=frozenset({"prim"}),

@@ -172,12 +172,6 @@ def _attribute(attributes: dict[str, Any], name: str, path: Path) -> Any:
     return np.array(value, dtype=np.float64)
 
 
-def read_zarr(path: Path, options: ReadOptions) -> MeshSequence:
-    """The whole sequence of a zarr store."""
-    with ZarrFrames(path, options) as source:
-        return source.load()
-
-
 def write_zarr(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
     """Write the sequence as a zarr format 3 group (see the module docstring), atomically."""
     zarr = _zarr("writing zarr stores")
@@ -208,7 +202,6 @@ FORMAT = SequenceFormat(
     name="zarr",
     suffixes=(".zarr",),
     description="zarr store (a folder): array 'vertices' (frames, vertices, 3), faces, attributes",
-    read=read_zarr,
     write=write_zarr,
     open=ZarrFrames,
     extra="zarr",

@@ -24,12 +24,6 @@ from .timing import timing
 from .writer import write_sequence_gltf
 
 
-def read(path: Path, options: ReadOptions) -> MeshSequence:
-    """The sequence of a .glb/.gltf file; ``object_path`` names the mesh node or mesh, ``fps``
-    the sampling rate."""
-    return read_gltf(path, object_path=options.object_path, fps=options.fps)
-
-
 class GltfFrames(FrameSource):
     """The frames of a glTF animation, evaluated a range at a time: the file is read and
     checked once and held (its buffers hold every target anyway), and each range's frames are
@@ -82,7 +76,6 @@ FORMAT = SequenceFormat(
     name="gltf",
     suffixes=(".glb", ".gltf"),
     description="glTF 2.0 morph animation (frame 0 the mesh, frames as morph targets)",
-    read=read,
     write=write,
     open=GltfFrames,
     read_frame=read_frame,

@@ -4,11 +4,13 @@ stuck process.
 
 Why: alembic3d segfaults on about 2 % of randomly damaged archives, and pxr allocates whatever
 a crafted ``.usdc`` declares (8 GiB and 27 s for a 1 KB file declaring 2^31 face indices);
-neither can be caught in the process that runs the library. :func:`read_isolated` runs a
-reader in a fresh Python and turns each way it can end into an outcome in the caller:
+neither can be caught in the process that runs the library. :class:`IsolatedFrames` opens a
+format's source (``usd.StageFrames``, ``alembic.ArchiveFrames``) in a fresh Python, which
+serves reads of frame ranges, and turns each way a request can end into an outcome in the
+caller:
 
-* a sequence: sent back through a temporary file (a JSON line, then the arrays in ``.npy``
-  format, read without pickle) and checked again by :class:`MeshSequence`;
+* frames (and first the source's description): sent back raw through a pipe (the protocol is
+  :mod:`.child`'s; no pickle) and checked again by :class:`~..streaming.FrameSource`;
 * a :class:`~tuckercodec.errors.TuckerCodecError` (InputError, DependencyError): raised again
   with its class, message, path and frame (unpickled only from :mod:`tuckercodec.errors`);
 * a crash (a signal; on Windows an NTSTATUS exit code): ``InputError("object /a/aShape: the
@@ -22,7 +24,8 @@ reader in a fresh Python and turns each way it can end into an outcome in the ca
   ``InputError("declares more data than 2 GiB allows")``; pxr turns some failed allocations
   into a "corrupt asset" error of its own, which comes back as such;
 * time: :data:`TIMEOUT_BASE` (60 s) plus a second per :data:`TIMEOUT_BYTES_PER_SECOND` (8 MiB)
-  of file, wall clock; then the child is killed and the error says so.
+  of file, wall clock, for each request (the opening, then each read), not for the child's
+  life; then a watchdog kills the child and the error says so.
 
 ``TUCKERCODEC_READ_MEMORY_GIB`` and ``TUCKERCODEC_READ_TIMEOUT`` (seconds) replace those limits
 (0: none). The child's stderr and stdout go to a temporary file: the libraries' messages stay
@@ -42,65 +45,127 @@ the caller's ``sys.path``, its own stderr and exit status, and the same code on 
 for about 0.3 s more per read than in process, which the 1 s target allows. Where
 ``sys.executable`` cannot run Python (a frozen application) the read runs in process.
 
+Why one child for many reads rather than one per read: starting the interpreter, importing
+the library and opening the stage cost about 0.5 s (pxr) and 0.3 s (alembic3d) per child on
+this machine, once; a read then costs its frames' sampling and a copy through a pipe (see
+BENCHMARKS for the measured figures). After a crash the next read starts a new child; so does
+the first read after unpickling (workers of a process pool or Dask each start their own).
+:func:`read_isolated` is the same child for a function that reads a whole sequence at once.
+
 Writing is not isolated: the data is ours, and the library only re-reads what it just wrote.
-What runs in the child is :mod:`.isolation_child`; a child that serves many reads of ranges,
-for streaming, is :mod:`.isolated_frames`.
+What runs in the child is :mod:`.child`; the caller's side of the conversation, with the
+limits, is :mod:`.channel`.
 """
 
 from __future__ import annotations
 
-import base64
-import contextlib
-import importlib
-import importlib.util
-import io
-import json
-import math
-import os
-import pickle
-import signal
-import subprocess
-import sys
-import tempfile
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, Any
+from typing import ClassVar
 
 import numpy as np
 
-from ... import errors
 from ...errors import InputError
-from ...optional import import_optional
 from ...sequence import MeshSequence
 from ..registry import ReadOptions
+from ..streaming import FrameSource, SequenceFrames
+from .channel import (
+    MEMORY_BASE,
+    MEMORY_PER_BYTE,
+    MEMORY_VARIABLE,
+    TIMEOUT_BASE,
+    TIMEOUT_BYTES_PER_SECOND,
+    TIMEOUT_VARIABLE,
+    Child,
+    Description,
+    can_isolate,
+    child_request,
+)
 from .child import note as note  # the readers' and hooks' name for it
 
-GIB = 2**30
-#: The address space a reading child may add to what its interpreter and libraries take.
-MEMORY_BASE = 2 * GIB
-#: ... plus this many times the file's size.
-MEMORY_PER_BYTE = 16
-#: The wall-clock time a read may take: this many seconds...
-TIMEOUT_BASE = 60.0
-#: ... plus one second per this many bytes of file (a slow network disk).
-TIMEOUT_BYTES_PER_SECOND = 8 * 2**20
-MEMORY_VARIABLE = "TUCKERCODEC_READ_MEMORY_GIB"
-TIMEOUT_VARIABLE = "TUCKERCODEC_READ_TIMEOUT"
-#: Thread pools the child does not need, which would reserve address space per core
-#: (glibc's malloc arenas, OpenBLAS's buffers, pxr's workers): one each. The user's own
-#: settings win.
-CHILD_ENVIRONMENT = {"MALLOC_ARENA_MAX": "2"} | dict.fromkeys(
-    ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "PXR_WORK_THREAD_LIMIT"), "1"
-)
-#: What the child runs: the caller's import path, then a function of :mod:`.isolation_child`
-#: (:func:`~.isolation_child.read_child`, or ``serve_child`` for :mod:`.isolated_frames`).
-_BOOTSTRAP = (
-    "import json, sys; sys.path[:] = json.loads(sys.argv[1])['sys_path']; "
-    "from tuckercodec.io.isolation.child import {0}; {0}(sys.argv[1])"
-)
-#: How Windows reports a crash: the NTSTATUS exit codes of the usual ones.
-_WINDOWS_CRASHES = {0xC0000005: "an access violation", 0xC00000FD: "a stack overflow"}
+__all__ = [
+    "MEMORY_BASE",
+    "MEMORY_PER_BYTE",
+    "MEMORY_VARIABLE",
+    "TIMEOUT_BASE",
+    "TIMEOUT_BYTES_PER_SECOND",
+    "TIMEOUT_VARIABLE",
+    "IsolatedFrames",
+    "note",
+    "read_isolated",
+]
+
+
+class IsolatedFrames(FrameSource):
+    """The frames that ``opener(path, options)`` reads, read in a child process (see the
+    module docstring).
+
+    Args:
+        opener: the in-process source (a module-level FrameSource class), or a module-level
+            function that reads a whole sequence; the child imports it by name.
+        library: the library's name for messages ("USD", "Alembic").
+        extra: the extra that installs it.
+        preload: the modules it imports, looked for here first (a DependencyError without
+            starting a process) and imported in the child before its memory is capped.
+    """
+
+    _transient: ClassVar[tuple[str, ...]] = ("_child", "_local")
+    _child: Child | None = None
+    _local: FrameSource | None = None
+
+    def __init__(
+        self,
+        opener: Callable[[Path, ReadOptions], FrameSource | MeshSequence],
+        path: Path,
+        options: ReadOptions,
+        library: str,
+        extra: str,
+        preload: Iterable[str] = (),
+    ):
+        self._opener, self._file, self._options = opener, path, options
+        self._library, self._extra, self._preload = library, extra, tuple(preload)
+        opened = self._start()
+        self._describe(
+            path,
+            opened.frame_count,
+            opened.vertex_count,
+            opened.faces,
+            opened.frame_names,
+            opened.frame_rate,
+            opened.time_codes,
+        )
+
+    def _start(self) -> FrameSource | Description:
+        """Open the file in a new child (and say what it found), or where no child can
+        start, in this process."""
+        if not can_isolate(self._preload, self._library, self._extra):
+            opened = self._opener(self._file, self._options)
+            if isinstance(opened, MeshSequence):
+                opened = SequenceFrames(opened, self._file)
+            self._local = opened
+            return opened
+        request = child_request(self._opener, self._file, self._options, self._preload)
+        self._child = Child(request, self._file, self._library)
+        return self._child.description
+
+    def _read(self, start: int, stop: int) -> np.ndarray:
+        if self._local is None and (self._child is None or not self._child.alive()):
+            if self._child is not None:  # gone while idle (its caller's thread ended)
+                self._child.close()
+                self._child = None
+            opened = self._start()
+            if (opened.frame_count, opened.vertex_count) != (self.frame_count, self.vertex_count):
+                raise InputError("has changed since it was opened", path=self._file)
+        if self._local is not None:
+            return self._local.read(start, stop)
+        assert self._child is not None
+        try:
+            return self._child.read(start, stop)
+        except InputError:
+            if not self._child.alive():  # it crashed: the next read starts afresh
+                self._child.close()
+                self._child = None
+            raise
 
 
 def read_isolated(
@@ -111,7 +176,9 @@ def read_isolated(
     extra: str,
     preload: Iterable[str] = (),
 ) -> MeshSequence:
-    """``reader(path, options)`` run in a child process (see the module docstring).
+    """``reader(path, options)``, a function that reads a whole sequence, run in a child
+    process (see the module docstring): the child serves the sequence it read as frames,
+    all read at once.
 
     Args:
         reader: a module-level function of the package (the child imports it by name).
@@ -128,234 +195,5 @@ def read_isolated(
         RuntimeError: the child could not start, or the reader failed for a reason other
             than the file (a bug): the child's traceback is in the message.
     """
-    preload = tuple(preload)
-    if not can_isolate(preload, library, extra):
-        return reader(path, options)  # no interpreter to start: see the module docstring
-    request = child_request(reader, path, options, preload)
-    memory, timeout = request["memory"], request["timeout"]
-    with tempfile.TemporaryFile() as result, tempfile.TemporaryFile() as stderr:
-        returncode = _run(request, result, stderr, timeout)
-        result.seek(0)
-        return _outcome(result, returncode, last_words(stderr), path, library, memory, timeout)
-
-
-def child_request(
-    function: Callable[..., Any], path: Path, options: ReadOptions, preload: tuple[str, ...]
-) -> dict[str, Any]:
-    """What a child needs to run ``function(path, options)``, as JSON, with its limits."""
-    memory, timeout = _limits(path)
-    return {
-        "sys_path": [entry for entry in sys.path if isinstance(entry, str)],
-        "reader": f"{function.__module__}:{function.__qualname__}",
-        "path": os.fspath(path),
-        "options": {
-            name: None if value is None else (os.fspath(value) if name == "faces" else value)
-            for name, value in vars(options).items()
-        },
-        "preload": preload,
-        "memory": memory,
-        "timeout": timeout,
-        "alarm": None if timeout is None else math.ceil(timeout) + 10,
-        "parent": os.getpid(),
-    }
-
-
-def last_words(stderr: IO[bytes]) -> list[str]:
-    """The lines of the last 4 KiB a child printed, without pxr's banners of ``#``."""
-    stderr.seek(max(0, stderr.seek(0, io.SEEK_END) - 4096))
-    said = [line.strip() for line in stderr.read().decode(errors="replace").splitlines()]
-    return [line for line in said if line and not line[0] == line[-1] == "#"]
-
-
-def can_isolate(preload: tuple[str, ...], library: str, extra: str) -> bool:
-    """Whether a child can be started (not where ``sys.executable`` cannot run Python: a
-    frozen application); first, a DependencyError for a ``preload`` module that is absent."""
-    for module in filter(_absent, preload):
-        import_optional(module, extra, f"reading {library} files")  # DependencyError
-    return bool(sys.executable) and not getattr(sys, "frozen", False)
-
-
-def _absent(module: str) -> bool:
-    """Whether ``module`` cannot be imported, found without importing it where possible."""
-    if module in sys.modules:
-        return sys.modules[module] is None
-    try:
-        return importlib.util.find_spec(module.partition(".")[0]) is None
-    except (ImportError, ValueError):
-        return True
-
-
-def _limit(variable: str, default: float) -> float | None:
-    """The limit an environment variable sets (0: none), else ``default``."""
-    text = os.environ.get(variable, "").strip()
-    if not text:
-        return default
-    try:
-        value = float(text)
-    except ValueError:
-        value = -1.0
-    if not (math.isfinite(value) and value >= 0):
-        raise ValueError(f"{variable} must be a number >= 0 (0: no limit), got {text!r}")
-    return value or None
-
-
-def _limits(path: Path) -> tuple[int | None, float | None]:
-    """The address space (bytes) and wall-clock time (s) the child may take for this file."""
-    try:
-        size = os.stat(path).st_size
-    except OSError:
-        size = 0  # the reader will say why
-    gib = _limit(MEMORY_VARIABLE, (MEMORY_BASE + MEMORY_PER_BYTE * size) / GIB)
-    timeout = _limit(TIMEOUT_VARIABLE, TIMEOUT_BASE + size / TIMEOUT_BYTES_PER_SECOND)
-    return (None if gib is None else int(gib * GIB)), timeout
-
-
-def _run(
-    request: dict[str, Any], result: IO[bytes], stderr: IO[bytes], timeout: float | None
-) -> int | None:
-    """Run the child to its end; its exit status, or None if it ran out of time."""
-    child = spawn("read_child", request, subprocess.DEVNULL, result, stderr)
-    try:
-        return child.wait(timeout)
-    except subprocess.TimeoutExpired:
-        return None
-    finally:  # out of time, Ctrl-C, SIGTERM raised as an exception: no child left behind
-        if child.returncode is None:
-            child.kill()
-            child.wait()
-
-
-def spawn(
-    entry: str, request: dict[str, Any], stdin: Any, stdout: Any, stderr: Any
-) -> subprocess.Popen[bytes]:
-    """Start ``python -P -c`` running :mod:`.isolation_child`'s function ``entry`` on the
-    request, with the caller's import path and :data:`CHILD_ENVIRONMENT`."""
-    environment = {**CHILD_ENVIRONMENT, **os.environ}
-    environment.pop("PYTHONINSPECT", None)  # would wait at a prompt once the child is done
-    command = [sys.executable, "-P", "-c", _BOOTSTRAP.format(entry), json.dumps(request)]
-    return subprocess.Popen(command, stdin=stdin, stdout=stdout, stderr=stderr, env=environment)
-
-
-def _outcome(
-    result: IO[bytes],
-    returncode: int | None,
-    said: list[str],
-    path: Path,
-    library: str,
-    memory: int | None,
-    timeout: float | None,
-) -> MeshSequence:
-    """The sequence the child sent, or the exception that says how it ended."""
-    where, frame, started = None, None, False
-    header: dict[str, Any] = {}
-    for line in iter(lambda: result.readline(1 << 20), b""):
-        try:
-            message = json.loads(line)
-        except ValueError:  # torn: the child died while writing it
-            break
-        if "note" in message:
-            where, frame = message["note"], message["frame"]
-        started = started or "started" in message
-        if "result" in message:
-            header = message if returncode == 0 else {}  # believe only a clean exit
-            break
-    if header.get("result") == "sequence":
-        try:
-            return _sequence(result, header, path)
-        except (ValueError, OSError, EOFError) as error:  # cut short: the child's disk full?
-            raise RuntimeError(f"{path}: the reading process sent half a result: {error}") from None
-    ending = Ending(path, library, memory, timeout, returncode, said, where, frame, started)
-    raise ending.error(header)
-
-
-@dataclass
-class Ending:
-    """How a reading child ended (or a request to it did), for :meth:`error`: the file, the
-    library and the limits; the exit status (``None``: killed at the time limit), its last
-    words on stderr, the last place it noted, and whether it started at all."""
-
-    path: Path
-    library: str
-    memory: int | None
-    timeout: float | None
-    returncode: int | None = None
-    said: list[str] = field(default_factory=list)
-    where: str | None = None
-    frame: int | None = None
-    started: bool = True
-
-    def error(self, header: dict[str, Any]) -> Exception:
-        """What to raise: what the child's result ``header`` says (its error, a bug, memory),
-        or what its exit status says (a crash, the time limit)."""
-        path, said, returncode, memory = self.path, self.said, self.returncode, self.memory
-        kind = header.get("result")
-        if kind == "error":
-            raised = _ErrorUnpickler(io.BytesIO(base64.b64decode(header["pickle"]))).load()
-            if isinstance(raised, errors.TuckerCodecError):
-                return raised
-        if kind in ("bug", "error"):
-            detail = header.get("traceback", "an error that is not tuckercodec's")
-            return RuntimeError(f"{path}: reading it failed in a child process:\n{detail}")
-        last = f" (it printed: {said[-1][:200]})" if said else ""
-        if returncode is not None and not self.started:
-            return RuntimeError(
-                f"{path}: could not start a process to read it with {sys.executable} "
-                f"(exit status {returncode}){last}"
-            )
-        if kind == "memory" or any("bad_alloc" in line for line in said):
-            limit = "there is memory for"  # no cap: none asked for, or not Linux (_cap_memory)
-            if memory is not None and os.path.exists("/proc/self/statm"):
-                limit = (
-                    f"{memory / GIB:.3g} GiB allows (the memory limit of a read: {MEMORY_VARIABLE})"
-                )
-            reason = f"declares more data than {limit}"
-        elif returncode is None:
-            reason = (
-                f"the {self.library} library did not finish reading it in {self.timeout:g} s: the "
-                f"file is damaged or far larger than it looks (the time limit of a read: "
-                f"{TIMEOUT_VARIABLE})"
-            )
-        else:
-            given = os.environ.get(MEMORY_VARIABLE, "").strip()  # a low cap can crash pxr too
-            given = f", or {MEMORY_VARIABLE}={given} is too little" if given and memory else ""
-            how = _how(returncode)
-            reason = f"the {self.library} library crashed reading it ({how}): the file is damaged"
-            reason += given + last
-        where = self.where
-        return InputError(f"{where}: {reason}" if where else reason, path=path, frame=self.frame)
-
-
-def _how(returncode: int) -> str:
-    """A crashed child's exit status in words: the signal's name, or Windows's crash code."""
-    if returncode < 0:
-        with contextlib.suppress(ValueError):
-            return signal.Signals(-returncode).name
-    return _WINDOWS_CRASHES.get(returncode, f"exit status {returncode}")
-
-
-def _sequence(result: IO[bytes], header: dict[str, Any], path: Path) -> MeshSequence:
-    """The sequence whose arrays follow the header in the result file."""
-    arrays = [np.lib.format.read_array(result, allow_pickle=False) for _ in header["arrays"]]
-    named = dict(zip(header["arrays"], arrays, strict=True))
-    try:
-        return MeshSequence(
-            named["vertices"],
-            named["faces"],
-            frame_names=header["frame_names"],
-            frame_rate=header["frame_rate"],
-            time_codes=named.get("time_codes"),
-        )
-    except InputError as error:
-        raise InputError(error.reason, path=path, frame=error.frame) from None
-
-
-class _ErrorUnpickler(pickle.Unpickler):
-    """Unpickles tuckercodec's errors and nothing else: no other class or function runs."""
-
-    def find_class(self, module: str, name: str) -> Any:
-        found = getattr(errors, name, None) if module == errors.__name__ else None
-        if found is errors._rebuild or (
-            isinstance(found, type) and issubclass(found, errors.TuckerCodecError)
-        ):
-            return found
-        raise pickle.UnpicklingError(f"{module}.{name} is not an error of tuckercodec")
+    with IsolatedFrames(reader, path, options, library, extra, preload) as source:
+        return source.load()

@@ -1,68 +1,139 @@
-"""The ``.npz`` sequence format: one NumPy archive holding the whole sequence.
+"""The ``.npz`` sequence format: one NumPy archive holding the whole sequence (and, in
+:mod:`.npy`, the ``.npy`` array of positions, which shares its header checks).
 
 Keys: ``V`` positions (frames, vertices, 3), optionally ``F`` faces (0-based, -1 padding),
 ``frame_files`` (one name per frame), ``frame_rate`` and ``time_codes``. It is read with
 :mod:`zipfile` and ``numpy.lib.format``, never with pickle, and every declared size is checked
-against the file before anything is allocated (:mod:`.npz_archive`). :mod:`.npz_frames` reads
-key ``V`` a range of frames at a time.
+against the file before anything is allocated (:mod:`.archive`): a member must be a ``.npy``
+array, stored or deflated (what ``np.savez`` and ``np.savez_compressed`` write), not
+encrypted, and present once, and the shape and dtype in its header must account for exactly
+the bytes of its member.
+
+:class:`NpzFrames` reads key ``V`` in place, a range of frames at a time: a stored member
+(``np.savez``) by offset in the file, as a ``.npy`` is (:class:`..streaming.RawFrames`); a
+deflated one (``np.savez_compressed``) by decompressing forward from where the last read
+stopped, the member staying open between reads, so that reading the ranges in order
+decompresses the member once (a range before the last one starts again from the member's
+beginning). The other keys (faces, names, rate, time codes) are read whole when the archive is
+opened. A range read does not check a stored member's CRC (only reading every byte could);
+:meth:`NpzFrames.load` reads ``V`` whole through zipfile, which does. A ``V`` in Fortran
+order, whose frames are scattered over the member, is read whole on first use.
 """
 
 from __future__ import annotations
 
+import struct
+import zipfile
 from pathlib import Path
-from typing import Any
+from typing import IO, Any, ClassVar
 
 import numpy as np
 
 from ...atomic import atomic_output
 from ...errors import InputError
+from ...reading import open_input
 from ...sequence import MeshSequence
-from ..registry import ReadOptions, SequenceFormat, WriteOptions
-from ..streaming import FrameSource, SequenceFrames
-from .archive import NpzArchive
-from .frames import NpzFrames, Scattered
+from ..registry import SequenceFormat, WriteOptions
+from ..streaming import RawFrames, read_into
+from .archive import ZIP_ERRORS, NpzArchive, member_header
+
+#: A zip local file header: signature, 22 bytes, then the lengths of the name and extra field.
+_LOCAL_HEADER = struct.Struct("<4s22xHH")
+_LOCAL_SIGNATURE = b"PK\x03\x04"
 
 
-def read_npz(path: Path, options: ReadOptions | None = None) -> MeshSequence:
-    """A sequence from an .npz archive (keys V, optional F, frame_files, frame_rate,
-    time_codes); the archive format takes no read options.
+class NpzFrames(RawFrames):
+    """Key V of an .npz archive read in place (see the module docstring); the archive format
+    takes no read options."""
 
-    The archive is read with :mod:`zipfile` and each array with ``numpy.lib.format``, never
-    with pickle. A member must be a ``.npy`` array, stored or deflated (what ``np.savez`` and
-    ``np.savez_compressed`` write), not encrypted, and present once. Before an array is
-    allocated, the shape and dtype in its header must account for exactly the bytes of its
-    member, and the member's sizes must be possible for the file: a header that claims a
-    billion vertices in a small file is refused without allocating anything, and reading
-    every byte of the member makes zipfile check its CRC.
-    """
-    with NpzArchive(path) as archive:
-        vertices = _npz_vertices(archive.array("V"), path)
-        faces, names, rate, codes = archive.metadata(*vertices.shape[:2])
-    try:
-        return MeshSequence(vertices, faces, frame_names=names, frame_rate=rate, time_codes=codes)
-    except InputError as error:
-        raise InputError(error.reason, path=path, frame=error.frame) from None
+    _transient: ClassVar[tuple[str, ...]] = ("_member", "_archive", "_stream", "_whole")
+    _what = "an .npz archive"
+    _vertex_label = "key 'V': "
+    _member: IO[bytes] | None = None
+    _archive: zipfile.ZipFile | None = None
+    #: Key V read whole: for :meth:`load`, or in Fortran order (read on first use)
+    _whole: np.ndarray | None = None
+
+    def __init__(self, path: Path, options: object = None):
+        with NpzArchive(path) as archive:
+            info = archive.info("V")
+            header = member_header(archive.zip, info, "V", archive.size, path)
+            if header.dtype.kind not in "fiu":
+                raise InputError(
+                    f"key 'V' must hold real numbers, got dtype {header.dtype}", path=path
+                )
+            shape = header.positions()
+            if shape is None:
+                raise InputError(
+                    f"key 'V' must have shape (frames, vertices, 3), got {header.shape}",
+                    path=path,
+                )
+            faces, names, rate, codes = archive.metadata(*shape)
+            self._name = info.filename
+            self._deflated = info.compress_type == zipfile.ZIP_DEFLATED
+            self._scattered = header.fortran_order and shape[0] > 1
+            self._offset = header.size  # in the member
+            self._data_start = 0  # where a stored member's bytes start in the file
+            if not self._deflated:
+                self._data_start = _data_start(archive.stream, info, archive.size, path)
+        self._file, self._dtype = path, header.dtype
+        self._describe(path, *shape, faces, names, rate, codes)
+
+    def load(self, progress: bool = False) -> MeshSequence:
+        """The whole sequence, key V read in one piece through zipfile, which checks its CRC."""
+        self._whole = self._read_whole()
+        try:
+            return super().load()
+        finally:
+            self._whole = None
+
+    def _read(self, start: int, stop: int) -> np.ndarray:
+        if self._scattered and self._whole is None:
+            self._whole = self._read_whole()
+        if self._whole is not None:
+            return self._whole[start:stop]
+        return super()._read(start, stop)
+
+    def _read_whole(self) -> np.ndarray:
+        """Key V as the file stores it, (F, K, 3) (every byte read: CRC checked)."""
+        with NpzArchive(self._file) as archive:
+            values = archive.array("V")
+        if values.size != self.frame_count * self.vertex_count * 3:
+            raise InputError("has changed since it was opened", path=self._file)
+        return values.reshape(self.frame_count, self.vertex_count, 3)
+
+    def _read_at(self, offset: int, into: memoryview) -> None:
+        if not self._deflated:
+            super()._read_at(self._data_start + offset, into)
+            return
+        try:
+            if self._member is None:
+                self._stream = open_input(self._file, self._what)
+                self._archive = zipfile.ZipFile(self._stream)
+                self._member = self._archive.open(self._name)
+            # forward: decompresses from where the last read stopped; backward: from the start
+            self._member.seek(offset)
+            read_into(self._member, into, self._file)
+        except InputError:
+            raise
+        except ZIP_ERRORS as error:
+            raise InputError(f"key 'V' cannot be read: {error}", path=self._file) from None
 
 
-def _npz_vertices(values: np.ndarray, path: Path) -> np.ndarray:
-    """Key V as float64 (F, K, 3); a (K, 3) array is one frame."""
-    if values.dtype.kind not in "fiu":
-        raise InputError(f"key 'V' must hold real numbers, got dtype {values.dtype}", path=path)
-    if values.ndim == 2:
-        values = values[np.newaxis]
-    if values.ndim != 3 or values.shape[2] != 3 or values.shape[0] < 1 or values.shape[1] < 1:
+def _data_start(stream: IO[bytes], info: zipfile.ZipInfo, size: int, path: Path) -> int:
+    """Where a stored member's bytes start in the file: after its local header."""
+    stream.seek(info.header_offset)
+    raw = stream.read(_LOCAL_HEADER.size)
+    if len(raw) != _LOCAL_HEADER.size or raw[:4] != _LOCAL_SIGNATURE:
+        raise InputError("key 'V' has no local header where the archive says", path=path)
+    _, name_length, extra_length = _LOCAL_HEADER.unpack(raw)
+    start = info.header_offset + _LOCAL_HEADER.size + name_length + extra_length
+    if start + info.compress_size > size:
         raise InputError(
-            f"key 'V' must have shape (frames, vertices, 3), got {values.shape}", path=path
+            f"key 'V' ends beyond the end of the file ({size} bytes): the file is truncated",
+            path=path,
         )
-    with np.errstate(over="ignore"):  # a long double beyond float64 becomes inf, named below
-        values = values.astype(np.float64)
-    bad = ~np.isfinite(values)
-    if bad.any():
-        frame, vertex, _ = (int(i) for i in np.argwhere(bad)[0])
-        raise InputError(
-            f"key 'V': vertex {vertex} has a non-finite coordinate", path=path, frame=frame
-        )
-    return values
+    return start
 
 
 def write_npz(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
@@ -81,23 +152,13 @@ def write_npz(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
         np.savez(stream, **arrays)
 
 
-def open_npz(path: Path, options: ReadOptions) -> FrameSource:
-    """The frames of an .npz archive, a range at a time (:mod:`.npz_frames`); a ``V`` in
-    Fortran order, whose frames are scattered over its member, is read whole."""
-    try:
-        return NpzFrames(path)
-    except Scattered:
-        return SequenceFrames(read_npz(path, options), path)
-
-
 FORMAT = SequenceFormat(
     name="npz",
     suffixes=(".npz",),
     description=(
         "NumPy archive: V (frames, vertices, 3), F faces, frame_files, frame_rate, time_codes"
     ),
-    read=read_npz,
+    open=NpzFrames,
     write=write_npz,
-    open=open_npz,
     carries=frozenset({"float64", "faces", "polygons", "frame_names", "frame_rate", "time_codes"}),
 )

@@ -51,15 +51,13 @@ class NpyFrames(RawFrames):
                 )
             stream.seek(0)
             header = npy_header(stream, "its array", path)
-            shape, dtype = header.shape, header.dtype
+            dtype, shape = header.dtype, header.positions()
             if dtype.kind != "f" or f"{dtype.kind}{dtype.itemsize}" not in _KINDS:
                 raise InputError(
                     f"holds {dtype} numbers; a .npy of positions holds float32 or float64",
                     path=path,
                 )
-            if len(shape) == 2:  # one frame
-                shape = (1, *shape)
-            if len(shape) != 3 or shape[2] != 3 or shape[0] < 1 or shape[1] < 1:
+            if shape is None:
                 raise InputError(
                     f"holds an array of shape {header.shape}, not (frames, vertices, 3)",
                     path=path,
@@ -86,17 +84,6 @@ class NpyFrames(RawFrames):
         self._describe(path, shape[0], shape[1], cache_faces(faces_file, shape[1], path))
 
 
-def open_npy(path: Path, options: ReadOptions) -> NpyFrames:
-    """The frames of a ``.npy`` file, read range by range; faces from ``options.faces``."""
-    return NpyFrames(path, options)
-
-
-def read_npy(path: Path, options: ReadOptions) -> MeshSequence:
-    """The whole sequence of a ``.npy`` file."""
-    with NpyFrames(path, options) as source:
-        return source.load()
-
-
 def write_npy(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
     """Write the positions as a ``.npy`` array, float32 where exact, else float64, atomically;
     faces, names, rate and time codes are not kept."""
@@ -108,9 +95,8 @@ FORMAT = SequenceFormat(
     name="npy",
     suffixes=(".npy",),
     description="NumPy array of positions (frames, vertices, 3), float32 or float64",
-    read=read_npy,
     write=write_npy,
-    open=open_npy,
+    open=NpyFrames,
     read_options=frozenset({"faces"}),
     carries=frozenset({"float64"}),
 )

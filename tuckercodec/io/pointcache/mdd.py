@@ -103,12 +103,6 @@ class MddFrames(RawFrames):
         self._describe(path, frames, points, faces, frame_rate=rate, time_codes=codes)
 
 
-def read_mdd(path: Path, options: ReadOptions) -> MeshSequence:
-    """The whole sequence of an MDD point cache (:class:`MddFrames`)."""
-    with MddFrames(path, options) as source:
-        return source.load()
-
-
 def frame_timing(times: np.ndarray, path: Path) -> tuple[float | None, np.ndarray | None]:
     """The frame rate and time codes that reproduce the float32 ``times`` (seconds) exactly;
     ``(None, None)`` for times that do not increase."""
@@ -162,7 +156,6 @@ FORMAT = SequenceFormat(
     name="mdd",
     suffixes=(".mdd",),
     description="MDD point cache (LightWave, Blender, Houdini): positions, times in seconds",
-    read=read_mdd,
     write=write_mdd,
     open=MddFrames,
     read_options=frozenset({"faces"}),

@@ -87,12 +87,6 @@ class Pc2Frames(RawFrames):
         self._describe(path, frames, points, faces, time_codes=codes)
 
 
-def read_pc2(path: Path, options: ReadOptions) -> MeshSequence:
-    """The whole sequence of a PC2 point cache (:class:`Pc2Frames`)."""
-    with Pc2Frames(path, options) as source:
-        return source.load()
-
-
 def _time_codes(start: float, step: float, frames: int, path: Path) -> np.ndarray:
     """Each sample's frame number, ``start + i * step``, from the header's float32 fields."""
     if not np.isfinite(start):
@@ -149,7 +143,6 @@ FORMAT = SequenceFormat(
     name="pc2",
     suffixes=(".pc2",),
     description="PC2 point cache (Blender, 3ds Max, Maya): positions, start frame, sample rate",
-    read=read_pc2,
     write=write_pc2,
     open=Pc2Frames,
     read_options=frozenset({"faces"}),

@@ -102,13 +102,6 @@ class PvdFrames(FrameSource):
         return np.stack(frames)
 
 
-def read_pvd(path: Path, options: ReadOptions | None = None) -> MeshSequence:
-    """A sequence from a ParaView ``.pvd`` collection of ``.vtp``/``.vtu`` files (see the
-    module docstring); the format takes no read options."""
-    with PvdFrames(path) as source:
-        return source.load()
-
-
 def _refuse_repeated_files(entries: list[_Entry], path: Path) -> None:
     """Each frame must have a file of its own: an index that lists one file many times would
     read it again for every listing."""
@@ -313,7 +306,6 @@ FORMAT = SequenceFormat(
     name="vtk",
     suffixes=(".pvd",),
     description="VTK time series: a ParaView .pvd of .vtp or .vtu files, one per time step",
-    read=read_pvd,
     write=write_pvd,
     open=PvdFrames,
     carries=frozenset({"float64", "faces", "polygons", "frame_names", "time_codes"}),

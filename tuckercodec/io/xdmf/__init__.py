@@ -40,7 +40,6 @@ import numpy as np
 
 from ...errors import InputError
 from ...reading import open_input
-from ...sequence import MeshSequence
 from ..polygons import faces_from_polygons
 from ..registry import SequenceFormat
 from ..streaming import FrameSource
@@ -124,13 +123,6 @@ class XdmfFrames(FrameSource):
                 step = steps[index]
                 vertices[index - start] = self._step(index, step, self.faces, self.vertex_count)[0]
         return vertices
-
-
-def read_xdmf(path: Path, options: object = None) -> MeshSequence:
-    """A sequence from an XDMF temporal collection (see the module docstring); the format
-    takes no read options."""
-    with XdmfFrames(path) as source:
-        return source.load()
 
 
 def _shared(first: int, index: int, source: object) -> InputError:
@@ -392,7 +384,6 @@ FORMAT = SequenceFormat(
     name="xdmf",
     suffixes=(".xdmf", ".xmf"),
     description="XDMF time series: a temporal collection of grids, HDF5 or XML data (h5py)",
-    read=read_xdmf,
     write=write_xdmf,
     open=XdmfFrames,
     extra="xdmf",
