@@ -21,13 +21,32 @@ budget allows; ``meshopt``, EXT_meshopt_compression (three.js needs its MeshoptD
 registered to load it): the targets as 16-bit integers at the coarsest step the budget allows,
 the base, weights and translation float32 with the EXPONENTIAL filter, the triangles in vertex
 cache order. The rounding follows from an error budget, not a fixed bit count
-(:mod:`.quantization`); the layouts are :mod:`.decomposition_file`'s.
+(:mod:`.quantization`).
+
+Layout in the file. Nodes: the root ``tuckercodec`` carries the translation track (the
+centroids, plus the targets' offsets in the quantized variants), its child ``decomposition``
+the mesh and, quantized, the dequantization (translation and uniform scale). One animation,
+LINEAR: the mesh's ``weights`` and the root's ``translation``, a keyframe per frame. Per
+variant:
+
+* ``none``: float32 everywhere, a buffer view per array.
+* ``quantize`` (KHR_mesh_quantization): the base and the targets as normalized SHORT VEC3 (8-byte
+  stride), every target in one buffer view (one view instead of k keeps the JSON small); the
+  weights as normalized UNSIGNED_BYTE or UNSIGNED_SHORT where the budget allows, else float32.
+* ``meshopt`` (EXT_meshopt_compression, vertex codec 0): the targets as above, integers >= 0;
+  the base, the weights and the translation float32 with the EXPONENTIAL filter (each a
+  multiple of its power-of-two step); the weights' codec stride one keyframe (k weights) where
+  it fits the codec's 256 bytes, so it codes differences over time; the triangles reordered
+  for the vertex cache (never the vertices) and coded with the index codec.
+
+It sits beside :mod:`tuckercodec.files` rather than in :mod:`tuckercodec.io`: it takes a
+decoder, not a sequence. The glTF container and accessors are :mod:`tuckercodec.io.gltf`'s.
 """
 
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal, Protocol
 
@@ -35,11 +54,12 @@ import numpy as np
 
 from ..atomic import refuse_existing, write_atomic
 from ..format.reconstruction import reconstruction_basis
+from ..io.gltf.accessors import ARRAY_BUFFER, BufferBuilder, padded_rows
+from ..io.gltf.document import add_triangles, file_bytes, new_gltf
 from ..io.gltf.reader import sample_gltf
 from ..metrics import KG_DEFINITION, kg_error
 from ..sequence import DEFAULT_FRAME_RATE, MeshSequence
-from .layout import decomposition_bytes
-from .quantization import quantize_animation
+from .quantization import Quantized, quantize_animation, weight_values
 
 Compression = Literal["none", "quantize", "meshopt"]
 COMPRESSIONS: tuple[str, ...] = ("none", "quantize", "meshopt")
@@ -48,6 +68,7 @@ COMPRESSIONS: tuple[str, ...] = ("none", "quantize", "meshopt")
 #: meshopt is a third of that again (chicken, samba, cloth) but loads only where a meshopt
 #: decoder is registered (three.js: GLTFLoader.setMeshoptDecoder), so it is asked for by name.
 DEFAULT_COMPRESSION: Compression = "quantize"
+_MAX_CODEC_STRIDE = 256  # EXT_meshopt_compression's ATTRIBUTES mode
 
 
 class Decomposed(Protocol):
@@ -160,50 +181,89 @@ def write_decomposition_gltf(
         raise ValueError(f"compress must be one of {', '.join(COMPRESSIONS)}, got {compress!r}")
     path = Path(path)
     refuse_existing([path], overwrite)  # before the work, not after it
-    chosen = decoder.frame_indices(frames)
-    if chosen.size == 0:
-        raise ValueError(f"the selection {frames!r} names no frame of the file")
-    decoded = decoder.positions(chosen)
-    rate = float(decoder.info.frame_rate or DEFAULT_FRAME_RATE)
-    in_order = chosen.size < decoder.info.frames and bool(np.all(np.diff(chosen) > 0))
-    codes = chosen if in_order or chosen.size == decoder.info.frames else np.arange(chosen.size)
-    times = (codes / rate).astype(np.float32)
-
-    weights, base, targets = morph_parts(decoder, chosen)
-    centroids = decoder.centroids[chosen]
+    animation = _Animation.of(decoder, frames)
     quantized = None
     if compress != "none":
         quantized = quantize_animation(
-            base,
-            targets,
-            weights,
-            centroids,
-            decoded,
+            animation.base,
+            animation.targets,
+            animation.weights,
+            animation.centroids,
+            animation.decoded,
             decoder.info.kg,
             filters=compress == "meshopt",
         )
-    triangles = MeshSequence(base[None], decoder.faces).triangles()
+    triangles = MeshSequence(animation.base[None], decoder.faces).triangles()
     data = decomposition_bytes(
-        path, triangles, times, weights, base, targets, centroids, quantized, compress
+        path,
+        triangles,
+        animation.times,
+        animation.weights,
+        animation.base,
+        animation.targets,
+        animation.centroids,
+        quantized,
+        compress,
     )
     write_atomic(path, data, overwrite=overwrite)
+    return _report(path, len(data), compress, animation, quantized, reference)
 
-    viewer = sample_gltf(path, times.astype(np.float64)).positions
-    report_reference = None if reference is None else _reference(reference, decoded, chosen)
+
+@dataclass(frozen=True)
+class _Animation:
+    """The frames written, as a viewer will play them: the frames ``chosen`` of the file, their
+    decode, keyframe times (s) at ``rate``, and their morph parts (:func:`morph_parts`)."""
+
+    chosen: np.ndarray
+    decoded: np.ndarray
+    rate: float
+    times: np.ndarray
+    weights: np.ndarray
+    base: np.ndarray
+    targets: np.ndarray
+    centroids: np.ndarray
+
+    @classmethod
+    def of(cls, decoder: Decomposed, frames: Any) -> _Animation:
+        """The frames ``frames`` selects of the file (ValueError if none)."""
+        chosen = decoder.frame_indices(frames)
+        if chosen.size == 0:
+            raise ValueError(f"the selection {frames!r} names no frame of the file")
+        rate = float(decoder.info.frame_rate or DEFAULT_FRAME_RATE)
+        # times: the frames' numbers in the file, unless a reordered part renumbers them
+        count = decoder.info.frames
+        in_order = chosen.size < count and bool(np.all(np.diff(chosen) > 0))
+        codes = chosen if in_order or chosen.size == count else np.arange(chosen.size)
+        decoded = decoder.positions(chosen)
+        weights, base, targets = morph_parts(decoder, chosen)
+        times = (codes / rate).astype(np.float32)
+        return cls(chosen, decoded, rate, times, weights, base, targets, decoder.centroids[chosen])
+
+
+def _report(
+    path: Path,
+    size: int,
+    compress: str,
+    animation: _Animation,
+    quantized: Quantized | None,
+    reference: MeshSequence | np.ndarray | None,
+) -> GltfReport:
+    """What was written, with the KG error of the file read back as a viewer plays it."""
+    decoded = animation.decoded
+    viewer = sample_gltf(path, animation.times.astype(np.float64)).positions
+    original = None if reference is None else _reference(reference, decoded, animation.chosen)
     return GltfReport(
         path=path,
-        size=len(data),
+        size=size,
         compression=compress,
-        frames=int(chosen.size),
-        targets=len(targets),
-        frame_rate=rate,
+        frames=int(animation.chosen.size),
+        targets=len(animation.targets),
+        frame_rate=animation.rate,
         position_step=0.0 if quantized is None else quantized.step,
         weight_bits=32 if quantized is None else 8 * quantized.weights.dtype.itemsize,
         viewer_kg=kg_error(decoded, viewer),
-        viewer_kg_reference=None
-        if report_reference is None
-        else kg_error(report_reference, viewer),
-        tkc_kg_reference=None if report_reference is None else kg_error(report_reference, decoded),
+        viewer_kg_reference=None if original is None else kg_error(original, viewer),
+        tkc_kg_reference=None if original is None else kg_error(original, decoded),
     )
 
 
@@ -231,3 +291,215 @@ def morph_parts(
     weights = (u3 - lo) / span
     base = np.einsum("b,bvx->vx", lo, shapes)
     return weights, base, shapes * span[:, None, None]
+
+
+# ------------------------------------------------------------------------------------------
+# the file's bytes, laid out for each variant (module docstring)
+
+
+def decomposition_bytes(
+    path: Path,
+    triangles: np.ndarray,
+    times: np.ndarray,
+    weights: np.ndarray,
+    base: np.ndarray,
+    targets: np.ndarray,
+    centroids: np.ndarray,
+    quantized: Quantized | None,
+    compress: str,
+) -> bytes:
+    """The file: ``weights`` (F, k), ``base`` (K, 3), ``targets`` (k, K, 3) and ``centroids``
+    (F, 3) as :func:`morph_parts` gives them (written as float32 when ``quantized`` is None),
+    else the stored numbers of ``quantized``."""
+    builder = BufferBuilder()
+    if quantized is None:
+        stored = _float32_numbers(builder, weights, base, targets, centroids)
+    else:
+        stored = _quantized_numbers(builder, quantized)
+    filtered = compress == "meshopt"
+    primitive: dict[str, Any] = {"attributes": {"POSITION": stored.position}}
+    if filtered and len(triangles):
+        from ..io.gltf.meshopt import vertex_cache_order
+
+        triangles = vertex_cache_order(triangles, len(base))
+    add_triangles(builder, primitive, triangles, len(base))
+    primitive["targets"] = [{"POSITION": m} for m in stored.morphs]
+    mesh = {
+        "name": "decomposition",
+        "primitives": [primitive],
+        "weights": [float(w) for w in stored.shown_weights[0].astype(np.float32)],
+    }
+    gltf = _document(stored, mesh, _samplers(builder, times, stored))
+    if filtered:
+        return _meshopt_file(gltf, builder, path)
+    return file_bytes(gltf, builder, path)
+
+
+@dataclass
+class _Stored:
+    """The animation's numbers as the file stores them: the accessors of the base mesh
+    (``position``) and of the targets (``morphs``), the weights as stored and as a viewer reads
+    them, the translation track, the meshopt codecs of the last two (``None``: plain), and what
+    the child node and the file declare for the dequantization."""
+
+    position: int
+    morphs: list[int]
+    weights: np.ndarray
+    shown_weights: np.ndarray
+    translation: np.ndarray
+    weight_codec: dict[str, Any] | None = None
+    translation_codec: dict[str, Any] | None = None
+    node: dict[str, Any] = field(default_factory=dict)
+    extensions: list[str] = field(default_factory=list)
+
+
+def _float32_numbers(
+    builder: BufferBuilder,
+    weights: np.ndarray,
+    base: np.ndarray,
+    targets: np.ndarray,
+    centroids: np.ndarray,
+) -> _Stored:
+    """The ``none`` variant's numbers: float32, a buffer view per array."""
+    position = builder.add_accessor(
+        base.astype(np.float32), target=ARRAY_BUFFER, bounds=True, vertex_attribute=True
+    )
+    morphs = [
+        builder.add_accessor(
+            t.astype(np.float32), target=ARRAY_BUFFER, bounds=True, vertex_attribute=True
+        )
+        for t in targets
+    ]
+    stored_weights = weights.astype(np.float32)
+    return _Stored(position, morphs, stored_weights, stored_weights, centroids.astype(np.float32))
+
+
+def _quantized_numbers(builder: BufferBuilder, quantized: Quantized) -> _Stored:
+    """The quantized variants' numbers (KHR_mesh_quantization), dequantized by the child node's
+    translation and scale; with the meshopt variant's EXPONENTIAL filters, if any."""
+    position = builder.add_accessor(
+        quantized.base,
+        target=ARRAY_BUFFER,
+        bounds=True,
+        normalized=quantized.base.dtype == np.int16,
+        vertex_attribute=True,
+        codec=_exponential(quantized.base_exponents, 12),
+    )
+    return _Stored(
+        position,
+        _shared_targets(builder, quantized.targets),
+        quantized.weights,
+        weight_values(quantized.weights),
+        quantized.translation,
+        _weight_codec(quantized.weight_exponents, len(quantized.weights)),
+        _exponential(quantized.translation_exponents, 12),
+        {
+            "translation": [float(v) for v in quantized.offset],
+            "scale": [float(quantized.scale)] * 3,
+        },
+        ["KHR_mesh_quantization"],
+    )
+
+
+def _samplers(builder: BufferBuilder, times: np.ndarray, stored: _Stored) -> list[dict[str, Any]]:
+    """The animation's two LINEAR samplers, one keyframe per frame: the mesh's weights, then
+    the root's translation."""
+    key_times = builder.add_accessor(times, bounds=True)
+    return [
+        {
+            "input": key_times,
+            "output": builder.add_accessor(
+                stored.weights.reshape(-1),
+                normalized=stored.weights.dtype != np.float32,
+                codec=stored.weight_codec,
+            ),
+            "interpolation": "LINEAR",
+        },
+        {
+            "input": key_times,
+            "output": builder.add_accessor(stored.translation, codec=stored.translation_codec),
+            "interpolation": "LINEAR",
+        },
+    ]
+
+
+def _document(
+    stored: _Stored, mesh: dict[str, Any], samplers: list[dict[str, Any]]
+) -> dict[str, Any]:
+    """The glTF's JSON: the root node (the translation track) and its child (the mesh), the
+    mesh, and the animation of both."""
+    gltf = new_gltf(stored.extensions)
+    root = {
+        "name": "tuckercodec",
+        "children": [1],
+        "translation": [float(v) for v in stored.translation[0]],
+    }
+    child = {"name": "decomposition", "mesh": 0, **stored.node}
+    channels = [
+        {"sampler": 0, "target": {"node": 1, "path": "weights"}},
+        {"sampler": 1, "target": {"node": 0, "path": "translation"}},
+    ]
+    gltf.update(
+        {
+            "scene": 0,
+            "scenes": [{"nodes": [0]}],
+            "nodes": [root, child],
+            "meshes": [mesh],
+            "animations": [{"name": "decomposition", "samplers": samplers, "channels": channels}],
+        }
+    )
+    return gltf
+
+
+def _shared_targets(builder: BufferBuilder, targets: np.ndarray) -> list[int]:
+    """Every target (k, K, 3) int16 in one buffer view of 8-byte rows, an accessor each."""
+    count, vertices = targets.shape[:2]
+    if count == 0:
+        return []
+    rows = padded_rows(targets.reshape(-1, 3), 8)
+    view = builder.add_view(rows, 6, byteStride=8, target=ARRAY_BUFFER)
+    return [
+        builder.add_accessor(
+            target, view=view, byte_offset=b * vertices * 8, normalized=True, bounds=True
+        )
+        for b, target in enumerate(targets)
+    ]
+
+
+def _exponential(exponents: np.ndarray | None, stride: int) -> dict[str, Any] | None:
+    """The codec of float32 rows of ``stride`` bytes with the EXPONENTIAL filter, if any."""
+    if exponents is None:
+        return None
+    return {"stride": stride, "exponents": exponents}
+
+
+def _weight_codec(exponents: np.ndarray | None, frames: int) -> dict[str, Any] | None:
+    """The weights' codec: a keyframe's k weights per codec row where they fit in 256 bytes
+    (differences over time), else one weight per row; each target's exponent."""
+    if exponents is None:
+        return None
+    count = len(exponents)
+    if 0 < 4 * count <= _MAX_CODEC_STRIDE:
+        return {"stride": 4 * count, "exponents": exponents}
+    return {"stride": 4, "exponents": np.tile(exponents, frames)}
+
+
+def _meshopt_file(gltf: dict[str, Any], builder: BufferBuilder, path: Path) -> bytes:
+    from ..io.gltf.container import pack_glb, pack_gltf
+    from ..io.gltf.meshopt import EXTENSION, compress_views
+
+    views, binary, fallback = compress_views(
+        builder.views, builder.view_data, builder.view_elements, builder.view_codecs
+    )
+    gltf = dict(gltf)
+    gltf["extensionsUsed"] = sorted({*gltf.get("extensionsUsed", []), EXTENSION})
+    gltf["extensionsRequired"] = sorted({*gltf.get("extensionsRequired", []), EXTENSION})
+    gltf["accessors"] = builder.accessors
+    gltf["bufferViews"] = views
+    gltf["buffers"] = [
+        {"byteLength": len(binary)},
+        {"byteLength": fallback, "extensions": {EXTENSION: {"fallback": True}}},
+    ]
+    if path.suffix.lower() == ".gltf":
+        return pack_gltf(gltf, binary)
+    return pack_glb(gltf, binary)
