@@ -1,4 +1,4 @@
-"""One VTK XML file (tuckercodec/io/vtk_xml.py and vtk_data.py), read and written in plain numpy.
+"""One VTK XML file (tuckercodec/io/vtk/datasets.py and arrays.py), read and written in plain numpy.
 
 Every layout VTK writes (ascii; base64 inline; appended raw and base64; zlib blocks or none;
 UInt32 and UInt64 block headers; big-endian) is read exactly from files VTK itself wrote

@@ -174,7 +174,7 @@ def decode_file(
 ) -> MeshSequence:
     """Decode a compressed file and write the frames: a folder of OBJ files, or a sequence
     file (``.npz``, ``.usd``...). A glTF output (``.glb``/``.gltf``) holds the decomposition
-    itself as a morph animation (:func:`tuckercodec.gltf.decomposition.write_decomposition_gltf`),
+    itself as a morph animation (:func:`tuckercodec.gltf_export.write_decomposition_gltf`),
     compressed as ``glb_compress`` says ("none", "quantize" (default), "meshopt"); a segmented
     file (format 1.1) has one decomposition per segment, so its glTF holds the decoded frames as
     any sequence written to glTF does (frame 0 the mesh, each other frame a morph target).

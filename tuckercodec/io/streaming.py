@@ -8,7 +8,7 @@ Which formats stream, and how (a format's :attr:`~.registry.SequenceFormat.open`
   (:class:`RawFrames`): a range is read with ``readinto`` in pieces of at most
   :data:`PIECE_BYTES`, so that reading costs the range's float64 array and no more. Nothing
   is memory-mapped: the pages of a mapped file count in the process's resident memory.
-* ``.npz`` (:mod:`.npz_frames`): key ``V`` by offset when stored, by decompressing forward when
+* ``.npz`` (:mod:`.npz`): key ``V`` by offset when stored, by decompressing forward when
   deflated (the member stays open, so a forward read of ranges never starts again from the
   beginning; a range before the last one does).
 * zarr stores (:mod:`.zarr_store`): chunk by chunk, through zarr.
@@ -17,7 +17,7 @@ Which formats stream, and how (a format's :attr:`~.registry.SequenceFormat.open`
   with any inline data, is held; its HDF5 datasets are read per step).
 * glTF (:mod:`.gltf`): the file is held and the frames of a range evaluated on demand.
 * USD and Alembic (:mod:`.usd`, :mod:`.alembic`): sample by sample, in a child process that
-  stays open for the source's life (:mod:`.isolated_frames`), so that a crash of the library
+  stays open for the source's life (:mod:`.isolation`), so that a crash of the library
   is still an :class:`~tuckercodec.errors.InputError`.
 
 Every format streams: ``open`` is the one way a whole-sequence format reads (``load()`` reads

@@ -33,7 +33,7 @@ Reading:
   So the file is read in a child process (:mod:`.isolation`) whose memory and time are
   capped, and which may crash without taking the caller along: each is an InputError.
   :func:`open_usd` reads the frames sample by sample, a range at a time, in a child that stays
-  open (:mod:`.isolated_frames`; :class:`StageFrames` is what it runs).
+  open (:mod:`.isolation`; :class:`StageFrames` is what it runs).
 
 Writing: a stage with ``upAxis`` Y, ``metersPerUnit`` 0.01 (USD's fallback, authored only
 because usdchecker requires it: the file means what an unauthored one would), ``defaultPrim``

@@ -1,9 +1,9 @@
 """The glTF 2.0 sequence format (``.glb``, ``.gltf``): morph targets and a weights animation.
 
 Reading samples the first animation of the file's mesh as a viewer plays it, at the keyframes
-or at ``--fps`` (:func:`tuckercodec.gltf.reader.read_gltf`); writing puts frame 0 in the mesh
+or at ``--fps`` (:func:`.reader.read_gltf`); writing puts frame 0 in the mesh
 and every other frame in a morph target, one keyframe per frame
-(:mod:`tuckercodec.gltf.sequence_writer`), exact to within the float32 rounding of base +
+(:mod:`.writer`), exact to within the float32 rounding of base +
 target. A static glTF (no animation) is a one-frame sequence, so a folder of .glb frames still
 reads one frame per file. :class:`GltfFrames` evaluates the frames a range at a time.
 """

@@ -10,7 +10,7 @@ serves reads of frame ranges, and turns each way a request can end into an outco
 caller:
 
 * frames (and first the source's description): sent back raw through a pipe (the protocol is
-  :mod:`.child`'s; no pickle) and checked again by :class:`~..streaming.FrameSource`;
+  :mod:`.child`'s; no pickle) and checked again by :class:`~tuckercodec.io.streaming.FrameSource`;
 * a :class:`~tuckercodec.errors.TuckerCodecError` (InputError, DependencyError): raised again
   with its class, message, path and frame (unpickled only from :mod:`tuckercodec.errors`);
 * a crash (a signal; on Windows an NTSTATUS exit code): ``InputError("object /a/aShape: the

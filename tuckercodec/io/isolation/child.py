@@ -138,12 +138,12 @@ def _memory(error: BaseException) -> dict[str, Any] | None:
 
 
 def serve(argument: str) -> None:
-    """The child's whole life: open the request's source (a :class:`~..streaming.FrameSource`
-    class, or a function that reads a whole sequence, served from memory), send its
-    description, then for each line ``{"read": [start, stop]}`` on stdin send the frames, until
-    stdin ends; then exit (never returns). Our own errors are sent and the child serves on;
-    anything else ends it. The time limit (``alarm``) runs while the child opens the file or
-    reads, not while it waits."""
+    """The child's whole life: open the request's source (a
+    :class:`~tuckercodec.io.streaming.FrameSource` class, or a function that reads a whole sequence,
+    served from memory), send its description, then for each line ``{"read": [start, stop]}`` on
+    stdin send the frames, until stdin ends; then exit (never returns). Our own errors are sent and
+    the child serves on; anything else ends it. The time limit (``alarm``) runs while the child
+    opens the file or reads, not while it waits."""
     request = json.loads(argument)
     try:
         opener = start_child(request)

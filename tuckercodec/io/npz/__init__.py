@@ -10,14 +10,14 @@ encrypted, and present once, and the shape and dtype in its header must account 
 the bytes of its member.
 
 :class:`NpzFrames` reads key ``V`` in place, a range of frames at a time: a stored member
-(``np.savez``) by offset in the file, as a ``.npy`` is (:class:`..streaming.RawFrames`); a
-deflated one (``np.savez_compressed``) by decompressing forward from where the last read
-stopped, the member staying open between reads, so that reading the ranges in order
-decompresses the member once (a range before the last one starts again from the member's
-beginning). The other keys (faces, names, rate, time codes) are read whole when the archive is
-opened. A range read does not check a stored member's CRC (only reading every byte could);
-:meth:`NpzFrames.load` reads ``V`` whole through zipfile, which does. A ``V`` in Fortran
-order, whose frames are scattered over the member, is read whole on first use.
+(``np.savez``) by offset in the file, as a ``.npy`` is
+(:class:`~tuckercodec.io.streaming.RawFrames`); a deflated one (``np.savez_compressed``) by
+decompressing forward from where the last read stopped, the member staying open between reads, so
+that reading the ranges in order decompresses the member once (a range before the last one starts
+again from the member's beginning). The other keys (faces, names, rate, time codes) are read whole
+when the archive is opened. A range read does not check a stored member's CRC (only reading every
+byte could); :meth:`NpzFrames.load` reads ``V`` whole through zipfile, which does. A ``V`` in
+Fortran order, whose frames are scattered over the member, is read whole on first use.
 """
 
 from __future__ import annotations

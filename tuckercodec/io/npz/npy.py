@@ -1,16 +1,16 @@
 """The ``.npy`` sequence format: one NumPy array of positions, (frames, vertices, 3).
 
-The array holds float32 or float64 numbers of either byte order, in C order (a (vertices, 3)
-array is one frame); that is all a ``.npy`` holds, so faces come from ``--faces MESH``
-(:attr:`ReadOptions.faces`, as for the point caches: :func:`.pointcache.cache_faces`), and
-without it the sequence is a point sequence. The header is read and checked as in an ``.npz``
-(:func:`.npz_archive.npy_header`: never pickle), and the file's size must be exactly what it
-declares, before anything is allocated.
+The array holds float32 or float64 numbers of either byte order, in C order (a (vertices, 3) array
+is one frame); that is all a ``.npy`` holds, so faces come from ``--faces MESH``
+(:attr:`ReadOptions.faces`, as for the point caches:
+:func:`~tuckercodec.io.pointcache.cache_faces`), and without it the sequence is a point sequence.
+The header is read and checked as in an ``.npz`` (:func:`.archive.npy_header`: never pickle), and
+the file's size must be exactly what it declares, before anything is allocated.
 
-It streams (:class:`NpyFrames`): a range of frames is read by offset with ``readinto``, a few
-MiB at a time (:class:`.streaming.RawFrames`), so that reading a range costs its float64 array
-and nothing in proportion to the file. The file is not memory-mapped: mapped pages count in the
-process's resident memory.
+It streams (:class:`NpyFrames`): a range of frames is read by offset with ``readinto``, a few MiB at
+a time (:class:`~tuckercodec.io.streaming.RawFrames`), so that reading a range costs its float64
+array and nothing in proportion to the file. The file is not memory-mapped: mapped pages count in
+the process's resident memory.
 
 Writing: float32 where that is exact, else float64 (:meth:`MeshSequence.compact_vertices`);
 faces, frame names, rate and time codes are not kept.

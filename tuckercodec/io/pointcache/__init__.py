@@ -1,6 +1,6 @@
 """What the two point-cache formats share (:mod:`.pc2`, :mod:`.mdd`): reading a fixed-size
-header and checking the file's size against what it declares (positions are then read by
-offset: :class:`.streaming.RawFrames`), the faces the points take from ``--faces MESH`` (as
+header and checking the file's size against what it declares (positions are then read by offset:
+:class:`~tuckercodec.io.streaming.RawFrames`), the faces the points take from ``--faces MESH`` (as
 ``.npy`` files do too), and positions made ready for writing.
 
 A point cache holds positions only: F frames of K points, each a float32 x, y, z. The header

@@ -19,10 +19,10 @@ round trip keeps the times bit for bit. Times that do not increase (some exporte
 constant) carry no timing: the frames are read as 0, 1, 2... with no rate.
 
 Blender's MDD exporter before 2.80 wrote a "rest frame" (a copy of the first frame) before the
-frames, without counting it in numFrames: a file exactly one frame longer than its header says
-is read as that layout, and the uncounted rest frame is skipped. Any other size mismatch is an
-error. The faces come from ``--faces MESH`` (:func:`.pointcache.cache_faces`). Frames are read
-by offset, a range at a time (:class:`MddFrames`).
+frames, without counting it in numFrames: a file exactly one frame longer than its header says is
+read as that layout, and the uncounted rest frame is skipped. Any other size mismatch is an error.
+The faces come from ``--faces MESH`` (:func:`~tuckercodec.io.pointcache.cache_faces`). Frames are
+read by offset, a range at a time (:class:`MddFrames`).
 """
 
 from __future__ import annotations

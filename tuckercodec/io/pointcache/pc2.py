@@ -12,12 +12,12 @@ Layout, all little-endian (as in Blender's ``MOD_meshcache_pc2.cc``)::
     28      4     numSamples  int32, F
     32      12FK  positions   float32 x, y, z of K points, frame after frame
 
-Sample i is at frame ``startFrame + i * sampleRate``: these are the sequence's time codes
-(PC2 has no frames per second, so the frame rate stays unknown). Writing takes the start frame
-and the sample rate from the time codes (0, 1, 2... when the sequence has none), so they survive
-a PC2 to PC2 round trip; time codes that are not evenly spaced cannot be written as PC2.
-The faces come from ``--faces MESH`` (:func:`.pointcache.cache_faces`); without it the points
-are a point sequence. Frames are read by offset, a range at a time (:class:`Pc2Frames`).
+Sample i is at frame ``startFrame + i * sampleRate``: these are the sequence's time codes (PC2 has
+no frames per second, so the frame rate stays unknown). Writing takes the start frame and the sample
+rate from the time codes (0, 1, 2... when the sequence has none), so they survive a PC2 to PC2 round
+trip; time codes that are not evenly spaced cannot be written as PC2. The faces come from ``--faces
+MESH`` (:func:`~tuckercodec.io.pointcache.cache_faces`); without it the points are a point sequence.
+Frames are read by offset, a range at a time (:class:`Pc2Frames`).
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """One VTK XML dataset file, an UnstructuredGrid (``.vtu``) or a PolyData (``.vtp``): its
 points and surface cells read into a face table, and written back, in plain numpy and the
-standard library (the arrays' encodings are :mod:`.vtk_data`'s).
+standard library (the arrays' encodings are :mod:`.arrays`'s).
 
 Reading, by the ``<VTKFile type=..>`` of the file (whatever its name's suffix):
 
@@ -319,7 +319,7 @@ class DatasetWriter:
         faces: the face table (-1 padded; no rows for a point sequence).
         vertex_count: the number of points.
         kind: ``"PolyData"`` or ``"UnstructuredGrid"``.
-        layout: how arrays are stored (:class:`~.vtk_data.Layout`; ParaView's by default).
+        layout: how arrays are stored (:class:`~.arrays.Layout`; ParaView's by default).
     """
 
     def __init__(

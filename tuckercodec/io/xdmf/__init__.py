@@ -25,7 +25,7 @@ Hostile input: an ENTITY declaration is refused before parsing (a DOCTYPE alone,
 files carry, is harmless: the parser never fetches it); every count is checked against the data
 before it is used; an HDF dataset must hold as many values as its ``Dimensions`` and store at
 least 1/1032 of its size (no more than zlib can inflate). Errors name the .xdmf, the frame and
-the grid. Writing is :mod:`.xdmf_write`'s.
+the grid. Writing is :mod:`.writer`'s.
 """
 
 from __future__ import annotations

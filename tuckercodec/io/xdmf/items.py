@@ -3,9 +3,10 @@
 ``Reference``s that lead from one element to another.
 
 Every count is checked before it is used: XML values against the item's ``Dimensions``; an HDF
-dataset must hold exactly as many values, and store at least 1/:data:`~.vtk_data.MAX_INFLATION`
-of its size, so that no compression filter inflates it beyond what zlib could before it is read.
-Errors are :class:`InputError`s without a path (the caller names the .xdmf and the frame).
+dataset must hold exactly as many values, and store at least
+1/:data:`~tuckercodec.io.vtk.arrays.MAX_INFLATION` of its size, so that no compression filter
+inflates it beyond what zlib could before it is read. Errors are :class:`InputError`s without a path
+(the caller names the .xdmf and the frame).
 """
 
 from __future__ import annotations
