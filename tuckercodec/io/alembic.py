@@ -63,8 +63,8 @@ from ..reading import open_regular_file
 from ..sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_vertices
 from .isolation import IsolatedFrames, note
 from .polygons import faces_from_polygons, polygons_from_faces, reverse_winding
-from .registry import ReadOptions, SequenceFormat, WriteOptions
-from .streaming import FrameSource
+from .registry import ReadOptions, WriteOptions
+from .streaming import FrameByFrame, FrameSource
 from .usd import listing, prim_name
 
 #: What alembic3d raises on a damaged archive: Alembic's exceptions (RuntimeError), names and
@@ -94,7 +94,7 @@ def open_alembic(path: Path, options: ReadOptions) -> FrameSource:
     return IsolatedFrames(ArchiveFrames, path, options, "Alembic", "alembic", _MODULES)
 
 
-class ArchiveFrames(FrameSource):
+class ArchiveFrames(FrameByFrame):
     """A PolyMesh's position samples read one by one in this process (what the reading child
     runs): the archive, object, sample times, faces and rate at once, each frame's positions
     when read."""
@@ -189,12 +189,6 @@ class ArchiveFrames(FrameSource):
                 frame=frame,
             )
         return sample
-
-    def _read(self, start: int, stop: int) -> np.ndarray:
-        vertices = np.empty((stop - start, self.vertex_count, 3), dtype=np.float64)
-        for frame in range(start, stop):
-            vertices[frame - start] = self._first if frame == 0 else self._frame(frame)
-        return vertices
 
 
 def _objects(abc: SimpleNamespace, archive: Any) -> tuple[dict[str, Any], dict[str, str]]:
@@ -431,15 +425,3 @@ def time_sampling(abc: SimpleNamespace, codes: np.ndarray, rate: float) -> tuple
     vector.extend(times.tolist())
     kind = AbcA.TimeSamplingType(AbcA.AcyclicFlag.kAcyclic)
     return AbcA.TimeSampling(kind, vector), np.array_equal(codes_from_times(times, rate), codes)
-
-
-FORMAT = SequenceFormat(
-    name="alembic",
-    suffixes=(".abc",),
-    description="Alembic archive (Ogawa): a PolyMesh's position samples (--object to choose one)",
-    write=write_alembic,
-    open=open_alembic,
-    read_options=frozenset({"object_path"}),
-    extra="alembic",
-    carries=frozenset({"faces", "frame_rate", "time_codes"}),
-)

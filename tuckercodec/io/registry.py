@@ -1,7 +1,7 @@
 """The registry of sequence file formats, keyed by file-name suffix.
 
-Each format is one module (or package) of :mod:`tuckercodec.io` that defines ``FORMAT``, a
-:class:`SequenceFormat`, and is listed in :data:`BUILTIN_MODULES`. A format either holds a
+Each format is one module (or package) of :mod:`tuckercodec.io`, and one
+:class:`SequenceFormat` entry of the table in :mod:`.builtin`. A format either holds a
 whole sequence in one file (``open``/``write``: ``.npz``), or one frame per file (``read_frame``
 /``write_frame``: ``.obj``, and the meshes trimesh reads), which a folder, a glob or a list of
 files makes into a sequence (:mod:`.frames`). ``open`` is the one loader of a whole-sequence
@@ -12,7 +12,6 @@ up costs nothing.
 
 from __future__ import annotations
 
-import importlib
 import os
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -23,22 +22,6 @@ import numpy as np
 
 from ..sequence import MeshSequence
 from .streaming import FrameSource
-
-#: The modules of :mod:`tuckercodec.io` that define a ``FORMAT``, in the order the CLI lists them.
-BUILTIN_MODULES = (
-    "obj",
-    "npz",
-    "npz.npy",
-    "usd",
-    "alembic",
-    "pointcache.pc2",
-    "pointcache.mdd",
-    "gltf",
-    "vtk",
-    "xdmf",
-    "zarr_store",
-    "meshes",
-)
 
 
 @dataclass(eq=False)
@@ -129,12 +112,10 @@ class SequenceFormat:
 
 @cache
 def formats() -> tuple[SequenceFormat, ...]:
-    """Every registered format, in the order of :data:`BUILTIN_MODULES`."""
-    found = []
-    for name in BUILTIN_MODULES:
-        module = importlib.import_module(f"{__package__}.{name}")
-        found.append(module.FORMAT)
-    return tuple(found)
+    """Every registered format, in the order the CLI lists them (:data:`.builtin.FORMATS`)."""
+    from .builtin import FORMATS  # here: the format modules import this one for its types
+
+    return FORMATS
 
 
 def format_named(name: str) -> SequenceFormat:

@@ -38,7 +38,6 @@ import operator
 import os
 from collections.abc import Iterator
 from pathlib import Path
-from types import TracebackType
 from typing import IO, Any, BinaryIO, ClassVar
 
 import numpy as np
@@ -197,12 +196,7 @@ class FrameSource(abc.ABC):
     def __enter__(self) -> FrameSource:
         return self
 
-    def __exit__(
-        self,
-        kind: type[BaseException] | None,
-        error: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
+    def __exit__(self, *exception: object) -> None:
         self.close()
 
     def __del__(self) -> None:
@@ -243,6 +237,23 @@ class SequenceFrames(FrameSource):
 
     def load(self, progress: bool = False) -> MeshSequence:
         return self.sequence
+
+
+class FrameByFrame(FrameSource):
+    """A source whose library reads one frame at a time (:meth:`_frame`: USD, Alembic); frame 0
+    is read when the file is opened (for the vertex count) and kept in :attr:`_first`."""
+
+    _first: np.ndarray
+
+    def _read(self, start: int, stop: int) -> np.ndarray:
+        vertices = np.empty((stop - start, self.vertex_count, 3), dtype=np.float64)
+        for frame in range(start, stop):
+            vertices[frame - start] = self._first if frame == 0 else self._frame(frame)
+        return vertices
+
+    @abc.abstractmethod
+    def _frame(self, frame: int) -> np.ndarray:
+        """Frame ``frame``'s positions, (K, 3), checked."""
 
 
 class RawFrames(FrameSource):

@@ -65,8 +65,8 @@ from ..reading import open_regular_file
 from ..sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_vertices
 from .isolation import IsolatedFrames, note
 from .polygons import faces_from_polygons, polygons_from_faces, reverse_winding
-from .registry import ReadOptions, SequenceFormat, WriteOptions
-from .streaming import FrameSource
+from .registry import ReadOptions, WriteOptions
+from .streaming import FrameByFrame, FrameSource
 
 #: Where the written mesh lives: the root Xform (also the stage's defaultPrim).
 ROOT = "/Root"
@@ -123,7 +123,7 @@ def open_usd(path: Path, options: ReadOptions) -> FrameSource:
     return IsolatedFrames(StageFrames, path, options, "USD", "usd", _PRELOAD)
 
 
-class StageFrames(FrameSource):
+class StageFrames(FrameByFrame):
     """A UsdGeomMesh's points read sample by sample in this process (what the reading child
     runs): the stage, prim, time samples and faces at once, each frame's points when read."""
 
@@ -202,11 +202,8 @@ class StageFrames(FrameSource):
         return positions
 
     def _read(self, start: int, stop: int) -> np.ndarray:
-        vertices = np.empty((stop - start, self.vertex_count, 3), dtype=np.float64)
         with _quiet(self._pxr):
-            for frame in range(start, stop):
-                vertices[frame - start] = self._first if frame == 0 else self._frame(frame)
-        return vertices
+            return super()._read(start, stop)
 
 
 def listing(paths: list[str]) -> str:
@@ -381,15 +378,3 @@ def _stage(pxr: SimpleNamespace, seq: MeshSequence, vertices: np.ndarray, name: 
     stage.SetStartTimeCode(float(codes[0]))
     stage.SetEndTimeCode(float(codes[-1]))
     return stage
-
-
-FORMAT = SequenceFormat(
-    name="usd",
-    suffixes=(".usd", ".usda", ".usdc"),
-    description="USD stage: a UsdGeomMesh with time-sampled points (--prim to choose one)",
-    write=write_usd,
-    open=open_usd,
-    read_options=frozenset({"prim"}),
-    extra="usd",
-    carries=frozenset({"faces", "frame_rate", "time_codes"}),
-)

@@ -17,7 +17,7 @@ import numpy as np
 
 from ...errors import InputError
 from ...sequence import MeshSequence
-from ..registry import MeshFrame, ReadOptions, SequenceFormat, WriteOptions
+from ..registry import MeshFrame, ReadOptions, WriteOptions
 from ..streaming import FrameSource
 from .reader import Scene, read_gltf
 from .timing import timing
@@ -55,12 +55,12 @@ def _vertex_count(scene: Scene) -> int:
     return sum(len(scene.meshes[scene.doc.array("nodes")[n]["mesh"]].base) for n in scene.chosen)
 
 
-def write(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
+def write_gltf(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
     """Write the sequence as morph targets (polygons split into triangle fans)."""
     write_sequence_gltf(seq, path, overwrite=options.overwrite)
 
 
-def read_frame(path: Path, reference: MeshFrame | None = None) -> MeshFrame:
+def read_gltf_frame(path: Path, reference: MeshFrame | None = None) -> MeshFrame:
     """One frame from one glTF file of a folder of frames: its mesh as shown at rest; a file
     holding an animation of several frames is refused (load it on its own)."""
     seq = read_gltf(path)
@@ -70,15 +70,3 @@ def read_frame(path: Path, reference: MeshFrame | None = None) -> MeshFrame:
             path=path,
         )
     return MeshFrame(seq.vertices[0], seq.faces, path=str(path))
-
-
-FORMAT = SequenceFormat(
-    name="gltf",
-    suffixes=(".glb", ".gltf"),
-    description="glTF 2.0 morph animation (frame 0 the mesh, frames as morph targets)",
-    write=write,
-    open=GltfFrames,
-    read_frame=read_frame,
-    read_options=frozenset({"object_path", "fps"}),
-    carries=frozenset({"faces", "frame_names", "frame_rate", "time_codes"}),
-)

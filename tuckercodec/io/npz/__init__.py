@@ -33,7 +33,7 @@ from ...atomic import atomic_output
 from ...errors import InputError
 from ...reading import open_input
 from ...sequence import MeshSequence
-from ..registry import SequenceFormat, WriteOptions
+from ..registry import WriteOptions
 from ..streaming import RawFrames, read_into
 from .archive import ZIP_ERRORS, NpzArchive, member_header
 
@@ -150,15 +150,3 @@ def write_npz(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
     # np.savez adds ".npz" to a file *name* without it, so it gets an open file instead
     with atomic_output(path, overwrite=options.overwrite) as stream:
         np.savez(stream, **arrays)
-
-
-FORMAT = SequenceFormat(
-    name="npz",
-    suffixes=(".npz",),
-    description=(
-        "NumPy archive: V (frames, vertices, 3), F faces, frame_files, frame_rate, time_codes"
-    ),
-    open=NpzFrames,
-    write=write_npz,
-    carries=frozenset({"float64", "faces", "polygons", "frame_names", "frame_rate", "time_codes"}),
-)

@@ -28,7 +28,7 @@ from ...errors import InputError
 from ...reading import open_input
 from ...sequence import MeshSequence
 from ..pointcache import cache_faces, check_size
-from ..registry import ReadOptions, SequenceFormat, WriteOptions
+from ..registry import ReadOptions, WriteOptions
 from ..streaming import RawFrames
 from .archive import npy_header
 
@@ -89,14 +89,3 @@ def write_npy(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
     faces, names, rate and time codes are not kept."""
     with atomic_output(path, overwrite=options.overwrite) as stream:
         np.save(stream, seq.compact_vertices(), allow_pickle=False)
-
-
-FORMAT = SequenceFormat(
-    name="npy",
-    suffixes=(".npy",),
-    description="NumPy array of positions (frames, vertices, 3), float32 or float64",
-    write=write_npy,
-    open=NpyFrames,
-    read_options=frozenset({"faces"}),
-    carries=frozenset({"float64"}),
-)

@@ -35,18 +35,8 @@ import numpy as np
 from ...atomic import atomic_output
 from ...errors import InputError
 from ...sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_seconds
-from ..registry import ReadOptions, SequenceFormat, WriteOptions
-from ..streaming import RawFrames
-from . import (
-    POINT_BYTES,
-    cache_faces,
-    check_counts,
-    check_size,
-    float32_positions,
-    open_cache,
-    read_floats,
-    read_header,
-)
+from ..registry import ReadOptions, WriteOptions
+from . import POINT_BYTES, CacheFrames, check_counts, check_size, float32_positions, read_floats
 
 HEADER = struct.Struct(">ii")  # numFrames, numPoints
 #: Frame rates tried first when working out the rate of a file's times: film, PAL, NTSC (and
@@ -69,7 +59,7 @@ COMMON_RATES = (
 )
 
 
-class MddFrames(RawFrames):
+class MddFrames(CacheFrames):
     """The frames of an MDD point cache, read by offset: positions, the frame rate and time
     codes its times imply (see the module docstring), and the faces of ``options.faces``.
 
@@ -80,9 +70,8 @@ class MddFrames(RawFrames):
     _what = "an MDD point cache"
 
     def __init__(self, path: Path, options: ReadOptions):
-        stream, file_size = open_cache(path, self._what)
+        stream, raw, file_size = self._open_header(path, HEADER.size)
         with stream:
-            raw = read_header(stream, HEADER.size, file_size, self._what, path)
             frames, points = HEADER.unpack(raw)
             check_counts(frames, points, path)
             declared = HEADER.size + 4 * frames + frames * points * POINT_BYTES
@@ -95,12 +84,10 @@ class MddFrames(RawFrames):
                     path,
                 )
             times = read_floats(stream, frames, ">f4", path)
-        rate, codes = frame_timing(times, path)
-        faces = cache_faces(options.faces, points, path)
-        self._file, self._dtype = path, np.dtype(">f4")
         # Blender's old exporter: an uncounted copy of the first frame before the frames
-        self._offset = HEADER.size + 4 * frames + (points * POINT_BYTES if rest_frame else 0)
-        self._describe(path, frames, points, faces, frame_rate=rate, time_codes=codes)
+        offset = HEADER.size + 4 * frames + (points * POINT_BYTES if rest_frame else 0)
+        timing = frame_timing(times, path)
+        self._positions_at(path, options, offset, ">f4", (frames, points), timing)
 
 
 def frame_timing(times: np.ndarray, path: Path) -> tuple[float | None, np.ndarray | None]:
@@ -150,14 +137,3 @@ def write_mdd(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
         stream.write(HEADER.pack(seq.frame_count, seq.vertex_count))
         stream.write(times.tobytes())
         stream.write(positions.tobytes())
-
-
-FORMAT = SequenceFormat(
-    name="mdd",
-    suffixes=(".mdd",),
-    description="MDD point cache (LightWave, Blender, Houdini): positions, times in seconds",
-    write=write_mdd,
-    open=MddFrames,
-    read_options=frozenset({"faces"}),
-    carries=frozenset({"frame_rate", "time_codes"}),
-)

@@ -30,17 +30,8 @@ import numpy as np
 from ...atomic import atomic_output
 from ...errors import InputError
 from ...sequence import MeshSequence
-from ..registry import ReadOptions, SequenceFormat, WriteOptions
-from ..streaming import RawFrames
-from . import (
-    POINT_BYTES,
-    cache_faces,
-    check_counts,
-    check_size,
-    float32_positions,
-    open_cache,
-    read_header,
-)
+from ..registry import ReadOptions, WriteOptions
+from . import POINT_BYTES, CacheFrames, check_counts, check_size, float32_positions
 
 SIGNATURE = b"POINTCACHE2\0"
 VERSION = 1
@@ -50,7 +41,7 @@ HEADER = struct.Struct("<12siiffi")  # signature, version, numPoints, start, sam
 _SPACING_TOLERANCE = 1e-6
 
 
-class Pc2Frames(RawFrames):
+class Pc2Frames(CacheFrames):
     """The frames of a PC2 point cache, read by offset: positions, time codes ``startFrame +
     i * sampleRate``, and the faces of ``options.faces`` (none without it).
 
@@ -61,9 +52,8 @@ class Pc2Frames(RawFrames):
     _what = "a PC2 point cache"
 
     def __init__(self, path: Path, options: ReadOptions):
-        stream, file_size = open_cache(path, self._what)
-        with stream:
-            raw = read_header(stream, HEADER.size, file_size, self._what, path)
+        stream, raw, file_size = self._open_header(path, HEADER.size)
+        stream.close()
         signature, version, points, start, step, frames = HEADER.unpack(raw)
         if signature != SIGNATURE:
             raise InputError(
@@ -82,9 +72,7 @@ class Pc2Frames(RawFrames):
             path,
         )
         codes = _time_codes(start, step, frames, path)
-        faces = cache_faces(options.faces, points, path)
-        self._file, self._offset, self._dtype = path, HEADER.size, np.dtype("<f4")
-        self._describe(path, frames, points, faces, time_codes=codes)
+        self._positions_at(path, options, HEADER.size, "<f4", (frames, points), (None, codes))
 
 
 def _time_codes(start: float, step: float, frames: int, path: Path) -> np.ndarray:
@@ -137,14 +125,3 @@ def _start_and_step(codes: np.ndarray, path: Path) -> tuple[float, float]:
             f"startFrame and sampleRate of {path.name}"
         )
     return float(fields[0]), float(fields[1])
-
-
-FORMAT = SequenceFormat(
-    name="pc2",
-    suffixes=(".pc2",),
-    description="PC2 point cache (Blender, 3ds Max, Maya): positions, start frame, sample rate",
-    write=write_pc2,
-    open=Pc2Frames,
-    read_options=frozenset({"faces"}),
-    carries=frozenset({"time_codes"}),
-)

@@ -45,7 +45,7 @@ from ...errors import InputError
 from ...reading import open_input, open_regular_file
 from ...sequence import MeshSequence
 from ..frames import frame_file_names
-from ..registry import ReadOptions, SequenceFormat, WriteOptions
+from ..registry import ReadOptions, WriteOptions
 from ..streaming import FrameSource
 from .arrays import Layout
 from .datasets import DATASETS, DatasetWriter, read_dataset, refuse_declarations
@@ -300,13 +300,3 @@ def _index_xml(folder: str, names: list[str], codes: np.ndarray) -> bytes:
         )
     ElementTree.indent(root)
     return ElementTree.tostring(root, encoding="utf-8", xml_declaration=True) + b"\n"
-
-
-FORMAT = SequenceFormat(
-    name="vtk",
-    suffixes=(".pvd",),
-    description="VTK time series: a ParaView .pvd of .vtp or .vtu files, one per time step",
-    write=write_pvd,
-    open=PvdFrames,
-    carries=frozenset({"float64", "faces", "polygons", "frame_names", "time_codes"}),
-)

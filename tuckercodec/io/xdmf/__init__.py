@@ -41,10 +41,8 @@ import numpy as np
 from ...errors import InputError
 from ...reading import open_input
 from ..polygons import faces_from_polygons
-from ..registry import SequenceFormat
 from ..streaming import FrameSource
 from .items import XINCLUDE, HeavyData, lower, read_item, resolve
-from .writer import write_xdmf
 
 _FIXED = {"triangle": 3, "quadrilateral": 4}
 #: XDMF's Mixed topology codes: polyvertex and polygon are followed by their point count.
@@ -378,14 +376,3 @@ def _mixed(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     counts = np.array(sizes, dtype=np.int64)
     index = np.repeat(np.array(starts, dtype=np.int64) - np.cumsum(counts) + counts, counts)
     return counts, values[index + np.arange(index.size)]
-
-
-FORMAT = SequenceFormat(
-    name="xdmf",
-    suffixes=(".xdmf", ".xmf"),
-    description="XDMF time series: a temporal collection of grids, HDF5 or XML data (h5py)",
-    write=write_xdmf,
-    open=XdmfFrames,
-    extra="xdmf",
-    carries=frozenset({"float64", "faces", "polygons", "frame_names", "time_codes"}),
-)

@@ -27,16 +27,9 @@ from ..vtk.arrays import MAX_INFLATION
 XINCLUDE = ("{http://www.w3.org/2001/XInclude}include", "{http://www.w3.org/2003/XInclude}include")
 #: XDMF number types and precisions, as numpy types.
 _NUMBERS = {
-    ("float", 4): "f4",
-    ("float", 8): "f8",
-    ("int", 1): "i1",
-    ("int", 2): "i2",
-    ("int", 4): "i4",
-    ("int", 8): "i8",
-    ("uint", 1): "u1",
-    ("uint", 2): "u2",
-    ("uint", 4): "u4",
-    ("uint", 8): "u8",
+    **{("float", size): f"f{size}" for size in (4, 8)},
+    **{("int", size): f"i{size}" for size in (1, 2, 4, 8)},
+    **{("uint", size): f"u{size}" for size in (1, 2, 4, 8)},
     ("char", 1): "i1",
     ("uchar", 1): "u1",
 }
