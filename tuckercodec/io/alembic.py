@@ -62,7 +62,7 @@ from ..optional import import_optional
 from ..reading import open_regular_file
 from ..sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_vertices
 from .isolation import IsolatedFrames, note
-from .polygons import faces_from_polygons, polygons_from_faces, reverse_winding
+from .polygons import faces_from_polygons, first_change, polygons_from_faces, reverse_winding
 from .registry import ReadOptions, WriteOptions
 from .streaming import FrameByFrame, FrameSource
 from .usd import listing, prim_name
@@ -246,17 +246,15 @@ def _faces(
     def topology(selector: Any) -> tuple[np.ndarray, np.ndarray]:
         return np.asarray(counts.getValue(selector)), np.asarray(indices.getValue(selector))
 
-    first = topology(selectors[0])
-    if not (counts.isConstant() and indices.isConstant()):
-        for frame, selector in enumerate(selectors[1:], start=1):
-            now = topology(selector)
-            if not (np.array_equal(now[0], first[0]) and np.array_equal(now[1], first[1])):
-                raise InputError(
-                    f"{where}: the faces change at time {times[frame]} s (face counts or "
-                    "indices differ from frame 0's); a sequence keeps one set of faces",
-                    path=path,
-                    frame=frame,
-                )
+    varying = not (counts.isConstant() and indices.isConstant())
+    first, frame = first_change(lambda n: topology(selectors[n]), len(selectors), varying)
+    if frame is not None:
+        raise InputError(
+            f"{where}: the faces change at time {times[frame]} s (face counts or indices "
+            "differ from frame 0's); a sequence keeps one set of faces",
+            path=path,
+            frame=frame,
+        )
     try:
         return reverse_winding(faces_from_polygons(first[0], first[1], vertex_count))
     except InputError as error:

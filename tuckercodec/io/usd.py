@@ -64,7 +64,7 @@ from ..optional import import_optional
 from ..reading import open_regular_file
 from ..sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_vertices
 from .isolation import IsolatedFrames, note
-from .polygons import faces_from_polygons, polygons_from_faces, reverse_winding
+from .polygons import faces_from_polygons, first_change, polygons_from_faces, reverse_winding
 from .registry import ReadOptions, WriteOptions
 from .streaming import FrameByFrame, FrameSource
 
@@ -303,18 +303,15 @@ def _faces(
             return np.zeros(0, np.int32), np.zeros(0, np.int32)
         return np.asarray(found), np.asarray(listed)
 
-    first = topology(frame_times[0])
-    if counts.ValueMightBeTimeVarying() or indices.ValueMightBeTimeVarying():
-        for frame, time in enumerate(frame_times[1:], start=1):
-            now = topology(time)
-            if not (np.array_equal(now[0], first[0]) and np.array_equal(now[1], first[1])):
-                raise InputError(
-                    f"{where}: the faces change at time code {times[frame]} (faceVertexCounts "
-                    "or faceVertexIndices differ from frame 0's); a sequence keeps one set of "
-                    "faces",
-                    path=path,
-                    frame=frame,
-                )
+    varying = counts.ValueMightBeTimeVarying() or indices.ValueMightBeTimeVarying()
+    first, frame = first_change(lambda n: topology(frame_times[n]), len(frame_times), varying)
+    if frame is not None:
+        raise InputError(
+            f"{where}: the faces change at time code {times[frame]} (faceVertexCounts or "
+            "faceVertexIndices differ from frame 0's); a sequence keeps one set of faces",
+            path=path,
+            frame=frame,
+        )
     try:
         faces = faces_from_polygons(first[0], first[1], vertex_count)
     except InputError as error:
