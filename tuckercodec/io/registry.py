@@ -12,6 +12,7 @@ up costs nothing.
 
 from __future__ import annotations
 
+import importlib
 import os
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -113,9 +114,10 @@ class SequenceFormat:
 @cache
 def formats() -> tuple[SequenceFormat, ...]:
     """Every registered format, in the order the CLI lists them (:data:`.builtin.FORMATS`)."""
-    from .builtin import FORMATS  # here: the format modules import this one for its types
-
-    return FORMATS
+    # by name, on first use: the formats import this module for its types (and the point
+    # caches the whole package, for --faces), and importing tuckercodec imports none of them
+    table: tuple[SequenceFormat, ...] = importlib.import_module(f"{__package__}.builtin").FORMATS
+    return table
 
 
 def format_named(name: str) -> SequenceFormat:
