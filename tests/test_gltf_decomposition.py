@@ -15,8 +15,8 @@ import pytest
 
 from tuckercodec import Decoder, MeshSequence, decode_file, encode, load_sequence
 from tuckercodec.cli.main import main
-from tuckercodec.gltf.decomposition import COMPRESSIONS, write_decomposition_gltf
-from tuckercodec.gltf.quantization import BUDGET_SHARE
+from tuckercodec.gltf_export import COMPRESSIONS, write_decomposition_gltf
+from tuckercodec.gltf_export.quantization import BUDGET_SHARE
 from tuckercodec.metrics import KG_DEFINITION, kg_error
 from tuckercodec.samples import sample_path
 
@@ -216,7 +216,7 @@ def test_the_meshopt_variant_reorders_triangles_never_vertices(tkc: Path, tmp_pa
 
 def test_exponential_words_decode_to_the_values_and_refuse_what_is_not_a_multiple() -> None:
     meshopt = pytest.importorskip("meshoptimizer", reason="the EXPONENTIAL filter's decoder")
-    from tuckercodec.gltf.meshopt import exponential_words
+    from tuckercodec.io.gltf.meshopt import exponential_words
 
     values = np.array([[0.75, -3.0, 1e-3 * 2**-10], [0.0, 5.0, -(2**-20)]])
     exponents = np.array([-2, 0, -40])

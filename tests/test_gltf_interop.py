@@ -18,12 +18,12 @@ import pytest
 
 from tests.support.js_interop import HINT, INFO, issues, three_positions, validate_gltf_files
 from tuckercodec import Decoder, MeshSequence, encode, load_sequence, save_sequence
-from tuckercodec.gltf.accessors import view_bytes
-from tuckercodec.gltf.container import pack_glb, read_document
-from tuckercodec.gltf.decomposition import COMPRESSIONS, write_decomposition_gltf
-from tuckercodec.gltf.meshopt import EXTENSION
-from tuckercodec.gltf.quantization import BUDGET_SHARE
-from tuckercodec.gltf.reader import sample_gltf
+from tuckercodec.gltf_export import COMPRESSIONS, write_decomposition_gltf
+from tuckercodec.gltf_export.quantization import BUDGET_SHARE
+from tuckercodec.io.gltf.accessors import view_bytes
+from tuckercodec.io.gltf.container import pack_glb, read_document
+from tuckercodec.io.gltf.meshopt import EXTENSION
+from tuckercodec.io.gltf.reader import sample_gltf
 from tuckercodec.metrics import kg_error
 from tuckercodec.samples import sample_path
 

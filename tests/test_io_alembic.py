@@ -20,7 +20,7 @@ from tests.support.sequences import shared_file
 from tuckercodec import DependencyError, InputError, MeshSequence
 from tuckercodec.cli import main
 from tuckercodec.io import load_sequence, save_sequence
-from tuckercodec.io.alembic_time import CODES_KEY, RATE_KEY, codes_from_times
+from tuckercodec.io.alembic import CODES_KEY, RATE_KEY, codes_from_times
 
 pytest.importorskip("alembic3d", reason="alembic3d (the 'alembic' extra) is not installed")
 import imath

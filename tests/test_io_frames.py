@@ -344,7 +344,7 @@ def test_formats_are_chosen_by_suffix_from_one_registry(tmp_path: Path) -> None:
     assert len(suffixes) == len(set(suffixes))  # each suffix names one format
     assert format_of(tmp_path / "a.OBJ") is format_named("obj")
     whole, framed = format_of(tmp_path / "a.npz"), format_of(tmp_path / "a.ply")
-    assert whole is not None and whole.read is not None  # a whole sequence in one file
+    assert whole is not None and whole.open is not None  # a whole sequence in one file
     assert framed is not None and framed.read_frame is not None  # one frame per file
     assert format_of(tmp_path / "a.txt") is None
     with pytest.raises(

@@ -17,9 +17,9 @@ import pytest
 
 from tests.support.sequences import shared_file
 from tuckercodec import DependencyError, InputError, MeshSequence, load_sequence, save_sequence
-from tuckercodec.gltf import container
-from tuckercodec.gltf.container import pack_glb
 from tuckercodec.io import format_of
+from tuckercodec.io.gltf import container
+from tuckercodec.io.gltf.container import pack_glb
 from tuckercodec.samples import sample_path
 
 FLOAT, UBYTE, USHORT = 5126, 5121, 5123
@@ -335,7 +335,7 @@ def test_a_meshopt_file_without_meshoptimizer_names_the_extra(
     tmp_path: Path, monkeypatch: Any
 ) -> None:
     from tuckercodec import Decoder, encode
-    from tuckercodec.gltf.decomposition import write_decomposition_gltf
+    from tuckercodec.gltf_export import write_decomposition_gltf
 
     seq = load_sequence(sample_path())
     data = encode(MeshSequence(seq.vertices[:8], seq.faces), ranks=(4, 3))
@@ -354,7 +354,7 @@ def test_a_meshopt_view_claiming_more_than_its_codec_can_expand_is_refused(
     tmp_path: Path,
 ) -> None:
     from tuckercodec import Decoder, encode
-    from tuckercodec.gltf.decomposition import write_decomposition_gltf
+    from tuckercodec.gltf_export import write_decomposition_gltf
 
     seq = load_sequence(sample_path())
     (tmp_path / "a.tkc").write_bytes(

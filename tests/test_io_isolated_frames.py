@@ -1,4 +1,4 @@
-"""Reading range by range in a child that serves many reads (tuckercodec/io/isolated_frames.py,
+"""Reading range by range in a child that serves many reads (tuckercodec/io/isolation/,
 for USD and Alembic): the frames come back as the source reads them; the file's own errors
 leave the child serving; a crash, a hang or a bug ends in the error a one-shot read gives,
 and the next read starts a new child; no child outlives its source; a pickled source starts
@@ -21,8 +21,7 @@ from tests.test_io_isolation import CRASHING, LINUX, children, gone
 from tests.test_io_streaming import check_ranges, same_description
 from tuckercodec import InputError, load_sequence, save_sequence
 from tuckercodec.io import open_frames
-from tuckercodec.io.isolated_frames import IsolatedFrames
-from tuckercodec.io.isolation import TIMEOUT_VARIABLE
+from tuckercodec.io.isolation import TIMEOUT_VARIABLE, IsolatedFrames
 from tuckercodec.io.registry import ReadOptions
 
 

@@ -1,4 +1,4 @@
-"""Reading in a child process (tuckercodec/io/isolation.py): a crash, a runaway allocation, a
+"""Reading in a child process (tuckercodec/io/isolation/): a crash, a runaway allocation, a
 read that never ends and the libraries' messages stay in the child, and come back as
 InputErrors naming the file, the object and the frame; the reader's own errors come back as
 they were raised; no child outlives its read, nor its caller."""
@@ -24,7 +24,7 @@ from tests.support.inputs import check_sequence, expect_input_error
 from tuckercodec import DependencyError, InputError, MeshSequence
 from tuckercodec.cli import main
 from tuckercodec.io import isolation, load_sequence
-from tuckercodec.io.isolation import MEMORY_VARIABLE, TIMEOUT_VARIABLE, read_isolated
+from tuckercodec.io.isolation import MEMORY_VARIABLE, TIMEOUT_VARIABLE, channel, read_isolated
 from tuckercodec.io.registry import ReadOptions
 
 TESTS = Path(__file__).resolve().parent
@@ -195,13 +195,13 @@ def test_the_default_limits_grow_with_the_file(tmp_path, monkeypatch):
     monkeypatch.delenv(TIMEOUT_VARIABLE, raising=False)
     path = tmp_path / "f"
     path.write_bytes(bytes(2**20))
-    assert isolation._limits(path) == (2 * 2**30 + 16 * 2**20, 60.0 + 1 / 8)
+    assert channel._limits(path) == (2 * 2**30 + 16 * 2**20, 60.0 + 1 / 8)
     monkeypatch.setenv(MEMORY_VARIABLE, "0")
     monkeypatch.setenv(TIMEOUT_VARIABLE, "2.5")
-    assert isolation._limits(path) == (None, 2.5)
+    assert channel._limits(path) == (None, 2.5)
     monkeypatch.setenv(TIMEOUT_VARIABLE, "soon")
     with pytest.raises(ValueError, match=f"{TIMEOUT_VARIABLE} must be a number >= 0"):
-        isolation._limits(path)
+        channel._limits(path)
 
 
 @pytest.mark.usefixtures("no_child_left")
@@ -264,7 +264,7 @@ def test_a_sequence_comes_back_whole_and_the_libraries_messages_stay_in_the_chil
 
 def test_a_missing_library_is_named_before_any_process_starts(data_file, monkeypatch):
     monkeypatch.setitem(sys.modules, "nothing.here", None)
-    monkeypatch.setattr(isolation, "_run", None)  # starting a child would fail
+    monkeypatch.setattr(isolation, "Child", None)  # starting a child would fail
     with pytest.raises(DependencyError, match=r"^reading Test files needs .*'nothing'.*\[test\]"):
         read_isolated(hooks.chatty, data_file, ReadOptions(), "Test", "test", ["nothing.here"])
 

@@ -72,7 +72,7 @@ def test_every_format_is_described_once():
     assert len(names) == len(set(names))
     for found in formats():
         assert found.suffixes and all(s.startswith(".") and s == s.lower() for s in found.suffixes)
-        assert (found.read is not None) or (found.read_frame is not None), found.name
+        assert (found.open is not None) or (found.read_frame is not None), found.name
         parts = {"float64", "faces", "polygons", "frame_names", "frame_rate", "time_codes"}
         assert found.carries <= parts
         assert "polygons" not in found.carries or "faces" in found.carries

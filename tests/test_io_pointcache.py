@@ -24,7 +24,7 @@ from tests.support.properties import PROPERTY
 from tests.support.sequences import grid_faces, shared_file, wave_sequence
 from tuckercodec import InputError, MeshSequence, load_sequence, save_sequence
 from tuckercodec.cli import main
-from tuckercodec.io.mdd import frame_timing
+from tuckercodec.io.pointcache.mdd import frame_timing
 from tuckercodec.samples import sample_path
 from tuckercodec.sequence import DEFAULT_FRAME_RATE
 

@@ -25,7 +25,7 @@ from tuckercodec import InputError, MeshSequence, load_sequence, save_sequence
 from tuckercodec.cli import main
 from tuckercodec.io import vtk as vtk_format
 from tuckercodec.io.registry import WriteOptions, format_named
-from tuckercodec.io.vtk_xml import DatasetWriter
+from tuckercodec.io.vtk.datasets import DatasetWriter
 
 DATA = Path(__file__).parent / "data" / "vtk"
 FIXTURE = DATA / "series.pvd"

@@ -1,4 +1,4 @@
-"""One VTK XML file (tuckercodec/io/vtk_xml.py and vtk_data.py), read and written in plain numpy.
+"""One VTK XML file (tuckercodec/io/vtk/datasets.py and arrays.py), read and written in plain numpy.
 
 Every layout VTK writes (ascii; base64 inline; appended raw and base64; zlib blocks or none;
 UInt32 and UInt64 block headers; big-endian) is read exactly from files VTK itself wrote
@@ -26,8 +26,8 @@ from tests.support.inputs import expect_input_error, measure
 from tests.support.properties import PROPERTY, mutations, report_examples, scratch_folder
 from tests.support.sequences import wave_sequence
 from tuckercodec import InputError, load_sequence
-from tuckercodec.io.vtk_data import MAX_INFLATION, Layout
-from tuckercodec.io.vtk_xml import DatasetWriter, read_dataset
+from tuckercodec.io.vtk.arrays import MAX_INFLATION, Layout
+from tuckercodec.io.vtk.datasets import DatasetWriter, read_dataset
 
 DATA = Path(__file__).parent / "data" / "vtk"
 # tests/data/vtk/make.py's PolyData: sevenths, which float32 cannot hold

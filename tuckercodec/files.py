@@ -23,7 +23,7 @@ from .errors import InputError
 from .format.container import SIGNATURE
 from .format.limits import DEFAULT_LIMITS, Limits
 from .format.segments import BASIS_SHARED
-from .gltf.decomposition import DEFAULT_COMPRESSION, Compression, write_decomposition_gltf
+from .gltf_export import DEFAULT_COMPRESSION, Compression, write_decomposition_gltf
 from .io import Source, format_named, format_of, open_frames, save_sequence
 from .parallel import Executor
 from .reading import open_regular_file
@@ -174,7 +174,7 @@ def decode_file(
 ) -> MeshSequence:
     """Decode a compressed file and write the frames: a folder of OBJ files, or a sequence
     file (``.npz``, ``.usd``...). A glTF output (``.glb``/``.gltf``) holds the decomposition
-    itself as a morph animation (:func:`tuckercodec.gltf.decomposition.write_decomposition_gltf`),
+    itself as a morph animation (:func:`tuckercodec.gltf_export.write_decomposition_gltf`),
     compressed as ``glb_compress`` says ("none", "quantize" (default), "meshopt"); a segmented
     file (format 1.1) has one decomposition per segment, so its glTF holds the decoded frames as
     any sequence written to glTF does (frame 0 the mesh, each other frame a morph target).

@@ -43,9 +43,9 @@ from .format.container import (
     parse_container,
 )
 from .format.prediction import tree_depths
-from .gltf.decomposition import write_decomposition_gltf
-from .gltf.reader import sample_gltf
+from .gltf_export import write_decomposition_gltf
 from .hosvd import centre_frames, reconstruct
+from .io.gltf.reader import sample_gltf
 from .metrics import KG_DEFINITION
 from .perceptual import STED_DEFINITION
 from .plots import plot_rd_curve, pyplot, save_figure

@@ -1,6 +1,6 @@
 """Sources for tests/test_io_isolated_frames.py, each a FrameSource that does one thing a C++
 library may do while serving reads in a child: crash at a frame, hang, refuse a frame, fail
-for a bug. The serving child of tuckercodec.io.isolated_frames imports this module by name
+for a bug. The serving child of tuckercodec.io.isolation imports this module by name
 (tests.support.streaming_hooks) from the caller's import path, where pytest puts the
 repository's root."""
 
@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from tuckercodec import InputError
-from tuckercodec.io.isolation_child import note
+from tuckercodec.io.isolation import note
 from tuckercodec.io.registry import ReadOptions
 from tuckercodec.io.streaming import FrameSource
 

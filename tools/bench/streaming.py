@@ -13,7 +13,7 @@ just read); "cold" ones first ask the kernel to drop the file's pages
 KiB, ``posix_fadvise``).
 
 With ``--isolated``, it measures instead what reading USD and Alembic range by range costs,
-their files read in a child process that serves the reads (``tuckercodec.io.isolated_frames``):
+their files read in a child process that serves the reads (``tuckercodec.io.isolation``):
 the built-in cloth sample (or ``--sequence``, any file ``load_sequence`` reads) is written as
 ``.usdc`` and ``.abc``, then a fresh Python opens it (``open_frames``: the child starts and
 opens the file), reads each frame alone, then every frame in one range, and for comparison

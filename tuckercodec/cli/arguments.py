@@ -16,7 +16,7 @@ from ..encoder import DEFAULT_TARGET_KG
 from ..encoder.options import BASES
 from ..encoder.plan import DEFAULT_SEGMENT_FRAMES, parse_size
 from ..files import SUFFIX
-from ..gltf.decomposition import COMPRESSIONS
+from ..gltf_export import COMPRESSIONS
 from ..io.registry import writable_formats
 from ..metrics import KG_DEFINITION
 from ..perceptual import STED_DEFINITION

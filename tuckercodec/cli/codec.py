@@ -15,7 +15,7 @@ from ..encoder import EncodeOptions, Encoder, EncodeReport
 from ..errors import EXIT_OK, InputError
 from ..files import decode_file, decoded_output_path, is_gltf_output, write_encoded
 from ..format.segments import BASIS_SHARED
-from ..gltf.decomposition import DEFAULT_COMPRESSION, write_decomposition_gltf
+from ..gltf_export import DEFAULT_COMPRESSION, write_decomposition_gltf
 from ..metrics import (
     KG_DEFINITION,
     kg_error,

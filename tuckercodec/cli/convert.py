@@ -73,7 +73,7 @@ def run_formats(args: argparse.Namespace) -> int:
         modes = [
             m
             for m, f in (
-                ("read", found.read or found.read_frame),
+                ("read", found.open or found.read_frame),
                 ("write", found.write or found.write_frame),
             )
             if f

@@ -1,14 +1,16 @@
 """Reading and writing mesh sequences in the file formats where they live.
 
-:func:`load_sequence` and :func:`save_sequence` choose a format by the file name's suffix from
-the registry (:mod:`.registry`); each format is one module: :mod:`.obj` (one OBJ file per
-frame), :mod:`.npz` (a NumPy archive of the whole sequence), :mod:`.npy` (an array of
-positions), :mod:`.usd`, :mod:`.alembic`, :mod:`.pc2` and :mod:`.mdd` (animation caches),
-:mod:`.gltf` (morph animations, through :mod:`tuckercodec.gltf`), :mod:`.vtk` and :mod:`.xdmf`
-(simulation time series), :mod:`.zarr_store` (zarr arrays), and :mod:`.meshes` (other
-one-frame mesh files, through trimesh). Folders, globs and lists of one-frame files are
-:mod:`.frames`; ``tuckercodec formats`` lists them all. :func:`open_frames` reads any of them a
-range of frames at a time (:mod:`.streaming`).
+:func:`open_frames` and :func:`save_sequence` choose a format by the file name's suffix from
+the registry (:mod:`.registry`), and :func:`load_sequence` is ``open_frames(...).load()``. One
+module or package per format family: :mod:`.obj` (one OBJ file per frame), :mod:`.npz` (NumPy:
+the ``.npz`` archive of a whole sequence, and :mod:`.npz.npy`, an array of positions),
+:mod:`.usd`, :mod:`.alembic`, :mod:`.pointcache` (the PC2 and MDD animation caches),
+:mod:`.gltf` (morph animations: the glTF container, reader and writer), :mod:`.vtk` and
+:mod:`.xdmf` (simulation time series), :mod:`.zarr_store` (zarr arrays), and :mod:`.meshes`
+(other one-frame mesh files, through trimesh). Folders, globs and lists of one-frame files are
+:mod:`.frames`; ``tuckercodec formats`` lists them all. What the formats share: reading a range
+of frames at a time (:mod:`.streaming`), faces stored flat (:mod:`.polygons`), and reading with
+a C++ library in a child process (:mod:`.isolation`, for USD and Alembic).
 """
 
 from __future__ import annotations
@@ -21,14 +23,7 @@ from pathlib import Path
 
 from ..errors import InputError
 from ..sequence import MeshSequence
-from .frames import (
-    FileFrames,
-    folder_files,
-    glob_files,
-    natural_sort_key,
-    read_frames,
-    write_frames,
-)
+from .frames import FileFrames, folder_files, glob_files, natural_sort_key, write_frames
 from .registry import (
     OPTION_FLAGS,
     ReadOptions,
@@ -92,13 +87,9 @@ def load_sequence(
             the error names the file, frame and line (or object).
         DependencyError: the format's library is not installed; names the extra to install.
     """
-    options = _read_options(prim, object_path, faces, fps)
-    resolved = _resolve(source, options)
-    if isinstance(resolved, list):
-        return read_frames(resolved, progress)
-    found, path = resolved
-    assert found.read is not None  # _resolve returns only formats that read
-    return found.read(path, options)
+    opened = open_frames(source, prim=prim, object_path=object_path, faces=faces, fps=fps)
+    with opened:
+        return opened.load(progress)
 
 
 def open_frames(
@@ -116,8 +107,7 @@ def open_frames(
     streams: a folder or list of files file by file, ``.npy``/PC2/MDD by offset, ``.npz``
     member ``V`` by offset or forward decompression, zarr chunk by chunk, USD and Alembic sample
     by sample (in a child process that stays open), VTK and XDMF step by step, glTF evaluated
-    per range (:mod:`tuckercodec.io.streaming` says how). A format registered without
-    ``open`` is loaded whole.
+    per range (:mod:`tuckercodec.io.streaming` says how).
 
     The description (frame and vertex counts, faces, names, rate, time codes) is read at once;
     each frame is checked when read, so an error in frame 900 is raised by the read of a range
@@ -135,10 +125,8 @@ def open_frames(
         where = source if isinstance(source, (str, os.PathLike)) else None
         return FileFrames(resolved, where)
     found, path = resolved
-    if found.open is not None:
-        return found.open(path, options)
-    assert found.read is not None  # _resolve returns only formats that read
-    return SequenceFrames(found.read(path, options), path)
+    assert found.open is not None  # _resolve returns only whole-sequence formats
+    return found.open(path, options)
 
 
 def _read_options(
@@ -176,7 +164,7 @@ def _resolve(source: Source, options: ReadOptions) -> list[Path] | tuple[Sequenc
         return folder_files(path)
     if not path.exists():
         raise InputError("no such file or folder", path=path)
-    if found is not None and found.read is not None:
+    if found is not None and found.open is not None:
         _refuse_options(options, found.read_options, f"{found.name} files", path)
         return found, path
     _refuse_options(options, frozenset(), "a one-frame mesh file", path)

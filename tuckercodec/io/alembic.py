@@ -32,7 +32,7 @@ Reading:
   :class:`InputError`\\ s naming the file, the object and the frame; so are the library's crashes
   and runaway allocations on damaged files, as it reads in a child process (:mod:`.isolation`).
   :func:`open_alembic` reads the samples a range at a time, in a child that stays open
-  (:mod:`.isolated_frames`; :class:`ArchiveFrames` is what it runs).
+  (:mod:`.isolation`; :class:`ArchiveFrames` is what it runs).
 
 Writing: an Ogawa archive holding an Xform ``/<name>`` (identity) and a PolyMesh
 ``/<name>/<name>Shape`` named after the file (``horse.abc`` gives ``/horse/horseShape``): the
@@ -48,6 +48,7 @@ samples, and put in place when complete (:func:`~tuckercodec.atomic.atomic_path`
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
@@ -60,21 +61,10 @@ from ..errors import InputError
 from ..optional import import_optional
 from ..reading import open_regular_file
 from ..sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_vertices
-from .alembic_time import (
-    CODES_KEY,
-    RATE_KEY,
-    check_times,
-    codes_from_times,
-    frame_rate,
-    kept_codes,
-    time_sampling,
-)
-from .isolated_frames import IsolatedFrames
-from .isolation import read_isolated
-from .isolation_child import note
-from .polygons import faces_from_polygons, polygons_from_faces, reverse_winding
-from .registry import ReadOptions, SequenceFormat, WriteOptions
-from .streaming import FrameSource
+from .isolation import IsolatedFrames, note
+from .polygons import faces_from_polygons, first_change, polygons_from_faces, reverse_winding
+from .registry import ReadOptions, WriteOptions
+from .streaming import FrameByFrame, FrameSource
 from .usd import listing, prim_name
 
 #: What alembic3d raises on a damaged archive: Alembic's exceptions (RuntimeError), names and
@@ -98,24 +88,13 @@ def _message(error: BaseException) -> str:
     return text[:300] or type(error).__name__
 
 
-def read_alembic(path: Path, options: ReadOptions) -> MeshSequence:
-    """A PolyMesh's position samples (see the module docstring), read in a child process."""
-    return read_isolated(_read_archive, path, options, "Alembic", "alembic", _MODULES)
-
-
 def open_alembic(path: Path, options: ReadOptions) -> FrameSource:
     """The frames of a PolyMesh, read sample by sample in a child process that stays open
-    (:mod:`.isolated_frames`)."""
+    (:mod:`.isolation`)."""
     return IsolatedFrames(ArchiveFrames, path, options, "Alembic", "alembic", _MODULES)
 
 
-def _read_archive(path: Path, options: ReadOptions) -> MeshSequence:
-    """:func:`read_alembic` in this process."""
-    with ArchiveFrames(path, options) as source:
-        return source.load()
-
-
-class ArchiveFrames(FrameSource):
+class ArchiveFrames(FrameByFrame):
     """A PolyMesh's position samples read one by one in this process (what the reading child
     runs): the archive, object, sample times, faces and rate at once, each frame's positions
     when read."""
@@ -211,12 +190,6 @@ class ArchiveFrames(FrameSource):
             )
         return sample
 
-    def _read(self, start: int, stop: int) -> np.ndarray:
-        vertices = np.empty((stop - start, self.vertex_count, 3), dtype=np.float64)
-        for frame in range(start, stop):
-            vertices[frame - start] = self._first if frame == 0 else self._frame(frame)
-        return vertices
-
 
 def _objects(abc: SimpleNamespace, archive: Any) -> tuple[dict[str, Any], dict[str, str]]:
     """Every PolyMesh and SubD object of the archive by full name, and the schema of every
@@ -273,17 +246,15 @@ def _faces(
     def topology(selector: Any) -> tuple[np.ndarray, np.ndarray]:
         return np.asarray(counts.getValue(selector)), np.asarray(indices.getValue(selector))
 
-    first = topology(selectors[0])
-    if not (counts.isConstant() and indices.isConstant()):
-        for frame, selector in enumerate(selectors[1:], start=1):
-            now = topology(selector)
-            if not (np.array_equal(now[0], first[0]) and np.array_equal(now[1], first[1])):
-                raise InputError(
-                    f"{where}: the faces change at time {times[frame]} s (face counts or "
-                    "indices differ from frame 0's); a sequence keeps one set of faces",
-                    path=path,
-                    frame=frame,
-                )
+    varying = not (counts.isConstant() and indices.isConstant())
+    first, frame = first_change(lambda n: topology(selectors[n]), len(selectors), varying)
+    if frame is not None:
+        raise InputError(
+            f"{where}: the faces change at time {times[frame]} s (face counts or indices "
+            "differ from frame 0's); a sequence keeps one set of faces",
+            path=path,
+            frame=frame,
+        )
     try:
         return reverse_winding(faces_from_polygons(first[0], first[1], vertex_count))
     except InputError as error:
@@ -351,14 +322,104 @@ def _written_samples(abc: SimpleNamespace, path: Path, name: str) -> int:
     return int(schema.getSchema().getPositionsProperty().getNumSamples())
 
 
-FORMAT = SequenceFormat(
-    name="alembic",
-    suffixes=(".abc",),
-    description="Alembic archive (Ogawa): a PolyMesh's position samples (--object to choose one)",
-    read=read_alembic,
-    write=write_alembic,
-    open=open_alembic,
-    read_options=frozenset({"object_path"}),
-    extra="alembic",
-    carries=frozenset({"faces", "frame_rate", "time_codes"}),
-)
+# ------------------------------------------------------------------------------------------
+# time: sample times to and from time codes and a frame rate (the conventions are the module
+# docstring's), shared by the reader and the writer
+
+
+#: The archive metadata key that holds the exact frame rate (the DCC FPS key keeps 6 decimals).
+RATE_KEY = "tuckercodec_frame_rate"
+#: The mesh's user property that holds the exact time codes, written only where no sample
+#: times give them back exactly (time x rate cannot reach every float).
+CODES_KEY = "tuckercodec_time_codes"
+
+
+def check_times(sampling: Any, times: np.ndarray, where: str, path: Path) -> None:
+    """Refuse sample times that do not increase, or that do not select their own sample."""
+    bad = np.flatnonzero(~np.isfinite(times))
+    if bad.size:
+        frame = int(bad[0])
+        raise InputError(f"{where}: sample {frame} has the time {times[frame]}", path=path)
+    steps = np.flatnonzero(np.diff(times) <= 0)
+    if steps.size:
+        frame = int(steps[0]) + 1
+        raise InputError(
+            f"{where}: the time of sample {frame} ({times[frame]} s) does not follow sample "
+            f"{frame - 1}'s ({times[frame - 1]} s)",
+            path=path,
+            frame=frame,
+        )
+    for frame, time in enumerate(times.tolist()):
+        if sampling.getNearIndex(time, len(times)) != frame:  # a read by time would miss it
+            raise InputError(
+                f"{where}: the time of sample {frame} ({time} s) selects another sample",
+                path=path,
+                frame=frame,
+            )
+
+
+def frame_rate(abc: SimpleNamespace, archive: Any, sampling: Any) -> float | None:
+    """Frames per second: ours, the DCC's, or the uniform sampling's (module docstring)."""
+    metadata = archive.getTop().getMetaData()
+    for key, tolerance in ((RATE_KEY, 0.0), ("_ai_DCC_FPS", 5e-7)):  # DCC FPS: 6 decimals
+        try:
+            rate = float(metadata.get(key))
+        except (TypeError, ValueError):
+            continue
+        if math.isfinite(rate) and rate > 0:
+            return _usual_rate(rate, tolerance)
+    kind = sampling.getTimeSamplingType()
+    if not kind.isUniform() or not kind.getTimePerCycle() > 0:
+        return None
+    rate = 1.0 / kind.getTimePerCycle()
+    return _usual_rate(rate, 1e-9 * rate) if math.isfinite(rate) else None
+
+
+def _usual_rate(rate: float, tolerance: float) -> float:
+    """A whole or NTSC (n*1000/1001) rate within ``tolerance`` of ``rate``, else ``rate``."""
+    for candidate in (float(round(rate)), round(rate * 1.001) * 1000 / 1001):
+        if candidate > 0 and abs(rate - candidate) <= tolerance:
+            return candidate
+    return rate
+
+
+def kept_codes(abc: SimpleNamespace, schema: Any, codes: np.ndarray) -> np.ndarray:
+    """The exact time codes tuckercodec kept beside the times (:data:`CODES_KEY`), where they
+    agree with the times, else ``codes``."""
+    user = schema.getUserProperties()
+    header = user.getPropertyHeader(CODES_KEY) if user.valid() else None
+    if header is None or not abc.Abc.IDoubleArrayProperty.matches(header):
+        return codes
+    kept = np.asarray(abc.Abc.IDoubleArrayProperty(user, CODES_KEY).getValue(), dtype=np.float64)
+    if kept.shape != codes.shape or not np.all(
+        np.abs(kept - codes) <= 1e-6 * np.maximum(1.0, np.abs(codes))
+    ):
+        return codes  # stale or foreign: the times are what the file says
+    return kept
+
+
+def codes_from_times(times: np.ndarray, rate: float) -> np.ndarray:
+    """Time codes of sample times: time x rate, a value within a few units in the last place
+    of a multiple of 1e-6 taken as that multiple, so that frame numbers come out whole (the
+    multiplication and the sampling's own arithmetic round by an ulp or two)."""
+    codes = np.asarray(times, dtype=np.float64) * rate
+    snapped = np.round(codes, 6)
+    close = np.abs(codes - snapped) <= 16 * np.spacing(np.abs(codes))
+    return np.where(close, snapped, codes)
+
+
+def time_sampling(abc: SimpleNamespace, codes: np.ndarray, rate: float) -> tuple[Any, bool]:
+    """A uniform time sampling if it gives back exactly these codes, else an acyclic one; and
+    whether its times give back the codes exactly."""
+    AbcA = abc.AbcA
+    start = float(codes[0]) / rate
+    step = (float(codes[1]) - float(codes[0])) / rate if len(codes) > 1 else 1.0 / rate
+    # what Alembic's TimeSampling::getSampleTime computes for a uniform sampling
+    uniform = start + step * np.arange(len(codes), dtype=np.float64)
+    if step > 0 and np.array_equal(codes_from_times(uniform, rate), codes):
+        return AbcA.TimeSampling(step, start), True
+    times = codes / rate
+    vector = AbcA.TimeVector()
+    vector.extend(times.tolist())
+    kind = AbcA.TimeSamplingType(AbcA.AcyclicFlag.kAcyclic)
+    return AbcA.TimeSampling(kind, vector), np.array_equal(codes_from_times(times, rate), codes)

@@ -75,12 +75,6 @@ def _frame_format(path: Path) -> SequenceFormat | None:
     return found if found is not None and found.read_frame is not None else None
 
 
-def read_frames(files: list[Path], show_progress: bool) -> MeshSequence:
-    """Read one frame per file; every frame must match the first one's vertices and faces."""
-    source = FileFrames(files)
-    return source.load(show_progress)
-
-
 class FileFrames(FrameSource):
     """One frame per file (a folder, a glob, a list), read file by file: the first file at
     once (for the vertex count and faces), the others when their frames are read, each checked
@@ -130,9 +124,9 @@ class FileFrames(FrameSource):
             vertices[index - start] = frame.vertices
         return vertices
 
-    def load(self, show_progress: bool = False) -> MeshSequence:
+    def load(self, progress: bool = False) -> MeshSequence:
         """The whole sequence, with a progress bar on a terminal if asked."""
-        vertices = self._read(0, self.frame_count, show_progress)
+        vertices = self._read(0, self.frame_count, progress)
         return MeshSequence(vertices, self.faces, frame_names=self.frame_names)
 
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from .registry import MeshFrame, SequenceFormat
+from .registry import MeshFrame
 
 
 def read_mesh_frame(path: Path, reference: MeshFrame | None = None) -> MeshFrame:
@@ -45,11 +45,3 @@ def _read_with_trimesh(path: Path) -> MeshFrame:
         row = int(np.argwhere(~np.isfinite(vertices))[0, 0])
         raise InputError(f"vertex {row} has a non-finite coordinate", path=path)
     return MeshFrame(vertices, faces, path=str(path))
-
-
-FORMAT = SequenceFormat(
-    name="mesh",
-    suffixes=(".ply", ".off", ".stl", ".3mf", ".dae"),  # .glb/.gltf: the gltf format
-    description="one frame per file, read with trimesh in the file's vertex order",
-    read_frame=read_mesh_frame,
-)

@@ -59,7 +59,7 @@ from ..atomic import write_atomic
 from ..errors import InputError
 from ..reading import open_regular_file
 from ..topology import face_table_problem
-from .registry import MeshFrame, SequenceFormat, WriteOptions
+from .registry import MeshFrame, WriteOptions
 
 #: The longest line the OBJ reader accepts, in bytes, its line end not counted: 4 MiB, a face of
 #: about half a million corners, far beyond any real mesh. A longer line is refused as soon as
@@ -691,18 +691,8 @@ def _face_lines(faces: np.ndarray) -> list[str]:
     return ["f " + " ".join(str(index) for index in row if index > 0) for row in rows]
 
 
-def _write_frame(
+def write_obj_frame(
     path: Path, vertices: np.ndarray, faces: np.ndarray, options: WriteOptions
 ) -> None:
+    """One frame as an OBJ file (the format's frame writer: a folder of frames)."""
     write_obj(path, vertices, faces, precision=options.precision, overwrite=options.overwrite)
-
-
-FORMAT = SequenceFormat(
-    name="obj",
-    suffixes=(".obj",),
-    description="Wavefront OBJ, one frame per file (a folder of them, or a glob)",
-    read_frame=read_obj_frame,
-    write_frame=_write_frame,
-    # exact text (repr) unless a precision is asked for; the frame names are the file names
-    carries=frozenset({"float64", "faces", "polygons", "frame_names"}),
-)

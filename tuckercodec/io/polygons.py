@@ -10,6 +10,8 @@ OBJ reader's rule).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from ..errors import InputError
@@ -73,6 +75,20 @@ def faces_from_polygons(counts: object, indices: object, vertex_count: int) -> n
     table = np.full((sizes.size, width), -1, dtype=np.int64)
     table[np.arange(width) < sizes[:, np.newaxis]] = flat  # row by row: the file's order
     return table
+
+
+def first_change(
+    topology: Callable[[int], tuple[np.ndarray, np.ndarray]], frames: int, varying: bool
+) -> tuple[tuple[np.ndarray, np.ndarray], int | None]:
+    """Frame 0's corner counts and vertex indices (``topology(frame)`` reads a frame's), and
+    the first frame whose differ from them, or ``None``: a sequence keeps one set of faces.
+    Only frame 0 is read unless the file says they may be ``varying`` (USD and Alembic do)."""
+    first = topology(0)
+    for frame in range(1, frames if varying else 1):
+        now = topology(frame)
+        if not (np.array_equal(now[0], first[0]) and np.array_equal(now[1], first[1])):
+            return first, frame
+    return first, None
 
 
 def polygons_from_faces(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -1,12 +1,13 @@
 """The registry of sequence file formats, keyed by file-name suffix.
 
-Each format is one module of :mod:`tuckercodec.io` that defines ``FORMAT``, a
-:class:`SequenceFormat`, and is listed in :data:`BUILTIN_MODULES`. A format either holds a
-whole sequence in one file (``read``/``write``: ``.npz``), or one frame per file (``read_frame``
+Each format is one module (or package) of :mod:`tuckercodec.io`, and one
+:class:`SequenceFormat` entry of the table in :mod:`.builtin`. A format either holds a
+whole sequence in one file (``open``/``write``: ``.npz``), or one frame per file (``read_frame``
 /``write_frame``: ``.obj``, and the meshes trimesh reads), which a folder, a glob or a list of
-files makes into a sequence (:mod:`.frames`). A whole-sequence format may also read a range of
-frames at a time (``open``: :mod:`.streaming`). Modules import their heavy libraries only inside
-their functions, so that looking a format up costs nothing.
+files makes into a sequence (:mod:`.frames`). ``open`` is the one loader of a whole-sequence
+format: it reads a range of frames at a time (:mod:`.streaming`), and ``.load()`` reads them
+all. Modules import their heavy libraries only inside their functions, so that looking a format
+up costs nothing.
 """
 
 from __future__ import annotations
@@ -22,22 +23,6 @@ import numpy as np
 
 from ..sequence import MeshSequence
 from .streaming import FrameSource
-
-#: The modules of :mod:`tuckercodec.io` that define a ``FORMAT``, in the order the CLI lists them.
-BUILTIN_MODULES = (
-    "obj",
-    "npz",
-    "npy",
-    "usd",
-    "alembic",
-    "pc2",
-    "mdd",
-    "gltf",
-    "vtk",
-    "xdmf",
-    "zarr_store",
-    "meshes",
-)
 
 
 @dataclass(eq=False)
@@ -108,11 +93,12 @@ class SequenceFormat:
     name: str
     suffixes: tuple[str, ...]  # lower case, with the dot
     description: str
-    read: Callable[[Path, ReadOptions], MeshSequence] | None = None  # a whole sequence
+    #: a whole sequence: opened to read a range of frames at a time (``.load()``: all of them)
+    open: Callable[[Path, ReadOptions], FrameSource] | None = None
     write: Callable[[MeshSequence, Path, WriteOptions], None] | None = None
     read_frame: FrameReader | None = None  # one frame from one file
     write_frame: FrameWriter | None = None  # one frame (vertices, faces) to one file
-    #: the :class:`ReadOptions` fields ``read`` uses; giving another one is an error
+    #: the :class:`ReadOptions` fields ``open`` uses; giving another one is an error
     read_options: frozenset[str] = frozenset()
     #: the optional extra that installs the library the format needs (``None``: core only)
     extra: str | None = None
@@ -120,9 +106,6 @@ class SequenceFormat:
     #: exactly), "faces", "polygons" (faces of more than 3 corners, not split into
     #: triangles), "frame_names", "frame_rate", "time_codes"
     carries: frozenset[str] = frozenset()
-    #: the sequence read a range of frames at a time, taking the same options as ``read``
-    #: (``None``: the format cannot stream, and is read whole)
-    open: Callable[[Path, ReadOptions], FrameSource] | None = None
     #: its "files" are folders (a zarr store), read by this format rather than as a folder
     #: of frames
     folder: bool = False
@@ -130,12 +113,11 @@ class SequenceFormat:
 
 @cache
 def formats() -> tuple[SequenceFormat, ...]:
-    """Every registered format, in the order of :data:`BUILTIN_MODULES`."""
-    found = []
-    for name in BUILTIN_MODULES:
-        module = importlib.import_module(f"{__package__}.{name}")
-        found.append(module.FORMAT)
-    return tuple(found)
+    """Every registered format, in the order the CLI lists them (:data:`.builtin.FORMATS`)."""
+    # by name, on first use: the formats import this module for its types (and the point
+    # caches the whole package, for --faces), and importing tuckercodec imports none of them
+    table: tuple[SequenceFormat, ...] = importlib.import_module(f"{__package__}.builtin").FORMATS
+    return table
 
 
 def format_named(name: str) -> SequenceFormat:

@@ -8,7 +8,7 @@ Which formats stream, and how (a format's :attr:`~.registry.SequenceFormat.open`
   (:class:`RawFrames`): a range is read with ``readinto`` in pieces of at most
   :data:`PIECE_BYTES`, so that reading costs the range's float64 array and no more. Nothing
   is memory-mapped: the pages of a mapped file count in the process's resident memory.
-* ``.npz`` (:mod:`.npz_frames`): key ``V`` by offset when stored, by decompressing forward when
+* ``.npz`` (:mod:`.npz`): key ``V`` by offset when stored, by decompressing forward when
   deflated (the member stays open, so a forward read of ranges never starts again from the
   beginning; a range before the last one does).
 * zarr stores (:mod:`.zarr_store`): chunk by chunk, through zarr.
@@ -17,11 +17,11 @@ Which formats stream, and how (a format's :attr:`~.registry.SequenceFormat.open`
   with any inline data, is held; its HDF5 datasets are read per step).
 * glTF (:mod:`.gltf`): the file is held and the frames of a range evaluated on demand.
 * USD and Alembic (:mod:`.usd`, :mod:`.alembic`): sample by sample, in a child process that
-  stays open for the source's life (:mod:`.isolated_frames`), so that a crash of the library
+  stays open for the source's life (:mod:`.isolation`), so that a crash of the library
   is still an :class:`~tuckercodec.errors.InputError`.
 
-Every built-in format streams. A format registered without ``open`` is loaded whole and
-wrapped in a :class:`SequenceFrames`.
+Every format streams: ``open`` is the one way a whole-sequence format reads (``load()`` reads
+all the frames). :class:`SequenceFrames` is a sequence in memory as a source.
 
 Every source checks what it reads as :class:`~tuckercodec.sequence.MeshSequence` does (finite
 positions, the first frame's vertex count and faces), when it reads it: an error in frame 900
@@ -38,7 +38,6 @@ import operator
 import os
 from collections.abc import Iterator
 from pathlib import Path
-from types import TracebackType
 from typing import IO, Any, BinaryIO, ClassVar
 
 import numpy as np
@@ -82,6 +81,8 @@ class FrameSource(abc.ABC):
     #: The attributes that hold open files or processes: ``None`` when closed or unpickled,
     #: opened again on first use (each needs a class-level default of ``None``).
     _transient: ClassVar[tuple[str, ...]] = ()
+    #: How errors name the positions, before "vertex 5 has...": "key 'V': " in an .npz.
+    _vertex_label: ClassVar[str] = ""
 
     def _describe(
         self,
@@ -144,7 +145,7 @@ class FrameSource(abc.ABC):
             if bad.any():
                 frame, vertex, _ = (int(i) for i in np.argwhere(bad)[0])
                 raise InputError(
-                    f"vertex {vertex} has a non-finite coordinate",
+                    f"{self._vertex_label}vertex {vertex} has a non-finite coordinate",
                     path=self.path,
                     frame=start + frame,
                 )
@@ -162,8 +163,10 @@ class FrameSource(abc.ABC):
         for start in range(0, self.frame_count, size):
             yield start, self.read(start, min(start + size, self.frame_count))
 
-    def load(self) -> MeshSequence:
-        """The whole sequence in memory."""
+    def load(self, progress: bool = False) -> MeshSequence:
+        """The whole sequence in memory; ``progress`` draws a progress bar on a terminal where
+        the source reads many files (:class:`~.frames.FileFrames`), others read too fast to
+        need one."""
         try:
             return MeshSequence(
                 self.read(0, self.frame_count),
@@ -193,12 +196,7 @@ class FrameSource(abc.ABC):
     def __enter__(self) -> FrameSource:
         return self
 
-    def __exit__(
-        self,
-        kind: type[BaseException] | None,
-        error: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
+    def __exit__(self, *exception: object) -> None:
         self.close()
 
     def __del__(self) -> None:
@@ -237,8 +235,25 @@ class SequenceFrames(FrameSource):
     def _read(self, start: int, stop: int) -> np.ndarray:
         return self.sequence.vertices[start:stop].copy()
 
-    def load(self) -> MeshSequence:
+    def load(self, progress: bool = False) -> MeshSequence:
         return self.sequence
+
+
+class FrameByFrame(FrameSource):
+    """A source whose library reads one frame at a time (:meth:`_frame`: USD, Alembic); frame 0
+    is read when the file is opened (for the vertex count) and kept in :attr:`_first`."""
+
+    _first: np.ndarray
+
+    def _read(self, start: int, stop: int) -> np.ndarray:
+        vertices = np.empty((stop - start, self.vertex_count, 3), dtype=np.float64)
+        for frame in range(start, stop):
+            vertices[frame - start] = self._first if frame == 0 else self._frame(frame)
+        return vertices
+
+    @abc.abstractmethod
+    def _frame(self, frame: int) -> np.ndarray:
+        """Frame ``frame``'s positions, (K, 3), checked."""
 
 
 class RawFrames(FrameSource):

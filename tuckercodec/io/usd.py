@@ -33,7 +33,7 @@ Reading:
   So the file is read in a child process (:mod:`.isolation`) whose memory and time are
   capped, and which may crash without taking the caller along: each is an InputError.
   :func:`open_usd` reads the frames sample by sample, a range at a time, in a child that stays
-  open (:mod:`.isolated_frames`; :class:`StageFrames` is what it runs).
+  open (:mod:`.isolation`; :class:`StageFrames` is what it runs).
 
 Writing: a stage with ``upAxis`` Y, ``metersPerUnit`` 0.01 (USD's fallback, authored only
 because usdchecker requires it: the file means what an unauthored one would), ``defaultPrim``
@@ -63,12 +63,10 @@ from ..errors import InputError
 from ..optional import import_optional
 from ..reading import open_regular_file
 from ..sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_vertices
-from .isolated_frames import IsolatedFrames
-from .isolation import read_isolated
-from .isolation_child import note
-from .polygons import faces_from_polygons, polygons_from_faces, reverse_winding
-from .registry import ReadOptions, SequenceFormat, WriteOptions
-from .streaming import FrameSource
+from .isolation import IsolatedFrames, note
+from .polygons import faces_from_polygons, first_change, polygons_from_faces, reverse_winding
+from .registry import ReadOptions, WriteOptions
+from .streaming import FrameByFrame, FrameSource
 
 #: Where the written mesh lives: the root Xform (also the stage's defaultPrim).
 ROOT = "/Root"
@@ -119,24 +117,13 @@ def _tf_message(error: BaseException) -> str:
     return "; ".join(text[:200] for text in texts[:2])
 
 
-def read_usd(path: Path, options: ReadOptions) -> MeshSequence:
-    """A UsdGeomMesh's time-sampled points (see the module docstring), read in a child process."""
-    return read_isolated(_read_stage, path, options, "USD", "usd", _PRELOAD)
-
-
 def open_usd(path: Path, options: ReadOptions) -> FrameSource:
     """The frames of a UsdGeomMesh, read sample by sample in a child process that stays open
-    (:mod:`.isolated_frames`)."""
+    (:mod:`.isolation`)."""
     return IsolatedFrames(StageFrames, path, options, "USD", "usd", _PRELOAD)
 
 
-def _read_stage(path: Path, options: ReadOptions) -> MeshSequence:
-    """:func:`read_usd` in this process."""
-    with StageFrames(path, options) as source:
-        return source.load()
-
-
-class StageFrames(FrameSource):
+class StageFrames(FrameByFrame):
     """A UsdGeomMesh's points read sample by sample in this process (what the reading child
     runs): the stage, prim, time samples and faces at once, each frame's points when read."""
 
@@ -215,11 +202,8 @@ class StageFrames(FrameSource):
         return positions
 
     def _read(self, start: int, stop: int) -> np.ndarray:
-        vertices = np.empty((stop - start, self.vertex_count, 3), dtype=np.float64)
         with _quiet(self._pxr):
-            for frame in range(start, stop):
-                vertices[frame - start] = self._first if frame == 0 else self._frame(frame)
-        return vertices
+            return super()._read(start, stop)
 
 
 def listing(paths: list[str]) -> str:
@@ -319,18 +303,15 @@ def _faces(
             return np.zeros(0, np.int32), np.zeros(0, np.int32)
         return np.asarray(found), np.asarray(listed)
 
-    first = topology(frame_times[0])
-    if counts.ValueMightBeTimeVarying() or indices.ValueMightBeTimeVarying():
-        for frame, time in enumerate(frame_times[1:], start=1):
-            now = topology(time)
-            if not (np.array_equal(now[0], first[0]) and np.array_equal(now[1], first[1])):
-                raise InputError(
-                    f"{where}: the faces change at time code {times[frame]} (faceVertexCounts "
-                    "or faceVertexIndices differ from frame 0's); a sequence keeps one set of "
-                    "faces",
-                    path=path,
-                    frame=frame,
-                )
+    varying = counts.ValueMightBeTimeVarying() or indices.ValueMightBeTimeVarying()
+    first, frame = first_change(lambda n: topology(frame_times[n]), len(frame_times), varying)
+    if frame is not None:
+        raise InputError(
+            f"{where}: the faces change at time code {times[frame]} (faceVertexCounts or "
+            "faceVertexIndices differ from frame 0's); a sequence keeps one set of faces",
+            path=path,
+            frame=frame,
+        )
     try:
         faces = faces_from_polygons(first[0], first[1], vertex_count)
     except InputError as error:
@@ -394,16 +375,3 @@ def _stage(pxr: SimpleNamespace, seq: MeshSequence, vertices: np.ndarray, name: 
     stage.SetStartTimeCode(float(codes[0]))
     stage.SetEndTimeCode(float(codes[-1]))
     return stage
-
-
-FORMAT = SequenceFormat(
-    name="usd",
-    suffixes=(".usd", ".usda", ".usdc"),
-    description="USD stage: a UsdGeomMesh with time-sampled points (--prim to choose one)",
-    read=read_usd,
-    write=write_usd,
-    open=open_usd,
-    read_options=frozenset({"prim"}),
-    extra="usd",
-    carries=frozenset({"faces", "frame_rate", "time_codes"}),
-)

@@ -29,7 +29,7 @@ from ..atomic import atomic_store
 from ..errors import InputError
 from ..optional import import_optional
 from ..sequence import MeshSequence
-from .registry import ReadOptions, SequenceFormat, WriteOptions
+from .registry import ReadOptions, WriteOptions
 from .streaming import FrameSource
 
 #: Frames per chunk of a written store.
@@ -172,12 +172,6 @@ def _attribute(attributes: dict[str, Any], name: str, path: Path) -> Any:
     return np.array(value, dtype=np.float64)
 
 
-def read_zarr(path: Path, options: ReadOptions) -> MeshSequence:
-    """The whole sequence of a zarr store."""
-    with ZarrFrames(path, options) as source:
-        return source.load()
-
-
 def write_zarr(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
     """Write the sequence as a zarr format 3 group (see the module docstring), atomically."""
     zarr = _zarr("writing zarr stores")
@@ -202,16 +196,3 @@ def write_zarr(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
         if seq.faces.shape[0]:
             group.create_array("faces", data=np.asarray(seq.faces, dtype=np.int64))
         group.attrs.update(attributes)
-
-
-FORMAT = SequenceFormat(
-    name="zarr",
-    suffixes=(".zarr",),
-    description="zarr store (a folder): array 'vertices' (frames, vertices, 3), faces, attributes",
-    read=read_zarr,
-    write=write_zarr,
-    open=ZarrFrames,
-    extra="zarr",
-    folder=True,
-    carries=frozenset({"float64", "faces", "polygons", "frame_names", "frame_rate", "time_codes"}),
-)

@@ -1,11 +1,21 @@
-"""The glTF 2.0 sequence format (``.glb``, ``.gltf``): morph targets and a weights animation.
+"""The glTF 2.0 sequence format (``.glb``, ``.gltf``): morph targets and a weights animation,
+and the glTF library it is written with.
 
 Reading samples the first animation of the file's mesh as a viewer plays it, at the keyframes
-or at ``--fps`` (:func:`tuckercodec.gltf.reader.read_gltf`); writing puts frame 0 in the mesh
-and every other frame in a morph target, one keyframe per frame
-(:mod:`tuckercodec.gltf.sequence_writer`), exact to within the float32 rounding of base +
-target. A static glTF (no animation) is a one-frame sequence, so a folder of .glb frames still
-reads one frame per file. :class:`GltfFrames` evaluates the frames a range at a time.
+or at ``--fps`` (:func:`.reader.read_gltf`); writing puts frame 0 in the mesh and every other
+frame in a morph target, one keyframe per frame (:mod:`.writer`), exact to within the float32
+rounding of base + target. A static glTF (no animation) is a one-frame sequence, so a folder of
+.glb frames still reads one frame per file. :class:`GltfFrames` evaluates the frames a range at
+a time.
+
+Modules, one job each: :mod:`.container` (the .glb/.gltf container and its buffers),
+:mod:`.accessors` (typed arrays in and out of buffers), :mod:`.meshopt`
+(EXT_meshopt_compression through the ``meshoptimizer`` package), :mod:`.animation` (samplers
+and node transforms), :mod:`.primitives` (a mesh's primitives merged), :mod:`.reader` (a morph
+animation sampled into a sequence), :mod:`.timing` (its frame rate and time codes),
+:mod:`.document` (the shared skeleton of written files) and :mod:`.writer` (a sequence as morph
+targets). A compressed file's decomposition written as glTF is :mod:`tuckercodec.gltf_export`,
+which uses this library.
 """
 
 from __future__ import annotations
@@ -15,25 +25,19 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..errors import InputError
-from ..gltf.reader import Scene, read_gltf
-from ..gltf.sequence_writer import write_sequence_gltf
-from ..gltf.timing import timing
-from ..sequence import MeshSequence
-from .registry import MeshFrame, ReadOptions, SequenceFormat, WriteOptions
-from .streaming import FrameSource
-
-
-def read(path: Path, options: ReadOptions) -> MeshSequence:
-    """The sequence of a .glb/.gltf file; ``object_path`` names the mesh node or mesh, ``fps``
-    the sampling rate."""
-    return read_gltf(path, object_path=options.object_path, fps=options.fps)
+from ...errors import InputError
+from ...sequence import MeshSequence
+from ..registry import MeshFrame, ReadOptions, WriteOptions
+from ..streaming import FrameSource
+from .reader import Scene, read_gltf
+from .timing import timing
+from .writer import write_sequence_gltf
 
 
 class GltfFrames(FrameSource):
     """The frames of a glTF animation, evaluated a range at a time: the file is read and
     checked once and held (its buffers hold every target anyway), and each range's frames are
-    evaluated when read, the same numbers as :func:`read` gives them."""
+    evaluated when read, the same numbers as :func:`.reader.read_gltf` gives them."""
 
     _transient: ClassVar[tuple[str, ...]] = ("_scene",)
     _scene: Scene | None = None
@@ -61,12 +65,12 @@ def _vertex_count(scene: Scene) -> int:
     return sum(len(scene.meshes[scene.doc.array("nodes")[n]["mesh"]].base) for n in scene.chosen)
 
 
-def write(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
+def write_gltf(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
     """Write the sequence as morph targets (polygons split into triangle fans)."""
     write_sequence_gltf(seq, path, overwrite=options.overwrite)
 
 
-def read_frame(path: Path, reference: MeshFrame | None = None) -> MeshFrame:
+def read_gltf_frame(path: Path, reference: MeshFrame | None = None) -> MeshFrame:
     """One frame from one glTF file of a folder of frames: its mesh as shown at rest; a file
     holding an animation of several frames is refused (load it on its own)."""
     seq = read_gltf(path)
@@ -76,16 +80,3 @@ def read_frame(path: Path, reference: MeshFrame | None = None) -> MeshFrame:
             path=path,
         )
     return MeshFrame(seq.vertices[0], seq.faces, path=str(path))
-
-
-FORMAT = SequenceFormat(
-    name="gltf",
-    suffixes=(".glb", ".gltf"),
-    description="glTF 2.0 morph animation (frame 0 the mesh, frames as morph targets)",
-    read=read,
-    write=write,
-    open=GltfFrames,
-    read_frame=read_frame,
-    read_options=frozenset({"object_path", "fps"}),
-    carries=frozenset({"faces", "frame_names", "frame_rate", "time_codes"}),
-)

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from ..optional import import_optional
+from ...optional import import_optional
 from .container import Document, integer
 
 EXTENSION = "EXT_meshopt_compression"

@@ -1,8 +1,8 @@
-"""Reading an ``.npz`` archive safely, for :mod:`.npz` (whole) and :mod:`.npz_frames` (by
-ranges): :class:`NpzArchive` (members by key), the check of each member's sizes against the
-file and of its ``.npy`` header against the member (:func:`member_header`, before anything is
-allocated), ``.npy`` headers themselves (:func:`npy_header`, shared with :mod:`.npy`), and the
-checks of the keys beside ``V``. Never pickle.
+"""Reading an ``.npz`` archive safely, for :mod:`tuckercodec.io.npz`: :class:`NpzArchive`
+(members by key), the check of each member's sizes against the file and of its ``.npy`` header
+against the member (:func:`member_header`, before anything is allocated), ``.npy`` headers
+themselves (:func:`npy_header`, shared with :mod:`.npy`), and the checks of the keys beside
+``V``. Never pickle.
 """
 
 from __future__ import annotations
@@ -19,9 +19,9 @@ from typing import IO
 
 import numpy as np
 
-from ..errors import InputError
-from ..reading import open_input
-from ..topology import face_table_problem
+from ...errors import InputError
+from ...reading import open_input
+from ...topology import face_table_problem
 
 # What zipfile and numpy.lib.format raise on a damaged archive or member (ValueError: numpy's
 # header checks; NotImplementedError: a zip feature such as strong encryption; TokenError: numpy
@@ -200,6 +200,14 @@ class NpyHeader:
     def data_bytes(self) -> int:
         """The bytes of data the header declares (Python integers: no overflow)."""
         return math.prod(self.shape) * self.dtype.itemsize
+
+    def positions(self) -> tuple[int, int] | None:
+        """Frames and vertices of an array of positions, shaped (frames, vertices, 3) or
+        (vertices, 3) for one frame; ``None`` for any other shape."""
+        shape = (1, *self.shape) if len(self.shape) == 2 else self.shape
+        if len(shape) != 3 or shape[2] != 3 or shape[0] < 1 or shape[1] < 1:
+            return None
+        return shape[0], shape[1]
 
 
 def npy_header(stream: IO[bytes], label: str, path: str | os.PathLike[str]) -> NpyHeader:

@@ -18,10 +18,10 @@ from xml.etree import ElementTree
 
 import numpy as np
 
-from ..atomic import atomic_path, refuse_existing, write_atomic
-from ..optional import import_optional
-from ..sequence import MeshSequence
-from .registry import WriteOptions
+from ...atomic import atomic_path, refuse_existing, write_atomic
+from ...optional import import_optional
+from ...sequence import MeshSequence
+from ..registry import WriteOptions
 
 
 def write_xdmf(seq: MeshSequence, path: Path, options: WriteOptions) -> None:

@@ -32,7 +32,7 @@ from xml.etree import ElementTree
 
 import numpy as np
 
-from ..errors import InputError
+from ...errors import InputError
 
 #: The VTK type names of data arrays and their numpy types (byte order added per file).
 TYPES = {

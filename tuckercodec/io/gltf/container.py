@@ -24,8 +24,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..errors import InputError
-from ..reading import open_input, open_regular_file
+from ...errors import InputError
+from ...reading import open_input, open_regular_file
 
 GLB_MAGIC = b"glTF"
 JSON_CHUNK = 0x4E4F534A

@@ -12,12 +12,12 @@ Layout, all little-endian (as in Blender's ``MOD_meshcache_pc2.cc``)::
     28      4     numSamples  int32, F
     32      12FK  positions   float32 x, y, z of K points, frame after frame
 
-Sample i is at frame ``startFrame + i * sampleRate``: these are the sequence's time codes
-(PC2 has no frames per second, so the frame rate stays unknown). Writing takes the start frame
-and the sample rate from the time codes (0, 1, 2... when the sequence has none), so they survive
-a PC2 to PC2 round trip; time codes that are not evenly spaced cannot be written as PC2.
-The faces come from ``--faces MESH`` (:func:`.pointcache.cache_faces`); without it the points
-are a point sequence. Frames are read by offset, a range at a time (:class:`Pc2Frames`).
+Sample i is at frame ``startFrame + i * sampleRate``: these are the sequence's time codes (PC2 has
+no frames per second, so the frame rate stays unknown). Writing takes the start frame and the sample
+rate from the time codes (0, 1, 2... when the sequence has none), so they survive a PC2 to PC2 round
+trip; time codes that are not evenly spaced cannot be written as PC2. The faces come from ``--faces
+MESH`` (:func:`~tuckercodec.io.pointcache.cache_faces`); without it the points are a point sequence.
+Frames are read by offset, a range at a time (:class:`Pc2Frames`).
 """
 
 from __future__ import annotations
@@ -27,20 +27,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..atomic import atomic_output
-from ..errors import InputError
-from ..sequence import MeshSequence
-from .pointcache import (
-    POINT_BYTES,
-    cache_faces,
-    check_counts,
-    check_size,
-    float32_positions,
-    open_cache,
-    read_header,
-)
-from .registry import ReadOptions, SequenceFormat, WriteOptions
-from .streaming import RawFrames
+from ...atomic import atomic_output
+from ...errors import InputError
+from ...sequence import MeshSequence
+from ..registry import ReadOptions, WriteOptions
+from . import POINT_BYTES, CacheFrames, check_counts, check_size, float32_positions
 
 SIGNATURE = b"POINTCACHE2\0"
 VERSION = 1
@@ -50,7 +41,7 @@ HEADER = struct.Struct("<12siiffi")  # signature, version, numPoints, start, sam
 _SPACING_TOLERANCE = 1e-6
 
 
-class Pc2Frames(RawFrames):
+class Pc2Frames(CacheFrames):
     """The frames of a PC2 point cache, read by offset: positions, time codes ``startFrame +
     i * sampleRate``, and the faces of ``options.faces`` (none without it).
 
@@ -61,9 +52,8 @@ class Pc2Frames(RawFrames):
     _what = "a PC2 point cache"
 
     def __init__(self, path: Path, options: ReadOptions):
-        stream, file_size = open_cache(path, self._what)
-        with stream:
-            raw = read_header(stream, HEADER.size, file_size, self._what, path)
+        stream, raw, file_size = self._open_header(path, HEADER.size)
+        stream.close()
         signature, version, points, start, step, frames = HEADER.unpack(raw)
         if signature != SIGNATURE:
             raise InputError(
@@ -82,15 +72,7 @@ class Pc2Frames(RawFrames):
             path,
         )
         codes = _time_codes(start, step, frames, path)
-        faces = cache_faces(options.faces, points, path)
-        self._file, self._offset, self._dtype = path, HEADER.size, np.dtype("<f4")
-        self._describe(path, frames, points, faces, time_codes=codes)
-
-
-def read_pc2(path: Path, options: ReadOptions) -> MeshSequence:
-    """The whole sequence of a PC2 point cache (:class:`Pc2Frames`)."""
-    with Pc2Frames(path, options) as source:
-        return source.load()
+        self._positions_at(path, options, HEADER.size, "<f4", (frames, points), (None, codes))
 
 
 def _time_codes(start: float, step: float, frames: int, path: Path) -> np.ndarray:
@@ -143,15 +125,3 @@ def _start_and_step(codes: np.ndarray, path: Path) -> tuple[float, float]:
             f"startFrame and sampleRate of {path.name}"
         )
     return float(fields[0]), float(fields[1])
-
-
-FORMAT = SequenceFormat(
-    name="pc2",
-    suffixes=(".pc2",),
-    description="PC2 point cache (Blender, 3ds Max, Maya): positions, start frame, sample rate",
-    read=read_pc2,
-    write=write_pc2,
-    open=Pc2Frames,
-    read_options=frozenset({"faces"}),
-    carries=frozenset({"time_codes"}),
-)

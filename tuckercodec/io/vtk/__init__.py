@@ -1,6 +1,6 @@
 """VTK time series (``.pvd``): a ParaView collection of one ``.vtp`` (PolyData) or ``.vtu``
 (UnstructuredGrid) file per time step, the way simulation codes write a deforming mesh. Core:
-the files are read and written by :mod:`.vtk_xml` in plain numpy and the standard library, no
+the files are read and written by :mod:`.datasets` in plain numpy and the standard library, no
 extra needed; the ``.pvd`` index is read with the standard library's XML parser.
 
 Reading: the ``.pvd`` must be ``<VTKFile type="Collection">`` with a ``<Collection>`` of
@@ -10,7 +10,7 @@ simulation's own unit (the frame rate stays unknown); without timesteps the list
 One mesh per time step: several ``part`` values, or one timestep listed twice, are refused
 (merge the parts first, ParaView's Merge Blocks), as are parallel files (``.pvtu``, ``.pvtp``).
 Each file must have the first one's points and faces; what is read of each (every encoding VTK
-writes; triangles, quads, polygons, strips; what is refused) is :mod:`.vtk_xml`'s docstring.
+writes; triangles, quads, polygons, strips; what is refused) is :mod:`.datasets`'s docstring.
 Positions keep their precision (float64 stays float64). :class:`PvdFrames` reads the files as
 their frames are asked for, a range at a time. XDMF is not read here.
 
@@ -18,16 +18,16 @@ Hostile input: a ``.pvd`` larger than :data:`MAX_INDEX_BYTES`, or one that decla
 an ENTITY (the way to an entity-expansion attack; a ``.pvd`` needs neither), is refused before it
 is parsed, as is a ``.vtu``/``.vtp`` with either in its prolog. A listed file that is missing,
 not a regular file or not VTK XML is named with the DataSet that lists it. Sizes inside a file
-are checked before anything is allocated or inflated (:mod:`.vtk_data`).
+are checked before anything is allocated or inflated (:mod:`.arrays`).
 
 Writing ``out.pvd``: one ``.vtp`` per frame (:data:`FRAME_SUFFIX`; ``.vtu`` on request) in the
-folder ``out/`` beside it (names from :func:`.frames.frame_file_names`), in ParaView's own layout
-(appended raw binary, zlib blocks, UInt64 headers), Float32 when every position is a float32
-(exact either way), Float64 otherwise. PolyData is ParaView's surface type: its surface filters
-(normals, smoothing, decimation) take it directly, where an UnstructuredGrid first needs Extract
-Surface. Every target is checked first (never overwritten without ``overwrite``), the frames are
-staged in a hidden folder and moved in whole (:func:`~tuckercodec.atomic.atomic_folder`), and
-the ``.pvd`` is written last, atomically.
+folder ``out/`` beside it (names from :func:`~tuckercodec.io.frames.frame_file_names`), in
+ParaView's own layout (appended raw binary, zlib blocks, UInt64 headers), Float32 when every
+position is a float32 (exact either way), Float64 otherwise. PolyData is ParaView's surface type:
+its surface filters (normals, smoothing, decimation) take it directly, where an UnstructuredGrid
+first needs Extract Surface. Every target is checked first (never overwritten without
+``overwrite``), the frames are staged in a hidden folder and moved in whole
+(:func:`~tuckercodec.atomic.atomic_folder`), and the ``.pvd`` is written last, atomically.
 """
 
 from __future__ import annotations
@@ -40,15 +40,15 @@ from xml.etree import ElementTree
 
 import numpy as np
 
-from ..atomic import atomic_folder, refuse_existing, write_atomic
-from ..errors import InputError
-from ..reading import open_input, open_regular_file
-from ..sequence import MeshSequence
-from .frames import frame_file_names
-from .registry import ReadOptions, SequenceFormat, WriteOptions
-from .streaming import FrameSource
-from .vtk_data import Layout
-from .vtk_xml import DATASETS, DatasetWriter, read_dataset, refuse_declarations
+from ...atomic import atomic_folder, refuse_existing, write_atomic
+from ...errors import InputError
+from ...reading import open_input, open_regular_file
+from ...sequence import MeshSequence
+from ..frames import frame_file_names
+from ..registry import ReadOptions, WriteOptions
+from ..streaming import FrameSource
+from .arrays import Layout
+from .datasets import DATASETS, DatasetWriter, read_dataset, refuse_declarations
 
 #: The largest .pvd index read: about a million time steps, far beyond any real series.
 MAX_INDEX_BYTES = 64 * 1024 * 1024
@@ -100,13 +100,6 @@ class PvdFrames(FrameSource):
                 )
             frames.append(np.asarray(points, dtype=np.float64))
         return np.stack(frames)
-
-
-def read_pvd(path: Path, options: ReadOptions | None = None) -> MeshSequence:
-    """A sequence from a ParaView ``.pvd`` collection of ``.vtp``/``.vtu`` files (see the
-    module docstring); the format takes no read options."""
-    with PvdFrames(path) as source:
-        return source.load()
 
 
 def _refuse_repeated_files(entries: list[_Entry], path: Path) -> None:
@@ -307,14 +300,3 @@ def _index_xml(folder: str, names: list[str], codes: np.ndarray) -> bytes:
         )
     ElementTree.indent(root)
     return ElementTree.tostring(root, encoding="utf-8", xml_declaration=True) + b"\n"
-
-
-FORMAT = SequenceFormat(
-    name="vtk",
-    suffixes=(".pvd",),
-    description="VTK time series: a ParaView .pvd of .vtp or .vtu files, one per time step",
-    read=read_pvd,
-    write=write_pvd,
-    open=PvdFrames,
-    carries=frozenset({"float64", "faces", "polygons", "frame_names", "time_codes"}),
-)

@@ -3,9 +3,10 @@
 ``Reference``s that lead from one element to another.
 
 Every count is checked before it is used: XML values against the item's ``Dimensions``; an HDF
-dataset must hold exactly as many values, and store at least 1/:data:`~.vtk_data.MAX_INFLATION`
-of its size, so that no compression filter inflates it beyond what zlib could before it is read.
-Errors are :class:`InputError`s without a path (the caller names the .xdmf and the frame).
+dataset must hold exactly as many values, and store at least
+1/:data:`~tuckercodec.io.vtk.arrays.MAX_INFLATION` of its size, so that no compression filter
+inflates it beyond what zlib could before it is read. Errors are :class:`InputError`s without a path
+(the caller names the .xdmf and the frame).
 """
 
 from __future__ import annotations
@@ -18,24 +19,17 @@ from xml.etree import ElementTree
 
 import numpy as np
 
-from ..errors import InputError
-from ..optional import import_optional
-from .vtk_data import MAX_INFLATION
+from ...errors import InputError
+from ...optional import import_optional
+from ..vtk.arrays import MAX_INFLATION
 
 #: The tags of XInclude elements, which are not followed.
 XINCLUDE = ("{http://www.w3.org/2001/XInclude}include", "{http://www.w3.org/2003/XInclude}include")
 #: XDMF number types and precisions, as numpy types.
 _NUMBERS = {
-    ("float", 4): "f4",
-    ("float", 8): "f8",
-    ("int", 1): "i1",
-    ("int", 2): "i2",
-    ("int", 4): "i4",
-    ("int", 8): "i8",
-    ("uint", 1): "u1",
-    ("uint", 2): "u2",
-    ("uint", 4): "u4",
-    ("uint", 8): "u8",
+    **{("float", size): f"f{size}" for size in (4, 8)},
+    **{("int", size): f"i{size}" for size in (1, 2, 4, 8)},
+    **{("uint", size): f"u{size}" for size in (1, 2, 4, 8)},
     ("char", 1): "i1",
     ("uchar", 1): "u1",
 }

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from .._version import __version__
+from ..._version import __version__
 from .accessors import ELEMENT_ARRAY_BUFFER, BufferBuilder
 from .container import pack_glb, pack_gltf
 

@@ -25,7 +25,7 @@ Hostile input: an ENTITY declaration is refused before parsing (a DOCTYPE alone,
 files carry, is harmless: the parser never fetches it); every count is checked against the data
 before it is used; an HDF dataset must hold as many values as its ``Dimensions`` and store at
 least 1/1032 of its size (no more than zlib can inflate). Errors name the .xdmf, the frame and
-the grid. Writing is :mod:`.xdmf_write`'s.
+the grid. Writing is :mod:`.writer`'s.
 """
 
 from __future__ import annotations
@@ -38,14 +38,11 @@ from xml.etree import ElementTree
 
 import numpy as np
 
-from ..errors import InputError
-from ..reading import open_input
-from ..sequence import MeshSequence
-from .polygons import faces_from_polygons
-from .registry import SequenceFormat
-from .streaming import FrameSource
-from .xdmf_data import XINCLUDE, HeavyData, lower, read_item, resolve
-from .xdmf_write import write_xdmf
+from ...errors import InputError
+from ...reading import open_input
+from ..polygons import faces_from_polygons
+from ..streaming import FrameSource
+from .items import XINCLUDE, HeavyData, lower, read_item, resolve
 
 _FIXED = {"triangle": 3, "quadrilateral": 4}
 #: XDMF's Mixed topology codes: polyvertex and polygon are followed by their point count.
@@ -124,13 +121,6 @@ class XdmfFrames(FrameSource):
                 step = steps[index]
                 vertices[index - start] = self._step(index, step, self.faces, self.vertex_count)[0]
         return vertices
-
-
-def read_xdmf(path: Path, options: object = None) -> MeshSequence:
-    """A sequence from an XDMF temporal collection (see the module docstring); the format
-    takes no read options."""
-    with XdmfFrames(path) as source:
-        return source.load()
 
 
 def _shared(first: int, index: int, source: object) -> InputError:
@@ -386,15 +376,3 @@ def _mixed(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     counts = np.array(sizes, dtype=np.int64)
     index = np.repeat(np.array(starts, dtype=np.int64) - np.cumsum(counts) + counts, counts)
     return counts, values[index + np.arange(index.size)]
-
-
-FORMAT = SequenceFormat(
-    name="xdmf",
-    suffixes=(".xdmf", ".xmf"),
-    description="XDMF time series: a temporal collection of grids, HDF5 or XML data (h5py)",
-    read=read_xdmf,
-    write=write_xdmf,
-    open=XdmfFrames,
-    extra="xdmf",
-    carries=frozenset({"float64", "faces", "polygons", "frame_names", "time_codes"}),
-)

@@ -1,6 +1,6 @@
 """What the two point-cache formats share (:mod:`.pc2`, :mod:`.mdd`): reading a fixed-size
-header and checking the file's size against what it declares (positions are then read by
-offset: :class:`.streaming.RawFrames`), the faces the points take from ``--faces MESH`` (as
+header and checking the file's size against what it declares (positions are then read by offset:
+:class:`~tuckercodec.io.streaming.RawFrames`), the faces the points take from ``--faces MESH`` (as
 ``.npy`` files do too), and positions made ready for writing.
 
 A point cache holds positions only: F frames of K points, each a float32 x, y, z. The header
@@ -17,14 +17,47 @@ from typing import BinaryIO
 
 import numpy as np
 
-from ..errors import InputError
-from ..reading import open_input
-from ..sequence import MeshSequence, float32_vertices
+from ...errors import InputError
+from ...reading import open_input
+from ...sequence import MeshSequence, float32_vertices
+from ..registry import ReadOptions
+from ..streaming import RawFrames
 
 #: Bytes of one point: three float32 coordinates.
 POINT_BYTES = 12
 #: The largest count an int32 header field can hold, and so the largest a cache can declare.
 INT32_MAX = 2**31 - 1
+
+
+class CacheFrames(RawFrames):
+    """A point cache's frames, read by offset: what PC2 and MDD share. The file's header is read
+    first (:meth:`_open_header`), its counts checked against the file's size, then the place
+    and type of the positions and the faces of ``--faces`` set (:meth:`_positions_at`)."""
+
+    def _open_header(self, path: Path, size: int) -> tuple[BinaryIO, bytes, int]:
+        """The open file, its first ``size`` bytes (an InputError if it is shorter) and its
+        size in bytes."""
+        stream, file_size = open_cache(path, self._what)
+        try:
+            return stream, read_header(stream, size, file_size, self._what, path), file_size
+        except BaseException:
+            stream.close()
+            raise
+
+    def _positions_at(
+        self,
+        path: Path,
+        options: ReadOptions,
+        offset: int,
+        dtype: str,
+        counts: tuple[int, int],
+        timing: tuple[float | None, np.ndarray | None] = (None, None),
+    ) -> None:
+        """The ``counts`` (frames, points) of positions of ``dtype`` start at ``offset``;
+        ``timing`` is the frame rate and time codes; the faces are ``options.faces``'s."""
+        faces = cache_faces(options.faces, counts[1], path)
+        self._file, self._offset, self._dtype = path, offset, np.dtype(dtype)
+        self._describe(path, *counts, faces, frame_rate=timing[0], time_codes=timing[1])
 
 
 def open_cache(path: Path, what: str) -> tuple[BinaryIO, int]:
@@ -85,7 +118,7 @@ def cache_faces(faces_file: Path | None, point_count: int, path: Path) -> np.nda
     be the cache's point count; without one, no faces (a point sequence)."""
     if faces_file is None:
         return np.zeros((0, 3), dtype=np.int64)
-    from . import load_sequence  # here: the package imports the formats' registry
+    from .. import load_sequence  # here: the package imports the formats' registry
 
     mesh = load_sequence(faces_file, progress=False)
     if mesh.faces.shape[0] == 0:

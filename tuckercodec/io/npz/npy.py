@@ -1,16 +1,16 @@
 """The ``.npy`` sequence format: one NumPy array of positions, (frames, vertices, 3).
 
-The array holds float32 or float64 numbers of either byte order, in C order (a (vertices, 3)
-array is one frame); that is all a ``.npy`` holds, so faces come from ``--faces MESH``
-(:attr:`ReadOptions.faces`, as for the point caches: :func:`.pointcache.cache_faces`), and
-without it the sequence is a point sequence. The header is read and checked as in an ``.npz``
-(:func:`.npz_archive.npy_header`: never pickle), and the file's size must be exactly what it
-declares, before anything is allocated.
+The array holds float32 or float64 numbers of either byte order, in C order (a (vertices, 3) array
+is one frame); that is all a ``.npy`` holds, so faces come from ``--faces MESH``
+(:attr:`ReadOptions.faces`, as for the point caches:
+:func:`~tuckercodec.io.pointcache.cache_faces`), and without it the sequence is a point sequence.
+The header is read and checked as in an ``.npz`` (:func:`.archive.npy_header`: never pickle), and
+the file's size must be exactly what it declares, before anything is allocated.
 
-It streams (:class:`NpyFrames`): a range of frames is read by offset with ``readinto``, a few
-MiB at a time (:class:`.streaming.RawFrames`), so that reading a range costs its float64 array
-and nothing in proportion to the file. The file is not memory-mapped: mapped pages count in the
-process's resident memory.
+It streams (:class:`NpyFrames`): a range of frames is read by offset with ``readinto``, a few MiB at
+a time (:class:`~tuckercodec.io.streaming.RawFrames`), so that reading a range costs its float64
+array and nothing in proportion to the file. The file is not memory-mapped: mapped pages count in
+the process's resident memory.
 
 Writing: float32 where that is exact, else float64 (:meth:`MeshSequence.compact_vertices`);
 faces, frame names, rate and time codes are not kept.
@@ -23,14 +23,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..atomic import atomic_output
-from ..errors import InputError
-from ..reading import open_input
-from ..sequence import MeshSequence
-from .npz_archive import npy_header
-from .pointcache import cache_faces, check_size
-from .registry import ReadOptions, SequenceFormat, WriteOptions
-from .streaming import RawFrames
+from ...atomic import atomic_output
+from ...errors import InputError
+from ...reading import open_input
+from ...sequence import MeshSequence
+from ..pointcache import cache_faces, check_size
+from ..registry import ReadOptions, WriteOptions
+from ..streaming import RawFrames
+from .archive import npy_header
 
 #: The numbers a .npy of positions may hold (either byte order).
 _KINDS = ("f4", "f8")
@@ -51,15 +51,13 @@ class NpyFrames(RawFrames):
                 )
             stream.seek(0)
             header = npy_header(stream, "its array", path)
-            shape, dtype = header.shape, header.dtype
+            dtype, shape = header.dtype, header.positions()
             if dtype.kind != "f" or f"{dtype.kind}{dtype.itemsize}" not in _KINDS:
                 raise InputError(
                     f"holds {dtype} numbers; a .npy of positions holds float32 or float64",
                     path=path,
                 )
-            if len(shape) == 2:  # one frame
-                shape = (1, *shape)
-            if len(shape) != 3 or shape[2] != 3 or shape[0] < 1 or shape[1] < 1:
+            if shape is None:
                 raise InputError(
                     f"holds an array of shape {header.shape}, not (frames, vertices, 3)",
                     path=path,
@@ -86,31 +84,8 @@ class NpyFrames(RawFrames):
         self._describe(path, shape[0], shape[1], cache_faces(faces_file, shape[1], path))
 
 
-def open_npy(path: Path, options: ReadOptions) -> NpyFrames:
-    """The frames of a ``.npy`` file, read range by range; faces from ``options.faces``."""
-    return NpyFrames(path, options)
-
-
-def read_npy(path: Path, options: ReadOptions) -> MeshSequence:
-    """The whole sequence of a ``.npy`` file."""
-    with NpyFrames(path, options) as source:
-        return source.load()
-
-
 def write_npy(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
     """Write the positions as a ``.npy`` array, float32 where exact, else float64, atomically;
     faces, names, rate and time codes are not kept."""
     with atomic_output(path, overwrite=options.overwrite) as stream:
         np.save(stream, seq.compact_vertices(), allow_pickle=False)
-
-
-FORMAT = SequenceFormat(
-    name="npy",
-    suffixes=(".npy",),
-    description="NumPy array of positions (frames, vertices, 3), float32 or float64",
-    read=read_npy,
-    write=write_npy,
-    open=open_npy,
-    read_options=frozenset({"faces"}),
-    carries=frozenset({"float64"}),
-)

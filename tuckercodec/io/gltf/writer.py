@@ -11,7 +11,7 @@ target, ``|x_t - fl32(x_0)| · 2^-24`` per coordinate (on top of rounding ``x_0`
 frame 0): the round trip is exact to within that float32 rounding of base + target, not bit for
 bit. Faces are triangles: polygons are split into fans from their first corner (a point
 sequence is written as POINTS). Frame rate, time codes and frame names are kept in the
-asset's ``extras`` and read back by :func:`tuckercodec.gltf.reader.read_gltf`.
+asset's ``extras`` and read back by :func:`.reader.read_gltf`.
 """
 
 from __future__ import annotations
@@ -21,9 +21,9 @@ from typing import Any
 
 import numpy as np
 
-from ..atomic import write_atomic
-from ..errors import InputError
-from ..sequence import MeshSequence, float32_seconds
+from ...atomic import write_atomic
+from ...errors import InputError
+from ...sequence import MeshSequence, float32_seconds
 from .accessors import ARRAY_BUFFER, BufferBuilder
 from .document import add_triangles, file_bytes, new_gltf
 from .reader import EXTRAS_KEY

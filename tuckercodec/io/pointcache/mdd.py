@@ -19,10 +19,10 @@ round trip keeps the times bit for bit. Times that do not increase (some exporte
 constant) carry no timing: the frames are read as 0, 1, 2... with no rate.
 
 Blender's MDD exporter before 2.80 wrote a "rest frame" (a copy of the first frame) before the
-frames, without counting it in numFrames: a file exactly one frame longer than its header says
-is read as that layout, and the uncounted rest frame is skipped. Any other size mismatch is an
-error. The faces come from ``--faces MESH`` (:func:`.pointcache.cache_faces`). Frames are read
-by offset, a range at a time (:class:`MddFrames`).
+frames, without counting it in numFrames: a file exactly one frame longer than its header says is
+read as that layout, and the uncounted rest frame is skipped. Any other size mismatch is an error.
+The faces come from ``--faces MESH`` (:func:`~tuckercodec.io.pointcache.cache_faces`). Frames are
+read by offset, a range at a time (:class:`MddFrames`).
 """
 
 from __future__ import annotations
@@ -32,21 +32,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..atomic import atomic_output
-from ..errors import InputError
-from ..sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_seconds
-from .pointcache import (
-    POINT_BYTES,
-    cache_faces,
-    check_counts,
-    check_size,
-    float32_positions,
-    open_cache,
-    read_floats,
-    read_header,
-)
-from .registry import ReadOptions, SequenceFormat, WriteOptions
-from .streaming import RawFrames
+from ...atomic import atomic_output
+from ...errors import InputError
+from ...sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_seconds
+from ..registry import ReadOptions, WriteOptions
+from . import POINT_BYTES, CacheFrames, check_counts, check_size, float32_positions, read_floats
 
 HEADER = struct.Struct(">ii")  # numFrames, numPoints
 #: Frame rates tried first when working out the rate of a file's times: film, PAL, NTSC (and
@@ -69,7 +59,7 @@ COMMON_RATES = (
 )
 
 
-class MddFrames(RawFrames):
+class MddFrames(CacheFrames):
     """The frames of an MDD point cache, read by offset: positions, the frame rate and time
     codes its times imply (see the module docstring), and the faces of ``options.faces``.
 
@@ -80,9 +70,8 @@ class MddFrames(RawFrames):
     _what = "an MDD point cache"
 
     def __init__(self, path: Path, options: ReadOptions):
-        stream, file_size = open_cache(path, self._what)
+        stream, raw, file_size = self._open_header(path, HEADER.size)
         with stream:
-            raw = read_header(stream, HEADER.size, file_size, self._what, path)
             frames, points = HEADER.unpack(raw)
             check_counts(frames, points, path)
             declared = HEADER.size + 4 * frames + frames * points * POINT_BYTES
@@ -95,18 +84,10 @@ class MddFrames(RawFrames):
                     path,
                 )
             times = read_floats(stream, frames, ">f4", path)
-        rate, codes = frame_timing(times, path)
-        faces = cache_faces(options.faces, points, path)
-        self._file, self._dtype = path, np.dtype(">f4")
         # Blender's old exporter: an uncounted copy of the first frame before the frames
-        self._offset = HEADER.size + 4 * frames + (points * POINT_BYTES if rest_frame else 0)
-        self._describe(path, frames, points, faces, frame_rate=rate, time_codes=codes)
-
-
-def read_mdd(path: Path, options: ReadOptions) -> MeshSequence:
-    """The whole sequence of an MDD point cache (:class:`MddFrames`)."""
-    with MddFrames(path, options) as source:
-        return source.load()
+        offset = HEADER.size + 4 * frames + (points * POINT_BYTES if rest_frame else 0)
+        timing = frame_timing(times, path)
+        self._positions_at(path, options, offset, ">f4", (frames, points), timing)
 
 
 def frame_timing(times: np.ndarray, path: Path) -> tuple[float | None, np.ndarray | None]:
@@ -156,15 +137,3 @@ def write_mdd(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
         stream.write(HEADER.pack(seq.frame_count, seq.vertex_count))
         stream.write(times.tobytes())
         stream.write(positions.tobytes())
-
-
-FORMAT = SequenceFormat(
-    name="mdd",
-    suffixes=(".mdd",),
-    description="MDD point cache (LightWave, Blender, Houdini): positions, times in seconds",
-    read=read_mdd,
-    write=write_mdd,
-    open=MddFrames,
-    read_options=frozenset({"faces"}),
-    carries=frozenset({"frame_rate", "time_codes"}),
-)

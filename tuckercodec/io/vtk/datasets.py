@@ -1,6 +1,6 @@
 """One VTK XML dataset file, an UnstructuredGrid (``.vtu``) or a PolyData (``.vtp``): its
 points and surface cells read into a face table, and written back, in plain numpy and the
-standard library (the arrays' encodings are :mod:`.vtk_data`'s).
+standard library (the arrays' encodings are :mod:`.arrays`'s).
 
 Reading, by the ``<VTKFile type=..>`` of the file (whatever its name's suffix):
 
@@ -30,9 +30,9 @@ from xml.etree import ElementTree
 
 import numpy as np
 
-from ..errors import InputError
-from .polygons import faces_from_polygons, polygons_from_faces
-from .vtk_data import Encoding, Layout, encode_array, file_encoding, read_array, type_name
+from ...errors import InputError
+from ..polygons import faces_from_polygons, polygons_from_faces
+from .arrays import Encoding, Layout, encode_array, file_encoding, read_array, type_name
 
 #: The dataset types read and written, by the suffix VTK gives their files.
 DATASETS = {".vtu": "UnstructuredGrid", ".vtp": "PolyData"}
@@ -319,7 +319,7 @@ class DatasetWriter:
         faces: the face table (-1 padded; no rows for a point sequence).
         vertex_count: the number of points.
         kind: ``"PolyData"`` or ``"UnstructuredGrid"``.
-        layout: how arrays are stored (:class:`~.vtk_data.Layout`; ParaView's by default).
+        layout: how arrays are stored (:class:`~.arrays.Layout`; ParaView's by default).
     """
 
     def __init__(

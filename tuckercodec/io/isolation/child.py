@@ -1,12 +1,14 @@
-"""The reading child of :mod:`.isolation`: what runs in the child process, started with
-``python -P -c`` and given its request (reader, file, options, limits) as JSON.
+"""The child of :mod:`tuckercodec.io.isolation`: what runs in the child process, started with
+``python -P -c`` and given its request (opener, file, options, limits) as JSON.
 
-The child writes to its stdout, unbuffered so that nothing is lost in a crash, one JSON line at
-a time: ``{"started": true}`` once its libraries are imported and its memory capped, the
-reader's notes (:func:`note`: where it reads, for the error should it crash there), then a
-result: ``{"result": "sequence", ...}`` followed by the arrays in ``.npy`` format, or an error
-(our own errors pickled; a failed allocation; a bug's traceback). What the libraries print goes
-to stderr. :mod:`.isolated_frames` uses the same pieces for a child that serves many reads.
+One protocol, over the child's stdin and stdout. The child writes to its stdout, unbuffered so
+that nothing is lost in a crash, one JSON line at a time: ``{"started": true}`` once its
+libraries are imported and its memory capped, the reader's notes (:func:`note`: where it
+reads, for the error should it crash there), then a result header: the description of the
+opened source (``"description"``) or frames (``"frames"``), each followed by its arrays as raw
+bytes (the header lists their names, dtypes and shapes), or an error (our own errors pickled; a
+failed allocation; a bug's traceback). It reads one request ``{"read": [start, stop]}`` a line
+on its stdin, and leaves when its stdin ends. What the libraries print goes to stderr.
 """
 
 from __future__ import annotations
@@ -25,11 +27,12 @@ from typing import IO, Any
 
 import numpy as np
 
-from .. import errors
-from ..sequence import MeshSequence
-from .registry import ReadOptions
+from ... import errors
+from ...sequence import MeshSequence
+from ..registry import ReadOptions
+from ..streaming import SequenceFrames
 
-#: In the child: where :func:`note` writes (the result file); None in any other process.
+#: In the child: where :func:`note` writes (its stdout); None in any other process.
 _notes: IO[bytes] | None = None
 
 
@@ -38,17 +41,6 @@ def note(where: str, frame: int | None = None) -> None:
     the error should the library crash there. Does nothing outside a reading child."""
     if _notes is not None:
         send({"note": where, "frame": frame})
-
-
-def read_child(argument: str) -> None:
-    """The child's whole life: read, write the outcome to stdout, exit (never returns)."""
-    request = json.loads(argument)
-    try:
-        reader = start_child(request)
-        _send_sequence(reader(Path(request["path"]), child_options(request)))
-    except BaseException as error:
-        send_failure(error)
-    os._exit(0)  # skip the libraries' static destructors: a damaged file may have upset them
 
 
 def start_child(request: dict[str, Any]) -> Any:
@@ -145,32 +137,20 @@ def _memory(error: BaseException) -> dict[str, Any] | None:
     return None
 
 
-def _send_sequence(seq: MeshSequence) -> None:
-    """Write the sequence: its header line, then its arrays in ``.npy`` format."""
-    arrays = {"vertices": seq.vertices, "faces": seq.faces}
-    if seq.time_codes is not None:
-        arrays["time_codes"] = seq.time_codes
-    header = {
-        "result": "sequence",
-        "arrays": list(arrays),
-        "frame_names": seq.frame_names,
-        "frame_rate": seq.frame_rate,
-    }
-    send(header)
-    for array in arrays.values():
-        np.lib.format.write_array(_notes, array, allow_pickle=False)  # type: ignore[arg-type]
-
-
-def serve_child(argument: str) -> None:
-    """The life of a child that serves reads (:mod:`.isolated_frames`): open the request's
-    source (a :class:`~.streaming.FrameSource` class), send its description, then for each
-    line ``{"read": [start, stop]}`` on stdin send the frames, until stdin ends (never
-    returns). Our own errors are sent and the child serves on; anything else ends it. The time
-    limit (``alarm``) runs while the child opens the file or reads, not while it waits."""
+def serve(argument: str) -> None:
+    """The child's whole life: open the request's source (a
+    :class:`~tuckercodec.io.streaming.FrameSource` class, or a function that reads a whole sequence,
+    served from memory), send its description, then for each line ``{"read": [start, stop]}`` on
+    stdin send the frames, until stdin ends; then exit (never returns). Our own errors are sent and
+    the child serves on; anything else ends it. The time limit (``alarm``) runs while the child
+    opens the file or reads, not while it waits."""
     request = json.loads(argument)
     try:
         opener = start_child(request)
-        source = opener(Path(request["path"]), child_options(request))
+        path = Path(request["path"])
+        source = opener(path, child_options(request))
+        if isinstance(source, MeshSequence):  # read whole: served from memory
+            source = SequenceFrames(source, path)
         arrays = {"faces": source.faces}
         if source.time_codes is not None:
             arrays["time_codes"] = source.time_codes
@@ -211,7 +191,8 @@ def send_arrays(header: dict[str, Any], arrays: dict[str, np.ndarray]) -> None:
     send({**header, "arrays": listed})
     assert _notes is not None
     for array in contiguous.values():
-        data = memoryview(array).cast("B")  # type: ignore[arg-type]  # arrays are buffers
+        # flat: a memoryview of a shape with a 0 in it (no faces: (0, 3)) cannot be cast
+        data = memoryview(array.reshape(-1)).cast("B")  # type: ignore[arg-type]
         while data:
             written = _notes.write(data) or 0
             data = data[written:]

@@ -1,0 +1,199 @@
+"""Reading a file with a C++ library in a child process, so that whatever the library does with
+a damaged or crafted file ends as an :class:`InputError` naming the file, never as a dead or
+stuck process.
+
+Why: alembic3d segfaults on about 2 % of randomly damaged archives, and pxr allocates whatever
+a crafted ``.usdc`` declares (8 GiB and 27 s for a 1 KB file declaring 2^31 face indices);
+neither can be caught in the process that runs the library. :class:`IsolatedFrames` opens a
+format's source (``usd.StageFrames``, ``alembic.ArchiveFrames``) in a fresh Python, which
+serves reads of frame ranges, and turns each way a request can end into an outcome in the
+caller:
+
+* frames (and first the source's description): sent back raw through a pipe (the protocol is
+  :mod:`.child`'s; no pickle) and checked again by :class:`~tuckercodec.io.streaming.FrameSource`;
+* a :class:`~tuckercodec.errors.TuckerCodecError` (InputError, DependencyError): raised again
+  with its class, message, path and frame (unpickled only from :mod:`tuckercodec.errors`);
+* a crash (a signal; on Windows an NTSTATUS exit code): ``InputError("object /a/aShape: the
+  Alembic library crashed reading it (SIGSEGV): the file is damaged", path=, frame=)``, object
+  and frame being the last the reader announced with :func:`note`;
+* memory: the child may add :data:`MEMORY_BASE` (2 GiB) plus :data:`MEMORY_PER_BYTE` (16) times
+  the file's size to its address space (``RLIMIT_AS``, set once the libraries are imported;
+  where ``/proc/self/statm`` tells its size: Linux). Reading horse gallop adds 0.4 GiB through
+  pxr (its plug-ins), 0.02 GiB through Alembic; the base is for files that store a sample once
+  for many frames, as both formats do. A MemoryError or ``std::bad_alloc`` becomes
+  ``InputError("declares more data than 2 GiB allows")``; pxr turns some failed allocations
+  into a "corrupt asset" error of its own, which comes back as such;
+* time: :data:`TIMEOUT_BASE` (60 s) plus a second per :data:`TIMEOUT_BYTES_PER_SECOND` (8 MiB)
+  of file, wall clock, for each request (the opening, then each read), not for the child's
+  life; then a watchdog kills the child and the error says so.
+
+``TUCKERCODEC_READ_MEMORY_GIB`` and ``TUCKERCODEC_READ_TIMEOUT`` (seconds) replace those limits
+(0: none). The child's stderr and stdout go to a temporary file: the libraries' messages stay
+off the terminal, and the last line joins a crash's error. Ctrl-C or SIGTERM in the caller
+kills the child; a child whose caller died gets Linux's parent-death signal, or its alarm.
+
+How the child starts, measured reading horse gallop on 2 cores (a first read in a new process,
+then later ones; in process 0.14/0.002 s from ``.abc``, 0.27/0.003 s from ``.usdc``): fork
+0.17/0.16 s and 0.24/0.23 s, forkserver 0.42/0.16 and 0.52/0.24, spawn 0.47/0.42 and
+0.55/0.54, ``subprocess`` 0.40/0.42 and 0.51/0.51. We use ``subprocess`` (``python -P -c``).
+Fork copies a process with threads (2 after ``import numpy``, OpenBLAS's; 5 once pxr has run,
+as it does here when writing), which POSIX leaves to deadlock in the child, Python 3.12 warns
+about, and macOS and Windows do not offer. Forkserver and spawn import the caller's
+``__main__`` again in the child (every user script would need an ``if __name__ ==
+"__main__"`` guard), and their preloads are global state of multiprocessing. A subprocess gets
+the caller's ``sys.path``, its own stderr and exit status, and the same code on every system,
+for about 0.3 s more per read than in process, which the 1 s target allows. Where
+``sys.executable`` cannot run Python (a frozen application) the read runs in process.
+
+Why one child for many reads rather than one per read: starting the interpreter, importing
+the library and opening the stage cost about 0.5 s (pxr) and 0.3 s (alembic3d) per child on
+this machine, once; a read then costs its frames' sampling and a copy through a pipe (see
+BENCHMARKS for the measured figures). After a crash the next read starts a new child; so does
+the first read after unpickling (workers of a process pool or Dask each start their own).
+:func:`read_isolated` is the same child for a function that reads a whole sequence at once.
+
+Writing is not isolated: the data is ours, and the library only re-reads what it just wrote.
+What runs in the child is :mod:`.child`; the caller's side of the conversation, with the
+limits, is :mod:`.channel`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from pathlib import Path
+from typing import ClassVar
+
+import numpy as np
+
+from ...errors import InputError
+from ...sequence import MeshSequence
+from ..registry import ReadOptions
+from ..streaming import FrameSource, SequenceFrames
+from .channel import (
+    MEMORY_BASE,
+    MEMORY_PER_BYTE,
+    MEMORY_VARIABLE,
+    TIMEOUT_BASE,
+    TIMEOUT_BYTES_PER_SECOND,
+    TIMEOUT_VARIABLE,
+    Child,
+    Description,
+    can_isolate,
+    child_request,
+)
+from .child import note as note  # the readers' and hooks' name for it
+
+__all__ = [
+    "MEMORY_BASE",
+    "MEMORY_PER_BYTE",
+    "MEMORY_VARIABLE",
+    "TIMEOUT_BASE",
+    "TIMEOUT_BYTES_PER_SECOND",
+    "TIMEOUT_VARIABLE",
+    "IsolatedFrames",
+    "note",
+    "read_isolated",
+]
+
+
+class IsolatedFrames(FrameSource):
+    """The frames that ``opener(path, options)`` reads, read in a child process (see the
+    module docstring).
+
+    Args:
+        opener: the in-process source (a module-level FrameSource class), or a module-level
+            function that reads a whole sequence; the child imports it by name.
+        library: the library's name for messages ("USD", "Alembic").
+        extra: the extra that installs it.
+        preload: the modules it imports, looked for here first (a DependencyError without
+            starting a process) and imported in the child before its memory is capped.
+    """
+
+    _transient: ClassVar[tuple[str, ...]] = ("_child", "_local")
+    _child: Child | None = None
+    _local: FrameSource | None = None
+
+    def __init__(
+        self,
+        opener: Callable[[Path, ReadOptions], FrameSource | MeshSequence],
+        path: Path,
+        options: ReadOptions,
+        library: str,
+        extra: str,
+        preload: Iterable[str] = (),
+    ):
+        self._opener, self._file, self._options = opener, path, options
+        self._library, self._extra, self._preload = library, extra, tuple(preload)
+        opened = self._start()
+        self._describe(
+            path,
+            opened.frame_count,
+            opened.vertex_count,
+            opened.faces,
+            opened.frame_names,
+            opened.frame_rate,
+            opened.time_codes,
+        )
+
+    def _start(self) -> FrameSource | Description:
+        """Open the file in a new child (and say what it found), or where no child can
+        start, in this process."""
+        if not can_isolate(self._preload, self._library, self._extra):
+            opened = self._opener(self._file, self._options)
+            if isinstance(opened, MeshSequence):
+                opened = SequenceFrames(opened, self._file)
+            self._local = opened
+            return opened
+        request = child_request(self._opener, self._file, self._options, self._preload)
+        self._child = Child(request, self._file, self._library)
+        return self._child.description
+
+    def _read(self, start: int, stop: int) -> np.ndarray:
+        if self._local is None and (self._child is None or not self._child.alive()):
+            if self._child is not None:  # gone while idle (its caller's thread ended)
+                self._child.close()
+                self._child = None
+            opened = self._start()
+            if (opened.frame_count, opened.vertex_count) != (self.frame_count, self.vertex_count):
+                raise InputError("has changed since it was opened", path=self._file)
+        if self._local is not None:
+            return self._local.read(start, stop)
+        assert self._child is not None
+        try:
+            return self._child.read(start, stop)
+        except InputError:
+            if not self._child.alive():  # it crashed: the next read starts afresh
+                self._child.close()
+                self._child = None
+            raise
+
+
+def read_isolated(
+    reader: Callable[[Path, ReadOptions], MeshSequence],
+    path: Path,
+    options: ReadOptions,
+    library: str,
+    extra: str,
+    preload: Iterable[str] = (),
+) -> MeshSequence:
+    """``reader(path, options)``, a function that reads a whole sequence, run in a child
+    process (see the module docstring): the child serves the sequence it read as frames,
+    all read at once.
+
+    Args:
+        reader: a module-level function of the package (the child imports it by name).
+        library: the library's name for messages: "Alembic" gives "the Alembic library
+            crashed reading it", and "reading Alembic files needs..." when it is missing.
+        extra: the extra that installs it.
+        preload: the modules the reader imports, imported in the child before its memory is
+            capped, and looked for here first: a missing one is a DependencyError without
+            starting a process.
+
+    Raises:
+        InputError: what the reader raised, or the crash, memory or time that stopped it.
+        DependencyError: what the reader raised, or a ``preload`` module that is absent.
+        RuntimeError: the child could not start, or the reader failed for a reason other
+            than the file (a bug): the child's traceback is in the message.
+    """
+    with IsolatedFrames(reader, path, options, library, extra, preload) as source:
+        return source.load()
