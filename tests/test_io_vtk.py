@@ -317,20 +317,27 @@ def test_a_listed_file_that_is_missing_or_not_vtk_is_named(tmp_path):
     missing = tmp_path / "f" / "1.vtu"
     error = expect_input_error(lambda: load_sequence(pvd), missing, frame=1, match="cannot read")
     assert str(pvd) in str(error)
-    # a DataSet may name any file, ../../etc/passwd included: it is read only as VTK XML
-    outside = tmp_path / "passwd.vtu"
-    outside.write_text("root:x:0:0:root:/root:/bin/bash\n")
-    pvd.write_text(pvd_text('timestep="0" file="f/0.vtu"', 'timestep="1" file="../passwd.vtu"'))
+    (tmp_path / "f" / "1.vtu").write_text("root:x:0:0:root:/root:/bin/bash\n")
+    expect_input_error(lambda: load_sequence(pvd), missing, frame=1, match="not a VTK XML file")
+
+
+def test_a_listed_file_outside_the_folder_is_refused(tmp_path, capsys):
+    """Issue 22, finding 1: a .pvd may list only files inside its own folder."""
     (tmp_path / "sub").mkdir()
-    moved = tmp_path / "sub" / "s.pvd"
-    pvd.rename(moved)
-    (tmp_path / "f").rename(tmp_path / "sub" / "f")
-    expect_input_error(
-        lambda: load_sequence(moved),
-        tmp_path / "sub" / ".." / "passwd.vtu",
-        frame=1,
-        match="is not a VTK XML file",
-    )
+    (tmp_path / "a.vtp").write_text(square_frame())
+    (tmp_path / "sub" / "link.vtp").symlink_to(tmp_path / "a.vtp")
+    pvd = tmp_path / "sub" / "s.pvd"
+    for name, message in [
+        ("../a.vtp", "DataSet 1 names '../a.vtp', which leads out of its folder"),
+        (str(tmp_path / "a.vtp"), "DataSet 1 names .*, an absolute path"),
+        ("/etc/passwd.vtp", "DataSet 1 names '/etc/passwd.vtp', an absolute path"),
+        ("link.vtp", "DataSet 1 names 'link.vtp', which leads out of its folder"),
+    ]:
+        pvd.write_text(pvd_text('timestep="0" file="link0.vtp"', f'timestep="1" file="{name}"'))
+        expect_input_error(lambda: load_sequence(pvd), pvd, match=message)
+    assert main(["convert", str(pvd), str(tmp_path / "o.npz")]) == 4
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and "s.pvd" in lines[0] and "link.vtp" in lines[0]
 
 
 def test_a_damaged_frame_is_an_input_error_not_a_library_traceback(tmp_path):

@@ -81,17 +81,17 @@ def exact(a: np.ndarray, b: np.ndarray) -> bool:
 
 
 def frame_file(tmp_path: Path, data: bytes | Path, suffix: str = ".vtp") -> tuple[Path, Path]:
-    """A .pvd of one frame: ``data`` written to f/0<suffix>, or a file named by its path."""
-    if isinstance(data, Path):
-        frame = data.resolve()
-    else:
-        (tmp_path / "f").mkdir(exist_ok=True)
-        frame = tmp_path / "f" / f"0{suffix}"
-        frame.write_bytes(data)
+    """A .pvd of one frame: ``data`` written to f/0<suffix>, or a copy of the file ``data``."""
+    (tmp_path / "f").mkdir(exist_ok=True)
+    if isinstance(data, Path):  # copied: a .pvd lists only files inside its folder
+        suffix = data.suffix
+        data = data.read_bytes()
+    frame = tmp_path / "f" / f"0{suffix}"
+    frame.write_bytes(data)
     pvd = tmp_path / "one.pvd"
     pvd.write_text(
         '<VTKFile type="Collection"><Collection>'
-        f'<DataSet timestep="0" file="{frame}"/></Collection></VTKFile>'
+        f'<DataSet timestep="0" file="f/{frame.name}"/></Collection></VTKFile>'
     )
     return pvd, frame
 

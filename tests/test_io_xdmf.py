@@ -297,6 +297,62 @@ def test_broken_or_hostile_hdf5_data_is_refused_before_reading_it(tmp_path):
     refused(tmp_path, shared, "shares its geometry .*d.h5:/points. with time step 0", 1)
 
 
+def test_hdf5_data_kept_outside_the_file_is_refused(tmp_path):
+    """Issue 22, finding 1: external storage, a virtual dataset or an external link would read
+    another file of the machine (/etc/passwd) into the output."""
+    h5py = pytest.importorskip("h5py", reason=H5PY_MISSING)
+    secret = tmp_path / "secret.bin"
+    secret.write_bytes(bytes(range(120)))
+    with h5py.File(tmp_path / "other.h5", "w") as file:
+        file["points"] = POINTS
+    with h5py.File(tmp_path / "d.h5", "w") as file:
+        file.create_dataset("external", (5, 3), "f8", external=[(str(secret), 0, 120)])
+        layout = h5py.VirtualLayout(shape=(5, 3), dtype="f8")
+        layout[:] = h5py.VirtualSource(str(tmp_path / "other.h5"), "points", shape=(5, 3))
+        file.create_virtual_dataset("virtual", layout)
+        file["linked"] = h5py.ExternalLink(str(tmp_path / "other.h5"), "/points")
+        file["group"] = h5py.ExternalLink(str(tmp_path / "other.h5"), "/")
+    cases = {
+        "external": "d.h5:/external has external storage",
+        "virtual": "d.h5:/virtual is a virtual dataset",
+        "linked": "d.h5:/linked leads through an external link",
+        "group/points": "d.h5:/group/points leads through an external link",
+    }
+    for name, message in cases.items():
+        refused(tmp_path, document(hdf_grid(f"d.h5:/{name}")), message)
+
+
+def test_hdf5_files_outside_the_xdmf_folder_are_refused(tmp_path):
+    h5py = pytest.importorskip("h5py", reason=H5PY_MISSING)
+    with h5py.File(tmp_path / "d.h5", "w") as file:
+        file["points"] = POINTS
+    inner = tmp_path / "inner"
+    inner.mkdir()
+    (inner / "link.h5").symlink_to(tmp_path / "d.h5")
+    for name, message in [
+        ("/etc/passwd:/x", "names '/etc/passwd', an absolute path"),
+        (f"{tmp_path / 'd.h5'}:/points", "an absolute path"),
+        ("../d.h5:/points", "names '../d.h5', which leads out of its folder"),
+        ("link.h5:/points", "names 'link.h5', which leads out of its folder"),
+    ]:
+        refused(inner, document(hdf_grid(name)), message)
+    (inner / "d.h5").write_bytes((tmp_path / "d.h5").read_bytes())
+    (inner / "ok.xdmf").write_text(document(hdf_grid("./d.h5:/points")))
+    assert exact(load_sequence(inner / "ok.xdmf").vertices[0], POINTS)
+
+
+def test_the_cli_refuses_a_dataset_outside_in_one_line(tmp_path, capsys):
+    h5py = pytest.importorskip("h5py", reason=H5PY_MISSING)
+    with h5py.File(tmp_path / "d.h5", "w") as file:
+        file.create_dataset("points", (5, 3), "f8", external=[("/etc/passwd", 0, 120)])
+    for name in ("d.h5:/points", "/etc/passwd:/x"):
+        (tmp_path / "bad.xdmf").write_text(document(hdf_grid(name)))
+        assert main(["convert", str(tmp_path / "bad.xdmf"), str(tmp_path / "o.npz")]) == 4
+        lines = capsys.readouterr().err.strip().splitlines()
+        assert len(lines) == 1 and "bad.xdmf" in lines[0] and name.split(":")[0] in lines[0]
+        assert not (tmp_path / "o.npz").exists()
+
+
 def test_without_h5py_inline_series_are_read_and_hdf5_names_the_extra(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "h5py", None)  # importing h5py fails
     assert load_sequence(DATA / "moving_inline.xmf").frame_count == 3

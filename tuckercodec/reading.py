@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import stat
+from pathlib import Path
 from typing import BinaryIO
 
 from .errors import InputError
@@ -45,3 +46,19 @@ def open_input(path: str | os.PathLike[str], what: str) -> BinaryIO:
         return open_regular_file(path, what)
     except OSError as error:
         raise InputError(f"cannot read: {error.strerror or error}", path=path) from None
+
+
+def inside_folder(folder: Path, name: str) -> Path:
+    """The resolved path of ``name``, a file that another file lists (a .pvd's frames, an
+    .xdmf's HDF5 files), which must lie inside ``folder``, the lister's own: an absolute path, or
+    one that leads out through ``..`` or a symbolic link, is an :class:`InputError` without a
+    path (the caller names the file that lists it), as glTF keeps its buffers beside it. A
+    service that converts uploads must not hand out its own files."""
+    text = name.replace("\\", "/")
+    if "://" in text or text.startswith("/") or Path(text).is_absolute() or text[1:2] == ":":
+        raise InputError(f"names {name!r}, an absolute path: only files inside its folder are read")
+    base = folder.resolve()
+    target = (base / text).resolve()
+    if not target.is_relative_to(base):
+        raise InputError(f"names {name!r}, which leads out of its folder ({base}): refused")
+    return target

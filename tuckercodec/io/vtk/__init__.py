@@ -5,7 +5,8 @@ extra needed; the ``.pvd`` index is read with the standard library's XML parser.
 
 Reading: the ``.pvd`` must be ``<VTKFile type="Collection">`` with a ``<Collection>`` of
 ``<DataSet timestep=".." part=".." file=".."/>``; ``file`` is relative to the ``.pvd``'s folder
-(or absolute). The frames are ordered by ``timestep``, which becomes the time codes, in the
+and must lie inside it (an absolute path, or ``..`` or a symbolic link that leads out, is
+refused). The frames are ordered by ``timestep``, which becomes the time codes, in the
 simulation's own unit (the frame rate stays unknown); without timesteps the listed order holds.
 One mesh per time step: several ``part`` values, or one timestep listed twice, are refused
 (merge the parts first, ParaView's Merge Blocks), as are parallel files (``.pvtu``, ``.pvtp``).
@@ -42,7 +43,7 @@ import numpy as np
 
 from ...atomic import atomic_folder, refuse_existing, write_atomic
 from ...errors import InputError
-from ...reading import open_input, open_regular_file
+from ...reading import inside_folder, open_input, open_regular_file
 from ...sequence import MeshSequence
 from ..frames import frame_file_names
 from ..registry import ReadOptions, WriteOptions
@@ -202,8 +203,11 @@ def _entry(dataset: ElementTree.Element, number: int, path: Path) -> _Entry:
             ) from None
         if not np.isfinite(timestep):
             raise InputError(f"DataSet {number} ({name}) has timestep {text!r}", path=path)
-    file = Path(name.replace("\\", "/"))
-    file = file if file.is_absolute() else path.parent / file
+    try:
+        inside_folder(path.parent, name)
+    except InputError as error:
+        raise InputError(f"DataSet {number} {error.reason}", path=path) from None
+    file = path.parent / name.replace("\\", "/")
     suffix = file.suffix.lower()
     if suffix in _PARALLEL:
         raise InputError(

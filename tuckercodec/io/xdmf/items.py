@@ -21,6 +21,7 @@ import numpy as np
 
 from ...errors import InputError
 from ...optional import import_optional
+from ...reading import inside_folder
 from ..vtk.arrays import MAX_INFLATION
 
 #: The tags of XInclude elements, which are not followed.
@@ -85,8 +86,10 @@ class HeavyData:
         name, _, dataset = text.strip().partition(":")
         if not name or not dataset:
             raise InputError(f"{what}: HDF data {text.strip()[:80]!r} is not FILE:/DATASET")
-        file = Path(name)
-        file = (file if file.is_absolute() else self.folder / file).resolve()
+        try:
+            file = inside_folder(self.folder, name)
+        except InputError as error:
+            raise InputError(f"{what}: HDF data {error.reason}") from None
         if file not in self.files:
             try:
                 if not stat.S_ISREG(os.stat(file).st_mode):
@@ -95,9 +98,15 @@ class HeavyData:
             except OSError as error:  # h5py raises OSError for files that are not HDF5 too
                 raise InputError(f"{what}: cannot read {file} as HDF5 ({error})") from None
         try:
-            found = self.files[file].get(dataset)
+            found = _dataset(h5py, self.files[file], dataset, file, what)
             if not isinstance(found, h5py.Dataset) or found.dtype.kind not in "fiu":
                 raise InputError(f"{what}: {file} has no dataset of numbers named {dataset!r}")
+            outside = _stored_outside(found, file)
+            if outside:
+                raise InputError(
+                    f"{what}: {file}:{dataset} {outside}, outside {file.name}: refused (only "
+                    "data inside the HDF5 file is read)"
+                )
             if found.size != count:
                 raise InputError(
                     f"{what}: {file}:{dataset} holds {found.size} values, not the {count} its "
@@ -115,6 +124,35 @@ class HeavyData:
         except Exception as error:  # h5py and HDF5 raise many kinds on a damaged file
             raise InputError(f"{what}: cannot read {file}:{dataset} ({error})") from None
         return values, (file, dataset)
+
+
+def _dataset(h5py: Any, handle: Any, dataset: str, file: Path, what: str) -> Any:
+    """The object at ``dataset`` in the open ``file``, refused if the way to it goes through an
+    external link (to another file) before h5py follows it."""
+    at = ""
+    for part in dataset.split("/"):
+        if part:
+            at += "/" + part
+            link = handle.get(at, getlink=True)
+            if isinstance(link, h5py.ExternalLink):
+                raise InputError(
+                    f"{what}: {file}:{dataset} leads through an external link ({at}) to "
+                    f"{link.filename}:{link.path}, outside {file.name}: refused (only data "
+                    "inside the HDF5 file is read)"
+                )
+    return handle.get(dataset)
+
+
+def _stored_outside(found: Any, file: Path) -> str:
+    """How a dataset keeps its values outside its HDF5 file (external storage, a virtual
+    dataset's sources, a link to another file), or "" when it does not."""
+    if found.is_virtual:
+        return "is a virtual dataset, mapped from other datasets"
+    if found.external or found.id.get_create_plist().get_external_count():
+        return "has external storage (its values are kept in other files)"
+    if Path(found.file.filename).resolve() != file:
+        return f"is in {found.file.filename}, reached by a link"
+    return ""
 
 
 def read_item(
