@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from tests.support.inputs import expect_input_error
+from tests.support.inputs import expect_input_error, measure
 from tests.support.sequences import grid_faces, shared_file, wave_sequence
 from tuckercodec import InputError, MeshSequence, load_sequence, save_sequence
 from tuckercodec.cli import main
@@ -302,6 +302,31 @@ def test_entity_declarations_are_refused_before_parsing(tmp_path):
     pvd = series(tmp_path, [square_frame()])
     frame.write_text(square_frame().replace("<VTKFile", '<!DOCTYPE x [<!ENTITY e "e">]>\n<VTKFile'))
     expect_input_error(lambda: load_sequence(pvd), frame, frame=0, match="declares !DOCTYPE")
+
+
+LAUGHS = "".join(f'<!ENTITY lol{n} "{f"&lol{n - 1};" * 10 if n else "lol"}">' for n in range(10))
+
+
+def test_declarations_are_refused_by_the_parser_whatever_comes_first(tmp_path):
+    """Issue 22, finding 7: a comment before the DOCTYPE, or UTF-16, hid it from a byte filter,
+    and the entities expanded."""
+    pvd = series(tmp_path, [square_frame()])
+    frame = tmp_path / "f" / "0.vtu"
+    hidden = f"<!-- <VTKFile --><!DOCTYPE x [{LAUGHS}]>\n<VTKFile"
+    frame.write_text(square_frame().replace("<VTKFile", hidden, 1))
+    error, _, peak = measure(lambda: load_sequence(pvd))
+    assert isinstance(error, InputError) and error.path == str(frame), error
+    assert "declares !DOCTYPE, which VTK files never need" in str(error) and peak < 10**7
+    laughs = (
+        f'<?xml version="1.0" encoding="UTF-16"?>\n<!DOCTYPE lolz [{LAUGHS}]>\n'
+        '<VTKFile type="Collection"><Collection><DataSet file="&lol9;.vtu"/></Collection>'
+        "</VTKFile>"
+    )
+    path = tmp_path / "lol.pvd"
+    path.write_bytes(laughs.encode("utf-16"))
+    error, _, peak = measure(lambda: load_sequence(path))
+    assert isinstance(error, InputError) and error.path == str(path), error
+    assert "declares !DOCTYPE, which VTK files never need" in str(error) and peak < 10**7
 
 
 def test_an_index_beyond_the_size_limit_is_refused(tmp_path, monkeypatch):

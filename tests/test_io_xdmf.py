@@ -269,6 +269,30 @@ def test_entity_declarations_are_refused_and_a_plain_doctype_is_not(tmp_path):
     assert load_sequence(tmp_path / "ok.xdmf").frame_count == 1
 
 
+def test_entities_are_refused_by_the_parser_in_utf_16(tmp_path):
+    """Issue 22, finding 7: UTF-16 hid a billion laughs from the byte filter."""
+    laughs = "".join(f'<!ENTITY l{n} "{f"&l{n - 1};" * 10 if n else "lol"}">' for n in range(10))
+    text = document(grid(POINTS), head=f"<!DOCTYPE Xdmf [{laughs}]>").replace(
+        '<?xml version="1.0"?>', '<?xml version="1.0" encoding="UTF-16"?>'
+    )
+    path = tmp_path / "bad.xdmf"
+    path.write_bytes(
+        text.replace('<Grid GridType="Uniform">', "<Grid Name='&l9;'>").encode("utf-16")
+    )
+    error, _, peak = measure(lambda: load_sequence(path))
+    assert isinstance(error, InputError) and error.path == str(path), error
+    assert "declares !ENTITY, which XDMF files never need" in str(error) and peak < 10**7
+    for declaration in ('<!ATTLIST DataItem Format CDATA "HDF">', "<!ELEMENT Xdmf ANY>"):
+        bad = document(grid(POINTS), head=f"<!DOCTYPE Xdmf [{declaration}]>")
+        refused(tmp_path, bad, f"declares {declaration.split()[0][1:]}", None)
+    (tmp_path / "ok.xdmf").write_bytes(
+        document(grid(POINTS), head='<!DOCTYPE Xdmf SYSTEM "Xdmf.dtd" []>')
+        .replace('version="1.0"', 'version="1.0" encoding="UTF-16"')
+        .encode("utf-16")
+    )
+    assert load_sequence(tmp_path / "ok.xdmf").frame_count == 1
+
+
 def hdf_grid(name: str, dims: str = "5 3") -> str:
     return grid(POINTS).replace(
         item(POINTS, "5 3"),

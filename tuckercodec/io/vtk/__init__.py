@@ -15,9 +15,10 @@ writes; triangles, quads, polygons, strips; what is refused) is :mod:`.datasets`
 Positions keep their precision (float64 stays float64). :class:`PvdFrames` reads the files as
 their frames are asked for, a range at a time. XDMF is not read here.
 
-Hostile input: a ``.pvd`` larger than :data:`MAX_INDEX_BYTES`, or one that declares a DOCTYPE or
-an ENTITY (the way to an entity-expansion attack; a ``.pvd`` needs neither), is refused before it
-is parsed, as is a ``.vtu``/``.vtp`` with either in its prolog. A listed file that is missing,
+Hostile input: a ``.pvd`` larger than :data:`MAX_INDEX_BYTES` is refused before it is parsed;
+one that declares a DOCTYPE or an ENTITY (the way to an entity-expansion attack; a ``.pvd``
+needs neither) is refused by the parser, whatever its encoding, as is such a ``.vtu``/``.vtp``
+(:mod:`~tuckercodec.io.safe_xml`). A listed file that is missing,
 not a regular file or not VTK XML is named with the DataSet that lists it. Sizes inside a file
 are checked before anything is allocated or inflated (:mod:`.arrays`).
 
@@ -47,9 +48,10 @@ from ...reading import inside_folder, open_input, open_regular_file
 from ...sequence import MeshSequence
 from ..frames import frame_file_names
 from ..registry import ReadOptions, WriteOptions
+from ..safe_xml import parse_xml
 from ..streaming import FrameSource
 from .arrays import Layout
-from .datasets import DATASETS, DatasetWriter, read_dataset, refuse_declarations
+from .datasets import DATASETS, DatasetWriter, read_dataset
 
 #: The largest .pvd index read: about a million time steps, far beyond any real series.
 MAX_INDEX_BYTES = 64 * 1024 * 1024
@@ -143,11 +145,10 @@ def _collection(path: Path) -> list[_Entry]:
             f"is larger than {MAX_INDEX_BYTES} bytes, far more than an index of time steps needs",
             path=path,
         )
-    _refuse_declarations(data, path)
     try:
-        root = ElementTree.fromstring(data)
-    except ElementTree.ParseError as error:
-        raise InputError(f"is not well-formed XML: {error}", path=path) from None
+        root = parse_xml(data, "VTK")
+    except InputError as error:
+        raise InputError(error.reason, path=path) from None
     if root.tag != "VTKFile" or root.get("type") != "Collection":
         raise InputError(
             f'is not a ParaView collection: its root is <{root.tag} type="{root.get("type")}">, '
@@ -177,14 +178,6 @@ def _collection(path: Path) -> list[_Entry]:
                     path=path,
                 )
     return entries
-
-
-def _refuse_declarations(data: bytes, path: Path) -> None:
-    """Refuse XML whose prolog holds a DOCTYPE or ENTITY declaration."""
-    try:
-        refuse_declarations(data)
-    except InputError as error:
-        raise InputError(error.reason, path=path) from None
 
 
 def _entry(dataset: ElementTree.Element, number: int, path: Path) -> _Entry:

@@ -14,9 +14,10 @@ Reading, by the ``<VTKFile type=..>`` of the file (whatever its name's suffix):
 * PolyData ``<Polys>`` (faces), then ``<Strips>`` (split as above), in VTK's cell order;
   ``<Verts>`` only mark points; ``<Lines>`` are refused.
 
-A DOCTYPE or ENTITY declaration (the way to an entity-expansion attack) is refused before the
-XML is parsed. Raw appended data is cut off before parsing, so the XML parser sees only the
-XML. Every error is an :class:`InputError` without a path (the caller names the file).
+A DOCTYPE or any declaration (the way to an entity-expansion attack) is refused by the XML
+parser itself (:mod:`~tuckercodec.io.safe_xml`), whatever the encoding. Raw appended data is
+cut off before parsing, so the XML parser sees only the XML. Every error is an
+:class:`InputError` without a path (the caller names the file).
 
 Writing (:class:`DatasetWriter`): one piece of the points and the faces (Polys, or cells of
 types 5, 9 and 7), or, without faces, one vertex cell per point so that ParaView shows them;
@@ -32,12 +33,11 @@ import numpy as np
 
 from ...errors import InputError
 from ..polygons import faces_from_polygons, polygons_from_faces
+from ..safe_xml import parse_xml
 from .arrays import Encoding, Layout, encode_array, file_encoding, read_array, type_name
 
 #: The dataset types read and written, by the suffix VTK gives their files.
 DATASETS = {".vtu": "UnstructuredGrid", ".vtp": "PolyData"}
-#: XML declarations refused before parsing: they open the door to entity expansion.
-DECLARATIONS = (b"<!DOCTYPE", b"<!ENTITY")
 #: VTK cell types by number, for messages (vtkCellType.h); others are named by number.
 CELL_NAMES = {
     1: "vertex",
@@ -72,16 +72,6 @@ _LOOKUP = np.array([_KINDS.get(code, -1) for code in range(max(_KINDS) + 1)], dt
 _APPENDED = re.compile(rb"<AppendedData\b([^>]*)>\s*_")
 _ENCODING = re.compile(rb"""\bencoding\s*=\s*["']([^"']*)["']""")
 _INT64_MAX = np.iinfo(np.int64).max
-
-
-def refuse_declarations(data: bytes) -> None:
-    """Refuse XML that holds a DOCTYPE or ENTITY declaration (no VTK file needs one)."""
-    for declaration in DECLARATIONS:
-        if declaration in data:
-            raise InputError(
-                f"declares {declaration.decode()[1:]}, which VTK files never need: refused, "
-                "as the way to an entity-expansion attack"
-            )
 
 
 def read_dataset(data: bytes) -> tuple[np.ndarray, np.ndarray]:
@@ -137,7 +127,6 @@ def _parse(data: bytes) -> tuple[ElementTree.Element, Encoding]:
     start = data.find(b"<VTKFile")
     if start < 0:
         raise InputError("is not a VTK XML file: it has no <VTKFile> element")
-    refuse_declarations(data[:start])
     cut = data.find(b"<AppendedData", start)
     appended: memoryview | None = None
     base64 = False
@@ -157,10 +146,7 @@ def _parse(data: bytes) -> tuple[ElementTree.Element, Encoding]:
             stop -= 1
         appended = memoryview(data)[match.end() : stop]  # a view: the data is not copied
         xml = data[:cut] + b"</VTKFile>"  # the appended data is the root's last child
-    try:
-        root = ElementTree.fromstring(xml)
-    except ElementTree.ParseError as error:
-        raise InputError(f"is not well-formed XML: {error}") from None
+    root = parse_xml(xml, "VTK")
     return root, file_encoding(root, appended, base64)
 
 

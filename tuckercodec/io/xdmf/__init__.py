@@ -21,8 +21,11 @@ collections, or a spatial collection per step (several parts), are refused too. 
 as their frames are asked for, a range at a time (:class:`XdmfFrames`); the check that no two
 steps share a geometry then covers the steps read so far.
 
-Hostile input: an ENTITY declaration is refused before parsing (a DOCTYPE alone, which XDMF
-files carry, is harmless: the parser never fetches it); every count is checked against the data
+Hostile input: an ENTITY (or any other) declaration is refused by the parser, whatever the
+encoding (:mod:`~tuckercodec.io.safe_xml`; a DOCTYPE alone, which XDMF files carry, is
+harmless: the parser never fetches it); HDF5 files must lie inside the .xdmf's folder and keep
+their data inside themselves (no external storage, virtual datasets or external links); every
+count is checked against the data
 before it is used; an HDF dataset must hold as many values as its ``Dimensions`` and store at
 least 1/1032 of its size (no more than zlib can inflate). Errors name the .xdmf, the frame and
 the grid. Writing is :mod:`.writer`'s.
@@ -41,6 +44,7 @@ import numpy as np
 from ...errors import InputError
 from ...reading import open_input
 from ..polygons import faces_from_polygons
+from ..safe_xml import parse_xml
 from ..streaming import FrameSource
 from .items import XINCLUDE, HeavyData, lower, read_item, resolve
 
@@ -142,20 +146,14 @@ class _Step:
 
 
 def _parse(path: Path) -> ElementTree.Element:
-    """The root element, ENTITY declarations refused before parsing."""
+    """The root element; declarations are refused by the parser."""
     stream = open_input(path, "an XDMF file")
     with stream:
         data = stream.read()
-    if b"<!ENTITY" in data:
-        raise InputError(
-            "declares !ENTITY, which XDMF files never need: refused, as the way to an "
-            "entity-expansion attack",
-            path=path,
-        )
     try:
-        root = ElementTree.fromstring(data)
-    except ElementTree.ParseError as error:
-        raise InputError(f"is not well-formed XML: {error}", path=path) from None
+        root = parse_xml(data, "XDMF", doctype=True)
+    except InputError as error:
+        raise InputError(error.reason, path=path) from None
     if root.tag != "Xdmf" or root.find("Domain") is None:
         raise InputError(f"is not XDMF: its root is <{root.tag}>, not <Xdmf><Domain>", path=path)
     return root

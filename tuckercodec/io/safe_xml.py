@@ -1,0 +1,65 @@
+"""XML parsed with every declaration refused by the parser itself (issue 22, finding 7).
+
+A DOCTYPE's internal subset may declare entities that expand a few hundred bytes into
+gigabytes (billion laughs), or attribute defaults that change what elements say. Looking for
+``<!ENTITY`` in the bytes is not enough: a comment, or an encoding other than UTF-8 (UTF-16),
+hides it. Here expat reports each declaration as it parses it, whatever the encoding or what
+comes before, and the first one ends the parse with an :class:`InputError` (without a path: the
+caller names the file). The tree is built as ElementTree builds it (``{uri}name`` tags, comments
+and processing instructions dropped).
+"""
+
+from __future__ import annotations
+
+from typing import Any, NoReturn
+from xml.etree import ElementTree
+from xml.parsers import expat
+
+from ..errors import InputError
+
+
+def parse_xml(data: bytes, kind: str, doctype: bool = False) -> ElementTree.Element:
+    """The root element of the XML ``data`` of a ``kind`` file ("VTK", "XDMF"). A DOCTYPE is
+    refused unless ``doctype`` (XDMF files written by VTK carry ``<!DOCTYPE Xdmf SYSTEM
+    "Xdmf.dtd" []>``, which is never fetched); any declaration inside one (ENTITY, ELEMENT,
+    ATTLIST, NOTATION) is refused always, and so is a reference to an entity not declared."""
+    builder = ElementTree.TreeBuilder()
+    parser = expat.ParserCreate(namespace_separator="}")
+    parser.SetParamEntityParsing(expat.XML_PARAM_ENTITY_PARSING_NEVER)
+    parser.buffer_text = True
+
+    def refuse(declaration: str) -> NoReturn:
+        raise InputError(
+            f"declares {declaration}, which {kind} files never need: refused, as the way to an "
+            "entity-expansion attack"
+        )
+
+    def start_doctype(*_: Any) -> None:
+        if not doctype:
+            refuse("!DOCTYPE")
+
+    def skipped(name: str, *_: Any) -> NoReturn:
+        raise InputError(f"refers to the entity &{name}; which it does not declare")
+
+    def fix(name: str) -> str:
+        return "{" + name if "}" in name else name
+
+    def start(tag: str, attributes: dict[str, str]) -> None:
+        builder.start(fix(tag), {fix(key): value for key, value in attributes.items()})
+
+    parser.StartDoctypeDeclHandler = start_doctype
+    parser.EntityDeclHandler = lambda *_: refuse("!ENTITY")
+    parser.UnparsedEntityDeclHandler = lambda *_: refuse("!ENTITY")
+    parser.ElementDeclHandler = lambda *_: refuse("!ELEMENT")
+    parser.AttlistDeclHandler = lambda *_: refuse("!ATTLIST")
+    parser.NotationDeclHandler = lambda *_: refuse("!NOTATION")
+    parser.SkippedEntityHandler = skipped
+    parser.ExternalEntityRefHandler = lambda *_: refuse("an external entity")
+    parser.StartElementHandler = start
+    parser.EndElementHandler = lambda tag: builder.end(fix(tag))
+    parser.CharacterDataHandler = builder.data
+    try:
+        parser.Parse(data, True)
+    except expat.ExpatError as error:
+        raise InputError(f"is not well-formed XML: {error}") from None
+    return builder.close()
