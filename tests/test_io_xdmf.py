@@ -10,6 +10,7 @@ own XDMF reader reads what we write, bit for bit. Hostile files end in an InputE
 
 from __future__ import annotations
 
+import re
 import shutil
 import sys
 from pathlib import Path
@@ -193,6 +194,29 @@ def test_references_to_a_shared_topology_are_followed(tmp_path):
     assert seq.faces.tolist() == [[0, 1, 2], [0, 2, 3]] and exact(seq.vertices[1], POINTS + 1)
     broken = text.replace("Grid[1]/Topology", "Grid[9]/Topology")
     refused(tmp_path, broken, "Reference '/Xdmf/Domain/Grid/Grid.9./Topology' leads to no", 1)
+
+
+def test_references_other_than_plain_child_paths_are_refused(tmp_path, capsys):
+    """Issue 22, finding 3: ElementTree's // and * over a few hundred nested elements never
+    end (8 KB took 9.5 s), so only plain paths of child steps are followed."""
+    nested = "<Information>" * 300 + "</Information>" * 300
+    hostile = "/Xdmf/Domain//*//*//*//Nope"
+    topology = f'<Topology Reference="{hostile}"/>'
+    text = document(grid(POINTS), grid(POINTS + 1, 1.0, topology)).replace(
+        "<Domain>", f"<Domain>{nested}"
+    )
+    refused(tmp_path, text, re.escape(f"Reference {hostile!r} is not a plain path"), 1)
+    assert main(["convert", str(tmp_path / "bad.xdmf"), str(tmp_path / "o.npz")]) == 4
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and "bad.xdmf" in lines[0] and hostile in lines[0]
+    for reference in ("/Xdmf/Domain/*", "/Xdmf/../Xdmf", "/Xdmf/Domain/Grid[last()]", "Domain"):
+        other = text.replace(hostile, reference)
+        refused(tmp_path, other, re.escape(f"Reference {reference!r} is not a plain path"), 1)
+    named = text.replace('<Grid GridType="Uniform">', '<Grid GridType="Uniform" Name="a">', 1)
+    (tmp_path / "ok.xdmf").write_text(
+        named.replace(hostile, "/Xdmf/Domain/Grid/Grid[@Name='a']/Topology")
+    )
+    assert load_sequence(tmp_path / "ok.xdmf").faces.tolist() == [[0, 1, 2], [0, 2, 3]]
 
 
 def test_times_listed_by_the_collection_and_geometries_of_other_types(tmp_path):

@@ -12,6 +12,7 @@ inflates it beyond what zlib could before it is read. Errors are :class:`InputEr
 from __future__ import annotations
 
 import os
+import re
 import stat
 from pathlib import Path
 from typing import Any
@@ -35,6 +36,14 @@ _NUMBERS = {
     ("uchar", 1): "u1",
 }
 _REFERENCE_DEPTH = 8
+_NAME = r"[A-Za-z_][A-Za-z0-9_.-]*"
+#: The References followed: /Xdmf, then child steps, each an element name with at most one
+#: predicate, [@Attribute='value'] or [n]. ElementTree's // and * search the whole tree again
+#: for every match, without removing duplicates: /Xdmf/Domain//*//*//*//Nope over a few hundred
+#: nested elements never ends (issue 22, finding 3).
+_PLAIN_PATH = re.compile(
+    rf"/Xdmf(?:/{_NAME}(?:\[(?:@{_NAME}=(?:'[^']*'|\"[^\"]*\")|[1-9][0-9]*)\])?)+"
+)
 
 
 def lower(element: ElementTree.Element, *names: str, default: str = "") -> str:
@@ -47,20 +56,23 @@ def lower(element: ElementTree.Element, *names: str, default: str = "") -> str:
 
 
 def resolve(element: ElementTree.Element, root: ElementTree.Element) -> ElementTree.Element:
-    """The element a ``Reference`` leads to (an ``/Xdmf/...`` path, or for
-    ``Reference="XML"`` the path in the element's text)."""
+    """The element a ``Reference`` leads to (an ``/Xdmf/...`` path of child steps,
+    :data:`_PLAIN_PATH`, or for ``Reference="XML"`` the path in the element's text)."""
     for _ in range(_REFERENCE_DEPTH):
         reference = element.get("Reference")
         if reference is None:
             return element
         target = (element.text or "") if reference.strip().upper() == "XML" else reference
         target = target.strip()
-        found = None
-        if target.startswith("/Xdmf/"):
-            try:
-                found = root.find("./" + target[len("/Xdmf/") :])
-            except (SyntaxError, KeyError):  # ElementTree's XPath subset
-                found = None
+        if not _PLAIN_PATH.fullmatch(target):
+            raise InputError(
+                f"its Reference {target[:80]!r} is not a plain path of child elements "
+                "(/Xdmf/Domain/Grid[@Name='...']/...; no //, *, .. or functions): refused"
+            )
+        try:
+            found = root.find("./" + target[len("/Xdmf/") :])
+        except (SyntaxError, KeyError):  # ElementTree's XPath subset
+            found = None
         if found is None:
             raise InputError(f"its Reference {target[:80]!r} leads to no element found here")
         element = found
