@@ -196,7 +196,8 @@ def test_export_writes_the_folder_and_refuses_an_existing_one_without_force(
     printed = capsys.readouterr().out
     assert "python -m http.server -d" in printed
     written = sorted(str(p.relative_to(out)) for p in out.rglob("*") if p.is_file())
-    assert written == sorted([*page_files(), "data/wave_one.tkc", "index.html"])
+    marker = ".tuckercodec-viewer"  # what --force later recognises as an export
+    assert written == sorted([*page_files(), marker, "data/wave_one.tkc", "index.html"])
     assert (out / "data/wave_one.tkc").read_bytes() == files["tkc"].read_bytes()
     index = (out / "index.html").read_text()
     assert "viewer/index.html?file=../data/wave_one.tkc" in index
@@ -207,10 +208,81 @@ def test_export_writes_the_folder_and_refuses_an_existing_one_without_force(
     assert "already exists" in capsys.readouterr().err
     assert (out / "stray.txt").exists()  # untouched
 
+    # an export with a file it does not write beside its own is not replaced, even with --force
+    assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 1
+    err = capsys.readouterr().err.strip()
+    assert "would delete 1 entry (stray.txt)" in err and "\n" not in err
+    assert (out / "stray.txt").read_text() == "mine"
+
+    (out / "stray.txt").unlink()
+    (out / "data/wave_one.tkc").write_bytes(b"old")
     assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 0
-    assert not (out / "stray.txt").exists()  # replaced whole, never merged
     assert (out / "data/wave_one.tkc").read_bytes() == files["tkc"].read_bytes()
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no staging left
+
+
+def _exported(out: Path) -> list[str]:
+    return sorted(str(p.relative_to(out)) for p in out.rglob("*") if p.is_file())
+
+
+def test_export_force_replaces_a_previous_export_whole(files, tmp_path, capsys):
+    out = tmp_path / "site"
+    args = ["view", str(files["tkc"]), "--reference", str(files["original"])]
+    assert main([*args, "--export-html", str(out)]) == 0
+    assert (out / ".tuckercodec-viewer").read_text().startswith("tuckercodec viewer export")
+    assert "data/reference.bin" in _exported(out)
+    (out / "data/leftover.bin").write_bytes(b"x")  # inside the export's own folders: replaced
+    assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 0
+    written = _exported(out)
+    assert written == sorted(
+        [*page_files(), ".tuckercodec-viewer", "data/wave_one.tkc", "index.html"]
+    )
+    assert not [p for p in tmp_path.iterdir() if p.name != "site"]  # no staging, nothing aside
+
+
+def test_export_force_uses_an_empty_folder(files, tmp_path):
+    out = tmp_path / "empty"
+    out.mkdir()
+    assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 0
+    assert (out / "data/wave_one.tkc").read_bytes() == files["tkc"].read_bytes()
+    assert (out / ".tuckercodec-viewer").is_file()
+
+
+def test_export_force_refuses_a_folder_that_is_not_an_export_and_leaves_it(files, tmp_path, capsys):
+    """Finding 2 of issue 22: --force deleted a project's src/ and notes."""
+    out = tmp_path / "project"
+    (out / "src").mkdir(parents=True)
+    (out / "src/main.py").write_text("print(1)")
+    (out / "notes.txt").write_text("notes")
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"tuckercodec: {out} is no export") and "\n" not in err
+    assert "would delete 2 entries (notes.txt, src/)" in err
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
+    assert sorted(p.name for p in out.iterdir()) == ["notes.txt", "src"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["project"]  # nothing staged
+
+
+def test_export_force_refuses_many_names_listing_the_first_few(files, tmp_path, capsys):
+    out = tmp_path / "many"
+    out.mkdir()
+    for number in range(8):
+        (out / f"f{number}.txt").write_text("x")
+    assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 1
+    err = capsys.readouterr().err
+    assert "would delete 8 entries (f0.txt, f1.txt, f2.txt, f3.txt, f4.txt and 3 more)" in err
+    assert len(list(out.iterdir())) == 8
+
+
+def test_export_force_refuses_a_file_as_the_folder(files, tmp_path, capsys):
+    out = tmp_path / "notes.txt"
+    out.write_text("mine")
+    assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 1
+    err = capsys.readouterr().err.strip()
+    assert str(out) in err and "is not a folder" in err and "\n" not in err
+    assert out.read_text() == "mine"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.txt"]
 
 
 def test_export_with_a_reference_writes_its_float32_positions_and_the_measures(
