@@ -280,7 +280,7 @@ def test_export_force_refuses_a_file_as_the_folder(files, tmp_path, capsys):
     out.write_text("mine")
     assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 1
     err = capsys.readouterr().err.strip()
-    assert str(out) in err and "is not a folder" in err and "\n" not in err
+    assert err.startswith(f"tuckercodec: {out} is not a folder: --force") and "\n" not in err
     assert out.read_text() == "mine"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.txt"]
 

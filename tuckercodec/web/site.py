@@ -20,7 +20,6 @@ all frames (the page's fixed colour scale) and the whole sequence's KG error.
 
 from __future__ import annotations
 
-import errno
 import html
 import json
 import os
@@ -179,9 +178,7 @@ def replaceable(folder: Path) -> None:
         return
     if folder.is_symlink() or not folder.is_dir():
         raise FileExistsError(
-            errno.EEXIST,
-            "is not a folder; --force replaces only a previous export or an empty folder",
-            str(folder),
+            f"{folder} is not a folder: --force replaces only a previous export or an empty folder"
         )
     names = sorted(entry.name + ("/" if entry.is_dir() else "") for entry in folder.iterdir())
     if not names:
