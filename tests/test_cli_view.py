@@ -14,6 +14,7 @@ import signal
 import socket
 import subprocess
 import sys
+import time
 import tomllib
 from fnmatch import fnmatch
 from pathlib import Path
@@ -25,6 +26,7 @@ from tests.support.sequences import grid_faces, wave_sequence
 from tuckercodec import MeshSequence, decode, encode
 from tuckercodec.cli import main
 from tuckercodec.metrics import kg_error
+from tuckercodec.web import server as server_module
 from tuckercodec.web.server import ViewerServer
 from tuckercodec.web.site import build_site, page_files, web_root
 
@@ -144,6 +146,80 @@ def test_a_request_for_another_host_name_is_refused(served):
     assert _get(server, "/index.html", host=f"localhost:{server.port}")[0] == 200
     assert _get(server, "/index.html", host=f"evil.example:{server.port}")[0] == 403
     assert _get(server, "/index.html", host="127.0.0.1")[0] == 403
+
+
+def test_every_response_carries_the_security_headers(served):
+    """The page's policy as an HTTP header too, with what a meta tag cannot say: no framing."""
+    server, _, _ = served
+    page = (web_root() / "viewer/index.html").read_text(encoding="utf-8")
+    meta = re.search(r'http-equiv="Content-Security-Policy" content="([^"]+)"', page)
+    assert meta is not None
+    for path in ("/", "/viewer/index.html", "/viewer/viewer.js", "/data/wave_one.tkc", "/nope"):
+        status, headers, _ = _get(server, path)
+        assert status == (404 if path == "/nope" else 200), path
+        assert headers["Content-Security-Policy"] == f"{meta.group(1)}; frame-ancestors 'none'"
+        assert headers["X-Frame-Options"] == "DENY"
+        assert headers["Referrer-Policy"] == "no-referrer"
+        assert headers["X-Content-Type-Options"] == "nosniff"
+
+
+def _half_sent(port: int, count: int) -> list[socket.socket]:
+    """``count`` connections that each send the start of a request and then nothing more."""
+    held = []
+    for _ in range(count):
+        held.append(socket.create_connection(("127.0.0.1", port), timeout=10))
+        held[-1].sendall(f"GET /index.html HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n".encode())
+    return held
+
+
+def _closed_within(connection: socket.socket, seconds: float) -> bool:
+    """Whether the server closes ``connection`` (with no response) within ``seconds``."""
+    connection.settimeout(seconds)
+    try:
+        return connection.recv(1024) == b""
+    except ConnectionResetError:
+        return True
+    except TimeoutError:
+        return False
+
+
+def test_half_sent_requests_are_closed_at_the_timeout_and_others_still_served(served):
+    """Finding 9 of issue 22: half-sent requests held a thread each, forever."""
+    _, site, folder = served
+    assert 1 <= server_module.CONNECTION_TIMEOUT <= 10  # a few seconds by default
+    with ViewerServer(folder, site.files, 0, connection_timeout=1.0) as server:
+        held = _half_sent(server.port, 50)
+        try:
+            assert _get(server, "/index.html")[0] == 200  # while the 50 wait
+            # generous: only that they are closed, not how fast a slow machine gets to it
+            assert all(_closed_within(connection, 30) for connection in held)
+        finally:
+            for connection in held:
+                connection.close()
+        assert _get(server, "/index.html")[0] == 200
+
+
+def test_connections_over_the_cap_are_closed_at_once(served):
+    _, site, folder = served
+    with ViewerServer(folder, site.files, 0, connection_timeout=60, max_connections=4) as server:
+        held = _half_sent(server.port, 4)
+        try:
+            extra = socket.create_connection(("127.0.0.1", server.port), timeout=10)
+            with extra:
+                assert _closed_within(extra, 30)  # not the 60 s of the timeout
+            assert not any(_closed_within(connection, 0.2) for connection in held)
+        finally:
+            for connection in held:
+                connection.close()
+        # the slots come back when the held connections end (their threads see the close)
+        for _ in range(100):
+            try:
+                if _get(server, "/index.html")[0] == 200:
+                    break
+            except (ConnectionError, http.client.HTTPException):
+                time.sleep(0.1)
+        else:
+            pytest.fail("the server answers no request after the held connections closed")
 
 
 def test_the_page_loads_only_shipped_files_and_its_policy_allows_its_import_map():

@@ -226,6 +226,7 @@ def observed(browser: Browser) -> Iterator[dict[str, Any]]:
     running tests/js/conformance_observe.mjs, the module the node test runs)."""
     files = [
         "tests/js/conformance.html",
+        "tests/js/conformance_page.mjs",
         "tests/js/conformance_observe.mjs",
         *(str(p.relative_to(ROOT)) for p in (ROOT / "tuckercodec/web/tkc").glob("*.js")),
         *(str(p.relative_to(ROOT)) for p in (ROOT / "tuckercodec/web/vendor/fzstd").glob("*")),

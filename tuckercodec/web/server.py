@@ -6,7 +6,14 @@ out of the folder (``..``, encoded or not, names no file of the list). ``/`` is 
 index.html. Every response says ``Cache-Control: no-store`` (a page reopened after the file
 changed must not run stale scripts or show a stale file) and ``X-Content-Type-Options:
 nosniff`` with the right type for each file: browsers refuse to run an ES module served as
-anything but JavaScript. A request whose ``Host`` is not this server's address is refused
+anything but JavaScript. It also carries the page's Content-Security-Policy as an HTTP header,
+with ``frame-ancestors 'none'`` (which a meta tag cannot say) and ``X-Frame-Options: DENY``, so
+no other page can frame the viewer, and ``Referrer-Policy: no-referrer``.
+
+Each connection has a read and idle timeout (:data:`CONNECTION_TIMEOUT`): a client that stops
+sending, mid-request or between requests, is disconnected, so half-sent requests cannot hold
+threads. At most :data:`MAX_CONNECTIONS` connections are open at once; one more is closed as
+soon as it is accepted. A request whose ``Host`` is not this server's address is refused
 (403), which stops a web page elsewhere from reaching it through a name that resolves to
 127.0.0.1 (DNS rebinding).
 
@@ -23,13 +30,25 @@ from http import HTTPStatus
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path, PurePosixPath
 from types import TracebackType
+from typing import Any
 from urllib.parse import unquote, urlsplit
+
+from .site import page_policy
 
 #: The only address the server listens on.
 HOST = "127.0.0.1"
 
 #: How often the serving thread looks for a shutdown request: what stopping can take.
 POLL_SECONDS = 0.05
+
+#: Seconds a connection may wait for the client's next bytes (mid-request or between requests).
+CONNECTION_TIMEOUT = 5.0
+
+#: Connections open at once (a browser opens about six); more are closed when accepted.
+MAX_CONNECTIONS = 64
+
+#: What every response adds to the page's own policy: no page may frame this one.
+FRAME_POLICY = "frame-ancestors 'none'"
 
 #: Content-Type by suffix; a file without a suffix (LICENSE) is plain text.
 CONTENT_TYPES = {
@@ -59,14 +78,43 @@ class ViewerServer(ThreadingHTTPServer):
     """
 
     daemon_threads = True  # a browser's open connection must not hold up the shutdown
+    request_queue_size = MAX_CONNECTIONS  # accepted at once, then closed if over the cap
 
-    def __init__(self, folder: str | Path, files: list[str] | tuple[str, ...], port: int = 0):
+    def __init__(
+        self,
+        folder: str | Path,
+        files: list[str] | tuple[str, ...],
+        port: int = 0,
+        *,
+        connection_timeout: float = CONNECTION_TIMEOUT,
+        max_connections: int = MAX_CONNECTIONS,
+    ):
         root = Path(folder)
         self.routes: dict[str, Path] = {"/" + name: root / name for name in files}
         if "/index.html" in self.routes:
             self.routes["/"] = self.routes["/index.html"]
+        self.connection_timeout = connection_timeout
+        self.policy = f"{page_policy()}; {FRAME_POLICY}"
+        self._slots = threading.BoundedSemaphore(max_connections)
         self._thread: threading.Thread | None = None
         super().__init__((HOST, port), _Handler)
+
+    def process_request(self, request: Any, client_address: Any) -> None:
+        """Answer in a thread of its own, if fewer than the cap are open; else close at once."""
+        if not self._slots.acquire(blocking=False):
+            self.shutdown_request(request)
+            return
+        try:
+            super().process_request(request, client_address)
+        except BaseException:
+            self._slots.release()
+            raise
+
+    def process_request_thread(self, request: Any, client_address: Any) -> None:
+        try:
+            super().process_request_thread(request, client_address)
+        finally:
+            self._slots.release()
 
     @property
     def port(self) -> int:
@@ -116,6 +164,11 @@ class _Handler(BaseHTTPRequestHandler):
     server_version = "tuckercodec-view"
     sys_version = ""
 
+    def setup(self) -> None:
+        super().setup()
+        # for every read and write: a client that stops sending is disconnected
+        self.connection.settimeout(self.server.connection_timeout)
+
     def do_GET(self) -> None:
         self._respond(body=True)
 
@@ -149,6 +202,9 @@ class _Handler(BaseHTTPRequestHandler):
         self.send_header("Cache-Control", "no-store")
         self.send_header("X-Content-Type-Options", "nosniff")
         self.send_header("Cross-Origin-Resource-Policy", "same-origin")
+        self.send_header("Content-Security-Policy", self.server.policy)
+        self.send_header("X-Frame-Options", "DENY")
+        self.send_header("Referrer-Policy", "no-referrer")
         super().end_headers()
 
     def log_message(self, format: str, *args: object) -> None:

@@ -116,6 +116,16 @@ def page_files() -> list[str]:
     return sorted(found)
 
 
+def page_policy() -> str:
+    """The Content-Security-Policy of the page (its meta tag), which the server also sends as
+    an HTTP header: one policy, written once, in the page."""
+    page = (web_root() / PAGE).read_text(encoding="utf-8")
+    found = re.search(r'http-equiv="Content-Security-Policy" content="([^"]+)"', page)
+    if found is None:
+        raise RuntimeError(f"{PAGE} has no Content-Security-Policy")  # a broken installation
+    return html.unescape(found.group(1))
+
+
 def data_name(path: str | Path) -> str:
     """The compressed file's name in the folder: its own name where that is a plain, safe URL
     segment, else one with every other character replaced by ``_``; always ending ``.tkc``."""
