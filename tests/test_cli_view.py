@@ -63,14 +63,23 @@ def files(tmp_path_factory, wave) -> dict[str, Path]:
 
 
 def _get(
-    server: ViewerServer, path: str, method: str = "GET", host: str | None = None
+    server: ViewerServer,
+    path: str,
+    method: str = "GET",
+    host: str | None = None,
+    cookie: str | None = "token",
 ) -> tuple[int, dict[str, str], bytes]:
+    """A request as sent exactly; by default with the run's token in its cookie, as a page's
+    requests carry it (``cookie``: the Cookie header, ``"token"`` for that one, None for none)."""
     connection = http.client.HTTPConnection("127.0.0.1", server.port, timeout=10)
     try:
         # the path is sent exactly as given: no client-side clean-up of "..", as a hostile
         # client would not do any
         connection.putrequest(method, path, skip_host=True, skip_accept_encoding=True)
         connection.putheader("Host", host or f"127.0.0.1:{server.port}")
+        if cookie is not None:
+            value = f"{server.cookie}={server.token}" if cookie == "token" else cookie
+            connection.putheader("Cookie", value)
         connection.endheaders()
         response = connection.getresponse()
         return response.status, dict(response.getheaders()), response.read()
@@ -146,6 +155,30 @@ def test_a_request_for_another_host_name_is_refused(served):
     assert _get(server, "/index.html", host=f"localhost:{server.port}")[0] == 200
     assert _get(server, "/index.html", host=f"evil.example:{server.port}")[0] == 403
     assert _get(server, "/index.html", host="127.0.0.1")[0] == 403
+
+
+def test_every_request_needs_the_runs_token(served):
+    """Finding 9 of issue 22: any local user could read the served files. The token comes in
+    the printed URL's query; that response sets it as a cookie for the page's other requests."""
+    server, site, folder = served
+    assert len(server.token) >= 32
+    other = ViewerServer(folder, site.files, 0)
+    other.server_close()
+    assert other.token != server.token  # one per run
+    for path in ("/", "/index.html", "/data/wave_one.tkc", "/nope"):
+        assert _get(server, path, cookie=None)[0] == 403, path
+        assert _get(server, path, cookie=f"{server.cookie}=wrong")[0] == 403, path
+        assert _get(server, path, cookie=f"tuckercodec-view-1={server.token}")[0] == 403, path
+        assert _get(server, path + "?token=wrong", cookie=None)[0] == 403, path
+    address = server.address(site.entry)
+    assert address.startswith(server.url + site.entry + "&token=")
+    status, headers, body = _get(server, address.removeprefix(server.url[:-1]), cookie=None)
+    assert status == 200 and body == (folder / "viewer/index.html").read_bytes()
+    cookie = headers["Set-Cookie"]
+    assert cookie == f"{server.cookie}={server.token}; Path=/; HttpOnly; SameSite=Strict"
+    status, headers, body = _get(server, "/data/wave_one.tkc", cookie=cookie.split(";")[0])
+    assert status == 200 and body == (folder / "data/wave_one.tkc").read_bytes()
+    assert "Set-Cookie" not in headers  # only where the query carried it
 
 
 def test_every_response_carries_the_security_headers(served):
@@ -452,7 +485,13 @@ def test_the_view_command_serves_until_ctrl_c_then_exits_0(files):
         assert match is not None, url
         port = int(match.group(1))
         connection = http.client.HTTPConnection("127.0.0.1", port, timeout=10)
-        connection.request("GET", "/data/wave_one.tkc")
+        connection.request("GET", "/data/wave_one.tkc")  # without the printed URL's token
+        response = connection.getresponse()
+        assert response.status == 403
+        response.read()
+        token = re.search(r"[?&]token=([^&]+)$", url)
+        assert token is not None, url
+        connection.request("GET", f"/data/wave_one.tkc?token={token.group(1)}")
         response = connection.getresponse()
         assert response.status == 200
         assert response.read() == files["tkc"].read_bytes()

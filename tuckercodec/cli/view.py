@@ -3,8 +3,9 @@
 ``tuckercodec view FILE.tkc`` checks the file with the Python decoder (every section, so that a
 damaged file is reported here, exit 3, not half-played in the browser), builds the viewer's
 folder (:mod:`tuckercodec.web.site`) in a temporary folder and serves it on 127.0.0.1
-(:mod:`tuckercodec.web.server`) until Ctrl-C; the browser decodes the file itself, with the
-JavaScript decoder. ``--reference ORIGINAL`` adds the original's positions (its frame and vertex
+(:mod:`tuckercodec.web.server`) until Ctrl-C, printing the URL with the run's token, which
+the server requires; the browser decodes the file itself, with the JavaScript decoder.
+``--reference ORIGINAL`` adds the original's positions (its frame and vertex
 counts must be the file's, else exit 4). ``--export-html DIR`` writes the same folder instead,
 for any static web server, with a marker file (``.tuckercodec-viewer``): ``--force`` replaces
 only such a previous export or an empty folder, and refuses anything else (a file, a folder of
@@ -183,7 +184,7 @@ def _serve(args: argparse.Namespace, folder: Path, site: Site) -> int:
         # Ctrl-C is awaited from the first line printed: a caller that reads the URL and stops
         # the server at once must not catch it before the wait (that exited 130)
         try:
-            url = server.url + site.entry
+            url = server.address(site.entry)  # with the run's token, which every request needs
             _summary(site)
             print(f"serving {args.input} on {server.url} (this machine only); open:", flush=True)
             print(url, flush=True)
