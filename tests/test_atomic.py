@@ -302,3 +302,23 @@ def test_a_failed_decode_over_an_existing_folder_keeps_every_old_frame(tmp_path,
     np.testing.assert_array_equal(
         tc.load_sequence(tmp_path / "frames", progress=False).vertices, new.vertices
     )
+
+
+def test_atomic_store_asks_replaceable_before_replacing_and_keeps_a_refused_folder(tmp_path):
+    """The export's --force check runs again as the folder is replaced (it may have changed
+    while the new one was built); a refusal leaves the folder as it was and no staging."""
+    target = tmp_path / "store"
+    target.mkdir()
+    (target / "mine.txt").write_text("mine")
+    seen: list[Path] = []
+
+    def refuse(path: Path) -> None:
+        seen.append(path)
+        raise FileExistsError(f"{path} is not ours")
+
+    store = atomic.atomic_store(target, overwrite=True, replaceable=refuse)
+    with pytest.raises(FileExistsError, match="is not ours"), store as staging:
+        (staging / "new.txt").write_text("new")
+    assert seen == [target]
+    assert sorted(p.name for p in target.iterdir()) == ["mine.txt"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["store"]

@@ -14,6 +14,7 @@ import signal
 import socket
 import subprocess
 import sys
+import time
 import tomllib
 from fnmatch import fnmatch
 from pathlib import Path
@@ -25,6 +26,7 @@ from tests.support.sequences import grid_faces, wave_sequence
 from tuckercodec import MeshSequence, decode, encode
 from tuckercodec.cli import main
 from tuckercodec.metrics import kg_error
+from tuckercodec.web import server as server_module
 from tuckercodec.web.server import ViewerServer
 from tuckercodec.web.site import build_site, page_files, web_root
 
@@ -61,14 +63,23 @@ def files(tmp_path_factory, wave) -> dict[str, Path]:
 
 
 def _get(
-    server: ViewerServer, path: str, method: str = "GET", host: str | None = None
+    server: ViewerServer,
+    path: str,
+    method: str = "GET",
+    host: str | None = None,
+    cookie: str | None = "token",
 ) -> tuple[int, dict[str, str], bytes]:
+    """A request as sent exactly; by default with the run's token in its cookie, as a page's
+    requests carry it (``cookie``: the Cookie header, ``"token"`` for that one, None for none)."""
     connection = http.client.HTTPConnection("127.0.0.1", server.port, timeout=10)
     try:
         # the path is sent exactly as given: no client-side clean-up of "..", as a hostile
         # client would not do any
         connection.putrequest(method, path, skip_host=True, skip_accept_encoding=True)
         connection.putheader("Host", host or f"127.0.0.1:{server.port}")
+        if cookie is not None:
+            value = f"{server.cookie}={server.token}" if cookie == "token" else cookie
+            connection.putheader("Cookie", value)
         connection.endheaders()
         response = connection.getresponse()
         return response.status, dict(response.getheaders()), response.read()
@@ -146,6 +157,104 @@ def test_a_request_for_another_host_name_is_refused(served):
     assert _get(server, "/index.html", host="127.0.0.1")[0] == 403
 
 
+def test_every_request_needs_the_runs_token(served):
+    """Finding 9 of issue 22: any local user could read the served files. The token comes in
+    the printed URL's query; that response sets it as a cookie for the page's other requests."""
+    server, site, folder = served
+    assert len(server.token) >= 32
+    other = ViewerServer(folder, site.files, 0)
+    other.server_close()
+    assert other.token != server.token  # one per run
+    for path in ("/", "/index.html", "/data/wave_one.tkc", "/nope"):
+        assert _get(server, path, cookie=None)[0] == 403, path
+        assert _get(server, path, cookie=f"{server.cookie}=wrong")[0] == 403, path
+        assert _get(server, path, cookie=f"tuckercodec-view-1={server.token}")[0] == 403, path
+        assert _get(server, path + "?token=wrong", cookie=None)[0] == 403, path
+    address = server.address(site.entry)
+    assert address.startswith(server.url + site.entry + "&token=")
+    status, headers, body = _get(server, address.removeprefix(server.url[:-1]), cookie=None)
+    assert status == 200 and body == (folder / "viewer/index.html").read_bytes()
+    cookie = headers["Set-Cookie"]
+    assert cookie == f"{server.cookie}={server.token}; Path=/; HttpOnly; SameSite=Strict"
+    status, headers, body = _get(server, "/data/wave_one.tkc", cookie=cookie.split(";")[0])
+    assert status == 200 and body == (folder / "data/wave_one.tkc").read_bytes()
+    assert "Set-Cookie" not in headers  # only where the query carried it
+
+
+def test_every_response_carries_the_security_headers(served):
+    """The page's policy as an HTTP header too, with what a meta tag cannot say: no framing."""
+    server, _, _ = served
+    page = (web_root() / "viewer/index.html").read_text(encoding="utf-8")
+    meta = re.search(r'http-equiv="Content-Security-Policy" content="([^"]+)"', page)
+    assert meta is not None
+    for path in ("/", "/viewer/index.html", "/viewer/viewer.js", "/data/wave_one.tkc", "/nope"):
+        status, headers, _ = _get(server, path)
+        assert status == (404 if path == "/nope" else 200), path
+        assert headers["Content-Security-Policy"] == f"{meta.group(1)}; frame-ancestors 'none'"
+        assert headers["X-Frame-Options"] == "DENY"
+        assert headers["Referrer-Policy"] == "no-referrer"
+        assert headers["X-Content-Type-Options"] == "nosniff"
+
+
+def _half_sent(port: int, count: int) -> list[socket.socket]:
+    """``count`` connections that each send the start of a request and then nothing more."""
+    held = []
+    for _ in range(count):
+        held.append(socket.create_connection(("127.0.0.1", port), timeout=10))
+        held[-1].sendall(f"GET /index.html HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n".encode())
+    return held
+
+
+def _closed_within(connection: socket.socket, seconds: float) -> bool:
+    """Whether the server closes ``connection`` (with no response) within ``seconds``."""
+    connection.settimeout(seconds)
+    try:
+        return connection.recv(1024) == b""
+    except ConnectionResetError:
+        return True
+    except TimeoutError:
+        return False
+
+
+def test_half_sent_requests_are_closed_at_the_timeout_and_others_still_served(served):
+    """Finding 9 of issue 22: half-sent requests held a thread each, forever."""
+    _, site, folder = served
+    assert 1 <= server_module.CONNECTION_TIMEOUT <= 10  # a few seconds by default
+    with ViewerServer(folder, site.files, 0, connection_timeout=1.0) as server:
+        held = _half_sent(server.port, 50)
+        try:
+            assert _get(server, "/index.html")[0] == 200  # while the 50 wait
+            # generous: only that they are closed, not how fast a slow machine gets to it
+            assert all(_closed_within(connection, 30) for connection in held)
+        finally:
+            for connection in held:
+                connection.close()
+        assert _get(server, "/index.html")[0] == 200
+
+
+def test_connections_over_the_cap_are_closed_at_once(served):
+    _, site, folder = served
+    with ViewerServer(folder, site.files, 0, connection_timeout=60, max_connections=4) as server:
+        held = _half_sent(server.port, 4)
+        try:
+            extra = socket.create_connection(("127.0.0.1", server.port), timeout=10)
+            with extra:
+                assert _closed_within(extra, 30)  # not the 60 s of the timeout
+            assert not any(_closed_within(connection, 0.2) for connection in held)
+        finally:
+            for connection in held:
+                connection.close()
+        # the slots come back when the held connections end (their threads see the close)
+        for _ in range(100):
+            try:
+                if _get(server, "/index.html")[0] == 200:
+                    break
+            except (ConnectionError, http.client.HTTPException):
+                time.sleep(0.1)
+        else:
+            pytest.fail("the server answers no request after the held connections closed")
+
+
 def test_the_page_loads_only_shipped_files_and_its_policy_allows_its_import_map():
     """Every relative import of every shipped module names a shipped file (a module the
     decoder imports but the package lacks breaks the page), the import map points into the
@@ -196,7 +305,8 @@ def test_export_writes_the_folder_and_refuses_an_existing_one_without_force(
     printed = capsys.readouterr().out
     assert "python -m http.server -d" in printed
     written = sorted(str(p.relative_to(out)) for p in out.rglob("*") if p.is_file())
-    assert written == sorted([*page_files(), "data/wave_one.tkc", "index.html"])
+    marker = ".tuckercodec-viewer"  # what --force later recognises as an export
+    assert written == sorted([*page_files(), marker, "data/wave_one.tkc", "index.html"])
     assert (out / "data/wave_one.tkc").read_bytes() == files["tkc"].read_bytes()
     index = (out / "index.html").read_text()
     assert "viewer/index.html?file=../data/wave_one.tkc" in index
@@ -207,10 +317,81 @@ def test_export_writes_the_folder_and_refuses_an_existing_one_without_force(
     assert "already exists" in capsys.readouterr().err
     assert (out / "stray.txt").exists()  # untouched
 
+    # an export with a file it does not write beside its own is not replaced, even with --force
+    assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 1
+    err = capsys.readouterr().err.strip()
+    assert "would delete 1 entry (stray.txt)" in err and "\n" not in err
+    assert (out / "stray.txt").read_text() == "mine"
+
+    (out / "stray.txt").unlink()
+    (out / "data/wave_one.tkc").write_bytes(b"old")
     assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 0
-    assert not (out / "stray.txt").exists()  # replaced whole, never merged
     assert (out / "data/wave_one.tkc").read_bytes() == files["tkc"].read_bytes()
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no staging left
+
+
+def _exported(out: Path) -> list[str]:
+    return sorted(str(p.relative_to(out)) for p in out.rglob("*") if p.is_file())
+
+
+def test_export_force_replaces_a_previous_export_whole(files, tmp_path, capsys):
+    out = tmp_path / "site"
+    args = ["view", str(files["tkc"]), "--reference", str(files["original"])]
+    assert main([*args, "--export-html", str(out)]) == 0
+    assert (out / ".tuckercodec-viewer").read_text().startswith("tuckercodec viewer export")
+    assert "data/reference.bin" in _exported(out)
+    (out / "data/leftover.bin").write_bytes(b"x")  # inside the export's own folders: replaced
+    assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 0
+    written = _exported(out)
+    assert written == sorted(
+        [*page_files(), ".tuckercodec-viewer", "data/wave_one.tkc", "index.html"]
+    )
+    assert not [p for p in tmp_path.iterdir() if p.name != "site"]  # no staging, nothing aside
+
+
+def test_export_force_uses_an_empty_folder(files, tmp_path):
+    out = tmp_path / "empty"
+    out.mkdir()
+    assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 0
+    assert (out / "data/wave_one.tkc").read_bytes() == files["tkc"].read_bytes()
+    assert (out / ".tuckercodec-viewer").is_file()
+
+
+def test_export_force_refuses_a_folder_that_is_not_an_export_and_leaves_it(files, tmp_path, capsys):
+    """Finding 2 of issue 22: --force deleted a project's src/ and notes."""
+    out = tmp_path / "project"
+    (out / "src").mkdir(parents=True)
+    (out / "src/main.py").write_text("print(1)")
+    (out / "notes.txt").write_text("notes")
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"tuckercodec: {out} is no export") and "\n" not in err
+    assert "would delete 2 entries (notes.txt, src/)" in err
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
+    assert sorted(p.name for p in out.iterdir()) == ["notes.txt", "src"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["project"]  # nothing staged
+
+
+def test_export_force_refuses_many_names_listing_the_first_few(files, tmp_path, capsys):
+    out = tmp_path / "many"
+    out.mkdir()
+    for number in range(8):
+        (out / f"f{number}.txt").write_text("x")
+    assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 1
+    err = capsys.readouterr().err
+    assert "would delete 8 entries (f0.txt, f1.txt, f2.txt, f3.txt, f4.txt and 3 more)" in err
+    assert len(list(out.iterdir())) == 8
+
+
+def test_export_force_refuses_a_file_as_the_folder(files, tmp_path, capsys):
+    out = tmp_path / "notes.txt"
+    out.write_text("mine")
+    assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"tuckercodec: {out} is not a folder: --force") and "\n" not in err
+    assert out.read_text() == "mine"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.txt"]
 
 
 def test_export_with_a_reference_writes_its_float32_positions_and_the_measures(
@@ -304,7 +485,13 @@ def test_the_view_command_serves_until_ctrl_c_then_exits_0(files):
         assert match is not None, url
         port = int(match.group(1))
         connection = http.client.HTTPConnection("127.0.0.1", port, timeout=10)
-        connection.request("GET", "/data/wave_one.tkc")
+        connection.request("GET", "/data/wave_one.tkc")  # without the printed URL's token
+        response = connection.getresponse()
+        assert response.status == 403
+        response.read()
+        token = re.search(r"[?&]token=([^&]+)$", url)
+        assert token is not None, url
+        connection.request("GET", f"/data/wave_one.tkc?token={token.group(1)}")
         response = connection.getresponse()
         assert response.status == 200
         assert response.read() == files["tkc"].read_bytes()

@@ -82,7 +82,7 @@ def serve(folder: Path, data: bytes, name: str, original: np.ndarray | None) -> 
     reference = None if original is None else Frames(original)
     site = build_site(folder, data, name, reference=reference, reference_name=name)
     with ViewerServer(folder, site.files) as server:
-        yield server.url + site.entry
+        yield server.address(site.entry)
 
 
 def open_page(browser: Browser, url: str) -> Page:
@@ -226,6 +226,7 @@ def observed(browser: Browser) -> Iterator[dict[str, Any]]:
     running tests/js/conformance_observe.mjs, the module the node test runs)."""
     files = [
         "tests/js/conformance.html",
+        "tests/js/conformance_page.mjs",
         "tests/js/conformance_observe.mjs",
         *(str(p.relative_to(ROOT)) for p in (ROOT / "tuckercodec/web/tkc").glob("*.js")),
         *(str(p.relative_to(ROOT)) for p in (ROOT / "tuckercodec/web/vendor/fzstd").glob("*")),
@@ -237,7 +238,7 @@ def observed(browser: Browser) -> Iterator[dict[str, Any]]:
         for name, e in EXPECTED.items()
     ]
     with ViewerServer(ROOT, files) as server:
-        page = browser.new_page(server.url + "tests/js/conformance.html")
+        page = browser.new_page(server.address("tests/js/conformance.html"))
         try:
             page.wait_for("window.observeVectors !== undefined")
             yield page.evaluate(f"window.observeVectors({json.dumps(vectors)})", timeout=120)

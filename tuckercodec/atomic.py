@@ -298,7 +298,12 @@ def atomic_folder(
 
 
 @contextmanager
-def atomic_store(destination: str | Path, *, overwrite: bool = False) -> Iterator[Path]:
+def atomic_store(
+    destination: str | Path,
+    *,
+    overwrite: bool = False,
+    replaceable: Callable[[Path], None] | None = None,
+) -> Iterator[Path]:
     """A folder that a library writes as a whole (a zarr store): yield a hidden, empty staging
     folder beside ``destination``; when the block ends without an exception it becomes
     ``destination`` in one rename, and on any exception it is removed.
@@ -306,6 +311,8 @@ def atomic_store(destination: str | Path, *, overwrite: bool = False) -> Iterato
     An existing ``destination`` is refused before the block runs (``FileExistsError``) unless
     ``overwrite``; then it is replaced in whole (renamed aside, the new folder renamed in, the
     old one removed), never merged with the new files, which would mix two stores.
+    ``replaceable``, if given, is called with an existing ``destination`` just before it is
+    renamed aside, and may refuse it by raising (the staging folder is then removed).
     """
     target = Path(destination)
     refuse_existing([target], overwrite)
@@ -317,6 +324,8 @@ def atomic_store(destination: str | Path, *, overwrite: bool = False) -> Iterato
         if os.path.lexists(target):
             if not overwrite:
                 raise _exists(target)
+            if replaceable is not None:
+                replaceable(target)
             aside = staging.with_suffix(".old")  # the staging folder's random name: free
             os.rename(target, aside)
         try:

@@ -398,7 +398,11 @@ def _add_view(verbs: _Verbs) -> None:
             "any static web server, instead of serving"
         ),
     )
-    view.add_argument("--force", action="store_true", help="with --export-html: replace DIR")
+    view.add_argument(
+        "--force",
+        action="store_true",
+        help="with --export-html: replace DIR if it is a previous export or empty",
+    )
     _add_read_options(view, "the reference")
 
 

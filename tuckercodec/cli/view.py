@@ -3,10 +3,13 @@
 ``tuckercodec view FILE.tkc`` checks the file with the Python decoder (every section, so that a
 damaged file is reported here, exit 3, not half-played in the browser), builds the viewer's
 folder (:mod:`tuckercodec.web.site`) in a temporary folder and serves it on 127.0.0.1
-(:mod:`tuckercodec.web.server`) until Ctrl-C; the browser decodes the file itself, with the
-JavaScript decoder. ``--reference ORIGINAL`` adds the original's positions (its frame and vertex
+(:mod:`tuckercodec.web.server`) until Ctrl-C, printing the URL with the run's token, which
+the server requires; the browser decodes the file itself, with the JavaScript decoder.
+``--reference ORIGINAL`` adds the original's positions (its frame and vertex
 counts must be the file's, else exit 4). ``--export-html DIR`` writes the same folder instead,
-for any static web server.
+for any static web server, with a marker file (``.tuckercodec-viewer``): ``--force`` replaces
+only such a previous export or an empty folder, and refuses anything else (a file, a folder of
+other files) before writing, naming what it would delete (exit 1, as for an existing output).
 
 Ctrl-C is how a server is stopped, not a failure: it shuts the server down, removes the
 temporary folder and exits 0 (other verbs exit 130, since Ctrl-C cut their work short).
@@ -33,7 +36,14 @@ from ..errors import EXIT_OK, FormatError, InputError
 from ..format.disk import read_file
 from ..io import open_frames
 from ..web.server import ViewerServer
-from ..web.site import ReferenceFrames, Site, build_site, data_name
+from ..web.site import (
+    ReferenceFrames,
+    Site,
+    build_site,
+    data_name,
+    replaceable,
+    write_export_marker,
+)
 from .inputs import is_compressed, read_options, sequence_source
 
 
@@ -41,6 +51,8 @@ def run_view(args: argparse.Namespace) -> int:
     _check_options(args)
     if args.export_html is not None:
         refuse_existing([args.export_html], args.force)  # before the work, not after it
+        if args.force:
+            replaceable(args.export_html)  # only a previous export or an empty folder
     data, decoder = _validated(args.input)
     name = data_name(args.input)
     if args.export_html is not None:
@@ -140,7 +152,8 @@ def _export(
     reference: ReferenceFrames | None,
 ) -> int:
     destination = Path(args.export_html)
-    with atomic_store(destination, overwrite=args.force) as staging:
+    # checked again as it is replaced: the folder may have changed while the site was built
+    with atomic_store(destination, overwrite=args.force, replaceable=replaceable) as staging:
         site = build_site(
             staging,
             data,
@@ -149,6 +162,7 @@ def _export(
             reference=reference,
             reference_name=_shown(args),
         )
+        write_export_marker(staging)
     size = sum((destination / file).stat().st_size for file in site.files)
     print(f"wrote {destination}: the viewer and {name} ({len(site.files)} files, {size} bytes)")
     _summary(site)
@@ -170,7 +184,7 @@ def _serve(args: argparse.Namespace, folder: Path, site: Site) -> int:
         # Ctrl-C is awaited from the first line printed: a caller that reads the URL and stops
         # the server at once must not catch it before the wait (that exited 130)
         try:
-            url = server.url + site.entry
+            url = server.address(site.entry)  # with the run's token, which every request needs
             _summary(site)
             print(f"serving {args.input} on {server.url} (this machine only); open:", flush=True)
             print(url, flush=True)

@@ -6,9 +6,22 @@ out of the folder (``..``, encoded or not, names no file of the list). ``/`` is 
 index.html. Every response says ``Cache-Control: no-store`` (a page reopened after the file
 changed must not run stale scripts or show a stale file) and ``X-Content-Type-Options:
 nosniff`` with the right type for each file: browsers refuse to run an ES module served as
-anything but JavaScript. A request whose ``Host`` is not this server's address is refused
-(403), which stops a web page elsewhere from reaching it through a name that resolves to
-127.0.0.1 (DNS rebinding).
+anything but JavaScript. It also carries the page's Content-Security-Policy as an HTTP header,
+with ``frame-ancestors 'none'`` (which a meta tag cannot say) and ``X-Frame-Options: DENY``, so
+no other page can frame the viewer, and ``Referrer-Policy: no-referrer``.
+
+Each connection has a read and idle timeout (:data:`CONNECTION_TIMEOUT`): a client that stops
+sending, mid-request or between requests, is disconnected, so half-sent requests cannot hold
+threads. At most :data:`MAX_CONNECTIONS` connections are open at once; one more is closed as
+soon as it is accepted.
+
+Each run has a random token (as Jupyter does), in the URL to open (:meth:`ViewerServer.address`,
+``...&token=...``) and required on every request: other users of the machine can reach
+127.0.0.1 too. The first request that carries it in its query gets it back as a cookie (named
+with the port, since cookies do not tell ports apart), which the page's module, script and file
+requests then carry; a request with neither is refused (403). A request whose ``Host`` is not
+this server's address is refused (403) too, which stops a web page elsewhere from reaching it
+through a name that resolves to 127.0.0.1 (DNS rebinding).
 
 Use it as a context manager: the server answers in a background thread from ``__enter__`` until
 ``__exit__`` shuts it down.
@@ -16,20 +29,34 @@ Use it as a context manager: the server answers in a background thread from ``__
 
 from __future__ import annotations
 
+import secrets
 import shutil
 import sys
 import threading
 from http import HTTPStatus
+from http.cookies import CookieError, SimpleCookie
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path, PurePosixPath
 from types import TracebackType
-from urllib.parse import unquote, urlsplit
+from typing import Any
+from urllib.parse import parse_qs, quote, unquote, urlsplit
+
+from .site import page_policy
 
 #: The only address the server listens on.
 HOST = "127.0.0.1"
 
 #: How often the serving thread looks for a shutdown request: what stopping can take.
 POLL_SECONDS = 0.05
+
+#: Seconds a connection may wait for the client's next bytes (mid-request or between requests).
+CONNECTION_TIMEOUT = 5.0
+
+#: Connections open at once (a browser opens about six); more are closed when accepted.
+MAX_CONNECTIONS = 64
+
+#: What every response adds to the page's own policy: no page may frame this one.
+FRAME_POLICY = "frame-ancestors 'none'"
 
 #: Content-Type by suffix; a file without a suffix (LICENSE) is plain text.
 CONTENT_TYPES = {
@@ -59,14 +86,45 @@ class ViewerServer(ThreadingHTTPServer):
     """
 
     daemon_threads = True  # a browser's open connection must not hold up the shutdown
+    request_queue_size = MAX_CONNECTIONS  # accepted at once, then closed if over the cap
 
-    def __init__(self, folder: str | Path, files: list[str] | tuple[str, ...], port: int = 0):
+    def __init__(
+        self,
+        folder: str | Path,
+        files: list[str] | tuple[str, ...],
+        port: int = 0,
+        *,
+        connection_timeout: float = CONNECTION_TIMEOUT,
+        max_connections: int = MAX_CONNECTIONS,
+        token: str | None = None,
+    ):
         root = Path(folder)
         self.routes: dict[str, Path] = {"/" + name: root / name for name in files}
         if "/index.html" in self.routes:
             self.routes["/"] = self.routes["/index.html"]
+        self.connection_timeout = connection_timeout
+        self.token = token if token is not None else secrets.token_urlsafe(32)
+        self.policy = f"{page_policy()}; {FRAME_POLICY}"
+        self._slots = threading.BoundedSemaphore(max_connections)
         self._thread: threading.Thread | None = None
         super().__init__((HOST, port), _Handler)
+
+    def process_request(self, request: Any, client_address: Any) -> None:
+        """Answer in a thread of its own, if fewer than the cap are open; else close at once."""
+        if not self._slots.acquire(blocking=False):
+            self.shutdown_request(request)
+            return
+        try:
+            super().process_request(request, client_address)
+        except BaseException:
+            self._slots.release()
+            raise
+
+    def process_request_thread(self, request: Any, client_address: Any) -> None:
+        try:
+            super().process_request_thread(request, client_address)
+        finally:
+            self._slots.release()
 
     @property
     def port(self) -> int:
@@ -77,6 +135,31 @@ class ViewerServer(ThreadingHTTPServer):
     def url(self) -> str:
         """``http://127.0.0.1:PORT/``."""
         return f"http://{HOST}:{self.port}/"
+
+    def address(self, entry: str = "") -> str:
+        """The URL to open: ``entry`` (a path relative to the folder, with or without a query)
+        on this server, with the run's token in its query."""
+        separator = "&" if "?" in entry else "?"
+        return f"{self.url}{entry}{separator}token={quote(self.token)}"
+
+    @property
+    def cookie(self) -> str:
+        """The name of the cookie that carries the token (one per port)."""
+        return f"tuckercodec-view-{self.port}"
+
+    def authorised(self, query: str, cookies: str) -> tuple[bool, bool]:
+        """Whether a request with this query and Cookie header carries the token, and whether
+        it did so in its query (then it gets the cookie)."""
+        given = parse_qs(query).get("token", [])
+        if any(secrets.compare_digest(value, self.token) for value in given):
+            return True, True
+        jar = SimpleCookie()
+        try:
+            jar.load(cookies)
+        except CookieError:
+            return False, False
+        morsel = jar.get(self.cookie)
+        return morsel is not None and secrets.compare_digest(morsel.value, self.token), False
 
     def allowed_hosts(self) -> set[str]:
         """The ``Host`` headers this server answers: its own address, by number or name."""
@@ -116,6 +199,11 @@ class _Handler(BaseHTTPRequestHandler):
     server_version = "tuckercodec-view"
     sys_version = ""
 
+    def setup(self) -> None:
+        super().setup()
+        # for every read and write: a client that stops sending is disconnected
+        self.connection.settimeout(self.server.connection_timeout)
+
     def do_GET(self) -> None:
         self._respond(body=True)
 
@@ -123,10 +211,16 @@ class _Handler(BaseHTTPRequestHandler):
         self._respond(body=False)
 
     def _respond(self, body: bool) -> None:
+        self._grant = False
         if self.headers.get("Host", "") not in self.server.allowed_hosts():
             self.send_error(HTTPStatus.FORBIDDEN, "unknown host")
             return
-        path = self.server.routes.get(unquote(urlsplit(self.path).path))
+        parts = urlsplit(self.path)
+        allowed, self._grant = self.server.authorised(parts.query, self.headers.get("Cookie", ""))
+        if not allowed:
+            self.send_error(HTTPStatus.FORBIDDEN, "open the URL tuckercodec view printed")
+            return
+        path = self.server.routes.get(unquote(parts.path))
         if path is None:
             self.send_error(HTTPStatus.NOT_FOUND)
             return
@@ -149,6 +243,12 @@ class _Handler(BaseHTTPRequestHandler):
         self.send_header("Cache-Control", "no-store")
         self.send_header("X-Content-Type-Options", "nosniff")
         self.send_header("Cross-Origin-Resource-Policy", "same-origin")
+        self.send_header("Content-Security-Policy", self.server.policy)
+        self.send_header("X-Frame-Options", "DENY")
+        self.send_header("Referrer-Policy", "no-referrer")
+        if getattr(self, "_grant", False):
+            cookie = f"{self.server.cookie}={self.server.token}; Path=/; HttpOnly; SameSite=Strict"
+            self.send_header("Set-Cookie", cookie)
         super().end_headers()
 
     def log_message(self, format: str, *args: object) -> None:
