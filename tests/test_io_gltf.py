@@ -6,6 +6,7 @@ the part at fault."""
 
 from __future__ import annotations
 
+import base64
 import json
 import struct
 import sys
@@ -313,6 +314,50 @@ def test_a_missing_external_buffer_and_uris_out_of_the_folder_are_refused(tmp_pa
         gltf["buffers"][0]["uri"] = uri
         path.write_text(json.dumps(gltf))
         _refused(path, "(leads out of|is not a file beside)")
+
+
+def test_an_accessor_without_a_buffer_view_is_bounded_by_the_bytes_the_file_holds(
+    tmp_path: Path,
+) -> None:
+    """Issue 22, finding 4: a .gltf of a few hundred bytes whose buffer declares 3 GB and is
+    never loaded (no uri) asked for 3 GB of zeros; it is refused at once, naming the accessor.
+    Zeros within the file's real data still read."""
+    import time
+    import tracemalloc
+
+    count = 250_000_000  # 3 GB of float VEC3
+    gltf: dict[str, Any] = {
+        "asset": {"version": "2.0"},
+        "buffers": [{"byteLength": count * 12}],
+        "accessors": [{"componentType": FLOAT, "count": count, "type": "VEC3"}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "mode": 0}]}],
+        "nodes": [{"mesh": 0}],
+    }
+    path = tmp_path / "a.gltf"
+    path.write_text(json.dumps(gltf))
+    assert path.stat().st_size < 400
+    for buffer in ({"byteLength": count * 12}, {"uri": "absent.bin", "byteLength": count * 12}):
+        gltf["buffers"] = [buffer]
+        path.write_text(json.dumps(gltf))
+        pattern = r"accessors\[0\] \(.*POSITION\): 250000000 elements without"
+        _refused(path, pattern)  # once first: the reader's imports are not the file's doing
+        start = time.perf_counter()
+        tracemalloc.start()
+        try:
+            error = _refused(path, pattern)
+            peak = tracemalloc.get_traced_memory()[1]
+        finally:
+            tracemalloc.stop()
+        assert peak < 1 << 20 and time.perf_counter() - start < 1.0, (peak, error)
+        assert "more than the 0 bytes of data the file holds" in str(error)
+    data = base64.b64encode(bytes(48)).decode()
+    gltf["buffers"] = [{"uri": f"data:application/octet-stream;base64,{data}", "byteLength": 48}]
+    gltf["accessors"][0]["count"] = 4  # 48 bytes of zeros: as much as the file holds
+    path.write_text(json.dumps(gltf))
+    assert np.array_equal(load_sequence(path).vertices, np.zeros((1, 4, 3)))
+    gltf["accessors"][0]["count"] = 5
+    path.write_text(json.dumps(gltf))
+    _refused(path, "5 elements without a buffer view, more than the 48 bytes")
 
 
 def test_a_data_uri_beyond_the_limit_is_refused(tmp_path: Path, monkeypatch: Any) -> None:

@@ -218,6 +218,24 @@ def test_a_read_that_never_ends_is_killed_at_the_time_limit(data_file, monkeypat
     assert gone(int(hooks.pid_file(data_file).read_text()), 0)
 
 
+@pytest.mark.usefixtures("no_child_left")
+def test_the_time_limit_begins_when_the_child_has_started(data_file, tmp_path, monkeypatch):
+    """A library whose import takes longer than the limit (a busy machine) is not the file's
+    doing: the read is not killed, and a read that never ends still is, at its limit."""
+    (tmp_path / "slow_library.py").write_text("import time\ntime.sleep(1.5)\n")
+    monkeypatch.syspath_prepend(os.fspath(tmp_path))
+    monkeypatch.setenv(TIMEOUT_VARIABLE, "0.5")
+    slow = ("slow_library",)
+    seq = read_isolated(hooks.chatty, data_file, ReadOptions(), "Test", "test", slow)
+    assert np.array_equal(seq.vertices, hooks.chatty(data_file, ReadOptions()).vertices)
+    expect_input_error(
+        lambda: read_isolated(hooks.hang, data_file, ReadOptions(), "Test", "test", slow),
+        data_file,
+        frame=2,
+        match=r"object /slow: the Test library did not finish reading it in 0\.5 s",
+    )
+
+
 # ------------------------------------------------------------------------------------------
 # what the reader raises or returns
 

@@ -399,6 +399,50 @@ def test_a_point_chunk_that_is_damaged_is_refused():
         TuckerNumcodec().decode(data[:8] + b"\xff" * 8 + data[16:])
 
 
+def _refused(call) -> tuple[int, str]:
+    """The most memory Python and numpy held during ``call()``, which must raise a ValueError
+    saying what the chunk declares, and its message."""
+    import tracemalloc
+
+    tracemalloc.start()
+    try:
+        with pytest.raises(ValueError, match="declares") as caught:
+            call()
+        return tracemalloc.get_traced_memory()[1], str(caught.value)
+    finally:
+        tracemalloc.stop()
+
+
+def test_a_chunk_declaring_more_than_the_arrays_chunks_is_refused_before_decompressing(cloth):
+    """Issue 22, finding 6: a 1x10x3 array's chunk of a few KB declaring millions of
+    positions is refused from its head, not decompressed to what it declares."""
+    import zstandard
+
+    declared = (1, 2_000_000)  # 48 MB of float64 positions, from 1.6 KB of zstd
+    hostile = chunk_module._POINT_HEAD.pack(chunk_module.POINT_MAGIC, *declared)
+    hostile += zstandard.ZstdCompressor().compress(bytes(declared[0] * declared[1] * 24))
+    assert len(hostile) < 20_000
+    calls = {
+        "format 3": lambda: chunk.decode_chunk(hostile, "<f4", shape=(1, 10, 3), fill_value=0),
+        "format 2": lambda: TuckerNumcodec(dtype="<f4").decode(
+            hostile, out=np.empty((1, 10, 3), "<f4")
+        ),
+    }
+    for where, call in calls.items():
+        peak, message = _refused(call)
+        assert peak < 1 << 20, where
+        assert "point chunk declares 1 frames of 2000000 vertices" in message, where
+    tkc = TuckerNumcodec(dtype="<f4").encode(cloth[:5, :100])  # a .tkc chunk: its header
+    peak, message = _refused(lambda: chunk.decode_chunk(tkc, "<f4", shape=(1, 10, 3)))
+    assert peak < 1 << 20 and "the chunk declares more than the array's chunks hold" in message
+    # a chunk that fits still decodes, through both
+    small = TuckerNumcodec(dtype="<f4").encode(cloth[:1, :10])
+    assert chunk.decode_chunk(small, "<f4", shape=(1, 10, 3)).shape == (1, 10, 3)
+    out = np.empty((1, 10, 3), "<f4")
+    TuckerNumcodec(dtype="<f4").decode(small, out=out)
+    assert np.allclose(out, cloth[:1, :10], atol=1e-2)
+
+
 def test_a_chunk_of_another_shape_than_the_arrays_is_refused(cloth):
     data = TuckerNumcodec(dtype="<f4").encode(cloth[:5, :100])
     with pytest.raises(ValueError, match=r"decodes to shape \(5, 100, 3\)"):

@@ -20,6 +20,7 @@ bytes 16..   one zstd frame of the positions as little-endian float64, C order
 
 from __future__ import annotations
 
+import dataclasses
 import struct
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -30,8 +31,8 @@ import numpy as np
 from ..analysis import SMALLEST_COORDINATE, SMALLEST_RELATIVE_SHAPE
 from ..decoder import decode
 from ..encoder import EncodeOptions, Encoder
-from ..errors import InputError, UnreachableTargetError
-from ..format.limits import DEFAULT_LIMITS
+from ..errors import InputError, LimitError, UnreachableTargetError
+from ..format.limits import DEFAULT_LIMITS, Limits
 from ..format.streams import ZstdFrameProblem, compress, zstd_exact
 from ..metrics import kg_error
 from ..sequence import MeshSequence
@@ -315,7 +316,7 @@ def _pack_points(positions: np.ndarray) -> bytes:
     return _POINT_HEAD.pack(POINT_MAGIC, frames, vertices) + compress(values)
 
 
-def _unpack_points(data: bytes) -> np.ndarray:
+def _unpack_points(data: bytes, limits: Limits, room: str) -> np.ndarray:
     if len(data) < _POINT_HEAD.size:
         raise ValueError(f"a point chunk of {len(data)} bytes is shorter than its 16-byte head")
     _, frames, vertices = _POINT_HEAD.unpack_from(data)
@@ -323,6 +324,14 @@ def _unpack_points(data: bytes) -> np.ndarray:
         raise ValueError(
             f"a point chunk declares {frames} frames of {vertices} vertices: outside 1.."
             f"{DEFAULT_LIMITS.max_positions} positions"
+        )
+    if not (
+        frames <= limits.max_frames
+        and vertices <= limits.max_vertices
+        and frames * vertices <= limits.max_positions
+    ):
+        raise ValueError(  # before decompressing what the chunk declares
+            f"a point chunk declares {frames} frames of {vertices} vertices, more than {room}"
         )
     try:
         raw = zstd_exact(data[_POINT_HEAD.size :], frames * vertices * 24)
@@ -349,12 +358,59 @@ def unpadded(positions: np.ndarray, fill_value: Any, *, vertices: bool = True) -
     return positions[: frames[-1] + 1, : kept[-1] + 1]
 
 
+def _fits(frames: int, vertices: int, shape: tuple[int, ...]) -> bool:
+    """Whether a chunk of ``frames`` x ``vertices`` fits zarr's chunk ``shape`` (a smaller
+    one is an edge chunk the encoder cut: :func:`unpadded`)."""
+    return len(shape) == 3 and frames <= shape[0] and vertices <= shape[1]
+
+
+def _bound(shape: tuple[int, ...] | None, positions: int | None) -> tuple[int, int, int] | None:
+    """The most frames, vertices and positions a chunk may have: those of ``shape``, or at
+    most ``positions`` positions (a destination's size); None where neither is known."""
+    if shape is not None and len(shape) == 3:
+        frames, vertices = max(1, int(shape[0])), max(1, int(shape[1]))
+        return frames, vertices, frames * vertices
+    if positions is not None:
+        most = max(1, int(positions))
+        return most, most, most
+    return None
+
+
+def chunk_limits(shape: tuple[int, ...] | None, positions: int | None = None) -> Limits:
+    """The decoder's limits for a chunk that must fit ``shape`` (zarr knows it), or hold at
+    most ``positions`` positions: its frames, vertices and positions, the factors such a chunk
+    can have and the bytes a section of them can take, so that a chunk declaring more is
+    refused before anything is decompressed (spec/FORMAT.md §7). No faces: a chunk is a point
+    sequence. The defaults where neither is known."""
+    bound = _bound(shape, positions)
+    if bound is None:
+        return DEFAULT_LIMITS
+    frames, vertices, most = bound
+    # K*i + F*k + 3*i*k + 3*F with the ranks i <= K and k <= F, and K*F <= most
+    factors = min(vertices * vertices + frames * frames, 2 * most * most) + 3 * most + 3 * frames
+    bounded = {
+        "max_vertices": vertices,
+        "max_frames": frames,
+        "max_positions": most,
+        "max_faces": 0,
+        "max_factor_values": factors,
+        # a section holds values of up to four bytes (factors, or residuals per position),
+        # or the frames' names: a margin for those
+        "max_section_bytes": 4 * (factors + 3 * most) + 64 * frames + (64 << 10),
+    }
+    return dataclasses.replace(
+        DEFAULT_LIMITS,
+        **{name: min(value, getattr(DEFAULT_LIMITS, name)) for name, value in bounded.items()},
+    )
+
+
 def decode_chunk(
     data: Any,
     dtype: Any,
     shape: tuple[int, ...] | None = None,
     fill_value: Any = None,
     basis: FittedBasis | None = None,
+    positions: int | None = None,
 ) -> np.ndarray:
     """Decode one chunk (a .tkc file, a fitted chunk or a point chunk) into a C-ordered array
     of ``dtype``.
@@ -366,6 +422,9 @@ def decode_chunk(
         fill_value: with ``shape``, the value of the trailing frames and vertices that the
             encoder cut (:func:`unpadded`): a chunk smaller than ``shape`` gets them back.
         basis: the codec's fitted basis, which a fitted chunk's U1 is (:mod:`.fitted`).
+        positions: without ``shape``, the most positions the chunk may hold (the size of
+            the destination), if known. A chunk declaring more than ``shape`` or
+            ``positions`` allow is refused before it is decompressed (:func:`chunk_limits`).
 
     Raises:
         FormatError: the bytes are a damaged .tkc file.
@@ -373,21 +432,32 @@ def decode_chunk(
             chunk without its basis or with another (the message names the basis).
     """
     raw = bytes(memoryview(data).cast("B"))
+    limits = chunk_limits(shape, positions)
+    room = (
+        f"the array's chunks hold (shape {tuple(shape)})"
+        if shape is not None
+        else f"the destination holds ({positions} positions)"
+    )
     if raw[: len(POINT_MAGIC)] == POINT_MAGIC:
-        positions = _unpack_points(raw)
+        decoded = _unpack_points(raw, limits, room)
     else:
-        positions = decode(complete_file(raw, basis)).vertices
+        try:
+            decoded = decode(complete_file(raw, basis), limits=limits).vertices
+        except LimitError as error:
+            if limits is DEFAULT_LIMITS:
+                raise
+            raise ValueError(f"the chunk declares more than {room}: {error}") from None
     dtype = checked_dtype(dtype)
-    if shape is None or tuple(positions.shape) == tuple(shape):
+    if shape is None or tuple(decoded.shape) == tuple(shape):
         with np.errstate(over="ignore"):  # float16: a position beyond its range was beyond it
-            return np.ascontiguousarray(positions, dtype=dtype)
-    frames, vertices, _ = positions.shape
-    if fill_value is None or len(shape) != 3 or not (frames <= shape[0] and vertices <= shape[1]):
+            return np.ascontiguousarray(decoded, dtype=dtype)
+    frames, vertices, _ = decoded.shape
+    if fill_value is None or not _fits(frames, vertices, shape):
         raise ValueError(
-            f"the chunk decodes to shape {positions.shape}, but the array's chunks have shape "
+            f"the chunk decodes to shape {decoded.shape}, but the array's chunks have shape "
             f"{tuple(shape)}"
         )
     out = np.full(shape, fill_value, dtype=dtype)
     with np.errstate(over="ignore"):
-        out[:frames, :vertices] = positions
+        out[:frames, :vertices] = decoded
     return out

@@ -163,7 +163,14 @@ class TuckerNumcodec(Codec):  # type: ignore[misc]  # numcodecs is untyped (Any)
             return decode_chunk(buf, self._dtype, basis=self._basis)
         target = ensure_ndarray_like(out)
         dtype = target.dtype if target.dtype.kind == "f" else self._dtype
-        positions = decode_chunk(buf, dtype, basis=self._basis)
+        # no more than out holds: a chunk declaring more is refused before it is decompressed
+        most = target.nbytes // (3 * np.dtype(dtype).itemsize)
+        try:
+            positions = decode_chunk(buf, dtype, basis=self._basis, positions=most)
+        except ValueError as error:
+            if "declares more than the destination" not in str(error):
+                raise
+            raise ValueError(f"out has {target.nbytes} bytes, but {error}") from None
         if target.nbytes != positions.nbytes:
             raise ValueError(
                 f"out has {target.nbytes} bytes, but the chunk decodes to {positions.nbytes} "

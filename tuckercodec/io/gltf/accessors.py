@@ -11,11 +11,13 @@ naming the accessor.
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from ...errors import InputError
 from .container import Document, integer
 
 #: componentType -> numpy dtype (little-endian, as glTF stores them).
@@ -55,8 +57,13 @@ def read_accessor(doc: Document, index: Any, what: str, *, width: int | None = N
         raw = _strided(doc, accessor["bufferView"], offset, count, element, dtype.itemsize, name)
         values = raw.view(dtype).reshape(count, components).copy()
     else:
-        if count * element > _total_bytes(doc):  # all zeros: only as much as the file's data
-            raise doc.fail(f"{name}: {count} elements without a buffer view, beyond the file")
+        # all zeros (a sparse morph target's base): only as much as the file's data, the
+        # bytes its buffers hold, not the byteLength they declare
+        if count * element > _data_bytes(doc):
+            raise doc.fail(
+                f"{name}: {count} elements without a buffer view, more than the "
+                f"{_data_bytes(doc)} bytes of data the file holds"
+            )
         values = np.zeros((count, components), dtype=dtype)
     if "sparse" in accessor:
         _apply_sparse(doc, accessor["sparse"], values, name)
@@ -81,12 +88,17 @@ def _denormalize(values: np.ndarray) -> np.ndarray:
     return np.maximum(result, -1.0) if info.min < 0 else result
 
 
-def _total_bytes(doc: Document) -> int:
-    total = 0
-    for buffer in doc.array("buffers"):
-        if isinstance(buffer, dict) and isinstance(buffer.get("byteLength"), int):
-            total += buffer["byteLength"]
-    return total
+def _data_bytes(doc: Document) -> int:
+    """The bytes the file's buffers hold: each loaded (once, kept for the reads to come);
+    one that cannot be (absent, a compression extension's fallback) holds none. A declared
+    byteLength is not data: a few hundred bytes of JSON can declare gigabytes."""
+    if "data bytes" not in doc.cache:
+        total = 0
+        for index in range(len(doc.array("buffers"))):
+            with contextlib.suppress(InputError):
+                total += len(doc.buffer(index, "the file's data"))
+        doc.cache["data bytes"] = total
+    return int(doc.cache["data bytes"])
 
 
 def _strided(

@@ -25,7 +25,9 @@ caller:
   into a "corrupt asset" error of its own, which comes back as such;
 * time: :data:`TIMEOUT_BASE` (60 s) plus a second per :data:`TIMEOUT_BYTES_PER_SECOND` (8 MiB)
   of file, wall clock, for each request (the opening, then each read), not for the child's
-  life; then a watchdog kills the child and the error says so.
+  life; then a watchdog kills the child and the error says so. The opening's time begins when
+  the child has started (its interpreter and the library imported, which is not the file's
+  doing and slow on a busy machine), which may take :data:`~.channel.STARTUP_SECONDS` more.
 
 ``TUCKERCODEC_READ_MEMORY_GIB`` and ``TUCKERCODEC_READ_TIMEOUT`` (seconds) replace those limits
 (0: none). The child's stderr and stdout go to a temporary file: the libraries' messages stay

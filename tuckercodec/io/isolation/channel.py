@@ -43,6 +43,9 @@ TIMEOUT_BASE = 60.0
 TIMEOUT_BYTES_PER_SECOND = 8 * 2**20
 MEMORY_VARIABLE = "TUCKERCODEC_READ_MEMORY_GIB"
 TIMEOUT_VARIABLE = "TUCKERCODEC_READ_TIMEOUT"
+#: How long a child may take to start (its interpreter and the library's imports, which are
+#: not the file's doing) before the read's own time limit begins: a busy machine is slow here.
+STARTUP_SECONDS = 60.0
 #: Thread pools the child does not need, which would reserve address space per core
 #: (glibc's malloc arenas, OpenBLAS's buffers, pxr's workers): one each. The user's own
 #: settings win.
@@ -79,6 +82,7 @@ def child_request(
         "memory": memory,
         "timeout": timeout,
         "alarm": None if timeout is None else math.ceil(timeout) + 10,
+        "startup": math.ceil(STARTUP_SECONDS),
         "parent": os.getpid(),
     }
 
@@ -184,6 +188,12 @@ class Ending:
                     f"{memory / GIB:.3g} GiB allows (the memory limit of a read: {MEMORY_VARIABLE})"
                 )
             reason = f"declares more data than {limit}"
+        elif returncode is None and not self.started:
+            reason = (
+                f"the process to read it with the {self.library} library did not start within "
+                f"{self.timeout or 0:g} + {STARTUP_SECONDS:g} s (the time limit of a read: "
+                f"{TIMEOUT_VARIABLE}, after the start)"
+            )
         elif returncode is None:
             reason = (
                 f"the {self.library} library did not finish reading it in {self.timeout:g} s: the "
@@ -241,6 +251,7 @@ class Child:
         self.stderr = tempfile.TemporaryFile()  # noqa: SIM115  # lives as long as the child
         self.process = spawn(request, self.stderr)
         self.expired = False
+        self.watchdog: threading.Timer | None = None
         try:
             header, arrays = self._answer()
             self.description = Description(header, arrays)
@@ -265,11 +276,8 @@ class Child:
     def _answer(self) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
         """The next result the child sends, with its arrays, within the time limit; or the
         error it sends, or the one that says how it ended."""
-        watchdog = None
-        if self.timeout is not None:
-            watchdog = threading.Timer(self.timeout, self._expire)
-            watchdog.daemon = True
-            watchdog.start()
+        if self.timeout is not None:  # from when the child has started, not from its spawn
+            self._watch(self.timeout if self.ending.started else self.timeout + STARTUP_SECONDS)
         try:
             header = self._header()
             if header.get("result") in ("description", "frames"):
@@ -286,9 +294,18 @@ class Child:
             self.process.kill()
             raise
         finally:
-            if watchdog is not None:
-                watchdog.cancel()
+            self._watch(None)
         raise self._failure(header)
+
+    def _watch(self, seconds: float | None) -> None:
+        """Kill the child in ``seconds`` (the watchdog before replaced), or never (None)."""
+        if self.watchdog is not None:
+            self.watchdog.cancel()
+        self.watchdog = None
+        if seconds is not None:
+            self.watchdog = threading.Timer(seconds, self._expire)
+            self.watchdog.daemon = True
+            self.watchdog.start()
 
     def _header(self) -> dict[str, Any]:
         """The next result header (notes before it update where the reader is); ``{}`` if the
@@ -302,7 +319,10 @@ class Child:
                 break
             if "note" in message:
                 self.ending.where, self.ending.frame = message["note"], message["frame"]
-            self.ending.started = self.ending.started or "started" in message
+            if "started" in message and not self.ending.started:
+                self.ending.started = True
+                if self.timeout is not None:  # the read's own limit begins now
+                    self._watch(self.timeout)
             if "result" in message:
                 return dict(message)
         return {}

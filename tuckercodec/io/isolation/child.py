@@ -56,6 +56,8 @@ def start_child(request: dict[str, Any]) -> Any:
         with contextlib.suppress(ImportError):  # the reader raises DependencyError
             importlib.import_module(library)
     _cap_memory(request["memory"])
+    if request["alarm"] is not None and hasattr(signal, "alarm"):
+        signal.alarm(request["alarm"])  # the read's own time begins, as the caller's does
     send({"started": True})
     return reader
 
@@ -101,7 +103,8 @@ def _guard(request: dict[str, Any]) -> None:
         if os.getppid() != request["parent"]:  # the caller died before prctl
             os._exit(1)
     if request["alarm"] is not None and hasattr(signal, "alarm"):
-        signal.alarm(request["alarm"])  # SIGALRM's default ends the process, even mid-library
+        # SIGALRM's default ends the process, even mid-library; the start has time of its own
+        signal.alarm(request["alarm"] + request["startup"])
 
 
 def _cap_memory(memory: int | None) -> None:
