@@ -102,13 +102,13 @@ def test_float64_polygons_points_and_time_codes_are_kept(tmp_path, faces):
     assert back.time_codes.tolist() == [0.1, 0.2, 7.5] and back.frame_names == ["a", "b", "c"]
 
 
-def test_horse_gallop_round_trips_exactly_and_reads_fast(tmp_path):
+def test_horse_gallop_round_trips_exactly(tmp_path):
+    # how fast it reads is the read suite's to measure (python -m tools.bench read --formats),
+    # not a unit test's: a wall-clock limit failed here on a loaded machine (issue 22)
     pytest.importorskip("h5py", reason=H5PY_MISSING)
     horse = load_sequence(shared_file("horse-gallop"), progress=False)
     save_sequence(horse, tmp_path / "horse.xdmf")
-    error, seconds, _ = measure(lambda: load_sequence(tmp_path / "horse.xdmf"))
     back = load_sequence(tmp_path / "horse.xdmf")
-    assert error is None and seconds < 1.0, (error, seconds)
     assert exact(back.vertices, horse.vertices) and np.array_equal(back.faces, horse.faces)
 
 
