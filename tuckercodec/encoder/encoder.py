@@ -113,15 +113,12 @@ class Encoder:
                 frames, plan, options.basis, executor, options.level, self.progress, shared_basis
             )
             quantized, error2, trials = self._search(work)
-            data, sizes = work.pack(quantized, error2, self._header_target())
         choice = quantized.choice
         largest_i = choice.shared or max(i for i, _ in choice.ranks)
         return self._result(
             work,
             quantized,
             error2,
-            data,
-            sizes,
             start,
             ranks=(largest_i, max(k for _, k in choice.ranks)),
             truncation2=choice.truncation2,
@@ -138,7 +135,6 @@ class Encoder:
         analysis = analyze(sequence) if analysis is None else analysis
         work = WholeWorkspace(sequence, analysis, options.level, options.select)
         quantized, error2, trials = self._search(work)
-        data, sizes = work.pack(quantized, error2, self._header_target())
         extra: dict[str, Any] = {}
         if options.mode == "kg":  # what each way of choosing ranks alone would pick
             exact = analysis.cheapest(options.kg_target)
@@ -148,8 +144,6 @@ class Encoder:
             work,
             quantized,
             error2,
-            data,
-            sizes,
             start,
             ranks=quantized.choice,
             truncation2=work.truncation_error2(quantized.choice),
@@ -167,31 +161,27 @@ class Encoder:
             return search.search_bpfv(work, options.target_bpfv)
         return search.search_kg(work, options.kg_target)
 
-    def _header_target(self) -> float | None:
-        """The KG target the header states: only an error target's."""
-        return self.options.kg_target if self.options.mode == "kg" else None
-
     def _result(
         self,
         work: Workspace[Any],
         quantized: Quantized[Any],
         error2: float,
-        data: bytes,
-        sizes: dict[str, int],
         start: float,
         *,
         ranks: tuple[int, int],
         truncation2: float,
         **report: Any,
     ) -> EncodeResult:
+        """Pack the file (its header states the KG target of an error target only) and report
+        on it; ``report``: the fields only one kind of workspace knows."""
         options = self.options
-        mode = options.mode
-        target = {"kg": options.kg_target, "bpfv": options.target_bpfv, "ranks": None}[mode]
+        header_target = options.kg_target if options.mode == "kg" else None
+        data, sizes = work.pack(quantized, error2, header_target)
         return EncodeResult(
             data,
             EncodeReport(
-                mode=mode,
-                target=target,
+                mode=options.mode,
+                target=options.target,
                 ranks=ranks,
                 kg=work.kg(error2),
                 truncation_kg=work.kg(truncation2),

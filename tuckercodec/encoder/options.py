@@ -108,6 +108,12 @@ class EncodeOptions:
         """The KG target of mode ``"kg"``: the one given, or :data:`DEFAULT_TARGET_KG`."""
         return DEFAULT_TARGET_KG if self.target_kg is None else self.target_kg
 
+    @property
+    def target(self) -> float | None:
+        """What the mode aims at: :attr:`kg_target` for ``"kg"``, ``target_bpfv`` for
+        ``"bpfv"``, nothing for fixed ranks."""
+        return {"kg": self.kg_target, "bpfv": self.target_bpfv, "ranks": None}[self.mode]
+
     def to_config(self) -> dict[str, Any]:
         """Every field, as JSON's types (ranks as a list)."""
         config = asdict(self)

@@ -24,7 +24,6 @@ from dataclasses import dataclass
 from typing import Any, Generic
 
 from ..errors import UnreachableTargetError
-from ..format import streams
 from ..rate import bpfv as bits_per_frame_vertex
 from .fill import fill, fill_erratic
 from .trial import Choice, Quantized, Workspace
@@ -381,12 +380,6 @@ def search_bpfv(
     quantized = search.final_fill(best)
     if quantized is None:
         return search.coarsest()
-    error2 = work.measured_error2(quantized)
-    # the header holds the measured error: a float, so the same size (checked cheaply)
-    if (
-        len(work.pack(quantized, error2, None, streams.SEARCH_LEVEL)[0])
-        != len(work.pack(quantized, best.error2, None, streams.SEARCH_LEVEL)[0])
-        and len(work.pack(quantized, error2, None)[0]) > search.budget
-    ):  # pragma: no cover
-        return search.coarsest()
-    return quantized, error2, search.counted
+    # the header then states the measured error instead of the estimate the fill packed with:
+    # msgpack writes every Python float as 9 bytes, so the file keeps the size measured
+    return quantized, work.measured_error2(quantized), search.counted
