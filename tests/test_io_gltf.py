@@ -348,7 +348,8 @@ def test_an_accessor_without_a_buffer_view_is_bounded_by_the_bytes_the_file_hold
             peak = tracemalloc.get_traced_memory()[1]
         finally:
             tracemalloc.stop()
-        assert peak < 1 << 20 and time.perf_counter() - start < 1.0, (peak, error)
+        # milliseconds now; 12 s and 3.4 GB before: the margin holds on a much slower machine
+        assert peak < 1 << 20 and time.perf_counter() - start < 5.0, (peak, error)
         assert "more than the 0 bytes of data the file holds" in str(error)
     data = base64.b64encode(bytes(48)).decode()
     gltf["buffers"] = [{"uri": f"data:application/octet-stream;base64,{data}", "byteLength": 48}]

@@ -173,7 +173,9 @@ def test_a_crafted_usdc_declaring_2_31_face_indices_is_refused_quickly_and_quiet
     path = _crafted_stage(tmp_path / "crafted.usdc", 2**31)
     start = time.perf_counter()
     expect_input_error(lambda: load_sequence(path), path, match="prim /m: cannot read")
-    assert time.perf_counter() - start < 5.0
+    # the child's start-up (importing pxr) is counted too: a margin for a much slower machine,
+    # still short of the 27 s the allocation took
+    assert time.perf_counter() - start < 20.0
     assert capfd.readouterr() == ("", "")
 
 
@@ -214,7 +216,8 @@ def test_a_read_that_never_ends_is_killed_at_the_time_limit(data_file, monkeypat
         frame=2,
         match=r"object /slow: the Test library did not finish reading it in 0\.5 s",
     )
-    assert time.perf_counter() - start < 5.0
+    # the child's start-up is counted here too (0.6 s on a busy 2-core machine): a wide margin
+    assert time.perf_counter() - start < 20.0
     assert gone(int(hooks.pid_file(data_file).read_text()), 0)
 
 
@@ -222,9 +225,11 @@ def test_a_read_that_never_ends_is_killed_at_the_time_limit(data_file, monkeypat
 def test_the_time_limit_begins_when_the_child_has_started(data_file, tmp_path, monkeypatch):
     """A library whose import takes longer than the limit (a busy machine) is not the file's
     doing: the read is not killed, and a read that never ends still is, at its limit."""
-    (tmp_path / "slow_library.py").write_text("import time\ntime.sleep(1.5)\n")
+    # the import takes three times the limit; the limit leaves a read that takes milliseconds
+    # room on a machine many times slower than this one
+    (tmp_path / "slow_library.py").write_text("import time\ntime.sleep(3.0)\n")
     monkeypatch.syspath_prepend(os.fspath(tmp_path))
-    monkeypatch.setenv(TIMEOUT_VARIABLE, "0.5")
+    monkeypatch.setenv(TIMEOUT_VARIABLE, "1")
     slow = ("slow_library",)
     seq = read_isolated(hooks.chatty, data_file, ReadOptions(), "Test", "test", slow)
     assert np.array_equal(seq.vertices, hooks.chatty(data_file, ReadOptions()).vertices)
@@ -232,7 +237,7 @@ def test_the_time_limit_begins_when_the_child_has_started(data_file, tmp_path, m
         lambda: read_isolated(hooks.hang, data_file, ReadOptions(), "Test", "test", slow),
         data_file,
         frame=2,
-        match=r"object /slow: the Test library did not finish reading it in 0\.5 s",
+        match=r"object /slow: the Test library did not finish reading it in 1 s",
     )
 
 
