@@ -75,8 +75,14 @@ LARGE_ITEM_BYTES = 2**20
 WORKER_ENVIRONMENT = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
 #: The LocalCluster scheduler's settings: a task whose worker died (out of memory, a crash in
 #: a library) fails at once, where distributed would try it on 3 more workers, each of which it
-#: would likely kill in the same way.
-SCHEDULER_CONFIG = {"distributed.scheduler.allowed-failures": 0}
+#: would likely kill in the same way. And no active memory manager: its ReduceReplicas policy
+#: (every 2 s) drops the copies a broadcast put on each worker, so the next task there fetched
+#: the shared values again, a second copy on that worker (seen by test_parallel about once in
+#: 25 maps on a busy machine).
+SCHEDULER_CONFIG = {
+    "distributed.scheduler.allowed-failures": 0,
+    "distributed.scheduler.active-memory-manager.start": False,
+}
 #: How long connecting to a remote scheduler may take.
 CONNECT_SECONDS = 10
 #: How long a worker process may take to stop once asked, when the work is abandoned (Ctrl-C,
