@@ -345,6 +345,40 @@ def test_broken_or_hostile_hdf5_data_is_refused_before_reading_it(tmp_path):
     refused(tmp_path, shared, "shares its geometry .*d.h5:/points. with time step 0", 1)
 
 
+def test_an_honest_bomb_is_refused_beyond_max_memory_before_reading(tmp_path, capsys):
+    """Issue 22, finding 8: a gzip dataset of zeros that stores 1/1000 of what it holds is
+    bounded by --max-memory before h5py inflates it; each time step has the whole ceiling."""
+    h5py = pytest.importorskip("h5py", reason=H5PY_MISSING)
+    count, rows = 2**22, 2**16  # 96 MiB of float64 points
+    with h5py.File(tmp_path / "d.h5", "w") as file:
+        zeros = file.create_dataset("zeros", (count, 3), "f8", chunks=(rows, 3), compression=9)
+        for start in range(0, count, rows):  # a chunk at a time: written, so stored
+            zeros[start : start + rows] = np.zeros((rows, 3))
+        for step in range(2):  # 96 KiB that store a few hundred bytes
+            file.create_dataset(f"small{step}", data=np.zeros((4096, 3)) + step, compression=9)
+    steps = [
+        hdf_grid(f"d.h5:/small{step}", "4096 3").replace('"0.0"', f'"{step}"') for step in range(2)
+    ]
+    (tmp_path / "two.xdmf").write_text(document(*steps))
+    one_step = 4096 * 3 * 8  # the ceiling of one step's dataset, not of two
+    assert load_sequence(tmp_path / "two.xdmf", max_memory=one_step).frame_count == 2
+    path = tmp_path / "bomb.xdmf"
+    path.write_text(document(hdf_grid("d.h5:/zeros", f"{count} 3")))
+    error, _, peak = measure(lambda: load_sequence(path, max_memory=16 * 2**20))
+    assert isinstance(error, InputError) and (error.path, error.frame) == (str(path), 0), error
+    assert "d.h5:/zeros: inflates to 101 MB, beyond the 16.8 MB" in str(error)
+    assert peak < 2**20, peak  # not read
+    assert main(["convert", str(path), str(tmp_path / "o.npz"), "--max-memory", "16MiB"]) == 4
+    said = capsys.readouterr().err
+    assert said.count("\n") == 1 and "beyond the 16.8 MB a read may decompress" in said, said
+    expect_input_error(
+        lambda: load_sequence(tmp_path / "two.xdmf", max_memory=one_step - 1),
+        tmp_path / "two.xdmf",
+        frame=0,
+        match="small0: inflates to",
+    )
+
+
 def test_hdf5_data_kept_outside_the_file_is_refused(tmp_path):
     """Issue 22, finding 1: external storage, a virtual dataset or an external link would read
     another file of the machine (/etc/passwd) into the output."""

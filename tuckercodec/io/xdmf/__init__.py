@@ -27,8 +27,9 @@ harmless: the parser never fetches it); HDF5 files must lie inside the .xdmf's f
 their data inside themselves (no external storage, virtual datasets or external links); every
 count is checked against the data
 before it is used; an HDF dataset must hold as many values as its ``Dimensions`` and store at
-least 1/1032 of its size (no more than zlib can inflate). Errors name the .xdmf, the frame and
-the grid. Writing is :mod:`.writer`'s.
+least 1/1032 of its size (no more than zlib can inflate), and one step's datasets inflate
+within ``--max-memory`` together (:mod:`.items`). Errors name the .xdmf, the frame and the
+grid. Writing is :mod:`.writer`'s.
 """
 
 from __future__ import annotations
@@ -44,6 +45,7 @@ import numpy as np
 from ...errors import InputError
 from ...reading import open_input
 from ..polygons import faces_from_polygons
+from ..registry import ReadOptions
 from ..safe_xml import parse_xml
 from ..streaming import FrameSource
 from .items import XINCLUDE, HeavyData, lower, read_item, resolve
@@ -64,8 +66,8 @@ class XdmfFrames(FrameSource):
     _steps: list[_Step] | None = None
     _sources: dict[object, int] | None = None
 
-    def __init__(self, path: Path, options: object = None):
-        self._file = path
+    def __init__(self, path: Path, options: ReadOptions | None = None):
+        self._file, self._options = path, options or ReadOptions()
         _, steps = self._tree()
         self._topology = np.zeros(0, dtype=np.int64)
         faces = np.zeros((0, 3), dtype=np.int64)
@@ -91,7 +93,9 @@ class XdmfFrames(FrameSource):
         ``count`` (``None``: this is the first step)."""
         root, _ = self._tree()
         if self._heavy is None:
-            self._heavy = HeavyData(self._file.parent)
+            self._heavy = HeavyData(self._file.parent, self._options.inflation())
+        else:  # what one step's datasets may inflate to, together
+            self._heavy.inflation = self._options.inflation()
         if self._sources is None:
             self._sources = {}
         try:

@@ -5,8 +5,10 @@
 Every count is checked before it is used: XML values against the item's ``Dimensions``; an HDF
 dataset must hold exactly as many values, and store at least
 1/:data:`~tuckercodec.io.vtk.arrays.MAX_INFLATION` of its size, so that no compression filter
-inflates it beyond what zlib could before it is read. Errors are :class:`InputError`s without a path
-(the caller names the .xdmf and the frame).
+inflates it beyond what zlib could before it is read; and the size of one that stores less than
+it holds (compressed, or chunks never written) is taken from what a time step may inflate
+(``--max-memory``, :mod:`~tuckercodec.io.budget`) before h5py reads it. Errors are
+:class:`InputError`s without a path (the caller names the .xdmf and the frame).
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ import numpy as np
 from ...errors import InputError
 from ...optional import import_optional
 from ...reading import inside_folder
+from ..budget import Inflation
 from ..vtk.arrays import MAX_INFLATION
 
 #: The tags of XInclude elements, which are not followed.
@@ -80,11 +83,13 @@ def resolve(element: ElementTree.Element, root: ElementTree.Element) -> ElementT
 
 
 class HeavyData:
-    """The HDF5 files a series names, opened once each."""
+    """The HDF5 files a series names, opened once each, and what the datasets read for one time
+    step may still inflate to (:attr:`inflation`, which the reader renews for each step)."""
 
-    def __init__(self, folder: Path) -> None:
+    def __init__(self, folder: Path, inflation: Inflation) -> None:
         self.folder = folder
         self.files: dict[Path, Any] = {}
+        self.inflation = inflation
 
     def close(self) -> None:
         """Close every file opened."""
@@ -130,6 +135,8 @@ class HeavyData:
                     f"{what}: {file}:{dataset} declares {found.nbytes} bytes but stores "
                     f"{stored}: refused"
                 )
+            if found.nbytes > stored:  # compressed, or chunks never written (fill values)
+                self.inflation.take(found.nbytes, f"{what}: {file}:{dataset}")
             values = np.asarray(found[()]).reshape(-1)
         except InputError:
             raise
