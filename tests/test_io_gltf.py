@@ -10,6 +10,7 @@ import base64
 import json
 import struct
 import sys
+import tracemalloc
 from pathlib import Path
 from typing import Any
 
@@ -416,6 +417,43 @@ def test_a_meshopt_view_claiming_more_than_its_codec_can_expand_is_refused(
         view["byteLength"] = 10**9 * view["extensions"]["EXT_meshopt_compression"]["byteStride"]
 
     _refused(_edit(path, inflate), r"bufferViews\[0\].*impossible")
+
+
+def test_meshopt_views_decode_within_max_memory_together(tmp_path: Path) -> None:
+    """Issue 22, finding 8: the attribute codec turns 16 bytes of zeros into 2 bits, so a
+    meshopt view may honestly declare 64 times its bytes; the views a file decodes (and keeps)
+    are bounded by --max-memory together, before each is decoded."""
+    pytest.importorskip("meshoptimizer", reason="meshoptimizer (the 'gltf' extra) is missing")
+    from tuckercodec.io.gltf.meshopt import EXTENSION, encode_attributes
+
+    count = 2**20  # 12 MiB of float VEC3 zeros
+    payload = encode_attributes(bytes(count * 12), count, 12)
+    extension = {"buffer": 0, "byteLength": len(payload), "byteStride": 12, "count": count}
+    view = {"buffer": 0, "byteLength": count * 12, "byteStride": 12}
+    gltf: dict[str, Any] = {
+        "asset": {"version": "2.0"},
+        "extensionsUsed": [EXTENSION],
+        "extensionsRequired": [EXTENSION],
+        "buffers": [{"byteLength": len(payload)}],
+        "bufferViews": [{**view, "extensions": {EXTENSION: {**extension, "mode": "ATTRIBUTES"}}}],
+        "accessors": [{"bufferView": 0, "componentType": FLOAT, "count": count, "type": "VEC3"}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "mode": 0}]}],
+        "nodes": [{"mesh": 0}],
+    }
+    path = tmp_path / "zeros.glb"
+    path.write_bytes(pack_glb(gltf, payload))
+    assert load_sequence(path, max_memory=count * 12 * 2).vertex_count == count
+    tracemalloc.start()
+    try:
+        beyond = r"inflates to 12\.6 MB, beyond the 4\.19 MB"
+        with pytest.raises(InputError, match=beyond) as caught:
+            load_sequence(path, max_memory=4 * 2**20)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert caught.value.path == str(path)
+    assert str(caught.value).startswith(f"{path}: bufferViews[0].extensions.{EXTENSION}: ")
+    assert peak < 4 * len(path.read_bytes()), peak  # not decoded
 
 
 def _beyond_float32() -> MeshSequence:

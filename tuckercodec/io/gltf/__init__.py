@@ -53,7 +53,12 @@ class GltfFrames(FrameSource):
     def _opened(self) -> Scene:
         if self._scene is None:
             options = self._options
-            self._scene = Scene(self._file, object_path=options.object_path, fps=options.fps)
+            self._scene = Scene(
+                self._file,
+                object_path=options.object_path,
+                fps=options.fps,
+                inflation=options.inflation(),
+            )
         return self._scene
 
     def _read(self, start: int, stop: int) -> np.ndarray:

@@ -26,6 +26,7 @@ from typing import Any
 
 from ...errors import InputError
 from ...reading import open_input, open_regular_file
+from ..budget import Inflation, memory_ceiling
 
 GLB_MAGIC = b"glTF"
 JSON_CHUNK = 0x4E4F534A
@@ -52,6 +53,8 @@ class Document:
     _buffers: dict[int, memoryview] = field(default_factory=dict)
     #: buffer views decompressed once (EXT_meshopt_compression), by index
     decoded_views: dict[int, memoryview] = field(default_factory=dict)
+    #: what those views may still inflate to, together (``--max-memory``)
+    inflation: Inflation = field(default_factory=lambda: Inflation(memory_ceiling(None)))
     #: what readers derive once from the file (meshes merged from their primitives...)
     cache: dict[Any, Any] = field(default_factory=dict)
 
@@ -125,8 +128,9 @@ def integer(
     return value
 
 
-def read_document(path: Path) -> Document:
-    """Parse a .glb or .gltf file (by its first bytes, not its name); InputError if damaged."""
+def read_document(path: Path, inflation: Inflation | None = None) -> Document:
+    """Parse a .glb or .gltf file (by its first bytes, not its name); InputError if damaged.
+    Its compressed views inflate within ``inflation`` (default: half the machine's memory)."""
     with open_input(path, "a glTF file") as stream:
         data = stream.read()
     if not data.strip():
@@ -136,6 +140,8 @@ def read_document(path: Path) -> Document:
     else:
         gltf, glb_bin = _parse_json(data, path), None
     doc = Document(path, gltf, glb_bin)
+    if inflation is not None:
+        doc.inflation = inflation
     asset = gltf.get("asset")
     version = asset.get("version") if isinstance(asset, dict) else None
     if not isinstance(version, str) or not version.startswith("2."):

@@ -35,6 +35,7 @@ import numpy as np
 
 from ...errors import InputError
 from ...sequence import MeshSequence
+from ..budget import Inflation
 from .animation import PATH_WIDTHS, Sampler, node_matrix, numbers, read_sampler
 from .container import Document, integer, read_document
 from .primitives import MAX_NUMBERS, Mesh, read_mesh
@@ -103,6 +104,9 @@ class Scene:
         faces: the merged meshes' triangles.
         animated: whether the file has an animation.
         extras: the tuckercodec writer's record in the asset's ``extras``, if any.
+
+    ``inflation``: what the file's compressed views may inflate to (default: half the
+    machine's memory).
     """
 
     def __init__(
@@ -112,8 +116,9 @@ class Scene:
         *,
         object_path: str | None = None,
         fps: float | None = None,
+        inflation: Inflation | None = None,
     ):
-        doc = read_document(path)
+        doc = read_document(path, inflation)
         required = doc.gltf.get("extensionsRequired", [])
         if not isinstance(required, list):
             raise doc.fail("extensionsRequired must be a list")
