@@ -454,6 +454,11 @@ def test_meshopt_views_decode_within_max_memory_together(tmp_path: Path) -> None
     assert caught.value.path == str(path)
     assert str(caught.value).startswith(f"{path}: bufferViews[0].extensions.{EXTENSION}: ")
     assert peak < 4 * len(path.read_bytes()), peak  # not decoded
+    folder = tmp_path / "frames"  # a static .glb is one frame of a folder: the same ceiling
+    folder.mkdir()
+    path.rename(folder / "0.glb")
+    with pytest.raises(InputError, match=beyond):
+        load_sequence(folder, max_memory=4 * 2**20)
 
 
 def _beyond_float32() -> MeshSequence:

@@ -132,7 +132,7 @@ def open_frames(
     resolved = _resolve(source, options)
     if isinstance(resolved, list):
         where = source if isinstance(source, (str, os.PathLike)) else None
-        return FileFrames(resolved, where)
+        return FileFrames(resolved, where, options)
     found, path = resolved
     assert found.open is not None  # _resolve returns only whole-sequence formats
     return found.open(path, options)

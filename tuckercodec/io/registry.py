@@ -97,8 +97,9 @@ class WriteOptions:
 
 
 #: Reads one frame; the second argument is the sequence's first frame (``None`` for the first
-#: itself), which a reader may use to skip work or to name the first difference it finds.
-FrameReader = Callable[[Path, MeshFrame | None], MeshFrame]
+#: itself), which a reader may use to skip work or to name the first difference it finds; the
+#: third the read options (only ``max_memory`` applies to a frame's file).
+FrameReader = Callable[[Path, MeshFrame | None, ReadOptions], MeshFrame]
 FrameWriter = Callable[[Path, np.ndarray, np.ndarray, WriteOptions], None]
 
 

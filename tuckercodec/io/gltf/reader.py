@@ -61,9 +61,15 @@ class Sampled:
     extras: dict[str, Any] = field(default_factory=dict)
 
 
-def read_gltf(path: Path, object_path: str | None = None, fps: float | None = None) -> MeshSequence:
+def read_gltf(
+    path: Path,
+    object_path: str | None = None,
+    fps: float | None = None,
+    inflation: Inflation | None = None,
+) -> MeshSequence:
     """A mesh sequence from a ``.glb``/``.gltf`` file: the morph animation as a viewer plays it
-    (see the module docstring for which meshes, primitives and times).
+    (see the module docstring for which meshes, primitives and times); its compressed views
+    inflate within ``inflation`` (default: half the machine's memory).
 
     Raises:
         InputError: a damaged or unsupported file, naming the file, the mesh/node/accessor and
@@ -71,7 +77,7 @@ def read_gltf(path: Path, object_path: str | None = None, fps: float | None = No
         DependencyError: the file uses EXT_meshopt_compression and meshoptimizer (extra
             ``gltf``) is missing.
     """
-    sampled = sample_gltf(path, object_path=object_path, fps=fps)
+    sampled = sample_gltf(path, object_path=object_path, fps=fps, inflation=inflation)
     rate, codes, names = timing(sampled.times, sampled.animated, sampled.extras, fps)
     try:
         return MeshSequence(
@@ -87,9 +93,10 @@ def sample_gltf(
     *,
     object_path: str | None = None,
     fps: float | None = None,
+    inflation: Inflation | None = None,
 ) -> Sampled:
     """Evaluate the file's mesh at ``times`` (seconds), or at its keyframes or ``fps``."""
-    scene = Scene(path, times, object_path=object_path, fps=fps)
+    scene = Scene(path, times, object_path=object_path, fps=fps, inflation=inflation)
     positions = scene.evaluate(0, len(scene.times))
     return Sampled(positions, scene.faces, scene.times, scene.animated, scene.extras)
 
