@@ -311,10 +311,21 @@ def test_a_missing_external_buffer_and_uris_out_of_the_folder_are_refused(tmp_pa
     _refused(path, r"buffers\[0\]: its file 'frames.bin' is missing")
     (tmp_path / "frames.bin").write_bytes(np.arange(12, dtype="<f4").tobytes())
     assert np.array_equal(load_sequence(path).vertices[0].ravel(), np.arange(12))
-    for uri in ("../frames.bin", "/etc/passwd", "https://example.com/a.bin"):
+    (tmp_path / "link.bin").symlink_to(tmp_path.parent / "elsewhere.bin")
+    outside = [
+        "../frames.bin",
+        "%2E%2E/frames.bin",
+        "..\\frames.bin",
+        "/etc/passwd",
+        "%2Fetc%2Fpasswd",
+        "C:/Windows/win.ini",
+        "https://example.com/a.bin",
+        "link.bin",
+    ]
+    for uri in outside:  # refused by the check every reader shares (reading.inside_folder)
         gltf["buffers"][0]["uri"] = uri
         path.write_text(json.dumps(gltf))
-        _refused(path, "(leads out of|is not a file beside)")
+        _refused(path, r"buffers\[0\]: its uri names .*(leads out of its folder|absolute path)")
 
 
 def test_an_accessor_without_a_buffer_view_is_bounded_by_the_bytes_the_file_holds(

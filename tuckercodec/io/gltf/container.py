@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from ...errors import InputError
-from ...reading import open_input, open_regular_file
+from ...reading import inside_folder, open_input, open_regular_file
 from ..budget import Inflation, memory_ceiling
 
 GLB_MAGIC = b"glTF"
@@ -213,13 +213,14 @@ def _data_uri(doc: Document, uri: str, where: str) -> bytes:
 
 
 def _external(doc: Document, uri: str, where: str) -> bytes:
+    """The bytes of a buffer's file, which must lie inside the .gltf's folder (an absolute
+    path, a URL, or one that leads out through ``..`` or a link is refused, as for every
+    reader: :func:`~tuckercodec.reading.inside_folder`)."""
     name = urllib.parse.unquote(uri)
-    folder = doc.path.resolve().parent
-    if "://" in uri or name.startswith(("/", "\\")) or Path(name).is_absolute():
-        raise doc.fail(f"{where}: uri {uri!r} is not a file beside the .gltf; only those are read")
-    target = (folder / name).resolve()
-    if not target.is_relative_to(folder):
-        raise doc.fail(f"{where}: uri {uri!r} leads out of the .gltf's folder; refused")
+    try:
+        target = inside_folder(doc.path.parent, name)
+    except InputError as error:
+        raise doc.fail(f"{where}: its uri {error.reason}") from None
     if not target.exists():
         raise doc.fail(f"{where}: its file {name!r} is missing (looked for {target})")
     try:
