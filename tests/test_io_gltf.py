@@ -373,6 +373,24 @@ def test_an_accessor_without_a_buffer_view_is_bounded_by_the_bytes_the_file_hold
     _refused(path, "5 elements without a buffer view, more than the 48 bytes")
 
 
+def test_buffers_of_one_file_read_it_once_and_count_its_bytes_once(tmp_path: Path) -> None:
+    """Issue 22, finding 8: a thousand buffers naming one file read it a thousand times, and
+    counted it a thousand times as the data that bounds an accessor without a buffer view."""
+    (tmp_path / "data.bin").write_bytes(bytes(48))
+    gltf: dict[str, Any] = {
+        "asset": {"version": "2.0"},
+        "buffers": [{"uri": "data.bin", "byteLength": 48}] * 1000,
+        "accessors": [{"componentType": FLOAT, "count": 5, "type": "VEC3"}],  # 60 bytes
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "mode": 0}]}],
+        "nodes": [{"mesh": 0}],
+    }
+    path = tmp_path / "a.gltf"
+    path.write_text(json.dumps(gltf))
+    doc = container.read_document(path)
+    assert doc.buffer(0, "test").obj is doc.buffer(999, "test").obj
+    _refused(path, "5 elements without a buffer view, more than the 48 bytes")
+
+
 def test_a_data_uri_beyond_the_limit_is_refused(tmp_path: Path, monkeypatch: Any) -> None:
     save_sequence(MeshSequence(np.ones((2, 3, 3)), np.array([[0, 1, 2]])), tmp_path / "a.gltf")
     monkeypatch.setattr(container, "MAX_DATA_URI", 100)

@@ -221,11 +221,15 @@ def _external(doc: Document, uri: str, where: str) -> bytes:
         target = inside_folder(doc.path.parent, name)
     except InputError as error:
         raise doc.fail(f"{where}: its uri {error.reason}") from None
+    if ("file", target) in doc.cache:  # several buffers of one file: read once, shared
+        data: bytes = doc.cache["file", target]
+        return data
     if not target.exists():
         raise doc.fail(f"{where}: its file {name!r} is missing (looked for {target})")
     try:
         with open_regular_file(target, f"the buffer file of {where}") as stream:
-            return stream.read()
+            data = doc.cache["file", target] = stream.read()
+            return data
     except OSError as error:
         raise doc.fail(f"{where}: cannot read {name!r}: {error.strerror or error}") from None
 
