@@ -391,6 +391,43 @@ def test_buffers_of_one_file_read_it_once_and_count_its_bytes_once(tmp_path: Pat
     _refused(path, "5 elements without a buffer view, more than the 48 bytes")
 
 
+def _chain(path: Path, count: int, meshes: bool) -> Path:
+    """A .gltf of ``count`` nodes, each the child of the next, each moved by x + 1; a point
+    mesh at the bottom node, or at every node."""
+    data = base64.b64encode(bytes(12)).decode()
+    nodes: list[dict[str, Any]] = [
+        {"translation": [1, 0, 0], **({"children": [index - 1]} if index else {})}
+        for index in range(count)
+    ]
+    for index in range(count) if meshes else [0]:
+        nodes[index]["mesh"] = 0
+    gltf = {
+        "asset": {"version": "2.0"},
+        "buffers": [{"uri": f"data:application/octet-stream;base64,{data}", "byteLength": 12}],
+        "bufferViews": [{"buffer": 0, "byteLength": 12}],
+        "accessors": [{"bufferView": 0, "componentType": FLOAT, "count": 1, "type": "VEC3"}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "mode": 0}]}],
+        "nodes": nodes,
+        "scenes": [{"nodes": [count - 1]}],
+    }
+    path.write_text(json.dumps(gltf, separators=(",", ":")))
+    return path
+
+
+def test_a_deep_hierarchy_costs_work_in_proportion_to_its_nodes(tmp_path: Path) -> None:
+    """Issue 22: the check for cycles walked from every node to its root, the scene's order
+    was a list searched for every node, and each mesh node multiplied its whole chain of
+    transforms: a chain of 30,000 nodes (1 MB of JSON) took 450 million steps to check, and
+    30,000 mesh nodes nested each in the one before 450 million matrix products a frame.
+    Each node is walked once now, and nesting beyond 64 levels per node of the file, in all,
+    is refused before any frame is evaluated."""
+    count = 10_000
+    seq = load_sequence(_chain(tmp_path / "deep.gltf", count, meshes=False))
+    assert seq.vertices.tolist() == [[[count, 0, 0]]]  # every level's translation applied
+    path = _chain(tmp_path / "nested.gltf", count, meshes=True)
+    _refused(path, r"its 10000 mesh nodes lie more than 640064 levels deep in all")
+
+
 def test_a_data_uri_beyond_the_limit_is_refused(tmp_path: Path, monkeypatch: Any) -> None:
     save_sequence(MeshSequence(np.ones((2, 3, 3)), np.array([[0, 1, 2]])), tmp_path / "a.gltf")
     monkeypatch.setattr(container, "MAX_DATA_URI", 100)

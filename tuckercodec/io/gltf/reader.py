@@ -45,6 +45,9 @@ from .timing import timing
 SUPPORTED_EXTENSIONS = frozenset({"KHR_mesh_quantization", "EXT_meshopt_compression"})
 #: The key of the writer's own record in an animation's ``extras``.
 EXTRAS_KEY = "tuckercodec"
+#: The levels of nesting above the chosen mesh nodes, in all, allowed per node of the file:
+#: each frame multiplies that many transforms (:func:`_check_nesting`).
+NESTING_PER_NODE = 64
 #: The most frames ``fps`` may ask for (a read also holds at most MAX_NUMBERS numbers, about
 #: 2 GiB of float64): checked against the file's keyframe times before anything is sampled.
 MAX_FRAMES = 1_000_000
@@ -138,6 +141,7 @@ class Scene:
         self.doc = doc
         self.parents = _parents(doc)
         self.chosen = _mesh_nodes(doc, self.parents, object_path)
+        _check_nesting(doc, self.chosen, self.parents)
         animation, self.channels = _channels(doc, self.chosen, self.parents)
         self.animated = animation is not None
         keys = [s.times for per_node in self.channels.values() for s in per_node.values()]
@@ -196,13 +200,15 @@ def _parents(doc: Document) -> dict[int, int]:
             if child in parents or child == index:
                 raise doc.fail(f"nodes[{child}] has two parents (or is its own): not a tree")
             parents[child] = index
+    rooted: set[int] = set()  # nodes whose parents are known to end at a root
     for start in parents:
-        seen, node = {start}, start
-        while node in parents:
+        walked, node = {start}, start
+        while node in parents and node not in rooted:  # each node walked once: linear
             node = parents[node]
-            if node in seen:
+            if node in walked:
                 raise doc.fail(f"nodes[{start}]'s parents form a cycle")
-            seen.add(node)
+            walked.add(node)
+        rooted |= walked
     return parents
 
 
@@ -218,13 +224,15 @@ def _mesh_nodes(doc: Document, parents: dict[int, int], object_path: str | None)
     else:
         roots = [index for index in range(len(nodes)) if index not in parents]
     order: list[int] = []
+    placed: set[int] = set()  # as order, for a membership test that does not grow with it
     pending = list(reversed(roots))
     while pending:
         index = pending.pop()
         node = doc.item("nodes", index, "a scene")
-        if index in order:
+        if index in placed:
             raise doc.fail(f"nodes[{index}] appears twice in the scene")
         order.append(index)
+        placed.add(index)
         pending.extend(reversed(node.get("children", [])))
     found = [index for index in order if "mesh" in nodes[index]]
     if object_path is not None:
@@ -251,6 +259,24 @@ def _mesh_nodes(doc: Document, parents: dict[int, int], object_path: str | None)
     return found
 
 
+def _check_nesting(doc: Document, chosen: list[int], parents: dict[int, int]) -> None:
+    """Each frame multiplies the transforms from each chosen node up to its root: refuse a
+    hierarchy where that is far more than the file's nodes (a chain of N mesh nodes, each
+    inside the one before, costs N^2 / 2 products a frame from N nodes of JSON)."""
+    limit = NESTING_PER_NODE * (len(doc.array("nodes")) + 1)
+    total = 0
+    for node in chosen:
+        while node in parents:
+            total += 1
+            node = parents[node]
+            if total > limit:
+                raise doc.fail(
+                    f"its {len(chosen)} mesh nodes lie more than {limit} levels deep in all "
+                    f"(each frame multiplies the transforms of every level), beyond "
+                    f"{NESTING_PER_NODE} per node of the file: refused"
+                )
+
+
 def _mesh_of(doc: Document, node: int) -> int:
     index = doc.array("nodes")[node].get("mesh")
     doc.item("meshes", index, f"nodes[{node}]")
@@ -270,8 +296,8 @@ def _channels(
     if not animations:
         return None, {}
     relevant = set(chosen)
-    for start in chosen:
-        while start in parents:
+    for start in chosen:  # up to a node already known (its own walk adds its parents)
+        while start in parents and parents[start] not in relevant:
             start = parents[start]
             relevant.add(start)
     animation = doc.item("animations", 0, "the file")
