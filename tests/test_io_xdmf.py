@@ -219,6 +219,49 @@ def test_references_other_than_plain_child_paths_are_refused(tmp_path, capsys):
     assert load_sequence(tmp_path / "ok.xdmf").faces.tolist() == [[0, 1, 2], [0, 2, 3]]
 
 
+def _store(count: int, geometry: str) -> str:
+    """A spatial collection of ``count`` grids (not a time series: not read as frames), the
+    last one holding ``geometry``."""
+    grids = '<Grid Name="s"/>' * (count - 1) + f'<Grid Name="s{count}">{geometry}</Grid>'
+    return f'<Grid Name="store" GridType="Collection" CollectionType="Spatial">{grids}</Grid>'
+
+
+def test_following_references_costs_work_in_proportion_to_the_document(tmp_path):
+    """Issue 22, item D: ElementTree lists the siblings again for every candidate of a [n]
+    step, so one Reference to the 20,000th of 20,000 grids took 4e8 steps (minutes), and
+    References that search far for their targets cost the document's size each. Children
+    are indexed once by name and by the value a predicate names; all the following of one
+    read may visit 32 elements per element of the document."""
+    count = 20_000
+    geometry = f'<Geometry GeometryType="XYZ">{item(POINTS + 1, "5 3")}</Geometry>'
+    far = f'<Geometry Reference="/Xdmf/Domain/Grid[2]/Grid[{count}]/Geometry"/>'
+    plain = grid(POINTS, 0.0)
+    step = plain[: plain.index("<Geometry")]  # its time and topology
+    text = document(f"{step}{far}</Grid>").replace(
+        "</Domain>", _store(count, geometry) + "</Domain>"
+    )
+    (tmp_path / "far.xdmf").write_text(text)
+    assert exact(load_sequence(tmp_path / "far.xdmf").vertices[0], POINTS + 1)
+    # each step's geometry found by searching every step's grid first: the budget ends it
+    steps = 2_000
+    searching = [
+        step.replace('"0.0"', f'"{n}"')
+        + f"<Geometry Reference=\"/Xdmf/Domain/Grid/Grid/Geometry[@Name='g{n}']\"/></Grid>"
+        for n in range(steps)
+    ]
+    named = "".join(
+        f'<Grid Name="s"><Geometry Name="g{n}">{item(POINTS + n, "5 3")}</Geometry></Grid>'
+        for n in range(steps)
+    )
+    store = f'<Grid Name="store" GridType="Collection" CollectionType="Spatial">{named}</Grid>'
+    path = tmp_path / "searching.xdmf"
+    path.write_text(document(*searching).replace("</Domain>", store + "</Domain>"))
+    with pytest.raises(InputError, match="its References search further than the") as caught:
+        load_sequence(path)
+    error = caught.value
+    assert error.path == str(path) and error.frame is not None and 0 < error.frame < steps
+
+
 def test_times_listed_by_the_collection_and_geometries_of_other_types(tmp_path):
     xyz = " ".join(item(POINTS[:, axis], "5") for axis in range(3))
     split = grid(POINTS, None).replace(item(POINTS, "5 3"), xyz).replace('"XYZ"', '"X_Y_Z"')

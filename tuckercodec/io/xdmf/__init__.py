@@ -48,7 +48,7 @@ from ..polygons import faces_from_polygons
 from ..registry import ReadOptions
 from ..safe_xml import parse_xml
 from ..streaming import FrameSource
-from .items import XINCLUDE, HeavyData, lower, read_item, resolve
+from .items import XINCLUDE, HeavyData, References, lower, read_item, resolve
 
 _FIXED = {"triangle": 3, "quadrilateral": 4}
 #: XDMF's Mixed topology codes: polyvertex and polygon are followed by their point count.
@@ -62,7 +62,7 @@ class XdmfFrames(FrameSource):
 
     _transient: ClassVar[tuple[str, ...]] = ("_heavy", "_root", "_steps", "_sources")
     _heavy: HeavyData | None = None
-    _root: ElementTree.Element | None = None
+    _root: References | None = None
     _steps: list[_Step] | None = None
     _sources: dict[object, int] | None = None
 
@@ -79,11 +79,12 @@ class XdmfFrames(FrameSource):
             names = []
         self._describe(path, len(steps), len(self._points), faces, names, None, codes)
 
-    def _tree(self) -> tuple[ElementTree.Element, list[_Step]]:
-        """The parsed XML and its steps (parsed again after unpickling)."""
+    def _tree(self) -> tuple[References, list[_Step]]:
+        """The parsed XML (with its References' follower) and its steps (parsed again after
+        unpickling)."""
         if self._root is None or self._steps is None:
-            self._root = _parse(self._file)
-            self._steps = _steps(self._root, self._file)
+            self._root = References(_parse(self._file))
+            self._steps = _steps(self._root.root, self._file)
         return self._root, self._steps
 
     def _step(
@@ -256,7 +257,7 @@ def _listed_times(collection: ElementTree.Element, count: int, path: Path) -> li
     return list(values)
 
 
-def _child(grid: ElementTree.Element, tag: str, root: ElementTree.Element) -> ElementTree.Element:
+def _child(grid: ElementTree.Element, tag: str, root: References) -> ElementTree.Element:
     element = grid.find(tag)
     if element is None:
         if any(child.tag in XINCLUDE for child in grid):
@@ -272,7 +273,7 @@ def _child(grid: ElementTree.Element, tag: str, root: ElementTree.Element) -> El
 
 
 def _geometry(
-    grid: ElementTree.Element, root: ElementTree.Element, heavy: HeavyData
+    grid: ElementTree.Element, root: References, heavy: HeavyData
 ) -> tuple[np.ndarray, object]:
     """The grid's points (K, 3) float64, finite, and the identity of their source."""
     geometry = _child(grid, "Geometry", root)
@@ -306,7 +307,7 @@ def _geometry(
 
 
 def _topology_values(
-    grid: ElementTree.Element, root: ElementTree.Element, heavy: HeavyData
+    grid: ElementTree.Element, root: References, heavy: HeavyData
 ) -> tuple[np.ndarray, str]:
     """The grid's topology type and its values as int64."""
     topology = _child(grid, "Topology", root)
