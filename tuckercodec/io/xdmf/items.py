@@ -82,9 +82,15 @@ class References:
         self.left = WORK_PER_ELEMENT * sum(1 for _ in root.iter()) + _WORK_BASE
         self._named: dict[tuple[int, str], list[ElementTree.Element]] = {}
         self._valued: dict[tuple[int, str, str], dict[str, list[ElementTree.Element]]] = {}
+        self._found: dict[str, ElementTree.Element | None] = {}  # a path followed once
 
     def find(self, target: str) -> ElementTree.Element | None:
         """The element an ``/Xdmf/...`` path of child steps leads to, or None."""
+        if target not in self._found:  # steps that share a topology, or a read's next pass
+            self._found[target] = self._follow(target)
+        return self._found[target]
+
+    def _follow(self, target: str) -> ElementTree.Element | None:
         steps = [match.groups() for match in _STEP.finditer(target, len("/Xdmf"))]
         if not steps:
             return self.root
