@@ -428,6 +428,60 @@ def test_a_deep_hierarchy_costs_work_in_proportion_to_its_nodes(tmp_path: Path) 
     _refused(path, r"its 10000 mesh nodes lie more than 640064 levels deep in all")
 
 
+def test_the_weights_of_many_targets_are_evaluated_a_few_frames_at_a_time(
+    tmp_path: Path,
+) -> None:
+    """Issue 22, finding 8: the weights of every frame of a read were one (frames x targets)
+    array, which 400 KB of JSON and keyframes made 800 MB: 5,000 targets that name one
+    accessor, and 20,000 keyframes of a translation. They are evaluated a few frames at a
+    time now, and the frames come out the same."""
+    targets, frames = 5_000, 20_000
+    b = Builder()
+    position = b.accessor([[0, 0, 0]], "<f4", "VEC3", min=[0, 0, 0], max=[0, 0, 0])
+    key = b.accessor([0.0], "<f4", "SCALAR", min=[0.0], max=[0.0])
+    weights = b.accessor(np.zeros(targets), "<f4", "SCALAR")
+    times = np.arange(frames, dtype=np.float32)
+    move_times = b.accessor(times, "<f4", "SCALAR", min=[0.0], max=[float(frames - 1)])
+    moves = b.accessor(np.stack([times, 0 * times, 0 * times], 1), "<f4", "VEC3")
+    b.gltf.update(
+        {
+            "nodes": [{"mesh": 0}],
+            "meshes": [
+                {
+                    "primitives": [
+                        {
+                            "attributes": {"POSITION": position},
+                            "mode": 0,
+                            "targets": [{"POSITION": position}] * targets,
+                        }
+                    ]
+                }
+            ],
+            "animations": [
+                {
+                    "samplers": [
+                        {"input": key, "output": weights},
+                        {"input": move_times, "output": moves},
+                    ],
+                    "channels": [
+                        {"sampler": 0, "target": {"node": 0, "path": "weights"}},
+                        {"sampler": 1, "target": {"node": 0, "path": "translation"}},
+                    ],
+                }
+            ],
+        }
+    )
+    path = b.write(tmp_path / "many.glb")
+    tracemalloc.start()
+    try:
+        seq = load_sequence(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert seq.vertices[:, 0, 0].tolist() == times.tolist()
+    assert peak < 100 * 2**20, peak  # 800 MB of weights at once before
+
+
 def test_a_data_uri_beyond_the_limit_is_refused(tmp_path: Path, monkeypatch: Any) -> None:
     save_sequence(MeshSequence(np.ones((2, 3, 3)), np.array([[0, 1, 2]])), tmp_path / "a.gltf")
     monkeypatch.setattr(container, "MAX_DATA_URI", 100)

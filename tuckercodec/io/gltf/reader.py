@@ -48,6 +48,9 @@ EXTRAS_KEY = "tuckercodec"
 #: The levels of nesting above the chosen mesh nodes, in all, allowed per node of the file:
 #: each frame multiplies that many transforms (:func:`_check_nesting`).
 NESTING_PER_NODE = 64
+#: The most weights (frames x morph targets) evaluated at once: the frames of a range are
+#: evaluated this many numbers' worth at a time.
+WEIGHTS_AT_ONCE = 1 << 22
 #: The most frames ``fps`` may ask for (a read also holds at most MAX_NUMBERS numbers, about
 #: 2 GiB of float64): checked against the file's keyframe times before anything is sampled.
 MAX_FRAMES = 1_000_000
@@ -167,7 +170,21 @@ class Scene:
     def evaluate(self, start: int, stop: int) -> np.ndarray:
         """The positions (n, K, 3) at ``times[start:stop]``, each frame's numbers the same
         whatever the range (see :func:`_morphed`); a non-finite one is an InputError naming its
-        frame."""
+        frame. The frames are evaluated a few at a time, so that their weights (frames x
+        targets, which a file's JSON can make far larger than the positions) stay within
+        :data:`WEIGHTS_AT_ONCE` numbers."""
+        targets = max(len(mesh.weights) for mesh in self.meshes.values())
+        step = max(1, WEIGHTS_AT_ONCE // max(1, targets))
+        if stop - start <= step:
+            return self._evaluate(start, stop)
+        vertices = sum(len(self.meshes[_mesh_of(self.doc, n)].base) for n in self.chosen)
+        result = np.empty((stop - start, vertices, 3))
+        for first in range(start, stop, step):
+            last = min(first + step, stop)
+            result[first - start : last - start] = self._evaluate(first, last)
+        return result
+
+    def _evaluate(self, start: int, stop: int) -> np.ndarray:
         doc, times = self.doc, self.times[start:stop]
         positions = []
         for node in self.chosen:
