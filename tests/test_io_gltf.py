@@ -334,7 +334,6 @@ def test_an_accessor_without_a_buffer_view_is_bounded_by_the_bytes_the_file_hold
     """Issue 22, finding 4: a .gltf of a few hundred bytes whose buffer declares 3 GB and is
     never loaded (no uri) asked for 3 GB of zeros; it is refused at once, naming the accessor.
     Zeros within the file's real data still read."""
-    import time
     import tracemalloc
 
     count = 250_000_000  # 3 GB of float VEC3
@@ -353,15 +352,14 @@ def test_an_accessor_without_a_buffer_view_is_bounded_by_the_bytes_the_file_hold
         path.write_text(json.dumps(gltf))
         pattern = r"accessors\[0\] \(.*POSITION\): 250000000 elements without"
         _refused(path, pattern)  # once first: the reader's imports are not the file's doing
-        start = time.perf_counter()
         tracemalloc.start()
         try:
             error = _refused(path, pattern)
             peak = tracemalloc.get_traced_memory()[1]
         finally:
             tracemalloc.stop()
-        # milliseconds now; 12 s and 3.4 GB before: the margin holds on a much slower machine
-        assert peak < 1 << 20 and time.perf_counter() - start < 5.0, (peak, error)
+        # under a MiB now; 3.4 GB (and 12 s) before: memory holds on any machine, seconds not
+        assert peak < 1 << 20, (peak, error)
         assert "more than the 0 bytes of data the file holds" in str(error)
     data = base64.b64encode(bytes(48)).decode()
     gltf["buffers"] = [{"uri": f"data:application/octet-stream;base64,{data}", "byteLength": 48}]

@@ -453,10 +453,10 @@ def test_hostile_npy_headers_allocate_nothing(
         path = write_file(
             tmp_path / "huge.npz", zip_bytes({"V.npy": npy_bytes(header, payload)}, compression)
         )
-        raised, elapsed, peak = measure(functools.partial(load_sequence, path))
+        raised, _, peak = measure(functools.partial(load_sequence, path))
         assert isinstance(raised, InputError) and raised.path == str(path), raised
         assert re.search(message, str(raised)), raised
-        assert elapsed < 1.0 and peak < 4 * 2**20, (elapsed, peak)
+        assert peak < 4 * 2**20, peak
 
 
 def test_a_huge_header_is_refused(tmp_path: Path) -> None:
@@ -567,9 +567,9 @@ def test_a_stored_member_larger_than_the_file(tmp_path: Path) -> None:
         tmp_path / "stored.npz",
         _zip_with_sizes("V.npy", head + bytes(64), zipfile.ZIP_STORED, len(head) + 2**30, 0),
     )
-    raised, elapsed, peak = measure(lambda: load_sequence(path))
+    raised, _, peak = measure(lambda: load_sequence(path))
     assert isinstance(raised, InputError) and raised.path == str(path), raised
-    assert elapsed < 1.0 and peak < 4 * 2**20
+    assert peak < 4 * 2**20
 
 
 def test_encrypted_and_unsupported_members(tmp_path: Path) -> None:

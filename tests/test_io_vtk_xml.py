@@ -248,10 +248,10 @@ def test_a_zlib_bomb_is_refused_without_inflating_beyond_its_declared_size(tmp_p
     data = points_only(zlib_record([1, 216, 0, len(bomb)], bomb), 9, compressed=True)
     pvd, _ = frame_file(tmp_path, data)
     load_sequence(DATA / "surface.pvd")  # the formats' modules imported before measuring
-    error, seconds, peak = measure(lambda: load_sequence(pvd))
+    error, _, peak = measure(lambda: load_sequence(pvd))
     assert isinstance(error, InputError), error
     assert "block 0 inflates beyond the 216 bytes its header declares" in str(error)
-    assert peak < 4 * len(data) and seconds < 1.0, (peak, seconds)
+    assert peak < 4 * len(data), peak  # memory, which holds on any machine; not seconds
 
 
 def test_a_block_larger_than_zlib_can_expand_is_refused_before_inflating(tmp_path):
