@@ -426,7 +426,9 @@ def traverse_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
     entry = parts.entries[parts.index("FACE")]
     count, width = entry["shape"]
     payload = parts.payloads[parts.index("FACE")]
-    values, corner_order = traversal.read_streams(payload, entry, count, width, "FACE")
+    values, corner_order = traversal.read_streams(
+        payload, entry, count, width, parts.header["vertices"], "FACE"
+    )
     values[0][0] = traversal.TIP_PREV
     params, broken = traversal.pack_streams(values, count, width, corner_order, 19)
     return {"R39-traversal": (_edit(good, _payload("FACE", broken, **params)), "FormatError")}

@@ -38,6 +38,7 @@ import numpy as np
 
 from ..errors import FormatError
 from . import streams
+from .limits import DEFAULT_LIMITS, Limits, check_limit
 from .sections import section_shape
 
 FACES_TRAVERSE = "faces-traverse"
@@ -254,9 +255,21 @@ def _face_across(
 
 
 def read_streams(
-    payload: bytes | memoryview, params: Mapping[str, Any], count: int, width: int, where: str
+    payload: bytes | memoryview,
+    params: Mapping[str, Any],
+    count: int,
+    width: int,
+    vertex_count: int,
+    where: str,
+    limits: Limits = DEFAULT_LIMITS,
 ) -> tuple[list[list[int]], int]:
-    """The four streams of a faces-traverse payload (§6.8), and ``corner_order``."""
+    """The four streams of a faces-traverse payload (§6.8), and ``corner_order``.
+
+    In §5 step 15's order: ``corner_order``, the streams' table (:func:`_stream_table`: each
+    entry's form, the bounds on the counts, the lengths against the payload), every ``planes``
+    (R30), the bytes the streams decompress to (R21), then each stream. Nothing is allocated by a
+    declared count before its stream is decompressed.
+    """
     corner_order = params.get("corner_order")
     # an int, not a float that equals 0 or 1 (§1: an int is never a float): found by the
     # JavaScript decoder, which refused a float 1.0 that this check let through
@@ -267,15 +280,46 @@ def read_streams(
         raise _problem(
             f"{where}.corner_order", f"corner_order must be 0 or 1, got {corner_order!r}"
         )
-    table = params.get("streams")
+    table = _stream_table(params.get("streams"), count, width, vertex_count, where)
+    total = sum(length for _, _, length in table)
+    if total != len(payload):
+        raise _problem(
+            f"{where}.streams", f"the streams take {total} bytes of a {len(payload)}-byte payload"
+        )
+    fields = [f"{where}.streams.{name}" for name in STREAM_NAMES]
+    planes = [
+        streams.checked_planes({"planes": entry[1]}, field)
+        for entry, field in zip(table, fields, strict=True)
+    ]
+    raw = sum(entry[0] * p for entry, p in zip(table, planes, strict=True))
+    check_limit(
+        raw,
+        limits,
+        "max_section_bytes",
+        what=f"the faces-traverse streams' {raw} bytes",
+        field=f"{where}.streams",
+    )
+    values, offset = [], 0
+    for (size, _, length), p, field in zip(table, planes, fields, strict=True):
+        values.append(
+            streams.unpack_integers(payload[offset : offset + length], size, p, field).tolist()
+        )
+        offset += length
+    return values, int(corner_order)
+
+
+def _stream_table(
+    table: object, count: int, width: int, vertex_count: int, where: str
+) -> list[tuple[int, int, int]]:
+    """``streams``: four ``[count, planes, length]`` arrays of ints >= 0, whose counts keep
+    §6.8's bounds (R39): every walk that decodes ``count`` faces reads exactly that many values
+    and no more than these allow, so a file that breaks one fails here, before its streams are
+    decompressed, rather than after."""
     if not isinstance(table, list) or len(table) != len(STREAM_NAMES):
         raise _problem(
             f"{where}.streams",
             f"streams must be an array of {len(STREAM_NAMES)} [count, planes, bytes] arrays",
         )
-    # the table first, whole: every stream is bounded by the faces (a gate per directed edge, a
-    # tip per corner), and the lengths tile the payload
-    bound = 2 * count * width
     for name, entry in zip(STREAM_NAMES, table, strict=True):
         if (
             not isinstance(entry, list)
@@ -286,40 +330,39 @@ def read_streams(
                 f"{where}.streams.{name}",
                 "each stream is described by [count, planes, bytes], ints >= 0",
             )
-        if entry[0] > bound:
-            raise _problem(
-                f"{where}.streams.{name}",
-                f"stream {name} declares {entry[0]} values, more than the {count} faces of "
-                f"width {width} allow ({bound})",
-            )
-    total = sum(entry[2] for entry in table)
-    if total != len(payload):
-        raise _problem(
-            f"{where}.streams", f"the streams take {total} bytes of a {len(payload)}-byte payload"
-        )
-    values, offset = [], 0
-    for name, (size, planes, length) in zip(STREAM_NAMES, table, strict=True):
-        field = f"{where}.streams.{name}"
-        planes = streams.checked_planes({"planes": planes}, field)
-        values.append(
-            streams.unpack_integers(payload[offset : offset + length], size, planes, field).tolist()
-        )
-        offset += length
-    return values, int(corner_order)
+    ops, degrees, news, references = (entry[0] for entry in table)
+    corners = count * (3 if degrees == 0 else width)  # at most: 3 corners without degrees
+    problem = None
+    if degrees not in (0, count):
+        problem = "degrees", f"{degrees} degrees for {count} faces: one each, or none"
+    elif not count <= ops <= 2 * corners:
+        problem = "ops", f"{ops} ops, outside the {count}..{2 * corners} that {count} faces read"
+    elif news > vertex_count:
+        problem = "vertices", f"{news} new vertices, more than the {vertex_count} there are"
+    elif news + references > corners:
+        detail = f"{news} new vertices and {references} references, more than {corners} corners"
+        problem = "references", detail
+    if problem is not None:
+        name, detail = problem
+        raise _problem(f"{where}.streams.{name}", f"the streams declare {detail} (§6.8)")
+    return [(entry[0], entry[1], entry[2]) for entry in table]
 
 
 def decode_traversal(
-    payload: bytes | memoryview, params: Mapping[str, Any], vertex_count: int, where: str
+    payload: bytes | memoryview,
+    params: Mapping[str, Any],
+    vertex_count: int,
+    where: str,
+    limits: Limits = DEFAULT_LIMITS,
 ) -> np.ndarray:
     """The (M, n) faces of a FACE section with codec faces-traverse (§6.8), in walk order.
 
     In §5 step 15's order: the streams' table is checked and the streams read
-    (:func:`read_streams`), then the walk rebuilds the faces from them (:func:`_walk`).
+    (:func:`read_streams`), then the walk rebuilds the faces from them (:func:`_walk`). The walk's
+    state grows with the values it reads; the (M, n) table is made once M faces are decoded.
     """
     count, width = section_shape(params, where, min_cols=3)
-    values, corner_order = read_streams(payload, params, count, width, where)
-    if values[1] and len(values[1]) != count:
-        raise _broken(where, f"{len(values[1])} degrees for {count} faces")
+    values, corner_order = read_streams(payload, params, count, width, vertex_count, where, limits)
     try:
         rows = _walk(values, count, width, vertex_count, corner_order, where)
     except StopIteration:  # a stream read past its end
