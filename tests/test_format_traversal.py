@@ -3,13 +3,19 @@ and vertex order kept; face order the walk's), and every broken stream is R39-tr
 
 from __future__ import annotations
 
+import sys
 import tracemalloc
+from collections.abc import Callable
 from pathlib import Path
+from types import FrameType
 from typing import Any
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
+from tests.support.properties import HYPOTHESIS_SETTINGS
 from tuckercodec import FormatError, LimitError, load_sequence
 from tuckercodec.format import traversal
 from tuckercodec.format.faces import decode_faces, encode_face_section, encode_faces
@@ -364,3 +370,91 @@ def test_a_small_file_declaring_huge_streams_is_refused_without_allocating_them(
         tracemalloc.stop()
     assert raised.value.rule == "R21-header-limit"
     assert peak < 1 << 20
+
+
+# ----------------------------------------------------------------- the encoder's gate search
+
+
+class _SpecWalk(traversal._Walk):
+    """The encoder's walk with its gate search as §6.8 writes it (informative): every face in
+    the input's order, the first unvisited one with the corners b, a, else a, b."""
+
+    def _across(self, a: int, b: int) -> tuple[int, int, int] | None:
+        for first, second, kind in ((b, a, traversal.GATE_FACE), (a, b, traversal.GATE_FLIP)):
+            for f, row in enumerate(self.rows):
+                n = len(row)
+                for j in range(n):
+                    if not self.done[f] and row[j] == first and row[(j + 1) % n] == second:
+                        return f, j, kind
+        return None
+
+
+def _walk_streams(walk: traversal._Walk) -> tuple[list[int], ...]:
+    return (walk.ops_for(0), walk.ops_for(1), walk.degrees, walk.new_residuals, walk.references)
+
+
+def fan(count: int, alternating: bool = False) -> np.ndarray:
+    """``count`` triangles (0, 1, v) on the edge 0-1, every other one turned over if asked."""
+    tips = np.arange(2, count + 2)
+    faces = np.stack([np.zeros_like(tips), np.ones_like(tips), tips], axis=1)
+    if alternating:
+        faces[1::2, :2] = faces[1::2, 1::-1]
+    return faces
+
+
+@settings(max_examples=300, **HYPOTHESIS_SETTINGS)
+@given(
+    st.integers(2, 9).flatmap(
+        lambda k: st.tuples(
+            st.just(k),
+            st.lists(st.lists(st.integers(0, k - 1), min_size=3, max_size=5), max_size=30),
+        )
+    )
+)
+def test_the_gate_search_picks_the_face_the_spec_names(mesh):
+    """Soups of faces of 3 to 5 corners on a few vertices: edges of many faces in both
+    orientations, repeated vertices and faces. The walk is the one of §6.8's plain search."""
+    k, rows = mesh
+    assert _walk_streams(traversal._Walk(rows, k)) == _walk_streams(_SpecWalk(rows, k))
+    assert traversal._Walk(rows, k).order == _SpecWalk(rows, k).order
+
+
+@pytest.mark.parametrize("alternating", [False, True], ids=["same", "alternating"])
+def test_the_gate_search_is_linear_on_an_edge_of_many_faces(alternating):
+    """Work counted in lines of traversal.py run, not seconds: a fan of 10,000 faces on one edge
+    runs about ten times the lines of a fan of 1,000 (a search from the front each time ran 50
+    times as many; the trace stops such a run once it is past the budget)."""
+    small = _lines_run(lambda: traversal.encode_traversal(fan(1000, alternating), 1002), 10**7)
+    large = _lines_run(
+        lambda: traversal.encode_traversal(fan(10000, alternating), 10002), 15 * small
+    )
+    assert large <= 11 * small
+
+
+class _OverBudget(Exception):
+    pass
+
+
+def _lines_run(function: Callable[[], object], budget: int) -> int:
+    """How many lines of traversal.py ``function()`` runs; _OverBudget past ``budget``."""
+    lines = 0
+    source = traversal.__file__
+
+    def in_traversal(frame: FrameType, event: str, arg: object) -> Any:
+        nonlocal lines
+        if event == "line":
+            lines += 1
+            if lines > budget:
+                raise _OverBudget(f"more than {budget} lines")
+        return in_traversal
+
+    def calls(frame: FrameType, event: str, arg: object) -> Any:
+        return in_traversal if frame.f_code.co_filename == source else None
+
+    previous = sys.gettrace()
+    sys.settrace(calls)
+    try:
+        function()
+    finally:
+        sys.settrace(previous)
+    return lines
