@@ -16,6 +16,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tests.support.properties import HYPOTHESIS_SETTINGS
+from tools.bench.faces import closed_fan
 from tuckercodec import FormatError, LimitError, load_sequence
 from tuckercodec.format import traversal
 from tuckercodec.format.faces import decode_faces, encode_face_section, encode_faces
@@ -457,4 +458,24 @@ def _lines_run(function: Callable[[], object], budget: int) -> int:
         function()
     finally:
         sys.settrace(previous)
+    return lines
+
+
+def test_reading_the_newest_edge_after_many_were_closed_is_linear():
+    """into(0) read 1,000 and 10,000 times after as many entries behind its oldest were closed
+    (tools.bench.faces.closed_fan): the faces come out, and the decoder runs about ten times
+    the lines of traversal.py. The lines do not count C: the ordered dicts used before passed over
+    the closed entries inside dict iteration (4 * 160,000 faces took 56 s); python -m tools.bench
+    faces times that."""
+    small, large = (_closed_fan_lines(count) for count in (1000, 10000))
+    assert large <= 11 * small
+
+
+def _closed_fan_lines(count: int) -> int:
+    params, payload, k = closed_fan(count)
+    decoded: list[np.ndarray] = []
+    lines = _lines_run(
+        lambda: decoded.append(traversal.decode_traversal(payload, params, k, "FACE")), 10**8
+    )
+    assert decoded[0][-1].tolist() == [count + 1, 0, 1]  # the last read found 1
     return lines

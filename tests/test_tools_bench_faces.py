@@ -6,6 +6,7 @@ import numpy as np
 
 from tools import bench
 from tools.bench import faces as bench_faces
+from tuckercodec.format import traversal
 
 
 def test_a_fan_shares_one_edge_in_one_or_both_orientations():
@@ -27,3 +28,21 @@ def test_the_table_has_a_row_per_fan_and_size(capsys):
         [" same ", " 40 "],
         [" alternating ", " 40 "],
     ]
+    crafted = [line.split("|")[1:4] for line in out.splitlines() if line.startswith("| closed")]
+    assert [row[:2] for row in crafted] == [[" closed fan ", " 80 "], [" closed fan ", " 160 "]]
+
+
+def test_the_closed_fan_reads_its_oldest_edge_after_the_closed_ones():
+    params, payload, k = bench_faces.closed_fan(3)
+    decoded = traversal.decode_traversal(payload, params, k, "FACE")
+    y, x, u = [2, 3, 4], [5, 6, 7], [8, 9, 10]
+    assert decoded.tolist() == (
+        [[0, v, 1] for v in y]
+        + [[0, a, b] for a, b in zip(x, u, strict=True)]
+        + [[0, b, a] for a, b in zip(x, u, strict=True)]
+        + [[v, 0, 1] for v in y]
+    )
+    assert (
+        k == 11
+        and traversal.TIP_PREV in traversal.read_streams(payload, params, 12, 3, k, "FACE")[0][0]
+    )
