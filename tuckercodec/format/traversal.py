@@ -335,9 +335,9 @@ def _stream_table(
     table: object, count: int, width: int, vertex_count: int, where: str
 ) -> list[tuple[int, int, int]]:
     """``streams``: four ``[count, planes, length]`` arrays of ints >= 0, whose counts keep
-    §6.8's bounds (R39): every walk that decodes ``count`` faces reads exactly that many values
-    and no more than these allow, so a file that breaks one fails here, before its streams are
-    decompressed, rather than after."""
+    §6.8's bounds (R39). A walk of ``count`` faces reads every value of every stream, and never
+    more than the bounds allow, so a file that breaks one fails here, before its streams are
+    decompressed, rather than in the walk."""
     if not isinstance(table, list) or len(table) != len(STREAM_NAMES):
         raise _problem(
             f"{where}.streams",

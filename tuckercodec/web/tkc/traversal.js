@@ -121,8 +121,8 @@ function streamTable(table, K, M, n) {
 class VertexTable {
   /** @param {number} most the count of the vertices stream */
   constructor(most) {
-    this.bits = 1;
-    while (1 << this.bits < 2 * most + 2) this.bits++;
+    this.bits = 1; // at most half full (up to 2^29 vertices: 1 << 31 is not a size)
+    while (this.bits < 30 && 2 ** this.bits < 2 * most + 2) this.bits++;
     this.slots = new Int32Array(1 << this.bits).fill(-1);
     this.index = new Int32Array(most); // the vertex index of each number
     this.size = 0;
