@@ -3,11 +3,8 @@ and vertex order kept; face order the walk's), and every broken stream is R39-tr
 
 from __future__ import annotations
 
-import sys
 import tracemalloc
-from collections.abc import Callable
 from pathlib import Path
-from types import FrameType
 from typing import Any
 
 import numpy as np
@@ -16,6 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tests.support.properties import HYPOTHESIS_SETTINGS
+from tests.support.work import lines_run
 from tools.bench.faces import closed_fan
 from tuckercodec import FormatError, LimitError, load_sequence
 from tuckercodec.format import traversal
@@ -425,40 +423,17 @@ def test_the_gate_search_is_linear_on_an_edge_of_many_faces(alternating):
     """Work counted in lines of traversal.py run, not seconds: a fan of 10,000 faces on one edge
     runs about ten times the lines of a fan of 1,000 (a search from the front each time ran 50
     times as many; the trace stops such a run once it is past the budget)."""
-    small = _lines_run(lambda: traversal.encode_traversal(fan(1000, alternating), 1002), 10**7)
-    large = _lines_run(
-        lambda: traversal.encode_traversal(fan(10000, alternating), 10002), 15 * small
+    small = lines_run(
+        lambda: traversal.encode_traversal(fan(1000, alternating), 1002),
+        [traversal.__file__],
+        10**7,
+    )
+    large = lines_run(
+        lambda: traversal.encode_traversal(fan(10000, alternating), 10002),
+        [traversal.__file__],
+        15 * small,
     )
     assert large <= 11 * small
-
-
-class _OverBudget(Exception):
-    pass
-
-
-def _lines_run(function: Callable[[], object], budget: int) -> int:
-    """How many lines of traversal.py ``function()`` runs; _OverBudget past ``budget``."""
-    lines = 0
-    source = traversal.__file__
-
-    def in_traversal(frame: FrameType, event: str, arg: object) -> Any:
-        nonlocal lines
-        if event == "line":
-            lines += 1
-            if lines > budget:
-                raise _OverBudget(f"more than {budget} lines")
-        return in_traversal
-
-    def calls(frame: FrameType, event: str, arg: object) -> Any:
-        return in_traversal if frame.f_code.co_filename == source else None
-
-    previous = sys.gettrace()
-    sys.settrace(calls)
-    try:
-        function()
-    finally:
-        sys.settrace(previous)
-    return lines
 
 
 def test_reading_the_newest_edge_after_many_were_closed_is_linear():
@@ -474,8 +449,10 @@ def test_reading_the_newest_edge_after_many_were_closed_is_linear():
 def _closed_fan_lines(count: int) -> int:
     params, payload, k = closed_fan(count)
     decoded: list[np.ndarray] = []
-    lines = _lines_run(
-        lambda: decoded.append(traversal.decode_traversal(payload, params, k, "FACE")), 10**8
+    lines = lines_run(
+        lambda: decoded.append(traversal.decode_traversal(payload, params, k, "FACE")),
+        [traversal.__file__],
+        10**8,
     )
     assert decoded[0][-1].tolist() == [count + 1, 0, 1]  # the last read found 1
     return lines
