@@ -371,9 +371,12 @@ def test_a_frozen_application_reads_in_process(data_file, monkeypatch):
 # ------------------------------------------------------------------------------------------
 # the caller interrupted or killed
 
+# SIGINT's handler is set, not inherited: a shell that starts a job in the background without
+# job control (a CI script's `cmd &`) passes SIGINT on as ignored, and Python then keeps it so
 CALLER = """
-import sys
+import signal, sys
 from pathlib import Path
+signal.signal(signal.SIGINT, signal.default_int_handler)
 from tests.support import isolation_hooks
 from tuckercodec.io.isolation import read_isolated
 from tuckercodec.io.registry import ReadOptions

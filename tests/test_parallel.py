@@ -312,9 +312,11 @@ def test_in_process_imports_no_dask():
 
 _INTERRUPTED = textwrap.dedent(
     """
-    import sys, time
+    import signal, sys, time
     from tuckercodec.parallel import open_executor
     if __name__ == "__main__":
+        # set, not inherited: a background job without job control starts with SIGINT ignored
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         try:
             with open_executor(1) as executor:
                 print("running", flush=True)
