@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import InputError
+from ..streaming import as_float64
 from .container import Document, integer
 
 #: componentType -> numpy dtype (little-endian, as glTF stores them).
@@ -73,7 +74,7 @@ def read_accessor(doc: Document, index: Any, what: str, *, width: int | None = N
             raise doc.fail(f"{name}: normalized is only for 8- and 16-bit integers")
         return _denormalize(values)
     if dtype.kind == "f":
-        result = values.astype(np.float64)
+        result = as_float64(values)
         if not np.isfinite(result).all():
             row = int(np.argwhere(~np.isfinite(result))[0, 0])
             raise doc.fail(f"{name}: element {row} is not finite (NaN or infinity)")
