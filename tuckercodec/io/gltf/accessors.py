@@ -42,7 +42,10 @@ def read_accessor(doc: Document, index: Any, what: str, *, width: int | None = N
     caller needs (3 for positions); ``what`` names the referrer for messages."""
     accessor = doc.item("accessors", index, what)
     name = f"accessors[{index}] ({what})"
-    dtype = COMPONENT_TYPES.get(accessor.get("componentType"))  # type: ignore[arg-type]
+    code = accessor.get("componentType")
+    # a JSON integer: a list is unhashable, and 5126.0 or true would match a key
+    plain = isinstance(code, int) and not isinstance(code, bool)
+    dtype = COMPONENT_TYPES.get(code) if isinstance(code, int) and plain else None
     if dtype is None:
         raise doc.fail(f"{name}: componentType {accessor.get('componentType')!r} is not glTF's")
     kind = accessor.get("type")
