@@ -15,6 +15,7 @@ import json
 import random
 import re
 import struct
+import warnings
 import zipfile
 from collections.abc import Callable
 from typing import Any
@@ -211,7 +212,8 @@ def mutate_zip(data: bytes, rng: random.Random, inner: Callable[[bytes], bytes])
     else:
         members[index] = (info, inner(body))
     out = io.BytesIO()
-    with zipfile.ZipFile(out, "w") as archive:
+    with warnings.catch_warnings(), zipfile.ZipFile(out, "w") as archive:
+        warnings.simplefilter("ignore")  # a name twice, on purpose: zipfile warns
         for member, content in members:
             method = member.compress_type if member.compress_type in (0, 8) else 8
             archive.writestr(member.filename, content, compress_type=method)
