@@ -111,21 +111,73 @@ def write_input(data: bytes, suffix_of: Callable[[bytes], str]) -> Path:
     return folder / main_name
 
 
-def read_check(data: bytes, suffix_of: Callable[[bytes], str]) -> str:
+class _Opens:
+    """Files opened by Python code (the ``open`` audit event) while a reader runs, outside
+    the input's folder and the interpreter's and package's own files: a reader must never
+    read a file its input names outside its folder (a .pvd's frames, an .xdmf's HDF5 file, a
+    .gltf's buffers). Opens in C libraries (HDF5, pxr, Alembic) are not seen."""
+
+    def __init__(self) -> None:
+        self.folders: tuple[str, ...] = ()
+        self.strays: list[str] = []
+        self.allowed: tuple[str, ...] = ()
+
+    def hook(self, event: str, args: tuple[Any, ...]) -> None:
+        if event != "open" or not self.folders or not args:
+            return
+        name = args[0]
+        if isinstance(name, (str, bytes, os.PathLike)):
+            path = os.path.abspath(os.fsdecode(name))
+            if not path.startswith((*self.folders, *self.allowed)):
+                self.strays.append(path)
+
+    def start(self, folder: Path, isolated: bool) -> None:
+        if not self.allowed:
+            import sys
+
+            import tuckercodec
+
+            sys.addaudithook(self.hook)
+            package = str(Path(tuckercodec.__file__).resolve().parent)
+            prefixes = {sys.prefix, sys.base_prefix, sys.exec_prefix, package}
+            self.allowed = (*(p + os.sep for p in prefixes), "/dev/null", "/proc/", "/sys/")
+        self.folders = (str(folder) + os.sep,)
+        if isolated:  # the child's stderr goes to a temporary file
+            self.folders += (tempfile.gettempdir() + os.sep,)
+        self.strays = []
+
+    def stop(self) -> list[str]:
+        self.folders = ()
+        return self.strays
+
+
+OPENS = _Opens()
+
+
+def read_check(data: bytes, suffix_of: Callable[[bytes], str], isolated: bool = False) -> str:
     """The readers' oracle: ``open_frames`` loads the input, or raises InputError or
-    FormatError; the last frame read alone equals the loaded one; positions are finite."""
+    FormatError; the last frame read alone equals the loaded one; positions are finite; no
+    file outside the input's folder was opened (:class:`_Opens`)."""
     import numpy as np
 
     import tuckercodec as tc
 
     path = write_input(data, suffix_of)
+    OPENS.start(path.parent, isolated)
     try:
         with tc.open_frames(path) as source:
             sequence = source.load()
             count = sequence.frame_count
             last = source.read(count - 1, count)
+        outcome = "ok"
     except (tc.InputError, tc.FormatError) as error:
-        return type(error).__name__
+        outcome = type(error).__name__
+    finally:
+        strays = OPENS.stop()
+    if strays:
+        raise InvariantError(f"the reader opened {strays[0]!r}, outside the input's folder")
+    if outcome != "ok":
+        return outcome
     if not np.array_equal(last[0], sequence.vertices[-1]):
         raise InvariantError("the last frame read alone differs from the loaded one")
     if not np.isfinite(sequence.vertices).all():
@@ -275,7 +327,7 @@ def _reader(
     return Target(
         name=name,
         door=door,
-        check=lambda data: read_check(data, pick),
+        check=lambda data: read_check(data, pick, isolated),
         seeds=seeds or (lambda: _written(suffix)),
         mutate=lambda data, max_size, seed: mutate_bundle(data, max_size, seed, _atheris_mutate),
         isolated=isolated,
