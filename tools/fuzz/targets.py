@@ -127,9 +127,9 @@ class _Opens:
             return
         name = args[0]
         if isinstance(name, (str, bytes, os.PathLike)):
-            path = os.path.abspath(os.fsdecode(name))
-            if not path.startswith((*self.folders, *self.allowed)):
-                self.strays.append(path)
+            path = os.path.join(os.path.abspath(os.fsdecode(name)), "")  # a folder: its own
+            if not path.startswith((*self.folders, *self.allowed)):  # name with a separator
+                self.strays.append(path.rstrip(os.sep))
 
     def start(self, folder: Path, isolated: bool) -> None:
         if not self.allowed:
@@ -140,7 +140,7 @@ class _Opens:
             sys.addaudithook(self.hook)
             package = str(Path(tuckercodec.__file__).resolve().parent)
             prefixes = {sys.prefix, sys.base_prefix, sys.exec_prefix, package}
-            self.allowed = (*(p + os.sep for p in prefixes), "/dev/null", "/proc/", "/sys/")
+            self.allowed = (*(p + os.sep for p in prefixes), "/dev/null/", "/proc/", "/sys/")
         self.folders = (str(folder) + os.sep,)
         if isolated:  # the child's stderr goes to a temporary file
             self.folders += (tempfile.gettempdir() + os.sep,)
