@@ -50,6 +50,8 @@ ISOLATED_SECONDS = 180.0
 INPUT_PEAK_BYTES = 256 << 20
 FUZZ_SECONDS = int(os.environ.get("TKC_FUZZ_SECONDS", "30"))
 WARM: set[str] = set()
+#: Variants of its seeds each in-process door's own mutator makes, without libFuzzer.
+MUTATIONS = 40
 
 
 def _label(item: tuple[str, Path]) -> str:
@@ -132,7 +134,7 @@ def _flip(data: bytes, max_size: int) -> bytes:
 @pytest.mark.parametrize("name", [n for n, t in TARGETS.items() if not t.isolated])
 def test_structure_aware_mutations(name, monkeypatch):
     """Each in-process door's own mutator (the readers' bundle, zip, GLB, JSON, XML and number
-    edits; FACE's params and streams; the .tkc edits), 60 variants of its seeds:
+    edits; FACE's params and streams; the .tkc edits), MUTATIONS variants of its seeds:
     each ends in the documented error or a consistent read."""
     _needs(name)
     from tools.fuzz import targets
@@ -141,7 +143,7 @@ def test_structure_aware_mutations(name, monkeypatch):
     target = TARGETS[name]
     seeds = [p.read_bytes() for n, p in SAVED if n == name and p.name.startswith("seed")]
     rng = random.Random(f"{name}-20261127")
-    for _ in range(60):
+    for _ in range(MUTATIONS):
         data = rng.choice(seeds)
         for _ in range(rng.randint(1, 3)):
             if name in ("decoder", "segmented"):  # the .tkc mutator without libFuzzer's part
