@@ -9,7 +9,6 @@ import signal
 import subprocess
 import sys
 import textwrap
-import time
 from pathlib import Path
 
 import numpy as np
@@ -179,33 +178,46 @@ def test_killing_the_writer_mid_write_keeps_the_old_file(tmp_path, how):
         assert all(name.startswith(".out.bin.") and name.endswith(".tmp") for name in left)
 
 
+#: The CLI, run so that it says when its search has begun: SIGTERM is then certain to reach the
+#: encode, not the interpreter's start-up (which takes seconds on a slow machine, and there
+#: SIGTERM's default action ends the process before the CLI installs its handler).
+_ENCODE_SAYING_WHEN = """
+import sys
+from tuckercodec.cli import main
+from tuckercodec.encoder.encoder import Encoder
+
+search = Encoder._search
+
+def announced(self, work):
+    print("searching", flush=True)
+    return search(self, work)
+
+Encoder._search = announced
+sys.exit(main(sys.argv[1:]))
+"""
+
+
 def test_sigterm_during_an_encode_exits_cleanly_and_keeps_the_old_file(tmp_path):
     source = tmp_path / "big.npz"
     frames, side = 200, 60
     np.savez(source, V=wave_sequence(frames, side), F=grid_faces(side))
     out = tmp_path / "out.tkc"
     out.write_bytes(b"old")
+    arguments = ["encode", str(source), "-o", str(out), "--kg", "0.0001", "--force"]
     with subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "tuckercodec.cli",
-            "encode",
-            str(source),
-            "-o",
-            str(out),
-            "--kg",
-            "0.0001",
-            "--force",
-        ],
+        [sys.executable, "-c", _ENCODE_SAYING_WHEN, *arguments],
+        stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
     ) as child:
-        time.sleep(1.5)  # inside the encode, which takes several seconds
-        assert child.poll() is None, "the encode finished before it could be interrupted"
-        child.send_signal(signal.SIGTERM)
-        _, err = child.communicate(timeout=60)
-    assert child.returncode == 128 + signal.SIGTERM
+        try:
+            assert child.stdout is not None
+            assert child.stdout.readline() == "searching\n"  # the search takes seconds
+            child.send_signal(signal.SIGTERM)
+            _, err = child.communicate(timeout=300)  # a hang guard: it takes milliseconds
+        finally:
+            child.kill()
+    assert child.returncode == 128 + signal.SIGTERM, err
     assert err.strip() == "tuckercodec: interrupted"
     assert out.read_bytes() == b"old"
     assert _listing(tmp_path) == ["big.npz", "out.tkc"]

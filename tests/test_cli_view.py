@@ -232,6 +232,33 @@ def test_half_sent_requests_are_closed_at_the_timeout_and_others_still_served(se
         assert _get(server, "/index.html")[0] == 200
 
 
+def test_a_request_that_trickles_in_is_closed_at_its_deadline(served):
+    """A client that sends a byte of its request line every 4 s is never idle for the 5 s of
+    the timeout, and held its connection for as long as it liked; the request line and headers
+    must now arrive within REQUEST_DEADLINE, all of them."""
+    _, site, folder = served
+    assert 5 <= server_module.REQUEST_DEADLINE <= 30  # a slow link's request, not a trickle
+    # the test's own scale: a byte every 0.1 s, never idle for the 2 s of the timeout
+    with ViewerServer(
+        folder, site.files, 0, connection_timeout=2.0, request_deadline=0.5
+    ) as server:
+        trickle = socket.create_connection(("127.0.0.1", server.port), timeout=10)
+        with trickle:
+            line = f"GET /index.html?token={server.token} HTTP/1.1\r\nX-Pad: " + "a" * 1000
+            sent = 0
+            try:
+                for byte in line.encode():
+                    trickle.sendall(bytes([byte]))
+                    sent += 1
+                    if _closed_within(trickle, 0.1):
+                        break
+            except (BrokenPipeError, ConnectionResetError):
+                pass  # closed while sending
+            # generous: 100 s of bytes for a deadline of 0.5 s, whatever the machine's speed
+            assert sent < len(line), "the trickling request was never closed"
+        assert _get(server, "/index.html")[0] == 200  # and others are served as before
+
+
 def test_connections_over_the_cap_are_closed_at_once(served):
     _, site, folder = served
     with ViewerServer(folder, site.files, 0, connection_timeout=60, max_connections=4) as server:

@@ -3,15 +3,22 @@ and vertex order kept; face order the walk's), and every broken stream is R39-tr
 
 from __future__ import annotations
 
+import tracemalloc
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-from tuckercodec import FormatError, load_sequence
+from tests.support.properties import HYPOTHESIS_SETTINGS
+from tests.support.work import lines_run
+from tools.bench.faces import closed_fan
+from tuckercodec import FormatError, LimitError, load_sequence
 from tuckercodec.format import traversal
 from tuckercodec.format.faces import decode_faces, encode_face_section, encode_faces
+from tuckercodec.format.limits import Limits
 from tuckercodec.format.sections import FACES_TRAVERSE
 from tuckercodec.topology import mesh_edges, mesh_parents
 
@@ -177,7 +184,7 @@ def test_a_hand_written_stream_decodes_as_the_spec_says():
         ({"ops": [0, 0, 3], "references": [-1]}, "not one seen"),  # FAR to vertex 0 is fine...
         ({"ops": [0, 0, 0], "vertices": [0, 0, -1]}, "outside"),  # ...a NEW one placed is not
         ({"ops": [0, 0, 0], "vertices": [0, 0, 9]}, "outside"),
-        ({"ops": [0, 0, 0, 0], "vertices": [0, 0, 0, 0]}, "values left"),
+        ({"ops": [0, 0, 0, 0], "vertices": [0, 0, 0]}, "values left"),
         ({"ops": [0, 0], "vertices": [0, 0]}, "ends early"),
         (
             {
@@ -239,7 +246,7 @@ def test_random_damage_to_a_real_walk_is_always_a_format_error():
     rng = np.random.default_rng(8)
     for _ in range(150):
         count, corners = faces.shape
-        values, corner_order = traversal.read_streams(payload, params, count, corners, "FACE")
+        values, corner_order = traversal.read_streams(payload, params, count, corners, 100, "FACE")
         stream = int(rng.integers(4))
         if not values[stream]:
             continue
@@ -276,3 +283,176 @@ def test_a_huge_vertex_count_in_the_header_allocates_nothing_by_it():
     params, payload, walked = traversal.encode_traversal(faces, 16)
     decoded = traversal.decode_traversal(payload, params, 2**26, "section FACE")
     assert decoded.tolist() == walked.tolist()
+
+
+# ------------------------------------------------------------------ the streams' declared counts
+
+
+def _declared(table: list[list[int]], count: int = 2, width: int = 3, vertices: int = 5):
+    """Parameters declaring ``table`` over a payload of the lengths it gives, which is not even
+    zstd: a check made on the parameters fails before any stream is decompressed (R29)."""
+    params = {"shape": [count, width], "corner_order": 0, "streams": table}
+    payload = b"\xff" * sum(entry[2] for entry in table)
+    return params, payload, vertices
+
+
+@pytest.mark.parametrize(
+    ("table", "field"),
+    [
+        ([[6, 1, 9], [1, 1, 9], [3, 1, 9], [0, 1, 9]], "degrees"),  # neither 0 nor M = 2
+        ([[6, 1, 9], [3, 1, 9], [3, 1, 9], [0, 1, 9]], "degrees"),
+        ([[1, 1, 9], [0, 1, 9], [3, 1, 9], [0, 1, 9]], "ops"),  # fewer than one per face
+        ([[13, 1, 9], [0, 1, 9], [3, 1, 9], [0, 1, 9]], "ops"),  # 2 * M * 3 = 12 (triangles)
+        ([[6, 1, 9], [0, 1, 9], [6, 1, 9], [0, 1, 9]], "vertices"),  # more NEW than K = 5
+        ([[6, 1, 9], [0, 1, 9], [4, 1, 9], [3, 1, 9]], "references"),  # 4 + 3 > M * 3
+        ([[6, 1, 9], [0, 1, 9], [0, 1, 9], [7, 1, 9]], "references"),
+        ([[2**70, 1, 9], [0, 1, 9], [3, 1, 9], [0, 1, 9]], "ops"),
+    ],
+)
+def test_a_count_beyond_its_bound_is_r39_before_any_stream_is_read(table, field):
+    params, payload, vertices = _declared(table)
+    with pytest.raises(FormatError, match=r"\(§6\.8\)") as raised:
+        traversal.decode_traversal(payload, params, vertices, "FACE")
+    assert raised.value.rule == "R39-traversal"
+    assert raised.value.field == f"FACE.streams.{field}"
+
+
+@pytest.mark.parametrize(
+    "table",
+    [
+        [[2, 1, 9], [0, 1, 9], [0, 1, 9], [0, 1, 9]],  # M ops
+        [[12, 1, 9], [0, 1, 9], [5, 1, 9], [1, 1, 9]],  # 2 * M * 3 ops, 5 + 1 = M * 3
+        [[16, 1, 9], [2, 1, 9], [5, 1, 9], [3, 1, 9]],  # polygons of width 4: 2 * M * 4 ops
+    ],
+    ids=["least-ops", "most-triangles", "most-polygons"],
+)
+def test_counts_at_their_bounds_pass_to_the_streams(table):
+    """The bounds are inclusive: such a table is refused only by its (garbage) streams."""
+    params, payload, vertices = _declared(table, width=4 if table[1][0] else 3)
+    with pytest.raises(FormatError) as raised:
+        traversal.decode_traversal(payload, params, vertices, "FACE")
+    assert raised.value.rule == "R29-zstd-content-size"
+
+
+def test_streams_beyond_max_section_bytes_are_a_limit_error_before_decompression():
+    """Σ count * planes is the bytes the streams decompress to: a decoder limit (§7, R21),
+    checked after the planes (R30) and before any frame is read."""
+    params, payload, vertices = _declared([[10, 4, 9], [0, 1, 9], [3, 2, 9], [1, 3, 9]])
+    small = Limits(max_section_bytes=48)  # one below 40 + 0 + 6 + 3
+    with pytest.raises(LimitError, match="max_section_bytes") as limit:
+        traversal.decode_traversal(payload, params, vertices, "FACE", small)
+    assert (limit.value.rule, limit.value.field) == ("R21-header-limit", "FACE.streams")
+    with pytest.raises(FormatError) as raised:  # at the limit: on to the streams
+        traversal.decode_traversal(payload, params, vertices, "FACE", Limits(max_section_bytes=49))
+    assert raised.value.rule == "R29-zstd-content-size"
+    params["streams"][3][1] = 5  # a planes out of range is R30, before the sum
+    with pytest.raises(FormatError) as raised:
+        traversal.decode_traversal(payload, params, vertices, "FACE", small)
+    assert raised.value.rule == "R30-planes"
+
+
+def test_a_small_file_declaring_huge_streams_is_refused_without_allocating_them():
+    """2**28 faces and 6 * 2**28 ops of 4 planes: within max_faces, max_section_bytes for the
+    table, and §6.8's bounds, but 6 GiB of streams; refused as R21 before a byte of it exists
+    (the payload is the few bytes of a real file's streams)."""
+    faces = scrambled(grid(5), 25, 10)
+    params, payload, _ = traversal.encode_traversal(faces, 25)
+    table = [list(entry) for entry in params["streams"]]
+    table[0] = [6 << 28, 4, table[0][2]]
+    huge = {**params, "shape": [1 << 28, 3], "streams": table}
+    tracemalloc.start()
+    try:
+        with pytest.raises(LimitError) as raised:
+            traversal.decode_traversal(payload, huge, 1 << 26, "FACE")
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert raised.value.rule == "R21-header-limit"
+    assert peak < 1 << 20
+
+
+# ----------------------------------------------------------------- the encoder's gate search
+
+
+class _SpecWalk(traversal._Walk):
+    """The encoder's walk with its gate search as §6.8 writes it (informative): every face in
+    the input's order, the first unvisited one with the corners b, a, else a, b."""
+
+    def _across(self, a: int, b: int) -> tuple[int, int, int] | None:
+        for first, second, kind in ((b, a, traversal.GATE_FACE), (a, b, traversal.GATE_FLIP)):
+            for f, row in enumerate(self.rows):
+                n = len(row)
+                for j in range(n):
+                    if not self.done[f] and row[j] == first and row[(j + 1) % n] == second:
+                        return f, j, kind
+        return None
+
+
+def _walk_streams(walk: traversal._Walk) -> tuple[list[int], ...]:
+    return (walk.ops_for(0), walk.ops_for(1), walk.degrees, walk.new_residuals, walk.references)
+
+
+def fan(count: int, alternating: bool = False) -> np.ndarray:
+    """``count`` triangles (0, 1, v) on the edge 0-1, every other one turned over if asked."""
+    tips = np.arange(2, count + 2)
+    faces = np.stack([np.zeros_like(tips), np.ones_like(tips), tips], axis=1)
+    if alternating:
+        faces[1::2, :2] = faces[1::2, 1::-1]
+    return faces
+
+
+@settings(max_examples=300, **HYPOTHESIS_SETTINGS)
+@given(
+    st.integers(2, 9).flatmap(
+        lambda k: st.tuples(
+            st.just(k),
+            st.lists(st.lists(st.integers(0, k - 1), min_size=3, max_size=5), max_size=30),
+        )
+    )
+)
+def test_the_gate_search_picks_the_face_the_spec_names(mesh):
+    """Soups of faces of 3 to 5 corners on a few vertices: edges of many faces in both
+    orientations, repeated vertices and faces. The walk is the one of §6.8's plain search."""
+    k, rows = mesh
+    assert _walk_streams(traversal._Walk(rows, k)) == _walk_streams(_SpecWalk(rows, k))
+    assert traversal._Walk(rows, k).order == _SpecWalk(rows, k).order
+
+
+@pytest.mark.parametrize("alternating", [False, True], ids=["same", "alternating"])
+def test_the_gate_search_is_linear_on_an_edge_of_many_faces(alternating):
+    """Work counted in lines of traversal.py run, not seconds: a fan of 10,000 faces on one edge
+    runs about ten times the lines of a fan of 1,000 (a search from the front each time ran 50
+    times as many; the trace stops such a run once it is past the budget)."""
+    small = lines_run(
+        lambda: traversal.encode_traversal(fan(1000, alternating), 1002),
+        [traversal.__file__],
+        10**7,
+    )
+    large = lines_run(
+        lambda: traversal.encode_traversal(fan(10000, alternating), 10002),
+        [traversal.__file__],
+        15 * small,
+    )
+    assert large <= 11 * small
+
+
+def test_reading_the_newest_edge_after_many_were_closed_is_linear():
+    """into(0) read 1,000 and 10,000 times after as many entries behind its oldest were closed
+    (tools.bench.faces.closed_fan): the faces come out, and the decoder runs about ten times
+    the lines of traversal.py. The lines do not count C: the ordered dicts used before passed over
+    the closed entries inside dict iteration (4 * 160,000 faces took 56 s); python -m tools.bench
+    faces times that."""
+    small, large = (_closed_fan_lines(count) for count in (1000, 10000))
+    assert large <= 11 * small
+
+
+def _closed_fan_lines(count: int) -> int:
+    params, payload, k = closed_fan(count)
+    decoded: list[np.ndarray] = []
+    lines = lines_run(
+        lambda: decoded.append(traversal.decode_traversal(payload, params, k, "FACE")),
+        [traversal.__file__],
+        10**8,
+    )
+    assert decoded[0][-1].tolist() == [count + 1, 0, 1]  # the last read found 1
+    return lines

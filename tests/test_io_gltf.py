@@ -10,6 +10,7 @@ import base64
 import json
 import struct
 import sys
+import tracemalloc
 from pathlib import Path
 from typing import Any
 
@@ -310,10 +311,21 @@ def test_a_missing_external_buffer_and_uris_out_of_the_folder_are_refused(tmp_pa
     _refused(path, r"buffers\[0\]: its file 'frames.bin' is missing")
     (tmp_path / "frames.bin").write_bytes(np.arange(12, dtype="<f4").tobytes())
     assert np.array_equal(load_sequence(path).vertices[0].ravel(), np.arange(12))
-    for uri in ("../frames.bin", "/etc/passwd", "https://example.com/a.bin"):
+    (tmp_path / "link.bin").symlink_to(tmp_path.parent / "elsewhere.bin")
+    outside = [
+        "../frames.bin",
+        "%2E%2E/frames.bin",
+        "..\\frames.bin",
+        "/etc/passwd",
+        "%2Fetc%2Fpasswd",
+        "C:/Windows/win.ini",
+        "https://example.com/a.bin",
+        "link.bin",
+    ]
+    for uri in outside:  # refused by the check every reader shares (reading.inside_folder)
         gltf["buffers"][0]["uri"] = uri
         path.write_text(json.dumps(gltf))
-        _refused(path, "(leads out of|is not a file beside)")
+        _refused(path, r"buffers\[0\]: its uri names .*(leads out of its folder|absolute path)")
 
 
 def test_an_accessor_without_a_buffer_view_is_bounded_by_the_bytes_the_file_holds(
@@ -322,7 +334,6 @@ def test_an_accessor_without_a_buffer_view_is_bounded_by_the_bytes_the_file_hold
     """Issue 22, finding 4: a .gltf of a few hundred bytes whose buffer declares 3 GB and is
     never loaded (no uri) asked for 3 GB of zeros; it is refused at once, naming the accessor.
     Zeros within the file's real data still read."""
-    import time
     import tracemalloc
 
     count = 250_000_000  # 3 GB of float VEC3
@@ -341,15 +352,14 @@ def test_an_accessor_without_a_buffer_view_is_bounded_by_the_bytes_the_file_hold
         path.write_text(json.dumps(gltf))
         pattern = r"accessors\[0\] \(.*POSITION\): 250000000 elements without"
         _refused(path, pattern)  # once first: the reader's imports are not the file's doing
-        start = time.perf_counter()
         tracemalloc.start()
         try:
             error = _refused(path, pattern)
             peak = tracemalloc.get_traced_memory()[1]
         finally:
             tracemalloc.stop()
-        # milliseconds now; 12 s and 3.4 GB before: the margin holds on a much slower machine
-        assert peak < 1 << 20 and time.perf_counter() - start < 5.0, (peak, error)
+        # under a MiB now; 3.4 GB (and 12 s) before: memory holds on any machine, seconds not
+        assert peak < 1 << 20, (peak, error)
         assert "more than the 0 bytes of data the file holds" in str(error)
     data = base64.b64encode(bytes(48)).decode()
     gltf["buffers"] = [{"uri": f"data:application/octet-stream;base64,{data}", "byteLength": 48}]
@@ -359,6 +369,115 @@ def test_an_accessor_without_a_buffer_view_is_bounded_by_the_bytes_the_file_hold
     gltf["accessors"][0]["count"] = 5
     path.write_text(json.dumps(gltf))
     _refused(path, "5 elements without a buffer view, more than the 48 bytes")
+
+
+def test_buffers_of_one_file_read_it_once_and_count_its_bytes_once(tmp_path: Path) -> None:
+    """Issue 22, finding 8: a thousand buffers naming one file read it a thousand times, and
+    counted it a thousand times as the data that bounds an accessor without a buffer view."""
+    (tmp_path / "data.bin").write_bytes(bytes(48))
+    gltf: dict[str, Any] = {
+        "asset": {"version": "2.0"},
+        "buffers": [{"uri": "data.bin", "byteLength": 48}] * 1000,
+        "accessors": [{"componentType": FLOAT, "count": 5, "type": "VEC3"}],  # 60 bytes
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "mode": 0}]}],
+        "nodes": [{"mesh": 0}],
+    }
+    path = tmp_path / "a.gltf"
+    path.write_text(json.dumps(gltf))
+    doc = container.read_document(path)
+    assert doc.buffer(0, "test").obj is doc.buffer(999, "test").obj
+    _refused(path, "5 elements without a buffer view, more than the 48 bytes")
+
+
+def _chain(path: Path, count: int, meshes: bool) -> Path:
+    """A .gltf of ``count`` nodes, each the child of the next, each moved by x + 1; a point
+    mesh at the bottom node, or at every node."""
+    data = base64.b64encode(bytes(12)).decode()
+    nodes: list[dict[str, Any]] = [
+        {"translation": [1, 0, 0], **({"children": [index - 1]} if index else {})}
+        for index in range(count)
+    ]
+    for index in range(count) if meshes else [0]:
+        nodes[index]["mesh"] = 0
+    gltf = {
+        "asset": {"version": "2.0"},
+        "buffers": [{"uri": f"data:application/octet-stream;base64,{data}", "byteLength": 12}],
+        "bufferViews": [{"buffer": 0, "byteLength": 12}],
+        "accessors": [{"bufferView": 0, "componentType": FLOAT, "count": 1, "type": "VEC3"}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "mode": 0}]}],
+        "nodes": nodes,
+        "scenes": [{"nodes": [count - 1]}],
+    }
+    path.write_text(json.dumps(gltf, separators=(",", ":")))
+    return path
+
+
+def test_a_deep_hierarchy_costs_work_in_proportion_to_its_nodes(tmp_path: Path) -> None:
+    """Issue 22: the check for cycles walked from every node to its root, the scene's order
+    was a list searched for every node, and each mesh node multiplied its whole chain of
+    transforms: a chain of 30,000 nodes (1 MB of JSON) took 450 million steps to check, and
+    30,000 mesh nodes nested each in the one before 450 million matrix products a frame.
+    Each node is walked once now, and nesting beyond 64 levels per node of the file, in all,
+    is refused before any frame is evaluated."""
+    count = 10_000
+    seq = load_sequence(_chain(tmp_path / "deep.gltf", count, meshes=False))
+    assert seq.vertices.tolist() == [[[count, 0, 0]]]  # every level's translation applied
+    path = _chain(tmp_path / "nested.gltf", count, meshes=True)
+    _refused(path, r"its 10000 mesh nodes lie more than 640064 levels deep in all")
+
+
+def test_the_weights_of_many_targets_are_evaluated_a_few_frames_at_a_time(
+    tmp_path: Path,
+) -> None:
+    """Issue 22, finding 8: the weights of every frame of a read were one (frames x targets)
+    array, which 400 KB of JSON and keyframes made 800 MB: 5,000 targets that name one
+    accessor, and 20,000 keyframes of a translation. They are evaluated a few frames at a
+    time now, and the frames come out the same."""
+    targets, frames = 5_000, 20_000
+    b = Builder()
+    position = b.accessor([[0, 0, 0]], "<f4", "VEC3", min=[0, 0, 0], max=[0, 0, 0])
+    key = b.accessor([0.0], "<f4", "SCALAR", min=[0.0], max=[0.0])
+    weights = b.accessor(np.zeros(targets), "<f4", "SCALAR")
+    times = np.arange(frames, dtype=np.float32)
+    move_times = b.accessor(times, "<f4", "SCALAR", min=[0.0], max=[float(frames - 1)])
+    moves = b.accessor(np.stack([times, 0 * times, 0 * times], 1), "<f4", "VEC3")
+    b.gltf.update(
+        {
+            "nodes": [{"mesh": 0}],
+            "meshes": [
+                {
+                    "primitives": [
+                        {
+                            "attributes": {"POSITION": position},
+                            "mode": 0,
+                            "targets": [{"POSITION": position}] * targets,
+                        }
+                    ]
+                }
+            ],
+            "animations": [
+                {
+                    "samplers": [
+                        {"input": key, "output": weights},
+                        {"input": move_times, "output": moves},
+                    ],
+                    "channels": [
+                        {"sampler": 0, "target": {"node": 0, "path": "weights"}},
+                        {"sampler": 1, "target": {"node": 0, "path": "translation"}},
+                    ],
+                }
+            ],
+        }
+    )
+    path = b.write(tmp_path / "many.glb")
+    tracemalloc.start()
+    try:
+        seq = load_sequence(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert seq.vertices[:, 0, 0].tolist() == times.tolist()
+    assert peak < 100 * 2**20, peak  # 800 MB of weights at once before
 
 
 def test_a_data_uri_beyond_the_limit_is_refused(tmp_path: Path, monkeypatch: Any) -> None:
@@ -416,6 +535,48 @@ def test_a_meshopt_view_claiming_more_than_its_codec_can_expand_is_refused(
         view["byteLength"] = 10**9 * view["extensions"]["EXT_meshopt_compression"]["byteStride"]
 
     _refused(_edit(path, inflate), r"bufferViews\[0\].*impossible")
+
+
+def test_meshopt_views_decode_within_max_memory_together(tmp_path: Path) -> None:
+    """Issue 22, finding 8: the attribute codec turns 16 bytes of zeros into 2 bits, so a
+    meshopt view may honestly declare 64 times its bytes; the views a file decodes (and keeps)
+    are bounded by --max-memory together, before each is decoded."""
+    pytest.importorskip("meshoptimizer", reason="meshoptimizer (the 'gltf' extra) is missing")
+    from tuckercodec.io.gltf.meshopt import EXTENSION, encode_attributes
+
+    count = 2**20  # 12 MiB of float VEC3 zeros
+    payload = encode_attributes(bytes(count * 12), count, 12)
+    extension = {"buffer": 0, "byteLength": len(payload), "byteStride": 12, "count": count}
+    view = {"buffer": 0, "byteLength": count * 12, "byteStride": 12}
+    gltf: dict[str, Any] = {
+        "asset": {"version": "2.0"},
+        "extensionsUsed": [EXTENSION],
+        "extensionsRequired": [EXTENSION],
+        "buffers": [{"byteLength": len(payload)}],
+        "bufferViews": [{**view, "extensions": {EXTENSION: {**extension, "mode": "ATTRIBUTES"}}}],
+        "accessors": [{"bufferView": 0, "componentType": FLOAT, "count": count, "type": "VEC3"}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "mode": 0}]}],
+        "nodes": [{"mesh": 0}],
+    }
+    path = tmp_path / "zeros.glb"
+    path.write_bytes(pack_glb(gltf, payload))
+    assert load_sequence(path, max_memory=count * 12 * 2).vertex_count == count
+    tracemalloc.start()
+    try:
+        beyond = r"inflates to 12\.6 MB, beyond the 4\.19 MB"
+        with pytest.raises(InputError, match=beyond) as caught:
+            load_sequence(path, max_memory=4 * 2**20)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert caught.value.path == str(path)
+    assert str(caught.value).startswith(f"{path}: bufferViews[0].extensions.{EXTENSION}: ")
+    assert peak < 4 * len(path.read_bytes()), peak  # not decoded
+    folder = tmp_path / "frames"  # a static .glb is one frame of a folder: the same ceiling
+    folder.mkdir()
+    path.rename(folder / "0.glb")
+    with pytest.raises(InputError, match=beyond):
+        load_sequence(folder, max_memory=4 * 2**20)
 
 
 def _beyond_float32() -> MeshSequence:

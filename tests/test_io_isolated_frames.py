@@ -111,14 +111,12 @@ def test_a_read_that_never_ends_is_killed_at_the_limit_but_waiting_is_not_limite
         pid = child_pid(data_file)
         time.sleep(1.5)  # the caller computing between two reads: longer than a read may take
         assert np.array_equal(source.read(0, 8), hooks.expected(0, 8))
-        start = time.perf_counter()
         expect_input_error(
             lambda: source.read(7, 10),
             data_file,
             frame=8,
             match=r"object /hook: the Test library did not finish reading it in 1 s",
         )
-        assert time.perf_counter() - start < 5.0
         assert gone(pid)
 
 

@@ -15,7 +15,6 @@ import io
 import random
 import shutil
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +22,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from tests.support.compressed import deadline
 from tests.support.inputs import (
     CUBE_VERTICES,
     OBJ_TOKENS,
@@ -455,9 +455,8 @@ def test_messages_quote_a_long_token_only_in_part(tmp_path: Path) -> None:
 def test_a_long_broken_number_is_refused_quickly(tmp_path: Path) -> None:
     # A regex that backtracks quadratically took 8 s on 20 000 digits; a line may hold millions.
     path = write_file(tmp_path / "digits.obj", "v 0 0 " + "1" * (MAX_LINE_BYTES - 10) + "x\n")
-    start = time.perf_counter()
-    expect_input_error(lambda: read_obj(path), path, line=1, match="not a number")
-    assert time.perf_counter() - start < 2.0
+    with deadline():  # quadratic, it would take hours at this length: a hang guard suffices
+        expect_input_error(lambda: read_obj(path), path, line=1, match="not a number")
 
 
 def test_one_huge_polygon_among_many_faces(tmp_path: Path) -> None:
@@ -465,10 +464,10 @@ def test_one_huge_polygon_among_many_faces(tmp_path: Path) -> None:
     # file asked for 45 GiB before the limit); refused at the widest face's line.
     corners = " ".join(str(1 + i % 3) for i in range(20_000))
     path = write_file(tmp_path / "wide.obj", TRIANGLE + "f 1 2 3\n" * 1000 + f"f {corners}\n")
-    raised, elapsed, peak = measure(lambda: read_obj(path))
+    raised, _, peak = measure(lambda: read_obj(path))
     assert isinstance(raised, InputError), raised
     assert (raised.line, raised.path) == (1004, str(path)) and "20000 corners" in str(raised)
-    assert elapsed < 5.0 and peak < 64 * 2**20
+    assert peak < 64 * 2**20
     # a 500-gon cap among 2000 triangles is an ordinary mesh
     corners = " ".join(str(1 + i % 3) for i in range(500))
     path = write_file(tmp_path / "cap.obj", TRIANGLE + "f 1 2 3\n" * 2000 + f"f {corners}\n")
@@ -523,10 +522,11 @@ def sparse_file(path: Path, head: bytes, size: int = 2**31) -> Path:
 @pytest.mark.skipif(sys.platform == "win32", reason="no sparse files by default")
 def test_a_2gb_line_of_nul_bytes(tmp_path: Path) -> None:
     path = sparse_file(tmp_path / "hole.obj", b"v 0 0 0\nv 1 ")
-    raised, elapsed, peak = measure(lambda: read_obj(path))
+    with deadline():
+        raised, elapsed, peak = measure(lambda: read_obj(path))
     assert isinstance(raised, InputError) and raised.line == 2, raised
     print(f"\n2 GB sparse line (NUL): {elapsed * 1000:.1f} ms, peak {peak / 2**20:.2f} MiB")
-    assert elapsed < 2.0 and peak < 8 * 2**20
+    assert peak < 8 * 2**20
 
 
 @pytest.mark.skipif(sys.platform == "win32", reason="no sparse files by default")
@@ -534,11 +534,12 @@ def test_a_2gb_line_of_digits(tmp_path: Path) -> None:
     # Real digits for more than the limit, then a hole: it is the line limit that stops it.
     head = b"v 0 0 0\nv 1 " + b"1" * (MAX_LINE_BYTES + 2**20)
     path = sparse_file(tmp_path / "long.obj", head)
-    raised, elapsed, peak = measure(lambda: read_obj(path))
+    with deadline():
+        raised, elapsed, peak = measure(lambda: read_obj(path))
     assert isinstance(raised, InputError), raised
     assert raised.line == 2 and "longer than" in str(raised), raised
     print(f"\n2 GB line (digits then hole): {elapsed * 1000:.1f} ms, peak {peak / 2**20:.2f} MiB")
-    assert elapsed < 2.0 and peak < MAX_LINE_BYTES + 4 * 2**20
+    assert peak < MAX_LINE_BYTES + 4 * 2**20
 
 
 @pytest.mark.parametrize("ending", [b"\n", b"\r\n", b"\r"])

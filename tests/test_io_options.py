@@ -9,7 +9,7 @@ from tests.support.sequences import grid_faces, wave_sequence
 from tuckercodec import Decoder, InputError, MeshSequence, encode, load_sequence, save_sequence
 from tuckercodec.cli import main
 from tuckercodec.io import formats
-from tuckercodec.io.registry import OPTION_FLAGS, ReadOptions
+from tuckercodec.io.registry import COMMON_OPTIONS, OPTION_FLAGS, ReadOptions
 
 
 @pytest.fixture
@@ -62,9 +62,19 @@ def test_an_option_the_format_does_not_use_is_refused_by_name(wave, tmp_path):
 
 
 def test_every_option_has_a_flag_and_a_format_that_uses_it():
-    assert set(OPTION_FLAGS) == set(vars(ReadOptions()))
+    assert set(OPTION_FLAGS) | COMMON_OPTIONS == set(vars(ReadOptions()))
+    assert not set(OPTION_FLAGS) & COMMON_OPTIONS
     used = set().union(*(f.read_options for f in formats()))
     assert used <= set(OPTION_FLAGS)
+
+
+def test_max_memory_applies_to_every_source_and_must_be_positive(wave, tmp_path):
+    assert ReadOptions(prim="/m", max_memory=10).given() == ["prim"]
+    save_sequence(load_sequence(wave), tmp_path / "frames")
+    for source in (wave, tmp_path / "frames"):
+        assert load_sequence(source, max_memory=2**30).frame_count == 12
+    with pytest.raises(ValueError, match="max_memory must be a positive number of bytes"):
+        load_sequence(wave, max_memory=0)
 
 
 def test_every_format_is_described_once():

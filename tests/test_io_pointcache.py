@@ -11,7 +11,6 @@ Blender 2.80 an uncounted rest frame), not with the writer under test.
 from __future__ import annotations
 
 import struct
-import time
 from pathlib import Path
 
 import numpy as np
@@ -96,16 +95,13 @@ def _first_frame_obj(seq: MeshSequence, folder: Path) -> Path:
 
 
 @pytest.mark.parametrize("suffix", [".pc2", ".mdd"])
-def test_horse_gallop_round_trips_exactly_and_reads_fast(horse, tmp_path, suffix):
+def test_horse_gallop_round_trips_exactly(horse, tmp_path, suffix):
     path = tmp_path / f"horse{suffix}"
     mesh = _first_frame_obj(horse, tmp_path)
     save_sequence(horse, path)
-    start = time.perf_counter()
-    back = load_sequence(path, faces=mesh)
-    elapsed = time.perf_counter() - start
+    back = load_sequence(path, faces=mesh)  # its speed: python -m tools.bench read --formats
     assert exact(back, horse) and np.array_equal(back.faces, horse.faces)
     assert back.vertices.shape == (48, 8431, 3)
-    assert elapsed < 1.0, f"reading horse gallop from {suffix} took {elapsed:.2f} s"
 
 
 def test_pc2_keeps_its_start_frame_and_sample_rate(tmp_path):
@@ -303,9 +299,9 @@ def test_counts_far_beyond_the_file_are_refused_before_allocating(tmp_path, suff
         path = _pc2(tmp_path, pc2_bytes(moving(1), points=big, frames=big))
     else:
         path = _mdd(tmp_path, struct.pack(">2i", big, big) + b"\0" * 64)
-    error, seconds, peak = measure(lambda: load_sequence(path))
+    error, _, peak = measure(lambda: load_sequence(path))
     assert isinstance(error, InputError) and "is truncated" in str(error), error
-    assert seconds < 0.5 and peak < 1_000_000, (seconds, peak)
+    assert peak < 1_000_000, peak  # memory, not seconds: the same on any machine
 
 
 @pytest.mark.parametrize("suffix", [".pc2", ".mdd"])

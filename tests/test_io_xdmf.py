@@ -219,6 +219,49 @@ def test_references_other_than_plain_child_paths_are_refused(tmp_path, capsys):
     assert load_sequence(tmp_path / "ok.xdmf").faces.tolist() == [[0, 1, 2], [0, 2, 3]]
 
 
+def _store(count: int, geometry: str) -> str:
+    """A spatial collection of ``count`` grids (not a time series: not read as frames), the
+    last one holding ``geometry``."""
+    grids = '<Grid Name="s"/>' * (count - 1) + f'<Grid Name="s{count}">{geometry}</Grid>'
+    return f'<Grid Name="store" GridType="Collection" CollectionType="Spatial">{grids}</Grid>'
+
+
+def test_following_references_costs_work_in_proportion_to_the_document(tmp_path):
+    """Issue 22, item D: ElementTree lists the siblings again for every candidate of a [n]
+    step, so one Reference to the 20,000th of 20,000 grids took 4e8 steps (minutes), and
+    References that search far for their targets cost the document's size each. Children
+    are indexed once by name and by the value a predicate names; all the following of one
+    read may visit 32 elements per element of the document."""
+    count = 20_000
+    geometry = f'<Geometry GeometryType="XYZ">{item(POINTS + 1, "5 3")}</Geometry>'
+    far = f'<Geometry Reference="/Xdmf/Domain/Grid[2]/Grid[{count}]/Geometry"/>'
+    plain = grid(POINTS, 0.0)
+    step = plain[: plain.index("<Geometry")]  # its time and topology
+    text = document(f"{step}{far}</Grid>").replace(
+        "</Domain>", _store(count, geometry) + "</Domain>"
+    )
+    (tmp_path / "far.xdmf").write_text(text)
+    assert exact(load_sequence(tmp_path / "far.xdmf").vertices[0], POINTS + 1)
+    # each step's geometry found by searching every step's grid first: the budget ends it
+    steps = 2_000
+    searching = [
+        step.replace('"0.0"', f'"{n}"')
+        + f"<Geometry Reference=\"/Xdmf/Domain/Grid/Grid/Geometry[@Name='g{n}']\"/></Grid>"
+        for n in range(steps)
+    ]
+    named = "".join(
+        f'<Grid Name="s"><Geometry Name="g{n}">{item(POINTS + n, "5 3")}</Geometry></Grid>'
+        for n in range(steps)
+    )
+    store = f'<Grid Name="store" GridType="Collection" CollectionType="Spatial">{named}</Grid>'
+    path = tmp_path / "searching.xdmf"
+    path.write_text(document(*searching).replace("</Domain>", store + "</Domain>"))
+    with pytest.raises(InputError, match="its References search further than the") as caught:
+        load_sequence(path)
+    error = caught.value
+    assert error.path == str(path) and error.frame is not None and 0 < error.frame < steps
+
+
 def test_times_listed_by_the_collection_and_geometries_of_other_types(tmp_path):
     xyz = " ".join(item(POINTS[:, axis], "5") for axis in range(3))
     split = grid(POINTS, None).replace(item(POINTS, "5 3"), xyz).replace('"XYZ"', '"X_Y_Z"')
@@ -359,6 +402,40 @@ def test_broken_or_hostile_hdf5_data_is_refused_before_reading_it(tmp_path):
     assert peak < 10_000_000, peak
     shared = document(hdf_grid("d.h5:/points"), hdf_grid("d.h5:/points").replace('"0.0"', '"1"'))
     refused(tmp_path, shared, "shares its geometry .*d.h5:/points. with time step 0", 1)
+
+
+def test_an_honest_bomb_is_refused_beyond_max_memory_before_reading(tmp_path, capsys):
+    """Issue 22, finding 8: a gzip dataset of zeros that stores 1/1000 of what it holds is
+    bounded by --max-memory before h5py inflates it; each time step has the whole ceiling."""
+    h5py = pytest.importorskip("h5py", reason=H5PY_MISSING)
+    count, rows = 2**22, 2**16  # 96 MiB of float64 points
+    with h5py.File(tmp_path / "d.h5", "w") as file:
+        zeros = file.create_dataset("zeros", (count, 3), "f8", chunks=(rows, 3), compression=9)
+        for start in range(0, count, rows):  # a chunk at a time: written, so stored
+            zeros[start : start + rows] = np.zeros((rows, 3))
+        for step in range(2):  # 96 KiB that store a few hundred bytes
+            file.create_dataset(f"small{step}", data=np.zeros((4096, 3)) + step, compression=9)
+    steps = [
+        hdf_grid(f"d.h5:/small{step}", "4096 3").replace('"0.0"', f'"{step}"') for step in range(2)
+    ]
+    (tmp_path / "two.xdmf").write_text(document(*steps))
+    one_step = 4096 * 3 * 8  # the ceiling of one step's dataset, not of two
+    assert load_sequence(tmp_path / "two.xdmf", max_memory=one_step).frame_count == 2
+    path = tmp_path / "bomb.xdmf"
+    path.write_text(document(hdf_grid("d.h5:/zeros", f"{count} 3")))
+    error, _, peak = measure(lambda: load_sequence(path, max_memory=16 * 2**20))
+    assert isinstance(error, InputError) and (error.path, error.frame) == (str(path), 0), error
+    assert "d.h5:/zeros: inflates to 101 MB, beyond the 16.8 MB" in str(error)
+    assert peak < 2**20, peak  # not read
+    assert main(["convert", str(path), str(tmp_path / "o.npz"), "--max-memory", "16MiB"]) == 4
+    said = capsys.readouterr().err
+    assert said.count("\n") == 1 and "beyond the 16.8 MB a read may decompress" in said, said
+    expect_input_error(
+        lambda: load_sequence(tmp_path / "two.xdmf", max_memory=one_step - 1),
+        tmp_path / "two.xdmf",
+        frame=0,
+        match="small0: inflates to",
+    )
 
 
 def test_hdf5_data_kept_outside_the_file_is_refused(tmp_path):

@@ -135,6 +135,23 @@ def test_an_array_that_is_not_positions_is_refused(tmp_path, shape, dtype, chunk
     expect_input_error(lambda: open_frames(target), target, match=match)
 
 
+def test_chunks_and_faces_beyond_max_memory_are_refused_before_reading(tmp_path):
+    """Issue 22, finding 8: a chunk is decompressed whole, and the faces read whole."""
+    target = tmp_path / "x.zarr"
+    group = zarr.create_group(store=str(target))
+    group.create_array("vertices", data=np.zeros((4, 1000, 3)), chunks=(2, 1000, 3))
+    assert load_sequence(target, max_memory=48_000).frame_count == 4  # a chunk: 48,000 bytes
+    expect_input_error(
+        lambda: open_frames(target, max_memory=47_999),
+        target,
+        match=r"chunks \(2, 1000, 3\) of 48000 bytes, more than the 47999 read at once",
+    )
+    group.create_array("faces", data=np.zeros((4000, 3), dtype=np.int64))  # 96,000 bytes
+    expect_input_error(
+        lambda: open_frames(target, max_memory=95_999), target, match="'faces' .* too many"
+    )
+
+
 def test_bad_faces_or_attributes_are_refused(tmp_path):
     target = tmp_path / "x.zarr"
     group = zarr.create_group(store=str(target))

@@ -274,7 +274,7 @@ def test_traverse_hand_made_tables(tmp_path):
         cases.traverse(name, params, payload, vertices)
         walked[name] = _sha(walk, "<i4")
         count, corners = faces.shape
-        coded, order = traversal.read_streams(payload, params, count, corners, "FACE")
+        coded, order = traversal.read_streams(payload, params, count, corners, vertices, "FACE")
         other, other_payload = traversal.pack_streams(coded, count, corners, 1 - order, 19)
         cases.traverse(f"{name}-corner-order-{1 - order}", other, other_payload, vertices)
     results = cases.check()
@@ -287,7 +287,7 @@ def _base(name: str) -> tuple[list[list[int]], int, int, int, np.ndarray]:
     faces, vertices = _tables()[name]
     params, payload, _ = traversal.encode_traversal(faces, vertices)
     count, corners = faces.shape
-    coded, order = traversal.read_streams(payload, params, count, corners, "FACE")
+    coded, order = traversal.read_streams(payload, params, count, corners, vertices, "FACE")
     return coded, order, vertices, faces.shape[1], faces
 
 
@@ -413,6 +413,54 @@ def test_traverse_damaged_streams(tmp_path):
     for name in [*targeted, "rotation-too-large", "seed-prev-empty", "seed-next-empty"]:
         assert results[name]["rule"] == "R39-traversal", (name, results[name])
     assert sum(not r["accepted"] for r in results.values()) > len(results) // 2
+
+
+def test_traverse_stream_bounds_and_memory(tmp_path):
+    """§6.8's bounds on the declared counts, each broken by one, and the streams beyond
+    max_section_bytes (2**28 faces declaring 6 GiB of ops, in a file of a few hundred bytes):
+    the same rule as the reference, before any stream is decompressed. A header's K of 2**26,
+    and a walk past the 1024 faces the decoded table starts with: the same faces, and typed
+    arrays that grow with the values read (K sized 576 MB of them before)."""
+    faces, vertices = _tables()["polygons"]
+    good, payload, _ = traversal.encode_traversal(faces, vertices)
+    (ops, *_), (degrees, *_), (news, *_), (references, *_) = good["streams"]
+    count, width = faces.shape
+    corners = count * width
+
+    def counts(o: int = ops, g: int = degrees, v: int = news, r: int = references) -> Any:
+        table = [list(entry) for entry in good["streams"]]
+        for entry, value in zip(table, [o, g, v, r], strict=True):
+            entry[0] = value
+        return {**good, "streams": table}
+
+    breaks = {
+        "bound-degrees": counts(g=count - 1),
+        "bound-ops-below-faces": counts(o=count - 1),
+        "bound-ops-above": counts(o=2 * corners + 1),
+        "bound-vertices-above-k": counts(v=vertices + 1),
+        "bound-vertices-and-references": counts(r=corners - news + 1),
+    }
+    cases = Cases(tmp_path)
+    for name, params in breaks.items():
+        cases.traverse(name, params, payload, vertices)
+    table = [list(entry) for entry in good["streams"]]
+    triangles, tri_vertices = _tables()["torus"]
+    tri_params, tri_payload, _ = traversal.encode_traversal(triangles, tri_vertices)
+    huge_ops = [6 << 28, 4, tri_params["streams"][0][2]]
+    huge = {**tri_params, "shape": [1 << 28, 3], "streams": [huge_ops, *tri_params["streams"][1:]]}
+    cases.traverse("streams-beyond-max-section-bytes", huge, tri_payload, tri_vertices)
+    cases.traverse("vertices-in-header-2-26", tri_params, tri_payload, 1 << 26)
+    big = _table(_renumbered(_torus(40, 30), 1200, 3))
+    big_params, big_payload, _ = traversal.encode_traversal(big, 1200)
+    cases.traverse("table-grows-past-1024-faces", big_params, big_payload, 1200)
+    results = cases.check()
+    for name in breaks:
+        assert results[name]["rule"] == "R39-traversal", (name, results[name])
+        assert "count" in results[name]["message"], (name, results[name])  # not a stream's
+    assert results["streams-beyond-max-section-bytes"]["rule"] == "R21-header-limit"
+    assert results["streams-beyond-max-section-bytes"]["kind"] == "LimitError"
+    assert results["vertices-in-header-2-26"]["array_buffer_bytes"] < 1 << 20
+    assert table == good["streams"]  # the cases changed copies only
 
 
 def test_traverse_damaged_bytes(tmp_path):

@@ -40,10 +40,10 @@ def test_the_memory_of_children_and_grandchildren_is_summed(tmp_path):
 
 
 def test_a_tree_that_passes_the_limit_is_killed_and_said_to_be(tmp_path):
-    command = [sys.executable, "-c", _HOLD.format(n=480 * MB, s=30)]
+    command = [sys.executable, "-c", _HOLD.format(n=480 * MB, s=600)]
     run = bench_scale.run_measured(command, cwd=tmp_path, interval=0.02, limit=100 * MB)
     assert not run.ok and run.killed_above == 100 * MB
-    assert run.seconds < 20  # not left to sleep its 30 s
+    assert run.seconds < 300  # not left to sleep its 600 s (a hang guard, any machine)
     assert "passed 0.1 GB" in run.failure()
 
 

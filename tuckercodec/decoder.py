@@ -107,7 +107,12 @@ class Decoder:
             self._starts = np.array([segment.start for segment in self._index], dtype=np.int64)
             face = self._section("FACE")
             self.faces = faces.decode_face_section(
-                face.codec, self._payload("FACE"), face.params, self.info.vertices, "section FACE"
+                face.codec,
+                self._payload("FACE"),
+                face.params,
+                self.info.vertices,
+                "section FACE",
+                limits,
             )
             if not self.segmented:  # §5 steps 16-17 in order: U1, U3, CORE, CENT, then NAME
                 self.segment_factors(0)

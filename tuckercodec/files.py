@@ -74,8 +74,9 @@ def encode_file(
     ``segment_frames``) is read a range of frames at a time and written in segments (format
     1.1, :meth:`tuckercodec.encoder.Encoder.encode_source`). ``prim``, ``object_path``,
     ``faces`` and ``fps`` are the reading options of :func:`tuckercodec.io.load_sequence`
-    (``faces`` gives a ``.npy``, PC2 or MDD cache its faces). ``progress`` prints a line on
-    standard error as each pass of a segmented encode starts. Returns the encoder's report.
+    (``faces`` gives a ``.npy``, PC2 or MDD cache its faces); ``max_memory`` bounds what the
+    read may decompress as well. ``progress`` prints a line on standard error as each pass of a
+    segmented encode starts. Returns the encoder's report.
     """
     options = resolve_options(
         options,
@@ -89,6 +90,7 @@ def encode_file(
     )
     encoder = Encoder(options, executor=executor, progress=_say if progress else None)
     reading = {"prim": prim, "object_path": object_path, "faces": faces, "fps": fps}
+    reading["max_memory"] = options.max_memory  # what the read may inflate, too
     return write_encoded(encoder, source, output, overwrite=overwrite, **reading).report
 
 

@@ -2,7 +2,9 @@
 // (U1's mesh prediction, spec §6.2) and traversal.js (faces-traverse, §6.8) on the cases that
 // tests/test_js_topology.py wrote from the Python reference, and prints one JSON result per case:
 //   {name, accepted: true, sha256, ms, ...}  the output's SHA-256 (faces as int32 LE, restored
-//                                            columns as float64 LE, column after column)
+//                                            columns as float64 LE, column after column); a
+//                                            traverse case also gives array_buffer_bytes, the
+//                                            typed arrays' bytes made by its first decode
 //   {name, accepted: false, rule, kind, message}  a TkcError
 //   {name, crash: "..."}                      anything else thrown (always a test failure)
 // With --repeat N each case runs N times and `ms` is the fastest run (for measurements).
@@ -39,12 +41,16 @@ function runTraverse(spec) {
   const payload = bytes(spec.payload);
   let faces;
   let best = Infinity;
+  let held = 0;
   for (let r = 0; r < repeat; r++) {
+    const before = process.memoryUsage().arrayBuffers;
     const started = performance.now();
     faces = decodeTraverse(entry, payload, spec.K, spec.M, spec.n);
     best = Math.min(best, performance.now() - started);
+    // what the walk held at its end is still counted: nothing allocates between its return and this
+    if (r === 0) held = process.memoryUsage().arrayBuffers - before;
   }
-  return { accepted: true, sha256: sha256(faces), ms: best };
+  return { accepted: true, sha256: sha256(faces), ms: best, array_buffer_bytes: held };
 }
 
 function runRestore(spec) {

@@ -29,6 +29,7 @@ SUITES = {
     "gltf": "tools.bench.gltf",
     "zarr": "tools.bench.zarr",
     "viewer": "tools.bench.viewer",
+    "faces": "tools.bench.faces",
 }
 
 

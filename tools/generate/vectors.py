@@ -7,10 +7,11 @@ Valid vectors: small files encoded from deterministic synthetic sequences, each 
 the header fields a decoder must report, SHA-256 digests of the dequantized arrays, and the
 reference reconstruction (an .npy of the decoded positions) with its tolerance.
 
-Invalid vectors: one per rule of §11, each made by breaking exactly that rule in a valid file
-(checksums recomputed, so that nothing else is wrong), with the rule id and the error class it
-must raise. They are a function of the valid files alone: from the committed
-v1-wave-triangles.tkc (format 1.0), v1.1-segments-shared.tkc (1.1) and
+Invalid vectors: one per rule of §11, named after it, and a second for a rule checked at two
+places (``SECOND_VECTORS``, its name the rule's and a suffix), each made by breaking that rule
+in a valid file (checksums recomputed, so that nothing else is wrong before it), with the rule
+id and the error class it must raise. They are a function of the valid files alone: from the
+committed v1-wave-triangles.tkc (format 1.0), v1.1-segments-shared.tkc (1.1) and
 v1.2-traverse-triangles.tkc (1.2) they come out byte for byte as committed (a test checks it).
 
 The encoder is not byte-identical across machines (the SVD's signs and last bits depend on the
@@ -419,17 +420,44 @@ def traverse_vectors() -> dict[str, tuple[bytes, str]]:
 
 
 def traverse_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
-    """rule id -> (file bytes, error class name): the 1.2 file ``good`` with a rule of §6.8
-    broken: the walk's first op (the first seed's first corner) made PREV, which names no
-    vertex before any corner exists."""
+    """vector name -> (file bytes, error class name): the 1.2 file ``good`` with a rule of §6.8
+    broken. R39-traversal: the walk's first op (the first seed's first corner) made PREV, which
+    names no vertex before any corner exists. Its second vector declares one new vertex more than
+    the header's K in the streams' table (§6.8's third bound, checked before the streams are
+    decompressed: the stream itself is unchanged). R21's second declares 2**28 triangles, within
+    max_faces and max_section_bytes, and 6 * 2**28 ops of 4 planes, within §6.8's bounds: the
+    streams would decompress to more than max_section_bytes, which a file of a few hundred bytes
+    can ask, and is refused before anything is allocated by it."""
     parts = Parts(good)
     entry = parts.entries[parts.index("FACE")]
     count, width = entry["shape"]
     payload = parts.payloads[parts.index("FACE")]
-    values, corner_order = traversal.read_streams(payload, entry, count, width, "FACE")
+    vertices = parts.header["vertices"]
+    values, corner_order = traversal.read_streams(payload, entry, count, width, vertices, "FACE")
     values[0][0] = traversal.TIP_PREV
     params, broken = traversal.pack_streams(values, count, width, corner_order, 19)
-    return {"R39-traversal": (_edit(good, _payload("FACE", broken, **params)), "FormatError")}
+    table = [list(stream) for stream in entry["streams"]]
+    too_many = [table[0], table[1], [vertices + 1, *table[2][1:]], table[3]]
+    faces = 1 << 28
+    ops = [6 * faces, 4, table[0][2]]
+    return {
+        "R39-traversal": (_edit(good, _payload("FACE", broken, **params)), "FormatError"),
+        "R39-traversal-vertex-count": (
+            _edit(good, _entry("FACE", streams=too_many)),
+            "FormatError",
+        ),
+        "R21-header-limit-face-streams": (
+            _edit(good, _entry("FACE", shape=[faces, width], streams=[ops, *table[1:]])),
+            "LimitError",
+        ),
+    }
+
+
+#: Vectors that break a rule which has a vector of its name already, and the rule.
+SECOND_VECTORS = {
+    "R39-traversal-vertex-count": "R39-traversal",
+    "R21-header-limit-face-streams": "R21-header-limit",
+}
 
 
 def write_valid(folder: Path, name: str, data: bytes, purpose: str) -> None:
@@ -485,10 +513,11 @@ def write_invalid(folder: Path, good: bytes, segmented: bytes, traversed: bytes)
         **segmented_invalid_vectors(segmented),
         **traverse_invalid_vectors(traversed),
     }
-    for rule, (data, error) in vectors.items():
-        (folder / f"{rule}.tkc").write_bytes(data)
-        expected = {"file": f"{rule}.tkc", "valid": False, "rule": rule, "error": error}
-        (folder / f"{rule}.json").write_text(json.dumps(expected, indent=2) + "\n")
+    for name, (data, error) in vectors.items():
+        (folder / f"{name}.tkc").write_bytes(data)
+        rule = SECOND_VECTORS.get(name, name)
+        expected = {"file": f"{name}.tkc", "valid": False, "rule": rule, "error": error}
+        (folder / f"{name}.json").write_text(json.dumps(expected, indent=2) + "\n")
     return len(vectors)
 
 

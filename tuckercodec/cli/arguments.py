@@ -185,7 +185,7 @@ def _add_encode(verbs: _Verbs) -> None:
     _add_mode_options(encode)
     encode.add_argument("--force", action="store_true", help="replace the output if it exists")
     _add_segment_options(encode)
-    _add_read_options(encode)
+    _add_read_options(encode, memory=None)  # --max-memory is among the large sequences
 
 
 def _add_batch(verbs: _Verbs) -> None:
@@ -214,7 +214,7 @@ def _add_batch(verbs: _Verbs) -> None:
         "tuckercodec and must read the inputs at the same absolute paths",
     )
     batch.add_argument("--force", action="store_true", help="replace outputs that exist")
-    _add_read_options(batch)
+    _add_read_options(batch, memory=_ENCODE_MEMORY_HELP)
 
 
 def _add_decode(verbs: _Verbs) -> None:
@@ -441,9 +441,24 @@ _SEQUENCE_HELP = (
 )
 
 
-def _add_read_options(parser: argparse.ArgumentParser, applies_to: str = "INPUT") -> None:
-    """The options some sequence formats need to be read (tuckercodec.io.ReadOptions)."""
+#: --max-memory's help where it bounds the reading only.
+_READ_MEMORY_HELP = (
+    "the most memory a read may fill from compressed data (a zlib block, a deflated .npz "
+    "member, a filtered HDF5 dataset), e.g. 2GB or 512MiB (default: half the machine's)"
+)
+
+
+def _add_read_options(
+    parser: argparse.ArgumentParser, applies_to: str = "INPUT", memory: str | None = ""
+) -> None:
+    """The options some sequence formats need to be read (tuckercodec.io.ReadOptions), and
+    --max-memory (help ``memory``, or the reading's own if empty; ``None``: the verb has it
+    among its own options)."""
     group = parser.add_argument_group(f"reading {applies_to}")
+    if memory is not None:
+        group.add_argument(
+            "--max-memory", type=_size, metavar="SIZE", help=memory or _READ_MEMORY_HELP
+        )
     group.add_argument("--prim", metavar="PATH", help="USD: the mesh prim, if several")
     group.add_argument(
         "--object", dest="object_path", metavar="PATH", help="Alembic: the mesh object, if several"
@@ -472,6 +487,13 @@ def _add_precision(parser: argparse.ArgumentParser) -> None:
     )
 
 
+#: --max-memory's help where it bounds an encode too.
+_ENCODE_MEMORY_HELP = (
+    "memory the encode may use, and the most its read may fill from compressed data, e.g. 2GB "
+    "or 512MiB (default: half the machine's)"
+)
+
+
 def _add_segment_options(encode: argparse.ArgumentParser) -> None:
     """encode's options for sequences larger than memory (format 1.1's segments)."""
     large = encode.add_argument_group(
@@ -487,12 +509,7 @@ def _add_segment_options(encode: argparse.ArgumentParser) -> None:
         help="segments of N frames, each its own decomposition (default: only when needed, "
         f"then {DEFAULT_SEGMENT_FRAMES})",
     )
-    large.add_argument(
-        "--max-memory",
-        type=_size,
-        metavar="SIZE",
-        help="memory the encode may use, e.g. 2GB or 512MiB (default: half the machine's)",
-    )
+    large.add_argument("--max-memory", type=_size, metavar="SIZE", help=_ENCODE_MEMORY_HELP)
     large.add_argument(
         "--basis",
         choices=BASES,

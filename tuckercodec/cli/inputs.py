@@ -20,9 +20,9 @@ def sequence_source(name: str) -> str | Path:
 
 
 def read_options(args: argparse.Namespace) -> dict[str, Any]:
-    """The reading options a verb was given (--prim, --object, --faces, --fps), as the
-    keywords of :func:`tuckercodec.io.load_sequence`."""
-    names = ("prim", "object_path", "faces", "fps")
+    """The reading options a verb was given (--prim, --object, --faces, --fps, --max-memory),
+    as the keywords of :func:`tuckercodec.io.load_sequence`."""
+    names = ("prim", "object_path", "faces", "fps", "max_memory")
     return {name: getattr(args, name) for name in names if getattr(args, name, None) is not None}
 
 

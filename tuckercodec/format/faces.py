@@ -18,6 +18,7 @@ import numpy as np
 from ..errors import FormatError
 from ..topology import face_table_problem
 from . import streams
+from .limits import DEFAULT_LIMITS, Limits
 from .sections import FACES_DELTA, FACES_TRAVERSE, section_shape
 from .traversal import decode_traversal, encode_traversal
 
@@ -69,11 +70,12 @@ def decode_face_section(
     params: Mapping[str, Any],
     vertex_count: int,
     where: str,
+    limits: Limits = DEFAULT_LIMITS,
 ) -> np.ndarray:
     """The faces of a FACE section of either codec (the caller has checked that the codec is
-    allowed in this file)."""
+    allowed in this file, and the shape against ``limits``)."""
     if codec == FACES_TRAVERSE:
-        return decode_traversal(payload, params, vertex_count, where)
+        return decode_traversal(payload, params, vertex_count, where, limits)
     return decode_faces(payload, params, vertex_count, where)
 
 

@@ -38,6 +38,7 @@ import numpy as np
 
 from ..errors import FormatError
 from . import streams
+from .limits import DEFAULT_LIMITS, Limits, check_limit
 from .sections import section_shape
 
 FACES_TRAVERSE = "faces-traverse"
@@ -58,10 +59,14 @@ class _Boundary:
     """The directed edges of the decoded faces whose opposite edge is not decoded yet.
 
     ``count[x * K + y]`` is how many times x -> y is open (more than once only where faces
-    overlap); ``into[v]`` holds each u with an open u -> v once and ``out_of[v]`` each w with an
-    open v -> w, in the order those edges became open (ordered dicts used as sets, so that
-    adding, removing and reading the newest are O(1) whatever a file does; lists cost a crafted
-    file quadratic time). :meth:`attach` adds a face and pushes its new gates.
+    overlap). ``into[v]`` and ``out_of[v]`` are stacks of the edges u -> v and v -> w (as keys
+    ``u * K + v``, ``v * K + w``) in the order they became open: an entry stays when its edge
+    closes, and is popped for good once it is found on top with its edge closed
+    (:func:`_newest`). So adding, removing and reading the newest are O(1) amortized whatever a
+    file does: lists searched for the entry to remove cost a crafted file quadratic time, and so
+    did ordered dicts, whose last entry is found by passing over every entry removed behind it
+    (a 5 KB section took 56 s). An edge open again is pushed again, above its stale entry.
+    :meth:`attach` adds a face and pushes its new gates.
     """
 
     def __init__(self, vertex_count: int) -> None:
@@ -69,35 +74,49 @@ class _Boundary:
         self.count: dict[int, int] = {}
         # by vertex, made as vertices are touched: a header's vertex count is not yet checked
         # against anything when FACE is decoded, and must not size an allocation
-        self.into: defaultdict[int, dict[int, None]] = defaultdict(dict)
-        self.out_of: defaultdict[int, dict[int, None]] = defaultdict(dict)
+        self.into: defaultdict[int, list[int]] = defaultdict(list)
+        self.out_of: defaultdict[int, list[int]] = defaultdict(list)
         self.gates: list[int] = []
+
+    def newest_into(self, v: int) -> int | None:
+        """The u of the newest open u -> v, if any (PREV)."""
+        key = _newest(self.into.get(v), self.count)
+        return None if key is None else key // self.k
+
+    def newest_out_of(self, v: int) -> int | None:
+        """The w of the newest open v -> w, if any (NEXT)."""
+        key = _newest(self.out_of.get(v), self.count)
+        return None if key is None else key % self.k
 
     def attach(self, cycle: list[int], first_gate: int) -> None:
         """Add the face ``cycle`` (in walk order): each edge x -> y closes an open y -> x, or
         opens; the edges from ``first_gate`` on become gates, the last one popped first."""
         k, count, into, out_of, gates = self.k, self.count, self.into, self.out_of, self.gates
         for j, (x, y) in enumerate(zip(cycle, cycle[1:] + cycle[:1], strict=True)):
-            opposite = y * k + x
+            opposite, key = y * k + x, x * k + y
             open_count = count.get(opposite)
             if open_count:
-                if open_count == 1:  # y -> x is closed: no longer a neighbour on the boundary
+                if open_count == 1:  # y -> x is closed: its entries in into(x), out(y) go stale
                     del count[opposite]
-                    del into[x][y]
-                    del out_of[y][x]
                 else:
                     count[opposite] = open_count - 1
-                key = x * k + y
-            else:
-                key = x * k + y
-                if key in count:
-                    count[key] += 1
-                else:  # x -> y becomes open: the newest neighbour of both ends
-                    count[key] = 1
-                    into[y][x] = None
-                    out_of[x][y] = None
+            elif key in count:
+                count[key] += 1
+            else:  # x -> y becomes open: the newest entry of both ends
+                count[key] = 1
+                into[y].append(key)
+                out_of[x].append(key)
             if j >= first_gate:
                 gates.append(key)
+
+
+def _newest(stack: list[int] | None, open_edges: Mapping[int, int]) -> int | None:
+    """The key of the newest open edge of ``stack``, its closed ones on top popped for good."""
+    while stack:
+        if stack[-1] in open_edges:
+            return stack[-1]
+        stack.pop()
+    return None
 
 
 # ---------------------------------------------------------------------------------- encoding
@@ -146,12 +165,19 @@ class _Walk:
 
     def __init__(self, rows: list[list[int]], k: int) -> None:
         self.rows, self.k = rows, k
-        self.faces_of_edge: dict[int, list[int]] = {}
-        for f, row in enumerate(rows):
-            n = len(row)
-            for j in range(n):
-                x, y = row[j], row[(j + 1) % n]
-                self.faces_of_edge.setdefault(min(x, y) * k + max(x, y), []).append(f)
+        # per directed edge x -> y, the faces with the consecutive corners x, y, each once, the
+        # input's first last: the walk pops the visited ones off the end as it meets them, so
+        # that all its searches together take time linear in the corners (a search from the
+        # front each time was quadratic on an edge of many faces: 50,000 faces took 115 s)
+        self.faces_with: dict[int, list[int]] = {}
+        for f in range(len(rows) - 1, -1, -1):
+            row = rows[f]
+            for x, y in zip(row, row[1:] + row[:1], strict=True):
+                faces = self.faces_with.get(x * k + y)
+                if faces is None:
+                    self.faces_with[x * k + y] = [f]
+                elif faces[-1] != f:  # the edge again in the same face
+                    faces.append(f)
         self.polygons = any(len(row) != 3 for row in rows)
         self.done = [False] * len(rows)
         self.seen = bytearray(k)
@@ -175,19 +201,36 @@ class _Walk:
         return ops
 
     def _tip(self, w: int, previous: int, first: int, is_first: bool) -> None:
-        into, out_of = self.boundary.into, self.boundary.out_of
+        boundary = self.boundary
         if not self.seen[w]:
             self.seen[w] = 1
             self.ops.append(TIP_NEW)
             self.new_residuals.append(w - self.last_new - 1)
             self.last_new = w
-        elif not is_first and into[previous] and next(reversed(into[previous])) == w:
+        elif not is_first and boundary.newest_into(previous) == w:
             self.ops.append(TIP_PREV)
-        elif not is_first and out_of[first] and next(reversed(out_of[first])) == w:
+        elif not is_first and boundary.newest_out_of(first) == w:
             self.ops.append(TIP_NEXT)
         else:
             self.ops.append(TIP_FAR)
             self.references.append(w - previous)
+
+    def _across(self, a: int, b: int) -> tuple[int, int, int] | None:
+        """The first unvisited face, in the input's order, with the consecutive corners b, a
+        (the orientation of the gate's face), else a, b: ``(face, corner where the walk starts,
+        GATE_FACE or GATE_FLIP)``, or None. O(1) amortized: a visited face is popped once."""
+        done = self.done
+        for first, second, kind in ((b, a, GATE_FACE), (a, b, GATE_FLIP)):
+            faces = self.faces_with.get(first * self.k + second)
+            while faces and done[faces[-1]]:
+                faces.pop()
+            if faces:
+                row = self.rows[faces[-1]]
+                n = len(row)
+                for j in range(n):  # the first such corner, as the face's corners are stored
+                    if row[j] == first and row[(j + 1) % n] == second:
+                        return faces[-1], j, kind
+        return None
 
     def _visit(self, f: int) -> list[int]:
         self.done[f] = True
@@ -214,9 +257,7 @@ class _Walk:
             gate = boundary.gates.pop()
             if gate not in boundary.count:
                 continue
-            a, b = divmod(gate, k)
-            key = min(a, b) * k + max(a, b)
-            found = _face_across(rows, self.done, self.faces_of_edge.get(key, []), a, b)
+            found = self._across(*divmod(gate, k))
             if found is None:
                 self.ops.append(GATE_NONE)
                 continue
@@ -233,30 +274,25 @@ class _Walk:
             boundary.attach(cycle, 1)
 
 
-def _face_across(
-    rows: list[list[int]], done: list[bool], candidates: list[int], a: int, b: int
-) -> tuple[int, int, int] | None:
-    """The first unvisited face with the edge b -> a (same orientation as the gate's face), else
-    with a -> b: ``(face, corner where the walk starts, GATE_FACE or GATE_FLIP)``."""
-    for want_first, want_second, kind in ((b, a, GATE_FACE), (a, b, GATE_FLIP)):
-        for f in candidates:
-            if done[f]:
-                continue
-            row = rows[f]
-            n = len(row)
-            for j in range(n):
-                if row[j] == want_first and row[(j + 1) % n] == want_second:
-                    return f, j, kind
-    return None
-
-
 # ---------------------------------------------------------------------------------- decoding
 
 
 def read_streams(
-    payload: bytes | memoryview, params: Mapping[str, Any], count: int, width: int, where: str
+    payload: bytes | memoryview,
+    params: Mapping[str, Any],
+    count: int,
+    width: int,
+    vertex_count: int,
+    where: str,
+    limits: Limits = DEFAULT_LIMITS,
 ) -> tuple[list[list[int]], int]:
-    """The four streams of a faces-traverse payload (§6.8), and ``corner_order``."""
+    """The four streams of a faces-traverse payload (§6.8), and ``corner_order``.
+
+    In §5 step 15's order: ``corner_order``, the streams' table (:func:`_stream_table`: each
+    entry's form, the bounds on the counts, the lengths against the payload), every ``planes``
+    (R30), the bytes the streams decompress to (R21), then each stream. Nothing is allocated by a
+    declared count before its stream is decompressed.
+    """
     corner_order = params.get("corner_order")
     # an int, not a float that equals 0 or 1 (§1: an int is never a float): found by the
     # JavaScript decoder, which refused a float 1.0 that this check let through
@@ -267,15 +303,46 @@ def read_streams(
         raise _problem(
             f"{where}.corner_order", f"corner_order must be 0 or 1, got {corner_order!r}"
         )
-    table = params.get("streams")
+    table = _stream_table(params.get("streams"), count, width, vertex_count, where)
+    total = sum(length for _, _, length in table)
+    if total != len(payload):
+        raise _problem(
+            f"{where}.streams", f"the streams take {total} bytes of a {len(payload)}-byte payload"
+        )
+    fields = [f"{where}.streams.{name}" for name in STREAM_NAMES]
+    planes = [
+        streams.checked_planes({"planes": entry[1]}, field)
+        for entry, field in zip(table, fields, strict=True)
+    ]
+    raw = sum(entry[0] * p for entry, p in zip(table, planes, strict=True))
+    check_limit(
+        raw,
+        limits,
+        "max_section_bytes",
+        what=f"the faces-traverse streams' {raw} bytes",
+        field=f"{where}.streams",
+    )
+    values, offset = [], 0
+    for (size, _, length), p, field in zip(table, planes, fields, strict=True):
+        values.append(
+            streams.unpack_integers(payload[offset : offset + length], size, p, field).tolist()
+        )
+        offset += length
+    return values, int(corner_order)
+
+
+def _stream_table(
+    table: object, count: int, width: int, vertex_count: int, where: str
+) -> list[tuple[int, int, int]]:
+    """``streams``: four ``[count, planes, length]`` arrays of ints >= 0, whose counts keep
+    §6.8's bounds (R39). A walk of ``count`` faces reads every value of every stream, and never
+    more than the bounds allow, so a file that breaks one fails here, before its streams are
+    decompressed, rather than in the walk."""
     if not isinstance(table, list) or len(table) != len(STREAM_NAMES):
         raise _problem(
             f"{where}.streams",
             f"streams must be an array of {len(STREAM_NAMES)} [count, planes, bytes] arrays",
         )
-    # the table first, whole: every stream is bounded by the faces (a gate per directed edge, a
-    # tip per corner), and the lengths tile the payload
-    bound = 2 * count * width
     for name, entry in zip(STREAM_NAMES, table, strict=True):
         if (
             not isinstance(entry, list)
@@ -286,40 +353,39 @@ def read_streams(
                 f"{where}.streams.{name}",
                 "each stream is described by [count, planes, bytes], ints >= 0",
             )
-        if entry[0] > bound:
-            raise _problem(
-                f"{where}.streams.{name}",
-                f"stream {name} declares {entry[0]} values, more than the {count} faces of "
-                f"width {width} allow ({bound})",
-            )
-    total = sum(entry[2] for entry in table)
-    if total != len(payload):
-        raise _problem(
-            f"{where}.streams", f"the streams take {total} bytes of a {len(payload)}-byte payload"
-        )
-    values, offset = [], 0
-    for name, (size, planes, length) in zip(STREAM_NAMES, table, strict=True):
-        field = f"{where}.streams.{name}"
-        planes = streams.checked_planes({"planes": planes}, field)
-        values.append(
-            streams.unpack_integers(payload[offset : offset + length], size, planes, field).tolist()
-        )
-        offset += length
-    return values, int(corner_order)
+    ops, degrees, news, references = (entry[0] for entry in table)
+    corners = count * (3 if degrees == 0 else width)  # at most: 3 corners without degrees
+    problem = None
+    if degrees not in (0, count):
+        problem = "degrees", f"{degrees} degrees for {count} faces: one each, or none"
+    elif not count <= ops <= 2 * corners:
+        problem = "ops", f"{ops} ops, outside the {count}..{2 * corners} that {count} faces read"
+    elif news > vertex_count:
+        problem = "vertices", f"{news} new vertices, more than the {vertex_count} there are"
+    elif news + references > corners:
+        detail = f"{news} new vertices and {references} references, more than {corners} corners"
+        problem = "references", detail
+    if problem is not None:
+        name, detail = problem
+        raise _problem(f"{where}.streams.{name}", f"the streams declare {detail} (§6.8)")
+    return [(entry[0], entry[1], entry[2]) for entry in table]
 
 
 def decode_traversal(
-    payload: bytes | memoryview, params: Mapping[str, Any], vertex_count: int, where: str
+    payload: bytes | memoryview,
+    params: Mapping[str, Any],
+    vertex_count: int,
+    where: str,
+    limits: Limits = DEFAULT_LIMITS,
 ) -> np.ndarray:
     """The (M, n) faces of a FACE section with codec faces-traverse (§6.8), in walk order.
 
     In §5 step 15's order: the streams' table is checked and the streams read
-    (:func:`read_streams`), then the walk rebuilds the faces from them (:func:`_walk`).
+    (:func:`read_streams`), then the walk rebuilds the faces from them (:func:`_walk`). The walk's
+    state grows with the values it reads; the (M, n) table is made once M faces are decoded.
     """
     count, width = section_shape(params, where, min_cols=3)
-    values, corner_order = read_streams(payload, params, count, width, where)
-    if values[1] and len(values[1]) != count:
-        raise _broken(where, f"{len(values[1])} degrees for {count} faces")
+    values, corner_order = read_streams(payload, params, count, width, vertex_count, where, limits)
     try:
         rows = _walk(values, count, width, vertex_count, corner_order, where)
     except StopIteration:  # a stream read past its end
@@ -376,10 +442,15 @@ def _walk(
                 w = previous + next(references)
                 if not 0 <= w < k or w not in seen:
                     raise _broken(where, f"referenced vertex {w} is not one seen before")
-            elif cycle and tip_op == TIP_PREV and (candidates := into[previous]):
-                w = next(reversed(candidates))  # the newest
-            elif cycle and tip_op == TIP_NEXT and (candidates := out_of[cycle[0]]):
-                w = next(reversed(candidates))
+            elif cycle and tip_op in (TIP_PREV, TIP_NEXT):
+                # the newest open edge into the previous corner, or out of the first: closed
+                # ones on top are popped for good (_newest, written out)
+                stack = into.get(previous) if tip_op == TIP_PREV else out_of.get(cycle[0])
+                while stack and stack[-1] not in open_edges:
+                    stack.pop()
+                if not stack:
+                    raise _broken(where, f"tip operation {tip_op} names no vertex here")
+                w = stack[-1] // k if tip_op == TIP_PREV else stack[-1] % k
             else:
                 raise _broken(where, f"tip operation {tip_op} names no vertex here")
             cycle.append(w)
@@ -401,11 +472,12 @@ def _walk(
             if not open_count:
                 if key in open_edges:
                     open_edges[key] += 1
-                else:  # x -> y becomes open: the newest neighbour of both ends
+                else:  # x -> y becomes open: the newest entry of both ends
                     open_edges[key] = 1
-                    into[y][x] = out_of[x][y] = None
-            elif open_count == 1:  # y -> x is closed: no longer a neighbour on the boundary
-                del open_edges[opposite], into[x][y], out_of[y][x]
+                    into[y].append(key)
+                    out_of[x].append(key)
+            elif open_count == 1:  # y -> x is closed: its entries in into(x), out(y) go stale
+                del open_edges[opposite]
             else:
                 open_edges[opposite] = open_count - 1
             if j >= first_gate:

@@ -54,6 +54,7 @@ def load_sequence(
     object_path: str | None = None,
     faces: str | os.PathLike[str] | None = None,
     fps: float | None = None,
+    max_memory: int | None = None,
 ) -> MeshSequence:
     """Load a mesh sequence.
 
@@ -77,6 +78,10 @@ def load_sequence(
         faces: PC2, MDD and ``.npy``: a mesh file whose faces the points take (without it,
             points only).
         fps: glTF: sample the animation at this rate rather than at its keyframes.
+        max_memory: the most bytes a read may decompress and hold at once (default: half the
+            machine's memory): a compressed array that would inflate beyond it (a zlib block
+            of a VTK file, a deflated ``.npz`` member, a filtered HDF5 dataset of an XDMF
+            series, a glTF's meshopt views) is refused before it is inflated.
 
     Returns:
         The sequence; faces come from the first frame and ``frame_names`` are the file names.
@@ -84,10 +89,13 @@ def load_sequence(
     Raises:
         InputError: nothing to read, a file that cannot be read, a frame whose vertex count
             or faces differ from the first, or an option the source's format does not take;
-            the error names the file, frame and line (or object).
+            the error names the file, frame and line (or object); data that would
+            decompress beyond ``max_memory``.
         DependencyError: the format's library is not installed; names the extra to install.
     """
-    opened = open_frames(source, prim=prim, object_path=object_path, faces=faces, fps=fps)
+    opened = open_frames(
+        source, prim=prim, object_path=object_path, faces=faces, fps=fps, max_memory=max_memory
+    )
     with opened:
         return opened.load(progress)
 
@@ -99,6 +107,7 @@ def open_frames(
     object_path: str | None = None,
     faces: str | os.PathLike[str] | None = None,
     fps: float | None = None,
+    max_memory: int | None = None,
 ) -> FrameSource:
     """Open a mesh sequence to read a range of frames at a time, without loading it whole.
 
@@ -119,11 +128,11 @@ def open_frames(
             of a folder, the header of a file).
         DependencyError: the format's library is not installed.
     """
-    options = _read_options(prim, object_path, faces, fps)
+    options = _read_options(prim, object_path, faces, fps, max_memory)
     resolved = _resolve(source, options)
     if isinstance(resolved, list):
         where = source if isinstance(source, (str, os.PathLike)) else None
-        return FileFrames(resolved, where)
+        return FileFrames(resolved, where, options)
     found, path = resolved
     assert found.open is not None  # _resolve returns only whole-sequence formats
     return found.open(path, options)
@@ -134,12 +143,16 @@ def _read_options(
     object_path: str | None,
     faces: str | os.PathLike[str] | None,
     fps: float | None,
+    max_memory: int | None,
 ) -> ReadOptions:
+    if max_memory is not None and max_memory <= 0:
+        raise ValueError(f"max_memory must be a positive number of bytes, got {max_memory}")
     return ReadOptions(
         prim=prim,
         object_path=object_path,
         faces=None if faces is None else Path(faces),
         fps=fps,
+        max_memory=max_memory,
     )
 
 

@@ -23,6 +23,7 @@ from ..sequence import MeshSequence
 from .registry import (
     FrameReader,
     MeshFrame,
+    ReadOptions,
     SequenceFormat,
     WriteOptions,
     format_named,
@@ -79,10 +80,16 @@ class FileFrames(FrameSource):
     """One frame per file (a folder, a glob, a list), read file by file: the first file at
     once (for the vertex count and faces), the others when their frames are read, each checked
     against the first. ``where`` is the folder or pattern the files came from, for errors
-    that are not one file's."""
+    that are not one file's; ``options`` are given to each frame's reader (``max_memory``)."""
 
-    def __init__(self, files: list[Path], where: str | os.PathLike[str] | None = None):
+    def __init__(
+        self,
+        files: list[Path],
+        where: str | os.PathLike[str] | None = None,
+        options: ReadOptions | None = None,
+    ):
         self._files = list(files)
+        self._options = options or ReadOptions()
         self._readers: list[FrameReader] = []
         for index, file in enumerate(self._files):
             found = format_of(file) or format_named(FALLBACK_FRAME_FORMAT)
@@ -102,7 +109,7 @@ class FileFrames(FrameSource):
         """Frame ``index``, checked against ``reference`` (the first frame, if read yet)."""
         file = self._files[index]
         try:
-            frame = self._readers[index](file, reference)
+            frame = self._readers[index](file, reference, self._options)
             if reference is not None:
                 _check_matches(frame, reference, file)
         except InputError as error:

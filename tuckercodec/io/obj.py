@@ -59,7 +59,7 @@ from ..atomic import write_atomic
 from ..errors import InputError
 from ..reading import open_regular_file
 from ..topology import face_table_problem
-from .registry import MeshFrame, WriteOptions
+from .registry import MeshFrame, ReadOptions, WriteOptions
 
 #: The longest line the OBJ reader accepts, in bytes, its line end not counted: 4 MiB, a face of
 #: about half a million corners, far beyond any real mesh. A longer line is refused as soon as
@@ -130,8 +130,13 @@ def read_obj(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
     return mesh.vertices, mesh.faces
 
 
-def read_obj_frame(path: str | os.PathLike[str], reference: MeshFrame | None = None) -> MeshFrame:
-    """Read one OBJ frame of a sequence, checking it against the first frame ``reference``.
+def read_obj_frame(
+    path: str | os.PathLike[str],
+    reference: MeshFrame | None = None,
+    options: ReadOptions | None = None,
+) -> MeshFrame:
+    """Read one OBJ frame of a sequence, checking it against the first frame ``reference``
+    (``options``: nothing in an OBJ file is compressed, so ``max_memory`` has nothing to bound).
 
     With a reference, the frame must have as many vertices and the same faces as the reference;
     when its face lines are byte for byte those of the reference, they are not parsed again and

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from ..sequence import MeshSequence
+from .budget import Inflation, memory_ceiling
 from .streaming import FrameSource
 
 
@@ -54,20 +55,35 @@ class ReadOptions:
         faces: PC2, MDD and ``.npy`` (positions only): a mesh file whose faces the points take.
         fps: glTF: sample the animation at this many frames per second instead of at its
             keyframes.
+        max_memory: every format: the most bytes a read may decompress and hold at once
+            (``--max-memory``; ``None``: half the machine's memory), :mod:`.budget`.
     """
 
     prim: str | None = None
     object_path: str | None = None
     faces: Path | None = None
     fps: float | None = None
+    max_memory: int | None = None
 
     def given(self) -> list[str]:
-        """The names of the options that are set."""
-        return [name for name, value in vars(self).items() if value is not None]
+        """The names of the options that are set which only some formats take (not
+        :data:`COMMON_OPTIONS`)."""
+        return [
+            name
+            for name, value in vars(self).items()
+            if value is not None and name not in COMMON_OPTIONS
+        ]
+
+    def inflation(self) -> Inflation:
+        """A new :class:`~.budget.Inflation` of :attr:`max_memory` (or its default)."""
+        return Inflation(memory_ceiling(self.max_memory))
 
 
-#: How each read option is spelled on the command line, for the errors that name one.
+#: How each read option that only some formats take is spelled on the command line, for the
+#: errors that name one.
 OPTION_FLAGS = {"prim": "--prim", "object_path": "--object", "faces": "--faces", "fps": "--fps"}
+#: The read options every format takes (never refused as not applying).
+COMMON_OPTIONS = frozenset({"max_memory"})
 
 
 @dataclass(frozen=True)
@@ -81,8 +97,9 @@ class WriteOptions:
 
 
 #: Reads one frame; the second argument is the sequence's first frame (``None`` for the first
-#: itself), which a reader may use to skip work or to name the first difference it finds.
-FrameReader = Callable[[Path, MeshFrame | None], MeshFrame]
+#: itself), which a reader may use to skip work or to name the first difference it finds; the
+#: third the read options (only ``max_memory`` applies to a frame's file).
+FrameReader = Callable[[Path, MeshFrame | None, ReadOptions], MeshFrame]
 FrameWriter = Callable[[Path, np.ndarray, np.ndarray, WriteOptions], None]
 
 

@@ -34,6 +34,12 @@ Reading:
   capped, and which may crash without taking the caller along: each is an InputError.
   :func:`open_usd` reads the frames sample by sample, a range at a time, in a child that stays
   open (:mod:`.isolation`; :class:`StageFrames` is what it runs).
+* A stage reads only files inside its own folder: pxr resolves any asset path, absolute or
+  ``../``, so before the stage opens, each layer's sublayers, references and payloads (in
+  variants too) and its value clips (asset paths, manifests, templates) are resolved as pxr
+  would, layer after layer, and one that leads out of the folder is refused naming the layer
+  and the asset path (a file pxr would not find is not read, and passes; a variable
+  expression, evaluated into a path, is refused).
 
 Writing: a stage with ``upAxis`` Y, ``metersPerUnit`` 0.01 (USD's fallback, authored only
 because usdchecker requires it: the file means what an unauthored one would), ``defaultPrim``
@@ -75,7 +81,10 @@ _LISTED = 8
 
 
 #: The pxr modules this format uses.
-_MODULES = ("Usd", "UsdGeom", "Sdf", "Tf", "Vt", "UsdUtils")
+_MODULES = ("Usd", "UsdGeom", "Sdf", "Tf", "Vt", "UsdUtils", "Ar")
+#: The prim metadata of value clips that name files: the clip sets' dictionary, and the fields
+#: of the older clip metadata.
+_CLIP_FIELDS = ("clipAssetPaths", "clipManifestAssetPath", "clipTemplateAssetPath")
 #: ... as the reading child imports them, before its memory is capped.
 _PRELOAD = tuple(f"pxr.{name}" for name in _MODULES)
 
@@ -136,6 +145,7 @@ class StageFrames(FrameByFrame):
         self._file = path
         with _quiet(pxr):
             try:
+                _confine(pxr, path)
                 stage = pxr.Usd.Stage.Open(str(path), pxr.Usd.Stage.LoadAll)
             except _errors(pxr) as error:
                 raise InputError(
@@ -204,6 +214,74 @@ class StageFrames(FrameByFrame):
     def _read(self, start: int, stop: int) -> np.ndarray:
         with _quiet(self._pxr):
             return super()._read(start, stop)
+
+
+def _confine(pxr: SimpleNamespace, path: Path) -> None:
+    """Refuse a stage whose layers lead out of its folder: every layer it composes (sublayers,
+    references and payloads, in variants too) and every value clip, as pxr's resolver would
+    find them, followed from layer to layer before the stage opens any of them. A file that is
+    not found is not read by pxr either; a variable expression, which would be evaluated into
+    a path, is refused."""
+    folder = path.parent.resolve()
+    pending, seen = [str(path)], set()
+    while pending:
+        identifier = pending.pop()
+        if identifier in seen:
+            continue
+        seen.add(identifier)
+        layer = pxr.Sdf.Layer.FindOrOpen(identifier)
+        if not layer:
+            continue  # Stage.Open says why, for the root; a missing layer adds nothing
+        named = "it" if not seen - {identifier} else f"its layer {layer.identifier}"
+        for asset, template in _dependencies(pxr, layer):
+            if asset.startswith("`"):
+                raise InputError(
+                    f"{named} names the asset {asset[:80]!r}, a variable expression, which is "
+                    "not followed: refused",
+                    path=path,
+                )
+            anchored = pxr.Sdf.ComputeAssetPathRelativeToLayer(layer, asset)
+            found = anchored.replace("#", "0") if template else _resolved(pxr, anchored)
+            outer = pxr.Ar.SplitPackageRelativePathOuter(found)[0] if found else ""
+            if outer and not Path(outer).resolve().is_relative_to(folder):
+                raise InputError(
+                    f"{named} names the asset {asset[:80]!r}, which leads out of the stage's "
+                    f"folder ({folder}): refused (only files inside it are read)",
+                    path=path,
+                )
+            if found and not template:
+                pending.append(found)
+
+
+def _resolved(pxr: SimpleNamespace, anchored: str) -> str:
+    """Where pxr's resolver finds an asset ("" where it finds none)."""
+    return str(pxr.Ar.GetResolver().Resolve(anchored))
+
+
+def _dependencies(pxr: SimpleNamespace, layer: Any) -> Iterator[tuple[str, bool]]:
+    """The asset paths a layer's composition and value clips name, each with whether it is a
+    clip template (``clip.#.usd``: a pattern of files, not one)."""
+    for asset in layer.GetCompositionAssetDependencies():
+        yield str(asset), False
+    clips: list[dict[str, Any]] = []
+
+    def visit(spec_path: Any) -> None:
+        spec = layer.GetObjectAtPath(spec_path)
+        if isinstance(spec, pxr.Sdf.PrimSpec):
+            if spec.HasInfo("clips"):
+                clips.extend(dict(clip) for clip in dict(spec.GetInfo("clips")).values())
+            clips.append({name: spec.GetInfo(name) for name in _CLIP_FIELDS if spec.HasInfo(name)})
+
+    layer.Traverse(pxr.Sdf.Path.absoluteRootPath, visit)
+    for clip in clips:
+        for key, value in clip.items():
+            field = key.removeprefix("clip").lower()
+            if field == "assetpaths":
+                yield from ((str(item.path), False) for item in value)
+            elif field == "manifestassetpath":
+                yield str(value.path), False
+            elif field == "templateassetpath":
+                yield str(value), True
 
 
 def listing(paths: list[str]) -> str:

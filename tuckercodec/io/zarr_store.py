@@ -6,7 +6,8 @@ dtype zarr reads as one); with a group, optionally an integer array ``faces`` (M
 -1 padding, and the attributes ``frame_rate`` (a number), ``frame_names`` (one string per
 frame) and ``time_codes`` (one number per frame). Frames are read chunk by chunk: a range reads
 only the chunks it overlaps (:class:`ZarrFrames`), so a store larger than memory streams. A
-chunk larger than :data:`MAX_CHUNK_BYTES` is refused (it would be read whole for one frame).
+chunk larger than :data:`MAX_CHUNK_BYTES` is refused (it would be read whole for one frame), or
+than ``--max-memory`` if less (it is decompressed whole), and so are faces beyond either.
 A missing chunk reads as the array's fill value, as zarr defines it: the writer here uses NaN,
 so a lost chunk is an error, not zeros.
 
@@ -29,6 +30,7 @@ from ..atomic import atomic_store
 from ..errors import InputError
 from ..optional import import_optional
 from ..sequence import MeshSequence
+from .budget import memory_ceiling
 from .registry import ReadOptions, WriteOptions
 from .streaming import FrameSource
 
@@ -62,11 +64,13 @@ class ZarrFrames(FrameSource):
             raise InputError(f"{name} holds {dtype} values, not real numbers", path=path)
         if len(shape) != 3 or shape[2] != 3:
             raise InputError(f"{name} has shape {shape}, not (frames, vertices, 3)", path=path)
+        largest = min(MAX_CHUNK_BYTES, memory_ceiling((options or ReadOptions()).max_memory))
         chunk = math.prod(array.chunks) * dtype.itemsize
-        if chunk > MAX_CHUNK_BYTES:
+        if chunk > largest:
             raise InputError(
                 f"{name} has chunks {tuple(array.chunks)} of {chunk} bytes, more than the "
-                f"{MAX_CHUNK_BYTES} read at once: rechunk it by frames",
+                f"{largest} read at once (--max-memory, at most {MAX_CHUNK_BYTES}): rechunk it "
+                "by frames",
                 path=path,
             )
         self._array = array
@@ -75,7 +79,7 @@ class ZarrFrames(FrameSource):
         if group is not None:
             attributes = dict(group.attrs)
             if "faces" in group:
-                faces = _faces(_member(group, "faces", path), path)
+                faces = _faces(_member(group, "faces", path), path, largest)
         self._describe(
             path,
             shape[0],
@@ -133,8 +137,9 @@ def _member(group: Any, name: str, path: Path) -> Any:
         ) from None
 
 
-def _faces(array: Any, path: Path) -> np.ndarray:
-    """The ``faces`` array, (M, n) integers (checked as faces by the caller)."""
+def _faces(array: Any, path: Path, largest: int) -> np.ndarray:
+    """The ``faces`` array, (M, n) integers of at most ``largest`` bytes as int64 (checked as
+    faces by the caller)."""
     if not _is_array(array):
         raise InputError("its 'faces' is a group, not an array", path=path)
     if np.dtype(array.dtype).kind not in "iu" or len(array.shape) != 2:
@@ -143,8 +148,12 @@ def _faces(array: Any, path: Path) -> np.ndarray:
             f"{tuple(array.shape)}",
             path=path,
         )
-    if math.prod(array.shape) * 8 > MAX_CHUNK_BYTES:
-        raise InputError(f"its 'faces' {tuple(array.shape)} are too many to read", path=path)
+    if math.prod(array.shape) * 8 > largest:
+        raise InputError(
+            f"its 'faces' {tuple(array.shape)} are too many to read (more than {largest} bytes "
+            "of int64: --max-memory)",
+            path=path,
+        )
     try:
         faces = np.asarray(array[...])
     except Exception as error:

@@ -12,8 +12,11 @@ no other page can frame the viewer, and ``Referrer-Policy: no-referrer``.
 
 Each connection has a read and idle timeout (:data:`CONNECTION_TIMEOUT`): a client that stops
 sending, mid-request or between requests, is disconnected, so half-sent requests cannot hold
-threads. At most :data:`MAX_CONNECTIONS` connections are open at once; one more is closed as
-soon as it is accepted.
+threads. A request's line and headers must also arrive whole within :data:`REQUEST_DEADLINE`
+of when the server starts waiting for them: a client that sends a byte every few seconds,
+never idle for long, is disconnected there too (otherwise 64 kB of request line and a hundred
+headers at a byte every 4 s would hold a thread for weeks). At most :data:`MAX_CONNECTIONS`
+connections are open at once; one more is closed as soon as it is accepted.
 
 Each run has a random token (as Jupyter does), in the URL to open (:meth:`ViewerServer.address`,
 ``...&token=...``) and required on every request: other users of the machine can reach
@@ -29,10 +32,12 @@ Use it as a context manager: the server answers in a background thread from ``__
 
 from __future__ import annotations
 
+import io
 import secrets
 import shutil
 import sys
 import threading
+import time
 from http import HTTPStatus
 from http.cookies import CookieError, SimpleCookie
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
@@ -51,6 +56,10 @@ POLL_SECONDS = 0.05
 
 #: Seconds a connection may wait for the client's next bytes (mid-request or between requests).
 CONNECTION_TIMEOUT = 5.0
+
+#: Seconds a request's line and headers may take to arrive, all of them together, from when the
+#: server starts waiting for the request.
+REQUEST_DEADLINE = 15.0
 
 #: Connections open at once (a browser opens about six); more are closed when accepted.
 MAX_CONNECTIONS = 64
@@ -95,6 +104,7 @@ class ViewerServer(ThreadingHTTPServer):
         port: int = 0,
         *,
         connection_timeout: float = CONNECTION_TIMEOUT,
+        request_deadline: float = REQUEST_DEADLINE,
         max_connections: int = MAX_CONNECTIONS,
         token: str | None = None,
     ):
@@ -103,6 +113,7 @@ class ViewerServer(ThreadingHTTPServer):
         if "/index.html" in self.routes:
             self.routes["/"] = self.routes["/index.html"]
         self.connection_timeout = connection_timeout
+        self.request_deadline = request_deadline
         self.token = token if token is not None else secrets.token_urlsafe(32)
         self.policy = f"{page_policy()}; {FRAME_POLICY}"
         self._slots = threading.BoundedSemaphore(max_connections)
@@ -194,15 +205,56 @@ class ViewerServer(ThreadingHTTPServer):
         super().handle_error(request, client_address)  # type: ignore[arg-type]
 
 
+class _DeadlineReader(io.RawIOBase):
+    """A handler's connection read raw, each read within what is left of its deadline."""
+
+    def __init__(self, handler: _Handler):
+        self.handler = handler
+
+    def readable(self) -> bool:
+        return True
+
+    def readinto(self, buffer: Any) -> int:
+        self.handler.before_read()
+        return self.handler.connection.recv_into(buffer)
+
+
 class _Handler(BaseHTTPRequestHandler):
     server: ViewerServer
     server_version = "tuckercodec-view"
     sys_version = ""
 
+    #: When the request being read must have arrived (``time.monotonic``); None once it has.
+    _deadline: float | None = None
+
     def setup(self) -> None:
         super().setup()
         # for every read and write: a client that stops sending is disconnected
         self.connection.settimeout(self.server.connection_timeout)
+        # every read of the request checks what is left of its deadline first
+        plain, self.rfile = self.rfile, io.BufferedReader(_DeadlineReader(self))
+        plain.close()  # else it holds the socket open after the server closes it
+
+    def handle_one_request(self) -> None:
+        self._deadline = time.monotonic() + self.server.request_deadline
+        super().handle_one_request()  # a TimeoutError while reading ends the connection
+
+    def parse_request(self) -> bool:
+        parsed = super().parse_request()  # the request line and the headers
+        self._deadline = None  # arrived: the response has the plain timeout
+        self.connection.settimeout(self.server.connection_timeout)
+        return parsed
+
+    def before_read(self) -> None:
+        """Cut the socket's timeout to what is left of the request's deadline, or end the
+        connection (TimeoutError) if nothing is."""
+        if self._deadline is None:
+            return
+        left = self._deadline - time.monotonic()
+        if left <= 0:
+            deadline = self.server.request_deadline
+            raise TimeoutError(f"the request did not arrive within {deadline} s")
+        self.connection.settimeout(min(self.server.connection_timeout, left))
 
     def do_GET(self) -> None:
         self._respond(body=True)

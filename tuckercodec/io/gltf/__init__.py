@@ -53,7 +53,12 @@ class GltfFrames(FrameSource):
     def _opened(self) -> Scene:
         if self._scene is None:
             options = self._options
-            self._scene = Scene(self._file, object_path=options.object_path, fps=options.fps)
+            self._scene = Scene(
+                self._file,
+                object_path=options.object_path,
+                fps=options.fps,
+                inflation=options.inflation(),
+            )
         return self._scene
 
     def _read(self, start: int, stop: int) -> np.ndarray:
@@ -70,10 +75,13 @@ def write_gltf(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
     write_sequence_gltf(seq, path, overwrite=options.overwrite)
 
 
-def read_gltf_frame(path: Path, reference: MeshFrame | None = None) -> MeshFrame:
+def read_gltf_frame(
+    path: Path, reference: MeshFrame | None = None, options: ReadOptions | None = None
+) -> MeshFrame:
     """One frame from one glTF file of a folder of frames: its mesh as shown at rest; a file
-    holding an animation of several frames is refused (load it on its own)."""
-    seq = read_gltf(path)
+    holding an animation of several frames is refused (load it on its own). Its compressed
+    views inflate within ``options.max_memory``."""
+    seq = read_gltf(path, inflation=(options or ReadOptions()).inflation())
     if seq.frame_count != 1:
         raise InputError(
             f"holds an animation of {seq.frame_count} frames, not one frame: load it on its own",

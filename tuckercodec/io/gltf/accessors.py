@@ -94,14 +94,16 @@ def _denormalize(values: np.ndarray) -> np.ndarray:
 
 def _data_bytes(doc: Document) -> int:
     """The bytes the file's buffers hold: each loaded (once, kept for the reads to come);
-    one that cannot be (absent, a compression extension's fallback) holds none. A declared
-    byteLength is not data: a few hundred bytes of JSON can declare gigabytes."""
+    one that cannot be (absent, a compression extension's fallback) holds none, and buffers
+    of one file count its bytes once. A declared byteLength is not data: a few hundred bytes of
+    JSON can declare gigabytes, or name one file a thousand times."""
     if "data bytes" not in doc.cache:
-        total = 0
+        held: dict[int, int] = {}  # the longest view of each object of bytes
         for index in range(len(doc.array("buffers"))):
             with contextlib.suppress(InputError):
-                total += len(doc.buffer(index, "the file's data"))
-        doc.cache["data bytes"] = total
+                view = doc.buffer(index, "the file's data")
+                held[id(view.obj)] = max(held.get(id(view.obj), 0), len(view))
+        doc.cache["data bytes"] = sum(held.values())
     return int(doc.cache["data bytes"])
 
 

@@ -25,7 +25,8 @@ from pathlib import Path
 from typing import Any
 
 from ...errors import InputError
-from ...reading import open_input, open_regular_file
+from ...reading import inside_folder, open_input, open_regular_file
+from ..budget import Inflation, memory_ceiling
 
 GLB_MAGIC = b"glTF"
 JSON_CHUNK = 0x4E4F534A
@@ -52,6 +53,8 @@ class Document:
     _buffers: dict[int, memoryview] = field(default_factory=dict)
     #: buffer views decompressed once (EXT_meshopt_compression), by index
     decoded_views: dict[int, memoryview] = field(default_factory=dict)
+    #: what those views may still inflate to, together (``--max-memory``)
+    inflation: Inflation = field(default_factory=lambda: Inflation(memory_ceiling(None)))
     #: what readers derive once from the file (meshes merged from their primitives...)
     cache: dict[Any, Any] = field(default_factory=dict)
 
@@ -125,8 +128,9 @@ def integer(
     return value
 
 
-def read_document(path: Path) -> Document:
-    """Parse a .glb or .gltf file (by its first bytes, not its name); InputError if damaged."""
+def read_document(path: Path, inflation: Inflation | None = None) -> Document:
+    """Parse a .glb or .gltf file (by its first bytes, not its name); InputError if damaged.
+    Its compressed views inflate within ``inflation`` (default: half the machine's memory)."""
     with open_input(path, "a glTF file") as stream:
         data = stream.read()
     if not data.strip():
@@ -136,6 +140,8 @@ def read_document(path: Path) -> Document:
     else:
         gltf, glb_bin = _parse_json(data, path), None
     doc = Document(path, gltf, glb_bin)
+    if inflation is not None:
+        doc.inflation = inflation
     asset = gltf.get("asset")
     version = asset.get("version") if isinstance(asset, dict) else None
     if not isinstance(version, str) or not version.startswith("2."):
@@ -207,18 +213,23 @@ def _data_uri(doc: Document, uri: str, where: str) -> bytes:
 
 
 def _external(doc: Document, uri: str, where: str) -> bytes:
+    """The bytes of a buffer's file, which must lie inside the .gltf's folder (an absolute
+    path, a URL, or one that leads out through ``..`` or a link is refused, as for every
+    reader: :func:`~tuckercodec.reading.inside_folder`)."""
     name = urllib.parse.unquote(uri)
-    folder = doc.path.resolve().parent
-    if "://" in uri or name.startswith(("/", "\\")) or Path(name).is_absolute():
-        raise doc.fail(f"{where}: uri {uri!r} is not a file beside the .gltf; only those are read")
-    target = (folder / name).resolve()
-    if not target.is_relative_to(folder):
-        raise doc.fail(f"{where}: uri {uri!r} leads out of the .gltf's folder; refused")
+    try:
+        target = inside_folder(doc.path.parent, name)
+    except InputError as error:
+        raise doc.fail(f"{where}: its uri {error.reason}") from None
+    if ("file", target) in doc.cache:  # several buffers of one file: read once, shared
+        data: bytes = doc.cache["file", target]
+        return data
     if not target.exists():
         raise doc.fail(f"{where}: its file {name!r} is missing (looked for {target})")
     try:
         with open_regular_file(target, f"the buffer file of {where}") as stream:
-            return stream.read()
+            data = doc.cache["file", target] = stream.read()
+            return data
     except OSError as error:
         raise doc.fail(f"{where}: cannot read {name!r}: {error.strerror or error}") from None
 

@@ -5,6 +5,10 @@ the decomposition writer) both go through the ``meshoptimizer`` package, the opt
 ``gltf``; without it a :class:`DependencyError` names the extra. The extension's vertex codec is
 version 0 (what EXT_meshopt_compression defines; version 1 is KHR_meshopt_compression's), set
 before every encoding since the library keeps it as global state.
+
+A view decodes to at most 64 times its bytes (:data:`_MAX_RATIO`), and the views a file decodes,
+which it keeps, within ``--max-memory`` together (the document's
+:class:`~tuckercodec.io.budget.Inflation`), each checked before it is decoded.
 """
 
 from __future__ import annotations
@@ -14,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from ...errors import InputError
 from ...optional import import_optional
 from .container import Document, integer
 
@@ -62,6 +67,10 @@ def decode_view(doc: Document, index: Any, view: dict[str, Any], ext: Any) -> me
     buffer = doc.buffer(integer(doc, ext, "buffer", where), where)
     if offset + length > len(buffer):
         raise doc.fail(f"{where}: bytes {offset}..{offset + length} run past the buffer")
+    try:  # the views are kept once decoded: together within what the file may inflate
+        doc.inflation.take(count * stride, where)
+    except InputError as error:
+        raise doc.fail(error.reason) from None
     source = np.frombuffer(buffer[offset : offset + length], dtype=np.uint8)
     meshopt = _library("reading a glTF compressed with EXT_meshopt_compression")
     try:

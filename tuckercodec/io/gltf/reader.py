@@ -35,6 +35,7 @@ import numpy as np
 
 from ...errors import InputError
 from ...sequence import MeshSequence
+from ..budget import Inflation
 from .animation import PATH_WIDTHS, Sampler, node_matrix, numbers, read_sampler
 from .container import Document, integer, read_document
 from .primitives import MAX_NUMBERS, Mesh, read_mesh
@@ -44,6 +45,12 @@ from .timing import timing
 SUPPORTED_EXTENSIONS = frozenset({"KHR_mesh_quantization", "EXT_meshopt_compression"})
 #: The key of the writer's own record in an animation's ``extras``.
 EXTRAS_KEY = "tuckercodec"
+#: The levels of nesting above the chosen mesh nodes, in all, allowed per node of the file:
+#: each frame multiplies that many transforms (:func:`_check_nesting`).
+NESTING_PER_NODE = 64
+#: The most weights (frames x morph targets) evaluated at once: the frames of a range are
+#: evaluated this many numbers' worth at a time.
+WEIGHTS_AT_ONCE = 1 << 22
 #: The most frames ``fps`` may ask for (a read also holds at most MAX_NUMBERS numbers, about
 #: 2 GiB of float64): checked against the file's keyframe times before anything is sampled.
 MAX_FRAMES = 1_000_000
@@ -60,9 +67,15 @@ class Sampled:
     extras: dict[str, Any] = field(default_factory=dict)
 
 
-def read_gltf(path: Path, object_path: str | None = None, fps: float | None = None) -> MeshSequence:
+def read_gltf(
+    path: Path,
+    object_path: str | None = None,
+    fps: float | None = None,
+    inflation: Inflation | None = None,
+) -> MeshSequence:
     """A mesh sequence from a ``.glb``/``.gltf`` file: the morph animation as a viewer plays it
-    (see the module docstring for which meshes, primitives and times).
+    (see the module docstring for which meshes, primitives and times); its compressed views
+    inflate within ``inflation`` (default: half the machine's memory).
 
     Raises:
         InputError: a damaged or unsupported file, naming the file, the mesh/node/accessor and
@@ -70,7 +83,7 @@ def read_gltf(path: Path, object_path: str | None = None, fps: float | None = No
         DependencyError: the file uses EXT_meshopt_compression and meshoptimizer (extra
             ``gltf``) is missing.
     """
-    sampled = sample_gltf(path, object_path=object_path, fps=fps)
+    sampled = sample_gltf(path, object_path=object_path, fps=fps, inflation=inflation)
     rate, codes, names = timing(sampled.times, sampled.animated, sampled.extras, fps)
     try:
         return MeshSequence(
@@ -86,9 +99,10 @@ def sample_gltf(
     *,
     object_path: str | None = None,
     fps: float | None = None,
+    inflation: Inflation | None = None,
 ) -> Sampled:
     """Evaluate the file's mesh at ``times`` (seconds), or at its keyframes or ``fps``."""
-    scene = Scene(path, times, object_path=object_path, fps=fps)
+    scene = Scene(path, times, object_path=object_path, fps=fps, inflation=inflation)
     positions = scene.evaluate(0, len(scene.times))
     return Sampled(positions, scene.faces, scene.times, scene.animated, scene.extras)
 
@@ -103,6 +117,9 @@ class Scene:
         faces: the merged meshes' triangles.
         animated: whether the file has an animation.
         extras: the tuckercodec writer's record in the asset's ``extras``, if any.
+
+    ``inflation``: what the file's compressed views may inflate to (default: half the
+    machine's memory).
     """
 
     def __init__(
@@ -112,8 +129,9 @@ class Scene:
         *,
         object_path: str | None = None,
         fps: float | None = None,
+        inflation: Inflation | None = None,
     ):
-        doc = read_document(path)
+        doc = read_document(path, inflation)
         required = doc.gltf.get("extensionsRequired", [])
         if not isinstance(required, list):
             raise doc.fail("extensionsRequired must be a list")
@@ -126,6 +144,7 @@ class Scene:
         self.doc = doc
         self.parents = _parents(doc)
         self.chosen = _mesh_nodes(doc, self.parents, object_path)
+        _check_nesting(doc, self.chosen, self.parents)
         animation, self.channels = _channels(doc, self.chosen, self.parents)
         self.animated = animation is not None
         keys = [s.times for per_node in self.channels.values() for s in per_node.values()]
@@ -151,7 +170,21 @@ class Scene:
     def evaluate(self, start: int, stop: int) -> np.ndarray:
         """The positions (n, K, 3) at ``times[start:stop]``, each frame's numbers the same
         whatever the range (see :func:`_morphed`); a non-finite one is an InputError naming its
-        frame."""
+        frame. The frames are evaluated a few at a time, so that their weights (frames x
+        targets, which a file's JSON can make far larger than the positions) stay within
+        :data:`WEIGHTS_AT_ONCE` numbers."""
+        targets = max(len(mesh.weights) for mesh in self.meshes.values())
+        step = max(1, WEIGHTS_AT_ONCE // max(1, targets))
+        if stop - start <= step:
+            return self._evaluate(start, stop)
+        vertices = sum(len(self.meshes[_mesh_of(self.doc, n)].base) for n in self.chosen)
+        result = np.empty((stop - start, vertices, 3))
+        for first in range(start, stop, step):
+            last = min(first + step, stop)
+            result[first - start : last - start] = self._evaluate(first, last)
+        return result
+
+    def _evaluate(self, start: int, stop: int) -> np.ndarray:
         doc, times = self.doc, self.times[start:stop]
         positions = []
         for node in self.chosen:
@@ -184,13 +217,15 @@ def _parents(doc: Document) -> dict[int, int]:
             if child in parents or child == index:
                 raise doc.fail(f"nodes[{child}] has two parents (or is its own): not a tree")
             parents[child] = index
+    rooted: set[int] = set()  # nodes whose parents are known to end at a root
     for start in parents:
-        seen, node = {start}, start
-        while node in parents:
+        walked, node = {start}, start
+        while node in parents and node not in rooted:  # each node walked once: linear
             node = parents[node]
-            if node in seen:
+            if node in walked:
                 raise doc.fail(f"nodes[{start}]'s parents form a cycle")
-            seen.add(node)
+            walked.add(node)
+        rooted |= walked
     return parents
 
 
@@ -206,13 +241,15 @@ def _mesh_nodes(doc: Document, parents: dict[int, int], object_path: str | None)
     else:
         roots = [index for index in range(len(nodes)) if index not in parents]
     order: list[int] = []
+    placed: set[int] = set()  # as order, for a membership test that does not grow with it
     pending = list(reversed(roots))
     while pending:
         index = pending.pop()
         node = doc.item("nodes", index, "a scene")
-        if index in order:
+        if index in placed:
             raise doc.fail(f"nodes[{index}] appears twice in the scene")
         order.append(index)
+        placed.add(index)
         pending.extend(reversed(node.get("children", [])))
     found = [index for index in order if "mesh" in nodes[index]]
     if object_path is not None:
@@ -239,6 +276,24 @@ def _mesh_nodes(doc: Document, parents: dict[int, int], object_path: str | None)
     return found
 
 
+def _check_nesting(doc: Document, chosen: list[int], parents: dict[int, int]) -> None:
+    """Each frame multiplies the transforms from each chosen node up to its root: refuse a
+    hierarchy where that is far more than the file's nodes (a chain of N mesh nodes, each
+    inside the one before, costs N^2 / 2 products a frame from N nodes of JSON)."""
+    limit = NESTING_PER_NODE * (len(doc.array("nodes")) + 1)
+    total = 0
+    for node in chosen:
+        while node in parents:
+            total += 1
+            node = parents[node]
+            if total > limit:
+                raise doc.fail(
+                    f"its {len(chosen)} mesh nodes lie more than {limit} levels deep in all "
+                    f"(each frame multiplies the transforms of every level), beyond "
+                    f"{NESTING_PER_NODE} per node of the file: refused"
+                )
+
+
 def _mesh_of(doc: Document, node: int) -> int:
     index = doc.array("nodes")[node].get("mesh")
     doc.item("meshes", index, f"nodes[{node}]")
@@ -258,8 +313,8 @@ def _channels(
     if not animations:
         return None, {}
     relevant = set(chosen)
-    for start in chosen:
-        while start in parents:
+    for start in chosen:  # up to a node already known (its own walk adds its parents)
+        while start in parents and parents[start] not in relevant:
             start = parents[start]
             relevant.add(start)
     animation = doc.item("animations", 0, "the file")

@@ -17,17 +17,23 @@ caller:
   Alembic library crashed reading it (SIGSEGV): the file is damaged", path=, frame=)``, object
   and frame being the last the reader announced with :func:`note`;
 * memory: the child may add :data:`MEMORY_BASE` (2 GiB) plus :data:`MEMORY_PER_BYTE` (16) times
-  the file's size to its address space (``RLIMIT_AS``, set once the libraries are imported;
-  where ``/proc/self/statm`` tells its size: Linux). Reading horse gallop adds 0.4 GiB through
-  pxr (its plug-ins), 0.02 GiB through Alembic; the base is for files that store a sample once
-  for many frames, as both formats do. A MemoryError or ``std::bad_alloc`` becomes
-  ``InputError("declares more data than 2 GiB allows")``; pxr turns some failed allocations
-  into a "corrupt asset" error of its own, which comes back as such;
+  the bytes the file stores, up to :data:`MEMORY_CEILING` (64 GiB), to its address space
+  (``RLIMIT_AS``, set once the libraries are imported; where ``/proc/self/statm`` tells its
+  size: Linux). Reading horse gallop adds 0.4 GiB through pxr (its plug-ins), 0.02 GiB through
+  Alembic; the base is for files that store a sample once for many frames, as both formats do.
+  A MemoryError or ``std::bad_alloc`` becomes ``InputError("declares more data than 2 GiB
+  allows")``; pxr turns some failed allocations into a "corrupt asset" error of its own, which
+  comes back as such;
 * time: :data:`TIMEOUT_BASE` (60 s) plus a second per :data:`TIMEOUT_BYTES_PER_SECOND` (8 MiB)
-  of file, wall clock, for each request (the opening, then each read), not for the child's
-  life; then a watchdog kills the child and the error says so. The opening's time begins when
-  the child has started (its interpreter and the library imported, which is not the file's
-  doing and slow on a busy machine), which may take :data:`~.channel.STARTUP_SECONDS` more.
+  the file stores, up to :data:`TIMEOUT_CEILING` (an hour), wall clock, for each request (the
+  opening, then each read), not for the child's life; then a watchdog kills the child and the
+  error says so. The opening's time begins when the child has started (its interpreter and the
+  library imported, which is not the file's doing and slow on a busy machine), which may take
+  :data:`~.channel.STARTUP_SECONDS` more;
+* the bytes a file stores are its size, but no more than the disk blocks allocated to it
+  (:func:`~.channel.stored_bytes`): a 942-byte ``.usdc`` padded with a 1 TiB hole, which costs
+  nothing on disk, gets the limits of 942 bytes, not 16,386 GiB and 36 hours (and pxr, which
+  maps the whole file, refuses it).
 
 ``TUCKERCODEC_READ_MEMORY_GIB`` and ``TUCKERCODEC_READ_TIMEOUT`` (seconds) replace those limits
 (0: none). The child's stderr and stdout go to a temporary file: the libraries' messages stay
@@ -73,10 +79,12 @@ from ..registry import ReadOptions
 from ..streaming import FrameSource, SequenceFrames
 from .channel import (
     MEMORY_BASE,
+    MEMORY_CEILING,
     MEMORY_PER_BYTE,
     MEMORY_VARIABLE,
     TIMEOUT_BASE,
     TIMEOUT_BYTES_PER_SECOND,
+    TIMEOUT_CEILING,
     TIMEOUT_VARIABLE,
     Child,
     Description,
@@ -87,10 +95,12 @@ from .child import note as note  # the readers' and hooks' name for it
 
 __all__ = [
     "MEMORY_BASE",
+    "MEMORY_CEILING",
     "MEMORY_PER_BYTE",
     "MEMORY_VARIABLE",
     "TIMEOUT_BASE",
     "TIMEOUT_BYTES_PER_SECOND",
+    "TIMEOUT_CEILING",
     "TIMEOUT_VARIABLE",
     "IsolatedFrames",
     "note",

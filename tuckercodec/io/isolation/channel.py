@@ -35,12 +35,16 @@ from ..registry import ReadOptions
 GIB = 2**30
 #: The address space a reading child may add to what its interpreter and libraries take.
 MEMORY_BASE = 2 * GIB
-#: ... plus this many times the file's size.
+#: ... plus this many times the bytes the file occupies on disk (:func:`stored_bytes`)...
 MEMORY_PER_BYTE = 16
+#: ... and never more than this, whatever the file.
+MEMORY_CEILING = 64 * GIB
 #: The wall-clock time a read may take: this many seconds...
 TIMEOUT_BASE = 60.0
-#: ... plus one second per this many bytes of file (a slow network disk).
+#: ... plus one second per this many bytes the file occupies (a slow network disk)...
 TIMEOUT_BYTES_PER_SECOND = 8 * 2**20
+#: ... and never more than this (an hour), whatever the file.
+TIMEOUT_CEILING = 3600.0
 MEMORY_VARIABLE = "TUCKERCODEC_READ_MEMORY_GIB"
 TIMEOUT_VARIABLE = "TUCKERCODEC_READ_TIMEOUT"
 #: How long a child may take to start (its interpreter and the library's imports, which are
@@ -126,14 +130,29 @@ def _limit(variable: str, default: float) -> float | None:
     return value or None
 
 
-def _limits(path: Path) -> tuple[int | None, float | None]:
-    """The address space (bytes) and wall-clock time (s) the child may take for this file."""
+def stored_bytes(path: Path) -> int:
+    """The bytes of data ``path`` really holds: its size, but no more than the disk blocks
+    allocated to it (``st_blocks``, where the system counts them), so that a sparse file, whose
+    size a hole of zeros inflates for free (``truncate -s 1T``), counts what it stores. 0 for
+    a file that cannot be looked at (the reader will say why)."""
     try:
-        size = os.stat(path).st_size
+        found = os.stat(path)
     except OSError:
-        size = 0  # the reader will say why
-    gib = _limit(MEMORY_VARIABLE, (MEMORY_BASE + MEMORY_PER_BYTE * size) / GIB)
-    timeout = _limit(TIMEOUT_VARIABLE, TIMEOUT_BASE + size / TIMEOUT_BYTES_PER_SECOND)
+        return 0
+    blocks = getattr(found, "st_blocks", None)  # not on Windows: the size it is
+    return found.st_size if blocks is None else min(found.st_size, blocks * 512)
+
+
+def _limits(path: Path) -> tuple[int | None, float | None]:
+    """The address space (bytes) and wall-clock time (s) the child may take for this file: a
+    base, plus a share of the bytes it stores (:func:`stored_bytes`), up to fixed ceilings;
+    the environment's limits replace them."""
+    size = stored_bytes(path)
+    memory = min(MEMORY_BASE + MEMORY_PER_BYTE * size, MEMORY_CEILING)
+    gib = _limit(MEMORY_VARIABLE, memory / GIB)
+    timeout = _limit(
+        TIMEOUT_VARIABLE, min(TIMEOUT_BASE + size / TIMEOUT_BYTES_PER_SECOND, TIMEOUT_CEILING)
+    )
     return (None if gib is None else int(gib * GIB)), timeout
 
 

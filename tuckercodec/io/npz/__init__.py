@@ -7,7 +7,11 @@ Keys: ``V`` positions (frames, vertices, 3), optionally ``F`` faces (0-based, -1
 against the file before anything is allocated (:mod:`.archive`): a member must be a ``.npy``
 array, stored or deflated (what ``np.savez`` and ``np.savez_compressed`` write), not
 encrypted, and present once, and the shape and dtype in its header must account for exactly
-the bytes of its member.
+the bytes of its member. What the deflated members read whole inflate to (the keys beside ``V``,
+held from the opening, and ``V`` itself when read whole) is bounded by ``--max-memory``
+(:attr:`~tuckercodec.io.registry.ReadOptions.max_memory`, :mod:`~tuckercodec.io.budget`),
+checked against the sizes the members declare, which zipfile never inflates beyond, before a
+byte is inflated: a 1 MB member of zeros declaring 1.1 GB is refused there when that is more.
 
 :class:`NpzFrames` reads key ``V`` in place, a range of frames at a time: a stored member
 (``np.savez``) by offset in the file, as a ``.npy`` is
@@ -22,6 +26,7 @@ Fortran order, whose frames are scattered over the member, is read whole on firs
 
 from __future__ import annotations
 
+import copy
 import struct
 import zipfile
 from pathlib import Path
@@ -33,7 +38,7 @@ from ...atomic import atomic_output
 from ...errors import InputError
 from ...reading import open_input
 from ...sequence import MeshSequence
-from ..registry import WriteOptions
+from ..registry import ReadOptions, WriteOptions
 from ..streaming import RawFrames, read_into
 from .archive import ZIP_ERRORS, NpzArchive, member_header
 
@@ -54,8 +59,10 @@ class NpzFrames(RawFrames):
     #: Key V read whole: for :meth:`load`, or in Fortran order (read on first use)
     _whole: np.ndarray | None = None
 
-    def __init__(self, path: Path, options: object = None):
-        with NpzArchive(path) as archive:
+    def __init__(self, path: Path, options: ReadOptions | None = None):
+        # what the arrays read whole may inflate to: the metadata's, held, then V's when read
+        self._inflation = (options or ReadOptions()).inflation()
+        with NpzArchive(path, self._inflation) as archive:
             info = archive.info("V")
             header = member_header(archive.zip, info, "V", archive.size, path)
             if header.dtype.kind not in "fiu":
@@ -96,7 +103,7 @@ class NpzFrames(RawFrames):
 
     def _read_whole(self) -> np.ndarray:
         """Key V as the file stores it, (F, K, 3) (every byte read: CRC checked)."""
-        with NpzArchive(self._file) as archive:
+        with NpzArchive(self._file, copy.copy(self._inflation)) as archive:
             values = archive.array("V")
         if values.size != self.frame_count * self.vertex_count * 3:
             raise InputError("has changed since it was opened", path=self._file)

@@ -22,6 +22,7 @@ import numpy as np
 from ...errors import InputError
 from ...reading import open_input
 from ...topology import face_table_problem
+from ..budget import Inflation, memory_ceiling
 
 # What zipfile and numpy.lib.format raise on a damaged archive or member (ValueError: numpy's
 # header checks; NotImplementedError: a zip feature such as strong encryption; TokenError: numpy
@@ -41,10 +42,12 @@ ZIP_ERRORS = (
 
 class NpzArchive:
     """An open .npz archive: its members by key (numpy's naming: the member "V.npy", or a bare
-    "V", is the key "V"), each key present once, and key V present."""
+    "V", is the key "V"), each key present once, and key V present. The deflated members read
+    whole inflate within ``inflation``, together (default: half the machine's memory)."""
 
-    def __init__(self, path: Path):
+    def __init__(self, path: Path, inflation: Inflation | None = None):
         self.path = path
+        self.inflation = inflation or Inflation(memory_ceiling(None))
         self.stream = open_input(path, "an .npz archive")
         try:
             if self.stream.read(2) != b"PK":  # an .npz is a zip archive of .npy arrays
@@ -75,8 +78,16 @@ class NpzArchive:
         return self.members[key][0]
 
     def array(self, key: str) -> np.ndarray:
-        """A key's array, read whole (checked before allocating; CRC checked)."""
-        return _npz_member(self.zip, self.info(key), key, self.size, self.path)
+        """A key's array, read whole (checked before allocating, and a deflated one against
+        what the archive may still inflate; CRC checked)."""
+        info = self.info(key)
+        member_header(self.zip, info, key, self.size, self.path)
+        if info.compress_type == zipfile.ZIP_DEFLATED:
+            try:  # zipfile inflates a member no further than the size it declares
+                self.inflation.take(info.file_size, f"key {key!r} ({info.filename})")
+            except InputError as error:
+                raise InputError(error.reason, path=self.path) from None
+        return _npz_member(self.zip, info, key, self.path)
 
     def metadata(
         self, frame_count: int, vertex_count: int
@@ -112,14 +123,9 @@ _MAX_DEFLATE_RATIO = 1100
 
 
 def _npz_member(
-    archive: zipfile.ZipFile, info: zipfile.ZipInfo, key: str, size: int, path: Path
+    archive: zipfile.ZipFile, info: zipfile.ZipInfo, key: str, path: Path
 ) -> np.ndarray:
-    """Read one array of an archive of ``size`` bytes, checking its header before allocating.
-
-    Object arrays (which would need pickle), members that are not .npy arrays, sizes the file
-    cannot hold and headers that do not account for exactly the member's bytes are errors.
-    """
-    member_header(archive, info, key, size, path)
+    """Read one array of an archive whose header :func:`member_header` has checked."""
     try:
         # every byte of the member is read, so zipfile checks the CRC at the end
         with warnings.catch_warnings(), archive.open(info) as stream:

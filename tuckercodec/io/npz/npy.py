@@ -42,7 +42,7 @@ class NpyFrames(RawFrames):
     _what = "a .npy array"
 
     def __init__(self, path: Path, options: ReadOptions | None = None):
-        faces_file = None if options is None else options.faces
+        options = options or ReadOptions()
         stream = open_input(path, self._what)
         try:
             if stream.read(len(np.lib.format.MAGIC_PREFIX)) != np.lib.format.MAGIC_PREFIX:
@@ -81,7 +81,7 @@ class NpyFrames(RawFrames):
             raise
         self._stream = stream
         self._file, self._offset, self._dtype = path, header.size, dtype
-        self._describe(path, shape[0], shape[1], cache_faces(faces_file, shape[1], path))
+        self._describe(path, shape[0], shape[1], cache_faces(options, shape[1], path))
 
 
 def write_npy(seq: MeshSequence, path: Path, options: WriteOptions) -> None:

@@ -55,7 +55,7 @@ class CacheFrames(RawFrames):
     ) -> None:
         """The ``counts`` (frames, points) of positions of ``dtype`` start at ``offset``;
         ``timing`` is the frame rate and time codes; the faces are ``options.faces``'s."""
-        faces = cache_faces(options.faces, counts[1], path)
+        faces = cache_faces(options, counts[1], path)
         self._file, self._offset, self._dtype = path, offset, np.dtype(dtype)
         self._describe(path, *counts, faces, frame_rate=timing[0], time_codes=timing[1])
 
@@ -112,15 +112,17 @@ def read_floats(stream: BinaryIO, count: int, dtype: str, path: Path) -> np.ndar
     return as_float64(np.frombuffer(data, dtype=dtype))
 
 
-def cache_faces(faces_file: Path | None, point_count: int, path: Path) -> np.ndarray:
-    """The faces the cache's points take: those of the mesh file ``faces_file`` (any file
-    :func:`~tuckercodec.io.load_sequence` reads: OBJ, PLY, .npz...), whose vertex count must
-    be the cache's point count; without one, no faces (a point sequence)."""
+def cache_faces(options: ReadOptions, point_count: int, path: Path) -> np.ndarray:
+    """The faces the cache's points take: those of the mesh file ``options.faces`` (any file
+    :func:`~tuckercodec.io.load_sequence` reads: OBJ, PLY, .npz..., read within the options'
+    ``max_memory``), whose vertex count must be the cache's point count; without one, no faces
+    (a point sequence)."""
+    faces_file = options.faces
     if faces_file is None:
         return np.zeros((0, 3), dtype=np.int64)
     from .. import load_sequence  # here: the package imports the formats' registry
 
-    mesh = load_sequence(faces_file, progress=False)
+    mesh = load_sequence(faces_file, progress=False, max_memory=options.max_memory)
     if mesh.faces.shape[0] == 0:
         raise InputError(
             f"has no faces to give the points of the cache {path} (--faces names a mesh file)",

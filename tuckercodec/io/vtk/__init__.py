@@ -20,7 +20,9 @@ one that declares a DOCTYPE or an ENTITY (the way to an entity-expansion attack;
 needs neither) is refused by the parser, whatever its encoding, as is such a ``.vtu``/``.vtp``
 (:mod:`~tuckercodec.io.safe_xml`). A listed file that is missing,
 not a regular file or not VTK XML is named with the DataSet that lists it. Sizes inside a file
-are checked before anything is allocated or inflated (:mod:`.arrays`).
+are checked before anything is allocated or inflated, and what one file's compressed arrays
+inflate to is bounded by ``--max-memory`` (:attr:`~tuckercodec.io.registry.ReadOptions.max_memory`,
+by default half the machine's memory; :mod:`.arrays`).
 
 Writing ``out.pvd``: one ``.vtp`` per frame (:data:`FRAME_SUFFIX`; ``.vtu`` on request) in the
 folder ``out/`` beside it (names from :func:`~tuckercodec.io.frames.frame_file_names`), in
@@ -66,9 +68,10 @@ class PvdFrames(FrameSource):
     (see the module docstring)."""
 
     def __init__(self, path: Path, options: ReadOptions | None = None):
+        self._options = options or ReadOptions()
         self._entries = _collection(path)
         _refuse_repeated_files(self._entries, path)
-        points, faces = _read_frame(self._entries[0].file, path, 0)
+        points, faces = _read_frame(self._entries[0].file, path, 0, self._options)
         self._points = np.asarray(points, dtype=np.float64)
         timed = self._entries[0].timestep is not None
         codes = [entry.timestep for entry in self._entries] if timed else None
@@ -86,7 +89,7 @@ class PvdFrames(FrameSource):
             if index == 0:
                 frames.append(self._points)
                 continue
-            points, cells = _read_frame(entry.file, pvd, index)
+            points, cells = _read_frame(entry.file, pvd, index, self._options)
             if len(points) != self.vertex_count:
                 raise InputError(
                     f"has {len(points)} points but the first frame ({first}) has "
@@ -228,8 +231,11 @@ def _check_parts(datasets: list[ElementTree.Element], path: Path) -> None:
         )
 
 
-def _read_frame(file: Path, pvd: Path, index: int) -> tuple[np.ndarray, np.ndarray]:
-    """The points (K, 3) float64 and faces of one .vtp/.vtu frame, checked."""
+def _read_frame(
+    file: Path, pvd: Path, index: int, options: ReadOptions
+) -> tuple[np.ndarray, np.ndarray]:
+    """The points (K, 3) float64 and faces of one .vtp/.vtu frame, checked; its compressed
+    arrays inflate within ``options.max_memory``, together."""
     try:
         stream = open_regular_file(file, "a VTK XML file")
     except OSError as error:
@@ -245,7 +251,7 @@ def _read_frame(file: Path, pvd: Path, index: int) -> tuple[np.ndarray, np.ndarr
             frame=index,
         )
     try:
-        return read_dataset(data)
+        return read_dataset(data, options.inflation())
     except InputError as error:
         raise InputError(error.reason, path=file, frame=index) from None
 

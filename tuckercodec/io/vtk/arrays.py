@@ -17,8 +17,11 @@ does for compressed data and meshio for all) or together with the data (VTK, unc
 Every size is checked before anything is allocated: an uncompressed size against the bytes the
 file holds and against the array's declared length (``NumberOfPoints``, ``NumberOfCells``);
 compressed sizes likewise, and each block's inflated size against :data:`MAX_INFLATION` times
-its compressed size (no zlib stream expands further); each block is inflated with that size as
-its limit, so a stream that would expand beyond what its header declares is refused after at
+its compressed size (no zlib stream expands further); the array's inflated size is then taken
+from what the read may still decompress (:class:`~tuckercodec.io.budget.Inflation`, of
+``--max-memory``), before anything is inflated: a 467 KB file that declares, consistently,
+1 GB of zeros is refused there. Each block is inflated into its place with its declared size as
+the limit, so a stream that would expand beyond what its header declares is refused after at
 most that many bytes. LZ4 and LZMA compression (VTK's other compressors) are refused by name.
 """
 
@@ -33,6 +36,7 @@ from xml.etree import ElementTree
 import numpy as np
 
 from ...errors import InputError
+from ..budget import Inflation
 
 #: The VTK type names of data arrays and their numpy types (byte order added per file).
 TYPES = {
@@ -63,6 +67,7 @@ class Encoding:
         compressed: zlib blocks (``compressor="vtkZLibDataCompressor"``) or plain bytes.
         appended: the bytes after the ``_`` of ``<AppendedData>`` (``None``: there is none).
         appended_base64: whether those bytes are base64 text (``encoding="base64"``).
+        inflation: what the file's compressed arrays may still inflate to, together.
     """
 
     order: str
@@ -70,10 +75,14 @@ class Encoding:
     compressed: bool
     appended: memoryview | None
     appended_base64: bool
+    inflation: Inflation
 
 
-def file_encoding(root: ElementTree.Element, appended: memoryview | None, base64: bool) -> Encoding:
-    """The :class:`Encoding` that a ``<VTKFile>`` element declares."""
+def file_encoding(
+    root: ElementTree.Element, appended: memoryview | None, base64: bool, inflation: Inflation
+) -> Encoding:
+    """The :class:`Encoding` that a ``<VTKFile>`` element declares; its compressed arrays
+    inflate within ``inflation``."""
     order = _ORDERS.get(root.get("byte_order", "LittleEndian"))
     if order is None:
         raise InputError(f"has byte_order {root.get('byte_order')!r}, not LittleEndian/BigEndian")
@@ -92,6 +101,7 @@ def file_encoding(root: ElementTree.Element, appended: memoryview | None, base64
         bool(compressor),
         appended,
         appended is not None and base64,
+        inflation,
     )
 
 
@@ -277,6 +287,7 @@ def _binary(
             )
     if sum(sizes) > source.available():
         raise _truncated(what, sum(sizes), source.available())
+    encoding.inflation.take(sum(inflated), what)  # before a byte is inflated
     data = source.body((3 + blocks) * unit, sum(sizes), what)
     return np.frombuffer(_inflate(data, sizes, inflated, what), dtype)
 
@@ -295,9 +306,10 @@ def _check_size(size: int, dtype: np.dtype, expected: int | None, what: str) -> 
 def _inflate(
     data: bytes | memoryview, sizes: list[int], inflated: list[int], what: str
 ) -> bytearray:
-    """Inflate each zlib block to exactly its declared size, and never beyond it."""
-    out = bytearray()
-    start = 0
+    """Inflate each zlib block to exactly its declared size, and never beyond it, into its
+    place in one buffer of the declared total."""
+    out = bytearray(sum(inflated))
+    start = end = 0
     for number, (packed, size) in enumerate(zip(sizes, inflated, strict=True)):
         block = data[start : start + packed]
         start += packed
@@ -317,7 +329,8 @@ def _inflate(
                 f"{what}: compressed block {number} inflates to {len(found)} bytes, not the "
                 f"{size} its header declares (damaged or truncated)"
             )
-        out += found
+        out[end : end + size] = found
+        end += size
     return out
 
 

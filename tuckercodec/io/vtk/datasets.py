@@ -16,7 +16,9 @@ Reading, by the ``<VTKFile type=..>`` of the file (whatever its name's suffix):
 
 A DOCTYPE or any declaration (the way to an entity-expansion attack) is refused by the XML
 parser itself (:mod:`~tuckercodec.io.safe_xml`), whatever the encoding. Raw appended data is
-cut off before parsing, so the XML parser sees only the XML. Every error is an
+cut off before parsing, so the XML parser sees only the XML. Compressed arrays inflate
+within what one read may decompress (``--max-memory``, :mod:`~tuckercodec.io.budget`), all the
+file's arrays together. Every error is an
 :class:`InputError` without a path (the caller names the file).
 
 Writing (:class:`DatasetWriter`): one piece of the points and the faces (Polys, or cells of
@@ -32,6 +34,7 @@ from xml.etree import ElementTree
 import numpy as np
 
 from ...errors import InputError
+from ..budget import Inflation, memory_ceiling
 from ..polygons import faces_from_polygons, polygons_from_faces
 from ..safe_xml import parse_xml
 from ..streaming import as_float64
@@ -75,10 +78,11 @@ _ENCODING = re.compile(rb"""\bencoding\s*=\s*["']([^"']*)["']""")
 _INT64_MAX = np.iinfo(np.int64).max
 
 
-def read_dataset(data: bytes) -> tuple[np.ndarray, np.ndarray]:
+def read_dataset(data: bytes, inflation: Inflation | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The points ((K, 3) float64, finite) and face table ((M, n) int64, -1 padded; (0, 3)
-    without faces) of the bytes of a ``.vtu`` or ``.vtp`` file (see the module docstring)."""
-    root, encoding = _parse(data)
+    without faces) of the bytes of a ``.vtu`` or ``.vtp`` file (see the module docstring); its
+    compressed arrays inflate within ``inflation`` (default: half the machine's memory)."""
+    root, encoding = _parse(data, inflation or Inflation(memory_ceiling(None)))
     kind = root.get("type", "")
     if root.tag != "VTKFile" or kind not in DATASETS.values():
         raise InputError(
@@ -123,7 +127,7 @@ def read_dataset(data: bytes) -> tuple[np.ndarray, np.ndarray]:
     return vertices, faces_from_polygons(counts[0], corners[0], len(vertices))
 
 
-def _parse(data: bytes) -> tuple[ElementTree.Element, Encoding]:
+def _parse(data: bytes, inflation: Inflation) -> tuple[ElementTree.Element, Encoding]:
     """The root element, with raw appended data cut off before the XML parser sees it."""
     start = data.find(b"<VTKFile")
     if start < 0:
@@ -148,7 +152,7 @@ def _parse(data: bytes) -> tuple[ElementTree.Element, Encoding]:
         appended = memoryview(data)[match.end() : stop]  # a view: the data is not copied
         xml = data[:cut] + b"</VTKFile>"  # the appended data is the root's last child
     root = parse_xml(xml, "VTK")
-    return root, file_encoding(root, appended, base64)
+    return root, file_encoding(root, appended, base64, inflation)
 
 
 def _count(piece: ElementTree.Element, name: str, default: str | None = "0") -> int:

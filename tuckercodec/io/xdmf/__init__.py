@@ -27,8 +27,9 @@ harmless: the parser never fetches it); HDF5 files must lie inside the .xdmf's f
 their data inside themselves (no external storage, virtual datasets or external links); every
 count is checked against the data
 before it is used; an HDF dataset must hold as many values as its ``Dimensions`` and store at
-least 1/1032 of its size (no more than zlib can inflate). Errors name the .xdmf, the frame and
-the grid. Writing is :mod:`.writer`'s.
+least 1/1032 of its size (no more than zlib can inflate), and one step's datasets inflate
+within ``--max-memory`` together (:mod:`.items`). Errors name the .xdmf, the frame and the
+grid. Writing is :mod:`.writer`'s.
 """
 
 from __future__ import annotations
@@ -44,9 +45,10 @@ import numpy as np
 from ...errors import InputError
 from ...reading import open_input
 from ..polygons import faces_from_polygons
+from ..registry import ReadOptions
 from ..safe_xml import parse_xml
 from ..streaming import FrameSource, as_float64
-from .items import XINCLUDE, HeavyData, lower, read_item, resolve
+from .items import XINCLUDE, HeavyData, References, lower, read_item, resolve
 
 _FIXED = {"triangle": 3, "quadrilateral": 4}
 #: XDMF's Mixed topology codes: polyvertex and polygon are followed by their point count.
@@ -60,12 +62,12 @@ class XdmfFrames(FrameSource):
 
     _transient: ClassVar[tuple[str, ...]] = ("_heavy", "_root", "_steps", "_sources")
     _heavy: HeavyData | None = None
-    _root: ElementTree.Element | None = None
+    _root: References | None = None
     _steps: list[_Step] | None = None
     _sources: dict[object, int] | None = None
 
-    def __init__(self, path: Path, options: object = None):
-        self._file = path
+    def __init__(self, path: Path, options: ReadOptions | None = None):
+        self._file, self._options = path, options or ReadOptions()
         _, steps = self._tree()
         self._topology = np.zeros(0, dtype=np.int64)
         faces = np.zeros((0, 3), dtype=np.int64)
@@ -77,11 +79,12 @@ class XdmfFrames(FrameSource):
             names = []
         self._describe(path, len(steps), len(self._points), faces, names, None, codes)
 
-    def _tree(self) -> tuple[ElementTree.Element, list[_Step]]:
-        """The parsed XML and its steps (parsed again after unpickling)."""
+    def _tree(self) -> tuple[References, list[_Step]]:
+        """The parsed XML (with its References' follower) and its steps (parsed again after
+        unpickling)."""
         if self._root is None or self._steps is None:
-            self._root = _parse(self._file)
-            self._steps = _steps(self._root, self._file)
+            self._root = References(_parse(self._file))
+            self._steps = _steps(self._root.root, self._file)
         return self._root, self._steps
 
     def _step(
@@ -91,7 +94,9 @@ class XdmfFrames(FrameSource):
         ``count`` (``None``: this is the first step)."""
         root, _ = self._tree()
         if self._heavy is None:
-            self._heavy = HeavyData(self._file.parent)
+            self._heavy = HeavyData(self._file.parent, self._options.inflation())
+        else:  # what one step's datasets may inflate to, together
+            self._heavy.inflation = self._options.inflation()
         if self._sources is None:
             self._sources = {}
         try:
@@ -252,7 +257,7 @@ def _listed_times(collection: ElementTree.Element, count: int, path: Path) -> li
     return list(values)
 
 
-def _child(grid: ElementTree.Element, tag: str, root: ElementTree.Element) -> ElementTree.Element:
+def _child(grid: ElementTree.Element, tag: str, root: References) -> ElementTree.Element:
     element = grid.find(tag)
     if element is None:
         if any(child.tag in XINCLUDE for child in grid):
@@ -268,7 +273,7 @@ def _child(grid: ElementTree.Element, tag: str, root: ElementTree.Element) -> El
 
 
 def _geometry(
-    grid: ElementTree.Element, root: ElementTree.Element, heavy: HeavyData
+    grid: ElementTree.Element, root: References, heavy: HeavyData
 ) -> tuple[np.ndarray, object]:
     """The grid's points (K, 3) float64, finite, and the identity of their source."""
     geometry = _child(grid, "Geometry", root)
@@ -302,7 +307,7 @@ def _geometry(
 
 
 def _topology_values(
-    grid: ElementTree.Element, root: ElementTree.Element, heavy: HeavyData
+    grid: ElementTree.Element, root: References, heavy: HeavyData
 ) -> tuple[np.ndarray, str]:
     """The grid's topology type and its values as int64."""
     topology = _child(grid, "Topology", root)

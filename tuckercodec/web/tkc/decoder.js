@@ -71,7 +71,7 @@ export class TkcFile {
     const [M, n] = layout.faceShape;
     this.faceCount = M;
     this.faceWidth = n;
-    this.faces = decodeFaces(layout.face, this._payload(layout.face), this.vertices, M, n);
+    this.faces = decodeFaces(layout.face, this._payload(layout.face), this.vertices, M, n, limits);
     /** @type {Topology | null} */
     this._topology = null;
     /** @type {Float64Array | null} */

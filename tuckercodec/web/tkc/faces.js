@@ -12,10 +12,11 @@ import { decodeTraverse } from './traversal.js';
  * @param {number} K vertices
  * @param {number} M faces
  * @param {number} n face width
+ * @param {import('./limits.js').Limits} limits the decoder's limits (§7)
  * @returns {Int32Array} M*n indices, row-major
  */
-export function decodeFaces(section, payload, K, M, n) {
-  if (section.codec === 'faces-traverse') return decodeTraverse(section.entry, payload, K, M, n);
+export function decodeFaces(section, payload, K, M, n, limits) {
+  if (section.codec === 'faces-traverse') return decodeTraverse(section.entry, payload, K, M, n, limits);
   const planes = section.entry.get('planes');
   if (!isInt(planes) || planes < 1 || planes > 4) {
     throw formatError('R30-planes', `section 'FACE': "planes" is ${planes === undefined ? 'missing' : describe(planes)}, not an int in 1..4`);

@@ -1,17 +1,21 @@
 // Codec `faces-traverse` (spec/FORMAT.md §6.8, version 1.2): the faces coded by a walk over
 // them. Four integer streams (ops, degrees, vertices, references) drive the walk; the decoded
 // table lists the faces in walk order. Every failure is R39-traversal (R30/R29 for a stream's
-// planes and zstd frame), checked in the order of §5 step 15.
+// planes and zstd frame, R21 for the bytes the streams decompress to), checked in the order of
+// §5 step 15: the stream counts' bounds of §6.8 and the limit before any stream is decompressed.
 //
 // Linear in every input: the boundary is a hash table of directed edges (random multipliers, so
 // no file can aim at collisions), into(v) and out(v) are stacks with lazy deletion (an entry is
 // live while its edge is present and entered the boundary at that entry), the gates a stack.
+// Its memory grows with the values read: nothing is sized by K, M or a declared count.
 
-import { formatError } from './errors.js';
+import { formatError, limitError } from './errors.js';
+import { DEFAULT_LIMITS } from './limits.js';
 import { describe, isInt } from './msgpack.js';
 import { decodeIntStream } from './streams.js';
 
 /** @typedef {import('./msgpack.js').MsgValue} MsgValue */
+/** @typedef {import('./limits.js').Limits} Limits */
 
 const WHERE = "section 'FACE' (faces-traverse)";
 const STREAMS = ['ops', 'degrees', 'vertices', 'references'];
@@ -41,44 +45,119 @@ function isNonNegativeInt(value) {
  * @param {number} K vertices
  * @param {number} M faces (the checked `shape`)
  * @param {number} n face width
+ * @param {Limits} [limits] the decoder's limits (§7): max_section_bytes bounds the streams
  * @returns {Int32Array} M*n vertex indices, row-major, in walk order, −1 padded
- * @throws {TkcError} R39-traversal, R30-planes or R29-zstd-content-size
+ * @throws {TkcError} R39-traversal, R30-planes, R21-header-limit or R29-zstd-content-size
  */
-export function decodeTraverse(entry, payload, K, M, n) {
+export function decodeTraverse(entry, payload, K, M, n, limits = DEFAULT_LIMITS) {
   const cornerOrder = entry.get('corner_order');
   if (cornerOrder !== 0 && cornerOrder !== 1) {
     throw fail(`"corner_order" is ${cornerOrder === undefined ? 'missing' : describe(cornerOrder)}, not 0 or 1`);
   }
-  const table = entry.get('streams');
+  const table = streamTable(entry.get('streams'), K, M, n);
+  let total = 0;
+  for (const item of table) total += Number(item[2]); // a BigInt length is past any payload: the sum cannot match
+  if (total !== payload.length) {
+    const lengths = table.map((item) => String(item[2])).join(' + ');
+    throw fail(`the stream lengths ${lengths} add up to ${total}, not the payload's ${payload.length} bytes`);
+  }
+  for (let s = 0; s < 4; s++) {
+    const planes = table[s][1];
+    if (!(planes >= 1 && planes <= 4)) {
+      throw formatError('R30-planes', `${WHERE} stream ${s} (${STREAMS[s]}): "planes" is ${planes}, not an int in 1..4`);
+    }
+  }
+  // the bytes the streams decompress to, before any is: counts are below 2^36 and planes 1..4
+  const raw = table.reduce((sum, [count, planes]) => sum + Number(count) * Number(planes), 0);
+  if (raw > limits.max_section_bytes) {
+    throw limitError('R21-header-limit', `${WHERE}: the streams decompress to ${raw} bytes, max_section_bytes = ${limits.max_section_bytes}`);
+  }
+  const streams = [];
+  let at = 0;
+  for (let s = 0; s < 4; s++) {
+    const [count, planes, length] = table[s];
+    const where = `${WHERE} stream ${s} (${STREAMS[s]})`;
+    streams.push(decodeIntStream(payload.subarray(at, at + Number(length)), Number(count), Number(planes), where));
+    at += Number(length);
+  }
+  return walk(streams, cornerOrder, K, M, n);
+}
+
+/**
+ * The `streams` table: four [count, planes, length] arrays of ints ≥ 0, whose counts keep the
+ * four bounds of §6.8 in their order (every walk of M faces reads that many values and no more
+ * than these allow), all checked before any stream is decompressed.
+ * @param {MsgValue | undefined} table
+ * @param {number} K
+ * @param {number} M
+ * @param {number} n
+ * @returns {(number | bigint)[][]}
+ */
+function streamTable(table, K, M, n) {
   if (!Array.isArray(table) || table.length !== 4) {
     throw fail(`"streams" is ${table === undefined ? 'missing' : describe(table)}, not an array of 4 [count, planes, length] arrays`);
   }
-  const most = 2 * M * n;
-  let total = 0;
   for (let s = 0; s < 4; s++) {
     const item = table[s];
     if (!Array.isArray(item) || item.length !== 3 || !item.every(isNonNegativeInt)) {
       throw fail(`stream ${s} (${STREAMS[s]}) is ${describe(item)}, not an array [count, planes, length] of 3 ints >= 0`);
     }
-    if (!(item[0] <= most)) throw fail(`stream ${s} (${STREAMS[s]}) has count ${item[0]}, above 2·M·n = ${most}`);
-    total += Number(item[2]); // a BigInt length is past any payload: the sum cannot match
   }
-  if (total !== payload.length) {
-    const lengths = table.map((item) => String(/** @type {MsgValue[]} */ (item)[2])).join(' + ');
-    throw fail(`the stream lengths ${lengths} add up to ${total}, not the payload's ${payload.length} bytes`);
+  const checked = /** @type {(number | bigint)[][]} */ (table);
+  const [o, g, v, r] = checked.map((item) => item[0]); // a count beyond 2^53 is a BigInt: compared, never added
+  const corners = M * (g === 0 ? 3 : n); // the most corners the faces can have
+  if (g !== 0 && g !== M) throw fail(`stream 1 (degrees) has count ${g}: one per face (${M}) or none`);
+  if (!(o >= M && o <= 2 * corners)) throw fail(`stream 0 (ops) has count ${o}, outside the ${M}..${2 * corners} that ${M} faces read`);
+  if (v > K) throw fail(`stream 2 (vertices) has count ${v}, more new vertices than the ${K} there are`);
+  if (r > corners - Number(v)) throw fail(`streams 2 and 3 (vertices, references) have counts ${v} + ${r}, more than the ${corners} corners of the faces`);
+  return checked;
+}
+
+/**
+ * The vertices the walk has seen, numbered in the order seen: a hash table (open addressing,
+ * random multiplier) from a vertex index to its number, sized by the count of *vertices* (every
+ * seen vertex was a NEW), never by K, which is only the header's claim when FACE is decoded.
+ */
+class VertexTable {
+  /** @param {number} most the count of the vertices stream */
+  constructor(most) {
+    this.bits = 1; // at most half full (up to 2^29 vertices: 1 << 31 is not a size)
+    while (this.bits < 30 && 2 ** this.bits < 2 * most + 2) this.bits++;
+    this.slots = new Int32Array(1 << this.bits).fill(-1);
+    this.index = new Int32Array(most); // the vertex index of each number
+    this.size = 0;
+    this.m1 = (Math.random() * 2 ** 32) | 1;
+    this.m2 = (Math.random() * 2 ** 32) | 0;
   }
-  const streams = [];
-  let at = 0;
-  for (let s = 0; s < 4; s++) {
-    const [count, planes, length] = /** @type {(number | bigint)[]} */ (table[s]); // checked above
-    const where = `${WHERE} stream ${s} (${STREAMS[s]})`;
-    if (!(planes >= 1 && planes <= 4)) {
-      throw formatError('R30-planes', `${where}: "planes" is ${planes}, not an int in 1..4`);
-    }
-    streams.push(decodeIntStream(payload.subarray(at, at + Number(length)), Number(count), Number(planes), where));
-    at += Number(length);
+
+  /**
+   * The slot of vertex w, or of the empty one where it would go.
+   * @param {number} w
+   */
+  slot(w) {
+    const mask = (1 << this.bits) - 1;
+    let h = (Math.imul(w, this.m1) + this.m2) >>> (32 - this.bits);
+    while (this.slots[h] >= 0 && this.index[this.slots[h]] !== w) h = (h + 1) & mask;
+    return h;
   }
-  return walk(streams, cornerOrder, K, M, n);
+
+  /**
+   * Vertex w's number, or −1 if it is not seen.
+   * @param {number} w
+   */
+  find(w) {
+    return this.slots[this.slot(w)];
+  }
+
+  /**
+   * Numbers vertex w, which is not seen (at most `most` times: one per value of *vertices*).
+   * @param {number} w
+   */
+  add(w) {
+    this.slots[this.slot(w)] = this.size;
+    this.index[this.size] = w;
+    return this.size++;
+  }
 }
 
 /**
@@ -169,7 +248,9 @@ function grow(array) {
 }
 
 /**
- * The walk of §6.8 over decoded streams.
+ * The walk of §6.8 over decoded streams. Vertices are numbered in the order seen (VertexTable):
+ * the corners, edges, gates and lists hold those numbers, and every array grows with the values
+ * read (the decoded faces too, up to M*n), so no declared count or K sizes an allocation.
  * @param {Int32Array[]} streams
  * @param {0 | 1} cornerOrder
  * @param {number} K
@@ -182,8 +263,9 @@ function walk(streams, cornerOrder, K, M, n) {
   let degreesAt = 0;
   let verticesAt = 0;
   let referencesAt = 0;
-  const faces = new Int32Array(M * n).fill(-1);
-  const seen = new Uint8Array(K);
+  let faces = new Int32Array(Math.min(M, 1024) * n).fill(-1);
+  const seen = new VertexTable(vertices.length);
+  const index = seen.index; // each seen vertex's index in the file
   let last = -1;
   const edges = new EdgeTable();
   // into(v) and out(v): stacks of entries; entry t (one per 0 → 1 of an edge) is node 2t in
@@ -191,8 +273,8 @@ function walk(streams, cornerOrder, K, M, n) {
   let entryEdge = new Int32Array(512);
   let below = new Int32Array(1024); // the node under each node in its stack
   let entries = 0;
-  const topInto = new Int32Array(K).fill(-1);
-  const topOut = new Int32Array(K).fill(-1);
+  const topInto = new Int32Array(vertices.length).fill(-1);
+  const topOut = new Int32Array(vertices.length).fill(-1);
   let gates = new Int32Array(1024); // pairs a, b
   let gateCount = 0;
   const corners = new Int32Array(n); // the face being decoded, in walk order
@@ -231,27 +313,26 @@ function walk(streams, cornerOrder, K, M, n) {
   };
 
   /**
-   * The vertex named by tip j (c_0 .. c_{j−1} in corners) with operation op.
+   * The vertex (its number) named by tip j (c_0 .. c_{j−1} in corners) with operation op.
    * @param {number} op
    * @param {number} j
    */
   const tip = (op, j) => {
-    const p = j === 0 ? 0 : corners[j - 1];
+    const p = j === 0 ? 0 : index[corners[j - 1]];
     if (op === NEW) {
       if (verticesAt === vertices.length) throw fail(`face ${face} corner ${j}: the vertices stream ends before this NEW`);
       const w = last + 1 + vertices[verticesAt++];
       if (w < 0 || w >= K) throw fail(`face ${face} corner ${j}: NEW names vertex ${w}, outside 0..${K - 1}`);
-      if (seen[w]) throw fail(`face ${face} corner ${j}: NEW names vertex ${w}, which is already seen`);
-      seen[w] = 1;
+      if (seen.find(w) >= 0) throw fail(`face ${face} corner ${j}: NEW names vertex ${w}, which is already seen`);
       last = w;
-      return w;
+      return seen.add(w);
     }
     if (op === PREV || op === NEXT) {
       const name = op === PREV ? 'PREV' : 'NEXT';
       if (j === 0) throw fail(`face ${face} corner 0: ${name} at the first corner of a face`);
-      const w = op === PREV ? lastOf(topInto, p, edges.from) : lastOf(topOut, corners[0], edges.to);
+      const w = op === PREV ? lastOf(topInto, corners[j - 1], edges.from) : lastOf(topOut, corners[0], edges.to);
       if (w < 0) {
-        const list = op === PREV ? `into(${p})` : `out(${corners[0]})`;
+        const list = op === PREV ? `into(${p})` : `out(${index[corners[0]]})`;
         throw fail(`face ${face} corner ${j}: ${name} on an empty ${list}`);
       }
       return w;
@@ -260,8 +341,9 @@ function walk(streams, cornerOrder, K, M, n) {
       if (referencesAt === references.length) throw fail(`face ${face} corner ${j}: the references stream ends before this FAR`);
       const w = p + references[referencesAt++];
       if (w < 0 || w >= K) throw fail(`face ${face} corner ${j}: FAR names vertex ${w}, outside 0..${K - 1}`);
-      if (!seen[w]) throw fail(`face ${face} corner ${j}: FAR names vertex ${w}, which is not seen yet`);
-      return w;
+      const number = seen.find(w);
+      if (number < 0) throw fail(`face ${face} corner ${j}: FAR names vertex ${w}, which is not seen yet`);
+      return number;
     }
     throw fail(`face ${face} corner ${j}: operation ${op} is not 0..3`);
   };
@@ -304,11 +386,17 @@ function walk(streams, cornerOrder, K, M, n) {
 
   while (face < M) {
     const row = face * n;
+    if (row === faces.length) {
+      // the decoded faces double as they come, up to M*n: M is a claim until they are decoded
+      const more = new Int32Array(Math.min(2 * faces.length, M * n)).fill(-1, faces.length);
+      more.set(faces);
+      faces = more;
+    }
     if (gateCount === 0) {
       // a seed: the degree, then m tips; stored as decoded
       const m = readDegree();
       for (let j = 0; j < m; j++) corners[j] = tip(nextOp(`operation of seed corner ${j}`), j);
-      for (let j = 0; j < m; j++) faces[row + j] = corners[j];
+      for (let j = 0; j < m; j++) faces[row + j] = index[corners[j]];
       addFace(m, 0);
       face++;
       continue;
@@ -317,9 +405,9 @@ function walk(streams, cornerOrder, K, M, n) {
     const a = gates[--gateCount];
     const gate = edges.find(a, b);
     if (gate < 0 || edges.count[gate] === 0) continue; // closed meanwhile: nothing is read
-    const o = nextOp(`gate ${a} → ${b}`);
+    const o = nextOp(`gate ${index[a]} → ${index[b]}`);
     if (o === 0) continue;
-    if (o < 0 || o > 8 * n) throw fail(`face ${face}: operation ${o} across gate ${a} → ${b} is outside 0..${8 * n}`);
+    if (o < 0 || o > 8 * n) throw fail(`face ${face}: operation ${o} across gate ${index[a]} → ${index[b]} is outside 0..${8 * n}`);
     const v = o - 1;
     const q = v >> 3;
     const flipped = (v & 7) >= 4;
@@ -332,10 +420,10 @@ function walk(streams, cornerOrder, K, M, n) {
     let s = q;
     if (cornerOrder === 1) {
       let h = 0;
-      for (let j = 1; j < m; j++) if (corners[j] < corners[h]) h = j;
+      for (let j = 1; j < m; j++) if (index[corners[j]] < index[corners[h]]) h = j;
       s = q - h + m; // the same place mod m, kept non-negative
     }
-    for (let j = 0; j < m; j++) faces[row + ((s + j) % m)] = corners[j];
+    for (let j = 0; j < m; j++) faces[row + ((s + j) % m)] = index[corners[j]];
     addFace(m, 1);
     face++;
   }
