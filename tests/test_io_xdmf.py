@@ -294,6 +294,10 @@ def test_mixed_topologies_keep_polygons_and_drop_point_markers(tmp_path):
 # hostile and broken files
 
 TETRA = f'<Topology TopologyType="Tetrahedron">{item([0, 1, 2, 3], "1 4", "Int")}</Topology>'
+UCHAR = (
+    f'<Topology TopologyType="Triangle">{item([[0, 1, 2], [0, 2, 3]], "2 3", "UChar", 1)}'
+    "</Topology>"
+)
 
 
 @pytest.mark.parametrize(
@@ -315,6 +319,18 @@ TETRA = f'<Topology TopologyType="Tetrahedron">{item([0, 1, 2, 3], "1 4", "Int")
         (document(grid(POINTS).replace('Format="XML"', 'Format="Binary"')), "'Binary'", 0),
         (document(grid(POINTS).replace(" 2 0 2 3", " 2 0 2 9")), "vertex index 9 outside", 0),
         (document(grid(POINTS).replace(" 0.5 ", " nan ")), "point 4 has a non-finite", 0),
+        # beyond the NumberType: once a silent wrap (258 as a UChar was 2, a valid index)
+        (document(grid(POINTS, 0.0, UCHAR.replace(" 3<", " 258<"))), "beyond the 0..255", 0),
+        # once numpy's overflow warning (fuzzing, issue 22)
+        (
+            document(
+                grid(POINTS)
+                .replace('Precision="8"', 'Precision="4"', 1)
+                .replace(" 0.5 ", " 1e300 ")
+            ),
+            "point 4 has a non-finite",
+            0,
+        ),
     ],
 )
 def test_a_broken_file_is_refused_saying_why(tmp_path, text, message, frame):

@@ -23,6 +23,8 @@ package sees at once what the tools rely on.
   evaluated at given times, as a viewer does), for the glTF benchmark.
 * The encoder's quantizer choice, :mod:`~tuckercodec.encoder.rdo`, which
   ``python -m tools.bench entropy --rdo`` switches off to measure what it gains.
+* zarr chunks: :func:`encode_chunk` with its :func:`chunk_mode`, and :func:`decode_chunk`, the
+  work both zarr codecs share, without zarr or numcodecs (the fuzzer's door into the codec).
 * Sample data: :func:`sample_path`, and the synthetic :func:`wave_sheet` with its
   :func:`sheet_triangles`.
 """
@@ -51,6 +53,7 @@ from .perceptual import STED_DEFINITION
 from .plots import plot_rd_curve, pyplot, save_figure
 from .samples import sample_path, sheet_triangles, wave_sheet
 from .topology import mesh_parents, mesh_prediction
+from .zarr_codec.chunk import chunk_mode, decode_chunk, encode_chunk
 
 __all__ = [
     "CRC",
@@ -61,6 +64,9 @@ __all__ = [
     "STED_DEFINITION",
     "Curve",
     "centre_frames",
+    "chunk_mode",
+    "decode_chunk",
+    "encode_chunk",
     "faces",
     "mesh_parents",
     "mesh_prediction",

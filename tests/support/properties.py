@@ -22,7 +22,7 @@ HYPOTHESIS_SETTINGS: dict[str, Any] = {
 
 #: ``TUCKERCODEC_HYPOTHESIS_EXAMPLES`` scales the number of examples of each property test of
 #: the readers (for a long local run); CI runs the default, derandomized so that every run tries
-#: the same inputs (the long, random exploration is tools/fuzz.py's job).
+#: the same inputs (the long, random exploration is tools/fuzz's job).
 EXAMPLES = int(os.environ.get("TUCKERCODEC_HYPOTHESIS_EXAMPLES", "0")) or None
 PROPERTY = settings(
     max_examples=EXAMPLES or 400,

@@ -11,18 +11,47 @@ and processing instructions dropped).
 
 from __future__ import annotations
 
+import re
 from typing import Any, NoReturn
 from xml.etree import ElementTree
 from xml.parsers import expat
 
 from ..errors import InputError
 
+#: The encodings expat reads itself. For any other it asks Python's codecs, which fail in many
+#: ways on a crafted name: LookupError ("utf4", "rot13"), ValueError (every multi-byte one),
+#: UnicodeError ("idna"), a DeprecationWarning ("unicode_escape"). Found by fuzzing (issue 22).
+EXPAT_ENCODINGS = frozenset({"utf-8", "utf-16", "utf-16be", "utf-16le", "iso-8859-1", "us-ascii"})
+_DECLARED = re.compile(r"<\?xml\s[^>]*?\bencoding\s*=\s*(['\"])(.*?)\1", re.DOTALL)
+
+
+def declared_encoding(data: bytes) -> str | None:
+    """The encoding the XML declaration at the start of ``data`` names, or None: read as
+    UTF-16 when the bytes start so (with or without a byte-order mark), else byte by byte
+    (after UTF-8's mark, if any)."""
+    head = data[:512].removeprefix(b"\xef\xbb\xbf")  # UTF-8's byte-order mark
+    if head[:2] in (b"\xff\xfe", b"<\x00"):
+        text = head.decode("utf-16-le", "replace")
+    elif head[:2] in (b"\xfe\xff", b"\x00<"):
+        text = head.decode("utf-16-be", "replace")
+    else:
+        text = head.decode("latin-1")
+    found = _DECLARED.match(text.lstrip("\ufeff"))
+    return found.group(2) if found else None
+
 
 def parse_xml(data: bytes, kind: str, doctype: bool = False) -> ElementTree.Element:
     """The root element of the XML ``data`` of a ``kind`` file ("VTK", "XDMF"). A DOCTYPE is
     refused unless ``doctype`` (XDMF files written by VTK carry ``<!DOCTYPE Xdmf SYSTEM
     "Xdmf.dtd" []>``, which is never fetched); any declaration inside one (ENTITY, ELEMENT,
-    ATTLIST, NOTATION) is refused always, and so is a reference to an entity not declared."""
+    ATTLIST, NOTATION) is refused always, and so is a reference to an entity not declared, and
+    an encoding other than expat's own (:data:`EXPAT_ENCODINGS`)."""
+    encoding = declared_encoding(data)
+    if encoding is not None and encoding.lower() not in EXPAT_ENCODINGS:
+        raise InputError(
+            f"declares the encoding {encoding[:40]!r}: {kind} files are read in UTF-8, UTF-16, "
+            "ISO-8859-1 or US-ASCII"
+        )
     builder = ElementTree.TreeBuilder()
     parser = expat.ParserCreate(namespace_separator="}")
     parser.SetParamEntityParsing(expat.XML_PARAM_ENTITY_PARSING_NEVER)

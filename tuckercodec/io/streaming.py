@@ -134,8 +134,7 @@ class FrameSource(abc.ABC):
         if start == stop:
             return np.empty((0, self.vertex_count, 3), dtype=np.float64)
         values = self._read(start, stop)
-        with np.errstate(over="ignore"):  # a long double beyond float64 becomes inf, named below
-            values = np.ascontiguousarray(values, dtype=np.float64)
+        values = np.ascontiguousarray(as_float64(values))  # non-finite: named below
         if values.shape != (stop - start, self.vertex_count, 3):  # a reader's bug, not the file's
             raise RuntimeError(f"{type(self).__name__} read {values.shape} for {start}:{stop}")
         with np.errstate(over="ignore", invalid="ignore"):
@@ -285,8 +284,7 @@ class RawFrames(FrameSource):
             into = memoryview(part).cast("B")  # type: ignore[arg-type]  # arrays are buffers
             self._read_at(self._offset + (start + first) * frame_bytes, into)
             if piece is not None:
-                with np.errstate(over="ignore"):  # a long double beyond float64: inf, named later
-                    out[first : first + count] = part
+                out[first : first + count] = as_float64(part)  # non-finite: named later
         return out
 
     def _read_at(self, offset: int, into: memoryview) -> None:
@@ -295,6 +293,15 @@ class RawFrames(FrameSource):
             self._stream = open_input(self._file, self._what)
         self._stream.seek(offset)
         read_into(self._stream, into, self._file)
+
+
+def as_float64(values: np.ndarray) -> np.ndarray:
+    """``values`` (a file's numbers) as float64, without a warning: a float32 signalling NaN
+    (exponent all ones, quiet bit clear) raises numpy's "invalid value encountered in cast", a
+    long double beyond float64 its "overflow"; both become NaN or infinity, which the reader's
+    finiteness check names (:meth:`FrameSource.read`)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        return np.asarray(values).astype(np.float64)
 
 
 def read_into(stream: IO[bytes], into: memoryview, path: str | os.PathLike[str]) -> None:

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import InputError
+from ..streaming import as_float64
 from .container import Document, integer
 
 #: componentType -> numpy dtype (little-endian, as glTF stores them).
@@ -41,7 +42,10 @@ def read_accessor(doc: Document, index: Any, what: str, *, width: int | None = N
     caller needs (3 for positions); ``what`` names the referrer for messages."""
     accessor = doc.item("accessors", index, what)
     name = f"accessors[{index}] ({what})"
-    dtype = COMPONENT_TYPES.get(accessor.get("componentType"))  # type: ignore[arg-type]
+    code = accessor.get("componentType")
+    # a JSON integer: a list is unhashable, and 5126.0 or true would match a key
+    plain = isinstance(code, int) and not isinstance(code, bool)
+    dtype = COMPONENT_TYPES.get(code) if isinstance(code, int) and plain else None
     if dtype is None:
         raise doc.fail(f"{name}: componentType {accessor.get('componentType')!r} is not glTF's")
     kind = accessor.get("type")
@@ -73,7 +77,7 @@ def read_accessor(doc: Document, index: Any, what: str, *, width: int | None = N
             raise doc.fail(f"{name}: normalized is only for 8- and 16-bit integers")
         return _denormalize(values)
     if dtype.kind == "f":
-        result = values.astype(np.float64)
+        result = as_float64(values)
         if not np.isfinite(result).all():
             row = int(np.argwhere(~np.isfinite(result))[0, 0])
             raise doc.fail(f"{name}: element {row} is not finite (NaN or infinity)")

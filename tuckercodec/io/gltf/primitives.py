@@ -79,9 +79,11 @@ def _merge_primitives(doc: Document, index: int) -> Mesh:
     weights = np.zeros(target_count or 0)
     if "weights" in mesh:
         weights = numbers(doc, mesh["weights"], target_count or 0, f"meshes[{index}].weights")
-    return Mesh(
-        np.concatenate(bases), np.concatenate(targets, axis=1), np.concatenate(faces), weights
-    )
+    # float64 whatever the accessors' type: integer positions (KHR_mesh_quantization without
+    # normalization) gave an int64 base, to which the morph targets' float deltas could not be
+    # added in place (found by fuzzing, issue 22)
+    base = np.concatenate(bases).astype(np.float64)
+    return Mesh(base, np.concatenate(targets, axis=1), np.concatenate(faces), weights)
 
 
 def _deltas(doc: Document, morphs: list[Any], vertices: int, where: str) -> np.ndarray:

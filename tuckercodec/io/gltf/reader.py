@@ -329,6 +329,10 @@ def _channels(
             raise doc.fail(f"{where} lacks a target")
         node = target.get("node")
         path = target.get("path")
+        if node is None:
+            continue  # no node: an extension's target (KHR_animation_pointer), not a vertex's
+        if not isinstance(node, int) or isinstance(node, bool):  # 1.0 == 1 passed the test
+            raise doc.fail(f"{where}.target.node must be an integer, got {node!r}")  # below
         if node not in relevant or path not in (*PATH_WIDTHS, "weights"):
             continue  # another node, or a path (pointer...) that does not move vertices
         if path in found.get(node, {}):

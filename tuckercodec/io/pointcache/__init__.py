@@ -21,7 +21,7 @@ from ...errors import InputError
 from ...reading import open_input
 from ...sequence import MeshSequence, float32_vertices
 from ..registry import ReadOptions
-from ..streaming import RawFrames
+from ..streaming import RawFrames, as_float64
 
 #: Bytes of one point: three float32 coordinates.
 POINT_BYTES = 12
@@ -109,7 +109,7 @@ def read_floats(stream: BinaryIO, count: int, dtype: str, path: Path) -> np.ndar
     data = stream.read(count * 4)
     if len(data) != count * 4:  # the file shrank after its size was checked
         raise InputError(f"ended after {len(data)} of the {count * 4} bytes it declares", path=path)
-    return np.frombuffer(data, dtype=dtype).astype(np.float64)
+    return as_float64(np.frombuffer(data, dtype=dtype))
 
 
 def cache_faces(options: ReadOptions, point_count: int, path: Path) -> np.ndarray:

@@ -37,6 +37,7 @@ from ...errors import InputError
 from ..budget import Inflation, memory_ceiling
 from ..polygons import faces_from_polygons, polygons_from_faces
 from ..safe_xml import parse_xml
+from ..streaming import as_float64
 from .arrays import Encoding, Layout, encode_array, file_encoding, read_array, type_name
 
 #: The dataset types read and written, by the suffix VTK gives their files.
@@ -171,7 +172,7 @@ def _points(piece: ElementTree.Element, encoding: Encoding) -> np.ndarray:
             raise InputError(f"declares {count} points but has no <Points><DataArray>")
         return np.zeros((0, 3), dtype=np.float64)
     values = read_array(element, encoding, "Points", components=3, count=count)
-    return values.astype(np.float64).reshape(count, 3)
+    return as_float64(values).reshape(count, 3)
 
 
 def _arrays(

@@ -47,7 +47,7 @@ from ...reading import open_input
 from ..polygons import faces_from_polygons
 from ..registry import ReadOptions
 from ..safe_xml import parse_xml
-from ..streaming import FrameSource
+from ..streaming import FrameSource, as_float64
 from .items import XINCLUDE, HeavyData, References, lower, read_item, resolve
 
 _FIXED = {"triangle": 3, "quadrilateral": 4}
@@ -287,14 +287,14 @@ def _geometry(
         if values.size % width or (len(dims) > 1 and dims[-1] != width):
             raise InputError(f"its Geometry's Dimensions {dims} are not (points, {width})")
         points = np.zeros((values.size // width, 3))
-        points[:, :width] = values.reshape(-1, width)
+        points[:, :width] = as_float64(values).reshape(-1, width)
     elif kind == "x_y_z":
         if len(items) != 3:
             raise InputError(f"its X_Y_Z <Geometry> has {len(items)} DataItems, not 3")
         parts = [read_item(item, root, heavy, "Geometry") for item in items]
         if len({part[0].size for part in parts}) != 1:
             raise InputError("its X, Y and Z DataItems differ in length")
-        points = np.stack([part[0] for part in parts], axis=1).astype(np.float64)
+        points = as_float64(np.stack([part[0] for part in parts], axis=1))
         source = tuple(part[2] for part in parts)
     else:
         raise InputError(f"has a {kind.upper()} <Geometry>: XYZ, X_Y_Z and XY are read")

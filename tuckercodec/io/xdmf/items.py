@@ -282,7 +282,20 @@ def read_item(
             values = np.array(tokens, dtype=np.float64 if code[0] == "f" else np.int64)
         except (ValueError, OverflowError) as error:
             raise InputError(f"{what}: a value is not a number ({error})") from None
-        values, source = values.astype(code), id(item)
+        values, source = _narrowed(values, code, what), id(item)
     else:
         raise InputError(f"{what}: Format {item.get('Format')!r} is not read (XML and HDF are)")
     return values, dims, source
+
+
+def _narrowed(values: np.ndarray, code: str, what: str) -> np.ndarray:
+    """XML values (parsed as float64 or int64) in the item's NumberType and Precision. An
+    integer the type cannot hold is refused (numpy's cast would wrap it silently: 300 as a
+    uchar became 44, a valid index out of an invalid one); a float beyond float32 becomes
+    infinity, which the finiteness checks name."""
+    if code[0] in "iu" and values.size:
+        info = np.iinfo(code)
+        if values.min() < info.min or values.max() > info.max:
+            raise InputError(f"{what}: a value is beyond the {info.min}..{info.max} of {code}")
+    with np.errstate(over="ignore"):
+        return values.astype(code)

@@ -1,0 +1,242 @@
+"""The fuzzers' findings stay fixed, and a short fuzz run on every test run (issues 5 and 22).
+
+- Every saved input of every door (tests/fuzz/corpus/<target>, tests/fuzz/regressions/<target>,
+  and anything a fuzz run left in tests/fuzz/crashes/<target>) ends in the door's documented
+  error or reads consistently, quickly, in bounded memory, without a warning (the target's
+  ``check`` in tools.fuzz.targets is the oracle); a seed (``seed-*``) reads without error.
+  USD and Alembic inputs go through their isolated child, half a second each.
+- The structure-aware mutators, driven by a plain random generator, make variants of the
+  seeds: this part needs no atheris, so it runs everywhere.
+- A bounded atheris run (``TKC_FUZZ_SECONDS``, 30 s by default) of target ``all`` (every
+  in-process door in one process, the first byte of an input choosing) in a subprocess with a
+  hard timeout; skipped, saying why, where atheris is not installed (it has no Windows build).
+"""
+
+from __future__ import annotations
+
+import base64
+import importlib.util
+import json
+import os
+import random
+import signal
+import subprocess
+import sys
+import time
+import tracemalloc
+from pathlib import Path
+
+import pytest
+
+from tools import fuzz as fuzz_tool
+from tools.fuzz.container import decoder_seeds
+from tools.fuzz.targets import TARGETS
+
+ROOT = Path(__file__).resolve().parents[1]
+
+SAVED = [
+    (name, path)
+    for name in TARGETS
+    for path in fuzz_tool.saved_inputs(
+        *(root / name for root in (fuzz_tool.CORPUS, fuzz_tool.REGRESSIONS, fuzz_tool.CRASHES))
+    )
+]
+#: What one saved input may cost in process. The largest, a valid strip of 2**19 vertices,
+#: takes about 0.5 s and 100 MiB (6 s under tracemalloc on a loaded 2-core machine); the others
+#: milliseconds and kilobytes. An input read through the isolated child costs a process (about
+#: 0.5 s). The time limits only stop a hang: no test may assume how fast a machine runs.
+INPUT_SECONDS = 60.0
+ISOLATED_SECONDS = 180.0
+INPUT_PEAK_BYTES = 256 << 20
+FUZZ_SECONDS = int(os.environ.get("TKC_FUZZ_SECONDS", "30"))
+WARM: set[str] = set()
+#: Variants of its seeds each in-process door's own mutator makes, without libFuzzer.
+MUTATIONS = 40
+
+
+def _label(item: tuple[str, Path]) -> str:
+    name, path = item
+    return f"{name}/{path.parent.parent.name}/{path.name}"
+
+
+def _needs(name: str) -> None:
+    for module in TARGETS[name].needs:
+        if importlib.util.find_spec(module) is None:
+            pytest.skip(f"{module} is not installed: the {name} reader cannot run")
+
+
+def test_the_fuzz_folders_hold_inputs():
+    for name in TARGETS:
+        assert any(n == name and p.parent.parent == fuzz_tool.CORPUS for n, p in SAVED), (
+            f"tests/fuzz/corpus/{name} is empty"
+        )
+    assert any(p.parent.parent == fuzz_tool.REGRESSIONS for _, p in SAVED), "no regressions"
+    size = sum(p.stat().st_size for _, p in SAVED if p.parent.parent == fuzz_tool.CORPUS)
+    assert size < 512 << 10, f"the committed corpora are {size >> 10} KiB: merge them down"
+
+
+@pytest.mark.parametrize("item", SAVED, ids=[_label(item) for item in SAVED])
+def test_saved_input(item):
+    """The documented error or a consistent read; a file left in crashes/ fails here until
+    fixed. A seed is a valid input."""
+    name, path = item
+    _needs(name)
+    target = TARGETS[name]
+    data = path.read_bytes()
+    if name not in WARM:  # the lazy imports of a door's first input, under tracemalloc, take
+        WARM.add(name)  # seconds and megabytes that are not the input's doing
+        seeds = [p for n, p in SAVED if n == name and p.name.startswith("seed")]
+        target.check(seeds[0].read_bytes())
+    started = time.perf_counter()
+    tracemalloc.start()
+    try:
+        outcome = target.check(data)  # raises the crash itself; warnings are errors (pyproject)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    elapsed = time.perf_counter() - started
+    limit = ISOLATED_SECONDS if target.isolated else INPUT_SECONDS
+    assert elapsed < limit, f"{_label(item)} took {elapsed:.1f} s"
+    assert peak < INPUT_PEAK_BYTES, f"{_label(item)} peaked at {peak >> 20} MiB"
+    if path.name.startswith("seed-"):
+        assert outcome.split("/")[0] == "ok", f"the seed {_label(item)} is refused: {outcome}"
+
+
+def test_structural_mutations_of_the_seeds():
+    """Re-signed structural edits of every decoder seed, without libFuzzer: each ends in
+    FormatError or decodes consistently."""
+    rng = random.Random(20261123)
+    target = TARGETS["decoder"]
+    seeds = [p.read_bytes() for n, p in SAVED if n == "decoder" and p.name.startswith("seed")]
+    seeds += [p.read_bytes() for p in sorted((ROOT / "spec" / "vectors").glob("*.tkc"))]
+    for _ in range(400):
+        data = rng.choice(seeds)
+        for _ in range(rng.randint(1, 3)):  # a few edits on top of each other
+            data = fuzz_tool.structural_mutation(data, rng) or data
+        target.check(data)
+
+
+def _flip(data: bytes, max_size: int) -> bytes:
+    """A stand-in for libFuzzer's byte mutation: one byte changed, cut or repeated."""
+    rng = random.Random(data)
+    out = bytearray(data or b"\0")
+    at = rng.randrange(len(out))
+    what = rng.randrange(3)
+    if what == 0:
+        out[at] = rng.randrange(256)
+    elif what == 1:
+        del out[at:]
+    else:
+        out[at:at] = out[at : at + 8]
+    return bytes(out[:max_size])
+
+
+@pytest.mark.parametrize("name", [n for n, t in TARGETS.items() if not t.isolated])
+def test_structure_aware_mutations(name, monkeypatch):
+    """Each in-process door's own mutator (the readers' bundle, zip, GLB, JSON, XML and number
+    edits; FACE's params and streams; the .tkc edits), MUTATIONS variants of its seeds:
+    each ends in the documented error or a consistent read."""
+    _needs(name)
+    from tools.fuzz import targets
+
+    monkeypatch.setattr(targets, "_atheris_mutate", _flip)
+    target = TARGETS[name]
+    seeds = [p.read_bytes() for n, p in SAVED if n == name and p.name.startswith("seed")]
+    rng = random.Random(f"{name}-20261127")
+    for _ in range(MUTATIONS):
+        data = rng.choice(seeds)
+        for _ in range(rng.randint(1, 3)):
+            if name in ("decoder", "segmented"):  # the .tkc mutator without libFuzzer's part
+                data = fuzz_tool.structural_mutation(data, rng) or data
+            elif name == "zarr-chunk":
+                data = data[:1] + (fuzz_tool.structural_mutation(data[1:], rng) or data[1:])
+            else:
+                data = target.mutate(data, 1 << 16, rng.randrange(2**31))
+        target.check(data)
+
+
+def test_resign_makes_the_checksums_right():
+    """A byte-level mutation re-signed is judged on what it changed: a flipped header byte is
+    no longer a ChecksumError."""
+    import tuckercodec
+
+    data = bytearray((ROOT / "spec" / "vectors" / "v1-wave-triangles.tkc").read_bytes())
+    data[40] ^= 0x01  # inside the header
+    with pytest.raises(tuckercodec.ChecksumError):
+        tuckercodec.decode(bytes(data))
+    try:
+        tuckercodec.decode(fuzz_tool.resign(bytes(data)))
+    except tuckercodec.ChecksumError as error:  # pragma: no cover - the assertion says it
+        pytest.fail(f"still a checksum error after resign: {error}")
+    except tuckercodec.FormatError:
+        pass
+
+
+def test_importing_the_fuzzer_leaves_tuckercodec_to_its_worker():
+    """The worker imports tuckercodec for the first time under atheris' instrumentation (else it
+    fuzzes blind to the package's coverage): importing tools.fuzz must not import it."""
+    check = "import sys, tools.fuzz, tools.fuzz.driver; sys.exit('tuckercodec' in sys.modules)"
+    assert subprocess.run([sys.executable, "-c", check], cwd=ROOT, check=False).returncode == 0
+
+
+def test_the_hand_made_decoder_seed_is_as_committed():
+    """The seed built section by section is byte-stable, unlike the encoder's, so it must equal
+    the committed one."""
+    name = "seed-one-vertex.tkc"
+    assert decoder_seeds()[name] == (fuzz_tool.CORPUS / "decoder" / name).read_bytes()
+
+
+def test_a_short_bounded_fuzz_run(tmp_path):
+    """python -m tools.fuzz --target all for FUZZ_SECONDS from every in-process door's seeds, in
+    its own process group, killed if it overruns. Any crash fails the test with its traceback
+    and the input in base64 (to keep it: decode it into tests/fuzz/crashes/<target>/, without
+    the first byte, which chose the door)."""
+    try:
+        import atheris  # noqa: F401
+    except ImportError:
+        pytest.skip(
+            "atheris is not installed (it has no Windows build): the bounded fuzz run is skipped; "
+            "the saved inputs and mutations above still ran"
+        )
+    for name in TARGETS["decoder"].needs + fuzz_tool.target_named("all").needs:
+        if importlib.util.find_spec(name) is None:
+            pytest.skip(f"{name} is not installed: the bounded run needs every in-process door")
+    crashes, summary_path = tmp_path / "crashes", tmp_path / "summary.json"
+    seed = int(os.environ.get("TKC_FUZZ_SEED", str(random.SystemRandom().randrange(1, 2**31))))
+    command = [sys.executable, "-m", "tools.fuzz", "--target", "all"]
+    command += ["--seconds", str(FUZZ_SECONDS), "--seed", str(seed)]
+    command += ["--work", str(tmp_path / "work"), "--crashes", str(crashes)]
+    command += ["--json", str(summary_path), "--memory-mb", "1024"]
+    process = subprocess.Popen(
+        command,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
+        start_new_session=True,
+    )
+    try:
+        stdout, stderr = process.communicate(timeout=FUZZ_SECONDS + 180)
+    except subprocess.TimeoutExpired:
+        os.killpg(process.pid, signal.SIGKILL)  # the driver and its libFuzzer worker
+        process.communicate()
+        pytest.fail(
+            f"python -m tools.fuzz --target all --seconds {FUZZ_SECONDS} (seed {seed}) overran "
+            "its time and was killed"
+        )
+    assert summary_path.exists(), (
+        f"no summary (exit {process.returncode}):\n{stdout}\n{stderr[-4000:]}"
+    )
+    summary = json.loads(summary_path.read_text())
+    folder = crashes / "all"
+    found = sorted(p for p in folder.iterdir() if p.suffix != ".txt") if folder.exists() else []
+    report = []
+    for path in found:
+        notes = path.with_suffix(".txt")
+        why = notes.read_text() if notes.exists() else "(no traceback: a hang or out-of-memory)"
+        report.append(
+            f"--- {path.name} (seed {seed})\n{why}"
+            f"\ninput, base64: {base64.b64encode(path.read_bytes()).decode()}"
+        )
+    assert not found, "the fuzzer found crashes:\n" + "\n".join(report)
+    assert summary["inputs_tried"] > 100, summary
