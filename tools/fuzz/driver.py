@@ -22,7 +22,7 @@ from typing import Any
 from . import __doc__ as PACKAGE_DOC
 from .container import signature_of
 from .paths import CORPUS, CRASHES, NOT_INPUTS, REGRESSIONS, ROOT, saved_inputs
-from .targets import TARGETS, Target, target_named
+from .targets import SCRATCH_VARIABLE, TARGETS, Target, target_named
 from .worker import quiet_check, run_worker
 
 
@@ -103,6 +103,11 @@ def fuzz(args: argparse.Namespace) -> dict[str, Any]:
     runs = restarts = peak_rss = 0
     env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
     env["MKL_NUM_THREADS"] = "1"
+    memory = Path("/dev/shm")  # the readers' inputs are written there, once per input
+    scratch = tempfile.mkdtemp(
+        prefix="tkc-fuzz-", dir=memory if memory.is_dir() and os.access(memory, os.W_OK) else None
+    )
+    env[SCRATCH_VARIABLE] = scratch
     timeout = max(args.timeout, 120) if target.isolated else args.timeout
     seed = args.seed
     while True:
@@ -143,6 +148,7 @@ def fuzz(args: argparse.Namespace) -> dict[str, Any]:
         if restarts > 50:
             print("more than 50 restarts: stopping", file=sys.stderr)
             break
+    shutil.rmtree(scratch, ignore_errors=True)
     new = sorted(str(p) for p in set(crashes.iterdir()) - before if p.suffix not in NOT_INPUTS)
     summary = {
         "target": target.name,

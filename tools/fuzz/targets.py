@@ -71,6 +71,8 @@ def _atheris_mutate(data: bytes, max_size: int) -> bytes:
 
 
 _SCRATCH: list[Path] = []
+#: Where a worker makes its scratch folder (set by the driver).
+SCRATCH_VARIABLE = "TKC_FUZZ_SCRATCH"
 
 
 def scratch_folder() -> Path:
@@ -79,6 +81,9 @@ def scratch_folder() -> Path:
     if not _SCRATCH:
         memory = Path("/dev/shm")
         base = memory if memory.is_dir() and os.access(memory, os.W_OK) else None
+        # the driver's, which it removes: libFuzzer ends its worker without running atexit
+        given = os.environ.get(SCRATCH_VARIABLE)
+        base = Path(given) if given else base
         _SCRATCH.append(Path(tempfile.mkdtemp(prefix="tkc-fuzz-read-", dir=base)))
         atexit.register(shutil.rmtree, _SCRATCH[0], True)
     folder = _SCRATCH[0]
