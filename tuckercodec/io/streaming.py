@@ -283,8 +283,9 @@ class RawFrames(FrameSource):
             part = out[first : first + count] if piece is None else piece[:count]
             into = memoryview(part).cast("B")  # type: ignore[arg-type]  # arrays are buffers
             self._read_at(self._offset + (start + first) * frame_bytes, into)
-            if piece is not None:
-                out[first : first + count] = as_float64(part)  # non-finite: named later
+            if piece is not None:  # cast into its place: no float64 copy of the piece
+                with np.errstate(over="ignore", invalid="ignore"):  # as as_float64 says
+                    out[first : first + count] = part  # non-finite: named later
         return out
 
     def _read_at(self, offset: int, into: memoryview) -> None:
@@ -301,7 +302,7 @@ def as_float64(values: np.ndarray) -> np.ndarray:
     long double beyond float64 its "overflow"; both become NaN or infinity, which the reader's
     finiteness check names (:meth:`FrameSource.read`)."""
     with np.errstate(over="ignore", invalid="ignore"):
-        return np.asarray(values).astype(np.float64)
+        return np.asarray(values).astype(np.float64, copy=False)  # float64 already: itself
 
 
 def read_into(stream: IO[bytes], into: memoryview, path: str | os.PathLike[str]) -> None:
