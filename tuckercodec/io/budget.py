@@ -15,6 +15,8 @@ the ceiling. Stored (uncompressed) data is not counted: it is bytes the file hol
 
 from __future__ import annotations
 
+import os
+
 from ..encoder.plan import default_max_memory, human_bytes
 from ..errors import InputError
 
@@ -30,15 +32,16 @@ class Inflation:
     def __init__(self, ceiling: int):
         self.ceiling = self.left = ceiling
 
-    def take(self, size: int, what: str) -> None:
+    def take(self, size: int, what: str, path: str | os.PathLike[str] | None = None) -> None:
         """Count ``size`` more bytes inflated for ``what`` (an array, a member: named first in
-        the error, which the caller completes with the file), or refuse them."""
+        the error, with ``path``, the file, if given), or refuse them."""
         if size > self.left:
             held = self.ceiling - self.left
             beside = f" beside the {human_bytes(held)} inflated before it" if held else ""
             raise InputError(
                 f"{what}: inflates to {human_bytes(size)}{beside}, beyond the "
                 f"{human_bytes(self.ceiling)} a read may decompress (--max-memory, by default "
-                "half the machine's memory): refused"
+                "half the machine's memory): refused",
+                path=path,
             )
         self.left -= size

@@ -49,12 +49,11 @@ def _check_inflation(path: Path, options: ReadOptions) -> None:
     inflation = options.inflation()
     try:
         with zipfile.ZipFile(path) as archive:
-            for info in archive.infolist():
-                inflation.take(info.file_size, f"member {info.filename!r}")
-    except InputError as error:
-        raise InputError(error.reason, path=path) from None
+            members = archive.infolist()
     except (OSError, zipfile.BadZipFile, ValueError) as error:
         raise InputError(f"cannot read as a 3MF file (a zip archive): {error}", path=path) from None
+    for info in members:
+        inflation.take(info.file_size, f"member {info.filename!r}", path)
 
 
 def _read_with_trimesh(path: Path) -> MeshFrame:

@@ -83,10 +83,8 @@ class NpzArchive:
         info = self.info(key)
         member_header(self.zip, info, key, self.size, self.path)
         if info.compress_type == zipfile.ZIP_DEFLATED:
-            try:  # zipfile inflates a member no further than the size it declares
-                self.inflation.take(info.file_size, f"key {key!r} ({info.filename})")
-            except InputError as error:
-                raise InputError(error.reason, path=self.path) from None
+            # zipfile inflates a member no further than the size it declares
+            self.inflation.take(info.file_size, f"key {key!r} ({info.filename})", self.path)
         return _npz_member(self.zip, info, key, self.path)
 
     def metadata(
