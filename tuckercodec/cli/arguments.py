@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 
 from .._version import __version__
 from ..encoder import DEFAULT_TARGET_KG
-from ..encoder.options import BASES
+from ..encoder.options import BASES, parse_max_error
 from ..encoder.plan import DEFAULT_SEGMENT_FRAMES, parse_size
 from ..files import SUFFIX
 from ..gltf_export import COMPRESSIONS
@@ -525,6 +525,16 @@ def _add_segment_options(encode: argparse.ArgumentParser) -> None:
     )
 
 
+def _max_error(text: str) -> float | str:
+    """--max-error: a positive length or a percentage of the bounding-box diagonal."""
+    try:
+        return parse_max_error(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected a positive length or a percentage such as 0.1%, got {text!r}"
+        ) from None
+
+
 def _add_mode_options(parser: argparse.ArgumentParser) -> None:
     """The encoder's three modes, one at a time, and how ranks are selected."""
     mode = parser.add_mutually_exclusive_group()
@@ -532,6 +542,18 @@ def _add_mode_options(parser: argparse.ArgumentParser) -> None:
     mode.add_argument("--ranks", type=_ranks, metavar="I,K", help="fixed ranks (i, 3, k)")
     mode.add_argument(
         "--bpfv", type=_positive, metavar="BPFV", help="target size, bits per frame per vertex"
+    )
+    parser.add_argument(
+        "--max-error",
+        type=_max_error,
+        metavar="D",
+        help="no decoded vertex farther than D from the input (a length, or P%% of the bounding "
+        "box's diagonal); alone, with --kg or with --ranks (format 1.3 where corrections are needed)",
+    )
+    parser.add_argument(
+        "--lossless",
+        action="store_true",
+        help="decode to the input's values bit for bit (format 1.3); alone",
     )
     parser.add_argument(
         "--select",

@@ -96,6 +96,8 @@ def encode_options(args: argparse.Namespace, *, passes: bool = True) -> EncodeOp
         basis=getattr(args, "basis", BASIS_SHARED),
         jobs=args.jobs if passes else None,
         scheduler=args.scheduler if passes else None,
+        max_error=getattr(args, "max_error", None),
+        lossless=getattr(args, "lossless", False),
     )
 
 

@@ -21,7 +21,7 @@ from ..analysis import Selection
 from ..format import streams
 from ..format.segments import BASIS_OWN, BASIS_SHARED
 
-Mode = Literal["kg", "ranks", "bpfv"]
+Mode = Literal["kg", "ranks", "bpfv", "max-error", "lossless"]
 
 #: The KG error (percent) met when no mode is given.
 DEFAULT_TARGET_KG = 0.1
@@ -53,6 +53,13 @@ class EncodeOptions:
         basis: with segments, ``"shared"`` (one U1 for all, the default) or ``"own"``.
         jobs: with segments, run the passes on this many worker processes (extra ``dask``).
         scheduler: with segments, run the passes on the Dask cluster of this scheduler.
+        max_error: a bound on every decoded vertex's Euclidean distance from the input: a
+            length in the sequence's units, or a string ``"P%"``, P percent of the bounding-box
+            diagonal of the whole sequence. Alone (mode ``"max-error"``), with ``target_kg``
+            (both hold) or with ``ranks``; not with ``target_bpfv``. Files that need
+            corrections are format 1.3 (spec §6.9).
+        lossless: decode to the input's values bit for bit (mode ``"lossless"``, format 1.3),
+            alone.
 
     At most one of ``target_kg``, ``ranks`` and ``target_bpfv``; ``jobs`` or ``scheduler``, not
     both. A bad value raises ``ValueError`` naming it. Whether ranks fit the sequence is known
@@ -69,9 +76,29 @@ class EncodeOptions:
     basis: str = BASIS_SHARED
     jobs: int | None = None
     scheduler: str | None = None
+    max_error: float | str | None = None
+    lossless: bool = False
 
     def __post_init__(self) -> None:
         _refuse_two_modes(self.target_kg, self.ranks, self.target_bpfv)
+        if not isinstance(self.lossless, (bool, np.bool_)):
+            raise ValueError(f"lossless must be true or false, got {self.lossless!r}")
+        object.__setattr__(self, "lossless", bool(self.lossless))
+        if self.max_error is not None:
+            object.__setattr__(self, "max_error", parse_max_error(self.max_error))
+            if self.target_bpfv is not None:
+                raise ValueError(
+                    "give max_error or target_bpfv, not both: a size target cannot also promise "
+                    "a bound on every vertex"
+                )
+        if self.lossless:
+            given = [
+                name
+                for name in ("target_kg", "ranks", "target_bpfv", "max_error")
+                if getattr(self, name) is not None
+            ]
+            if given:
+                raise ValueError(f"lossless stands alone: give it without {' and '.join(given)}")
         for name in ("target_kg", "target_bpfv"):
             value = getattr(self, name)
             if value is not None:
@@ -98,7 +125,12 @@ class EncodeOptions:
 
     @property
     def mode(self) -> Mode:
-        """``"ranks"``, ``"bpfv"`` or ``"kg"`` (the default)."""
+        """``"lossless"``, ``"ranks"``, ``"bpfv"``, ``"max-error"`` (a bound alone) or ``"kg"``
+        (the default, with or without a bound)."""
+        if self.lossless:
+            return "lossless"
+        if self.max_error is not None and self.target_kg is None and self.ranks is None:
+            return "max-error"
         if self.ranks is not None:
             return "ranks"
         return "bpfv" if self.target_bpfv is not None else "kg"
@@ -112,7 +144,21 @@ class EncodeOptions:
     def target(self) -> float | None:
         """What the mode aims at: :attr:`kg_target` for ``"kg"``, ``target_bpfv`` for
         ``"bpfv"``, nothing for fixed ranks."""
-        return {"kg": self.kg_target, "bpfv": self.target_bpfv, "ranks": None}[self.mode]
+        targets: dict[str, float | None] = {"kg": self.kg_target, "bpfv": self.target_bpfv}
+        return targets.get(self.mode)
+
+    @property
+    def corrections(self) -> bool:
+        """Whether the encode may add corrections (§6.9): a bound on every vertex, or lossless."""
+        return self.lossless or self.max_error is not None
+
+    def max_error_length(self, diagonal: float) -> float | None:
+        """:attr:`max_error` as a length, given the sequence's bounding-box diagonal."""
+        if self.max_error is None:
+            return None
+        if isinstance(self.max_error, str):
+            return float(self.max_error[:-1]) / 100.0 * diagonal
+        return float(self.max_error)
 
     def to_config(self) -> dict[str, Any]:
         """Every field, as JSON's types (ranks as a list)."""
@@ -147,6 +193,24 @@ def _refuse_two_modes(target_kg: object, ranks: object, target_bpfv: object) -> 
     ]
     if len(given) > 1:
         raise ValueError(f"give one of target_kg, ranks and target_bpfv, not {' and '.join(given)}")
+
+
+def parse_max_error(value: object) -> float | str:
+    """A bound on every vertex: a positive finite length, or ``"P%"`` of the bounding-box
+    diagonal (kept as the string, normalised, so that the options stay JSON-safe)."""
+    if isinstance(value, str):
+        text = value.strip()
+        number = text[:-1].strip() if text.endswith("%") else text
+        try:
+            amount = float(number)
+        except ValueError:
+            amount = math.nan
+        if not (math.isfinite(amount) and amount > 0):
+            raise ValueError(
+                f"max_error must be a positive length or a percentage such as '0.1%', got {value!r}"
+            )
+        return f"{amount!r}%" if text.endswith("%") else amount
+    return _positive_number("max_error", value)
 
 
 def _positive_number(name: str, value: object) -> float:

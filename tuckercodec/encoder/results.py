@@ -29,6 +29,13 @@ class EncodeReport:
     trials: int = 0
     segments: int = 1  # segments of frames, each its own decomposition (format 1.1)
     basis: str | None = None  # "shared" or "own" for a segmented file
+    #: the largest Euclidean distance of a decoded vertex from the input's, in the sequence's
+    #: units, and the (frame, vertex) where it is (the first such in frame order)
+    max_distance: float | None = None
+    max_distance_at: tuple[int, int] | None = None
+    max_error: float | None = None  # the bound asked for, as a length (None: no bound)
+    lossless: bool = False  # decoded values checked to be the input's, bit for bit
+    corrections: str | None = None  # the domain of the file's corrections (§6.9), if it has any
 
     @property
     def bpfv(self) -> float:
