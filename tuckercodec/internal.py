@@ -34,7 +34,7 @@ from __future__ import annotations
 from .analysis import Curve
 from .atomic import refuse_existing, write_atomic
 from .encoder import rdo
-from .format import faces, qmat, sections, streams, traversal
+from .format import faces, qmat, residual, sections, streams, traversal
 from .format.container import (
     CRC,
     HEAD_SIZE,
@@ -44,6 +44,7 @@ from .format.container import (
     pack_raw,
     parse_container,
 )
+from .format.limits import DEFAULT_LIMITS
 from .format.prediction import tree_depths
 from .gltf_export import write_decomposition_gltf
 from .hosvd import centre_frames, reconstruct
@@ -57,6 +58,7 @@ from .zarr_codec.chunk import chunk_mode, decode_chunk, encode_chunk
 
 __all__ = [
     "CRC",
+    "DEFAULT_LIMITS",
     "HEAD_SIZE",
     "KG_DEFINITION",
     "PREAMBLE",
@@ -79,6 +81,7 @@ __all__ = [
     "rdo",
     "reconstruct",
     "refuse_existing",
+    "residual",
     "sample_gltf",
     "sample_path",
     "save_figure",

@@ -110,9 +110,12 @@ def header_map(
     target_kg: float | None,
     encoder: str,
     frame_rate: float | None,
+    claims: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Every header field but the section table, in the order the reference encoder writes
-    them (the order changes the bytes, not the meaning)."""
+    them (the order changes the bytes, not the meaning). ``claims``: more keys of the
+    informative ``error`` map (§4.1: the worst vertex of a file with a bound, format 1.3),
+    after the others, so that a file without them is written as before."""
     header: dict[str, Any] = {
         "vertices": vertices,
         "frames": frames,
@@ -123,6 +126,7 @@ def header_map(
             "definition": KG_DEFINITION_ID,
             "truncation_kg": truncation_kg,
             "target_kg": target_kg,
+            **(claims or {}),
         },
         "encoder": encoder,
     }
@@ -178,7 +182,12 @@ def read_header(container: Container, limits: Limits) -> FileInfo:
     if container.segmented:  # §6.7: the index replaces ranks and u2
         segments = read_segment_index(header, vertices, frames, limits)
         shared = check_segmented_sections(
-            container.sections, vertices, segments, limits, coding_tools=container.coding_tools
+            container.sections,
+            vertices,
+            segments,
+            limits,
+            coding_tools=container.coding_tools,
+            corrections=container.corrections,
         )
         i = shared or max(segment.ranks[0] for segment in segments)
         k = max(segment.ranks[1] for segment in segments)
@@ -192,6 +201,7 @@ def read_header(container: Container, limits: Limits) -> FileInfo:
             (i, k),
             limits,
             coding_tools=container.coding_tools,
+            corrections=container.corrections,
         )
     frame_rate = _field(
         header, "frame_rate", _is_frame_rate, "absent, nil or a positive finite float"
