@@ -36,8 +36,8 @@ from .sequence import MeshSequence
 KG_DEFINITION = "KG (Karni-Gotsman 2004): 100*||A-B||_F / ||A - per-frame vertex mean of A||_F"
 
 MAX_DISTANCE_DEFINITION = (
-    "worst vertex: max over frames f and vertices k of ||A_fk - B_fk||_2, the Euclidean distance "
-    "in the sequence's units (the first in frame-major order on ties)"
+    "the largest Euclidean distance ||A_fk - B_fk||_2 over frames f and vertices k, in the "
+    "sequence's units; the first in frame-major order on ties"
 )
 
 MeanKind = Literal["frame", "temporal"]
