@@ -8,6 +8,7 @@ import re
 import shutil
 import subprocess
 import sys
+from typing import Any
 
 import numpy as np
 import pytest
@@ -238,6 +239,12 @@ def printed_worst(line: str) -> tuple[float, int, int]:
     return float(found[1]), int(found[2]), int(found[3])
 
 
+def assert_worst(line: str, distance: float, frame: int, vertex: int) -> None:
+    """The line names this frame and vertex, and this distance to the 6 digits printed."""
+    printed, *at = printed_worst(line)
+    assert printed == pytest.approx(distance, rel=1e-5) and at == [frame, vertex], line
+
+
 def line_with(out: str, words: str) -> str:
     lines = [line for line in out.splitlines() if words in line]
     assert len(lines) == 1, out
@@ -257,7 +264,7 @@ def test_decode_and_eval_report_the_worst_vertex_beside_the_kg(wave_npz, tmp_pat
     lines = out.splitlines()
     kg_at = next(n for n, line in enumerate(lines) if line.startswith("actual KG error against"))
     assert lines[kg_at + 1].startswith(f"actual worst vertex against {wave_npz}: ")
-    assert printed_worst(lines[kg_at + 1]) == (pytest.approx(distance, rel=1e-5), frame, vertex)
+    assert_worst(lines[kg_at + 1], distance, frame, vertex)
 
     # a range of frames: the worst of those frames, numbered as in the file
     part = tmp_path / "part.npz"
@@ -265,7 +272,7 @@ def test_decode_and_eval_report_the_worst_vertex_beside_the_kg(wave_npz, tmp_pat
     assert main([*args, "--reference", str(wave_npz)]) == 0
     line = line_with(capsys.readouterr().out, "actual worst vertex against")
     distance, frame, vertex = brute_worst(original[11:15], np.load(part)["V"])
-    assert printed_worst(line) == (pytest.approx(distance, rel=1e-5), 11 + frame, vertex)
+    assert_worst(line, distance, 11 + frame, vertex)
     assert "of the 4 frames decoded" in line
 
     # the same range as a glTF decomposition: the .tkc's worst vertex of those frames
@@ -273,14 +280,14 @@ def test_decode_and_eval_report_the_worst_vertex_beside_the_kg(wave_npz, tmp_pat
     args = ["decode", str(packed), "-o", str(glb), "--frames", "11:15"]
     assert main([*args, "--reference", str(wave_npz)]) == 0
     line = line_with(capsys.readouterr().out, "actual worst vertex against")
-    assert printed_worst(line) == (pytest.approx(distance, rel=1e-5), 11 + frame, vertex)
+    assert_worst(line, distance, 11 + frame, vertex)
 
     # eval: text beside the KG error, and JSON with the keys info --json uses
     assert main(["eval", str(wave_npz), str(everything)]) == 0
     lines = capsys.readouterr().out.splitlines()
     assert lines[0].startswith("KG error") and lines[1].startswith("worst vertex")
     distance, frame, vertex = brute_worst(original, decoded)
-    assert printed_worst(lines[1]) == (pytest.approx(distance, rel=1e-5), frame, vertex)
+    assert_worst(lines[1], distance, frame, vertex)
     assert main(["eval", str(wave_npz), str(everything), "--json"]) == 0
     figures = json.loads(capsys.readouterr().out)
     assert figures["max_distance"] == distance and figures["max_distance_at"] == [frame, vertex]
@@ -347,7 +354,7 @@ def test_encode_prints_the_worst_vertex_and_the_bound_it_measured(
 
     from tuckercodec.encoder import Encoder, EncodeResult
 
-    measured = {
+    measured: dict[str, Any] = {
         "max_distance": 0.00123456789,
         "max_distance_at": (4, 9),
         "max_error": 0.002,
