@@ -30,6 +30,7 @@ from ..format.container import parse_container
 from ..format.limits import DEFAULT_LIMITS
 from ..format.reconstruction import reconstruct_frames, reconstruction_basis
 from ..format.residual import FLOAT32, FLOAT64, GRID
+from ..metrics import max_distance
 from ..sequence import MeshSequence
 from . import search
 from .options import EncodeOptions
@@ -167,19 +168,10 @@ def tolerance(reference: np.ndarray) -> float:
 
 
 def worst_vertex(positions: np.ndarray, original: np.ndarray) -> tuple[float, tuple[int, int]]:
-    """The largest Euclidean distance between a vertex of ``positions`` and the same vertex of
-    ``original`` (F, K, 3), and its (frame, vertex): the first in frame-major order."""
-    worst, where = -1.0, (0, 0)
-    frames_at_once = max(1, (1 << 20) // (3 * original.shape[1]))
-    for start in range(0, original.shape[0], frames_at_once):
-        block = slice(start, start + frames_at_once)
-        squared = np.square(positions[block] - original[block]).sum(axis=2)
-        flat = int(np.argmax(squared))
-        frame, vertex = divmod(flat, squared.shape[1])
-        value = float(squared[frame, vertex])
-        if value > worst:
-            worst, where = value, (start + frame, vertex)
-    return math.sqrt(max(worst, 0.0)), where
+    """The worst vertex of ``positions`` against ``original`` (the metric's
+    :func:`~tuckercodec.metrics.max_distance`): its Euclidean distance, and (frame, vertex)."""
+    worst = max_distance(original, positions)
+    return worst.distance, worst.at
 
 
 def verify(

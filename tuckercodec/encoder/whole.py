@@ -25,6 +25,7 @@ from ..format.header import header_map
 from ..format.qmat import QuantizedMatrix
 from ..format.reconstruction import factor_value_count, reconstruct_frames, reconstruction_basis
 from ..hosvd import project
+from ..metrics import ErrorAccumulator
 from ..sequence import MeshSequence
 from ..topology import MeshPrediction
 from . import rdo
@@ -251,17 +252,13 @@ class WholeWorkspace:
         basis = reconstruction_basis(
             factors.core.values().reshape(i, 3, k), self.analysis.decomposition.u2
         )
-        worst, where = -1.0, (0, 0)
+        measured = ErrorAccumulator()
         frames_at_once = max(1, BLOCK_BYTES // (24 * self.vertex_count))
         for start in range(0, self.frame_count, frames_at_once):
             block = slice(start, start + frames_at_once)
-            difference = reconstruct_frames(u1, basis, u3[block], centroids[block])
-            difference -= self.sequence.vertices[block]
-            squared = np.square(difference).sum(axis=2)
-            frame, vertex = divmod(int(np.argmax(squared)), self.vertex_count)
-            if squared[frame, vertex] > worst:
-                worst, where = float(squared[frame, vertex]), (start + frame, vertex)
-        return math.sqrt(worst), where
+            decoded = reconstruct_frames(u1, basis, u3[block], centroids[block])
+            measured.add(self.sequence.vertices[block], decoded)
+        return measured.worst.distance, measured.worst.at
 
     # the whole workspace measures every trial: its model is the decoded error
     modelled_error2 = decoded_error2
