@@ -216,7 +216,7 @@ class Encoder:
                 max_distance_at=where,
                 max_error=goal.bound,
                 lossless=goal.lossless,
-                corrections=goal.domain if section is not None else None,
+                corrections=chosen.domain.describe() if chosen.domain and section else None,
             ),
         )
 
