@@ -31,10 +31,12 @@ from ..format.container import parse_container
 from ..format.limits import DEFAULT_LIMITS
 from ..format.reconstruction import reconstruct_frames, reconstruction_basis
 from ..format.residual import FLOAT32, FLOAT64, GRID, Domain
-from ..metrics import max_distance
+from ..io.streaming import FrameSource
+from ..metrics import Displacement, ErrorAccumulator, max_distance
 from ..sequence import MeshSequence
 from . import search
 from .options import EncodeOptions
+from .segmented import SegmentedWorkspace
 from .trial import Quantized
 from .whole import Ranks, WholeWorkspace
 
@@ -129,6 +131,7 @@ class Corrected:
     domain: Domain | None
     section: tuple[dict[str, Any], bytes] | None
     tucker_bytes: int
+    kg: float | None = None  # the ladder's KG error this part was quantized for
 
     @property
     def total_bytes(self) -> int:
@@ -284,6 +287,7 @@ def search_whole(work: WholeWorkspace, options: EncodeOptions, goal: Goal) -> tu
         part = quick_part(work, kg)
         if part is not None:
             tried[kg] = attempt(part)
+            tried[kg].kg = kg
     if not tried:
         raise UnreachableTargetError("no Tucker part of this sequence can be quantized")
     ranked = sorted(tried, key=lambda kg: tried[kg].total_bytes)
@@ -292,6 +296,7 @@ def search_whole(work: WholeWorkspace, options: EncodeOptions, goal: Goal) -> tu
         part = quick_part(work, middle)
         if part is not None:
             tried[middle] = attempt(part)
+            tried[middle].kg = middle
     best_kg = min(tried, key=lambda kg: tried[kg].total_bytes)
     return tried[best_kg], len(tried)
 
@@ -336,16 +341,18 @@ def final_section(
     return section, integers, corrected_positions(exact, integers, domain)
 
 
-def check_written(data: bytes, integers: np.ndarray) -> None:
-    """Read the RESD section back from the packed file as a decoder does (§5 step 18, §6.9) and
+def check_written(
+    data: bytes, integers: np.ndarray, section_id: str = residual.SECTION_STEM
+) -> None:
+    """Read a RESD section back from the packed file as a decoder does (§5 step 18, §6.9) and
     check that it holds ``integers``: the positions the encoder measured are then what every
     decoder returns, since §8.1 and §6.9 leave no freedom in the arithmetic."""
     container = parse_container(data, DEFAULT_LIMITS)
-    entry = container.section(residual.SECTION_STEM)
+    entry = container.section(section_id)
     assert entry is not None
     payload = container.payload(data, entry)
     frames, vertices = integers.shape[:2]
-    where = f"section {residual.SECTION_STEM}"
+    where = f"section {section_id}"
     layout = residual.read_layout(
         entry.params, entry.length, frames, vertices, DEFAULT_LIMITS, where
     )
@@ -357,3 +364,92 @@ def check_written(data: bytes, integers: np.ndarray) -> None:
                 f"the corrections of frames {start}..{stop - 1} read back differently from what "
                 "was packed; this is a bug: please report it"
             )
+
+
+# -- a segmented file (§6.7): corrections per segment -------------------------------------------
+
+
+def goal_of_source(options: EncodeOptions, source: FrameSource, block_frames: int) -> Goal:
+    """:func:`goal_of` for a sequence read a range of frames at a time: one pass for the
+    bounding box, or for the lossless domains every range holds."""
+    low = np.full(3, np.inf)
+    high = np.full(3, -np.inf)
+    domains: tuple[Domain, ...] | None = None
+    largest = 0.0
+    for start in range(0, source.frame_count, block_frames):
+        block = source.read(start, min(source.frame_count, start + block_frames))
+        if options.lossless:
+            held = lossless_domains(block)
+            domains = held if domains is None else tuple(d for d in domains if d in held)
+            continue
+        low = np.minimum(low, block.min(axis=(0, 1)))
+        high = np.maximum(high, block.max(axis=(0, 1)))
+        largest = max(largest, float(np.abs(block).max()))
+    if options.lossless:
+        assert domains is not None
+        return Goal(domains)
+    bound = options.max_error_length(float(np.linalg.norm(high - low)))
+    assert bound is not None
+    return Goal((Domain(GRID, step=_grid_step(bound, largest)),), bound)
+
+
+def _grid_step(bound: float, largest: float) -> float:
+    """A grid's step for the bound D on positions reaching ``largest``, or
+    ``UnreachableTargetError`` if float64 cannot resolve D there."""
+    resolvable = 64 * np.spacing(largest) if largest > 0 else 0.0
+    if not bound > resolvable:
+        raise UnreachableTargetError(
+            f"no file can keep every vertex within {bound:.6g}: the positions reach "
+            f"{largest:.6g}, where float64 itself resolves only about {np.spacing(largest):.3g} "
+            f"(a bound must be above {resolvable:.3g}); ask for a larger bound, or --lossless"
+        )
+    return float(2.0 * bound / math.sqrt(3.0) * (1.0 - GRID_ROOM))
+
+
+@dataclass
+class SegmentCorrections:
+    """Every segment's RESD.s and what the corrected file measures."""
+
+    sections: list[tuple[dict[str, Any], bytes]]
+    integers: list[np.ndarray]
+    error2: float
+    worst: Displacement
+    domains: list[Domain]
+
+
+def correct_segments(
+    work: SegmentedWorkspace, quantized: Quantized[Any], goal: Goal, level: int
+) -> SegmentCorrections:
+    """A pass over the input: each segment's §8.1 positions, its corrections (the smallest of
+    the goal's domains) and the error of the corrected file, measured on them."""
+    work.say(f"pass {work.passes + 1}: correcting every segment")
+    shared = None if quantized.shared_u1 is None else quantized.shared_u1.values()
+    measured = ErrorAccumulator()
+    out = SegmentCorrections([], [], 0.0, Displacement(0.0, 0, 0), [])
+    for number, part in enumerate(work.decoded(quantized)):
+        i = part.basis.shape[0]
+        u1 = part.own_u1 if part.own_u1 is not None else shared[:, :i]  # type: ignore[index]
+        core = quantized.segments[number].core.values().reshape(i, 3, part.u3.shape[1])
+        u2 = work.models[number].u2
+        exact = residual.exact_frames(
+            np.ascontiguousarray(u1.T), residual.exact_basis(core, u2), part.u3, part.centroids
+        )
+        original = work.source.read(part.segment.start, part.segment.stop)
+        best: tuple[tuple[dict[str, Any], bytes], np.ndarray, Domain] | None = None
+        for domain in goal.domains:
+            integers = integers_for(exact, original, goal, domain)
+            section = residual.encode_section(integers, domain, min(level, CORRECTION_LEVEL))
+            if best is None or len(section[1]) < len(best[0][1]):
+                best = (section, integers, domain)
+        assert best is not None
+        section, integers, domain = best
+        decoded = corrected_positions(exact, integers, domain)
+        verify(decoded, original, goal, goal.bound)
+        measured.add(original, decoded, frames=range(part.segment.start, part.segment.stop))
+        out.sections.append(section)
+        out.integers.append(integers)
+        out.domains.append(domain)
+    work.passes += 1
+    out.worst = measured.worst
+    out.error2 = float(np.sum(measured.per_frame_squared()))
+    return out
