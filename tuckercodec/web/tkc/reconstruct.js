@@ -2,6 +2,12 @@
 //   Σ_a Σ_c Σ_b U1[v, a] · CORE[a, c, b] · U2[x, c] · U3[f, b] + CENT[f, x],
 // grouped as the reference groups it: B[a, x, b] = Σ_c CORE[a, c, b] · U2[x, c] once per
 // segment, then per frame W[a, x] = Σ_b B[a, x, b] · U3[f, b] and U1 · W + CENT[f]. All binary64.
+//
+// Every file is reconstructed in the one order §8.1 makes normative for files with corrections
+// (flag bit 2): each sum starts from its first product (not from 0, which could only change
+// the sign of a zero) and adds the others one at a time in index order, every operation one
+// binary64 multiplication or addition (JavaScript and WebAssembly never fuse or widen them).
+// So P is the same bits in every decoder, as §6.9 needs.
 
 import { formatError } from './errors.js';
 
@@ -24,9 +30,9 @@ export function coreTimesU2(core, u2, i, k) {
   for (let a = 0; a < i; a++) {
     for (let x = 0; x < 3; x++) {
       for (let b = 0; b < k; b++) {
-        let sum = 0;
-        for (let c = 0; c < 3; c++) sum += core[(a * 3 + c) * k + b] * u2[3 * x + c];
-        B[(a * 3 + x) * k + b] = sum;
+        // (CORE[a, 0, b]·U2[x, 0] + CORE[a, 1, b]·U2[x, 1]) + CORE[a, 2, b]·U2[x, 2]
+        const sum = core[(a * 3) * k + b] * u2[3 * x] + core[(a * 3 + 1) * k + b] * u2[3 * x + 1];
+        B[(a * 3 + x) * k + b] = sum + core[(a * 3 + 2) * k + b] * u2[3 * x + 2];
       }
     }
   }
@@ -35,7 +41,8 @@ export function coreTimesU2(core, u2, i, k) {
 
 /**
  * Frame t of a segment into `out` (K*3, any array type: Float64Array, or Float32Array for the
- * GPU, which rounds each binary64 position once). Every position must be finite (R36).
+ * GPU, which rounds each binary64 position once). Every position must be finite (R36), unless
+ * `finite` is false (§8.1: in the corrections' domain float32, P may be infinite or NaN).
  * @template {Float64Array | Float32Array} T
  * @param {Factors} factors u1 is K × columns row-major (a shared basis may have more columns
  *   than the segment uses); simd, when not null, the same U1 laid out for WebAssembly SIMD
@@ -44,15 +51,16 @@ export function coreTimesU2(core, u2, i, k) {
  * @param {T} out
  * @param {Float64Array} W scratch of i*3
  * @param {number} frameNumber the frame within the file, for messages
+ * @param {boolean} [finite] false: do not require finite positions (R36)
  * @returns {T}
  */
-export function reconstructFrame(factors, t, out, W, frameNumber) {
+export function reconstructFrame(factors, t, out, W, frameNumber, finite = true) {
   const { u1, columns, i, k, B, u3, cent, simd } = factors;
   for (let a = 0; a < i; a++) {
     for (let x = 0; x < 3; x++) {
-      let sum = 0;
       const row = (a * 3 + x) * k;
-      for (let b = 0; b < k; b++) sum += B[row + b] * u3[t * k + b];
+      let sum = B[row] * u3[t * k];
+      for (let b = 1; b < k; b++) sum += B[row + b] * u3[t * k + b];
       W[a * 3 + x] = sum;
     }
   }
@@ -60,7 +68,7 @@ export function reconstructFrame(factors, t, out, W, frameNumber) {
   const cy = cent[t * 3 + 1];
   const cz = cent[t * 3 + 2];
   const K = out.length / 3;
-  let finite = true;
+  let allFinite = true;
   if (simd) {
     // U1 · W in WebAssembly SIMD (simd.js): the same bits as the loop below, five times sooner
     const product = simd.product(W, i);
@@ -68,18 +76,19 @@ export function reconstructFrame(factors, t, out, W, frameNumber) {
       const px = product[v] + cx;
       const py = product[v + 1] + cy;
       const pz = product[v + 2] + cz;
-      if (px - px + (py - py) + (pz - pz) !== 0) finite = false;
+      if (px - px + (py - py) + (pz - pz) !== 0) allFinite = false;
       out[v] = px;
       out[v + 1] = py;
       out[v + 2] = pz;
     }
   } else {
     for (let v = 0; v < K; v++) {
-      let px = 0;
-      let py = 0;
-      let pz = 0;
       const base = v * columns;
-      let a = 0;
+      const first = u1[base];
+      let px = first * W[0];
+      let py = first * W[1];
+      let pz = first * W[2];
+      let a = 1;
       // four columns a step: a quarter of the loop's overhead, the same sum order
       for (; a + 3 < i; a += 4) {
         const w = 3 * a;
@@ -102,13 +111,13 @@ export function reconstructFrame(factors, t, out, W, frameNumber) {
       py += cy;
       pz += cz;
       // x − x is 0 for every finite x and NaN for ±∞ and NaN: one test for the three values
-      if (px - px + (py - py) + (pz - pz) !== 0) finite = false;
+      if (px - px + (py - py) + (pz - pz) !== 0) allFinite = false;
       out[3 * v] = px;
       out[3 * v + 1] = py;
       out[3 * v + 2] = pz;
     }
   }
-  if (!finite) {
+  if (finite && !allFinite) {
     for (let v = 0; v < K; v++) {
       for (let x = 0; x < 3; x++) {
         const p = reconstructAgain(factors, t, v, x, W);
@@ -130,7 +139,7 @@ export function reconstructFrame(factors, t, out, W, frameNumber) {
  */
 function reconstructAgain(factors, t, v, x, W) {
   const { u1, columns, i, cent } = factors;
-  let p = 0;
-  for (let a = 0; a < i; a++) p += u1[v * columns + a] * W[a * 3 + x];
+  let p = u1[v * columns] * W[x];
+  for (let a = 1; a < i; a++) p += u1[v * columns + a] * W[a * 3 + x];
   return p + cent[t * 3 + x];
 }
