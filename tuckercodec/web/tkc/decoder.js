@@ -1,7 +1,9 @@
-// The JavaScript decoder of the tuckercodec format, written from spec/FORMAT.md (version 1.2):
+// The JavaScript decoder of the tuckercodec format, written from spec/FORMAT.md (version 1.3):
 // openTkc(bytes) checks the container and header, decodes the faces and names, and, for a file
-// that is not segmented, every factor; a segmented file's segments are decoded when one of
-// their frames is first asked for (§6.7). Every failure is a TkcError carrying its §11 rule.
+// that is not segmented, every factor and its corrections' parameters; a segmented file's
+// segments are decoded when one of their frames is first asked for (§6.7). A file with
+// corrections (§6.9) decodes a chunk of them when one of its frames is first asked for, and
+// keeps the last few chunks. Every failure is a TkcError carrying its §11 rule.
 //
 //   import { openTkc } from './tkc/decoder.js';
 //   const file = openTkc(new Uint8Array(await (await fetch('a.tkc')).arrayBuffer()));
@@ -18,14 +20,19 @@ import { MsgFloat, isInt } from './msgpack.js';
 import { decodeNames, defaultNames, nameSize } from './names.js';
 import { decodeQmat } from './qmat.js';
 import { coreTimesU2, reconstructFrame } from './reconstruct.js';
+import { correct, decodeChunk, readResidual } from './residual.js';
 import { simdBasis } from './simd.js';
 import { meshTopology } from './topology.js';
 
 export { TkcError } from './errors.js';
 export { DEFAULT_LIMITS } from './limits.js';
 
+/** Bytes of decoded correction chunks a file keeps (at least the last one, whatever its size). */
+const CHUNK_CACHE_BYTES = 64 * 2 ** 20;
+
 /**
  * @typedef {import('./reconstruct.js').Factors} Factors
+ * @typedef {import('./residual.js').Residual} Residual
  * @typedef {import('./simd.js').SimdBasis} SimdBasis
  * @typedef {import('./topology.js').Topology} Topology
  */
@@ -98,6 +105,12 @@ export class TkcFile {
       this.names = defaultNames(this.frames);
     }
     this._scratch = new Float64Array(0);
+    /** @type {Float64Array} P of §8.1, before its corrections */
+    this._exact = new Float64Array(0);
+    /** @type {Map<string, Int32Array>} decoded correction chunks, the most recent last */
+    this._chunks = new Map();
+    // step 18: the corrections' parameters (a segmented file's, with their segment)
+    if (!layout.segmented && layout.corrections) this._readResidual(this._segment(0), 0);
   }
 
   /**
@@ -137,10 +150,41 @@ export class TkcFile {
     return { u1, u3: d.u3, core: d.core, cent: d.cent, u2: d.u2, ranks: [d.i, d.k] };
   }
 
-  /** Decodes every segment: checks the whole file (the Python `Decoder.check()`). */
+  /**
+   * Decodes every segment, and with corrections every frame (their chunks' zstd frames and
+   * values are checked only so): checks the whole file (the Python `Decoder.check()`).
+   */
   check() {
     for (let s = 0; s < this._decoded.length; s++) this._segment(s);
+    if (this.layout.corrections) {
+      const out = new Float64Array(3 * this.vertices);
+      for (let f = 0; f < this.frames; f++) this._reconstruct(f, out);
+    }
     return this;
+  }
+
+  /**
+   * Segment s's corrections (§6.9): null in a file without them (flag bit 2), else the RESD
+   * section's domain, grid step (0 outside domain "grid"), predict, frames per chunk and chunks.
+   */
+  residual(s = 0) {
+    const r = this._segment(s).residual;
+    if (r === null) return null;
+    return { domain: r.domain, step: r.step, predict: r.predict, chunkFrames: r.chunkFrames, chunks: r.chunks.length };
+  }
+
+  /**
+   * Segment s's restored correction integers e (§6.9), F_s × K × 3 in C order, or null in a
+   * file without corrections. Decodes every chunk of the segment (for tests and tools: a frame
+   * needs only its own chunk).
+   */
+  residualIntegers(s = 0) {
+    const d = this._segment(s);
+    if (d.residual === null) return null;
+    const out = new BigInt64Array(d.residual.frames * 3 * this.vertices);
+    const halves = new Int32Array(out.buffer);
+    d.residual.chunks.forEach((chunk, c) => halves.set(this._chunk(s, d, c), 2 * chunk.start * 3 * this.vertices));
+    return out;
   }
 
   /**
@@ -158,7 +202,55 @@ export class TkcFile {
     const d = this._segment(s);
     if (d.simd === undefined) d.simd = this._simdOnce(d); // on the first frame, not at open
     if (this._scratch.length < 3 * d.i) this._scratch = new Float64Array(3 * d.i);
-    return reconstructFrame(d, f - this.layout.segments[s].start, out, this._scratch, f);
+    const t = f - this.layout.segments[s].start;
+    const residual = d.residual;
+    if (residual === null) return reconstructFrame(d, t, out, this._scratch, f);
+    // §8.1 then §6.9: P (finite but in domain float32, R36), the frame's chunk, the correction
+    if (this._exact.length !== out.length) this._exact = new Float64Array(out.length);
+    reconstructFrame(d, t, this._exact, this._scratch, f, residual.domain !== 'float32');
+    const c = Math.floor(t / residual.chunkFrames);
+    const pairs = this._chunk(s, d, c);
+    correct(residual, this._exact, pairs, (t - residual.chunks[c].start) * out.length, out, f);
+    return out;
+  }
+
+  /**
+   * Chunk c of segment s's corrections, decoded (R29) and restored, from the cache when there.
+   * @param {number} s
+   * @param {Factors} d the segment, its residual read
+   * @param {number} c
+   */
+  _chunk(s, d, c) {
+    const key = `${s}/${c}`;
+    let pairs = this._chunks.get(key);
+    if (pairs !== undefined) {
+      this._chunks.delete(key); // most recently used: last
+    } else {
+      const residual = /** @type {Residual} */ (d.residual);
+      pairs = decodeChunk(residual, c, /** @type {Uint8Array} */ (d.residualPayload), this.vertices);
+      let bytes = pairs.byteLength;
+      for (const held of this._chunks.values()) bytes += held.byteLength;
+      for (const [old, held] of this._chunks) {
+        if (bytes <= CHUNK_CACHE_BYTES) break;
+        this._chunks.delete(old);
+        bytes -= held.byteLength;
+      }
+    }
+    this._chunks.set(key, pairs);
+    return pairs;
+  }
+
+  /**
+   * §5 step 18: the RESD section's parameters (R40, R21), then its CRC (R19).
+   * @param {Factors} d
+   * @param {number} s
+   */
+  _readResidual(d, s) {
+    const segment = this.layout.segments[s];
+    const section = /** @type {import('./container.js').Section} */ (segment.resd);
+    const residual = readResidual(section, segment.frames, this.vertices, this.limits);
+    d.residualPayload = this._payload(section);
+    d.residual = residual;
   }
 
   /**
@@ -208,7 +300,13 @@ export class TkcFile {
     const u3 = decodeQmat(segment.u3, this._payload(segment.u3), segment.frames, k, 'time', tools, topology);
     const core = decodeQmat(segment.core, this._payload(segment.core), i * 3 * k, 1, 'none', tools, topology);
     const cent = decodeQmat(segment.cent, this._payload(segment.cent), segment.frames, 3, 'time', tools, topology);
-    const decoded = { u1, columns, i, k, u3, core, cent, u2: segment.u2, B: coreTimesU2(core, segment.u2, i, k) };
+    /** @type {Factors} */
+    const decoded = {
+      u1, columns, i, k, u3, core, cent, u2: segment.u2, B: coreTimesU2(core, segment.u2, i, k),
+      residual: null, residualPayload: null,
+    };
+    // step 16s: a segment's RESD.s after its factors (a whole file's RESD comes after NAME)
+    if (this.layout.segmented && this.layout.corrections) this._readResidual(decoded, s);
     this._decoded[s] = decoded;
     return decoded;
   }
@@ -223,11 +321,19 @@ function errorClaims(error) {
   /** @param {import('./msgpack.js').MsgValue | undefined} value */
   const number = (value) => (value instanceof MsgFloat ? value.value : isInt(value) ? Number(value) : null);
   const definition = error.get('definition');
+  const at = error.get('max_distance_at');
+  const lossless = error.get('lossless');
   return {
     kg: number(error.get('kg')),
     truncationKg: number(error.get('truncation_kg')),
     targetKg: number(error.get('target_kg')),
     definition: typeof definition === 'string' ? definition : null,
+    // 1.3: the largest vertex distance the encoder measured, where, the bound it was given,
+    // and whether it checked the decoded values are the input's bits
+    maxDistance: number(error.get('max_distance')),
+    maxDistanceAt: Array.isArray(at) && at.length === 2 && at.every((v) => isInt(v)) ? at.map(Number) : null,
+    targetMaxDistance: number(error.get('target_max_distance')),
+    lossless: typeof lossless === 'boolean' ? lossless : null,
   };
 }
 
