@@ -1,0 +1,198 @@
+"""Files with corrections (spec/FORMAT.md §6.9, format 1.3) made by hand, from the spec alone:
+the exact reconstruction P of §8.1 written literally (one binary64 operation at a time, in its
+order), the correction integers e that move P onto chosen targets in each domain, and a RESD
+section coding them (64-bit zigzag, byte planes, zstd, chunks, predict 1's differences). Tests
+hold the JavaScript decoder to these files without needing the reference encoder, and edit them
+to break one rule of §6.9 at a time."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import zstandard
+
+from tests.support.compressed import Parts
+from tuckercodec import Decoder
+from tuckercodec.format.container import pack_container
+
+FLAG_CORRECTIONS = 1 << 2
+MINOR = 3
+MASK64 = (1 << 64) - 1
+
+
+def exact_reconstruction(data: bytes) -> list[np.ndarray]:
+    """P of §8.1 for every segment (each F_s x K x 3), literally: numpy's elementwise float64
+    multiply and add are single IEEE operations, done here in §8.1's order."""
+    decoder = Decoder(data)
+    out = []
+    for number in range(len(decoder.segments)):
+        factors = decoder.segment_factors(number)
+        u1, u3, core, cent, u2 = (
+            factors.u1,
+            factors.u3,
+            factors.core,
+            factors.centroids,
+            factors.u2,
+        )
+        i, k = core.shape[0], core.shape[2]
+        with np.errstate(over="ignore", invalid="ignore"):
+            B = np.empty((i, 3, k))
+            for x in range(3):
+                B[:, x, :] = (core[:, 0, :] * u2[x, 0] + core[:, 1, :] * u2[x, 1]) + core[
+                    :, 2, :
+                ] * u2[x, 2]
+            frames = np.empty((u3.shape[0], u1.shape[0], 3))
+            for t in range(u3.shape[0]):
+                W = B[:, :, 0] * u3[t, 0]
+                for b in range(1, k):
+                    W = W + B[:, :, b] * u3[t, b]
+                S = u1[:, 0:1] * W[0]
+                for a in range(1, i):
+                    S = S + u1[:, a : a + 1] * W[a]
+                frames[t] = S + cent[t]
+        out.append(frames)
+    return out
+
+
+def ordered(values: np.ndarray, bits: int) -> list[int]:
+    """The ordered integers (§6.9) of binary32 (bits 32) or binary64 values."""
+    signed = values.astype(np.float32 if bits == 32 else np.float64).view(
+        np.int32 if bits == 32 else np.int64
+    )
+    return [w if w >= 0 else -(1 << (bits - 1)) - w - 1 for w in signed.reshape(-1).tolist()]
+
+
+def from_ordered(integers: list[int], bits: int) -> np.ndarray:
+    """The binary32 or binary64 values of ordered integers (the map is its own inverse)."""
+    signed = [o if o >= 0 else -(1 << (bits - 1)) - o - 1 for o in integers]
+    return np.array(signed, dtype=np.int32 if bits == 32 else np.int64).view(
+        np.float32 if bits == 32 else np.float64
+    )
+
+
+def wrap(value: int) -> int:
+    """A Python int as a signed 64-bit value (mod 2^64)."""
+    value &= MASK64
+    return value - (1 << 64) if value >= 1 << 63 else value
+
+
+@dataclass
+class Corrections:
+    """One segment's corrections: its integers e (F_s x K x 3) and how to store them."""
+
+    e: np.ndarray  # int64 (object arithmetic is done in Python ints)
+    domain: str
+    step: float = 0.0
+    predict: int = 0
+    chunk_frames: int = 1 << 30
+    extra_planes: int = 0  # more planes than needed (a decoder accepts them)
+    params: dict[str, Any] = field(default_factory=dict)  # overrides, to break R40
+
+    def section(self, section_id: str, frames: int) -> tuple[dict[str, Any], bytes]:
+        """The RESD section's entry and payload (§6.9)."""
+        L = self.chunk_frames
+        flat = self.e.reshape(frames, -1)
+        chunks, payload = [], b""
+        for start in range(0, frames, L):
+            block = [[int(v) for v in row] for row in flat[start : start + L]]
+            if self.predict == 1:
+                block = [block[0]] + [
+                    [wrap(a - b) for a, b in zip(now, before, strict=True)]
+                    for now, before in zip(block[1:], block[:-1], strict=True)
+                ]
+            stream = [v for row in block for v in row]
+            zigzag = [((2 * s) & MASK64) if s >= 0 else (-2 * s - 1) for s in stream]
+            planes = max(1, max((u.bit_length() + 7) // 8 for u in zigzag)) + self.extra_planes
+            planes = min(planes, 8)
+            raw = b"".join(bytes((u >> (8 * p)) & 0xFF for u in zigzag) for p in range(planes))
+            frame = zstandard.ZstdCompressor(level=3, write_content_size=True).compress(raw)
+            chunks.append([planes, len(frame)])
+            payload += frame
+        entry: dict[str, Any] = {
+            "id": section_id,
+            "critical": True,
+            "codec": "residual",
+            "domain": self.domain,
+            "predict": self.predict,
+            "chunk_frames": L,
+            "chunks": chunks,
+        }
+        if self.domain == "grid":
+            entry["step"] = self.step
+        entry.update(self.params)
+        return entry, payload
+
+
+def with_corrections(
+    data: bytes,
+    corrections: list[Corrections],
+    *,
+    error: dict[str, Any] | None = None,
+    edit: Callable[[Parts], object] | None = None,
+) -> bytes:
+    """``data`` (a file of 1.0 to 1.2) with a RESD section (RESD.s per segment) appended, flag
+    bit 2 and minor version 3; ``edit(parts)``, if given, changes the parts before they are
+    packed (to break a rule)."""
+    parts = Parts(data)
+    segments = parts.header.get("segments")
+    if segments is None:
+        sizes = [int(parts.header["frames"])]
+        ids = ["RESD"]
+    else:
+        sizes = [int(s["frames"]) for s in segments]
+        ids = [f"RESD.{s}" for s in range(len(segments))]
+    for section_id, frames, item in zip(ids, sizes, corrections, strict=True):
+        parts.sections.append(item.section(section_id, frames))
+    if error is not None:
+        parts.header["error"] = {**parts.header.get("error", {}), **error}
+    parts.flags |= FLAG_CORRECTIONS
+    if edit is not None:
+        edit(parts)
+    return pack_container(parts.header, parts.sections, flags=parts.flags, minor=MINOR)
+
+
+def grid_targets(P: np.ndarray, step: float, rng: np.random.Generator) -> tuple[np.ndarray, Any]:
+    """Integers e moving P onto a grid near P + noise, and the decoded positions they give
+    (P + step·e, one multiplication and one addition)."""
+    noise = rng.normal(scale=20 * step, size=P.shape)
+    e = np.rint(noise / step).astype(np.int64)
+    e.reshape(-1)[:3] = [0, 2**53, -(2**53)]  # the ends of the range §6.9 allows
+    decoded = P + step * e.astype(np.float64)
+    return e, decoded
+
+
+def float_targets(
+    P: np.ndarray, bits: int, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray]:
+    """Integers e moving P onto chosen binary32 or binary64 targets: the original-like values
+    near P, and some far off (signs crossed, zeros of both signs, the largest finite values),
+    so that e needs many planes and, in binary64, wraps. Returns (e, targets as float64)."""
+    dtype = np.float32 if bits == 32 else np.float64
+    targets = (P + rng.normal(scale=1e-3, size=P.shape)).astype(dtype)
+    flat = targets.reshape(-1)
+    special = [-flat[0], 0.0, -0.0, np.finfo(dtype).max, -np.finfo(dtype).max, np.finfo(dtype).tiny]
+    flat[: len(special)] = np.array(special, dtype=dtype)[: flat.size]
+    flat[len(special) :: 17] *= -1
+    with np.errstate(over="ignore"):
+        rounded = P.astype(dtype)  # the binary32 nearest P (float64: P itself)
+    base = ordered(rounded, bits)
+    goal = ordered(targets, bits)
+    e = [g - b if bits == 32 else wrap(g - b) for g, b in zip(goal, base, strict=True)]
+    return np.array(e, dtype=np.int64).reshape(P.shape), targets.astype(np.float64)
+
+
+def spec_decode(P: np.ndarray, c: Corrections) -> np.ndarray:
+    """The decoded positions of §6.9 for P and c (valid values only)."""
+    if c.domain == "grid":
+        return P + c.step * c.e.astype(np.float64)
+    bits = 32 if c.domain == "float32" else 64
+    with np.errstate(over="ignore"):
+        base = ordered(P.astype(np.float32 if bits == 32 else np.float64), bits)
+    o = [
+        b + int(e) if bits == 32 else wrap(b + int(e))
+        for b, e in zip(base, c.e.reshape(-1), strict=True)
+    ]
+    return from_ordered(o, bits).astype(np.float64).reshape(P.shape)

@@ -1,0 +1,355 @@
+"""The JavaScript decoder (tuckercodec/web/tkc/) on files with corrections (spec/FORMAT.md §6.9,
+§8.1; format 1.3), in node.
+
+Files made here by hand from the spec alone (tests/support/corrections.py: §8.1's P written
+literally, e chosen to reach targets in each domain, the RESD section coded with 64-bit zigzag,
+planes, chunks and predict 1) decode to the spec's positions bit for bit, in either frame order
+and through frameFloat32; their restored integers are e. The same files edited to break one rule
+of §6.9 fail with that rule."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from tests.support.compressed import Parts, vector
+from tests.support.corrections import (
+    Corrections,
+    exact_reconstruction,
+    float_targets,
+    grid_targets,
+    ordered,
+    spec_decode,
+    with_corrections,
+    wrap,
+)
+from tests.support.js_decoder import run_node
+
+BASES = ["v1-wave-triangles", "v1.1-segments-shared", "v1.2-traverse-polygons-segments"]
+DOMAINS = ["grid", "float32", "float64"]
+
+
+def _corrections(base: str, domain: str, predict: int, seed: int) -> tuple[bytes, list[Any]]:
+    """``base`` with corrections in ``domain``: (file, [(P, Corrections)] per segment)."""
+    data = vector(base)
+    rng = np.random.default_rng(seed)
+    made = []
+    for number, P in enumerate(exact_reconstruction(data)):
+        if domain == "grid":
+            step = 1e-4 * (number + 1)
+            e, _ = grid_targets(P, step, rng)
+            item = Corrections(e, "grid", step=step)
+        else:
+            e, _ = float_targets(P, 32 if domain == "float32" else 64, rng)
+            item = Corrections(e, domain)
+        item.predict = predict
+        item.chunk_frames = [5, 1, 1 << 40][number % 3] if predict else [7, 100, 3][number % 3]
+        item.extra_planes = number % 2
+        made.append((P, item))
+    return with_corrections(data, [c for _, c in made]), made
+
+
+def _run(jobs: list[dict[str, Any]], tmp_path: Path) -> list[dict[str, Any]]:
+    spec = tmp_path / "jobs.json"
+    spec.write_text(json.dumps(jobs))
+    return run_node("corrections.mjs", spec)
+
+
+CASES = [(b, d, p) for b in BASES for d in DOMAINS for p in (0, 1)]
+
+
+@pytest.fixture(scope="module")
+def decoded(tmp_path_factory) -> dict[tuple[str, str, int], Any]:
+    """Every case decoded by node: forward, backward, and through frameFloat32."""
+    folder = tmp_path_factory.mktemp("corrections")
+    jobs, made = [], {}
+    for n, case in enumerate(CASES):
+        data, segments = _corrections(*case, seed=n)
+        path = folder / f"case{n}.tkc"
+        path.write_bytes(data)
+        made[case] = (data, segments)
+        jobs += [
+            {"path": str(path), "out": str(folder / f"case{n}.{order}"), "order": order}
+            for order in ("forward", "backward")
+        ]
+        jobs.append({"path": str(path), "out": str(folder / f"case{n}.f32"), "float32": True})
+    results = _run(jobs, folder)
+    out = {}
+    for n, case in enumerate(CASES):
+        out[case] = (made[case], results[3 * n : 3 * n + 3], folder, n)
+    return out
+
+
+def _read(path: Path, segments: list[Any]) -> tuple[np.ndarray, list[np.ndarray]]:
+    raw = path.read_bytes()
+    sizes = [P.size for P, _ in segments]
+    total = sum(sizes)
+    positions = np.frombuffer(raw[: 8 * total], "<f8")
+    integers, at = [], 8 * total
+    for size in sizes:
+        integers.append(np.frombuffer(raw[at : at + 8 * size], "<i8"))
+        at += 8 * size
+    return positions, integers
+
+
+@pytest.mark.parametrize("case", CASES, ids=["-".join(map(str, c)) for c in CASES])
+def test_hand_made_file_decodes_bit_for_bit(decoded, case):
+    (_, segments), results, folder, n = decoded[case]
+    assert all(r["accepted"] for r in results), [r.get("message") for r in results]
+    expected = np.concatenate([spec_decode(P, c).reshape(-1) for P, c in segments])
+    for suffix in ("forward", "backward"):
+        positions, integers = _read(folder / f"case{n}.{suffix}", segments)
+        assert np.array_equal(positions.view("<u8"), expected.view("<u8")), suffix
+        for got, (_, c) in zip(integers, segments, strict=True):
+            assert np.array_equal(got, c.e.reshape(-1))
+    # frameFloat32: the binary64 positions rounded once
+    f32, _ = _read(folder / f"case{n}.f32", segments)
+    with np.errstate(over="ignore"):  # the largest binary64 rounds to infinity
+        rounded = expected.astype(np.float32).astype(np.float64)
+    assert np.array_equal(f32.view("<u8"), rounded.view("<u8"))
+    residual = results[0]["residual"]
+    assert residual == [
+        {
+            "domain": c.domain,
+            "step": c.step,
+            "predict": c.predict,
+            "chunkFrames": min(c.chunk_frames, P.shape[0]),
+            "chunks": -(-P.shape[0] // c.chunk_frames),
+        }
+        for P, c in segments
+    ]
+    assert results[0]["version"] == "1.3"
+
+
+# ------------------------------------------------------------------------------------------
+# one rule broken at a time
+
+
+def _grid_file(edit=None, *, base: str = "v1-wave-triangles", **fields: Any) -> bytes:
+    """``base`` with grid corrections, the first segment's Corrections edited by ``fields``
+    and the parts by ``edit(parts)`` before they are packed."""
+    data = vector(base)
+    items = []
+    rng = np.random.default_rng(5)
+    for P in exact_reconstruction(data):
+        e, _ = grid_targets(P, 1e-3, rng)
+        items.append(Corrections(e, "grid", step=1e-3, chunk_frames=4))
+    for key, value in fields.items():
+        setattr(items[0], key, value)
+    return with_corrections(data, items, edit=edit)
+
+
+def _set(section_id: str, **params: Any):
+    def edit(parts: Parts) -> None:
+        index = parts.index(section_id)
+        entry, payload = parts.sections[index]
+        parts.sections[index] = ({**entry, **params}, payload)
+
+    return edit
+
+
+def _drop(key: str, section_id: str = "RESD"):
+    def edit(parts: Parts) -> None:
+        index = parts.index(section_id)
+        entry, payload = parts.sections[index]
+        parts.sections[index] = ({k: v for k, v in entry.items() if k != key}, payload)
+
+    return edit
+
+
+def _remove(section_id: str):
+    def edit(parts: Parts) -> None:
+        del parts.sections[parts.index(section_id)]
+
+    return edit
+
+
+def _clear_flag(parts: Parts) -> None:
+    parts.flags &= ~4
+
+
+def _chunks(change):
+    """An edit of RESD's chunks table: ``change(chunks)`` on a copy of its lists."""
+
+    def edit(parts: Parts) -> None:
+        index = parts.index("RESD")
+        entry, payload = parts.sections[index]
+        chunks = [list(c) for c in entry["chunks"]]
+        change(chunks)
+        parts.sections[index] = ({**entry, "chunks": chunks}, payload)
+
+    return edit
+
+
+def _flip_last_byte(data: bytes) -> bytes:
+    """RESD is the last section: a bit of its payload flipped, its CRC no longer matches."""
+    return data[:-1] + bytes([data[-1] ^ 1])
+
+
+def _e_file(domain: str, values: dict[int, Any], **fields: Any) -> bytes:
+    """v1-wave-triangles with corrections e = 0 except ``values`` (j -> e, or a function of
+    P[j] giving e)."""
+    data = vector("v1-wave-triangles")
+    (P,) = exact_reconstruction(data)
+    e = np.zeros(P.shape, dtype=np.int64)
+    for j, v in values.items():
+        e.reshape(-1)[j] = v(P.reshape(-1)[j]) if callable(v) else v
+    return with_corrections(data, [Corrections(e, domain, **fields)])
+
+
+def _to32(target: int):
+    return lambda p: target - ordered(np.array([p], dtype=np.float32), 32)[0]
+
+
+def _to64(target: int):
+    return lambda p: wrap(target - ordered(np.array([p]), 64)[0])
+
+
+def _set_planes(chunks: list[list[Any]], value: Any) -> None:
+    chunks[1][0] = value
+
+
+def _set_length(chunks: list[list[Any]], value: Any) -> None:
+    chunks[1][1] = value
+
+
+#: name -> (the file, the rule it breaks, the error class)
+INVALID: dict[str, tuple[Any, str, str]] = {
+    "flag-without-resd": (
+        lambda: _grid_file(_remove("RESD")),
+        "R26-required-section-missing",
+        "FormatError",
+    ),
+    "segment-resd-missing": (
+        lambda: _grid_file(_remove("RESD.1"), base="v1.1-segments-shared"),
+        "R26-required-section-missing",
+        "FormatError",
+    ),
+    "resd-without-flag": (
+        lambda: _grid_file(_clear_flag),
+        "R24-unknown-critical-section",
+        "UnsupportedVersionError",
+    ),
+    "resd-in-segmented-file": (
+        lambda: _grid_file(_set("RESD.2", id="RESD"), base="v1.1-segments-shared"),
+        "R24-unknown-critical-section",
+        "UnsupportedVersionError",
+    ),
+    "resd-ancillary": (
+        lambda: _grid_file(_set("RESD", critical=False)),
+        "R27-criticality",
+        "FormatError",
+    ),
+    "resd-codec": (
+        lambda: _grid_file(_set("RESD", codec="qmat")),
+        "R25-unknown-codec",
+        "UnsupportedVersionError",
+    ),
+    "crc": (lambda: _flip_last_byte(_grid_file()), "R19-section-crc", "ChecksumError"),
+    "chunk-zstd": (
+        lambda: _grid_file(_chunks(lambda c: c[0].__setitem__(0, c[0][0] + 1))),
+        "R29-zstd-content-size",
+        "FormatError",
+    ),
+    "grid-e-beyond-2^53": (
+        lambda: _e_file("grid", {40: 2**53 + 1}, step=1e-3),
+        "R41-residual-value",
+        "FormatError",
+    ),
+    "grid-e-below-2^53": (
+        lambda: _e_file("grid", {41: -(2**53) - 1}, step=1e-3),
+        "R41-residual-value",
+        "FormatError",
+    ),
+    "grid-not-finite": (
+        lambda: _e_file("grid", {7: 2**53}, step=1e300),
+        "R41-residual-value",
+        "FormatError",
+    ),
+    "float32-e-beyond-2^32": (
+        lambda: _e_file("float32", {3: -(2**32) - 1}),
+        "R41-residual-value",
+        "FormatError",
+    ),
+    "float32-infinity": (
+        lambda: _e_file("float32", {5: _to32(2139095040)}),
+        "R41-residual-value",
+        "FormatError",
+    ),
+    "float32-minus-infinity": (
+        lambda: _e_file("float32", {5: _to32(-2139095041)}),
+        "R41-residual-value",
+        "FormatError",
+    ),
+    "float64-infinity": (
+        lambda: _e_file("float64", {9: _to64(9218868437227405312)}),
+        "R41-residual-value",
+        "FormatError",
+    ),
+    "float64-nan": (
+        lambda: _e_file("float64", {11: _to64(9218868437227405313)}),
+        "R41-residual-value",
+        "FormatError",
+    ),
+}
+for _name, _edit in {
+    "domain": _set("RESD", domain="float16"),
+    "domain-missing": _drop("domain"),
+    "step-int": _set("RESD", step=1),
+    "step-zero": _set("RESD", step=0.0),
+    "step-nan": _set("RESD", step=float("nan")),
+    "step-missing": _drop("step"),
+    "predict": _set("RESD", predict=2),
+    "predict-bool": _set("RESD", predict=True),
+    "chunk-frames-zero": _set("RESD", chunk_frames=0),
+    "chunk-frames-float": _set("RESD", chunk_frames=4.0),
+    "chunks-count": _set("RESD", chunks=[[1, 10]]),
+    "chunks-not-array": _set("RESD", chunks={"a": 1}),
+    "chunks-planes-zero": _chunks(lambda c: _set_planes(c, 0)),
+    "chunks-planes-nine": _chunks(lambda c: _set_planes(c, 9)),
+    "chunks-planes-float": _chunks(lambda c: _set_planes(c, 1.0)),
+    "chunks-length-negative": _chunks(lambda c: _set_length(c, -1)),
+    "chunks-length-sum": _chunks(lambda c: _set_length(c, c[1][1] + 1)),
+    "chunks-entry-three": _chunks(lambda c: c[1].append(0)),
+}.items():
+    INVALID[f"R40-{_name}"] = ((lambda e=_edit: _grid_file(e)), "R40-residual", "FormatError")
+
+
+@pytest.fixture(scope="module")
+def refused(tmp_path_factory) -> dict[str, dict[str, Any]]:
+    folder = tmp_path_factory.mktemp("refused")
+    jobs = []
+    for name, (make, _, _) in INVALID.items():
+        path = folder / f"{name}.tkc"
+        path.write_bytes(make())
+        jobs.append({"path": str(path)})
+    return dict(zip(INVALID, _run(jobs, folder), strict=True))
+
+
+@pytest.mark.parametrize("name", list(INVALID))
+def test_broken_rule_is_reported(refused, name):
+    _, rule, kind = INVALID[name]
+    got = refused[name]
+    assert not got.get("crashed"), got["message"]
+    assert not got["accepted"], f"accepted a file that breaks {rule}"
+    assert (got["rule"], got["kind"]) == (rule, kind), got["message"]
+
+
+def test_chunk_size_limit(tmp_path):
+    """Each chunk's decompressed size N_c·P against max_section_bytes (R21), after R40."""
+    data = _grid_file(extra_planes=7)  # 8 planes in the first chunk of 4 frames
+    path = tmp_path / "a.tkc"
+    path.write_bytes(data)
+    K = 81
+    limit = 4 * K * 3 * 8 - 1
+    jobs = [
+        {"path": str(path), "limits": {"max_section_bytes": limit}},
+        {"path": str(path), "limits": {"max_section_bytes": limit + 1}},
+    ]
+    over, under = _run(jobs, tmp_path)
+    assert (over["rule"], over["kind"]) == ("R21-header-limit", "LimitError"), over
+    assert under["accepted"], under.get("message")
