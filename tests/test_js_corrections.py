@@ -202,11 +202,11 @@ def _e_file(domain: str, values: dict[int, Any], **fields: Any) -> bytes:
 
 
 def _to32(target: int):
-    return lambda p: target - ordered(np.array([p], dtype=np.float32), 32)[0]
+    return lambda p: target - int(ordered(np.array([p], dtype=np.float32), 32)[0])
 
 
 def _to64(target: int):
-    return lambda p: wrap(target - ordered(np.array([p]), 64)[0])
+    return lambda p: wrap(target - int(ordered(np.array([p]), 64)[0]))
 
 
 def _set_planes(chunks: list[list[Any]], value: Any) -> None:

@@ -8,7 +8,7 @@ to break one rule of §6.9 at a time."""
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -57,18 +57,21 @@ def exact_reconstruction(data: bytes) -> list[np.ndarray]:
     return out
 
 
-def ordered(values: np.ndarray, bits: int) -> list[int]:
-    """The ordered integers (§6.9) of binary32 (bits 32) or binary64 values."""
-    signed = values.astype(np.float32 if bits == 32 else np.float64).view(
+def ordered(values: np.ndarray, bits: int) -> np.ndarray:
+    """The ordered integers (§6.9) of binary32 (bits 32) or binary64 values, flattened, as
+    int64: w for a bit pattern w >= 0, else -2^(n-1) - w - 1, which is w XOR (2^(n-1) - 1)."""
+    signed = np.ascontiguousarray(values, dtype=np.float32 if bits == 32 else np.float64).view(
         np.int32 if bits == 32 else np.int64
     )
-    return [w if w >= 0 else -(1 << (bits - 1)) - w - 1 for w in signed.reshape(-1).tolist()]
+    flat = signed.reshape(-1)
+    return np.where(flat >= 0, flat, flat ^ ((1 << (bits - 1)) - 1)).astype(np.int64)
 
 
-def from_ordered(integers: list[int], bits: int) -> np.ndarray:
+def from_ordered(integers: np.ndarray, bits: int) -> np.ndarray:
     """The binary32 or binary64 values of ordered integers (the map is its own inverse)."""
-    signed = [o if o >= 0 else -(1 << (bits - 1)) - o - 1 for o in integers]
-    return np.array(signed, dtype=np.int32 if bits == 32 else np.int64).view(
+    o = np.asarray(integers, dtype=np.int64)
+    signed = np.where(o >= 0, o, o ^ ((1 << (bits - 1)) - 1))
+    return signed.astype(np.int32 if bits == 32 else np.int64).view(
         np.float32 if bits == 32 else np.float64
     )
 
@@ -81,33 +84,34 @@ def wrap(value: int) -> int:
 
 @dataclass
 class Corrections:
-    """One segment's corrections: its integers e (F_s x K x 3) and how to store them."""
+    """One segment's corrections: its integers e (F_s x K x 3, int64) and how to store them."""
 
-    e: np.ndarray  # int64 (object arithmetic is done in Python ints)
+    e: np.ndarray
     domain: str
     step: float = 0.0
     predict: int = 0
     chunk_frames: int = 1 << 30
     extra_planes: int = 0  # more planes than needed (a decoder accepts them)
-    params: dict[str, Any] = field(default_factory=dict)  # overrides, to break R40
 
     def section(self, section_id: str, frames: int) -> tuple[dict[str, Any], bytes]:
-        """The RESD section's entry and payload (§6.9)."""
+        """The RESD section's entry and payload (§6.9). numpy's int64 arithmetic wraps mod
+        2^64, as predict 1's differences do."""
         L = self.chunk_frames
-        flat = self.e.reshape(frames, -1)
+        flat = self.e.reshape(frames, -1).astype(np.int64)
         chunks, payload = [], b""
         for start in range(0, frames, L):
-            block = [[int(v) for v in row] for row in flat[start : start + L]]
+            block = flat[start : start + L].copy()
             if self.predict == 1:
-                block = [block[0]] + [
-                    [wrap(a - b) for a, b in zip(now, before, strict=True)]
-                    for now, before in zip(block[1:], block[:-1], strict=True)
-                ]
-            stream = [v for row in block for v in row]
-            zigzag = [((2 * s) & MASK64) if s >= 0 else (-2 * s - 1) for s in stream]
-            planes = max(1, max((u.bit_length() + 7) // 8 for u in zigzag)) + self.extra_planes
-            planes = min(planes, 8)
-            raw = b"".join(bytes((u >> (8 * p)) & 0xFF for u in zigzag) for p in range(planes))
+                with np.errstate(over="ignore"):
+                    block[1:] = block[1:] - flat[start : start + L][:-1]
+            s = block.reshape(-1)
+            u = (s.view(np.uint64) << np.uint64(1)) ^ (s >> 63).view(np.uint64)  # zigzag
+            needed = (int(u.max()).bit_length() + 7) // 8 if u.size else 1
+            planes = min(max(1, needed) + self.extra_planes, 8)
+            raw = b"".join(
+                ((u >> np.uint64(8 * p)) & np.uint64(0xFF)).astype(np.uint8).tobytes()
+                for p in range(planes)
+            )
             frame = zstandard.ZstdCompressor(level=3, write_content_size=True).compress(raw)
             chunks.append([planes, len(frame)])
             payload += frame
@@ -122,7 +126,6 @@ class Corrections:
         }
         if self.domain == "grid":
             entry["step"] = self.step
-        entry.update(self.params)
         return entry, payload
 
 
@@ -165,23 +168,31 @@ def grid_targets(P: np.ndarray, step: float, rng: np.random.Generator) -> tuple[
 
 
 def float_targets(
-    P: np.ndarray, bits: int, rng: np.random.Generator
+    P: np.ndarray, bits: int, rng: np.random.Generator | None
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Integers e moving P onto chosen binary32 or binary64 targets: the original-like values
-    near P, and some far off (signs crossed, zeros of both signs, the largest finite values),
-    so that e needs many planes and, in binary64, wraps. Returns (e, targets as float64)."""
+    """Integers e moving P onto chosen binary32 or binary64 targets: with ``rng``, values near
+    P and some far off (signs crossed, zeros of both signs, the largest finite values), so that
+    e needs many planes and, in binary64, wraps; without, ``P`` itself holds the targets (an
+    original, for a lossless file). Returns (e, targets as float64)."""
     dtype = np.float32 if bits == 32 else np.float64
+    if rng is None:
+        raise ValueError("use lossless_targets for an original")
     targets = (P + rng.normal(scale=1e-3, size=P.shape)).astype(dtype)
     flat = targets.reshape(-1)
     special = [-flat[0], 0.0, -0.0, np.finfo(dtype).max, -np.finfo(dtype).max, np.finfo(dtype).tiny]
     flat[: len(special)] = np.array(special, dtype=dtype)[: flat.size]
     flat[len(special) :: 17] *= -1
+    return lossless_targets(P, targets), targets.astype(np.float64)
+
+
+def lossless_targets(P: np.ndarray, original: np.ndarray) -> np.ndarray:
+    """Integers e that make P decode to ``original``'s bits: domain float32 for a float32
+    original, float64 for a float64 one."""
+    bits = 32 if original.dtype == np.float32 else 64
     with np.errstate(over="ignore"):
-        rounded = P.astype(dtype)  # the binary32 nearest P (float64: P itself)
-    base = ordered(rounded, bits)
-    goal = ordered(targets, bits)
-    e = [g - b if bits == 32 else wrap(g - b) for g, b in zip(goal, base, strict=True)]
-    return np.array(e, dtype=np.int64).reshape(P.shape), targets.astype(np.float64)
+        base = ordered(P.astype(original.dtype), bits)  # the binary32 nearest P, or P itself
+    with np.errstate(over="ignore"):
+        return (ordered(original, bits).reshape(-1) - base.reshape(-1)).reshape(P.shape)
 
 
 def spec_decode(P: np.ndarray, c: Corrections) -> np.ndarray:
@@ -190,9 +201,6 @@ def spec_decode(P: np.ndarray, c: Corrections) -> np.ndarray:
         return P + c.step * c.e.astype(np.float64)
     bits = 32 if c.domain == "float32" else 64
     with np.errstate(over="ignore"):
-        base = ordered(P.astype(np.float32 if bits == 32 else np.float64), bits)
-    o = [
-        b + int(e) if bits == 32 else wrap(b + int(e))
-        for b, e in zip(base, c.e.reshape(-1), strict=True)
-    ]
+        base = ordered(P.astype(np.float32 if bits == 32 else np.float64), bits).reshape(-1)
+        o = base + c.e.reshape(-1).astype(np.int64)  # int64: wraps mod 2^64
     return from_ordered(o, bits).astype(np.float64).reshape(P.shape)
