@@ -74,7 +74,14 @@ export async function observeVector(tkc, npy) {
       observed.sha256[`u3${suffix}`] = await sha256(littleEndianFloat64(f.u3));
       observed.sha256[`core${suffix}`] = await sha256(littleEndianFloat64(f.core));
       observed.sha256[`centroids${suffix}`] = await sha256(littleEndianFloat64(f.cent));
-
+      // a file with corrections (§6.9): the restored integers e, little-endian int64
+      const residual = file.residual(s);
+      if (residual !== null) {
+        const e = file.residualIntegers(s);
+        observed.sha256[`residual${suffix}`] = await sha256(littleEndianInt64(e));
+        observed.residual = observed.residual ?? {};
+        observed.residual[`residual${suffix}`] = { domain: residual.domain, predict: residual.predict, chunk_frames: residual.chunkFrames };
+      }
     }
     // every frame, each alone (§8: a frame does not depend on which others are asked for)
     const K3 = 3 * file.vertices;
@@ -88,7 +95,11 @@ export async function observeVector(tkc, npy) {
         difference = Math.max(difference, Math.abs(positions[j] - reference.values[j]));
         scale = Math.max(scale, Math.abs(reference.values[j]));
       }
-      observed.reference = { shape: reference.shape, max_abs_difference: difference, max_abs_reference: scale };
+      // bit for bit (a file with corrections must be: §8.1), -0 and +0 told apart
+      const mine = new Uint8Array(positions.buffer);
+      const theirs = new Uint8Array(reference.values.buffer, reference.values.byteOffset, reference.values.byteLength);
+      const identical = mine.length === theirs.length && mine.every((byte, j) => byte === theirs[j]);
+      observed.reference = { shape: reference.shape, max_abs_difference: difference, max_abs_reference: scale, identical };
     }
     return observed;
   } catch (error) {
