@@ -40,7 +40,8 @@ export const LITTLE_ENDIAN = new Uint8Array(new Uint16Array([1]).buffer)[0] === 
  */
 
 /**
- * A RESD (or RESD.s) section's parameters, checked.
+ * A RESD (or RESD.s) section's parameters, checked; chunk c holds the section's frames
+ * c·chunkFrames .. (its start and frames).
  * @typedef {{section: import('./container.js').Section, domain: 'grid' | 'float32' | 'float64',
  *   step: number, predict: number, chunkFrames: number, chunks: Chunk[], frames: number}} Residual
  */
@@ -111,7 +112,8 @@ export function readResidual(section, frames, K, limits) {
       throw limitError('R21-header-limit', `${where}: chunk ${c} decodes to ${size} bytes, max_section_bytes = ${limits.max_section_bytes}`);
     }
   });
-  return { section, domain, step, predict, chunkFrames: L, chunks, frames };
+  // chunkFrames as the file gives it (a BigInt one made a Number: still above F', one chunk)
+  return { section, domain, step, predict, chunkFrames: Number(chunkFrames), chunks, frames };
 }
 
 /**
