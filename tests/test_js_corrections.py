@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+import tuckercodec
 from tests.support.compressed import Parts, vector
 from tests.support.corrections import (
     Corrections,
@@ -28,6 +29,7 @@ from tests.support.corrections import (
     wrap,
 )
 from tests.support.js_decoder import run_node
+from tuckercodec.cli import main
 
 BASES = ["v1-wave-triangles", "v1.1-segments-shared", "v1.2-traverse-polygons-segments"]
 DOMAINS = ["grid", "float32", "float64"]
@@ -353,3 +355,60 @@ def test_chunk_size_limit(tmp_path):
     over, under = _run(jobs, tmp_path)
     assert (over["rule"], over["kind"]) == ("R21-header-limit", "LimitError"), over
     assert under["accepted"], under.get("message")
+
+
+# ------------------------------------------------------------------------------------------
+# files the reference encoder writes: the same bits as the Python decoder
+
+CLOTH = Path(__file__).resolve().parents[1] / "tuckercodec" / "data" / "cloth-vellum.npz"
+ENCODINGS = {
+    "max-error": ["--max-error", "0.1%"],
+    "lossless": ["--lossless"],
+    "max-error-segments": ["--max-error", "0.1%", "--segment-frames", "20"],
+    "lossless-segments": ["--lossless", "--segment-frames", "20"],
+}
+
+
+@pytest.fixture(scope="module")
+def encoded(tmp_path_factory) -> dict[str, Any]:
+    """cloth-vellum encoded by the CLI in each mode, then decoded by node in both frame orders
+    (and through frameFloat32)."""
+    folder = tmp_path_factory.mktemp("encoded")
+    paths, jobs = {}, []
+    for name, options in ENCODINGS.items():
+        path = folder / f"{name}.tkc"
+        assert main(["encode", str(CLOTH), "-o", str(path), *options]) == 0
+        paths[name] = path
+        jobs += [
+            {"path": str(path), "out": str(folder / f"{name}.{order}"), "order": order}
+            for order in ("forward", "backward")
+        ]
+        jobs.append({"path": str(path), "out": str(folder / f"{name}.f32"), "float32": True})
+    results = _run(jobs, folder)
+    return {
+        name: (paths[name], results[3 * n : 3 * n + 3], folder) for n, name in enumerate(ENCODINGS)
+    }
+
+
+@pytest.mark.parametrize("name", list(ENCODINGS))
+def test_python_encoded_file_same_bits_as_python(encoded, name):
+    path, results, folder = encoded[name]
+    assert all(r["accepted"] for r in results), [r.get("message") for r in results]
+    assert results[0]["version"] == "1.3", "the encoder wrote no corrections"
+    expected = tuckercodec.decode(path).vertices
+    assert expected.dtype == np.float64
+    size = expected.size
+    for suffix in ("forward", "backward"):
+        positions = np.frombuffer((folder / f"{name}.{suffix}").read_bytes()[: 8 * size], "<u8")
+        assert np.array_equal(positions, expected.reshape(-1).view("<u8")), suffix
+    f32 = np.frombuffer((folder / f"{name}.f32").read_bytes()[: 8 * size], "<f8")
+    assert np.array_equal(f32, expected.reshape(-1).astype(np.float32).astype(np.float64))
+    error = results[0]["error"]
+    if name.startswith("lossless"):
+        with np.load(CLOTH) as original:
+            assert np.array_equal(expected, original["V"].astype(np.float64))
+        assert error["lossless"] is True
+        assert {r["domain"] for r in results[0]["residual"]} == {"float32"}
+    else:
+        assert {r["domain"] for r in results[0]["residual"]} == {"grid"}
+        assert error["targetMaxDistance"] is not None

@@ -159,7 +159,7 @@ export function decodeChunk(residual, c, payload, K) {
   return pairs;
 }
 
-/** Scratch views shared by correct(): one frame's binary32 values and their bits. */
+/** Scratch shared by correct(): one frame's binary32 values, and binary64 ones, with their bits. */
 let scratch32 = new Float32Array(0);
 let bits32 = new Int32Array(0);
 let scratch64 = new Float64Array(0);
@@ -168,7 +168,8 @@ let bits64 = new Int32Array(0);
 /**
  * One frame's decoded positions (§6.9): P (the exact reconstruction of §8.1) corrected by the
  * frame's integers, into `out` (a Float32Array receives the binary64 result rounded once, which
- * in domain float32 is the corrected binary32 value itself).
+ * in domain float32 is the corrected binary32 value itself). The loops below work on one array
+ * type each and return the first value that breaks R41 (or −1); the message is made here.
  * @param {Residual} residual
  * @param {Float64Array} P K·3 values
  * @param {Int32Array} pairs the chunk's integers (decodeChunk)
@@ -180,77 +181,111 @@ export function correct(residual, P, pairs, first, out, frameNumber) {
   if (!LITTLE_ENDIAN) throw new Error('corrections (§6.9) are decoded on little-endian engines only');
   const n = P.length;
   const at = 2 * first;
-  /** @type {(j: number, message: string) => Error} */
-  const fail = (j, message) => formatError(VALUE, `section '${residual.section.id}', frame ${frameNumber}, vertex ${Math.floor(j / 3)}, axis ${'xyz'[j % 3]}: ${message}`);
-  /** @param {number} j */
-  const integer = (j) => BigInt.asIntN(64, (BigInt(pairs[at + 2 * j + 1]) << 32n) | BigInt(pairs[at + 2 * j] >>> 0));
-  if (residual.domain === 'grid') {
-    const step = residual.step;
-    for (let j = 0; j < n; j++) {
-      const hi = pairs[at + 2 * j + 1];
-      const lo = pairs[at + 2 * j] >>> 0;
-      if ((hi < -GRID_HIGH || hi >= GRID_HIGH) && !(hi === GRID_HIGH && lo === 0)) {
-        throw fail(j, `e = ${integer(j)} is outside −2^53..2^53`);
-      }
-      const e = hi * TWO_32 + lo; // exact: |e| <= 2^53
-      const value = P[j] + step * e; // one multiplication, then one addition (never fused in JS)
-      if (value - value !== 0) throw fail(j, `P + step·e = ${P[j]} + ${step}·${e} is ${value}, not finite`);
-      out[j] = value;
-    }
-    return out;
-  }
+  let bad;
   if (residual.domain === 'float32') {
     if (scratch32.length < n) {
       scratch32 = new Float32Array(n);
       bits32 = new Int32Array(scratch32.buffer);
     }
-    scratch32.set(P.subarray(0, n)); // the binary32 nearest each P (ties to even, beyond: ±∞)
-    for (let j = 0; j < n; j++) {
-      // NaN has no binary32 "nearest" it, and its bits are the engine's: no correction is defined
-      if (P[j] !== P[j]) throw fail(j, 'P is NaN: no binary32 value is nearest it');
-      const bits = bits32[j];
-      const b = bits < 0 ? bits ^ 0x7fffffff : bits; // the ordered integer
-      const hi = pairs[at + 2 * j + 1];
-      const lo = pairs[at + 2 * j] >>> 0;
-      if (hi !== 0 && hi !== -1 && !(hi === 1 && lo === 0)) throw fail(j, `e = ${integer(j)} is outside −2^32..2^32`);
-      const o = b + (hi * TWO_32 + lo); // exact
-      if (o < F32_LOWEST || o > F32_HIGHEST) {
-        throw fail(j, `b + e = ${b} + ${hi * TWO_32 + lo} = ${o} is not the ordered integer of a finite binary32 (P = ${P[j]})`);
-      }
-      bits32[j] = o < 0 ? o ^ 0x7fffffff : o;
+    scratch32.set(P); // the binary32 nearest each P (ties to even; beyond the range, ±∞)
+    bad = correctFloat32(P, bits32, pairs, at, n);
+    if (bad < 0) {
+      out.set(scratch32.subarray(0, n));
+      return out;
     }
-    out.set(scratch32.subarray(0, n));
-    return out;
-  }
-  // float64: o = b + e on 64 bits, on the halves of P's bits (written over them, in `out`
-  // itself when it is a Float64Array)
-  let target;
-  let bits;
-  if (out instanceof Float64Array) {
-    target = out;
-    bits = new Int32Array(out.buffer, out.byteOffset, 2 * n);
   } else {
-    if (scratch64.length < n) {
-      scratch64 = new Float64Array(n);
-      bits64 = new Int32Array(scratch64.buffer);
+    // the result is made in binary64: in `out` itself when it is a Float64Array
+    /** @type {Float64Array<ArrayBufferLike>} */
+    let target = scratch64;
+    /** @type {Int32Array<ArrayBufferLike>} */
+    let bits = bits64;
+    if (out instanceof Float64Array) {
+      target = out;
+      bits = new Int32Array(out.buffer, out.byteOffset, 2 * n);
+    } else if (scratch64.length < n) {
+      target = scratch64 = new Float64Array(n);
+      bits = bits64 = new Int32Array(scratch64.buffer);
     }
-    target = scratch64;
-    bits = bits64;
+    if (residual.domain === 'grid') {
+      bad = correctGrid(P, residual.step, pairs, at, target, n);
+    } else {
+      if (target !== P) target.set(P);
+      bad = correctFloat64(bits, pairs, at, n);
+    }
+    if (bad < 0) {
+      if (target !== out) out.set(target.subarray(0, n));
+      return out;
+    }
   }
-  if (target !== P) target.set(P.subarray(0, n));
+  throw formatError(VALUE, `section '${residual.section.id}', frame ${frameNumber}, vertex ${Math.floor(bad / 3)}, axis ${'xyz'[bad % 3]}: ${why(residual, P[bad], pairs, at + 2 * bad)}`);
+}
+
+/**
+ * Domain grid: P + step·e, one multiplication then one addition (JavaScript never fuses them).
+ * @param {Float64Array} P
+ * @param {number} step
+ * @param {Int32Array} pairs
+ * @param {number} at
+ * @param {Float64Array} out
+ * @param {number} n
+ */
+function correctGrid(P, step, pairs, at, out, n) {
   for (let j = 0; j < n; j++) {
-    let pLo = bits[2 * j];
-    let pHi = bits[2 * j + 1];
-    if (pHi < 0) {
-      pHi ^= 0x7fffffff;
-      pLo = ~pLo;
+    const hi = pairs[at + 2 * j + 1];
+    const lo = pairs[at + 2 * j] >>> 0;
+    // e in −2^53..2^53: a high half in −2^21..2^21 − 1, or e = 2^53 itself
+    if ((hi < -GRID_HIGH || hi >= GRID_HIGH) && !(hi === GRID_HIGH && lo === 0)) return j;
+    const value = P[j] + step * (hi * TWO_32 + lo); // e exact: |e| <= 2^53
+    if (value - value !== 0) return j; // not finite
+    out[j] = value;
+  }
+  return -1;
+}
+
+/**
+ * Domain float32: o = b + e, b the ordered integer of the binary32 nearest P (its bits given);
+ * the bits of o's value are written over them.
+ * @param {Float64Array} P
+ * @param {Int32Array} bits
+ * @param {Int32Array} pairs
+ * @param {number} at
+ * @param {number} n
+ */
+function correctFloat32(P, bits, pairs, at, n) {
+  for (let j = 0; j < n; j++) {
+    // NaN has no binary32 nearest it, and its bits are the engine's: no correction is defined
+    if (P[j] !== P[j]) return j;
+    const w = bits[j];
+    const b = w < 0 ? w ^ 0x7fffffff : w; // the ordered integer
+    const hi = pairs[at + 2 * j + 1];
+    const lo = pairs[at + 2 * j] >>> 0;
+    if (hi !== 0 && hi !== -1 && !(hi === 1 && lo === 0)) return j; // e outside −2^32..2^32
+    const o = b + (hi * TWO_32 + lo); // exact
+    if (o < F32_LOWEST || o > F32_HIGHEST) return j;
+    bits[j] = o < 0 ? o ^ 0x7fffffff : o;
+  }
+  return -1;
+}
+
+/**
+ * Domain float64: o = b + e wrapped to 64 bits, on the halves of P's bits (written over them).
+ * @param {Int32Array} bits P's bits, interleaved halves
+ * @param {Int32Array} pairs
+ * @param {number} at
+ * @param {number} n
+ */
+function correctFloat64(bits, pairs, at, n) {
+  for (let j = 0; j < n; j++) {
+    let lo = bits[2 * j];
+    let hi = bits[2 * j + 1];
+    if (hi < 0) {
+      // the ordered integer of a negative pattern w is w XOR 0x7FFFFFFFFFFFFFFF
+      hi ^= 0x7fffffff;
+      lo = ~lo;
     }
-    const sum = (pLo >>> 0) + (pairs[at + 2 * j] >>> 0);
-    const oHi = (pHi + pairs[at + 2 * j + 1] + (sum >= TWO_32 ? 1 : 0)) | 0;
-    if (oHi < F64_LOWEST_HIGH || oHi > F64_HIGHEST_HIGH) {
-      const o = BigInt.asIntN(64, (BigInt(oHi) << 32n) | BigInt(sum >>> 0));
-      throw fail(j, `b + e = ${o} is not the ordered integer of a finite binary64 (P = ${P[j]}, e = ${integer(j)})`);
-    }
+    const sum = (lo >>> 0) + (pairs[at + 2 * j] >>> 0);
+    const oHi = (hi + pairs[at + 2 * j + 1] + (sum >= TWO_32 ? 1 : 0)) | 0;
+    if (oHi < F64_LOWEST_HIGH || oHi > F64_HIGHEST_HIGH) return j;
     if (oHi < 0) {
       bits[2 * j] = ~sum;
       bits[2 * j + 1] = oHi ^ 0x7fffffff;
@@ -259,6 +294,33 @@ export function correct(residual, P, pairs, first, out, frameNumber) {
       bits[2 * j + 1] = oHi;
     }
   }
-  if (target !== out) out.set(target.subarray(0, n));
-  return out;
+  return -1;
+}
+
+/**
+ * Why value j breaks R41, for the message (the slow path: BigInt is fine here).
+ * @param {Residual} residual
+ * @param {number} p P of the value
+ * @param {Int32Array} pairs
+ * @param {number} at the index of its low half
+ */
+function why(residual, p, pairs, at) {
+  const e = BigInt.asIntN(64, (BigInt(pairs[at + 1]) << 32n) | BigInt(pairs[at] >>> 0));
+  if (residual.domain === 'grid') {
+    if (e > 2n ** 53n || e < -(2n ** 53n)) return `e = ${e} is outside −2^53..2^53`;
+    return `P + step·e = ${p} + ${residual.step}·${e} is not finite`;
+  }
+  const scratch = new DataView(new ArrayBuffer(8));
+  if (residual.domain === 'float32') {
+    if (p !== p) return 'P is NaN: no binary32 value is nearest it, so no correction is defined';
+    if (e > 2n ** 32n || e < -(2n ** 32n)) return `e = ${e} is outside −2^32..2^32`;
+    scratch.setFloat32(0, p);
+    const w = scratch.getInt32(0);
+    const o = BigInt(w < 0 ? w ^ 0x7fffffff : w) + e;
+    return `b + e = ${o} is not the ordered integer of a finite binary32 (P = ${p}, e = ${e})`;
+  }
+  scratch.setFloat64(0, p);
+  const w = scratch.getBigInt64(0);
+  const b = w < 0n ? w ^ 0x7fffffffffffffffn : w;
+  return `b + e = ${BigInt.asIntN(64, b + e)} is not the ordered integer of a finite binary64 (P = ${p}, e = ${e})`;
 }
