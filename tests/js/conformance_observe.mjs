@@ -74,13 +74,12 @@ export async function observeVector(tkc, npy) {
       observed.sha256[`u3${suffix}`] = await sha256(littleEndianFloat64(f.u3));
       observed.sha256[`core${suffix}`] = await sha256(littleEndianFloat64(f.core));
       observed.sha256[`centroids${suffix}`] = await sha256(littleEndianFloat64(f.cent));
-      // a file with corrections (§6.9): the restored integers e, little-endian int64
+      // a file with corrections (§6.9, §12): the first segment's parameters, and every
+      // segment's restored integers e (little-endian int64)
       const residual = file.residual(s);
       if (residual !== null) {
-        const e = file.residualIntegers(s);
-        observed.sha256[`residual${suffix}`] = await sha256(littleEndianInt64(e));
-        observed.residual = observed.residual ?? {};
-        observed.residual[`residual${suffix}`] = { domain: residual.domain, predict: residual.predict, chunk_frames: residual.chunkFrames };
+        observed.residual ??= { domain: residual.domain, predict: residual.predict, chunk_frames: residual.chunkFrames, sha256: {} };
+        observed.residual.sha256[`residual${suffix}`] = await sha256(littleEndianInt64(file.residualIntegers(s)));
       }
     }
     // every frame, each alone (§8: a frame does not depend on which others are asked for)

@@ -73,6 +73,7 @@ def check_valid_observation(observed: dict[str, Any], name: str) -> None:
     assert got["frame_names"] == expected["frame_names"]
     assert got["segments"] == expected.get("segments", [])
     assert got["sha256"] == expected["sha256"]  # bit for bit (§6.3)
+    assert got.get("residual") == expected.get("residual")  # 1.3: the corrections' integers
     reference = got["reference"]
     relative = expected["tolerance"]["relative_to_max_abs"]
     if relative == 0:  # a file with corrections: the same bits (§8.1)
