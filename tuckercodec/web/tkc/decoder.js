@@ -151,15 +151,17 @@ export class TkcFile {
   }
 
   /**
-   * Decodes every segment, and with corrections every frame (their chunks' zstd frames and
-   * values are checked only so): checks the whole file (the Python `Decoder.check()`).
+   * Decodes every segment and, with corrections, each segment's chunks and values, after its
+   * factors (R29, R41; §5 step 16s): checks the whole file, as the Python `Decoder.check()`
+   * does. Like it, it does not look for R36 (frames are asked for that).
    */
   check() {
-    for (let s = 0; s < this._decoded.length; s++) this._segment(s);
-    if (this.layout.corrections) {
-      const out = new Float64Array(3 * this.vertices);
-      for (let f = 0; f < this.frames; f++) this._reconstruct(f, out);
-    }
+    const out = new Float64Array(3 * this.vertices);
+    this.layout.segments.forEach((segment, s) => {
+      this._segment(s);
+      if (!this.layout.corrections) return;
+      for (let f = segment.start; f < segment.start + segment.frames; f++) this._reconstruct(f, out, false);
+    });
     return this;
   }
 
@@ -191,9 +193,10 @@ export class TkcFile {
    * @template {Float64Array | Float32Array} T
    * @param {number} f
    * @param {T} out
+   * @param {boolean} [finite] false: do not require finite positions (R36)
    * @returns {T}
    */
-  _reconstruct(f, out) {
+  _reconstruct(f, out, finite = true) {
     if (!Number.isInteger(f) || f < 0 || f >= this.frames) {
       throw new RangeError(`frame ${f} does not exist: the file has frames 0..${this.frames - 1}`);
     }
@@ -205,12 +208,17 @@ export class TkcFile {
     const t = f - this.layout.segments[s].start;
     const residual = d.residual;
     if (residual === null) return reconstructFrame(d, t, out, this._scratch, f);
-    // §8.1 then §6.9: P (finite but in domain float32, R36), the frame's chunk, the correction
-    if (this._exact.length !== out.length) this._exact = new Float64Array(out.length);
-    reconstructFrame(d, t, this._exact, this._scratch, f, residual.domain !== 'float32');
+    // §8.1's P, the frame's chunk (R29), the correction (R41, on the values whose P is finite),
+    // and last, in the domains grid and float64, a P that is not finite (R36): the Python
+    // decoder's order
+    const P = this._exact.length === out.length ? this._exact : (this._exact = new Float64Array(out.length));
+    reconstructFrame(d, t, P, this._scratch, f, false);
     const c = Math.floor(t / residual.chunkFrames);
     const pairs = this._chunk(s, d, c);
-    correct(residual, this._exact, pairs, (t - residual.chunks[c].start) * out.length, out, f);
+    const j = correct(residual, P, pairs, (t - residual.chunks[c].start) * out.length, out, f);
+    if (finite && j >= 0) {
+      throw formatError('R36-reconstruction-finite', `frame ${f}, vertex ${Math.floor(j / 3)}, axis ${'xyz'[j % 3]}: the decoded position is not finite (P of §8.1 is ${P[j]})`);
+    }
     return out;
   }
 

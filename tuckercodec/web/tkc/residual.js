@@ -26,7 +26,10 @@ const F32_LOWEST = -2139095040;
 const F32_HIGHEST = 2139095039;
 // float64 domain: the high halves of the ordered integers of the finite binary64 values,
 // −0x7FF0000000000000 (that of −max) .. 0x7FEFFFFFFFFFFFFF (that of +max); every low half goes
-const F64_LOWEST_HIGH = -2146435072; // 0x80100000 as int32: −0x7FF0000000000000 is 0x8010000000000000
+// float64 domain: the range §6.9 gives, −9218868437227405313 .. 9218868437227405311, as high
+// halves: 0x800FFFFF (with the low half 0xFFFFFFFF only) .. 0x7FEFFFFF. (The low end is the
+// ordered integer of −infinity, not of −max, −9218868437227405312: see correctFloat64.)
+const F64_LOWEST_HIGH = -2146435073; // 0x800FFFFF as int32
 const F64_HIGHEST_HIGH = 0x7fefffff;
 // grid domain: e in −2^53 .. 2^53, high halves −2^21 .. 2^21 − 1, or 2^53 itself
 const GRID_HIGH = 2 ** 21;
@@ -168,7 +171,10 @@ let bits64 = new Int32Array(0);
 /**
  * One frame's decoded positions (§6.9): P (the exact reconstruction of §8.1) corrected by the
  * frame's integers, into `out` (a Float32Array receives the binary64 result rounded once, which
- * in domain float32 is the corrected binary32 value itself). The loops below work on one array
+ * in domain float32 is the corrected binary32 value itself). In the domains grid and float64 a
+ * P that is not finite is left so, unchecked: the caller reports it (R36) after every value
+ * whose P is finite has been checked (R41), as the Python decoder does.
+ * @returns {number} the first value whose decoded position is not finite (R36), or −1 The loops below work on one array
  * type each and return the first value that breaks R41 (or −1); the message is made here.
  * @param {Residual} residual
  * @param {Float64Array} P K·3 values
@@ -191,7 +197,7 @@ export function correct(residual, P, pairs, first, out, frameNumber) {
     bad = correctFloat32(P, bits32, pairs, at, n);
     if (bad < 0) {
       out.set(scratch32.subarray(0, n));
-      return out;
+      return -1; // every binary32 value o stands for is finite
     }
   } else {
     // the result is made in binary64: in `out` itself when it is a Float64Array
@@ -214,7 +220,7 @@ export function correct(residual, P, pairs, first, out, frameNumber) {
     }
     if (bad < 0) {
       if (target !== out) out.set(target.subarray(0, n));
-      return out;
+      return -2 - bad;
     }
   }
   throw formatError(VALUE, `section '${residual.section.id}', frame ${frameNumber}, vertex ${Math.floor(bad / 3)}, axis ${'xyz'[bad % 3]}: ${why(residual, P[bad], pairs, at + 2 * bad)}`);
@@ -222,6 +228,8 @@ export function correct(residual, P, pairs, first, out, frameNumber) {
 
 /**
  * Domain grid: P + step·e, one multiplication then one addition (JavaScript never fuses them).
+ * Returns the first value that breaks R41, or −2 − j for the first value j not finite (from a
+ * P that is not finite), or −1.
  * @param {Float64Array} P
  * @param {number} step
  * @param {Int32Array} pairs
@@ -230,16 +238,21 @@ export function correct(residual, P, pairs, first, out, frameNumber) {
  * @param {number} n
  */
 function correctGrid(P, step, pairs, at, out, n) {
+  let notFinite = -1;
   for (let j = 0; j < n; j++) {
     const hi = pairs[at + 2 * j + 1];
     const lo = pairs[at + 2 * j] >>> 0;
     // e in −2^53..2^53: a high half in −2^21..2^21 − 1, or e = 2^53 itself
     if ((hi < -GRID_HIGH || hi >= GRID_HIGH) && !(hi === GRID_HIGH && lo === 0)) return j;
     const value = P[j] + step * (hi * TWO_32 + lo); // e exact: |e| <= 2^53
-    if (value - value !== 0) return j; // not finite
+    if (value - value !== 0) {
+      // not finite from a finite P: R41; from a P that is not: R36, which the caller reports
+      if (P[j] - P[j] === 0) return j;
+      if (notFinite < 0) notFinite = j;
+    }
     out[j] = value;
   }
-  return -1;
+  return -2 - notFinite;
 }
 
 /**
@@ -269,15 +282,24 @@ function correctFloat32(P, bits, pairs, at, n) {
 
 /**
  * Domain float64: o = b + e wrapped to 64 bits, on the halves of P's bits (written over them).
+ * Returns as correctGrid does. §6.9's range admits −9218868437227405313, which is −infinity's
+ * ordered integer; the Python decoder accepts it too and then finds the position not finite
+ * (R36), and so does this decoder.
  * @param {Int32Array} bits P's bits, interleaved halves
  * @param {Int32Array} pairs
  * @param {number} at
  * @param {number} n
  */
 function correctFloat64(bits, pairs, at, n) {
+  let notFinite = -1;
   for (let j = 0; j < n; j++) {
     let lo = bits[2 * j];
     let hi = bits[2 * j + 1];
+    // a P that is not finite (all exponent bits set) stays so: R36, which the caller reports
+    if ((hi & 0x7ff00000) === 0x7ff00000) {
+      if (notFinite < 0) notFinite = j;
+      continue;
+    }
     if (hi < 0) {
       // the ordered integer of a negative pattern w is w XOR 0x7FFFFFFFFFFFFFFF
       hi ^= 0x7fffffff;
@@ -286,6 +308,10 @@ function correctFloat64(bits, pairs, at, n) {
     const sum = (lo >>> 0) + (pairs[at + 2 * j] >>> 0);
     const oHi = (hi + pairs[at + 2 * j + 1] + (sum >= TWO_32 ? 1 : 0)) | 0;
     if (oHi < F64_LOWEST_HIGH || oHi > F64_HIGHEST_HIGH) return j;
+    if (oHi === F64_LOWEST_HIGH) {
+      if (sum % TWO_32 !== TWO_32 - 1) return j; // below −infinity's ordered integer
+      if (notFinite < 0) notFinite = j; // −infinity itself
+    }
     if (oHi < 0) {
       bits[2 * j] = ~sum;
       bits[2 * j + 1] = oHi ^ 0x7fffffff;
@@ -294,7 +320,7 @@ function correctFloat64(bits, pairs, at, n) {
       bits[2 * j + 1] = oHi;
     }
   }
-  return -1;
+  return -2 - notFinite;
 }
 
 /**
