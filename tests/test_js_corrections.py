@@ -72,7 +72,8 @@ CASES = [(b, d, p) for b in BASES for d in DOMAINS for p in (0, 1)]
 def decoded(tmp_path_factory) -> dict[tuple[str, str, int], Any]:
     """Every case decoded by node: forward, backward, and through frameFloat32."""
     folder = tmp_path_factory.mktemp("corrections")
-    jobs, made = [], {}
+    jobs: list[dict[str, Any]] = []
+    made = {}
     for n, case in enumerate(CASES):
         data, segments = _corrections(*case, seed=n)
         path = folder / f"case{n}.tkc"
@@ -417,7 +418,8 @@ def encoded(tmp_path_factory) -> dict[str, Any]:
     """cloth-vellum encoded by the CLI in each mode, then decoded by node in both frame orders
     (and through frameFloat32)."""
     folder = tmp_path_factory.mktemp("encoded")
-    paths, jobs = {}, []
+    paths = {}
+    jobs: list[dict[str, Any]] = []
     for name, options in ENCODINGS.items():
         path = folder / f"{name}.tkc"
         assert main(["encode", str(CLOTH), "-o", str(path), *options]) == 0

@@ -63,8 +63,8 @@ def ordered(values: np.ndarray, bits: int) -> np.ndarray:
     signed = np.ascontiguousarray(values, dtype=np.float32 if bits == 32 else np.float64).view(
         np.int32 if bits == 32 else np.int64
     )
-    flat = signed.reshape(-1)
-    return np.where(flat >= 0, flat, flat ^ ((1 << (bits - 1)) - 1)).astype(np.int64)
+    flat: np.ndarray = signed.reshape(-1).astype(np.int64)
+    return np.where(flat >= 0, flat, flat ^ ((1 << (bits - 1)) - 1))
 
 
 def from_ordered(integers: np.ndarray, bits: int) -> np.ndarray:
@@ -178,10 +178,10 @@ def float_targets(
     if rng is None:
         raise ValueError("use lossless_targets for an original")
     targets = (P + rng.normal(scale=1e-3, size=P.shape)).astype(dtype)
-    flat = targets.reshape(-1)
+    flat: np.ndarray = targets.reshape(-1)
     special = [-flat[0], 0.0, -0.0, np.finfo(dtype).max, -np.finfo(dtype).max, np.finfo(dtype).tiny]
     flat[: len(special)] = np.array(special, dtype=dtype)[: flat.size]
-    flat[len(special) :: 17] *= -1
+    flat[len(special) :: 17] *= np.asarray(-1, dtype=dtype)
     return lossless_targets(P, targets), targets.astype(np.float64)
 
 
