@@ -34,6 +34,7 @@ from tests.support.corrections import (
 from tests.support.js_decoder import run_node
 from tuckercodec import FormatError
 from tuckercodec.cli import main
+from tuckercodec.format import residual
 
 BASES = ["v1-wave-triangles", "v1.1-segments-shared", "v1.2-traverse-polygons-segments"]
 DOMAINS = ["grid", "float32", "float64"]
@@ -133,6 +134,58 @@ def test_hand_made_file_decodes_bit_for_bit(decoded, case):
         for P, c in segments
     ]
     assert results[0]["version"] == "1.3"
+
+
+# ------------------------------------------------------------------------------------------
+# the decimal domains: the same bits as the Python decoder, over every decade and both ends
+
+DECIMALS = [("decimal-places", d) for d in (0, 3, 10, 22)] + [
+    ("decimal-digits", p) for p in (1, 6, 14, 15)
+]
+
+
+def _decimal_e(P: np.ndarray, domain: str, scale: int, rng: np.random.Generator) -> np.ndarray:
+    """Integers e that move P to targets over the domain's whole range: near P, at both ends
+    (k = +-2^53, o = -1-L and L), zeros of both signs, and every decade of decimal-digits."""
+    flat = P.reshape(-1)
+    if domain == "decimal-places":
+        base = residual.places_ordered(flat, scale)
+        limit = 2**53
+        goal = base + rng.integers(-1000, 1000, size=base.size)
+        ends = [limit, -limit, 0, 1, -1, limit - 1, -limit + 1]
+    else:
+        base = residual.digits_ordered(flat, scale)
+        limit = residual.digits_largest(scale)
+        goal = base + rng.integers(-1000, 1000, size=base.size)
+        per_decade = 9 * 10 ** (scale - 1)
+        decades = [1 + d * per_decade + int(rng.integers(per_decade)) for d in range(45)]
+        ends = [limit, -1 - limit, 0, -1, 1, -2, *decades, *(-1 - o for o in decades)]
+    goal = np.clip(goal, -1 - limit if domain == "decimal-digits" else -limit, limit)
+    goal[7 : 7 + len(ends)] = ends
+    return (goal - base).reshape(P.shape)
+
+
+@pytest.mark.parametrize(("domain", "scale"), DECIMALS, ids=[f"{d}-{s}" for d, s in DECIMALS])
+def test_decimal_domain_same_bits_as_python(tmp_path, domain, scale):
+    data = vector("v1.1-segments-shared")
+    rng = np.random.default_rng(scale)
+    items = [
+        Corrections(_decimal_e(P, domain, scale, rng), domain, scale=scale, predict=n % 2)
+        for n, P in enumerate(exact_reconstruction(data))
+    ]
+    for item in items:
+        item.chunk_frames = 5
+    path = tmp_path / "decimal.tkc"
+    path.write_bytes(with_corrections(data, items))
+    (result,) = _run(
+        [{"path": str(path), "out": str(tmp_path / "out"), "order": "backward"}], tmp_path
+    )
+    assert result["accepted"], result.get("message")
+    assert result["residual"][0]["scale"] == scale
+    expected = tuckercodec.decode(path).vertices.reshape(-1)
+    size = expected.size
+    positions = np.frombuffer((tmp_path / "out").read_bytes()[: 8 * size], "<u8")
+    assert np.array_equal(positions, expected.view("<u8"))
 
 
 # ------------------------------------------------------------------------------------------

@@ -78,7 +78,7 @@ export async function observeVector(tkc, npy) {
       // segment's restored integers e (little-endian int64)
       const residual = file.residual(s);
       if (residual !== null) {
-        observed.residual ??= { domain: residual.domain, predict: residual.predict, chunk_frames: residual.chunkFrames, sha256: {} };
+        observed.residual ??= { domain: residual.domain, scale: residual.scale, predict: residual.predict, chunk_frames: residual.chunkFrames, sha256: {} };
         observed.residual.sha256[`residual${suffix}`] = await sha256(littleEndianInt64(file.residualIntegers(s)));
       }
     }

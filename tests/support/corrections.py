@@ -89,6 +89,7 @@ class Corrections:
     e: np.ndarray
     domain: str
     step: float = 0.0
+    scale: int = 0  # the places or digits of a decimal domain
     predict: int = 0
     chunk_frames: int = 1 << 30
     extra_planes: int = 0  # more planes than needed (a decoder accepts them)
@@ -126,6 +127,10 @@ class Corrections:
         }
         if self.domain == "grid":
             entry["step"] = self.step
+        elif self.domain == "decimal-places":
+            entry["places"] = self.scale
+        elif self.domain == "decimal-digits":
+            entry["digits"] = self.scale
         return entry, payload
 
 

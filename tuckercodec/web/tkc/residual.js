@@ -1,6 +1,7 @@
 // Codec `residual` (spec/FORMAT.md §6.9, version 1.3): one 64-bit integer e per decoded
-// coordinate, which moves the exact reconstruction P of §8.1 onto a grid ("grid") or onto
-// chosen binary32 or binary64 bits ("float32", "float64").
+// coordinate, which moves the exact reconstruction P of §8.1 onto a grid ("grid"), onto
+// chosen binary32 or binary64 bits ("float32", "float64"), or onto decimals of d places or p
+// significant digits ("decimal-places", "decimal-digits").
 //
 // readResidual checks the section's parameters in the order of §5 step 18 (R40-residual, then
 // R21-header-limit for each chunk's decompressed size); the caller checks the CRC after it.
@@ -33,6 +34,16 @@ const F64_LOWEST_HIGH = -2146435073; // 0x800FFFFF as int32
 const F64_HIGHEST_HIGH = 0x7fefffff;
 // grid domain: e in −2^53 .. 2^53, high halves −2^21 .. 2^21 − 1, or 2^53 itself
 const GRID_HIGH = 2 ** 21;
+// decimal-places: e in −2^54 .. 2^54 (high halves −2^22 .. 2^22 − 1, or 2^54 itself), and
+// k = b + e in −2^53 .. 2^53 as in the grid domain
+const PLACES_E_HIGH = 2 ** 22;
+const TWO_53 = 2 ** 53;
+/** 10^n for n = 0..22, each exact in binary64 (read from text, which rounds correctly). */
+const TEN = Array.from({ length: 23 }, (_, n) => Number(`1e${n}`));
+/** The domains and the parameter each decimal one takes, with its range (§6.9). */
+const DOMAINS = ['grid', 'float32', 'float64', 'decimal-places', 'decimal-digits'];
+/** @type {{[domain: string]: [string, number, number]}} */
+const SCALES = { 'decimal-places': ['places', 0, 22], 'decimal-digits': ['digits', 1, 15] };
 
 /** True where typed arrays are little-endian (the halves above, and the bit views below). */
 export const LITTLE_ENDIAN = new Uint8Array(new Uint16Array([1]).buffer)[0] === 1;
@@ -45,8 +56,9 @@ export const LITTLE_ENDIAN = new Uint8Array(new Uint16Array([1]).buffer)[0] === 
 /**
  * A RESD (or RESD.s) section's parameters, checked; chunk c holds the section's frames
  * c·chunkFrames .. (its start and frames).
- * @typedef {{section: import('./container.js').Section, domain: 'grid' | 'float32' | 'float64',
- *   step: number, predict: number, chunkFrames: number, chunks: Chunk[], frames: number}} Residual
+ * @typedef {{section: import('./container.js').Section, domain: string, step: number,
+ *   scale: number | null, predict: number, chunkFrames: number, chunks: Chunk[],
+ *   frames: number}} Residual
  */
 
 /**
@@ -67,8 +79,8 @@ export function readResidual(section, frames, K, limits) {
   /** @param {string} key */
   const shown = (key) => (entry.has(key) ? describe(entry.get(key)) : 'missing');
   const domain = entry.get('domain');
-  if (domain !== 'grid' && domain !== 'float32' && domain !== 'float64') {
-    throw fail(`"domain" is ${shown('domain')}, not "grid", "float32" or "float64"`);
+  if (typeof domain !== 'string' || !DOMAINS.includes(domain)) {
+    throw fail(`"domain" is ${shown('domain')}, not one of ${DOMAINS.map((d) => `"${d}"`).join(', ')}`);
   }
   let step = 0;
   if (domain === 'grid') {
@@ -77,6 +89,15 @@ export function readResidual(section, frames, K, limits) {
       throw fail(`"step" is ${shown('step')}; in domain "grid" it is a finite float > 0`);
     }
     step = value.value;
+  }
+  let scale = null;
+  if (domain in SCALES) {
+    const [key, least, most] = SCALES[domain];
+    const value = entry.get(key);
+    if (!isInt(value) || !(value >= least && value <= most)) {
+      throw fail(`"${key}" is ${shown(key)}; in domain "${domain}" it is an int in ${least}..${most}`);
+    }
+    scale = Number(value);
   }
   const predict = entry.get('predict');
   if (predict !== 0 && predict !== 1) throw fail(`"predict" is ${shown('predict')}, not 0 or 1`);
@@ -116,7 +137,7 @@ export function readResidual(section, frames, K, limits) {
     }
   });
   // chunkFrames as the file gives it (a BigInt one made a Number: still above F', one chunk)
-  return { section, domain, step, predict, chunkFrames: Number(chunkFrames), chunks, frames };
+  return { section, domain, step, scale, predict, chunkFrames: Number(chunkFrames), chunks, frames };
 }
 
 /**
@@ -214,6 +235,10 @@ export function correct(residual, P, pairs, first, out, frameNumber) {
     }
     if (residual.domain === 'grid') {
       bad = correctGrid(P, residual.step, pairs, at, target, n);
+    } else if (residual.domain === 'decimal-places') {
+      bad = correctPlaces(P, /** @type {number} */ (residual.scale), pairs, at, target, n);
+    } else if (residual.domain === 'decimal-digits') {
+      bad = correctDigits(P, digitConstants(/** @type {number} */ (residual.scale)), pairs, at, target, n);
     } else {
       if (target !== P) target.set(P);
       bad = correctFloat64(bits, pairs, at, n);
@@ -336,6 +361,15 @@ function why(residual, p, pairs, at) {
     if (e > 2n ** 53n || e < -(2n ** 53n)) return `e = ${e} is outside −2^53..2^53`;
     return `P + step·e = ${p} + ${residual.step}·${e} is not finite`;
   }
+  if (residual.domain === 'decimal-places') {
+    if (e > 2n ** 54n || e < -(2n ** 54n)) return `e = ${e} is outside −2^54..2^54`;
+    return `k = b + e (b the integer nearest P·10^${residual.scale}, P = ${p}; e = ${e}) is outside −2^53..2^53`;
+  }
+  if (residual.domain === 'decimal-digits') {
+    const { bound } = digitConstants(/** @type {number} */ (residual.scale));
+    if (e > 2n * bound + 1n || e < -(2n * bound + 1n)) return `e = ${e} is outside ±(2L+1), L = ${bound}`;
+    return `o = b + e (b the ordered decimal integer of P = ${p}; e = ${e}) is outside −1−L..L, L = ${bound}`;
+  }
   const scratch = new DataView(new ArrayBuffer(8));
   if (residual.domain === 'float32') {
     if (p !== p) return 'P is NaN: no binary32 value is nearest it, so no correction is defined';
@@ -349,4 +383,210 @@ function why(residual, p, pairs, at) {
   const w = scratch.getBigInt64(0);
   const b = w < 0n ? w ^ 0x7fffffffffffffffn : w;
   return `b + e = ${BigInt.asIntN(64, b + e)} is not the ordered integer of a finite binary64 (P = ${p}, e = ${e})`;
+}
+
+// ---------------------------------------------------------------------------------------------
+// the decimal domains (§6.9): each map one correctly rounded binary64 operation against an exact
+// power of ten, so that every decoder agrees
+
+/**
+ * Rounded to the nearest integer, ties to even (Math.round sends ties toward +∞).
+ * @param {number} x
+ */
+function roundHalfEven(x) {
+  const r = Math.round(x);
+  return r - x === 0.5 && r % 2 !== 0 ? r - 1 : r;
+}
+
+/**
+ * Domain decimal-places (d places): b = round(P·10^d) clamped to ±2^53, k = b + e, the position
+ * k / 10^d. Returns as correctGrid does.
+ * @param {Float64Array} P
+ * @param {number} d
+ * @param {Int32Array} pairs
+ * @param {number} at
+ * @param {Float64Array} out
+ * @param {number} n
+ */
+function correctPlaces(P, d, pairs, at, out, n) {
+  const ten = TEN[d];
+  let notFinite = -1;
+  for (let j = 0; j < n; j++) {
+    const eHi = pairs[at + 2 * j + 1];
+    const eLo = pairs[at + 2 * j] >>> 0;
+    if ((eHi < -PLACES_E_HIGH || eHi >= PLACES_E_HIGH) && !(eHi === PLACES_E_HIGH && eLo === 0)) return j;
+    const p = P[j];
+    if (p - p !== 0) {
+      // a P that is not finite stays so: R36, which the caller reports
+      if (notFinite < 0) notFinite = j;
+      out[j] = p;
+      continue;
+    }
+    let b = roundHalfEven(p * ten); // ±∞ when the product overflows: clamped below
+    if (b > TWO_53) b = TWO_53;
+    else if (b < -TWO_53) b = -TWO_53;
+    // k = b + e exactly, on halves (|b| <= 2^53 and |e| <= 2^54: no 64-bit overflow)
+    const bHi = Math.floor(b / TWO_32);
+    let kLo = b - bHi * TWO_32 + eLo;
+    let kHi = bHi + eHi;
+    if (kLo >= TWO_32) {
+      kLo -= TWO_32;
+      kHi += 1;
+    }
+    if ((kHi < -GRID_HIGH || kHi >= GRID_HIGH) && !(kHi === GRID_HIGH && kLo === 0)) return j;
+    out[j] = (kHi * TWO_32 + kLo) / ten; // k exact: |k| <= 2^53
+  }
+  return -2 - notFinite;
+}
+
+/**
+ * The constants of decimal-digits with p digits: E_min = p − 23, the significands' least
+ * 10^(p−1), the decimals of a decade B = 9·10^(p−1), Q[j] the binary64 nearest 10^(E_min + j)
+ * (j = 0..44, read from text as §6.9 says), L = 45·B, and the halves of the bounds on e
+ * (±(2L + 1)) and on o (−1 − L .. L), which need more than 53 bits when p = 15.
+ * @typedef {{least: number, decade: number, powers: number[], bound: bigint,
+ *   eHigh: number[], eLow: number[], oHigh: number[], oLow: number[]}} Digits
+ */
+
+/** @type {Map<number, Digits>} */
+const DIGITS = new Map();
+
+/** @param {number} p */
+function digitConstants(p) {
+  let found = DIGITS.get(p);
+  if (found === undefined) {
+    const least = TEN[p - 1];
+    const lowest = p - 23;
+    const bound = 45n * 9n * 10n ** BigInt(p - 1);
+    /** @param {bigint} v */
+    const halves = (v) => [Number(BigInt.asIntN(64, v) >> 32n), Number(BigInt.asUintN(32, v))];
+    found = {
+      least,
+      decade: 9 * least,
+      powers: Array.from({ length: 45 }, (_, j) => Number(`1e${lowest + j}`)),
+      bound,
+      eHigh: halves(2n * bound + 1n),
+      eLow: halves(-(2n * bound + 1n)),
+      oHigh: halves(bound),
+      oLow: halves(-1n - bound),
+    };
+    DIGITS.set(p, found);
+  }
+  return found;
+}
+
+/**
+ * Whether hi·2^32 + lo (lo in 0..2^32 − 1) is within [low, high], each given as halves.
+ * @param {number} hi
+ * @param {number} lo
+ * @param {number[]} low
+ * @param {number[]} high
+ */
+function within(hi, lo, low, high) {
+  if (hi < low[0] || (hi === low[0] && lo < low[1])) return false;
+  return !(hi > high[0] || (hi === high[0] && lo > high[1]));
+}
+
+/**
+ * Domain decimal-digits (p digits): b the ordered decimal integer of P, o = b + e, the position
+ * the value of o (§6.9). The integers reach 2^57 when p = 15, so they are added on halves, and
+ * o's decade is found with a division corrected by its exact remainder. Returns as correctGrid.
+ * @param {Float64Array} P
+ * @param {Digits} c
+ * @param {Int32Array} pairs
+ * @param {number} at
+ * @param {Float64Array} out
+ * @param {number} n
+ */
+function correctDigits(P, c, pairs, at, out, n) {
+  const { least, decade: B, powers } = c;
+  let notFinite = -1;
+  for (let j = 0; j < n; j++) {
+    const eHi = pairs[at + 2 * j + 1];
+    const eLo = pairs[at + 2 * j] >>> 0;
+    if (!within(eHi, eLo, c.eLow, c.eHigh)) return j;
+    const x = P[j];
+    if (x - x !== 0) {
+      if (notFinite < 0) notFinite = j; // R36, which the caller reports
+      out[j] = x;
+      continue;
+    }
+    // b, the ordered decimal integer of x, as halves
+    let bHi = 0;
+    let bLo = 0;
+    if (x !== 0) {
+      const a = Math.abs(x);
+      // the largest index with powers[index] <= a, or 0 if there is none
+      let lo = 0;
+      let hi = 44;
+      if (powers[0] > a) hi = 0;
+      while (lo < hi) {
+        const mid = (lo + hi + 1) >> 1;
+        if (powers[mid] <= a) lo = mid;
+        else hi = mid - 1;
+      }
+      const s = 22 - lo; // p − 1 − (E_min + index)
+      let m = roundHalfEven(s >= 0 ? a * TEN[s] : a / TEN[-s]);
+      if (m < least) m = least;
+      else if (m > 10 * least - 1) m = 10 * least - 1;
+      // o = index·B + (1 + m − 10^(p−1)): both terms exact, their sum on halves
+      const X = lo * B;
+      const Y = 1 + m - least;
+      const xh = Math.floor(X / TWO_32);
+      const yh = Math.floor(Y / TWO_32);
+      bLo = X - xh * TWO_32 + (Y - yh * TWO_32);
+      bHi = xh + yh;
+      if (bLo >= TWO_32) {
+        bLo -= TWO_32;
+        bHi += 1;
+      }
+    }
+    if (x < 0 || Object.is(x, -0)) {
+      // −1 − o
+      bHi = -bHi - 1;
+      bLo = TWO_32 - 1 - bLo;
+    }
+    let oLo = bLo + eLo;
+    let oHi = bHi + eHi;
+    if (oLo >= TWO_32) {
+      oLo -= TWO_32;
+      oHi += 1;
+    }
+    if (!within(oHi, oLo, c.oLow, c.oHigh)) return j;
+    // the value of o: its magnitude's decade and significand, then one operation
+    const negative = oHi < 0;
+    let mh = oHi;
+    let ml = oLo;
+    if (negative) {
+      mh = -oHi - 1;
+      ml = TWO_32 - 1 - oLo;
+    }
+    if (mh === 0 && ml === 0) {
+      out[j] = negative ? -0 : 0;
+      continue;
+    }
+    // q = magnitude − 1 = decade·B + offset
+    let ql = ml - 1;
+    let qh = mh;
+    if (ql < 0) {
+      ql += TWO_32;
+      qh -= 1;
+    }
+    let decade = Math.floor((qh * TWO_32 + ql) / B); // off by at most one where q passes 2^53
+    // exact: qh·2^32 and decade·B are exact, their difference a multiple of 2^(p−1) below
+    // 2^57 (so of at most 43 significant bits), and the offset a small integer
+    let offset = qh * TWO_32 - decade * B + ql;
+    if (offset < 0) {
+      decade -= 1;
+      offset += B;
+    } else if (offset >= B) {
+      decade += 1;
+      offset -= B;
+    }
+    const significand = least + offset;
+    const s = 22 - decade;
+    const value = s > 0 ? significand / TEN[s] : significand * TEN[-s];
+    out[j] = negative ? -value : value;
+  }
+  return -2 - notFinite;
 }
