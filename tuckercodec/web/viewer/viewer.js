@@ -813,6 +813,8 @@ function correctionsText(file) {
   const r = /** @type {NonNullable<ReturnType<TkcFile['residual']>>} */ (file.residual(0));
   const more = file.segments.length > 1 ? ' (segment 0)' : '';
   if (r.domain === 'grid') return `on a grid of step ${formatNumber(r.step)} scene units${more}`;
+  if (r.domain === 'decimal-places') return `to decimals of ${r.scale} places${more}`;
+  if (r.domain === 'decimal-digits') return `to decimals of ${r.scale} significant digits${more}`;
   return `to exact ${r.domain === 'float32' ? 'binary32' : 'binary64'} values${more}`;
 }
 
