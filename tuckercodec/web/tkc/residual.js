@@ -156,20 +156,29 @@ export function decodeChunk(residual, c, payload, K) {
   const where = `section '${residual.section.id}' chunk ${c}`;
   const raw = decompressExact(payload.subarray(chunk.offset, chunk.offset + chunk.length), N * P, where);
   const pairs = new Int32Array(2 * N);
-  // u[j] = Σ_p raw[p·N + j] << 8p: planes 0-3 make the low half, 4-7 the high half
-  for (let p = 0; p < P; p++) {
-    const plane = raw.subarray(p * N, (p + 1) * N);
-    const half = p < 4 ? 0 : 1;
-    const shift = 8 * (p & 3);
-    for (let j = 0; j < N; j++) pairs[2 * j + half] |= plane[j] << shift;
-  }
-  // zigzag on 64 bits: s = (u >> 1) XOR −(u AND 1), the shift carrying bit 32 into the low half
-  for (let j = 0; j < 2 * N; j += 2) {
-    const lo = pairs[j];
-    const hi = pairs[j + 1];
-    const sign = -(lo & 1);
-    pairs[j] = ((lo >>> 1) | (hi << 31)) ^ sign;
-    pairs[j + 1] = (hi >>> 1) ^ sign;
+  // u[j] = Σ_p raw[p·N + j] << 8p: planes 0-3 make the low half, 4-7 the high half (a plane
+  // the chunk does not have reads as zeros); then zigzag on 64 bits, s = (u >> 1) XOR
+  // −(u AND 1), the shift carrying bit 32 into the low half. One pass, one loop per case.
+  const zeros = P < 8 ? new Uint8Array(N) : raw;
+  /** @param {number} p */
+  const plane = (p) => (p < P ? raw.subarray(p * N, (p + 1) * N) : zeros);
+  const [p0, p1, p2, p3] = [plane(0), plane(1), plane(2), plane(3)];
+  if (P <= 4) {
+    for (let j = 0; j < N; j++) {
+      const lo = p0[j] | (p1[j] << 8) | (p2[j] << 16) | (p3[j] << 24);
+      const sign = -(lo & 1);
+      pairs[2 * j] = (lo >>> 1) ^ sign;
+      pairs[2 * j + 1] = sign;
+    }
+  } else {
+    const [p4, p5, p6, p7] = [plane(4), plane(5), plane(6), plane(7)];
+    for (let j = 0; j < N; j++) {
+      const lo = p0[j] | (p1[j] << 8) | (p2[j] << 16) | (p3[j] << 24);
+      const hi = p4[j] | (p5[j] << 8) | (p6[j] << 16) | (p7[j] << 24);
+      const sign = -(lo & 1);
+      pairs[2 * j] = ((lo >>> 1) | (hi << 31)) ^ sign;
+      pairs[2 * j + 1] = (hi >>> 1) ^ sign;
+    }
   }
   if (residual.predict === 1) {
     // e[t] = s[t] + e[t − 1], wrapped to 64 bits: a carry from the low halves into the high
