@@ -7,7 +7,7 @@ planes, chunks and predict 1), whole and in segments, decode to the spec's posit
 bit, in either frame order and through frameFloat32, in node and in the Python decoder; their
 restored integers are e. The same files edited to break one rule of §6.9 fail with that rule in
 both decoders. And files the CLI writes with --max-error and --lossless decode in node to the
-Python decoder's bits."""
+Python decoder's bits, as do the real sequences lossless in the domain each gets (slow)."""
 
 from __future__ import annotations
 
@@ -32,7 +32,8 @@ from tests.support.corrections import (
     wrap,
 )
 from tests.support.js_decoder import run_node
-from tuckercodec import FormatError
+from tests.support.sequences import shared_file
+from tuckercodec import EncodeOptions, FormatError
 from tuckercodec.cli import main
 from tuckercodec.format import residual
 
@@ -600,3 +601,20 @@ def test_python_encoded_file_same_bits_as_python(encoded, name):
     else:
         assert {r["domain"] for r in results[0]["residual"]} == {"grid"}
         assert error["targetMaxDistance"] is not None
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["chicken.npz", "horse-gallop", "samba.npz"])
+def test_real_sequence_lossless_same_bits_as_python(tmp_path, name):
+    """The real sequences lossless, each in the domain the encoder picks for it (chicken:
+    decimals of 10 places; horse gallop, read from OBJ text: 6 significant digits; samba:
+    binary32): node decodes the input's bits, as the Python decoder does."""
+    sequence = tuckercodec.load_sequence(shared_file(name), progress=False)
+    path = tmp_path / "lossless.tkc"
+    path.write_bytes(tuckercodec.encode(sequence, options=EncodeOptions(lossless=True)))
+    (result,) = _run([{"path": str(path), "out": str(tmp_path / "out")}], tmp_path)
+    assert result["accepted"], result.get("message")
+    expected = tuckercodec.decode(path).vertices
+    got = np.frombuffer((tmp_path / "out").read_bytes()[: 8 * expected.size], "<u8")
+    assert np.array_equal(got, expected.reshape(-1).view("<u8"))
+    assert np.array_equal(expected, sequence.vertices)
