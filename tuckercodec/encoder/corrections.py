@@ -29,6 +29,7 @@ from ..errors import UnreachableTargetError
 from ..format import residual, streams
 from ..format.container import parse_container
 from ..format.limits import DEFAULT_LIMITS
+from ..format.qmat import QuantizedMatrix
 from ..format.reconstruction import reconstruct_frames, reconstruction_basis
 from ..format.residual import FLOAT32, FLOAT64, GRID, Domain
 from ..io.streaming import FrameSource
@@ -138,17 +139,34 @@ class Corrected:
         return self.tucker_bytes + (len(self.section[1]) if self.section is not None else 0)
 
 
-def exact_positions(quantized: Quantized[Any], u2: np.ndarray) -> np.ndarray:
-    """Every frame of a whole file's Tucker part as §8.1 reconstructs it (F, K, 3)."""
+def exact_positions(quantized: Quantized[Any], u2: np.ndarray) -> tuple[np.ndarray, int]:
+    """Every frame of a whole file's Tucker part as §8.1 reconstructs it (F, K, 3), and the
+    exponent e it is reconstructed with."""
     (factors,) = quantized.segments
     assert factors.u1 is not None
-    u1 = factors.u1.values()
-    i = u1.shape[1]
-    u3 = factors.u3.values()
-    core = factors.core.values().reshape(i, 3, u3.shape[1])
-    return residual.exact_frames(
-        np.ascontiguousarray(u1.T), residual.exact_basis(core, u2), u3, factors.centroids.values()
-    )
+    return exact_segment(factors.u1, factors.core, factors.u3, factors.centroids, u2)
+
+
+def exact_segment(
+    u1: QuantizedMatrix,
+    core: QuantizedMatrix,
+    u3: QuantizedMatrix,
+    centroids: QuantizedMatrix,
+    u2: np.ndarray,
+) -> tuple[np.ndarray, int]:
+    """One decomposition's frames as §8.1 reconstructs them, with the exponent e that keeps
+    its integer product exact and most precise (:func:`~.residual.choose_exponent`)."""
+    exact_u1 = residual.ExactU1.of(u1.q, u1.steps)
+    i = u1.q.shape[1]
+    u3_values = u3.values()
+    basis = residual.exact_basis(core.values().reshape(i, 3, u3_values.shape[1]), u2)
+    scaled = residual.scaled_weights(exact_u1, basis, u3_values)
+    largest = float(np.abs(scaled).max()) if scaled.size else 0.0
+    exponent = residual.choose_exponent(exact_u1, largest)
+    while not residual.weights_fit(exact_u1, residual.integer_weights(scaled, exponent)):
+        exponent += 1  # rounding took a weight over: one step coarser
+    positions = residual.exact_frames(exact_u1, basis, u3_values, centroids.values(), exponent)
+    return positions, exponent
 
 
 def integers_for(exact: np.ndarray, original: np.ndarray, goal: Goal, domain: Domain) -> np.ndarray:
@@ -332,11 +350,11 @@ def final_section(
     if corrected.section is None or corrected.domain is None:
         return None
     domain = corrected.domain
-    exact = exact_positions(corrected.quantized, u2)
+    exact, exponent = exact_positions(corrected.quantized, u2)
     integers = integers_for(exact, original, goal, domain)
     predict = int(corrected.section[0]["predict"])
     section = residual.encode_section(
-        integers, domain, min(level, CORRECTION_LEVEL), predict=predict
+        integers, domain, min(level, CORRECTION_LEVEL), exponent=exponent, predict=predict
     )
     return section, integers, corrected_positions(exact, integers, domain)
 
@@ -423,22 +441,26 @@ def correct_segments(
     """A pass over the input: each segment's §8.1 positions, its corrections (the smallest of
     the goal's domains) and the error of the corrected file, measured on them."""
     work.say(f"pass {work.passes + 1}: correcting every segment")
-    shared = None if quantized.shared_u1 is None else quantized.shared_u1.values()
     measured = ErrorAccumulator()
     out = SegmentCorrections([], [], 0.0, Displacement(0.0, 0, 0), [])
     for number, part in enumerate(work.decoded(quantized)):
+        factors = quantized.segments[number]
         i = part.basis.shape[0]
-        u1 = part.own_u1 if part.own_u1 is not None else shared[:, :i]  # type: ignore[index]
-        core = quantized.segments[number].core.values().reshape(i, 3, part.u3.shape[1])
-        u2 = work.models[number].u2
-        exact = residual.exact_frames(
-            np.ascontiguousarray(u1.T), residual.exact_basis(core, u2), part.u3, part.centroids
+        u1 = factors.u1
+        if u1 is None:  # the shared basis's first i columns
+            assert quantized.shared_u1 is not None
+            shared = quantized.shared_u1
+            u1 = QuantizedMatrix(shared.q[:, :i], shared.steps[:i])
+        exact, exponent = exact_segment(
+            u1, factors.core, factors.u3, factors.centroids, work.models[number].u2
         )
         original = work.source.read(part.segment.start, part.segment.stop)
         best: tuple[tuple[dict[str, Any], bytes], np.ndarray, Domain] | None = None
         for domain in goal.domains:
             integers = integers_for(exact, original, goal, domain)
-            section = residual.encode_section(integers, domain, min(level, CORRECTION_LEVEL))
+            section = residual.encode_section(
+                integers, domain, min(level, CORRECTION_LEVEL), exponent=exponent
+            )
             if best is None or len(section[1]) < len(best[0][1]):
                 best = (section, integers, domain)
         assert best is not None
