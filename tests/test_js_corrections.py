@@ -24,6 +24,7 @@ from tests.support.compressed import Parts, vector
 from tests.support.corrections import (
     Corrections,
     exact_reconstruction,
+    exponents_of,
     float_targets,
     grid_targets,
     ordered,
@@ -375,15 +376,25 @@ INVALID: dict[str, tuple[Any, str, str]] = {
         "R36-reconstruction-finite",
         "FormatError",
     ),
-    "grid-P-overflows": (
+    # §8.1's weights: not finite (U2 so large that W overflows), or too large for the exponent
+    # (R·max|w| beyond 2^53 when e is three less than the least that fits)
+    "grid-weights-not-finite": (
         lambda: _grid_file(_huge_u2),
-        "R36-reconstruction-finite",
+        "R41-residual-value",
         "FormatError",
     ),
-    "grid-P-overflows-then-e-beyond-2^53": (
-        # R41 (a later chunk's value) is found before R36 (every frame's P): the order of the
-        # Python decoder, which checks the positions' finiteness after every correction
-        lambda: _grid_file(_huge_u2, e_last=2**53 + 1),
+    "weights-beyond-2^53": (
+        lambda: with_corrections(
+            vector("v1-wave-triangles"),
+            [
+                Corrections(
+                    np.zeros((24, 81, 3), np.int64),
+                    "grid",
+                    step=1e-3,
+                    exponent=exponents_of(vector("v1-wave-triangles"))[0] - 3,
+                )
+            ],
+        ),
         "R41-residual-value",
         "FormatError",
     ),
@@ -407,6 +418,10 @@ for _name, _edit in {
     "chunks-length-negative": _chunks(lambda c: _set_length(c, -1)),
     "chunks-length-sum": _chunks(lambda c: _set_length(c, c[1][1] + 1)),
     "chunks-entry-three": _chunks(lambda c: c[1].append(0)),
+    "exponent-1023": _set("RESD", exponent=1023),
+    "exponent-minus-1023": _set("RESD", exponent=-1023),
+    "exponent-float": _set("RESD", exponent=0.0),
+    "exponent-missing": _drop("exponent"),
 }.items():
     INVALID[f"R40-{_name}"] = ((lambda e=_edit: _grid_file(e)), "R40-residual", "FormatError")
 
@@ -448,14 +463,6 @@ for _name, (_make, _rule) in {
         lambda: _e_file("decimal-digits", {8: 2 * _DIGITS_L6}, scale=6),
         "R41-residual-value",
     ),
-    "places-P-overflows": (
-        lambda: with_corrections(
-            vector("v1-wave-triangles"),
-            [Corrections(np.zeros((24, 81, 3), np.int64), "decimal-places", scale=2)],
-            edit=_huge_u2,
-        ),
-        "R36-reconstruction-finite",
-    ),
 }.items():
     INVALID[_name] = (_make, _rule, "FormatError")
 
@@ -467,21 +474,6 @@ REFERENCE_BUGS: dict[str, tuple[Any, str, str]] = {
     "grid-e-minus-2^63": (
         lambda: _e_file("grid", {5: -(2**63)}, step=1e-3),
         "R41-residual-value",
-        "FormatError",
-    ),
-    # P not finite is R36 in decimal-digits, but the reference maps such a value's o back to a
-    # decimal too, and an o beyond L indexes past its table of powers: IndexError
-    "digits-P-overflows-e-2L+1": (
-        lambda: with_corrections(
-            vector("v1-wave-triangles"),
-            [
-                Corrections(
-                    np.full((24, 81, 3), 2 * _DIGITS_L6 + 1, np.int64), "decimal-digits", scale=6
-                )
-            ],
-            edit=_huge_u2,
-        ),
-        "R36-reconstruction-finite",
         "FormatError",
     ),
 }

@@ -1,6 +1,7 @@
 """Files with corrections (spec/FORMAT.md §6.9, format 1.3) made by hand, from the spec alone:
-the exact reconstruction P of §8.1 written literally (one binary64 operation at a time, in its
-order), the correction integers e that move P onto chosen targets in each domain, and a RESD
+the exact reconstruction P of §8.1 written literally (B and W one binary64 operation at a time,
+in its order, the weights rounded to integers in units of 2^e and S an exact integer product),
+the correction integers e that move P onto chosen targets in each domain, and a RESD
 section coding them (64-bit zigzag, byte planes, zstd, chunks, predict 1's differences). Tests
 hold the JavaScript decoder to these files without needing the reference encoder, and edit them
 to break one rule of §6.9 at a time."""
@@ -23,36 +24,71 @@ MINOR = 3
 MASK64 = (1 << 64) - 1
 
 
-def exact_reconstruction(data: bytes) -> list[np.ndarray]:
-    """P of §8.1 for every segment (each F_s x K x 3), literally: numpy's elementwise float64
-    multiply and add are single IEEE operations, done here in §8.1's order."""
+def _u1_integers(decoder: Decoder, number: int) -> tuple[np.ndarray, np.ndarray]:
+    """Segment ``number``'s U1 integers q1 (K x i, int64) and steps (i, float64): §8.1 multiplies
+    them. (Read through the decoder's own U1 reader: a file without corrections keeps none.)"""
+    segment = decoder.segments[number]
+    i = segment.ranks[0]
+    section_id = "U1" if segment.basis == "shared" or not decoder.segmented else f"U1.{number}"
+    quantized = decoder._decode_u1(section_id)
+    return quantized.q[:, :i].astype(np.int64), quantized.steps[:i].astype(np.float64)
+
+
+def _weights(decoder: Decoder, number: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """y[t, a, x] = step1[a]·W[a, x] of §8.1 for every frame t of a segment (B and W summed in
+    §8.1's order, one binary64 operation at a time), with q1 and CENT."""
+    factors = decoder.segment_factors(number)
+    u3, core, cent, u2 = factors.u3, factors.core, factors.centroids, factors.u2
+    q1, steps1 = _u1_integers(decoder, number)
+    i, k = core.shape[0], core.shape[2]
+    with np.errstate(over="ignore", invalid="ignore"):
+        B = np.empty((i, 3, k))
+        for x in range(3):
+            B[:, x, :] = (core[:, 0, :] * u2[x, 0] + core[:, 1, :] * u2[x, 1]) + core[:, 2, :] * u2[
+                x, 2
+            ]
+        y = np.empty((u3.shape[0], i, 3))
+        for t in range(u3.shape[0]):
+            W = B[:, :, 0] * u3[t, 0]
+            for b in range(1, k):
+                W = W + B[:, :, b] * u3[t, b]
+            y[t] = steps1[:, None] * W
+    return y, q1, cent
+
+
+def exponents_of(data: bytes, extra: int = 0) -> list[int]:
+    """Each segment's e of §8.1: the smallest with R·max|w| <= 2^53 (R = max_v Σ_a |q1[v, a]|),
+    found by trying (the rounding of w can need one more), plus ``extra``."""
     decoder = Decoder(data)
     out = []
     for number in range(len(decoder.segments)):
-        factors = decoder.segment_factors(number)
-        u1, u3, core, cent, u2 = (
-            factors.u1,
-            factors.u3,
-            factors.core,
-            factors.centroids,
-            factors.u2,
-        )
-        i, k = core.shape[0], core.shape[2]
-        with np.errstate(over="ignore", invalid="ignore"):
-            B = np.empty((i, 3, k))
-            for x in range(3):
-                B[:, x, :] = (core[:, 0, :] * u2[x, 0] + core[:, 1, :] * u2[x, 1]) + core[
-                    :, 2, :
-                ] * u2[x, 2]
-            frames = np.empty((u3.shape[0], u1.shape[0], 3))
-            for t in range(u3.shape[0]):
-                W = B[:, :, 0] * u3[t, 0]
-                for b in range(1, k):
-                    W = W + B[:, :, b] * u3[t, b]
-                S = u1[:, 0:1] * W[0]
-                for a in range(1, i):
-                    S = S + u1[:, a : a + 1] * W[a]
-                frames[t] = S + cent[t]
+        y, q1, _ = _weights(decoder, number)
+        R = int(np.abs(q1).sum(axis=1).max())
+        e = -1022
+        largest = float(np.abs(y).max())
+        if largest > 0 and R > 0:
+            e = max(-1022, int(np.floor(np.log2(R * largest))) - 54)
+        while R * int(np.abs(np.rint(y * 2.0**-e)).max()) > 2**53:
+            e += 1
+        out.append(e + extra)
+    return out
+
+
+def exact_reconstruction(data: bytes, exponents: list[int] | None = None) -> list[np.ndarray]:
+    """P of §8.1 for every segment (each F_s x K x 3) with the exponents given (by default
+    exponents_of's), literally: w = round(y·2^-e) (ties to even), S = q1·w in exact integers
+    (Python's), P = S·2^e + CENT, one multiplication and one addition."""
+    decoder = Decoder(data)
+    exponents = exponents_of(data) if exponents is None else exponents
+    out = []
+    for number, e in enumerate(exponents):
+        y, q1, cent = _weights(decoder, number)
+        w = np.rint(y * 2.0**-e)
+        frames = np.empty((y.shape[0], q1.shape[0], 3))
+        q = q1.astype(object)
+        for t in range(y.shape[0]):
+            S = np.array(q @ w[t].astype(np.int64).astype(object), dtype=np.float64)  # exact
+            frames[t] = S * 2.0**e + cent[t]
         out.append(frames)
     return out
 
@@ -93,6 +129,7 @@ class Corrections:
     predict: int = 0
     chunk_frames: int = 1 << 30
     extra_planes: int = 0  # more planes than needed (a decoder accepts them)
+    exponent: int | None = None  # §8.1's e; by default exponents_of's
 
     def section(self, section_id: str, frames: int) -> tuple[dict[str, Any], bytes]:
         """The RESD section's entry and payload (§6.9). numpy's int64 arithmetic wraps mod
@@ -121,6 +158,7 @@ class Corrections:
             "critical": True,
             "codec": "residual",
             "domain": self.domain,
+            "exponent": self.exponent,
             "predict": self.predict,
             "chunk_frames": L,
             "chunks": chunks,
@@ -152,7 +190,10 @@ def with_corrections(
     else:
         sizes = [int(s["frames"]) for s in segments]
         ids = [f"RESD.{s}" for s in range(len(segments))]
-    for section_id, frames, item in zip(ids, sizes, corrections, strict=True):
+    exponents = exponents_of(data)
+    for section_id, frames, item, e in zip(ids, sizes, corrections, exponents, strict=False):
+        if item.exponent is None:
+            item.exponent = e
         parts.sections.append(item.section(section_id, frames))
     if error is not None:
         parts.header["error"] = {**parts.header.get("error", {}), **error}

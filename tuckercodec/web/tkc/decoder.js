@@ -19,7 +19,7 @@ import { resolveLimits } from './limits.js';
 import { MsgFloat, isInt } from './msgpack.js';
 import { decodeNames, defaultNames, nameSize } from './names.js';
 import { decodeQmat } from './qmat.js';
-import { coreTimesU2, reconstructFrame } from './reconstruct.js';
+import { coreTimesU2, exactWeights, reconstructExact, reconstructFrame, weightsFit } from './reconstruct.js';
 import { correct, decodeChunk, readResidual } from './residual.js';
 import { simdBasis } from './simd.js';
 import { meshTopology } from './topology.js';
@@ -83,6 +83,8 @@ export class TkcFile {
     this._topology = null;
     /** @type {Float64Array | null} */
     this._sharedU1 = null;
+    /** @type {{q?: Float64Array, steps?: Float64Array}} the shared U1's integers and steps */
+    this._sharedKept = {};
     /** @type {SimdBasis | null | undefined} */
     this._sharedSimd = undefined;
     /** @type {(Factors | null)[]} */
@@ -158,8 +160,11 @@ export class TkcFile {
   check() {
     const out = new Float64Array(3 * this.vertices);
     this.layout.segments.forEach((segment, s) => {
-      this._segment(s);
+      const d = this._segment(s);
       if (!this.layout.corrections) return;
+      // the weights of every frame of the segment (R41), then its chunks and values in order
+      if (this._scratch.length < 3 * d.i) this._scratch = new Float64Array(3 * d.i);
+      for (let t = 0; t < segment.frames; t++) this._weights(d, t, segment.start + t);
       for (let f = segment.start; f < segment.start + segment.frames; f++) this._reconstruct(f, out, false);
     });
     return this;
@@ -209,11 +214,12 @@ export class TkcFile {
     const t = f - this.layout.segments[s].start;
     const residual = d.residual;
     if (residual === null) return reconstructFrame(d, t, out, this._scratch, f);
-    // §8.1's P, the frame's chunk (R29), the correction (R41, on the values whose P is finite),
-    // and last, in the domains grid and float64, a P that is not finite (R36): the Python
-    // decoder's order
+    // §8.1's weights (R41) and P, the frame's chunk (R29), the correction (R41, on the values
+    // whose P is finite), and last, a position that is not finite (R36): the Python decoder's
+    // order
     const P = this._exact.length === out.length ? this._exact : (this._exact = new Float64Array(out.length));
-    reconstructFrame(d, t, P, this._scratch, f, false);
+    this._weights(d, t, f);
+    reconstructExact(d, t, P, this._scratch, residual.exponent);
     const c = Math.floor(t / residual.chunkFrames);
     const pairs = this._chunk(s, d, c);
     const j = correct(residual, P, pairs, (t - residual.chunks[c].start) * out.length, out, f);
@@ -221,6 +227,22 @@ export class TkcFile {
       throw formatError('R36-reconstruction-finite', `frame ${f}, vertex ${Math.floor(j / 3)}, axis ${'xyz'[j % 3]}: the decoded position is not finite (P of §8.1 is ${P[j]})`);
     }
     return out;
+  }
+
+  /**
+   * §8.1's integer weights of frame t of a segment into this._scratch, R41 unless they fit.
+   * @param {Factors} d
+   * @param {number} t
+   * @param {number} f the frame within the file, for messages
+   */
+  _weights(d, t, f) {
+    const residual = /** @type {Residual} */ (d.residual);
+    const exact = /** @type {import('./reconstruct.js').Exact} */ (d.exact);
+    const largest = exactWeights(d, t, this._scratch, residual.exponent);
+    if (!weightsFit(exact.rowSum, largest)) {
+      const what = largest === largest ? `R = ${exact.rowSum} times the largest |w| = ${largest} exceeds 2^53` : 'a weight is not finite';
+      throw formatError('R41-residual-value', `section '${residual.section.id}', frame ${f}: §8.1's integer weights at exponent ${residual.exponent} do not fit: ${what}`);
+    }
   }
 
   /**
@@ -268,8 +290,11 @@ export class TkcFile {
    */
   _simdOnce(d) {
     if (!this._useSimd) return null;
-    if (d.u1 !== this._sharedU1) return simdBasis(d.u1, this.vertices, d.columns);
-    if (this._sharedSimd === undefined) this._sharedSimd = simdBasis(d.u1, this.vertices, d.columns);
+    // the matrix each frame multiplies: U1, or with corrections its integers (§8.1)
+    const matrix = d.exact ? d.exact.q1 : d.u1;
+    const shared = d.exact ? this._sharedKept.q : this._sharedU1;
+    if (matrix !== shared) return simdBasis(matrix, this.vertices, d.columns);
+    if (this._sharedSimd === undefined) this._sharedSimd = simdBasis(matrix, this.vertices, d.columns);
     return this._sharedSimd;
   }
 
@@ -296,15 +321,20 @@ export class TkcFile {
     const topology = () => this._topologyOnce();
     let u1;
     let columns = i;
+    // with corrections, §8.1 multiplies U1's integers: kept with its steps
+    const corrections = this.layout.corrections;
+    /** @type {{q?: Float64Array, steps?: Float64Array}} */
+    let kept = {};
     if (segment.basis === 'shared') {
       if (this._sharedU1 === null) {
         const c = this.layout.sharedColumns;
-        this._sharedU1 = decodeQmat(segment.u1, this._payload(segment.u1), K, c, 'mesh', tools, topology);
+        this._sharedU1 = decodeQmat(segment.u1, this._payload(segment.u1), K, c, 'mesh', tools, topology, corrections ? this._sharedKept : undefined);
       }
       u1 = this._sharedU1;
+      kept = this._sharedKept;
       columns = this.layout.sharedColumns;
     } else {
-      u1 = decodeQmat(segment.u1, this._payload(segment.u1), K, i, 'mesh', tools, topology);
+      u1 = decodeQmat(segment.u1, this._payload(segment.u1), K, i, 'mesh', tools, topology, corrections ? kept : undefined);
     }
     const u3 = decodeQmat(segment.u3, this._payload(segment.u3), segment.frames, k, 'time', tools, topology);
     const core = decodeQmat(segment.core, this._payload(segment.core), i * 3 * k, 1, 'none', tools, topology);
@@ -312,8 +342,12 @@ export class TkcFile {
     /** @type {Factors} */
     const decoded = {
       u1, columns, i, k, u3, core, cent, u2: segment.u2, B: coreTimesU2(core, segment.u2, i, k),
-      residual: null, residualPayload: null,
+      residual: null, residualPayload: null, exact: null,
     };
+    if (corrections) {
+      const q1 = /** @type {Float64Array} */ (kept.q);
+      decoded.exact = { q1, steps1: /** @type {Float64Array} */ (kept.steps), rowSum: rowSum(q1, K, columns, i) };
+    }
     // step 16s: a segment's RESD.s after its factors (a whole file's RESD comes after NAME)
     if (this.layout.segmented && this.layout.corrections) this._readResidual(decoded, s);
     this._decoded[s] = decoded;
@@ -347,3 +381,20 @@ function errorClaims(error) {
 }
 
 export { formatError };
+
+/**
+ * R of §8.1: the largest Σ_a |q1[v, a]| over the first i of U1's columns (exact below 2^53).
+ * @param {Float64Array} q1 K × columns
+ * @param {number} K
+ * @param {number} columns
+ * @param {number} i
+ */
+function rowSum(q1, K, columns, i) {
+  let largest = 0;
+  for (let v = 0; v < K; v++) {
+    let sum = 0;
+    for (let a = 0; a < i; a++) sum += Math.abs(q1[v * columns + a]);
+    if (sum > largest) largest = sum;
+  }
+  return largest;
+}

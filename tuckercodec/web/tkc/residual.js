@@ -57,8 +57,8 @@ export const LITTLE_ENDIAN = new Uint8Array(new Uint16Array([1]).buffer)[0] === 
  * A RESD (or RESD.s) section's parameters, checked; chunk c holds the section's frames
  * c·chunkFrames .. (its start and frames).
  * @typedef {{section: import('./container.js').Section, domain: string, step: number,
- *   scale: number | null, predict: number, chunkFrames: number, chunks: Chunk[],
- *   frames: number}} Residual
+ *   scale: number | null, exponent: number, predict: number, chunkFrames: number,
+ *   chunks: Chunk[], frames: number}} Residual
  */
 
 /**
@@ -99,6 +99,11 @@ export function readResidual(section, frames, K, limits) {
     }
     scale = Number(value);
   }
+  // §8.1's e: the unit of the integer weights is 2^e
+  const exponent = entry.get('exponent');
+  if (!isInt(exponent) || !(exponent >= -1022 && exponent <= 1022)) {
+    throw fail(`"exponent" is ${shown('exponent')}, not an int in -1022..1022`);
+  }
   const predict = entry.get('predict');
   if (predict !== 0 && predict !== 1) throw fail(`"predict" is ${shown('predict')}, not 0 or 1`);
   const chunkFrames = entry.get('chunk_frames');
@@ -137,7 +142,7 @@ export function readResidual(section, frames, K, limits) {
     }
   });
   // chunkFrames as the file gives it (a BigInt one made a Number: still above F', one chunk)
-  return { section, domain, step, scale, predict, chunkFrames: Number(chunkFrames), chunks, frames };
+  return { section, domain, step, scale, exponent: Number(exponent), predict, chunkFrames: Number(chunkFrames), chunks, frames };
 }
 
 /**
