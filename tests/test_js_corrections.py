@@ -130,6 +130,7 @@ def test_hand_made_file_decodes_bit_for_bit(decoded, case):
             "domain": c.domain,
             "step": c.step,
             "scale": None,
+            "exponent": c.exponent,
             "predict": c.predict,
             "chunkFrames": c.chunk_frames,
             "chunks": -(-P.shape[0] // c.chunk_frames),
