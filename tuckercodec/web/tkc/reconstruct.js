@@ -50,8 +50,7 @@ export function coreTimesU2(core, u2, i, k) {
 
 /**
  * Frame t of a segment into `out` (K*3, any array type: Float64Array, or Float32Array for the
- * GPU, which rounds each binary64 position once). Every position must be finite (R36), unless
- * `finite` is false (§8.1: in the corrections' domain float32, P may be infinite or NaN).
+ * GPU, which rounds each binary64 position once). Every position must be finite (R36).
  * @template {Float64Array | Float32Array} T
  * @param {Factors} factors u1 is K × columns row-major (a shared basis may have more columns
  *   than the segment uses); simd, when not null, the same U1 laid out for WebAssembly SIMD
@@ -60,10 +59,9 @@ export function coreTimesU2(core, u2, i, k) {
  * @param {T} out
  * @param {Float64Array} W scratch of i*3
  * @param {number} frameNumber the frame within the file, for messages
- * @param {boolean} [finite] false: do not require finite positions (R36)
  * @returns {T}
  */
-export function reconstructFrame(factors, t, out, W, frameNumber, finite = true) {
+export function reconstructFrame(factors, t, out, W, frameNumber) {
   const { u1, columns, i, k, B, u3, cent, simd } = factors;
   for (let a = 0; a < i; a++) {
     for (let x = 0; x < 3; x++) {
@@ -126,7 +124,7 @@ export function reconstructFrame(factors, t, out, W, frameNumber, finite = true)
       out[3 * v + 2] = pz;
     }
   }
-  if (finite && !allFinite) {
+  if (!allFinite) {
     for (let v = 0; v < K; v++) {
       for (let x = 0; x < 3; x++) {
         const p = reconstructAgain(factors, t, v, x, W);
