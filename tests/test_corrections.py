@@ -207,6 +207,17 @@ def test_lossless_decimals_read_from_text(rough, style, domain):
     assert _same_bits(decoder.positions(), sequence.vertices)
 
 
+def test_lossless_float32_values_read_from_text(rough):
+    """A float32 cache written from %g text: counted in the text's last digit, not in float32's."""
+    texts = [f"{v:.6g}" for v in rough.vertices.reshape(-1)]
+    values = np.array(texts, dtype=np.float32).astype(np.float64).reshape(rough.vertices.shape)
+    sequence = MeshSequence(values, rough.faces)
+    data = Encoder(EncodeOptions(lossless=True)).encode(sequence)
+    decoder = Decoder(data)
+    assert decoder.corrections == "decimal-digits-float32"
+    assert _same_bits(decoder.positions(), values)
+
+
 def test_segmented_files_keep_the_promise_in_every_segment(cloth):
     bound = 0.001 * _diagonal(cloth.vertices)
     bounded = Encoder(EncodeOptions(max_error=bound, segment_frames=20)).encode(cloth)

@@ -22,6 +22,7 @@ import operator
 import os
 from collections import OrderedDict
 from collections.abc import Iterator, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
@@ -82,6 +83,8 @@ class SegmentFactors:
 CACHED_SEGMENTS = 2
 #: Decoded chunks of corrections kept (about a million integers each, §6.9).
 CACHED_CHUNKS = 3
+#: Threads that correct chunks at once: the work is numpy's and zstd's, which release the GIL.
+CHUNK_THREADS = min(4, os.cpu_count() or 1)
 
 
 class Decoder:
@@ -277,26 +280,20 @@ class Decoder:
             u1_quantized=None,  # kept as ExactU1 now
         )
 
-    def _chunk(self, number: int, part: SegmentFactors, chunk: int) -> np.ndarray:
-        """The restored integers of one chunk of a segment's corrections, kept for the next
-        frames."""
-        key = (number, chunk)
-        cached = self._chunks.get(key)
-        if cached is None:
-            assert part.corrections is not None
-            with self._naming_path():
-                cached = residual.decode_chunk(
-                    self._payload(part.residual_id),
-                    part.corrections,
-                    chunk,
-                    self.info.vertices,
-                    f"section {part.residual_id}",
-                )
-            self._chunks[key] = cached
-            while len(self._chunks) > CACHED_CHUNKS:
-                self._chunks.popitem(last=False)
+    def _chunk(self, part: SegmentFactors, chunk: int, payload: memoryview) -> np.ndarray:
+        """The restored integers of one chunk of a segment's corrections (R29)."""
+        assert part.corrections is not None
+        with self._naming_path():
+            return residual.decode_chunk(
+                payload, part.corrections, chunk, self.info.vertices, f"section {part.residual_id}"
+            )
+
+    def _keep_chunk(self, key: tuple[int, int], values: np.ndarray) -> None:
+        """Keep a chunk's integers for the next frames (the most recent few)."""
+        self._chunks[key] = values
         self._chunks.move_to_end(key)
-        return cached
+        while len(self._chunks) > CACHED_CHUNKS:
+            self._chunks.popitem(last=False)
 
     def _corrected(self, number: int, part: SegmentFactors, local: np.ndarray) -> np.ndarray:
         """Frames ``local`` (numbers within the segment) of a file with corrections: §8.1's
@@ -314,14 +311,35 @@ class Decoder:
             )
         out = np.empty_like(exact)
         chunks = local // layout.chunk_frames
-        for chunk in np.unique(chunks).tolist():
+        needed = np.unique(chunks).tolist()
+        payload = (
+            self._payload(part.residual_id)
+            if any((number, chunk) not in self._chunks for chunk in needed)
+            else memoryview(b"")
+        )
+
+        def corrected(chunk: int) -> tuple[int, np.ndarray]:
+            """One chunk's frames corrected: run on threads (numpy and zstd release the GIL),
+            reading the cache but not changing it."""
+            values = self._chunks.get((number, chunk))
+            if values is None:
+                values = self._chunk(part, chunk, payload)
             rows = np.flatnonzero(chunks == chunk)
-            values = self._chunk(number, part, chunk)
             start, _ = layout.chunk_range(chunk)
             with self._naming_path():
                 out[rows] = residual.correct(
                     exact[rows], values[local[rows] - start], layout, f"section {part.residual_id}"
                 )
+            return chunk, values
+
+        workers = min(len(needed), CHUNK_THREADS)
+        if workers <= 1:
+            done = [corrected(chunk) for chunk in needed]
+        else:
+            with ThreadPoolExecutor(workers) as pool:
+                done = list(pool.map(corrected, needed))
+        for chunk, values in done:
+            self._keep_chunk((number, chunk), values)
         return out
 
     def check(self) -> None:

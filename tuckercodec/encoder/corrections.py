@@ -48,6 +48,14 @@ LADDER = (0.003, 0.01, 0.03, 0.1, 0.3, 1.0, 3.0)
 TRUNCATION_SHARE = 0.5
 #: A grid's step is this much under 2D/sqrt(3): rounding of the correction itself has room.
 GRID_ROOM = 1e-6
+#: A part up to this much larger than the smallest is chosen if it has fewer U1 columns: §8.1's
+#: product, most of a decode's time, grows with them, and the ladder's sizes are flat near the
+#: smallest (samba lossless: 49.3 bpfv at 353 columns, 50.3 at 247, 53.2 at 144).
+DECODE_SLACK = 0.03
+#: The most U1 columns a lossless file's Tucker part has (unless no coarser part exists): its
+#: decode is then about 2 * 128 multiply-adds per value in §8.1's product, a fraction of the
+#: 80 ns a value that issue 23's 50 MB/s of float32 output allows on 2 cores.
+LOSSLESS_COLUMNS = 128
 #: zstd level of the corrections in the final file: above it, minutes for a percent or two.
 CORRECTION_LEVEL = 9
 
@@ -112,7 +120,8 @@ def _holds(values: np.ndarray, domain: Domain) -> bool:
 
 def _candidates(values: np.ndarray) -> Iterator[Domain]:
     """Binary32, then the fewest places and the fewest digits that hold a sample of the
-    values (most scales are ruled out on the sample, cheaply)."""
+    values (most scales are ruled out on the sample, cheaply), as binary64 and, for binary32
+    values, as binary32."""
     yield Domain(FLOAT32)
     sample = np.ascontiguousarray(values.reshape(-1)[:: max(1, values.size // 4096)])
     for name, (_, least, most) in residual.SCALES.items():
@@ -301,7 +310,11 @@ def search_whole(work: WholeWorkspace, options: EncodeOptions, goal: Goal) -> tu
                 break
         assert best is not None
         return best, len(tried)
-    for kg in LADDER:
+    ladder = list(LADDER)
+    if goal.lossless:  # no part too slow to decode, while a coarser one is there instead
+        fast = [kg for kg in ladder if work.ranks_for(kg, TRUNCATION_SHARE)[0] <= LOSSLESS_COLUMNS]
+        ladder = fast or ladder[-1:]
+    for kg in ladder:
         part = quick_part(work, kg)
         if part is not None:
             tried[kg] = attempt(part)
@@ -311,12 +324,16 @@ def search_whole(work: WholeWorkspace, options: EncodeOptions, goal: Goal) -> tu
     ranked = sorted(tried, key=lambda kg: tried[kg].total_bytes)
     if len(ranked) > 1:
         middle = math.sqrt(ranked[0] * ranked[1])
-        part = quick_part(work, middle)
+        fits = work.ranks_for(middle, TRUNCATION_SHARE)[0] <= LOSSLESS_COLUMNS
+        part = quick_part(work, middle) if fits or not goal.lossless else None
         if part is not None:
             tried[middle] = attempt(part)
             tried[middle].kg = middle
-    best_kg = min(tried, key=lambda kg: tried[kg].total_bytes)
-    return tried[best_kg], len(tried)
+    smallest = min(candidate.total_bytes for candidate in tried.values())
+    # within DECODE_SLACK of the smallest, the part of fewest U1 columns: it decodes fastest
+    near = [kg for kg in tried if tried[kg].total_bytes <= (1 + DECODE_SLACK) * smallest]
+    chosen = min(near, key=lambda kg: (tried[kg].quantized.choice[0], tried[kg].total_bytes))
+    return tried[chosen], len(tried)
 
 
 def quick_part(work: WholeWorkspace, kg: float) -> Quantized[Ranks] | None:

@@ -34,9 +34,12 @@ GRID, FLOAT32, FLOAT64 = "grid", "float32", "float64"
 #: Lossless domains for values that are decimals as text gave them: k / 10**places, or
 #: numbers of ``digits`` significant digits (§6.9).
 PLACES, DIGITS = "decimal-places", "decimal-digits"
-DOMAINS = (GRID, FLOAT32, FLOAT64, PLACES, DIGITS)
+#: binary32 values read from decimals of ``digits`` significant digits (a float32 cache
+#: written from text): the decimal's binary64 value rounded to binary32.
+DIGITS32 = "decimal-digits-float32"
+DOMAINS = (GRID, FLOAT32, FLOAT64, PLACES, DIGITS, DIGITS32)
 #: The parameter each decimal domain takes, and its range.
-SCALES = {PLACES: ("places", 0, 22), DIGITS: ("digits", 1, 15)}
+SCALES = {PLACES: ("places", 0, 22), DIGITS: ("digits", 1, 15), DIGITS32: ("digits", 1, 15)}
 
 
 @dataclass(frozen=True)
@@ -146,15 +149,26 @@ def digits_ordered(values: np.ndarray, digits: int) -> np.ndarray:
     decade's range."""
     lowest_exponent, per_decade, low, powers = _digit_constants(digits)
     magnitude = np.abs(values)
-    decade = np.clip(np.searchsorted(powers, magnitude, side="right") - 1, 0, len(powers) - 1)
-    shift = digits - 1 - (lowest_exponent + decade)  # within -22 .. 22
-    ten = np.asarray(TEN)[np.abs(shift)]
+    decade = np.searchsorted(powers, magnitude, side="right")
+    decade -= 1
+    np.clip(decade, 0, len(powers) - 1, out=decade)
+    shift = (digits - 1 - lowest_exponent) - decade  # within -22 .. 22
+    tens = np.asarray(TEN)
     with np.errstate(over="ignore", invalid="ignore"):
-        scaled = np.where(shift >= 0, magnitude * ten, magnitude / ten)
-    significand = np.clip(np.rint(scaled), low, 10 * low - 1).astype(np.int64)
-    ordered = 1 + decade.astype(np.int64) * per_decade + (significand - low)
-    ordered = np.where(magnitude == 0, 0, ordered)
-    return np.where(np.signbit(values), -1 - ordered, ordered)
+        scaled = magnitude * tens[np.maximum(shift, 0)]  # the usual case: values below 10**p
+        above = shift < 0
+        if above.any():
+            scaled[above] = magnitude[above] / tens[-shift[above]]
+    np.rint(scaled, out=scaled)
+    np.clip(scaled, low, 10 * low - 1, out=scaled)
+    ordered = decade.astype(np.int64)
+    ordered *= per_decade
+    ordered += scaled.astype(np.int64)
+    ordered += 1 - low
+    ordered[magnitude == 0] = 0
+    negative = np.signbit(values)
+    ordered[negative] = -1 - ordered[negative]
+    return ordered
 
 
 def digits_largest(digits: int) -> int:
@@ -167,14 +181,24 @@ def digits_values(ordered: np.ndarray, digits: int) -> np.ndarray:
     correctly rounded operation, so the value nearest the decimal."""
     lowest_exponent, per_decade, low, _ = _digit_constants(digits)
     negative = ordered < 0
-    magnitude = np.where(negative, -1 - ordered, ordered)
-    decade, offset = np.divmod(np.maximum(magnitude - 1, 0), per_decade)
-    significand = (low + offset).astype(np.float64)
-    shift = digits - 1 - (lowest_exponent + decade)
-    ten = np.asarray(TEN)[np.abs(shift)]
-    value = np.where(shift > 0, significand / ten, significand * ten)
-    value = np.where(magnitude == 0, 0.0, value)
-    return np.where(negative, -value, value)
+    magnitude = ordered.copy()
+    magnitude[negative] = -1 - magnitude[negative]
+    zero = magnitude == 0
+    magnitude -= 1
+    np.maximum(magnitude, 0, out=magnitude)
+    decade, offset = np.divmod(magnitude, per_decade)
+    offset += low
+    value = offset.astype(np.float64)
+    shift = (digits - 1 - lowest_exponent) - decade
+    tens = np.asarray(TEN)
+    below = shift > 0  # the usual case: a division by an exact power of ten
+    value[below] /= tens[shift[below]]
+    rest = ~below
+    if rest.any():
+        value[rest] *= tens[-shift[rest]]
+    value[zero] = 0.0
+    value[negative] = -value[negative]
+    return value
 
 
 # -- §8.1 the exact reconstruction -------------------------------------------------------------
@@ -486,7 +510,8 @@ def _decimal(
     stay not finite, for R36), corrected by e, back to the value of its decimal."""
     assert layout.scale is not None
     scale = layout.scale
-    base = np.where(finite, exact, 0.0)
+    every = bool(finite.all())  # the usual case: no copies for the non-finite
+    base = exact if every else np.where(finite, exact, 0.0)
     if layout.domain == PLACES:
         limit = LARGEST_PLACES_INTEGER
         if residual.size and int(np.abs(residual).max()) > 2 * limit:
@@ -499,12 +524,15 @@ def _decimal(
         limit = digits_largest(scale)
         if residual.size and int(np.abs(residual).max()) > 2 * limit + 1:
             _value_error(where, f"a correction is beyond the decimals of {scale} digits")
-        ordered = digits_ordered(base, scale) + residual
-        inside = ordered[finite]
+        ordered = digits_ordered(base, scale)
+        ordered += residual
+        inside = ordered if every else ordered[finite]
         if inside.size and (inside.min() < -1 - limit or inside.max() > limit):
             _value_error(where, f"a corrected integer is not a decimal of {scale} digits")
         values = digits_values(ordered, scale)
-    return np.where(finite, values, np.nan)
+        if layout.domain == DIGITS32:  # rounded once more, to binary32
+            values = values.astype(np.float32).astype(np.float64)
+    return values if every else np.where(finite, values, np.nan)
 
 
 def _value_error(where: str, problem: str) -> NoReturn:
@@ -525,7 +553,7 @@ def ordered_in(values: np.ndarray, domain: Domain) -> np.ndarray:
     if domain.name == PLACES:
         assert domain.scale is not None
         return places_ordered(values, domain.scale)
-    if domain.name == DIGITS:
+    if domain.name in (DIGITS, DIGITS32):
         assert domain.scale is not None
         return digits_ordered(values, domain.scale)
     return ordered64(values)
