@@ -142,9 +142,11 @@ def test_hand_made_file_decodes_bit_for_bit(decoded, case):
 # ------------------------------------------------------------------------------------------
 # the decimal domains: the same bits as the Python decoder, over every decade and both ends
 
-DECIMALS = [("decimal-places", d) for d in (0, 3, 10, 22)] + [
-    ("decimal-digits", p) for p in (1, 6, 14, 15)
-]
+DECIMALS = (
+    [("decimal-places", d) for d in (0, 3, 10, 22)]
+    + [("decimal-digits", p) for p in (1, 6, 14, 15)]
+    + [("decimal-digits-float32", p) for p in (1, 6, 9, 15)]
+)
 
 
 def _decimal_e(P: np.ndarray, domain: str, scale: int, rng: np.random.Generator) -> np.ndarray:

@@ -167,7 +167,7 @@ class Corrections:
             entry["step"] = self.step
         elif self.domain == "decimal-places":
             entry["places"] = self.scale
-        elif self.domain == "decimal-digits":
+        elif self.domain in ("decimal-digits", "decimal-digits-float32"):
             entry["digits"] = self.scale
         return entry, payload
 

@@ -41,9 +41,13 @@ const TWO_53 = 2 ** 53;
 /** 10^n for n = 0..22, each exact in binary64 (read from text, which rounds correctly). */
 const TEN = Array.from({ length: 23 }, (_, n) => Number(`1e${n}`));
 /** The domains and the parameter each decimal one takes, with its range (§6.9). */
-const DOMAINS = ['grid', 'float32', 'float64', 'decimal-places', 'decimal-digits'];
+const DOMAINS = ['grid', 'float32', 'float64', 'decimal-places', 'decimal-digits', 'decimal-digits-float32'];
 /** @type {{[domain: string]: [string, number, number]}} */
-const SCALES = { 'decimal-places': ['places', 0, 22], 'decimal-digits': ['digits', 1, 15] };
+const SCALES = {
+  'decimal-places': ['places', 0, 22],
+  'decimal-digits': ['digits', 1, 15],
+  'decimal-digits-float32': ['digits', 1, 15],
+};
 
 /** True where typed arrays are little-endian (the halves above, and the bit views below). */
 export const LITTLE_ENDIAN = new Uint8Array(new Uint16Array([1]).buffer)[0] === 1;
@@ -251,8 +255,9 @@ export function correct(residual, P, pairs, first, out, frameNumber) {
       bad = correctGrid(P, residual.step, pairs, at, target, n);
     } else if (residual.domain === 'decimal-places') {
       bad = correctPlaces(P, /** @type {number} */ (residual.scale), pairs, at, target, n);
-    } else if (residual.domain === 'decimal-digits') {
-      bad = correctDigits(P, digitConstants(/** @type {number} */ (residual.scale)), pairs, at, target, n);
+    } else if (residual.domain === 'decimal-digits' || residual.domain === 'decimal-digits-float32') {
+      const float32 = residual.domain === 'decimal-digits-float32';
+      bad = correctDigits(P, digitConstants(/** @type {number} */ (residual.scale)), pairs, at, target, n, float32);
     } else {
       if (target !== P) target.set(P);
       bad = correctFloat64(bits, pairs, at, n);
@@ -379,7 +384,7 @@ function why(residual, p, pairs, at) {
     if (e > 2n ** 54n || e < -(2n ** 54n)) return `e = ${e} is outside −2^54..2^54`;
     return `k = b + e (b the integer nearest P·10^${residual.scale}, P = ${p}; e = ${e}) is outside −2^53..2^53`;
   }
-  if (residual.domain === 'decimal-digits') {
+  if (residual.domain === 'decimal-digits' || residual.domain === 'decimal-digits-float32') {
     const { bound } = digitConstants(/** @type {number} */ (residual.scale));
     if (e > 2n * bound + 1n || e < -(2n * bound + 1n)) return `e = ${e} is outside ±(2L+1), L = ${bound}`;
     return `o = b + e (b the ordered decimal integer of P = ${p}; e = ${e}) is outside −1−L..L, L = ${bound}`;
@@ -503,16 +508,18 @@ function within(hi, lo, low, high) {
 
 /**
  * Domain decimal-digits (p digits): b the ordered decimal integer of P, o = b + e, the position
- * the value of o (§6.9). The integers reach 2^57 when p = 15, so they are added on halves, and
- * o's decade is found with a division corrected by its exact remainder. Returns as correctGrid.
+ * the value of o (§6.9); in decimal-digits-float32 (`float32`) that value rounded to binary32.
+ * The integers reach 2^57 when p = 15, so they are added on halves, and o's decade is found
+ * with a division corrected by its exact remainder. Returns as correctGrid.
  * @param {Float64Array} P
  * @param {Digits} c
  * @param {Int32Array} pairs
  * @param {number} at
  * @param {Float64Array} out
  * @param {number} n
+ * @param {boolean} float32
  */
-function correctDigits(P, c, pairs, at, out, n) {
+function correctDigits(P, c, pairs, at, out, n, float32) {
   const { least, decade: B, powers } = c;
   let notFinite = -1;
   for (let j = 0; j < n; j++) {
@@ -600,7 +607,8 @@ function correctDigits(P, c, pairs, at, out, n) {
     const significand = least + offset;
     const s = 22 - decade;
     const value = s > 0 ? significand / TEN[s] : significand * TEN[-s];
-    out[j] = negative ? -value : value;
+    const signed = negative ? -value : value;
+    out[j] = float32 ? Math.fround(signed) : signed; // ties to even, like any binary32 rounding
   }
   return -2 - notFinite;
 }

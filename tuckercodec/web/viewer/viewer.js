@@ -815,6 +815,7 @@ function correctionsText(file) {
   if (r.domain === 'grid') return `on a grid of step ${formatNumber(r.step)} scene units${more}`;
   if (r.domain === 'decimal-places') return `to decimals of ${r.scale} places${more}`;
   if (r.domain === 'decimal-digits') return `to decimals of ${r.scale} significant digits${more}`;
+  if (r.domain === 'decimal-digits-float32') return `to binary32 values of decimals of ${r.scale} significant digits${more}`;
   return `to exact ${r.domain === 'float32' ? 'binary32' : 'binary64'} values${more}`;
 }
 
