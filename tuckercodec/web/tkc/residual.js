@@ -1,7 +1,8 @@
 // Codec `residual` (spec/FORMAT.md §6.9, version 1.3): one 64-bit integer e per decoded
 // coordinate, which moves the exact reconstruction P of §8.1 onto a grid ("grid"), onto
 // chosen binary32 or binary64 bits ("float32", "float64"), or onto decimals of d places or p
-// significant digits ("decimal-places", "decimal-digits").
+// significant digits ("decimal-places", "decimal-digits", and "decimal-digits-float32" for the
+// binary32 values such decimals give).
 //
 // readResidual checks the section's parameters in the order of §5 step 18 (R40-residual, then
 // R21-header-limit for each chunk's decompressed size); the caller checks the CRC after it.
@@ -25,8 +26,6 @@ const TWO_32 = 4294967296;
 // float32 domain: the ordered integers of the finite binary32 values (§6.9)
 const F32_LOWEST = -2139095040;
 const F32_HIGHEST = 2139095039;
-// float64 domain: the high halves of the ordered integers of the finite binary64 values,
-// −0x7FF0000000000000 (that of −max) .. 0x7FEFFFFFFFFFFFFF (that of +max); every low half goes
 // float64 domain: the range §6.9 gives, −9218868437227405313 .. 9218868437227405311, as high
 // halves: 0x800FFFFF (with the low half 0xFFFFFFFF only) .. 0x7FEFFFFF. (The low end is the
 // ordered integer of −infinity, not of −max, −9218868437227405312: see correctFloat64.)
