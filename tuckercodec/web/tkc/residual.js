@@ -462,7 +462,7 @@ function correctPlaces(P, d, pairs, at, out, n) {
  * 10^(p−1), the decimals of a decade B = 9·10^(p−1), Q[j] the binary64 nearest 10^(E_min + j)
  * (j = 0..44, read from text as §6.9 says), L = 45·B, and the halves of the bounds on e
  * (±(2L + 1)) and on o (−1 − L .. L), which need more than 53 bits when p = 15.
- * @typedef {{least: number, decade: number, powers: number[], bound: bigint,
+ * @typedef {{digits: number, least: number, decade: number, powers: number[], bound: bigint,
  *   eHigh: number[], eLow: number[], oHigh: number[], oLow: number[]}} Digits
  */
 
@@ -479,6 +479,7 @@ function digitConstants(p) {
     /** @param {bigint} v */
     const halves = (v) => [Number(BigInt.asIntN(64, v) >> 32n), Number(BigInt.asUintN(32, v))];
     found = {
+      digits: p,
       least,
       decade: 9 * least,
       powers: Array.from({ length: 45 }, (_, j) => Number(`1e${lowest + j}`)),
@@ -491,6 +492,83 @@ function digitConstants(p) {
     DIGITS.set(p, found);
   }
   return found;
+}
+
+const INVERSE_32 = 2 ** -32;
+
+/**
+ * correctDigits for p <= 14, where L < 2^52: e (when in range), b and o (when in range) are
+ * integers below 2^53, so plain binary64 arithmetic is exact, and an o out of range is seen
+ * as such though its sum rounds (rounding is monotone and the bounds are exact).
+ * @param {Float64Array} P
+ * @param {Digits} c
+ * @param {Int32Array} pairs
+ * @param {number} at
+ * @param {Float64Array} out
+ * @param {number} n
+ * @param {boolean} float32
+ */
+function correctDigitsNumber(P, c, pairs, at, out, n, float32) {
+  const { least, decade: B, powers } = c;
+  const L = Number(c.bound);
+  const most = 10 * least - 1;
+  const inverseB = 1 / B;
+  const lowest = 23 - c.digits; // −E_min
+  const bits = new Int32Array(P.buffer, P.byteOffset, 2 * P.length); // P's high halves: its exponent
+  let notFinite = -1;
+  for (let j = 0; j < n; j++) {
+    const e = pairs[at + 2 * j + 1] * TWO_32 + (pairs[at + 2 * j] >>> 0); // exact when in range
+    if (e > 2 * L + 1 || e < -2 * L - 1) return j;
+    const x = P[j];
+    if (x - x !== 0) {
+      if (notFinite < 0) notFinite = j; // R36, which the caller reports
+      out[j] = x;
+      continue;
+    }
+    // b, the ordered decimal integer of x
+    let b = 0;
+    if (x !== 0) {
+      const a = x < 0 ? -x : x;
+      // the largest index with powers[index] <= a (or 0): guessed from a's binary exponent
+      // (log10 2 ≈ 0.30103, within one decade), then stepped to the right one
+      const binary = ((bits[2 * j + 1] >>> 20) & 0x7ff) - 1023;
+      let lo = Math.floor(binary * 0.30103) + lowest;
+      if (lo < 0) lo = 0;
+      else if (lo > 44) lo = 44;
+      while (lo < 44 && powers[lo + 1] <= a) lo++;
+      while (lo > 0 && powers[lo] > a) lo--;
+      const s = 22 - lo;
+      let m = roundHalfEven(s >= 0 ? a * TEN[s] : a / TEN[-s]);
+      if (m < least) m = least;
+      else if (m > most) m = most;
+      b = lo * B + (1 + m - least);
+    }
+    if (x < 0 || (x === 0 && 1 / x < 0)) b = -1 - b;
+    const o = b + e;
+    if (o > L || o < -1 - L) return j;
+    const negative = o < 0;
+    const magnitude = negative ? -1 - o : o;
+    if (magnitude === 0) {
+      out[j] = negative ? -0 : 0;
+      continue;
+    }
+    const q = magnitude - 1;
+    let decade = Math.floor(q * inverseB); // within one of the quotient: corrected below
+    let offset = q - decade * B; // exact
+    if (offset < 0) {
+      decade -= 1;
+      offset += B;
+    } else if (offset >= B) {
+      decade += 1;
+      offset -= B;
+    }
+    const significand = least + offset;
+    const s = 22 - decade;
+    const value = s > 0 ? significand / TEN[s] : significand * TEN[-s];
+    const signed = negative ? -value : value;
+    out[j] = float32 ? Math.fround(signed) : signed;
+  }
+  return -2 - notFinite;
 }
 
 /**
@@ -519,6 +597,7 @@ function within(hi, lo, low, high) {
  * @param {boolean} float32
  */
 function correctDigits(P, c, pairs, at, out, n, float32) {
+  if (c.bound < 2n ** 52n) return correctDigitsNumber(P, c, pairs, at, out, n, float32);
   const { least, decade: B, powers } = c;
   let notFinite = -1;
   for (let j = 0; j < n; j++) {
@@ -552,8 +631,8 @@ function correctDigits(P, c, pairs, at, out, n, float32) {
       // o = index·B + (1 + m − 10^(p−1)): both terms exact, their sum on halves
       const X = lo * B;
       const Y = 1 + m - least;
-      const xh = Math.floor(X / TWO_32);
-      const yh = Math.floor(Y / TWO_32);
+      const xh = Math.floor(X * INVERSE_32);
+      const yh = Math.floor(Y * INVERSE_32);
       bLo = X - xh * TWO_32 + (Y - yh * TWO_32);
       bHi = xh + yh;
       if (bLo >= TWO_32) {
