@@ -26,10 +26,9 @@ const TWO_32 = 4294967296;
 // float32 domain: the ordered integers of the finite binary32 values (§6.9)
 const F32_LOWEST = -2139095040;
 const F32_HIGHEST = 2139095039;
-// float64 domain: the range §6.9 gives, −9218868437227405313 .. 9218868437227405311, as high
-// halves: 0x800FFFFF (with the low half 0xFFFFFFFF only) .. 0x7FEFFFFF. (The low end is the
-// ordered integer of −infinity, not of −max, −9218868437227405312: see correctFloat64.)
-const F64_LOWEST_HIGH = -2146435073; // 0x800FFFFF as int32
+// float64 domain: the range §6.9 gives, −9218868437227405312 .. 9218868437227405311 (−max to
+// +max), as high halves: 0x80100000 .. 0x7FEFFFFF (every low half with each)
+const F64_LOWEST_HIGH = -2146435072; // 0x80100000 as int32
 const F64_HIGHEST_HIGH = 0x7fefffff;
 // grid domain: e in −2^53 .. 2^53, high halves −2^21 .. 2^21 − 1, or 2^53 itself
 const GRID_HIGH = 2 ** 21;
@@ -325,9 +324,7 @@ function correctFloat32(P, bits, pairs, at, n) {
 
 /**
  * Domain float64: o = b + e wrapped to 64 bits, on the halves of P's bits (written over them).
- * Returns as correctGrid does. §6.9's range admits −9218868437227405313, which is −infinity's
- * ordered integer; the Python decoder accepts it too and then finds the position not finite
- * (R36), and so does this decoder.
+ * Returns as correctGrid does.
  * @param {Int32Array} bits P's bits, interleaved halves
  * @param {Int32Array} pairs
  * @param {number} at
@@ -351,10 +348,6 @@ function correctFloat64(bits, pairs, at, n) {
     const sum = (lo >>> 0) + (pairs[at + 2 * j] >>> 0);
     const oHi = (hi + pairs[at + 2 * j + 1] + (sum >= TWO_32 ? 1 : 0)) | 0;
     if (oHi < F64_LOWEST_HIGH || oHi > F64_HIGHEST_HIGH) return j;
-    if (oHi === F64_LOWEST_HIGH) {
-      if (sum % TWO_32 !== TWO_32 - 1) return j; // below −infinity's ordered integer
-      if (notFinite < 0) notFinite = j; // −infinity itself
-    }
     if (oHi < 0) {
       bits[2 * j] = ~sum;
       bits[2 * j + 1] = oHi ^ 0x7fffffff;
