@@ -84,16 +84,7 @@ def goal_of(options: EncodeOptions, sequence: MeshSequence) -> Goal:
     diagonal = float(np.linalg.norm(corner_high - corner_low))
     bound = options.max_error_length(diagonal)
     assert bound is not None
-    largest = float(np.abs(vertices).max())
-    # Positions are binary64: a grid finer than a few of their ulps cannot be met reliably.
-    resolvable = 64 * np.spacing(largest) if largest > 0 else 0.0
-    if not bound > resolvable:
-        raise UnreachableTargetError(
-            f"no file can keep every vertex within {bound:.6g}: the positions reach "
-            f"{largest:.6g}, where float64 itself resolves only about {np.spacing(largest):.3g} "
-            f"(a bound must be above {resolvable:.3g}); ask for a larger bound, or --lossless"
-        )
-    step = float(2.0 * bound / math.sqrt(3.0) * (1.0 - GRID_ROOM))
+    step = _grid_step(bound, float(np.abs(vertices).max()))
     return Goal((Domain(GRID, step=step),), bound)
 
 
@@ -430,7 +421,8 @@ def goal_of_source(options: EncodeOptions, source: FrameSource, block_frames: in
 
 def _grid_step(bound: float, largest: float) -> float:
     """A grid's step for the bound D on positions reaching ``largest``, or
-    ``UnreachableTargetError`` if float64 cannot resolve D there."""
+    ``UnreachableTargetError`` if float64 cannot resolve D there (a grid finer than a few of
+    the positions' ulps cannot be met reliably)."""
     resolvable = 64 * np.spacing(largest) if largest > 0 else 0.0
     if not bound > resolvable:
         raise UnreachableTargetError(

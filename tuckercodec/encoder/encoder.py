@@ -200,30 +200,21 @@ class Encoder:
                 f"the corrected file's KG error {work.kg(error2):.6g} is above the target "
                 f"{target_kg}: this is a bug, please report it"
             )
-        choice = quantized.choice
-        return EncodeResult(
+        return self._report(
+            work,
             data,
-            EncodeReport(
-                mode=options.mode,
-                target=options.target,
-                select=options.select,
-                ranks=choice,
-                kg=work.kg(error2),
-                truncation_kg=work.kg(work.truncation_error2(choice)),
-                exact_ranks=None,
-                bound_ranks=None,
-                total_bytes=len(data),
-                section_bytes=sizes,
-                vertices=work.vertex_count,
-                frames=work.frame_count,
-                seconds=time.perf_counter() - start,
-                trials=trials,
-                max_distance=distance,
-                max_distance_at=where,
-                max_error=goal.bound,
-                lossless=goal.lossless,
-                corrections=chosen.domain.describe() if chosen.domain and section else None,
-            ),
+            sizes,
+            start,
+            select=options.select,
+            ranks=quantized.choice,
+            kg=work.kg(error2),
+            truncation_kg=work.kg(work.truncation_error2(quantized.choice)),
+            trials=trials,
+            max_distance=distance,
+            max_distance_at=where,
+            max_error=goal.bound,
+            lossless=goal.lossless,
+            corrections=chosen.domain.describe() if chosen.domain and section else None,
         )
 
     def _segments_corrected(
@@ -264,33 +255,48 @@ class Encoder:
             )
         choice = quantized.choice
         names = sorted({domain.describe() for domain in fixed.domains})
+        return self._report(
+            work,
+            data,
+            sizes,
+            start,
+            select="exact",
+            ranks=(
+                choice.shared or max(i for i, _ in choice.ranks),
+                max(k for _, k in choice.ranks),
+            ),
+            kg=work.kg(fixed.error2),
+            truncation_kg=work.kg(choice.truncation2),
+            trials=trials + work.passes,
+            segments=len(work.models),
+            basis=options.basis,
+            max_distance=fixed.worst.distance,
+            max_distance_at=fixed.worst.at,
+            max_error=goal.bound,
+            lossless=goal.lossless,
+            corrections=", ".join(names),
+        )
+
+    def _report(
+        self,
+        work: Workspace[Any],
+        data: bytes,
+        sizes: dict[str, int],
+        start: float,
+        **fields: Any,
+    ) -> EncodeResult:
+        """The file and its report: the mode and sizes every encode states, and ``fields``."""
         return EncodeResult(
             data,
             EncodeReport(
-                mode=options.mode,
-                target=options.target,
-                select="exact",
-                ranks=(
-                    choice.shared or max(i for i, _ in choice.ranks),
-                    max(k for _, k in choice.ranks),
-                ),
-                kg=work.kg(fixed.error2),
-                truncation_kg=work.kg(choice.truncation2),
-                exact_ranks=None,
-                bound_ranks=None,
+                mode=self.options.mode,
+                target=self.options.target,
                 total_bytes=len(data),
                 section_bytes=sizes,
                 vertices=work.vertex_count,
                 frames=work.frame_count,
                 seconds=time.perf_counter() - start,
-                trials=trials + work.passes,
-                segments=len(work.models),
-                basis=options.basis,
-                max_distance=fixed.worst.distance,
-                max_distance_at=fixed.worst.at,
-                max_error=goal.bound,
-                lossless=goal.lossless,
-                corrections=", ".join(names),
+                **{"exact_ranks": None, "bound_ranks": None, **fields},
             ),
         )
 
@@ -319,21 +325,15 @@ class Encoder:
         options = self.options
         header_target = options.kg_target if options.mode == "kg" else None
         data, sizes = work.pack(quantized, error2, header_target)
-        return EncodeResult(
+        return self._report(
+            work,
             data,
-            EncodeReport(
-                mode=options.mode,
-                target=options.target,
-                ranks=ranks,
-                kg=work.kg(error2),
-                truncation_kg=work.kg(truncation2),
-                total_bytes=len(data),
-                section_bytes=sizes,
-                vertices=work.vertex_count,
-                frames=work.frame_count,
-                seconds=time.perf_counter() - start,
-                **{"exact_ranks": None, "bound_ranks": None, **report},
-            ),
+            sizes,
+            start,
+            ranks=ranks,
+            kg=work.kg(error2),
+            truncation_kg=work.kg(truncation2),
+            **report,
         )
 
     def _say(self, line: str) -> None:
