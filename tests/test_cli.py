@@ -388,9 +388,10 @@ def test_encode_prints_the_worst_vertex_and_the_bound_it_measured(
     )
     assert not any("bound on every vertex" in line for line in lines)
 
-    monkeypatch.setattr(Encoder, "encode_source", real)  # no measure: no line
+    monkeypatch.setattr(Encoder, "encode_source", real)  # every whole encode measures it
     assert main(["encode", str(wave_npz), "-o", str(tmp_path / "c.tkc"), "--ranks", "4,4"]) == 0
-    assert "worst vertex" not in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "decoded worst vertex" in out and "bound on every vertex" not in out
 
 
 def test_encode_never_overwrites_without_force(wave_npz, tmp_path, capsys):

@@ -573,11 +573,12 @@ def test_python_encoded_file_same_bits_as_python(encoded, name):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["chicken.npz", "horse-gallop", "samba.npz"])
+@pytest.mark.parametrize("name", ["horse-gallop"])
 def test_real_sequence_lossless_same_bits_as_python(tmp_path, name):
-    """The real sequences lossless, each in the domain the encoder picks for it (chicken:
-    decimals of 10 places; horse gallop, read from OBJ text: 6 significant digits; samba:
-    binary32): node decodes the input's bits, as the Python decoder does."""
+    """A real sequence lossless in the domain the encoder picks for it (horse gallop, read from
+    OBJ text: decimals of 6 significant digits): node decodes the input's bits, as the Python
+    decoder does. (Every other domain has its vector and its hand-made files above; chicken and
+    samba add a minute to every run and no code path.)"""
     sequence = tuckercodec.load_sequence(shared_file(name), progress=False)
     path = tmp_path / "lossless.tkc"
     path.write_bytes(tuckercodec.encode(sequence, options=EncodeOptions(lossless=True)))
