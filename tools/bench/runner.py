@@ -30,6 +30,7 @@ SUITES = {
     "zarr": "tools.bench.zarr",
     "viewer": "tools.bench.viewer",
     "faces": "tools.bench.faces",
+    "bounds": "tools.bench.bounds",
 }
 
 
