@@ -31,6 +31,7 @@ SUITES = {
     "viewer": "tools.bench.viewer",
     "faces": "tools.bench.faces",
     "bounds": "tools.bench.bounds",
+    "lossless": "tools.bench.lossless",
 }
 
 
