@@ -8,6 +8,7 @@ import re
 import shutil
 import subprocess
 import sys
+from typing import Any
 
 import numpy as np
 import pytest
@@ -215,7 +216,181 @@ def test_encode_decode_info_eval(wave_npz, tmp_path, capsys):
     figures = json.loads(capsys.readouterr().out)
     assert figures["kg"] == pytest.approx(header["kg"], rel=1e-6)
     assert main(["eval", str(wave_npz), str(packed)]) == 0  # a compressed file is decoded
-    assert "largest vertex displacement" in capsys.readouterr().out
+    assert "worst vertex" in capsys.readouterr().out
+
+
+# ------------------------------------------------------------------------------------------
+# the worst vertex beside the KG error (issue 23, item 4)
+
+WORST = re.compile(r"worst vertex (?:against \S+: )?(\S+) at frame (\d+), vertex (\d+) \((.*)\)")
+
+
+def brute_worst(original: np.ndarray, decoded: np.ndarray) -> tuple[float, int, int]:
+    """The largest Euclidean distance between matching vertices and its (frame, vertex)."""
+    distances = np.linalg.norm(original - decoded, axis=2)
+    frame, vertex = np.unravel_index(int(np.argmax(distances)), distances.shape)
+    return float(distances[frame, vertex]), int(frame), int(vertex)
+
+
+def printed_worst(line: str) -> tuple[float, int, int]:
+    found = WORST.search(line)
+    assert found is not None, line
+    assert "largest Euclidean distance" in found[4] and "sequence's units" in found[4]
+    return float(found[1]), int(found[2]), int(found[3])
+
+
+def assert_worst(line: str, distance: float, frame: int, vertex: int) -> None:
+    """The line names this frame and vertex, and this distance to the 6 digits printed."""
+    printed, *at = printed_worst(line)
+    assert printed == pytest.approx(distance, rel=1e-5) and at == [frame, vertex], line
+
+
+def line_with(out: str, words: str) -> str:
+    lines = [line for line in out.splitlines() if words in line]
+    assert len(lines) == 1, out
+    return lines[0]
+
+
+def test_decode_and_eval_report_the_worst_vertex_beside_the_kg(wave_npz, tmp_path, capsys):
+    packed = tmp_path / "wave.tkc"
+    assert main(["encode", str(wave_npz), "-o", str(packed), "--kg", "0.5"]) == 0
+    original = np.load(wave_npz)["V"]
+    capsys.readouterr()
+    everything = tmp_path / "all.npz"
+    assert main(["decode", str(packed), "-o", str(everything), "--reference", str(wave_npz)]) == 0
+    out = capsys.readouterr().out
+    decoded = np.load(everything)["V"]
+    distance, frame, vertex = brute_worst(original, decoded)
+    lines = out.splitlines()
+    kg_at = next(n for n, line in enumerate(lines) if line.startswith("actual KG error against"))
+    assert lines[kg_at + 1].startswith(f"actual worst vertex against {wave_npz}: ")
+    assert_worst(lines[kg_at + 1], distance, frame, vertex)
+
+    # a range of frames: the worst of those frames, numbered as in the file
+    part = tmp_path / "part.npz"
+    args = ["decode", str(packed), "-o", str(part), "--frames", "11:15"]
+    assert main([*args, "--reference", str(wave_npz)]) == 0
+    line = line_with(capsys.readouterr().out, "actual worst vertex against")
+    distance, frame, vertex = brute_worst(original[11:15], np.load(part)["V"])
+    assert_worst(line, distance, 11 + frame, vertex)
+    assert "of the 4 frames decoded" in line
+
+    # the same range as a glTF decomposition: the .tkc's worst vertex of those frames
+    glb = tmp_path / "part.glb"
+    args = ["decode", str(packed), "-o", str(glb), "--frames", "11:15"]
+    assert main([*args, "--reference", str(wave_npz)]) == 0
+    line = line_with(capsys.readouterr().out, "actual worst vertex against")
+    assert_worst(line, distance, 11 + frame, vertex)
+
+    # eval: text beside the KG error, and JSON with the keys info --json uses
+    assert main(["eval", str(wave_npz), str(everything)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].startswith("KG error") and lines[1].startswith("worst vertex")
+    distance, frame, vertex = brute_worst(original, decoded)
+    assert_worst(lines[1], distance, frame, vertex)
+    assert main(["eval", str(wave_npz), str(everything), "--json"]) == 0
+    figures = json.loads(capsys.readouterr().out)
+    assert figures["max_distance"] == distance and figures["max_distance_at"] == [frame, vertex]
+    assert "largest Euclidean distance" in figures["max_distance_definition"]
+
+    # a file without the header keys says where to measure it
+    assert main(["info", str(packed)]) == 0
+    line = line_with(capsys.readouterr().out, "worst vertex")
+    assert "not recorded in the file" in line and "--max-error or --lossless" in line
+    assert main(["info", str(packed), "--json"]) == 0
+    header = json.loads(capsys.readouterr().out)
+    assert header["max_distance"] is None and header["max_distance_at"] is None
+    assert header["lossless"] is None
+
+
+def test_info_and_decode_print_the_worst_vertex_a_file_records(wave_npz, tmp_path, capsys):
+    """A file with the error keys of spec §4.1 (1.3), written here by hand over a real file."""
+    from tests.support.compressed import Parts
+
+    packed = tmp_path / "wave.tkc"
+    assert main(["encode", str(wave_npz), "-o", str(packed), "--kg", "0.5"]) == 0
+    parts = Parts(packed.read_bytes())
+    parts.header["error"].update(
+        max_distance=0.0125, max_distance_at=[3, 7], target_max_distance=0.02, lossless=False
+    )
+    bounded = tmp_path / "bounded.tkc"
+    bounded.write_bytes(parts.pack())
+    parts.header["error"].update(max_distance=0.0, max_distance_at=[0, 0], lossless=True)
+    parts.header["error"]["target_max_distance"] = None
+    exact = tmp_path / "exact.tkc"
+    exact.write_bytes(parts.pack())
+    capsys.readouterr()
+
+    assert main(["info", str(bounded)]) == 0
+    out = capsys.readouterr().out
+    line = line_with(out, "worst vertex")
+    assert printed_worst(line) == (0.0125, 3, 7) and line.endswith(", bound 0.02")
+    lines = out.splitlines()
+    assert lines.index(line) == 1 + next(n for n, x in enumerate(lines) if "KG error" in x)
+    assert "lossless" not in out
+    assert main(["info", str(bounded), "--json"]) == 0
+    header = json.loads(capsys.readouterr().out)
+    assert header["max_distance"] == 0.0125 and header["max_distance_at"] == [3, 7]
+    assert header["target_max_distance"] == 0.02 and header["lossless"] is False
+
+    assert main(["info", str(exact)]) == 0
+    out = capsys.readouterr().out
+    assert printed_worst(line_with(out, "worst vertex")) == (0.0, 0, 0)
+    assert "bound" not in out
+    assert "lossless: the encoder checked the decoded values to be the input's" in out
+
+    assert main(["decode", str(bounded), "-o", str(tmp_path / "b.npz")]) == 0
+    line = line_with(capsys.readouterr().out, "file:")
+    assert "KG error recorded by the encoder" in line
+    assert line.endswith("; worst vertex 0.0125 at frame 3, vertex 7, bound 0.02")
+
+
+def test_encode_prints_the_worst_vertex_and_the_bound_it_measured(
+    wave_npz, tmp_path, capsys, monkeypatch
+):
+    """What the encoder's report holds is printed beside its KG error (the report's fields are
+    set here, as the encoder of --max-error and --lossless sets them)."""
+    import dataclasses
+
+    from tuckercodec.encoder import Encoder, EncodeResult
+
+    measured: dict[str, Any] = {
+        "max_distance": 0.00123456789,
+        "max_distance_at": (4, 9),
+        "max_error": 0.002,
+        "corrections": "grid",
+    }
+    real = Encoder.encode_source
+
+    def encode_source(self, frames, **kwargs):
+        result = real(self, frames, **kwargs)
+        return EncodeResult(result.data, dataclasses.replace(result.report, **measured))
+
+    monkeypatch.setattr(Encoder, "encode_source", encode_source)
+    assert main(["encode", str(wave_npz), "-o", str(tmp_path / "a.tkc"), "--ranks", "4,4"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    kg_at = next(n for n, line in enumerate(lines) if "decoded KG error" in line)
+    assert lines[kg_at + 1].startswith("decoded worst vertex 0.00123457 at frame 4, vertex 9 (")
+    assert printed_worst(lines[kg_at + 1]) == (0.00123457, 4, 9)
+    assert lines[kg_at + 2].startswith("bound on every vertex 0.002 (--max-error")
+    assert lines[kg_at + 2].endswith("; corrections (spec §6.9) in the grid domain")
+    assert not any("lossless" in line for line in lines)
+
+    measured.update(max_distance=0.0, max_distance_at=(0, 0), max_error=None, lossless=True)
+    measured["corrections"] = "float32"
+    assert main(["encode", str(wave_npz), "-o", str(tmp_path / "b.tkc"), "--ranks", "4,4"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    kg_at = next(n for n, line in enumerate(lines) if "decoded KG error" in line)
+    assert printed_worst(lines[kg_at + 1]) == (0.0, 0, 0)
+    assert lines[kg_at + 2] == (
+        "lossless: the decoded values checked to be the input's, bit for bit; "
+        "corrections (spec §6.9) in the float32 domain"
+    )
+    assert not any("bound on every vertex" in line for line in lines)
+
+    monkeypatch.setattr(Encoder, "encode_source", real)  # no measure: no line
+    assert main(["encode", str(wave_npz), "-o", str(tmp_path / "c.tkc"), "--ranks", "4,4"]) == 0
+    assert "worst vertex" not in capsys.readouterr().out
 
 
 def test_encode_never_overwrites_without_force(wave_npz, tmp_path, capsys):

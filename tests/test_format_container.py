@@ -58,12 +58,20 @@ def test_any_minor_version_is_read(minor):
     assert error is None and sequence is not None
 
 
-@pytest.mark.parametrize("flags", [4, 0x8000, 0xFFFF, 0xFFFFFFFF, 0x00010004])
+@pytest.mark.parametrize("flags", [8, 0x8000, 0xFFFF, 0xFFFFFFFF, 0x00010008])
 def test_critical_flag_bits_are_refused(flags):
     error = expect_error(
         with_preamble(vector("v1-wave-triangles"), flags=flags), UnsupportedVersionError, exact=True
     )
     assert error.rule == "R06-critical-flag"
+
+
+def test_the_corrections_flag_needs_a_resd_section():
+    """Bit 2 is known since format 1.3 (§6.9): a file of 1.0 that sets it lacks RESD."""
+    error = expect_error(
+        with_preamble(vector("v1-wave-triangles"), flags=4), FormatError, exact=True
+    )
+    assert error.rule == "R26-required-section-missing"
 
 
 def test_the_segmented_flag_needs_a_segment_index():

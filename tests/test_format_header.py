@@ -39,7 +39,10 @@ def _set(header: dict[str, Any], path: tuple[str | int, ...], value: Any) -> Non
     for key in path[:-1]:
         target = target[key]
     if value is MISSING:
-        del target[path[-1]]
+        if isinstance(target, dict):
+            target.pop(path[-1], None)  # a key the vector may not have (error.max_distance)
+        else:
+            del target[path[-1]]
     else:
         target[path[-1]] = value
 
@@ -67,6 +70,10 @@ HEADER_FIELDS: dict[tuple[str | int, ...], tuple[set[str], set[str]]] = {
     ("error",): (EVERYTHING, set()),
     ("error", "kg"): (EVERYTHING, set()),
     ("error", "definition"): (EVERYTHING, set()),
+    ("error", "max_distance"): (EVERYTHING, set()),  # the keys of 1.3, as informative
+    ("error", "max_distance_at"): (EVERYTHING, set()),
+    ("error", "target_max_distance"): (EVERYTHING, set()),
+    ("error", "lossless"): (EVERYTHING, set()),
     ("sections",): (set(), set()),
 }
 
@@ -109,9 +116,50 @@ def test_info_as_json_is_strict_json_whatever_the_error_map_claims(label):
         "kg": HOSTILE[label],
         "target_kg": HOSTILE[label],
         "definition": HOSTILE[label],
+        "max_distance": HOSTILE[label],
+        "max_distance_at": HOSTILE[label],
+        "target_max_distance": HOSTILE[label],
+        "lossless": HOSTILE[label],
     }
     text = json.dumps(tuckercodec.info(parts.pack()).to_dict(), allow_nan=False)
     assert json.loads(text)["vertices"] == 81
+
+
+def test_info_reads_the_worst_vertex_keys_of_the_error_map():
+    """§4.1 (1.3): ``max_distance``, ``max_distance_at``, ``target_max_distance`` and
+    ``lossless``, read when they have their types and treated as absent otherwise."""
+    parts = Parts(vector("v1-wave-triangles"))  # 24 frames of 81 vertices
+    plain = tuckercodec.info(parts.pack())
+    assert (plain.max_distance, plain.max_distance_at) == (None, None)
+    assert (plain.target_max_distance, plain.lossless) == (None, None)
+    assert {"max_distance", "max_distance_at", "target_max_distance", "lossless"} <= set(
+        plain.to_dict()
+    )
+    parts.header["error"].update(
+        max_distance=0.0125, max_distance_at=[23, 80], target_max_distance=0.02, lossless=False
+    )
+    read = tuckercodec.info(parts.pack())
+    assert (read.max_distance, read.max_distance_at) == (0.0125, (23, 80))
+    assert (read.target_max_distance, read.lossless) == (0.02, False)
+    as_json = read.to_dict()
+    assert as_json["max_distance"] == 0.0125 and as_json["max_distance_at"] == [23, 80]
+    assert as_json["target_max_distance"] == 0.02 and as_json["lossless"] is False
+    parts.header["error"].update(max_distance=0, target_max_distance=None, lossless=True)
+    read = tuckercodec.info(parts.pack())  # an int is a number; nil is "no bound"
+    assert (read.max_distance, read.target_max_distance, read.lossless) == (0.0, None, True)
+    for wrong in (
+        {"max_distance": True, "max_distance_at": [24, 0]},  # a bool; frame 24 of 0..23
+        {"max_distance": "0.1", "max_distance_at": [0, 81]},  # a str; vertex 81 of 0..80
+        {"max_distance": [0.1], "max_distance_at": [1, 2, 3]},
+        {"max_distance": None, "max_distance_at": [True, 0]},
+        {"max_distance": {}, "max_distance_at": [-1, 0]},
+        {"max_distance": b"\x01", "max_distance_at": [1.0, 2.0]},
+        {"max_distance": None, "max_distance_at": {"frame": 1, "vertex": 2}},
+    ):
+        parts.header["error"].update(wrong, target_max_distance="0.2", lossless=1)
+        read = tuckercodec.info(parts.pack())
+        assert (read.max_distance, read.max_distance_at) == (None, None), wrong
+        assert (read.target_max_distance, read.lossless) == (None, None), wrong
 
 
 # ------------------------------------------------------------------------------------------

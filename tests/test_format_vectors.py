@@ -56,6 +56,10 @@ def test_valid_vector(path):
     # any single frame decodes alone to the same positions
     last = reference.shape[0] - 1
     np.testing.assert_allclose(decoder.frame(last), reference[last], rtol=0, atol=tolerance)
+    if "residual" in expected:  # format 1.3 (§6.9, §8.1): the integers, and every bit
+        assert make_vectors.corrections_of(decoder) == expected["residual"]
+        assert positions.tobytes() == reference.tobytes()
+        assert decoder.frame(last).tobytes() == reference[last].tobytes()
 
 
 @pytest.mark.parametrize(
@@ -126,7 +130,8 @@ def test_the_invalid_vectors_come_from_the_committed_valid_one(tmp_path):
     good = (SPEC / "vectors" / "v1-wave-triangles.tkc").read_bytes()
     segmented = (SPEC / "vectors" / "v1.1-segments-shared.tkc").read_bytes()
     traversed = (SPEC / "vectors" / "v1.2-traverse-triangles.tkc").read_bytes()
-    count = make_vectors.write_invalid(tmp_path, good, segmented, traversed)
+    corrected = (SPEC / "vectors" / "v1.3-lossless-float32.tkc").read_bytes()
+    count = make_vectors.write_invalid(tmp_path, good, segmented, traversed, corrected)
     assert count == len([p for p in VECTORS if not json.loads(p.read_text())["valid"]])
     for path in sorted(tmp_path.iterdir()):
         committed = (SPEC / "vectors" / path.name).read_bytes()

@@ -10,10 +10,14 @@ sharing the faces and, usually, U1. Opening a :class:`Decoder` on a path reads t
 header only; a frame's segment is read from disk (its sections' byte ranges) and decoded the
 first time one of its frames is asked for, so frame t of a long file costs its segment, never
 the whole file. Each frame then costs one (K x i) by (i x 3) product.
+
+A file of format 1.3 with corrections (§6.9) is reconstructed in the one exact order of §8.1 and
+each position then corrected by its integer; the integers are read a chunk of frames at a time.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import operator
 import os
 from collections import OrderedDict
@@ -25,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from .errors import FormatError
-from .format import faces, names, qmat
+from .format import faces, names, qmat, residual
 from .format.container import parse_container
 from .format.disk import FileRanges, open_file_container, read_file
 from .format.header import FileInfo, read_header
@@ -65,10 +69,17 @@ class SegmentFactors:
     centroids: np.ndarray
     u2: np.ndarray
     basis: np.ndarray  # CORE x2 U2, (i, 3, k), formed once for every frame of the segment
+    #: with corrections (§6.9): the section's checked layout and id, U1 transposed and §8.1's B
+    corrections: residual.ResidualLayout | None = None
+    residual_id: str = ""
+    u1_columns: np.ndarray | None = None
+    exact_basis: np.ndarray | None = None
 
 
 #: Decoded segments a :class:`Decoder` keeps, most recent first: playback walks forward.
 CACHED_SEGMENTS = 2
+#: Decoded chunks of corrections kept (about a million integers each, §6.9).
+CACHED_CHUNKS = 3
 
 
 class Decoder:
@@ -95,6 +106,7 @@ class Decoder:
         self._segments: OrderedDict[int, SegmentFactors] = OrderedDict()
         self._shared_u1: np.ndarray | None = None
         self._mesh: MeshPrediction | None = None
+        self._chunks: OrderedDict[tuple[int, int], np.ndarray] = OrderedDict()
         self._data: bytes | memoryview | FileRanges
         with self._naming_path():
             if isinstance(source, (str, os.PathLike)):
@@ -117,6 +129,16 @@ class Decoder:
             if not self.segmented:  # §5 steps 16-17 in order: U1, U3, CORE, CENT, then NAME
                 self.segment_factors(0)
             self.frame_names = self._decode_names()
+            if self._container.corrections and not self.segmented:
+                self._segments[0] = self._with_corrections(self._segments[0], self._index[0])
+
+    @property
+    def corrections(self) -> str | None:
+        """The domain of the file's corrections (§6.9: ``"grid"``, ``"float32"`` or
+        ``"float64"``), from its first segment; ``None`` for a file without them."""
+        if not self._container.corrections:
+            return None
+        return self.segment_factors(0).corrections.domain  # type: ignore[union-attr]
 
     @contextmanager
     def _naming_path(self) -> Iterator[None]:
@@ -214,17 +236,87 @@ class Decoder:
         with np.errstate(over="ignore", invalid="ignore"):  # an overflow is R36, found per frame
             basis = reconstruction_basis(core, u2)
         factors = SegmentFactors(segment.start, segment.stop, u1, u3, core, centroids, u2, basis)
+        if self._container.corrections and self.segmented:  # step 16s: then its RESD.s
+            factors = self._with_corrections(factors, segment)
         self._segments[number] = factors
         self._segments.move_to_end(number, last=False)
         while len(self._segments) > CACHED_SEGMENTS:
             self._segments.popitem(last=True)
         return factors
 
+    def _with_corrections(self, factors: SegmentFactors, segment: SegmentEntry) -> SegmentFactors:
+        """§5 step 18: the segment's RESD layout (R40, R21) and CRC, with what §8.1 needs."""
+        section_id = self._section_id(segment, residual.SECTION_STEM)
+        section = self._section(section_id)
+        with self._naming_path():
+            layout = residual.read_layout(
+                section.params,
+                section.length,
+                segment.stop - segment.start,
+                self.info.vertices,
+                self.limits,
+                f"section {section_id}",
+            )
+            self._payload(section_id)  # the CRC (step 9), before any chunk is read
+        with np.errstate(over="ignore", invalid="ignore"):  # an overflow is R36, per frame
+            exact_basis = residual.exact_basis(factors.core, factors.u2)
+        return dataclasses.replace(
+            factors,
+            corrections=layout,
+            residual_id=section_id,
+            u1_columns=np.ascontiguousarray(factors.u1.T),
+            exact_basis=exact_basis,
+        )
+
+    def _chunk(self, number: int, part: SegmentFactors, chunk: int) -> np.ndarray:
+        """The restored integers of one chunk of a segment's corrections, kept for the next
+        frames."""
+        key = (number, chunk)
+        cached = self._chunks.get(key)
+        if cached is None:
+            assert part.corrections is not None
+            with self._naming_path():
+                cached = residual.decode_chunk(
+                    self._payload(part.residual_id),
+                    part.corrections,
+                    chunk,
+                    self.info.vertices,
+                    f"section {part.residual_id}",
+                )
+            self._chunks[key] = cached
+            while len(self._chunks) > CACHED_CHUNKS:
+                self._chunks.popitem(last=False)
+        self._chunks.move_to_end(key)
+        return cached
+
+    def _corrected(self, number: int, part: SegmentFactors, local: np.ndarray) -> np.ndarray:
+        """Frames ``local`` (numbers within the segment) of a file with corrections: §8.1's
+        exact reconstruction, corrected chunk by chunk (§6.9)."""
+        layout = part.corrections
+        assert layout is not None and part.u1_columns is not None and part.exact_basis is not None
+        with np.errstate(over="ignore", invalid="ignore"):
+            exact = residual.exact_frames(
+                part.u1_columns, part.exact_basis, part.u3[local], part.centroids[local]
+            )
+        out = np.empty_like(exact)
+        chunks = local // layout.chunk_frames
+        for chunk in np.unique(chunks).tolist():
+            rows = np.flatnonzero(chunks == chunk)
+            values = self._chunk(number, part, chunk)
+            start, _ = layout.chunk_range(chunk)
+            with self._naming_path():
+                out[rows] = residual.correct(
+                    exact[rows], values[local[rows] - start], layout, f"section {part.residual_id}"
+                )
+        return out
+
     def check(self) -> None:
         """Decode every segment, so that any damaged section is found now (a file of format
         1.0 was checked whole when it was opened)."""
         for number in range(len(self._index)):
-            self.segment_factors(number)
+            part = self.segment_factors(number)
+            if part.corrections is not None:  # every chunk's frame and values (R29, R41)
+                self._corrected(number, part, np.arange(part.stop - part.start))
 
     def _decode_names(self) -> list[str]:
         name_section = self._container.section("NAME")
@@ -321,6 +413,9 @@ class Decoder:
             local = chosen[picked] - part.start
             # Overflow is a property of the file, reported below as R36: numpy must not warn
             # (or, under np.seterr(all="raise"), raise FloatingPointError) before that check.
+            if part.corrections is not None:
+                positions[picked] = self._corrected(number, part, local)
+                continue
             with np.errstate(over="ignore", invalid="ignore"):
                 positions[picked] = reconstruct_frames(
                     part.u1, part.basis, part.u3[local], part.centroids[local]

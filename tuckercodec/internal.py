@@ -14,7 +14,8 @@ package sees at once what the tools rely on.
   :mod:`~tuckercodec.format.traversal` (§6.8); the mesh parents of §6.2 and
   :func:`mesh_prediction` (its predictor 2), and :func:`tree_depths` of a parent forest.
 * The decomposition and its analysis: :func:`centre_frames`, :func:`reconstruct`, :class:`Curve`.
-* The definitions the reports quote: :data:`KG_DEFINITION`, :data:`STED_DEFINITION`.
+* The definitions the reports quote: :data:`KG_DEFINITION`, :data:`MAX_DISTANCE_DEFINITION`
+  (the worst vertex, measured with :func:`max_distance`), :data:`STED_DEFINITION`.
 * Files and pictures: :func:`write_atomic`, :func:`refuse_existing`, :func:`plot_rd_curve`,
   :func:`pyplot` (matplotlib on the Agg backend, or a DependencyError naming the extra) and
   :func:`save_figure` (atomic, never replacing a file unasked).
@@ -34,7 +35,7 @@ from __future__ import annotations
 from .analysis import Curve
 from .atomic import refuse_existing, write_atomic
 from .encoder import rdo
-from .format import faces, qmat, sections, streams, traversal
+from .format import faces, qmat, residual, sections, streams, traversal
 from .format.container import (
     CRC,
     HEAD_SIZE,
@@ -44,11 +45,12 @@ from .format.container import (
     pack_raw,
     parse_container,
 )
+from .format.limits import DEFAULT_LIMITS
 from .format.prediction import tree_depths
 from .gltf_export import write_decomposition_gltf
 from .hosvd import centre_frames, reconstruct
 from .io.gltf.reader import sample_gltf
-from .metrics import KG_DEFINITION
+from .metrics import KG_DEFINITION, MAX_DISTANCE_DEFINITION, max_distance
 from .perceptual import STED_DEFINITION
 from .plots import plot_rd_curve, pyplot, save_figure
 from .samples import sample_path, sheet_triangles, wave_sheet
@@ -57,8 +59,10 @@ from .zarr_codec.chunk import chunk_mode, decode_chunk, encode_chunk
 
 __all__ = [
     "CRC",
+    "DEFAULT_LIMITS",
     "HEAD_SIZE",
     "KG_DEFINITION",
+    "MAX_DISTANCE_DEFINITION",
     "PREAMBLE",
     "SIGNATURE",
     "STED_DEFINITION",
@@ -68,6 +72,7 @@ __all__ = [
     "decode_chunk",
     "encode_chunk",
     "faces",
+    "max_distance",
     "mesh_parents",
     "mesh_prediction",
     "pack_container",
@@ -79,6 +84,7 @@ __all__ = [
     "rdo",
     "reconstruct",
     "refuse_existing",
+    "residual",
     "sample_gltf",
     "sample_path",
     "save_figure",

@@ -10,12 +10,21 @@ frame's mean vertex position (the per-frame, per-axis mean over vertices). The s
 formula reads as if E(A) held each vertex's mean position over time; that variant gives
 different numbers and is available only by name (``mean="temporal"``).
 
+The worst vertex (:func:`max_distance`, :data:`MAX_DISTANCE_DEFINITION`) is the largest
+Euclidean distance between a vertex of the approximation and the same vertex of the original,
+over every frame and vertex, in the sequence's own units (not a percentage), with the frame and
+vertex where it is. :class:`ErrorAccumulator` measures it and the KG error together, in one pass
+over blocks of frames, so that a long sequence (or one read a range of frames at a time) never
+needs a difference array of its whole size.
+
 The perception-correlated STED error of Váša and Skala (2011) is in :mod:`tuckercodec.perceptual`;
 the rate measure bpfv in :mod:`tuckercodec.rate`.
 """
 
 from __future__ import annotations
 
+import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Literal
 
@@ -26,7 +35,16 @@ from .sequence import MeshSequence
 
 KG_DEFINITION = "KG (Karni-Gotsman 2004): 100*||A-B||_F / ||A - per-frame vertex mean of A||_F"
 
+MAX_DISTANCE_DEFINITION = (
+    "the largest Euclidean distance ||A_fk - B_fk||_2 over frames f and vertices k, in the "
+    "sequence's units; the first in frame-major order on ties"
+)
+
 MeanKind = Literal["frame", "temporal"]
+
+#: The float64 bytes of the difference of one block of frames that :class:`ErrorAccumulator`
+#: holds at a time (the block's other temporaries are of the same order).
+BLOCK_BYTES = 16 * 2**20
 
 
 def _positions(x: MeshSequence | np.ndarray) -> np.ndarray:
@@ -56,16 +74,20 @@ def kg_denominator(original: MeshSequence | np.ndarray, *, mean: MeanKind = "fra
         raise ValueError(f"mean must be 'frame' or 'temporal', got {mean!r}")
     norm = float(np.linalg.norm(centred))
     if norm == 0.0:
-        if mean == "frame":
-            raise InputError(
-                "the KG error is undefined: every frame collapses to a single point, so the "
-                "Karni-Gotsman denominator is zero"
-            )
-        raise InputError(
-            "the temporal-mean KG error is undefined: no vertex ever moves, so its denominator "
-            "is zero (the Karni-Gotsman definition, mean='frame', is defined here)"
-        )
+        raise _undefined_kg(mean)
     return norm
+
+
+def _undefined_kg(mean: MeanKind) -> InputError:
+    if mean == "frame":
+        return InputError(
+            "the KG error is undefined: every frame collapses to a single point, so the "
+            "Karni-Gotsman denominator is zero"
+        )
+    return InputError(
+        "the temporal-mean KG error is undefined: no vertex ever moves, so its denominator "
+        "is zero (the Karni-Gotsman definition, mean='frame', is defined here)"
+    )
 
 
 def kg_error(
@@ -94,29 +116,222 @@ def relative_error(original: MeshSequence | np.ndarray, approx: MeshSequence | n
 
 @dataclass(frozen=True)
 class Displacement:
-    """The largest Euclidean distance between matching vertices, and where it occurs."""
+    """The worst vertex: the largest Euclidean distance between matching vertices, in the
+    sequence's units, and the frame and vertex where it is (:data:`MAX_DISTANCE_DEFINITION`)."""
 
     distance: float
     frame: int
     vertex: int
 
+    @property
+    def at(self) -> tuple[int, int]:
+        """(frame, vertex), as ``EncodeReport.max_distance_at`` and the header's
+        ``error.max_distance_at`` (spec §4.1) give it."""
+        return (self.frame, self.vertex)
+
+
+class ErrorAccumulator:
+    """The KG error and the worst vertex of an approximation, measured in one pass over the
+    frames, a block of frames at a time.
+
+    Give it the frames in order, any number per call, with :meth:`add`; then read :attr:`kg`
+    (:data:`KG_DEFINITION`, over every frame added: its denominator's per-frame mean makes it
+    a sum over frames), :attr:`worst` (:data:`MAX_DISTANCE_DEFINITION`), :attr:`relative_error`
+    and the per-frame series. Each call is cut into blocks of ``block_frames`` frames (by
+    default as many as make :data:`BLOCK_BYTES` of float64 differences), so the memory it
+    takes beyond its inputs is bounded by the block, not the sequence; what it keeps is a few
+    numbers per frame.
+
+    Frames are numbered as they come (0, 1, ... across calls) unless :meth:`add` is given
+    their numbers (``frames=``), for instance a range of a longer sequence; the worst vertex's
+    frame is then that number. On ties the first in the order given wins: the first in
+    frame-major order (frame, then vertex) when the frames come in order.
+    """
+
+    def __init__(self, *, block_frames: int | None = None) -> None:
+        if block_frames is not None and (isinstance(block_frames, bool) or block_frames < 1):
+            raise ValueError(f"block_frames must be an integer >= 1, got {block_frames!r}")
+        self.block_frames = block_frames
+        self.vertex_count: int | None = None
+        self._numbers: list[np.ndarray] = []  # the frames' numbers, as added
+        self._squared: list[np.ndarray] = []  # per frame: sum over k of ||a_fk - b_fk||^2
+        self._spread: list[np.ndarray] = []  # per frame: ||A_f - its vertex mean||^2
+        self._energy: list[np.ndarray] = []  # per frame: ||A_f||^2
+        self._largest: list[np.ndarray] = []  # per frame: max over k of ||a_fk - b_fk||
+        self._worst: Displacement | None = None
+        self._next = 0  # the number of the next frame, when add is given none
+
+    @property
+    def frame_count(self) -> int:
+        """Frames added so far."""
+        return sum(len(n) for n in self._numbers)
+
+    def add(
+        self,
+        original: MeshSequence | np.ndarray,
+        approx: MeshSequence | np.ndarray,
+        *,
+        frames: Iterable[int] | None = None,
+    ) -> None:
+        """Add frames: ``original`` and ``approx`` of shape (n, K, 3) (any float type; read in
+        blocks and converted to float64 a block at a time), the same K at every call.
+        ``frames``: their numbers (default: those after the frames added so far)."""
+        a = original.vertices if isinstance(original, MeshSequence) else original
+        b = approx.vertices if isinstance(approx, MeshSequence) else approx
+        a, b = np.asanyarray(a), np.asanyarray(b)
+        if a.ndim != 3 or a.shape[2] != 3:
+            raise ValueError(f"expected positions of shape (frames, vertices, 3), got {a.shape}")
+        if a.shape != b.shape:
+            raise InputError(f"the sequences differ in shape: {a.shape} against {b.shape}")
+        if self.vertex_count is not None and a.shape[1] != self.vertex_count:
+            raise InputError(
+                f"these frames have {a.shape[1]} vertices, the frames before {self.vertex_count}"
+            )
+        count = a.shape[0]
+        if frames is None:
+            numbers = np.arange(self._next, self._next + count, dtype=np.int64)
+        else:
+            numbers = np.asarray(list(frames), dtype=np.int64).reshape(-1)
+            if numbers.size != count:
+                raise ValueError(f"{numbers.size} frame numbers given for {count} frames")
+        self.vertex_count = a.shape[1]
+        if count == 0:
+            return
+        self._next = int(numbers[-1]) + 1
+        step = self.block_frames or max(1, BLOCK_BYTES // max(1, a.shape[1] * 24))
+        for start in range(0, count, step):
+            stop = min(start + step, count)
+            self._add_block(
+                np.asarray(a[start:stop], dtype=np.float64),
+                np.asarray(b[start:stop], dtype=np.float64),
+                numbers[start:stop],
+            )
+
+    def _add_block(self, a: np.ndarray, b: np.ndarray, numbers: np.ndarray) -> None:
+        difference = a - b
+        # each vertex's squared distance summed over x, y, z in that order, as
+        # np.linalg.norm(axis=2) sums it, so that equal distances are equal here too
+        squared = np.sum(difference * difference, axis=2)
+        del difference
+        self._squared.append(np.sum(squared, axis=1))
+        distances = np.sqrt(squared)
+        del squared
+        largest = np.max(distances, axis=1) if distances.shape[1] else np.zeros(len(a))
+        self._largest.append(largest)
+        if distances.size:
+            index = int(np.argmax(distances))  # the first of equals (and the first NaN)
+            frame, vertex = divmod(index, distances.shape[1])
+            found = float(distances[frame, vertex])
+            best = self._worst
+            if (
+                best is None
+                or found > best.distance
+                or (math.isnan(found) and not math.isnan(best.distance))
+            ):
+                self._worst = Displacement(found, int(numbers[frame]), int(vertex))
+        del distances
+        centred = a - a.mean(axis=1, keepdims=True) if a.shape[1] else a
+        self._spread.append(np.sum(np.square(centred), axis=(1, 2)))
+        del centred
+        self._energy.append(np.sum(np.square(a), axis=(1, 2)))
+        self._numbers.append(numbers)
+
+    def _check(self) -> None:
+        if not self._numbers:
+            raise ValueError("no frames have been compared")
+
+    @property
+    def worst(self) -> Displacement:
+        """The worst vertex of the frames added (:data:`MAX_DISTANCE_DEFINITION`)."""
+        self._check()
+        if self._worst is None:  # frames without vertices
+            raise ValueError("the frames compared have no vertices")
+        return self._worst
+
+    @property
+    def kg(self) -> float:
+        """The KG error of the frames added (:data:`KG_DEFINITION`), in percent; an InputError
+        if it is undefined (every frame a single point)."""
+        self._check()
+        spread = float(np.sum(np.concatenate(self._spread)))
+        if spread == 0.0:
+            raise _undefined_kg("frame")
+        return 100.0 * math.sqrt(float(np.sum(self.per_frame_squared()))) / math.sqrt(spread)
+
+    @property
+    def relative_error(self) -> float:
+        """||A - B||_F / ||A||_F over the frames added (uncentred, as :func:`relative_error`)."""
+        self._check()
+        energy = float(np.sum(np.concatenate(self._energy)))
+        if energy == 0.0:
+            raise InputError("the relative error is undefined: every position of the original is 0")
+        return math.sqrt(float(np.sum(self.per_frame_squared()))) / math.sqrt(energy)
+
+    @property
+    def frame_numbers(self) -> np.ndarray:
+        """The numbers of the frames added, in order."""
+        self._check()
+        return np.concatenate(self._numbers)
+
+    def per_frame_squared(self) -> np.ndarray:
+        """Each frame's ||A_f - B_f||_F^2, in the order added."""
+        self._check()
+        return np.concatenate(self._squared)
+
+    def per_frame_kg(self) -> np.ndarray:
+        """Each frame's share of the KG error, as :func:`per_frame_kg` (their squares sum to
+        :attr:`kg` squared), in the order added."""
+        self._check()
+        spread = float(np.sum(np.concatenate(self._spread)))
+        if spread == 0.0:
+            raise _undefined_kg("frame")
+        return 100.0 * np.sqrt(self.per_frame_squared()) / math.sqrt(spread)
+
+    def per_frame_max_distance(self) -> np.ndarray:
+        """Each frame's worst vertex distance, in the sequence's units, in the order added."""
+        self._check()
+        return np.concatenate(self._largest)
+
+
+def compare(
+    original: MeshSequence | np.ndarray,
+    approx: MeshSequence | np.ndarray,
+    *,
+    block_frames: int | None = None,
+) -> ErrorAccumulator:
+    """An :class:`ErrorAccumulator` that has been given every frame of both sequences: the KG
+    error, the worst vertex and the per-frame series from one pass."""
+    measured = ErrorAccumulator(block_frames=block_frames)
+    measured.add(original, approx)
+    return measured
+
+
+def max_distance(
+    original: MeshSequence | np.ndarray,
+    approx: MeshSequence | np.ndarray,
+    *,
+    block_frames: int | None = None,
+) -> Displacement:
+    """The worst vertex (:data:`MAX_DISTANCE_DEFINITION`): the largest Euclidean distance
+    ||a_fk - b_fk||_2 over all frames f and vertices k, in the sequence's units, and its
+    (frame, vertex), the first in frame-major order on ties. Computed a block of frames at a
+    time (:class:`ErrorAccumulator`), so memory stays bounded for long sequences."""
+    return compare(original, approx, block_frames=block_frames).worst
+
 
 def max_vertex_displacement(
     original: MeshSequence | np.ndarray, approx: MeshSequence | np.ndarray
 ) -> Displacement:
-    """The largest ||a_fk - b_fk||_2 over all frames f and vertices k, in scene units."""
-    a, b = _pair(original, approx)
-    distances = np.linalg.norm(a - b, axis=2)
-    frame, vertex = np.unravel_index(int(np.argmax(distances)), distances.shape)
-    return Displacement(float(distances[frame, vertex]), int(frame), int(vertex))
+    """The largest ||a_fk - b_fk||_2 over all frames f and vertices k, in scene units: the
+    public API's name for :func:`max_distance`."""
+    return max_distance(original, approx)
 
 
 def per_frame_max_displacement(
     original: MeshSequence | np.ndarray, approx: MeshSequence | np.ndarray
 ) -> np.ndarray:
     """Each frame's worst vertex: max over k of ||a_fk - b_fk||_2, in scene units, shape (F,)."""
-    a, b = _pair(original, approx)
-    return np.sqrt(np.max(np.einsum("fkx,fkx->fk", a - b, a - b), axis=1))
+    return compare(original, approx).per_frame_max_distance()
 
 
 def per_frame_kg(

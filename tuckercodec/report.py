@@ -1,4 +1,5 @@
-"""Text and CSV renderings of an analysis, shared by the command line and the tools."""
+"""Text and CSV renderings of an analysis, and of the worst vertex, shared by the command line
+and the tools."""
 
 from __future__ import annotations
 
@@ -11,6 +12,14 @@ import numpy as np
 from .analysis import Analysis, Curve
 
 DEFAULT_TARGETS = (1.0, 0.5, 0.1, 0.05, 0.02)
+
+
+def worst_vertex(distance: float, at: tuple[int, int] | None) -> str:
+    """A worst vertex as every command prints it: ``0.00123457 at frame 6, vertex 11`` (the
+    distance in the sequence's units, :data:`tuckercodec.metrics.MAX_DISTANCE_DEFINITION`;
+    the frame as the file numbers it). ``at`` None: a distance whose place is not known."""
+    where = "" if at is None else f" at frame {at[0]}, vertex {at[1]}"
+    return f"{distance:.6g}{where}"
 
 
 def targets_table(analysis: Analysis, targets: Sequence[float] = DEFAULT_TARGETS) -> str:

@@ -35,11 +35,13 @@ import msgpack
 import numpy as np
 
 from tools import common
-from tuckercodec import Decoder, MeshSequence, encode, encode_with_report, internal
+from tuckercodec import Decoder, EncodeOptions, MeshSequence, encode, encode_with_report, internal
 from tuckercodec.internal import (
+    DEFAULT_LIMITS,
     HEAD_SIZE,
     faces,
     parse_container,
+    residual,
     sheet_triangles,
     streams,
     traversal,
@@ -206,7 +208,7 @@ def invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
         "R03-preamble-truncated": (good[:20], "TruncatedFileError"),
         "R04-preamble-crc": (good[:10] + bytes([good[10] ^ 0x04]) + good[11:], "ChecksumError"),
         "R05-major-version": (_set_preamble(good, 8, "<H", 2), "UnsupportedVersionError"),
-        "R06-critical-flag": (_set_preamble(good, 12, "<I", 0x0004), "UnsupportedVersionError"),
+        "R06-critical-flag": (_set_preamble(good, 12, "<I", 0x0008), "UnsupportedVersionError"),
         "R07-header-limit": (_set_preamble(good, 16, "<I", (16 << 20) + 1), "LimitError"),
         "R08-total-length": (
             _set_preamble(good, 20, "<Q", HEAD_SIZE + header_length),
@@ -348,6 +350,34 @@ def digests(decoder: Decoder) -> dict[str, str]:
     return {name: hashlib.sha256(array.tobytes()).hexdigest() for name, array in arrays.items()}
 
 
+def corrections_of(decoder: Decoder) -> dict[str, Any]:
+    """A file of format 1.3's corrections (§12): the RESD parameters a decoder reads, and the
+    SHA-256 of its restored integers e (little-endian int64, F x K x 3; per segment
+    ``residual.s``)."""
+    first = decoder.segment_factors(0).corrections
+    assert first is not None
+    found: dict[str, Any] = {
+        "domain": first.domain,
+        "predict": first.predict,
+        "chunk_frames": first.chunk_frames,
+        "sha256": {},
+    }
+    for segment in decoder.segments:
+        part = decoder.segment_factors(segment.index)
+        layout = part.corrections
+        assert layout is not None
+        payload = decoder._payload(part.residual_id)
+        values = np.concatenate(
+            [
+                residual.decode_chunk(payload, layout, n, decoder.info.vertices, part.residual_id)
+                for n in range(len(layout.planes))
+            ]
+        )
+        name = f"residual.{segment.index}" if decoder.segmented else "residual"
+        found["sha256"][name] = hashlib.sha256(values.astype("<i8").tobytes()).hexdigest()
+    return found
+
+
 def segment_index(decoder: Decoder) -> list[dict[str, Any]]:
     """The segment index a decoder must report (§6.7): empty for a file of format 1.0."""
     return [
@@ -374,6 +404,7 @@ def valid_vectors() -> dict[str, tuple[bytes, str]]:
     long_wave = MeshSequence(wave_sheet(40, 9), sheet_triangles(9), frame_rate=25.0)
     return {
         **traverse_vectors(),
+        **correction_vectors(),
         "v1-wave-triangles": (basic, "triangles, no names: the basic file"),
         "v1.1-segments-shared": (
             encode_with_report(long_wave, target_kg=0.5, segment_frames=12).data,
@@ -416,6 +447,60 @@ def traverse_vectors() -> dict[str, tuple[bytes, str]]:
             "format 1.2 and 1.1 together: faces-traverse of scrambled polygons (degrees), two "
             "segments sharing U1, names",
         ),
+    }
+
+
+def correction_vectors() -> dict[str, tuple[bytes, str]]:
+    """The valid vectors of format 1.3 (§6.9, §8.1): corrections in each domain, and in
+    segments."""
+    # noise no low rank captures, so that a Tucker part alone cannot meet the bound
+    rough = wave_sheet(24, 9) + np.random.default_rng(23).normal(scale=2e-3, size=(24, 81, 3))
+    wave = MeshSequence(rough, sheet_triangles(9))
+    single = MeshSequence(wave_sheet(20, 8).astype(np.float32), sheet_triangles(8))
+    named = MeshSequence(
+        wave_sheet(16, 7) * 3.0 + 10.0,
+        polygons(7),
+        [f"walk_{n:03d}.obj" for n in range(16)],
+        frame_rate=30.0,
+    )
+    return {
+        "v1.3-bound-grid": (
+            encode(wave, options=EncodeOptions(max_error="0.05%")),
+            "format 1.3: every vertex of a noisy sheet within 0.05 % of the diagonal, on a grid",
+        ),
+        "v1.3-lossless-float32": (
+            encode(single, options=EncodeOptions(lossless=True)),
+            "format 1.3: lossless float32 values, corrections of binary32 ordered integers",
+        ),
+        "v1.3-lossless-float64": (
+            encode(named, options=EncodeOptions(lossless=True)),
+            "format 1.3: lossless float64 values far from the origin, polygons and names",
+        ),
+    }
+
+
+def correction_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
+    """rule id -> (file bytes, error class name): the 1.3 file ``good`` (lossless float32) with
+    a rule of §6.9 broken. R40: a domain the format does not have. R41: the first integer of the
+    first chunk made 2**40, beyond binary32's range of corrections (its frame repacked, so that
+    only the value is wrong)."""
+    parts = Parts(good)
+    entry = parts.entries[parts.index("RESD")]
+    payload = parts.payloads[parts.index("RESD")]
+    vertices, frames = parts.header["vertices"], parts.header["frames"]
+    layout = residual.read_layout(entry, len(payload), frames, vertices, DEFAULT_LIMITS, "RESD")
+    chunks = [
+        residual.decode_chunk(payload, layout, number, vertices, "RESD")
+        for number in range(len(layout.planes))
+    ]
+    values = np.concatenate(chunks)
+    values[0, 0, 0] = 1 << 40
+    params, broken = residual.encode_section(
+        values, layout.domain, layout.step, 19, chunk_frames=layout.chunk_frames, predict=0
+    )
+    return {
+        "R40-residual": (_edit(good, _entry("RESD", domain="float16")), "FormatError"),
+        "R41-residual-value": (_edit(good, _payload("RESD", broken, **params)), "FormatError"),
     }
 
 
@@ -467,7 +552,8 @@ def write_valid(folder: Path, name: str, data: bytes, purpose: str) -> None:
     (folder / f"{name}.tkc").write_bytes(data)
     np.save(folder / f"{name}.positions.npy", positions)
     header = decoder.info
-    expected = {
+    exact = decoder.corrections is not None  # §8.1: every decoder returns the same bits
+    expected: dict[str, Any] = {
         "file": f"{name}.tkc",
         "valid": True,
         "purpose": purpose,
@@ -486,8 +572,10 @@ def write_valid(folder: Path, name: str, data: bytes, purpose: str) -> None:
         "segments": segment_index(decoder),
         "sha256": digests(decoder),
         "reference": f"{name}.positions.npy",
-        "tolerance": {"relative_to_max_abs": RELATIVE_TOLERANCE},
+        "tolerance": {"relative_to_max_abs": 0.0 if exact else RELATIVE_TOLERANCE},
     }
+    if exact:
+        expected["residual"] = corrections_of(decoder)
     (folder / f"{name}.json").write_text(json.dumps(expected, indent=2) + "\n")
 
 
@@ -505,20 +593,64 @@ def segmented_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
     }
 
 
-def write_invalid(folder: Path, good: bytes, segmented: bytes, traversed: bytes) -> int:
+def write_invalid(
+    folder: Path, good: bytes, segmented: bytes, traversed: bytes, corrected: bytes
+) -> int:
     """The invalid vectors made from the valid files ``good`` (format 1.0), ``segmented``
-    (1.1) and ``traversed`` (1.2), with their JSON; how many."""
+    (1.1), ``traversed`` (1.2) and ``corrected`` (1.3), with their JSON; how many."""
     vectors = {
         **invalid_vectors(good),
         **segmented_invalid_vectors(segmented),
         **traverse_invalid_vectors(traversed),
+        **correction_invalid_vectors(corrected),
     }
     for name, (data, error) in vectors.items():
-        (folder / f"{name}.tkc").write_bytes(data)
-        rule = SECOND_VECTORS.get(name, name)
-        expected = {"file": f"{name}.tkc", "valid": False, "rule": rule, "error": error}
-        (folder / f"{name}.json").write_text(json.dumps(expected, indent=2) + "\n")
+        write_invalid_vector(folder, name, data, error)
     return len(vectors)
+
+
+def write_invalid_vector(folder: Path, name: str, data: bytes, error: str) -> None:
+    """One invalid vector and its JSON."""
+    (folder / f"{name}.tkc").write_bytes(data)
+    rule = SECOND_VECTORS.get(name, name)
+    expected = {"file": f"{name}.tkc", "valid": False, "rule": rule, "error": error}
+    (folder / f"{name}.json").write_text(json.dumps(expected, indent=2) + "\n")
+
+
+#: The valid file each group of invalid vectors is made from.
+INVALID_SOURCES = {
+    "invalid": "v1-wave-triangles",
+    "segmented": "v1.1-segments-shared",
+    "traverse": "v1.2-traverse-triangles",
+    "corrections": "v1.3-lossless-float32",
+}
+
+
+def write_only(out: Path, names: list[str]) -> int:
+    """Write the named vectors alone; the valid files invalid ones are made from are read from
+    ``out`` (written first if they are among ``names``)."""
+    valid = valid_vectors()
+    unknown = []
+    for name in names:
+        if name in valid:
+            write_valid(out, name, *valid[name])
+    sources = {key: (out / f"{name}.tkc").read_bytes() for key, name in INVALID_SOURCES.items()}
+    invalid = {
+        **invalid_vectors(sources["invalid"]),
+        **segmented_invalid_vectors(sources["segmented"]),
+        **traverse_invalid_vectors(sources["traverse"]),
+        **correction_invalid_vectors(sources["corrections"]),
+    }
+    for name in names:
+        if name in invalid:
+            write_invalid_vector(out, name, *invalid[name])
+        elif name not in valid:
+            unknown.append(name)
+    if unknown:
+        print(f"no vector is named {', '.join(unknown)}", file=sys.stderr)
+        return 1
+    print(f"wrote {len(names)} vectors to {out}")
+    return 0
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -529,8 +661,18 @@ def main(argv: list[str] | None = None) -> int:
         "--out", type=Path, default=VECTORS, help="where to write them (default: spec/vectors/)"
     )
     parser.add_argument("--force", action="store_true", help="replace existing vectors")
+    parser.add_argument(
+        "--only",
+        nargs="+",
+        metavar="NAME",
+        help="write just these vectors, the others left as committed (an invalid vector is made "
+        "from the committed valid file it breaks): vectors are written once, and today's encoder "
+        "writes other bytes than the one that made the older ones",
+    )
     args = parser.parse_args(argv)
     out: Path = args.out
+    if args.only:
+        return write_only(out, args.only)
     existing = [p for p in out.iterdir() if p.suffix in VECTOR_SUFFIXES] if out.is_dir() else []
     if existing and not args.force:
         print(f"{out} holds vectors: pass --force to write the vectors again", file=sys.stderr)
@@ -546,6 +688,7 @@ def main(argv: list[str] | None = None) -> int:
         valid["v1-wave-triangles"][0],
         valid["v1.1-segments-shared"][0],
         valid["v1.2-traverse-triangles"][0],
+        valid["v1.3-lossless-float32"][0],
     )
     print(f"wrote {len(valid)} valid and {invalid} invalid vectors to {out}")
     return 0

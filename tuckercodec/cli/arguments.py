@@ -548,7 +548,8 @@ def _add_mode_options(parser: argparse.ArgumentParser) -> None:
         type=_max_error,
         metavar="D",
         help="no decoded vertex farther than D from the input (a length, or P%% of the bounding "
-        "box's diagonal); alone, with --kg or with --ranks (format 1.3 where corrections are needed)",
+        "box's diagonal); alone, with --kg or with --ranks (format 1.3 where corrections are "
+        "needed)",
     )
     parser.add_argument(
         "--lossless",

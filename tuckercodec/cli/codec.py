@@ -9,6 +9,8 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 from ..decoder import Decoder, FileInfo
 from ..decoder import info as read_info
 from ..encoder import EncodeOptions, Encoder, EncodeReport
@@ -16,10 +18,8 @@ from ..errors import EXIT_OK, InputError
 from ..files import decode_file, decoded_output_path, is_gltf_output, write_encoded
 from ..format.segments import BASIS_SHARED
 from ..gltf_export import DEFAULT_COMPRESSION, write_decomposition_gltf
-from ..metrics import (
-    KG_DEFINITION,
-    kg_error,
-)
+from ..metrics import KG_DEFINITION, MAX_DISTANCE_DEFINITION, Displacement, ErrorAccumulator
+from ..report import worst_vertex
 from ..sequence import MeshSequence
 from .inputs import check_precision, load_input, read_options, sequence_source
 
@@ -39,6 +39,7 @@ def _print_encode_report(report: EncodeReport, format_version: str) -> None:
         else f"decoded KG error {report.kg:.5f} of the whole sequence (truncation alone "
         f"{report.truncation_kg:.5f}; {KG_DEFINITION})"
     )
+    _print_encode_bounds(report)
     print(
         f"format {format_version}; size {report.total_bytes} bytes = {report.bpfv:.4f} bpfv "
         f"(whole file; connectivity "
@@ -50,6 +51,26 @@ def _print_encode_report(report: EncodeReport, format_version: str) -> None:
             f"bound {report.bound_ranks}; chosen by '{report.select}' with quantization"
         )
     print(f"time {report.seconds:.2f} s")
+
+
+def _print_encode_bounds(report: EncodeReport) -> None:
+    """The worst vertex the encoder measured, beside its KG error, and the bound or the
+    lossless check it was asked for."""
+    if report.max_distance is not None:
+        where = worst_vertex(report.max_distance, report.max_distance_at)
+        print(f"decoded worst vertex {where} ({MAX_DISTANCE_DEFINITION})")
+    corrections = (
+        f"corrections (spec §6.9) in the {report.corrections} domain"
+        if report.corrections is not None
+        else "no corrections needed"
+    )
+    if report.max_error is not None:
+        print(
+            f"bound on every vertex {report.max_error:.6g} (--max-error, as a length in the "
+            f"sequence's units); {corrections}"
+        )
+    if report.lossless:
+        print(f"lossless: the decoded values checked to be the input's, bit for bit; {corrections}")
 
 
 def run_encode(args: argparse.Namespace) -> int:
@@ -148,12 +169,13 @@ def run_decode(args: argparse.Namespace) -> int:
         f"{args.input}: {decoded.frame_count} of {header.frames} frames, "
         f"{decoded.vertex_count} vertices -> {output} in {elapsed:.2f} s"
     )
-    print(
-        f"file: {header.total_bytes} bytes = {header.bpfv:.4f} bpfv; KG error recorded by the "
-        f"encoder {_number(header.kg)} ({header.kg_definition or 'no definition recorded'})"
-    )
+    _print_recorded(header)
     if reference is not None:
-        selected = reference.vertices[args.frames if args.frames is not None else slice(None)]
+        chosen = args.frames if args.frames is not None else slice(None)
+        measured = ErrorAccumulator()  # the KG error and the worst vertex in one pass
+        measured.add(
+            reference.vertices[chosen], decoded.vertices, frames=np.arange(header.frames)[chosen]
+        )
         scope = (
             ""
             if args.frames is None
@@ -163,10 +185,41 @@ def run_decode(args: argparse.Namespace) -> int:
             )
         )
         print(
-            f"actual KG error against {args.reference}: {kg_error(selected, decoded):.5f}{scope} "
-            f"({KG_DEFINITION})"
+            f"actual KG error against {args.reference}: {measured.kg:.5f}{scope} ({KG_DEFINITION})"
         )
+        _print_actual_worst(args, measured.worst, decoded.frame_count)
     return EXIT_OK
+
+
+def _print_recorded(header: FileInfo) -> None:
+    """What the file says the encoder measured: its KG error, and its worst vertex if the file
+    records one (files encoded with --max-error or --lossless)."""
+    recorded = ""
+    if header.max_distance is not None:
+        recorded = (
+            f"; worst vertex {worst_vertex(header.max_distance, header.max_distance_at)}"
+            f"{_bound(header)}"
+        )
+    print(
+        f"file: {header.total_bytes} bytes = {header.bpfv:.4f} bpfv; KG error recorded by the "
+        f"encoder {_number(header.kg)} ({header.kg_definition or 'no definition recorded'})"
+        f"{recorded}"
+    )
+
+
+def _print_actual_worst(args: argparse.Namespace, worst: Displacement, frames: int) -> None:
+    """The worst vertex measured against ``--reference``, its frame numbered as in the file."""
+    scope = "" if args.frames is None else f"of the {frames} frames decoded; "
+    print(
+        f"actual worst vertex against {args.reference}: {worst_vertex(worst.distance, worst.at)}"
+        f" ({scope}{MAX_DISTANCE_DEFINITION})"
+    )
+
+
+def _bound(header: FileInfo) -> str:
+    if header.target_max_distance is None:
+        return ""
+    return f", bound {header.target_max_distance:.6g}"
 
 
 def _decode_gltf(
@@ -193,11 +246,10 @@ def _decode_gltf(
         f"-> {output} (glTF morph animation: {report.targets} targets, {report.compression}, "
         f"{report.frame_rate:g} fps) in {time.perf_counter() - start:.2f} s"
     )
-    print(
-        f"file: {header.total_bytes} bytes = {header.bpfv:.4f} bpfv; KG error recorded by the "
-        f"encoder {_number(header.kg)} ({header.kg_definition or 'no definition recorded'})"
-    )
+    _print_recorded(header)
     print(f"glTF: {report.size} bytes; {report.summary()}")
+    if report.tkc_worst_reference is not None:
+        _print_actual_worst(args, report.tkc_worst_reference, report.frames)
     return EXIT_OK
 
 
@@ -241,6 +293,19 @@ def run_info(args: argparse.Namespace) -> int:
         f"  KG error {_number(header.kg)} ({header.kg_definition or 'no definition recorded'}), "
         f"target {target}"
     )
+    if header.max_distance is None:
+        print(
+            "  worst vertex not recorded in the file (only files encoded with --max-error or "
+            f"--lossless carry it; 'tuckercodec eval ORIGINAL {args.input}' measures it)"
+            f"{_bound(header)}"
+        )
+    else:
+        print(
+            f"  worst vertex {worst_vertex(header.max_distance, header.max_distance_at)} "
+            f"({MAX_DISTANCE_DEFINITION}){_bound(header)}"
+        )
+    if header.lossless:
+        print("  lossless: the encoder checked the decoded values to be the input's, bit for bit")
     if header.frame_rate is not None:
         print(f"  {header.frame_rate:g} frames per second")
     print(f"  written by {header.encoder or 'an unnamed encoder'}")

@@ -20,16 +20,9 @@ from ..decoder import Decoder, decode
 from ..encoder import encode_with_report
 from ..errors import EXIT_OK, InputError
 from ..io import load_sequence
-from ..metrics import (
-    KG_DEFINITION,
-    kg_error,
-    max_vertex_displacement,
-    per_frame_kg,
-    per_frame_max_displacement,
-    relative_error,
-)
+from ..metrics import KG_DEFINITION, MAX_DISTANCE_DEFINITION, compare, kg_error
 from ..perceptual import STED_DEFINITION, sted
-from ..report import curves_csv, targets_table
+from ..report import curves_csv, targets_table, worst_vertex
 from ..samples import SAMPLE_NAME, sample_path
 from ..sequence import MeshSequence
 from .inputs import is_compressed, load_input, read_options, sequence_source
@@ -103,22 +96,23 @@ def run_eval(args: argparse.Namespace) -> int:
             f"vertices, {args.approximation} {approximation.frame_count} of "
             f"{approximation.vertex_count}"
         )
-    per_frame = per_frame_kg(original, approximation)
+    measured = compare(original, approximation)  # KG, worst vertex, per frame: one pass
+    per_frame = measured.per_frame_kg()
     worst_frame = int(per_frame.argmax())
-    displacement = max_vertex_displacement(original, approximation)
+    worst = measured.worst
     if original.faces.shape[0]:  # STED measures edges: on A's faces, the reference's
-        measured = sted(original, approximation, width=args.sted_width, window=args.sted_window)
-        sted_figures = measured.to_dict()
+        perceptual = sted(original, approximation, width=args.sted_width, window=args.sted_window)
+        sted_figures = perceptual.to_dict()
     else:
-        measured, sted_figures = None, None
+        perceptual, sted_figures = None, None
     figures = {
-        "kg": kg_error(original, approximation),
+        "kg": measured.kg,
         "kg_definition": KG_DEFINITION,
+        "max_distance": worst.distance,  # the worst vertex, in the sequence's units
+        "max_distance_at": list(worst.at),  # [frame, vertex], as info --json has it
+        "max_distance_definition": MAX_DISTANCE_DEFINITION,
         "sted": sted_figures,  # None where A has no faces: STED needs edges
-        "relative_error": relative_error(original, approximation),
-        "max_vertex_displacement": displacement.distance,
-        "max_displacement_frame": displacement.frame,
-        "max_displacement_vertex": displacement.vertex,
+        "relative_error": measured.relative_error,
         "worst_frame": worst_frame,
         "worst_frame_kg_share": float(per_frame[worst_frame]),
     }
@@ -126,16 +120,17 @@ def run_eval(args: argparse.Namespace) -> int:
         from ..plots import plot_frame_errors  # matplotlib only when asked for
 
         title = f"{Path(args.approximation).name} against {Path(args.original).name}"
-        worst = per_frame_max_displacement(original, approximation)
-        plot_frame_errors(per_frame, worst, args.plot, title=title, overwrite=args.force)
+        largest = measured.per_frame_max_distance()
+        plot_frame_errors(per_frame, largest, args.plot, title=title, overwrite=args.force)
     if args.json:
         print(json.dumps(figures, indent=2))
         return EXIT_OK
     print(f"KG error {figures['kg']:.6f} ({KG_DEFINITION})")
-    if measured is None:
+    print(f"worst vertex {worst_vertex(worst.distance, worst.at)} ({MAX_DISTANCE_DEFINITION})")
+    if perceptual is None:
         print(f"STED not measured: {args.original} has no faces, and STED compares edge lengths")
     else:
-        p = measured
+        p = perceptual
         print(
             f"STED {p.value:.6g} (spatial STED_s {p.spatial:.6g}, "
             f"temporal STED_t {p.temporal:.6g}; "
@@ -144,10 +139,6 @@ def run_eval(args: argparse.Namespace) -> int:
         )
         print(f"  {STED_DEFINITION}")
     print(f"relative error ||A-B||/||A|| {figures['relative_error']:.3e} (uncentred)")
-    print(
-        f"largest vertex displacement {displacement.distance:.6g} (frame {displacement.frame}, "
-        f"vertex {displacement.vertex}), in scene units"
-    )
     print(
         f"worst frame {worst_frame}: {per_frame[worst_frame]:.6f} of the KG error "
         "(its share; the squares of all frames' shares sum to KG squared)"

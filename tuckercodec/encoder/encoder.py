@@ -15,11 +15,14 @@ import time
 from collections.abc import Callable, Iterator
 from typing import Any
 
+import numpy as np
+
 from ..analysis import Analysis, analyze
+from ..errors import UnreachableTargetError
 from ..io.streaming import FrameSource, SequenceFrames
 from ..parallel import Executor, InProcessExecutor, open_executor
 from ..sequence import MeshSequence
-from . import search
+from . import corrections, search
 from .options import EncodeOptions
 from .plan import default_max_memory, needs_segments, plan_segments
 from .results import EncodeReport, EncodeResult
@@ -134,12 +137,15 @@ class Encoder:
         options = self.options
         analysis = analyze(sequence) if analysis is None else analysis
         work = WholeWorkspace(sequence, analysis, options.level, options.select)
+        if options.corrections:
+            return self._encode_corrected(work, start)
         quantized, error2, trials = self._search(work)
         extra: dict[str, Any] = {}
         if options.mode == "kg":  # what each way of choosing ranks alone would pick
             exact = analysis.cheapest(options.kg_target)
             bound = analysis.cheapest(options.kg_target, select="bound")
             extra = {"exact_ranks": (exact.i, exact.k), "bound_ranks": (bound.i, bound.k)}
+        extra["max_distance"], extra["max_distance_at"] = work.worst_vertex(quantized)
         return self._result(
             work,
             quantized,
@@ -150,6 +156,68 @@ class Encoder:
             select=options.select,
             trials=trials,
             **extra,
+        )
+
+    def _encode_corrected(self, work: WholeWorkspace, start: float) -> EncodeResult:
+        """A bound on every vertex, or lossless (format 1.3 where corrections are needed):
+        the smallest Tucker part plus corrections (:mod:`.corrections`), packed, then decoded
+        and checked before it is returned."""
+        options = self.options
+        sequence = work.sequence
+        goal = corrections.goal_of(options, sequence)
+        chosen, trials = corrections.search_whole(work, options, goal)
+        u2 = work.analysis.decomposition.u2
+        final = corrections.final_section(chosen, goal, sequence.vertices, u2, options.level)
+        quantized = chosen.quantized
+        target_kg = options.target_kg if options.mode == "kg" else None
+        section, integers = None, None
+        if final is not None:
+            section, integers, decoded = final
+        else:
+            decoded = corrections.plain_positions(quantized, u2)
+        distance, where = corrections.worst_vertex(decoded, sequence.vertices)
+        difference = decoded - sequence.vertices
+        error2 = float(np.square(difference).sum())
+        claims = {
+            "max_distance": distance,
+            "max_distance_at": [where[0], where[1]],
+            "target_max_distance": goal.bound,
+            "lossless": goal.lossless,
+        }
+        data, sizes = work.pack(quantized, error2, target_kg, correction=section, claims=claims)
+        # the promise, checked on the positions measured and on the bytes returned
+        corrections.verify(decoded, sequence.vertices, goal if section else None, goal.bound)
+        if integers is not None:
+            corrections.check_written(data, integers)
+        if target_kg is not None and work.kg(error2) > target_kg:
+            raise UnreachableTargetError(
+                f"the corrected file's KG error {work.kg(error2):.6g} is above the target "
+                f"{target_kg}: this is a bug, please report it"
+            )
+        choice = quantized.choice
+        return EncodeResult(
+            data,
+            EncodeReport(
+                mode=options.mode,
+                target=options.target,
+                select=options.select,
+                ranks=choice,
+                kg=work.kg(error2),
+                truncation_kg=work.kg(work.truncation_error2(choice)),
+                exact_ranks=None,
+                bound_ranks=None,
+                total_bytes=len(data),
+                section_bytes=sizes,
+                vertices=work.vertex_count,
+                frames=work.frame_count,
+                seconds=time.perf_counter() - start,
+                trials=trials,
+                max_distance=distance,
+                max_distance_at=where,
+                max_error=goal.bound,
+                lossless=goal.lossless,
+                corrections=goal.domain if section is not None else None,
+            ),
         )
 
     def _search(self, work: Workspace[Any]) -> tuple[Quantized[Any], float, int]:

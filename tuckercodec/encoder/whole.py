@@ -19,12 +19,13 @@ import numpy as np
 from .._version import __version__
 from ..analysis import Analysis, Selection
 from ..errors import UnreachableTargetError
-from ..format import faces, names, qmat, sections, streams
-from ..format.container import pack_container
+from ..format import faces, names, qmat, residual, sections, streams
+from ..format.container import FORMAT_MINOR, pack_container
 from ..format.header import header_map
 from ..format.qmat import QuantizedMatrix
 from ..format.reconstruction import factor_value_count, reconstruct_frames, reconstruction_basis
 from ..hosvd import project
+from ..metrics import ErrorAccumulator
 from ..sequence import MeshSequence
 from ..topology import MeshPrediction
 from . import rdo
@@ -240,6 +241,25 @@ class WholeWorkspace:
             total += float(flat @ flat)
         return total
 
+    def worst_vertex(self, quantized: Quantized[Ranks]) -> tuple[float, tuple[int, int]]:
+        """The decoded vertex farthest from the input (Euclidean distance) and its (frame,
+        vertex), with the decoder's own reconstruction, a block of frames at a time."""
+        (i, k), (factors,) = quantized.choice, quantized.segments
+        assert factors.u1 is not None
+        u1 = factors.u1.values()
+        u3 = factors.u3.values()
+        centroids = factors.centroids.values()
+        basis = reconstruction_basis(
+            factors.core.values().reshape(i, 3, k), self.analysis.decomposition.u2
+        )
+        measured = ErrorAccumulator()
+        frames_at_once = max(1, BLOCK_BYTES // (24 * self.vertex_count))
+        for start in range(0, self.frame_count, frames_at_once):
+            block = slice(start, start + frames_at_once)
+            decoded = reconstruct_frames(u1, basis, u3[block], centroids[block])
+            measured.add(self.sequence.vertices[block], decoded)
+        return measured.worst.distance, measured.worst.at
+
     # the whole workspace measures every trial: its model is the decoded error
     modelled_error2 = decoded_error2
     measured_error2 = decoded_error2
@@ -316,9 +336,13 @@ class WholeWorkspace:
         error2: float,
         target_kg: float | None,
         level: int | None = None,
+        *,
+        correction: tuple[dict[str, Any], bytes] | None = None,
+        claims: dict[str, Any] | None = None,
     ) -> tuple[bytes, dict[str, int]]:
         """The file's bytes, and the size of each section (zstd ``level``: the final one unless
-        given)."""
+        given). ``correction``: a RESD section's parameters and payload (format 1.3, §6.9);
+        ``claims``: more keys of the header's ``error`` map."""
         header = header_map(
             vertices=self.vertex_count,
             frames=self.frame_count,
@@ -329,10 +353,17 @@ class WholeWorkspace:
             target_kg=target_kg,
             encoder=f"tuckercodec {__version__}",
             frame_rate=self.sequence.frame_rate,
+            claims=claims,
         )
         packed = self.sections(quantized, self.level if level is None else level)
+        flags, minor = 0, FORMAT_MINOR
+        if correction is not None:
+            entry = {"id": residual.SECTION_STEM, "critical": True, "codec": residual.RESIDUAL}
+            at = next((n for n, (e, _) in enumerate(packed) if e["id"] == "NAME"), len(packed))
+            packed.insert(at, ({**entry, **correction[0]}, correction[1]))
+            flags, minor = residual.CORRECTIONS, residual.CORRECTIONS_MINOR
         sizes = {entry["id"]: len(payload) for entry, payload in packed}
-        return pack_container(header, packed), sizes
+        return pack_container(header, packed, flags=flags, minor=minor), sizes
 
 
 def column_steps(root: float, norms: np.ndarray) -> np.ndarray:

@@ -34,6 +34,7 @@ from ..errors import (
     UnsupportedVersionError,
 )
 from .limits import DEFAULT_LIMITS, Limits
+from .residual import CORRECTIONS
 from .sections import CODING_TOOLS, Section, read_section_table, with_coding_tools
 from .segments import SEGMENTED
 
@@ -50,8 +51,8 @@ HEAD_SIZE = PREAMBLE_END + CRC.size  # 32: where the header starts
 #: Bits 0-15 of the preamble flags are critical: a decoder rejects any it does not know.
 CRITICAL_FLAGS_MASK = 0x0000FFFF
 #: Critical flags this decoder knows: bit 0, a segmented file (format 1.1, §6.7), and bit 1,
-#: the coding tools of format 1.2.
-KNOWN_CRITICAL_FLAGS = SEGMENTED | CODING_TOOLS
+#: the coding tools of format 1.2, and bit 2, corrections (format 1.3, §6.9).
+KNOWN_CRITICAL_FLAGS = SEGMENTED | CODING_TOOLS | CORRECTIONS
 
 
 @dataclass(frozen=True)
@@ -112,6 +113,11 @@ class Container:
     def coding_tools(self) -> bool:
         """Whether the preamble sets flag bit 1: the coding tools of format 1.2 (§6.8)."""
         return bool(self.flags & CODING_TOOLS)
+
+    @property
+    def corrections(self) -> bool:
+        """Whether the preamble sets flag bit 2: corrections (format 1.3, §6.9, §8.1)."""
+        return bool(self.flags & CORRECTIONS)
 
     def payload(self, data: bytes | memoryview | RangeReader, entry: Section) -> memoryview:
         """The bytes of a section, after checking its CRC-32 (§5 step 9); ``data`` is the whole

@@ -51,6 +51,13 @@ class FileInfo:
     #: the segment index of a segmented file (§6.7); empty for a file of one decomposition.
     #: ``ranks`` is then (the shared basis's columns, or the largest i; the largest k).
     segments: tuple[SegmentEntry, ...] = ()
+    #: the worst vertex the encoder measured (§4.1, 1.3; written with corrections): the largest
+    #: Euclidean distance, in the sequence's units, between a decoded vertex and the input's,
+    #: and its [frame, vertex]. None: not recorded (or not a number / a place in the file).
+    max_distance: float | None = None
+    max_distance_at: tuple[int, int] | None = None
+    target_max_distance: float | None = None  # the bound given to the encoder (None: none)
+    lossless: bool | None = None  # the encoder checked the decode bit for bit (None: no claim)
 
     @property
     def bpfv(self) -> float:
@@ -58,9 +65,10 @@ class FileInfo:
         return bpfv(self.total_bytes, self.frames, self.vertices)
 
     def to_dict(self) -> dict[str, Any]:
-        """A JSON-safe dictionary of every field, and the bpfv. The encoder's claims ``kg`` and
-        ``target_kg`` are any float the file holds (§4.1): NaN or infinity becomes ``None``,
-        since JSON has no such numbers (``json.dumps`` would write a bare ``NaN``)."""
+        """A JSON-safe dictionary of every field, and the bpfv. The encoder's claims ``kg``,
+        ``target_kg``, ``max_distance`` and ``target_max_distance`` are any float the file holds
+        (§4.1): NaN or infinity becomes ``None``, since JSON has no such numbers
+        (``json.dumps`` would write a bare ``NaN``)."""
         return {
             "format_version": self.format_version,
             "vertices": self.vertices,
@@ -73,6 +81,10 @@ class FileInfo:
             "kg": _json_number(self.kg),
             "kg_definition": self.kg_definition,
             "target_kg": _json_number(self.target_kg),
+            "max_distance": _json_number(self.max_distance),
+            "max_distance_at": None if self.max_distance_at is None else list(self.max_distance_at),
+            "target_max_distance": _json_number(self.target_max_distance),
+            "lossless": self.lossless,
             "frame_rate": self.frame_rate,
             "encoder": self.encoder,
             "sections": [
@@ -110,9 +122,12 @@ def header_map(
     target_kg: float | None,
     encoder: str,
     frame_rate: float | None,
+    claims: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Every header field but the section table, in the order the reference encoder writes
-    them (the order changes the bytes, not the meaning)."""
+    them (the order changes the bytes, not the meaning). ``claims``: more keys of the
+    informative ``error`` map (§4.1: the worst vertex of a file with a bound, format 1.3),
+    after the others, so that a file without them is written as before."""
     header: dict[str, Any] = {
         "vertices": vertices,
         "frames": frames,
@@ -123,6 +138,7 @@ def header_map(
             "definition": KG_DEFINITION_ID,
             "truncation_kg": truncation_kg,
             "target_kg": target_kg,
+            **(claims or {}),
         },
         "encoder": encoder,
     }
@@ -156,6 +172,17 @@ def _number(value: object) -> float | None:
     return None
 
 
+def _place(value: object, frames: int, vertices: int) -> tuple[int, int] | None:
+    """``max_distance_at`` of the ``error`` map (§4.1): [frame, vertex], two ints (not bools)
+    naming a vertex of the file; anything else is no claim."""
+    if not isinstance(value, list) or len(value) != 2:
+        return None
+    frame, vertex = value
+    if not (is_int(frame) and is_int(vertex) and 0 <= frame < frames and 0 <= vertex < vertices):
+        return None
+    return (frame, vertex)
+
+
 def read_header(container: Container, limits: Limits) -> FileInfo:
     """Check the header's fields (§5 steps 10 and 14) and the section table against them
     (steps 11-13); what the header says."""
@@ -178,7 +205,12 @@ def read_header(container: Container, limits: Limits) -> FileInfo:
     if container.segmented:  # §6.7: the index replaces ranks and u2
         segments = read_segment_index(header, vertices, frames, limits)
         shared = check_segmented_sections(
-            container.sections, vertices, segments, limits, coding_tools=container.coding_tools
+            container.sections,
+            vertices,
+            segments,
+            limits,
+            coding_tools=container.coding_tools,
+            corrections=container.corrections,
         )
         i = shared or max(segment.ranks[0] for segment in segments)
         k = max(segment.ranks[1] for segment in segments)
@@ -192,6 +224,7 @@ def read_header(container: Container, limits: Limits) -> FileInfo:
             (i, k),
             limits,
             coding_tools=container.coding_tools,
+            corrections=container.corrections,
         )
     frame_rate = _field(
         header, "frame_rate", _is_frame_rate, "absent, nil or a positive finite float"
@@ -200,6 +233,7 @@ def read_header(container: Container, limits: Limits) -> FileInfo:
     error = header.get("error")
     error = error if isinstance(error, dict) else {}  # informative only (§4.1): never trusted
     definition = error.get("definition")
+    lossless = error.get("lossless")
     encoder = header.get("encoder")
     face = container.section("FACE")
     assert face is not None  # check_sections found every required section
@@ -215,6 +249,10 @@ def read_header(container: Container, limits: Limits) -> FileInfo:
         kg=_number(error.get("kg")),
         kg_definition=definition if isinstance(definition, str) else None,
         target_kg=_number(error.get("target_kg")),
+        max_distance=_number(error.get("max_distance")),
+        max_distance_at=_place(error.get("max_distance_at"), frames, vertices),
+        target_max_distance=_number(error.get("target_max_distance")),
+        lossless=lossless if isinstance(lossless, bool) else None,
         frame_rate=frame_rate,
         encoder=encoder if isinstance(encoder, str) else None,
         sections=tuple((s.id, s.length, s.codec, s.critical) for s in container.sections),

@@ -16,6 +16,7 @@ from typing import Any
 from ..errors import FormatError, UnsupportedVersionError
 from . import streams
 from .limits import Limits, check_limit
+from .residual import RESIDUAL, SECTION_STEM
 
 #: Codec ids (§6.3-6.5, §6.8).
 QMAT = "qmat"
@@ -70,9 +71,18 @@ KNOWN_SECTIONS: dict[str, SectionKind] = {
     "NAME": SectionKind(MSGPACK_ZSTD, critical=False, required=False),
 }
 REQUIRED_SECTIONS = tuple(name for name, kind in KNOWN_SECTIONS.items() if kind.required)
+#: The corrections of format 1.3 (§6.9): known, and required, only in a file with flag bit 2.
+RESIDUAL_KIND = SectionKind(RESIDUAL, critical=True, required=True)
+
+
+def known_kinds(corrections: bool) -> dict[str, SectionKind]:
+    """§6.6's sections, with RESD when the preamble sets flag bit 2."""
+    return {**KNOWN_SECTIONS, SECTION_STEM: RESIDUAL_KIND} if corrections else KNOWN_SECTIONS
+
+
 #: The order the reference encoder writes (§9): the faces first, which the decoder needs for
 #: U1's mesh parents; the decoder does not depend on it (§3).
-WRITE_ORDER = ("FACE", "CENT", "U3", "CORE", "U1", "NAME")
+WRITE_ORDER = ("FACE", "CENT", "U3", "CORE", "U1", "RESD", "NAME")
 
 
 _SECTION_KEYS: dict[str, type] = {
@@ -323,12 +333,13 @@ def check_sections(
     limits: Limits,
     *,
     coding_tools: bool = False,
+    corrections: bool = False,
 ) -> None:
     """§5 steps 11-13: known sections with their codec and criticality, unknown critical ones
-    refused, the required ones present, and every shape as the header implies and within the
-    limits."""
-    present = check_known_sections(table, KNOWN_SECTIONS, coding_tools=coding_tools)
-    require_sections(present, list(REQUIRED_SECTIONS))
+    refused, the required ones present (RESD too with ``corrections``, flag bit 2), and every
+    shape as the header implies and within the limits."""
+    present = check_known_sections(table, known_kinds(corrections), coding_tools=coding_tools)
+    require_sections(present, list(REQUIRED_SECTIONS) + ([SECTION_STEM] if corrections else []))
     i, k = ranks
     expected_shapes = {
         "U1": (vertices, i),

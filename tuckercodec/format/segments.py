@@ -20,12 +20,13 @@ from typing import Any, NoReturn
 
 from ..errors import FormatError
 from .limits import Limits, check_limit
+from .residual import SECTION_STEM
 from .sections import (
-    KNOWN_SECTIONS,
     Section,
     check_face_shape,
     check_known_sections,
     check_stream_size,
+    known_kinds,
     require_sections,
     section_shape,
 )
@@ -210,13 +211,15 @@ def _short(value: object) -> str:
 
 
 def known_segment_kinds(
-    segments: tuple[SegmentEntry, ...],
+    segments: tuple[SegmentEntry, ...], corrections: bool = False
 ) -> dict[str, tuple[str, int | None]]:
     """Every section id a segmented file may hold -> (its kind in §6.6's table, its segment);
-    the shared sections have segment ``None``."""
+    the shared sections have segment ``None``. With ``corrections`` (flag bit 2), each
+    segment's ``RESD.s`` too."""
     known: dict[str, tuple[str, int | None]] = {stem: (stem, None) for stem in SHARED_SECTIONS}
+    stems = SEGMENT_STEMS + ((SECTION_STEM,) if corrections else ())
     for segment in segments:
-        for stem in SEGMENT_STEMS:
+        for stem in stems:
             if stem == "U1" and segment.basis != BASIS_OWN:
                 continue
             known[segment.section_id(stem)] = (stem, segment.index)
@@ -230,6 +233,7 @@ def check_segmented_sections(
     limits: Limits,
     *,
     coding_tools: bool = False,
+    corrections: bool = False,
 ) -> int:
     """§5 steps 11s-13s for a segmented file; returns the shared U1's column count (0 if none).
 
@@ -237,9 +241,10 @@ def check_segmented_sections(
     ``CENT.s`` and, for a segment with its own basis, ``U1.s``; any other critical id is
     unknown (R24), including ``U3``, ``CORE`` and ``CENT`` without a segment number.
     """
+    known = known_kinds(corrections)
     kinds = {
-        section_id: KNOWN_SECTIONS[stem]
-        for section_id, (stem, _) in known_segment_kinds(segments).items()
+        section_id: known[stem]
+        for section_id, (stem, _) in known_segment_kinds(segments, corrections).items()
     }
     present = check_known_sections(table, kinds, coding_tools=coding_tools)
     shared_needed = any(segment.basis == BASIS_SHARED for segment in segments)
@@ -247,6 +252,8 @@ def check_segmented_sections(
     for segment in segments:
         stems = SEGMENT_STEMS if segment.basis == BASIS_OWN else SEGMENT_STEMS[1:]
         required += [segment.section_id(stem) for stem in stems]
+        if corrections:
+            required.append(segment.section_id(SECTION_STEM))
     require_sections(present, required)
 
     check_face_shape(present["FACE"].params, limits)

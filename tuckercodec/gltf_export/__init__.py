@@ -57,7 +57,7 @@ from ..format.reconstruction import reconstruction_basis
 from ..io.gltf.accessors import ARRAY_BUFFER, BufferBuilder, padded_rows
 from ..io.gltf.document import add_triangles, file_bytes, new_gltf
 from ..io.gltf.reader import sample_gltf
-from ..metrics import KG_DEFINITION, kg_error
+from ..metrics import KG_DEFINITION, Displacement, ErrorAccumulator, kg_error
 from ..sequence import DEFAULT_FRAME_RATE, MeshSequence
 from .quantization import Quantized, quantize_animation, weight_values
 
@@ -117,6 +117,9 @@ class GltfReport:
             file (sampled at each frame's time) against the .tkc's own decode of those frames.
         viewer_kg_reference: the same against a reference sequence, if one was given.
         tkc_kg_reference: the .tkc decode's KG error against that reference.
+        tkc_worst_reference: the .tkc decode's worst vertex against that reference
+            (:data:`~tuckercodec.metrics.MAX_DISTANCE_DEFINITION`; its frame numbered as in
+            the file), measured in the same pass as ``tkc_kg_reference``.
         definition: the KG definition of the three figures.
     """
 
@@ -132,6 +135,7 @@ class GltfReport:
     viewer_kg_reference: float | None = None
     tkc_kg_reference: float | None = None
     definition: str = KG_DEFINITION
+    tkc_worst_reference: Displacement | None = None
 
     def summary(self) -> str:
         """The report as the command line prints it."""
@@ -252,6 +256,10 @@ def _report(
     decoded = animation.decoded
     viewer = sample_gltf(path, animation.times.astype(np.float64)).positions
     original = None if reference is None else _reference(reference, decoded, animation.chosen)
+    tkc = None
+    if original is not None:
+        tkc = ErrorAccumulator()  # the .tkc's KG error and worst vertex in one pass
+        tkc.add(original, decoded, frames=animation.chosen)
     return GltfReport(
         path=path,
         size=size,
@@ -263,7 +271,8 @@ def _report(
         weight_bits=32 if quantized is None else 8 * quantized.weights.dtype.itemsize,
         viewer_kg=kg_error(decoded, viewer),
         viewer_kg_reference=None if original is None else kg_error(original, viewer),
-        tkc_kg_reference=None if original is None else kg_error(original, decoded),
+        tkc_kg_reference=None if tkc is None else tkc.kg,
+        tkc_worst_reference=None if tkc is None else tkc.worst,
     )
 
 

@@ -1,0 +1,319 @@
+"""A bound on every vertex, or every bit: the Tucker part plus corrections (format 1.3, §6.9).
+
+The KG error is an average; what a viewer sees is the worst vertex, and what an archive needs is
+the input back. Both are met the same way: the decoded Tucker part (reconstructed in §8.1's exact
+order, so that every decoder gets the same binary64 values) is corrected by one integer per
+coordinate, on a grid of step at most 2D/sqrt(3) (each axis then errs by at most D/sqrt(3), so
+a vertex by at most D) or on the ordered integers of the input's own floats (lossless).
+
+Which Tucker part? A finer one leaves fewer and smaller corrections but costs more itself, so
+the encoder tries a ladder of them (:func:`candidates`) and keeps the smallest whole file: with a
+KG target too, only parts that meet it (a correction only moves a vertex nearer its original, so
+the file still meets it). Where the Tucker part alone already keeps every vertex within D, with
+room for §8's tolerance, the file needs no corrections and is written as before.
+
+Everything is checked on the bytes written: :func:`verify` decodes them with the decoder and
+measures every vertex (or compares every bit) before the file is returned.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..errors import UnreachableTargetError
+from ..format import residual, streams
+from ..format.container import parse_container
+from ..format.limits import DEFAULT_LIMITS
+from ..format.reconstruction import reconstruct_frames, reconstruction_basis
+from ..format.residual import FLOAT32, FLOAT64, GRID
+from ..metrics import max_distance
+from ..sequence import MeshSequence
+from . import search
+from .options import EncodeOptions
+from .trial import Quantized
+from .whole import Ranks, WholeWorkspace
+
+#: The KG errors (percent) of the Tucker parts tried without a KG target: from far finer than
+#: any usual target to coarse; the best two's geometric mean is tried last.
+LADDER = (0.003, 0.01, 0.03, 0.1, 0.3, 1.0, 3.0)
+#: The share of a ladder step's squared error given to truncation (the rest to quantization).
+TRUNCATION_SHARE = 0.5
+#: A grid's step is this much under 2D/sqrt(3): rounding of the correction itself has room.
+GRID_ROOM = 1e-6
+#: zstd level of the corrections in the final file: above it, minutes for a percent or two.
+CORRECTION_LEVEL = 9
+
+
+@dataclass(frozen=True)
+class Goal:
+    """What the corrections must achieve: the domain, and for a grid the bound D and step."""
+
+    domain: str
+    bound: float | None = None  # D, in the sequence's units
+    step: float | None = None  # the grid's spacing
+
+    @property
+    def lossless(self) -> bool:
+        return self.domain != GRID
+
+
+def goal_of(options: EncodeOptions, sequence: MeshSequence) -> Goal:
+    """The corrections ``options`` ask for on ``sequence``; ``UnreachableTargetError`` for a
+    bound below what float64 positions can resolve."""
+    vertices = sequence.vertices
+    if options.lossless:
+        single = vertices.astype(np.float32).astype(np.float64)
+        same = np.array_equal(single.view(np.int64), vertices.view(np.int64))
+        return Goal(FLOAT32 if same else FLOAT64)
+    corner_low = vertices.min(axis=(0, 1))
+    corner_high = vertices.max(axis=(0, 1))
+    diagonal = float(np.linalg.norm(corner_high - corner_low))
+    bound = options.max_error_length(diagonal)
+    assert bound is not None
+    largest = float(np.abs(vertices).max())
+    # Positions are binary64: a grid finer than a few of their ulps cannot be met reliably.
+    resolvable = 64 * np.spacing(largest) if largest > 0 else 0.0
+    if not bound > resolvable:
+        raise UnreachableTargetError(
+            f"no file can keep every vertex within {bound:.6g}: the positions reach "
+            f"{largest:.6g}, where float64 itself resolves only about {np.spacing(largest):.3g} "
+            f"(a bound must be above {resolvable:.3g}); ask for a larger bound, or --lossless"
+        )
+    step = float(2.0 * bound / math.sqrt(3.0) * (1.0 - GRID_ROOM))
+    return Goal(GRID, bound, step)
+
+
+@dataclass
+class Corrected:
+    """A Tucker part with its corrections: the integers, the exact reconstruction they correct
+    and the RESD section they pack to (``None`` when no correction is needed)."""
+
+    quantized: Quantized[Any]
+    integers: None
+    section: tuple[dict[str, Any], bytes] | None
+    tucker_bytes: int
+
+    @property
+    def total_bytes(self) -> int:
+        return self.tucker_bytes + (len(self.section[1]) if self.section is not None else 0)
+
+
+def exact_positions(quantized: Quantized[Any], u2: np.ndarray) -> np.ndarray:
+    """Every frame of a whole file's Tucker part as §8.1 reconstructs it (F, K, 3)."""
+    (factors,) = quantized.segments
+    assert factors.u1 is not None
+    u1 = factors.u1.values()
+    i = u1.shape[1]
+    u3 = factors.u3.values()
+    core = factors.core.values().reshape(i, 3, u3.shape[1])
+    return residual.exact_frames(
+        np.ascontiguousarray(u1.T), residual.exact_basis(core, u2), u3, factors.centroids.values()
+    )
+
+
+def integers_for(exact: np.ndarray, original: np.ndarray, goal: Goal) -> np.ndarray:
+    """The corrections that take ``exact`` to ``original``: every bit, or, on a grid, only the
+    vertices farther than D (their integers nearest; everyone else's 0)."""
+    if goal.lossless:
+        return residual.residuals_of(exact, original, goal.domain, None)
+    assert goal.step is not None and goal.bound is not None
+    integers = residual.residuals_of(exact, original, GRID, goal.step)
+    distance = np.sqrt(np.square(exact - original).sum(axis=2))
+    integers[distance <= goal.bound * (1.0 - GRID_ROOM)] = 0
+    return integers
+
+
+def corrected_positions(exact: np.ndarray, integers: np.ndarray, goal: Goal) -> np.ndarray:
+    """What a decoder returns for these corrections (§6.9's arithmetic)."""
+    layout = residual.ResidualLayout(
+        goal.domain, goal.step, 0, exact.shape[0], (8,), (0, 0), exact.shape[0]
+    )
+    return residual.correct(exact, integers, layout, "corrections")
+
+
+def correct(
+    quantized: Quantized[Any],
+    goal: Goal,
+    original: np.ndarray,
+    u2: np.ndarray,
+    plain_positions: np.ndarray,
+    tucker_bytes: int,
+    level: int,
+) -> Corrected:
+    """The corrections one Tucker part needs, and their size packed at ``level``.
+
+    ``plain_positions`` is the part as §8 decodes it: when every vertex there is within D, less
+    §8's tolerance (any decoder's positions are that close to it), no correction is needed.
+    Otherwise the corrections are sized on these positions, which §8.1's exact ones differ from
+    by rounding only: the same sizes, at a fraction of the time (:func:`final_section` makes
+    the real ones for the part chosen)."""
+    if not goal.lossless:
+        assert goal.bound is not None
+        distance, _ = worst_vertex(plain_positions, original)
+        if distance <= goal.bound - tolerance(plain_positions):
+            return Corrected(quantized, None, None, tucker_bytes)
+    integers = integers_for(plain_positions, original, goal)
+    section = residual.encode_section(integers, goal.domain, goal.step, level)
+    return Corrected(quantized, None, section, tucker_bytes)
+
+
+def tolerance(reference: np.ndarray) -> float:
+    """How far (Euclidean) a conforming decoder's vertex may be from the reference's on a file
+    without corrections: §8's per-value tolerance on each of three axes."""
+    return math.sqrt(3.0) * (1e-9 * float(np.abs(reference).max()) + 1e-12)
+
+
+def worst_vertex(positions: np.ndarray, original: np.ndarray) -> tuple[float, tuple[int, int]]:
+    """The worst vertex of ``positions`` against ``original`` (the metric's
+    :func:`~tuckercodec.metrics.max_distance`): its Euclidean distance, and (frame, vertex)."""
+    worst = max_distance(original, positions)
+    return worst.distance, worst.at
+
+
+def verify(
+    decoded: np.ndarray, original: np.ndarray, goal: Goal | None, bound: float | None
+) -> tuple[float, tuple[int, int]]:
+    """Check decoded positions against the promise: bit for bit (lossless), or every vertex
+    within ``bound``. Returns the worst vertex's distance and (frame, vertex). A broken promise
+    is an ``UnreachableTargetError``: the file is never returned."""
+    distance, where = worst_vertex(decoded, original)
+    if goal is not None and goal.lossless:
+        if not np.array_equal(decoded.view(np.int64), original.view(np.int64)):
+            mismatch = np.argwhere(decoded.view(np.int64) != original.view(np.int64))[0]
+            raise UnreachableTargetError(
+                f"the lossless file does not decode to the input's bits (frame {mismatch[0]}, "
+                f"vertex {mismatch[1]}); this is a bug: please report it"
+            )
+    elif bound is not None and distance > bound:
+        raise UnreachableTargetError(
+            f"vertex {where[1]} of frame {where[0]} decodes {distance:.6g} from the input, above "
+            f"the bound {bound:.6g}: float64 cannot resolve this bound on these positions"
+        )
+    return distance, where
+
+
+__all__ = [
+    "CORRECTION_LEVEL",
+    "LADDER",
+    "TRUNCATION_SHARE",
+    "Corrected",
+    "Goal",
+    "check_written",
+    "correct",
+    "corrected_positions",
+    "goal_of",
+    "search_whole",
+    "verify",
+    "worst_vertex",
+]
+
+
+# -- the search over Tucker parts (a whole file) -----------------------------------------------
+
+
+def search_whole(work: WholeWorkspace, options: EncodeOptions, goal: Goal) -> tuple[Corrected, int]:
+    """The Tucker part whose file, corrections included, is smallest (sizes at the search's
+    fast zstd level), and the number of parts tried."""
+    original = work.sequence.vertices
+    u2 = work.analysis.decomposition.u2
+    tried: dict[float, Corrected] = {}
+
+    def attempt(quantized: Quantized[Ranks]) -> Corrected:
+        plain = plain_positions(quantized, u2)
+        tucker_bytes = len(work.pack(quantized, 0.0, None, streams.SEARCH_LEVEL)[0])
+        return correct(quantized, goal, original, u2, plain, tucker_bytes, streams.SEARCH_LEVEL)
+
+    if options.ranks is not None:
+        return attempt(search.encode_ranks(work, options.ranks)[0]), 1
+    if options.target_kg is not None:  # every part meets the KG target itself
+        best: Corrected | None = None
+        for divisor in (1.0, 2.0, 4.0):
+            candidate = attempt(search.search_kg(work, options.target_kg / divisor)[0])
+            tried[divisor] = candidate
+            if best is not None and candidate.total_bytes >= best.total_bytes:
+                break
+            best = candidate
+            if candidate.section is None:  # no corrections needed: nothing finer is smaller
+                break
+        assert best is not None
+        return best, len(tried)
+    for kg in LADDER:
+        part = quick_part(work, kg)
+        if part is not None:
+            tried[kg] = attempt(part)
+    if not tried:
+        raise UnreachableTargetError("no Tucker part of this sequence can be quantized")
+    ranked = sorted(tried, key=lambda kg: tried[kg].total_bytes)
+    if len(ranked) > 1:
+        middle = math.sqrt(ranked[0] * ranked[1])
+        part = quick_part(work, middle)
+        if part is not None:
+            tried[middle] = attempt(part)
+    best_kg = min(tried, key=lambda kg: tried[kg].total_bytes)
+    return tried[best_kg], len(tried)
+
+
+def quick_part(work: WholeWorkspace, kg: float) -> Quantized[Ranks] | None:
+    """A Tucker part of about KG error ``kg``: the cheapest ranks for a share of it, quantized
+    for the rest (no closed loop: the corrections make up whatever it misses)."""
+    limit2 = (kg / 100.0) ** 2 * work.denominator2
+    choice = work.ranks_for(kg, TRUNCATION_SHARE)
+    room = limit2 - work.truncation_error2(choice) - work.floor_error2
+    if room <= 0:
+        return None
+    work.prepare([choice])
+    return work.quantize(choice, work.initial_step(choice, room))
+
+
+def plain_positions(quantized: Quantized[Any], u2: np.ndarray) -> np.ndarray:
+    """Every frame as §8 reconstructs a file without corrections (any summation order)."""
+    (factors,) = quantized.segments
+    assert factors.u1 is not None
+    u1 = factors.u1.values()
+    u3 = factors.u3.values()
+    core = factors.core.values().reshape(u1.shape[1], 3, u3.shape[1])
+    return reconstruct_frames(u1, reconstruction_basis(core, u2), u3, factors.centroids.values())
+
+
+def final_section(
+    corrected: Corrected, goal: Goal, original: np.ndarray, u2: np.ndarray, level: int
+) -> tuple[tuple[dict[str, Any], bytes], np.ndarray, np.ndarray] | None:
+    """The chosen part's corrections on §8.1's exact positions, packed for the file at the
+    final level (capped at :data:`CORRECTION_LEVEL`) with the predictor the search chose, the
+    integers and the positions they decode to; ``None`` if the part needs none."""
+    if corrected.section is None:
+        return None
+    exact = exact_positions(corrected.quantized, u2)
+    integers = integers_for(exact, original, goal)
+    predict = int(corrected.section[0]["predict"])
+    section = residual.encode_section(
+        integers, goal.domain, goal.step, min(level, CORRECTION_LEVEL), predict=predict
+    )
+    return section, integers, corrected_positions(exact, integers, goal)
+
+
+def check_written(data: bytes, integers: np.ndarray) -> None:
+    """Read the RESD section back from the packed file as a decoder does (§5 step 18, §6.9) and
+    check that it holds ``integers``: the positions the encoder measured are then what every
+    decoder returns, since §8.1 and §6.9 leave no freedom in the arithmetic."""
+    container = parse_container(data, DEFAULT_LIMITS)
+    entry = container.section(residual.SECTION_STEM)
+    assert entry is not None
+    payload = container.payload(data, entry)
+    frames, vertices = integers.shape[:2]
+    where = f"section {residual.SECTION_STEM}"
+    layout = residual.read_layout(
+        entry.params, entry.length, frames, vertices, DEFAULT_LIMITS, where
+    )
+    for chunk in range(len(layout.planes)):
+        start, stop = layout.chunk_range(chunk)
+        stored = residual.decode_chunk(payload, layout, chunk, vertices, where)
+        if not np.array_equal(stored, integers[start:stop]):
+            raise UnreachableTargetError(
+                f"the corrections of frames {start}..{stop - 1} read back differently from what "
+                "was packed; this is a bug: please report it"
+            )

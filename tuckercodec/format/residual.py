@@ -1,0 +1,362 @@
+"""§6.9 Codec ``residual`` (corrections) and §8.1 the exact reconstruction (format 1.3).
+
+A file whose preamble sets flag bit 2 corrects every decoded coordinate by an integer ``e``: on a
+grid (``P + step * e``, a bound on every vertex), or on the ordered integers of binary32 or
+binary64 values (lossless). Every decoder must correct the same binary64 values, so such a file
+is reconstructed in one normative order (:func:`exact_frames`), one rounded operation at a time.
+
+The integers are stored per chunk of frames (:class:`ResidualLayout`), each chunk one zstd frame
+of 64-bit zigzagged integers in byte planes (§6.1 on 64 bits), optionally as differences from
+the frame before within the chunk.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Mapping
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..errors import FormatError
+from . import streams
+from .limits import Limits, check_limit
+
+#: Preamble flag bit 2 (critical, format 1.3): the file has corrections (§6.9).
+CORRECTIONS = 0x0004
+#: The minor version of a file that sets :data:`CORRECTIONS`.
+CORRECTIONS_MINOR = 3
+#: The codec id of RESD sections.
+RESIDUAL = "residual"
+SECTION_STEM = "RESD"
+GRID, FLOAT32, FLOAT64 = "grid", "float32", "float64"
+DOMAINS = (GRID, FLOAT32, FLOAT64)
+MAX_PLANES = 8
+
+#: The ordered integers of the finite values (§6.9): +max and -max.
+FINITE32 = (-2139095040, 2139095039)
+FINITE64 = (-9218868437227405313, 9218868437227405311)
+#: |e| allowed: grid values must widen to binary64 exactly; float32 ones stay within 33 bits.
+GRID_LARGEST = 2**53
+FLOAT32_LARGEST = 2**32
+
+
+# -- the ordered integers (§6.9) ---------------------------------------------------------------
+
+
+def ordered32(values: np.ndarray) -> np.ndarray:
+    """The ordered integer (int64) of each binary32 value."""
+    bits = np.ascontiguousarray(values, dtype=np.float32).view(np.int32).astype(np.int64)
+    return np.where(bits >= 0, bits, -(2**31) - bits - 1)
+
+
+def from_ordered32(ordered: np.ndarray) -> np.ndarray:
+    """The binary32 values of ordered integers within :data:`FINITE32` (the map is its own
+    inverse)."""
+    bits = np.where(ordered >= 0, ordered, -(2**31) - ordered - 1).astype(np.int32)
+    return bits.view(np.float32)
+
+
+def ordered64(values: np.ndarray) -> np.ndarray:
+    """The ordered integer (int64) of each binary64 value."""
+    bits = np.ascontiguousarray(values, dtype=np.float64).view(np.int64)
+    # -2**63 - w - 1 is ~w with the sign bit cleared... computed as (-w - 1) ^ (1 << 63) wraps
+    # nowhere: for w < 0, -w - 1 = ~w >= 0, and subtracting 2**63 is flipping the top bit.
+    flipped = np.bitwise_xor(np.invert(bits), np.int64(-(2**63)))
+    return np.where(bits >= 0, bits, flipped)
+
+
+def from_ordered64(ordered: np.ndarray) -> np.ndarray:
+    """The binary64 values of ordered integers (the map is its own inverse)."""
+    return ordered64(ordered.view(np.float64)).view(np.float64)
+
+
+# -- §8.1 the exact reconstruction -------------------------------------------------------------
+
+
+def exact_basis(core: np.ndarray, u2: np.ndarray) -> np.ndarray:
+    """``B[a, x, b]`` of §8.1, (i, 3, k): the three products added left to right."""
+    parts = [core[:, c, None, :] * u2[None, :, c, None] for c in range(3)]
+    return (parts[0] + parts[1]) + parts[2]
+
+
+#: Threads that reconstruct frames at once: numpy releases the GIL in its element-wise loops.
+EXACT_THREADS = min(4, os.cpu_count() or 1)
+
+
+def exact_frames(
+    u1_columns: np.ndarray, basis: np.ndarray, u3_rows: np.ndarray, centroid_rows: np.ndarray
+) -> np.ndarray:
+    """P (n, K, 3) of §8.1 for the frames of ``u3_rows`` (n, k) and ``centroid_rows`` (n, 3).
+
+    ``u1_columns`` is U1 transposed, (i, K), so that each step reads one contiguous column.
+    Every product and sum is one binary64 operation, in the order §8.1 gives: numpy's
+    element-wise multiply and add each round once, and nothing here is fused or reassociated.
+    A frame is summed as (3, K), every step one long vector times a scalar; frames are shared
+    between threads (the order within a frame is all that matters).
+    """
+    n, k = u3_rows.shape
+    vertices = u1_columns.shape[1]
+    weights = basis[None, :, :, 0] * u3_rows[:, 0, None, None]  # (n, i, 3)
+    for b in range(1, k):
+        weights = weights + basis[None, :, :, b] * u3_rows[:, b, None, None]
+    out = np.empty((n, vertices, 3))
+
+    def frames(first: int, last: int) -> None:
+        total = np.empty((3, vertices))
+        scratch = np.empty((3, vertices))
+        for f in range(first, last):
+            frame_weights = weights[f][:, :, None]  # (i, 3, 1)
+            np.multiply(frame_weights[0], u1_columns[0], out=total)
+            for a in range(1, u1_columns.shape[0]):
+                np.multiply(frame_weights[a], u1_columns[a], out=scratch)
+                np.add(total, scratch, out=total)
+            np.add(total, centroid_rows[f][:, None], out=total)
+            out[f] = total.T
+
+    workers = max(1, min(EXACT_THREADS, n))
+    bounds = [round(n * part / workers) for part in range(workers + 1)]
+    if workers == 1:
+        frames(0, n)
+    else:
+        with ThreadPoolExecutor(workers) as pool:
+            list(pool.map(frames, bounds[:-1], bounds[1:]))
+    return out
+
+
+# -- the section's layout (§6.9 parameters) ----------------------------------------------------
+
+
+@dataclass(frozen=True)
+class ResidualLayout:
+    """A RESD section's checked parameters: its domain (and grid step), whether frames are
+    stored as differences, and each chunk's planes and byte range in the payload."""
+
+    domain: str
+    step: float | None
+    predict: int
+    chunk_frames: int
+    planes: tuple[int, ...]
+    offsets: tuple[int, ...]  # len(planes) + 1 byte offsets into the payload
+    frames: int
+
+    def chunk_of(self, frame: int) -> int:
+        return frame // self.chunk_frames
+
+    def chunk_range(self, chunk: int) -> tuple[int, int]:
+        start = chunk * self.chunk_frames
+        return start, min(self.frames, start + self.chunk_frames)
+
+
+def _is_int(value: object) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def read_layout(
+    params: Mapping[str, Any],
+    payload_length: int,
+    frames: int,
+    vertices: int,
+    limits: Limits,
+    where: str,
+) -> ResidualLayout:
+    """§5 step 18: the parameters in order (R40), then each chunk's size against the decoder's
+    ``max_section_bytes`` (R21). The CRC and the chunks themselves are checked later."""
+    domain = params.get("domain")
+    if domain not in DOMAINS:
+        raise FormatError(
+            f"domain must be one of {', '.join(DOMAINS)}, got {domain!r}",
+            rule="R40-residual",
+            field=f"{where}.domain",
+        )
+    step = params.get("step")
+    if domain == GRID:
+        if not (isinstance(step, float) and math.isfinite(step) and step > 0):
+            raise FormatError(
+                f"a grid's step must be a finite float > 0, got {step!r}",
+                rule="R40-residual",
+                field=f"{where}.step",
+            )
+    else:
+        step = None
+    predict = params.get("predict")
+    if not (isinstance(predict, int) and not isinstance(predict, bool) and predict in (0, 1)):
+        raise FormatError(
+            f"predict must be 0 or 1, got {predict!r}",
+            rule="R40-residual",
+            field=f"{where}.predict",
+        )
+    chunk_frames = params.get("chunk_frames")
+    if not (isinstance(chunk_frames, int) and not isinstance(chunk_frames, bool)):
+        chunk_frames = 0
+    if chunk_frames < 1:
+        raise FormatError(
+            f"chunk_frames must be an int >= 1, got {params.get('chunk_frames')!r}",
+            rule="R40-residual",
+            field=f"{where}.chunk_frames",
+        )
+    chunks = params.get("chunks")
+    count = -(-frames // chunk_frames)
+    if not (isinstance(chunks, list) and len(chunks) == count):
+        got = f"{len(chunks)} entries" if isinstance(chunks, list) else repr(chunks)
+        raise FormatError(
+            f"chunks must be an array of {count} [planes, length] entries "
+            f"({frames} frames, {chunk_frames} a chunk), got {got}",
+            rule="R40-residual",
+            field=f"{where}.chunks",
+        )
+    planes: list[int] = []
+    offsets = [0]
+    for number, entry in enumerate(chunks):
+        if not (
+            isinstance(entry, list)
+            and len(entry) == 2
+            and all(_is_int(value) for value in entry)
+            and 1 <= entry[0] <= MAX_PLANES
+            and entry[1] >= 0
+        ):
+            raise FormatError(
+                f"each chunk is [planes 1..{MAX_PLANES}, length >= 0], got {entry!r}",
+                rule="R40-residual",
+                field=f"{where}.chunks[{number}]",
+            )
+        planes.append(entry[0])
+        offsets.append(offsets[-1] + entry[1])
+    if offsets[-1] != payload_length:
+        raise FormatError(
+            f"the chunks' lengths add up to {offsets[-1]} bytes, the payload has {payload_length}",
+            rule="R40-residual",
+            field=f"{where}.chunks",
+        )
+    layout = ResidualLayout(
+        domain, step, predict, chunk_frames, tuple(planes), tuple(offsets), frames
+    )
+    for number, chunk_planes in enumerate(planes):
+        start, stop = layout.chunk_range(number)
+        check_limit(
+            (stop - start) * vertices * 3 * chunk_planes,
+            limits,
+            "max_section_bytes",
+            what=f"chunk {number}'s {(stop - start) * vertices * 3} integers of {chunk_planes} "
+            "bytes",
+            field=f"{where}.chunks[{number}]",
+        )
+    return layout
+
+
+def decode_chunk(
+    payload: bytes | memoryview, layout: ResidualLayout, chunk: int, vertices: int, where: str
+) -> np.ndarray:
+    """The restored integers e of one chunk, (n_c, K, 3) int64 (R29 for its zstd frame)."""
+    start, stop = layout.chunk_range(chunk)
+    count = (stop - start) * vertices * 3
+    planes = layout.planes[chunk]
+    piece = payload[layout.offsets[chunk] : layout.offsets[chunk + 1]]
+    raw = streams.decompress_exact(piece, count * planes, f"{where}.chunks[{chunk}]")
+    values = streams.unzigzag(streams.from_planes(raw, count, planes))
+    values = values.reshape(stop - start, vertices, 3)
+    if layout.predict == 1:
+        np.cumsum(values, axis=0, out=values)  # int64 addition wraps, as §6.9 wraps
+    return values
+
+
+def correct(
+    exact: np.ndarray, residual: np.ndarray, layout: ResidualLayout, where: str
+) -> np.ndarray:
+    """The decoded positions (float64) of §6.9: ``exact`` (P of §8.1) corrected by
+    ``residual`` (e), R41 checked. In the domains grid and float64 a P that is not finite
+    stays so (the decoder reports it as R36, as for any file); in float32 it rounds to
+    +-infinity, which e may bring back."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        if layout.domain == FLOAT32:
+            if residual.size and int(np.abs(residual).max()) > FLOAT32_LARGEST:
+                _value_error(where, f"a correction is beyond +-2**32 in domain {FLOAT32}")
+            ordered = ordered32(exact.astype(np.float32)) + residual
+            if ordered.size and (ordered.min() < FINITE32[0] or ordered.max() > FINITE32[1]):
+                _value_error(where, "a corrected value is not a finite binary32")
+            return from_ordered32(ordered).astype(np.float64)
+        finite = np.isfinite(exact)
+        if layout.domain == GRID:
+            if residual.size and int(np.abs(residual).max()) > GRID_LARGEST:
+                _value_error(where, f"a correction is beyond +-2**53 in domain {GRID}")
+            assert layout.step is not None
+            out = exact + layout.step * residual.astype(np.float64)
+            if not np.isfinite(out)[finite].all():
+                _value_error(where, "a corrected position is not finite")
+            return out
+        ordered = ordered64(np.where(finite, exact, 0.0)) + residual  # int64 addition wraps
+        ordered = ordered[finite]
+        if ordered.size and (ordered.min() < FINITE64[0] or ordered.max() > FINITE64[1]):
+            _value_error(where, "a corrected value is not a finite binary64")
+        out = np.full(exact.shape, np.nan)
+        out[finite] = from_ordered64(ordered)
+        return out
+
+
+def _value_error(where: str, problem: str) -> None:
+    raise FormatError(problem, rule="R41-residual-value", field=where)
+
+
+# -- the encoder's side ------------------------------------------------------------------------
+
+#: Integers per chunk the encoder aims at: a frame read costs at most about this many.
+CHUNK_VALUES = 1 << 20
+
+
+def residuals_of(
+    exact: np.ndarray, original: np.ndarray, domain: str, step: float | None
+) -> np.ndarray:
+    """The integers e that take ``exact`` to ``original`` exactly (float domains), or to the
+    nearest grid point (grid: the encoder then keeps e only where it needs it)."""
+    if domain == GRID:
+        assert step is not None
+        return np.rint((original - exact) / step).astype(np.int64)
+    if domain == FLOAT32:
+        with np.errstate(over="ignore"):
+            return ordered32(original.astype(np.float32)) - ordered32(exact.astype(np.float32))
+    return ordered64(original) - ordered64(exact)  # wraps, as the decoder does
+
+
+def encode_section(
+    residual: np.ndarray,
+    domain: str,
+    step: float | None,
+    level: int,
+    *,
+    chunk_frames: int | None = None,
+    predict: int | None = None,
+) -> tuple[dict[str, Any], bytes]:
+    """A RESD section's parameters and payload for the integers ``residual`` (F', K, 3).
+
+    ``chunk_frames`` defaults to about :data:`CHUNK_VALUES` integers a chunk; ``predict`` to
+    whichever of the two stores the smaller payload."""
+    frames, vertices, _ = residual.shape
+    if chunk_frames is None:
+        chunk_frames = max(1, min(frames, CHUNK_VALUES // (3 * vertices)))
+    options = (0, 1) if predict is None else (predict,)
+    best: tuple[dict[str, Any], bytes] | None = None
+    for choice in options:
+        chunks: list[list[int]] = []
+        payloads: list[bytes] = []
+        for start in range(0, frames, chunk_frames):
+            values = residual[start : start + chunk_frames]
+            if choice == 1:
+                values = values.copy()
+                values[1:] -= residual[start : start + chunk_frames][:-1]  # wraps like e
+            unsigned = streams.zigzag(values.reshape(-1))
+            planes = streams.planes_needed(unsigned)
+            payload = streams.compress(streams.to_planes(unsigned, planes), level)
+            chunks.append([planes, len(payload)])
+            payloads.append(payload)
+        params: dict[str, Any] = {"domain": domain}
+        if domain == GRID:
+            params["step"] = float(step)  # type: ignore[arg-type]
+        params.update(predict=choice, chunk_frames=chunk_frames, chunks=chunks)
+        body = b"".join(payloads)
+        if best is None or len(body) < len(best[1]):
+            best = (params, body)
+    assert best is not None
+    return best
