@@ -100,3 +100,24 @@ def test_bounds_that_are_not_fractions_of_the_diagonal_are_refused(capsys):
         bench.main(["bounds", "sample", "--bounds", "2"])
     assert exit_.value.code == 2
     assert "fractions of the diagonal" in capsys.readouterr().err
+
+
+def test_tuckercodec_keeps_every_vertex_within_the_bound_measured_here(sample):
+    diagonal = base.bounding_box_diagonal(sample.vertices)
+    values = base.own_precision(sample)
+    entry = bounds.measure(
+        "sample", "tuckercodec", bounds.CODERS["tuckercodec"][1], sample, values, 1e-3, diagonal, 1
+    )
+    assert entry.error is None and entry.worst is not None
+    assert entry.within and entry.worst <= 1e-3 * diagonal
+    # the encoder's own report agrees with the measure made here
+    assert entry.reported_worst == pytest.approx(entry.worst, rel=bounds.REPORT_TOLERANCE)
+
+
+def test_the_combined_row_bounds_the_kg_file_at_twice_its_worst_vertex(sample):
+    row = bounds.combined("sample", sample, 1.0, 2.0)
+    assert row.error is None and row.ratio is not None and row.worst is not None
+    assert row.bound == pytest.approx(2.0 * row.plain_worst)
+    assert row.worst <= row.bound
+    assert row.measured_kg is not None and row.measured_kg <= 1.0
+    assert row.ratio >= 1.0 or row.bytes == row.plain_bytes  # a bound never makes it smaller

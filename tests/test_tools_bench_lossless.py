@@ -88,3 +88,16 @@ def test_the_suite_reports_the_smallest_file_of_each_coder(short, tmp_path, caps
     assert "Misses: none." in text
     assert bench.main(args) == 2  # results are never replaced without --force
     assert "--force" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("precision", ["short", "doubles"])
+def test_tuckercodec_lossless_gives_back_every_bit(precision, request):
+    sequence = request.getfixturevalue(precision)
+    values = base.own_precision(sequence)
+    (entry,) = lossless.measure(
+        precision, "tuckercodec", lossless.CODERS["tuckercodec"][1], sequence, values, 1
+    )
+    assert entry.error is None
+    assert entry.exact and entry.chosen
+    assert not entry.float64_differences  # the float64 output is the input's values too
+    assert entry.decode_mb_s is not None and entry.decode_mb_s > 0
