@@ -358,6 +358,7 @@ def corrections_of(decoder: Decoder) -> dict[str, Any]:
     assert first is not None
     found: dict[str, Any] = {
         "domain": first.domain,
+        "scale": first.scale,
         "predict": first.predict,
         "chunk_frames": first.chunk_frames,
         "sha256": {},
@@ -476,7 +477,21 @@ def correction_vectors() -> dict[str, tuple[bytes, str]]:
             encode(named, options=EncodeOptions(lossless=True)),
             "format 1.3: lossless float64 values far from the origin, polygons and names",
         ),
+        "v1.3-lossless-digits": (
+            encode(as_text(rough, "{:.6g}"), options=EncodeOptions(lossless=True)),
+            "format 1.3: lossless values read from %.6g text, decimals of 6 significant digits",
+        ),
+        "v1.3-lossless-places": (
+            encode(as_text(rough + 20.0, "{:.5f}"), options=EncodeOptions(lossless=True)),
+            "format 1.3: lossless values read from %.5f text, decimals of 5 places",
+        ),
     }
+
+
+def as_text(positions: np.ndarray, style: str) -> MeshSequence:
+    """The sheet as an OBJ of ``style`` would give it back: each value parsed from its text."""
+    values = np.array([float(style.format(v)) for v in positions.reshape(-1)])
+    return MeshSequence(values.reshape(positions.shape), sheet_triangles(9))
 
 
 def correction_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
@@ -495,8 +510,9 @@ def correction_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
     ]
     values = np.concatenate(chunks)
     values[0, 0, 0] = 1 << 40
+    domain = residual.Domain(layout.domain, layout.step, layout.scale)
     params, broken = residual.encode_section(
-        values, layout.domain, layout.step, 19, chunk_frames=layout.chunk_frames, predict=0
+        values, domain, 19, chunk_frames=layout.chunk_frames, predict=0
     )
     return {
         "R40-residual": (_edit(good, _entry("RESD", domain="float16")), "FormatError"),

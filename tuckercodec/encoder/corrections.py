@@ -19,6 +19,7 @@ measures every vertex (or compares every bit) before the file is returned.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -29,11 +30,13 @@ from ..format import residual, streams
 from ..format.container import parse_container
 from ..format.limits import DEFAULT_LIMITS
 from ..format.reconstruction import reconstruct_frames, reconstruction_basis
-from ..format.residual import FLOAT32, FLOAT64, GRID
-from ..metrics import max_distance
+from ..format.residual import FLOAT32, FLOAT64, GRID, Domain
+from ..io.streaming import FrameSource
+from ..metrics import Displacement, ErrorAccumulator, max_distance
 from ..sequence import MeshSequence
 from . import search
 from .options import EncodeOptions
+from .segmented import SegmentedWorkspace
 from .trial import Quantized
 from .whole import Ranks, WholeWorkspace
 
@@ -50,15 +53,15 @@ CORRECTION_LEVEL = 9
 
 @dataclass(frozen=True)
 class Goal:
-    """What the corrections must achieve: the domain, and for a grid the bound D and step."""
+    """What the corrections must achieve: a bound D on every vertex (one grid domain), or the
+    input's bits (every lossless domain its values fit, the smallest file chosen)."""
 
-    domain: str
+    domains: tuple[Domain, ...]
     bound: float | None = None  # D, in the sequence's units
-    step: float | None = None  # the grid's spacing
 
     @property
     def lossless(self) -> bool:
-        return self.domain != GRID
+        return self.bound is None
 
 
 def goal_of(options: EncodeOptions, sequence: MeshSequence) -> Goal:
@@ -66,9 +69,7 @@ def goal_of(options: EncodeOptions, sequence: MeshSequence) -> Goal:
     bound below what float64 positions can resolve."""
     vertices = sequence.vertices
     if options.lossless:
-        single = vertices.astype(np.float32).astype(np.float64)
-        same = np.array_equal(single.view(np.int64), vertices.view(np.int64))
-        return Goal(FLOAT32 if same else FLOAT64)
+        return Goal(lossless_domains(vertices))
     corner_low = vertices.min(axis=(0, 1))
     corner_high = vertices.max(axis=(0, 1))
     diagonal = float(np.linalg.norm(corner_high - corner_low))
@@ -84,7 +85,41 @@ def goal_of(options: EncodeOptions, sequence: MeshSequence) -> Goal:
             f"(a bound must be above {resolvable:.3g}); ask for a larger bound, or --lossless"
         )
     step = float(2.0 * bound / math.sqrt(3.0) * (1.0 - GRID_ROOM))
-    return Goal(GRID, bound, step)
+    return Goal((Domain(GRID, step=step),), bound)
+
+
+def lossless_domains(values: np.ndarray) -> tuple[Domain, ...]:
+    """Every lossless domain whose ordered integers hold each of ``values`` exactly, bit for
+    bit: binary32 if they are binary32 values; the fewest decimal places, and the fewest
+    significant digits, that give each value back as text would (an OBJ written with %.6f or
+    %g); and binary64, which holds anything."""
+    found = [domain for domain in _candidates(values) if _holds(values, domain)]
+    return (*found, Domain(FLOAT64))
+
+
+def _holds(values: np.ndarray, domain: Domain) -> bool:
+    """Whether ``domain``'s ordered integers give every value back, bit for bit."""
+    ordered = residual.ordered_in(values, domain)
+    frames = 1
+    layout = residual.ResidualLayout(
+        domain.name, None, 0, frames, (8,), (0, 0), frames, domain.scale
+    )
+    with np.errstate(all="ignore"):
+        back = residual.correct(values, ordered - ordered, layout, "input")
+    return bool(np.array_equal(back.view(np.int64), values.view(np.int64)))
+
+
+def _candidates(values: np.ndarray) -> Iterator[Domain]:
+    """Binary32, then the fewest places and the fewest digits that hold a sample of the
+    values (most scales are ruled out on the sample, cheaply)."""
+    yield Domain(FLOAT32)
+    sample = np.ascontiguousarray(values.reshape(-1)[:: max(1, values.size // 4096)])
+    for name, (_, least, most) in residual.SCALES.items():
+        for scale in range(least, most + 1):
+            domain = Domain(name, scale=scale)
+            if _holds(sample, domain):
+                yield domain
+                break
 
 
 @dataclass
@@ -93,9 +128,10 @@ class Corrected:
     and the RESD section they pack to (``None`` when no correction is needed)."""
 
     quantized: Quantized[Any]
-    integers: None
+    domain: Domain | None
     section: tuple[dict[str, Any], bytes] | None
     tucker_bytes: int
+    kg: float | None = None  # the ladder's KG error this part was quantized for
 
     @property
     def total_bytes(self) -> int:
@@ -115,22 +151,23 @@ def exact_positions(quantized: Quantized[Any], u2: np.ndarray) -> np.ndarray:
     )
 
 
-def integers_for(exact: np.ndarray, original: np.ndarray, goal: Goal) -> np.ndarray:
-    """The corrections that take ``exact`` to ``original``: every bit, or, on a grid, only the
-    vertices farther than D (their integers nearest; everyone else's 0)."""
+def integers_for(exact: np.ndarray, original: np.ndarray, goal: Goal, domain: Domain) -> np.ndarray:
+    """The corrections that take ``exact`` to ``original`` in ``domain``: every bit, or, on a
+    grid, only the vertices farther than D (their integers nearest; everyone else's 0)."""
+    integers = residual.residuals_of(exact, original, domain)
     if goal.lossless:
-        return residual.residuals_of(exact, original, goal.domain, None)
-    assert goal.step is not None and goal.bound is not None
-    integers = residual.residuals_of(exact, original, GRID, goal.step)
+        return integers
+    assert goal.bound is not None
     distance = np.sqrt(np.square(exact - original).sum(axis=2))
     integers[distance <= goal.bound * (1.0 - GRID_ROOM)] = 0
     return integers
 
 
-def corrected_positions(exact: np.ndarray, integers: np.ndarray, goal: Goal) -> np.ndarray:
+def corrected_positions(exact: np.ndarray, integers: np.ndarray, domain: Domain) -> np.ndarray:
     """What a decoder returns for these corrections (§6.9's arithmetic)."""
+    frames = exact.shape[0]
     layout = residual.ResidualLayout(
-        goal.domain, goal.step, 0, exact.shape[0], (8,), (0, 0), exact.shape[0]
+        domain.name, domain.step, 0, frames, (8,), (0, 0), frames, domain.scale
     )
     return residual.correct(exact, integers, layout, "corrections")
 
@@ -156,9 +193,14 @@ def correct(
         distance, _ = worst_vertex(plain_positions, original)
         if distance <= goal.bound - tolerance(plain_positions):
             return Corrected(quantized, None, None, tucker_bytes)
-    integers = integers_for(plain_positions, original, goal)
-    section = residual.encode_section(integers, goal.domain, goal.step, level)
-    return Corrected(quantized, None, section, tucker_bytes)
+    best: Corrected | None = None
+    for domain in goal.domains:  # lossless: the smallest of the domains the values fit
+        integers = integers_for(plain_positions, original, goal, domain)
+        section = residual.encode_section(integers, domain, level)
+        if best is None or best.section is None or len(section[1]) < len(best.section[1]):
+            best = Corrected(quantized, domain, section, tucker_bytes)
+    assert best is not None
+    return best
 
 
 def tolerance(reference: np.ndarray) -> float:
@@ -245,6 +287,7 @@ def search_whole(work: WholeWorkspace, options: EncodeOptions, goal: Goal) -> tu
         part = quick_part(work, kg)
         if part is not None:
             tried[kg] = attempt(part)
+            tried[kg].kg = kg
     if not tried:
         raise UnreachableTargetError("no Tucker part of this sequence can be quantized")
     ranked = sorted(tried, key=lambda kg: tried[kg].total_bytes)
@@ -253,6 +296,7 @@ def search_whole(work: WholeWorkspace, options: EncodeOptions, goal: Goal) -> tu
         part = quick_part(work, middle)
         if part is not None:
             tried[middle] = attempt(part)
+            tried[middle].kg = middle
     best_kg = min(tried, key=lambda kg: tried[kg].total_bytes)
     return tried[best_kg], len(tried)
 
@@ -285,27 +329,30 @@ def final_section(
     """The chosen part's corrections on §8.1's exact positions, packed for the file at the
     final level (capped at :data:`CORRECTION_LEVEL`) with the predictor the search chose, the
     integers and the positions they decode to; ``None`` if the part needs none."""
-    if corrected.section is None:
+    if corrected.section is None or corrected.domain is None:
         return None
+    domain = corrected.domain
     exact = exact_positions(corrected.quantized, u2)
-    integers = integers_for(exact, original, goal)
+    integers = integers_for(exact, original, goal, domain)
     predict = int(corrected.section[0]["predict"])
     section = residual.encode_section(
-        integers, goal.domain, goal.step, min(level, CORRECTION_LEVEL), predict=predict
+        integers, domain, min(level, CORRECTION_LEVEL), predict=predict
     )
-    return section, integers, corrected_positions(exact, integers, goal)
+    return section, integers, corrected_positions(exact, integers, domain)
 
 
-def check_written(data: bytes, integers: np.ndarray) -> None:
-    """Read the RESD section back from the packed file as a decoder does (§5 step 18, §6.9) and
+def check_written(
+    data: bytes, integers: np.ndarray, section_id: str = residual.SECTION_STEM
+) -> None:
+    """Read a RESD section back from the packed file as a decoder does (§5 step 18, §6.9) and
     check that it holds ``integers``: the positions the encoder measured are then what every
     decoder returns, since §8.1 and §6.9 leave no freedom in the arithmetic."""
     container = parse_container(data, DEFAULT_LIMITS)
-    entry = container.section(residual.SECTION_STEM)
+    entry = container.section(section_id)
     assert entry is not None
     payload = container.payload(data, entry)
     frames, vertices = integers.shape[:2]
-    where = f"section {residual.SECTION_STEM}"
+    where = f"section {section_id}"
     layout = residual.read_layout(
         entry.params, entry.length, frames, vertices, DEFAULT_LIMITS, where
     )
@@ -317,3 +364,92 @@ def check_written(data: bytes, integers: np.ndarray) -> None:
                 f"the corrections of frames {start}..{stop - 1} read back differently from what "
                 "was packed; this is a bug: please report it"
             )
+
+
+# -- a segmented file (§6.7): corrections per segment -------------------------------------------
+
+
+def goal_of_source(options: EncodeOptions, source: FrameSource, block_frames: int) -> Goal:
+    """:func:`goal_of` for a sequence read a range of frames at a time: one pass for the
+    bounding box, or for the lossless domains every range holds."""
+    low = np.full(3, np.inf)
+    high = np.full(3, -np.inf)
+    domains: tuple[Domain, ...] | None = None
+    largest = 0.0
+    for start in range(0, source.frame_count, block_frames):
+        block = source.read(start, min(source.frame_count, start + block_frames))
+        if options.lossless:
+            held = lossless_domains(block)
+            domains = held if domains is None else tuple(d for d in domains if d in held)
+            continue
+        low = np.minimum(low, block.min(axis=(0, 1)))
+        high = np.maximum(high, block.max(axis=(0, 1)))
+        largest = max(largest, float(np.abs(block).max()))
+    if options.lossless:
+        assert domains is not None
+        return Goal(domains)
+    bound = options.max_error_length(float(np.linalg.norm(high - low)))
+    assert bound is not None
+    return Goal((Domain(GRID, step=_grid_step(bound, largest)),), bound)
+
+
+def _grid_step(bound: float, largest: float) -> float:
+    """A grid's step for the bound D on positions reaching ``largest``, or
+    ``UnreachableTargetError`` if float64 cannot resolve D there."""
+    resolvable = 64 * np.spacing(largest) if largest > 0 else 0.0
+    if not bound > resolvable:
+        raise UnreachableTargetError(
+            f"no file can keep every vertex within {bound:.6g}: the positions reach "
+            f"{largest:.6g}, where float64 itself resolves only about {np.spacing(largest):.3g} "
+            f"(a bound must be above {resolvable:.3g}); ask for a larger bound, or --lossless"
+        )
+    return float(2.0 * bound / math.sqrt(3.0) * (1.0 - GRID_ROOM))
+
+
+@dataclass
+class SegmentCorrections:
+    """Every segment's RESD.s and what the corrected file measures."""
+
+    sections: list[tuple[dict[str, Any], bytes]]
+    integers: list[np.ndarray]
+    error2: float
+    worst: Displacement
+    domains: list[Domain]
+
+
+def correct_segments(
+    work: SegmentedWorkspace, quantized: Quantized[Any], goal: Goal, level: int
+) -> SegmentCorrections:
+    """A pass over the input: each segment's §8.1 positions, its corrections (the smallest of
+    the goal's domains) and the error of the corrected file, measured on them."""
+    work.say(f"pass {work.passes + 1}: correcting every segment")
+    shared = None if quantized.shared_u1 is None else quantized.shared_u1.values()
+    measured = ErrorAccumulator()
+    out = SegmentCorrections([], [], 0.0, Displacement(0.0, 0, 0), [])
+    for number, part in enumerate(work.decoded(quantized)):
+        i = part.basis.shape[0]
+        u1 = part.own_u1 if part.own_u1 is not None else shared[:, :i]  # type: ignore[index]
+        core = quantized.segments[number].core.values().reshape(i, 3, part.u3.shape[1])
+        u2 = work.models[number].u2
+        exact = residual.exact_frames(
+            np.ascontiguousarray(u1.T), residual.exact_basis(core, u2), part.u3, part.centroids
+        )
+        original = work.source.read(part.segment.start, part.segment.stop)
+        best: tuple[tuple[dict[str, Any], bytes], np.ndarray, Domain] | None = None
+        for domain in goal.domains:
+            integers = integers_for(exact, original, goal, domain)
+            section = residual.encode_section(integers, domain, min(level, CORRECTION_LEVEL))
+            if best is None or len(section[1]) < len(best[0][1]):
+                best = (section, integers, domain)
+        assert best is not None
+        section, integers, domain = best
+        decoded = corrected_positions(exact, integers, domain)
+        verify(decoded, original, goal, goal.bound)
+        measured.add(original, decoded, frames=range(part.segment.start, part.segment.stop))
+        out.sections.append(section)
+        out.integers.append(integers)
+        out.domains.append(domain)
+    work.passes += 1
+    out.worst = measured.worst
+    out.error2 = float(np.sum(measured.per_frame_squared()))
+    return out

@@ -19,11 +19,12 @@ import numpy as np
 
 from ..analysis import Analysis, analyze
 from ..errors import UnreachableTargetError
+from ..format import residual, streams
 from ..io.streaming import FrameSource, SequenceFrames
 from ..parallel import Executor, InProcessExecutor, open_executor
 from ..sequence import MeshSequence
 from . import corrections, search
-from .options import EncodeOptions
+from .options import DEFAULT_TARGET_KG, EncodeOptions
 from .plan import default_max_memory, needs_segments, plan_segments
 from .results import EncodeReport, EncodeResult
 from .segmented import SegmentedWorkspace, SharedBasis
@@ -111,10 +112,15 @@ class Encoder:
             segment_frames=options.segment_frames,
             max_memory=memory,
         )
+        goal = None
+        if options.corrections:  # a pass for the bound's length or the lossless domains
+            goal = corrections.goal_of_source(options, frames, plan.block_frames)
         with self._executor() as executor:
             work = SegmentedWorkspace(
                 frames, plan, options.basis, executor, options.level, self.progress, shared_basis
             )
+            if goal is not None:
+                return self._segments_corrected(work, frames, goal, start)
             quantized, error2, trials = self._search(work)
         choice = quantized.choice
         largest_i = choice.shared or max(i for i, _ in choice.ranks)
@@ -216,7 +222,75 @@ class Encoder:
                 max_distance_at=where,
                 max_error=goal.bound,
                 lossless=goal.lossless,
-                corrections=goal.domain if section is not None else None,
+                corrections=chosen.domain.describe() if chosen.domain and section else None,
+            ),
+        )
+
+    def _segments_corrected(
+        self, work: SegmentedWorkspace, frames: FrameSource, goal: corrections.Goal, start: float
+    ) -> EncodeResult:
+        """A segmented file with corrections (format 1.3): the Tucker part for the KG target,
+        or for the KG error whose part made the smallest file of the first segment encoded
+        whole; then a pass that corrects every segment, measured and read back."""
+        options = self.options
+        if options.ranks is not None:
+            quantized, _, trials = search.encode_ranks(work, options.ranks)
+        else:
+            kg = options.target_kg
+            if kg is None:
+                first = work.ranges[0]
+                head = MeshSequence(frames.read(first.start, first.stop), frames.faces)
+                whole = WholeWorkspace(head, analyze(head), streams.SEARCH_LEVEL, "exact")
+                chosen, _ = corrections.search_whole(whole, options, goal)
+                kg = chosen.kg if chosen.kg is not None else DEFAULT_TARGET_KG
+            quantized, _, trials = search.search_kg(work, kg)
+        fixed = corrections.correct_segments(work, quantized, goal, options.level)
+        claims = {
+            "max_distance": fixed.worst.distance,
+            "max_distance_at": list(fixed.worst.at),
+            "target_max_distance": goal.bound,
+            "lossless": goal.lossless,
+        }
+        target_kg = options.target_kg if options.mode == "kg" else None
+        data, sizes = work.pack(
+            quantized, fixed.error2, target_kg, corrections=fixed.sections, claims=claims
+        )
+        for number, integers in enumerate(fixed.integers):
+            corrections.check_written(data, integers, f"{residual.SECTION_STEM}.{number}")
+        if target_kg is not None and work.kg(fixed.error2) > target_kg:
+            raise UnreachableTargetError(
+                f"the corrected file's KG error {work.kg(fixed.error2):.6g} is above the target "
+                f"{target_kg}: this is a bug, please report it"
+            )
+        choice = quantized.choice
+        names = sorted({domain.describe() for domain in fixed.domains})
+        return EncodeResult(
+            data,
+            EncodeReport(
+                mode=options.mode,
+                target=options.target,
+                select="exact",
+                ranks=(
+                    choice.shared or max(i for i, _ in choice.ranks),
+                    max(k for _, k in choice.ranks),
+                ),
+                kg=work.kg(fixed.error2),
+                truncation_kg=work.kg(choice.truncation2),
+                exact_ranks=None,
+                bound_ranks=None,
+                total_bytes=len(data),
+                section_bytes=sizes,
+                vertices=work.vertex_count,
+                frames=work.frame_count,
+                seconds=time.perf_counter() - start,
+                trials=trials + work.passes,
+                segments=len(work.models),
+                basis=options.basis,
+                max_distance=fixed.worst.distance,
+                max_distance_at=fixed.worst.at,
+                max_error=goal.bound,
+                lossless=goal.lossless,
+                corrections=", ".join(names),
             ),
         )
 

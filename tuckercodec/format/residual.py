@@ -33,7 +33,41 @@ CORRECTIONS_MINOR = 3
 RESIDUAL = "residual"
 SECTION_STEM = "RESD"
 GRID, FLOAT32, FLOAT64 = "grid", "float32", "float64"
-DOMAINS = (GRID, FLOAT32, FLOAT64)
+#: Lossless domains for values that are decimals as text gave them: k / 10**places, or
+#: numbers of ``digits`` significant digits (§6.9).
+PLACES, DIGITS = "decimal-places", "decimal-digits"
+DOMAINS = (GRID, FLOAT32, FLOAT64, PLACES, DIGITS)
+#: The parameter each decimal domain takes, and its range.
+SCALES = {PLACES: ("places", 0, 22), DIGITS: ("digits", 1, 15)}
+
+
+@dataclass(frozen=True)
+class Domain:
+    """How integers correct values (§6.9): its name, and a grid's step or a decimal domain's
+    places or digits."""
+
+    name: str
+    step: float | None = None
+    scale: int | None = None
+
+    def params(self) -> dict[str, Any]:
+        """The section parameters that name it."""
+        params: dict[str, Any] = {"domain": self.name}
+        if self.name == GRID:
+            params["step"] = float(self.step)  # type: ignore[arg-type]
+        elif self.name in SCALES:
+            params[SCALES[self.name][0]] = self.scale
+        return params
+
+    def describe(self) -> str:
+        """Its name, with its step, places or digits."""
+        if self.name == GRID:
+            return f"{GRID} (step {self.step:.6g})"
+        if self.name in SCALES:
+            return f"{self.name} ({self.scale} {SCALES[self.name][0]})"
+        return self.name
+
+
 MAX_PLANES = 8
 
 #: The ordered integers of the finite values (§6.9): +max and -max.
@@ -72,6 +106,77 @@ def ordered64(values: np.ndarray) -> np.ndarray:
 def from_ordered64(ordered: np.ndarray) -> np.ndarray:
     """The binary64 values of ordered integers (the map is its own inverse)."""
     return ordered64(ordered.view(np.float64)).view(np.float64)
+
+
+# -- decimals (§6.9) -----------------------------------------------------------------------------
+
+#: 10**n, exact in binary64 for n <= 22.
+TEN = tuple(float(10**n) for n in range(23))
+LARGEST_PLACES_INTEGER = 2**53
+
+
+def places_ordered(values: np.ndarray, places: int) -> np.ndarray:
+    """k = the integer nearest values * 10**places (one binary64 product, then rounded half
+    to even), within +-2**53."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        scaled = np.rint(values * TEN[places])
+    limit = float(LARGEST_PLACES_INTEGER)
+    return np.clip(np.nan_to_num(scaled, posinf=limit, neginf=-limit), -limit, limit).astype(
+        np.int64
+    )
+
+
+def places_values(ordered: np.ndarray, places: int) -> np.ndarray:
+    """k / 10**places, one correctly rounded binary64 division: the value of the decimal."""
+    return ordered.astype(np.float64) / TEN[places]
+
+
+def _digit_constants(digits: int) -> tuple[int, int, int, np.ndarray]:
+    """E_min, the integers per decade B = 9 * 10**(p-1), the lowest significand 10**(p-1),
+    and the binary64 nearest 10**E for E = E_min .. E_min + 44."""
+    low = 10 ** (digits - 1)
+    lowest_exponent = digits - 23
+    powers = np.array([float(f"1e{e}") for e in range(lowest_exponent, lowest_exponent + 45)])
+    return lowest_exponent, 9 * low, low, powers
+
+
+def digits_ordered(values: np.ndarray, digits: int) -> np.ndarray:
+    """The ordered decimal integer of each value rounded to ``digits`` significant digits
+    (§6.9): +0 is 0, -0 is -1, a positive value 1 + (E - E_min) * B + (m - 10**(p-1)) and a
+    negative one -1 minus that of its magnitude. E is the decade the table of binary64
+    powers of ten places |value| in, m the significand rounded half to even, kept in its
+    decade's range."""
+    lowest_exponent, per_decade, low, powers = _digit_constants(digits)
+    magnitude = np.abs(values)
+    decade = np.clip(np.searchsorted(powers, magnitude, side="right") - 1, 0, len(powers) - 1)
+    shift = digits - 1 - (lowest_exponent + decade)  # within -22 .. 22
+    ten = np.asarray(TEN)[np.abs(shift)]
+    with np.errstate(over="ignore", invalid="ignore"):
+        scaled = np.where(shift >= 0, magnitude * ten, magnitude / ten)
+    significand = np.clip(np.rint(scaled), low, 10 * low - 1).astype(np.int64)
+    ordered = 1 + decade.astype(np.int64) * per_decade + (significand - low)
+    ordered = np.where(magnitude == 0, 0, ordered)
+    return np.where(np.signbit(values), -1 - ordered, ordered)
+
+
+def digits_largest(digits: int) -> int:
+    """The largest ordered decimal integer of ``digits`` digits (its negative is -1 - this)."""
+    return 45 * 9 * 10 ** (digits - 1)
+
+
+def digits_values(ordered: np.ndarray, digits: int) -> np.ndarray:
+    """The binary64 value of each ordered decimal integer: m / 10**s or m * 10**-s, one
+    correctly rounded operation, so the value nearest the decimal."""
+    lowest_exponent, per_decade, low, _ = _digit_constants(digits)
+    negative = ordered < 0
+    magnitude = np.where(negative, -1 - ordered, ordered)
+    decade, offset = np.divmod(np.maximum(magnitude - 1, 0), per_decade)
+    significand = (low + offset).astype(np.float64)
+    shift = digits - 1 - (lowest_exponent + decade)
+    ten = np.asarray(TEN)[np.abs(shift)]
+    value = np.where(shift > 0, significand / ten, significand * ten)
+    value = np.where(magnitude == 0, 0.0, value)
+    return np.where(negative, -value, value)
 
 
 # -- §8.1 the exact reconstruction -------------------------------------------------------------
@@ -136,12 +241,13 @@ class ResidualLayout:
     stored as differences, and each chunk's planes and byte range in the payload."""
 
     domain: str
-    step: float | None
+    step: float | None  # a grid's spacing
     predict: int
     chunk_frames: int
     planes: tuple[int, ...]
     offsets: tuple[int, ...]  # len(planes) + 1 byte offsets into the payload
     frames: int
+    scale: int | None = None  # decimal-places' places, decimal-digits' digits
 
     def chunk_of(self, frame: int) -> int:
         return frame // self.chunk_frames
@@ -182,6 +288,16 @@ def read_layout(
             )
     else:
         step = None
+    scale = None
+    if domain in SCALES:
+        key, least, most = SCALES[domain]
+        scale = params.get(key)
+        if not (isinstance(scale, int) and not isinstance(scale, bool) and least <= scale <= most):
+            raise FormatError(
+                f"{key} must be an int from {least} to {most}, got {scale!r}",
+                rule="R40-residual",
+                field=f"{where}.{key}",
+            )
     predict = params.get("predict")
     if not (isinstance(predict, int) and not isinstance(predict, bool) and predict in (0, 1)):
         raise FormatError(
@@ -232,7 +348,7 @@ def read_layout(
             field=f"{where}.chunks",
         )
     layout = ResidualLayout(
-        domain, step, predict, chunk_frames, tuple(planes), tuple(offsets), frames
+        domain, step, predict, chunk_frames, tuple(planes), tuple(offsets), frames, scale
     )
     for number, chunk_planes in enumerate(planes):
         start, stop = layout.chunk_range(number)
@@ -279,6 +395,8 @@ def correct(
                 _value_error(where, "a corrected value is not a finite binary32")
             return from_ordered32(ordered).astype(np.float64)
         finite = np.isfinite(exact)
+        if layout.domain in SCALES:
+            return _decimal(exact, residual, layout, finite, where)
         if layout.domain == GRID:
             if residual.size and int(np.abs(residual).max()) > GRID_LARGEST:
                 _value_error(where, f"a correction is beyond +-2**53 in domain {GRID}")
@@ -296,6 +414,38 @@ def correct(
         return out
 
 
+def _decimal(
+    exact: np.ndarray,
+    residual: np.ndarray,
+    layout: ResidualLayout,
+    finite: np.ndarray,
+    where: str,
+) -> np.ndarray:
+    """The decimal domains of §6.9: P's ordered decimal integer (of the finite P; the others
+    stay not finite, for R36), corrected by e, back to the value of its decimal."""
+    assert layout.scale is not None
+    scale = layout.scale
+    base = np.where(finite, exact, 0.0)
+    if layout.domain == PLACES:
+        limit = LARGEST_PLACES_INTEGER
+        if residual.size and int(np.abs(residual).max()) > 2 * limit:
+            _value_error(where, f"a correction is beyond +-2**54 in domain {PLACES}")
+        ordered = places_ordered(base, scale) + residual
+        if ordered.size and int(np.abs(ordered[finite]).max(initial=0)) > limit:
+            _value_error(where, f"a corrected integer is beyond +-2**53 in domain {PLACES}")
+        values = places_values(ordered, scale)
+    else:
+        limit = digits_largest(scale)
+        if residual.size and int(np.abs(residual).max()) > 2 * limit + 1:
+            _value_error(where, f"a correction is beyond the decimals of {scale} digits")
+        ordered = digits_ordered(base, scale) + residual
+        inside = ordered[finite]
+        if inside.size and (inside.min() < -1 - limit or inside.max() > limit):
+            _value_error(where, f"a corrected integer is not a decimal of {scale} digits")
+        values = digits_values(ordered, scale)
+    return np.where(finite, values, np.nan)
+
+
 def _value_error(where: str, problem: str) -> None:
     raise FormatError(problem, rule="R41-residual-value", field=where)
 
@@ -306,24 +456,32 @@ def _value_error(where: str, problem: str) -> None:
 CHUNK_VALUES = 1 << 20
 
 
-def residuals_of(
-    exact: np.ndarray, original: np.ndarray, domain: str, step: float | None
-) -> np.ndarray:
-    """The integers e that take ``exact`` to ``original`` exactly (float domains), or to the
-    nearest grid point (grid: the encoder then keeps e only where it needs it)."""
-    if domain == GRID:
-        assert step is not None
-        return np.rint((original - exact) / step).astype(np.int64)
-    if domain == FLOAT32:
+def ordered_in(values: np.ndarray, domain: Domain) -> np.ndarray:
+    """The ordered integers of a lossless domain: what e is a difference of (§6.9)."""
+    if domain.name == FLOAT32:
         with np.errstate(over="ignore"):
-            return ordered32(original.astype(np.float32)) - ordered32(exact.astype(np.float32))
-    return ordered64(original) - ordered64(exact)  # wraps, as the decoder does
+            return ordered32(values.astype(np.float32))
+    if domain.name == PLACES:
+        assert domain.scale is not None
+        return places_ordered(values, domain.scale)
+    if domain.name == DIGITS:
+        assert domain.scale is not None
+        return digits_ordered(values, domain.scale)
+    return ordered64(values)
+
+
+def residuals_of(exact: np.ndarray, original: np.ndarray, domain: Domain) -> np.ndarray:
+    """The integers e that take ``exact`` to ``original`` exactly (lossless domains), or to
+    the nearest grid point (grid: the encoder then keeps e only where it needs it)."""
+    if domain.name == GRID:
+        assert domain.step is not None
+        return np.rint((original - exact) / domain.step).astype(np.int64)
+    return ordered_in(original, domain) - ordered_in(exact, domain)  # int64: wraps as e does
 
 
 def encode_section(
     residual: np.ndarray,
-    domain: str,
-    step: float | None,
+    domain: Domain,
     level: int,
     *,
     chunk_frames: int | None = None,
@@ -351,9 +509,7 @@ def encode_section(
             payload = streams.compress(streams.to_planes(unsigned, planes), level)
             chunks.append([planes, len(payload)])
             payloads.append(payload)
-        params: dict[str, Any] = {"domain": domain}
-        if domain == GRID:
-            params["step"] = float(step)  # type: ignore[arg-type]
+        params = domain.params()
         params.update(predict=choice, chunk_frames=chunk_frames, chunks=chunks)
         body = b"".join(payloads)
         if best is None or len(body) < len(best[1]):

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..._version import __version__
 from ...errors import InputError, UnreachableTargetError
-from ...format import faces, names, qmat, streams
+from ...format import faces, names, qmat, residual, streams
 from ...format.container import pack_container
 from ...format.header import KG_DEFINITION_ID
 from ...format.qmat import QuantizedMatrix
@@ -465,9 +465,14 @@ class SegmentedWorkspace:
         error2: float,
         target_kg: float | None,
         level: int | None = None,
+        *,
+        corrections: list[tuple[dict[str, Any], bytes]] | None = None,
+        claims: dict[str, Any] | None = None,
     ) -> tuple[bytes, dict[str, int]]:
         """The file's bytes and each section kind's size, the segments' summed (zstd
-        ``level``: the final one unless given)."""
+        ``level``: the final one unless given). ``corrections``: each segment's RESD.s
+        parameters and payload (format 1.3, §6.9); ``claims``: more keys of the header's
+        ``error`` map."""
         segments = [
             segment_map(model.frames, ranks, model.u2.reshape(-1).tolist(), self.basis)
             for model, ranks in zip(self.models, quantized.choice.ranks, strict=True)
@@ -481,17 +486,35 @@ class SegmentedWorkspace:
                 "definition": KG_DEFINITION_ID,
                 "truncation_kg": self.kg(quantized.choice.truncation2),
                 "target_kg": target_kg,
+                **(claims or {}),
             },
             "encoder": f"tuckercodec {__version__}",
         }
         if self.source.frame_rate is not None:
             header["frame_rate"] = float(self.source.frame_rate)
         packed = self.sections(quantized, self.level if level is None else level)
+        flags, minor = SEGMENTED, SEGMENTED_MINOR
+        if corrections is not None:  # before NAME, as in a whole file
+            at = next((n for n, (e, _) in enumerate(packed) if e["id"] == "NAME"), len(packed))
+            entries = [
+                (
+                    {
+                        "id": segment_section_id(residual.SECTION_STEM, number),
+                        "critical": True,
+                        "codec": residual.RESIDUAL,
+                        **params,
+                    },
+                    payload,
+                )
+                for number, (params, payload) in enumerate(corrections)
+            ]
+            packed[at:at] = entries
+            flags, minor = SEGMENTED | residual.CORRECTIONS, residual.CORRECTIONS_MINOR
         sizes: dict[str, int] = {}
         for entry, payload in packed:
             stem = entry["id"].split(".")[0]
             sizes[stem] = sizes.get(stem, 0) + len(payload)
-        data = pack_container(header, packed, flags=SEGMENTED, minor=SEGMENTED_MINOR)
+        data = pack_container(header, packed, flags=flags, minor=minor)
         return data, sizes
 
 
