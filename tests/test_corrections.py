@@ -88,36 +88,51 @@ def test_decimal_places_give_back_every_decimal_with_that_many_places(places):
     assert _same_bits(residual.places_values(ordered, places), values)
 
 
-def test_the_exact_reconstruction_is_the_order_of_section_8_1():
-    """§8.1's loops, written out one value at a time, against the vectorised reference."""
+def test_the_exact_reconstruction_is_section_8_1_written_out():
+    """§8.1 one value at a time: B and W in their order, the integer weights, S summed in
+    Python's exact integers, then S x 2**e + CENT; bit for bit against the reference."""
     rng = np.random.default_rng(7)
     i, k, vertices, frames = 5, 4, 7, 3
-    u1 = rng.standard_normal((vertices, i))
+    q1 = rng.integers(-3000, 3000, size=(vertices, i))
+    steps = rng.uniform(1e-4, 1e-3, size=i).astype(np.float32)
     core = rng.standard_normal((i, 3, k))
     u2 = np.linalg.qr(rng.standard_normal((3, 3)))[0]
     u3 = rng.standard_normal((frames, k))
     centroids = rng.standard_normal((frames, 3))
-    got = residual.exact_frames(
-        np.ascontiguousarray(u1.T), residual.exact_basis(core, u2), u3, centroids
+    u1 = residual.ExactU1.of(q1, steps)
+    basis = residual.exact_basis(core, u2)
+    exponent = residual.choose_exponent(
+        u1, float(np.abs(residual.scaled_weights(u1, basis, u3)).max())
     )
+    got = residual.exact_frames(u1, basis, u3, centroids, exponent)
     for f in range(frames):
+        weights = []
+        for a in range(i):
+            row = []
+            for x in range(3):
+
+                def b_of(b: int, a: int = a, x: int = x) -> float:
+                    terms = [float(core[a, c, b]) * float(u2[x, c]) for c in range(3)]
+                    return (terms[0] + terms[1]) + terms[2]
+
+                w = b_of(0) * float(u3[f, 0])
+                for b in range(1, k):
+                    w = w + b_of(b) * float(u3[f, b])
+                y = float(steps[a]) * w
+                row.append(round(y * 2.0**-exponent))  # Python's round: half to even
+            weights.append(row)
         for v in range(vertices):
             for x in range(3):
-                b_of = [
-                    (core[a, 0, b] * u2[x, 0] + core[a, 1, b] * u2[x, 1]) + core[a, 2, b] * u2[x, 2]
-                    for a in range(i)
-                    for b in range(k)
-                ]
-                weights = []
-                for a in range(i):
-                    w = b_of[a * k] * u3[f, 0]
-                    for b in range(1, k):
-                        w = w + b_of[a * k + b] * u3[f, b]
-                    weights.append(w)
-                total = u1[v, 0] * weights[0]
-                for a in range(1, i):
-                    total = total + u1[v, a] * weights[a]
-                assert got[f, v, x] == total + centroids[f, x]
+                total = sum(int(q1[v, a]) * weights[a][x] for a in range(i))
+                assert got[f, v, x] == float(total) * 2.0**exponent + float(centroids[f, x])
+
+
+def test_an_exponent_too_small_for_an_exact_product_is_r41():
+    u1 = residual.ExactU1.of(np.full((2, 2), 2**20), np.ones(2, np.float32))
+    basis = np.ones((2, 3, 1))
+    with pytest.raises(FormatError) as caught:
+        residual.exact_frames(u1, basis, np.ones((1, 1)), np.zeros((1, 3)), exponent=-40)
+    assert caught.value.rule == "R41-residual-value"
 
 
 # -- the promises, measured -------------------------------------------------------------------
@@ -150,6 +165,7 @@ def test_a_bound_the_tucker_part_already_meets_writes_the_file_of_before(cloth):
 
 def test_kg_and_a_bound_both_hold(cloth):
     plain = Encoder(EncodeOptions(target_kg=0.1)).encode_with_report(cloth)
+    assert plain.report.max_distance is not None
     bound = 0.4 * plain.report.max_distance
     result = Encoder(EncodeOptions(target_kg=0.1, max_error=bound)).encode_with_report(cloth)
     decoded = tc.decode(result.data).vertices
@@ -189,6 +205,17 @@ def test_lossless_decimals_read_from_text(rough, style, domain):
     decoder = Decoder(data)
     assert decoder.corrections == domain
     assert _same_bits(decoder.positions(), sequence.vertices)
+
+
+def test_lossless_float32_values_read_from_text(rough):
+    """A float32 cache written from %g text: counted in the text's last digit, not in float32's."""
+    texts = [f"{v:.6g}" for v in rough.vertices.reshape(-1)]
+    values = np.array(texts, dtype=np.float32).astype(np.float64).reshape(rough.vertices.shape)
+    sequence = MeshSequence(values, rough.faces)
+    data = Encoder(EncodeOptions(lossless=True)).encode(sequence)
+    decoder = Decoder(data)
+    assert decoder.corrections == "decimal-digits-float32"
+    assert _same_bits(decoder.positions(), values)
 
 
 def test_segmented_files_keep_the_promise_in_every_segment(cloth):

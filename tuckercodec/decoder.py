@@ -22,6 +22,7 @@ import operator
 import os
 from collections import OrderedDict
 from collections.abc import Iterator, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
@@ -69,10 +70,12 @@ class SegmentFactors:
     centroids: np.ndarray
     u2: np.ndarray
     basis: np.ndarray  # CORE x2 U2, (i, 3, k), formed once for every frame of the segment
-    #: with corrections (§6.9): the section's checked layout and id, U1 transposed and §8.1's B
+    #: U1's integers and steps, kept in a file with corrections for §8.1
+    u1_quantized: qmat.QuantizedMatrix | None = None
+    #: with corrections (§6.9): the section's checked layout and id, and what §8.1 takes
     corrections: residual.ResidualLayout | None = None
     residual_id: str = ""
-    u1_columns: np.ndarray | None = None
+    exact_u1: residual.ExactU1 | None = None
     exact_basis: np.ndarray | None = None
 
 
@@ -80,6 +83,8 @@ class SegmentFactors:
 CACHED_SEGMENTS = 2
 #: Decoded chunks of corrections kept (about a million integers each, §6.9).
 CACHED_CHUNKS = 3
+#: Threads that correct chunks at once: the work is numpy's and zstd's, which release the GIL.
+CHUNK_THREADS = min(4, os.cpu_count() or 1)
 
 
 class Decoder:
@@ -104,7 +109,7 @@ class Decoder:
         self.path = os.fspath(source) if isinstance(source, (str, os.PathLike)) else None
         self.limits = limits
         self._segments: OrderedDict[int, SegmentFactors] = OrderedDict()
-        self._shared_u1: np.ndarray | None = None
+        self._shared_u1: qmat.QuantizedMatrix | None = None
         self._mesh: MeshPrediction | None = None
         self._chunks: OrderedDict[tuple[int, int], np.ndarray] = OrderedDict()
         self._data: bytes | memoryview | FileRanges
@@ -192,14 +197,14 @@ class Decoder:
             self._mesh = MeshPrediction(self.faces, self.info.vertices)
         return self._mesh
 
-    def _decode_u1(self, section_id: str) -> np.ndarray:
+    def _decode_u1(self, section_id: str) -> qmat.QuantizedMatrix:
         return qmat.decode_matrix(
             self._payload(section_id),
             self._section(section_id).params,
             self._mesh_prediction,
             f"section {section_id}",
             coding_tools=self._container.coding_tools,  # predictor 2 only in format 1.2
-        ).values()
+        )
 
     def segment_factors(self, number: int) -> SegmentFactors:
         """Segment ``number``'s dequantized factors, decoded (§5 step 16, in its order) and
@@ -214,9 +219,11 @@ class Decoder:
             if segment.basis == BASIS_SHARED:
                 if self._shared_u1 is None:
                     self._shared_u1 = self._decode_u1("U1")
-                u1 = self._shared_u1[:, :i]
+                shared = self._shared_u1
+                u1_quantized = qmat.QuantizedMatrix(shared.q[:, :i], shared.steps[:i])
             else:
-                u1 = self._decode_u1(self._section_id(segment, "U1"))
+                u1_quantized = self._decode_u1(self._section_id(segment, "U1"))
+            u1 = u1_quantized.values()
 
             def matrix(stem: str, allow_predict: bool = True) -> np.ndarray:
                 section_id = self._section_id(segment, stem)
@@ -236,6 +243,8 @@ class Decoder:
         with np.errstate(over="ignore", invalid="ignore"):  # an overflow is R36, found per frame
             basis = reconstruction_basis(core, u2)
         factors = SegmentFactors(segment.start, segment.stop, u1, u3, core, centroids, u2, basis)
+        if self._container.corrections:  # §8.1 multiplies U1's integers
+            factors = dataclasses.replace(factors, u1_quantized=u1_quantized)
         if self._container.corrections and self.segmented:  # step 16s: then its RESD.s
             factors = self._with_corrections(factors, segment)
         self._segments[number] = factors
@@ -260,54 +269,77 @@ class Decoder:
             self._payload(section_id)  # the CRC (step 9), before any chunk is read
         with np.errstate(over="ignore", invalid="ignore"):  # an overflow is R36, per frame
             exact_basis = residual.exact_basis(factors.core, factors.u2)
+        assert factors.u1_quantized is not None
+        quantized = factors.u1_quantized
         return dataclasses.replace(
             factors,
             corrections=layout,
             residual_id=section_id,
-            u1_columns=np.ascontiguousarray(factors.u1.T),
+            exact_u1=residual.ExactU1.of(quantized.q, quantized.steps),
             exact_basis=exact_basis,
+            u1_quantized=None,  # kept as ExactU1 now
         )
 
-    def _chunk(self, number: int, part: SegmentFactors, chunk: int) -> np.ndarray:
-        """The restored integers of one chunk of a segment's corrections, kept for the next
-        frames."""
-        key = (number, chunk)
-        cached = self._chunks.get(key)
-        if cached is None:
-            assert part.corrections is not None
-            with self._naming_path():
-                cached = residual.decode_chunk(
-                    self._payload(part.residual_id),
-                    part.corrections,
-                    chunk,
-                    self.info.vertices,
-                    f"section {part.residual_id}",
-                )
-            self._chunks[key] = cached
-            while len(self._chunks) > CACHED_CHUNKS:
-                self._chunks.popitem(last=False)
+    def _chunk(self, part: SegmentFactors, chunk: int, payload: memoryview) -> np.ndarray:
+        """The restored integers of one chunk of a segment's corrections (R29)."""
+        assert part.corrections is not None
+        with self._naming_path():
+            return residual.decode_chunk(
+                payload, part.corrections, chunk, self.info.vertices, f"section {part.residual_id}"
+            )
+
+    def _keep_chunk(self, key: tuple[int, int], values: np.ndarray) -> None:
+        """Keep a chunk's integers for the next frames (the most recent few)."""
+        self._chunks[key] = values
         self._chunks.move_to_end(key)
-        return cached
+        while len(self._chunks) > CACHED_CHUNKS:
+            self._chunks.popitem(last=False)
 
     def _corrected(self, number: int, part: SegmentFactors, local: np.ndarray) -> np.ndarray:
         """Frames ``local`` (numbers within the segment) of a file with corrections: §8.1's
         exact reconstruction, corrected chunk by chunk (§6.9)."""
         layout = part.corrections
-        assert layout is not None and part.u1_columns is not None and part.exact_basis is not None
-        with np.errstate(over="ignore", invalid="ignore"):
+        assert layout is not None and part.exact_u1 is not None and part.exact_basis is not None
+        with self._naming_path(), np.errstate(over="ignore", invalid="ignore"):
             exact = residual.exact_frames(
-                part.u1_columns, part.exact_basis, part.u3[local], part.centroids[local]
+                part.exact_u1,
+                part.exact_basis,
+                part.u3[local],
+                part.centroids[local],
+                layout.exponent,
+                f"section {part.residual_id}",
             )
         out = np.empty_like(exact)
         chunks = local // layout.chunk_frames
-        for chunk in np.unique(chunks).tolist():
+        needed = np.unique(chunks).tolist()
+        payload = (
+            self._payload(part.residual_id)
+            if any((number, chunk) not in self._chunks for chunk in needed)
+            else memoryview(b"")
+        )
+
+        def corrected(chunk: int) -> tuple[int, np.ndarray]:
+            """One chunk's frames corrected: run on threads (numpy and zstd release the GIL),
+            reading the cache but not changing it."""
+            values = self._chunks.get((number, chunk))
+            if values is None:
+                values = self._chunk(part, chunk, payload)
             rows = np.flatnonzero(chunks == chunk)
-            values = self._chunk(number, part, chunk)
             start, _ = layout.chunk_range(chunk)
             with self._naming_path():
                 out[rows] = residual.correct(
                     exact[rows], values[local[rows] - start], layout, f"section {part.residual_id}"
                 )
+            return chunk, values
+
+        workers = min(len(needed), CHUNK_THREADS)
+        if workers <= 1:
+            done = [corrected(chunk) for chunk in needed]
+        else:
+            with ThreadPoolExecutor(workers) as pool:
+                done = list(pool.map(corrected, needed))
+        for chunk, values in done:
+            self._keep_chunk((number, chunk), values)
         return out
 
     def check(self) -> None:

@@ -481,6 +481,10 @@ def correction_vectors() -> dict[str, tuple[bytes, str]]:
             encode(as_text(rough, "{:.6g}"), options=EncodeOptions(lossless=True)),
             "format 1.3: lossless values read from %.6g text, decimals of 6 significant digits",
         ),
+        "v1.3-lossless-digits-float32": (
+            encode(as_text(rough, "{:.6g}", np.float32), options=EncodeOptions(lossless=True)),
+            "format 1.3: lossless float32 values read from %.6g text",
+        ),
         "v1.3-lossless-places": (
             encode(as_text(rough + 20.0, "{:.5f}"), options=EncodeOptions(lossless=True)),
             "format 1.3: lossless values read from %.5f text, decimals of 5 places",
@@ -488,9 +492,11 @@ def correction_vectors() -> dict[str, tuple[bytes, str]]:
     }
 
 
-def as_text(positions: np.ndarray, style: str) -> MeshSequence:
-    """The sheet as an OBJ of ``style`` would give it back: each value parsed from its text."""
-    values = np.array([float(style.format(v)) for v in positions.reshape(-1)])
+def as_text(positions: np.ndarray, style: str, dtype: type = np.float64) -> MeshSequence:
+    """The sheet as an OBJ of ``style`` would give it back: each value parsed from its text
+    (as float32 values, with ``dtype``, each parsed straight to float32)."""
+    texts = [style.format(v) for v in positions.reshape(-1)]
+    values = np.array(texts, dtype=dtype).astype(np.float64)
     return MeshSequence(values.reshape(positions.shape), sheet_triangles(9))
 
 

@@ -29,6 +29,7 @@ from ..errors import UnreachableTargetError
 from ..format import residual, streams
 from ..format.container import parse_container
 from ..format.limits import DEFAULT_LIMITS
+from ..format.qmat import QuantizedMatrix
 from ..format.reconstruction import reconstruct_frames, reconstruction_basis
 from ..format.residual import FLOAT32, FLOAT64, GRID, Domain
 from ..io.streaming import FrameSource
@@ -47,6 +48,14 @@ LADDER = (0.003, 0.01, 0.03, 0.1, 0.3, 1.0, 3.0)
 TRUNCATION_SHARE = 0.5
 #: A grid's step is this much under 2D/sqrt(3): rounding of the correction itself has room.
 GRID_ROOM = 1e-6
+#: A part up to this much larger than the smallest is chosen if it has fewer U1 columns: §8.1's
+#: product, most of a decode's time, grows with them, and the ladder's sizes are flat near the
+#: smallest (samba lossless: 49.3 bpfv at 353 columns, 50.3 at 247, 53.2 at 144).
+DECODE_SLACK = 0.03
+#: The most U1 columns a lossless file's Tucker part has (unless no coarser part exists): its
+#: decode is then about 2 * 128 multiply-adds per value in §8.1's product, a fraction of the
+#: 80 ns a value that issue 23's 50 MB/s of float32 output allows on 2 cores.
+LOSSLESS_COLUMNS = 128
 #: zstd level of the corrections in the final file: above it, minutes for a percent or two.
 CORRECTION_LEVEL = 9
 
@@ -111,7 +120,8 @@ def _holds(values: np.ndarray, domain: Domain) -> bool:
 
 def _candidates(values: np.ndarray) -> Iterator[Domain]:
     """Binary32, then the fewest places and the fewest digits that hold a sample of the
-    values (most scales are ruled out on the sample, cheaply)."""
+    values (most scales are ruled out on the sample, cheaply), as binary64 and, for binary32
+    values, as binary32."""
     yield Domain(FLOAT32)
     sample = np.ascontiguousarray(values.reshape(-1)[:: max(1, values.size // 4096)])
     for name, (_, least, most) in residual.SCALES.items():
@@ -138,17 +148,34 @@ class Corrected:
         return self.tucker_bytes + (len(self.section[1]) if self.section is not None else 0)
 
 
-def exact_positions(quantized: Quantized[Any], u2: np.ndarray) -> np.ndarray:
-    """Every frame of a whole file's Tucker part as §8.1 reconstructs it (F, K, 3)."""
+def exact_positions(quantized: Quantized[Any], u2: np.ndarray) -> tuple[np.ndarray, int]:
+    """Every frame of a whole file's Tucker part as §8.1 reconstructs it (F, K, 3), and the
+    exponent e it is reconstructed with."""
     (factors,) = quantized.segments
     assert factors.u1 is not None
-    u1 = factors.u1.values()
-    i = u1.shape[1]
-    u3 = factors.u3.values()
-    core = factors.core.values().reshape(i, 3, u3.shape[1])
-    return residual.exact_frames(
-        np.ascontiguousarray(u1.T), residual.exact_basis(core, u2), u3, factors.centroids.values()
-    )
+    return exact_segment(factors.u1, factors.core, factors.u3, factors.centroids, u2)
+
+
+def exact_segment(
+    u1: QuantizedMatrix,
+    core: QuantizedMatrix,
+    u3: QuantizedMatrix,
+    centroids: QuantizedMatrix,
+    u2: np.ndarray,
+) -> tuple[np.ndarray, int]:
+    """One decomposition's frames as §8.1 reconstructs them, with the exponent e that keeps
+    its integer product exact and most precise (:func:`~.residual.choose_exponent`)."""
+    exact_u1 = residual.ExactU1.of(u1.q, u1.steps)
+    i = u1.q.shape[1]
+    u3_values = u3.values()
+    basis = residual.exact_basis(core.values().reshape(i, 3, u3_values.shape[1]), u2)
+    scaled = residual.scaled_weights(exact_u1, basis, u3_values)
+    largest = float(np.abs(scaled).max()) if scaled.size else 0.0
+    exponent = residual.choose_exponent(exact_u1, largest)
+    while not residual.weights_fit(exact_u1, residual.integer_weights(scaled, exponent)):
+        exponent += 1  # rounding took a weight over: one step coarser
+    positions = residual.exact_frames(exact_u1, basis, u3_values, centroids.values(), exponent)
+    return positions, exponent
 
 
 def integers_for(exact: np.ndarray, original: np.ndarray, goal: Goal, domain: Domain) -> np.ndarray:
@@ -283,7 +310,11 @@ def search_whole(work: WholeWorkspace, options: EncodeOptions, goal: Goal) -> tu
                 break
         assert best is not None
         return best, len(tried)
-    for kg in LADDER:
+    ladder = list(LADDER)
+    if goal.lossless:  # no part too slow to decode, while a coarser one is there instead
+        fast = [kg for kg in ladder if work.ranks_for(kg, TRUNCATION_SHARE)[0] <= LOSSLESS_COLUMNS]
+        ladder = fast or ladder[-1:]
+    for kg in ladder:
         part = quick_part(work, kg)
         if part is not None:
             tried[kg] = attempt(part)
@@ -293,12 +324,16 @@ def search_whole(work: WholeWorkspace, options: EncodeOptions, goal: Goal) -> tu
     ranked = sorted(tried, key=lambda kg: tried[kg].total_bytes)
     if len(ranked) > 1:
         middle = math.sqrt(ranked[0] * ranked[1])
-        part = quick_part(work, middle)
+        fits = work.ranks_for(middle, TRUNCATION_SHARE)[0] <= LOSSLESS_COLUMNS
+        part = quick_part(work, middle) if fits or not goal.lossless else None
         if part is not None:
             tried[middle] = attempt(part)
             tried[middle].kg = middle
-    best_kg = min(tried, key=lambda kg: tried[kg].total_bytes)
-    return tried[best_kg], len(tried)
+    smallest = min(candidate.total_bytes for candidate in tried.values())
+    # within DECODE_SLACK of the smallest, the part of fewest U1 columns: it decodes fastest
+    near = [kg for kg in tried if tried[kg].total_bytes <= (1 + DECODE_SLACK) * smallest]
+    chosen = min(near, key=lambda kg: (tried[kg].quantized.choice[0], tried[kg].total_bytes))
+    return tried[chosen], len(tried)
 
 
 def quick_part(work: WholeWorkspace, kg: float) -> Quantized[Ranks] | None:
@@ -332,11 +367,11 @@ def final_section(
     if corrected.section is None or corrected.domain is None:
         return None
     domain = corrected.domain
-    exact = exact_positions(corrected.quantized, u2)
+    exact, exponent = exact_positions(corrected.quantized, u2)
     integers = integers_for(exact, original, goal, domain)
     predict = int(corrected.section[0]["predict"])
     section = residual.encode_section(
-        integers, domain, min(level, CORRECTION_LEVEL), predict=predict
+        integers, domain, min(level, CORRECTION_LEVEL), exponent=exponent, predict=predict
     )
     return section, integers, corrected_positions(exact, integers, domain)
 
@@ -423,22 +458,26 @@ def correct_segments(
     """A pass over the input: each segment's §8.1 positions, its corrections (the smallest of
     the goal's domains) and the error of the corrected file, measured on them."""
     work.say(f"pass {work.passes + 1}: correcting every segment")
-    shared = None if quantized.shared_u1 is None else quantized.shared_u1.values()
     measured = ErrorAccumulator()
     out = SegmentCorrections([], [], 0.0, Displacement(0.0, 0, 0), [])
     for number, part in enumerate(work.decoded(quantized)):
+        factors = quantized.segments[number]
         i = part.basis.shape[0]
-        u1 = part.own_u1 if part.own_u1 is not None else shared[:, :i]  # type: ignore[index]
-        core = quantized.segments[number].core.values().reshape(i, 3, part.u3.shape[1])
-        u2 = work.models[number].u2
-        exact = residual.exact_frames(
-            np.ascontiguousarray(u1.T), residual.exact_basis(core, u2), part.u3, part.centroids
+        u1 = factors.u1
+        if u1 is None:  # the shared basis's first i columns
+            assert quantized.shared_u1 is not None
+            shared = quantized.shared_u1
+            u1 = QuantizedMatrix(shared.q[:, :i], shared.steps[:i])
+        exact, exponent = exact_segment(
+            u1, factors.core, factors.u3, factors.centroids, work.models[number].u2
         )
         original = work.source.read(part.segment.start, part.segment.stop)
         best: tuple[tuple[dict[str, Any], bytes], np.ndarray, Domain] | None = None
         for domain in goal.domains:
             integers = integers_for(exact, original, goal, domain)
-            section = residual.encode_section(integers, domain, min(level, CORRECTION_LEVEL))
+            section = residual.encode_section(
+                integers, domain, min(level, CORRECTION_LEVEL), exponent=exponent
+            )
             if best is None or len(section[1]) < len(best[0][1]):
                 best = (section, integers, domain)
         assert best is not None

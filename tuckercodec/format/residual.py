@@ -13,11 +13,9 @@ the frame before within the chunk.
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Mapping
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
 
@@ -36,9 +34,12 @@ GRID, FLOAT32, FLOAT64 = "grid", "float32", "float64"
 #: Lossless domains for values that are decimals as text gave them: k / 10**places, or
 #: numbers of ``digits`` significant digits (§6.9).
 PLACES, DIGITS = "decimal-places", "decimal-digits"
-DOMAINS = (GRID, FLOAT32, FLOAT64, PLACES, DIGITS)
+#: binary32 values read from decimals of ``digits`` significant digits (a float32 cache
+#: written from text): the decimal's binary64 value rounded to binary32.
+DIGITS32 = "decimal-digits-float32"
+DOMAINS = (GRID, FLOAT32, FLOAT64, PLACES, DIGITS, DIGITS32)
 #: The parameter each decimal domain takes, and its range.
-SCALES = {PLACES: ("places", 0, 22), DIGITS: ("digits", 1, 15)}
+SCALES = {PLACES: ("places", 0, 22), DIGITS: ("digits", 1, 15), DIGITS32: ("digits", 1, 15)}
 
 
 @dataclass(frozen=True)
@@ -148,15 +149,26 @@ def digits_ordered(values: np.ndarray, digits: int) -> np.ndarray:
     decade's range."""
     lowest_exponent, per_decade, low, powers = _digit_constants(digits)
     magnitude = np.abs(values)
-    decade = np.clip(np.searchsorted(powers, magnitude, side="right") - 1, 0, len(powers) - 1)
-    shift = digits - 1 - (lowest_exponent + decade)  # within -22 .. 22
-    ten = np.asarray(TEN)[np.abs(shift)]
+    decade = np.searchsorted(powers, magnitude, side="right")
+    decade -= 1
+    np.clip(decade, 0, len(powers) - 1, out=decade)
+    shift = (digits - 1 - lowest_exponent) - decade  # within -22 .. 22
+    tens = np.asarray(TEN)
     with np.errstate(over="ignore", invalid="ignore"):
-        scaled = np.where(shift >= 0, magnitude * ten, magnitude / ten)
-    significand = np.clip(np.rint(scaled), low, 10 * low - 1).astype(np.int64)
-    ordered = 1 + decade.astype(np.int64) * per_decade + (significand - low)
-    ordered = np.where(magnitude == 0, 0, ordered)
-    return np.where(np.signbit(values), -1 - ordered, ordered)
+        scaled = magnitude * tens[np.maximum(shift, 0)]  # the usual case: values below 10**p
+        above = shift < 0
+        if above.any():
+            scaled[above] = magnitude[above] / tens[-shift[above]]
+    np.rint(scaled, out=scaled)
+    np.clip(scaled, low, 10 * low - 1, out=scaled)
+    ordered = decade.astype(np.int64)
+    ordered *= per_decade
+    ordered += scaled.astype(np.int64)
+    ordered += 1 - low
+    ordered[magnitude == 0] = 0
+    negative = np.signbit(values)
+    ordered[negative] = -1 - ordered[negative]
+    return ordered
 
 
 def digits_largest(digits: int) -> int:
@@ -169,14 +181,24 @@ def digits_values(ordered: np.ndarray, digits: int) -> np.ndarray:
     correctly rounded operation, so the value nearest the decimal."""
     lowest_exponent, per_decade, low, _ = _digit_constants(digits)
     negative = ordered < 0
-    magnitude = np.where(negative, -1 - ordered, ordered)
-    decade, offset = np.divmod(np.maximum(magnitude - 1, 0), per_decade)
-    significand = (low + offset).astype(np.float64)
-    shift = digits - 1 - (lowest_exponent + decade)
-    ten = np.asarray(TEN)[np.abs(shift)]
-    value = np.where(shift > 0, significand / ten, significand * ten)
-    value = np.where(magnitude == 0, 0.0, value)
-    return np.where(negative, -value, value)
+    magnitude = ordered.copy()
+    magnitude[negative] = -1 - magnitude[negative]
+    zero = magnitude == 0
+    magnitude -= 1
+    np.maximum(magnitude, 0, out=magnitude)
+    decade, offset = np.divmod(magnitude, per_decade)
+    offset += low
+    value = offset.astype(np.float64)
+    shift = (digits - 1 - lowest_exponent) - decade
+    tens = np.asarray(TEN)
+    below = shift > 0  # the usual case: a division by an exact power of ten
+    value[below] /= tens[shift[below]]
+    rest = ~below
+    if rest.any():
+        value[rest] *= tens[-shift[rest]]
+    value[zero] = 0.0
+    value[negative] = -value[negative]
+    return value
 
 
 # -- §8.1 the exact reconstruction -------------------------------------------------------------
@@ -188,48 +210,91 @@ def exact_basis(core: np.ndarray, u2: np.ndarray) -> np.ndarray:
     return (parts[0] + parts[1]) + parts[2]
 
 
-#: Threads that reconstruct frames at once: numpy releases the GIL in its element-wise loops.
-EXACT_THREADS = min(4, os.cpu_count() or 1)
+#: The largest |S| of §8.1 (and |sum of |q1| |w_hat||): every partial sum is then an exact binary64
+#: integer, so any order, BLAS's included, gives the same S.
+EXACT_LIMIT = 2**53
+#: The range of a RESD section's ``exponent``: 2**e and 2**-e are normal binary64 numbers.
+EXPONENTS = (-1022, 1022)
+
+
+@dataclass(frozen=True)
+class ExactU1:
+    """What §8.1 takes of U1: its integers q1 as binary64 (exact), its steps, and
+    R = max over v of sum over a of |q1[v, a]| (an exact integer)."""
+
+    integers: np.ndarray  # (K, i) float64
+    steps: np.ndarray  # (i,) float64, the stored f32 widened
+    row_sum: int
+
+    @classmethod
+    def of(cls, q: np.ndarray, steps: np.ndarray) -> ExactU1:
+        row_sum = int(np.abs(q).sum(axis=1).max()) if q.size else 0
+        return cls(
+            q.astype(np.float64), np.asarray(steps, dtype=np.float32).astype(np.float64), row_sum
+        )
+
+
+def scaled_weights(u1: ExactU1, basis: np.ndarray, u3_rows: np.ndarray) -> np.ndarray:
+    """y[f, a, x] = step[a] x W_f[a, x] of §8.1, (n, i, 3): W summed over b left to right,
+    then one product with U1's step (every operation one binary64 rounding)."""
+    weights = basis[None, :, :, 0] * u3_rows[:, 0, None, None]  # (n, i, 3)
+    for b in range(1, u3_rows.shape[1]):
+        weights = weights + basis[None, :, :, b] * u3_rows[:, b, None, None]
+    return u1.steps[None, :, None] * weights
+
+
+def choose_exponent(u1: ExactU1, largest: float) -> int:
+    """The encoder's e: the smallest that keeps R * max|w_hat| within 2**53 for weights up to
+    ``largest`` (with a step of room for the rounding), so that S keeps the most precision."""
+    if not (largest > 0 and u1.row_sum > 0):
+        return 0
+    exponent = math.ceil(math.log2(u1.row_sum * largest)) - 52
+    return int(min(max(exponent, EXPONENTS[0]), EXPONENTS[1]))
+
+
+def integer_weights(scaled: np.ndarray, exponent: int) -> np.ndarray:
+    """w_hat = y x 2**-e, rounded to the nearest integer (ties to even), as binary64."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        return np.rint(scaled * (2.0**-exponent))
+
+
+def weights_fit(u1: ExactU1, weights: np.ndarray) -> bool:
+    """R * max|w_hat| <= 2**53 (and every w_hat finite): S is then exact in any order."""
+    if not weights.size:
+        return True
+    largest = float(np.abs(weights).max())
+    if not math.isfinite(largest):
+        return False
+    return u1.row_sum * int(largest) <= EXACT_LIMIT
 
 
 def exact_frames(
-    u1_columns: np.ndarray, basis: np.ndarray, u3_rows: np.ndarray, centroid_rows: np.ndarray
+    u1: ExactU1,
+    basis: np.ndarray,
+    u3_rows: np.ndarray,
+    centroid_rows: np.ndarray,
+    exponent: int,
+    where: str = "section RESD",
 ) -> np.ndarray:
     """P (n, K, 3) of §8.1 for the frames of ``u3_rows`` (n, k) and ``centroid_rows`` (n, 3).
 
-    ``u1_columns`` is U1 transposed, (i, K), so that each step reads one contiguous column.
-    Every product and sum is one binary64 operation, in the order §8.1 gives: numpy's
-    element-wise multiply and add each round once, and nothing here is fused or reassociated.
-    A frame is summed as (3, K), every step one long vector times a scalar; frames are shared
-    between threads (the order within a frame is all that matters).
+    S = q1 . w_hat is a product of integers whose every partial sum stays within 2**53 (R41
+    otherwise), so BLAS computes it exactly, whatever its order or fused operations; then
+    P = S x 2**e + CENT, two rounded operations.
     """
-    n, k = u3_rows.shape
-    vertices = u1_columns.shape[1]
-    weights = basis[None, :, :, 0] * u3_rows[:, 0, None, None]  # (n, i, 3)
-    for b in range(1, k):
-        weights = weights + basis[None, :, :, b] * u3_rows[:, b, None, None]
-    out = np.empty((n, vertices, 3))
-
-    def frames(first: int, last: int) -> None:
-        total = np.empty((3, vertices))
-        scratch = np.empty((3, vertices))
-        for f in range(first, last):
-            frame_weights = weights[f][:, :, None]  # (i, 3, 1)
-            np.multiply(frame_weights[0], u1_columns[0], out=total)
-            for a in range(1, u1_columns.shape[0]):
-                np.multiply(frame_weights[a], u1_columns[a], out=scratch)
-                np.add(total, scratch, out=total)
-            np.add(total, centroid_rows[f][:, None], out=total)
-            out[f] = total.T
-
-    workers = max(1, min(EXACT_THREADS, n))
-    bounds = [round(n * part / workers) for part in range(workers + 1)]
-    if workers == 1:
-        frames(0, n)
-    else:
-        with ThreadPoolExecutor(workers) as pool:
-            list(pool.map(frames, bounds[:-1], bounds[1:]))
-    return out
+    n = u3_rows.shape[0]
+    weights = integer_weights(scaled_weights(u1, basis, u3_rows), exponent)
+    if not weights_fit(u1, weights):
+        _value_error(
+            f"{where}.exponent",
+            f"U1's integers times the frames' weights at exponent {exponent} exceed 2**53: "
+            "the exact reconstruction of §8.1 would round",
+        )
+    i = u1.integers.shape[1]
+    product = u1.integers @ weights.transpose(1, 0, 2).reshape(i, 3 * n)  # (K, 3n), exact
+    positions = product.reshape(-1, n, 3).transpose(1, 0, 2)
+    with np.errstate(over="ignore", invalid="ignore"):
+        return positions * (2.0**exponent) + centroid_rows[:, None, :]
 
 
 # -- the section's layout (§6.9 parameters) ----------------------------------------------------
@@ -248,6 +313,7 @@ class ResidualLayout:
     offsets: tuple[int, ...]  # len(planes) + 1 byte offsets into the payload
     frames: int
     scale: int | None = None  # decimal-places' places, decimal-digits' digits
+    exponent: int = 0  # e of §8.1: S x 2**e
 
     def chunk_of(self, frame: int) -> int:
         return frame // self.chunk_frames
@@ -298,6 +364,17 @@ def read_layout(
                 rule="R40-residual",
                 field=f"{where}.{key}",
             )
+    exponent = params.get("exponent")
+    if not (
+        isinstance(exponent, int)
+        and not isinstance(exponent, bool)
+        and EXPONENTS[0] <= exponent <= EXPONENTS[1]
+    ):
+        raise FormatError(
+            f"exponent must be an int from {EXPONENTS[0]} to {EXPONENTS[1]}, got {exponent!r}",
+            rule="R40-residual",
+            field=f"{where}.exponent",
+        )
     predict = params.get("predict")
     if not (isinstance(predict, int) and not isinstance(predict, bool) and predict in (0, 1)):
         raise FormatError(
@@ -348,7 +425,15 @@ def read_layout(
             field=f"{where}.chunks",
         )
     layout = ResidualLayout(
-        domain, step, predict, chunk_frames, tuple(planes), tuple(offsets), frames, scale
+        domain,
+        step,
+        predict,
+        chunk_frames,
+        tuple(planes),
+        tuple(offsets),
+        frames,
+        scale,
+        exponent,
     )
     for number, chunk_planes in enumerate(planes):
         start, stop = layout.chunk_range(number)
@@ -425,7 +510,8 @@ def _decimal(
     stay not finite, for R36), corrected by e, back to the value of its decimal."""
     assert layout.scale is not None
     scale = layout.scale
-    base = np.where(finite, exact, 0.0)
+    every = bool(finite.all())  # the usual case: no copies for the non-finite
+    base = exact if every else np.where(finite, exact, 0.0)
     if layout.domain == PLACES:
         limit = LARGEST_PLACES_INTEGER
         if residual.size and int(np.abs(residual).max()) > 2 * limit:
@@ -438,15 +524,18 @@ def _decimal(
         limit = digits_largest(scale)
         if residual.size and int(np.abs(residual).max()) > 2 * limit + 1:
             _value_error(where, f"a correction is beyond the decimals of {scale} digits")
-        ordered = digits_ordered(base, scale) + residual
-        inside = ordered[finite]
+        ordered = digits_ordered(base, scale)
+        ordered += residual
+        inside = ordered if every else ordered[finite]
         if inside.size and (inside.min() < -1 - limit or inside.max() > limit):
             _value_error(where, f"a corrected integer is not a decimal of {scale} digits")
         values = digits_values(ordered, scale)
-    return np.where(finite, values, np.nan)
+        if layout.domain == DIGITS32:  # rounded once more, to binary32
+            values = values.astype(np.float32).astype(np.float64)
+    return values if every else np.where(finite, values, np.nan)
 
 
-def _value_error(where: str, problem: str) -> None:
+def _value_error(where: str, problem: str) -> NoReturn:
     raise FormatError(problem, rule="R41-residual-value", field=where)
 
 
@@ -464,7 +553,7 @@ def ordered_in(values: np.ndarray, domain: Domain) -> np.ndarray:
     if domain.name == PLACES:
         assert domain.scale is not None
         return places_ordered(values, domain.scale)
-    if domain.name == DIGITS:
+    if domain.name in (DIGITS, DIGITS32):
         assert domain.scale is not None
         return digits_ordered(values, domain.scale)
     return ordered64(values)
@@ -484,6 +573,7 @@ def encode_section(
     domain: Domain,
     level: int,
     *,
+    exponent: int = 0,
     chunk_frames: int | None = None,
     predict: int | None = None,
 ) -> tuple[dict[str, Any], bytes]:
@@ -510,6 +600,7 @@ def encode_section(
             chunks.append([planes, len(payload)])
             payloads.append(payload)
         params = domain.params()
+        params.update(exponent=exponent)
         params.update(predict=choice, chunk_frames=chunk_frames, chunks=chunks)
         body = b"".join(payloads)
         if best is None or len(body) < len(best[1]):
