@@ -70,6 +70,9 @@ def test_the_suite_reports_sizes_bounds_and_misses(sample, tmp_path, capsys):
     rate = 8 * int(cells[5]) / (sample.frame_count * sample.vertex_count)
     assert float(cells[6].split()[0]) == pytest.approx(rate, abs=5e-4)
     assert "Misses: none." in text
+    assert "| sequence | coder | 0.003 | 0.001 |" in text  # the plot's points, as a table
+    points = next(line for line in text.splitlines() if line.startswith("| sample | sz3 |"))
+    assert float(points.split("|")[3]) < float(points.split("|")[4])  # a looser D, a smaller file
     assert (out / "bounds.md").read_text() == text
     entries = json.loads((out / "results.json").read_text())
     assert sorted(e["relative"] for e in entries) == [1e-3, 3e-3]  # the plot's bound measured

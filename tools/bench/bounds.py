@@ -290,6 +290,26 @@ def summary_rows(entries: list[Entry], names: list[str], relatives: list[float])
     return lines
 
 
+def plot_rows(entries: list[Entry], names: list[str], plotted: list[float]) -> list[str]:
+    """The plot's points as a table: each coder's bpfv at every bound measured."""
+    coders = [c for c in CODERS if any(e.coder == c for e in entries)]
+    lines = [
+        "| sequence | coder | " + " | ".join(f"{r:g}" for r in plotted) + " |",
+        "|" + "---|" * (len(plotted) + 2),
+    ]
+    for name in names:
+        for coder in coders:
+            cells = []
+            for relative in plotted:
+                e = _find(entries, name, relative, coder)
+                if e is None or e.bpfv is None:
+                    cells.append("no file")
+                else:
+                    cells.append(f"{e.bpfv:.3f}" + ("" if e.within else " (**over D**)"))
+            lines.append(f"| {name} | {coder} | " + " | ".join(cells) + " |")
+    return lines
+
+
 def combined_rows(rows: list[Combined]) -> list[str]:
     lines = [
         "| sequence | plain KG file bytes (bpfv) | its worst vertex W | bound | bounded file "
@@ -507,6 +527,13 @@ def run(args: argparse.Namespace) -> int:
         *entry_rows(entries, relatives),
         "",
     ]
+    if plotted != relatives:
+        text += [
+            "bpfv at every bound measured (the plot's points; D over the diagonal):",
+            "",
+            *plot_rows(entries, names, plotted),
+            "",
+        ]
     if rows:
         text += [
             f"KG {args.combined_kg:g} alone, then with a bound at {args.combined_factor:g} times "
