@@ -12,6 +12,9 @@ as the reference, the page steps to a few frames; at each, through ``window.tkcV
 - a screenshot of the canvas shows a mesh around its centre, which changes with the frame;
 - the console holds no error and no exception.
 
+The cloth encoded with corrections (format 1.3, lossless and with --max-error) decodes in the
+page to the Python decoder's bits, and the panel shows the bound its header claims.
+
 A truncated file shows its rule (the Python decoder's) on the page and logs it, its one console
 error. And the conformance vectors of spec/vectors are decoded in the browser by
 tests/js/conformance.html with the observations test_js_conformance.py judges in node.
@@ -42,7 +45,7 @@ from tests.support.js_decoder import (
 )
 from tests.support.png import decode_png
 from tests.support.sequences import shared_file
-from tuckercodec import Decoder, FormatError, MeshSequence
+from tuckercodec import Decoder, EncodeOptions, FormatError, MeshSequence
 from tuckercodec.web.server import ViewerServer
 from tuckercodec.web.site import build_site
 
@@ -259,3 +262,44 @@ def test_valid_vector_in_the_browser(observed, name):
 @pytest.mark.parametrize("name", INVALID)
 def test_invalid_vector_in_the_browser(observed, name):
     check_invalid_observation(observed, name)
+
+
+# ------------------------------------------------------------------------------------------
+# files with corrections (format 1.3): the same bits as Python, and the bound on show
+
+
+@pytest.mark.parametrize(
+    ("mode", "options", "shown"),
+    [
+        ("lossless", EncodeOptions(lossless=True), "lossless"),
+        ("max-error", EncodeOptions(max_error="0.1%"), "every vertex within"),
+    ],
+)
+def test_corrections_same_bits_and_bound_shown(browser, cloth, tmp_path, mode, options, shown):
+    """The built-in cloth encoded with corrections: every frame the page decodes is the Python
+    decoder's, bit for bit (§8.1), the drawn positions those rounded to float32 once, and the
+    panel shows the bound the header claims."""
+    data = tuckercodec.encode(cloth, options=options)
+    decoder = Decoder(data)
+    assert decoder.corrections is not None, "the encoder wrote no corrections"
+    with serve(tmp_path, data, f"{mode}.tkc", cloth.vertices) as url:
+        page = open_page(browser, url)
+        try:
+            info = page.evaluate("window.tkcViewer.ready.then(() => window.tkcViewer.info)")
+            assert info["version"] == "1.3"
+            assert info["corrections"]["domain"] == decoder.corrections
+            assert shown in info["bound"]
+            panel = page.evaluate("document.getElementById('facts-list').textContent")
+            assert info["bound"] in panel and "KG error" in panel
+            for t in (0, 31, decoder.frame_count - 1):
+                page.evaluate(f"window.tkcViewer.setFrame({t})")
+                expected = decoder.frame(t).reshape(-1)
+                decoded = page.typed_array(f"window.tkcViewer.decodedPositions({t})")
+                assert np.array_equal(decoded.view(np.uint64), expected.view(np.uint64)), t
+                drawn = page.typed_array("window.tkcViewer.drawnPositions()")
+                assert np.array_equal(drawn, expected.astype(np.float32)), t
+                if mode == "lossless":  # the original itself, so no distance to it
+                    assert page.evaluate("window.tkcViewer.frameError()")["maxError"] == 0
+            assert page.problems() == []
+        finally:
+            page.close()

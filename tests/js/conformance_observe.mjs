@@ -74,7 +74,13 @@ export async function observeVector(tkc, npy) {
       observed.sha256[`u3${suffix}`] = await sha256(littleEndianFloat64(f.u3));
       observed.sha256[`core${suffix}`] = await sha256(littleEndianFloat64(f.core));
       observed.sha256[`centroids${suffix}`] = await sha256(littleEndianFloat64(f.cent));
-
+      // a file with corrections (§6.9, §12): the first segment's parameters, and every
+      // segment's restored integers e (little-endian int64)
+      const residual = file.residual(s);
+      if (residual !== null) {
+        observed.residual ??= { domain: residual.domain, scale: residual.scale, predict: residual.predict, chunk_frames: residual.chunkFrames, sha256: {} };
+        observed.residual.sha256[`residual${suffix}`] = await sha256(littleEndianInt64(file.residualIntegers(s)));
+      }
     }
     // every frame, each alone (§8: a frame does not depend on which others are asked for)
     const K3 = 3 * file.vertices;
@@ -88,7 +94,11 @@ export async function observeVector(tkc, npy) {
         difference = Math.max(difference, Math.abs(positions[j] - reference.values[j]));
         scale = Math.max(scale, Math.abs(reference.values[j]));
       }
-      observed.reference = { shape: reference.shape, max_abs_difference: difference, max_abs_reference: scale };
+      // bit for bit (a file with corrections must be: §8.1), -0 and +0 told apart
+      const mine = new Uint8Array(positions.buffer);
+      const theirs = new Uint8Array(reference.values.buffer, reference.values.byteOffset, reference.values.byteLength);
+      const identical = mine.length === theirs.length && mine.every((byte, j) => byte === theirs[j]);
+      observed.reference = { shape: reference.shape, max_abs_difference: difference, max_abs_reference: scale, identical };
     }
     return observed;
   } catch (error) {

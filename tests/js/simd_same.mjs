@@ -20,8 +20,8 @@ function synthetic() {
   let differ = 0;
   for (let v = 0; v < K; v++) {
     for (let x = 0; x < 3; x++) {
-      let sum = 0;
-      for (let a = 0; a < i; a++) sum += u1[v * columns + a] * W[3 * a + x];
+      let sum = u1[v * columns] * W[x]; // §8.1: the first product starts the sum
+      for (let a = 1; a < i; a++) sum += u1[v * columns + a] * W[3 * a + x];
       differ += !Object.is(sum, product[3 * v + x]);
     }
   }

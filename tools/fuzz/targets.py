@@ -660,7 +660,11 @@ TARGETS: dict[str, Target] = {
             check=segmented_check,
             seeds=segmented_seeds,
             mutate=mutate_container,
-            extra_seeds=("spec/vectors/v1.1-*.tkc", "spec/vectors/v1.2-*segments.tkc"),
+            extra_seeds=(
+                "spec/vectors/v1.1-*.tkc",
+                "spec/vectors/v1.2-*segments.tkc",
+                "spec/vectors/v1.3-segments-*.tkc",
+            ),
         ),
         Target(
             name="face",

@@ -485,6 +485,14 @@ def correction_vectors() -> dict[str, tuple[bytes, str]]:
             encode(as_text(rough, "{:.6g}", np.float32), options=EncodeOptions(lossless=True)),
             "format 1.3: lossless float32 values read from %.6g text",
         ),
+        "v1.3-segments-lossless": (
+            encode_with_report(
+                MeshSequence(rough.astype(np.float32).astype(np.float64), sheet_triangles(9)),
+                options=EncodeOptions(lossless=True, segment_frames=8),
+            ).data,
+            "format 1.3 and 1.1 together: lossless float32 values in three segments sharing U1, "
+            "each with its RESD.s",
+        ),
         "v1.3-lossless-places": (
             encode(as_text(rough + 20.0, "{:.5f}"), options=EncodeOptions(lossless=True)),
             "format 1.3: lossless values read from %.5f text, decimals of 5 places",

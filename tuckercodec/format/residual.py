@@ -73,7 +73,7 @@ MAX_PLANES = 8
 
 #: The ordered integers of the finite values (§6.9): +max and -max.
 FINITE32 = (-2139095040, 2139095039)
-FINITE64 = (-9218868437227405313, 9218868437227405311)
+FINITE64 = (-9218868437227405312, 9218868437227405311)
 #: |e| allowed: grid values must widen to binary64 exactly; float32 ones stay within 33 bits.
 GRID_LARGEST = 2**53
 FLOAT32_LARGEST = 2**32
@@ -473,7 +473,7 @@ def correct(
     +-infinity, which e may bring back."""
     with np.errstate(over="ignore", invalid="ignore"):
         if layout.domain == FLOAT32:
-            if residual.size and int(np.abs(residual).max()) > FLOAT32_LARGEST:
+            if _beyond(residual, FLOAT32_LARGEST):
                 _value_error(where, f"a correction is beyond +-2**32 in domain {FLOAT32}")
             ordered = ordered32(exact.astype(np.float32)) + residual
             if ordered.size and (ordered.min() < FINITE32[0] or ordered.max() > FINITE32[1]):
@@ -483,7 +483,7 @@ def correct(
         if layout.domain in SCALES:
             return _decimal(exact, residual, layout, finite, where)
         if layout.domain == GRID:
-            if residual.size and int(np.abs(residual).max()) > GRID_LARGEST:
+            if _beyond(residual, GRID_LARGEST):
                 _value_error(where, f"a correction is beyond +-2**53 in domain {GRID}")
             assert layout.step is not None
             out = exact + layout.step * residual.astype(np.float64)
@@ -497,6 +497,11 @@ def correct(
         out = np.full(exact.shape, np.nan)
         out[finite] = from_ordered64(ordered)
         return out
+
+
+def _beyond(values: np.ndarray, limit: int) -> bool:
+    """Whether a value is outside -limit..limit (by its extremes: abs() of -2**63 overflows)."""
+    return bool(values.size) and (int(values.min()) < -limit or int(values.max()) > limit)
 
 
 def _decimal(
@@ -514,20 +519,23 @@ def _decimal(
     base = exact if every else np.where(finite, exact, 0.0)
     if layout.domain == PLACES:
         limit = LARGEST_PLACES_INTEGER
-        if residual.size and int(np.abs(residual).max()) > 2 * limit:
+        if _beyond(residual, 2 * limit):
             _value_error(where, f"a correction is beyond +-2**54 in domain {PLACES}")
         ordered = places_ordered(base, scale) + residual
-        if ordered.size and int(np.abs(ordered[finite]).max(initial=0)) > limit:
+        if not every:
+            ordered[~finite] = 0  # not finite: R36, whatever e says
+        if _beyond(ordered, limit):
             _value_error(where, f"a corrected integer is beyond +-2**53 in domain {PLACES}")
         values = places_values(ordered, scale)
     else:
         limit = digits_largest(scale)
-        if residual.size and int(np.abs(residual).max()) > 2 * limit + 1:
+        if _beyond(residual, 2 * limit + 1):
             _value_error(where, f"a correction is beyond the decimals of {scale} digits")
         ordered = digits_ordered(base, scale)
         ordered += residual
-        inside = ordered if every else ordered[finite]
-        if inside.size and (inside.min() < -1 - limit or inside.max() > limit):
+        if not every:
+            ordered[~finite] = 0  # not finite: R36, whatever e says
+        if ordered.size and (ordered.min() < -1 - limit or ordered.max() > limit):
             _value_error(where, f"a corrected integer is not a decimal of {scale} digits")
         values = digits_values(ordered, scale)
         if layout.domain == DIGITS32:  # rounded once more, to binary32

@@ -9,7 +9,8 @@ import { MsgpackProblem, describe, unpack } from './msgpack.js';
 export const SIGNATURE = Object.freeze([0x89, 0x54, 0x4b, 0x43, 0x0d, 0x0a, 0x1a, 0x0a]);
 export const FLAG_SEGMENTED = 1 << 0; // §6.7, version 1.1
 export const FLAG_CODING_TOOLS = 1 << 1; // §6.8, version 1.2
-const KNOWN_CRITICAL_FLAGS = FLAG_SEGMENTED | FLAG_CODING_TOOLS;
+export const FLAG_CORRECTIONS = 1 << 2; // §6.9 and §8.1, version 1.3
+const KNOWN_CRITICAL_FLAGS = FLAG_SEGMENTED | FLAG_CODING_TOOLS | FLAG_CORRECTIONS;
 const PREAMBLE_END = 32;
 
 /**
@@ -78,7 +79,7 @@ export function readContainer(bytes, limits) {
   if (major !== 1) throw unsupported('R05-major-version', `format major version ${major}; this decoder reads 1`);
   const unknown = flags & 0xffff & ~KNOWN_CRITICAL_FLAGS;
   if (unknown) {
-    throw unsupported('R06-critical-flag', `critical flag bits 0x${hex(unknown)} are set; this decoder knows bits 0 and 1 (version 1.2)`);
+    throw unsupported('R06-critical-flag', `critical flag bits 0x${hex(unknown)} are set; this decoder knows bits 0 to 2 (version 1.3)`);
   }
   // step 4: the header's size
   if (headerLength > limits.max_header_bytes) {

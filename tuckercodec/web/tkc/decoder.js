@@ -1,7 +1,9 @@
-// The JavaScript decoder of the tuckercodec format, written from spec/FORMAT.md (version 1.2):
+// The JavaScript decoder of the tuckercodec format, written from spec/FORMAT.md (version 1.3):
 // openTkc(bytes) checks the container and header, decodes the faces and names, and, for a file
-// that is not segmented, every factor; a segmented file's segments are decoded when one of
-// their frames is first asked for (§6.7). Every failure is a TkcError carrying its §11 rule.
+// that is not segmented, every factor and its corrections' parameters; a segmented file's
+// segments are decoded when one of their frames is first asked for (§6.7). A file with
+// corrections (§6.9) decodes a chunk of them when one of its frames is first asked for, and
+// keeps the last few chunks. Every failure is a TkcError carrying its §11 rule.
 //
 //   import { openTkc } from './tkc/decoder.js';
 //   const file = openTkc(new Uint8Array(await (await fetch('a.tkc')).arrayBuffer()));
@@ -17,15 +19,20 @@ import { resolveLimits } from './limits.js';
 import { MsgFloat, isInt } from './msgpack.js';
 import { decodeNames, defaultNames, nameSize } from './names.js';
 import { decodeQmat } from './qmat.js';
-import { coreTimesU2, reconstructFrame } from './reconstruct.js';
+import { coreTimesU2, exactWeights, reconstructExact, reconstructFrame, weightsFit } from './reconstruct.js';
+import { correct, decodeChunk, readResidual } from './residual.js';
 import { simdBasis } from './simd.js';
 import { meshTopology } from './topology.js';
 
 export { TkcError } from './errors.js';
 export { DEFAULT_LIMITS } from './limits.js';
 
+/** Bytes of decoded correction chunks a file keeps (at least the last one, whatever its size). */
+const CHUNK_CACHE_BYTES = 64 * 2 ** 20;
+
 /**
  * @typedef {import('./reconstruct.js').Factors} Factors
+ * @typedef {import('./residual.js').Residual} Residual
  * @typedef {import('./simd.js').SimdBasis} SimdBasis
  * @typedef {import('./topology.js').Topology} Topology
  */
@@ -76,6 +83,8 @@ export class TkcFile {
     this._topology = null;
     /** @type {Float64Array | null} */
     this._sharedU1 = null;
+    /** @type {{q?: Float64Array, steps?: Float64Array}} the shared U1's integers and steps */
+    this._sharedKept = {};
     /** @type {SimdBasis | null | undefined} */
     this._sharedSimd = undefined;
     /** @type {(Factors | null)[]} */
@@ -98,6 +107,12 @@ export class TkcFile {
       this.names = defaultNames(this.frames);
     }
     this._scratch = new Float64Array(0);
+    /** @type {Float64Array} P of §8.1, before its corrections */
+    this._exact = new Float64Array(0);
+    /** @type {Map<string, Int32Array>} decoded correction chunks, the most recent last */
+    this._chunks = new Map();
+    // step 18: the corrections' parameters (a segmented file's, with their segment)
+    if (!layout.segmented && layout.corrections) this._readResidual(this._segment(0), 0);
   }
 
   /**
@@ -137,19 +152,57 @@ export class TkcFile {
     return { u1, u3: d.u3, core: d.core, cent: d.cent, u2: d.u2, ranks: [d.i, d.k] };
   }
 
-  /** Decodes every segment: checks the whole file (the Python `Decoder.check()`). */
+  /**
+   * Decodes every segment and, with corrections, each segment's chunks and values, after its
+   * factors (R29, R41; §5 step 16s): checks the whole file, as the Python `Decoder.check()`
+   * does. Like it, it does not look for R36 (frames are asked for that).
+   */
   check() {
-    for (let s = 0; s < this._decoded.length; s++) this._segment(s);
+    const out = new Float64Array(3 * this.vertices);
+    this.layout.segments.forEach((segment, s) => {
+      const d = this._segment(s);
+      if (!this.layout.corrections) return;
+      // the weights of every frame of the segment (R41), then its chunks and values in order
+      if (this._scratch.length < 3 * d.i) this._scratch = new Float64Array(3 * d.i);
+      for (let t = 0; t < segment.frames; t++) this._weights(d, t, segment.start + t);
+      for (let f = segment.start; f < segment.start + segment.frames; f++) this._reconstruct(f, out, false);
+    });
     return this;
+  }
+
+  /**
+   * Segment s's corrections (§6.9): null in a file without them (flag bit 2), else the RESD
+   * section's domain, grid step (0 outside domain "grid"), scale (the places or digits of a
+   * decimal domain, else null), §8.1's exponent, predict, frames per chunk and chunks.
+   */
+  residual(s = 0) {
+    const r = this._segment(s).residual;
+    if (r === null) return null;
+    return { domain: r.domain, step: r.step, scale: r.scale, exponent: r.exponent, predict: r.predict, chunkFrames: r.chunkFrames, chunks: r.chunks.length };
+  }
+
+  /**
+   * Segment s's restored correction integers e (§6.9), F_s × K × 3 in C order, or null in a
+   * file without corrections. Decodes every chunk of the segment (for tests and tools: a frame
+   * needs only its own chunk).
+   */
+  residualIntegers(s = 0) {
+    const d = this._segment(s);
+    if (d.residual === null) return null;
+    const out = new BigInt64Array(d.residual.frames * 3 * this.vertices);
+    const halves = new Int32Array(out.buffer);
+    d.residual.chunks.forEach((chunk, c) => halves.set(this._chunk(s, d, c), 2 * chunk.start * 3 * this.vertices));
+    return out;
   }
 
   /**
    * @template {Float64Array | Float32Array} T
    * @param {number} f
    * @param {T} out
+   * @param {boolean} [finite] false: do not require finite positions (R36)
    * @returns {T}
    */
-  _reconstruct(f, out) {
+  _reconstruct(f, out, finite = true) {
     if (!Number.isInteger(f) || f < 0 || f >= this.frames) {
       throw new RangeError(`frame ${f} does not exist: the file has frames 0..${this.frames - 1}`);
     }
@@ -158,7 +211,77 @@ export class TkcFile {
     const d = this._segment(s);
     if (d.simd === undefined) d.simd = this._simdOnce(d); // on the first frame, not at open
     if (this._scratch.length < 3 * d.i) this._scratch = new Float64Array(3 * d.i);
-    return reconstructFrame(d, f - this.layout.segments[s].start, out, this._scratch, f);
+    const t = f - this.layout.segments[s].start;
+    const residual = d.residual;
+    if (residual === null) return reconstructFrame(d, t, out, this._scratch, f);
+    // §8.1's weights (R41) and P, the frame's chunk (R29), the correction (R41, on the values
+    // whose P is finite), and last, a position that is not finite (R36): the Python decoder's
+    // order
+    const P = this._exact.length === out.length ? this._exact : (this._exact = new Float64Array(out.length));
+    this._weights(d, t, f);
+    reconstructExact(d, t, P, this._scratch, residual.exponent);
+    const c = Math.floor(t / residual.chunkFrames);
+    const pairs = this._chunk(s, d, c);
+    const j = correct(residual, P, pairs, (t - residual.chunks[c].start) * out.length, out, f);
+    if (finite && j >= 0) {
+      throw formatError('R36-reconstruction-finite', `frame ${f}, vertex ${Math.floor(j / 3)}, axis ${'xyz'[j % 3]}: the decoded position is not finite (P of §8.1 is ${P[j]})`);
+    }
+    return out;
+  }
+
+  /**
+   * §8.1's integer weights of frame t of a segment into this._scratch, R41 unless they fit.
+   * @param {Factors} d
+   * @param {number} t
+   * @param {number} f the frame within the file, for messages
+   */
+  _weights(d, t, f) {
+    const residual = /** @type {Residual} */ (d.residual);
+    const exact = /** @type {import('./reconstruct.js').Exact} */ (d.exact);
+    const largest = exactWeights(d, t, this._scratch, residual.exponent);
+    if (!weightsFit(exact.rowSum, largest)) {
+      const what = largest === largest ? `R = ${exact.rowSum} times the largest |w| = ${largest} exceeds 2^53` : 'a weight is not finite';
+      throw formatError('R41-residual-value', `section '${residual.section.id}', frame ${f}: §8.1's integer weights at exponent ${residual.exponent} do not fit: ${what}`);
+    }
+  }
+
+  /**
+   * Chunk c of segment s's corrections, decoded (R29) and restored, from the cache when there.
+   * @param {number} s
+   * @param {Factors} d the segment, its residual read
+   * @param {number} c
+   */
+  _chunk(s, d, c) {
+    const key = `${s}/${c}`;
+    let pairs = this._chunks.get(key);
+    if (pairs !== undefined) {
+      this._chunks.delete(key); // most recently used: last
+    } else {
+      const residual = /** @type {Residual} */ (d.residual);
+      pairs = decodeChunk(residual, c, /** @type {Uint8Array} */ (d.residualPayload), this.vertices);
+      let bytes = pairs.byteLength;
+      for (const held of this._chunks.values()) bytes += held.byteLength;
+      for (const [old, held] of this._chunks) {
+        if (bytes <= CHUNK_CACHE_BYTES) break;
+        this._chunks.delete(old);
+        bytes -= held.byteLength;
+      }
+    }
+    this._chunks.set(key, pairs);
+    return pairs;
+  }
+
+  /**
+   * §5 step 18: the RESD section's parameters (R40, R21), then its CRC (R19).
+   * @param {Factors} d
+   * @param {number} s
+   */
+  _readResidual(d, s) {
+    const segment = this.layout.segments[s];
+    const section = /** @type {import('./container.js').Section} */ (segment.resd);
+    const residual = readResidual(section, segment.frames, this.vertices, this.limits);
+    d.residualPayload = this._payload(section);
+    d.residual = residual;
   }
 
   /**
@@ -167,8 +290,11 @@ export class TkcFile {
    */
   _simdOnce(d) {
     if (!this._useSimd) return null;
-    if (d.u1 !== this._sharedU1) return simdBasis(d.u1, this.vertices, d.columns);
-    if (this._sharedSimd === undefined) this._sharedSimd = simdBasis(d.u1, this.vertices, d.columns);
+    // the matrix each frame multiplies: U1, or with corrections its integers (§8.1)
+    const matrix = d.exact ? d.exact.q1 : d.u1;
+    const shared = d.exact ? this._sharedKept.q : this._sharedU1;
+    if (matrix !== shared) return simdBasis(matrix, this.vertices, d.columns);
+    if (this._sharedSimd === undefined) this._sharedSimd = simdBasis(matrix, this.vertices, d.columns);
     return this._sharedSimd;
   }
 
@@ -195,20 +321,35 @@ export class TkcFile {
     const topology = () => this._topologyOnce();
     let u1;
     let columns = i;
+    // with corrections, §8.1 multiplies U1's integers: kept with its steps
+    const corrections = this.layout.corrections;
+    /** @type {{q?: Float64Array, steps?: Float64Array}} */
+    let kept = {};
     if (segment.basis === 'shared') {
       if (this._sharedU1 === null) {
         const c = this.layout.sharedColumns;
-        this._sharedU1 = decodeQmat(segment.u1, this._payload(segment.u1), K, c, 'mesh', tools, topology);
+        this._sharedU1 = decodeQmat(segment.u1, this._payload(segment.u1), K, c, 'mesh', tools, topology, corrections ? this._sharedKept : undefined);
       }
       u1 = this._sharedU1;
+      kept = this._sharedKept;
       columns = this.layout.sharedColumns;
     } else {
-      u1 = decodeQmat(segment.u1, this._payload(segment.u1), K, i, 'mesh', tools, topology);
+      u1 = decodeQmat(segment.u1, this._payload(segment.u1), K, i, 'mesh', tools, topology, corrections ? kept : undefined);
     }
     const u3 = decodeQmat(segment.u3, this._payload(segment.u3), segment.frames, k, 'time', tools, topology);
     const core = decodeQmat(segment.core, this._payload(segment.core), i * 3 * k, 1, 'none', tools, topology);
     const cent = decodeQmat(segment.cent, this._payload(segment.cent), segment.frames, 3, 'time', tools, topology);
-    const decoded = { u1, columns, i, k, u3, core, cent, u2: segment.u2, B: coreTimesU2(core, segment.u2, i, k) };
+    /** @type {Factors} */
+    const decoded = {
+      u1, columns, i, k, u3, core, cent, u2: segment.u2, B: coreTimesU2(core, segment.u2, i, k),
+      residual: null, residualPayload: null, exact: null,
+    };
+    if (corrections) {
+      const q1 = /** @type {Float64Array} */ (kept.q);
+      decoded.exact = { q1, steps1: /** @type {Float64Array} */ (kept.steps), rowSum: rowSum(q1, K, columns, i) };
+    }
+    // step 16s: a segment's RESD.s after its factors (a whole file's RESD comes after NAME)
+    if (this.layout.segmented && this.layout.corrections) this._readResidual(decoded, s);
     this._decoded[s] = decoded;
     return decoded;
   }
@@ -223,12 +364,37 @@ function errorClaims(error) {
   /** @param {import('./msgpack.js').MsgValue | undefined} value */
   const number = (value) => (value instanceof MsgFloat ? value.value : isInt(value) ? Number(value) : null);
   const definition = error.get('definition');
+  const at = error.get('max_distance_at');
+  const lossless = error.get('lossless');
   return {
     kg: number(error.get('kg')),
     truncationKg: number(error.get('truncation_kg')),
     targetKg: number(error.get('target_kg')),
     definition: typeof definition === 'string' ? definition : null,
+    // 1.3: the largest vertex distance the encoder measured, where, the bound it was given,
+    // and whether it checked the decoded values are the input's bits
+    maxDistance: number(error.get('max_distance')),
+    maxDistanceAt: Array.isArray(at) && at.length === 2 && at.every((v) => isInt(v)) ? at.map(Number) : null,
+    targetMaxDistance: number(error.get('target_max_distance')),
+    lossless: typeof lossless === 'boolean' ? lossless : null,
   };
 }
 
 export { formatError };
+
+/**
+ * R of §8.1: the largest Σ_a |q1[v, a]| over the first i of U1's columns (exact below 2^53).
+ * @param {Float64Array} q1 K × columns
+ * @param {number} K
+ * @param {number} columns
+ * @param {number} i
+ */
+function rowSum(q1, K, columns, i) {
+  let largest = 0;
+  for (let v = 0; v < K; v++) {
+    let sum = 0;
+    for (let a = 0; a < i; a++) sum += Math.abs(q1[v * columns + a]);
+    if (sum > largest) largest = sum;
+  }
+  return largest;
+}

@@ -4,7 +4,7 @@
 
 import { TkcError, formatError, limitError } from './errors.js';
 import { MsgFloat, describe, isInt } from './msgpack.js';
-import { FLAG_CODING_TOOLS, FLAG_SEGMENTED } from './container.js';
+import { FLAG_CODING_TOOLS, FLAG_CORRECTIONS, FLAG_SEGMENTED } from './container.js';
 
 /**
  * @typedef {import('./msgpack.js').MsgValue} MsgValue
@@ -15,16 +15,16 @@ import { FLAG_CODING_TOOLS, FLAG_SEGMENTED } from './container.js';
 
 /**
  * A segment of the file (the whole file when it is not segmented) and its sections (for a
- * shared basis, u1 is the shared U1's entry).
+ * shared basis, u1 is the shared U1's entry; resd, its corrections, only with flag bit 2).
  * @typedef {{start: number, frames: number, ranks: number[], u2: Float64Array,
  *   basis: 'whole' | 'shared' | 'own', u1: Section, u3: Section, core: Section,
- *   cent: Section}} Segment
+ *   cent: Section, resd: Section | null}} Segment
  */
 
 /**
  * The layout of the file: which section holds what, every size checked.
  * @typedef {{vertices: number, frames: number, frameRate: number | null, segmented: boolean,
- *   codingTools: boolean, segments: Segment[], face: Section, faceShape: number[],
+ *   codingTools: boolean, corrections: boolean, segments: Segment[], face: Section, faceShape: number[],
  *   name: Section | null, sharedU1: Section | null, sharedColumns: number}} Layout
  */
 
@@ -42,6 +42,7 @@ const KINDS = {
   CORE: ['qmat', true],
   CENT: ['qmat', true],
   NAME: ['msgpack-zstd', false],
+  RESD: ['residual', true], // §6.9: known only in a file with flag bit 2 (kindOf)
 };
 
 /**
@@ -54,6 +55,7 @@ export function readLayout(container, limits) {
   const { header, sections, flags } = container;
   const segmented = (flags & FLAG_SEGMENTED) !== 0;
   const codingTools = (flags & FLAG_CODING_TOOLS) !== 0;
+  const corrections = (flags & FLAG_CORRECTIONS) !== 0;
   // step 10 / 10s
   const K = count(header, 'vertices', limits.max_vertices, 'max_vertices');
   const F = count(header, 'frames', limits.max_frames, 'max_frames');
@@ -70,13 +72,13 @@ export function readLayout(container, limits) {
     if (factorValues > limits.max_factor_values) {
       throw limitError('R21-header-limit', `the factors hold ${factorValues} values, max_factor_values = ${limits.max_factor_values}`);
     }
-    segments = [/** @type {Segment} */ ({ start: 0, frames: F, ranks: [i, k], u2: u2(header.get('u2'), 'u2'), basis: 'whole' })];
+    segments = [/** @type {Segment} */ ({ start: 0, frames: F, ranks: [i, k], u2: u2(header.get('u2'), 'u2'), basis: 'whole', resd: null })];
   }
   // step 11: every entry known, critical as it should be, with its codec
   /** @type {Map<string, Section>} */
   const known = new Map();
   for (const section of sections) {
-    const kind = kindOf(section.id, segmented, segments.length);
+    const kind = kindOf(section.id, segmented, corrections, segments.length);
     if (kind === null) {
       if (section.critical) {
         throw unsupported('R24-unknown-critical-section', `section '${section.id}' is critical and unknown to this decoder`);
@@ -110,12 +112,14 @@ export function readLayout(container, limits) {
       segment.cent = need(`CENT.${s}`);
       if (segment.basis === 'own') segment.u1 = need(`U1.${s}`);
     });
+    if (corrections) segments.forEach((segment, s) => { segment.resd = need(`RESD.${s}`); });
   } else {
     const [segment] = segments;
     segment.u1 = need('U1');
     segment.u3 = need('U3');
     segment.core = need('CORE');
     segment.cent = need('CENT');
+    if (corrections) segment.resd = need('RESD');
   }
   // step 13 / 13s: shapes and sizes
   const [M, n] = faceShape(face, limits);
@@ -169,7 +173,7 @@ export function readLayout(container, limits) {
       frameRate = rate.value;
     }
   }
-  return { vertices: K, frames: F, frameRate, segmented, codingTools, segments, face, faceShape: [M, n], name: known.get('NAME') ?? null, sharedU1, sharedColumns };
+  return { vertices: K, frames: F, frameRate, segmented, codingTools, corrections, segments, face, faceShape: [M, n], name: known.get('NAME') ?? null, sharedU1, sharedColumns };
 }
 
 /**
@@ -256,7 +260,7 @@ function readSegmentIndex(header, K, F, limits) {
     const Fs = Number(frames);
     const maxI = basis === 'own' ? Math.min(K, 3 * Fs) : K;
     const segmentRanks = ranks(entry.get('ranks'), K, Fs, 'R38-segment-ranks', `${where}: "ranks"`, maxI);
-    const segment = /** @type {Segment} */ ({ start, frames: Fs, ranks: segmentRanks, u2: u2(entry.get('u2'), `${where}: "u2"`), basis });
+    const segment = /** @type {Segment} */ ({ start, frames: Fs, ranks: segmentRanks, u2: u2(entry.get('u2'), `${where}: "u2"`), basis, resd: null });
     start += Fs;
     return segment;
   });
@@ -265,16 +269,20 @@ function readSegmentIndex(header, K, F, limits) {
 }
 
 /**
+ * The kind (§6.6) of a section id, or null for an id this file does not know: RESD (RESD.s)
+ * is known only in a file with flag bit 2 (§6.9); elsewhere it is unknown, like any other id.
  * @param {string} id
  * @param {boolean} segmented
+ * @param {boolean} corrections
  * @param {number} segmentCount
  * @returns {string | null}
  */
-function kindOf(id, segmented, segmentCount) {
+function kindOf(id, segmented, corrections, segmentCount) {
   if (id === 'FACE' || id === 'NAME' || id === 'U1') return id;
-  if (!segmented) return id in KINDS ? id : null;
-  const match = /^(U1|U3|CORE|CENT)\.(0|[1-9][0-9]*)$/.exec(id);
+  if (!segmented) return id in KINDS && (id !== 'RESD' || corrections) ? id : null;
+  const match = /^(U1|U3|CORE|CENT|RESD)\.(0|[1-9][0-9]*)$/.exec(id);
   if (match === null || Number(match[2]) >= segmentCount) return null;
+  if (match[1] === 'RESD' && !corrections) return null;
   return match[1];
 }
 

@@ -21,9 +21,12 @@ const LINEAR_STEP = 2 ** 33; // ... and the running differences
  * @param {boolean} codingTools preamble flag bit 1 (version 1.2)
  * @param {() => import('./topology.js').Topology} topology the mesh topology, built on first
  *   use (for U1 only)
+ * @param {{q?: Float64Array, steps?: Float64Array}} [keep] when given, also the restored
+ *   integers q (rows*cols, row-major, as binary64) and the steps (the f32 widened) are set in
+ *   it: §8.1 multiplies U1's integers
  * @returns {Float64Array} rows*cols values
  */
-export function decodeQmat(section, payload, rows, cols, relation, codingTools, topology) {
+export function decodeQmat(section, payload, rows, cols, relation, codingTools, topology, keep) {
   const where = `section '${section.id}'`;
   const entry = section.entry;
   const planes = entry.get('planes');
@@ -56,6 +59,11 @@ export function decodeQmat(section, payload, rows, cols, relation, codingTools, 
   }
   const stream = decodeIntStream(payload, rows * cols, Number(planes), where);
   const out = new Float64Array(rows * cols);
+  const integers = keep ? new Float64Array(rows * cols) : null;
+  if (keep) {
+    keep.q = /** @type {Float64Array} */ (integers);
+    keep.steps = step;
+  }
   for (let c = 0; c < cols; c++) {
     const offset = c * rows; // stream order is column-major (§6.3)
     let q;
@@ -66,6 +74,7 @@ export function decodeQmat(section, payload, rows, cols, relation, codingTools, 
     else q = restoreLinear(stream, offset, rows, `${where} column ${c}`);
     const s = step[c];
     for (let r = 0; r < rows; r++) out[r * cols + c] = s * q[r];
+    if (integers) for (let r = 0; r < rows; r++) integers[r * cols + c] = q[r];
   }
   return out;
 }

@@ -4,9 +4,10 @@
 //
 // The module is assembled here from named opcodes, so there is no toolchain and no build step:
 // one function, frame(u1, w, out, pairs, columns, skip), over one memory the caller fills. Each
-// lane computes x += u·W[a, x] for a = 0, 1, ... in the JavaScript loop's order with the same
-// binary64 multiply and add (WebAssembly never fuses them): both paths give the same bits, and
-// an engine without WebAssembly SIMD uses the JavaScript loop (reconstruct.js).
+// lane computes x = u·W[0, x], then x += u·W[a, x] for a = 1, 2, ... (the order of §8.1) with
+// the JavaScript loop's binary64 multiply and add (WebAssembly never fuses them): both paths
+// give the same bits, and an engine without WebAssembly SIMD uses the JavaScript loop
+// (reconstruct.js).
 
 const I32 = 0x7f;
 const V128 = 0x7b;
@@ -24,7 +25,6 @@ const f64x2Add = simd(0xf0);
 const f64x2Mul = simd(0xf2);
 /** @type {(lane: number) => number[]} */
 const extract = (lane) => [...simd(0x21), lane];
-const v128Zero = [...simd(0x0c), ...new Array(16).fill(0)];
 
 /**
  * @param {number} value
@@ -60,6 +60,9 @@ const addConst = (local, n) => [...get(local), op.i32Const, ...uleb(n), op.i32Ad
 // accumulator += u · W-pair at byte offset `offset` of PW
 /** @type {(acc: number, offset: number) => number[]} */
 const multiplyAdd = (acc, offset) => [...get(acc), ...get(U), ...get(PW), ...v128Load(offset), ...f64x2Mul, ...f64x2Add, ...set(acc)];
+// accumulator = u · W-pair at byte offset `offset` of PW
+/** @type {(acc: number, offset: number) => number[]} */
+const product = (acc, offset) => [...get(U), ...get(PW), ...v128Load(offset), ...f64x2Mul, ...set(acc)];
 /** @type {(acc: number, lane: number, offset: number) => number[]} */
 const store = (acc, lane, offset) => [...get(PO), ...get(acc), ...extract(lane), op.f64Store, 3, ...uleb(offset)];
 
@@ -67,8 +70,10 @@ const body = [
   ...get(U1), ...set(PU), ...get(OUT), ...set(PO), op.i32Const, 0, ...set(P),
   op.block, op.void, op.loop, op.void,
   ...get(P), ...get(PAIRS), op.i32GeU, op.brIf, 1,
-  ...v128Zero, ...set(X), ...v128Zero, ...set(Y), ...v128Zero, ...set(Z),
-  ...get(W), ...set(PW), op.i32Const, 0, ...set(A),
+  // column 0 starts each sum (§8.1: S = U1[v, 0]·W[0, x], then + U1[v, a]·W[a, x] for a = 1...)
+  ...get(W), ...set(PW), ...get(PU), ...v128Load(0), ...set(U),
+  ...product(X, 0), ...product(Y, 16), ...product(Z, 32),
+  ...addConst(PU, 16), ...addConst(PW, 48), op.i32Const, 1, ...set(A),
   op.block, op.void, op.loop, op.void,
   ...get(A), ...get(COLUMNS), op.i32GeU, op.brIf, 1,
   ...get(PU), ...v128Load(0), ...set(U),

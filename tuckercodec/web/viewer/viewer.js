@@ -92,6 +92,9 @@ const state = /** @type {any} */ ({
 
 const info = {
   version: null, vertices: null, frames: null, frameRate: null, faces: null, openMs: null,
+  // a file with corrections (format 1.3): the first segment's domain, and the bound the panel
+  // shows ("every vertex within D", "lossless"), or null
+  corrections: null, bound: null,
 };
 
 /** @type {Window & {tkcViewer?: object}} */ (window).tkcViewer = {
@@ -184,6 +187,7 @@ async function start() {
   Object.assign(info, {
     version: file.version, vertices: file.vertices, frames: file.frames,
     frameRate: file.frameRate, faces: file.faceCount, openMs: state.openMs,
+    corrections: file.residual(0), bound: boundText(file),
     // where openMs went: openTkc; the scene (triangles, buffers); sampling frames to frame the
     // camera; frame 0 and the first render (which compiles the shaders)
     openParts: {
@@ -778,6 +782,10 @@ function showFacts(file) {
     ['KG error', error && Number.isFinite(error.kg) ? `${formatNumber(/** @type {number} */ (error.kg))} % (the encoder's claim, in the header)` : 'not recorded in the header'],
   ];
   if (error && Number.isFinite(error.targetKg)) rows.push(['target KG', `${formatNumber(/** @type {number} */ (error.targetKg))} %`]);
+  const corrections = correctionsText(file);
+  if (corrections !== null) rows.push(['corrections', corrections]);
+  const bound = boundText(file);
+  if (bound !== null) rows.push(['vertex bound', bound]);
   const ref = state.reference;
   if (ref) {
     rows.push(['original', `${ref.source}, positions rounded to float32`]);
@@ -793,6 +801,46 @@ function showFacts(file) {
     list.append(dt, dd);
   }
   $('facts-note').textContent = error && error.definition ? `KG: ${error.definition}` : '';
+}
+
+/**
+ * What a file with corrections (§6.9) stores: the domain of each segment's RESD, or null.
+ * @param {TkcFile} file
+ */
+function correctionsText(file) {
+  if (!file.layout.corrections) return null;
+  // a segmented file decodes a segment when a frame of it is first shown: segment 0 is decoded
+  const r = /** @type {NonNullable<ReturnType<TkcFile['residual']>>} */ (file.residual(0));
+  const more = file.segments.length > 1 ? ' (segment 0)' : '';
+  if (r.domain === 'grid') return `on a grid of step ${formatNumber(r.step)} scene units${more}`;
+  if (r.domain === 'decimal-places') return `to decimals of ${r.scale} places${more}`;
+  if (r.domain === 'decimal-digits') return `to decimals of ${r.scale} significant digits${more}`;
+  if (r.domain === 'decimal-digits-float32') return `to binary32 values of decimals of ${r.scale} significant digits${more}`;
+  return `to exact ${r.domain === 'float32' ? 'binary32' : 'binary64'} values${more}`;
+}
+
+/**
+ * The bound on every vertex the header claims (§4.1, 1.3): "lossless", or "every vertex within
+ * D" from target_max_distance (else max_distance), with the distance measured and where; null
+ * when the header claims neither.
+ * @param {TkcFile} file
+ * @returns {string | null}
+ */
+function boundText(file) {
+  const error = file.error;
+  if (!error) return null;
+  const claim = "(the encoder's claim, in the header)";
+  if (error.lossless === true) return `lossless: every value is the original's, bit for bit ${claim}`;
+  const measured = error.maxDistance;
+  const at = error.maxDistanceAt ? ` at frame ${error.maxDistanceAt[0]}, vertex ${error.maxDistanceAt[1]}` : '';
+  if (error.targetMaxDistance !== null && Number.isFinite(error.targetMaxDistance)) {
+    const largest = measured !== null && Number.isFinite(measured) ? `; the largest is ${formatNumber(measured)}${at}` : '';
+    return `every vertex within ${formatNumber(error.targetMaxDistance)} scene units of the original${largest} ${claim}`;
+  }
+  if (measured !== null && Number.isFinite(measured)) {
+    return `every vertex within ${formatNumber(measured)} scene units of the original, the largest distance measured${at} ${claim}`;
+  }
+  return null;
 }
 
 /** @param {TkcFile['segments']} segments */

@@ -100,14 +100,17 @@ var rzfh = function (dat, w) {
         }
         if (ws > 2145386496)
             err(1);
-        var buf = new u8((w == 1 ? (fss || ws) : w ? 0 : ws) + 12);
+        // tuckercodec patch: === and !== (not == and !=) against 1: w is often the output
+        // buffer, and `buffer == 1` turns the whole buffer into a string to compare it (a
+        // quarter of a second for 4 MB, every frame decoded into a caller's buffer)
+        var buf = new u8((w === 1 ? (fss || ws) : w ? 0 : ws) + 12);
         buf[0] = 1, buf[4] = 4, buf[8] = 8;
         return {
             b: bt + fsb,
             y: 0,
             l: 0,
             d: di,
-            w: (w && w != 1) ? w : buf.subarray(12),
+            w: (w && w !== 1) ? w : buf.subarray(12),
             e: ws,
             o: new i32(buf.buffer, 0, 3),
             u: fss,
