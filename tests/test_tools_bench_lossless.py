@@ -101,3 +101,12 @@ def test_tuckercodec_lossless_gives_back_every_bit(precision, request):
     assert entry.exact and entry.chosen
     assert not entry.float64_differences  # the float64 output is the input's values too
     assert entry.decode_mb_s is not None and entry.decode_mb_s > 0
+
+
+def test_the_decode_is_timed_part_by_part_for_the_lossless_and_the_plain_file(short):
+    lossless_file, plain = lossless.decode_parts("short", short, 1)
+    assert (lossless_file.file, plain.file) == ("lossless", "KG 0.1")
+    assert lossless_file.bytes > plain.bytes  # every bit costs more than KG 0.1
+    for parts in (lossless_file, plain):
+        assert parts.open_seconds > 0 and parts.positions_seconds > 0
+        assert parts.mb_s == pytest.approx(short.vertices.size * 4 / 1e6 / parts.decode_seconds)

@@ -26,6 +26,11 @@ float32-equivalent output (F * K * 3 * 4 bytes over the decode's time), the deco
 tuckercodec being :func:`tuckercodec.decode` of the whole file (faces and float64 positions);
 encode and decode times are medians of ``--repeat`` runs of each coder's smallest file.
 
+Then tuckercodec's decode part by part (``--no-parts`` leaves it out): opening the file
+(``Decoder(data)``: header, faces, factor matrices), ``positions()`` (§8.1's reconstruction and
+the corrections) and the whole ``decode``, medians of ``--repeat`` runs, for the lossless file
+and for the plain file at KG 0.1 beside it: what the lossless mode adds to a decode.
+
 Last, the misses against the issue's targets: every file bit-exact; tuckercodec's smaller than
 the smallest peer's on every sequence; tuckercodec decoding at least ``TARGET_MB_S``.
 
@@ -41,6 +46,7 @@ from __future__ import annotations
 import argparse
 import datetime
 import json
+import statistics
 import sys
 import time
 from collections.abc import Callable
@@ -60,10 +66,20 @@ from tools.bench.peers.fpz import run_fpzip
 from tools.bench.peers.pco import run_pcodec
 from tools.bench.peers.tkc import run_with_options
 from tools.bench.peers.zstd import run_zstd_lossless
-from tuckercodec import EncodeOptions, MeshSequence, TuckerCodecError, bpfv
+from tuckercodec import (
+    Decoder,
+    EncodeOptions,
+    Encoder,
+    MeshSequence,
+    TuckerCodecError,
+    bpfv,
+    decode,
+)
 
 #: Issue 23: tuckercodec decodes at least this many MB (1e6 bytes) of float32 output a second.
 TARGET_MB_S = 50.0
+#: The plain file whose decode the lossless file's is compared with, part by part.
+REFERENCE_KG = 0.1
 
 
 def _tuckercodec(sequence: MeshSequence, values: np.ndarray) -> list[base.Trial]:
@@ -147,6 +163,58 @@ def measure(
     return entries
 
 
+@dataclass
+class DecodeParts:
+    """Where tuckercodec's decode of one file spends its time: medians of ``repeat`` runs."""
+
+    sequence: str
+    file: str  # "lossless", or the plain KG file it is compared with
+    bytes: int
+    open_seconds: float  # Decoder(data): header, faces, factor matrices
+    positions_seconds: float  # positions() of an opened decoder: §8.1 and the corrections
+    decode_seconds: float  # decode(data): the whole file, as the speed of the tables
+    megabytes: float  # float32-equivalent output, F * K * 12 / 1e6
+
+    @property
+    def mb_s(self) -> float:
+        return self.megabytes / self.decode_seconds
+
+
+def decode_parts(name: str, sequence: MeshSequence, repeat: int) -> list[DecodeParts]:
+    """tuckercodec's decode in its parts, for the lossless file and, for comparison, the
+    plain file at the default KG target: what the decode speed of the lossless mode adds."""
+    megabytes = sequence.frame_count * sequence.vertex_count * 12 / 1e6
+    parts = []
+    for label, options in (
+        ("lossless", EncodeOptions(lossless=True)),
+        (f"KG {REFERENCE_KG:g}", EncodeOptions(target_kg=REFERENCE_KG)),
+    ):
+        data = Encoder(options).encode(sequence)
+        open_times, positions, whole = [], [], []
+        for _ in range(repeat):  # a new decoder each time: it keeps what it has decoded
+            start = time.perf_counter()
+            decoder = Decoder(data)
+            middle = time.perf_counter()
+            decoder.positions()
+            open_times.append(middle - start)
+            positions.append(time.perf_counter() - middle)
+            start = time.perf_counter()
+            decode(data)
+            whole.append(time.perf_counter() - start)
+        parts.append(
+            DecodeParts(
+                name,
+                label,
+                len(data),
+                statistics.median(open_times),
+                statistics.median(positions),
+                statistics.median(whole),
+                megabytes,
+            )
+        )
+    return parts
+
+
 # ------------------------------------------------------------------------------------------
 # tables
 
@@ -220,6 +288,19 @@ def summary_rows(entries: list[Entry], names: list[str], coders: list[str]) -> l
     return lines
 
 
+def parts_rows(parts: list[DecodeParts]) -> list[str]:
+    return [
+        "| sequence | file | bytes | open s (header, faces, factors) | positions s | "
+        "whole decode s | MB/s (float32) |",
+        "|" + "---|" * 7,
+        *(
+            f"| {p.sequence} | {p.file} | {p.bytes} | {p.open_seconds:.3f} | "
+            f"{p.positions_seconds:.3f} | {p.decode_seconds:.3f} | {p.mb_s:.0f} |"
+            for p in parts
+        ),
+    ]
+
+
 def misses(entries: list[Entry], names: list[str]) -> list[str]:
     """What broke a promise or missed a target of issue 23."""
     found = []
@@ -257,6 +338,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     arguments.sequences(parser, "every sequence of ../shared/data")
     parser.add_argument("--coders", default=",".join(CODERS), help="coders to run, comma-separated")
     arguments.repeat(parser, 1, "timings of each coder's smallest file, the medians kept")
+    parser.add_argument(
+        "--no-parts",
+        action="store_true",
+        help="leave out tuckercodec's decode part by part (two more encodes per sequence)",
+    )
     arguments.output(
         parser, "output folder (default results/bench-lossless)", "results/bench-lossless"
     )
@@ -284,6 +370,7 @@ def run(args: argparse.Namespace) -> int:
 
     started = time.monotonic()
     entries: list[Entry] = []
+    parts: list[DecodeParts] = []
     names: list[str] = []
     header: list[str] = []
     taken: set[str] = set()
@@ -299,6 +386,9 @@ def run(args: argparse.Namespace) -> int:
         for coder in coders:
             print(f"{name}: {coder}...", file=sys.stderr)
             entries += measure(name, coder, CODERS[coder][1], sequence, values, args.repeat)
+        if "tuckercodec" in coders and not args.no_parts:
+            print(f"{name}: tuckercodec's decode, part by part...", file=sys.stderr)
+            parts += decode_parts(name, sequence, args.repeat)
 
     found = misses(entries, names)
     versions = []
@@ -323,8 +413,16 @@ def run(args: argparse.Namespace) -> int:
         "",
         *detail_rows(entries),
         "",
-        *(f"{coder}: skipped, {why}." for coder, why in skipped.items()),
     ]
+    if parts:
+        text += [
+            "tuckercodec's decode part by part, the lossless file beside the plain file at KG "
+            f"{REFERENCE_KG:g} (medians of {args.repeat} run(s)):",
+            "",
+            *parts_rows(parts),
+            "",
+        ]
+    text += [f"{coder}: skipped, {why}." for coder, why in skipped.items()]
     text += ["Misses:", *(f"- {m}" for m in found)] if found else ["Misses: none."]
     common.write_text(out / "lossless.md", "\n".join(text) + "\n", args.force)
     common.write_text(
