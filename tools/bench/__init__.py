@@ -18,7 +18,11 @@ ready for BENCHMARKS.md, with the machine and the command that made it.
 - ``gltf``: the decomposition as a glTF morph animation, against gltfpack;
 - ``zarr``: a sequence as a zarr array of .tkc chunks, against one .tkc;
 - ``viewer``: the viewer page in headless Chromium;
-- ``faces``: the faces-traverse encoder and decoder on fans of triangles sharing one edge.
+- ``faces``: the faces-traverse encoder and decoder on fans of triangles sharing one edge;
+- ``bounds``: size against a bound on every vertex, against SZ3 and zfp with the same
+  guarantee, and a bound beside a KG target (issue 23);
+- ``lossless``: the lossless mode against fpzip, pcodec, zstd and Blosc2, bit for bit, and its
+  decoding speed (issue 23).
 
 The options several suites take mean the same in each (:mod:`tools.bench.arguments`): the
 sequences measured (positional: files, folders of OBJ frames, or ``sample``, the built-in

@@ -30,6 +30,8 @@ SUITES = {
     "zarr": "tools.bench.zarr",
     "viewer": "tools.bench.viewer",
     "faces": "tools.bench.faces",
+    "bounds": "tools.bench.bounds",
+    "lossless": "tools.bench.lossless",
 }
 
 

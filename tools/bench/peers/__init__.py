@@ -37,7 +37,6 @@ import datetime
 import inspect
 import json
 import math
-import statistics
 import sys
 import time
 from pathlib import Path
@@ -150,17 +149,7 @@ def retime_chosen(
         if (t := best_at(trials, target)) is not None
     }
     for trial in chosen.values():
-        runs = [(trial.encode_seconds, trial.decode_seconds, trial.total_bytes)]
-        retime = trial.retime
-        assert retime is not None, f"{trial.coder} {trial.setting} cannot run again"
-        runs += [retime() for _ in range(repeat - 1)]
-        if any(size != trial.total_bytes for _, _, size in runs):  # it must time the same encode
-            raise RuntimeError(
-                f"{trial.coder} {trial.setting}: a re-run gave another size: "
-                f"{[size for _, _, size in runs]}"
-            )
-        trial.encode_seconds = statistics.median(r[0] for r in runs)
-        trial.decode_seconds = statistics.median(r[1] for r in runs)
+        base.retime_median(trial, repeat)
 
 
 def encode_seconds(trial: base.Trial) -> float:

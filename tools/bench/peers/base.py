@@ -8,16 +8,20 @@ plain int32 triangle list, the lossless reference of ../shared/NOTES.md. Errors 
 the caller on the decoded positions, never taken from the coder.
 
 Each coder is a module of its own beside this one (:mod:`~tools.bench.peers.tkc`, ``pca``,
-``draco``, ``meshopt``, ``sz3``, ``zfp``, ``tthresh``, ``zstd``), listed in
-:data:`tools.bench.peers.CODERS`; what they share is here: one run measured (:class:`Trial`),
-what every coder of one sequence shares (:class:`Context`), and the search of an error bound
-that the error-bounded float compressors (SZ3, zfp, TTHRESH) make for each KG target.
+``draco``, ``meshopt``, ``sz3``, ``zfp``, ``tthresh``, ``zstd``, and the lossless ``fpz``,
+``pco`` and ``blosc``), listed in :data:`tools.bench.peers.CODERS` (the bounds and lossless
+suites list theirs); what they share is here: one run measured (:class:`Trial`), what every
+coder of one sequence shares (:class:`Context`), the search of an error bound that the
+error-bounded float compressors (SZ3, zfp, TTHRESH) make for each KG target, and, for the
+suites of issue 23, the positions in their own precision, the layouts a float compressor is
+given them in, and the worst vertex measured independently of every coder.
 """
 
 from __future__ import annotations
 
 import math
 import shutil
+import statistics
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -110,6 +114,25 @@ def timed_trial(
     )
 
 
+def retime_median(trial: Trial, repeat: int) -> None:
+    """Time ``trial``'s encode and decode ``repeat`` times in all (its first, measured run
+    included) and keep the medians; a run that gives another size is an error (it must time
+    the same encode)."""
+    if repeat <= 1:
+        return
+    runs = [(trial.encode_seconds, trial.decode_seconds, trial.total_bytes)]
+    retime = trial.retime
+    assert retime is not None, f"{trial.coder} {trial.setting} cannot run again"
+    runs += [retime() for _ in range(repeat - 1)]
+    if any(size != trial.total_bytes for _, _, size in runs):
+        raise RuntimeError(
+            f"{trial.coder} {trial.setting}: a re-run gave another size: "
+            f"{[size for _, _, size in runs]}"
+        )
+    trial.encode_seconds = statistics.median(r[0] for r in runs)
+    trial.decode_seconds = statistics.median(r[1] for r in runs)
+
+
 def kg_of(centred_norm: float, original: np.ndarray, decoded: np.ndarray) -> float:
     """KG error (Karni-Gotsman, per-frame centroid) given the original's centred norm."""
     return 100.0 * float(np.linalg.norm(decoded - original)) / centred_norm
@@ -126,6 +149,76 @@ def zstd_bytes(raw: bytes) -> bytes:
 def faces_once(sequence: MeshSequence) -> bytes:
     """The faces as a plain int32 list, zstd 19: the connectivity of coders without their own."""
     return zstd_bytes(np.ascontiguousarray(sequence.faces, dtype="<i4").tobytes())
+
+
+def own_precision(sequence: MeshSequence) -> np.ndarray:
+    """The positions in the sequence's own precision: float32 where every value is a float32
+    exactly, else float64; what the bound and lossless suites give the float compressors."""
+    return sequence.compact_vertices()
+
+
+#: Arrangements of the (F, K, 3) positions a float compressor may be given, by name: the axes
+#: of the stored array in order, the last varying fastest. ``3KF`` puts each vertex coordinate's
+#: frames side by side (time fastest), where an animation is smoothest.
+LAYOUTS: dict[str, tuple[int, int, int]] = {
+    "FK3": (0, 1, 2),
+    "3KF": (2, 1, 0),
+    "3FK": (2, 0, 1),
+}
+
+
+def arrange(values: np.ndarray, layout: str) -> np.ndarray:
+    """The (F, K, 3) ``values`` in ``layout`` (a name of :data:`LAYOUTS`), contiguous."""
+    return np.ascontiguousarray(values.transpose(LAYOUTS[layout]))
+
+
+def restore(arranged: np.ndarray, layout: str) -> np.ndarray:
+    """The (F, K, 3) positions of an array in ``layout``: the inverse of :func:`arrange`."""
+    return arranged.transpose(np.argsort(LAYOUTS[layout]))
+
+
+def worst_vertex(original: np.ndarray, decoded: np.ndarray) -> tuple[float, int, int]:
+    """The largest Euclidean distance of a decoded vertex from the original, in the
+    sequence's units, and its (frame, vertex): measured here with numpy in float64, never
+    taken from a coder's report."""
+    difference = np.asarray(decoded, dtype=np.float64) - np.asarray(original, dtype=np.float64)
+    distances = np.sqrt(np.einsum("fkx,fkx->fk", difference, difference))
+    frame, vertex = np.unravel_index(int(np.argmax(distances)), distances.shape)
+    return float(distances[frame, vertex]), int(frame), int(vertex)
+
+
+def bounding_box_diagonal(vertices: np.ndarray) -> float:
+    """The diagonal of the box around every vertex of every frame: what ``P%`` bounds of
+    issue 23 are a fraction of."""
+    return float(np.linalg.norm(vertices.max(axis=(0, 1)) - vertices.min(axis=(0, 1))))
+
+
+def lossless_trial(
+    coder: str,
+    setting: str,
+    sequence: MeshSequence,
+    values: np.ndarray,
+    layout: str,
+    compress: Callable[[np.ndarray], bytes],
+    decompress: Callable[[bytes, np.ndarray], np.ndarray],
+) -> Trial:
+    """One lossless coder at one setting: ``compress`` the ``values`` (positions in their own
+    precision) arranged in ``layout``, the faces once; ``decompress(payload, like)`` gives back
+    an array of the shape and type of ``like`` (the arranged input, read for nothing else). The
+    decoded positions stay in their own type, for the caller's comparison of bits. The decode
+    unpacks the faces too, as the decode of a whole file would."""
+    arranged = arrange(values, layout)
+    faces = faces_once(sequence)
+
+    def encode() -> tuple[int, int, bytes]:
+        payload = compress(arranged)
+        return len(payload) + len(faces), len(faces), payload
+
+    def decode_(payload: bytes) -> np.ndarray:
+        np.frombuffer(zstandard.ZstdDecompressor().decompress(faces), dtype="<i4")
+        return restore(decompress(payload, arranged).reshape(arranged.shape), layout)
+
+    return timed_trial(coder, f"{setting}, {values.dtype}, {layout}", encode, decode_)
 
 
 def uncentre(tensor: np.ndarray, centroids: np.ndarray) -> np.ndarray:
@@ -169,16 +262,21 @@ class Coder:
 
     def unavailable(self) -> str | None:
         """Why this coder cannot run here, or None."""
-        if not self.needs:
-            return None
-        if self.needs.startswith("binary:"):
-            binary = self.needs.split(":", 1)[1]
-            return None if shutil.which(binary) else f"no `{binary}` binary on the PATH"
-        try:
-            __import__(self.needs)
-        except ImportError:
-            return f"Python package `{self.needs}` is not installed (pip install '.[bench]')"
+        return missing(self.needs)
+
+
+def missing(needs: str) -> str | None:
+    """Why what a coder ``needs`` (an import, or ``binary:NAME``) is not here, or None."""
+    if not needs:
         return None
+    if needs.startswith("binary:"):
+        binary = needs.split(":", 1)[1]
+        return None if shutil.which(binary) else f"no `{binary}` binary on the PATH"
+    try:
+        __import__(needs)
+    except ImportError:
+        return f"Python package `{needs}` is not installed (pip install '.[bench]')"
+    return None
 
 
 @dataclass
