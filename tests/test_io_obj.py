@@ -604,3 +604,18 @@ def teardown_module() -> None:
     """Remove the scratch folder; report how many examples each property test ran (``-s``)."""
     shutil.rmtree(SCRATCH, ignore_errors=True)
     report_examples(EXAMPLES_RUN)
+
+
+def test_a_folder_of_frames_gets_each_frames_own_faces(tmp_path):
+    """The faces' text is kept from one frame to the next (a folder writes the same faces in
+    each): a frame with other faces must still get its own, and the text of every frame is
+    what formatting it alone gives (repr of each float, 1-based corners)."""
+    vertices = np.random.default_rng(4).standard_normal((5, 3))
+    first = np.array([[0, 1, 2], [2, 3, 4]])
+    second = np.array([[0, 1, 2, 3], [1, 2, 4, -1]])
+    for number, faces in enumerate((first, second, first)):
+        path = tmp_path / f"frame{number}.obj"
+        write_obj(path, vertices, faces)
+        expected = [f"v {x!r} {y!r} {z!r}" for x, y, z in vertices.tolist()]
+        expected += ["f " + " ".join(str(i + 1) for i in row if i >= 0) for row in faces.tolist()]
+        assert path.read_text() == "\n".join(expected) + "\n"
