@@ -266,7 +266,7 @@ def test_a_corrected_value_out_of_range_is_r41(cloth):
     assert part.corrections is not None
     with pytest.raises(FormatError) as caught:
         residual.correct(
-            np.zeros((1, 2, 3)), np.full((1, 2, 3), 2**40), part.corrections, "section RESD"
+            np.zeros((1, 2, 3)), np.full((1, 2, 3), 2**40), part.corrections.kind, "section RESD"
         )
     assert caught.value.rule == "R41-residual-value"
 

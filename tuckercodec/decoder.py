@@ -110,6 +110,7 @@ class Decoder:
         self.limits = limits
         self._segments: OrderedDict[int, SegmentFactors] = OrderedDict()
         self._shared_u1: qmat.QuantizedMatrix | None = None
+        self._shared_u1_values: np.ndarray | None = None  # dequantized once for every segment
         self._mesh: MeshPrediction | None = None
         self._chunks: OrderedDict[tuple[int, int], np.ndarray] = OrderedDict()
         self._data: bytes | memoryview | FileRanges
@@ -217,13 +218,15 @@ class Decoder:
         i, k = segment.ranks
         with self._naming_path():
             if segment.basis == BASIS_SHARED:
-                if self._shared_u1 is None:
+                if self._shared_u1 is None or self._shared_u1_values is None:
                     self._shared_u1 = self._decode_u1("U1")
+                    self._shared_u1_values = self._shared_u1.values()
                 shared = self._shared_u1
                 u1_quantized = qmat.QuantizedMatrix(shared.q[:, :i], shared.steps[:i])
+                u1 = self._shared_u1_values[:, :i]
             else:
                 u1_quantized = self._decode_u1(self._section_id(segment, "U1"))
-            u1 = u1_quantized.values()
+                u1 = u1_quantized.values()
 
             def matrix(stem: str, allow_predict: bool = True) -> np.ndarray:
                 section_id = self._section_id(segment, stem)
@@ -328,7 +331,10 @@ class Decoder:
             start, _ = layout.chunk_range(chunk)
             with self._naming_path():
                 out[rows] = residual.correct(
-                    exact[rows], values[local[rows] - start], layout, f"section {part.residual_id}"
+                    exact[rows],
+                    values[local[rows] - start],
+                    layout.kind,
+                    f"section {part.residual_id}",
                 )
             return chunk, values
 

@@ -19,7 +19,7 @@ measures every vertex (or compares every bit) before the file is returned.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -76,16 +76,7 @@ class Goal:
 def goal_of(options: EncodeOptions, sequence: MeshSequence) -> Goal:
     """The corrections ``options`` ask for on ``sequence``; ``UnreachableTargetError`` for a
     bound below what float64 positions can resolve."""
-    vertices = sequence.vertices
-    if options.lossless:
-        return Goal(lossless_domains(vertices))
-    corner_low = vertices.min(axis=(0, 1))
-    corner_high = vertices.max(axis=(0, 1))
-    diagonal = float(np.linalg.norm(corner_high - corner_low))
-    bound = options.max_error_length(diagonal)
-    assert bound is not None
-    step = _grid_step(bound, float(np.abs(vertices).max()))
-    return Goal((Domain(GRID, step=step),), bound)
+    return goal_of_blocks(options, [sequence.vertices])
 
 
 def lossless_domains(values: np.ndarray) -> tuple[Domain, ...]:
@@ -100,12 +91,8 @@ def lossless_domains(values: np.ndarray) -> tuple[Domain, ...]:
 def _holds(values: np.ndarray, domain: Domain) -> bool:
     """Whether ``domain``'s ordered integers give every value back, bit for bit."""
     ordered = residual.ordered_in(values, domain)
-    frames = 1
-    layout = residual.ResidualLayout(
-        domain.name, None, 0, frames, (8,), (0, 0), frames, domain.scale
-    )
     with np.errstate(all="ignore"):
-        back = residual.correct(values, ordered - ordered, layout, "input")
+        back = residual.correct(values, ordered - ordered, domain, "input")
     return bool(np.array_equal(back.view(np.int64), values.view(np.int64)))
 
 
@@ -183,11 +170,7 @@ def integers_for(exact: np.ndarray, original: np.ndarray, goal: Goal, domain: Do
 
 def corrected_positions(exact: np.ndarray, integers: np.ndarray, domain: Domain) -> np.ndarray:
     """What a decoder returns for these corrections (§6.9's arithmetic)."""
-    frames = exact.shape[0]
-    layout = residual.ResidualLayout(
-        domain.name, domain.step, 0, frames, (8,), (0, 0), frames, domain.scale
-    )
-    return residual.correct(exact, integers, layout, "corrections")
+    return residual.correct(exact, integers, domain, "corrections")
 
 
 def correct(
@@ -396,14 +379,20 @@ def check_written(
 
 
 def goal_of_source(options: EncodeOptions, source: FrameSource, block_frames: int) -> Goal:
-    """:func:`goal_of` for a sequence read a range of frames at a time: one pass for the
-    bounding box, or for the lossless domains every range holds."""
+    """:func:`goal_of` for a sequence read a range of frames at a time: one pass."""
+    starts = range(0, source.frame_count, block_frames)
+    blocks = (source.read(a, min(source.frame_count, a + block_frames)) for a in starts)
+    return goal_of_blocks(options, blocks)
+
+
+def goal_of_blocks(options: EncodeOptions, blocks: Iterable[np.ndarray]) -> Goal:
+    """The goal from the frames, given a block at a time: the bounding box's diagonal (and the
+    largest coordinate) for a bound, or the lossless domains that hold every block."""
     low = np.full(3, np.inf)
     high = np.full(3, -np.inf)
     domains: tuple[Domain, ...] | None = None
     largest = 0.0
-    for start in range(0, source.frame_count, block_frames):
-        block = source.read(start, min(source.frame_count, start + block_frames))
+    for block in blocks:
         if options.lossless:
             held = lossless_domains(block)
             domains = held if domains is None else tuple(d for d in domains if d in held)

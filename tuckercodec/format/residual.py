@@ -315,6 +315,11 @@ class ResidualLayout:
     scale: int | None = None  # decimal-places' places, decimal-digits' digits
     exponent: int = 0  # e of §8.1: S x 2**e
 
+    @property
+    def kind(self) -> Domain:
+        """Its domain, with the grid's step or the decimals' places or digits."""
+        return Domain(self.domain, self.step, self.scale)
+
     def chunk_of(self, frame: int) -> int:
         return frame // self.chunk_frames
 
@@ -464,15 +469,13 @@ def decode_chunk(
     return values
 
 
-def correct(
-    exact: np.ndarray, residual: np.ndarray, layout: ResidualLayout, where: str
-) -> np.ndarray:
+def correct(exact: np.ndarray, residual: np.ndarray, domain: Domain, where: str) -> np.ndarray:
     """The decoded positions (float64) of §6.9: ``exact`` (P of §8.1) corrected by
     ``residual`` (e), R41 checked. In the domains grid and float64 a P that is not finite
     stays so (the decoder reports it as R36, as for any file); in float32 it rounds to
     +-infinity, which e may bring back."""
     with np.errstate(over="ignore", invalid="ignore"):
-        if layout.domain == FLOAT32:
+        if domain.name == FLOAT32:
             if _beyond(residual, FLOAT32_LARGEST):
                 _value_error(where, f"a correction is beyond +-2**32 in domain {FLOAT32}")
             ordered = ordered32(exact.astype(np.float32)) + residual
@@ -480,13 +483,13 @@ def correct(
                 _value_error(where, "a corrected value is not a finite binary32")
             return from_ordered32(ordered).astype(np.float64)
         finite = np.isfinite(exact)
-        if layout.domain in SCALES:
-            return _decimal(exact, residual, layout, finite, where)
-        if layout.domain == GRID:
+        if domain.name in SCALES:
+            return _decimal(exact, residual, domain, finite, where)
+        if domain.name == GRID:
             if _beyond(residual, GRID_LARGEST):
                 _value_error(where, f"a correction is beyond +-2**53 in domain {GRID}")
-            assert layout.step is not None
-            out = exact + layout.step * residual.astype(np.float64)
+            assert domain.step is not None
+            out = exact + domain.step * residual.astype(np.float64)
             if not np.isfinite(out)[finite].all():
                 _value_error(where, "a corrected position is not finite")
             return out
@@ -507,17 +510,17 @@ def _beyond(values: np.ndarray, limit: int) -> bool:
 def _decimal(
     exact: np.ndarray,
     residual: np.ndarray,
-    layout: ResidualLayout,
+    domain: Domain,
     finite: np.ndarray,
     where: str,
 ) -> np.ndarray:
     """The decimal domains of §6.9: P's ordered decimal integer (of the finite P; the others
     stay not finite, for R36), corrected by e, back to the value of its decimal."""
-    assert layout.scale is not None
-    scale = layout.scale
+    assert domain.scale is not None
+    scale = domain.scale
     every = bool(finite.all())  # the usual case: no copies for the non-finite
     base = exact if every else np.where(finite, exact, 0.0)
-    if layout.domain == PLACES:
+    if domain.name == PLACES:
         limit = LARGEST_PLACES_INTEGER
         if _beyond(residual, 2 * limit):
             _value_error(where, f"a correction is beyond +-2**54 in domain {PLACES}")
@@ -538,7 +541,7 @@ def _decimal(
         if ordered.size and (ordered.min() < -1 - limit or ordered.max() > limit):
             _value_error(where, f"a corrected integer is not a decimal of {scale} digits")
         values = digits_values(ordered, scale)
-        if layout.domain == DIGITS32:  # rounded once more, to binary32
+        if domain.name == DIGITS32:  # rounded once more, to binary32
             values = values.astype(np.float32).astype(np.float64)
     return values if every else np.where(finite, values, np.nan)
 
