@@ -4,6 +4,11 @@ runs, and where results are written. A suite adds the ones it takes, with its ow
 from __future__ import annotations
 
 import argparse
+import sys
+from collections.abc import Callable, Iterable
+from pathlib import Path
+
+from tools import common
 
 
 class UsageError(Exception):
@@ -57,3 +62,36 @@ def output(parser: argparse.ArgumentParser, what: str, default: str | None = Non
     replacing earlier ones unless forced."""
     parser.add_argument("--out", default=default, help=what)
     parser.add_argument("--force", action="store_true", help="replace earlier results in --out")
+
+
+def sequences_and_folder(args: argparse.Namespace, marker: str) -> tuple[list[str], Path] | None:
+    """The sequences a suite measures (``--sequences``, or every one of ../shared/data) and its
+    output folder, made; ``None``, the reason printed, when there is no sequence or the folder
+    holds earlier results (its ``marker`` file) and ``--force`` is not given: refused before
+    the run, not after it."""
+    paths = args.sequences or common.shared_sequences()
+    if not paths:
+        print(f"no sequences given and none found in {common.SHARED_DATA}", file=sys.stderr)
+        return None
+    out = Path(args.out)
+    if (out / marker).exists() and not args.force:
+        print(f"{out} holds earlier results; give --force to replace them", file=sys.stderr)
+        return None
+    out.mkdir(parents=True, exist_ok=True)
+    return paths, out
+
+
+def available_coders(
+    names: str, known: Iterable[str], missing: Callable[[str], str | None]
+) -> tuple[list[str], dict[str, str]]:
+    """The coders of ``--coders`` (comma-separated) that can run here, and those skipped with
+    why (their library is ``missing``; the reason is printed too). An unknown name is a
+    UsageError."""
+    wanted = [name for name in names.split(",") if name]
+    unknown = set(wanted) - set(known)
+    if unknown:
+        raise UsageError(f"unknown coders: {', '.join(sorted(unknown))}")
+    skipped = {name: why for name in wanted if (why := missing(name))}
+    for name, why in skipped.items():
+        print(f"{name}: skipped, {why}", file=sys.stderr)
+    return [name for name in wanted if name not in skipped], skipped

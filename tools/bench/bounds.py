@@ -460,23 +460,13 @@ def run(args: argparse.Namespace) -> int:
     """Measure and print; the exit status."""
     relatives = _fractions(args.bounds)
     plotted = sorted(set(relatives) | set(_fractions(args.plot_bounds)), reverse=True)
-    wanted = [c for c in args.coders.split(",") if c]
-    unknown = set(wanted) - set(CODERS)
-    if unknown:
-        raise UsageError(f"unknown coders: {', '.join(sorted(unknown))}")
-    paths = args.sequences or common.shared_sequences()
-    if not paths:
-        print(f"no sequences given and none found in {common.SHARED_DATA}", file=sys.stderr)
+    coders, skipped = arguments.available_coders(
+        args.coders, CODERS, lambda coder: base.missing(CODERS[coder][0])
+    )
+    inputs = arguments.sequences_and_folder(args, "bounds.md")
+    if inputs is None:
         return 2
-    out = Path(args.out)
-    if (out / "bounds.md").exists() and not args.force:  # refuse now, not after the run
-        print(f"{out} holds earlier results; give --force to replace them", file=sys.stderr)
-        return 2
-    out.mkdir(parents=True, exist_ok=True)
-    skipped = {c: why for c in wanted if (why := base.missing(CODERS[c][0]))}
-    for coder, why in skipped.items():
-        print(f"{coder}: skipped, {why}", file=sys.stderr)
-    coders = [c for c in wanted if c not in skipped]
+    paths, out = inputs
 
     started = time.monotonic()
     entries: list[Entry] = []

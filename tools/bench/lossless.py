@@ -51,14 +51,12 @@ import sys
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
-from pathlib import Path
 
 import numpy as np
 
 import tuckercodec
 from tools import common
 from tools.bench import arguments
-from tools.bench.arguments import UsageError
 from tools.bench.bounds import sequence_name
 from tools.bench.peers import base
 from tools.bench.peers.blosc import run_blosc2
@@ -350,23 +348,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Measure and print; the exit status."""
-    wanted = [c for c in args.coders.split(",") if c]
-    unknown = set(wanted) - set(CODERS)
-    if unknown:
-        raise UsageError(f"unknown coders: {', '.join(sorted(unknown))}")
-    paths = args.sequences or common.shared_sequences()
-    if not paths:
-        print(f"no sequences given and none found in {common.SHARED_DATA}", file=sys.stderr)
+    coders, skipped = arguments.available_coders(
+        args.coders, CODERS, lambda coder: base.missing(CODERS[coder][0])
+    )
+    inputs = arguments.sequences_and_folder(args, "lossless.md")
+    if inputs is None:
         return 2
-    out = Path(args.out)
-    if (out / "lossless.md").exists() and not args.force:  # refuse now, not after the run
-        print(f"{out} holds earlier results; give --force to replace them", file=sys.stderr)
-        return 2
-    out.mkdir(parents=True, exist_ok=True)
-    skipped = {c: why for c in wanted if (why := base.missing(CODERS[c][0]))}
-    for coder, why in skipped.items():
-        print(f"{coder}: skipped, {why}", file=sys.stderr)
-    coders = [c for c in wanted if c not in skipped]
+    paths, out = inputs
 
     started = time.monotonic()
     entries: list[Entry] = []

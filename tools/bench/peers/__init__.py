@@ -314,15 +314,10 @@ def run(args: argparse.Namespace) -> int:
     if unknown:
         raise UsageError(f"unknown coders: {', '.join(sorted(unknown))}")
     coders = [c for c in CODERS if c.name in wanted]
-    paths = args.sequences or common.shared_sequences()
-    if not paths:
-        print(f"no sequences given and none found in {common.SHARED_DATA}", file=sys.stderr)
+    found = arguments.sequences_and_folder(args, "summary.md")
+    if found is None:
         return 2
-    out = Path(args.out)
-    if (out / "summary.md").exists() and not args.force:  # refuse now, not after the run
-        print(f"{out} holds earlier results; give --force to replace them", file=sys.stderr)
-        return 2
-    out.mkdir(parents=True, exist_ok=True)
+    paths, out = found
 
     skipped = {c.name: c.unavailable() for c in coders if c.unavailable()}
     for name, why in skipped.items():
