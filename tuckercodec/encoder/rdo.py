@@ -92,7 +92,11 @@ class Levels:
 
 #: Columns chosen at once: each column is chosen alone, and a block bounds the temporaries
 #: (a dozen arrays of rows x block floats) rather than letting them grow with U1's width.
+#: A block holds about BLOCK_VALUES entries (4 MiB of float64 per array: wide enough that the
+#: per-level loop's Python overhead is amortised, small enough to stay in cache), and at least
+#: COLUMN_BLOCK columns. Columns are independent, so the width changes no integer.
 COLUMN_BLOCK = 16
+BLOCK_VALUES = 1 << 19
 
 
 def quantize(
@@ -105,17 +109,15 @@ def quantize(
     modelled without it. With ``settings.lam`` None this is :func:`.format.qmat.quantize`.
     """
     columns = values.shape[1]
-    if settings.lam is None or columns <= COLUMN_BLOCK:
+    width = max(COLUMN_BLOCK, BLOCK_VALUES // max(values.shape[0], 1))
+    if settings.lam is None or columns <= width:
         return _quantize_block(values, steps, levels, settings)
     steps = np.broadcast_to(np.asarray(steps), (columns,))
     blocks = [
         _quantize_block(
-            values[:, start : start + COLUMN_BLOCK],
-            steps[start : start + COLUMN_BLOCK],
-            levels,
-            settings,
+            values[:, start : start + width], steps[start : start + width], levels, settings
         )
-        for start in range(0, columns, COLUMN_BLOCK)
+        for start in range(0, columns, width)
     ]
     return QuantizedMatrix(
         np.concatenate([block.q for block in blocks], axis=1),
@@ -200,10 +202,13 @@ def _zigzag(values: np.ndarray) -> np.ndarray:
     return out
 
 
-def _bits(residual: np.ndarray, table: np.ndarray, columns: np.ndarray) -> np.ndarray:
+def _bits(residual: np.ndarray, flat_table: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """Each residual's bits by its column's table (``flat_table``: the tables one after the
+    other, column c's at ``offsets[c]``), escapes priced as in :func:`_bit_table`."""
     zig = _zigzag(residual)
-    clipped = np.minimum(zig, TABLE_SIZE)
-    bits: np.ndarray = table[columns, clipped]
+    index = np.minimum(zig, TABLE_SIZE)
+    index += offsets
+    bits: np.ndarray = flat_table.take(index)
     over = zig > TABLE_SIZE
     if over.any():
         bits = bits + np.where(over, 2.0 * np.log2(np.maximum(zig, 1) / TABLE_SIZE), 0.0)
@@ -220,7 +225,8 @@ def _choose(
     lam: float,
 ) -> np.ndarray:
     q = np.empty(low.shape, dtype=np.int64)
-    columns = np.arange(low.shape[1])[None, :]
+    flat_table = np.ascontiguousarray(table).reshape(-1)
+    offsets = (np.arange(low.shape[1]) * table.shape[1])[None, :]
     for rows in levels.groups:
         parents = levels.parents[rows]
         base = low[rows].astype(np.int64)
@@ -229,8 +235,8 @@ def _choose(
         if has.size:
             residual[has] -= q[parents[has]] * predicted
         below, above = error_low[rows], error_high[rows]
-        cost_low = below + lam * _bits(residual, table, columns)
-        cost_high = above + lam * _bits(residual + 1, table, columns)
+        cost_low = below + lam * _bits(residual, flat_table, offsets)
+        cost_high = above + lam * _bits(residual + 1, flat_table, offsets)
         # ties go to the nearer integer (the plain rounding), so lam -> 0 is nearest rounding
         high = (cost_high < cost_low) | ((cost_high == cost_low) & (above < below))
         q[rows] = base + high
