@@ -28,7 +28,7 @@ from ..hosvd import project
 from ..metrics import ErrorAccumulator
 from ..sequence import MeshSequence
 from ..topology import MeshPrediction
-from . import rdo
+from . import estimate, rdo
 from .trial import TRIAL_RATIO, Quantized, QuantizedSegment
 
 #: The largest |integer| a section may stream: after zigzag it must fit streams.MAX_PLANES bytes.
@@ -82,6 +82,7 @@ class WholeWorkspace:
         # how factors are rounded (rdo.py); the prediction trees it needs are made on first use
         self.rdo = rdo.DEFAULT
         self._u1_levels: rdo.Levels | None = None
+        self._u1_predictors = estimate.U1Predictors(self.mesh)
 
     # -- choosing ranks ------------------------------------------------------------------------
 
@@ -320,8 +321,15 @@ class WholeWorkspace:
         ]
 
     def trial_bytes(self, quantized: Quantized[Ranks]) -> int:
-        """The payload bytes at the fast search level: to compare trials, not the final size."""
-        return sum(len(payload) for _, payload in self.sections(quantized, streams.SEARCH_LEVEL))
+        """The quantized sections' bytes estimated from their integers (:mod:`.estimate`), and
+        the coded faces': to compare trials, not the final size."""
+        (factors,) = quantized.segments
+        assert factors.u1 is not None  # a whole file's U1 is its own
+        bits = estimate.entropy_bits(self._u1_predictors.stream(factors.u1.q))
+        bits += estimate.matrix_bits(factors.u3.q, predict=True)
+        bits += estimate.matrix_bits(factors.core.q, predict=False)
+        bits += estimate.matrix_bits(factors.centroids.q, predict=True)
+        return round(bits / 8.0) + len(self.face_section[1])
 
     def trial_size(self, quantized: Quantized[Ranks]) -> float:
         """The file packed at the fast level, its quantized sections scaled by

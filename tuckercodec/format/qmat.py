@@ -110,7 +110,7 @@ def encode_matrix(
     stream = q
     if allow_predict and q.shape[0] > 1:
         # in a function of its own: the other predictors' residuals are freed before packing
-        stream, predict = _predicted_stream(q, parents, coding_tools)
+        stream, predict = predicted_stream(q, parents, coding_tools)
     payload, planes = streams.pack_integers(np.ascontiguousarray(stream.T), level)
     params = {
         "shape": [int(q.shape[0]), int(q.shape[1])],
@@ -121,7 +121,7 @@ def encode_matrix(
     return params, payload
 
 
-def _predicted_stream(
+def predicted_stream(
     q: np.ndarray, parents: Mesh | None, coding_tools: bool
 ) -> tuple[np.ndarray, np.ndarray]:
     """The residuals to stream and each column's predictor: per column, the predictor whose
