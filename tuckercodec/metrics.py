@@ -130,6 +130,41 @@ class Displacement:
         return (self.frame, self.vertex)
 
 
+class WorstVertex:
+    """The running worst vertex over blocks of frames: the first of equal distances, and the
+    first NaN over any number (:data:`MAX_DISTANCE_DEFINITION`)."""
+
+    def __init__(self) -> None:
+        self.worst: Displacement | None = None
+
+    def add_distances(self, distances: np.ndarray, numbers: np.ndarray) -> None:
+        """Distances (n, K) of frames numbered ``numbers``."""
+        if not distances.size:
+            return
+        index = int(np.argmax(distances))  # the first of equals (and the first NaN)
+        frame, vertex = divmod(index, distances.shape[1])
+        found = float(distances[frame, vertex])
+        best = self.worst
+        if (
+            best is None
+            or found > best.distance
+            or (math.isnan(found) and not math.isnan(best.distance))
+        ):
+            self.worst = Displacement(found, int(numbers[frame]), int(vertex))
+
+    def add(self, difference: np.ndarray, first_frame: int) -> None:
+        """The difference (n, K, 3) of frames ``first_frame`` onwards (either sign)."""
+        squared = np.sum(difference * difference, axis=2)  # x, y, z in order, as norm sums
+        np.sqrt(squared, out=squared)
+        self.add_distances(squared, np.arange(first_frame, first_frame + len(difference)))
+
+    def found(self) -> tuple[float, tuple[int, int]]:
+        """(distance, (frame, vertex)) of the worst vertex added."""
+        if self.worst is None:
+            raise ValueError("no vertices have been compared")
+        return self.worst.distance, self.worst.at
+
+
 class ErrorAccumulator:
     """The KG error and the worst vertex of an approximation, measured in one pass over the
     frames, a block of frames at a time.
@@ -158,7 +193,7 @@ class ErrorAccumulator:
         self._spread: list[np.ndarray] = []  # per frame: ||A_f - its vertex mean||^2
         self._energy: list[np.ndarray] = []  # per frame: ||A_f||^2
         self._largest: list[np.ndarray] = []  # per frame: max over k of ||a_fk - b_fk||
-        self._worst: Displacement | None = None
+        self._worst = WorstVertex()
         self._next = 0  # the number of the next frame, when add is given none
 
     @property
@@ -218,17 +253,7 @@ class ErrorAccumulator:
         del squared
         largest = np.max(distances, axis=1) if distances.shape[1] else np.zeros(len(a))
         self._largest.append(largest)
-        if distances.size:
-            index = int(np.argmax(distances))  # the first of equals (and the first NaN)
-            frame, vertex = divmod(index, distances.shape[1])
-            found = float(distances[frame, vertex])
-            best = self._worst
-            if (
-                best is None
-                or found > best.distance
-                or (math.isnan(found) and not math.isnan(best.distance))
-            ):
-                self._worst = Displacement(found, int(numbers[frame]), int(vertex))
+        self._worst.add_distances(distances, numbers)
         del distances
         centred = a - a.mean(axis=1, keepdims=True) if a.shape[1] else a
         self._spread.append(np.sum(np.square(centred), axis=(1, 2)))
@@ -244,9 +269,9 @@ class ErrorAccumulator:
     def worst(self) -> Displacement:
         """The worst vertex of the frames added (:data:`MAX_DISTANCE_DEFINITION`)."""
         self._check()
-        if self._worst is None:  # frames without vertices
+        if self._worst.worst is None:  # frames without vertices
             raise ValueError("the frames compared have no vertices")
-        return self._worst
+        return self._worst.worst
 
     @property
     def kg(self) -> float:

@@ -46,6 +46,9 @@ class Quantized(Generic[Choice]):
     step: float
     segments: list[QuantizedSegment]
     shared_u1: QuantizedMatrix | None = None
+    #: The decoded vertex farthest from the input and its (frame, vertex), once a workspace
+    #: has measured it alongside the error (a whole file's :meth:`decoded_error2`).
+    worst: tuple[float, tuple[int, int]] | None = None
 
 
 class Workspace(Protocol[Choice]):

@@ -25,7 +25,7 @@ from ..format.header import header_map
 from ..format.qmat import QuantizedMatrix
 from ..format.reconstruction import factor_value_count, reconstruct_frames, reconstruction_basis
 from ..hosvd import project
-from ..metrics import ErrorAccumulator
+from ..metrics import WorstVertex
 from ..sequence import MeshSequence
 from ..topology import MeshPrediction
 from . import estimate, rdo
@@ -223,7 +223,8 @@ class WholeWorkspace:
     # -- its error -------------------------------------------------------------------------------
 
     def decoded_error2(self, quantized: Quantized[Ranks]) -> float:
-        """||decoded - input||**2, computed with the decoder's own reconstruction."""
+        """||decoded - input||**2, computed with the decoder's own reconstruction. The worst
+        vertex is found in the same pass and kept on ``quantized`` (:meth:`worst_vertex`)."""
         (i, k), (factors,) = quantized.choice, quantized.segments
         assert factors.u1 is not None  # a whole file's U1 is its own
         u1 = factors.u1.values()
@@ -232,6 +233,7 @@ class WholeWorkspace:
         core = factors.core.values().reshape(i, 3, k)
         basis = reconstruction_basis(core, self.analysis.decomposition.u2)
         total = 0.0
+        worst = WorstVertex()
         vertices = self.sequence.vertices
         frames_at_once = max(1, BLOCK_BYTES // (24 * self.vertex_count))
         for start in range(0, self.frame_count, frames_at_once):
@@ -240,26 +242,17 @@ class WholeWorkspace:
             difference -= vertices[block]
             flat = difference.reshape(-1)
             total += float(flat @ flat)
+            worst.add(difference, start)
+        quantized.worst = worst.found()
         return total
 
     def worst_vertex(self, quantized: Quantized[Ranks]) -> tuple[float, tuple[int, int]]:
         """The decoded vertex farthest from the input (Euclidean distance) and its (frame,
-        vertex), with the decoder's own reconstruction, a block of frames at a time."""
-        (i, k), (factors,) = quantized.choice, quantized.segments
-        assert factors.u1 is not None
-        u1 = factors.u1.values()
-        u3 = factors.u3.values()
-        centroids = factors.centroids.values()
-        basis = reconstruction_basis(
-            factors.core.values().reshape(i, 3, k), self.analysis.decomposition.u2
-        )
-        measured = ErrorAccumulator()
-        frames_at_once = max(1, BLOCK_BYTES // (24 * self.vertex_count))
-        for start in range(0, self.frame_count, frames_at_once):
-            block = slice(start, start + frames_at_once)
-            decoded = reconstruct_frames(u1, basis, u3[block], centroids[block])
-            measured.add(self.sequence.vertices[block], decoded)
-        return measured.worst.distance, measured.worst.at
+        vertex), with the decoder's own reconstruction (measured with the error if it was)."""
+        if quantized.worst is None:
+            self.decoded_error2(quantized)
+        assert quantized.worst is not None
+        return quantized.worst
 
     # the whole workspace measures every trial: its model is the decoded error
     modelled_error2 = decoded_error2
