@@ -48,9 +48,13 @@ CLOSE_ENOUGH = 0.97
 #: once, by at most this factor, aiming this far inside the room.
 LOOSEN_AT_MOST, LOOSEN_AIM = 1.5, 0.99
 #: Above the target, D shrinks in proportion to the excess (the noise grows about linearly with
-#: D), aimed a little inside, by at least 5 % (never stalls) and at most 4 times (never
+#: D), aimed a little inside, by at least 2 % (never stalls) and at most 4 times (never
 #: overshoots on a noisy first measure).
-TIGHTEN_AIM, TIGHTEN_LEAST, TIGHTEN_MOST = 0.97, 0.95, 0.25
+TIGHTEN_AIM, TIGHTEN_LEAST, TIGHTEN_MOST = 0.985, 0.98, 0.25
+#: The noise model's D fills 0.97-1.02 of quantization's room once rounded (rate-distortion
+#: rounding included); started this far inside, meet() is usually done on its first
+#: quantization instead of its third (above, then too far below, then loosened).
+FIRST_AIM = 0.985
 #: Passes that measure the error on the input before giving up on the target (a modelled error
 #: only: each one tightens D by what it measured above the model).
 MAX_MEASURING_PASSES = 6
@@ -66,7 +70,8 @@ def meet(
     """Adjust D so that the decoded squared error is at most ``limit2``, as loose as it can be:
     on the workspace's model of the error, then measured; each measurement above the limit
     tightens the model's limit by the excess and tries again."""
-    model_limit2 = limit2
+    fixed2 = work.truncation_error2(choice) + work.floor_error2
+    model_limit2 = limit2 - work.model_margin * max(limit2 - fixed2, 0.0)
     adjustments = 0
     for _ in range(MAX_MEASURING_PASSES):
         quantized, modelled2, tried = _meet_in_model(work, choice, step, model_limit2)
@@ -81,11 +86,12 @@ def meet(
         )
         model_limit2 -= 1.01 * (measured2 - modelled2) + 1e-12 * limit2
         step = quantized.step * 0.9
-        if model_limit2 <= work.truncation_error2(choice) + work.floor_error2:
+        if model_limit2 <= fixed2:
             break
     raise UnreachableTargetError(
-        "the segmented encoder could not meet the error target: the sketch misses too much "
-        "of the sequence (ask for a larger error, or longer segments)"
+        "the encoder could not meet the error target: its model of the error misses too much "
+        "of the decoded error (segmented: the sketch misses too much of the sequence; ask for "
+        "a larger error, or longer segments)"
     )
 
 
@@ -141,7 +147,7 @@ def search_kg(
         choice, step = work.largest_choice(limit2, target_kg)
         trials.append((0, choice, step))
     _, choice, step = min(trials, key=lambda trial: trial[0])
-    quantized, error2, adjustments = meet(work, choice, step, limit2)
+    quantized, error2, adjustments = meet(work, choice, step * FIRST_AIM, limit2)
     return quantized, error2, len(trials) + adjustments
 
 

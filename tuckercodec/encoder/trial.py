@@ -65,6 +65,9 @@ class Workspace(Protocol[Choice]):
     face_section: tuple[dict[str, Any], bytes]
     #: Whether :meth:`modelled_error2` is the decoded error itself (no measuring needed).
     exact_model: bool
+    #: Where the model is not exact: the share of quantization's room its limit keeps inside
+    #: the target, so that a measurement rarely finds the model's choice above it.
+    model_margin: float
     #: Truncation shares to try when none of the usual ones leaves room for quantization.
     late_shares: tuple[float, ...]
     #: A size target's first fill: the numbers that scale its first guess of the size's slope,
