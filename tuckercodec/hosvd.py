@@ -33,6 +33,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg
 
 # Rows of X1 processed at once when measuring energies: bounds the scratch memory to
 # ROW_BLOCK * 3F floats instead of a second copy of the tensor.
@@ -112,12 +113,9 @@ class HOSVD:
         scale = np.sqrt(self.mode1_energy[:rank])
         scale[scale == 0] = 1.0
         columns = (x1 @ self._v1[:, :rank]) / scale
-        # Columns from tiny singular values carry rounding noise; QR makes them orthonormal
-        # while keeping the leading ones (R's diagonal made positive keeps their signs).
-        q, r = np.linalg.qr(columns)
-        signs = np.sign(np.diag(r))
-        signs[signs == 0] = 1.0
-        return q * signs
+        # Columns from tiny singular values carry rounding noise; orthonormalising them keeps
+        # the leading ones (and their signs: R's diagonal is positive).
+        return orthonormal_columns(columns)
 
     def truncate(self, i: int, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The truncated decomposition with ranks (i, 3, k).
@@ -133,6 +131,39 @@ class HOSVD:
         u3 = self.u3[:, :k].copy()
         core = project(self.tensor, u1, self.u2, u3)
         return core, u1, self.u2.copy(), u3
+
+
+#: Cholesky QR's result is accepted when Q'Q is this close to the identity (entrywise).
+ORTHONORMAL_TOLERANCE = 1e-13
+
+
+def orthonormal_columns(columns: np.ndarray) -> np.ndarray:
+    """Q of the thin QR factorisation of ``columns`` with R's diagonal positive.
+
+    Cholesky QR twice (R from the Cholesky factor of the Gram matrix, then once more on the
+    result) costs two Gram matrices and two triangular solves, all level-3 BLAS, about a
+    third of Householder QR's time on a tall U1 (samba's 9,971 x 363: 0.33 s -> 0.1 s). Its
+    columns are orthonormal to rounding when the columns are not nearly dependent, which
+    holds for X1 V / s (orthogonal in exact arithmetic); a noise column that breaks the
+    Cholesky factorisation, or a result further than :data:`ORTHONORMAL_TOLERANCE` from
+    orthonormal, falls back to Householder QR.
+    """
+    q = columns
+    try:
+        for _ in range(2):
+            gram = q.T @ q
+            upper = np.linalg.cholesky(gram).T  # R, with a positive diagonal
+            q = scipy.linalg.solve_triangular(upper, q.T, trans="T", lower=False).T
+        check = q.T @ q
+        np.fill_diagonal(check, np.diag(check) - 1.0)
+        if q.size and np.abs(check).max() <= ORTHONORMAL_TOLERANCE:
+            return np.ascontiguousarray(q)
+    except np.linalg.LinAlgError:
+        pass
+    q, r = np.linalg.qr(columns)
+    signs = np.sign(np.diag(r))
+    signs[signs == 0] = 1.0
+    return np.asarray(q * signs)
 
 
 def project(tensor: np.ndarray, u1: np.ndarray, u2: np.ndarray, u3: np.ndarray) -> np.ndarray:

@@ -56,10 +56,10 @@ class U1Predictors:
     def stream(self, q: np.ndarray) -> np.ndarray:
         """The residuals ``q`` (rows, cols) would be streamed as under the predictors kept
         (chosen now for columns not seen before)."""
-        cols = q.shape[1]
-        if cols > self.predict.size:  # choose for every column, as the file would
-            stream, self.predict = qmat.predicted_stream(q, self.mesh, True)
-            return stream
+        cols, known = q.shape[1], self.predict.size
+        if cols > known:  # choose for the new columns, as the file would (each on its own)
+            new = qmat.predicted_stream(q[:, known:], self.mesh, True)[1]
+            self.predict = np.concatenate([self.predict, new])
         predict = self.predict[:cols]
         out = q.copy()
         parent = np.flatnonzero(predict == qmat.PREDICT_PARENT)

@@ -1,0 +1,139 @@
+"""The encoder's faster paths (issue 24) against the slower ones they replace or the
+definitions they implement: each must give the same answer, or the one its docstring says."""
+
+from __future__ import annotations
+
+import math
+from unittest import mock
+
+import numpy as np
+import pytest
+
+from tuckercodec import load_sequence
+from tuckercodec.encoder import estimate, rdo, search
+from tuckercodec.format import qmat
+from tuckercodec.hosvd import orthonormal_columns
+from tuckercodec.metrics import ErrorAccumulator, WorstVertex
+from tuckercodec.samples import sample_path
+from tuckercodec.topology import MeshPrediction
+
+
+def _householder(columns: np.ndarray) -> np.ndarray:
+    q, r = np.linalg.qr(columns)
+    signs = np.sign(np.diag(r))
+    signs[signs == 0] = 1.0
+    return q * signs
+
+
+def test_cholesky_qr_is_householder_qr_with_a_positive_diagonal():
+    rng = np.random.default_rng(3)
+    # orthogonal columns of very different norms, as X1 V is, normalised as U1 normalises them
+    base = np.linalg.qr(rng.standard_normal((500, 40)))[0] * np.logspace(0, -6, 40)
+    columns = base / np.linalg.norm(base, axis=0) + 1e-9 * rng.standard_normal((500, 40))
+    q = orthonormal_columns(columns)
+    assert np.abs(q.T @ q - np.eye(40)).max() < 1e-13
+    assert np.abs(q - _householder(columns)).max() < 1e-9
+
+
+def test_dependent_columns_fall_back_to_householder():
+    rng = np.random.default_rng(4)
+    columns = rng.standard_normal((200, 10))
+    columns[:, 7] = columns[:, 2]  # exactly dependent: Cholesky QR cannot make it orthonormal
+    with mock.patch("numpy.linalg.qr", wraps=np.linalg.qr) as householder:
+        q = orthonormal_columns(columns)
+    assert householder.called
+    np.testing.assert_array_equal(q, _householder(columns))
+
+
+def test_entropy_bits_is_each_columns_order_zero_entropy():
+    rng = np.random.default_rng(5)
+    stream = np.stack(
+        [
+            rng.integers(-3, 4, 1000),
+            np.zeros(1000, dtype=np.int64),
+            rng.geometric(0.001, 1000) * 4,  # many escapes past the table
+        ],
+        axis=1,
+    ).astype(np.int64)
+    expected = 0.0
+    for column in stream.T:
+        zig = (column << 1) ^ (column >> 63)
+        clipped = np.minimum(zig, estimate.TABLE_SIZE)
+        _, counts = np.unique(clipped, return_counts=True)
+        expected -= sum(c * math.log2(c / column.size) for c in counts)
+        expected += sum(2.0 * math.log2(z / estimate.TABLE_SIZE) for z in zig[zig >= 4095])
+    assert estimate.entropy_bits(stream) == pytest.approx(expected, rel=1e-12)
+    assert estimate.entropy_bits(np.zeros((0, 3), dtype=np.int64)) == 0.0
+
+
+def test_u1_predictors_give_the_stream_the_file_would_store():
+    sequence = load_sequence(sample_path())
+    mesh = MeshPrediction(sequence.faces, sequence.vertex_count)
+    rng = np.random.default_rng(6)
+    smooth = np.cumsum(rng.standard_normal((sequence.vertex_count, 12)), axis=0)
+    q = np.rint(smooth * 20).astype(np.int64)
+    predictors = estimate.U1Predictors(mesh)
+    # first the leading columns, then all of them: the new ones chosen as the file would
+    np.testing.assert_array_equal(
+        predictors.stream(q[:, :5]), qmat.predicted_stream(q[:, :5], mesh, True)[0]
+    )
+    stream, predict = qmat.predicted_stream(q, mesh, True)
+    np.testing.assert_array_equal(predictors.stream(q), stream)
+    np.testing.assert_array_equal(predictors.predict, predict)
+    # and a narrower trial reuses them
+    np.testing.assert_array_equal(predictors.stream(q[:, :8]), stream[:, :8])
+
+
+@pytest.mark.parametrize(
+    "sizes",
+    [
+        [9, 8, 7, 6, 5, 6, 7, 8],
+        [5, 6, 7, 8, 9, 10, 11, 12],
+        [12, 11, 10, 9, 8, 7, 6, 5],
+        [7, 6, 5, 6, 7, 8, 9, 10],
+        [4],
+        [6, 5],
+    ],
+)
+def test_the_valley_is_the_least_of_sizes_that_fall_then_rise(sizes):
+    asked: list[int] = []
+
+    def size(index: int) -> int:
+        asked.append(index)
+        return sizes[index]
+
+    best = search._valley(size, len(sizes))
+    assert sizes[best] == min(sizes)
+    assert len(set(asked)) <= max(1, len(sizes) // 2 + 2)
+
+
+def test_rdo_blocks_of_any_width_choose_the_same_integers():
+    rng = np.random.default_rng(7)
+    values = np.cumsum(rng.standard_normal((300, 70)), axis=0)
+    steps = np.full(70, 0.7)
+    levels = rdo.Levels.chain(300)
+    wide = rdo.quantize(values, steps, levels)
+    with mock.patch.object(rdo, "BLOCK_VALUES", 1):  # every block COLUMN_BLOCK columns
+        narrow = rdo.quantize(values, steps, levels)
+    np.testing.assert_array_equal(wide.q, narrow.q)
+
+
+def test_the_worst_vertex_is_the_accumulators():
+    rng = np.random.default_rng(8)
+    original = rng.standard_normal((7, 50, 3))
+    decoded = original + 1e-3 * rng.standard_normal((7, 50, 3))
+    decoded[4, 17] += 0.5  # the worst
+    decoded[5, 3] = original[5, 3] + (decoded[4, 17] - original[4, 17])  # equal: the first wins
+    accumulator = ErrorAccumulator(block_frames=2)
+    accumulator.add(original, decoded)
+    worst = WorstVertex()
+    for start in range(0, 7, 3):  # other blocks, the other sign
+        worst.add(decoded[start : start + 3] - original[start : start + 3], start)
+    assert (
+        worst.found()
+        == (accumulator.worst.distance, accumulator.worst.at)
+        == (
+            accumulator.worst.distance,
+            (4, 17),
+        )
+    )
