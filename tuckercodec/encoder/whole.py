@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -46,6 +47,30 @@ QUANTIZED_SECTIONS = ("CENT", "U3", "CORE", "U1")
 FIRST_ROOM_FLOOR = 1e-3
 
 
+@dataclass(frozen=True)
+class Connectivity:
+    """What a file's faces and names cost, the same for every trial: U1's mesh predictors,
+    the coded FACE section (the smaller codec; faces-traverse reorders the faces, §6.8) and
+    the coded NAME section. Python-bound, and independent of the analysis (BLAS-bound), so an
+    encoder can make both at once (:meth:`of` in a thread)."""
+
+    mesh: MeshPrediction
+    face_codec: str
+    face_section: tuple[dict[str, Any], bytes]
+    name_section: tuple[dict[str, Any], bytes] | None
+
+    @classmethod
+    def of(cls, sequence: MeshSequence, level: int) -> Connectivity:
+        """The connectivity of ``sequence``, its sections at zstd ``level``."""
+        face = faces.encode_face_section(sequence.faces, sequence.vertex_count, level)
+        return cls(
+            MeshPrediction(sequence.faces, sequence.vertex_count),
+            face.codec,
+            (face.params, face.payload),
+            names.encode_names(sequence.frame_names, level),
+        )
+
+
 class WholeWorkspace:
     """The input, its analysis and the parts shared by every trial of the search."""
 
@@ -61,7 +86,12 @@ class WholeWorkspace:
     first_room_floor = FIRST_ROOM_FLOOR
 
     def __init__(
-        self, sequence: MeshSequence, analysis: Analysis, level: int, select: Selection = "exact"
+        self,
+        sequence: MeshSequence,
+        analysis: Analysis,
+        level: int,
+        select: Selection = "exact",
+        connectivity: Connectivity | None = None,
     ) -> None:
         self.sequence = sequence
         self.analysis = analysis
@@ -71,14 +101,14 @@ class WholeWorkspace:
         self.frame_count = sequence.frame_count
         # The KG denominator: each frame is centred, so ||A - E(A)|| is the centred tensor's norm.
         self.denominator2 = analysis.total_energy
+        if connectivity is None:
+            connectivity = Connectivity.of(sequence, level)
         # U1's predictors: the mesh parents (1) and the decoded neighbours' mean (2)
-        self.mesh = MeshPrediction(sequence.faces, self.vertex_count)
+        self.mesh = connectivity.mesh
         self.parents = self.mesh.parents
-        # the smaller connectivity codec; faces-traverse reorders the faces (§6.8)
-        face = faces.encode_face_section(sequence.faces, self.vertex_count, level)
-        self.face_codec = face.codec
-        self.face_section = (face.params, face.payload)
-        self.name_section = names.encode_names(sequence.frame_names, level)
+        self.face_codec = connectivity.face_codec
+        self.face_section = connectivity.face_section
+        self.name_section = connectivity.name_section
         self.centroid_floor_step, self.floor_error2 = self._centroid_floor()
         r1, r3 = analysis.max_ranks
         self.first_fill_values = factor_value_count(self.vertex_count, self.frame_count, r1, r3)
