@@ -3,8 +3,9 @@
 Both packages run in fresh child Pythons: this checkout's, and the package as it was at
 ``--baseline`` (a git revision, default the last commit before issue 24), extracted with
 ``git archive`` into a temporary folder first on the child's ``PYTHONPATH``. Every measure runs
-as rounds of one child per package, baseline then now (A B A B...), so that whatever else the
-machine does falls on both alike; the first round is a warm-up (it also compiles the
+as rounds of one child per package, baseline and now (A B B A A B...), so that whatever else
+the machine does falls on both alike (the order turns each round: on a loaded machine a run's
+place in the round was seen to matter); the first round is a warm-up (it also compiles the
 extracted package's bytecode) and is thrown away, and each figure is the median of the
 ``--repeat`` rounds after it. A child times only the call measured, after its imports and
 reading its input. A decode is timed after one untimed call in the same child (lazy imports
@@ -205,11 +206,13 @@ class Measure:
 def interleaved(
     contenders: list[tuple[str, Package, dict[str, Any]]], repeat: int, warmup: int
 ) -> Measure:
-    """``warmup + repeat`` rounds, each running every contender's job once in order (A B A
-    B...); a failing contender stops the measure."""
+    """``warmup + repeat`` rounds, each running every contender's job once, the order turned
+    by one each round (A B, B A, A B... with two), so that neither always runs first or after
+    the same one; a failing contender stops the measure."""
     measure = Measure({name: [] for name, _, _ in contenders})
     for number in range(warmup + repeat):
-        for name, package, job in contenders:
+        turn = number % len(contenders)
+        for name, package, job in contenders[turn:] + contenders[:turn]:
             result = package.run(job)
             if "error" in result:
                 measure.errors.append(result["error"])
@@ -733,7 +736,7 @@ def run(args: argparse.Namespace) -> int:
     report.lines += [
         f"Speed of this checkout ({checkout_state()}) against the baseline {revision} "
         f"(`{args.baseline}`), one run, {args.repeat} rounds after {args.warmup} warm-up, "
-        "baseline and now alternating in fresh processes:",
+        "baseline and now alternating in fresh processes (the order turned each round):",
         "",
     ]
     encode_table(report, results)
