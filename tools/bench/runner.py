@@ -32,6 +32,7 @@ SUITES = {
     "faces": "tools.bench.faces",
     "bounds": "tools.bench.bounds",
     "lossless": "tools.bench.lossless",
+    "speed": "tools.bench.speed",
 }
 
 

@@ -12,6 +12,7 @@ import glob
 import os
 import re
 from collections.abc import Iterable, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -35,6 +36,8 @@ _UNSAFE_NAME_CHARACTERS = re.compile(r"[^A-Za-z0-9._-]+")
 #: The format that reads a listed file whose suffix no format claims: trimesh reads far more
 #: kinds of mesh than the registry lists (.xyz, .drc...), and says so when it cannot.
 FALLBACK_FRAME_FORMAT = "mesh"
+#: Threads writing the frames of a folder at once.
+WRITER_THREADS = 4
 
 
 def natural_sort_key(name: str) -> tuple[tuple[int | str, ...], str]:
@@ -166,14 +169,28 @@ def write_frames(
         raise ValueError(f"the {frame_format.name} format cannot write frames")
     names = frame_file_names(seq.frame_names, frame_format.suffixes[0])
     destination.parent.mkdir(parents=True, exist_ok=True)
-    numbered: Iterable[int] = range(seq.frame_count)
-    if options.progress:
-        numbered = progress_bar(
-            numbered, total=seq.frame_count, label=f"writing {frame_format.name.upper()}"
-        )
-    with atomic_folder(destination, names, overwrite=options.overwrite) as staging:
-        for index in numbered:
-            write_frame(staging / names[index], seq.vertices[index], seq.faces, options)
+
+    def write(index: int) -> None:
+        write_frame(staging / names[index], seq.vertices[index], seq.faces, options)
+
+    # frames written by a few threads: each file's fsync waits on the disk, and numpy (which
+    # makes an OBJ frame's text) runs without the GIL meanwhile; the pool ends (its frames
+    # written or cancelled) before the staging folder is moved in or removed
+    with (
+        atomic_folder(destination, names, overwrite=options.overwrite) as staging,
+        ThreadPoolExecutor(max_workers=WRITER_THREADS) as pool,
+    ):
+        written: Iterable[None] = pool.map(write, range(seq.frame_count))
+        if options.progress:
+            written = progress_bar(
+                written, total=seq.frame_count, label=f"writing {frame_format.name.upper()}"
+            )
+        try:
+            for _ in written:
+                pass
+        except BaseException:
+            pool.shutdown(cancel_futures=True)  # and wait for the frames being written
+            raise
 
 
 def frame_file_names(frame_names: Sequence[str], suffix: str) -> list[str]:

@@ -61,6 +61,7 @@ from ..errors import InputError
 from ..reading import open_regular_file
 from ..topology import face_table_problem
 from .registry import MeshFrame, ReadOptions, WriteOptions
+from .shortest import vertex_text
 
 #: The longest line the OBJ reader accepts, in bytes, its line end not counted: 4 MiB, a face of
 #: about half a million corners, far beyond any real mesh. A longer line is refused as soon as
@@ -658,9 +659,13 @@ def write_obj(
     vertices = np.asarray(vertices, dtype=np.float64)
     faces = np.asarray(faces)
     _check_writable(vertices, faces, precision)
-    lines = _vertex_lines(vertices, precision)
-    text = "\n".join([*lines, _faces_text(faces)]) if lines else _faces_text(faces)
-    write_atomic(path, text.encode("ascii"), overwrite=overwrite)
+    if precision is None:  # repr's text, made by array operations
+        text = vertex_text(vertices) + _faces_bytes(faces)
+    else:
+        lines = _vertex_lines(vertices, precision)
+        joined = "\n".join([*lines, _faces_text(faces)]) if lines else _faces_text(faces)
+        text = joined.encode("ascii")
+    write_atomic(path, text, overwrite=overwrite)
 
 
 def _check_writable(vertices: np.ndarray, faces: np.ndarray, precision: int | None) -> None:
@@ -690,22 +695,33 @@ def _vertex_lines(vertices: np.ndarray, precision: int | None) -> list[str]:
     return [f"v {x} {y} {z}" for x, y, z in zip(each, each, each, strict=True)]
 
 
-#: The last faces written and their text: a folder of frames writes the same faces in every
-#: frame, so their text is made once (a key of the table's bytes, not its identity).
-_last_faces: tuple[tuple[tuple[int, ...], str, bytes], str] | None = None
+#: The last faces written and their text, as str and as ASCII bytes: a folder of frames writes
+#: the same faces in every frame, so their text is made once (a key of the table's bytes, not
+#: its identity). Frames written from several threads at once may each make it: the same text.
+_last_faces: tuple[tuple[tuple[int, ...], str, bytes], str, bytes] | None = None
 
 
 def _faces_text(faces: np.ndarray) -> str:
     """The ``f`` lines of ``faces``, each ended by a newline (the last text kept for the next
     frame of a folder, when it writes the same faces)."""
+    return _faces_cached(faces)[0]
+
+
+def _faces_bytes(faces: np.ndarray) -> bytes:
+    """:func:`_faces_text` as ASCII bytes."""
+    return _faces_cached(faces)[1]
+
+
+def _faces_cached(faces: np.ndarray) -> tuple[str, bytes]:
     global _last_faces
     key = (faces.shape, faces.dtype.str, hashlib.blake2b(faces.tobytes(), digest_size=16).digest())
     cached = _last_faces
     if cached is not None and cached[0] == key:
-        return cached[1]
+        return cached[1], cached[2]
     text = "".join(line + "\n" for line in _face_lines(faces))
-    _last_faces = (key, text)
-    return text
+    encoded = text.encode("ascii")
+    _last_faces = (key, text, encoded)
+    return text, encoded
 
 
 def _face_lines(faces: np.ndarray) -> list[str]:
