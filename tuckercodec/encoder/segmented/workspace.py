@@ -36,6 +36,7 @@ from ...format.segments import (
 from ...io.streaming import FrameSource
 from ...parallel import Executor, InProcessExecutor
 from ...topology import MeshPrediction
+from .. import estimate
 from ..plan import SegmentPlan
 from ..trial import TRIAL_RATIO, Quantized, QuantizedSegment
 from ..whole import LARGEST_STREAMED, column_steps
@@ -138,6 +139,7 @@ class SegmentedWorkspace:
         if fixed_basis is not None:
             fixed += len(fixed_basis.payload)
         self._coded_once = fixed  # payload bytes no choice of D changes
+        self._u1_predictors: dict[int, estimate.U1Predictors] = {}
 
     # -- the passes that learn the sequence ----------------------------------------------------
 
@@ -451,13 +453,31 @@ class SegmentedWorkspace:
         return out
 
     def trial_bytes(self, quantized: Quantized[SegmentRanks]) -> int:
-        """The payload bytes at the fast zstd level: to compare trials, not the final size."""
-        return sum(len(p) for _, p in self.sections(quantized, streams.SEARCH_LEVEL))
+        """The quantized sections' bytes estimated from their integers (:mod:`..estimate`),
+        and those coded once: to compare trials, not the final size."""
+        bits = 0.0
+        if self.fixed_basis is None and quantized.shared_u1 is not None:
+            bits += estimate.entropy_bits(self._predictors(-1).stream(quantized.shared_u1.q))
+        for s, factors in enumerate(quantized.segments):
+            if factors.u1 is not None:
+                bits += estimate.entropy_bits(self._predictors(s).stream(factors.u1.q))
+            bits += estimate.matrix_bits(factors.u3.q, predict=True)
+            bits += estimate.matrix_bits(factors.core.q, predict=False)
+            bits += estimate.matrix_bits(factors.centroids.q, predict=True)
+        return round(bits / 8.0) + self._coded_once
+
+    def _predictors(self, segment: int) -> estimate.U1Predictors:
+        """U1's predictors kept between trials: the shared U1's (-1) or a segment's own."""
+        if segment not in self._u1_predictors:
+            self._u1_predictors[segment] = estimate.U1Predictors(self.mesh)
+        return self._u1_predictors[segment]
 
     def trial_size(self, quantized: Quantized[SegmentRanks]) -> float:
         """The payloads at the fast level (the quantized ones scaled by :data:`TRIAL_RATIO`)
-        and the header as :data:`HEADER_BYTES` predicts it."""
-        variable = self.trial_bytes(quantized) - self._coded_once
+        and the header as :data:`HEADER_BYTES` predicts it: packed, as a size target's fill
+        is calibrated on packed sizes."""
+        packed = sum(len(p) for _, p in self.sections(quantized, streams.SEARCH_LEVEL))
+        variable = packed - self._coded_once
         header = HEADER_BYTES + HEADER_BYTES_PER_SEGMENT * len(self.ranges)
         return header + self._coded_once + TRIAL_RATIO * variable
 
