@@ -214,6 +214,31 @@ def test_predictor_2_follows_the_spec_text_exactly():
                 np.testing.assert_array_equal(mean_accumulate(residual, steps), values)
 
 
+@pytest.mark.parametrize("block_values", [1 << 22, 7, 1])
+@pytest.mark.parametrize("crafted", [False, True], ids=["float", "int64"])
+def test_predictor_2_restored_in_blocks_of_columns_is_the_same(monkeypatch, block_values, crafted):
+    """The decoder restores a U1 of predictor 2 in place, a block of columns at a time
+    (mean_accumulate_columns): the same integers as mean_accumulate, whole or one column at a
+    time, and the same refusal of a value beyond the range."""
+    monkeypatch.setattr(prediction, "MEAN_RESTORE_VALUES", block_values)
+    if crafted:
+        monkeypatch.setattr(prediction, "_FLOAT_SOURCES", 1)
+    rng = np.random.default_rng(17)
+    for count in (12, 90):
+        faces = _random_mesh(rng, count)
+        steps = mesh_prediction(faces, count).mean_steps
+        values = rng.integers(-MEAN_LIMIT, MEAN_LIMIT, size=(count, 5), endpoint=True)
+        residual = mean_residuals(values, steps)
+        assert residual is not None
+        columns = np.ascontiguousarray(residual.T)
+        prediction.mean_accumulate_columns(columns, steps)
+        np.testing.assert_array_equal(columns.T, mean_accumulate(residual, steps))
+        np.testing.assert_array_equal(columns.T, values)
+        if steps.rows.size:
+            with pytest.raises(ValueError, match="range of predictor 2"):
+                prediction.mean_accumulate_columns(np.ascontiguousarray(residual.T) * 2**20, steps)
+
+
 def test_predictor_2_rounds_half_up():
     # one edge: vertex 1's only source is root 0, its own anchor: U = 3 q[0], U / 3c = q[0]
     # a triangle: vertex 2 (depth 1, phase 1) has sources 0 (up) and 1 (same depth, phase 0)
