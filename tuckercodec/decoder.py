@@ -465,9 +465,18 @@ class Decoder:
                 positions[picked] = self._corrected(number, part, local)
                 continue
             with np.errstate(over="ignore", invalid="ignore"):
-                positions[picked] = reconstruct_frames(
-                    part.u1, part.basis, part.u3[local], part.centroids[local]
-                )
+                if picked[-1] - picked[0] == picked.size - 1:  # a run: written where it goes
+                    reconstruct_frames(
+                        part.u1,
+                        part.basis,
+                        part.u3[local],
+                        part.centroids[local],
+                        out=positions[picked[0] : picked[-1] + 1],
+                    )
+                else:
+                    positions[picked] = reconstruct_frames(
+                        part.u1, part.basis, part.u3[local], part.centroids[local]
+                    )
         if not np.isfinite(positions).all():  # finite factors whose products overflow
             field = "header.segments" if self.segmented else "header.u2"
             raise FormatError(
