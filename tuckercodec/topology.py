@@ -307,9 +307,11 @@ def _rows(
     return lengths, indices[positions]
 
 
-#: The most levels :func:`_mesh_forest` walks a level at a time in numpy (a few calls per level);
-#: a deeper forest (a strip of faces) is walked by scipy's compiled breadth-first search.
-LEVEL_WALK_LIMIT = 4096
+#: The most levels :func:`_mesh_forest` walks a level at a time in numpy (a few calls per level,
+#: about 20 us here); a deeper forest (a strip of faces) is walked by scipy's compiled
+#: breadth-first search, after at most this many levels' work lost. (The shared sequences and
+#: the 100,000-vertex meshes of tools.bench have 119 to 536 levels.)
+LEVEL_WALK_LIMIT = 1024
 #: The most rounds of :func:`_component_roots`' hooking (a handful on meshes).
 COMPONENT_ROUNDS = 64
 
