@@ -8,6 +8,7 @@ import pytest
 
 import tuckercodec as tc
 from tuckercodec import decode, encode
+from tuckercodec.format.reconstruction import reconstruct_frames
 
 
 def test_frame_ranges_match_the_whole(cloth):
@@ -38,3 +39,16 @@ def test_frame_selections(cloth):
         decoder.positions(slice(5, 2))
     with pytest.raises(ValueError, match="does not exist"):
         decoder.positions([2**70])
+
+
+def test_a_run_of_frames_written_in_place_is_bit_for_bit_the_frames_made_apart(cloth):
+    """positions() writes a run of one segment's frames straight into its output
+    (reconstruct_frames(out=)); any other selection is made apart and copied in: the same
+    bits as reconstruct_frames returns for those frames. (Frames decoded in different groups
+    can differ in the last bits: BLAS sums a product of another shape in another order.)"""
+    decoder = tc.Decoder(encode(cloth, target_kg=0.5))
+    part = decoder.segment_factors(0)
+    for frames in (range(60), range(10, 20), [19, 3, 11], [5, 6, 8]):
+        chosen = np.asarray(frames)
+        apart = reconstruct_frames(part.u1, part.basis, part.u3[chosen], part.centroids[chosen])
+        assert np.array_equal(decoder.positions(frames), apart)

@@ -265,6 +265,72 @@ def test_random_damage_to_a_real_walk_is_always_a_format_error():
             assert rule == "R39-traversal"
 
 
+def _walked(values: list[list[int]], params: dict[str, Any], k: int, fast: bool) -> object:
+    """The faces one of the two walks decodes from ``values``, or its error."""
+    (count, width), corner_order = params["shape"], params["corner_order"]
+    arrays = [np.array(stream, dtype=np.int64) for stream in values]
+    try:
+        if fast:
+            faces = traversal._walk_triangles(arrays, count, width, k, corner_order, "FACE")
+            return faces.tolist()
+        rows = traversal._walk(values, count, width, k, corner_order, "FACE")
+        return traversal._padded(rows, count, width).tolist()
+    except StopIteration:
+        return "a stream ends early"
+    except FormatError as error:
+        return error.rule, str(error)
+
+
+TRIANGLE_TABLES = [
+    (scrambled(grid(9), 81, 1), 81),
+    (np.array(TETRAHEDRON), 4),
+    (scrambled(torus(), 30, 3), 30),
+    (np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4], [1, 0, 5]]), 6),
+    (np.array([[0, 1, 2], [0, 1, 3], [3, 1, 4]]), 5),
+    (np.array([[0, 1, 1], [1, 2, 2], [0, 0, 0], [2, 1, 0]]), 3),
+    (np.array([[0, 1, 2], [0, 1, 2], [2, 1, 0]]), 3),
+    (np.concatenate([grid(4), grid(4) + 16, grid(3) + 40]), 49),
+    (np.array([[0, 1, 2, -1], [2, 1, 3, -1]]), 4),
+]
+
+
+@pytest.mark.parametrize("corner_order", [0, 1])
+def test_the_triangle_walk_decodes_what_the_general_walk_decodes(corner_order):
+    """decode_traversal walks a table of triangles with _walk_triangles, which must give the
+    faces of _walk, the reference that holds every case of §6.8, on every stream of triangles:
+    whole, and damaged (then the same error, or the same faces where the walk absorbs it)."""
+    rng = np.random.default_rng(11)
+    tables = TRIANGLE_TABLES + [
+        (rng.integers(0, k, size=(int(rng.integers(1, 25)), 3)), k)
+        for k in rng.integers(3, 12, size=20).tolist()
+    ]
+    outcomes = set()
+    for faces, k in tables:
+        walk = traversal._Walk([[v for v in row if v >= 0] for row in faces.tolist()], k)
+        values = [walk.ops_for(corner_order), [], walk.new_residuals, walk.references]
+        params = {"shape": list(faces.shape), "corner_order": corner_order}
+        assert _walked(values, params, k, True) == _walked(values, params, k, False)
+        for _ in range(40):
+            broken = [list(stream) for stream in values]
+            stream = int(rng.choice([0, 0, 2, 3]))
+            if not broken[stream]:
+                continue
+            position = int(rng.integers(len(broken[stream])))
+            change = int(rng.integers(4))
+            if change == 0:
+                broken[stream][position] += int(rng.choice([-2, -1, 1, 2, 4, 8, 24]))
+            elif change == 1:
+                broken[stream][position] = int(rng.integers(-3, 27))
+            elif change == 2:
+                del broken[stream][position]
+            else:
+                broken[stream].insert(position, int(rng.integers(-2, 9)))
+            fast = _walked(broken, params, k, True)
+            assert fast == _walked(broken, params, k, False)
+            outcomes.add(fast[1].split("breaks: ")[-1][:12] if isinstance(fast, tuple) else "ok")
+    assert len(outcomes) >= 7, outcomes  # faces, and many kinds of failure, were met
+
+
 @pytest.mark.skipif(not (DATA / "chicken.npz").exists(), reason=f"{DATA} is absent")
 @pytest.mark.parametrize("name", ["chicken.npz", "cloth-vellum.npz", "horse-gallop"])
 def test_the_shared_meshes_round_trip_and_shrink(name):

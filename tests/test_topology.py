@@ -5,11 +5,13 @@ literally, on random faces and on faces hypothesis makes (repeated, degenerate, 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tests.support.compressed import spec_walk
 from tests.support.properties import HYPOTHESIS_SETTINGS
+from tuckercodec import topology
 from tuckercodec.topology import face_edges, mesh_parents
 
 
@@ -53,3 +55,39 @@ def test_mesh_parents_match_the_walk_of_the_spec(count, faces, repeat):
     if len(array):
         array = np.concatenate([array, np.repeat(array[:1], repeat, axis=0)])
     assert mesh_parents(array, count).tolist() == _spec_walk(array, count)
+
+
+@pytest.mark.parametrize(
+    "fallback", ["levels", "rounds"], ids=["deeper-than-the-level-walk", "hooking-unfinished"]
+)
+def test_both_walks_of_the_forest_give_the_spec_walk(monkeypatch, fallback):
+    """The forest is walked a level at a time in numpy, or by scipy's compiled search for a
+    forest deeper than LEVEL_WALK_LIMIT (or components the hooking has not found in
+    COMPONENT_ROUNDS rounds): the same walk order and parents, the spec's (§6.2), on random
+    faces of several components, a strip and a grid."""
+    rng = np.random.default_rng(19)
+    strip = np.arange(60)
+    tables = [
+        (rng.integers(0, count, size=(int(rng.integers(1, 50)), 3)), count)
+        for count in rng.integers(2, 80, size=60).tolist()
+    ]
+    tables.append((np.stack([strip, strip + 1, strip + 2], 1), 62))
+    tables.append(
+        (rng.permutation(100)[np.stack([strip[:50], strip[:50] + 1, strip[:50] + 10], 1)], 100)
+    )
+    for faces, count in tables:
+        numpy_forest = topology._mesh_forest(faces, count)
+        with monkeypatch.context() as patch:
+            if fallback == "levels":
+                patch.setattr(topology, "LEVEL_WALK_LIMIT", 0)
+            else:
+                patch.setattr(topology, "COMPONENT_ROUNDS", 0)
+            scipy_forest = topology._mesh_forest(faces, count)
+        np.testing.assert_array_equal(numpy_forest.walk, scipy_forest.walk)
+        np.testing.assert_array_equal(numpy_forest.found, scipy_forest.found)
+        spec = spec_walk(faces, count)
+        used = numpy_forest.used
+        reached = [v for v in spec.reached_order if spec.neighbours[v]]
+        by_depth = sorted(reached, key=lambda v: spec.depth[v])  # stable: the forest's order
+        assert used[numpy_forest.walk].tolist() == by_depth
+        assert numpy_forest.parents(count).tolist() == spec.parent

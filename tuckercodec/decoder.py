@@ -217,12 +217,22 @@ class Decoder:
         segment = self._index[number]
         i, k = segment.ranks
         with self._naming_path():
+            u1_quantized: qmat.QuantizedMatrix | None
             if segment.basis == BASIS_SHARED:
-                if self._shared_u1 is None or self._shared_u1_values is None:
-                    self._shared_u1 = self._decode_u1("U1")
-                    self._shared_u1_values = self._shared_u1.values()
+                if self._shared_u1_values is None:
+                    decoded = self._decode_u1("U1")
+                    if all(other.basis == BASIS_SHARED for other in self._index):
+                        self._mesh = None  # no other U1 to restore: free it before the values
+                    self._shared_u1_values = decoded.values()
+                    # its integers only for §8.1: a large U1's are as large as its values
+                    self._shared_u1 = decoded if self._container.corrections else None
+                    del decoded
                 shared = self._shared_u1
-                u1_quantized = qmat.QuantizedMatrix(shared.q[:, :i], shared.steps[:i])
+                u1_quantized = (
+                    None
+                    if shared is None
+                    else qmat.QuantizedMatrix(shared.q[:, :i], shared.steps[:i])
+                )
                 u1 = self._shared_u1_values[:, :i]
             else:
                 u1_quantized = self._decode_u1(self._section_id(segment, "U1"))
@@ -455,9 +465,18 @@ class Decoder:
                 positions[picked] = self._corrected(number, part, local)
                 continue
             with np.errstate(over="ignore", invalid="ignore"):
-                positions[picked] = reconstruct_frames(
-                    part.u1, part.basis, part.u3[local], part.centroids[local]
-                )
+                if picked[-1] - picked[0] == picked.size - 1:  # a run: written where it goes
+                    reconstruct_frames(
+                        part.u1,
+                        part.basis,
+                        part.u3[local],
+                        part.centroids[local],
+                        out=positions[picked[0] : picked[-1] + 1],
+                    )
+                else:
+                    positions[picked] = reconstruct_frames(
+                        part.u1, part.basis, part.u3[local], part.centroids[local]
+                    )
         if not np.isfinite(positions).all():  # finite factors whose products overflow
             field = "header.segments" if self.segmented else "header.u2"
             raise FormatError(

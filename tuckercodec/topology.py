@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Any, Literal
+from typing import Literal
 
 import numpy as np
 
@@ -234,7 +234,8 @@ class _Forest:
     edge (``used[j]`` is vertex j's index in the mesh)."""
 
     used: np.ndarray  # (n,) int64, ascending
-    adjacency: Any  # scipy.sparse.csr_matrix (n, n), one entry per edge, ascending; None if n = 0
+    #: (indptr, indices) of the (n, n) CSR adjacency, one entry per edge, each row ascending
+    adjacency: tuple[np.ndarray, np.ndarray]
     walk: np.ndarray  # (n,) the vertices in the order the walk reaches them
     found: np.ndarray  # (n,) int64: each vertex's parent, or -1
 
@@ -275,19 +276,18 @@ class _Forest:
         order = walk[level_ends[1] :][np.argsort(step_in_walk[level_ends[1] :], kind="stable")]
         step_ends = np.zeros(steps + 1, dtype=np.int64)
         np.cumsum(np.bincount(step[order] - first_step, minlength=steps)[:steps], out=step_ends[1:])
-        lists = self.adjacency[order] if order.size else None
-        if lists is None:
+        if not order.size:
             empty = np.zeros(0, dtype=np.int64)
             return MeanSteps(empty, step_ends, empty, empty, np.zeros(1, np.int64), levels)
-        owner = np.repeat(order, np.diff(lists.indptr))
-        neighbour = lists.indices.astype(np.int64)
+        lengths, neighbour = _rows(*self.adjacency, order)
+        owner = np.repeat(order, lengths)
         mine, theirs = step[owner], step[neighbour]
         depth_of = mine // MEAN_PHASES
         upper = theirs // MEAN_PHASES == depth_of - 1
         keep = upper | ((theirs // MEAN_PHASES == depth_of) & (theirs < mine))
         anchor = np.where(upper & (found[neighbour] >= 0), found[neighbour], neighbour)[keep]
         source_ends = np.zeros(order.size + 1, dtype=np.int64)
-        row_of = np.repeat(np.arange(order.size), np.diff(lists.indptr))
+        row_of = np.repeat(np.arange(order.size), lengths)
         np.cumsum(np.bincount(row_of[keep], minlength=order.size), out=source_ends[1:])
         used = self.used
         return MeanSteps(
@@ -295,33 +295,49 @@ class _Forest:
         )
 
 
+def _rows(
+    indptr: np.ndarray, indices: np.ndarray, rows: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(lengths, entries)``: the CSR rows ``rows``, each in its order, back to back."""
+    starts = indptr[rows]
+    lengths = indptr[rows + 1] - starts
+    ends = np.cumsum(lengths)
+    positions = np.arange(int(ends[-1]) if ends.size else 0, dtype=np.int64)
+    positions += np.repeat(starts - (ends - lengths), lengths)
+    return lengths, indices[positions]
+
+
+#: The most levels :func:`_mesh_forest` walks a level at a time in numpy (a few calls per level,
+#: about 20 us here); a deeper forest (a strip of faces) is walked by scipy's compiled
+#: breadth-first search, after at most this many levels' work lost. (The shared sequences and
+#: the 100,000-vertex meshes of tools.bench have 119 to 536 levels.)
+LEVEL_WALK_LIMIT = 1024
+#: The most rounds of :func:`_component_roots`' hooking (a handful on meshes).
+COMPONENT_ROUNDS = 64
+
+
 def _mesh_forest(faces: np.ndarray, vertex_count: int) -> _Forest:
     """The breadth-first forest of §6.2 over the vertices on an edge.
-
-    The queue walk runs in scipy's compiled breadth-first search, which pops a first-in-first-out
-    queue and scans each vertex's row of a sorted CSR matrix in order: the neighbours in
-    ascending order. One search covers the whole forest: a virtual root, numbered after every
-    vertex, has as its neighbours each component's smallest vertex in ascending order.
-    Components are disjoint, so within one component the global queue holds that component's
-    vertices in the order of its own walk, and the parents are the same. (An earlier version
-    walked one level per Python iteration: a strip of faces, as deep as half its vertices, took
-    minutes.)
 
     Only vertices on an edge can have a parent; they are numbered 0..n-1 in index order, which
     keeps every order the walk depends on, so the graph's size follows the faces, not K (the
     rest costs at most 13 bytes per vertex, the int64 result included).
-    """
-    # imported here: scipy.sparse costs about 0.13 s, which every command and every isolated
-    # read would pay at start-up; only the encoder and the decoder need the parents
-    import scipy.sparse as sparse
-    from scipy.sparse.csgraph import breadth_first_order, connected_components
 
+    The walk is made a level at a time with numpy, over every component at once: as if a
+    virtual root, before every vertex, had each component's smallest vertex as its neighbours
+    in ascending order (:func:`_component_roots`). Components are disjoint, so within one the
+    queue holds that component's vertices in the order of its own walk, and the parents are the
+    spec's. The queue is first in, first out, so level d + 1 is, in order, the neighbours of
+    level d's vertices in their order, each row ascending, at their first occurrence, less the
+    vertices reached before. A forest deeper than :data:`LEVEL_WALK_LIMIT` is walked by scipy
+    (:func:`_scipy_forest`, the same walk), whose import costs about 0.1 s and 11 MB.
+    """
     a, b = face_edges(faces)
     proper = a != b  # a degenerate face may repeat a vertex
     a, b = a[proper], b[proper]
     if a.size == 0:
         empty = np.zeros(0, dtype=np.int64)
-        return _Forest(empty, None, empty, empty)  # no edges: no adjacency
+        return _Forest(empty, (np.zeros(1, dtype=np.int64), empty), empty, empty)  # no edges
     present = np.zeros(vertex_count, dtype=bool)
     present[a] = True
     present[b] = True
@@ -329,29 +345,110 @@ def _mesh_forest(faces: np.ndarray, vertex_count: int) -> _Forest:
     count = used.size
     del present
     if vertex_count <= 4 * a.size:  # dense: a lookup table is fastest
-        number = np.zeros(vertex_count, dtype=np.int32)  # scipy's graphs index with int32 anyway
-        number[used] = np.arange(count, dtype=np.int32)
+        number = np.zeros(vertex_count, dtype=np.int64)
+        number[used] = np.arange(count, dtype=np.int64)
         la, lb = number[a], number[b]
         del number
     else:  # a few faces among many vertices: no table of K entries
         la, lb = np.searchsorted(used, a), np.searchsorted(used, b)
+    del a, b
+    # one key per directed edge, both ways: sorted, they are the CSR rows, each ascending
+    keys = np.concatenate([la * count + lb, lb * count + la])
+    keys.sort()  # not np.unique: numpy 2's hashing unique is many times slower here
+    keys = keys[np.concatenate([[True], keys[1:] != keys[:-1]])]
+    source, indices = np.divmod(keys, count)
+    del keys, la, lb
+    indptr = np.zeros(count + 1, dtype=np.int64)
+    np.cumsum(np.bincount(source, minlength=count), out=indptr[1:])
+    upward = source < indices  # each edge once
+    roots = _component_roots(source[upward], indices[upward], count)
+    del source, upward
+    walked = None if roots is None else _level_walk(indptr, indices, roots, count)
+    if walked is None:
+        walked = _scipy_forest(indptr, indices, count)
+    return _Forest(used.astype(np.int64), (indptr, indices), *walked)
+
+
+def _component_roots(la: np.ndarray, lb: np.ndarray, count: int) -> np.ndarray | None:
+    """Each component's smallest vertex, ascending, from the edges ``la``-``lb``: every label
+    starts as its vertex; each round hooks the larger label of each edge whose two ends differ
+    onto the smaller, then every vertex follows its labels to the end. Labels only fall and
+    stay within a component, so each ends at the component's smallest vertex. None after
+    :data:`COMPONENT_ROUNDS` rounds (then scipy's search finds the components)."""
+    label = np.arange(count, dtype=np.int64)
+    for _ in range(COMPONENT_ROUNDS):
+        ends_a, ends_b = label[la], label[lb]
+        differ = ends_a != ends_b
+        if not differ.any():
+            return np.flatnonzero(label == np.arange(count))
+        la, lb, ends_a, ends_b = la[differ], lb[differ], ends_a[differ], ends_b[differ]
+        np.minimum.at(label, np.maximum(ends_a, ends_b), np.minimum(ends_a, ends_b))
+        while True:  # pointer jumping: every vertex to the end of its chain of labels
+            jumped = label[label]
+            if np.array_equal(jumped, label):
+                break
+            label = jumped
+    return None
+
+
+def _level_walk(
+    indptr: np.ndarray, indices: np.ndarray, roots: np.ndarray, count: int
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """``(walk, parents)`` of the breadth-first walk from ``roots`` (the virtual root's
+    neighbours), a level at a time; None past :data:`LEVEL_WALK_LIMIT` levels."""
+    found = np.full(count, NO_PARENT, dtype=np.int64)
+    # where the queue first meets each vertex of the next level (a place in the level's list
+    # of neighbours); the largest int64: not met yet; -1: reached at an earlier level
+    first = np.full(count, np.iinfo(np.int64).max, dtype=np.int64)
+    first[roots] = -1
+    levels, frontier = [roots], roots
+    while frontier.size:
+        if len(levels) > LEVEL_WALK_LIMIT:
+            return None
+        lengths, neighbour = _rows(indptr, indices, frontier)
+        fresh = first[neighbour] > 0
+        neighbour = neighbour[fresh]
+        place = np.flatnonzero(fresh)
+        np.minimum.at(first, neighbour, place)
+        met = first[neighbour] == place  # each vertex at its first place, in the queue's order
+        parents = np.repeat(frontier, lengths)[place[met]]
+        frontier = neighbour[met]
+        found[frontier] = parents
+        first[frontier] = -1
+        levels.append(frontier)
+    levels.pop()  # the last is empty
+    return np.concatenate(levels), found
+
+
+def _scipy_forest(
+    indptr: np.ndarray, indices: np.ndarray, count: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_level_walk`'s ``(walk, parents)`` from scipy's compiled breadth-first search,
+    which pops a first-in-first-out queue and scans each vertex's row of a sorted CSR matrix in
+    order: the neighbours in ascending order. The virtual root, numbered after every vertex,
+    lists the components' smallest vertices. (A strip of faces, as deep as half its vertices,
+    took minutes when walked one level per Python iteration.)"""
+    # imported here: scipy.sparse.csgraph costs about 0.2 s (it imports scipy.linalg)
+    import scipy.sparse as sparse
+    from scipy.sparse.csgraph import breadth_first_order, connected_components
+
     adjacency = sparse.csr_matrix(
-        (np.ones(2 * a.size, dtype=np.int32), (np.concatenate([la, lb]), np.concatenate([lb, la]))),
-        shape=(count, count),
+        (np.ones(indices.size, dtype=np.int8), indices, indptr), shape=(count, count)
     )
-    # one entry per edge (int32 counts cannot wrap to 0), neighbours ascending
-    adjacency.sum_duplicates()
     _, labels = connected_components(adjacency, directed=False)
     _, roots = np.unique(labels, return_index=True)  # the smallest vertex of each component
     roots = np.sort(roots)
     # the virtual root `count`: its row lists the component roots, and no row lists it
-    indptr = np.concatenate([adjacency.indptr, [adjacency.indptr[-1] + roots.size]])
-    indices = np.concatenate([adjacency.indices, roots])
     forest = sparse.csr_matrix(
-        (np.ones(indices.size, dtype=np.int8), indices, indptr), shape=(count + 1, count + 1)
+        (
+            np.ones(indices.size + roots.size, dtype=np.int8),
+            np.concatenate([indices, roots]),
+            np.concatenate([indptr, [indptr[-1] + roots.size]]),
+        ),
+        shape=(count + 1, count + 1),
     )
     walk, predecessors = breadth_first_order(forest, count, directed=True, return_predecessors=True)
     found = predecessors[:count].astype(np.int64)
     found[found == count] = NO_PARENT  # the roots hang from the virtual root
     found[found < 0] = NO_PARENT
-    return _Forest(used.astype(np.int64), adjacency, walk[1:].astype(np.int64), found)
+    return walk[1:].astype(np.int64), found

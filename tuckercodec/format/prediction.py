@@ -15,6 +15,7 @@ Two parent relations exist (§6.6 says which section uses which):
 
 from __future__ import annotations
 
+import itertools
 from typing import Any
 
 import numpy as np
@@ -169,13 +170,64 @@ def mean_accumulate(residual: np.ndarray, steps: MeanSteps) -> np.ndarray:
                     raise ValueError("a restored value leaves the range of predictor 2")
         return total
     work = np.array(residual, dtype=np.float64, order="C")  # C: the product reads it flat
-    for step in range(ends.size - 1):
-        start, stop = int(ends[step]), int(ends[step + 1])
-        if start < stop:
-            work[rows[start:stop]] += _float_predictions(work, steps, start, stop)
+    if rows.size:
+        _float_restore(work, steps)
     if work.size and not (work.min() >= -MEAN_LIMIT and work.max() <= MEAN_LIMIT):  # NaN fails
         raise ValueError("a restored value leaves the range of predictor 2")
     return work.astype(np.int64)
+
+
+#: Values of U1 that :func:`mean_accumulate_columns` restores at once (32 MB of float64): a
+#: block of columns (they do not depend on each other), as few blocks as this allows, since
+#: each block pays every step's few numpy calls again.
+MEAN_RESTORE_VALUES = 1 << 22
+
+
+def mean_accumulate_columns(columns: np.ndarray, steps: MeanSteps) -> None:
+    """:func:`mean_accumulate` of ``columns.T``, written back into ``columns`` (cols, rows),
+    the residuals as the stream holds them, column after column: a block of columns at a time,
+    so that a large U1 is never copied whole (each block's floats are the temporary). Raises
+    ``ValueError`` as :func:`mean_accumulate` does, at the first block that leaves the range."""
+    count = columns.shape[0]
+    blocks = max(1, -(-columns.size // MEAN_RESTORE_VALUES))
+    width = max(1, -(-count // blocks))
+    crafted = steps.rows.size and int(steps.counts.max()) >= _FLOAT_SOURCES
+    for start in range(0, count, width):
+        block = columns[start : start + width]
+        if crafted:  # only a crafted mesh: mean_accumulate's int64 steps
+            block[:] = mean_accumulate(block.T, steps).T
+            continue
+        work = np.array(block.T, dtype=np.float64, order="C")  # C: the product reads it flat
+        if steps.rows.size:
+            _float_restore(work, steps)
+        if work.size and not (work.min() >= -MEAN_LIMIT and work.max() <= MEAN_LIMIT):
+            raise ValueError("a restored value leaves the range of predictor 2")
+        block[:] = work.T  # exact integers: the cast is exact
+
+
+def _float_restore(work: np.ndarray, steps: MeanSteps) -> None:
+    """:func:`mean_accumulate`'s steps on ``work`` (float64, C order), in place: each step the
+    float products of :func:`_float_predictions`, with what does not change between steps (the
+    counts, the matrix's arrays, the product) looked up once. A step costs a few numpy calls, and
+    a mesh has eight per depth (samba: 929 steps)."""
+    ptr, idx, weights = steps.matrix
+    counts = steps.counts.astype(np.float64)[:, None]
+    half, thirds = 1.5 * counts, 3.0 * counts
+    product = _csr_matvecs()
+    rows, ends = steps.rows, steps.step_ends.tolist()
+    flat, width, height = work.reshape(-1), work.shape[1], work.shape[0]
+    sums = np.empty((int(np.diff(steps.step_ends).max(initial=0)), width))
+    for start, stop in itertools.pairwise(ends):
+        if start == stop:
+            continue
+        part = sums[: stop - start]
+        part[:] = half[start:stop]  # U + 1.5c: the product below adds U
+        # the whole matrix's columns and weights, addressed by this step's row pointers
+        pointers = ptr[start : stop + 1]
+        product(stop - start, height, width, pointers, idx, weights, flat, part.reshape(-1))
+        part /= thirds[start:stop]
+        np.floor(part, out=part)
+        work[rows[start:stop]] += part
 
 
 def _float_predictions(work: np.ndarray, steps: MeanSteps, start: int, stop: int) -> np.ndarray:

@@ -29,6 +29,7 @@ from .prediction import (
     linear_accumulate,
     linear_residuals,
     mean_accumulate,
+    mean_accumulate_columns,
     mean_residuals,
     residuals,
 )
@@ -53,8 +54,8 @@ class QuantizedMatrix:
 
     def values(self) -> np.ndarray:
         """The dequantized matrix, float64: ``step[c] * q[r, c]`` (§6.3)."""
-        out = self.q.astype(np.float64)
-        out *= self.steps.astype(np.float64)[None, :]  # in place: the same products, no scratch
+        out = np.empty(self.q.shape)  # C order, whatever q's: the products of §8 read it so
+        np.multiply(self.q, self.steps.astype(np.float64)[None, :], out=out)  # one pass
         return out
 
 
@@ -203,9 +204,14 @@ def decode_matrix(
             named += f" ({extra} needs the coding tools flag of format 1.2)"
         _refuse_predictor(f"every predictor must be {named}", where)
     stream = streams.unpack_integers(payload, rows * cols, planes, where)
-    q = np.ascontiguousarray(stream.reshape(cols, rows).T)
     chosen = np.flatnonzero(predict == PREDICT_PARENT)
     meaned = np.flatnonzero(predict == PREDICT_MEAN)
+    if cols and meaned.size == cols:  # U1's usual case: restored in the stream, no copy made
+        mesh = parents() if callable(parents) else parents
+        columns = stream.reshape(cols, rows)
+        _restore_mean(columns, mesh if isinstance(mesh, MeshPrediction) else None, where, True)
+        return QuantizedMatrix(columns.T, steps)
+    q = np.ascontiguousarray(stream.reshape(cols, rows).T)
     if chosen.size or meaned.size:
         if callable(parents):
             parents = parents()
@@ -226,8 +232,11 @@ def decode_matrix(
     return QuantizedMatrix(q, steps)
 
 
-def _restore_mean(residual: np.ndarray, mesh: MeshPrediction | None, where: str) -> np.ndarray:
-    """Predictor 2's columns restored (§6.2), or R32 when its conditions fail."""
+def _restore_mean(
+    residual: np.ndarray, mesh: MeshPrediction | None, where: str, in_columns: bool = False
+) -> np.ndarray:
+    """Predictor 2's columns restored (§6.2), or R32 when its conditions fail; with
+    ``in_columns``, ``residual`` is (cols, rows) and restored in place."""
     if mesh is None:
         raise ValueError("predictor 2 needs the mesh's MeshPrediction, not only its parents")
     if mesh.levels > MAX_MEAN_LEVELS:
@@ -237,6 +246,9 @@ def _restore_mean(residual: np.ndarray, mesh: MeshPrediction | None, where: str)
             where,
         )
     try:
+        if in_columns:
+            mean_accumulate_columns(residual, mesh.mean_steps)
+            return residual
         return mean_accumulate(residual, mesh.mean_steps)
     except ValueError:
         _refuse_predictor("a value restored with predictor 2 is outside -2**32..2**32", where)

@@ -26,11 +26,16 @@ def reconstruction_basis(core: np.ndarray, u2: np.ndarray) -> np.ndarray:
 
 
 def reconstruct_frames(
-    u1: np.ndarray, basis: np.ndarray, u3_rows: np.ndarray, centroid_rows: np.ndarray
+    u1: np.ndarray,
+    basis: np.ndarray,
+    u3_rows: np.ndarray,
+    centroid_rows: np.ndarray,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Positions (n, K, 3) of the frames whose U3 rows (n, k) and centroids (n, 3) are given."""
+    """Positions (n, K, 3) of the frames whose U3 rows (n, k) and centroids (n, 3) are given,
+    written into ``out`` if given (the decoder's output array: no copy of every frame)."""
     i = u1.shape[1]
     weights = basis @ u3_rows.T  # (i, 3, n)
     flat = u1 @ weights.reshape(i, -1)  # (K, 3n)
-    out = flat.reshape(u1.shape[0], 3, len(u3_rows)).transpose(2, 0, 1)
-    return out + centroid_rows[:, None, :]
+    frames = flat.reshape(u1.shape[0], 3, len(u3_rows)).transpose(2, 0, 1)
+    return np.add(frames, centroid_rows[:, None, :], out=out)

@@ -60,12 +60,13 @@ def to_planes(unsigned: np.ndarray, planes: int) -> bytes:
 def from_planes(raw: bytes | memoryview, count: int, planes: int) -> np.ndarray:
     """Unsigned values (uint64) from ``planes`` byte planes of ``count`` values each."""
     grid = np.frombuffer(raw, dtype=np.uint8).reshape(planes, count)
-    out = grid[0].astype(np.uint64)
-    for plane in range(1, planes):
-        widened = grid[plane].astype(np.uint64)
-        widened <<= np.uint64(8 * plane)  # in place: one scratch array, not two
-        out |= widened
-    return out
+    out = np.zeros(count, dtype="<u8")
+    # each plane copied into its byte of the little-endian values: no 8-byte scratch per value
+    # (a large U1's values are the largest array a decoder makes)
+    as_bytes = out.view(np.uint8).reshape(count, 8)
+    for plane in range(planes):
+        as_bytes[:, plane] = grid[plane]
+    return out.astype(np.uint64, copy=False)
 
 
 def compress(raw: bytes, level: int = DEFAULT_LEVEL) -> bytes:
