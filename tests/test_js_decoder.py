@@ -15,7 +15,7 @@ import pytest
 import tuckercodec
 from tests.support.compressed import Parts, deadline, vector
 from tests.support.js_decoder import run_node
-from tests.support.sequences import shared_file
+from tests.support.sequences import shared_case, shared_encoded
 from tuckercodec import FormatError
 from tuckercodec.format.container import HEAD_SIZE, PREAMBLE, SIGNATURE, pack_raw
 from tuckercodec.samples import sample_path
@@ -79,12 +79,13 @@ def test_sample_own_bases(tmp_path):
     _same_as_python(data, tmp_path)
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("name", ["samba.npz", "chicken.npz", "horse-gallop", "cloth-vellum.npz"])
+@pytest.mark.parametrize(
+    "name",
+    [shared_case(s) for s in ["samba.npz", "chicken.npz", "horse-gallop", "cloth-vellum.npz"]],
+)
 def test_shared_sequences(tmp_path, name):
     """The real sequences at KG 0.1: polygons, boundaries, 1.2's predictors on real meshes."""
-    sequence = tuckercodec.load_sequence(shared_file(name))
-    _same_as_python(tuckercodec.encode(sequence, target_kg=0.1), tmp_path)
+    _same_as_python(shared_encoded(name).data, tmp_path)
 
 
 def test_simd_and_the_javascript_loop_give_the_same_bits(tmp_path):

@@ -25,7 +25,7 @@ import pytest
 
 import tuckercodec
 from tests.support.js_decoder import node
-from tests.support.sequences import shared_file
+from tests.support.sequences import shared_case, shared_encoded
 from tuckercodec import FormatError
 from tuckercodec.format import streams, traversal
 from tuckercodec.format.container import parse_container
@@ -589,11 +589,11 @@ def _file_data(name: str) -> bytes:
     if name == "sample":
         return tuckercodec.encode(tuckercodec.load_sequence(sample_path()))
     if name in SHARED:
-        return tuckercodec.encode(tuckercodec.load_sequence(shared_file(name)))
+        return shared_encoded(name).data  # at the default target, KG 0.1
     return (VECTORS / f"{name}.tkc").read_bytes()
 
 
-@pytest.mark.parametrize("name", FILES + [pytest.param(s, marks=pytest.mark.slow) for s in SHARED])
+@pytest.mark.parametrize("name", FILES + [shared_case(s) for s in SHARED])
 def test_real_files(tmp_path, name):
     """The faces and every restored U1 column of real files, bit for bit (predictor 2 in use)."""
     cases = Cases(tmp_path)

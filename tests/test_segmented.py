@@ -8,7 +8,7 @@ import pytest
 
 import tuckercodec
 from tests.support.compressed import assert_same_faces
-from tests.support.sequences import shared_file as shared_data
+from tests.support.sequences import shared_encoded, shared_sequence
 from tools.generate import vectors as make_vectors
 from tuckercodec import Decoder, FormatError, LimitError, Limits, MeshSequence, encode_with_report
 from tuckercodec.encoder.plan import needs_segments, parse_size, plan_segments
@@ -175,9 +175,10 @@ def test_a_damaged_segment_is_found_when_its_frames_are_decoded(shared_file):
         Decoder(data).check()
 
 
+@pytest.mark.xdist_group("chicken.npz")  # with the other tests of shared_encoded("chicken.npz")
 def test_chicken_in_segments_of_100_frames():
-    chicken = tuckercodec.load_sequence(shared_data("chicken.npz"), progress=False)
-    whole = encode_with_report(chicken, target_kg=0.1).report
+    chicken = shared_sequence("chicken.npz")
+    whole = shared_encoded("chicken.npz").report  # the same sequence, whole, at KG 0.1
     result = encode_with_report(chicken, target_kg=0.1, segment_frames=100)
     assert result.report.segments == 4
     assert result.report.total_bytes <= 1.3 * whole.total_bytes

@@ -185,7 +185,13 @@ def test_bench_writes_tables_plots_and_refuses_to_overwrite(sample, tmp_path, ca
     assert "| sample | 1 |" in summary and "| sample | 0.2 |" in summary
     assert bench.main(args) == 2  # results are never replaced without --force
     assert "--force" in capsys.readouterr().err
-    assert bench.main([*args, "--force"]) == 0
+    # forced, a cheaper run (one coder, one target, one timing) replaces every file
+    cheaper = [*args[:2], "--coders", "zstd-f32", "--targets", "1", "--out", str(out)]
+    before = {name: (out / name).read_bytes() for name in ("summary.md", "sample.md", "sample.png")}
+    assert bench.main([*cheaper, "--force"]) == 0
+    rows = json.loads((out / "results.json").read_text())
+    assert {row["coder"] for row in rows} == {"zstd-f32"}
+    assert all((out / name).read_bytes() != text for name, text in before.items())
 
 
 def test_bench_runs_on_a_sequence_without_faces(tmp_path):

@@ -44,7 +44,7 @@ from tests.support.js_decoder import (
     check_valid_observation,
 )
 from tests.support.png import decode_png
-from tests.support.sequences import shared_file
+from tests.support.sequences import shared_encoded, shared_sequence
 from tuckercodec import Decoder, EncodeOptions, FormatError, MeshSequence
 from tuckercodec.web.server import ViewerServer
 from tuckercodec.web.site import build_site
@@ -185,9 +185,10 @@ def test_cloth_sample_frames_match_python(browser, cloth, cloth_file, tmp_path):
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("samba.npz")  # with the other tests of shared_encoded("samba.npz")
 def test_samba_frames_match_python(browser, tmp_path):
-    sequence = tuckercodec.load_sequence(shared_file("samba.npz"), progress=False)
-    data = tuckercodec.encode(sequence, target_kg=TARGET_KG)
+    sequence, data = shared_sequence("samba.npz"), shared_encoded("samba.npz").data  # KG 0.1
+    assert TARGET_KG == 0.1
     with serve(tmp_path, data, "samba.tkc", sequence.vertices) as url:
         page = open_page(browser, url)
         try:
