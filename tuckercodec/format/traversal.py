@@ -444,99 +444,113 @@ def _new_vertices(residuals: np.ndarray, k: int) -> tuple[list[int | None], int]
     return vertices, int(placed[stop])
 
 
-def _walk_triangles(
-    arrays: list[np.ndarray], count: int, width: int, k: int, corner_order: int, where: str
-) -> np.ndarray:
-    """:func:`_walk` for a table of triangles (the degrees stream is empty), its Python loop cut
-    to what is sequential: reading each gate and tip and updating the boundary. What is not is
-    done by numpy around it: the NEW vertices (:func:`_new_vertices`, with the check of each)
-    before, the rotation of every face into its stored order after. A face across a gate that is
-    not flipped, nearly every face, is decoded inline; seeds, flips and the rarer tips call
-    helpers. Same values read in the same order, same checks, same errors as :func:`_walk`.
-    (samba's 19,938 triangles: about 4 times faster than :func:`_walk`.)"""
-    placed, bad = _new_vertices(arrays[2], k)
-    op_source, new_source = iter(arrays[0].tolist()), iter(placed)
-    reference_source = iter(arrays[3].tolist())
-    next_op, next_new, next_reference = (
-        op_source.__next__,
-        new_source.__next__,
-        reference_source.__next__,
-    )
-    open_edges: dict[int, int] = {}  # _Boundary's count, into and out_of, as locals
-    into: defaultdict[int, list[int]] = defaultdict(list)
-    out_of: defaultdict[int, list[int]] = defaultdict(list)
-    gates: list[int] = []
-    open_count_of, pop_gate, push_gate = open_edges.get, gates.pop, gates.append
-    corners: list[int] = []  # each face's corners in walk order (c0, c1, c2)
-    codes: list[int] = []  # each face's gate op - 1 (rotation, flip, first tip), -1 for a seed
-    add_code = codes.append
-    known: dict[int, int] = {}  # vertex -> its turn among the NEW tips, made at the first FAR
+class _TriangleWalk:
+    """The state of :func:`_walk_triangles` and its rarer steps: the streams being read, the
+    boundary (_Boundary's count, into and out_of), the gates, and each face's corners and code.
+    The walk's loop binds what it uses most to locals."""
 
-    def new_vertex() -> int:
-        w = next_new()
+    def __init__(self, arrays: list[np.ndarray], k: int, where: str) -> None:
+        self.k, self.where = k, where
+        self.placed, self.bad = _new_vertices(arrays[2], k)
+        self.op_source, self.new_source = iter(arrays[0].tolist()), iter(self.placed)
+        self.reference_source = iter(arrays[3].tolist())
+        self.next_op, self.next_new = self.op_source.__next__, self.new_source.__next__
+        self.next_reference = self.reference_source.__next__
+        self.open_edges: dict[int, int] = {}
+        self.into: defaultdict[int, list[int]] = defaultdict(list)
+        self.out_of: defaultdict[int, list[int]] = defaultdict(list)
+        self.gates: list[int] = []
+        self.corners: list[int] = []  # each face's corners in walk order (c0, c1, c2)
+        self.codes: list[int] = []  # each face's gate op - 1, -1 for a seed
+        self.known: dict[int, int] = {}  # vertex -> its turn among NEW tips, made at first FAR
+
+    def new_vertex(self) -> int:
+        w = self.next_new()
         if w is None:
-            raise _broken(where, f"new vertex {bad} is outside 0..{k - 1} or placed")
+            raise _broken(self.where, f"new vertex {self.bad} is outside 0..{self.k - 1} or placed")
         return w
 
-    def far(previous: int) -> int:
-        w = previous + next_reference()
+    def far(self, previous: int) -> int:
+        w = previous + self.next_reference()
+        placed, known = self.placed, self.known
         if not known:  # placed's vertices are distinct up to its end or None
-            good = placed[: len(placed) - (bad >= 0)]
+            good = placed[: len(placed) - (self.bad >= 0)]
             known.update(zip(good, range(len(good)), strict=True))  # type: ignore[arg-type]
         turn = known.get(w)  # seen: placed by a NEW tip read so far
-        if turn is None or turn >= len(placed) - operator.length_hint(new_source):
-            raise _broken(where, f"referenced vertex {w} is not one seen before")
+        if turn is None or turn >= len(placed) - operator.length_hint(self.new_source):
+            raise _broken(self.where, f"referenced vertex {w} is not one seen before")
         return w
 
-    def newest(tip: int, vertex: int) -> int:
+    def newest(self, tip: int, vertex: int) -> int:
         """PREV (the newest open u -> vertex) or NEXT (vertex -> w)."""
-        stack = into.get(vertex) if tip == TIP_PREV else out_of.get(vertex)
-        while stack and stack[-1] not in open_edges:
+        stack = self.into.get(vertex) if tip == TIP_PREV else self.out_of.get(vertex)
+        while stack and stack[-1] not in self.open_edges:
             stack.pop()
         if not stack:
-            raise _broken(where, f"tip operation {tip} names no vertex here")
-        return stack[-1] // k if tip == TIP_PREV else stack[-1] % k
+            raise _broken(self.where, f"tip operation {tip} names no vertex here")
+        return stack[-1] // self.k if tip == TIP_PREV else stack[-1] % self.k
 
-    def join(x: int, y: int) -> int:
+    def join(self, x: int, y: int) -> int:
         """One edge x -> y of a face added to the boundary (_Boundary.attach); its key."""
+        open_edges, k = self.open_edges, self.k
         opposite, key = y * k + x, x * k + y
-        open_count = open_count_of(opposite)
+        open_count = open_edges.get(opposite)
         if not open_count:
             if key in open_edges:
                 open_edges[key] += 1
             else:
                 open_edges[key] = 1
-                into[y].append(key)
-                out_of[x].append(key)
+                self.into[y].append(key)
+                self.out_of[x].append(key)
         elif open_count == 1:
             del open_edges[opposite]
         else:
             open_edges[opposite] = open_count - 1
         return key
 
-    def seed() -> None:
+    def seed(self) -> None:
         """A face no gate reaches: three tips, each with the next op; every edge a gate."""
         cycle: list[int] = []
         previous = 0
         while len(cycle) < 3:
-            tip = next_op()
+            tip = self.next_op()
             if tip == TIP_NEW:
-                w = new_vertex()
+                w = self.new_vertex()
             elif tip == TIP_FAR:
-                w = far(previous)
+                w = self.far(previous)
             elif cycle and tip in (TIP_PREV, TIP_NEXT):
-                w = newest(tip, previous if tip == TIP_PREV else cycle[0])
+                w = self.newest(tip, previous if tip == TIP_PREV else cycle[0])
             else:
-                raise _broken(where, f"tip operation {tip} names no vertex here")
+                raise _broken(self.where, f"tip operation {tip} names no vertex here")
             cycle.append(w)
             previous = w
         for x, y in zip(cycle, cycle[1:] + cycle[:1], strict=True):
-            push_gate(join(x, y))
-        corners.extend(cycle)
-        add_code(-1)
+            self.gates.append(self.join(x, y))
+        self.corners.extend(cycle)
+        self.codes.append(-1)
 
-    top = 8 * width
-    faces = 0
+    def check_ends(self) -> None:
+        """Every stream read to its end (there is no degrees stream for triangles)."""
+        sources = (self.op_source, iter(()), self.new_source, self.reference_source)
+        for name, source in zip(STREAM_NAMES, sources, strict=True):
+            if operator.length_hint(source):
+                raise _broken(self.where, f"stream {name} has values left, or ends early")
+
+
+def _walk_triangles(
+    arrays: list[np.ndarray], count: int, width: int, k: int, corner_order: int, where: str
+) -> np.ndarray:
+    """:func:`_walk` for a table of triangles (no degrees stream), its loop cut to what is
+    sequential; numpy places the NEW vertices before it and turns the faces after it. A NEW tip
+    across an unflipped gate, the common face, is decoded inline; the rest call
+    :class:`_TriangleWalk`. Same values read in the same order, same checks and errors."""
+    walk = _TriangleWalk(arrays, k, where)
+    next_op, next_new, bad = walk.next_op, walk.next_new, walk.bad
+    far, join, seed, newest = walk.far, walk.join, walk.seed, walk.newest
+    open_edges, into, out_of, gates = walk.open_edges, walk.into, walk.out_of, walk.gates
+    open_count_of, pop_gate, push_gate = open_edges.get, gates.pop, gates.append
+    corners, add_code = walk.corners, walk.codes.append
+    top, faces = 8 * width, 0
     while faces < count:
         if not gates:
             seed()
@@ -580,68 +594,27 @@ def _walk_triangles(
                 add_code(op)
                 faces += 1
                 continue
-        elif tip == 1:  # TIP_PREV, _newest written out
-            stack = into.get(previous)
-            while stack and stack[-1] not in open_edges:
-                stack.pop()
-            if not stack:
-                raise _broken(where, f"tip operation {tip} names no vertex here")
-            w = stack[-1] // k
-        elif tip == 2:  # TIP_NEXT
-            stack = out_of.get(first)
-            while stack and stack[-1] not in open_edges:
-                stack.pop()
-            if not stack:
-                raise _broken(where, f"tip operation {tip} names no vertex here")
-            w = stack[-1] % k
-        else:
+        elif tip == 3:  # TIP_FAR
             w = far(previous)
+        else:  # TIP_PREV (the newest open u -> previous) or TIP_NEXT (first -> w)
+            w = newest(tip, previous if tip == TIP_PREV else first)
         if op >= 24:
             raise _broken(where, f"rotation {op >> 3} of a face of 3 corners")
-        # _Boundary.attach written out for the edges previous -> w and w -> first, both gates;
-        # the edge first -> previous closes the gate (flipped: joins it, no gate)
+        # the edge first -> previous closes the gate (flipped: joins it, no gate); the edges
+        # previous -> w and w -> first are gates
         if op & 4:
             join(first, previous)
         elif gate_count == 1:
             del open_edges[gate]
         else:
             open_edges[gate] = gate_count - 1
-        opposite, key = w * k + previous, previous * k + w
-        open_count = open_count_of(opposite)
-        if not open_count:
-            if key in open_edges:
-                open_edges[key] += 1
-            else:
-                open_edges[key] = 1
-                into[w].append(key)
-                out_of[previous].append(key)
-        elif open_count == 1:
-            del open_edges[opposite]
-        else:
-            open_edges[opposite] = open_count - 1
-        push_gate(key)
-        opposite, key = first * k + w, w * k + first
-        open_count = open_count_of(opposite)
-        if not open_count:
-            if key in open_edges:
-                open_edges[key] += 1
-            else:
-                open_edges[key] = 1
-                into[first].append(key)
-                out_of[w].append(key)
-        elif open_count == 1:
-            del open_edges[opposite]
-        else:
-            open_edges[opposite] = open_count - 1
-        push_gate(key)
+        push_gate(join(previous, w))
+        push_gate(join(w, first))
         corners += (first, previous, w)
         add_code(op)
         faces += 1
-    sources = (op_source, iter(()), new_source, reference_source)  # no degrees: triangles
-    for name, source in zip(STREAM_NAMES, sources, strict=True):
-        if operator.length_hint(source):
-            raise _broken(where, f"stream {name} has values left, or ends early")
-    return _stored(corners, codes, count, width, corner_order)
+    walk.check_ends()
+    return _stored(corners, walk.codes, count, width, corner_order)
 
 
 def _stored(
