@@ -21,6 +21,7 @@ import numpy as np
 from ..format import qmat
 from ..format.prediction import mean_residuals, residuals
 from ..topology import MeshPrediction
+from .trial import QuantizedSegment
 
 #: Zigzag residuals counted by their own histogram entry; larger ones are escapes.
 TABLE_SIZE = 4095
@@ -75,9 +76,14 @@ class U1Predictors:
         return out
 
 
-def matrix_bits(q: np.ndarray, *, predict: bool) -> float:
-    """The estimated bits of a small section (U3, CENT with ``predict``; CORE without), its
-    predictors chosen as :func:`.format.qmat.encode_matrix` chooses them."""
-    if predict and q.shape[0] > 1:
-        q = qmat.predicted_stream(q, None, True)[0]
-    return entropy_bits(q)
+def segment_bits(segment: QuantizedSegment, u1_predictors: U1Predictors | None) -> float:
+    """The estimated bits of a decomposition's quantized sections: its own U1 (if it has one,
+    under ``u1_predictors``), then U3 and CENT predicted and CORE as it is, each chosen as
+    :func:`.format.qmat.encode_matrix` chooses (:func:`.format.qmat.section_stream`)."""
+    bits = 0.0
+    if segment.u1 is not None:
+        assert u1_predictors is not None  # an own U1 is sized under its kept predictors
+        bits += entropy_bits(u1_predictors.stream(segment.u1.q))
+    for matrix, predict in ((segment.u3, True), (segment.core, False), (segment.centroids, True)):
+        bits += entropy_bits(qmat.section_stream(matrix.q, None, predict, True)[0])
+    return bits

@@ -352,11 +352,7 @@ class WholeWorkspace:
         """The quantized sections' bytes estimated from their integers (:mod:`.estimate`), and
         the coded faces': to compare trials, not the final size."""
         (factors,) = quantized.segments
-        assert factors.u1 is not None  # a whole file's U1 is its own
-        bits = estimate.entropy_bits(self._u1_predictors.stream(factors.u1.q))
-        bits += estimate.matrix_bits(factors.u3.q, predict=True)
-        bits += estimate.matrix_bits(factors.core.q, predict=False)
-        bits += estimate.matrix_bits(factors.centroids.q, predict=True)
+        bits = estimate.segment_bits(factors, self._u1_predictors)
         return round(bits / 8.0) + len(self.face_section[1])
 
     def trial_size(self, quantized: Quantized[Ranks]) -> float:

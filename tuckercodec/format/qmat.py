@@ -107,11 +107,7 @@ def encode_matrix(
     from the section entries whether the file needs the coding tools flag.
     """
     q = matrix.q
-    predict = np.zeros(q.shape[1], dtype=np.uint8)
-    stream = q
-    if allow_predict and q.shape[0] > 1:
-        # in a function of its own: the other predictors' residuals are freed before packing
-        stream, predict = predicted_stream(q, parents, coding_tools)
+    stream, predict = section_stream(q, parents, allow_predict, coding_tools)
     payload, planes = streams.pack_integers(np.ascontiguousarray(stream.T), level)
     params = {
         "shape": [int(q.shape[0]), int(q.shape[1])],
@@ -120,6 +116,17 @@ def encode_matrix(
         "predict": predict.tobytes(),
     }
     return params, payload
+
+
+def section_stream(
+    q: np.ndarray, parents: Mesh | None, allow_predict: bool, coding_tools: bool
+) -> tuple[np.ndarray, np.ndarray]:
+    """The integers a section streams and each column's predictor: :func:`predicted_stream`
+    where prediction is allowed and there is a row to predict from, else ``q`` itself."""
+    if allow_predict and q.shape[0] > 1:
+        # in a function of its own: the other predictors' residuals are freed before packing
+        return predicted_stream(q, parents, coding_tools)
+    return q, np.zeros(q.shape[1], dtype=np.uint8)
 
 
 def predicted_stream(

@@ -459,11 +459,7 @@ class SegmentedWorkspace:
         if self.fixed_basis is None and quantized.shared_u1 is not None:
             bits += estimate.entropy_bits(self._predictors(-1).stream(quantized.shared_u1.q))
         for s, factors in enumerate(quantized.segments):
-            if factors.u1 is not None:
-                bits += estimate.entropy_bits(self._predictors(s).stream(factors.u1.q))
-            bits += estimate.matrix_bits(factors.u3.q, predict=True)
-            bits += estimate.matrix_bits(factors.core.q, predict=False)
-            bits += estimate.matrix_bits(factors.centroids.q, predict=True)
+            bits += estimate.segment_bits(factors, self._predictors(s))
         return round(bits / 8.0) + self._coded_once
 
     def _predictors(self, segment: int) -> estimate.U1Predictors:
