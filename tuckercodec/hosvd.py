@@ -33,7 +33,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 
 # Rows of X1 processed at once when measuring energies: bounds the scratch memory to
 # ROW_BLOCK * 3F floats instead of a second copy of the tensor.
@@ -148,6 +147,8 @@ def orthonormal_columns(columns: np.ndarray) -> np.ndarray:
     Cholesky factorisation, or a result further than :data:`ORTHONORMAL_TOLERANCE` from
     orthonormal, falls back to Householder QR.
     """
+    import scipy.linalg  # here: 0.2-0.4 s at start-up that every command would pay
+
     q = columns
     try:
         for _ in range(2):

@@ -35,7 +35,6 @@ killed if tasks were left running. A worker that dies fails only the task it was
 from __future__ import annotations
 
 import abc
-import asyncio
 import contextlib
 import itertools
 import logging
@@ -439,6 +438,7 @@ def _connect(distributed: Any, address: str) -> Any:
 def _kill_workers(cluster: Any) -> None:
     """Stop a LocalCluster's worker processes without waiting for their running tasks (the
     nanny otherwise gives a worker 4 s to finish before it kills it)."""
+    import asyncio  # here: only a cluster needs it, and it costs every command's start-up
 
     async def kill() -> None:
         nannies = list(cluster.workers.values())
