@@ -29,6 +29,19 @@ def test_zigzag_and_planes_round_trip():
     )
 
 
+def test_unpacking_unzigzags_block_by_block_at_every_boundary(monkeypatch):
+    # a small block, so that a few values cross every boundary case: none, one, several blocks
+    # and a short last one
+    monkeypatch.setattr(streams, "_UNZIGZAG_BLOCK", 4)
+    rng = np.random.default_rng(5)
+    for count in (0, 1, 3, 4, 5, 8, 13):
+        values = rng.integers(-(2**31), 2**31, count)
+        payload, planes = streams.pack_integers(values)
+        out = streams.unpack_integers(payload, count, planes, "test")
+        assert out.dtype == np.int64
+        np.testing.assert_array_equal(out, values)
+
+
 def test_integers_beyond_the_format_range_are_refused():
     with pytest.raises(ValueError, match="32-bit"):
         streams.pack_integers(np.array([2**31 + 5]))

@@ -160,11 +160,19 @@ def unpack_integers(payload: bytes | memoryview, count: int, planes: int, where:
     raw = decompress_exact(payload, count * planes, where)
     unsigned = from_planes(raw, count, planes)
     del raw
-    # unzigzag in place (8 bytes of scratch per value instead of 24): the stream's integers
-    # are the largest array the decoder holds before the positions
-    sign = (unsigned & np.uint64(1)).view(np.int64)
-    np.negative(sign, out=sign)  # 0 or -1
-    unsigned >>= np.uint64(1)
-    signed = unsigned.view(np.int64)
-    signed ^= sign
-    return signed
+    # unzigzag in place, a block at a time: the stream's integers are the largest array the
+    # decoder holds before the positions, and a whole-size sign array beside them was a third
+    # copy of a large U1 at the decoder's peak
+    sign = np.empty(min(count, _UNZIGZAG_BLOCK), dtype=np.int64)
+    for start in range(0, count, _UNZIGZAG_BLOCK):
+        block = unsigned[start : start + _UNZIGZAG_BLOCK]
+        part = sign[: block.size]
+        np.bitwise_and(block, np.uint64(1), out=part.view(np.uint64))
+        np.negative(part, out=part)  # 0 or -1
+        block >>= np.uint64(1)
+        block.view(np.int64)[:] ^= part
+    return unsigned.view(np.int64)
+
+
+#: Values unzigzagged at once by :func:`unpack_integers` (8 MB of scratch).
+_UNZIGZAG_BLOCK = 1 << 20
