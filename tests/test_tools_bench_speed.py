@@ -98,3 +98,25 @@ def test_obj_text_that_differs_is_a_failure():
     speed.obj_table(report, [result])
     assert report.failures == ["horse: the OBJ text differs from the baseline's"]
     assert "NOT met" in report.verdicts[0]
+
+
+def test_the_large_files_target_counts_the_import_a_lazy_package_pays_in_the_call(tmp_path):
+    # the old package imports everything before the call, the new one inside it: judged on the
+    # sum, the new one is 2x here, not the 5x its call alone would show
+    def sample(imported: float, first: float) -> dict[str, object]:
+        return {
+            "import": imported,
+            "first": first,
+            "first_with_import": imported + first,
+            "first_peak": 100 * speed.MB,
+            "later": [0.01],
+        }
+
+    measure = speed.Measure({"old": [sample(1.0, 3.0)], "new": [sample(0.0, 2.0)]})
+    large = speed.LargeResult(tmp_path / "large.tkc", [1], measure, "made now")
+    report = speed.Report()
+    speed.large_table(report, large)
+    text = "\n".join(report.lines)
+    assert "| import tuckercodec + open + frame 0 (s) | 4.000 | 2.000 | 2.00 |" in text
+    assert "| open + frame 0 (s) | 3.000 | 2.000 | 1.50 |" in text
+    assert "first frame at least 5x: NOT met (2.00x)" in report.verdicts[0]

@@ -31,9 +31,11 @@ With ``--large``, the first frame from disk of a large segmented file: the skinn
 ``tools.generate.sequence`` (100,000 vertices, 1,000 frames, the size issue 24 gives), made once in
 ``--workdir`` and encoded there once by the baseline's CLI at KG 0.1 in segments of 250 frames
 (the encoder's default length), so that both packages read the same file. Each child opens
-``Decoder(path)`` and decodes frame 0 (timed together), then a few later frames (the median
-reported); the memory is the whole child process's peak resident set (``ru_maxrss``: the
-interpreter, imports and all) after frame 0.
+``Decoder(path)`` and decodes frame 0 (timed together, and with the child's ``import
+tuckercodec`` added: a package that imports its modules lazily pays them inside the call, so
+the target is judged on the sum), then a few later frames (the median reported); the memory
+is the whole child process's peak resident set (``ru_maxrss``: the interpreter, imports and
+all) after frame 0.
 
 Printed: a table per measure with both packages' seconds and the ratio baseline/now, the
 verdicts against the issue's targets, the machine, the load average before and after, and the
@@ -105,8 +107,9 @@ def peak():
 kind = job["kind"]
 if kind == "encode":
     sequence = tc.load_sequence(job["source"], progress=False)
+    encode = tc.encode  # a package that imports lazily imports the encoder here, untimed
     start = time.perf_counter()
-    data = tc.encode(sequence, target_kg=job["target"])
+    data = encode(sequence, target_kg=job["target"])
     out["seconds"] = time.perf_counter() - start
     out["bytes"] = len(data)
     with open(job["output"], "wb") as handle:
@@ -144,6 +147,8 @@ elif kind == "large":
     decoder = tc.Decoder(job["file"])
     decoder.frame(0)
     out["first"] = time.perf_counter() - start
+    # with the import: a package that imports lazily imports the decoder inside "first"
+    out["first_with_import"] = out["import"] + out["first"]
     out["first_peak"] = peak()
     later = []
     for frame in job["frames"]:
@@ -601,7 +606,9 @@ def large_table(report: Report, large: LargeResult) -> None:
     report.lines.append(
         f"First frame from disk of {large.file.name} ({LARGE_VERTICES} vertices requested, "
         f"{LARGE_FRAMES} frames, segments of {LARGE_SEGMENT_FRAMES}; {large.made}), a fresh "
-        "process per run: `Decoder(path)` + `frame(0)`, the process's peak resident memory "
+        "process per run: `import tuckercodec` + `Decoder(path)` + `frame(0)` (the target's "
+        "measure: a package that imports lazily imports the decoder in the call) and the call "
+        "alone, the process's peak resident memory "
         f"after it (ru_maxrss), and the median of frames {large.frames} decoded after it:"
     )
     report.lines.append("")
@@ -615,11 +622,18 @@ def large_table(report: Report, large: LargeResult) -> None:
         runs = [statistics.median(s["later"]) for s in measure.samples[contender]]
         return statistics.median(runs) if runs else None
 
-    first = [measure.median(c, "first") for c in ("old", "new")]
+    first = [measure.median(c, "first_with_import") for c in ("old", "new")]
+    opened = [measure.median(c, "first") for c in ("old", "new")]
     peak = [measure.median(c, "first_peak") for c in ("old", "new")]
     after = [later(c) for c in ("old", "new")]
     rows = [
-        ["open + frame 0 (s)", cell(first[0], 3), cell(first[1], 3), cell(ratio(*first), 2)],
+        [
+            "import tuckercodec + open + frame 0 (s)",
+            cell(first[0], 3),
+            cell(first[1], 3),
+            cell(ratio(*first), 2),
+        ],
+        ["open + frame 0 (s)", cell(opened[0], 3), cell(opened[1], 3), cell(ratio(*opened), 2)],
         [
             "peak resident memory after frame 0 (MB)",
             cell((peak[0] or 0) / MB, 0),
