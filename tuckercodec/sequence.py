@@ -15,6 +15,9 @@ from .topology import checked_face_table
 #: default of USD (timeCodesPerSecond), Blender and film.
 DEFAULT_FRAME_RATE = 24.0
 
+#: The up axes a sequence can name: USD's (``UsdGeom`` allows only Y and Z), glTF's Y.
+UP_AXES = ("Y", "Z")
+
 
 @dataclass(eq=False)
 class MeshSequence:
@@ -32,6 +35,9 @@ class MeshSequence:
         time_codes: each frame's time in frames (USD's time codes, a point cache's frame
             numbers): float64, strictly increasing; ``None`` means 0, 1, 2... A frame's time in
             seconds is its time code divided by the frame rate (:meth:`seconds`).
+        meters_per_unit: the length of one unit of the positions in metres (USD's
+            ``metersPerUnit``: 0.01 for centimetres, 1.0 for metres), if known.
+        up_axis: ``"Y"`` or ``"Z"``, the axis that points up in the source, if known.
     """
 
     vertices: np.ndarray
@@ -39,6 +45,8 @@ class MeshSequence:
     frame_names: list[str] = field(default_factory=list)
     frame_rate: float | None = None
     time_codes: np.ndarray | None = None
+    meters_per_unit: float | None = None
+    up_axis: str | None = None
 
     def __post_init__(self) -> None:
         vertices = np.asarray(self.vertices)
@@ -74,6 +82,8 @@ class MeshSequence:
             raise InputError(f"frame rate must be a positive number, got {self.frame_rate}")
         if self.time_codes is not None:
             self.time_codes = checked_time_codes(self.time_codes, self.frame_count)
+        self.meters_per_unit = checked_meters_per_unit(self.meters_per_unit)
+        self.up_axis = checked_up_axis(self.up_axis)
 
     @property
     def frame_count(self) -> int:
@@ -183,3 +193,25 @@ def checked_time_codes(values: np.ndarray, frame_count: int) -> np.ndarray:
             f"time codes must increase: {codes[frame]} follows {codes[frame - 1]}", frame=frame
         )
     return codes
+
+
+def checked_meters_per_unit(value: object) -> float | None:
+    """A length unit in metres: ``None``, or a positive finite number (as a float)."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.number)):
+        raise InputError(f"meters per unit must be a positive number, got {value!r}")
+    unit = float(value)
+    if not (np.isfinite(unit) and unit > 0):
+        raise InputError(f"meters per unit must be a positive number, got {unit}")
+    return unit
+
+
+def checked_up_axis(value: object) -> str | None:
+    """An up axis: ``None``, or ``"Y"`` or ``"Z"`` (either case)."""
+    if value is None:
+        return None
+    axis = value.upper() if isinstance(value, str) else value
+    if axis not in UP_AXES:
+        raise InputError(f"the up axis must be Y or Z, got {value!r}")
+    return str(axis)

@@ -25,6 +25,8 @@ _PARTS = {
     "frame_names": "frame names",
     "frame_rate": "frame rate",
     "time_codes": "time codes",
+    "meters_per_unit": "unit (metres per unit)",
+    "up_axis": "up axis",
 }
 #: What becomes of a part that the output's format does not keep.
 _LOSSES = {"float64": " (rounded to float32)", "polygons": " (split into triangles)"}
@@ -64,6 +66,8 @@ def _contents(sequence: MeshSequence) -> dict[str, bool]:
         "frame_names": sequence.frame_names != default_frame_names(sequence.frame_count),
         "frame_rate": sequence.frame_rate is not None,
         "time_codes": sequence.time_codes is not None,
+        "meters_per_unit": sequence.meters_per_unit is not None,
+        "up_axis": sequence.up_axis is not None,
     }
 
 

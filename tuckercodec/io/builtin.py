@@ -15,7 +15,18 @@ from .registry import SequenceFormat
 from .xdmf.writer import write_xdmf
 
 #: What each format keeps of a sequence beyond float32 positions (``SequenceFormat.carries``).
-_EVERYTHING = frozenset({"float64", "faces", "polygons", "frame_names", "frame_rate", "time_codes"})
+_EVERYTHING = frozenset(
+    {
+        "float64",
+        "faces",
+        "polygons",
+        "frame_names",
+        "frame_rate",
+        "time_codes",
+        "meters_per_unit",
+        "up_axis",
+    }
+)
 _SERIES = frozenset({"float64", "faces", "polygons", "frame_names", "time_codes"})
 _SCENE = frozenset({"faces", "frame_rate", "time_codes"})
 
@@ -34,7 +45,8 @@ FORMATS = (
         name="npz",
         suffixes=(".npz",),
         description=(
-            "NumPy archive: V (frames, vertices, 3), F faces, frame_files, frame_rate, time_codes"
+            "NumPy archive: V (frames, vertices, 3), F faces, frame_files, frame_rate, "
+            "time_codes, meters_per_unit, up_axis"
         ),
         open=NpzFrames,
         write=write_npz,
@@ -57,7 +69,7 @@ FORMATS = (
         write=usd.write_usd,
         read_options=frozenset({"prim"}),
         extra="usd",
-        carries=_SCENE,
+        carries=_SCENE | {"meters_per_unit", "up_axis"},
     ),
     SequenceFormat(
         name="alembic",

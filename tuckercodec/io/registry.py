@@ -121,7 +121,7 @@ class SequenceFormat:
     extra: str | None = None
     #: what a file keeps of a sequence beyond float32 positions, of: "float64" (positions
     #: exactly), "faces", "polygons" (faces of more than 3 corners, not split into
-    #: triangles), "frame_names", "frame_rate", "time_codes"
+    #: triangles), "frame_names", "frame_rate", "time_codes", "meters_per_unit", "up_axis"
     carries: frozenset[str] = frozenset()
     #: its "files" are folders (a zarr store), read by this format rather than as a folder
     #: of frames

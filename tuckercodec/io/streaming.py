@@ -45,7 +45,12 @@ import numpy as np
 from ..errors import InputError
 from ..format.names import default_frame_names
 from ..reading import open_input
-from ..sequence import MeshSequence, checked_time_codes
+from ..sequence import (
+    MeshSequence,
+    checked_meters_per_unit,
+    checked_time_codes,
+    checked_up_axis,
+)
 from ..topology import checked_face_table
 
 #: The most bytes of the file's own type that :class:`RawFrames` reads at a time (a frame more
@@ -65,6 +70,8 @@ class FrameSource(abc.ABC):
         frame_names: F names (``frame_00000``... where the source has none).
         frame_rate: frames per second, if known.
         time_codes: each frame's time in frames, or ``None`` (0, 1, 2...).
+        meters_per_unit: the length of a unit of the positions in metres, if known.
+        up_axis: ``"Y"`` or ``"Z"``, if known.
 
     A source may hold open files or a child process: close it (or use ``with``) when done.
     It reads for one caller at a time; several threads need one source each.
@@ -77,6 +84,8 @@ class FrameSource(abc.ABC):
     frame_names: list[str]
     frame_rate: float | None
     time_codes: np.ndarray | None
+    meters_per_unit: float | None = None
+    up_axis: str | None = None
 
     #: The attributes that hold open files or processes: ``None`` when closed or unpickled,
     #: opened again on first use (each needs a class-level default of ``None``).
@@ -93,6 +102,8 @@ class FrameSource(abc.ABC):
         frame_names: list[str] | None = None,
         frame_rate: float | None = None,
         time_codes: object = None,
+        meters_per_unit: object = None,
+        up_axis: object = None,
     ) -> None:
         """Set the description, checked as MeshSequence checks it; errors name ``path``."""
         self.path = None if path is None else os.fspath(path)
@@ -114,6 +125,8 @@ class FrameSource(abc.ABC):
             self.time_codes = None
             if time_codes is not None:
                 self.time_codes = checked_time_codes(np.asarray(time_codes), frame_count)
+            self.meters_per_unit = checked_meters_per_unit(meters_per_unit)
+            self.up_axis = checked_up_axis(up_axis)
         except InputError as error:
             raise InputError(error.reason, path=error.path or path, frame=error.frame) from None
 
@@ -173,6 +186,8 @@ class FrameSource(abc.ABC):
                 frame_names=self.frame_names,
                 frame_rate=self.frame_rate,
                 time_codes=self.time_codes,
+                meters_per_unit=self.meters_per_unit,
+                up_axis=self.up_axis,
             )
         except InputError as error:
             raise InputError(
@@ -229,6 +244,8 @@ class SequenceFrames(FrameSource):
             sequence.frame_names,
             sequence.frame_rate,
             sequence.time_codes,
+            sequence.meters_per_unit,
+            sequence.up_axis,
         )
 
     def _read(self, start: int, stop: int) -> np.ndarray:

@@ -10,6 +10,8 @@ Reading:
 * Frames are the points' time samples, in time order, and ``time_codes`` their times (stage
   time, after any layer offsets). Points without time samples give one frame, their default
   value, and no time codes.
+* ``meters_per_unit`` and ``up_axis`` are the stage's ``metersPerUnit`` and ``upAxis``: as
+  authored, else USD's fallbacks (0.01, Y), which is what an unauthored stage means.
 * ``frame_rate`` is the stage's ``timeCodesPerSecond``, which is what turns a time code into
   seconds; ``framesPerSecond`` is only a playback hint, so where the two differ
   ``timeCodesPerSecond`` wins and every frame keeps its time in seconds. USD's own fallbacks
@@ -41,8 +43,9 @@ Reading:
   and the asset path (a file pxr would not find is not read, and passes; a variable
   expression, evaluated into a path, is refused).
 
-Writing: a stage with ``upAxis`` Y, ``metersPerUnit`` 0.01 (USD's fallback, authored only
-because usdchecker requires it: the file means what an unauthored one would), ``defaultPrim``
+Writing: a stage with the sequence's ``upAxis`` and ``metersPerUnit``; for a sequence that
+carries none (an Alembic or point cache, an OBJ folder), Y and 0.01, USD's fallbacks (authored
+because usdchecker requires it: the file means what an unauthored one would). ``defaultPrim``
 ``/Root``, an Xform ``/Root`` holding a Mesh named after the file (``horse.usdc`` gives
 ``/Root/horse``) with ``subdivisionScheme`` "none", float32 ``points`` and an ``extent``
 sampled at the sequence's time codes, its faces as counts and indices, and
@@ -183,8 +186,13 @@ class StageFrames(FrameByFrame):
         if not (np.isfinite(rate) and rate > 0):
             raise InputError(f"timeCodesPerSecond must be a positive number, got {rate}", path=path)
         codes = np.array(times) if times else None
+        # what the stage means: its authored unit and up axis, else USD's fallbacks (0.01, Y)
+        unit = float(pxr.UsdGeom.GetStageMetersPerUnit(self._stage))
+        axis = str(pxr.UsdGeom.GetStageUpAxis(self._stage))
         try:
-            self._describe(path, len(self._frame_times), len(self._first), faces, None, rate, codes)
+            self._describe(
+                path, len(self._frame_times), len(self._first), faces, None, rate, codes, unit, axis
+            )
         except InputError as error:
             raise InputError(f"{where}: {error.reason}", path=path, frame=error.frame) from None
 
@@ -430,8 +438,10 @@ def _stage(pxr: SimpleNamespace, seq: MeshSequence, vertices: np.ndarray, name: 
     Mesh under /Root."""
     Usd, UsdGeom, Vt = pxr.Usd, pxr.UsdGeom, pxr.Vt
     stage = Usd.Stage.CreateInMemory()
-    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.y)
-    UsdGeom.SetStageMetersPerUnit(stage, UsdGeom.LinearUnits.centimeters)
+    axis = UsdGeom.Tokens.z if seq.up_axis == "Z" else UsdGeom.Tokens.y
+    UsdGeom.SetStageUpAxis(stage, axis)
+    unit = seq.meters_per_unit or UsdGeom.LinearUnits.centimeters  # USD's fallback, 0.01
+    UsdGeom.SetStageMetersPerUnit(stage, unit)
     root = UsdGeom.Xform.Define(stage, ROOT)
     stage.SetDefaultPrim(root.GetPrim())
     mesh = UsdGeom.Mesh.Define(stage, f"{ROOT}/{name}")

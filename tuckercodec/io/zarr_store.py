@@ -4,7 +4,8 @@ and written with zarr (the ``zarr`` extra), zarr format 2 or 3.
 Reading: the store's root array, or in a group the array ``vertices``, of real numbers (any
 dtype zarr reads as one); with a group, optionally an integer array ``faces`` (M, n), 0-based,
 -1 padding, and the attributes ``frame_rate`` (a number), ``frame_names`` (one string per
-frame) and ``time_codes`` (one number per frame). Frames are read chunk by chunk: a range reads
+frame), ``time_codes`` (one number per frame), ``meters_per_unit`` (a number) and ``up_axis``
+(``Y`` or ``Z``). Frames are read chunk by chunk: a range reads
 only the chunks it overlaps (:class:`ZarrFrames`), so a store larger than memory streams. A
 chunk larger than :data:`MAX_CHUNK_BYTES` is refused (it would be read whole for one frame), or
 than ``--max-memory`` if less (it is decompressed whole), and so are faces beyond either.
@@ -88,6 +89,8 @@ class ZarrFrames(FrameSource):
             _attribute(attributes, "frame_names", path),
             _attribute(attributes, "frame_rate", path),
             _attribute(attributes, "time_codes", path),
+            _attribute(attributes, "meters_per_unit", path),
+            _attribute(attributes, "up_axis", path),
         )
 
     def _read(self, start: int, stop: int) -> np.ndarray:
@@ -168,10 +171,14 @@ def _attribute(attributes: dict[str, Any], name: str, path: Path) -> Any:
     value = attributes.get(name)
     if value is None:
         return None
-    if name == "frame_rate":
+    if name in ("frame_rate", "meters_per_unit"):
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise InputError(f"its attribute frame_rate is {value!r}, not a number", path=path)
+            raise InputError(f"its attribute {name} is {value!r}, not a number", path=path)
         return float(value)
+    if name == "up_axis":
+        if not isinstance(value, str):
+            raise InputError(f"its attribute up_axis is {value!r}, not a string", path=path)
+        return value
     if not isinstance(value, list):
         raise InputError(f"its attribute {name} is not a list, one item per frame", path=path)
     if name == "frame_names":
@@ -190,6 +197,10 @@ def write_zarr(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
         attributes["frame_rate"] = seq.frame_rate
     if seq.time_codes is not None:
         attributes["time_codes"] = seq.time_codes.tolist()
+    if seq.meters_per_unit is not None:
+        attributes["meters_per_unit"] = seq.meters_per_unit
+    if seq.up_axis is not None:
+        attributes["up_axis"] = seq.up_axis
     with atomic_store(path, overwrite=options.overwrite) as staging:
         group = zarr.create_group(store=str(staging), zarr_format=3)
         frames = min(CHUNK_FRAMES, seq.frame_count)

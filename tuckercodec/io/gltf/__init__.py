@@ -29,7 +29,7 @@ from ...errors import InputError
 from ...sequence import MeshSequence
 from ..registry import MeshFrame, ReadOptions, WriteOptions
 from ..streaming import FrameSource
-from .reader import Scene, read_gltf
+from .reader import METERS_PER_UNIT, UP_AXIS, Scene, read_gltf
 from .timing import timing
 from .writer import write_sequence_gltf
 
@@ -47,7 +47,15 @@ class GltfFrames(FrameSource):
         scene = self._opened()
         rate, codes, names = timing(scene.times, scene.animated, scene.extras, options.fps)
         self._describe(
-            path, len(scene.times), _vertex_count(scene), scene.faces, names, rate, codes
+            path,
+            len(scene.times),
+            _vertex_count(scene),
+            scene.faces,
+            names,
+            rate,
+            codes,
+            METERS_PER_UNIT,
+            UP_AXIS,
         )
 
     def _opened(self) -> Scene:

@@ -45,6 +45,9 @@ from .timing import timing
 SUPPORTED_EXTENSIONS = frozenset({"KHR_mesh_quantization", "EXT_meshopt_compression"})
 #: The key of the writer's own record in an animation's ``extras``.
 EXTRAS_KEY = "tuckercodec"
+#: glTF's units and up axis, fixed by its specification (§3.4: metres, +Y up).
+METERS_PER_UNIT = 1.0
+UP_AXIS = "Y"
 #: The levels of nesting above the chosen mesh nodes, in all, allowed per node of the file:
 #: each frame multiplies that many transforms (:func:`_check_nesting`).
 NESTING_PER_NODE = 64
@@ -87,7 +90,13 @@ def read_gltf(
     rate, codes, names = timing(sampled.times, sampled.animated, sampled.extras, fps)
     try:
         return MeshSequence(
-            sampled.positions, sampled.faces, frame_names=names, frame_rate=rate, time_codes=codes
+            sampled.positions,
+            sampled.faces,
+            frame_names=names,
+            frame_rate=rate,
+            time_codes=codes,
+            meters_per_unit=METERS_PER_UNIT,
+            up_axis=UP_AXIS,
         )
     except InputError as error:
         raise InputError(error.reason, path=path, frame=error.frame) from None

@@ -145,6 +145,8 @@ class IsolatedFrames(FrameSource):
             opened.frame_names,
             opened.frame_rate,
             opened.time_codes,
+            opened.meters_per_unit,
+            opened.up_axis,
         )
 
     def _start(self) -> FrameSource | Description:

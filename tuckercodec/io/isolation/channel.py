@@ -259,6 +259,9 @@ class Description:
         self.frame_rate = header["frame_rate"]
         self.faces = arrays["faces"]
         self.time_codes = arrays.get("time_codes")
+        # checked by FrameSource._describe, as every value a child sends
+        self.meters_per_unit = header.get("meters_per_unit")
+        self.up_axis = header.get("up_axis")
 
 
 class Child:

@@ -162,6 +162,8 @@ def serve(argument: str) -> None:
             "vertex_count": source.vertex_count,
             "frame_names": source.frame_names,
             "frame_rate": source.frame_rate,
+            "meters_per_unit": source.meters_per_unit,
+            "up_axis": source.up_axis,
         }
         send_arrays({"result": "description", **description}, arrays)
     except BaseException as error:

@@ -2,7 +2,8 @@
 :mod:`.npy`, the ``.npy`` array of positions, which shares its header checks).
 
 Keys: ``V`` positions (frames, vertices, 3), optionally ``F`` faces (0-based, -1 padding),
-``frame_files`` (one name per frame), ``frame_rate`` and ``time_codes``. It is read with
+``frame_files`` (one name per frame), ``frame_rate``, ``time_codes``, ``meters_per_unit`` (one
+number) and ``up_axis`` (one string, ``Y`` or ``Z``). It is read with
 :mod:`zipfile` and ``numpy.lib.format``, never with pickle, and every declared size is checked
 against the file before anything is allocated (:mod:`.archive`): a member must be a ``.npy``
 array, stored or deflated (what ``np.savez`` and ``np.savez_compressed`` write), not
@@ -76,6 +77,7 @@ class NpzFrames(RawFrames):
                     path=path,
                 )
             faces, names, rate, codes = archive.metadata(*shape)
+            unit, axis = archive.scene()
             self._name = info.filename
             self._deflated = info.compress_type == zipfile.ZIP_DEFLATED
             self._scattered = header.fortran_order and shape[0] > 1
@@ -84,7 +86,7 @@ class NpzFrames(RawFrames):
             if not self._deflated:
                 self._data_start = _data_start(archive.stream, info, archive.size, path)
         self._file, self._dtype = path, header.dtype
-        self._describe(path, *shape, faces, names, rate, codes)
+        self._describe(path, *shape, faces, names, rate, codes, unit, axis)
 
     def load(self, progress: bool = False) -> MeshSequence:
         """The whole sequence, key V read in one piece through zipfile, which checks its CRC."""
@@ -154,6 +156,10 @@ def write_npz(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
         arrays["frame_rate"] = np.float64(seq.frame_rate)
     if seq.time_codes is not None:
         arrays["time_codes"] = np.asarray(seq.time_codes, dtype=np.float64)
+    if seq.meters_per_unit is not None:
+        arrays["meters_per_unit"] = np.float64(seq.meters_per_unit)
+    if seq.up_axis is not None:
+        arrays["up_axis"] = np.array(seq.up_axis, dtype=str)
     # np.savez adds ".npz" to a file *name* without it, so it gets an open file instead
     with atomic_output(path, overwrite=options.overwrite) as stream:
         np.savez(stream, **arrays)

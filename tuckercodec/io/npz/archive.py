@@ -103,6 +103,31 @@ class NpzArchive:
         codes = self.array("time_codes") if "time_codes" in self.members else None
         return faces, names, rate, codes
 
+    def scene(self) -> tuple[float | None, str | None]:
+        """Keys meters_per_unit (one positive number) and up_axis (one string), where the
+        archive has them; their values are checked where the source is described."""
+        unit: float | None = None
+        if "meters_per_unit" in self.members:
+            values = self.array("meters_per_unit")
+            if values.dtype.kind not in "fiu" or values.size != 1:
+                raise InputError(
+                    f"key 'meters_per_unit' must be one number, got dtype {values.dtype} "
+                    f"shape {values.shape}",
+                    path=self.path,
+                )
+            unit = float(values.reshape(()))
+        axis: str | None = None
+        if "up_axis" in self.members:
+            values = self.array("up_axis")
+            if values.dtype.kind != "U" or values.size != 1:
+                raise InputError(
+                    f"key 'up_axis' must be one string, got dtype {values.dtype} "
+                    f"shape {values.shape}",
+                    path=self.path,
+                )
+            axis = str(values.reshape(()))
+        return unit, axis
+
     def close(self) -> None:
         if hasattr(self, "zip"):
             self.zip.close()
