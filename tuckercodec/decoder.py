@@ -495,14 +495,21 @@ class Decoder:
         """The selected frames as a :class:`MeshSequence` with the file's faces and names; a
         part of the file, in order, carries its frame numbers as time codes."""
         chosen = self._selected(frames)
-        in_time = chosen.size < self.info.frames and bool(np.all(np.diff(chosen) > 0))
+        in_time = bool(np.all(np.diff(chosen) > 0))
+        codes = None
+        if in_time and self.info.time_codes is not None:  # the file's (format 1.4)
+            codes = np.asarray(self.info.time_codes, dtype=np.float64)[chosen]
+        elif in_time and chosen.size < self.info.frames:  # frame n at time code n
+            codes = np.asarray(chosen, dtype=np.float64)
         return MeshSequence(
             self.positions(chosen),
             self.faces,
             frame_names=[self.frame_names[n] for n in chosen],
             frame_rate=self.info.frame_rate,
-            # a part in order keeps its frames' places in time (frame n at time code n)
-            time_codes=np.asarray(chosen, dtype=np.float64) if in_time else None,
+            # a part in order keeps its frames' places in time
+            time_codes=codes,
+            meters_per_unit=self.info.meters_per_unit,
+            up_axis=self.info.up_axis,
         )
 
 

@@ -59,6 +59,9 @@ export async function observeVector(tkc, npy) {
         ranks: file.ranks,
         frame_rate: file.frameRate,
         kg: file.error ? file.error.kg : null,
+        time_codes: file.timeCodes === null ? null : Array.from(file.timeCodes),
+        meters_per_unit: file.metersPerUnit,
+        up_axis: file.upAxis,
       },
       frame_names: file.names,
       segments: file.layout.segmented

@@ -253,6 +253,14 @@ def invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
             "ChecksumError",
         ),
         "R20-header-field": (_edit(good, _header(vertices=_DELETE)), "FormatError"),
+        # 1.4 (§4): time codes that go back, frame 2 before frame 1
+        "R20-header-field-time-codes": (
+            _edit(
+                good,
+                _header(time_codes=_time_codes_back(parts.header["frames"])),
+            ),
+            "FormatError",
+        ),
         "R21-header-limit": (_edit(good, _header(vertices=1 << 40)), "LimitError"),
         "R22-ranks": (
             _edit(good, _header(ranks=[parts.header["ranks"][0], 10_000])),
@@ -297,6 +305,13 @@ def invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
             "FormatError",
         ),
     }
+
+
+def _time_codes_back(frames: int) -> bytes:
+    """A ``time_codes`` bin (§4, 1.4) of ``frames`` codes whose third is below its second."""
+    codes = np.arange(frames, dtype="<f8")
+    codes[2] = 0.5
+    return codes.tobytes()
 
 
 def _forget_last_entry(parts: Parts) -> None:
@@ -406,6 +421,7 @@ def valid_vectors() -> dict[str, tuple[bytes, str]]:
     return {
         **traverse_vectors(),
         **correction_vectors(),
+        **scene_vectors(),
         "v1-wave-triangles": (basic, "triangles, no names: the basic file"),
         "v1.1-segments-shared": (
             encode_with_report(long_wave, target_kg=0.5, segment_frames=12).data,
@@ -422,6 +438,33 @@ def valid_vectors() -> dict[str, tuple[bytes, str]]:
         "v1-ignorable-extensions": (
             extended.pack(),
             "v1-wave-triangles plus an ignorable flag, header key and ancillary section",
+        ),
+    }
+
+
+def scene_vectors() -> dict[str, tuple[bytes, str]]:
+    """The valid vectors of format 1.4 (§4): time codes, unit and up axis in the header."""
+    # a film cache's frames from 1001, one sample dropped (uneven), in metres and Z up
+    codes = np.concatenate([np.arange(1001.0, 1011.0), np.arange(1012.0, 1026.0)])
+    film = MeshSequence(
+        wave_sheet(24, 9),
+        sheet_triangles(9),
+        frame_rate=24.0,
+        time_codes=codes,
+        meters_per_unit=1.0,
+        up_axis="Z",
+    )
+    seconds = MeshSequence(  # times at 0.5 s, 0.75 s...: time codes in frames of 8 fps
+        wave_sheet(40, 9), sheet_triangles(9), frame_rate=8.0, time_codes=np.arange(4.0, 44.0)
+    )
+    return {
+        "v1.4-scene-times": (
+            encode(film, target_kg=0.5),
+            "format 1.4: time codes from 1001 with one frame missing, metres, Z up",
+        ),
+        "v1.4-scene-segments": (
+            encode_with_report(seconds, target_kg=0.5, segment_frames=16).data,
+            "format 1.4 and 1.1: time codes offset by 4 frames in three segments, no unit or axis",
         ),
     }
 
@@ -572,6 +615,7 @@ def traverse_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
 SECOND_VECTORS = {
     "R39-traversal-vertex-count": "R39-traversal",
     "R21-header-limit-face-streams": "R21-header-limit",
+    "R20-header-field-time-codes": "R20-header-field",
 }
 
 
@@ -606,6 +650,12 @@ def write_valid(folder: Path, name: str, data: bytes, purpose: str) -> None:
     }
     if exact:
         expected["residual"] = corrections_of(decoder)
+    if header.time_codes is not None:  # 1.4 (§4): only where a file has them, so that the
+        expected["header"]["time_codes"] = list(header.time_codes)  # older JSON stays as it is
+    if header.meters_per_unit is not None:
+        expected["header"]["meters_per_unit"] = header.meters_per_unit
+    if header.up_axis is not None:
+        expected["header"]["up_axis"] = header.up_axis
     (folder / f"{name}.json").write_text(json.dumps(expected, indent=2) + "\n")
 
 

@@ -88,12 +88,6 @@ def run_encode(args: argparse.Namespace) -> int:
         f"-> {args.output}"
     )
     _print_encode_report(encoded.report, read_info(encoded.data).format_version)
-    if encoded.time_codes is not None:  # the format keeps a frame rate, not times
-        codes = encoded.time_codes
-        print(
-            f"not kept in the compressed file: time codes ({codes[0]:g}..{codes[-1]:g} "
-            f"decode as frames 0..{encoded.frame_count - 1})"
-        )
     elapsed = time.perf_counter() - start
     megabytes = encoded.frame_count * encoded.vertex_count * 12 / 1e6
     print(
@@ -308,6 +302,13 @@ def run_info(args: argparse.Namespace) -> int:
         print("  lossless: the encoder checked the decoded values to be the input's, bit for bit")
     if header.frame_rate is not None:
         print(f"  {header.frame_rate:g} frames per second")
+    if header.time_codes is not None:
+        codes = header.time_codes
+        print(f"  time codes {codes[0]:g} to {codes[-1]:g}")
+    if header.meters_per_unit is not None:
+        print(f"  {header.meters_per_unit:g} metres per unit")
+    if header.up_axis is not None:
+        print(f"  {header.up_axis} up")
     print(f"  written by {header.encoder or 'an unnamed encoder'}")
     for section_id, length, codec, critical in header.sections:
         kind = "" if critical else " (ancillary)"

@@ -22,7 +22,7 @@ from ..analysis import Analysis, Selection
 from ..errors import UnreachableTargetError
 from ..format import faces, names, qmat, residual, sections, streams
 from ..format.container import FORMAT_MINOR, pack_container
-from ..format.header import header_map
+from ..format.header import SCENE_MINOR, header_map, scene_keys
 from ..format.qmat import QuantizedMatrix
 from ..format.reconstruction import factor_value_count, reconstruct_frames, reconstruction_basis
 from ..hosvd import project
@@ -99,6 +99,10 @@ class WholeWorkspace:
         self.select: Selection = select
         self.vertex_count = sequence.vertex_count
         self.frame_count = sequence.frame_count
+        # the time and scene keys the sequence carries (format 1.4), empty if none
+        self.scene = scene_keys(
+            self.frame_count, sequence.time_codes, sequence.meters_per_unit, sequence.up_axis
+        )
         # The KG denominator: each frame is centred, so ||A - E(A)|| is the centred tensor's norm.
         self.denominator2 = analysis.total_energy
         if connectivity is None:
@@ -386,6 +390,7 @@ class WholeWorkspace:
             encoder=f"tuckercodec {__version__}",
             frame_rate=self.sequence.frame_rate,
             claims=claims,
+            scene=self.scene,
         )
         packed = self.sections(quantized, self.level if level is None else level)
         flags, minor = 0, FORMAT_MINOR
@@ -394,6 +399,8 @@ class WholeWorkspace:
             at = next((n for n, (e, _) in enumerate(packed) if e["id"] == "NAME"), len(packed))
             packed.insert(at, ({**entry, **correction[0]}, correction[1]))
             flags, minor = residual.CORRECTIONS, residual.CORRECTIONS_MINOR
+        if self.scene:  # format 1.4's keys: the file says so (every 1.x decoder reads it)
+            minor = max(minor, SCENE_MINOR)
         sizes = {entry["id"]: len(payload) for entry, payload in packed}
         return pack_container(header, packed, flags=flags, minor=minor), sizes
 

@@ -12,6 +12,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from ..errors import FormatError
 from ..rate import bpfv
 from .container import Container
@@ -29,6 +31,12 @@ from .segments import (
 
 #: The error definition id of §4.1: the KG error of Karni and Gotsman (2004), in percent.
 KG_DEFINITION_ID = "karni-gotsman-2004"
+
+#: The minor version of the time and scene keys (§4, §10): a file that carries any of them is
+#: written as 1.4 at least (every 1.x decoder reads it; those before 1.4 ignore the keys).
+SCENE_MINOR = 4
+#: The up axes the header's ``up_axis`` may name (§4).
+UP_AXES = ("Y", "Z")
 
 
 @dataclass(frozen=True)
@@ -58,6 +66,10 @@ class FileInfo:
     max_distance_at: tuple[int, int] | None = None
     target_max_distance: float | None = None  # the bound given to the encoder (None: none)
     lossless: bool | None = None  # the encoder checked the decode bit for bit (None: no claim)
+    #: each frame's time code (§4, 1.4), or None: frame f at f; seconds are codes / frame rate
+    time_codes: tuple[float, ...] | None = None
+    meters_per_unit: float | None = None  # the length of a unit of the positions, in metres
+    up_axis: str | None = None  # "Y" or "Z", the source's up axis (None: not recorded)
 
     @property
     def bpfv(self) -> float:
@@ -86,6 +98,9 @@ class FileInfo:
             "target_max_distance": _json_number(self.target_max_distance),
             "lossless": self.lossless,
             "frame_rate": self.frame_rate,
+            "time_codes": None if self.time_codes is None else list(self.time_codes),
+            "meters_per_unit": self.meters_per_unit,
+            "up_axis": self.up_axis,
             "encoder": self.encoder,
             "sections": [
                 {"id": s, "bytes": n, "codec": c, "critical": crit}
@@ -123,11 +138,13 @@ def header_map(
     encoder: str,
     frame_rate: float | None,
     claims: dict[str, Any] | None = None,
+    scene: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Every header field but the section table, in the order the reference encoder writes
     them (the order changes the bytes, not the meaning). ``claims``: more keys of the
     informative ``error`` map (§4.1: the worst vertex of a file with a bound, format 1.3),
-    after the others, so that a file without them is written as before."""
+    after the others, so that a file without them is written as before; ``scene``: the time
+    and scene keys of :func:`scene_keys` (format 1.4), last."""
     header: dict[str, Any] = {
         "vertices": vertices,
         "frames": frames,
@@ -144,7 +161,29 @@ def header_map(
     }
     if frame_rate is not None:
         header["frame_rate"] = float(frame_rate)  # a msgpack float, never an int (§4)
+    header.update(scene or {})
     return header
+
+
+def scene_keys(
+    frames: int,
+    time_codes: np.ndarray | None,
+    meters_per_unit: float | None,
+    up_axis: str | None,
+) -> dict[str, Any]:
+    """The time and scene keys of §4 (format 1.4) a sequence carries: ``time_codes`` only when
+    they are not 0, 1, 2... (what their absence means), each other key only when known. Empty
+    for a sequence that carries none, whose file is then written as before, byte for byte."""
+    keys: dict[str, Any] = {}
+    if time_codes is not None:
+        codes = np.asarray(time_codes, dtype="<f8")
+        if not np.array_equal(codes, np.arange(frames, dtype=np.float64)):
+            keys["time_codes"] = codes.tobytes()  # bin: F little-endian binary64
+    if meters_per_unit is not None:
+        keys["meters_per_unit"] = float(meters_per_unit)  # a msgpack float, never an int
+    if up_axis is not None:
+        keys["up_axis"] = str(up_axis)
+    return keys
 
 
 # ------------------------------------------------------------------------------------------
@@ -229,6 +268,13 @@ def read_header(container: Container, limits: Limits) -> FileInfo:
     frame_rate = _field(
         header, "frame_rate", _is_frame_rate, "absent, nil or a positive finite float"
     )
+    time_codes = _time_codes(header.get("time_codes"), frames)
+    meters_per_unit = _field(
+        header, "meters_per_unit", _is_frame_rate, "absent, nil or a positive finite float"
+    )
+    up_axis = _field(
+        header, "up_axis", lambda v: v is None or v in UP_AXES, 'absent, nil, "Y" or "Z"'
+    )
 
     error = header.get("error")
     error = error if isinstance(error, dict) else {}  # informative only (§4.1): never trusted
@@ -254,10 +300,38 @@ def read_header(container: Container, limits: Limits) -> FileInfo:
         target_max_distance=_number(error.get("target_max_distance")),
         lossless=lossless if isinstance(lossless, bool) else None,
         frame_rate=frame_rate,
+        time_codes=time_codes,
+        meters_per_unit=meters_per_unit,
+        up_axis=up_axis,
         encoder=encoder if isinstance(encoder, str) else None,
         sections=tuple((s.id, s.length, s.codec, s.critical) for s in container.sections),
         segments=segments,
     )
+
+
+def _time_codes(value: object, frames: int) -> tuple[float, ...] | None:
+    """``time_codes`` (§4, 1.4): absent or nil, or F little-endian binary64 values as a bin of
+    8·F bytes, finite and strictly increasing (R20-header-field)."""
+    if value is None:
+        return None
+    if not isinstance(value, bytes) or len(value) != 8 * frames:
+        got = f"{len(value)} bytes" if isinstance(value, bytes) else type(value).__name__
+        raise FormatError(
+            f"must be {8 * frames} bytes (a binary64 per frame), got {got}",
+            rule="R20-header-field",
+            field="header.time_codes",
+        )
+    codes = np.frombuffer(value, dtype="<f8")
+    problem = None
+    if not np.isfinite(codes).all():
+        problem = f"must be finite: frame {int(np.flatnonzero(~np.isfinite(codes))[0])}'s is not"
+    elif frames > 1 and not (np.diff(codes) > 0).all():
+        frame = int(np.flatnonzero(np.diff(codes) <= 0)[0]) + 1
+        problem = f"must increase: frame {frame}'s {codes[frame]!r} follows {codes[frame - 1]!r}"
+    if problem is not None:
+        raise FormatError(problem, rule="R20-header-field", field="header.time_codes")
+    listed: list[float] = codes.tolist()
+    return tuple(listed)
 
 
 def _check_single(

@@ -70,6 +70,12 @@ export class TkcFile {
     this.vertices = layout.vertices;
     this.frames = layout.frames;
     this.frameRate = layout.frameRate;
+    /** Each frame's time code (§4, 1.4; in frames, seconds = code / frameRate), or null: 0, 1, 2... */
+    this.timeCodes = layout.timeCodes;
+    /** The length of a unit of the positions in metres (1.4), or null: unknown. */
+    this.metersPerUnit = layout.metersPerUnit;
+    /** "Y" or "Z", the source's up axis (1.4), or null: unknown. */
+    this.upAxis = layout.upAxis;
     this.header = container.header;
     const encoder = container.header.get('encoder');
     this.encoder = typeof encoder === 'string' ? encoder : null;

@@ -23,7 +23,9 @@ import { FLAG_CODING_TOOLS, FLAG_CORRECTIONS, FLAG_SEGMENTED } from './container
 
 /**
  * The layout of the file: which section holds what, every size checked.
- * @typedef {{vertices: number, frames: number, frameRate: number | null, segmented: boolean,
+ * @typedef {{vertices: number, frames: number, frameRate: number | null,
+ *   timeCodes: Float64Array | null, metersPerUnit: number | null, upAxis: string | null,
+ *   segmented: boolean,
  *   codingTools: boolean, corrections: boolean, segments: Segment[], face: Section, faceShape: number[],
  *   name: Section | null, sharedU1: Section | null, sharedColumns: number}} Layout
  */
@@ -173,7 +175,9 @@ export function readLayout(container, limits) {
       frameRate = rate.value;
     }
   }
-  return { vertices: K, frames: F, frameRate, segmented, codingTools, corrections, segments, face, faceShape: [M, n], name: known.get('NAME') ?? null, sharedU1, sharedColumns };
+  // step 14 (1.4): the time codes, the unit and the up axis
+  const { timeCodes, metersPerUnit, upAxis } = readScene(header, F);
+  return { vertices: K, frames: F, frameRate, timeCodes, metersPerUnit, upAxis, segmented, codingTools, corrections, segments, face, faceShape: [M, n], name: known.get('NAME') ?? null, sharedU1, sharedColumns };
 }
 
 /**
@@ -337,4 +341,43 @@ function sectionBytes(section, rows, cols, limits) {
   if (rows * cols * 4 > limits.max_section_bytes) {
     throw limitError('R21-header-limit', `section '${section.id}' decodes to ${rows * cols * 4} bytes, max_section_bytes = ${limits.max_section_bytes}`);
   }
+}
+
+/**
+ * §4 (1.4): `time_codes` (nil, or a bin of F little-endian binary64, finite and increasing),
+ * `meters_per_unit` (nil, or a finite float > 0) and `up_axis` (nil, "Y" or "Z"); R20.
+ * @param {Map<string, MsgValue>} header
+ * @param {number} F
+ * @returns {{timeCodes: Float64Array | null, metersPerUnit: number | null, upAxis: string | null}}
+ */
+function readScene(header, F) {
+  let timeCodes = null;
+  const codes = header.get('time_codes') ?? null;
+  if (codes !== null) {
+    if (!(codes instanceof Uint8Array) || codes.length !== 8 * F) {
+      throw formatError('R20-header-field', `"time_codes" is ${describe(codes)}; it must be nil or a bin of ${8 * F} bytes`);
+    }
+    const view = new DataView(codes.buffer, codes.byteOffset, codes.length);
+    timeCodes = new Float64Array(F);
+    for (let f = 0; f < F; f++) {
+      const code = view.getFloat64(8 * f, true);
+      if (!Number.isFinite(code) || (f > 0 && !(code > timeCodes[f - 1]))) {
+        throw formatError('R20-header-field', `"time_codes" frame ${f} is ${code}; they must be finite and increase`);
+      }
+      timeCodes[f] = code;
+    }
+  }
+  let metersPerUnit = null;
+  const unit = header.get('meters_per_unit') ?? null;
+  if (unit !== null) {
+    if (!(unit instanceof MsgFloat) || !Number.isFinite(unit.value) || !(unit.value > 0)) {
+      throw formatError('R20-header-field', `"meters_per_unit" is ${describe(unit)}; it must be nil or a finite float > 0`);
+    }
+    metersPerUnit = unit.value;
+  }
+  const axis = header.get('up_axis') ?? null;
+  if (axis !== null && axis !== 'Y' && axis !== 'Z') {
+    throw formatError('R20-header-field', `"up_axis" is ${describe(axis)}; it must be nil, "Y" or "Z"`);
+  }
+  return { timeCodes, metersPerUnit, upAxis: axis };
 }
