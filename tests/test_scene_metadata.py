@@ -24,10 +24,14 @@ def cloth() -> MeshSequence:
     return load_sequence(sample_path(), progress=False)
 
 
+def _codes(frames: int) -> np.ndarray:
+    """A film cache's time codes: from 1001, one sample missing (uneven)."""
+    return np.delete(np.arange(1001.0, 1001.0 + frames + 1), 7)
+
+
 def _film(cloth: MeshSequence, frames: int = 20) -> MeshSequence:
-    """A film cache's frames: from 1001, one sample missing (uneven), metres, Z up."""
-    codes = np.arange(1001.0, 1001.0 + frames + 1)
-    codes = np.delete(codes, 7)
+    """A film cache's frames: :func:`_codes`, metres, Z up."""
+    codes = _codes(frames)
     return MeshSequence(
         cloth.vertices[:frames],
         cloth.faces,
@@ -43,14 +47,14 @@ def test_a_file_keeps_the_time_codes_unit_and_up_axis(cloth):
     data = encode(film, target_kg=0.5)
     header = info(data)
     assert header.format_version == "1.4"  # the keys are 1.4's (§10)
-    assert header.time_codes == tuple(film.time_codes.tolist())
+    assert header.time_codes == tuple(_codes(20).tolist())
     assert (header.meters_per_unit, header.up_axis) == (1.0, "Z")
     assert header.to_dict()["time_codes"][:2] == [1001.0, 1002.0]
     back = decode(data)
     np.testing.assert_array_equal(back.time_codes, film.time_codes)
     assert (back.frame_rate, back.meters_per_unit, back.up_axis) == (24.0, 1.0, "Z")
     part = decode(data, frames=range(5, 9))  # a part keeps its frames' codes
-    np.testing.assert_array_equal(part.time_codes, film.time_codes[5:9])
+    np.testing.assert_array_equal(part.time_codes, _codes(20)[5:9])
     assert decode(data, frames=[3, 1]).time_codes is None  # out of time order: none
 
 
@@ -73,7 +77,7 @@ def test_a_segmented_file_keeps_them_too(cloth):
     header = info(data)
     assert len(header.segments) == 3 and header.format_version == "1.4"
     back = decode(data, frames=range(12, 25))
-    np.testing.assert_array_equal(back.time_codes, film.time_codes[12:25])
+    np.testing.assert_array_equal(back.time_codes, _codes(30)[12:25])
     assert (back.meters_per_unit, back.up_axis) == (1.0, "Z")
 
 
