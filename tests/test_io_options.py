@@ -84,6 +84,7 @@ def test_every_format_is_described_once():
         assert found.suffixes and all(s.startswith(".") and s == s.lower() for s in found.suffixes)
         assert (found.open is not None) or (found.read_frame is not None), found.name
         parts = {"float64", "faces", "polygons", "frame_names", "frame_rate", "time_codes"}
+        parts |= {"meters_per_unit", "up_axis"}
         assert found.carries <= parts
         assert "polygons" not in found.carries or "faces" in found.carries
 

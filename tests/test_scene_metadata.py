@@ -188,3 +188,11 @@ def test_old_files_decode_with_no_scene(tmp_path):
     vector = Path(__file__).parent.parent / "spec" / "vectors" / "v1.2-traverse-triangles.tkc"
     back = decode(vector.read_bytes())
     assert (back.time_codes, back.meters_per_unit, back.up_axis) == (None, None, None)
+
+
+def test_the_decomposition_as_gltf_keys_frames_at_the_files_times(cloth, tmp_path):
+    pytest.importorskip("meshoptimizer", reason="meshoptimizer (the 'gltf' extra) is not installed")
+    (tmp_path / "film.tkc").write_bytes(encode(_film(cloth), target_kg=0.5))
+    assert main(["decode", str(tmp_path / "film.tkc"), "-o", str(tmp_path / "film.glb")]) == 0
+    back = load_sequence(tmp_path / "film.glb", progress=False)
+    np.testing.assert_allclose(back.seconds(), _codes(20) / 24.0, rtol=1e-6)

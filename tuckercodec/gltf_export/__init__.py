@@ -11,8 +11,9 @@ glTF holds the same sum as a viewer evaluates it:
 * the centroids ``c_f`` are the translation track of the root node (in the quantized
   variants plus the rigid shift of the targets' offsets, :mod:`.quantization`), the mesh sits
   on a child node (which holds the dequantization of the quantized variants);
-* one keyframe per frame at its time in seconds: the frame's time code (its number in the file,
-  or in the part written) over the file's frame rate, 24 when the file records none.
+* one keyframe per frame at its time in seconds: the frame's time code (the file's, format 1.4,
+  else its number in the file, or in the part written) over the file's frame rate, 24 when the
+  file records none.
 
 Variants (``compress``): ``none``, float32 everywhere; ``quantize`` (the default),
 KHR_mesh_quantization: mesh and targets as normalized 16-bit integers, dequantized by the
@@ -234,10 +235,13 @@ class _Animation:
         if chosen.size == 0:
             raise ValueError(f"the selection {frames!r} names no frame of the file")
         rate = float(decoder.info.frame_rate or DEFAULT_FRAME_RATE)
-        # times: the frames' numbers in the file, unless a reordered part renumbers them
+        # times: the frames' time codes in the file (format 1.4; else their numbers), unless
+        # a reordered part renumbers them
         count = decoder.info.frames
         in_order = chosen.size < count and bool(np.all(np.diff(chosen) > 0))
-        codes = chosen if in_order or chosen.size == count else np.arange(chosen.size)
+        file_codes = decoder.info.time_codes
+        numbers = chosen if file_codes is None else np.asarray(file_codes)[chosen]
+        codes = numbers if in_order or chosen.size == count else np.arange(chosen.size)
         decoded = decoder.positions(chosen)
         weights, base, targets = morph_parts(decoder, chosen)
         times = (codes / rate).astype(np.float32)
