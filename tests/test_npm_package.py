@@ -12,8 +12,9 @@ the package's own names (``import ... from "tuckercodec"`` and ``"tuckercodec/th
   and bounds follow the frame, ``update(seconds)`` follows the clock, and ``load`` over HTTP
   honours the loader's path, request header and LoadingManager, and hands a damaged file's rule
   to onError;
-- and tsc types a user's TypeScript (tests/js/package_usage.ts) with the declarations the
-  package's ``exports`` name, which are those tsc emits from the JSDoc now.
+- and tsc types a user's TypeScript (tests/js/package_usage.ts) and the READMEs' examples of
+  TKCLoader with the declarations the package's ``exports`` name, which are those tsc emits from
+  the JSDoc now.
 
 The tests that run node or npm skip, naming what is missing, where node (18 or newer) or npm is
 absent; the ones that run tsc skip where tools/js has not been installed (``npm ci`` there).
@@ -373,15 +374,52 @@ def test_load_fetches_through_the_loaders_path_header_and_manager(loader_runs):
     assert "onError damaged.tkc" in loaded["eventsOfDamaged"]
 
 
+#: what the READMEs' three.js examples may use without defining it, and its type
+EXAMPLE_CONTEXT = {
+    "scene": "Scene",
+    "camera": "Camera",
+    "renderer": "WebGLRenderer",
+    "clock": "Clock",
+}
+
+
+def readme_examples() -> dict[str, str]:
+    """The ```js examples of TKCLoader in README.md (For web developers) and the package's README,
+    as TypeScript modules: their imports, then a declaration of each name of EXAMPLE_CONTEXT
+    they do not define, then the rest."""
+    texts = {
+        "readme_example.ts": (ROOT / "README.md").read_text().split("### For web developers")[1],
+        "package_readme_example.ts": (WEB / "README.md").read_text(),
+    }
+    examples = {}
+    for name, text in texts.items():
+        code = re.search(r"```js\n(.*?)```", text, re.S)
+        assert code is not None and "TKCLoader" in code.group(1), f"no TKCLoader example for {name}"
+        lines = code.group(1).splitlines()
+        imports = [line for line in lines if line.startswith("import ")]
+        rest = [line for line in lines if not line.startswith("import ")]
+        context = [
+            f"declare const {variable}: import('three').{kind};"
+            for variable, kind in EXAMPLE_CONTEXT.items()
+            if not re.search(rf"\b(const|let|var)\s+{variable}\b", code.group(1))
+        ]
+        examples[name] = "\n".join([*imports, *context, *rest, ""])
+    return examples
+
+
 def test_the_declarations_type_a_users_typescript(three_project):
-    """tsc, strict, over tests/js/package_usage.ts in the project: the package's types come from
-    its exports' "types" conditions, three's from @types/three (tools/js's copy)."""
+    """tsc, strict, over tests/js/package_usage.ts and the READMEs' examples in the project: the
+    package's types come from its exports' "types" conditions, three's from @types/three
+    (tools/js's copy)."""
     compiler = tsc()
     types = three_project / "node_modules" / "@types"
     types.mkdir(exist_ok=True)
     if not (types / "three").exists():
         (types / "three").symlink_to(TOOLS_JS / "node_modules" / "@types" / "three")
     shutil.copy(JS_TESTS / "package_usage.ts", three_project)
+    examples = readme_examples()
+    for name, code in examples.items():
+        (three_project / name).write_text(code)
     config = {
         "compilerOptions": {
             "strict": True,
@@ -395,7 +433,7 @@ def test_the_declarations_type_a_users_typescript(three_project):
             # all of @types/three again here would take ten seconds
             "skipLibCheck": True,
         },
-        "files": ["package_usage.ts"],
+        "files": ["package_usage.ts", *examples],
     }
     (three_project / "tsconfig.json").write_text(json.dumps(config))
     run([compiler, "-p", "tsconfig.json"], three_project, "tsc over package_usage.ts")
