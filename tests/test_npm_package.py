@@ -74,7 +74,9 @@ def three_version() -> str:
 
 
 def test_the_npm_version_is_the_python_version():
-    assert MANIFEST["version"] == tuckercodec.__version__
+    assert MANIFEST["version"] == tuckercodec.__version__, (
+        "tuckercodec/web/package.json's version must be tuckercodec/_version.py's: change both"
+    )
 
 
 def test_the_manifest_names_files_the_package_has():
