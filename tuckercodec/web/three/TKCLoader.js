@@ -61,12 +61,18 @@ export class TKCAnimation {
     this.decodeMs = 0;
 
     const K = file.vertices;
+    /** The positions of the frame shown (the position attribute's array), K*3. */
+    this._positions = new Float32Array(3 * K);
+    /** Their vertex normals (the normal attribute's array), K*3. */
+    this._normals = new Float32Array(3 * K);
+    /** The faces fanned into triangles (the index's array). */
+    this._triangles = file.triangles();
     const geometry = new BufferGeometry();
-    const position = new BufferAttribute(new Float32Array(3 * K), 3).setUsage(DynamicDrawUsage);
-    const normal = new BufferAttribute(new Float32Array(3 * K), 3).setUsage(DynamicDrawUsage);
+    const position = new BufferAttribute(this._positions, 3).setUsage(DynamicDrawUsage);
+    const normal = new BufferAttribute(this._normals, 3).setUsage(DynamicDrawUsage);
     geometry.setAttribute('position', position);
     geometry.setAttribute('normal', normal);
-    geometry.setIndex(new BufferAttribute(file.triangles(), 1));
+    geometry.setIndex(new BufferAttribute(this._triangles, 1));
     geometry.boundingBox = new Box3();
     geometry.boundingSphere = new Sphere();
     /** @type {import('three').BufferAttribute} */
@@ -100,17 +106,15 @@ export class TKCAnimation {
     if (!Number.isInteger(t) || t < 0 || t >= this.frameCount) {
       throw new RangeError(`frame ${t} does not exist: the file has frames 0..${this.frameCount - 1}`);
     }
-    const positions = /** @type {Float32Array} */ (this._position.array);
     const began = performance.now();
-    this.file.frameFloat32(t, positions);
+    this.file.frameFloat32(t, this._positions);
     this.decodeMs = performance.now() - began;
     this._position.needsUpdate = true;
-    const geometry = this.mesh.geometry;
     if (this.updateNormals) {
-      computeNormals(positions, /** @type {Uint32Array} */ (/** @type {import('three').BufferAttribute} */ (geometry.index).array), /** @type {Float32Array} */ (this._normal.array));
+      computeNormals(this._positions, this._triangles, this._normals);
       this._normal.needsUpdate = true;
     }
-    this._bound(positions);
+    this._bound(this._positions);
     this.frame = t;
     this.time = t / this.frameRate;
     return this;

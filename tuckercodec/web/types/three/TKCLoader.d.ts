@@ -36,6 +36,12 @@ export declare class TKCAnimation {
     time: number;
     /** Milliseconds the last setFrame spent decoding the frame (file.frameFloat32 alone). */
     decodeMs: number;
+    /** The positions of the frame shown (the position attribute's array), K*3. */
+    _positions: Float32Array<ArrayBuffer>;
+    /** Their vertex normals (the normal attribute's array), K*3. */
+    _normals: Float32Array<ArrayBuffer>;
+    /** The faces fanned into triangles (the index's array). */
+    _triangles: Uint32Array<ArrayBuffer>;
     /** @type {import('three').BufferAttribute} */
     _position: import('three').BufferAttribute;
     /** @type {import('three').BufferAttribute} */
