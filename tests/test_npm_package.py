@@ -346,7 +346,7 @@ def test_update_follows_the_clock_at_the_frame_rate_and_loops(loader_runs, name)
     assert played["clamped"] == frames - 1  # loop = false stops at the last frame
 
 
-def test_load_fetches_through_the_loaders_path_header_and_manager(loader_runs):
+def test_load_fetches_through_the_loaders_path_header_and_manager_and_aborts(loader_runs):
     name = LOADER_FILES[0]
     loaded = loader_runs[name]["load"]
     parsed = loader_runs[name]["parse"]
@@ -362,7 +362,7 @@ def test_load_fetches_through_the_loaders_path_header_and_manager(loader_runs):
     ]
     assert loaded["requests"] == [
         {"url": f"/models/{name}", "header": "sent"}
-        for name in ("anim.tkc", "anim.tkc", "missing.tkc", "damaged.tkc")
+        for name in ("anim.tkc", "anim.tkc", "missing.tkc", "damaged.tkc", "slow.tkc")
     ]
     missing = loaded["missing"]
     assert not missing["tkcError"] and "404" in missing["message"]
@@ -374,6 +374,11 @@ def test_load_fetches_through_the_loaders_path_header_and_manager(loader_runs):
     assert damaged["tkcError"] and damaged["rule"] == "R10-file-truncated"
     assert damaged["message"].endswith("[R10-file-truncated]")
     assert "onError damaged.tkc" in loaded["eventsOfDamaged"]
+    # abort() stops a fetch under way: onError, and the manager is idle again
+    aborted = loaded["aborted"]
+    assert aborted["name"] == "AbortError" and not aborted["tkcError"]
+    assert "onError slow.tkc" in loaded["eventsOfAborted"]
+    assert loaded["eventsOfAborted"][-1] == "onLoad"
 
 
 #: what the READMEs' three.js examples may use without defining it, and its type

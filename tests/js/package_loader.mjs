@@ -8,7 +8,8 @@
 //   bounding box and sphere; how many frames were decoded, to show they are decoded on demand;
 // - update: the frames update(seconds) shows, looping and not;
 // - load: load and loadAsync over HTTP from a server on 127.0.0.1 (setPath, setRequestHeader), the
-//   LoadingManager's events, and onError for a missing file and for REQUEST.damaged.
+//   LoadingManager's events, and onError for a missing file, for REQUEST.damaged and for a file
+//   whose fetch abort() stops.
 
 import { readFileSync } from 'node:fs';
 import { createServer } from 'node:http';
@@ -101,8 +102,15 @@ function updated() {
 async function loaded() {
   const damaged = readFileSync(request.damaged);
   const seen = [];
+  let slowAsked = () => {};
   const server = createServer((req, res) => {
     seen.push({ url: req.url, header: req.headers['x-tkc-test'] ?? null });
+    if (req.url === '/models/slow.tkc') { // half the file, and the rest never
+      res.writeHead(200, { 'Content-Type': 'application/octet-stream', 'Content-Length': bytes.length });
+      res.write(bytes.subarray(0, bytes.length >> 1));
+      slowAsked();
+      return;
+    }
     const body = req.url === '/models/anim.tkc' ? bytes : req.url === '/models/damaged.tkc' ? damaged : null;
     if (body === null) { res.writeHead(404); res.end(); return; }
     res.writeHead(200, { 'Content-Type': 'application/octet-stream', 'Content-Length': body.length });
@@ -127,7 +135,7 @@ async function loaded() {
     const outcome = await new Promise((resolve) => {
       loader.load(name, (animation) => { events.push('animation'); resolve(animation); }, undefined, (error) => {
         events.push('error');
-        resolve({ tkcError: error instanceof TkcError, rule: error.rule ?? null, message: String(error.message) });
+        resolve({ tkcError: error instanceof TkcError, name: error.name, rule: error.rule ?? null, message: String(error.message) });
       });
     });
     await quiet;
@@ -146,8 +154,15 @@ async function loaded() {
     events.splice(0);
     [result.missing, result.eventsOfMissing] = await step('missing.tkc');
     [result.damaged, result.eventsOfDamaged] = await step('damaged.tkc');
+    // abort(): a fetch under way ends in onError
+    const asked = new Promise((resolve) => { slowAsked = resolve; });
+    const aborted = step('slow.tkc');
+    await asked;
+    loader.abort();
+    [result.aborted, result.eventsOfAborted] = await aborted;
     result.requests = seen;
   } finally {
+    server.closeAllConnections();
     server.close();
   }
   return result;

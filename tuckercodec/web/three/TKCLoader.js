@@ -183,6 +183,8 @@ export class TKCLoader extends Loader {
     super(manager);
     /** @type {DecoderOptions} */
     this.decoderOptions = {};
+    /** @type {FileLoader | null} what fetches the files, made by the first load() */
+    this._fileLoader = null;
   }
 
   /**
@@ -212,7 +214,7 @@ export class TKCLoader extends Loader {
       this.manager.itemError(url);
       this.manager.itemEnd(url);
     };
-    const loader = new FileLoader(this.manager);
+    const loader = (this._fileLoader ??= new FileLoader(this.manager));
     loader.setPath(this.path);
     loader.setResponseType('arraybuffer');
     loader.setRequestHeader(this.requestHeader);
@@ -223,6 +225,15 @@ export class TKCLoader extends Loader {
         this.manager.itemEnd(url);
       }, failed);
     }, onProgress, failed);
+  }
+
+  /**
+   * Stops the files being fetched: their load() calls onError with the fetch's AbortError.
+   * @returns {this}
+   */
+  abort() {
+    if (this._fileLoader) this._fileLoader.abort();
+    return this;
   }
 
   /**

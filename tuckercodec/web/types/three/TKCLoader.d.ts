@@ -1,4 +1,4 @@
-import { BufferGeometry, Loader, Mesh } from 'three';
+import { BufferGeometry, FileLoader, Loader, Mesh } from 'three';
 export { TkcError } from '../tkc/decoder.js';
 /** The rate, in frames per second, of a file that records none. */
 export declare const DEFAULT_FRAME_RATE = 24;
@@ -93,6 +93,8 @@ export declare class TKCAnimation {
 export declare class TKCLoader extends Loader<TKCAnimation> {
     /** @type {DecoderOptions} */
     decoderOptions: DecoderOptions;
+    /** @type {FileLoader | null} what fetches the files, made by the first load() */
+    _fileLoader: FileLoader | null;
     /** @param {import('three').LoadingManager} [manager] */
     constructor(manager?: import('three').LoadingManager);
     /**
@@ -110,6 +112,11 @@ export declare class TKCLoader extends Loader<TKCAnimation> {
      * @param {(error: unknown) => void} [onError] the fetch's error, or the decoder's TkcError
      */
     load(url: string, onLoad: (animation: TKCAnimation) => void, onProgress?: (event: ProgressEvent) => void, onError?: (error: unknown) => void): void;
+    /**
+     * Stops the files being fetched: their load() calls onError with the fetch's AbortError.
+     * @returns {this}
+     */
+    abort(): this;
     /**
      * Opens a whole .tkc file held in memory and calls onLoad with its animation, showing frame 0,
      * before returning (so it can be used synchronously). A file that breaks a rule of the format
