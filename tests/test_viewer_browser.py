@@ -1,8 +1,10 @@
 """The viewer page in a real browser (headless Chromium, driven by tests/support/browser.py over the
 DevTools protocol), served by the project's own server, as ``tuckercodec view`` serves it.
 
-For the built-in cloth and for samba (../shared/data), both encoded at KG 0.1 with the original
-as the reference, the page steps to a few frames; at each, through ``window.tkcViewer``:
+The page plays the file with TKCLoader (tuckercodec/web/three, the npm package's loader), so what
+is checked here is the loader in a browser: the positions drawn are its mesh's position
+attribute. For the built-in cloth and for samba (../shared/data), both encoded at KG 0.1 with the
+original as the reference, the page steps to a few frames; at each, through ``window.tkcViewer``:
 
 - the positions drawn (float32, in the file's vertex order) are the Python decode of that frame
   within spec §8's tolerance plus float32 rounding, and the JavaScript decoder's binary64 frame

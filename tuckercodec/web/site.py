@@ -6,6 +6,7 @@ page served is the page exported. Its layout::
     index.html                  opens viewer/index.html?file=...&reference=... (a redirect)
     viewer/                     the page: index.html, viewer.js, measure.js, viewer.css
     tkc/                        the JavaScript decoder
+    three/                      TKCLoader, which the page plays the file with, and its normals
     vendor/three/, vendor/fzstd/   three.js and fzstd, each with its LICENSE
     data/NAME.tkc               the compressed file, byte for byte
     data/reference.json         with a reference: what data/reference.bin holds
@@ -44,6 +45,7 @@ PAGE = "viewer/index.html"
 SHIPPED = {
     "viewer": (".html", ".js", ".css"),
     "tkc": (".js", ".mjs"),
+    "three": (".js",),
     "vendor": (".js", ".mjs", ".md", "LICENSE"),
 }
 REFERENCE_JSON = "data/reference.json"

@@ -1,44 +1,16 @@
 // The viewer's arithmetic on flat position arrays (x, y, z per vertex, in the file's vertex
 // order): vertex normals, bounding boxes, the error of a frame against the original, and the
 // colour scale. No three.js and no DOM here, so node can run it too; nothing allocates, so the
-// page can call it every frame.
+// page can call it every frame. The normals are the loader's (../three/normals.js), the same
+// function for the decoded mesh and the original.
+
+export { computeNormals } from '../three/normals.js';
 
 /** What the KG error of one frame means, as the page labels it. */
 export const FRAME_KG_DEFINITION =
   "KG error of this frame (Karni-Gotsman): 100·‖A_t − B_t‖ / ‖A_t − mean_v(A_t)‖, " +
   'A_t the original positions of frame t, B_t the decoded ones, mean_v(A_t) the mean ' +
   "of A_t's vertices: this frame's positions only";
-
-/**
- * Area-weighted vertex normals of an indexed triangle mesh, written into `normals`.
- * Each triangle adds its cross product (twice its area times its unit normal) to its three
- * corners; a vertex no triangle with area touches gets (0, 0, 1), never a zero vector.
- * @param {Float32Array} positions K*3
- * @param {Uint32Array} index T*3 vertex numbers
- * @param {Float32Array} normals K*3, overwritten
- */
-export function computeNormals(positions, index, normals) {
-  normals.fill(0);
-  for (let t = 0, n = index.length; t < n; t += 3) {
-    const a = index[t] * 3, b = index[t + 1] * 3, c = index[t + 2] * 3;
-    const ax = positions[a], ay = positions[a + 1], az = positions[a + 2];
-    const e1x = positions[b] - ax, e1y = positions[b + 1] - ay, e1z = positions[b + 2] - az;
-    const e2x = positions[c] - ax, e2y = positions[c + 1] - ay, e2z = positions[c + 2] - az;
-    const nx = e1y * e2z - e1z * e2y, ny = e1z * e2x - e1x * e2z, nz = e1x * e2y - e1y * e2x;
-    normals[a] += nx; normals[a + 1] += ny; normals[a + 2] += nz;
-    normals[b] += nx; normals[b + 1] += ny; normals[b + 2] += nz;
-    normals[c] += nx; normals[c + 1] += ny; normals[c + 2] += nz;
-  }
-  for (let v = 0, n = normals.length; v < n; v += 3) {
-    const x = normals[v], y = normals[v + 1], z = normals[v + 2];
-    const length = Math.sqrt(x * x + y * y + z * z);
-    if (length > 0 && Number.isFinite(length)) {
-      normals[v] = x / length; normals[v + 1] = y / length; normals[v + 2] = z / length;
-    } else {
-      normals[v] = 0; normals[v + 1] = 0; normals[v + 2] = 1;
-    }
-  }
-}
 
 /**
  * Grow `box` ([minx, miny, minz, maxx, maxy, maxz], start from emptyBox()) by the positions.

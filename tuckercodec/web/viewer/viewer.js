@@ -6,11 +6,12 @@
 // positions, {vertices, frames, dtype: "float32", data: "reference.bin", ...}, `data` being
 // F*K*3 little-endian float32 (relative to the JSON's URL): the original rounded to float32.
 //
-// Every frame is reconstructed when it is shown: X_t = file.frameFloat32(t, positions) writes
-// straight into the position attribute of one indexed BufferGeometry, in the file's vertex order,
-// whose index is file.triangles(); nothing is allocated per frame. Playback follows the real
-// clock: the frame shown is floor(elapsed * rate), so it never runs slow; a frame index skipped
-// on the way counts as dropped.
+// The file is loaded and played by TKCLoader (../three/TKCLoader.js), as any page using the npm
+// package plays one: every frame is reconstructed when it is shown, animation.setFrame(t)
+// writing X_t straight into the position attribute of one indexed BufferGeometry, in the file's
+// vertex order, whose index is file.triangles(); nothing is allocated per frame. Playback follows
+// the real clock: the frame shown is floor(elapsed * rate), so it never runs slow; a frame index
+// skipped on the way counts as dropped.
 //
 // window.tkcViewer is the page's contract with its tests (tests/ and tools/ drive it in
 // headless Chromium): ready, info, setFrame, drawnPositions, decodedPositions, frameError,
@@ -20,9 +21,6 @@ import {
   FRAME_KG_DEFINITION, colourScale, computeNormals, emptyBox, extendBox, frameError,
   paintDistances,
 } from './measure.js';
-
-/** The rate a file that records none plays at. */
-const DEFAULT_RATE = 24;
 /** Frames sampled to frame the camera: the box holding them, not just frame 0. */
 const FRAMING_SAMPLES = 9;
 /** Reconstruction times kept by stats() (the oldest half is dropped beyond it). */
@@ -31,6 +29,7 @@ const MAX_TIMINGS = 100000;
 /**
  * @typedef {typeof import('three')} Three
  * @typedef {import('../tkc/decoder.js').TkcFile} TkcFile
+ * @typedef {import('../three/TKCLoader.js').TKCAnimation} TKCAnimation
  * @typedef {import('three').Mesh<import('three').BufferGeometry, import('three').MeshStandardMaterial>} SolidMesh
  * @typedef {import('three').Mesh<import('three').BufferGeometry, import('three').MeshBasicMaterial>} WireMesh
  * @typedef {{vertices: number, frames: number, positions: Float32Array, maxDistance: number | null,
@@ -56,7 +55,7 @@ ready.catch(() => {}); // shown on the page and logged; not also an "uncaught" r
  * them; what may be read before (file, positions, renderer) or without an original (refMesh,
  * refWire) is tested first where it is read.
  * @type {{
- *   THREE: Three, file: TkcFile, renderer: import('three').WebGLRenderer,
+ *   THREE: Three, file: TkcFile, animation: TKCAnimation, renderer: import('three').WebGLRenderer,
  *   scene: import('three').Scene, camera: import('three').PerspectiveCamera,
  *   controls: import('../vendor/three/OrbitControls.js').OrbitControls,
  *   group: import('three').Group, geometry: import('three').BufferGeometry,
@@ -76,13 +75,13 @@ ready.catch(() => {}); // shown on the page and logged; not also an "uncaught" r
  * }}
  */
 const state = /** @type {any} */ ({
-  THREE: null, file: null, renderer: null, scene: null, camera: null, controls: null,
+  THREE: null, file: null, animation: null, renderer: null, scene: null, camera: null, controls: null,
   group: null, geometry: null, material: null, mesh: null, wire: null,
   positions: null, normals: null, index: null, colours: null,
   reference: null, // {positions: Float32Array F*K*3, maxDistance, kg, note}
   refGeometry: null, refMesh: null, refWire: null, refPositions: null, refNormals: null,
   distances: null, lut: null, scale: 0, scaleFixed: false,
-  frame: 0, rate: DEFAULT_RATE, rateNote: '', bytes: 0,
+  frame: 0, rate: 0, rateNote: '', bytes: 0,
   playing: false, clockStart: 0, lastTick: 0, rafPending: false, dirty: false,
   frameMs: [], updateMs: [], renderMs: [], played: 0, dropped: 0, openMs: null, error: null,
   lastError: null, box: null, offset: 0,
@@ -157,24 +156,27 @@ async function start() {
   status('loading…');
   // Loaded here rather than imported at the top, so that a missing or broken script is
   // reported on the page like any other failure.
-  const [THREE, controls, decoder, bytes, reference] = await Promise.all([
+  const [THREE, controls, { TKCLoader }] = await Promise.all([
     import('three'),
     import('../vendor/three/OrbitControls.js'),
-    import('../tkc/decoder.js'),
-    fetchBytes(fileUrl, 'the file'),
+    import('../three/TKCLoader.js'),
+  ]);
+  const [{ animation, fetched }, reference] = await Promise.all([
+    loadAnimation(new TKCLoader(), fileUrl),
     referenceUrl ? fetchReference(referenceUrl) : null,
   ]);
-  const began = performance.now(); // openMs: everything fetched -> first frame drawn
-  state.THREE = THREE;
-  state.bytes = bytes.byteLength;
-  status('decoding…');
-  const file = decoder.openTkc(bytes);
   const opened = performance.now();
+  // openMs: the file fetched -> first frame drawn (a reference still arriving is not counted)
+  const began = fetched;
+  const file = animation.file;
+  state.THREE = THREE;
+  state.bytes = file.bytes.byteLength;
+  state.animation = animation;
   state.file = file;
   if (reference) checkReference(reference, file, /** @type {string} */ (referenceUrl));
   state.reference = reference;
-  setupRate(file);
-  setupScene(THREE, controls.OrbitControls, file);
+  setupRate(animation);
+  setupScene(THREE, controls.OrbitControls, animation);
   if (reference) setupReference(THREE, file);
   const built = performance.now();
   frameCamera();
@@ -188,8 +190,9 @@ async function start() {
     version: file.version, vertices: file.vertices, frames: file.frames,
     frameRate: file.frameRate, faces: file.faceCount, openMs: state.openMs,
     corrections: file.residual(0), bound: boundText(file),
-    // where openMs went: openTkc; the scene (triangles, buffers); sampling frames to frame the
-    // camera; frame 0 and the first render (which compiles the shaders)
+    // where openMs went: TKCLoader's parse (openTkc, the triangles, buffers and frame 0); the
+    // rest of the scene; sampling frames to frame the camera; frame 0 shown and the first render
+    // (which compiles the shaders)
     openParts: {
       decodeMs: opened - began, sceneMs: built - opened, framingMs: framed - built,
       firstFrameMs: drawn - framed,
@@ -199,6 +202,30 @@ async function start() {
   setupControls();
   status('');
   await nextPaint();
+}
+
+/**
+ * The file's animation, loaded by TKCLoader, and when its last bytes arrived (the last progress
+ * event of the fetch; when the browser gives none, when loading began).
+ * @param {InstanceType<typeof import('../three/TKCLoader.js').TKCLoader>} loader
+ * @param {string} url
+ * @returns {Promise<{animation: TKCAnimation, fetched: number}>}
+ */
+async function loadAnimation(loader, url) {
+  let fetched = performance.now();
+  let animation;
+  try {
+    animation = await loader.loadAsync(url, () => {
+      fetched = performance.now();
+      status('decoding…');
+    });
+  } catch (error) {
+    if (error instanceof Error && !('rule' in error)) {
+      throw new Error(`could not fetch the file ${url}: ${error.message}`);
+    }
+    throw error; // the decoder's TkcError, with its rule
+  }
+  return { animation, fetched };
 }
 
 /**
@@ -277,16 +304,15 @@ function checkReference(reference, file, url) {
   }
 }
 
-/** @param {TkcFile} file */
-function setupRate(file) {
-  const rate = file.frameRate;
-  if (typeof rate === 'number' && Number.isFinite(rate) && rate > 0) {
-    state.rate = rate;
-    state.rateNote = `plays at ${formatNumber(rate)} frames per second (the file's rate)`;
-  } else {
-    state.rate = DEFAULT_RATE;
-    state.rateNote = `plays at ${DEFAULT_RATE} frames per second: the file records no frame rate`;
-  }
+/**
+ * The rate the animation plays at: the file's, or TKCLoader's default when it records none.
+ * @param {TKCAnimation} animation
+ */
+function setupRate(animation) {
+  state.rate = animation.frameRate;
+  state.rateNote = animation.frameRate === animation.file.frameRate
+    ? `plays at ${formatNumber(animation.frameRate)} frames per second (the file's rate)`
+    : `plays at ${formatNumber(animation.frameRate)} frames per second: the file records no frame rate`;
   $('rate-label').textContent = state.rateNote;
 }
 
@@ -296,9 +322,9 @@ function setupRate(file) {
 /**
  * @param {Three} THREE
  * @param {typeof import('../vendor/three/OrbitControls.js').OrbitControls} OrbitControls
- * @param {TkcFile} file
+ * @param {TKCAnimation} animation
  */
-function setupScene(THREE, OrbitControls, file) {
+function setupScene(THREE, OrbitControls, animation) {
   const canvas = /** @type {HTMLCanvasElement} */ ($('canvas'));
   const antialias = chooseAntialias();
   const renderer = new THREE.WebGLRenderer({
@@ -315,23 +341,21 @@ function setupScene(THREE, OrbitControls, file) {
   headlight.position.set(0.4, 0.6, 1);
   camera.add(headlight, headlight.target);
 
-  const K = file.vertices;
-  const index = file.triangles();
-  const geometry = new THREE.BufferGeometry();
-  state.positions = new Float32Array(K * 3);
-  state.normals = new Float32Array(K * 3);
-  geometry.setAttribute('position', dynamic(new THREE.BufferAttribute(state.positions, 3), THREE));
-  geometry.setAttribute('normal', dynamic(new THREE.BufferAttribute(state.normals, 3), THREE));
-  geometry.setIndex(new THREE.BufferAttribute(index, 1));
+  // the animation's mesh: its geometry holds the frame shown (positions, normals, bounds), its
+  // index the file's faces fanned into triangles
+  const geometry = animation.mesh.geometry;
+  state.positions = /** @type {Float32Array} */ (geometry.getAttribute('position').array);
+  state.normals = /** @type {Float32Array} */ (geometry.getAttribute('normal').array);
+  const index = /** @type {Uint32Array} */ (/** @type {import('three').BufferAttribute} */ (geometry.getIndex()).array);
   const material = new THREE.MeshStandardMaterial({
     color: 0xd8d2c4, roughness: 0.65, metalness: 0, side: THREE.DoubleSide,
   });
-  const mesh = new THREE.Mesh(geometry, material);
+  const mesh = /** @type {SolidMesh} */ (animation.mesh);
+  mesh.material.dispose(); // the loader's default, never drawn
+  mesh.material = material;
   const wire = new THREE.Mesh(geometry, new THREE.MeshBasicMaterial({
     color: 0x000000, wireframe: true, transparent: true, opacity: 0.35,
   }));
-  // The bounding sphere three.js computes once (from frame 0) would cull later frames wrongly.
-  mesh.frustumCulled = wire.frustumCulled = false;
   wire.visible = false;
   const group = new THREE.Group();
   group.add(mesh, wire);
@@ -411,6 +435,8 @@ function setupReference(THREE, file) {
   });
   const refMesh = new THREE.Mesh(geometry, material);
   const refWire = new THREE.Mesh(geometry, state.wire.material);
+  // the original's bounds are not kept up to date: never culled (the decoded mesh's are, by the
+  // animation)
   refMesh.frustumCulled = refWire.frustumCulled = false;
   refWire.visible = false;
   state.group.add(refMesh, refWire);
@@ -551,21 +577,19 @@ function placeReference() {
  */
 function showFrame(t) {
   const file = state.file;
+  const animation = state.animation;
   const began = performance.now();
-  file.frameFloat32(t, state.positions);
-  const took = performance.now() - began;
+  // smooth normals are only kept up to date while they are used
+  const smooth = state.shading !== 'flat';
+  animation.updateNormals = smooth;
+  animation.setFrame(t); // the frame, its normals and bounds
+  const took = animation.decodeMs;
   if (state.frameMs.length >= MAX_TIMINGS) {
     for (const list of [state.frameMs, state.updateMs, state.renderMs]) list.splice(0, MAX_TIMINGS / 2);
   }
   state.frameMs.push(took);
   state.frame = t;
   const geometry = state.geometry;
-  geometry.attributes.position.needsUpdate = true;
-  const smooth = state.shading !== 'flat';
-  if (smooth) {
-    computeNormals(state.positions, state.index, state.normals);
-    geometry.attributes.normal.needsUpdate = true;
-  }
   if (state.reference) {
     const K = file.vertices;
     const original = state.reference.positions.subarray(t * K * 3, (t + 1) * K * 3);
@@ -777,7 +801,7 @@ function showFacts(file) {
     ['faces', `${file.faceCount.toLocaleString('en')} of up to ${file.faceWidth} corners`],
     ['size', `${bytes.toLocaleString('en')} bytes`],
     ['bpfv', `${bpfv.toFixed(4)} bits per frame per vertex (8·bytes / (F·K), the whole file)`],
-    ['frame rate', file.frameRate ? `${formatNumber(file.frameRate)} fps` : `none recorded (plays at ${DEFAULT_RATE})`],
+    ['frame rate', file.frameRate ? `${formatNumber(file.frameRate)} fps` : `none recorded (plays at ${formatNumber(state.rate)})`],
     ['segments', segmentsText(file.segments)],
     ['KG error', error && Number.isFinite(error.kg) ? `${formatNumber(/** @type {number} */ (error.kg))} % (the encoder's claim, in the header)` : 'not recorded in the header'],
   ];

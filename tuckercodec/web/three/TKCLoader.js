@@ -1,0 +1,268 @@
+// TKCLoader: a three.js loader of .tkc files, in the convention of three.js's own loaders
+// (DRACOLoader, KTX2Loader, GLTFLoader): it extends THREE.Loader, fetches with THREE.FileLoader
+// (path, request header, credentials and LoadingManager honoured) and resolves to a TKCAnimation,
+// whose `mesh` shows one frame at a time, decoded on demand by the JavaScript decoder
+// (../tkc/decoder.js): no frame is decoded before it is shown, and any frame can be shown next.
+//
+//   import { TKCLoader } from 'tuckercodec/three';
+//   const animation = await new TKCLoader().loadAsync('anim.tkc');
+//   scene.add(animation.mesh);
+//   // in the render loop:
+//   animation.update(clock.getDelta());
+//
+// The page that imports it resolves the bare specifier `three` (an import map, or a bundler).
+
+import {
+  Box3, BufferAttribute, BufferGeometry, DoubleSide, DynamicDrawUsage, FileLoader, Loader, Mesh,
+  MeshStandardMaterial, Sphere,
+} from 'three';
+import { openTkc } from '../tkc/decoder.js';
+import { computeBounds, computeNormals } from './normals.js';
+
+export { TkcError } from '../tkc/decoder.js';
+
+/** The rate, in frames per second, of a file that records none. */
+export const DEFAULT_FRAME_RATE = 24;
+
+/**
+ * @typedef {import('../tkc/decoder.js').TkcFile} TkcFile
+ * @typedef {{limits?: {[name: string]: number}, simd?: boolean}} DecoderOptions what openTkc
+ *   takes: lower decoder limits (spec §7) for a page that should not be asked for gigabytes, or
+ *   `simd: false` for the plain JavaScript reconstruction
+ */
+
+/**
+ * One .tkc file played on a THREE.Mesh: its position attribute holds the current frame, its
+ * normal attribute and bounds follow it, its index is the file's faces fanned into triangles.
+ */
+export class TKCAnimation {
+  /**
+   * @param {TkcFile} file an opened file (the decoder's openTkc)
+   * @param {import('three').Material} [material] the mesh's material (default: a
+   *   MeshStandardMaterial drawn on both sides, which dispose() disposes)
+   */
+  constructor(file, material) {
+    /** The decoder's file: header facts, names, faces, any frame as binary64. */
+    this.file = file;
+    /** The number of frames (F); frames are 0 .. frameCount - 1. */
+    this.frameCount = file.frames;
+    const rate = file.frameRate;
+    /** Frames per second that update() plays at: the file's rate, or DEFAULT_FRAME_RATE. */
+    this.frameRate = typeof rate === 'number' && Number.isFinite(rate) && rate > 0 ? rate : DEFAULT_FRAME_RATE;
+    /** Whether update() goes back to frame 0 after the last frame (else it stays there). */
+    this.loop = true;
+    /** Whether setFrame recomputes the vertex normals (a flat-shaded material needs none). */
+    this.updateNormals = true;
+    /** The frame the mesh shows. */
+    this.frame = 0;
+    /** The playback time in seconds, within [0, frameCount / frameRate). */
+    this.time = 0;
+    /** Milliseconds the last setFrame spent decoding the frame (file.frameFloat32 alone). */
+    this.decodeMs = 0;
+
+    const K = file.vertices;
+    /** The positions of the frame shown (the position attribute's array), K*3. */
+    this._positions = new Float32Array(3 * K);
+    /** Their vertex normals (the normal attribute's array), K*3. */
+    this._normals = new Float32Array(3 * K);
+    /** The faces fanned into triangles (the index's array). */
+    this._triangles = file.triangles();
+    const geometry = new BufferGeometry();
+    const position = new BufferAttribute(this._positions, 3).setUsage(DynamicDrawUsage);
+    const normal = new BufferAttribute(this._normals, 3).setUsage(DynamicDrawUsage);
+    geometry.setAttribute('position', position);
+    geometry.setAttribute('normal', normal);
+    geometry.setIndex(new BufferAttribute(this._triangles, 1));
+    geometry.boundingBox = new Box3();
+    geometry.boundingSphere = new Sphere();
+    /** @type {import('three').BufferAttribute} */
+    this._position = position;
+    /** @type {import('three').BufferAttribute} */
+    this._normal = normal;
+    /** @type {import('three').Material | null} the material made here, disposed by dispose() */
+    this._ownMaterial = material ? null : new MeshStandardMaterial({ side: DoubleSide });
+    /** @type {number[]} */
+    this._box = new Array(6).fill(0);
+    /** The mesh to add to a scene; its geometry and material are the animation's. */
+    this.mesh = new Mesh(geometry, material || /** @type {import('three').Material} */ (this._ownMaterial));
+    this.mesh.name = 'tkc';
+    this.setFrame(0);
+  }
+
+  /** The length of one pass through every frame, in seconds. */
+  get duration() {
+    return this.frameCount / this.frameRate;
+  }
+
+  /**
+   * Shows frame t: decodes it into the position attribute (float32), then recomputes the
+   * normals (when updateNormals) and the geometry's bounds. Playback by update() goes on from
+   * the start of frame t.
+   * @param {number} t an integer, 0 .. frameCount - 1
+   * @returns {this}
+   * @throws {RangeError} when the file has no frame t; a TkcError when the frame is damaged
+   */
+  setFrame(t) {
+    if (!Number.isInteger(t) || t < 0 || t >= this.frameCount) {
+      throw new RangeError(`frame ${t} does not exist: the file has frames 0..${this.frameCount - 1}`);
+    }
+    const began = performance.now();
+    this.file.frameFloat32(t, this._positions);
+    this.decodeMs = performance.now() - began;
+    this._position.needsUpdate = true;
+    if (this.updateNormals) {
+      computeNormals(this._positions, this._triangles, this._normals);
+      this._normal.needsUpdate = true;
+    }
+    this._bound(this._positions);
+    this.frame = t;
+    this.time = t / this.frameRate;
+    return this;
+  }
+
+  /**
+   * Advances playback by `seconds` on the real clock (THREE.Clock's getDelta(), say) at
+   * frameRate, looping after the last frame unless `loop` is false, and shows the frame that
+   * time falls in when it is not the one shown. A frame the clock passes over is not decoded.
+   * @param {number} seconds time since the last call (negative plays backwards)
+   * @returns {this}
+   */
+  update(seconds) {
+    if (!Number.isFinite(seconds)) throw new RangeError(`update takes a finite number of seconds, not ${seconds}`);
+    const duration = this.duration;
+    let time = this.time + seconds;
+    if (this.loop) {
+      time %= duration;
+      if (time < 0) time += duration;
+    } else {
+      time = Math.min(Math.max(time, 0), (this.frameCount - 1) / this.frameRate);
+    }
+    // floor(time * rate) can round up to frameCount just below the end
+    const frame = Math.min(Math.floor(time * this.frameRate), this.frameCount - 1);
+    if (frame !== this.frame) this.setFrame(frame);
+    this.time = time;
+    return this;
+  }
+
+  /** Frees the geometry's GPU buffers and the material made here (not one passed in). */
+  dispose() {
+    this.mesh.geometry.dispose();
+    if (this._ownMaterial) this._ownMaterial.dispose();
+  }
+
+  /**
+   * The geometry's bounding box and sphere from this frame (three.js culls and picks by them).
+   * @private
+   * @param {Float32Array} positions
+   */
+  _bound(positions) {
+    const geometry = this.mesh.geometry;
+    const box = /** @type {import('three').Box3} */ (geometry.boundingBox);
+    const sphere = /** @type {import('three').Sphere} */ (geometry.boundingSphere);
+    const radius2 = computeBounds(positions, this._box);
+    if (radius2 < 0) {
+      box.makeEmpty();
+      sphere.makeEmpty();
+      return;
+    }
+    const b = this._box;
+    box.min.set(b[0], b[1], b[2]);
+    box.max.set(b[3], b[4], b[5]);
+    box.getCenter(sphere.center);
+    sphere.radius = Math.sqrt(radius2);
+  }
+}
+
+/**
+ * Loads .tkc files as TKCAnimation objects.
+ * @extends {Loader<TKCAnimation>}
+ */
+export class TKCLoader extends Loader {
+  /** @param {import('three').LoadingManager} [manager] */
+  constructor(manager) {
+    super(manager);
+    /** @type {DecoderOptions} */
+    this.decoderOptions = {};
+    /** @type {FileLoader | null} what fetches the files, made by the first load() */
+    this._fileLoader = null;
+  }
+
+  /**
+   * The options every file is opened with (see DecoderOptions).
+   * @param {DecoderOptions} options
+   * @returns {this}
+   */
+  setDecoderOptions(options) {
+    this.decoderOptions = { ...options };
+    return this;
+  }
+
+  /**
+   * Fetches `url` (after the loader's path) and parses it. The LoadingManager counts the file
+   * until it is parsed, so its onLoad does not fire between the fetch and the parse.
+   * @param {string} url
+   * @param {(animation: TKCAnimation) => void} onLoad
+   * @param {(event: ProgressEvent) => void} [onProgress]
+   * @param {(error: unknown) => void} [onError] the fetch's error, or the decoder's TkcError
+   */
+  load(url, onLoad, onProgress, onError) {
+    this.manager.itemStart(url);
+    /** @param {unknown} error */
+    const failed = (error) => {
+      if (onError) onError(error);
+      else console.error(error);
+      this.manager.itemError(url);
+      this.manager.itemEnd(url);
+    };
+    const loader = (this._fileLoader ??= new FileLoader(this.manager));
+    loader.setPath(this.path);
+    loader.setResponseType('arraybuffer');
+    loader.setRequestHeader(this.requestHeader);
+    loader.setWithCredentials(this.withCredentials);
+    loader.load(url, (buffer) => {
+      this.parse(/** @type {ArrayBuffer} */ (buffer), (animation) => {
+        onLoad(animation);
+        this.manager.itemEnd(url);
+      }, failed);
+    }, onProgress, failed);
+  }
+
+  /**
+   * Stops the files being fetched: their load() calls onError with the fetch's AbortError.
+   * @returns {this}
+   */
+  abort() {
+    if (this._fileLoader) this._fileLoader.abort();
+    return this;
+  }
+
+  /**
+   * Opens a whole .tkc file held in memory and calls onLoad with its animation, showing frame 0,
+   * before returning (so it can be used synchronously). A file that breaks a rule of the format
+   * calls onError with the decoder's TkcError (its `rule` names the rule), or throws it when
+   * there is no onError.
+   * @param {ArrayBuffer | Uint8Array} buffer
+   * @param {(animation: TKCAnimation) => void} onLoad
+   * @param {(error: unknown) => void} [onError]
+   */
+  parse(buffer, onLoad, onError) {
+    let animation;
+    try {
+      animation = new TKCAnimation(openTkc(buffer, this.decoderOptions));
+    } catch (error) {
+      if (!onError) throw error;
+      onError(error);
+      return;
+    }
+    onLoad(animation);
+  }
+
+  /**
+   * parse() as a promise.
+   * @param {ArrayBuffer | Uint8Array} buffer
+   * @returns {Promise<TKCAnimation>}
+   */
+  parseAsync(buffer) {
+    return new Promise((resolve, reject) => this.parse(buffer, resolve, reject));
+  }
+}

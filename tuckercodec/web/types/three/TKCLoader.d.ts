@@ -1,0 +1,136 @@
+import { BufferGeometry, FileLoader, Loader, Mesh } from 'three';
+export { TkcError } from '../tkc/decoder.js';
+/** The rate, in frames per second, of a file that records none. */
+export declare const DEFAULT_FRAME_RATE = 24;
+export type TkcFile = import('../tkc/decoder.js').TkcFile;
+export type DecoderOptions = {
+    limits?: {
+        [name: string]: number;
+    };
+    simd?: boolean;
+};
+/**
+ * @typedef {import('../tkc/decoder.js').TkcFile} TkcFile
+ * @typedef {{limits?: {[name: string]: number}, simd?: boolean}} DecoderOptions what openTkc
+ *   takes: lower decoder limits (spec §7) for a page that should not be asked for gigabytes, or
+ *   `simd: false` for the plain JavaScript reconstruction
+ */
+/**
+ * One .tkc file played on a THREE.Mesh: its position attribute holds the current frame, its
+ * normal attribute and bounds follow it, its index is the file's faces fanned into triangles.
+ */
+export declare class TKCAnimation {
+    /** The decoder's file: header facts, names, faces, any frame as binary64. */
+    file: import("../tkc/decoder.js").TkcFile;
+    /** The number of frames (F); frames are 0 .. frameCount - 1. */
+    frameCount: number;
+    /** Frames per second that update() plays at: the file's rate, or DEFAULT_FRAME_RATE. */
+    frameRate: number;
+    /** Whether update() goes back to frame 0 after the last frame (else it stays there). */
+    loop: boolean;
+    /** Whether setFrame recomputes the vertex normals (a flat-shaded material needs none). */
+    updateNormals: boolean;
+    /** The frame the mesh shows. */
+    frame: number;
+    /** The playback time in seconds, within [0, frameCount / frameRate). */
+    time: number;
+    /** Milliseconds the last setFrame spent decoding the frame (file.frameFloat32 alone). */
+    decodeMs: number;
+    /** The positions of the frame shown (the position attribute's array), K*3. */
+    _positions: Float32Array<ArrayBuffer>;
+    /** Their vertex normals (the normal attribute's array), K*3. */
+    _normals: Float32Array<ArrayBuffer>;
+    /** The faces fanned into triangles (the index's array). */
+    _triangles: Uint32Array<ArrayBuffer>;
+    /** @type {import('three').BufferAttribute} */
+    _position: import('three').BufferAttribute;
+    /** @type {import('three').BufferAttribute} */
+    _normal: import('three').BufferAttribute;
+    /** @type {import('three').Material | null} the material made here, disposed by dispose() */
+    _ownMaterial: import('three').Material | null;
+    /** @type {number[]} */
+    _box: number[];
+    /** The mesh to add to a scene; its geometry and material are the animation's. */
+    mesh: Mesh<BufferGeometry<import("three").NormalBufferAttributes, import("three").BufferGeometryEventMap>, import("three").Material<import("three").MaterialEventMap>, import("three").Object3DEventMap>;
+    /**
+     * @param {TkcFile} file an opened file (the decoder's openTkc)
+     * @param {import('three').Material} [material] the mesh's material (default: a
+     *   MeshStandardMaterial drawn on both sides, which dispose() disposes)
+     */
+    constructor(file: TkcFile, material?: import('three').Material);
+    /** The length of one pass through every frame, in seconds. */
+    get duration(): number;
+    /**
+     * Shows frame t: decodes it into the position attribute (float32), then recomputes the
+     * normals (when updateNormals) and the geometry's bounds. Playback by update() goes on from
+     * the start of frame t.
+     * @param {number} t an integer, 0 .. frameCount - 1
+     * @returns {this}
+     * @throws {RangeError} when the file has no frame t; a TkcError when the frame is damaged
+     */
+    setFrame(t: number): this;
+    /**
+     * Advances playback by `seconds` on the real clock (THREE.Clock's getDelta(), say) at
+     * frameRate, looping after the last frame unless `loop` is false, and shows the frame that
+     * time falls in when it is not the one shown. A frame the clock passes over is not decoded.
+     * @param {number} seconds time since the last call (negative plays backwards)
+     * @returns {this}
+     */
+    update(seconds: number): this;
+    /** Frees the geometry's GPU buffers and the material made here (not one passed in). */
+    dispose(): void;
+    /**
+     * The geometry's bounding box and sphere from this frame (three.js culls and picks by them).
+     * @private
+     * @param {Float32Array} positions
+     */
+    private _bound;
+}
+/**
+ * Loads .tkc files as TKCAnimation objects.
+ * @extends {Loader<TKCAnimation>}
+ */
+export declare class TKCLoader extends Loader<TKCAnimation> {
+    /** @type {DecoderOptions} */
+    decoderOptions: DecoderOptions;
+    /** @type {FileLoader | null} what fetches the files, made by the first load() */
+    _fileLoader: FileLoader | null;
+    /** @param {import('three').LoadingManager} [manager] */
+    constructor(manager?: import('three').LoadingManager);
+    /**
+     * The options every file is opened with (see DecoderOptions).
+     * @param {DecoderOptions} options
+     * @returns {this}
+     */
+    setDecoderOptions(options: DecoderOptions): this;
+    /**
+     * Fetches `url` (after the loader's path) and parses it. The LoadingManager counts the file
+     * until it is parsed, so its onLoad does not fire between the fetch and the parse.
+     * @param {string} url
+     * @param {(animation: TKCAnimation) => void} onLoad
+     * @param {(event: ProgressEvent) => void} [onProgress]
+     * @param {(error: unknown) => void} [onError] the fetch's error, or the decoder's TkcError
+     */
+    load(url: string, onLoad: (animation: TKCAnimation) => void, onProgress?: (event: ProgressEvent) => void, onError?: (error: unknown) => void): void;
+    /**
+     * Stops the files being fetched: their load() calls onError with the fetch's AbortError.
+     * @returns {this}
+     */
+    abort(): this;
+    /**
+     * Opens a whole .tkc file held in memory and calls onLoad with its animation, showing frame 0,
+     * before returning (so it can be used synchronously). A file that breaks a rule of the format
+     * calls onError with the decoder's TkcError (its `rule` names the rule), or throws it when
+     * there is no onError.
+     * @param {ArrayBuffer | Uint8Array} buffer
+     * @param {(animation: TKCAnimation) => void} onLoad
+     * @param {(error: unknown) => void} [onError]
+     */
+    parse(buffer: ArrayBuffer | Uint8Array, onLoad: (animation: TKCAnimation) => void, onError?: (error: unknown) => void): void;
+    /**
+     * parse() as a promise.
+     * @param {ArrayBuffer | Uint8Array} buffer
+     * @returns {Promise<TKCAnimation>}
+     */
+    parseAsync(buffer: ArrayBuffer | Uint8Array): Promise<TKCAnimation>;
+}

@@ -1,0 +1,182 @@
+import { formatError } from './errors.js';
+export { TkcError } from './errors.js';
+export { DEFAULT_LIMITS } from './limits.js';
+export type Factors = import('./reconstruct.js').Factors;
+export type Residual = import('./residual.js').Residual;
+export type SimdBasis = import('./simd.js').SimdBasis;
+export type Topology = import('./topology.js').Topology;
+/**
+ * @typedef {import('./reconstruct.js').Factors} Factors
+ * @typedef {import('./residual.js').Residual} Residual
+ * @typedef {import('./simd.js').SimdBasis} SimdBasis
+ * @typedef {import('./topology.js').Topology} Topology
+ */
+/**
+ * Opens a .tkc file held in memory.
+ * @param {Uint8Array|ArrayBuffer} bytes the whole file
+ * @param {{limits?: {[name: string]: number}, simd?: boolean}} [options] decoder limits (§7) to use instead of the
+ *   defaults; `simd: false` reconstructs frames with the JavaScript loop instead of WebAssembly
+ *   SIMD (the same bits, five times slower: for tests and engines that misbehave)
+ * @returns {TkcFile}
+ * @throws {TkcError} when the file breaks a rule of §11
+ */
+export declare function openTkc(bytes: Uint8Array | ArrayBuffer, options?: {
+    limits?: {
+        [name: string]: number;
+    };
+    simd?: boolean;
+}): TkcFile;
+/** An opened file: its header facts, faces and names, and its frames on demand. */
+export declare class TkcFile {
+    bytes: Uint8Array<ArrayBufferLike>;
+    _useSimd: boolean;
+    limits: import("./limits.js").Limits;
+    container: import("./container.js").Container;
+    layout: import("./header.js").Layout;
+    version: string;
+    flags: number;
+    vertices: number;
+    frames: number;
+    frameRate: number | null;
+    header: Map<string, import("./msgpack.js").MsgValue>;
+    encoder: string | null;
+    error: {
+        kg: number | null;
+        truncationKg: number | null;
+        targetKg: number | null;
+        definition: string | null;
+        maxDistance: number | null;
+        maxDistanceAt: number[] | null;
+        targetMaxDistance: number | null;
+        lossless: boolean | null;
+    } | null;
+    faceCount: number;
+    faceWidth: number;
+    faces: Int32Array<ArrayBufferLike>;
+    /** @type {Topology | null} */
+    _topology: Topology | null;
+    /** @type {Float64Array | null} */
+    _sharedU1: Float64Array | null;
+    /** @type {{q?: Float64Array, steps?: Float64Array}} the shared U1's integers and steps */
+    _sharedKept: {
+        q?: Float64Array;
+        steps?: Float64Array;
+    };
+    /** @type {SimdBasis | null | undefined} */
+    _sharedSimd: SimdBasis | null | undefined;
+    /** @type {(Factors | null)[]} */
+    _decoded: (Factors | null)[];
+    segments: {
+        start: number;
+        frames: number;
+        ranks: number[];
+        basis: "own" | "shared" | "whole";
+    }[];
+    ranks: number[];
+    _segmentOfFrame: Int32Array<ArrayBuffer>;
+    names: string[];
+    _scratch: Float64Array<ArrayBuffer>;
+    /** @type {Float64Array} P of §8.1, before its corrections */
+    _exact: Float64Array;
+    /** @type {Map<string, Int32Array>} decoded correction chunks, the most recent last */
+    _chunks: Map<string, Int32Array>;
+    /**
+     * @param {Uint8Array} bytes
+     * @param {import('./limits.js').Limits} limits
+     */
+    constructor(bytes: Uint8Array, limits: import('./limits.js').Limits, simd?: boolean);
+    /**
+     * Frame f's positions (§8), K*3 binary64 values; `out` is reused when given.
+     * @param {number} f
+     * @param {Float64Array} [out]
+     */
+    frame(f: number, out?: Float64Array): Float64Array<ArrayBufferLike>;
+    /**
+     * Frame f's positions rounded to float32 (for a GPU buffer), into `out` (K*3).
+     * @param {number} f
+     * @param {Float32Array} [out]
+     */
+    frameFloat32(f: number, out?: Float32Array): Float32Array<ArrayBufferLike>;
+    /** The faces as a triangle list (fan triangulation of each polygon), for drawing. */
+    triangles(): Uint32Array<ArrayBuffer>;
+    /**
+     * The dequantized factors of segment s: u1 (K × i, the columns the segment uses), u3 (F_s × k),
+     * core (i × 3 × k), cent (F_s × 3), all row-major Float64Arrays, and u2 (9 values, row-major).
+     */
+    factors(s?: number): {
+        u1: Float64Array<ArrayBufferLike>;
+        u3: Float64Array<ArrayBufferLike>;
+        core: Float64Array<ArrayBufferLike>;
+        cent: Float64Array<ArrayBufferLike>;
+        u2: Float64Array<ArrayBufferLike>;
+        ranks: number[];
+    };
+    /**
+     * Decodes every segment and, with corrections, each segment's chunks and values, after its
+     * factors (R29, R41; §5 step 16s): checks the whole file, as the Python `Decoder.check()`
+     * does. Like it, it does not look for R36 (frames are asked for that).
+     */
+    check(): this;
+    /**
+     * Segment s's corrections (§6.9): null in a file without them (flag bit 2), else the RESD
+     * section's domain, grid step (0 outside domain "grid"), scale (the places or digits of a
+     * decimal domain, else null), §8.1's exponent, predict, frames per chunk and chunks.
+     */
+    residual(s?: number): {
+        domain: string;
+        step: number;
+        scale: number | null;
+        exponent: number;
+        predict: number;
+        chunkFrames: number;
+        chunks: number;
+    } | null;
+    /**
+     * Segment s's restored correction integers e (§6.9), F_s × K × 3 in C order, or null in a
+     * file without corrections. Decodes every chunk of the segment (for tests and tools: a frame
+     * needs only its own chunk).
+     */
+    residualIntegers(s?: number): BigInt64Array<ArrayBuffer> | null;
+    /**
+     * @template {Float64Array | Float32Array} T
+     * @param {number} f
+     * @param {T} out
+     * @param {boolean} [finite] false: do not require finite positions (R36)
+     * @returns {T}
+     */
+    _reconstruct<T extends Float64Array | Float32Array>(f: number, out: T, finite?: boolean): T;
+    /**
+     * §8.1's integer weights of frame t of a segment into this._scratch, R41 unless they fit.
+     * @param {Factors} d
+     * @param {number} t
+     * @param {number} f the frame within the file, for messages
+     */
+    _weights(d: Factors, t: number, f: number): void;
+    /**
+     * Chunk c of segment s's corrections, decoded (R29) and restored, from the cache when there.
+     * @param {number} s
+     * @param {Factors} d the segment, its residual read
+     * @param {number} c
+     */
+    _chunk(s: number, d: Factors, c: number): Int32Array<ArrayBufferLike>;
+    /**
+     * §5 step 18: the RESD section's parameters (R40, R21), then its CRC (R19).
+     * @param {Factors} d
+     * @param {number} s
+     */
+    _readResidual(d: Factors, s: number): void;
+    /**
+     * The segment's U1 for simd.js, made once per basis (a shared U1 serves every segment).
+     * @param {Factors} d
+     */
+    _simdOnce(d: Factors): import("./simd.js").SimdBasis | null;
+    /** @param {import('./container.js').Section} section */
+    _payload(section: import('./container.js').Section): Uint8Array<ArrayBufferLike>;
+    _topologyOnce(): import("./topology.js").Topology;
+    /**
+     * @param {number} s
+     * @returns {Factors}
+     */
+    _segment(s: number): Factors;
+}
+export { formatError };

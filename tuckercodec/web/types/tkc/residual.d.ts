@@ -1,0 +1,79 @@
+/** True where typed arrays are little-endian (the halves above, and the bit views below). */
+export declare const LITTLE_ENDIAN: boolean;
+export type Chunk = {
+    planes: number;
+    offset: number;
+    length: number;
+    start: number;
+    frames: number;
+};
+export type Residual = {
+    section: import('./container.js').Section;
+    domain: string;
+    step: number;
+    scale: number | null;
+    exponent: number;
+    predict: number;
+    chunkFrames: number;
+    chunks: Chunk[];
+    frames: number;
+};
+/**
+ * One chunk of a RESD section: its frames (counted from the section's first) and bytes.
+ * @typedef {{planes: number, offset: number, length: number, start: number, frames: number}} Chunk
+ */
+/**
+ * A RESD (or RESD.s) section's parameters, checked; chunk c holds the section's frames
+ * c·chunkFrames .. (its start and frames).
+ * @typedef {{section: import('./container.js').Section, domain: string, step: number,
+ *   scale: number | null, exponent: number, predict: number, chunkFrames: number,
+ *   chunks: Chunk[], frames: number}} Residual
+ */
+/**
+ * §5 step 18 up to the CRC: the parameters of a RESD section covering `frames` frames of K
+ * vertices, in the order §6.9 lists them (R40-residual), then each chunk's decompressed size
+ * against max_section_bytes (R21-header-limit).
+ * @param {import('./container.js').Section} section
+ * @param {number} frames F' (F for RESD, F_s for RESD.s)
+ * @param {number} K
+ * @param {import('./limits.js').Limits} limits
+ * @returns {Residual}
+ */
+export declare function readResidual(section: import('./container.js').Section, frames: number, K: number, limits: import('./limits.js').Limits): Residual;
+/**
+ * Chunk c's restored integers e (§6.9), as interleaved halves (see the top of this file):
+ * N_c = n_c·K·3 values in frame-major order, j = (t·K + v)·3 + x.
+ * @param {Residual} residual
+ * @param {number} c
+ * @param {Uint8Array} payload the whole section's payload, its CRC checked
+ * @param {number} K
+ * @returns {Int32Array} 2·N_c halves
+ */
+export declare function decodeChunk(residual: Residual, c: number, payload: Uint8Array, K: number): Int32Array;
+/**
+ * One frame's decoded positions (§6.9): P (the exact reconstruction of §8.1) corrected by the
+ * frame's integers, into `out` (a Float32Array receives the binary64 result rounded once, which
+ * in domain float32 is the corrected binary32 value itself). In the domains grid and float64 a
+ * P that is not finite is left so, unchecked: the caller reports it (R36) after every value
+ * whose P is finite has been checked (R41), as the Python decoder does.
+ * @returns {number} the first value whose decoded position is not finite (R36), or −1 The loops below work on one array
+ * type each and return the first value that breaks R41 (or −1); the message is made here.
+ * @param {Residual} residual
+ * @param {Float64Array} P K·3 values
+ * @param {Int32Array} pairs the chunk's integers (decodeChunk)
+ * @param {number} first the index in the chunk of the frame's first integer, t·K·3
+ * @param {Float64Array | Float32Array} out K·3 values
+ * @param {number} frameNumber the frame within the file, for messages
+ */
+export declare function correct(residual: Residual, P: Float64Array, pairs: Int32Array, first: number, out: Float64Array | Float32Array, frameNumber: number): number;
+export type Digits = {
+    digits: number;
+    least: number;
+    decade: number;
+    powers: number[];
+    bound: bigint;
+    eHigh: number[];
+    eLow: number[];
+    oHigh: number[];
+    oLow: number[];
+};

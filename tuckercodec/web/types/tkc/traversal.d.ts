@@ -1,0 +1,14 @@
+export type MsgValue = import('./msgpack.js').MsgValue;
+export type Limits = import('./limits.js').Limits;
+/**
+ * Decodes a FACE section coded with faces-traverse.
+ * @param {Map<string, MsgValue>} entry the section-table entry (codec parameters corner_order, streams)
+ * @param {Uint8Array} payload the section's bytes, CRC already checked
+ * @param {number} K vertices
+ * @param {number} M faces (the checked `shape`)
+ * @param {number} n face width
+ * @param {Limits} [limits] the decoder's limits (§7): max_section_bytes bounds the streams
+ * @returns {Int32Array} M*n vertex indices, row-major, in walk order, −1 padded
+ * @throws {TkcError} R39-traversal, R30-planes, R21-header-limit or R29-zstd-content-size
+ */
+export declare function decodeTraverse(entry: Map<string, MsgValue>, payload: Uint8Array, K: number, M: number, n: number, limits?: Limits): Int32Array;
