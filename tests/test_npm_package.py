@@ -56,7 +56,9 @@ TSC = TOOLS_JS / "node_modules" / ".bin" / "tsc"
 VENDORED_THREE = WEB / "vendor" / "three"
 #: the loader's files: a file with corrections (the JavaScript frame is the Python one, bit for
 #: bit) and no frame rate, and a segmented one of polygons at 30 fps (within §8's tolerance)
-LOADER_FILES = ("v1.3-bound-grid", "v1.2-traverse-polygons-segments")
+LOADER_FILES = ("v1.3-bound-grid", "v1.2-traverse-polygons-segments", "v1.4-scene-times")
+#: The files of LOADER_FILES whose frames are evenly spaced (no time codes of format 1.4).
+EVEN_FILES = LOADER_FILES[:2]
 TIMEOUT = 60.0
 
 
@@ -331,7 +333,7 @@ def test_set_frame_puts_the_python_decoders_frame_in_the_position_attribute(load
     ]
 
 
-@pytest.mark.parametrize("name", LOADER_FILES)
+@pytest.mark.parametrize("name", EVEN_FILES)
 def test_update_follows_the_clock_at_the_frame_rate_and_loops(loader_runs, name):
     played = loader_runs[name]["update"]
     frames = loader_runs[name]["parse"]["frameCount"]
@@ -344,6 +346,17 @@ def test_update_follows_the_clock_at_the_frame_rate_and_loops(loader_runs, name)
     assert played["shown"][10:] == [2, frames - 1]
     assert played["afterSetFrame"] == 1  # half a frame on from the start of frame 1
     assert played["clamped"] == frames - 1  # loop = false stops at the last frame
+
+
+def test_update_plays_a_file_with_time_codes_at_their_times(loader_runs):
+    # v1.4-scene-times: frames at 1001..1010, then 1012..1025 (one sample missing), 24 fps
+    played = loader_runs["v1.4-scene-times"]["update"]
+    codes = np.array(EXPECTED["v1.4-scene-times.json"]["header"]["time_codes"])
+    assert played["frameTimes"] == pytest.approx(((codes - codes[0]) / 24.0).tolist())
+    assert played["duration"] == pytest.approx((codes[-1] - codes[0] + 1) / 24.0)
+    # just before each frame's start the one before it shows, at its start the frame itself:
+    # frame 10 starts two frame periods after frame 9
+    assert played["aroundStarts"] == [[f - 1, f] for f in range(1, len(codes))]
 
 
 def test_load_fetches_through_the_loaders_path_header_and_manager_and_aborts(loader_runs):

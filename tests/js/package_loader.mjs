@@ -96,7 +96,19 @@ function updated() {
   const afterSetFrame = animation.update(period / 2).frame;
   animation.loop = false;
   const clamped = animation.update(10 * animation.duration).frame;
-  return { shown, decodedByQuarters, afterSetFrame, clamped, duration: animation.duration };
+  // a file with time codes (format 1.4): the frames either side of each frame's start
+  animation.loop = true;
+  const aroundStarts = [];
+  for (let f = 1; f < animation.frameCount; f++) {
+    animation.setFrame(0);
+    const justBefore = animation.update(animation.frameTimes[f] - 1e-9).frame;
+    animation.setFrame(0);
+    aroundStarts.push([justBefore, animation.update(animation.frameTimes[f]).frame]);
+  }
+  return {
+    shown, decodedByQuarters, afterSetFrame, clamped, duration: animation.duration,
+    frameTimes: Array.from(animation.frameTimes), aroundStarts,
+  };
 }
 
 async function loaded() {

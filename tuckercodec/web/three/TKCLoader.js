@@ -55,8 +55,17 @@ export class TKCAnimation {
     this.updateNormals = true;
     /** The frame the mesh shows. */
     this.frame = 0;
-    /** The playback time in seconds, within [0, frameCount / frameRate). */
+    /** The playback time in seconds, within [0, duration). */
     this.time = 0;
+    /**
+     * When each frame starts, in seconds from frame 0: from the file's time codes (format 1.4:
+     * a cache sampled unevenly plays unevenly), else frame f at f / frameRate.
+     */
+    this.frameTimes = new Float64Array(this.frameCount);
+    const codes = file.timeCodes;
+    for (let f = 0; f < this.frameCount; f++) {
+      this.frameTimes[f] = codes ? (codes[f] - codes[0]) / this.frameRate : f / this.frameRate;
+    }
     /** Milliseconds the last setFrame spent decoding the frame (file.frameFloat32 alone). */
     this.decodeMs = 0;
 
@@ -89,9 +98,9 @@ export class TKCAnimation {
     this.setFrame(0);
   }
 
-  /** The length of one pass through every frame, in seconds. */
+  /** The length of one pass through every frame, in seconds (the last frame lasts 1 / frameRate). */
   get duration() {
-    return this.frameCount / this.frameRate;
+    return this.frameTimes[this.frameCount - 1] + 1 / this.frameRate;
   }
 
   /**
@@ -116,14 +125,15 @@ export class TKCAnimation {
     }
     this._bound(this._positions);
     this.frame = t;
-    this.time = t / this.frameRate;
+    this.time = this.frameTimes[t];
     return this;
   }
 
   /**
    * Advances playback by `seconds` on the real clock (THREE.Clock's getDelta(), say) at
    * frameRate, looping after the last frame unless `loop` is false, and shows the frame that
-   * time falls in when it is not the one shown. A frame the clock passes over is not decoded.
+   * time falls in (the last frame that starts at or before it, frameTimes) when it is not the
+   * one shown. A frame the clock passes over is not decoded.
    * @param {number} seconds time since the last call (negative plays backwards)
    * @returns {this}
    */
@@ -135,13 +145,28 @@ export class TKCAnimation {
       time %= duration;
       if (time < 0) time += duration;
     } else {
-      time = Math.min(Math.max(time, 0), (this.frameCount - 1) / this.frameRate);
+      time = Math.min(Math.max(time, 0), this.frameTimes[this.frameCount - 1]);
     }
-    // floor(time * rate) can round up to frameCount just below the end
-    const frame = Math.min(Math.floor(time * this.frameRate), this.frameCount - 1);
+    const frame = this._frameAt(time);
     if (frame !== this.frame) this.setFrame(frame);
     this.time = time;
     return this;
+  }
+
+  /**
+   * The last frame that starts at or before `time` (binary search of frameTimes).
+   * @param {number} time seconds from frame 0
+   * @returns {number}
+   */
+  _frameAt(time) {
+    let low = 0;
+    let high = this.frameCount - 1;
+    while (low < high) {
+      const middle = (low + high + 1) >> 1;
+      if (this.frameTimes[middle] <= time) low = middle;
+      else high = middle - 1;
+    }
+    return low;
   }
 
   /** Frees the geometry's GPU buffers and the material made here (not one passed in). */

@@ -32,8 +32,13 @@ export declare class TKCAnimation {
     updateNormals: boolean;
     /** The frame the mesh shows. */
     frame: number;
-    /** The playback time in seconds, within [0, frameCount / frameRate). */
+    /** The playback time in seconds, within [0, duration). */
     time: number;
+    /**
+     * When each frame starts, in seconds from frame 0: from the file's time codes (format 1.4:
+     * a cache sampled unevenly plays unevenly), else frame f at f / frameRate.
+     */
+    frameTimes: Float64Array<ArrayBuffer>;
     /** Milliseconds the last setFrame spent decoding the frame (file.frameFloat32 alone). */
     decodeMs: number;
     /** The positions of the frame shown (the position attribute's array), K*3. */
@@ -58,7 +63,7 @@ export declare class TKCAnimation {
      *   MeshStandardMaterial drawn on both sides, which dispose() disposes)
      */
     constructor(file: TkcFile, material?: import('three').Material);
-    /** The length of one pass through every frame, in seconds. */
+    /** The length of one pass through every frame, in seconds (the last frame lasts 1 / frameRate). */
     get duration(): number;
     /**
      * Shows frame t: decodes it into the position attribute (float32), then recomputes the
@@ -72,11 +77,18 @@ export declare class TKCAnimation {
     /**
      * Advances playback by `seconds` on the real clock (THREE.Clock's getDelta(), say) at
      * frameRate, looping after the last frame unless `loop` is false, and shows the frame that
-     * time falls in when it is not the one shown. A frame the clock passes over is not decoded.
+     * time falls in (the last frame that starts at or before it, frameTimes) when it is not the
+     * one shown. A frame the clock passes over is not decoded.
      * @param {number} seconds time since the last call (negative plays backwards)
      * @returns {this}
      */
     update(seconds: number): this;
+    /**
+     * The last frame that starts at or before `time` (binary search of frameTimes).
+     * @param {number} time seconds from frame 0
+     * @returns {number}
+     */
+    _frameAt(time: number): number;
     /** Frees the geometry's GPU buffers and the material made here (not one passed in). */
     dispose(): void;
     /**

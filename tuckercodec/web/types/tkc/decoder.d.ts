@@ -38,6 +38,12 @@ export declare class TkcFile {
     vertices: number;
     frames: number;
     frameRate: number | null;
+    /** Each frame's time code (§4, 1.4; in frames, seconds = code / frameRate), or null: 0, 1, 2... */
+    timeCodes: Float64Array<ArrayBufferLike> | null;
+    /** The length of a unit of the positions in metres (1.4), or null: unknown. */
+    metersPerUnit: number | null;
+    /** "Y" or "Z", the source's up axis (1.4), or null: unknown. */
+    upAxis: string | null;
     header: Map<string, import("./msgpack.js").MsgValue>;
     encoder: string | null;
     error: {

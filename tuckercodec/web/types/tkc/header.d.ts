@@ -18,6 +18,9 @@ export type Layout = {
     vertices: number;
     frames: number;
     frameRate: number | null;
+    timeCodes: Float64Array | null;
+    metersPerUnit: number | null;
+    upAxis: string | null;
     segmented: boolean;
     codingTools: boolean;
     corrections: boolean;
