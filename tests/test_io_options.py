@@ -6,7 +6,15 @@ import numpy as np
 import pytest
 
 from tests.support.sequences import grid_faces, wave_sequence
-from tuckercodec import Decoder, InputError, MeshSequence, encode, load_sequence, save_sequence
+from tuckercodec import (
+    Decoder,
+    InputError,
+    MeshSequence,
+    decode,
+    encode,
+    load_sequence,
+    save_sequence,
+)
 from tuckercodec.cli import main
 from tuckercodec.io import formats
 from tuckercodec.io.registry import COMMON_OPTIONS, OPTION_FLAGS, ReadOptions
@@ -170,12 +178,15 @@ def test_times_that_float32_cannot_tell_apart_are_refused_naming_the_frame(tmp_p
     assert not (tmp_path / f"late{suffix}").exists()
 
 
-def test_encode_says_the_compressed_file_does_not_keep_time_codes(tmp_path, capsys):
+def test_the_compressed_file_keeps_time_codes(tmp_path, capsys):
+    # format 1.4 keeps them (the file said it did not before)
     timed = tmp_path / "timed.npz"
     seq = MeshSequence(wave_sequence(12, 6), grid_faces(6), time_codes=np.arange(101.0, 113.0))
     save_sequence(seq, timed)
     assert main(["encode", str(timed), "-o", str(tmp_path / "t.tkc"), "--kg", "1"]) == 0
-    assert "not kept in the compressed file: time codes" in capsys.readouterr().out
+    assert "not kept" not in capsys.readouterr().out
+    back = decode(tmp_path / "t.tkc")
+    np.testing.assert_array_equal(back.time_codes, np.arange(101.0, 113.0))
 
 
 @pytest.mark.parametrize("name", ["out.obj", "out.ply", "out.vtu"])

@@ -194,10 +194,13 @@ def _field(header: dict[str, Any], key: str, valid: Callable[[Any], bool], wante
     """The value of a header field of R20-header-field, checked by ``valid``."""
     value = header.get(key)
     if not valid(value):
-        raise FormatError(
-            f"must be {wanted}, got {value!r}", rule="R20-header-field", field=f"header.{key}"
-        )
+        raise _bad_field(key, f"must be {wanted}, got {value!r}")
     return value
+
+
+def _bad_field(key: str, problem: str) -> FormatError:
+    """R20-header-field for the header's ``key``."""
+    return FormatError(problem, rule="R20-header-field", field=f"header.{key}")
 
 
 def _is_frame_rate(value: object) -> bool:
@@ -268,13 +271,7 @@ def read_header(container: Container, limits: Limits) -> FileInfo:
     frame_rate = _field(
         header, "frame_rate", _is_frame_rate, "absent, nil or a positive finite float"
     )
-    time_codes = _time_codes(header.get("time_codes"), frames)
-    meters_per_unit = _field(
-        header, "meters_per_unit", _is_frame_rate, "absent, nil or a positive finite float"
-    )
-    up_axis = _field(
-        header, "up_axis", lambda v: v is None or v in UP_AXES, 'absent, nil, "Y" or "Z"'
-    )
+    time_codes, meters_per_unit, up_axis = _scene(header, frames)
 
     error = header.get("error")
     error = error if isinstance(error, dict) else {}  # informative only (§4.1): never trusted
@@ -309,6 +306,17 @@ def read_header(container: Container, limits: Limits) -> FileInfo:
     )
 
 
+def _scene(header: dict[str, Any], frames: int) -> tuple[tuple[float, ...] | None, Any, Any]:
+    """The time and scene keys (§4, format 1.4; §5 step 14 after ``frame_rate``): the time
+    codes, the unit and the up axis, each checked (R20-header-field)."""
+    codes = _time_codes(header.get("time_codes"), frames)
+    unit = _field(
+        header, "meters_per_unit", _is_frame_rate, "absent, nil or a positive finite float"
+    )
+    axis = _field(header, "up_axis", lambda v: v is None or v in UP_AXES, 'absent, nil, "Y" or "Z"')
+    return codes, unit, axis
+
+
 def _time_codes(value: object, frames: int) -> tuple[float, ...] | None:
     """``time_codes`` (§4, 1.4): absent or nil, or F little-endian binary64 values as a bin of
     8·F bytes, finite and strictly increasing (R20-header-field)."""
@@ -316,20 +324,19 @@ def _time_codes(value: object, frames: int) -> tuple[float, ...] | None:
         return None
     if not isinstance(value, bytes) or len(value) != 8 * frames:
         got = f"{len(value)} bytes" if isinstance(value, bytes) else type(value).__name__
-        raise FormatError(
-            f"must be {8 * frames} bytes (a binary64 per frame), got {got}",
-            rule="R20-header-field",
-            field="header.time_codes",
+        raise _bad_field(
+            "time_codes", f"must be {8 * frames} bytes (a binary64 per frame), got {got}"
         )
     codes = np.frombuffer(value, dtype="<f8")
-    problem = None
     if not np.isfinite(codes).all():
-        problem = f"must be finite: frame {int(np.flatnonzero(~np.isfinite(codes))[0])}'s is not"
-    elif frames > 1 and not (np.diff(codes) > 0).all():
+        frame = int(np.flatnonzero(~np.isfinite(codes))[0])
+        raise _bad_field("time_codes", f"must be finite: frame {frame}'s is not")
+    if frames > 1 and not (np.diff(codes) > 0).all():
         frame = int(np.flatnonzero(np.diff(codes) <= 0)[0]) + 1
-        problem = f"must increase: frame {frame}'s {codes[frame]!r} follows {codes[frame - 1]!r}"
-    if problem is not None:
-        raise FormatError(problem, rule="R20-header-field", field="header.time_codes")
+        raise _bad_field(
+            "time_codes",
+            f"must increase: frame {frame}'s {codes[frame]!r} follows {codes[frame - 1]!r}",
+        )
     listed: list[float] = codes.tolist()
     return tuple(listed)
 
