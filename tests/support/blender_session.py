@@ -1,0 +1,116 @@
+"""One headless Blender session (the ``bpy`` module) for tests/test_blender_addon.py, run as a
+script in a process of its own so that a crash of Blender cannot take pytest with it::
+
+    python tests/support/blender_session.py ADDON.zip FILE.tkc WORKDIR
+
+It installs the add-on's zip as Blender installs an extension from disk, imports FILE.tkc,
+reads the evaluated vertices at several scene frames, exports the object back, tries the
+refusals (an existing file, a change of topology), imports a baked copy, and writes what it saw
+to WORKDIR/session.npz (arrays) and WORKDIR/session.json (the rest), for the test to judge.
+Nothing here compares: the test does, against the Python decoder in its own process.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+import bpy
+import numpy as np
+
+#: The scene frames read back (the file's frame 0 is at scene frame 1): forward, back, the ends.
+FRAMES = (1, 2, 17, 45, 60, 30)
+ADDON_MODULE = "bl_ext.user_default.tuckercodec_blender"
+
+
+def evaluated_vertices(obj: Any) -> np.ndarray:
+    """``obj``'s evaluated vertex coordinates, (K, 3) float32."""
+    mesh = obj.evaluated_get(bpy.context.evaluated_depsgraph_get()).data
+    values = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
+    mesh.vertices.foreach_get("co", values)
+    return values.reshape(-1, 3)
+
+
+def polygons(mesh: Any) -> np.ndarray:
+    """A mesh's faces as (M, 3) vertex indices (the sample is triangles)."""
+    loops = np.empty(len(mesh.loops), dtype=np.int64)
+    mesh.loops.foreach_get("vertex_index", loops)
+    return loops.reshape(-1, 3)
+
+
+def install(addon: Path) -> dict[str, Any]:
+    """Install and enable the extension; where its tuckercodec was imported from."""
+    result = bpy.ops.extensions.package_install_files(
+        filepath=str(addon), repo="user_default", enable_on_install=True
+    )
+    enabled = ADDON_MODULE in bpy.context.preferences.addons
+    return {
+        "install": sorted(result),
+        "enabled": enabled,
+        "tuckercodec_file": sys.modules["tuckercodec"].__file__ if enabled else None,
+        "extensions_folder": bpy.utils.user_resource("EXTENSIONS"),
+    }
+
+
+def play(tkc: Path, arrays: dict[str, np.ndarray]) -> dict[str, Any]:
+    """Import ``tkc`` and read the evaluated vertices at :data:`FRAMES`."""
+    assert bpy.ops.import_scene.tkc(filepath=str(tkc)) == {"FINISHED"}
+    obj = bpy.context.active_object
+    scene = bpy.context.scene
+    arrays["faces"] = polygons(obj.data)
+    for frame in FRAMES:
+        scene.frame_set(frame)
+        arrays[f"frame_{frame}"] = evaluated_vertices(obj)
+    return {
+        "object": obj.name,
+        "frame_range": [scene.frame_start, scene.frame_end],
+        "fps": scene.render.fps / scene.render.fps_base,
+    }
+
+
+def refusal(call: Any) -> str | None:
+    """The message of the error ``call`` reports (Blender raises it as RuntimeError)."""
+    try:
+        call()
+    except RuntimeError as error:
+        return str(error)
+    return None
+
+
+def changing_topology(work: Path) -> str | None:
+    """Export a cube whose Decimate ratio jumps from 1 to 0.5 at frame 4: the refusal."""
+    bpy.ops.mesh.primitive_uv_sphere_add()
+    sphere = bpy.context.active_object
+    decimate = sphere.modifiers.new("decimate", "DECIMATE")
+    for frame, ratio in ((1, 1.0), (4, 0.5)):
+        decimate.ratio = ratio
+        decimate.keyframe_insert("ratio", frame=frame)
+    for curve in sphere.animation_data.action.fcurves:
+        for point in curve.keyframe_points:
+            point.interpolation = "CONSTANT"
+    scene = bpy.context.scene
+    scene.frame_start, scene.frame_end = 1, 6
+    return refusal(lambda: bpy.ops.export_scene.tkc(filepath=str(work / "sphere.tkc")))
+
+
+def main(addon: Path, tkc: Path, work: Path) -> None:
+    arrays: dict[str, np.ndarray] = {}
+    seen = install(addon)
+    seen.update(play(tkc, arrays))
+    exported = work / "exported.tkc"
+    seen["export"] = sorted(bpy.ops.export_scene.tkc(filepath=str(exported), kg=0.5))
+    seen["export_again"] = refusal(lambda: bpy.ops.export_scene.tkc(filepath=str(exported)))
+    seen["bake"] = sorted(bpy.ops.import_scene.tkc(filepath=str(tkc), bake=True))
+    baked = bpy.context.active_object
+    seen["baked_modifiers"] = [modifier.type for modifier in baked.modifiers]
+    bpy.context.scene.frame_set(20)
+    arrays["baked_20"] = evaluated_vertices(baked)
+    seen["topology"] = changing_topology(work)
+    np.savez(work / "session.npz", **arrays)  # type: ignore[arg-type] # (the names are keys)
+    (work / "session.json").write_text(json.dumps(seen, indent=2))
+
+
+if __name__ == "__main__":
+    main(Path(sys.argv[1]), Path(sys.argv[2]), Path(sys.argv[3]))
