@@ -197,6 +197,22 @@ def test_an_imported_tkc_plays_the_decoders_frames(session):
 
 
 @needs_bpy
+def test_a_render_plays_the_decoders_frames(session):
+    """What the render's own depsgraph evaluated at each frame it rendered (Cycles)."""
+    assert session.report["rendered"] == ["render_0005.png", "render_0006.png"]
+    decoder = Decoder(session.tkc)
+    for frame in (5, 6):
+        expected = decoder.frame(frame - 1).astype(np.float32)
+        np.testing.assert_array_equal(session.arrays[f"render_{frame}"], expected)
+
+
+@needs_bpy
+def test_a_saved_blend_plays_again_when_reopened(session):
+    expected = Decoder(session.tkc).frame(32).astype(np.float32)
+    np.testing.assert_array_equal(session.arrays["reopened_33"], expected)
+
+
+@needs_bpy
 def test_a_baked_import_plays_from_a_point_cache(session):
     tkc, work, report, arrays, _ = session
     assert report["bake"] == ["FINISHED"] and report["baked_modifiers"] == ["MESH_CACHE"]

@@ -5,7 +5,8 @@ script in a process of its own so that a crash of Blender cannot take pytest wit
 
 It installs the add-on's zip as Blender installs an extension from disk, imports FILE.tkc,
 reads the evaluated vertices at several scene frames, exports the object back, tries the
-refusals (an existing file, a change of topology), imports a baked copy, and writes what it saw
+refusals (an existing file, a change of topology), imports a baked copy, renders two frames,
+saves and reopens the .blend, and writes what it saw
 to WORKDIR/session.npz (arrays) and WORKDIR/session.json (the rest), for the test to judge.
 Nothing here compares: the test does, against the Python decoder in its own process.
 """
@@ -70,6 +71,40 @@ def play(tkc: Path, arrays: dict[str, np.ndarray]) -> dict[str, Any]:
     }
 
 
+def render(obj: Any, work: Path, arrays: dict[str, np.ndarray]) -> list[str]:
+    """Render scene frames 5 and 6 (Cycles, 8 x 8 pixels, one sample) and keep ``obj``'s
+    vertices as the render's own depsgraph evaluated them at each frame; the images written."""
+    scene = bpy.context.scene
+
+    def seen(scene: Any, depsgraph: Any) -> None:
+        mesh = obj.evaluated_get(depsgraph).data
+        values = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
+        mesh.vertices.foreach_get("co", values)
+        arrays[f"render_{scene.frame_current}"] = values.reshape(-1, 3)
+
+    scene.render.engine = "CYCLES"
+    scene.cycles.samples = 1
+    scene.render.resolution_x = scene.render.resolution_y = 8
+    scene.frame_start, scene.frame_end = 5, 6
+    scene.render.filepath = str(work / "render_")
+    bpy.app.handlers.frame_change_post.append(seen)
+    try:
+        bpy.ops.render.render(animation=True)
+    finally:
+        bpy.app.handlers.frame_change_post.remove(seen)
+    return sorted(path.name for path in work.glob("render_*.png"))
+
+
+def reopened(name: str, work: Path, arrays: dict[str, np.ndarray]) -> None:
+    """Save the .blend, open it again (the decoders closed, the handler kept) and read object
+    ``name`` at scene frame 33."""
+    blend = str(work / "scene.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=blend)
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    bpy.context.scene.frame_set(33)
+    arrays["reopened_33"] = evaluated_vertices(bpy.data.objects[name])
+
+
 def refusal(call: Any) -> str | None:
     """The message of the error ``call`` reports (Blender raises it as RuntimeError)."""
     try:
@@ -107,7 +142,10 @@ def main(addon: Path, tkc: Path, work: Path) -> None:
     seen["baked_modifiers"] = [modifier.type for modifier in baked.modifiers]
     bpy.context.scene.frame_set(20)
     arrays["baked_20"] = evaluated_vertices(baked)
+    baked.hide_render = True  # the render shows the played object alone
+    seen["rendered"] = render(bpy.data.objects[seen["object"]], work, arrays)
     seen["topology"] = changing_topology(work)
+    reopened(seen["object"], work, arrays)
     np.savez(work / "session.npz", **arrays)  # type: ignore[arg-type] # (the names are keys)
     (work / "session.json").write_text(json.dumps(seen, indent=2))
 

@@ -128,6 +128,18 @@ def _new_object(context: Any, name: str, decoder: Decoder) -> Any:
     return obj
 
 
+def _stored_path(source: Path) -> str:
+    """The path an object keeps: relative to the saved .blend (``//...``, so that the two move
+    together), else absolute."""
+    absolute = str(source.resolve())
+    if not bpy.data.filepath:
+        return absolute
+    try:
+        return str(bpy.path.relpath(absolute))
+    except ValueError:  # another drive than the .blend's, on Windows
+        return absolute
+
+
 def _bake_pc2(obj: Any, decoder: Decoder, source: Path, first: int, overwrite: bool) -> Path:
     """Decode every frame into a ``.pc2`` beside the .blend (beside the ``.tkc`` while the
     .blend is unsaved) and play it with a Mesh Cache modifier instead of the handler."""
@@ -178,14 +190,15 @@ class ImportTKC(bpy.types.Operator, ImportHelper):
         try:
             decoder = Decoder(source)
             obj = _new_object(context, source.stem, decoder)
-            obj[PATH_PROPERTY] = str(source.resolve())
+            obj[PATH_PROPERTY] = _stored_path(source)
             obj[FIRST_FRAME_PROPERTY] = self.first_frame
             info = decoder.info
             if self.set_scene:
                 scene = context.scene
                 scene.frame_start = self.first_frame
                 scene.frame_end = self.first_frame + info.frames - 1
-                scene.render.fps, scene.render.fps_base = scene_rate(info.frame_rate)
+                if info.frame_rate is not None:  # else the scene keeps its own rate
+                    scene.render.fps, scene.render.fps_base = scene_rate(info.frame_rate)
             how = "decoded on demand"
             if self.bake:
                 cache = _bake_pc2(obj, decoder, source, self.first_frame, self.overwrite)
