@@ -182,6 +182,42 @@ def test_blender_installs_the_zip_with_its_own_wheels(session):
     assert report["tuckercodec_file"].endswith("site-packages/tuckercodec/__init__.py")
 
 
+#: Run with the extension's site-packages first on the path: the bundled wheels alone decode
+#: and encode (in Blender the host's modules may win: here the test venv has its own scipy).
+BUNDLED_CHECK = """
+import json, sys
+import msgpack, scipy, scipy.linalg, zstandard
+import tuckercodec
+decoder = tuckercodec.Decoder(sys.argv[1])
+sequence = decoder.sequence()
+result = tuckercodec.encode_with_report(sequence, target_kg=0.5)
+print(json.dumps({
+    "files": [module.__file__ for module in (msgpack, scipy, zstandard, tuckercodec)],
+    "kg": tuckercodec.kg_error(sequence, tuckercodec.decode(result.data)),
+}))
+"""
+
+
+@needs_bpy
+def test_the_bundled_wheels_decode_and_encode_on_their_own(session):
+    local = Path(session.report["extensions_folder"]) / ".local" / "lib"
+    site = next(local.glob("python*/site-packages"))
+    assert {"scipy", "msgpack", "zstandard", "tuckercodec"} <= {p.name for p in site.iterdir()}
+    environment = {**os.environ, "PYTHONPATH": str(site)}
+    done = subprocess.run(
+        [sys.executable, "-c", BUNDLED_CHECK, str(session.tkc)],
+        capture_output=True,
+        text=True,
+        env=environment,
+        cwd=session.work,  # not this checkout, which `python -c` would put first on the path
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    checked = json.loads(done.stdout)
+    assert all(Path(file).is_relative_to(site) for file in checked["files"]), checked["files"]
+    assert 0 < checked["kg"] <= 0.5
+
+
 @needs_bpy
 def test_an_imported_tkc_plays_the_decoders_frames(session):
     tkc, _, report, arrays, stdout = session
