@@ -26,7 +26,7 @@ import numpy as np
 import pytest
 
 import tuckercodec
-from tuckercodec import Decoder, InputError, kg_error
+from tuckercodec import Decoder, InputError, kg_error, max_vertex_displacement
 from tuckercodec.blender.meshes import (
     ExportFrames,
     file_frame,
@@ -268,6 +268,17 @@ def test_an_exported_object_meets_its_target_against_what_was_imported(session):
     measured = kg_error(imported.positions(), exported.positions())
     assert 0 < measured <= 0.5
     assert "Exported 'cloth' to exported.tkc: 60 frames of 3101 vertices, KG error" in stdout
+
+
+@needs_bpy
+def test_the_exports_other_targets_are_met(session):
+    assert session.report["export_modes"] == [["FINISHED"]] * 3
+    imported = Decoder(session.tkc).positions().astype(np.float32)  # what Blender held
+    assert Decoder(session.work / "bpfv.tkc").info.bpfv <= 1.0
+    assert Decoder(session.work / "ranks.tkc").info.ranks == (6, 4)
+    bounded = Decoder(session.work / "bounded.tkc")
+    assert kg_error(imported, bounded.positions()) <= 1.0
+    assert max_vertex_displacement(imported, bounded.positions()).distance <= 0.05
 
 
 @needs_bpy

@@ -24,6 +24,13 @@ import numpy as np
 #: The scene frames read back (the file's frame 0 is at scene frame 1): forward, back, the ends.
 FRAMES = (1, 2, 17, 45, 60, 30)
 ADDON_MODULE = "bl_ext.user_default.tuckercodec_blender"
+#: The exports besides the first (kg 0.5), by file name: a size target, fixed ranks, and a KG
+#: target with a bound on every vertex.
+EXPORT_MODES: dict[str, dict[str, Any]] = {
+    "bpfv.tkc": {"mode": "BPFV", "bpfv": 1.0},
+    "ranks.tkc": {"mode": "RANKS", "rank_i": 6, "rank_k": 4},
+    "bounded.tkc": {"mode": "KG", "kg": 1.0, "max_error": 0.05},
+}
 
 
 def evaluated_vertices(obj: Any) -> np.ndarray:
@@ -137,6 +144,10 @@ def main(addon: Path, tkc: Path, work: Path) -> None:
     exported = work / "exported.tkc"
     seen["export"] = sorted(bpy.ops.export_scene.tkc(filepath=str(exported), kg=0.5))
     seen["export_again"] = refusal(lambda: bpy.ops.export_scene.tkc(filepath=str(exported)))
+    seen["export_modes"] = [  # the other targets, each to a file of its own
+        sorted(bpy.ops.export_scene.tkc(filepath=str(work / name), **options))
+        for name, options in EXPORT_MODES.items()
+    ]
     seen["bake"] = sorted(bpy.ops.import_scene.tkc(filepath=str(tkc), bake=True))
     baked = bpy.context.active_object
     seen["baked_modifiers"] = [modifier.type for modifier in baked.modifiers]
