@@ -26,7 +26,8 @@ import numpy as np
 import pytest
 
 import tuckercodec
-from tuckercodec import Decoder, InputError, kg_error, max_vertex_displacement
+from tuckercodec import Decoder, DependencyError, InputError, kg_error, max_vertex_displacement
+from tuckercodec.blender import package
 from tuckercodec.blender.meshes import (
     ExportFrames,
     file_frame,
@@ -128,6 +129,54 @@ def test_the_command_refuses_an_existing_zip_before_any_work(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "already exists" in err and "--force" in err and len(err.splitlines()) == 1
     assert existing.read_bytes() == b"mine"
+
+
+def _fake_downloads(platform_name, folder):
+    """Stand-in for pip download: one empty 'wheel' per requirement, as pip names them."""
+    target = folder / platform_name
+    target.mkdir()
+    tag = "win_amd64" if platform_name == "windows-x64" else "manylinux_2_17_x86_64"
+    wheels = [target / f"{name}-1.0-cp311-cp311-{tag}.whl" for name in ("msgpack", "scipy")]
+    wheels.append(folder / "zstandard-1.0-py3-none-any.whl")  # the same file for every platform
+    for wheel in wheels:
+        wheel.write_bytes(platform_name.encode())
+    return wheels
+
+
+def test_the_zip_holds_the_manifest_the_loader_and_each_wheel_once(tmp_path, monkeypatch):
+    monkeypatch.setattr(package, "download_wheels", _fake_downloads)
+    written = package.write_addon_zip(tmp_path / "addon.zip", ["linux-x64", "windows-x64"])
+    with zipfile.ZipFile(written.path) as archive:
+        names = archive.namelist()
+        parsed = tomllib.loads(archive.read("blender_manifest.toml").decode())
+        loader = archive.read("__init__.py").decode()
+    assert parsed["platforms"] == ["linux-x64", "windows-x64"]
+    assert parsed["wheels"] == [f"./wheels/{name}" for name in written.wheels]
+    assert len(written.wheels) == 6  # tuckercodec, 2 + 2 platform wheels, zstandard once
+    assert sorted(names) == sorted(
+        ["blender_manifest.toml", "__init__.py"] + [f"wheels/{name}" for name in written.wheels]
+    )
+    assert "from tuckercodec.blender.addon import register, unregister" in loader
+    assert written.size == (tmp_path / "addon.zip").stat().st_size
+
+
+def test_a_failed_download_names_the_platform_and_leaves_no_zip(tmp_path, monkeypatch):
+    said = "ERROR: No matching distribution found for scipy<1.17,>=1.11"
+    monkeypatch.setattr(
+        subprocess,  # the module package.py calls pip through
+        "run",
+        lambda *args, **kwargs: subprocess.CompletedProcess(args, 1, stdout="", stderr=said),
+    )
+    with pytest.raises(DependencyError, match=r"wheels for macos-arm64 .*No matching distribution"):
+        package.write_addon_zip(tmp_path / "addon.zip", ["macos-arm64"])
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_unknown_platform_is_refused_before_any_work(tmp_path):
+    with pytest.raises(ValueError, match="unknown platform 'amiga-68k'"):
+        package.write_addon_zip(tmp_path / "addon.zip", ["amiga-68k"])
+    assert list(tmp_path.iterdir()) == []
+    assert package.current_platform() in package.PLATFORM_TAGS
 
 
 # ------------------------------------------------------------------------------------------
