@@ -15,6 +15,7 @@ import hashlib
 import importlib.util
 import json
 import os
+import re
 import subprocess
 import sys
 import tomllib
@@ -336,3 +337,10 @@ def test_the_export_refuses_an_existing_file_and_a_change_of_topology(session):
     assert "exported.tkc: already exists" in report["export_again"]
     assert "object 'Sphere' changes topology at frame 4" in report["topology"]
     assert not (work / "sphere.tkc").exists()
+    assert re.search(r"'Camera[.\d]*' \(CAMERA\): select a mesh, curve or text", report["camera"])
+
+
+@needs_bpy
+def test_a_damaged_file_is_refused_naming_it(session):
+    message = session.report["broken"]
+    assert message.count("broken.tkc") == 1 and message.endswith("[R01-signature]\n")

@@ -156,6 +156,10 @@ def main(addon: Path, tkc: Path, work: Path) -> None:
     baked.hide_render = True  # the render shows the played object alone
     seen["rendered"] = render(bpy.data.objects[seen["object"]], work, arrays)
     seen["topology"] = changing_topology(work)
+    (work / "broken.tkc").write_bytes(b"not a tkc file")
+    seen["broken"] = refusal(lambda: bpy.ops.import_scene.tkc(filepath=str(work / "broken.tkc")))
+    bpy.ops.object.camera_add()
+    seen["camera"] = refusal(lambda: bpy.ops.export_scene.tkc(filepath=str(work / "camera.tkc")))
     reopened(seen["object"], work, arrays)
     np.savez(work / "session.npz", **arrays)  # type: ignore[arg-type] # (the names are keys)
     (work / "session.json").write_text(json.dumps(seen, indent=2))

@@ -43,7 +43,17 @@ _OPEN: dict[int, tuple[str, Decoder, int | None]] = {}
 #: Objects whose file failed, by session id: their message is printed once, not every frame.
 _FAILED: dict[int, str] = {}
 
+#: The object types whose evaluated geometry is a mesh (``to_mesh``): what Export takes.
+GEOMETRY_TYPES = frozenset({"MESH", "CURVE", "SURFACE", "META", "FONT"})
+
 _Handler = TypeVar("_Handler", bound=Callable[..., None])
+
+
+def naming(path: Path, error: Exception) -> str:
+    """An error's message naming the file at fault once (the decoder's errors name it)."""
+    message = str(error)
+    return message if str(path) in message else f"{path}: {message}"
+
 
 # ------------------------------------------------------------------------------------------
 # playback
@@ -206,7 +216,7 @@ class ImportTKC(bpy.types.Operator, ImportHelper):
             else:
                 show_frame(obj, context.scene.frame_current)
         except (TuckerCodecError, OSError, ValueError) as error:
-            self.report({"ERROR"}, f"{source}: {error}")
+            self.report({"ERROR"}, naming(source, error))
             return {"CANCELLED"}
         rate = "unknown rate" if info.frame_rate is None else f"{info.frame_rate:g} fps"
         self.report(
@@ -311,8 +321,9 @@ class ExportTKC(bpy.types.Operator, ExportHelper):
 
         obj = context.active_object
         target = Path(self.filepath)
-        if obj is None:
-            self.report({"ERROR"}, "no active object to export")
+        if obj is None or obj.type not in GEOMETRY_TYPES:
+            what = "no active object" if obj is None else f"object {obj.name!r} ({obj.type})"
+            self.report({"ERROR"}, f"{what}: select a mesh, curve or text object to export")
             return {"CANCELLED"}
         try:
             options = self._options()
@@ -323,7 +334,7 @@ class ExportTKC(bpy.types.Operator, ExportHelper):
             result = encode_with_report(sequence, options=options)
             write_atomic(target, result.data, overwrite=self.overwrite)
         except (TuckerCodecError, OSError, ValueError) as error:
-            self.report({"ERROR"}, f"{target}: {error}")
+            self.report({"ERROR"}, naming(target, error))
             return {"CANCELLED"}
         report = result.report
         worst = "" if report.max_distance is None else f", worst vertex {report.max_distance:.6g}"
