@@ -130,6 +130,7 @@ def test_usage_errors_exit_2(capsys):
         ["render"],
         ["convert"],
         ["formats"],
+        ["blender-addon"],
     ],
 )
 def test_help_on_every_verb(verb, capsys):

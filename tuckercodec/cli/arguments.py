@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from .._version import __version__
+from ..blender.package import PLATFORM_TAGS
 from ..encoder import DEFAULT_TARGET_KG
 from ..encoder.options import BASES, parse_max_error
 from ..encoder.plan import DEFAULT_SEGMENT_FRAMES, parse_size
@@ -133,6 +134,7 @@ def build_parser() -> argparse.ArgumentParser:
         _add_view,
         _add_formats,
         _add_demo,
+        _add_blender_addon,
     ):
         add_verb(verbs)
     return parser
@@ -429,6 +431,29 @@ def _add_demo(verbs: _Verbs) -> None:
         metavar="KG,KG,...",
         help="target KG errors in percent (default: %(default)s)",
     )
+
+
+def _add_blender_addon(verbs: _Verbs) -> None:
+    """The ``blender-addon`` verb (tuckercodec.cli.addon): the Blender add-on's zip."""
+    addon = verbs.add_parser(
+        "blender-addon",
+        help="write the Blender add-on (import and export .tkc) as an installable zip",
+        description=(
+            "Write the Blender 4.2+ extension tuckercodec_blender (File > Import and Export of "
+            ".tkc files) as one zip with the wheels it needs (tuckercodec's own, and scipy, "
+            "msgpack and zstandard's for Blender's Python 3.11, fetched with pip download). "
+            "Install it with Edit > Preferences > Get Extensions > Install from Disk."
+        ),
+    )
+    addon.add_argument("output", type=Path, metavar="OUT.zip", help="the zip to write")
+    addon.add_argument(
+        "--platform",
+        action="append",
+        choices=sorted(PLATFORM_TAGS),
+        help="a Blender platform to bundle wheels for (repeat for several; default: this "
+        "machine's)",
+    )
+    addon.add_argument("--force", action="store_true", help="replace OUT.zip if it exists")
 
 
 # ------------------------------------------------------------------------------------------

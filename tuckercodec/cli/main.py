@@ -18,7 +18,7 @@ import threading
 from collections.abc import Callable, Sequence
 
 from ..errors import EXIT_FAILURE
-from . import batch, codec, commands, convert, view
+from . import addon, batch, codec, commands, convert, view
 from .arguments import build_parser
 from .failures import describe_failure
 
@@ -34,6 +34,7 @@ _VERBS: dict[str, Callable[[argparse.Namespace], int]] = {
     "formats": convert.run_formats,
     "batch": batch.run_batch,
     "view": view.run_view,
+    "blender-addon": addon.run_blender_addon,
 }
 
 

@@ -1,0 +1,169 @@
+"""One headless Blender session (the ``bpy`` module) for tests/test_blender_addon.py, run as a
+script in a process of its own so that a crash of Blender cannot take pytest with it::
+
+    python tests/support/blender_session.py ADDON.zip FILE.tkc WORKDIR
+
+It installs the add-on's zip as Blender installs an extension from disk, imports FILE.tkc,
+reads the evaluated vertices at several scene frames, exports the object back, tries the
+refusals (an existing file, a change of topology), imports a baked copy, renders two frames,
+saves and reopens the .blend, and writes what it saw
+to WORKDIR/session.npz (arrays) and WORKDIR/session.json (the rest), for the test to judge.
+Nothing here compares: the test does, against the Python decoder in its own process.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+import bpy
+import numpy as np
+
+#: The scene frames read back (the file's frame 0 is at scene frame 1): forward, back, the ends.
+FRAMES = (1, 2, 17, 45, 60, 30)
+ADDON_MODULE = "bl_ext.user_default.tuckercodec_blender"
+#: The exports besides the first (kg 0.5), by file name: a size target, fixed ranks, and a KG
+#: target with a bound on every vertex.
+EXPORT_MODES: dict[str, dict[str, Any]] = {
+    "bpfv.tkc": {"mode": "BPFV", "bpfv": 1.0},
+    "ranks.tkc": {"mode": "RANKS", "rank_i": 6, "rank_k": 4},
+    "bounded.tkc": {"mode": "KG", "kg": 1.0, "max_error": 0.05},
+}
+
+
+def evaluated_vertices(obj: Any) -> np.ndarray:
+    """``obj``'s evaluated vertex coordinates, (K, 3) float32."""
+    mesh = obj.evaluated_get(bpy.context.evaluated_depsgraph_get()).data
+    values = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
+    mesh.vertices.foreach_get("co", values)
+    return values.reshape(-1, 3)
+
+
+def polygons(mesh: Any) -> np.ndarray:
+    """A mesh's faces as (M, 3) vertex indices (the sample is triangles)."""
+    loops = np.empty(len(mesh.loops), dtype=np.int64)
+    mesh.loops.foreach_get("vertex_index", loops)
+    return loops.reshape(-1, 3)
+
+
+def install(addon: Path) -> dict[str, Any]:
+    """Install and enable the extension; where its tuckercodec was imported from."""
+    result = bpy.ops.extensions.package_install_files(
+        filepath=str(addon), repo="user_default", enable_on_install=True
+    )
+    enabled = ADDON_MODULE in bpy.context.preferences.addons
+    return {
+        "install": sorted(result),
+        "enabled": enabled,
+        "tuckercodec_file": sys.modules["tuckercodec"].__file__ if enabled else None,
+        "extensions_folder": bpy.utils.user_resource("EXTENSIONS"),
+    }
+
+
+def play(tkc: Path, arrays: dict[str, np.ndarray]) -> dict[str, Any]:
+    """Import ``tkc`` and read the evaluated vertices at :data:`FRAMES`."""
+    assert bpy.ops.import_scene.tkc(filepath=str(tkc)) == {"FINISHED"}
+    obj = bpy.context.active_object
+    scene = bpy.context.scene
+    arrays["faces"] = polygons(obj.data)
+    for frame in FRAMES:
+        scene.frame_set(frame)
+        arrays[f"frame_{frame}"] = evaluated_vertices(obj)
+    return {
+        "object": obj.name,
+        "frame_range": [scene.frame_start, scene.frame_end],
+        "fps": scene.render.fps / scene.render.fps_base,
+    }
+
+
+def render(obj: Any, work: Path, arrays: dict[str, np.ndarray]) -> list[str]:
+    """Render scene frames 5 and 6 (Cycles, 8 x 8 pixels, one sample) and keep ``obj``'s
+    vertices as the render's own depsgraph evaluated them at each frame; the images written."""
+    scene = bpy.context.scene
+
+    def seen(scene: Any, depsgraph: Any) -> None:
+        mesh = obj.evaluated_get(depsgraph).data
+        values = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
+        mesh.vertices.foreach_get("co", values)
+        arrays[f"render_{scene.frame_current}"] = values.reshape(-1, 3)
+
+    scene.render.engine = "CYCLES"
+    scene.cycles.samples = 1
+    scene.render.resolution_x = scene.render.resolution_y = 8
+    scene.frame_start, scene.frame_end = 5, 6
+    scene.render.filepath = str(work / "render_")
+    bpy.app.handlers.frame_change_post.append(seen)
+    try:
+        bpy.ops.render.render(animation=True)
+    finally:
+        bpy.app.handlers.frame_change_post.remove(seen)
+    return sorted(path.name for path in work.glob("render_*.png"))
+
+
+def reopened(name: str, work: Path, arrays: dict[str, np.ndarray]) -> None:
+    """Save the .blend, open it again (the decoders closed, the handler kept) and read object
+    ``name`` at scene frame 33."""
+    blend = str(work / "scene.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=blend)
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    bpy.context.scene.frame_set(33)
+    arrays["reopened_33"] = evaluated_vertices(bpy.data.objects[name])
+
+
+def refusal(call: Any) -> str | None:
+    """The message of the error ``call`` reports (Blender raises it as RuntimeError)."""
+    try:
+        call()
+    except RuntimeError as error:
+        return str(error)
+    return None
+
+
+def changing_topology(work: Path) -> str | None:
+    """Export a cube whose Decimate ratio jumps from 1 to 0.5 at frame 4: the refusal."""
+    bpy.ops.mesh.primitive_uv_sphere_add()
+    sphere = bpy.context.active_object
+    decimate = sphere.modifiers.new("decimate", "DECIMATE")
+    for frame, ratio in ((1, 1.0), (4, 0.5)):
+        decimate.ratio = ratio
+        decimate.keyframe_insert("ratio", frame=frame)
+    for curve in sphere.animation_data.action.fcurves:
+        for point in curve.keyframe_points:
+            point.interpolation = "CONSTANT"
+    scene = bpy.context.scene
+    scene.frame_start, scene.frame_end = 1, 6
+    return refusal(lambda: bpy.ops.export_scene.tkc(filepath=str(work / "sphere.tkc")))
+
+
+def main(addon: Path, tkc: Path, work: Path) -> None:
+    arrays: dict[str, np.ndarray] = {}
+    seen = install(addon)
+    seen.update(play(tkc, arrays))
+    exported = work / "exported.tkc"
+    seen["export"] = sorted(bpy.ops.export_scene.tkc(filepath=str(exported), kg=0.5))
+    seen["export_again"] = refusal(lambda: bpy.ops.export_scene.tkc(filepath=str(exported)))
+    seen["export_modes"] = [  # the other targets, each to a file of its own
+        sorted(bpy.ops.export_scene.tkc(filepath=str(work / name), **options))
+        for name, options in EXPORT_MODES.items()
+    ]
+    seen["bake"] = sorted(bpy.ops.import_scene.tkc(filepath=str(tkc), bake=True))
+    baked = bpy.context.active_object
+    seen["baked_modifiers"] = [modifier.type for modifier in baked.modifiers]
+    bpy.context.scene.frame_set(20)
+    arrays["baked_20"] = evaluated_vertices(baked)
+    baked.hide_render = True  # the render shows the played object alone
+    seen["rendered"] = render(bpy.data.objects[seen["object"]], work, arrays)
+    seen["topology"] = changing_topology(work)
+    (work / "broken.tkc").write_bytes(b"not a tkc file")
+    seen["broken"] = refusal(lambda: bpy.ops.import_scene.tkc(filepath=str(work / "broken.tkc")))
+    bpy.ops.object.camera_add()
+    seen["camera"] = refusal(lambda: bpy.ops.export_scene.tkc(filepath=str(work / "camera.tkc")))
+    reopened(seen["object"], work, arrays)
+    np.savez(work / "session.npz", **arrays)  # type: ignore[arg-type] # (the names are keys)
+    (work / "session.json").write_text(json.dumps(seen, indent=2))
+
+
+if __name__ == "__main__":
+    main(Path(sys.argv[1]), Path(sys.argv[2]), Path(sys.argv[3]))

@@ -1,0 +1,346 @@
+"""The Blender add-on (tuckercodec.blender): its array work and its zip anywhere, and the add-on
+itself in headless Blender (the ``bpy`` wheel) where that is installed.
+
+The Blender half runs one Blender session per module in a process of its own
+(tests/support/blender_session.py), so that a crash of Blender fails these tests instead of
+ending pytest; the session reports what Blender showed, and this module compares it with the
+Python decoder.
+"""
+
+from __future__ import annotations
+
+import base64
+import dataclasses
+import hashlib
+import importlib.util
+import json
+import os
+import re
+import subprocess
+import sys
+import tomllib
+import zipfile
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import numpy as np
+import pytest
+
+import tuckercodec
+from tuckercodec import Decoder, DependencyError, InputError, kg_error, max_vertex_displacement
+from tuckercodec.blender import package
+from tuckercodec.blender.meshes import (
+    ExportFrames,
+    file_frame,
+    padded_faces,
+    polygon_loops,
+    scene_rate,
+)
+from tuckercodec.blender.package import ADDON_ID, build_own_wheel, manifest
+from tuckercodec.cli import main
+
+SESSION = Path(__file__).parent / "support" / "blender_session.py"
+NO_BPY = (
+    "needs Blender's bpy module: pip install 'bpy<5' (the bpy 4.x wheels, for Python 3.11; "
+    "about 370 MB)"
+)
+
+# ------------------------------------------------------------------------------------------
+# the add-on's array work, without Blender
+
+
+def test_faces_become_blender_polygons_and_come_back():
+    faces = np.array([[0, 1, 2, -1], [2, 1, 3, 4], [4, 3, 5, -1]])
+    loops, starts, totals = polygon_loops(faces)
+    assert loops.tolist() == [0, 1, 2, 2, 1, 3, 4, 4, 3, 5]
+    assert starts.tolist() == [0, 3, 7] and totals.tolist() == [3, 4, 3]
+    np.testing.assert_array_equal(padded_faces(loops, starts, totals), faces)
+    triangles = np.array([[0, 1, 2], [2, 1, 3]])
+    np.testing.assert_array_equal(padded_faces(*polygon_loops(triangles)), triangles)
+
+
+def test_scene_frames_map_to_the_files_frames_held_at_the_ends():
+    assert [file_frame(f, 1, 60) for f in (1, 2, 60)] == [0, 1, 59]
+    assert file_frame(-5, 1, 60) == 0 and file_frame(100, 1, 60) == 59
+    assert file_frame(1001, 1001, 10) == 0
+
+
+def test_the_scene_rate_is_the_files():
+    assert scene_rate(24.0) == (24, 1.0)
+    fps, base = scene_rate(29.97)
+    assert fps == 30 and fps / base == pytest.approx(29.97)
+    assert scene_rate(None) == (24, 1.0)
+
+
+def test_an_export_refuses_a_change_of_topology_naming_the_frame_and_object():
+    frames = ExportFrames("Cube")
+    faces = np.array([[0, 1, 2]])
+    frames.add(1, np.zeros((3, 3)), faces)
+    frames.add(2, np.ones(9), faces)  # flat values, as foreach_get gives them
+    with pytest.raises(InputError, match=r"'Cube' changes topology at frame 3:.*different faces"):
+        frames.add(3, np.zeros((3, 3)), np.array([[0, 2, 1]]))
+    with pytest.raises(InputError, match=r"'Cube' changes topology at frame 4: 4 vertices"):
+        frames.add(4, np.zeros((4, 3)), faces)
+    sequence = frames.sequence(25.0)
+    assert sequence.vertices.shape == (2, 3, 3) and sequence.frame_rate == 25.0
+
+
+# ------------------------------------------------------------------------------------------
+# the zip, without Blender
+
+
+def test_the_manifest_lists_the_extension_its_platforms_and_wheels():
+    text = manifest(["linux-x64", "windows-x64"], ["a-1-py3-none-any.whl"])
+    parsed = tomllib.loads(text)
+    assert parsed["id"] == ADDON_ID == "tuckercodec_blender"
+    assert parsed["version"] == tuckercodec.__version__
+    assert parsed["type"] == "add-on" and parsed["blender_version_min"] == "4.2.0"
+    assert parsed["platforms"] == ["linux-x64", "windows-x64"]
+    assert parsed["wheels"] == ["./wheels/a-1-py3-none-any.whl"]
+
+
+def test_the_own_wheel_holds_the_package_and_a_record_that_checks(tmp_path):
+    wheel = build_own_wheel(tmp_path)
+    assert wheel.name == f"tuckercodec-{tuckercodec.__version__}-py3-none-any.whl"
+    with zipfile.ZipFile(wheel) as archive:
+        names = set(archive.namelist())
+        info = f"tuckercodec-{tuckercodec.__version__}.dist-info"
+        record = archive.read(f"{info}/RECORD").decode().splitlines()
+        for line in record:
+            name, digest, size = line.rsplit(",", 2)
+            if name == f"{info}/RECORD":
+                continue
+            data = archive.read(name)
+            expected = base64.urlsafe_b64encode(hashlib.sha256(data).digest()).rstrip(b"=")
+            assert digest == f"sha256={expected.decode()}" and int(size) == len(data), name
+    assert {line.rsplit(",", 2)[0] for line in record} == names
+    for needed in (
+        "tuckercodec/decoder.py",
+        "tuckercodec/blender/addon.py",
+        "tuckercodec/py.typed",
+    ):
+        assert needed in names
+    assert not any("__pycache__" in name or name.endswith(".pyc") for name in names)
+
+
+def test_the_command_refuses_an_existing_zip_before_any_work(tmp_path, capsys):
+    existing = tmp_path / "addon.zip"
+    existing.write_bytes(b"mine")
+    assert main(["blender-addon", str(existing)]) == 1
+    err = capsys.readouterr().err
+    assert "already exists" in err and "--force" in err and len(err.splitlines()) == 1
+    assert existing.read_bytes() == b"mine"
+
+
+def _fake_downloads(platform_name, folder):
+    """Stand-in for pip download: one empty 'wheel' per requirement, as pip names them."""
+    target = folder / platform_name
+    target.mkdir()
+    tag = "win_amd64" if platform_name == "windows-x64" else "manylinux_2_17_x86_64"
+    wheels = [target / f"{name}-1.0-cp311-cp311-{tag}.whl" for name in ("msgpack", "scipy")]
+    wheels.append(folder / "zstandard-1.0-py3-none-any.whl")  # the same file for every platform
+    for wheel in wheels:
+        wheel.write_bytes(platform_name.encode())
+    return wheels
+
+
+def test_the_zip_holds_the_manifest_the_loader_and_each_wheel_once(tmp_path, monkeypatch):
+    monkeypatch.setattr(package, "download_wheels", _fake_downloads)
+    written = package.write_addon_zip(tmp_path / "addon.zip", ["linux-x64", "windows-x64"])
+    with zipfile.ZipFile(written.path) as archive:
+        names = archive.namelist()
+        parsed = tomllib.loads(archive.read("blender_manifest.toml").decode())
+        loader = archive.read("__init__.py").decode()
+    assert parsed["platforms"] == ["linux-x64", "windows-x64"]
+    assert parsed["wheels"] == [f"./wheels/{name}" for name in written.wheels]
+    assert len(written.wheels) == 6  # tuckercodec, 2 + 2 platform wheels, zstandard once
+    assert sorted(names) == sorted(
+        ["blender_manifest.toml", "__init__.py"] + [f"wheels/{name}" for name in written.wheels]
+    )
+    assert "from tuckercodec.blender.addon import register, unregister" in loader
+    assert written.size == (tmp_path / "addon.zip").stat().st_size
+
+
+def test_a_failed_download_names_the_platform_and_leaves_no_zip(tmp_path, monkeypatch):
+    said = "ERROR: No matching distribution found for scipy<1.17,>=1.11"
+    monkeypatch.setattr(
+        subprocess,  # the module package.py calls pip through
+        "run",
+        lambda *args, **kwargs: subprocess.CompletedProcess(args, 1, stdout="", stderr=said),
+    )
+    with pytest.raises(DependencyError, match=r"wheels for macos-arm64 .*No matching distribution"):
+        package.write_addon_zip(tmp_path / "addon.zip", ["macos-arm64"])
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_unknown_platform_is_refused_before_any_work(tmp_path):
+    with pytest.raises(ValueError, match="unknown platform 'amiga-68k'"):
+        package.write_addon_zip(tmp_path / "addon.zip", ["amiga-68k"])
+    assert list(tmp_path.iterdir()) == []
+    assert package.current_platform() in package.PLATFORM_TAGS
+
+
+# ------------------------------------------------------------------------------------------
+# the add-on in headless Blender
+
+needs_bpy = pytest.mark.skipif(importlib.util.find_spec("bpy") is None, reason=NO_BPY)
+
+
+class Session(NamedTuple):
+    """What one Blender session did (tests/support/blender_session.py)."""
+
+    tkc: Path  # the file imported
+    work: Path  # its folder, where the session exported and baked
+    report: dict[str, Any]  # session.json
+    arrays: dict[str, np.ndarray]  # session.npz: faces, evaluated vertices by scene frame
+    stdout: str  # Blender's reports
+
+
+@pytest.fixture(scope="module")
+def session(cloth, tmp_path_factory) -> Session:
+    """The zip built by the command line, and one Blender session that installs it, plays the
+    cloth (encoded at KG 0.1, at 29.97 fps) and exports it back."""
+    work = tmp_path_factory.mktemp("blender")
+    tkc = work / "cloth.tkc"
+    tkc.write_bytes(tuckercodec.encode(dataclasses.replace(cloth, frame_rate=29.97), target_kg=0.1))
+    addon = work / "tuckercodec_blender.zip"
+    assert main(["blender-addon", str(addon)]) == 0
+    environment = {name: value for name, value in os.environ.items() if name != "PYTHONPATH"}
+    environment["BLENDER_USER_RESOURCES"] = str(work / "user")  # not the user's own Blender
+    done = subprocess.run(
+        [sys.executable, str(SESSION), str(addon), str(tkc), str(work)],
+        capture_output=True,
+        text=True,
+        env=environment,
+        cwd=work,
+        timeout=600,
+        check=False,
+    )
+    assert done.returncode == 0, f"the Blender session failed:\n{done.stdout}\n{done.stderr}"
+    report = json.loads((work / "session.json").read_text())
+    with np.load(work / "session.npz") as arrays:
+        return Session(tkc, work, report, dict(arrays), done.stdout)
+
+
+@needs_bpy
+def test_blender_installs_the_zip_with_its_own_wheels(session):
+    report = session.report
+    assert report["install"] == ["FINISHED"] and report["enabled"]
+    # the package came from the wheel the zip bundles, not from this checkout
+    site = Path(report["extensions_folder"]) / ".local" / "lib"
+    assert Path(report["tuckercodec_file"]).is_relative_to(site)
+    assert report["tuckercodec_file"].endswith("site-packages/tuckercodec/__init__.py")
+
+
+#: Run with the extension's site-packages first on the path: the bundled wheels alone decode
+#: and encode (in Blender the host's modules may win: here the test venv has its own scipy).
+BUNDLED_CHECK = """
+import json, sys
+import msgpack, scipy, scipy.linalg, zstandard
+import tuckercodec
+decoder = tuckercodec.Decoder(sys.argv[1])
+sequence = decoder.sequence()
+result = tuckercodec.encode_with_report(sequence, target_kg=0.5)
+print(json.dumps({
+    "files": [module.__file__ for module in (msgpack, scipy, zstandard, tuckercodec)],
+    "kg": tuckercodec.kg_error(sequence, tuckercodec.decode(result.data)),
+}))
+"""
+
+
+@needs_bpy
+def test_the_bundled_wheels_decode_and_encode_on_their_own(session):
+    local = Path(session.report["extensions_folder"]) / ".local" / "lib"
+    site = next(local.glob("python*/site-packages"))
+    assert {"scipy", "msgpack", "zstandard", "tuckercodec"} <= {p.name for p in site.iterdir()}
+    environment = {**os.environ, "PYTHONPATH": str(site)}
+    done = subprocess.run(
+        [sys.executable, "-c", BUNDLED_CHECK, str(session.tkc)],
+        capture_output=True,
+        text=True,
+        env=environment,
+        cwd=session.work,  # not this checkout, which `python -c` would put first on the path
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    checked = json.loads(done.stdout)
+    assert all(Path(file).is_relative_to(site) for file in checked["files"]), checked["files"]
+    assert 0 < checked["kg"] <= 0.5
+
+
+@needs_bpy
+def test_an_imported_tkc_plays_the_decoders_frames(session):
+    tkc, _, report, arrays, stdout = session
+    decoder = Decoder(tkc)
+    np.testing.assert_array_equal(arrays["faces"], decoder.faces)
+    assert report["frame_range"] == [1, 60]
+    assert report["fps"] == pytest.approx(29.97)
+    for key in (key for key in arrays if key.startswith("frame_")):
+        frame = int(key.removeprefix("frame_"))
+        expected = decoder.frame(frame - 1).astype(np.float32)
+        np.testing.assert_array_equal(arrays[key], expected, err_msg=f"scene frame {frame}")
+    assert "decoded on demand" in stdout
+
+
+@needs_bpy
+def test_a_render_plays_the_decoders_frames(session):
+    """What the render's own depsgraph evaluated at each frame it rendered (Cycles)."""
+    assert session.report["rendered"] == ["render_0005.png", "render_0006.png"]
+    decoder = Decoder(session.tkc)
+    for frame in (5, 6):
+        expected = decoder.frame(frame - 1).astype(np.float32)
+        np.testing.assert_array_equal(session.arrays[f"render_{frame}"], expected)
+
+
+@needs_bpy
+def test_a_saved_blend_plays_again_when_reopened(session):
+    expected = Decoder(session.tkc).frame(32).astype(np.float32)
+    np.testing.assert_array_equal(session.arrays["reopened_33"], expected)
+
+
+@needs_bpy
+def test_a_baked_import_plays_from_a_point_cache(session):
+    tkc, work, report, arrays, _ = session
+    assert report["bake"] == ["FINISHED"] and report["baked_modifiers"] == ["MESH_CACHE"]
+    assert (work / "cloth.pc2").exists()
+    expected = Decoder(tkc).frame(19).astype(np.float32)
+    np.testing.assert_array_equal(arrays["baked_20"], expected)
+
+
+@needs_bpy
+def test_an_exported_object_meets_its_target_against_what_was_imported(session):
+    tkc, work, report, _, stdout = session
+    assert report["export"] == ["FINISHED"]
+    imported, exported = Decoder(tkc), Decoder(work / "exported.tkc")
+    assert exported.info.frames == 60 and exported.info.vertices == 3101
+    assert exported.info.frame_rate == pytest.approx(29.97)
+    np.testing.assert_array_equal(exported.faces, imported.faces)
+    measured = kg_error(imported.positions(), exported.positions())
+    assert 0 < measured <= 0.5
+    assert "Exported 'cloth' to exported.tkc: 60 frames of 3101 vertices, KG error" in stdout
+
+
+@needs_bpy
+def test_the_exports_other_targets_are_met(session):
+    assert session.report["export_modes"] == [["FINISHED"]] * 3
+    imported = Decoder(session.tkc).positions().astype(np.float32)  # what Blender held
+    assert Decoder(session.work / "bpfv.tkc").info.bpfv <= 1.0
+    assert Decoder(session.work / "ranks.tkc").info.ranks == (6, 4)
+    bounded = Decoder(session.work / "bounded.tkc")
+    assert kg_error(imported, bounded.positions()) <= 1.0
+    assert max_vertex_displacement(imported, bounded.positions()).distance <= 0.05
+
+
+@needs_bpy
+def test_the_export_refuses_an_existing_file_and_a_change_of_topology(session):
+    _, work, report, _, _ = session
+    assert "exported.tkc: already exists" in report["export_again"]
+    assert "object 'Sphere' changes topology at frame 4" in report["topology"]
+    assert not (work / "sphere.tkc").exists()
+    assert re.search(r"'Camera[.\d]*' \(CAMERA\): select a mesh, curve or text", report["camera"])
+
+
+@needs_bpy
+def test_a_damaged_file_is_refused_naming_it(session):
+    message = session.report["broken"]
+    assert message.count("broken.tkc") == 1 and message.endswith("[R01-signature]\n")

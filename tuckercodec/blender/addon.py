@@ -1,0 +1,397 @@
+"""The Blender add-on ``tuckercodec_blender``: File > Import and File > Export of ``.tkc`` files.
+
+*Import* (``bpy.ops.import_scene.tkc``) makes a mesh object with the file's faces and vertex
+order, sets the scene's frame range and rate from the file, and plays it by decoding the frame
+asked for when the frame changes (a ``frame_change_pre`` handler, one open
+:class:`~tuckercodec.Decoder` per object: random access, nothing decoded up front), in the
+viewport and in renders. Baked instead, the file is decoded once into a ``.pc2`` point cache
+read by a Mesh Cache modifier, which any Blender plays without this add-on.
+
+*Export* (``bpy.ops.export_scene.tkc``) encodes the active object's evaluated mesh (armature,
+shape keys, modifiers, simulations: whatever Blender evaluates) over the scene's frame range, in
+object space, and reports the error and size reached; a change of topology is refused.
+
+This module runs only inside Blender (it imports ``bpy``); the array work it needs is in
+:mod:`tuckercodec.blender.meshes`, tested without Blender.
+"""
+# Blender reads an operator's properties from its class annotations, evaluated: no
+# ``from __future__ import annotations`` here, and the annotations are calls, not types.
+# mypy: disable-error-code="valid-type"
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any, TypeVar, cast
+
+import bpy
+import numpy as np
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, StringProperty
+from bpy_extras.io_utils import ExportHelper, ImportHelper
+
+from ..atomic import write_atomic
+from ..decoder import Decoder
+from ..errors import TuckerCodecError
+from .meshes import ExportFrames, file_frame, padded_faces, scene_rate
+
+#: The custom properties an imported object carries: the file it plays, the scene frame of the
+#: file's frame 0, and whether it was baked to a point cache (then it is not played here).
+PATH_PROPERTY = "tkc_path"
+FIRST_FRAME_PROPERTY = "tkc_first_frame"
+BAKED_PROPERTY = "tkc_baked"
+
+#: Open decoders, by object (its session id): (absolute path, decoder, frame shown).
+_OPEN: dict[int, tuple[str, Decoder, int | None]] = {}
+#: Objects whose file failed, by session id: their message is printed once, not every frame.
+_FAILED: dict[int, str] = {}
+
+#: The object types whose evaluated geometry is a mesh (``to_mesh``): what Export takes.
+GEOMETRY_TYPES = frozenset({"MESH", "CURVE", "SURFACE", "META", "FONT"})
+
+_Handler = TypeVar("_Handler", bound=Callable[..., None])
+
+
+def naming(path: Path, error: Exception) -> str:
+    """An error's message naming the file at fault once (the decoder's errors name it)."""
+    message = str(error)
+    return message if str(path) in message else f"{path}: {message}"
+
+
+# ------------------------------------------------------------------------------------------
+# playback
+
+
+def _played(obj: Any) -> bool:
+    return bool(obj.type == "MESH" and PATH_PROPERTY in obj and not obj.get(BAKED_PROPERTY))
+
+
+def show_frame(obj: Any, scene_frame: int) -> int:
+    """Put the file's frame for ``scene_frame`` in ``obj``'s mesh; returns the file's frame.
+    The object's decoder is opened at its first frame and kept; a frame already shown is not
+    decoded again. Raises what the decoder raises, and ``ValueError`` when the mesh no longer
+    has the file's vertex count."""
+    path = bpy.path.abspath(obj[PATH_PROPERTY])
+    key = obj.session_uid
+    cached = _OPEN.get(key)
+    if cached is None or cached[0] != path:
+        cached = (path, Decoder(path), None)
+    decoder = cached[1]
+    frame = file_frame(scene_frame, int(obj.get(FIRST_FRAME_PROPERTY, 1)), decoder.frame_count)
+    mesh = obj.data
+    if len(mesh.vertices) != decoder.info.vertices:
+        raise ValueError(
+            f"object {obj.name!r} has {len(mesh.vertices)} vertices, its file {path} "
+            f"{decoder.info.vertices}: the mesh was edited, so it is not played"
+        )
+    if cached[2] != frame:
+        positions = decoder.frame(frame).astype(np.float32)
+        mesh.vertices.foreach_set("co", positions.reshape(-1))
+        mesh.update()
+    _OPEN[key] = (path, decoder, frame)
+    return frame
+
+
+def _persistent(handler: _Handler) -> _Handler:
+    """``bpy.app.handlers.persistent``, typed: the handler stays when another .blend loads."""
+    return cast(_Handler, bpy.app.handlers.persistent(handler))
+
+
+@_persistent
+def _on_frame_change(scene: Any, depsgraph: Any = None) -> None:
+    """Before each frame is evaluated (viewport, render, ``frame_set``): every played object
+    of the scene shows its file's frame. A failure is printed once per object, naming it."""
+    for obj in scene.objects:
+        if not _played(obj):
+            continue
+        try:
+            show_frame(obj, scene.frame_current)
+            _FAILED.pop(obj.session_uid, None)
+        except (TuckerCodecError, OSError, ValueError) as error:
+            message = f"tuckercodec: object {obj.name!r}, frame {scene.frame_current}: {error}"
+            if _FAILED.get(obj.session_uid) != message:
+                _FAILED[obj.session_uid] = message
+                print(message)
+
+
+@_persistent
+def _on_load(*_: Any) -> None:
+    """A new .blend: close the decoders of the last one."""
+    _OPEN.clear()
+    _FAILED.clear()
+
+
+# ------------------------------------------------------------------------------------------
+# import
+
+
+def _new_object(context: Any, name: str, decoder: Decoder) -> Any:
+    """A mesh object with the file's vertex order and faces, showing frame 0, linked into the
+    active collection, selected and active."""
+    faces = [row[row >= 0].tolist() for row in decoder.faces]
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata(decoder.frame(0).astype(np.float32), [], faces)
+    mesh.update()
+    obj = bpy.data.objects.new(name, mesh)
+    context.collection.objects.link(obj)
+    for other in context.view_layer.objects:
+        other.select_set(False)
+    obj.select_set(True)
+    context.view_layer.objects.active = obj
+    return obj
+
+
+def _stored_path(source: Path) -> str:
+    """The path an object keeps: relative to the saved .blend (``//...``, so that the two move
+    together), else absolute."""
+    absolute = str(source.resolve())
+    if not bpy.data.filepath:
+        return absolute
+    try:
+        return str(bpy.path.relpath(absolute))
+    except ValueError:  # another drive than the .blend's, on Windows
+        return absolute
+
+
+def _bake_pc2(obj: Any, decoder: Decoder, source: Path, first: int, overwrite: bool) -> Path:
+    """Decode every frame into a ``.pc2`` beside the .blend (beside the ``.tkc`` while the
+    .blend is unsaved) and play it with a Mesh Cache modifier instead of the handler."""
+    from ..io import save_sequence
+
+    folder = Path(bpy.path.abspath("//")) if bpy.data.filepath else source.parent
+    cache = folder / f"{source.stem}.pc2"
+    save_sequence(decoder.sequence(), cache, overwrite=overwrite, progress=False)
+    modifier = obj.modifiers.new("tuckercodec point cache", "MESH_CACHE")
+    modifier.cache_format = "PC2"
+    modifier.filepath = str(cache)
+    modifier.frame_start = first
+    obj[BAKED_PROPERTY] = True
+    return cache
+
+
+class ImportTKC(bpy.types.Operator, ImportHelper):
+    """Open a tuckercodec file (.tkc) as an animated mesh"""
+
+    bl_idname = "import_scene.tkc"
+    bl_label = "Import tuckercodec (.tkc)"
+    bl_options = {"REGISTER", "UNDO", "PRESET"}  # noqa: RUF012 - Blender reads a set here
+
+    filename_ext = ".tkc"
+    filter_glob: StringProperty(default="*.tkc", options={"HIDDEN"})
+    first_frame: IntProperty(
+        name="First Frame", default=1, description="The scene frame that shows the file's frame 0"
+    )
+    set_scene: BoolProperty(
+        name="Set Scene Frames",
+        default=True,
+        description="Set the scene's frame range and frame rate to the file's",
+    )
+    bake: BoolProperty(
+        name="Bake to Point Cache",
+        default=False,
+        description=(
+            "Decode every frame into a .pc2 beside the .blend, played by a Mesh Cache modifier: "
+            "plays without this add-on, but the cache is as large as the uncompressed frames"
+        ),
+    )
+    overwrite: BoolProperty(
+        name="Overwrite Cache", default=False, description="Replace a .pc2 that exists"
+    )
+
+    def execute(self, context: Any) -> set[str]:
+        source = Path(self.filepath)
+        try:
+            decoder = Decoder(source)
+            obj = _new_object(context, source.stem, decoder)
+            obj[PATH_PROPERTY] = _stored_path(source)
+            obj[FIRST_FRAME_PROPERTY] = self.first_frame
+            info = decoder.info
+            if self.set_scene:
+                scene = context.scene
+                scene.frame_start = self.first_frame
+                scene.frame_end = self.first_frame + info.frames - 1
+                if info.frame_rate is not None:  # else the scene keeps its own rate
+                    scene.render.fps, scene.render.fps_base = scene_rate(info.frame_rate)
+            how = "decoded on demand"
+            if self.bake:
+                cache = _bake_pc2(obj, decoder, source, self.first_frame, self.overwrite)
+                how = f"baked to {cache}"
+            else:
+                show_frame(obj, context.scene.frame_current)
+        except (TuckerCodecError, OSError, ValueError) as error:
+            self.report({"ERROR"}, naming(source, error))
+            return {"CANCELLED"}
+        rate = "unknown rate" if info.frame_rate is None else f"{info.frame_rate:g} fps"
+        self.report(
+            {"INFO"},
+            f"Imported {source.name}: {info.frames} frames of {info.vertices} vertices, "
+            f"{len(decoder.faces)} faces, {rate}, {how}",
+        )
+        return {"FINISHED"}
+
+
+# ------------------------------------------------------------------------------------------
+# export
+
+
+def _mesh_arrays(mesh: Any) -> tuple[np.ndarray, np.ndarray]:
+    """A Blender mesh's vertex coordinates (K x 3, float32) and faces (M, n) padded with -1."""
+    coordinates = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
+    mesh.vertices.foreach_get("co", coordinates)
+    loops = np.empty(len(mesh.loops), dtype=np.int32)
+    mesh.loops.foreach_get("vertex_index", loops)
+    starts = np.empty(len(mesh.polygons), dtype=np.int32)
+    mesh.polygons.foreach_get("loop_start", starts)
+    totals = np.empty(len(mesh.polygons), dtype=np.int32)
+    mesh.polygons.foreach_get("loop_total", totals)
+    return coordinates.reshape(-1, 3), padded_faces(loops, starts, totals)
+
+
+def gather_frames(context: Any, obj: Any) -> ExportFrames:
+    """``obj``'s evaluated mesh at every frame of the scene's range, the scene's current frame
+    restored afterwards. Raises ``InputError`` naming the frame where the topology changes."""
+    scene = context.scene
+    frames = ExportFrames(obj.name)
+    current = scene.frame_current
+    try:
+        for number in range(scene.frame_start, scene.frame_end + 1):
+            scene.frame_set(number)
+            evaluated = obj.evaluated_get(context.evaluated_depsgraph_get())
+            mesh = evaluated.to_mesh()
+            try:
+                frames.add(number, *_mesh_arrays(mesh))
+            finally:
+                evaluated.to_mesh_clear()
+    finally:
+        scene.frame_set(current)
+    return frames
+
+
+class ExportTKC(bpy.types.Operator, ExportHelper):
+    """Encode the active object's animation over the scene's frame range into a .tkc"""
+
+    bl_idname = "export_scene.tkc"
+    bl_label = "Export tuckercodec (.tkc)"
+    bl_options = {"REGISTER", "PRESET"}  # noqa: RUF012 - Blender reads a set here
+
+    filename_ext = ".tkc"
+    filter_glob: StringProperty(default="*.tkc", options={"HIDDEN"})
+    mode: EnumProperty(
+        name="Target",
+        items=(
+            ("KG", "KG Error", "The largest KG error (percent) the decoded animation may have"),
+            ("BPFV", "Size", "The largest file size, in bits per frame per vertex"),
+            ("RANKS", "Ranks", "Fixed ranks (i, k) of the decomposition"),
+        ),
+        default="KG",
+    )
+    kg: FloatProperty(name="KG Error (%)", default=0.1, min=1e-6, precision=4)
+    bpfv: FloatProperty(name="Bits per Frame per Vertex", default=2.0, min=1e-3)
+    rank_i: IntProperty(name="Rank i (vertices)", default=16, min=1)
+    rank_k: IntProperty(name="Rank k (frames)", default=8, min=1)
+    max_error: FloatProperty(
+        name="Max Vertex Error",
+        default=0.0,
+        min=0.0,
+        description=(
+            "Also bound every decoded vertex's distance from the input, in object units "
+            "(0: no bound; not with a size target)"
+        ),
+    )
+    overwrite: BoolProperty(
+        name="Overwrite",
+        default=False,
+        description="Replace a file that exists (the file browser asks first)",
+    )
+
+    def invoke(self, context: Any, event: Any) -> set[str]:
+        self.overwrite = True  # the file browser shows an existing name in red and asks
+        result: set[str] = ExportHelper.invoke(self, context, event)
+        return result
+
+    def _options(self) -> Any:
+        from ..encoder import EncodeOptions
+
+        bound = self.max_error if self.max_error > 0 else None
+        if self.mode == "BPFV":
+            return EncodeOptions(target_bpfv=self.bpfv, max_error=bound)
+        if self.mode == "RANKS":
+            return EncodeOptions(ranks=(self.rank_i, self.rank_k), max_error=bound)
+        return EncodeOptions(target_kg=self.kg, max_error=bound)
+
+    def execute(self, context: Any) -> set[str]:
+        from ..encoder import encode_with_report
+
+        obj = context.active_object
+        target = Path(self.filepath)
+        if obj is None or obj.type not in GEOMETRY_TYPES:
+            what = "no active object" if obj is None else f"object {obj.name!r} ({obj.type})"
+            self.report({"ERROR"}, f"{what}: select a mesh, curve or text object to export")
+            return {"CANCELLED"}
+        try:
+            options = self._options()
+            if target.exists() and not self.overwrite:
+                raise FileExistsError("already exists (set overwrite to replace it)")
+            render = context.scene.render
+            sequence = gather_frames(context, obj).sequence(render.fps / render.fps_base)
+            result = encode_with_report(sequence, options=options)
+            write_atomic(target, result.data, overwrite=self.overwrite)
+        except (TuckerCodecError, OSError, ValueError) as error:
+            self.report({"ERROR"}, naming(target, error))
+            return {"CANCELLED"}
+        report = result.report
+        worst = "" if report.max_distance is None else f", worst vertex {report.max_distance:.6g}"
+        self.report(
+            {"INFO"},
+            f"Exported {obj.name!r} to {target.name}: {report.frames} frames of "
+            f"{report.vertices} vertices, KG error {report.kg:.6g} %{worst}, "
+            f"{report.total_bytes} bytes ({report.bpfv:.3f} bpfv, ranks {report.ranks})",
+        )
+        return {"FINISHED"}
+
+
+# ------------------------------------------------------------------------------------------
+# registration
+
+
+def _import_menu(self: Any, context: Any) -> None:
+    self.layout.operator(ImportTKC.bl_idname, text="tuckercodec (.tkc)")
+
+
+def _export_menu(self: Any, context: Any) -> None:
+    self.layout.operator(ExportTKC.bl_idname, text="tuckercodec (.tkc)")
+
+
+_CLASSES = (ImportTKC, ExportTKC)
+
+
+def register() -> None:
+    """Register the operators, their menu entries and the playback handlers."""
+    for cls in _CLASSES:
+        bpy.utils.register_class(cls)
+    bpy.types.TOPBAR_MT_file_import.append(_import_menu)
+    bpy.types.TOPBAR_MT_file_export.append(_export_menu)
+    handlers = bpy.app.handlers
+    for handler_list, handler in (
+        (handlers.frame_change_pre, _on_frame_change),
+        (handlers.load_post, _on_load),
+    ):
+        if handler not in handler_list:
+            handler_list.append(handler)
+
+
+def unregister() -> None:
+    """Undo :func:`register` and close every decoder."""
+    handlers = bpy.app.handlers
+    for handler_list, handler in (
+        (handlers.frame_change_pre, _on_frame_change),
+        (handlers.load_post, _on_load),
+    ):
+        if handler in handler_list:
+            handler_list.remove(handler)
+    bpy.types.TOPBAR_MT_file_export.remove(_export_menu)
+    bpy.types.TOPBAR_MT_file_import.remove(_import_menu)
+    for cls in reversed(_CLASSES):
+        bpy.utils.unregister_class(cls)
+    _OPEN.clear()
+    _FAILED.clear()
+
+
+__all__ = ["ExportTKC", "ImportTKC", "gather_frames", "register", "show_frame", "unregister"]

@@ -1,0 +1,85 @@
+"""What the Blender add-on does to arrays, kept apart from ``bpy`` so that it is tested anywhere:
+faces as Blender's polygons and back, which frame of a file a scene frame shows, the scene's
+frame rate, and the frames of an export gathered with their topology checked."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import InputError
+from ..sequence import MeshSequence
+
+
+def polygon_loops(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A file's faces, (M, n) padded with -1, as Blender's polygons: the loops' vertex indices
+    (every face's corners in order), each polygon's first loop and its number of loops."""
+    faces = np.asarray(faces, dtype=np.int64)
+    used = faces >= 0
+    totals = used.sum(axis=1)
+    starts = np.concatenate([[0], np.cumsum(totals)[:-1]]) if totals.size else totals
+    return faces[used], starts.astype(np.int64), totals.astype(np.int64)
+
+
+def padded_faces(loops: np.ndarray, starts: np.ndarray, totals: np.ndarray) -> np.ndarray:
+    """Blender's polygons (loops' vertex indices, first loops, loop counts) as a file's faces:
+    (M, n), n the widest polygon's corners (3 at least), shorter rows padded with -1."""
+    totals = np.asarray(totals, dtype=np.int64)
+    width = max(3, int(totals.max(initial=0)))
+    faces = np.full((totals.size, width), -1, dtype=np.int64)
+    column = np.arange(width)
+    inside = column[None, :] < totals[:, None]
+    faces[inside] = np.asarray(loops, dtype=np.int64)[
+        (np.asarray(starts, dtype=np.int64)[:, None] + column[None, :])[inside]
+    ]
+    return faces
+
+
+def file_frame(scene_frame: int, first: int, frame_count: int) -> int:
+    """The file's frame shown at ``scene_frame`` when its frame 0 is at scene frame ``first``:
+    held at the first and last frames outside the file's range."""
+    return min(max(scene_frame - first, 0), frame_count - 1)
+
+
+def scene_rate(frame_rate: float | None) -> tuple[int, float]:
+    """Blender's ``(fps, fps_base)`` for a file's frame rate (fps / fps_base is the rate):
+    29.97 is (30, 1.001); None or a non-positive rate leaves Blender's default 24."""
+    if frame_rate is None or not math.isfinite(frame_rate) or frame_rate <= 0:
+        return 24, 1.0
+    fps = max(1, round(frame_rate))
+    return fps, fps / frame_rate
+
+
+class ExportFrames:
+    """The frames of an export, gathered one at a time with their topology checked against the
+    first: every frame must have the first frame's vertices and faces (a change is refused,
+    naming the scene frame and the object)."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self.frames: list[np.ndarray] = []
+        self.faces: np.ndarray | None = None
+        self._first_frame = 0
+
+    def add(self, scene_frame: int, vertices: np.ndarray, faces: np.ndarray) -> None:
+        """One frame's vertices (K x 3 values) and (M, n) faces, at ``scene_frame``."""
+        vertices = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
+        if self.faces is None:
+            self.faces, self._first_frame = faces, scene_frame
+        elif len(vertices) != len(self.frames[0]) or not np.array_equal(faces, self.faces):
+            first = self._first_frame
+            raise InputError(
+                f"object {self.name!r} changes topology at frame {scene_frame}: "
+                f"{len(vertices)} vertices and {len(faces)} faces, where frame {first} had "
+                f"{len(self.frames[0])} and {len(self.faces)}"
+                + ("" if len(faces) != len(self.faces) else " (different faces)")
+                + "; a .tkc keeps one topology for every frame"
+            )
+        self.frames.append(vertices)
+
+    def sequence(self, frame_rate: float | None) -> MeshSequence:
+        """The gathered frames as a sequence at ``frame_rate``."""
+        if self.faces is None:
+            raise InputError(f"object {self.name!r}: no frame to export")
+        return MeshSequence(np.stack(self.frames), self.faces, frame_rate=frame_rate)
