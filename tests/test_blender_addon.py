@@ -27,13 +27,22 @@ import numpy as np
 import pytest
 
 import tuckercodec
-from tuckercodec import Decoder, DependencyError, InputError, kg_error, max_vertex_displacement
+from tuckercodec import (
+    Decoder,
+    DependencyError,
+    InputError,
+    MeshSequence,
+    kg_error,
+    max_vertex_displacement,
+)
 from tuckercodec.blender import package
 from tuckercodec.blender.meshes import (
     ExportFrames,
     file_frame,
     padded_faces,
+    placement,
     polygon_loops,
+    scene_frames,
     scene_rate,
 )
 from tuckercodec.blender.package import ADDON_ID, build_own_wheel, manifest
@@ -203,6 +212,7 @@ def session(cloth, tmp_path_factory) -> Session:
     work = tmp_path_factory.mktemp("blender")
     tkc = work / "cloth.tkc"
     tkc.write_bytes(tuckercodec.encode(dataclasses.replace(cloth, frame_rate=29.97), target_kg=0.1))
+    (work / "film.tkc").write_bytes(tuckercodec.encode(_film(cloth), target_kg=0.5))
     addon = work / "tuckercodec_blender.zip"
     assert main(["blender-addon", str(addon)]) == 0
     environment = {name: value for name, value in os.environ.items() if name != "PYTHONPATH"}
@@ -338,6 +348,68 @@ def test_the_export_refuses_an_existing_file_and_a_change_of_topology(session):
     assert "object 'Sphere' changes topology at frame 4" in report["topology"]
     assert not (work / "sphere.tkc").exists()
     assert re.search(r"'Camera[.\d]*' \(CAMERA\): select a mesh, curve or text", report["camera"])
+
+
+def _film(cloth: MeshSequence) -> MeshSequence:
+    """12 frames of the cloth as a film cache (format 1.4): time codes from 1001 with 1007
+    missing, in centimetres, Y up, at 24 fps."""
+    codes = np.delete(np.arange(1001.0, 1014.0), 6)
+    return MeshSequence(
+        cloth.vertices[:12],
+        cloth.faces,
+        frame_rate=24.0,
+        time_codes=codes,
+        meters_per_unit=0.01,
+        up_axis="Y",
+    )
+
+
+def test_a_files_time_codes_place_its_frames_on_the_scene():
+    codes = [1001.0, 1002.0, 1004.0]  # 1003 missing: frame 1 held there
+    assert [file_frame(f, 1001, 3, codes) for f in (1000, 1001, 1002, 1003, 1004, 1010)] == [
+        0,
+        0,
+        1,
+        1,
+        2,
+        2,
+    ]
+    assert file_frame(5, 1, 3, codes) == 2  # placed from another first frame
+    assert scene_frames(1001, 3, codes) == 4 and scene_frames(1, 3, None) == 3
+
+
+def test_a_files_unit_and_up_axis_place_the_object():
+    rotation, scale = placement(0.01, "Y", 1.0)
+    assert rotation == pytest.approx(np.pi / 2) and scale == 0.01
+    assert placement(1.0, "Z", 1.0) == (0.0, 1.0)
+    assert placement(None, None, 0.01) == (0.0, 1.0)  # unknown: left as it is
+    assert placement(1.0, None, 0.01) == (0.0, 100.0)  # metres in a centimetre scene
+
+
+@needs_bpy
+def test_a_film_cache_plays_at_its_time_codes_turned_and_scaled_into_the_scene(session):
+    report, arrays = session.report, session.arrays
+    assert report["film_range"] == [1001, 1013]
+    assert report["film_rotation"] == pytest.approx([np.pi / 2, 0.0, 0.0])  # Y up to Z up
+    assert report["film_scale"] == pytest.approx([0.01] * 3)  # centimetres in a metre scene
+    decoder = Decoder(session.work / "film.tkc")
+    shown = {1001: 0, 1006: 5, 1007: 5, 1008: 6, 1013: 11}  # 1007 holds the frame before
+    for scene_frame, frame in shown.items():
+        expected = decoder.frame(frame).astype(np.float32)
+        np.testing.assert_array_equal(arrays[f"film_{scene_frame}"], expected)
+        np.testing.assert_array_equal(arrays[f"film_baked_{scene_frame}"], expected)
+
+
+@needs_bpy
+def test_an_export_keeps_the_scene_frames_unit_and_axis_of_the_objects_space(session):
+    assert session.report["film_export"] == ["FINISHED"]
+    exported = Decoder(session.work / "film_export.tkc").info
+    # every scene frame 1001..1013 (1007 holding the frame before), at its own number
+    assert exported.time_codes == tuple(float(f) for f in range(1001, 1014))
+    assert (exported.meters_per_unit, exported.up_axis) == (0.01, "Y")  # the file's space
+    plain = Decoder(session.work / "exported.tkc").info  # an object without a file's space
+    assert (plain.meters_per_unit, plain.up_axis) == (1.0, "Z")
+    assert plain.time_codes == tuple(float(f) for f in range(1, 61))
 
 
 @needs_bpy

@@ -137,6 +137,36 @@ def changing_topology(work: Path) -> str | None:
     return refusal(lambda: bpy.ops.export_scene.tkc(filepath=str(work / "sphere.tkc")))
 
 
+#: The scene frames read of WORKDIR/film.tkc, whose time codes skip 1007 (format 1.4).
+FILM_FRAMES = (1001, 1006, 1007, 1008, 1013)
+
+
+def film(work: Path, arrays: dict[str, np.ndarray]) -> dict[str, Any]:
+    """Import WORKDIR/film.tkc (time codes from 1001 with 1007 missing, centimetres, Y up),
+    played and baked: the scene range, the object's placement, the vertices at
+    :data:`FILM_FRAMES`; then export it back to WORKDIR/film_export.tkc."""
+    assert bpy.ops.import_scene.tkc(filepath=str(work / "film.tkc")) == {"FINISHED"}
+    obj, scene = bpy.context.active_object, bpy.context.scene
+    seen = {
+        "film_range": [scene.frame_start, scene.frame_end],
+        "film_rotation": list(obj.rotation_euler),
+        "film_scale": list(obj.scale),
+    }
+    for frame in FILM_FRAMES:
+        scene.frame_set(frame)
+        arrays[f"film_{frame}"] = evaluated_vertices(obj)
+    seen["film_export"] = sorted(
+        bpy.ops.export_scene.tkc(filepath=str(work / "film_export.tkc"), kg=0.5)
+    )
+    obj.hide_viewport = True
+    assert bpy.ops.import_scene.tkc(filepath=str(work / "film.tkc"), bake=True) == {"FINISHED"}
+    baked = bpy.context.active_object
+    for frame in FILM_FRAMES:
+        scene.frame_set(frame)
+        arrays[f"film_baked_{frame}"] = evaluated_vertices(baked)
+    return seen
+
+
 def main(addon: Path, tkc: Path, work: Path) -> None:
     arrays: dict[str, np.ndarray] = {}
     seen = install(addon)
@@ -160,6 +190,7 @@ def main(addon: Path, tkc: Path, work: Path) -> None:
     seen["broken"] = refusal(lambda: bpy.ops.import_scene.tkc(filepath=str(work / "broken.tkc")))
     bpy.ops.object.camera_add()
     seen["camera"] = refusal(lambda: bpy.ops.export_scene.tkc(filepath=str(work / "camera.tkc")))
+    seen.update(film(work, arrays))
     reopened(seen["object"], work, arrays)
     np.savez(work / "session.npz", **arrays)  # type: ignore[arg-type] # (the names are keys)
     (work / "session.json").write_text(json.dumps(seen, indent=2))

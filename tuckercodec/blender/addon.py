@@ -30,12 +30,23 @@ from bpy_extras.io_utils import ExportHelper, ImportHelper
 from ..atomic import write_atomic
 from ..decoder import Decoder
 from ..errors import TuckerCodecError
-from .meshes import ExportFrames, file_frame, padded_faces, scene_rate
+from ..sequence import MeshSequence
+from .meshes import (
+    ExportFrames,
+    file_frame,
+    padded_faces,
+    placement,
+    scene_frames,
+    scene_rate,
+)
 
 #: The custom properties an imported object carries: the file it plays, the scene frame of the
 #: file's frame 0, and whether it was baked to a point cache (then it is not played here).
 PATH_PROPERTY = "tkc_path"
 FIRST_FRAME_PROPERTY = "tkc_first_frame"
+#: The unit and up axis of an imported file (format 1.4), which its object's space keeps.
+UNIT_PROPERTY = "tkc_meters_per_unit"
+AXIS_PROPERTY = "tkc_up_axis"
 BAKED_PROPERTY = "tkc_baked"
 
 #: Open decoders, by object (its session id): (absolute path, decoder, frame shown).
@@ -74,7 +85,8 @@ def show_frame(obj: Any, scene_frame: int) -> int:
     if cached is None or cached[0] != path:
         cached = (path, Decoder(path), None)
     decoder = cached[1]
-    frame = file_frame(scene_frame, int(obj.get(FIRST_FRAME_PROPERTY, 1)), decoder.frame_count)
+    first = int(obj.get(FIRST_FRAME_PROPERTY, 1))
+    frame = file_frame(scene_frame, first, decoder.frame_count, decoder.info.time_codes)
     mesh = obj.data
     if len(mesh.vertices) != decoder.info.vertices:
         raise ValueError(
@@ -157,7 +169,16 @@ def _bake_pc2(obj: Any, decoder: Decoder, source: Path, first: int, overwrite: b
 
     folder = Path(bpy.path.abspath("//")) if bpy.data.filepath else source.parent
     cache = folder / f"{source.stem}.pc2"
-    save_sequence(decoder.sequence(), cache, overwrite=overwrite, progress=False)
+    # one sample per scene frame, the frame the handler would show there: a .pc2 is evenly
+    # spaced, so a file's uneven time codes become held frames
+    codes, count = decoder.info.time_codes, decoder.frame_count
+    shown = [
+        file_frame(first + n, first, count, codes) for n in range(scene_frames(first, count, codes))
+    ]
+    baked = MeshSequence(
+        decoder.positions(shown), decoder.faces, frame_rate=decoder.info.frame_rate
+    )
+    save_sequence(baked, cache, overwrite=overwrite, progress=False)
     modifier = obj.modifiers.new("tuckercodec point cache", "MESH_CACHE")
     modifier.cache_format = "PC2"
     modifier.filepath = str(cache)
@@ -177,6 +198,23 @@ class ImportTKC(bpy.types.Operator, ImportHelper):
     filter_glob: StringProperty(default="*.tkc", options={"HIDDEN"})
     first_frame: IntProperty(
         name="First Frame", default=1, description="The scene frame that shows the file's frame 0"
+    )
+    use_time_codes: BoolProperty(
+        name="Use File Time Codes",
+        default=True,
+        description=(
+            "Where the file has time codes (format 1.4), play each frame at its own: frame 0 "
+            "at its code (1001 for a film cache) instead of at First Frame, and a missing "
+            "sample holds the frame before"
+        ),
+    )
+    convert_axes: BoolProperty(
+        name="Convert Unit and Up Axis",
+        default=True,
+        description=(
+            "Where the file records them, scale the object from the file's unit into the "
+            "scene's and turn a Y-up file to Blender's Z up"
+        ),
     )
     set_scene: BoolProperty(
         name="Set Scene Frames",
@@ -201,17 +239,30 @@ class ImportTKC(bpy.types.Operator, ImportHelper):
             decoder = Decoder(source)
             obj = _new_object(context, source.stem, decoder)
             obj[PATH_PROPERTY] = _stored_path(source)
-            obj[FIRST_FRAME_PROPERTY] = self.first_frame
             info = decoder.info
+            first = self.first_frame
+            if self.use_time_codes and info.time_codes is not None:
+                first = round(info.time_codes[0])
+            obj[FIRST_FRAME_PROPERTY] = first
+            # the object's own space is the file's: an export of it says so again
+            if info.meters_per_unit is not None:
+                obj[UNIT_PROPERTY] = info.meters_per_unit
+            if info.up_axis is not None:
+                obj[AXIS_PROPERTY] = info.up_axis
+            if self.convert_axes:
+                scale_length = context.scene.unit_settings.scale_length
+                rotation, scale = placement(info.meters_per_unit, info.up_axis, scale_length)
+                obj.rotation_euler[0] = rotation
+                obj.scale = (scale, scale, scale)
             if self.set_scene:
                 scene = context.scene
-                scene.frame_start = self.first_frame
-                scene.frame_end = self.first_frame + info.frames - 1
+                scene.frame_start = first
+                scene.frame_end = first + scene_frames(first, info.frames, info.time_codes) - 1
                 if info.frame_rate is not None:  # else the scene keeps its own rate
                     scene.render.fps, scene.render.fps_base = scene_rate(info.frame_rate)
             how = "decoded on demand"
             if self.bake:
-                cache = _bake_pc2(obj, decoder, source, self.first_frame, self.overwrite)
+                cache = _bake_pc2(obj, decoder, source, first, self.overwrite)
                 how = f"baked to {cache}"
             else:
                 show_frame(obj, context.scene.frame_current)
@@ -329,8 +380,17 @@ class ExportTKC(bpy.types.Operator, ExportHelper):
             options = self._options()
             if target.exists() and not self.overwrite:
                 raise FileExistsError("already exists (set overwrite to replace it)")
-            render = context.scene.render
-            sequence = gather_frames(context, obj).sequence(render.fps / render.fps_base)
+            scene = context.scene
+            render, units = scene.render, scene.unit_settings
+            # the object's space: an imported file's (its unit and axis, kept on the object),
+            # else the scene's (Z up, its unit scale in metres unless it has no unit system)
+            unit = None if units.system == "NONE" else units.scale_length
+            sequence = gather_frames(context, obj).sequence(
+                render.fps / render.fps_base,
+                first_frame=scene.frame_start,  # the time codes: the scene's frame numbers
+                meters_per_unit=obj.get(UNIT_PROPERTY, unit),
+                up_axis=obj.get(AXIS_PROPERTY, "Z"),
+            )
             result = encode_with_report(sequence, options=options)
             write_atomic(target, result.data, overwrite=self.overwrite)
         except (TuckerCodecError, OSError, ValueError) as error:

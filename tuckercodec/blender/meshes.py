@@ -5,6 +5,7 @@ frame rate, and the frames of an export gathered with their topology checked."""
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -36,10 +37,37 @@ def padded_faces(loops: np.ndarray, starts: np.ndarray, totals: np.ndarray) -> n
     return faces
 
 
-def file_frame(scene_frame: int, first: int, frame_count: int) -> int:
+def file_frame(
+    scene_frame: int, first: int, frame_count: int, time_codes: Sequence[float] | None = None
+) -> int:
     """The file's frame shown at ``scene_frame`` when its frame 0 is at scene frame ``first``:
-    held at the first and last frames outside the file's range."""
-    return min(max(scene_frame - first, 0), frame_count - 1)
+    with the file's time codes (format 1.4), frame f at ``first + code_f - code_0`` and shown
+    until the next one starts (a missing sample holds the one before); without them, frame f at
+    ``first + f``. Held at the first and last frames outside the file's range."""
+    if time_codes is None:
+        return min(max(scene_frame - first, 0), frame_count - 1)
+    codes = np.asarray(time_codes, dtype=np.float64)
+    started = int(np.searchsorted(codes - codes[0], scene_frame - first, side="right"))
+    return min(max(started - 1, 0), frame_count - 1)
+
+
+def scene_frames(first: int, frame_count: int, time_codes: Sequence[float] | None) -> int:
+    """The number of scene frames a file spans from ``first``: to its last time code."""
+    if time_codes is None:
+        return frame_count
+    return math.floor(time_codes[-1] - time_codes[0]) + 1
+
+
+def placement(
+    meters_per_unit: float | None, up_axis: str | None, scene_meters: float
+) -> tuple[float, float]:
+    """The object's (x rotation in radians, uniform scale) that shows a file in Blender's Z up
+    scene in metres of ``scene_meters`` (the scene's unit scale): a Y-up file is turned a
+    quarter about X (Y to Z, as Blender's glTF and USD importers do), and positions in a unit
+    other than the scene's are scaled into it. Unknown (None) leaves each as it is."""
+    rotation = math.pi / 2 if up_axis == "Y" else 0.0
+    scale = 1.0 if meters_per_unit is None else meters_per_unit / scene_meters
+    return rotation, scale
 
 
 def scene_rate(frame_rate: float | None) -> tuple[int, float]:
@@ -78,8 +106,24 @@ class ExportFrames:
             )
         self.frames.append(vertices)
 
-    def sequence(self, frame_rate: float | None) -> MeshSequence:
-        """The gathered frames as a sequence at ``frame_rate``."""
+    def sequence(
+        self,
+        frame_rate: float | None,
+        first_frame: int = 0,
+        meters_per_unit: float | None = None,
+        up_axis: str = "Z",
+    ) -> MeshSequence:
+        """The gathered frames as a sequence at ``frame_rate``: their time codes the scene's
+        frame numbers from ``first_frame`` (a file imported again lands on the same frames),
+        with the unit and up axis of the object's space."""
         if self.faces is None:
             raise InputError(f"object {self.name!r}: no frame to export")
-        return MeshSequence(np.stack(self.frames), self.faces, frame_rate=frame_rate)
+        codes = first_frame + np.arange(len(self.frames), dtype=np.float64)
+        return MeshSequence(
+            np.stack(self.frames),
+            self.faces,
+            frame_rate=frame_rate,
+            time_codes=codes,
+            meters_per_unit=meters_per_unit,
+            up_axis=up_axis,
+        )
