@@ -80,6 +80,18 @@ def _large_result(item: int) -> dict[str, Any]:
     return {"large": large, "small": np.arange(3) + item, "item": item}
 
 
+def _write_shared(item: int, shared: np.ndarray) -> tuple[float, str]:
+    """What a task sees of a large common value: its first number after adding 1 to it (each
+    task its own copy of what it writes), and what holds its memory."""
+    shared[0] += 1.0
+    holder: object = shared
+    while isinstance(holder, np.ndarray):
+        holder = holder.base
+    if isinstance(holder, memoryview):
+        holder = holder.obj
+    return float(shared[0]) + item, type(holder).__name__
+
+
 def _environment(item: int) -> dict[str, object]:
     return {
         "pid": os.getpid(),
@@ -174,6 +186,15 @@ def test_a_large_result_comes_back_through_a_file_the_caller_removes(cluster):
         assert result["large"].flags.f_contiguous and result["large"].flags.writeable
         result["large"] += 1.0  # the caller's own memory (a sketch is summed into in place)
     assert os.listdir(directory) == []  # each file removed once read
+
+
+def test_a_large_common_value_is_mapped_by_each_task_from_one_file(cluster):
+    # written once by the caller rather than copied to every worker; what a task writes is its
+    # own (copy on write), and the file is removed when the map ends
+    shared = np.zeros(2 * 2**20 // 8)
+    results = cluster.map(_write_shared, range(4), shared)
+    assert results == [(1.0 + item, "mmap") for item in range(4)]
+    assert shared[0] == 0.0 and os.listdir(cluster._handoff) == []
 
 
 def test_a_handed_off_value_is_read_back_whole(tmp_path):

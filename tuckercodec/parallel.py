@@ -14,7 +14,8 @@ What a function and its arguments must be:
 
 * ``function`` is a module-level function (pickled by name; each worker imports its module);
 * each value in ``common`` (a large array the tasks share) is sent to each worker once per
-  :meth:`Executor.map` call, not once per item;
+  :meth:`Executor.map` call, not once per item (on a LocalCluster, its large arrays are written
+  once to a file in memory, whose pages every task maps);
 * an item that is a large array or bytes (1 MiB or more) is sent ahead of its task; any other
   large data belongs in ``common``, or is read by the task itself from a file;
 * a task's exception comes back as itself, class and fields intact (the package's errors pickle:
@@ -39,6 +40,7 @@ import asyncio
 import contextlib
 import itertools
 import logging
+import mmap
 import multiprocessing
 import os
 import pickle
@@ -207,9 +209,14 @@ class DaskExecutor(Executor):
         distributed = import_optional("distributed", EXTRA, "running on Dask workers")
         client = self.client
         sent: list[Any] = []  # every future made here, released at the end
+        handed: list[_HandedOff] = []  # the common values' files, removed at the end
         try:
+            values = list(common)
+            if self._handoff is not None:  # large ones written once, mapped by every task
+                values = [_HandedOff.wrap(value, self._handoff) for value in values]
+                handed += [value for value in values if isinstance(value, _HandedOff)]
             # a list, so that scatter sends each value whole (it splits lists and dicts)
-            shared = client.scatter(list(common), broadcast=True, hash=False) if common else []
+            shared = client.scatter(values, broadcast=True, hash=False) if values else []
             sent += shared
             large = [i for i, item in enumerate(items) if _nbytes(item) >= LARGE_ITEM_BYTES]
             arguments = list(items)
@@ -254,6 +261,9 @@ class DaskExecutor(Executor):
             if sent:
                 with contextlib.suppress(Exception):  # the cluster may be gone already
                     client.cancel(sent)
+            for value in handed:  # a task still running keeps its mapping of the file
+                with contextlib.suppress(OSError):
+                    os.unlink(value.path)
 
     def _busy(self) -> bool:
         """Whether a task submitted here may still be queued or running."""
@@ -520,9 +530,10 @@ def _call(
     The exception is returned, not raised, so that it reaches the caller as itself (Dask would
     also log it on the worker's standard error) with the traceback as text (tracebacks do not
     pickle). With ``handoff`` (a LocalCluster's directory), the value's large arrays come back
-    through a file there (:class:`_HandedOff`).
+    through a file there, as the large ``common`` values came (:class:`_HandedOff`).
     """
     try:
+        common = tuple(c.mapped() if isinstance(c, _HandedOff) else c for c in common)
         value = function(item, *common)
         return True, value if handoff is None else _HandedOff.wrap(value, handoff), ""
     except Exception as error:
@@ -556,12 +567,15 @@ def _completed(index: int, future: Any) -> Completed:
 
 @dataclass(frozen=True)
 class _HandedOff:
-    """A task's value whose large buffers (arrays of :data:`LARGE_ITEM_BYTES` or more) wait in
-    a file of the LocalCluster's handoff directory, on this machine, rather than travel through
-    Dask's connection: the rest is ``pickled`` here (pickle protocol 5, the buffers out of
-    band). A segmented encode's first pass returns one K x r sketch per segment (410 MB at
-    200,000 x 256): received through Dask, each cost the caller seconds of copying, which a
-    file in memory (``/dev/shm``) written by the worker and read back once does not."""
+    """A value whose large buffers (arrays of :data:`LARGE_ITEM_BYTES` or more) wait in a file
+    of the LocalCluster's handoff directory, on this machine, rather than travel through Dask's
+    connection: the rest is ``pickled`` here (pickle protocol 5, the buffers out of band).
+
+    A task's result: a segmented encode's first pass returns one K x r sketch per segment (410
+    MB at 200,000 x 256); received through Dask, each cost the caller seconds of copying, which
+    a file in memory (``/dev/shm``) written by the worker and mapped by the caller does not. A
+    map's common value: the second pass's K x r basis, which Dask copied to every worker before
+    the pass could start, is written once and mapped by each task."""
 
     path: str
     pickled: bytes
@@ -574,7 +588,11 @@ class _HandedOff:
         large: list[pickle.PickleBuffer] = []
 
         def keep_small(buffer: pickle.PickleBuffer) -> bool:
-            if buffer.raw().nbytes < LARGE_ITEM_BYTES:
+            try:
+                size = buffer.raw().nbytes
+            except BufferError:  # not contiguous: in band, as pickle would
+                return True
+            if size < LARGE_ITEM_BYTES:
                 return True  # in band: in the pickle itself
             large.append(buffer)
             return False
@@ -596,17 +614,24 @@ class _HandedOff:
         return _HandedOff(path, pickled, tuple(buffer.raw().nbytes for buffer in large))
 
     def unwrap(self) -> Any:
-        """The value, its buffers read from the file (one copy, into memory of its own), and
-        the file removed."""
+        """The value, its buffers mapped from the file (no copy: a page is copied only when
+        written, as a sketch summed into is), and the file removed (its pages stay until the
+        value is freed)."""
         try:
-            buffers = []
-            with open(self.path, "rb") as file:
-                for size in self.sizes:
-                    buffer = bytearray(size)
-                    if file.readinto(buffer) != size:
-                        raise TuckerCodecError(f"a worker's result file {self.path} is truncated")
-                    buffers.append(buffer)
+            return self.mapped()
         finally:
             with contextlib.suppress(OSError):
                 os.unlink(self.path)
+
+    def mapped(self) -> Any:
+        """The value, its buffers mapped from the file rather than read (written, a page
+        becomes this process's own copy), the file kept: for a common value, which every task
+        of a map maps, sharing its pages, until the caller removes it when the map ends."""
+        with open(self.path, "rb") as file:
+            if os.fstat(file.fileno()).st_size != sum(self.sizes):
+                raise TuckerCodecError(f"the worker's file {self.path} is not the size it wrote")
+            pages = mmap.mmap(file.fileno(), 0, access=mmap.ACCESS_COPY)
+        whole = memoryview(pages)
+        ends = list(itertools.accumulate(self.sizes))
+        buffers = [whole[end - size : end] for end, size in zip(ends, self.sizes, strict=True)]
         return pickle.loads(self.pickled, buffers=buffers)
