@@ -16,6 +16,7 @@ import sys
 import textwrap
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -70,6 +71,25 @@ def _raise_unpicklable(item: int) -> None:
 
 def _total(item: np.ndarray) -> float:
     return float(item.sum())
+
+
+def _large_result(item: int) -> dict[str, Any]:
+    """A task's value as a segmented encode's first pass returns it: a large Fortran-order
+    array beside small ones."""
+    large = np.asfortranarray(np.arange(2 * 2**20 // 8, dtype=np.float64).reshape(-1, 8) + item)
+    return {"large": large, "small": np.arange(3) + item, "item": item}
+
+
+def _write_shared(item: int, shared: np.ndarray) -> tuple[float, str]:
+    """What a task sees of a large common value: its first number after adding 1 to it (each
+    task its own copy of what it writes), and what holds its memory."""
+    shared[0] += 1.0
+    holder: object = shared
+    while isinstance(holder, np.ndarray):
+        holder = holder.base
+    if isinstance(holder, memoryview):
+        holder = holder.obj
+    return float(shared[0]) + item, type(holder).__name__
 
 
 def _environment(item: int) -> dict[str, object]:
@@ -149,6 +169,62 @@ def test_a_task_error_comes_back_as_itself_with_its_fields(executor):
         assert "raised on a Dask worker" in error.__notes__[0]
         assert "_fail_on" in error.__notes__[0]  # the worker's traceback
     assert executor.map(_fail_on, range(3), 99) == [0, 1, 2]  # the executor goes on
+
+
+def test_a_large_result_comes_back_through_a_file_the_caller_removes(cluster):
+    # a LocalCluster's workers write a large array to a file of its handoff directory (in
+    # memory on Linux) rather than send it through Dask: the same values, in the same order
+    directory = cluster._handoff
+    assert directory is not None and os.path.isdir(directory)
+    if LINUX:
+        assert directory.startswith(parallel.SHARED_MEMORY + "/")
+    results = cluster.map(_large_result, range(3))
+    for item, result in enumerate(results):
+        expected = _large_result(item)
+        assert result["item"] == item and np.array_equal(result["small"], expected["small"])
+        assert np.array_equal(result["large"], expected["large"])
+        assert result["large"].flags.f_contiguous and result["large"].flags.writeable
+        result["large"] += 1.0  # the caller's own memory (a sketch is summed into in place)
+    assert os.listdir(directory) == []  # each file removed once read
+
+
+def test_a_large_common_value_is_mapped_by_each_task_from_one_file(cluster):
+    # written once by the caller rather than copied to every worker; what a task writes is its
+    # own (copy on write), and the file is removed when the map ends
+    shared = np.zeros(2 * 2**20 // 8)
+    results = cluster.map(_write_shared, range(4), shared)
+    assert results == [(1.0 + item, "mmap") for item in range(4)]
+    assert shared[0] == 0.0 and os.listdir(cluster._handoff) == []
+
+
+def test_a_handed_off_value_is_read_back_whole(tmp_path):
+    ok, value, _ = parallel._call(_large_result, 4, handoff=str(tmp_path))
+    assert ok and isinstance(value, parallel._HandedOff)
+    assert len(list(tmp_path.iterdir())) == 1 and value.sizes == (2 * 2**20,)
+    back = value.unwrap()
+    assert np.array_equal(back["large"], _large_result(4)["large"]) and back["item"] == 4
+    assert list(tmp_path.iterdir()) == []
+    # small values, and a directory that cannot take the file, go through Dask as they are
+    assert parallel._call(_fail_on, 1, -1, handoff=str(tmp_path)) == (True, 1, "")
+    ok, value, _ = parallel._call(_large_result, 4, handoff=str(tmp_path / "gone"))
+    assert ok and isinstance(value, dict) and value["item"] == 4
+
+
+def test_closing_a_local_cluster_removes_its_handoff_directory():
+    pytest.importorskip("distributed", reason="dask.distributed is not installed (extra [dask])")
+    with open_executor(1) as one:
+        assert isinstance(one, parallel.DaskExecutor)
+        directory = one._handoff
+        assert directory is not None
+        Path(directory, "left.buffers").write_bytes(b"a task's file never read")
+    assert not os.path.exists(directory)
+
+
+def test_background_gives_the_value_or_raises_the_error():
+    assert parallel.Background(sum, [1, 2, 3]).result() == 6
+    failing = parallel.Background(_fail_on, 2, 2, name="fails")
+    with pytest.raises(InputError, match="no vertices"):
+        failing.result()
 
 
 @pytest.mark.parametrize(

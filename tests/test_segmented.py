@@ -206,6 +206,42 @@ def test_the_bytes_do_not_depend_on_the_workers(cloth):
     assert written[0] == written[1], "--jobs 1 and --jobs 2 wrote other bytes"
 
 
+def test_the_file_is_packed_once_beside_the_last_measuring_pass(cloth, shared_file, monkeypatch):
+    """Each measure begins packing its quantization's sections (in a thread, beside the pass);
+    the file takes them rather than packing again, and is the same bytes as a pack made after
+    the search."""
+    import threading
+
+    from tuckercodec.encoder.segmented.workspace import SegmentedWorkspace
+
+    levels: list[tuple[int, bool]] = []  # each packing's level, and whether in a thread
+    measures: list[object] = []
+    sections, measure = SegmentedWorkspace.sections, SegmentedWorkspace.measured_error2
+
+    def counted_sections(self, quantized, level):
+        levels.append((level, threading.current_thread() is not threading.main_thread()))
+        return sections(self, quantized, level)
+
+    def counted_measure(self, quantized):
+        measures.append(quantized)
+        return measure(self, quantized)
+
+    monkeypatch.setattr(SegmentedWorkspace, "sections", counted_sections)
+    monkeypatch.setattr(SegmentedWorkspace, "measured_error2", counted_measure)
+    data = encode_with_report(cloth, target_kg=0.1, segment_frames=20).data
+    final = tuckercodec.EncodeOptions().level
+    # one packing per measure, beside it; none after the search
+    assert measures and levels.count((final, True)) == len(measures)
+    assert (final, False) not in levels
+    assert data == shared_file
+
+    def after_the_search(self, quantized, level, *, wait=True):
+        return sections(self, quantized, level) if wait else []
+
+    monkeypatch.setattr(SegmentedWorkspace, "_packed_sections", after_the_search)
+    assert encode_with_report(cloth, target_kg=0.1, segment_frames=20).data == data
+
+
 def test_encode_in_segments_on_the_command_line(tmp_path, capsys):
     from tuckercodec.cli import main
 

@@ -59,3 +59,31 @@ def test_the_streamed_kg_is_the_kg_error(tmp_path, monkeypatch):
     assert bench_scale.streamed_kg(npy, compressed, block_values=7 * 3 * 500) == pytest.approx(
         expected, rel=1e-9
     )
+
+
+def test_the_cpu_time_of_the_tree_is_counted(tmp_path):
+    # a grandchild that spins: its CPU time reaches the child's, which reaps it
+    spin = "import time\nend = time.process_time() + 0.3\nwhile time.process_time() < end: pass\n"
+    tree = f"import subprocess, sys\nsubprocess.run([sys.executable, '-c', {spin!r}])\n"
+    run = bench_scale.run_measured([sys.executable, "-c", tree], cwd=tmp_path, interval=0.02)
+    assert run.ok, run.stderr
+    assert run.cpu_seconds >= 0.3
+
+
+def test_the_jobs_table_sets_the_workers_against_the_run_in_process(tmp_path):
+    data = bench_scale.Input(tmp_path / "b.npy", tmp_path / "b.obj", tmp_path / "b.npy", 10, 100)
+    results = []
+    for label, seconds, content in (
+        ("--jobs 1", 8.0, b"same"),
+        ("--jobs 2", 4.0, b"same"),
+        ("in process", 5.0, b"other"),
+    ):
+        output = tmp_path / f"{seconds}.tkc"
+        output.write_bytes(content)
+        result = bench_scale.EncodeResult(label, output=output)
+        result.runs.append(bench_scale.Run([], seconds, 0, "", "", 2 * MB, cpu_seconds=9.5))
+        results.append(result)
+    text = "\n".join(bench_scale.jobs_table(results, data))
+    assert "| in process | 1 | 5.0 | 9.5 |" in text
+    assert "speed-up of --jobs 2 over --jobs 1 2.00" in text and "byte-identical files: yes" in text
+    assert "--jobs 2 against in process: 1.25 times as fast" in text

@@ -14,7 +14,8 @@ What a function and its arguments must be:
 
 * ``function`` is a module-level function (pickled by name; each worker imports its module);
 * each value in ``common`` (a large array the tasks share) is sent to each worker once per
-  :meth:`Executor.map` call, not once per item;
+  :meth:`Executor.map` call, not once per item (on a LocalCluster, its large arrays are written
+  once to a file in memory, whose pages every task maps);
 * an item that is a large array or bytes (1 MiB or more) is sent ahead of its task; any other
   large data belongs in ``common``, or is read by the task itself from a file;
 * a task's exception comes back as itself, class and fields intact (the package's errors pickle:
@@ -38,17 +39,20 @@ import abc
 import contextlib
 import itertools
 import logging
+import mmap
 import multiprocessing
 import os
 import pickle
+import shutil
 import signal
+import tempfile
 import threading
 import traceback
 import uuid
 from collections.abc import Callable, Generator, Iterator, Sequence
 from dataclasses import dataclass
 from types import TracebackType
-from typing import Any, TypeVar
+from typing import Any, Generic, TypeVar
 
 from ._version import __version__
 from .errors import TuckerCodecError
@@ -194,6 +198,9 @@ class DaskExecutor(Executor):
         # task it was running. A remote cluster gets them all, to queue and scale as it does.
         self._in_flight = self.workers if cluster is not None else 0
         self._submitted: set[Any] = set()  # the futures of the maps under way
+        # On a LocalCluster, the workers hand large results back through files in memory
+        # (:class:`_HandedOff`): removed, with whatever a task left there, on closing
+        self._handoff = _handoff_directory() if cluster is not None else None
 
     def as_completed(
         self, function: Callable[..., Any], items: Sequence[Any], *common: Any
@@ -201,9 +208,14 @@ class DaskExecutor(Executor):
         distributed = import_optional("distributed", EXTRA, "running on Dask workers")
         client = self.client
         sent: list[Any] = []  # every future made here, released at the end
+        handed: list[_HandedOff] = []  # the common values' files, removed at the end
         try:
+            values = list(common)
+            if self._handoff is not None:  # large ones written once, mapped by every task
+                values = [_HandedOff.wrap(value, self._handoff) for value in values]
+                handed += [value for value in values if isinstance(value, _HandedOff)]
             # a list, so that scatter sends each value whole (it splits lists and dicts)
-            shared = client.scatter(list(common), broadcast=True, hash=False) if common else []
+            shared = client.scatter(values, broadcast=True, hash=False) if values else []
             sent += shared
             large = [i for i, item in enumerate(items) if _nbytes(item) >= LARGE_ITEM_BYTES]
             arguments = list(items)
@@ -221,7 +233,13 @@ class DaskExecutor(Executor):
             def submit_next() -> None:
                 for i, argument in itertools.islice(waiting, 1):
                     future = client.submit(
-                        _call, function, argument, *shared, key=f"{name}-{batch}-{i}", pure=False
+                        _call,
+                        function,
+                        argument,
+                        *shared,
+                        handoff=self._handoff,
+                        key=f"{name}-{batch}-{i}",
+                        pure=False,
                     )
                     sent.append(future)
                     self._submitted.add(future)
@@ -242,6 +260,9 @@ class DaskExecutor(Executor):
             if sent:
                 with contextlib.suppress(Exception):  # the cluster may be gone already
                     client.cancel(sent)
+            for value in handed:  # a task still running keeps its mapping of the file
+                with contextlib.suppress(OSError):
+                    os.unlink(value.path)
 
     def _busy(self) -> bool:
         """Whether a task submitted here may still be queued or running."""
@@ -261,6 +282,40 @@ class DaskExecutor(Executor):
         finally:
             self.cluster = None
             self._submitted.clear()
+            if self._handoff is not None:
+                shutil.rmtree(self._handoff, ignore_errors=True)
+                self._handoff = None
+
+
+class Background(Generic[T]):
+    """``function(*args)`` run in a daemon thread of this process, beside the caller's own
+    work: for what only this process can do while the workers (or BLAS, which releases the
+    GIL) keep the cores busy. :meth:`result` waits for it, and gives its value or raises its
+    exception. A daemon thread, so that Ctrl-C or an error in the caller never waits for work
+    it no longer wants (a thread cannot be stopped; it dies with the process)."""
+
+    def __init__(self, function: Callable[..., T], *args: Any, name: str = "background") -> None:
+        self._outcome: list[Any] = []  # [value, None] or [None, exception], once done
+        self._thread = threading.Thread(
+            target=self._run, args=(function, args), name=f"tuckercodec: {name}", daemon=True
+        )
+        self._thread.start()
+
+    def _run(self, function: Callable[..., Any], args: tuple[Any, ...]) -> None:
+        try:
+            self._outcome[:] = [function(*args), None]
+        except BaseException as error:  # handed to the caller of result()
+            self._outcome[:] = [None, error]
+
+    def result(self) -> T:
+        """The function's value, once it has returned; its exception, raised here, if it
+        raised one."""
+        self._thread.join()
+        value, error = self._outcome
+        if error is not None:
+            raise error
+        result: T = value
+        return result
 
 
 def open_executor(
@@ -448,6 +503,17 @@ def _kill_workers(cluster: Any) -> None:
         cluster.sync(kill)
 
 
+#: Where a LocalCluster's workers hand large results back: memory, where there is such a file
+#: system (Linux), else the temporary directory (a file read back at once, mostly from cache).
+SHARED_MEMORY = "/dev/shm"
+
+
+def _handoff_directory() -> str:
+    """A new private directory for the workers' result files (:class:`_HandedOff`)."""
+    where = SHARED_MEMORY if os.access(SHARED_MEMORY, os.W_OK | os.X_OK) else None
+    return tempfile.mkdtemp(prefix="tuckercodec-results-", dir=where)
+
+
 def _nbytes(item: object) -> int:
     """The size of an array or bytes item, else 0 (small by assumption)."""
     if isinstance(item, bytes | bytearray | memoryview):
@@ -456,15 +522,20 @@ def _nbytes(item: object) -> int:
     return size if isinstance(size, int) else 0
 
 
-def _call(function: Callable[..., Any], item: Any, *common: Any) -> tuple[bool, Any, str]:
+def _call(
+    function: Callable[..., Any], item: Any, *common: Any, handoff: str | None = None
+) -> tuple[bool, Any, str]:
     """Run a task on a worker: ``(True, value, "")``, or ``(False, exception, traceback)``.
 
     The exception is returned, not raised, so that it reaches the caller as itself (Dask would
     also log it on the worker's standard error) with the traceback as text (tracebacks do not
-    pickle).
+    pickle). With ``handoff`` (a LocalCluster's directory), the value's large arrays come back
+    through a file there, as the large ``common`` values came (:class:`_HandedOff`).
     """
     try:
-        return True, function(item, *common), ""
+        common = tuple(c.mapped() if isinstance(c, _HandedOff) else c for c in common)
+        value = function(item, *common)
+        return True, value if handoff is None else _HandedOff.wrap(value, handoff), ""
     except Exception as error:
         trace = "".join(traceback.format_exception(error))
         try:
@@ -487,6 +558,80 @@ def _completed(index: int, future: Any) -> Completed:
         failure.__cause__ = error
         return Completed(index, None, failure)
     if ok:
+        if isinstance(value, _HandedOff):
+            value = value.unwrap()
         return Completed(index, value, None)
     value.add_note(f"raised on a Dask worker:\n{trace.rstrip()}")
     return Completed(index, None, value)
+
+
+@dataclass(frozen=True)
+class _HandedOff:
+    """A value whose large buffers (arrays of :data:`LARGE_ITEM_BYTES` or more) wait in a file
+    of the LocalCluster's handoff directory, on this machine, rather than travel through Dask's
+    connection: the rest is ``pickled`` here (pickle protocol 5, the buffers out of band).
+
+    A task's result: a segmented encode's first pass returns one K x r sketch per segment (410
+    MB at 200,000 x 256); received through Dask, each cost the caller seconds of copying, which
+    a file in memory (``/dev/shm``) written by the worker and mapped by the caller does not. A
+    map's common value: the second pass's K x r basis, which Dask copied to every worker before
+    the pass could start, is written once and mapped by each task."""
+
+    path: str
+    pickled: bytes
+    sizes: tuple[int, ...]
+
+    @staticmethod
+    def wrap(value: Any, directory: str) -> Any:
+        """``value`` itself if it holds no large buffer (or the file cannot be written, the
+        directory full or gone), else its :class:`_HandedOff`."""
+        large: list[pickle.PickleBuffer] = []
+
+        def keep_small(buffer: pickle.PickleBuffer) -> bool:
+            try:
+                size = buffer.raw().nbytes
+            except BufferError:  # not contiguous: in band, as pickle would
+                return True
+            if size < LARGE_ITEM_BYTES:
+                return True  # in band: in the pickle itself
+            large.append(buffer)
+            return False
+
+        pickled = pickle.dumps(value, protocol=5, buffer_callback=keep_small)
+        if not large:
+            return value
+        path = None
+        try:
+            descriptor, path = tempfile.mkstemp(dir=directory, suffix=".buffers")
+            with os.fdopen(descriptor, "wb") as file:
+                for buffer in large:
+                    file.write(buffer.raw())
+        except OSError:  # no room, or the directory is gone: the value goes through Dask
+            if path is not None:
+                with contextlib.suppress(OSError):
+                    os.unlink(path)
+            return value
+        return _HandedOff(path, pickled, tuple(buffer.raw().nbytes for buffer in large))
+
+    def unwrap(self) -> Any:
+        """The value, its buffers mapped from the file (no copy: a page is copied only when
+        written, as a sketch summed into is), and the file removed (its pages stay until the
+        value is freed)."""
+        try:
+            return self.mapped()
+        finally:
+            with contextlib.suppress(OSError):
+                os.unlink(self.path)
+
+    def mapped(self) -> Any:
+        """The value, its buffers mapped from the file rather than read (written, a page
+        becomes this process's own copy), the file kept: for a common value, which every task
+        of a map maps, sharing its pages, until the caller removes it when the map ends."""
+        with open(self.path, "rb") as file:
+            if os.fstat(file.fileno()).st_size != sum(self.sizes):
+                raise TuckerCodecError(f"the worker's file {self.path} is not the size it wrote")
+            pages = mmap.mmap(file.fileno(), 0, access=mmap.ACCESS_COPY)
+        whole = memoryview(pages)
+        ends = list(itertools.accumulate(self.sizes))
+        buffers = [whole[end - size : end] for end, size in zip(ends, self.sizes, strict=True)]
+        return pickle.loads(self.pickled, buffers=buffers)

@@ -34,7 +34,7 @@ from ...format.segments import (
     segment_section_id,
 )
 from ...io.streaming import FrameSource
-from ...parallel import Executor, InProcessExecutor
+from ...parallel import Background, Executor, InProcessExecutor
 from ...topology import MeshPrediction
 from .. import estimate
 from ..plan import SegmentPlan
@@ -65,6 +65,9 @@ LATE_SHARES = (0.8, 0.9, 0.95, 0.98)
 #: fill packs real files, so no file exceeds its budget. Kept because the trials' aim decides the
 #: bytes of segmented size-target files, which must not move without a reason of their own.
 HEADER_BYTES, HEADER_BYTES_PER_SEGMENT = 400, 300
+
+#: A section as :meth:`SegmentedWorkspace.sections` gives it: its table entry and payload.
+Section = tuple[dict[str, Any], bytes]
 
 
 @dataclass(frozen=True)
@@ -125,9 +128,14 @@ class SegmentedWorkspace:
                     f"the shared basis is for {self.fixed_u1.q.shape[0]} vertices and a shared "
                     f"basis; this encode has {self.vertex_count} and basis {basis!r}"
                 )
+        # The faces' coding (Python loops, 14 s for 200,000 faces) needs nothing from the
+        # passes: it runs in a thread beside them, while the workers, or BLAS in process, read
+        # and multiply. The smaller connectivity codec; faces-traverse reorders them (§6.8).
+        coding = Background(
+            faces.encode_face_section, source.faces, self.vertex_count, level, name="faces"
+        )
         self._read_and_model()
-        # the smaller connectivity codec; faces-traverse reorders the faces (§6.8)
-        face = faces.encode_face_section(source.faces, self.vertex_count, level)
+        face = coding.result()
         self.face_codec = face.codec
         self.face_section = (face.params, face.payload)
         self.name_section = names.encode_names(source.frame_names, level)
@@ -140,6 +148,9 @@ class SegmentedWorkspace:
             fixed += len(fixed_basis.payload)
         self._coded_once = fixed  # payload bytes no choice of D changes
         self._u1_predictors: dict[int, estimate.U1Predictors] = {}
+        # the sections of the quantization packed last, its level, and the packing (in a
+        # thread when begun ahead): the next pack of the same quantization takes them
+        self._packing: tuple[Quantized[SegmentRanks], int, Background[list[Section]]] | None = None
 
     # -- the passes that learn the sequence ----------------------------------------------------
 
@@ -413,18 +424,33 @@ class SegmentedWorkspace:
         self.say(f"pass {self.passes + 1}: measuring the decoded error on the input")
         shared = None if quantized.shared_u1 is None else quantized.shared_u1.values()
         parts = self.decoded(quantized)
+        # A measure is most often the search's last step before the file: its sections are
+        # packed meanwhile (zstd at the final level, which releases the GIL), while this
+        # process would otherwise only wait for the workers' pass. Wasted only if the
+        # measure misses the target, which costs another pass anyway.
+        self._packed_sections(quantized, self.level, wait=False)
         total = sum(self._in_order(measure_segment, parts, self.source, shared))
         self.passes += 1
         return float(total)
 
     # -- the file ----------------------------------------------------------------------------------
 
-    def sections(
-        self, quantized: Quantized[SegmentRanks], level: int
-    ) -> list[tuple[dict[str, Any], bytes]]:
+    def _packed_sections(
+        self, quantized: Quantized[SegmentRanks], level: int, *, wait: bool = True
+    ) -> list[Section]:
+        """:meth:`sections`, kept for the next call with the same quantization and level (a
+        pack after the measure, or after a size target's fill packed the same): begun in a
+        thread and returned empty if not ``wait``, else waited for and returned (a copy)."""
+        held = self._packing
+        if held is None or held[0] is not quantized or held[1] != level:
+            packing = Background(self.sections, quantized, level, name="sections")
+            self._packing = held = (quantized, level, packing)
+        return list(held[2].result()) if wait else []
+
+    def sections(self, quantized: Quantized[SegmentRanks], level: int) -> list[Section]:
         """The file's sections in the order the reference encoder writes them (§6.7): FACE,
         the shared U1, each segment's CENT, U3, CORE (and U1), then NAME."""
-        out: list[tuple[dict[str, Any], bytes]] = [
+        out: list[Section] = [
             (section_entry("FACE", self.face_section[0], self.face_codec), self.face_section[1])
         ]
         if self.fixed_basis is not None:  # a given basis: its section, byte for byte
@@ -515,7 +541,7 @@ class SegmentedWorkspace:
             self.frame_count, source.time_codes, source.meters_per_unit, source.up_axis
         )
         header.update(scene)  # format 1.4's time and scene keys, last
-        packed = self.sections(quantized, self.level if level is None else level)
+        packed = self._packed_sections(quantized, self.level if level is None else level)
         flags, minor = SEGMENTED, SEGMENTED_MINOR
         if corrections is not None:  # before NAME, as in a whole file
             at = next((n for n, (e, _) in enumerate(packed) if e["id"] == "NAME"), len(packed))
