@@ -8,6 +8,7 @@ makes a folder of one file per frame, staged and moved in whole.
 
 from __future__ import annotations
 
+import dataclasses
 import glob
 import os
 import re
@@ -170,14 +171,19 @@ def write_frames(
     names = frame_file_names(seq.frame_names, frame_format.suffixes[0])
     destination.parent.mkdir(parents=True, exist_ok=True)
 
-    def write(index: int) -> None:
-        write_frame(staging / names[index], seq.vertices[index], seq.faces, options)
+    staged = dataclasses.replace(options, staged=True)
 
-    # frames written by a few threads: each file's fsync waits on the disk, and numpy (which
-    # makes an OBJ frame's text) runs without the GIL meanwhile; the pool ends (its frames
-    # written or cancelled) before the staging folder is moved in or removed
+    def write(index: int) -> None:
+        write_frame(staging / names[index], seq.vertices[index], seq.faces, staged)
+
+    # The frames are written plainly into the staging folder, their writeback started at
+    # once, and made durable all together (sync) before anything is moved in: the same
+    # guarantee as an fsync per file before its link, without a wait on the disk per frame.
+    # A few threads write them: numpy (which makes an OBJ frame's text) runs without the GIL.
+    # The pool ends (its frames written or cancelled) before the folder is synced and moved
+    # in, or removed.
     with (
-        atomic_folder(destination, names, overwrite=options.overwrite) as staging,
+        atomic_folder(destination, names, overwrite=options.overwrite, sync=True) as staging,
         ThreadPoolExecutor(max_workers=WRITER_THREADS) as pool,
     ):
         written: Iterable[None] = pool.map(write, range(seq.frame_count))

@@ -56,7 +56,7 @@ from typing import BinaryIO
 
 import numpy as np
 
-from ..atomic import write_atomic
+from ..atomic import write_atomic, write_staged
 from ..errors import InputError
 from ..reading import open_regular_file
 from ..topology import face_table_problem
@@ -640,6 +640,7 @@ def write_obj(
     *,
     precision: int | None = None,
     overwrite: bool = False,
+    staged: bool = False,
 ) -> None:
     """Write vertices and faces as an OBJ file, atomically.
 
@@ -650,6 +651,9 @@ def write_obj(
         precision: significant digits of the coordinates; ``None`` (default) writes the
             shortest text that reads back to the very same float64 (Python's ``repr``).
         overwrite: replace an existing file; otherwise an existing file is an error.
+        staged: ``path`` is a new file in the staging folder of a folder of frames, which is
+            synced and moved in whole (:func:`tuckercodec.atomic.atomic_folder` with
+            ``sync``): it is written plainly (:func:`tuckercodec.atomic.write_staged`).
 
     Raises:
         FileExistsError: ``path`` exists and ``overwrite`` is False (checked before writing; the
@@ -659,13 +663,16 @@ def write_obj(
     vertices = np.asarray(vertices, dtype=np.float64)
     faces = np.asarray(faces)
     _check_writable(vertices, faces, precision)
-    if precision is None:  # repr's text, made by array operations
-        text = vertex_text(vertices) + _faces_bytes(faces)
+    if precision is None:  # repr's text, made by array operations; the faces' kept bytes
+        chunks = [vertex_text(vertices), _faces_bytes(faces)]
     else:
         lines = _vertex_lines(vertices, precision)
         joined = "\n".join([*lines, _faces_text(faces)]) if lines else _faces_text(faces)
-        text = joined.encode("ascii")
-    write_atomic(path, text, overwrite=overwrite)
+        chunks = [joined.encode("ascii")]
+    if staged:
+        write_staged(path, chunks)
+    else:
+        write_atomic(path, lambda handle: handle.writelines(chunks), overwrite=overwrite)
 
 
 def _check_writable(vertices: np.ndarray, faces: np.ndarray, precision: int | None) -> None:
@@ -739,4 +746,11 @@ def write_obj_frame(
     path: Path, vertices: np.ndarray, faces: np.ndarray, options: WriteOptions
 ) -> None:
     """One frame as an OBJ file (the format's frame writer: a folder of frames)."""
-    write_obj(path, vertices, faces, precision=options.precision, overwrite=options.overwrite)
+    write_obj(
+        path,
+        vertices,
+        faces,
+        precision=options.precision,
+        overwrite=options.overwrite,
+        staged=options.staged,
+    )
