@@ -74,20 +74,28 @@ def _scaled(mv: np.ndarray, exponent: np.ndarray) -> tuple[np.ndarray, np.ndarra
     quotient: exact unless the fraction is that close to 1, which the caller leaves to
     ``repr``."""
     m0, m1 = mv & _LOW32, mv >> _U64(32)
-    columns: list[np.ndarray] = [np.zeros_like(mv) for _ in range(_LIMBS + 2)]
+    # the 32-bit columns 2 to 5 of the product, as lists of parts (each a new array) to add;
+    # what would carry out of column 5 is beyond the 64-bit quotient (zero), so not made
+    parts: dict[int, list[np.ndarray]] = {2: [], 3: [], 4: [], 5: []}
     for y in range(1, _LIMBS):
         factor = np.take(_POWER_LIMBS[y], exponent)
         for x, mx in ((0, m0), (1, m1)):
             if x + y < 2:
                 continue
             product = mx * factor  # below 2**64: both below 2**32
-            columns[x + y] += product & _LOW32
-            columns[x + y + 1] += product >> _U64(32)
-    carry = np.zeros_like(mv)
-    for index in range(2, _LIMBS + 2):
-        total = columns[index] + carry
-        columns[index] = total & _LOW32
+            parts[x + y].append(product & _LOW32)
+            if x + y < 5:
+                parts[x + y + 1].append(product >> _U64(32))
+    columns: dict[int, np.ndarray] = {}
+    carry = None
+    for index, column_parts in parts.items():
+        total = column_parts[0]
+        for part in column_parts[1:]:
+            total += part
+        if carry is not None:
+            total += carry
         carry = total >> _U64(32)
+        columns[index] = total & _LOW32
     whole = columns[4] | (columns[5] << _U64(32))
     fraction = ((columns[3] << _U64(32)) | columns[2]).astype(np.float64) * 2.0**-64
     return whole, fraction
