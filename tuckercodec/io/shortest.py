@@ -34,14 +34,16 @@ _SHIFT = 128
 _LIMBS = 5
 
 
-def _tables() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _tables() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Per biased binary exponent (0..2047): whether this module writes its floats, the power
-    of five as five 32-bit limbs (low first), that power over 2**128 as a float, and the
-    decimal exponent of the scaled value (Ryū's e10)."""
+    of five as five 32-bit limbs (low first), that power over 2**128 as a float, the decimal
+    exponent of the scaled value (Ryū's e10), and the mask of the q - 1 low bits of mv that
+    are all zero when the scaled value is an integer (Ryū's vrIsTrailingZeros)."""
     ours = np.zeros(2048, dtype=bool)
     limbs = np.zeros((_LIMBS, 2048), dtype=np.uint64)
     scale = np.zeros(2048, dtype=np.float64)
     e10 = np.zeros(2048, dtype=np.int64)
+    trailing = np.zeros(2048, dtype=np.uint64)
     for exponent in range(1, 1023 + 49):  # normal, below 2**49
         e2 = exponent - 1077  # two more bits, for the interval's ends (as Ryū)
         q = max((-e2 * 732923 >> 20) - 1, 0)  # floor(-e2 log10 5) - 1
@@ -57,10 +59,11 @@ def _tables() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
             limbs[limb, exponent] = (power >> (32 * limb)) & 0xFFFFFFFF
         scale[exponent] = power / 2.0**_SHIFT
         e10[exponent] = q + e2
-    return ours, limbs, scale, e10
+        trailing[exponent] = (1 << min(q - 1, 63)) - 1
+    return ours, limbs, scale, e10, trailing
 
 
-_OURS, _POWER_LIMBS, _POWER_SCALE, _E10 = _tables()
+_OURS, _POWER_LIMBS, _POWER_SCALE, _E10, _TRAILING = _tables()
 _POWERS_OF_TEN = np.array([10**n for n in range(20)], dtype=np.uint64)
 #: Interval ends closer than this to an integer (in float64) are left to ``repr``.
 _GUARD = 1e-7
@@ -108,16 +111,15 @@ def _shortest(bits: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.
     exponent = ((bits >> _U64(52)) & _U64(0x7FF)).astype(np.intp)
     mantissa = bits & _U64((1 << 52) - 1)
     mv = (mantissa | _U64(1 << 52)) << _U64(2)
-    e2 = exponent - 1077
-    q = np.maximum(((-e2) * 732923 >> 20) - 1, 0)
     # the scaled value is an integer (Ryū's vrIsTrailingZeros) when mv has q - 1 zero bits
-    low = (_U64(1) << np.minimum(q - 1, 63).astype(np.uint64)) - _U64(1)
-    ours = np.take(_OURS, exponent) & ((mv & low) != 0)
+    ours = np.take(_OURS, exponent) & ((mv & np.take(_TRAILING, exponent)) != 0)
     vr, fraction = _scaled(mv, exponent)
     scale = np.take(_POWER_SCALE, exponent)
     narrow = (mantissa == 0) & (exponent > 1)  # the interval's lower half is half as wide
-    above = fraction + 2.0 * scale
-    below = fraction - np.where(narrow, 1.0, 2.0) * scale
+    twice = scale * 2.0
+    above = fraction + twice
+    below = fraction - twice
+    below[narrow] = fraction[narrow] - scale[narrow]
     ours &= fraction < 1.0 - _GUARD  # the products left out cannot carry into the quotient
     ours &= np.abs(above - np.rint(above)) > _GUARD
     ours &= np.abs(below - np.rint(below)) > _GUARD
