@@ -174,17 +174,18 @@ _TEN_TWELVE = _U64(10**_LOW_DIGITS)
 
 
 def _write_digits(slots: np.ndarray, value: np.ndarray, places: int) -> None:
-    """The decimal digits of ``value`` right-aligned in the last ``places`` (a multiple of
-    four) bytes of each row of ``slots`` (uint8, (N, width a multiple of 4), blanks (0) before
-    the first digit."""
+    """The decimal digits of ``value`` (flat, one per slot) right-aligned in the last
+    ``places`` (a multiple of four) bytes of each slot of ``slots`` (uint8, (..., width a
+    multiple of 4), each slot's bytes contiguous and 4-aligned), blanks (0) before the first
+    digit."""
     quads = slots.view(np.uint32)
-    columns = quads.shape[1]
+    columns = quads.shape[-1]
     ten_thousand = _U64(10000)
     for quad in range(places // 4):
         quotient = value // ten_thousand
         code = value - quotient * ten_thousand
         code += (quotient == 0).astype(np.uint64) * ten_thousand
-        quads[:, columns - 1 - quad] = np.take(_QUADS, code)
+        quads[..., columns - 1 - quad] = np.take(_QUADS, code).reshape(quads.shape[:-1])
         value = quotient
 
 
@@ -239,24 +240,28 @@ def _block_text(vertices: np.ndarray) -> bytes:
         _LOW_DIGITS + np.searchsorted(_POWERS_OF_TEN, high, side="right"),
         np.searchsorted(_POWERS_OF_TEN, low, side="right"),
     )
-    places = int(length.max(initial=2)) + 2  # two more: a sign, a "0"
+    places = int(length.max(initial=2)) + 3  # three more: a space, a sign, a "0"
     places = max(places + -places % 4, _LOW_DIGITS + 4)
-    slots = np.zeros((len(values), places), dtype=np.uint8)
-    _write_digits(slots, low + (high > 0) * _TEN_TWELVE, _LOW_DIGITS)
-    _write_digits(slots[:, :-_LOW_DIGITS], high, places - _LOW_DIGITS)
-    flat = slots.reshape(-1)
-    end = np.arange(1, len(values) + 1) * slots.shape[1]  # just past each value's slots
+    # each row's bytes: "v" and 3 blanks, the three numbers' slots (a space first in each,
+    # the digits right-aligned), "\n" and 3 blanks; the blanks (0) are removed at the end
+    width = 3 * places + 8
+    line = np.zeros((rows, width), dtype=np.uint8)
+    line[:, 0] = ord("v")
+    line[:, -4] = ord("\n")
+    fields = line[:, 4:-4].reshape(rows, 3, places)
+    if not np.may_share_memory(fields, line):  # reshape made a view (it can), not a copy
+        raise AssertionError("the slots of a line must be a view of it")
+    _write_digits(fields, low + (high > 0) * _TEN_TWELVE, _LOW_DIGITS)
+    _write_digits(fields[:, :, :-_LOW_DIGITS], high, places - _LOW_DIGITS)
+    fields[:, :, 0] = ord(" ")  # over a blank the digits left
+    flat = line.reshape(-1)
+    # just past each value's slot
+    end = (np.arange(rows) * width + 4)[:, None] + np.arange(1, 4) * places
+    end = end.reshape(-1)
     flat[end - 1 - decimals] = ord(".")
     flat[(end - 1 - length)[bare]] = ord("0")
     negative = np.signbit(values)
     flat[(end - 1 - length - bare)[negative]] = ord("-")
-    width = slots.shape[1] + 1
-    line = np.empty((rows, 3 * width + 2), dtype=np.uint8)
-    line[:, 0] = ord("v")
-    line[:, -1] = ord("\n")
-    fields = line[:, 1:-1].reshape(rows, 3, width)
-    fields[:, :, 0] = ord(" ")
-    fields[:, :, 1:] = slots.reshape(rows, 3, -1)
     by_repr = np.flatnonzero(~ours.reshape(rows, 3).all(axis=1))
     made = line.tobytes().translate(None, b"\0")
     if not by_repr.size:
