@@ -38,11 +38,12 @@ _UNSAFE_NAME_CHARACTERS = re.compile(r"[^A-Za-z0-9._-]+")
 #: kinds of mesh than the registry lists (.xyz, .drc...), and says so when it cannot.
 FALLBACK_FRAME_FORMAT = "mesh"
 #: Threads writing the frames of a folder at once. Since no frame waits for its own fsync
-#: (the folder is synced once), the threads are only for numpy's steps, which run without the
-#: GIL: two overlap them on two cores, more only pass the GIL back and forth (horse gallop's
-#: OBJ folder, 10 fresh processes each at load 5: 1, 2 and 4 threads 0.98-1.17, 0.89-1.19
-#: and 1.05-1.48 s of CPU, min-median; wall 1.34-2.01, 1.03-2.19 and 1.46-2.20 s).
-WRITER_THREADS = 2
+#: (the folder is synced once), more threads could only overlap numpy's GIL-free steps, and
+#: on the 2-core machine measured they passed the GIL back and forth instead (horse gallop's
+#: OBJ folder, fresh processes, load 4-9, three runs of 8-10: 1, 2 and 4 threads median wall
+#: 1.44, 1.63, 1.69 s; 2.01, 2.19, 2.20 s; 1.27, 1.39, 1.38 s; CPU the least with one).
+#: More cores may want more.
+WRITER_THREADS = 1
 
 
 def natural_sort_key(name: str) -> tuple[tuple[int | str, ...], str]:
@@ -183,7 +184,7 @@ def write_frames(
     # The frames are written plainly into the staging folder, their writeback started at
     # once, and made durable all together (sync) before anything is moved in: the same
     # guarantee as an fsync per file before its link, without a wait on the disk per frame.
-    # A few threads write them: numpy (which makes an OBJ frame's text) runs without the GIL.
+    # WRITER_THREADS write them (numpy, which makes an OBJ frame's text, frees the GIL).
     # The pool ends (its frames written or cancelled) before the folder is synced and moved
     # in, or removed.
     with (
