@@ -37,13 +37,12 @@ _UNSAFE_NAME_CHARACTERS = re.compile(r"[^A-Za-z0-9._-]+")
 #: The format that reads a listed file whose suffix no format claims: trimesh reads far more
 #: kinds of mesh than the registry lists (.xyz, .drc...), and says so when it cannot.
 FALLBACK_FRAME_FORMAT = "mesh"
-#: Threads writing the frames of a folder at once. Since no frame waits for its own fsync
-#: (the folder is synced once), more threads could only overlap numpy's GIL-free steps, and
-#: on the 2-core machine measured they passed the GIL back and forth instead (horse gallop's
-#: OBJ folder, fresh processes, load 4-9, three runs of 8-10: 1, 2 and 4 threads median wall
-#: 1.44, 1.63, 1.69 s; 2.01, 2.19, 2.20 s; 1.27, 1.39, 1.38 s; CPU the least with one).
-#: More cores may want more.
-WRITER_THREADS = 1
+#: Threads writing the frames of a folder at once. No frame waits for its own fsync (the
+#: folder is synced once), so they overlap numpy's GIL-free steps, which are long on a whole
+#: frame's values: horse gallop's OBJ folder (8 fresh processes each, load 5, 2 cores) took
+#: 0.78-1.01, 0.69-0.91 and 0.63-0.94 s of wall time (min-median) with 1, 2 and 4 threads,
+#: 0.71-1.05, 0.90-1.04 and 0.95-1.08 s of CPU.
+WRITER_THREADS = 2
 
 
 def natural_sort_key(name: str) -> tuple[tuple[int | str, ...], str]:
