@@ -334,3 +334,41 @@ def test_atomic_store_asks_replaceable_before_replacing_and_keeps_a_refused_fold
     assert seen == [target]
     assert sorted(p.name for p in target.iterdir()) == ["mine.txt"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["store"]
+
+
+def test_frames_written_plainly_are_synced_before_their_folder_appears(tmp_path, monkeypatch):
+    """A folder of OBJ frames is written without an fsync per file: every file, and the
+    staging folder, is synced before the folder is moved in (an fsync that fails leaves
+    nothing), so a crash cannot leave a visible folder of incomplete frames."""
+    sequence = tc.MeshSequence(wave_sequence(5, 4), grid_faces(4))
+    target = tmp_path / "frames"
+    synced: set[int] = set()  # inodes: the files and the folder keep theirs when moved in
+    real_fsync = os.fsync
+
+    def fsync(descriptor: int) -> None:
+        assert not target.exists()  # nothing is visible before the syncs
+        synced.add(os.fstat(descriptor).st_ino)
+        real_fsync(descriptor)
+
+    monkeypatch.setattr(os, "fsync", fsync)
+    tc.save_sequence(sequence, target, progress=False)
+    files = list(target.iterdir())
+    assert len(files) == 5
+    assert synced >= {path.stat().st_ino for path in files}
+    assert target.stat().st_ino in synced or os.name != "posix"  # a folder is synced on POSIX
+
+    def failing(descriptor: int) -> None:
+        raise OSError(5, "Input/output error")
+
+    monkeypatch.setattr(os, "fsync", failing)
+    with pytest.raises(OSError, match="Input/output"):
+        tc.save_sequence(sequence, tmp_path / "other", progress=False)
+    assert _listing(tmp_path) == ["frames"]
+
+
+def test_write_staged_writes_new_files_only(tmp_path):
+    atomic.write_staged(tmp_path / "a", [b"one ", b"", b"two"])
+    assert (tmp_path / "a").read_bytes() == b"one two"
+    with pytest.raises(FileExistsError):
+        atomic.write_staged(tmp_path / "a", [b"three"])
+    assert (tmp_path / "a").read_bytes() == b"one two"

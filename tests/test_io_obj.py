@@ -613,7 +613,11 @@ def test_a_folder_of_frames_gets_each_frames_own_faces(tmp_path):
     vertices = np.random.default_rng(4).standard_normal((5, 3))
     first = np.array([[0, 1, 2], [2, 3, 4]])
     second = np.array([[0, 1, 2, 3], [1, 2, 4, -1]])
-    for number, faces in enumerate((first, second, first)):
+    changed = first.copy()  # the same table changed in place: its new faces, not the kept text
+    tables = (first, second, first, first.astype(np.int32), changed, changed)
+    for number, faces in enumerate(tables):
+        if number == len(tables) - 1:
+            changed[1] = [4, 3, 2]
         path = tmp_path / f"frame{number}.obj"
         write_obj(path, vertices, faces)
         expected = [f"v {x!r} {y!r} {z!r}" for x, y, z in vertices.tolist()]

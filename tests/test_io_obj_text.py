@@ -87,3 +87,11 @@ def test_write_obj_writes_the_text_of_repr(tmp_path):
     obj.write_obj(tmp_path / "a.obj", vertices, faces)
     expected = _by_repr(vertices) + b"f 1 2 3\nf 3 4 5\n"
     assert (tmp_path / "a.obj").read_bytes() == expected
+
+
+def test_blocks_of_rows_join_to_the_text_of_the_whole(monkeypatch):
+    # rows left to repr (1e20, subnormals) first, last and inside blocks of 7 rows
+    monkeypatch.setattr(shortest, "BLOCK_ROWS", 7)
+    values = RNG.standard_normal(3 * 50)
+    values[[0, 20, 21, 22, 64, 149]] = [1e20, 5e-324, -1e-300, 2.0**60, -1e17, 1e300]
+    _check(values)

@@ -14,7 +14,10 @@ A file is written first where no one can see it, and put in place only once comp
 
 Either way a rename within one folder is atomic, so readers see the old file or the new one.
 A folder of files (decoded OBJ frames) is written as a whole with :func:`atomic_folder`, and
-a folder that a library writes (a zarr store) with :func:`atomic_store`.
+a folder that a library writes (a zarr store) with :func:`atomic_store`. The files of an
+:func:`atomic_folder` may be written plainly into its staging folder (:func:`write_staged`),
+since no one sees them there: ``sync=True`` makes them durable, all at once, before they are
+moved in.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ import os
 import shutil
 import tempfile
 from collections.abc import Callable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager, suppress
 from pathlib import Path
 from typing import BinaryIO, cast
@@ -255,9 +259,72 @@ def _move_in(source: Path, target: Path, overwrite: bool) -> None:
     os.unlink(source)
 
 
+#: sync_file_range's flag that starts the writeback of a range without waiting for it.
+_SYNC_FILE_RANGE_WRITE = 2
+#: Windows opens files as text unless told otherwise; elsewhere there is no such flag.
+_O_BINARY = getattr(os, "O_BINARY", 0)
+
+
+def _start_writeback(descriptor: int) -> None:
+    """Ask the kernel to start writing a file's data to disk now, without waiting (Linux's
+    ``sync_file_range``; elsewhere nothing): the fsync that makes it durable later then finds
+    it written, or being written, while the caller did other work meanwhile."""
+    if not hasattr(os, "O_TMPFILE"):  # not Linux: the later fsync does all the work
+        return
+    try:
+        function = _libc().sync_file_range
+    except (AttributeError, OSError):
+        return
+    function.argtypes = [ctypes.c_int, ctypes.c_int64, ctypes.c_int64, ctypes.c_uint]
+    function(descriptor, 0, 0, _SYNC_FILE_RANGE_WRITE)  # a failure only loses the head start
+
+
+def write_staged(path: str | os.PathLike[str], chunks: list[bytes]) -> None:
+    """Write a new file of ``chunks`` plainly, for a staging folder of :func:`atomic_folder`
+    whose ``sync=True`` makes it durable before it is moved in (no one else sees it meanwhile,
+    and the folder is removed on any error). Its writeback is started at once.
+    ``FileExistsError`` if ``path`` exists."""
+    descriptor = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | _O_BINARY, 0o666)
+    with os.fdopen(descriptor, "wb", buffering=0) as handle:
+        for chunk in chunks:
+            view = memoryview(chunk)
+            while view:  # a raw write may write less than asked
+                view = view[handle.write(view) or 0 :]
+        _start_writeback(descriptor)
+
+
+#: Files synced at once by :func:`sync_files`: the file system commits the waits of
+#: concurrent fsyncs together (on ext4 one journal commit serves them all), where one fsync
+#: after another waits for a commit and a disk cache flush each.
+SYNC_THREADS = 8
+
+
+def sync_files(folder: Path, names: list[str]) -> None:
+    """Make the files ``names`` of ``folder``, and the folder's entries, durable: an fsync of
+    each file (a few at once), then of the folder itself (where a folder can be opened: not
+    on Windows). The first error is raised once every fsync has ended."""
+
+    def sync(name: str) -> None:
+        descriptor = os.open(folder / name, os.O_RDWR | _O_BINARY)  # Windows syncs writable ones
+        try:
+            os.fsync(descriptor)
+        finally:
+            os.close(descriptor)
+
+    with ThreadPoolExecutor(max_workers=max(1, min(SYNC_THREADS, len(names)))) as pool:
+        for _ in pool.map(sync, names):
+            pass
+    if os.name == "posix":
+        descriptor = os.open(folder, os.O_RDONLY)
+        try:
+            os.fsync(descriptor)
+        finally:
+            os.close(descriptor)
+
+
 @contextmanager
 def atomic_folder(
-    destination: str | Path, names: list[str], *, overwrite: bool = False
+    destination: str | Path, names: list[str], *, overwrite: bool = False, sync: bool = False
 ) -> Iterator[Path]:
     """Write the files ``names`` of a folder as a whole: yield a hidden staging folder beside
     ``destination``; when the block ends without an exception, its files are moved into
@@ -269,6 +336,11 @@ def atomic_folder(
     can only fall in that short last step. Existing files among ``names`` are refused unless
     ``overwrite``; other files in ``destination`` are never touched. Only a hard kill while the
     files are being written can leave the staging folder (``.<destination>.<random>.tmp``).
+
+    With ``sync``, the files and the staging folder are made durable (:func:`sync_files`)
+    before anything is moved in, so files written plainly into it (:func:`write_staged`) are
+    complete on disk before they can be seen under ``destination``, as those of
+    :func:`write_atomic` are.
     """
     target = Path(destination)
     if target.exists() and not target.is_dir():
@@ -283,6 +355,8 @@ def atomic_folder(
     staging = Path(tempfile.mkdtemp(dir=parent, prefix=f".{target.name}.", suffix=".tmp"))
     try:
         yield staging
+        if sync:
+            sync_files(staging, names)
         if not target.exists():
             os.chmod(staging, 0o777 & ~_umask())  # mkdtemp makes 0700; match a plain mkdir
             try:

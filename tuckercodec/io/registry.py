@@ -89,11 +89,15 @@ COMMON_OPTIONS = frozenset({"max_memory"})
 @dataclass(frozen=True)
 class WriteOptions:
     """How a sequence is written: ``overwrite`` existing files; ``precision`` significant
-    digits for text formats (``None``: exact); ``progress`` bar on a terminal."""
+    digits for text formats (``None``: exact); ``progress`` bar on a terminal. ``staged``,
+    for a frame writer: the file goes into the staging folder of a folder of frames, which is
+    made durable as a whole before it is moved in (:func:`tuckercodec.atomic.atomic_folder`
+    with ``sync``), so it may be written plainly (:func:`tuckercodec.atomic.write_staged`)."""
 
     overwrite: bool = False
     precision: int | None = None
     progress: bool = False
+    staged: bool = False
 
 
 #: Reads one frame; the second argument is the sequence's first frame (``None`` for the first

@@ -34,14 +34,16 @@ _SHIFT = 128
 _LIMBS = 5
 
 
-def _tables() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _tables() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Per biased binary exponent (0..2047): whether this module writes its floats, the power
-    of five as five 32-bit limbs (low first), that power over 2**128 as a float, and the
-    decimal exponent of the scaled value (Ryū's e10)."""
+    of five as five 32-bit limbs (low first), that power over 2**128 as a float, the decimal
+    exponent of the scaled value (Ryū's e10), and the mask of the q - 1 low bits of mv that
+    are all zero when the scaled value is an integer (Ryū's vrIsTrailingZeros)."""
     ours = np.zeros(2048, dtype=bool)
     limbs = np.zeros((_LIMBS, 2048), dtype=np.uint64)
     scale = np.zeros(2048, dtype=np.float64)
     e10 = np.zeros(2048, dtype=np.int64)
+    trailing = np.zeros(2048, dtype=np.uint64)
     for exponent in range(1, 1023 + 49):  # normal, below 2**49
         e2 = exponent - 1077  # two more bits, for the interval's ends (as Ryū)
         q = max((-e2 * 732923 >> 20) - 1, 0)  # floor(-e2 log10 5) - 1
@@ -57,10 +59,11 @@ def _tables() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
             limbs[limb, exponent] = (power >> (32 * limb)) & 0xFFFFFFFF
         scale[exponent] = power / 2.0**_SHIFT
         e10[exponent] = q + e2
-    return ours, limbs, scale, e10
+        trailing[exponent] = (1 << min(q - 1, 63)) - 1
+    return ours, limbs, scale, e10, trailing
 
 
-_OURS, _POWER_LIMBS, _POWER_SCALE, _E10 = _tables()
+_OURS, _POWER_LIMBS, _POWER_SCALE, _E10, _TRAILING = _tables()
 _POWERS_OF_TEN = np.array([10**n for n in range(20)], dtype=np.uint64)
 #: Interval ends closer than this to an integer (in float64) are left to ``repr``.
 _GUARD = 1e-7
@@ -74,20 +77,28 @@ def _scaled(mv: np.ndarray, exponent: np.ndarray) -> tuple[np.ndarray, np.ndarra
     quotient: exact unless the fraction is that close to 1, which the caller leaves to
     ``repr``."""
     m0, m1 = mv & _LOW32, mv >> _U64(32)
-    columns: list[np.ndarray] = [np.zeros_like(mv) for _ in range(_LIMBS + 2)]
+    # the 32-bit columns 2 to 5 of the product, as lists of parts (each a new array) to add;
+    # what would carry out of column 5 is beyond the 64-bit quotient (zero), so not made
+    parts: dict[int, list[np.ndarray]] = {2: [], 3: [], 4: [], 5: []}
     for y in range(1, _LIMBS):
         factor = np.take(_POWER_LIMBS[y], exponent)
         for x, mx in ((0, m0), (1, m1)):
             if x + y < 2:
                 continue
             product = mx * factor  # below 2**64: both below 2**32
-            columns[x + y] += product & _LOW32
-            columns[x + y + 1] += product >> _U64(32)
-    carry = np.zeros_like(mv)
-    for index in range(2, _LIMBS + 2):
-        total = columns[index] + carry
-        columns[index] = total & _LOW32
+            parts[x + y].append(product & _LOW32)
+            if x + y < 5:
+                parts[x + y + 1].append(product >> _U64(32))
+    columns: dict[int, np.ndarray] = {}
+    carry = None
+    for index, column_parts in parts.items():
+        total = column_parts[0]
+        for part in column_parts[1:]:
+            total += part
+        if carry is not None:
+            total += carry
         carry = total >> _U64(32)
+        columns[index] = total & _LOW32
     whole = columns[4] | (columns[5] << _U64(32))
     fraction = ((columns[3] << _U64(32)) | columns[2]).astype(np.float64) * 2.0**-64
     return whole, fraction
@@ -100,16 +111,15 @@ def _shortest(bits: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.
     exponent = ((bits >> _U64(52)) & _U64(0x7FF)).astype(np.intp)
     mantissa = bits & _U64((1 << 52) - 1)
     mv = (mantissa | _U64(1 << 52)) << _U64(2)
-    e2 = exponent - 1077
-    q = np.maximum(((-e2) * 732923 >> 20) - 1, 0)
     # the scaled value is an integer (Ryū's vrIsTrailingZeros) when mv has q - 1 zero bits
-    low = (_U64(1) << np.minimum(q - 1, 63).astype(np.uint64)) - _U64(1)
-    ours = np.take(_OURS, exponent) & ((mv & low) != 0)
+    ours = np.take(_OURS, exponent) & ((mv & np.take(_TRAILING, exponent)) != 0)
     vr, fraction = _scaled(mv, exponent)
     scale = np.take(_POWER_SCALE, exponent)
     narrow = (mantissa == 0) & (exponent > 1)  # the interval's lower half is half as wide
-    above = fraction + 2.0 * scale
-    below = fraction - np.where(narrow, 1.0, 2.0) * scale
+    twice = scale * 2.0
+    above = fraction + twice
+    below = fraction - twice
+    below[narrow] = fraction[narrow] - scale[narrow]
     ours &= fraction < 1.0 - _GUARD  # the products left out cannot carry into the quotient
     ours &= np.abs(above - np.rint(above)) > _GUARD
     ours &= np.abs(below - np.rint(below)) > _GUARD
@@ -164,24 +174,41 @@ _TEN_TWELVE = _U64(10**_LOW_DIGITS)
 
 
 def _write_digits(slots: np.ndarray, value: np.ndarray, places: int) -> None:
-    """The decimal digits of ``value`` right-aligned in the last ``places`` (a multiple of
-    four) bytes of each row of ``slots`` (uint8, (N, width a multiple of 4), blanks (0) before
-    the first digit."""
+    """The decimal digits of ``value`` (flat, one per slot) right-aligned in the last
+    ``places`` (a multiple of four) bytes of each slot of ``slots`` (uint8, (..., width a
+    multiple of 4), each slot's bytes contiguous and 4-aligned), blanks (0) before the first
+    digit."""
     quads = slots.view(np.uint32)
-    columns = quads.shape[1]
+    columns = quads.shape[-1]
     ten_thousand = _U64(10000)
     for quad in range(places // 4):
         quotient = value // ten_thousand
         code = value - quotient * ten_thousand
         code += (quotient == 0).astype(np.uint64) * ten_thousand
-        quads[:, columns - 1 - quad] = np.take(_QUADS, code)
+        quads[..., columns - 1 - quad] = np.take(_QUADS, code).reshape(quads.shape[:-1])
         value = quotient
+
+
+#: Rows made at a time, which bounds the dozens of temporary arrays of a large mesh (a block's
+#: each 1.5 MB). Smaller blocks only add numpy calls: 2048 rows looked faster on its own (its
+#: fresh heap faulted pages in for a whole frame's temporaries), but in a decode to OBJ, whose
+#: heap is grown already, horse gallop's frames (8431 rows) whole took 0.33-0.46 s of CPU for
+#: the 48 frames against 0.58-0.70 s in blocks of 2048 (4 fresh processes each, load 5-7).
+BLOCK_ROWS = 65536
 
 
 def vertex_text(vertices: np.ndarray) -> bytes:
     """The ``v x y z`` lines of a (K, 3) float64 array, each ended by a newline, every number as
     ``repr`` writes it."""
     vertices = np.ascontiguousarray(vertices, dtype=np.float64)
+    if len(vertices) <= BLOCK_ROWS:
+        return _block_text(vertices)
+    blocks = range(0, len(vertices), BLOCK_ROWS)
+    return b"".join([_block_text(vertices[start : start + BLOCK_ROWS]) for start in blocks])
+
+
+def _block_text(vertices: np.ndarray) -> bytes:
+    """:func:`vertex_text` of a block of rows (contiguous float64)."""
     rows = len(vertices)
     if not rows:
         return b""
@@ -215,24 +242,28 @@ def vertex_text(vertices: np.ndarray) -> bytes:
         _LOW_DIGITS + np.searchsorted(_POWERS_OF_TEN, high, side="right"),
         np.searchsorted(_POWERS_OF_TEN, low, side="right"),
     )
-    places = int(length.max(initial=2)) + 2  # two more: a sign, a "0"
+    places = int(length.max(initial=2)) + 3  # three more: a space, a sign, a "0"
     places = max(places + -places % 4, _LOW_DIGITS + 4)
-    slots = np.zeros((len(values), places), dtype=np.uint8)
-    _write_digits(slots, low + (high > 0) * _TEN_TWELVE, _LOW_DIGITS)
-    _write_digits(slots[:, :-_LOW_DIGITS], high, places - _LOW_DIGITS)
-    flat = slots.reshape(-1)
-    end = np.arange(1, len(values) + 1) * slots.shape[1]  # just past each value's slots
+    # each row's bytes: "v" and 3 blanks, the three numbers' slots (a space first in each,
+    # the digits right-aligned), "\n" and 3 blanks; the blanks (0) are removed at the end
+    width = 3 * places + 8
+    line = np.zeros((rows, width), dtype=np.uint8)
+    line[:, 0] = ord("v")
+    line[:, -4] = ord("\n")
+    fields = line[:, 4:-4].reshape(rows, 3, places)
+    if not np.may_share_memory(fields, line):  # reshape made a view (it can), not a copy
+        raise AssertionError("the slots of a line must be a view of it")
+    _write_digits(fields, low + (high > 0) * _TEN_TWELVE, _LOW_DIGITS)
+    _write_digits(fields[:, :, :-_LOW_DIGITS], high, places - _LOW_DIGITS)
+    fields[:, :, 0] = ord(" ")  # over a blank the digits left
+    flat = line.reshape(-1)
+    # just past each value's slot
+    end = (np.arange(rows) * width + 4)[:, None] + np.arange(1, 4) * places
+    end = end.reshape(-1)
     flat[end - 1 - decimals] = ord(".")
     flat[(end - 1 - length)[bare]] = ord("0")
     negative = np.signbit(values)
     flat[(end - 1 - length - bare)[negative]] = ord("-")
-    width = slots.shape[1] + 1
-    line = np.empty((rows, 3 * width + 2), dtype=np.uint8)
-    line[:, 0] = ord("v")
-    line[:, -1] = ord("\n")
-    fields = line[:, 1:-1].reshape(rows, 3, width)
-    fields[:, :, 0] = ord(" ")
-    fields[:, :, 1:] = slots.reshape(rows, 3, -1)
     by_repr = np.flatnonzero(~ours.reshape(rows, 3).all(axis=1))
     made = line.tobytes().translate(None, b"\0")
     if not by_repr.size:
