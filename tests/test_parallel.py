@@ -39,8 +39,16 @@ _SIGINT = signal.getsignal(signal.SIGINT)
 # the tasks (module-level: the workers import this module to run them)
 
 
-def _after(item: int, delays: list[float]) -> int:
-    time.sleep(delays[item])
+def _after(item: int, folder: str) -> int:
+    """Item 0 finishes only once item 1 has (a file item 1 leaves in ``folder``, polled for
+    at most a minute), whatever the machine's speed; the others at once."""
+    flag = Path(folder) / "1"
+    if item == 0:
+        deadline = time.monotonic() + 60.0
+        while not flag.exists() and time.monotonic() < deadline:
+            time.sleep(0.01)
+    else:
+        (Path(folder) / str(item)).touch()
     return item * 10
 
 
@@ -138,14 +146,23 @@ def executor(request) -> Executor:
     return request.getfixturevalue("cluster")
 
 
-def test_map_gives_results_in_item_order_whatever_finishes_first(executor):
-    delays = [0.3, 0.0, 0.0, 0.0, 0.0, 0.0]
-    order = [done.index for done in executor.as_completed(_after, range(6), delays)]
+def test_map_gives_results_in_item_order_whatever_finishes_first(executor, tmp_path):
+    # item 0 waits on one worker for item 1, which another worker runs: on workers item 0
+    # cannot complete first, however slow the machine (in process the items run in order,
+    # so item 1's file is there from the start)
+    folder = tmp_path / "as_completed"
+    folder.mkdir()
+    if executor.workers == 1:
+        (folder / "1").touch()
+    order = [done.index for done in executor.as_completed(_after, range(6), str(folder))]
     assert sorted(order) == list(range(6))
-    if executor.workers > 1:  # item 0 runs long on one worker while the other does the rest
+    if executor.workers > 1:
         assert order[0] != 0, order
-    assert executor.map(_after, range(6), delays) == [0, 10, 20, 30, 40, 50]
-    assert executor.map(_after, [], delays) == []
+    ready = tmp_path / "map"
+    ready.mkdir()
+    (ready / "1").touch()  # item 0 need not wait here: map's order is the items'
+    assert executor.map(_after, range(6), str(ready)) == [0, 10, 20, 30, 40, 50]
+    assert executor.map(_after, [], str(ready)) == []
 
 
 def test_a_shared_value_reaches_each_worker_once_per_map(executor):
