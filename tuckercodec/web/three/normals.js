@@ -44,14 +44,7 @@ export function computeNormals(positions, index, normals) {
 export function computeBounds(positions, box) {
   box.fill(Infinity, 0, 3);
   box.fill(-Infinity, 3, 6);
-  for (let v = 0, n = positions.length; v < n; v += 3) {
-    for (let axis = 0; axis < 3; axis++) {
-      const value = positions[v + axis];
-      if (!Number.isFinite(value)) continue;
-      if (value < box[axis]) box[axis] = value;
-      if (value > box[axis + 3]) box[axis + 3] = value;
-    }
-  }
+  extendBox(box, positions);
   if (!(box[0] <= box[3] && box[1] <= box[4] && box[2] <= box[5])) return -1;
   const cx = (box[0] + box[3]) / 2, cy = (box[1] + box[4]) / 2, cz = (box[2] + box[5]) / 2;
   let radius2 = 0;
@@ -61,4 +54,22 @@ export function computeBounds(positions, box) {
     if (d2 > radius2 && Number.isFinite(d2)) radius2 = d2;
   }
   return radius2;
+}
+
+/**
+ * Grow `box` ([minx, miny, minz, maxx, maxy, maxz], start from emptyBox()) by the positions.
+ * Non-finite values are skipped.
+ * @param {number[]} box
+ * @param {ArrayLike<number>} positions
+ */
+export function extendBox(box, positions) {
+  for (let v = 0, n = positions.length; v < n; v += 3) {
+    for (let axis = 0; axis < 3; axis++) {
+      const value = positions[v + axis];
+      if (!Number.isFinite(value)) continue;
+      if (value < box[axis]) box[axis] = value;
+      if (value > box[axis + 3]) box[axis + 3] = value;
+    }
+  }
+  return box;
 }

@@ -4,31 +4,13 @@
 // page can call it every frame. The normals are the loader's (../three/normals.js), the same
 // function for the decoded mesh and the original.
 
-export { computeNormals } from '../three/normals.js';
+export { computeNormals, extendBox } from '../three/normals.js';
 
 /** What the KG error of one frame means, as the page labels it. */
 export const FRAME_KG_DEFINITION =
   "KG error of this frame (Karni-Gotsman): 100·‖A_t − B_t‖ / ‖A_t − mean_v(A_t)‖, " +
   'A_t the original positions of frame t, B_t the decoded ones, mean_v(A_t) the mean ' +
   "of A_t's vertices: this frame's positions only";
-
-/**
- * Grow `box` ([minx, miny, minz, maxx, maxy, maxz], start from emptyBox()) by the positions.
- * Non-finite values are skipped.
- * @param {number[]} box
- * @param {ArrayLike<number>} positions
- */
-export function extendBox(box, positions) {
-  for (let v = 0, n = positions.length; v < n; v += 3) {
-    for (let axis = 0; axis < 3; axis++) {
-      const value = positions[v + axis];
-      if (!Number.isFinite(value)) continue;
-      if (value < box[axis]) box[axis] = value;
-      if (value > box[axis + 3]) box[axis + 3] = value;
-    }
-  }
-  return box;
-}
 
 /** A box no point is in yet. */
 export function emptyBox() {

@@ -16,3 +16,10 @@ export declare function computeNormals(positions: Float32Array, index: Uint32Arr
  * @returns {number} the squared radius
  */
 export declare function computeBounds(positions: Float32Array, box: number[]): number;
+/**
+ * Grow `box` ([minx, miny, minz, maxx, maxy, maxz], start from emptyBox()) by the positions.
+ * Non-finite values are skipped.
+ * @param {number[]} box
+ * @param {ArrayLike<number>} positions
+ */
+export declare function extendBox(box: number[], positions: ArrayLike<number>): number[];
