@@ -8,15 +8,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import InputError
+from .format.header import UP_AXES  # USD's (UsdGeom allows only Y and Z), glTF's Y
 from .format.names import default_frame_names
 from .topology import checked_face_table
 
 #: Frames per second assumed where a format needs a rate and the sequence has none: 24, the
 #: default of USD (timeCodesPerSecond), Blender and film.
 DEFAULT_FRAME_RATE = 24.0
-
-#: The up axes a sequence can name: USD's (``UsdGeom`` allows only Y and Z), glTF's Y.
-UP_AXES = ("Y", "Z")
 
 
 @dataclass(eq=False)

@@ -22,7 +22,7 @@ from ..analysis import Analysis, Selection
 from ..errors import UnreachableTargetError
 from ..format import faces, names, qmat, residual, sections, streams
 from ..format.container import FORMAT_MINOR, pack_container
-from ..format.header import SCENE_MINOR, header_map, scene_keys
+from ..format.header import header_map, scene_keys
 from ..format.qmat import QuantizedMatrix
 from ..format.reconstruction import factor_value_count, reconstruct_frames, reconstruction_basis
 from ..hosvd import project
@@ -399,8 +399,6 @@ class WholeWorkspace:
             at = next((n for n, (e, _) in enumerate(packed) if e["id"] == "NAME"), len(packed))
             packed.insert(at, ({**entry, **correction[0]}, correction[1]))
             flags, minor = residual.CORRECTIONS, residual.CORRECTIONS_MINOR
-        if self.scene:  # format 1.4's keys: the file says so (every 1.x decoder reads it)
-            minor = max(minor, SCENE_MINOR)
         sizes = {entry["id"]: len(payload) for entry, payload in packed}
         return pack_container(header, packed, flags=flags, minor=minor), sizes
 

@@ -48,6 +48,11 @@ CRC = struct.Struct("<I")
 PREAMBLE_END = len(SIGNATURE) + PREAMBLE.size  # 28: where the preamble CRC starts
 HEAD_SIZE = PREAMBLE_END + CRC.size  # 32: where the header starts
 
+#: The header keys of format 1.4 (§4: time codes, unit, up axis): a file that has any of them
+#: says minor 4 at least; every 1.x decoder reads it (those before 1.4 ignore the keys, §10).
+SCENE_KEYS = ("time_codes", "meters_per_unit", "up_axis")
+SCENE_MINOR = 4
+
 #: Bits 0-15 of the preamble flags are critical: a decoder rejects any it does not know.
 CRITICAL_FLAGS_MASK = 0x0000FFFF
 #: Critical flags this decoder knows: bit 0, a segmented file (format 1.1, §6.7), and bit 1,
@@ -158,12 +163,15 @@ def pack_container(
             ``critical``, ``codec`` and the codec's parameters. ``offset``, ``length`` and
             ``crc32`` are filled in from the payload.
         flags: the preamble flags (0 in format 1.0; :data:`SEGMENTED` for a segmented file).
-        minor: the format's minor version (0, or 1 for a segmented file).
+        minor: the format's minor version (0, or 1 for a segmented file); raised to 4 when the
+            header has a key of format 1.4 (:data:`SCENE_KEYS`).
         coding_tools: whether to set flag bit 1 and minor version 2 (§6.8); by default, when a
             section needs it (:func:`.sections.uses_coding_tools`). Only files that break the
             rules on purpose (conformance vectors) say ``False`` for such sections.
     """
     flags, minor = with_coding_tools([entry for entry, _ in sections], flags, minor, coding_tools)
+    if any(key in header for key in SCENE_KEYS):
+        minor = max(minor, SCENE_MINOR)
     table = []
     offset = 0
     for entry, payload in sections:

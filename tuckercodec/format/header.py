@@ -32,9 +32,6 @@ from .segments import (
 #: The error definition id of §4.1: the KG error of Karni and Gotsman (2004), in percent.
 KG_DEFINITION_ID = "karni-gotsman-2004"
 
-#: The minor version of the time and scene keys (§4, §10): a file that carries any of them is
-#: written as 1.4 at least (every 1.x decoder reads it; those before 1.4 ignore the keys).
-SCENE_MINOR = 4
 #: The up axes the header's ``up_axis`` may name (§4).
 UP_AXES = ("Y", "Z")
 

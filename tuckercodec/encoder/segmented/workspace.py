@@ -19,7 +19,7 @@ from ..._version import __version__
 from ...errors import InputError, UnreachableTargetError
 from ...format import faces, names, qmat, residual, streams
 from ...format.container import pack_container
-from ...format.header import KG_DEFINITION_ID, SCENE_MINOR, scene_keys
+from ...format.header import KG_DEFINITION_ID, scene_keys
 from ...format.qmat import QuantizedMatrix
 from ...format.reconstruction import factor_value_count, reconstruction_basis
 from ...format.sections import KNOWN_SECTIONS
@@ -537,10 +537,10 @@ class SegmentedWorkspace:
         if self.source.frame_rate is not None:
             header["frame_rate"] = float(self.source.frame_rate)
         source = self.source
-        scene = scene_keys(
-            self.frame_count, source.time_codes, source.meters_per_unit, source.up_axis
+        # format 1.4's time and scene keys, last (pack_container raises the minor for them)
+        header.update(
+            scene_keys(self.frame_count, source.time_codes, source.meters_per_unit, source.up_axis)
         )
-        header.update(scene)  # format 1.4's time and scene keys, last
         packed = self._packed_sections(quantized, self.level if level is None else level)
         flags, minor = SEGMENTED, SEGMENTED_MINOR
         if corrections is not None:  # before NAME, as in a whole file
@@ -559,8 +559,6 @@ class SegmentedWorkspace:
             ]
             packed[at:at] = entries
             flags, minor = SEGMENTED | residual.CORRECTIONS, residual.CORRECTIONS_MINOR
-        if scene:  # the file says it uses 1.4 (every 1.x decoder reads it)
-            minor = max(minor, SCENE_MINOR)
         sizes: dict[str, int] = {}
         for entry, payload in packed:
             stem = entry["id"].split(".")[0]
