@@ -39,14 +39,13 @@ from tuckercodec.blender import package
 from tuckercodec.blender.meshes import (
     ExportFrames,
     file_frame,
-    padded_faces,
     placement,
-    polygon_loops,
     scene_frames,
     scene_rate,
 )
 from tuckercodec.blender.package import ADDON_ID, build_own_wheel, manifest
 from tuckercodec.cli import main
+from tuckercodec.io.polygons import faces_from_polygons, polygons_from_faces
 
 SESSION = Path(__file__).parent / "support" / "blender_session.py"
 NO_BPY = (
@@ -59,13 +58,17 @@ NO_BPY = (
 
 
 def test_faces_become_blender_polygons_and_come_back():
+    # Blender's loops (vertex indices, polygon after polygon) and loop totals are the corner
+    # counts and flat indices of io.polygons, which the add-on reads them with
     faces = np.array([[0, 1, 2, -1], [2, 1, 3, 4], [4, 3, 5, -1]])
-    loops, starts, totals = polygon_loops(faces)
+    totals, loops = polygons_from_faces(faces)
     assert loops.tolist() == [0, 1, 2, 2, 1, 3, 4, 4, 3, 5]
-    assert starts.tolist() == [0, 3, 7] and totals.tolist() == [3, 4, 3]
-    np.testing.assert_array_equal(padded_faces(loops, starts, totals), faces)
+    assert totals.tolist() == [3, 4, 3]
+    np.testing.assert_array_equal(faces_from_polygons(totals, loops, 6), faces)
     triangles = np.array([[0, 1, 2], [2, 1, 3]])
-    np.testing.assert_array_equal(padded_faces(*polygon_loops(triangles)), triangles)
+    np.testing.assert_array_equal(
+        faces_from_polygons(*polygons_from_faces(triangles), 4), triangles
+    )
 
 
 def test_scene_frames_map_to_the_files_frames_held_at_the_ends():

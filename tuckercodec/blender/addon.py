@@ -30,11 +30,11 @@ from bpy_extras.io_utils import ExportHelper, ImportHelper
 from ..atomic import write_atomic
 from ..decoder import Decoder
 from ..errors import TuckerCodecError
+from ..io.polygons import faces_from_polygons
 from ..sequence import MeshSequence
 from .meshes import (
     ExportFrames,
     file_frame,
-    padded_faces,
     placement,
     scene_frames,
     scene_rate,
@@ -288,11 +288,11 @@ def _mesh_arrays(mesh: Any) -> tuple[np.ndarray, np.ndarray]:
     mesh.vertices.foreach_get("co", coordinates)
     loops = np.empty(len(mesh.loops), dtype=np.int32)
     mesh.loops.foreach_get("vertex_index", loops)
-    starts = np.empty(len(mesh.polygons), dtype=np.int32)
-    mesh.polygons.foreach_get("loop_start", starts)
     totals = np.empty(len(mesh.polygons), dtype=np.int32)
     mesh.polygons.foreach_get("loop_total", totals)
-    return coordinates.reshape(-1, 3), padded_faces(loops, starts, totals)
+    # Blender keeps each polygon's loops together, in polygon order (its face offsets): the
+    # corner counts and flat indices USD and Alembic give, read by the same function
+    return coordinates.reshape(-1, 3), faces_from_polygons(totals, loops, len(mesh.vertices))
 
 
 def gather_frames(context: Any, obj: Any) -> ExportFrames:

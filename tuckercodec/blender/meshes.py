@@ -1,5 +1,5 @@
 """What the Blender add-on does to arrays, kept apart from ``bpy`` so that it is tested anywhere:
-faces as Blender's polygons and back, which frame of a file a scene frame shows, the scene's
+which frame of a file a scene frame shows, the scene's
 frame rate, and the frames of an export gathered with their topology checked."""
 
 from __future__ import annotations
@@ -11,30 +11,6 @@ import numpy as np
 
 from ..errors import InputError
 from ..sequence import MeshSequence
-
-
-def polygon_loops(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """A file's faces, (M, n) padded with -1, as Blender's polygons: the loops' vertex indices
-    (every face's corners in order), each polygon's first loop and its number of loops."""
-    faces = np.asarray(faces, dtype=np.int64)
-    used = faces >= 0
-    totals = used.sum(axis=1)
-    starts = np.concatenate([[0], np.cumsum(totals)[:-1]]) if totals.size else totals
-    return faces[used], starts.astype(np.int64), totals.astype(np.int64)
-
-
-def padded_faces(loops: np.ndarray, starts: np.ndarray, totals: np.ndarray) -> np.ndarray:
-    """Blender's polygons (loops' vertex indices, first loops, loop counts) as a file's faces:
-    (M, n), n the widest polygon's corners (3 at least), shorter rows padded with -1."""
-    totals = np.asarray(totals, dtype=np.int64)
-    width = max(3, int(totals.max(initial=0)))
-    faces = np.full((totals.size, width), -1, dtype=np.int64)
-    column = np.arange(width)
-    inside = column[None, :] < totals[:, None]
-    faces[inside] = np.asarray(loops, dtype=np.int64)[
-        (np.asarray(starts, dtype=np.int64)[:, None] + column[None, :])[inside]
-    ]
-    return faces
 
 
 def file_frame(
