@@ -35,6 +35,7 @@ from ..sequence import MeshSequence
 from .meshes import (
     ExportFrames,
     file_frame,
+    file_frames,
     placement,
     scene_frames,
     scene_rate,
@@ -172,9 +173,8 @@ def _bake_pc2(obj: Any, decoder: Decoder, source: Path, first: int, overwrite: b
     # one sample per scene frame, the frame the handler would show there: a .pc2 is evenly
     # spaced, so a file's uneven time codes become held frames
     codes, count = decoder.info.time_codes, decoder.frame_count
-    shown = [
-        file_frame(first + n, first, count, codes) for n in range(scene_frames(first, count, codes))
-    ]
+    scene = first + np.arange(scene_frames(first, count, codes))
+    shown = file_frames(scene, first, count, codes).tolist()
     baked = MeshSequence(
         decoder.positions(shown), decoder.faces, frame_rate=decoder.info.frame_rate
     )

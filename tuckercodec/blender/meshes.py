@@ -13,18 +13,27 @@ from ..errors import InputError
 from ..sequence import MeshSequence
 
 
+def file_frames(
+    scene_frames: np.ndarray, first: int, frame_count: int, time_codes: Sequence[float] | None
+) -> np.ndarray:
+    """The file's frames shown at ``scene_frames`` when its frame 0 is at scene frame
+    ``first``: with the file's time codes (format 1.4), frame f at ``first + code_f - code_0``
+    and shown until the next one starts (a missing sample holds the one before); without them,
+    frame f at ``first + f``. Held at the first and last frames outside the file's range."""
+    offsets = np.asarray(scene_frames) - first
+    if time_codes is None:
+        shown = offsets
+    else:
+        codes = np.asarray(time_codes, dtype=np.float64)
+        shown = np.searchsorted(codes - codes[0], offsets, side="right") - 1
+    return np.clip(shown, 0, frame_count - 1).astype(np.int64)
+
+
 def file_frame(
     scene_frame: int, first: int, frame_count: int, time_codes: Sequence[float] | None = None
 ) -> int:
-    """The file's frame shown at ``scene_frame`` when its frame 0 is at scene frame ``first``:
-    with the file's time codes (format 1.4), frame f at ``first + code_f - code_0`` and shown
-    until the next one starts (a missing sample holds the one before); without them, frame f at
-    ``first + f``. Held at the first and last frames outside the file's range."""
-    if time_codes is None:
-        return min(max(scene_frame - first, 0), frame_count - 1)
-    codes = np.asarray(time_codes, dtype=np.float64)
-    started = int(np.searchsorted(codes - codes[0], scene_frame - first, side="right"))
-    return min(max(started - 1, 0), frame_count - 1)
+    """:func:`file_frames` of one scene frame."""
+    return int(file_frames(np.array([scene_frame]), first, frame_count, time_codes)[0])
 
 
 def scene_frames(first: int, frame_count: int, time_codes: Sequence[float] | None) -> int:
