@@ -495,22 +495,27 @@ class Decoder:
         """The selected frames as a :class:`MeshSequence` with the file's faces and names; a
         part of the file, in order, carries its frame numbers as time codes."""
         chosen = self._selected(frames)
-        in_time = bool(np.all(np.diff(chosen) > 0))
-        codes = None
-        if in_time and self.info.time_codes is not None:  # the file's (format 1.4)
-            codes = np.asarray(self.info.time_codes, dtype=np.float64)[chosen]
-        elif in_time and chosen.size < self.info.frames:  # frame n at time code n
-            codes = np.asarray(chosen, dtype=np.float64)
         return MeshSequence(
             self.positions(chosen),
             self.faces,
             frame_names=[self.frame_names[n] for n in chosen],
             frame_rate=self.info.frame_rate,
-            # a part in order keeps its frames' places in time
-            time_codes=codes,
+            time_codes=selected_time_codes(self.info, chosen),
             meters_per_unit=self.info.meters_per_unit,
             up_axis=self.info.up_axis,
         )
+
+
+def selected_time_codes(info: FileInfo, chosen: np.ndarray) -> np.ndarray | None:
+    """The time codes of the frames ``chosen`` of a file: a selection in order keeps its
+    frames' places in time, the file's codes (format 1.4) or else their numbers (frame n at
+    time code n); ``None`` (0, 1, 2...) for the whole file without codes, or for frames out
+    of order, which have no time of their own."""
+    if not bool(np.all(np.diff(chosen) > 0)):
+        return None
+    if info.time_codes is not None:
+        return np.asarray(info.time_codes, dtype=np.float64)[chosen]
+    return np.asarray(chosen, dtype=np.float64) if chosen.size < info.frames else None
 
 
 def _frame_numbers(frames: int | Sequence[int] | np.ndarray) -> list[int]:

@@ -54,6 +54,7 @@ from typing import Any, Literal, Protocol
 import numpy as np
 
 from ..atomic import refuse_existing, write_atomic
+from ..decoder import selected_time_codes
 from ..format.reconstruction import reconstruction_basis
 from ..io.gltf.accessors import ARRAY_BUFFER, BufferBuilder, padded_rows
 from ..io.gltf.document import add_triangles, file_bytes, new_gltf
@@ -235,13 +236,11 @@ class _Animation:
         if chosen.size == 0:
             raise ValueError(f"the selection {frames!r} names no frame of the file")
         rate = float(decoder.info.frame_rate or DEFAULT_FRAME_RATE)
-        # times: the frames' time codes in the file (format 1.4; else their numbers), unless
-        # a reordered part renumbers them
-        count = decoder.info.frames
-        in_order = chosen.size < count and bool(np.all(np.diff(chosen) > 0))
-        file_codes = decoder.info.time_codes
-        numbers = chosen if file_codes is None else np.asarray(file_codes)[chosen]
-        codes = numbers if in_order or chosen.size == count else np.arange(chosen.size)
+        # times: the selection's time codes as a decoded sequence has them (frames out of
+        # order are renumbered 0, 1, 2..., which keyframes need: increasing times)
+        codes = selected_time_codes(decoder.info, chosen)
+        if codes is None:
+            codes = np.arange(chosen.size, dtype=np.float64)
         decoded = decoder.positions(chosen)
         weights, base, targets = morph_parts(decoder, chosen)
         times = (codes / rate).astype(np.float32)
