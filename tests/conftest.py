@@ -8,10 +8,10 @@ import pytest
 
 import tuckercodec
 from tuckercodec import MeshSequence
-from tuckercodec.samples import sample_path
+from tuckercodec.io.samples import sample_path
 
 #: The environment of each pytest-xdist worker (pyproject.toml's addopts run one per core): one
-#: BLAS thread each, as tuckercodec.parallel gives its own workers. Two workers of two BLAS
+#: BLAS thread each, as tuckercodec.system.parallel gives its own workers. Two workers of two BLAS
 #: threads each on two cores oversubscribe them, and OpenBLAS's waiting threads then make a
 #: large factorisation several times slower (chicken's U1 at rank 1200: 3.7 s on one thread,
 #: 23 s on two with the other core busy). A value already set is kept.

@@ -7,9 +7,9 @@ import pytest
 
 from tests.support.sequences import load_shared_npz, wave_sequence
 from tuckercodec import InputError, load_sequence
-from tuckercodec.analysis import analyze, stored_floats
-from tuckercodec.hosvd import centre_frames, hosvd, reconstruct
-from tuckercodec.samples import sample_path
+from tuckercodec.decomposition.analysis import analyze, stored_floats
+from tuckercodec.decomposition.hosvd import centre_frames, hosvd, reconstruct
+from tuckercodec.io.samples import sample_path
 
 
 def explicit_error2(analysis, i: int, k: int) -> float:

@@ -1,6 +1,6 @@
-"""Nothing is lost (tuckercodec/atomic.py, and every writer that uses it): outputs appear whole
-or not at all, an interrupted or failed write leaves the previous output as it was, and nothing
-is replaced without --force (overwrite=True)."""
+"""Nothing is lost (tuckercodec/system/atomic.py, and every writer that uses it): outputs appear
+whole or not at all, an interrupted or failed write leaves the previous output as it was, and
+nothing is replaced without --force (overwrite=True)."""
 
 from __future__ import annotations
 
@@ -16,8 +16,8 @@ import pytest
 
 import tuckercodec as tc
 from tests.support.sequences import grid_faces, wave_sequence
-from tuckercodec import atomic
 from tuckercodec.cli import main
+from tuckercodec.system import atomic
 
 
 def _listing(folder: Path) -> list[str]:
@@ -137,7 +137,7 @@ def test_a_library_write_that_fails_or_meets_an_existing_file_leaves_it(tmp_path
 _SLOW_WRITER = textwrap.dedent(
     """
     import signal, sys, time
-    from tuckercodec import atomic
+    from tuckercodec.system import atomic
     # A shell's background job inherits SIGINT ignored; restore Ctrl-C as a terminal has it.
     signal.signal(signal.SIGINT, signal.default_int_handler)
     folder = sys.argv[1]

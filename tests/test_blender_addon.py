@@ -45,7 +45,7 @@ from tuckercodec.blender.meshes import (
 )
 from tuckercodec.blender.package import ADDON_ID, build_own_wheel, manifest
 from tuckercodec.cli import main
-from tuckercodec.io.polygons import faces_from_polygons, polygons_from_faces
+from tuckercodec.io.common.polygons import faces_from_polygons, polygons_from_faces
 
 SESSION = Path(__file__).parent / "support" / "blender_session.py"
 NO_BPY = (

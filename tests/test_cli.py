@@ -515,7 +515,7 @@ def packed(wave_npz, tmp_path):
 
 def test_eval_reports_sted_with_its_parameters_and_definition(wave_npz, packed, capsys):
     from tuckercodec import load_sequence, read_compressed, sted
-    from tuckercodec.perceptual import STED_DEFINITION
+    from tuckercodec.measures.perceptual import STED_DEFINITION
 
     capsys.readouterr()
     assert main(["eval", str(wave_npz), str(packed), "--json"]) == 0

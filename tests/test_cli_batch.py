@@ -19,10 +19,10 @@ from tests.support.inputs import write_cube_frames
 from tests.support.sequences import grid_faces, wave_sequence
 from tuckercodec.cli import batch, main
 from tuckercodec.cli.batch import EXIT_SOME_FAILED, output_name
-from tuckercodec.parallel import DaskExecutor, open_executor
-from tuckercodec.samples import sample_path
+from tuckercodec.io.samples import sample_path
+from tuckercodec.system.parallel import DaskExecutor, open_executor
 
-#: One BLAS thread, as each Dask worker has (tuckercodec.parallel.WORKER_ENVIRONMENT): the
+#: One BLAS thread, as each Dask worker has (tuckercodec.system.parallel.WORKER_ENVIRONMENT): the
 #: encoder's recorded KG errors (header floats) change in their last digits with the thread
 #: count, the rest of the file does not.
 ONE_THREAD = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}

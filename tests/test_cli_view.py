@@ -25,7 +25,7 @@ import pytest
 from tests.support.sequences import grid_faces, wave_sequence
 from tuckercodec import MeshSequence, decode, encode
 from tuckercodec.cli import main
-from tuckercodec.metrics import kg_error
+from tuckercodec.measures.distortion import kg_error
 from tuckercodec.web import server as server_module
 from tuckercodec.web.server import ViewerServer
 from tuckercodec.web.site import build_site, page_files, web_root

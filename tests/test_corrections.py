@@ -20,7 +20,7 @@ from tuckercodec import Decoder, EncodeOptions, Encoder, MeshSequence
 from tuckercodec.cli import main
 from tuckercodec.errors import FormatError, UnreachableTargetError
 from tuckercodec.format import residual
-from tuckercodec.samples import sample_path
+from tuckercodec.io.samples import sample_path
 
 
 def _worst(decoded: np.ndarray, original: np.ndarray) -> float:

@@ -11,7 +11,7 @@ import pytest
 import tuckercodec as tc
 from tests.support.sequences import grid_faces, wave_sequence
 from tuckercodec.encoder import encode_frames, encode_source
-from tuckercodec.io.streaming import SequenceFrames
+from tuckercodec.model.sources import SequenceFrames
 
 
 @pytest.fixture(scope="module")

@@ -10,7 +10,7 @@ import pytest
 
 import tuckercodec as tc
 from tuckercodec.encoder import fill, search
-from tuckercodec.samples import sample_path
+from tuckercodec.io.samples import sample_path
 
 
 @pytest.fixture(scope="module")

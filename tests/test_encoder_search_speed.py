@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 
 from tuckercodec import load_sequence
+from tuckercodec.decomposition.hosvd import orthonormal_columns
 from tuckercodec.encoder import estimate, rdo, search
 from tuckercodec.format import qmat
-from tuckercodec.hosvd import orthonormal_columns
-from tuckercodec.metrics import ErrorAccumulator, WorstVertex
-from tuckercodec.samples import sample_path
-from tuckercodec.topology import MeshPrediction
+from tuckercodec.io.samples import sample_path
+from tuckercodec.measures.distortion import ErrorAccumulator, WorstVertex
+from tuckercodec.model.topology import MeshPrediction
 
 
 def _householder(columns: np.ndarray) -> np.ndarray:

@@ -10,7 +10,7 @@ import pytest
 
 from tests.support.compressed import IDENTITY_U2, deadline, spec_walk
 from tests.support.work import lines_run
-from tuckercodec import Decoder, topology
+from tuckercodec import Decoder
 from tuckercodec.format import prediction
 from tuckercodec.format.container import pack_container
 from tuckercodec.format.faces import encode_faces
@@ -23,7 +23,8 @@ from tuckercodec.format.prediction import (
     residuals,
 )
 from tuckercodec.format.streams import compress, pack_integers
-from tuckercodec.topology import MAX_MEAN_LEVELS, mesh_parents, mesh_prediction
+from tuckercodec.model import topology
+from tuckercodec.model.topology import MAX_MEAN_LEVELS, mesh_parents, mesh_prediction
 
 
 def test_accumulate_inverts_residuals_on_any_forest():

@@ -22,8 +22,8 @@ from tuckercodec.format.qmat import (
 )
 from tuckercodec.format.sections import uses_coding_tools
 from tuckercodec.format.streams import compress, pack_integers
-from tuckercodec.samples import sample_path
-from tuckercodec.topology import MAX_MEAN_LEVELS, mesh_prediction
+from tuckercodec.io.samples import sample_path
+from tuckercodec.model.topology import MAX_MEAN_LEVELS, mesh_prediction
 
 
 def test_quantized_matrix_round_trip_with_prediction():

@@ -20,7 +20,7 @@ from tuckercodec.format import traversal
 from tuckercodec.format.faces import decode_faces, encode_face_section, encode_faces
 from tuckercodec.format.limits import Limits
 from tuckercodec.format.sections import FACES_TRAVERSE
-from tuckercodec.topology import mesh_edges, mesh_parents
+from tuckercodec.model.topology import mesh_edges, mesh_parents
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 

@@ -17,8 +17,8 @@ from tuckercodec import Decoder, MeshSequence, decode_file, encode, load_sequenc
 from tuckercodec.cli.main import main
 from tuckercodec.gltf_export import COMPRESSIONS, write_decomposition_gltf
 from tuckercodec.gltf_export.quantization import BUDGET_SHARE
-from tuckercodec.metrics import KG_DEFINITION, kg_error
-from tuckercodec.samples import sample_path
+from tuckercodec.io.samples import sample_path
+from tuckercodec.measures.distortion import KG_DEFINITION, kg_error
 
 
 @pytest.fixture(scope="module")

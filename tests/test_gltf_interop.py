@@ -24,8 +24,8 @@ from tuckercodec.io.gltf.accessors import view_bytes
 from tuckercodec.io.gltf.container import pack_glb, read_document
 from tuckercodec.io.gltf.meshopt import EXTENSION
 from tuckercodec.io.gltf.reader import sample_gltf
-from tuckercodec.metrics import kg_error
-from tuckercodec.samples import sample_path
+from tuckercodec.io.samples import sample_path
+from tuckercodec.measures.distortion import kg_error
 
 # the validator cannot decode EXT_meshopt_compression: on such a file it says so, as infos
 MESHOPT_INFOS = {"UNSUPPORTED_EXTENSION", "UNUSED_OBJECT"}

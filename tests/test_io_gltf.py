@@ -22,7 +22,7 @@ from tuckercodec import DependencyError, InputError, MeshSequence, load_sequence
 from tuckercodec.io import format_of
 from tuckercodec.io.gltf import container
 from tuckercodec.io.gltf.container import pack_glb
-from tuckercodec.samples import sample_path
+from tuckercodec.io.samples import sample_path
 
 FLOAT, UBYTE, USHORT = 5126, 5121, 5123
 

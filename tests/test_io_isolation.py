@@ -358,7 +358,7 @@ def test_a_sequence_comes_back_whole_and_the_libraries_messages_stay_in_the_chil
 
 def test_a_missing_library_is_named_before_any_process_starts(data_file, monkeypatch):
     monkeypatch.setitem(sys.modules, "nothing.here", None)
-    monkeypatch.setattr(isolation, "Child", None)  # starting a child would fail
+    monkeypatch.setattr(isolation.parent, "Child", None)  # starting a child would fail
     with pytest.raises(DependencyError, match=r"^reading Test files needs .*'nothing'.*\[test\]"):
         read_isolated(hooks.chatty, data_file, ReadOptions(), "Test", "test", ["nothing.here"])
 

@@ -12,7 +12,8 @@ import pytest
 from tests.support.inputs import expect_input_error, measure, write_cube_frames
 from tuckercodec import MeshSequence, load_sequence, save_sequence
 from tuckercodec.cli import main
-from tuckercodec.io import open_frames, streaming
+from tuckercodec.io import open_frames
+from tuckercodec.model import sources as streaming
 
 
 def npy_file(path: Path, values: np.ndarray) -> Path:

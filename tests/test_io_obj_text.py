@@ -1,4 +1,4 @@
-"""OBJ vertex text made by array operations (tuckercodec.io.shortest): byte for byte what
+"""OBJ vertex text made by array operations (tuckercodec.io.common.float_text): byte for byte what
 ``repr`` of every value gives, on random float64 and float32 values at every scale, random bit
 patterns, and the edge values (zeros of both signs, subnormals, the largest and smallest
 normals, powers of two and ten, the ends of the positional range, ties, integers)."""
@@ -8,7 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tuckercodec.io import obj, shortest
+from tuckercodec.io import obj
+from tuckercodec.io.common import float_text as shortest
 
 
 def _by_repr(vertices: np.ndarray) -> bytes:

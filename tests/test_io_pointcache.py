@@ -24,8 +24,8 @@ from tests.support.sequences import grid_faces, shared_file, wave_sequence
 from tuckercodec import InputError, MeshSequence, load_sequence, save_sequence
 from tuckercodec.cli import main
 from tuckercodec.io.pointcache.mdd import frame_timing
-from tuckercodec.samples import sample_path
-from tuckercodec.sequence import DEFAULT_FRAME_RATE
+from tuckercodec.io.samples import sample_path
+from tuckercodec.model.sequence import DEFAULT_FRAME_RATE
 
 # ------------------------------------------------------------------------------------------
 # files as exporters write them

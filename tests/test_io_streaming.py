@@ -1,4 +1,4 @@
-"""Reading a sequence a range of frames at a time (tuckercodec/io/streaming.py and every
+"""Reading a sequence a range of frames at a time (tuckercodec/model/sources.py and every
 format's ``open``): the same numbers as load_sequence for any range, in every format, after
 pickling too; ranges, blocks, options; and the forward decompression of a deflated .npz.
 

@@ -18,7 +18,11 @@ from tests.support.sequences import shared_file
 from tuckercodec import DependencyError, InputError, MeshSequence
 from tuckercodec.cli import main
 from tuckercodec.io import load_sequence, save_sequence
-from tuckercodec.io.polygons import faces_from_polygons, polygons_from_faces, reverse_winding
+from tuckercodec.io.common.polygons import (
+    faces_from_polygons,
+    polygons_from_faces,
+    reverse_winding,
+)
 
 pxr = pytest.importorskip("pxr", reason="usd-core (the 'usd' extra) is not installed")
 from pxr import Usd, UsdGeom, UsdValidation, Vt  # noqa: E402
@@ -489,7 +493,7 @@ def test_a_missing_usd_core_names_the_extra(cloth, tmp_path, monkeypatch):
 
 
 # ------------------------------------------------------------------------------------------
-# the face lists of tuckercodec/io/polygons.py
+# the face lists of tuckercodec/io/common/polygons.py
 
 
 def test_polygon_lists_and_the_face_table_convert_both_ways():

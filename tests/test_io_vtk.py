@@ -23,6 +23,7 @@ from tests.support.sequences import grid_faces, shared_file, wave_sequence
 from tuckercodec import InputError, MeshSequence, load_sequence, save_sequence
 from tuckercodec.cli import main
 from tuckercodec.io import vtk as vtk_format
+from tuckercodec.io.vtk import series as vtk_series
 from tuckercodec.io.registry import WriteOptions, format_named
 from tuckercodec.io.vtk.datasets import DatasetWriter
 
@@ -326,7 +327,7 @@ def test_declarations_are_refused_by_the_parser_whatever_comes_first(tmp_path):
 
 
 def test_an_index_beyond_the_size_limit_is_refused(tmp_path, monkeypatch):
-    monkeypatch.setattr(vtk_format, "MAX_INDEX_BYTES", 100)
+    monkeypatch.setattr(vtk_series, "MAX_INDEX_BYTES", 100)
     path = tmp_path / "big.pvd"
     path.write_text(pvd_text(*['file="a.vtu"'] * 10))
     expect_input_error(lambda: load_sequence(path), path, match="is larger than 100 bytes")

@@ -18,7 +18,7 @@ from tests.support.js_decoder import run_node
 from tests.support.sequences import shared_case, shared_encoded
 from tuckercodec import FormatError
 from tuckercodec.format.container import HEAD_SIZE, PREAMBLE, SIGNATURE, pack_raw
-from tuckercodec.samples import sample_path
+from tuckercodec.io.samples import sample_path
 
 TOLERANCE = 1e-9  # spec/FORMAT.md §8, relative to the largest |position|
 VECTORS = Path(__file__).resolve().parents[1] / "spec" / "vectors"

@@ -30,8 +30,8 @@ from tuckercodec import FormatError
 from tuckercodec.format import streams, traversal
 from tuckercodec.format.container import parse_container
 from tuckercodec.format.qmat import decode_matrix
-from tuckercodec.samples import sample_path
-from tuckercodec.topology import MeshPrediction, mesh_parents
+from tuckercodec.io.samples import sample_path
+from tuckercodec.model.topology import MeshPrediction, mesh_parents
 
 SCRIPT = Path(__file__).resolve().parent / "js" / "tkc_topology.mjs"
 VECTORS = Path(__file__).resolve().parents[1] / "spec" / "vectors"

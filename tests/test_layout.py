@@ -72,6 +72,69 @@ def _family(reached: set[str], prefix: str) -> set[str]:
     return {name for name in reached if name == prefix or name.startswith(prefix + ".")}
 
 
+#: The package's layers, lowest first, and the top-level packages and modules each holds (""
+#: is the package's own ``__init__``). ARCHITECTURE.md says what each knows.
+LAYERS: tuple[tuple[str, frozenset[str]], ...] = (
+    ("foundation", frozenset({"_version", "errors", "system"})),
+    ("model", frozenset({"model"})),
+    ("measures", frozenset({"measures"})),
+    ("format", frozenset({"format"})),
+    ("codec", frozenset({"decomposition", "encoder", "decoder"})),
+    ("io", frozenset({"io"})),
+    (
+        "applications",
+        frozenset(
+            {"", "__main__", "files", "gltf_export", "reports", "cli", "blender", "web"}
+            | {"zarr_codec", "internal"}
+        ),
+    ),
+)
+
+
+def _unit(module: str) -> str:
+    """The top-level package or module of the package that ``module`` belongs to."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else ""
+
+
+def _layer(module: str) -> int:
+    unit = _unit(module)
+    found = [index for index, (_, units) in enumerate(LAYERS) if unit in units]
+    assert found, f"{module}: its top-level unit {unit!r} is in no layer of LAYERS"
+    return found[0]
+
+
+def _layer_violations(edges: dict[str, frozenset[str]]) -> list[str]:
+    """Every import (module -> imported) that goes up the layers."""
+    return [
+        f"{module} ({LAYERS[_layer(module)][0]}) imports {name} ({LAYERS[_layer(name)][0]})"
+        for module in sorted(edges)
+        for name in sorted(edges[module])
+        if _layer(name) > _layer(module)
+    ]
+
+
+def test_every_module_belongs_to_one_layer():
+    units = [units for _, units in LAYERS]
+    assert sum(len(u) for u in units) == len(frozenset().union(*units)), "a unit in two layers"
+    for module in _modules():
+        _layer(module)
+
+
+def test_every_import_goes_down_the_layers():
+    violations = _layer_violations({module: _imports(module) for module in _modules()})
+    assert not violations, "imports that go up the layers:\n" + "\n".join(violations)
+
+
+def test_the_layer_check_sees_an_import_that_goes_up():
+    """The check itself, on a made-up import: the model importing the codec is refused."""
+    edges = {"tuckercodec.model.sequence": frozenset({"tuckercodec.encoder.options"})}
+    assert _layer_violations(edges) == [
+        "tuckercodec.model.sequence (model) imports tuckercodec.encoder.options (codec)"
+    ]
+    assert not _layer_violations({"tuckercodec.encoder.options": frozenset(edges)})
+
+
 def test_the_encoder_never_imports_the_decoder():
     for module in _family(set(_modules()), "tuckercodec.encoder"):
         assert not _family(_reachable(module), "tuckercodec.decoder"), module
@@ -79,15 +142,44 @@ def test_the_encoder_never_imports_the_decoder():
 
 def test_the_decoder_never_imports_the_encoder_or_the_error_measures():
     reached = _reachable("tuckercodec.decoder")
-    for forbidden in ("tuckercodec.encoder", "tuckercodec.metrics", "tuckercodec.perceptual"):
+    forbidden_families = (
+        "tuckercodec.encoder",
+        "tuckercodec.measures.distortion",
+        "tuckercodec.measures.perceptual",
+    )
+    for forbidden in forbidden_families:
         assert not _family(reached, forbidden), forbidden
+
+
+def test_io_imports_neither_the_format_nor_the_codec():
+    """Reading and writing a cache needs no part of the codec (the codec reads through
+    :class:`~tuckercodec.model.sources.FrameSource`)."""
+    for module in _family(set(_modules()), "tuckercodec.io"):
+        reached = _reachable(module)
+        for layer in ("format", "decomposition", "encoder", "decoder"):
+            assert not _family(reached, f"tuckercodec.{layer}"), (module, layer)
 
 
 def test_the_format_package_knows_bytes_not_the_codec_around_it():
     for module in _family(set(_modules()), "tuckercodec.format"):
         reached = _reachable(module)
-        for layer in ("encoder", "decoder", "io", "cli", "analysis", "hosvd", "metrics"):
+        for layer in ("encoder", "decoder", "io", "cli", "decomposition"):
             assert not _family(reached, f"tuckercodec.{layer}"), (module, layer)
+
+
+def test_init_files_only_re_export():
+    """An ``__init__.py`` holds no function or class of its own (the package root's lazy
+    ``__getattr__`` and ``__dir__``, and a lazy package's, are the exception): code lives in
+    modules whose names say what they hold."""
+    allowed = {"__getattr__", "__dir__"}
+    for path in sorted(PACKAGE.rglob("__init__.py")):
+        defined = [
+            node.name
+            for node in ast.parse(path.read_text()).body
+            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef)
+            and node.name not in allowed
+        ]
+        assert not defined, f"{path.relative_to(ROOT)} defines {defined}: move them to a module"
 
 
 def test_package_imports_form_no_cycle():

@@ -1,6 +1,6 @@
-"""Error measures (tuckercodec/metrics.py): the Karni-Gotsman error and its temporal variant,
-the relative error and the largest vertex displacement, on cases whose value is known by hand;
-the worst vertex (max_distance) against a brute-force numpy computation, with ties, in blocks
+"""Error measures (tuckercodec/measures/distortion.py): the Karni-Gotsman error and its temporal
+variant, the relative error and the largest vertex displacement, on cases whose value is known by
+hand; the worst vertex (max_distance) against a brute-force numpy computation, with ties, in blocks
 and a range at a time (ErrorAccumulator)."""
 
 from __future__ import annotations
@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from tests.support.sequences import wave_sequence
-from tuckercodec import InputError, MeshSequence, metrics
-from tuckercodec.metrics import (
+from tuckercodec import InputError, MeshSequence
+from tuckercodec.measures import distortion as metrics
+from tuckercodec.measures.distortion import (
     kg_denominator,
     kg_error,
     max_distance,

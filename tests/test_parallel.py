@@ -1,4 +1,4 @@
-"""tuckercodec.parallel: one function over many items, in this process and on a real Dask
+"""tuckercodec.system.parallel: one function over many items, in this process and on a real Dask
 LocalCluster of 2 worker processes on loopback (one, module-scoped: it takes about a second to
 start). Results in item order, shared values sent once per worker, exceptions back with their
 class and fields, the workers' environment (one BLAS thread, Ctrl-C ignored), a remote scheduler
@@ -21,9 +21,10 @@ from typing import Any
 import numpy as np
 import pytest
 
-from tuckercodec import errors, parallel
+from tuckercodec import errors
 from tuckercodec.errors import DependencyError, FormatError, InputError, TuckerCodecError
-from tuckercodec.parallel import Executor, InProcessExecutor, open_executor
+from tuckercodec.system import parallel
+from tuckercodec.system.parallel import Executor, InProcessExecutor, open_executor
 
 LINUX = sys.platform.startswith("linux")
 #: Shared values a task kept, so that no two copies can share an address (see test below).
@@ -393,7 +394,7 @@ def test_open_executor_refuses_what_it_cannot_do(monkeypatch):
 
 def test_in_process_imports_no_dask():
     code = (
-        "import sys; from tuckercodec.parallel import open_executor\n"
+        "import sys; from tuckercodec.system.parallel import open_executor\n"
         "with open_executor() as executor: assert executor.map(abs, [-1, -2]) == [1, 2]\n"
         "print(sorted(m for m in sys.modules if m.split('.')[0] in ('dask', 'distributed')))"
     )
@@ -406,7 +407,7 @@ def test_in_process_imports_no_dask():
 _INTERRUPTED = textwrap.dedent(
     """
     import signal, sys, time
-    from tuckercodec.parallel import open_executor
+    from tuckercodec.system.parallel import open_executor
     if __name__ == "__main__":
         # set, not inherited: a background job without job control starts with SIGINT ignored
         signal.signal(signal.SIGINT, signal.default_int_handler)

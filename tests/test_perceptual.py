@@ -1,6 +1,6 @@
-"""STED, the spatio-temporal edge difference of Vasa and Skala 2011 (tuckercodec/perceptual.py):
-its edge neighbourhoods, and its value on cases known by hand (rigid motions, uniform scaling,
-one moved vertex), on a real sequence, and on bad arguments."""
+"""STED, the spatio-temporal edge difference of Vasa and Skala 2011
+(tuckercodec/measures/perceptual.py): its edge neighbourhoods, and its value on cases known by hand
+(rigid motions, uniform scaling, one moved vertex), on a real sequence, and on bad arguments."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ import pytest
 
 from tests.support.sequences import grid_faces, load_shared_npz, wave_sequence
 from tuckercodec import InputError, MeshSequence
-from tuckercodec.perceptual import STED_DEFINITION, Sted, neighbourhood_edges, sted
-from tuckercodec.topology import mesh_edges
+from tuckercodec.measures.perceptual import STED_DEFINITION, Sted, neighbourhood_edges, sted
+from tuckercodec.model.topology import mesh_edges
 
 # A 2 x 1 rectangle in the plane z = 0, two triangles: its bounding-box diagonal is sqrt(5).
 RECTANGLE = np.array([[0, 0, 0], [2, 0, 0], [2, 1, 0], [0, 1, 0]], dtype=float)

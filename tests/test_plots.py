@@ -6,7 +6,10 @@ import numpy as np
 import pytest
 
 from tests.support.sequences import grid_faces, wave_sequence
-from tuckercodec.plots import plot_frame_errors, render_frame  # matplotlib is imported on use
+from tuckercodec.reports.plots import (  # matplotlib is imported on use
+    plot_frame_errors,
+    render_frame,
+)
 
 pytest.importorskip("matplotlib")
 

@@ -1,10 +1,10 @@
-"""The rate (tuckercodec/rate.py): bits per frame per vertex, from whole bytes."""
+"""The rate (tuckercodec/measures/rate.py): bits per frame per vertex, from whole bytes."""
 
 from __future__ import annotations
 
 import pytest
 
-from tuckercodec.rate import bpfv
+from tuckercodec.measures.rate import bpfv
 
 
 def test_bpfv_counts_whole_bytes():

@@ -1,5 +1,5 @@
-"""Opening inputs (tuckercodec/reading.py): only regular files are read, so a named pipe given
-by mistake is an InputError at once, not a wait for a writer that never comes; the same for a
+"""Opening inputs (tuckercodec/system/reading.py): only regular files are read, so a named pipe
+given by mistake is an InputError at once, not a wait for a writer that never comes; the same for a
 compressed file, whichever way it is opened."""
 
 from __future__ import annotations
@@ -88,7 +88,7 @@ def _exit_code(argv: list[str]) -> None:
 
 
 def test_open_input_names_a_file_that_cannot_be_opened(tmp_path):
-    from tuckercodec.reading import open_input
+    from tuckercodec.system.reading import open_input
 
     with pytest.raises(InputError, match=r"missing\.pc2: cannot read: No such file"):
         open_input(tmp_path / "missing.pc2", "a PC2 point cache")

@@ -1,4 +1,4 @@
-"""The built-in sample (tuckercodec/samples.py): the cloth the package ships is the shared cloth
+"""The built-in sample (tuckercodec/io/samples.py): the cloth the package ships is the shared cloth
 sequence, unchanged, with its licence."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ import numpy as np
 
 import tuckercodec
 from tests.support.sequences import load_shared_npz
-from tuckercodec.samples import sample_path
+from tuckercodec.io.samples import sample_path
 
 
 def test_builtin_sample_is_the_shared_cloth_unchanged():

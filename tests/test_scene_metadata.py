@@ -16,7 +16,7 @@ from tuckercodec import FormatError, InputError, MeshSequence, decode, encode, i
 from tuckercodec.cli import main
 from tuckercodec.encoder import EncodeOptions, Encoder
 from tuckercodec.io import load_sequence, save_sequence
-from tuckercodec.samples import sample_path
+from tuckercodec.io.samples import sample_path
 
 
 @pytest.fixture(scope="module")

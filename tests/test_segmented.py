@@ -14,8 +14,8 @@ from tuckercodec import Decoder, FormatError, LimitError, Limits, MeshSequence, 
 from tuckercodec.encoder.plan import needs_segments, parse_size, plan_segments
 from tuckercodec.format.segments import SEGMENTED
 from tuckercodec.internal import HEAD_SIZE
-from tuckercodec.metrics import kg_error
-from tuckercodec.samples import sample_path
+from tuckercodec.io.samples import sample_path
+from tuckercodec.measures.distortion import kg_error
 
 
 @pytest.fixture(scope="module")
@@ -195,7 +195,7 @@ def test_the_bytes_do_not_depend_on_the_workers(cloth):
     run on several threads and round its products differently, so that file may differ in its
     last bits; it meets the same target.)"""
     pytest.importorskip("distributed", reason="the LocalCluster needs the extra [dask]")
-    from tuckercodec.parallel import open_executor
+    from tuckercodec.system.parallel import open_executor
 
     written = []
     for jobs in (1, 2):
@@ -279,7 +279,7 @@ def test_encode_in_segments_on_the_command_line(tmp_path, capsys):
 def test_a_fitted_basis_serves_every_segment_on_its_own(cloth):
     from tuckercodec.encoder import encode_frames
     from tuckercodec.encoder.segmented import fit_basis, shared_basis_of
-    from tuckercodec.io.streaming import SequenceFrames
+    from tuckercodec.model.sources import SequenceFrames
 
     basis = fit_basis(SequenceFrames(cloth), target_kg=0.1, segment_frames=20)
     for start in range(0, 60, 20):

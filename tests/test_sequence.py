@@ -1,6 +1,6 @@
-"""The in-memory sequence (tuckercodec/sequence.py): MeshSequence checks its arrays (shape, finite
-positions, the face rule of tuckercodec/topology.py, frame names) as the readers check a
-file's."""
+"""The in-memory sequence (tuckercodec/model/sequence.py): MeshSequence checks its arrays (shape,
+finite positions, the face rule of tuckercodec/model/topology.py, frame names) as the readers check
+a file's."""
 
 from __future__ import annotations
 

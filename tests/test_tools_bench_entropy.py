@@ -6,7 +6,7 @@ from tools import bench
 from tools.bench import entropy as bench_entropy
 from tuckercodec import encode_with_report, load_sequence
 from tuckercodec.internal import parse_container, streams
-from tuckercodec.samples import sample_path
+from tuckercodec.io.samples import sample_path
 
 
 def test_the_measured_integers_are_those_the_file_stores():

@@ -9,7 +9,7 @@ import pytest
 
 from tools import bench, common
 from tools.bench import size as bench_size
-from tuckercodec.samples import sample_path
+from tuckercodec.io.samples import sample_path
 
 
 def _has_baseline() -> bool:

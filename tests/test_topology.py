@@ -1,5 +1,5 @@
-"""The face table and what follows from it (tuckercodec/topology.py): the edges of polygons, and
-the mesh parents of spec/FORMAT.md §6.2, compared with the spec's queue walk written out
+"""The face table and what follows from it (tuckercodec/model/topology.py): the edges of polygons,
+and the mesh parents of spec/FORMAT.md §6.2, compared with the spec's queue walk written out
 literally, on random faces and on faces hypothesis makes (repeated, degenerate, padded)."""
 
 from __future__ import annotations
@@ -11,8 +11,8 @@ from hypothesis import strategies as st
 
 from tests.support.compressed import spec_walk
 from tests.support.properties import HYPOTHESIS_SETTINGS
-from tuckercodec import topology
-from tuckercodec.topology import face_edges, mesh_parents
+from tuckercodec.model import topology
+from tuckercodec.model.topology import face_edges, mesh_parents
 
 
 def _spec_walk(faces: np.ndarray, count: int) -> list[int]:

@@ -28,8 +28,8 @@ numcodecs = pytest.importorskip(
 import tuckercodec  # noqa: E402
 from tuckercodec import InputError  # noqa: E402
 from tuckercodec.encoder.segmented import SharedBasis  # noqa: E402
-from tuckercodec.metrics import kg_error  # noqa: E402
-from tuckercodec.samples import sample_path  # noqa: E402
+from tuckercodec.io.samples import sample_path  # noqa: E402
+from tuckercodec.measures.distortion import kg_error  # noqa: E402
 from tuckercodec.zarr_codec import FittedBasis, TuckerNumcodec, TuckerZarrCodec, chunk  # noqa: E402
 from tuckercodec.zarr_codec import chunk as chunk_module  # noqa: E402
 from tuckercodec.zarr_codec import numcodec as numcodec_module  # noqa: E402
@@ -452,7 +452,7 @@ def test_a_chunk_of_another_shape_than_the_arrays_is_refused(cloth):
 
 def test_the_zarr_benchmark_measures_what_it_stores(tmp_path):
     from tools.bench import zarr as bench_zarr
-    from tuckercodec.samples import sheet_triangles, wave_sheet
+    from tuckercodec.io.samples import sheet_triangles, wave_sheet
 
     sheet = tuckercodec.MeshSequence(wave_sheet(frames=24, grid=9), sheet_triangles(9))
     result = bench_zarr.measure(sheet, 1.0, 8, 1, tmp_path)

@@ -17,9 +17,9 @@ The public API::
     info(data)                             # the header, without decoding anything
 
 The package follows the pipeline: :mod:`~tuckercodec.io` reads and writes sequences,
-:mod:`~tuckercodec.hosvd` and :mod:`~tuckercodec.analysis` decompose and tabulate,
-:mod:`~tuckercodec.encoder` meets the target over :mod:`~tuckercodec.format` (the spec's parts),
-and :mod:`~tuckercodec.decoder` rebuilds frames from it.
+:mod:`~tuckercodec.decomposition.hosvd` and :mod:`~tuckercodec.decomposition.analysis` decompose and
+tabulate, :mod:`~tuckercodec.encoder` meets the target over :mod:`~tuckercodec.format` (the spec's
+parts), and :mod:`~tuckercodec.decoder` rebuilds frames from it.
 
 Errors are KG errors (Karni-Gotsman, per-frame centroid) unless a name says otherwise;
 ``sted(original, approx)`` is the perception-correlated STED of Váša and Skala (2011).
@@ -37,9 +37,9 @@ from ._version import __version__
 # so that a process that only decodes never imports the encoder, scipy.linalg or the format
 # libraries: ``import tuckercodec`` took 0.6-1.3 s and 61 MB where numpy alone takes 0.15 s.
 _PUBLIC = {
-    "Analysis": "analysis",
-    "RankChoice": "analysis",
-    "analyze": "analysis",
+    "Analysis": "decomposition.analysis",
+    "RankChoice": "decomposition.analysis",
+    "analyze": "decomposition.analysis",
     "Decoder": "decoder",
     "FileInfo": "decoder",
     "decode": "decoder",
@@ -68,17 +68,17 @@ _PUBLIC = {
     "load_sequence": "io",
     "open_frames": "io",
     "save_sequence": "io",
-    "kg_error": "metrics",
-    "max_vertex_displacement": "metrics",
-    "relative_error": "metrics",
-    "sted": "perceptual",
-    "bpfv": "rate",
-    "MeshSequence": "sequence",
+    "kg_error": "measures.distortion",
+    "max_vertex_displacement": "measures.distortion",
+    "relative_error": "measures.distortion",
+    "sted": "measures.perceptual",
+    "bpfv": "measures.rate",
+    "MeshSequence": "model.sequence",
 }
 
 if TYPE_CHECKING:
-    from .analysis import Analysis, RankChoice, analyze
     from .decoder import Decoder, FileInfo, decode, info
+    from .decomposition.analysis import Analysis, RankChoice, analyze
     from .encoder import (
         EncodeOptions,
         Encoder,
@@ -101,10 +101,10 @@ if TYPE_CHECKING:
     from .files import decode_file, encode_file, read_compressed
     from .format.limits import Limits
     from .io import FrameSource, formats, load_sequence, open_frames, save_sequence
-    from .metrics import kg_error, max_vertex_displacement, relative_error
-    from .perceptual import sted
-    from .rate import bpfv
-    from .sequence import MeshSequence
+    from .measures.distortion import kg_error, max_vertex_displacement, relative_error
+    from .measures.perceptual import sted
+    from .measures.rate import bpfv
+    from .model.sequence import MeshSequence
 
 
 def __getattr__(name: str) -> Any:

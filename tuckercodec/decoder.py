@@ -38,8 +38,8 @@ from .format.limits import DEFAULT_LIMITS, Limits, check_limit
 from .format.reconstruction import reconstruct_frames, reconstruction_basis
 from .format.sections import Section
 from .format.segments import BASIS_OWN, BASIS_SHARED, SegmentEntry
-from .sequence import MeshSequence
-from .topology import MeshPrediction
+from .model.sequence import MeshSequence, default_frame_names
+from .model.topology import MeshPrediction
 
 #: A compressed file: its bytes, or a path to read it from.
 CompressedFile = bytes | bytearray | memoryview | str | os.PathLike[str]
@@ -369,7 +369,7 @@ class Decoder:
     def _decode_names(self) -> list[str]:
         name_section = self._container.section("NAME")
         if name_section is None:
-            return names.default_frame_names(self.info.frames)
+            return default_frame_names(self.info.frames)
         return names.decode_names(
             name_section.params,
             lambda: self._container.payload(self._data, name_section),

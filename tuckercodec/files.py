@@ -15,19 +15,20 @@ from typing import Any
 
 import numpy as np
 
-from .analysis import Selection
-from .atomic import refuse_existing, write_atomic
 from .decoder import Decoder, FrameSelection
+from .decomposition.analysis import Selection
 from .encoder import EncodeOptions, Encoder, EncodeReport, resolve_options
 from .errors import InputError
 from .format.container import SIGNATURE
 from .format.limits import DEFAULT_LIMITS, Limits
 from .format.segments import BASIS_SHARED
 from .gltf_export import DEFAULT_COMPRESSION, Compression, write_decomposition_gltf
-from .io import Source, format_named, format_of, open_frames, save_sequence
-from .parallel import Executor
-from .reading import open_regular_file
-from .sequence import MeshSequence
+from .io import format_named, format_of, open_frames, save_sequence
+from .io.dispatch import Source
+from .model.sequence import MeshSequence
+from .system.atomic import refuse_existing, write_atomic
+from .system.parallel import Executor
+from .system.reading import open_regular_file
 
 #: The suffix of compressed files.
 SUFFIX = ".tkc"

@@ -32,8 +32,8 @@ package sees at once what the tools rely on.
 
 from __future__ import annotations
 
-from .analysis import Curve
-from .atomic import refuse_existing, write_atomic
+from .decomposition.analysis import Curve
+from .decomposition.hosvd import centre_frames, reconstruct
 from .encoder import rdo
 from .format import faces, qmat, residual, sections, streams, traversal
 from .format.container import (
@@ -48,13 +48,13 @@ from .format.container import (
 from .format.limits import DEFAULT_LIMITS
 from .format.prediction import tree_depths
 from .gltf_export import write_decomposition_gltf
-from .hosvd import centre_frames, reconstruct
 from .io.gltf.reader import sample_gltf
-from .metrics import KG_DEFINITION, MAX_DISTANCE_DEFINITION, max_distance
-from .perceptual import STED_DEFINITION
-from .plots import plot_rd_curve, pyplot, save_figure
-from .samples import sample_path, sheet_triangles, wave_sheet
-from .topology import mesh_parents, mesh_prediction
+from .io.samples import sample_path, sheet_triangles, wave_sheet
+from .measures.distortion import KG_DEFINITION, MAX_DISTANCE_DEFINITION, max_distance
+from .measures.perceptual import STED_DEFINITION
+from .model.topology import mesh_parents, mesh_prediction
+from .reports.plots import plot_rd_curve, pyplot, save_figure
+from .system.atomic import refuse_existing, write_atomic
 from .zarr_codec.chunk import chunk_mode, decode_chunk, encode_chunk
 
 __all__ = [

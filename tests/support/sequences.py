@@ -12,7 +12,7 @@ import pytest
 
 import tuckercodec
 from tuckercodec import EncodeResult, MeshSequence
-from tuckercodec.samples import sheet_triangles, wave_sheet
+from tuckercodec.io.samples import sheet_triangles, wave_sheet
 
 SHARED_DATA = Path(__file__).resolve().parents[3] / "shared" / "data"
 
@@ -59,7 +59,7 @@ def load_shared_npz(name: str) -> tuple[np.ndarray, np.ndarray]:
 
 
 def wave_sequence(frames: int = 24, grid: int = 9, seed: int = 0) -> np.ndarray:
-    """A real-looking synthetic animation (:func:`tuckercodec.samples.wave_sheet`) plus a little
+    """A real-looking synthetic animation (:func:`tuckercodec.io.samples.wave_sheet`) plus a little
     noise so that no rank is exactly zero. Shape (frames, grid*grid, 3)."""
     rng = np.random.default_rng(seed)
     out = wave_sheet(frames, grid)

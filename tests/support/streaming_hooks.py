@@ -16,7 +16,7 @@ import numpy as np
 from tuckercodec import InputError
 from tuckercodec.io.isolation import note
 from tuckercodec.io.registry import ReadOptions
-from tuckercodec.io.streaming import FrameSource
+from tuckercodec.model.sources import FrameSource
 
 FRAMES, VERTICES = 10, 5
 

@@ -18,8 +18,8 @@ median of ``--repeat`` runs (``--big-repeat`` for the large sequence), with [min
    time, MB/s of float32 input, peak memory, size, bpfv, the KG error the encoder reports
    (``info --json``) and the KG error measured here, independently, by streaming the ``.npy``
    (memory-mapped, block by block) against ``Decoder(path).positions(range)``, Karni-Gotsman
-   (per-frame centroid) as in tuckercodec.metrics. Targets: peak at most 1.5 GB, at least
-   25 MB/s, decoded KG at most the target.
+   (per-frame centroid) as in tuckercodec.measures.distortion. Targets: peak at most 1.5 GB, at
+   least 25 MB/s, decoded KG at most the target.
 2. **One frame from disk**, in a fresh process each run: resident memory after ``import
    tuckercodec``, the time to open ``Decoder(path)``, then to decode frame 0, the middle frame,
    the last frame and the frame after the middle one (in the middle one's segment), and the

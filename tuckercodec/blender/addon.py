@@ -27,11 +27,11 @@ import numpy as np
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper, ImportHelper
 
-from ..atomic import write_atomic
 from ..decoder import Decoder
 from ..errors import TuckerCodecError
-from ..io.polygons import faces_from_polygons
-from ..sequence import MeshSequence
+from ..io.common.polygons import faces_from_polygons
+from ..model.sequence import MeshSequence
+from ..system.atomic import write_atomic
 from .meshes import (
     ExportFrames,
     file_frame,

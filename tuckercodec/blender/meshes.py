@@ -10,7 +10,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import InputError
-from ..sequence import MeshSequence
+from ..model.sequence import MeshSequence
 
 
 def file_frames(

@@ -30,8 +30,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .._version import __version__
-from ..atomic import atomic_output
 from ..errors import DependencyError
+from ..system.atomic import atomic_output
 
 #: The add-on's module and extension id.
 ADDON_ID = "tuckercodec_blender"

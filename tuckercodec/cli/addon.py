@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import argparse
 
-from ..atomic import refuse_existing
 from ..blender.package import write_addon_zip
 from ..errors import EXIT_OK
+from ..system.atomic import refuse_existing
 
 
 def run_blender_addon(args: argparse.Namespace) -> int:

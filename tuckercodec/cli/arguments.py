@@ -19,9 +19,9 @@ from ..encoder.plan import DEFAULT_SEGMENT_FRAMES, parse_size
 from ..files import SUFFIX
 from ..gltf_export import COMPRESSIONS
 from ..io.registry import writable_formats
-from ..metrics import KG_DEFINITION
-from ..perceptual import STED_DEFINITION
-from ..report import DEFAULT_TARGETS
+from ..measures.distortion import KG_DEFINITION
+from ..measures.perceptual import STED_DEFINITION
+from ..reports.text import DEFAULT_TARGETS
 
 if TYPE_CHECKING:
     _Verbs = argparse._SubParsersAction[argparse.ArgumentParser]

@@ -1,5 +1,5 @@
 """The ``batch`` verb: encode many sequences the same way, each into ``OUTDIR/<name>.tkc``, in
-parallel over an executor (:mod:`tuckercodec.parallel`: this process, ``--jobs N`` worker
+parallel over an executor (:mod:`tuckercodec.system.parallel`: this process, ``--jobs N`` worker
 processes, or a Dask cluster with ``--scheduler``).
 
 Everything that can be checked is checked before any work: the output names (one per input,
@@ -24,13 +24,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TextIO
 
-from ..atomic import write_atomic
 from ..encoder import EncodeOptions, Encoder, EncodeReport
 from ..errors import EXIT_OK
 from ..files import SUFFIX
 from ..io import format_of, load_sequence
-from ..metrics import KG_DEFINITION
-from ..parallel import open_executor
+from ..measures.distortion import KG_DEFINITION
+from ..system.atomic import write_atomic
+from ..system.parallel import open_executor
 from .codec import encode_options
 from .failures import describe_failure
 from .inputs import read_options, sequence_source

@@ -18,9 +18,14 @@ from ..errors import EXIT_OK, InputError
 from ..files import decode_file, decoded_output_path, is_gltf_output, write_encoded
 from ..format.segments import BASIS_SHARED
 from ..gltf_export import DEFAULT_COMPRESSION, write_decomposition_gltf
-from ..metrics import KG_DEFINITION, MAX_DISTANCE_DEFINITION, Displacement, ErrorAccumulator
-from ..report import worst_vertex
-from ..sequence import MeshSequence
+from ..measures.distortion import (
+    KG_DEFINITION,
+    MAX_DISTANCE_DEFINITION,
+    Displacement,
+    ErrorAccumulator,
+)
+from ..model.sequence import MeshSequence
+from ..reports.text import worst_vertex
 from .inputs import check_precision, load_input, read_options, sequence_source
 
 

@@ -14,17 +14,17 @@ from pathlib import Path
 
 import numpy as np
 
-from ..analysis import analyze
-from ..atomic import refuse_existing, write_atomic
 from ..decoder import Decoder, decode
+from ..decomposition.analysis import analyze
 from ..encoder import encode_with_report
 from ..errors import EXIT_OK, InputError
 from ..io import load_sequence
-from ..metrics import KG_DEFINITION, MAX_DISTANCE_DEFINITION, compare, kg_error
-from ..perceptual import STED_DEFINITION, sted
-from ..report import curves_csv, targets_table, worst_vertex
-from ..samples import SAMPLE_NAME, sample_path
-from ..sequence import MeshSequence
+from ..io.samples import SAMPLE_NAME, sample_path
+from ..measures.distortion import KG_DEFINITION, MAX_DISTANCE_DEFINITION, compare, kg_error
+from ..measures.perceptual import STED_DEFINITION, sted
+from ..model.sequence import MeshSequence
+from ..reports.text import curves_csv, targets_table, worst_vertex
+from ..system.atomic import refuse_existing, write_atomic
 from .inputs import is_compressed, load_input, read_options, sequence_source
 
 PLOT_FORMATS = (".png", ".svg", ".pdf")
@@ -69,7 +69,7 @@ def run_rd(args: argparse.Namespace) -> int:
         write_atomic(args.csv, curves_csv(analysis).encode(), overwrite=args.force)
         print(f"\nwrote {args.csv}")
     if args.plot is not None or args.heatmap is not None:
-        from ..plots import plot_heatmaps, plot_rd_curve  # matplotlib only when asked for
+        from ..reports.plots import plot_heatmaps, plot_rd_curve  # matplotlib only when asked for
 
         name = Path(str(source)).stem
         if args.plot is not None:
@@ -117,7 +117,7 @@ def run_eval(args: argparse.Namespace) -> int:
         "worst_frame_kg_share": float(per_frame[worst_frame]),
     }
     if args.plot is not None:
-        from ..plots import plot_frame_errors  # matplotlib only when asked for
+        from ..reports.plots import plot_frame_errors  # matplotlib only when asked for
 
         title = f"{Path(args.approximation).name} against {Path(args.original).name}"
         largest = measured.per_frame_max_distance()
@@ -196,7 +196,7 @@ def run_render(args: argparse.Namespace) -> int:
             )
         errors = np.linalg.norm(shown.vertices[0] - reference.frame(args.frame).vertices[0], axis=1)
 
-    from ..plots import render_frame  # matplotlib only when asked for
+    from ..reports.plots import render_frame  # matplotlib only when asked for
 
     count = frames.count
     frame = args.frame % count

@@ -7,14 +7,14 @@ import time
 
 import numpy as np
 
-from ..atomic import refuse_existing
 from ..errors import EXIT_OK
 from ..files import SUFFIX
-from ..format.names import default_frame_names
-from ..io import FOLDER_FORMAT, format_named, format_of, formats, save_sequence
+from ..io import format_named, format_of, formats, save_sequence
+from ..io.dispatch import FOLDER_FORMAT
 from ..io.registry import OPTION_FLAGS
-from ..optional import extra_installed
-from ..sequence import MeshSequence
+from ..model.sequence import MeshSequence, default_frame_names
+from ..system.atomic import refuse_existing
+from ..system.optional import extra_installed
 from .inputs import check_precision, load_input
 
 #: How the parts a format may keep (SequenceFormat.carries) are named to the user.

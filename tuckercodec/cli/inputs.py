@@ -10,8 +10,8 @@ from typing import Any
 from ..decoder import Decoder
 from ..files import SUFFIX, is_compressed_file
 from ..io import format_of, load_sequence
-from ..samples import sample_path
-from ..sequence import MeshSequence
+from ..io.samples import sample_path
+from ..model.sequence import MeshSequence
 
 
 def sequence_source(name: str) -> str | Path:

@@ -30,11 +30,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..atomic import atomic_store, refuse_existing
 from ..decoder import Decoder
 from ..errors import EXIT_OK, FormatError, InputError
 from ..format.disk import read_file
 from ..io import open_frames
+from ..system.atomic import atomic_store, refuse_existing
 from ..web.server import ViewerServer
 from ..web.site import (
     ReferenceFrames,

@@ -5,7 +5,8 @@ size in bpfv (the smallest error that fits).
 
 How a target KG error is met (errors are squared norms; E is the KG denominator's square):
 
-1. The exact table (:mod:`tuckercodec.analysis`) gives the truncation error of every (i, k).
+1. The exact table (:mod:`tuckercodec.decomposition.analysis`) gives the truncation error of
+   every (i, k).
 2. Quantization adds error. An error e in column a of U1 reaches the tensor multiplied by the
    norm of core slice a, so column a gets the step sqrt(D) / ||CORE[a, :, :]||; likewise U3's
    column b with ||CORE[:, :, b]||, the core gets sqrt(D), the centroids sqrt(D / K) (an error
@@ -30,12 +31,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from ..analysis import Analysis, Selection
+from ..decomposition.analysis import Analysis, Selection
 from ..format import streams
 from ..format.segments import BASIS_SHARED
-from ..io.streaming import FrameSource
-from ..parallel import Executor
-from ..sequence import MeshSequence
+from ..model.sequence import MeshSequence
+from ..model.sources import FrameSource
+from ..system.parallel import Executor
 from .encoder import Encoder
 from .options import DEFAULT_TARGET_KG, EncodeOptions, Mode, resolve_options
 from .results import EncodeReport, EncodeResult
@@ -67,7 +68,7 @@ def encode_with_report(
         target_kg, ranks, target_bpfv, select, level, segment_frames, max_memory, basis: as
             the fields of :class:`EncodeOptions` (one mode at a time; default: KG 0.1).
         analysis: the sequence's :func:`~tuckercodec.analyze` result, if already computed.
-        executor: with segments, where the passes' tasks run (:mod:`tuckercodec.parallel`);
+        executor: with segments, where the passes' tasks run (:mod:`tuckercodec.system.parallel`);
             the bytes written do not depend on it.
         options: all of the above at once, instead of the keywords.
 

@@ -32,9 +32,9 @@ from ..format.limits import DEFAULT_LIMITS
 from ..format.qmat import QuantizedMatrix
 from ..format.reconstruction import reconstruct_frames, reconstruction_basis
 from ..format.residual import FLOAT32, FLOAT64, GRID, Domain
-from ..io.streaming import FrameSource
-from ..metrics import Displacement, ErrorAccumulator, max_distance
-from ..sequence import MeshSequence
+from ..measures.distortion import Displacement, ErrorAccumulator, max_distance
+from ..model.sequence import MeshSequence
+from ..model.sources import FrameSource
 from . import search
 from .options import EncodeOptions
 from .segmented import SegmentedWorkspace
@@ -212,7 +212,8 @@ def tolerance(reference: np.ndarray) -> float:
 
 def worst_vertex(positions: np.ndarray, original: np.ndarray) -> tuple[float, tuple[int, int]]:
     """The worst vertex of ``positions`` against ``original`` (the metric's
-    :func:`~tuckercodec.metrics.max_distance`): its Euclidean distance, and (frame, vertex)."""
+    :func:`~tuckercodec.measures.distortion.max_distance`): its Euclidean distance, and (frame,
+    vertex)."""
     worst = max_distance(original, positions)
     return worst.distance, worst.at
 

@@ -18,12 +18,12 @@ from typing import Any
 
 import numpy as np
 
-from ..analysis import Analysis, analyze
+from ..decomposition.analysis import Analysis, analyze
 from ..errors import UnreachableTargetError
 from ..format import residual, streams
-from ..io.streaming import FrameSource, SequenceFrames
-from ..parallel import Executor, InProcessExecutor, open_executor
-from ..sequence import MeshSequence
+from ..model.sequence import MeshSequence
+from ..model.sources import FrameSource, SequenceFrames
+from ..system.parallel import Executor, InProcessExecutor, open_executor
 from . import corrections, search
 from .options import DEFAULT_TARGET_KG, EncodeOptions
 from .plan import default_max_memory, needs_segments, plan_segments

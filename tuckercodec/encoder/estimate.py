@@ -20,7 +20,7 @@ import numpy as np
 
 from ..format import qmat
 from ..format.prediction import mean_residuals, residuals
-from ..topology import MeshPrediction
+from ..model.topology import MeshPrediction
 from .trial import QuantizedSegment
 
 #: Zigzag residuals counted by their own histogram entry; larger ones are escapes.

@@ -17,7 +17,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..analysis import Selection
+from ..decomposition.analysis import Selection
 from ..format import streams
 from ..format.segments import BASIS_OWN, BASIS_SHARED
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from ..analysis import Selection
-from ..rate import bpfv as bits_per_frame_vertex
+from ..decomposition.analysis import Selection
+from ..measures.rate import bpfv as bits_per_frame_vertex
 from .options import Mode
 
 

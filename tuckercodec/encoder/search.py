@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from typing import Any, Generic
 
 from ..errors import UnreachableTargetError
-from ..rate import bpfv as bits_per_frame_vertex
+from ..measures.rate import bpfv as bits_per_frame_vertex
 from .fill import fill, fill_erratic
 from .trial import Choice, Quantized, Workspace
 

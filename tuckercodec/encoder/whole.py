@@ -18,17 +18,17 @@ from typing import Any
 import numpy as np
 
 from .._version import __version__
-from ..analysis import Analysis, Selection
+from ..decomposition.analysis import Analysis, Selection
+from ..decomposition.hosvd import project
 from ..errors import UnreachableTargetError
 from ..format import faces, names, qmat, residual, sections, streams
 from ..format.container import FORMAT_MINOR, pack_container
 from ..format.header import header_map, scene_keys
 from ..format.qmat import QuantizedMatrix
 from ..format.reconstruction import factor_value_count, reconstruct_frames, reconstruction_basis
-from ..hosvd import project
-from ..metrics import WorstVertex
-from ..sequence import MeshSequence
-from ..topology import MeshPrediction
+from ..measures.distortion import WorstVertex
+from ..model.sequence import MeshSequence
+from ..model.topology import MeshPrediction
 from . import estimate, rdo
 from .trial import TRIAL_RATIO, Quantized, QuantizedSegment
 

@@ -7,7 +7,7 @@
   criticality, order and shapes;
 * :mod:`.streams` (§6.1): zigzag integers in byte planes, one zstd frame;
 * :mod:`.prediction` (§6.2): residuals from parent rows (the mesh parents are
-  :func:`tuckercodec.topology.mesh_parents`);
+  :func:`tuckercodec.model.topology.mesh_parents`);
 * the section codecs: :mod:`.qmat` (§6.3, quantized matrices), :mod:`.faces` (§6.4,
   connectivity), :mod:`.names` (§6.5, frame names);
 * :mod:`.limits` (§7): what a decoder accepts before allocating;

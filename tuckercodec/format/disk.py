@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import os
 
-from ..reading import open_regular_file
+from ..system.reading import open_regular_file
 from .container import (
     HEAD_SIZE,
     Container,

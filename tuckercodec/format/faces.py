@@ -16,7 +16,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..errors import FormatError
-from ..topology import face_table_problem
+from ..model.topology import face_table_problem
 from . import streams
 from .limits import DEFAULT_LIMITS, Limits
 from .sections import FACES_DELTA, FACES_TRAVERSE, section_shape

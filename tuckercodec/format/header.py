@@ -15,7 +15,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import FormatError
-from ..rate import bpfv
+from ..measures.rate import bpfv
+from ..model.sequence import UP_AXES
 from .container import Container
 from .limits import Limits, check_limit
 from .reconstruction import factor_value_count
@@ -31,9 +32,6 @@ from .segments import (
 
 #: The error definition id of §4.1: the KG error of Karni and Gotsman (2004), in percent.
 KG_DEFINITION_ID = "karni-gotsman-2004"
-
-#: The up axes the header's ``up_axis`` may name (§4).
-UP_AXES = ("Y", "Z")
 
 
 @dataclass(frozen=True)

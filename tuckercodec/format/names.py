@@ -13,13 +13,9 @@ from typing import Any
 import msgpack
 
 from ..errors import FormatError
+from ..model.sequence import default_frame_names
 from . import streams
 from .limits import Limits, check_limit
-
-
-def default_frame_names(count: int) -> list[str]:
-    """``frame_00000``, ``frame_00001``...: the names of frames without a NAME section."""
-    return [f"frame_{n:05d}" for n in range(count)]
 
 
 def encode_names(

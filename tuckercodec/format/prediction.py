@@ -8,7 +8,7 @@ restores the values by summing residuals along the parent chain.
 Two parent relations exist (§6.6 says which section uses which):
 
 * mesh parents (U1): the breadth-first spanning forest of the face edges,
-  :func:`tuckercodec.topology.mesh_parents` (it lives with the other rules of the face table);
+  :func:`tuckercodec.model.topology.mesh_parents` (it lives with the other rules of the face table);
 * previous-row parents (U3, CENT): frame f's parent is frame f - 1, written ``parents=None``
   here.
 """
@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from ..topology import MeanSteps
+from ..model.topology import MeanSteps
 
 
 def residuals(values: np.ndarray, parents: np.ndarray | None) -> np.ndarray:

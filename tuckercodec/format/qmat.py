@@ -20,7 +20,7 @@ from typing import Any, NoReturn
 import numpy as np
 
 from ..errors import FormatError, UnreachableTargetError
-from ..topology import MAX_MEAN_LEVELS, MeshPrediction
+from ..model.topology import MAX_MEAN_LEVELS, MeshPrediction
 from . import streams
 from .prediction import (
     LINEAR_LIMIT,
@@ -101,9 +101,9 @@ def encode_matrix(
     look cheapest.
 
     ``parents`` as in :func:`.prediction.residuals` (``None``: the previous row), or a mesh's
-    :class:`~tuckercodec.topology.MeshPrediction`, which also offers predictor 2 (the mean of
+    :class:`~tuckercodec.model.topology.MeshPrediction`, which also offers predictor 2 (the mean of
     the decoded neighbours) when ``coding_tools`` allows it and the mesh is not too deep
-    (:data:`~tuckercodec.topology.MAX_MEAN_LEVELS`). :func:`.sections.uses_coding_tools` tells
+    (:data:`~tuckercodec.model.topology.MAX_MEAN_LEVELS`). :func:`.sections.uses_coding_tools` tells
     from the section entries whether the file needs the coding tools flag.
     """
     q = matrix.q
@@ -176,7 +176,7 @@ def decode_matrix(
     the header and the limits.
 
     ``parents`` as in :func:`.prediction.accumulate`, a mesh's
-    :class:`~tuckercodec.topology.MeshPrediction`, or a function that makes either: it is
+    :class:`~tuckercodec.model.topology.MeshPrediction`, or a function that makes either: it is
     called only once the stream has decoded and only if a column is predicted, so that their
     cost (arrays of ``rows`` entries) is never paid for a payload that turns out bad.
     Predictor 2 (the mean of the decoded neighbours) is accepted only with ``coding_tools``

@@ -53,14 +53,14 @@ from typing import Any, Literal, Protocol
 
 import numpy as np
 
-from ..atomic import refuse_existing, write_atomic
 from ..decoder import selected_time_codes
 from ..format.reconstruction import reconstruction_basis
 from ..io.gltf.accessors import ARRAY_BUFFER, BufferBuilder, padded_rows
 from ..io.gltf.document import add_triangles, file_bytes, new_gltf
 from ..io.gltf.reader import sample_gltf
-from ..metrics import KG_DEFINITION, Displacement, ErrorAccumulator, kg_error
-from ..sequence import DEFAULT_FRAME_RATE, MeshSequence
+from ..measures.distortion import KG_DEFINITION, Displacement, ErrorAccumulator, kg_error
+from ..model.sequence import DEFAULT_FRAME_RATE, MeshSequence
+from ..system.atomic import refuse_existing, write_atomic
 from .quantization import Quantized, quantize_animation, weight_values
 
 Compression = Literal["none", "quantize", "meshopt"]
@@ -120,8 +120,8 @@ class GltfReport:
         viewer_kg_reference: the same against a reference sequence, if one was given.
         tkc_kg_reference: the .tkc decode's KG error against that reference.
         tkc_worst_reference: the .tkc decode's worst vertex against that reference
-            (:data:`~tuckercodec.metrics.MAX_DISTANCE_DEFINITION`; its frame numbered as in
-            the file), measured in the same pass as ``tkc_kg_reference``.
+            (:data:`~tuckercodec.measures.distortion.MAX_DISTANCE_DEFINITION`; its frame numbered as
+            in the file), measured in the same pass as ``tkc_kg_reference``.
         definition: the KG definition of the three figures.
     """
 

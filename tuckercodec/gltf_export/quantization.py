@@ -48,7 +48,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..metrics import kg_denominator
+from ..measures.distortion import kg_denominator
 
 #: The glTF's own quantization error may be this share of the file's recorded KG error: added
 #: in quadrature, it makes the viewer's error 1.05 times the file's.

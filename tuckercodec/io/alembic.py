@@ -43,7 +43,7 @@ frame (code / rate), and where those times cannot give back every code exactly, 
 themselves go in the mesh's user property ``tuckercodec_time_codes``. The rate (24 when the
 sequence has none) is the archive's DCC FPS and, exactly, its ``tuckercodec_frame_rate``. The
 file is written to a hidden temporary name beside the target, opened again to check its
-samples, and put in place when complete (:func:`~tuckercodec.atomic.atomic_path`).
+samples, and put in place when complete (:func:`~tuckercodec.system.atomic.atomic_path`).
 """
 
 from __future__ import annotations
@@ -56,15 +56,20 @@ from typing import Any
 import numpy as np
 
 from .._version import __version__
-from ..atomic import atomic_path
 from ..errors import InputError
-from ..optional import import_optional
-from ..reading import open_regular_file
-from ..sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_vertices
+from ..model.sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_vertices
+from ..model.sources import FrameByFrame, FrameSource
+from ..system.atomic import atomic_path
+from ..system.optional import import_optional
+from ..system.reading import open_regular_file
+from .common.polygons import (
+    faces_from_polygons,
+    first_change,
+    polygons_from_faces,
+    reverse_winding,
+)
 from .isolation import IsolatedFrames, note
-from .polygons import faces_from_polygons, first_change, polygons_from_faces, reverse_winding
 from .registry import ReadOptions, WriteOptions
-from .streaming import FrameByFrame, FrameSource
 from .usd import listing, prim_name
 
 #: What alembic3d raises on a damaged archive: Alembic's exceptions (RuntimeError), names and

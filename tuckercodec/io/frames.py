@@ -18,10 +18,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..atomic import atomic_folder
 from ..errors import InputError
-from ..progress import progress as progress_bar
-from ..sequence import MeshSequence
+from ..model.sequence import MeshSequence
+from ..model.sources import FrameSource
+from ..system.atomic import atomic_folder
+from ..system.progress import progress as progress_bar
 from .registry import (
     FrameReader,
     MeshFrame,
@@ -31,7 +32,6 @@ from .registry import (
     format_named,
     format_of,
 )
-from .streaming import FrameSource
 
 _UNSAFE_NAME_CHARACTERS = re.compile(r"[^A-Za-z0-9._-]+")
 #: The format that reads a listed file whose suffix no format claims: trimesh reads far more

@@ -55,12 +55,12 @@ from typing import BinaryIO
 
 import numpy as np
 
-from ..atomic import write_atomic, write_staged
 from ..errors import InputError
-from ..reading import open_regular_file
-from ..topology import face_table_problem
+from ..model.topology import face_table_problem
+from ..system.atomic import write_atomic, write_staged
+from ..system.reading import open_regular_file
+from .common.float_text import vertex_text
 from .registry import MeshFrame, ReadOptions, WriteOptions
-from .shortest import vertex_text
 
 #: The longest line the OBJ reader accepts, in bytes, its line end not counted: 4 MiB, a face of
 #: about half a million corners, far beyond any real mesh. A longer line is refused as soon as
@@ -651,12 +651,12 @@ def write_obj(
             shortest text that reads back to the very same float64 (Python's ``repr``).
         overwrite: replace an existing file; otherwise an existing file is an error.
         staged: ``path`` is a new file in the staging folder of a folder of frames, which is
-            synced and moved in whole (:func:`tuckercodec.atomic.atomic_folder` with
-            ``sync``): it is written plainly (:func:`tuckercodec.atomic.write_staged`).
+            synced and moved in whole (:func:`tuckercodec.system.atomic.atomic_folder` with
+            ``sync``): it is written plainly (:func:`tuckercodec.system.atomic.write_staged`).
 
     Raises:
         FileExistsError: ``path`` exists and ``overwrite`` is False (checked before writing; the
-            file is written to a temporary name and renamed, see :mod:`tuckercodec.atomic`).
+            file is written to a temporary name and renamed, see :mod:`tuckercodec.system.atomic`).
         ValueError: the arrays have the wrong shape or hold non-finite/out-of-range values.
     """
     vertices = np.asarray(vertices, dtype=np.float64)

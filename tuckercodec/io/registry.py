@@ -21,9 +21,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..sequence import MeshSequence
-from .budget import Inflation, memory_ceiling
-from .streaming import FrameSource
+from ..model.sequence import MeshSequence
+from ..model.sources import FrameSource
+from .common.budget import Inflation, memory_ceiling
 
 
 @dataclass(eq=False)
@@ -91,8 +91,9 @@ class WriteOptions:
     """How a sequence is written: ``overwrite`` existing files; ``precision`` significant
     digits for text formats (``None``: exact); ``progress`` bar on a terminal. ``staged``,
     for a frame writer: the file goes into the staging folder of a folder of frames, which is
-    made durable as a whole before it is moved in (:func:`tuckercodec.atomic.atomic_folder`
-    with ``sync``), so it may be written plainly (:func:`tuckercodec.atomic.write_staged`)."""
+    made durable as a whole before it is moved in (:func:`tuckercodec.system.atomic.atomic_folder`
+    with ``sync``), so it may be written plainly
+    (:func:`tuckercodec.system.atomic.write_staged`)."""
 
     overwrite: bool = False
     precision: int | None = None

@@ -53,7 +53,7 @@ sampled at the sequence's time codes, its faces as counts and indices, and
 sequence without one, which then reads back at 24) with ``startTimeCode``/``endTimeCode``.
 ``.usda`` is text; ``.usdc`` and ``.usd`` are binary crate files. The file is written to a
 hidden temporary name beside the target and put in place when complete
-(:func:`~tuckercodec.atomic.atomic_path`). Writing runs in this process: the data is ours.
+(:func:`~tuckercodec.system.atomic.atomic_path`). Writing runs in this process: the data is ours.
 """
 
 from __future__ import annotations
@@ -67,15 +67,20 @@ from typing import Any
 
 import numpy as np
 
-from ..atomic import atomic_path
 from ..errors import InputError
-from ..optional import import_optional
-from ..reading import open_regular_file
-from ..sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_vertices
+from ..model.sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_vertices
+from ..model.sources import FrameByFrame, FrameSource
+from ..system.atomic import atomic_path
+from ..system.optional import import_optional
+from ..system.reading import open_regular_file
+from .common.polygons import (
+    faces_from_polygons,
+    first_change,
+    polygons_from_faces,
+    reverse_winding,
+)
 from .isolation import IsolatedFrames, note
-from .polygons import faces_from_polygons, first_change, polygons_from_faces, reverse_winding
 from .registry import ReadOptions, WriteOptions
-from .streaming import FrameByFrame, FrameSource
 
 #: Where the written mesh lives: the root Xform (also the stage's defaultPrim).
 ROOT = "/Root"

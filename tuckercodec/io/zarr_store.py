@@ -16,7 +16,7 @@ Writing ``out.zarr``: a zarr format 3 group holding ``vertices`` (float32 where 
 float64; chunked by :data:`CHUNK_FRAMES` frames, each chunk all vertices; zarr's default
 compressor), ``faces`` (int64, when the sequence has faces) and the attributes above. The store
 is written in a hidden folder beside the target and renamed into place when complete
-(:func:`~tuckercodec.atomic.atomic_store`).
+(:func:`~tuckercodec.system.atomic.atomic_store`).
 """
 
 from __future__ import annotations
@@ -27,13 +27,13 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ..atomic import atomic_store
 from ..errors import InputError
-from ..optional import import_optional
-from ..sequence import MeshSequence
-from .budget import memory_ceiling
+from ..model.sequence import MeshSequence
+from ..model.sources import FrameSource
+from ..system.atomic import atomic_store
+from ..system.optional import import_optional
+from .common.budget import memory_ceiling
 from .registry import ReadOptions, WriteOptions
-from .streaming import FrameSource
 
 #: Frames per chunk of a written store.
 CHUNK_FRAMES = 100

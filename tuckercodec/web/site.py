@@ -37,7 +37,7 @@ import numpy as np
 
 from ..decoder import Decoder
 from ..errors import InputError
-from ..metrics import KG_DEFINITION
+from ..measures.distortion import KG_DEFINITION
 
 #: Where the page lives in the folder; the URL to open is this with its query.
 PAGE = "viewer/index.html"

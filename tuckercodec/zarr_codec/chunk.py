@@ -28,14 +28,14 @@ from typing import Any
 
 import numpy as np
 
-from ..analysis import SMALLEST_COORDINATE, SMALLEST_RELATIVE_SHAPE
 from ..decoder import decode
+from ..decomposition.analysis import SMALLEST_COORDINATE, SMALLEST_RELATIVE_SHAPE
 from ..encoder import EncodeOptions, Encoder
 from ..errors import InputError, LimitError, UnreachableTargetError
 from ..format.limits import DEFAULT_LIMITS, Limits
 from ..format.streams import ZstdFrameProblem, compress, zstd_exact
-from ..metrics import kg_error
-from ..sequence import MeshSequence
+from ..measures.distortion import kg_error
+from ..model.sequence import MeshSequence
 from .fitted import BASIS_KEYS, FittedBasis, complete_file, fit_array
 
 #: The first bytes of a point chunk; never those of a .tkc file, which start with 0x89 "TKC".

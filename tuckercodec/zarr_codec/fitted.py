@@ -51,8 +51,8 @@ from ..encoder import EncodeOptions, Encoder
 from ..encoder.segmented import SharedBasis, fit_basis
 from ..errors import FormatError, InputError
 from ..format.container import parse_container
-from ..io.streaming import FrameSource, SequenceFrames
-from ..sequence import MeshSequence
+from ..model.sequence import MeshSequence
+from ..model.sources import FrameSource, SequenceFrames
 
 #: The configuration keys of a fitted codec (beside ``target_kg``).
 BASIS_KEYS = ("basis", "basis_sha256")
@@ -236,7 +236,7 @@ def _shape(shared: SharedBasis) -> tuple[int, int]:
 
 class ArrayFrames(FrameSource):
     """An array of shape (frames, vertices, 3) (numpy, zarr, dask or any array with ``shape``,
-    ``dtype`` and slicing) as a :class:`~tuckercodec.io.streaming.FrameSource`.
+    ``dtype`` and slicing) as a :class:`~tuckercodec.model.sources.FrameSource`.
 
     A zarr or dask array is read a chunk of frames at a time (its ``chunks``) and the last one
     read is kept, since the encoder's passes read blocks of at most 16 frames in order: each

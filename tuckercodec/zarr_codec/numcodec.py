@@ -12,7 +12,7 @@ import numpy as np
 
 from ..encoder import DEFAULT_TARGET_KG
 from ..errors import InputError
-from ..optional import import_optional
+from ..system.optional import import_optional
 from .chunk import (
     SETTINGS_KEYS,
     ChunkMode,

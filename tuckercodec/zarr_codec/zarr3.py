@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..encoder import DEFAULT_TARGET_KG
-from ..optional import import_optional
+from ..system.optional import import_optional
 from .chunk import (
     SETTINGS_KEYS,
     ChunkMode,

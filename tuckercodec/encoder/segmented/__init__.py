@@ -3,7 +3,7 @@
 The frames are cut into segments (:mod:`..plan`), each its own decomposition with its own U3,
 core, centroids and U2, and one U1 shared by all of them (``basis="shared"``, the default) or
 one per segment (``basis="own"``). Three passes read the input, a segment per task, on any
-executor (:mod:`tuckercodec.parallel`; :mod:`.passes`):
+executor (:mod:`tuckercodec.system.parallel`; :mod:`.passes`):
 
 1. the centroids, the energies and a randomized range finder's sketch of the mode-1 space;
 2. the projection of every frame on the sketch's orthonormal basis Q, which leaves the whole

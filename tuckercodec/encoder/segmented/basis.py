@@ -10,8 +10,8 @@ import numpy as np
 from ...format import qmat, streams
 from ...format.container import parse_container
 from ...format.segments import BASIS_SHARED
-from ...io.streaming import FrameSource
-from ...parallel import InProcessExecutor
+from ...model.sources import FrameSource
+from ...system.parallel import InProcessExecutor
 from ..plan import default_max_memory, plan_segments
 from ..whole import column_steps
 from .workspace import SegmentedWorkspace, SharedBasis

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...analysis import discarded_energy
+from ...decomposition.analysis import discarded_energy
 
 #: Bisection steps of the Lagrange multiplier (on its logarithm, from 1e-12 to 1e12).
 LAMBDA_STEPS = 60

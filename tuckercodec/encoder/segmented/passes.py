@@ -1,7 +1,7 @@
 """The passes of a segmented encode over the input, one task per segment.
 
 Each task reads its segment's frames a block at a time from a
-:class:`~tuckercodec.io.streaming.FrameSource` (which it may have been sent, pickled, by an
+:class:`~tuckercodec.model.sources.FrameSource` (which it may have been sent, pickled, by an
 executor) and returns small results, or one K x r matrix for the sketch. The blocks and the order
 of every sum are fixed by the plan, never by the number of workers, so the output is the same
 bytes whichever executor runs the tasks.
@@ -22,9 +22,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...decomposition.hosvd import centre_frames
 from ...format.reconstruction import reconstruct_frames
-from ...hosvd import centre_frames
-from ...io.streaming import FrameSource
+from ...model.sources import FrameSource
 from ..plan import blocks
 
 

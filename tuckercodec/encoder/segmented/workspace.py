@@ -33,9 +33,9 @@ from ...format.segments import (
     segment_map,
     segment_section_id,
 )
-from ...io.streaming import FrameSource
-from ...parallel import Background, Executor, InProcessExecutor
-from ...topology import MeshPrediction
+from ...model.sources import FrameSource
+from ...model.topology import MeshPrediction
+from ...system.parallel import Background, Executor, InProcessExecutor
 from .. import estimate
 from ..plan import SegmentPlan
 from ..trial import TRIAL_RATIO, Quantized, QuantizedSegment

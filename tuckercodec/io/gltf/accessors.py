@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import InputError
-from ..streaming import as_float64
+from ...model.sources import as_float64
 from .container import Document, integer
 
 #: componentType -> numpy dtype (little-endian, as glTF stores them).

@@ -25,8 +25,8 @@ from pathlib import Path
 from typing import Any
 
 from ...errors import InputError
-from ...reading import inside_folder, open_input, open_regular_file
-from ..budget import Inflation, memory_ceiling
+from ...system.reading import inside_folder, open_input, open_regular_file
+from ..common.budget import Inflation, memory_ceiling
 
 GLB_MAGIC = b"glTF"
 JSON_CHUNK = 0x4E4F534A
@@ -215,7 +215,7 @@ def _data_uri(doc: Document, uri: str, where: str) -> bytes:
 def _external(doc: Document, uri: str, where: str) -> bytes:
     """The bytes of a buffer's file, which must lie inside the .gltf's folder (an absolute
     path, a URL, or one that leads out through ``..`` or a link is refused, as for every
-    reader: :func:`~tuckercodec.reading.inside_folder`)."""
+    reader: :func:`~tuckercodec.system.reading.inside_folder`)."""
     name = urllib.parse.unquote(uri)
     try:
         target = inside_folder(doc.path.parent, name)

@@ -8,7 +8,7 @@ before every encoding since the library keeps it as global state.
 
 A view decodes to at most 64 times its bytes (:data:`_MAX_RATIO`), and the views a file decodes,
 which it keeps, within ``--max-memory`` together (the document's
-:class:`~tuckercodec.io.budget.Inflation`), each checked before it is decoded.
+:class:`~tuckercodec.io.common.budget.Inflation`), each checked before it is decoded.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import InputError
-from ...optional import import_optional
+from ...system.optional import import_optional
 from .container import Document, integer
 
 EXTENSION = "EXT_meshopt_compression"

@@ -34,8 +34,8 @@ from typing import Any
 import numpy as np
 
 from ...errors import InputError
-from ...sequence import MeshSequence
-from ..budget import Inflation
+from ...model.sequence import MeshSequence
+from ..common.budget import Inflation
 from .animation import PATH_WIDTHS, Sampler, node_matrix, numbers, read_sampler
 from .container import Document, integer, read_document
 from .primitives import MAX_NUMBERS, Mesh, read_mesh

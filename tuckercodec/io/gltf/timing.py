@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from ...sequence import DEFAULT_FRAME_RATE
+from ...model.sequence import DEFAULT_FRAME_RATE
 
 
 def timing(

@@ -21,9 +21,9 @@ from typing import Any
 
 import numpy as np
 
-from ...atomic import write_atomic
 from ...errors import InputError
-from ...sequence import MeshSequence, float32_seconds
+from ...model.sequence import MeshSequence, float32_seconds
+from ...system.atomic import write_atomic
 from .accessors import ARRAY_BUFFER, BufferBuilder
 from .document import add_triangles, file_bytes, new_gltf
 from .reader import EXTRAS_KEY

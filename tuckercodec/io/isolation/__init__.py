@@ -10,7 +10,7 @@ serves reads of frame ranges, and turns each way a request can end into an outco
 caller:
 
 * frames (and first the source's description): sent back raw through a pipe (the protocol is
-  :mod:`.child`'s; no pickle) and checked again by :class:`~tuckercodec.io.streaming.FrameSource`;
+  :mod:`.child`'s; no pickle) and checked again by :class:`~tuckercodec.model.sources.FrameSource`;
 * a :class:`~tuckercodec.errors.TuckerCodecError` (InputError, DependencyError): raised again
   with its class, message, path and frame (unpickled only from :mod:`tuckercodec.errors`);
 * a crash (a signal; on Windows an NTSTATUS exit code): ``InputError("object /a/aShape: the
@@ -65,19 +65,7 @@ What runs in the child is :mod:`.child`; the caller's side of the conversation, 
 limits, is :mod:`.channel`.
 """
 
-from __future__ import annotations
-
-from collections.abc import Callable, Iterable
-from pathlib import Path
-from typing import ClassVar
-
-import numpy as np
-
-from ...errors import InputError
-from ...sequence import MeshSequence
-from ..registry import ReadOptions
-from ..streaming import FrameSource, SequenceFrames
-from .channel import (
+from .parent import (
     MEMORY_BASE,
     MEMORY_CEILING,
     MEMORY_PER_BYTE,
@@ -86,12 +74,10 @@ from .channel import (
     TIMEOUT_BYTES_PER_SECOND,
     TIMEOUT_CEILING,
     TIMEOUT_VARIABLE,
-    Child,
-    Description,
-    can_isolate,
-    child_request,
+    IsolatedFrames,
+    note,
+    read_isolated,
 )
-from .child import note as note  # the readers' and hooks' name for it
 
 __all__ = [
     "MEMORY_BASE",
@@ -106,108 +92,3 @@ __all__ = [
     "note",
     "read_isolated",
 ]
-
-
-class IsolatedFrames(FrameSource):
-    """The frames that ``opener(path, options)`` reads, read in a child process (see the
-    module docstring).
-
-    Args:
-        opener: the in-process source (a module-level FrameSource class), or a module-level
-            function that reads a whole sequence; the child imports it by name.
-        library: the library's name for messages ("USD", "Alembic").
-        extra: the extra that installs it.
-        preload: the modules it imports, looked for here first (a DependencyError without
-            starting a process) and imported in the child before its memory is capped.
-    """
-
-    _transient: ClassVar[tuple[str, ...]] = ("_child", "_local")
-    _child: Child | None = None
-    _local: FrameSource | None = None
-
-    def __init__(
-        self,
-        opener: Callable[[Path, ReadOptions], FrameSource | MeshSequence],
-        path: Path,
-        options: ReadOptions,
-        library: str,
-        extra: str,
-        preload: Iterable[str] = (),
-    ):
-        self._opener, self._file, self._options = opener, path, options
-        self._library, self._extra, self._preload = library, extra, tuple(preload)
-        opened = self._start()
-        self._describe(
-            path,
-            opened.frame_count,
-            opened.vertex_count,
-            opened.faces,
-            opened.frame_names,
-            opened.frame_rate,
-            opened.time_codes,
-            opened.meters_per_unit,
-            opened.up_axis,
-        )
-
-    def _start(self) -> FrameSource | Description:
-        """Open the file in a new child (and say what it found), or where no child can
-        start, in this process."""
-        if not can_isolate(self._preload, self._library, self._extra):
-            opened = self._opener(self._file, self._options)
-            if isinstance(opened, MeshSequence):
-                opened = SequenceFrames(opened, self._file)
-            self._local = opened
-            return opened
-        request = child_request(self._opener, self._file, self._options, self._preload)
-        self._child = Child(request, self._file, self._library)
-        return self._child.description
-
-    def _read(self, start: int, stop: int) -> np.ndarray:
-        if self._local is None and (self._child is None or not self._child.alive()):
-            if self._child is not None:  # gone while idle (its caller's thread ended)
-                self._child.close()
-                self._child = None
-            opened = self._start()
-            if (opened.frame_count, opened.vertex_count) != (self.frame_count, self.vertex_count):
-                raise InputError("has changed since it was opened", path=self._file)
-        if self._local is not None:
-            return self._local.read(start, stop)
-        assert self._child is not None
-        try:
-            return self._child.read(start, stop)
-        except InputError:
-            if not self._child.alive():  # it crashed: the next read starts afresh
-                self._child.close()
-                self._child = None
-            raise
-
-
-def read_isolated(
-    reader: Callable[[Path, ReadOptions], MeshSequence],
-    path: Path,
-    options: ReadOptions,
-    library: str,
-    extra: str,
-    preload: Iterable[str] = (),
-) -> MeshSequence:
-    """``reader(path, options)``, a function that reads a whole sequence, run in a child
-    process (see the module docstring): the child serves the sequence it read as frames,
-    all read at once.
-
-    Args:
-        reader: a module-level function of the package (the child imports it by name).
-        library: the library's name for messages: "Alembic" gives "the Alembic library
-            crashed reading it", and "reading Alembic files needs..." when it is missing.
-        extra: the extra that installs it.
-        preload: the modules the reader imports, imported in the child before its memory is
-            capped, and looked for here first: a missing one is a DependencyError without
-            starting a process.
-
-    Raises:
-        InputError: what the reader raised, or the crash, memory or time that stopped it.
-        DependencyError: what the reader raised, or a ``preload`` module that is absent.
-        RuntimeError: the child could not start, or the reader failed for a reason other
-            than the file (a bug): the child's traceback is in the message.
-    """
-    with IsolatedFrames(reader, path, options, library, extra, preload) as source:
-        return source.load()

@@ -29,7 +29,7 @@ import numpy as np
 
 from ... import errors
 from ...errors import InputError
-from ...optional import import_optional
+from ...system.optional import import_optional
 from ..registry import ReadOptions
 
 GIB = 2**30

@@ -28,9 +28,9 @@ from typing import IO, Any
 import numpy as np
 
 from ... import errors
-from ...sequence import MeshSequence
+from ...model.sequence import MeshSequence
+from ...model.sources import SequenceFrames
 from ..registry import ReadOptions
-from ..streaming import SequenceFrames
 
 #: In the child: where :func:`note` writes (its stdout); None in any other process.
 _notes: IO[bytes] | None = None
@@ -142,11 +142,11 @@ def _memory(error: BaseException) -> dict[str, Any] | None:
 
 def serve(argument: str) -> None:
     """The child's whole life: open the request's source (a
-    :class:`~tuckercodec.io.streaming.FrameSource` class, or a function that reads a whole sequence,
-    served from memory), send its description, then for each line ``{"read": [start, stop]}`` on
-    stdin send the frames, until stdin ends; then exit (never returns). Our own errors are sent and
-    the child serves on; anything else ends it. The time limit (``alarm``) runs while the child
-    opens the file or reads, not while it waits."""
+    :class:`~tuckercodec.model.sources.FrameSource` class, or a function that reads a whole
+    sequence, served from memory), send its description, then for each line ``{"read": [start,
+    stop]}`` on stdin send the frames, until stdin ends; then exit (never returns). Our own errors
+    are sent and the child serves on; anything else ends it. The time limit (``alarm``) runs while
+    the child opens the file or reads, not while it waits."""
     request = json.loads(argument)
     try:
         opener = start_child(request)

@@ -10,13 +10,13 @@ array, stored or deflated (what ``np.savez`` and ``np.savez_compressed`` write),
 encrypted, and present once, and the shape and dtype in its header must account for exactly
 the bytes of its member. What the deflated members read whole inflate to (the keys beside ``V``,
 held from the opening, and ``V`` itself when read whole) is bounded by ``--max-memory``
-(:attr:`~tuckercodec.io.registry.ReadOptions.max_memory`, :mod:`~tuckercodec.io.budget`),
+(:attr:`~tuckercodec.io.registry.ReadOptions.max_memory`, :mod:`~tuckercodec.io.common.budget`),
 checked against the sizes the members declare, which zipfile never inflates beyond, before a
 byte is inflated: a 1 MB member of zeros declaring 1.1 GB is refused there when that is more.
 
 :class:`NpzFrames` reads key ``V`` in place, a range of frames at a time: a stored member
 (``np.savez``) by offset in the file, as a ``.npy`` is
-(:class:`~tuckercodec.io.streaming.RawFrames`); a deflated one (``np.savez_compressed``) by
+(:class:`~tuckercodec.model.sources.RawFrames`); a deflated one (``np.savez_compressed``) by
 decompressing forward from where the last read stopped, the member staying open between reads, so
 that reading the ranges in order decompresses the member once (a range before the last one starts
 again from the member's beginning). The other keys (faces, names, rate, time codes) are read whole
@@ -25,141 +25,12 @@ byte could); :meth:`NpzFrames.load` reads ``V`` whole through zipfile, which doe
 Fortran order, whose frames are scattered over the member, is read whole on first use.
 """
 
-from __future__ import annotations
+from .sequence import (
+    NpzFrames,
+    write_npz,
+)
 
-import copy
-import struct
-import zipfile
-from pathlib import Path
-from typing import IO, Any, ClassVar
-
-import numpy as np
-
-from ...atomic import atomic_output
-from ...errors import InputError
-from ...reading import open_input
-from ...sequence import MeshSequence
-from ..registry import ReadOptions, WriteOptions
-from ..streaming import RawFrames, read_into
-from .archive import ZIP_ERRORS, NpzArchive, member_header
-
-#: A zip local file header: signature, 22 bytes, then the lengths of the name and extra field.
-_LOCAL_HEADER = struct.Struct("<4s22xHH")
-_LOCAL_SIGNATURE = b"PK\x03\x04"
-
-
-class NpzFrames(RawFrames):
-    """Key V of an .npz archive read in place (see the module docstring); the archive format
-    takes no read options."""
-
-    _transient: ClassVar[tuple[str, ...]] = ("_member", "_archive", "_stream", "_whole")
-    _what = "an .npz archive"
-    _vertex_label = "key 'V': "
-    _member: IO[bytes] | None = None
-    _archive: zipfile.ZipFile | None = None
-    #: Key V read whole: for :meth:`load`, or in Fortran order (read on first use)
-    _whole: np.ndarray | None = None
-
-    def __init__(self, path: Path, options: ReadOptions | None = None):
-        # what the arrays read whole may inflate to: the metadata's, held, then V's when read
-        self._inflation = (options or ReadOptions()).inflation()
-        with NpzArchive(path, self._inflation) as archive:
-            info = archive.info("V")
-            header = member_header(archive.zip, info, "V", archive.size, path)
-            if header.dtype.kind not in "fiu":
-                raise InputError(
-                    f"key 'V' must hold real numbers, got dtype {header.dtype}", path=path
-                )
-            shape = header.positions()
-            if shape is None:
-                raise InputError(
-                    f"key 'V' must have shape (frames, vertices, 3), got {header.shape}",
-                    path=path,
-                )
-            faces, names, rate, codes = archive.metadata(*shape)
-            unit, axis = archive.scene()
-            self._name = info.filename
-            self._deflated = info.compress_type == zipfile.ZIP_DEFLATED
-            self._scattered = header.fortran_order and shape[0] > 1
-            self._offset = header.size  # in the member
-            self._data_start = 0  # where a stored member's bytes start in the file
-            if not self._deflated:
-                self._data_start = _data_start(archive.stream, info, archive.size, path)
-        self._file, self._dtype = path, header.dtype
-        self._describe(path, *shape, faces, names, rate, codes, unit, axis)
-
-    def load(self, progress: bool = False) -> MeshSequence:
-        """The whole sequence, key V read in one piece through zipfile, which checks its CRC."""
-        self._whole = self._read_whole()
-        try:
-            return super().load()
-        finally:
-            self._whole = None
-
-    def _read(self, start: int, stop: int) -> np.ndarray:
-        if self._scattered and self._whole is None:
-            self._whole = self._read_whole()
-        if self._whole is not None:
-            return self._whole[start:stop]
-        return super()._read(start, stop)
-
-    def _read_whole(self) -> np.ndarray:
-        """Key V as the file stores it, (F, K, 3) (every byte read: CRC checked)."""
-        with NpzArchive(self._file, copy.copy(self._inflation)) as archive:
-            values = archive.array("V")
-        if values.size != self.frame_count * self.vertex_count * 3:
-            raise InputError("has changed since it was opened", path=self._file)
-        return values.reshape(self.frame_count, self.vertex_count, 3)
-
-    def _read_at(self, offset: int, into: memoryview) -> None:
-        if not self._deflated:
-            super()._read_at(self._data_start + offset, into)
-            return
-        try:
-            if self._member is None:
-                self._stream = open_input(self._file, self._what)
-                self._archive = zipfile.ZipFile(self._stream)
-                self._member = self._archive.open(self._name)
-            # forward: decompresses from where the last read stopped; backward: from the start
-            self._member.seek(offset)
-            read_into(self._member, into, self._file)
-        except InputError:
-            raise
-        except ZIP_ERRORS as error:
-            raise InputError(f"key 'V' cannot be read: {error}", path=self._file) from None
-
-
-def _data_start(stream: IO[bytes], info: zipfile.ZipInfo, size: int, path: Path) -> int:
-    """Where a stored member's bytes start in the file: after its local header."""
-    stream.seek(info.header_offset)
-    raw = stream.read(_LOCAL_HEADER.size)
-    if len(raw) != _LOCAL_HEADER.size or raw[:4] != _LOCAL_SIGNATURE:
-        raise InputError("key 'V' has no local header where the archive says", path=path)
-    _, name_length, extra_length = _LOCAL_HEADER.unpack(raw)
-    start = info.header_offset + _LOCAL_HEADER.size + name_length + extra_length
-    if start + info.compress_size > size:
-        raise InputError(
-            f"key 'V' ends beyond the end of the file ({size} bytes): the file is truncated",
-            path=path,
-        )
-    return start
-
-
-def write_npz(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
-    """Write the sequence as an .npz archive, atomically."""
-    arrays: dict[str, Any] = {
-        "V": np.asarray(seq.vertices, dtype=np.float64),
-        "F": np.asarray(seq.faces, dtype=np.int64),
-        "frame_files": np.array(seq.frame_names, dtype=str),
-    }
-    if seq.frame_rate is not None:
-        arrays["frame_rate"] = np.float64(seq.frame_rate)
-    if seq.time_codes is not None:
-        arrays["time_codes"] = np.asarray(seq.time_codes, dtype=np.float64)
-    if seq.meters_per_unit is not None:
-        arrays["meters_per_unit"] = np.float64(seq.meters_per_unit)
-    if seq.up_axis is not None:
-        arrays["up_axis"] = np.array(seq.up_axis, dtype=str)
-    # np.savez adds ".npz" to a file *name* without it, so it gets an open file instead
-    with atomic_output(path, overwrite=options.overwrite) as stream:
-        np.savez(stream, **arrays)
+__all__ = [
+    "NpzFrames",
+    "write_npz",
+]

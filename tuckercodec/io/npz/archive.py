@@ -20,9 +20,9 @@ from typing import IO
 import numpy as np
 
 from ...errors import InputError
-from ...reading import open_input
-from ...topology import face_table_problem
-from ..budget import Inflation, memory_ceiling
+from ...model.topology import face_table_problem
+from ...system.reading import open_input
+from ..common.budget import Inflation, memory_ceiling
 
 # What zipfile and numpy.lib.format raise on a damaged archive or member (ValueError: numpy's
 # header checks; NotImplementedError: a zip feature such as strong encryption; TokenError: numpy

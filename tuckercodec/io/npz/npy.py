@@ -8,7 +8,7 @@ The header is read and checked as in an ``.npz`` (:func:`.archive.npy_header`: n
 the file's size must be exactly what it declares, before anything is allocated.
 
 It streams (:class:`NpyFrames`): a range of frames is read by offset with ``readinto``, a few MiB at
-a time (:class:`~tuckercodec.io.streaming.RawFrames`), so that reading a range costs its float64
+a time (:class:`~tuckercodec.model.sources.RawFrames`), so that reading a range costs its float64
 array and nothing in proportion to the file. The file is not memory-mapped: mapped pages count in
 the process's resident memory.
 
@@ -23,13 +23,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ...atomic import atomic_output
 from ...errors import InputError
-from ...reading import open_input
-from ...sequence import MeshSequence
+from ...model.sequence import MeshSequence
+from ...model.sources import RawFrames
+from ...system.atomic import atomic_output
+from ...system.reading import open_input
 from ..pointcache import cache_faces, check_size
 from ..registry import ReadOptions, WriteOptions
-from ..streaming import RawFrames
 from .archive import npy_header
 
 #: The numbers a .npy of positions may hold (either byte order).

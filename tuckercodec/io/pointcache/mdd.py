@@ -32,9 +32,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ...atomic import atomic_output
 from ...errors import InputError
-from ...sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_seconds
+from ...model.sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_seconds
+from ...system.atomic import atomic_output
 from ..registry import ReadOptions, WriteOptions
 from . import POINT_BYTES, CacheFrames, check_counts, check_size, float32_positions, read_floats
 

@@ -27,9 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ...atomic import atomic_output
 from ...errors import InputError
-from ...sequence import MeshSequence
+from ...model.sequence import MeshSequence
+from ...system.atomic import atomic_output
 from ..registry import ReadOptions, WriteOptions
 from . import POINT_BYTES, CacheFrames, check_counts, check_size, float32_positions
 

@@ -18,7 +18,7 @@ Every size is checked before anything is allocated: an uncompressed size against
 file holds and against the array's declared length (``NumberOfPoints``, ``NumberOfCells``);
 compressed sizes likewise, and each block's inflated size against :data:`MAX_INFLATION` times
 its compressed size (no zlib stream expands further); the array's inflated size is then taken
-from what the read may still decompress (:class:`~tuckercodec.io.budget.Inflation`, of
+from what the read may still decompress (:class:`~tuckercodec.io.common.budget.Inflation`, of
 ``--max-memory``), before anything is inflated: a 467 KB file that declares, consistently,
 1 GB of zeros is refused there. Each block is inflated into its place with its declared size as
 the limit, so a stream that would expand beyond what its header declares is refused after at
@@ -36,7 +36,7 @@ from xml.etree import ElementTree
 import numpy as np
 
 from ...errors import InputError
-from ..budget import Inflation
+from ..common.budget import Inflation
 
 #: The VTK type names of data arrays and their numpy types (byte order added per file).
 TYPES = {

@@ -15,10 +15,10 @@ Reading, by the ``<VTKFile type=..>`` of the file (whatever its name's suffix):
   ``<Verts>`` only mark points; ``<Lines>`` are refused.
 
 A DOCTYPE or any declaration (the way to an entity-expansion attack) is refused by the XML
-parser itself (:mod:`~tuckercodec.io.safe_xml`), whatever the encoding. Raw appended data is
+parser itself (:mod:`~tuckercodec.io.common.safe_xml`), whatever the encoding. Raw appended data is
 cut off before parsing, so the XML parser sees only the XML. Compressed arrays inflate
-within what one read may decompress (``--max-memory``, :mod:`~tuckercodec.io.budget`), all the
-file's arrays together. Every error is an
+within what one read may decompress (``--max-memory``, :mod:`~tuckercodec.io.common.budget`), all
+the file's arrays together. Every error is an
 :class:`InputError` without a path (the caller names the file).
 
 Writing (:class:`DatasetWriter`): one piece of the points and the faces (Polys, or cells of
@@ -34,10 +34,10 @@ from xml.etree import ElementTree
 import numpy as np
 
 from ...errors import InputError
-from ..budget import Inflation, memory_ceiling
-from ..polygons import faces_from_polygons, polygons_from_faces
-from ..safe_xml import parse_xml
-from ..streaming import as_float64
+from ...model.sources import as_float64
+from ..common.budget import Inflation, memory_ceiling
+from ..common.polygons import faces_from_polygons, polygons_from_faces
+from ..common.safe_xml import parse_xml
 from .arrays import Encoding, Layout, encode_array, file_encoding, read_array, type_name
 
 #: The dataset types read and written, by the suffix VTK gives their files.

@@ -7,7 +7,7 @@ dataset must hold exactly as many values, and store at least
 1/:data:`~tuckercodec.io.vtk.arrays.MAX_INFLATION` of its size, so that no compression filter
 inflates it beyond what zlib could before it is read; and the size of one that stores less than
 it holds (compressed, or chunks never written) is taken from what a time step may inflate
-(``--max-memory``, :mod:`~tuckercodec.io.budget`) before h5py reads it. Errors are
+(``--max-memory``, :mod:`~tuckercodec.io.common.budget`) before h5py reads it. Errors are
 :class:`InputError`s without a path (the caller names the .xdmf and the frame).
 """
 
@@ -24,9 +24,9 @@ from xml.etree import ElementTree
 import numpy as np
 
 from ...errors import InputError
-from ...optional import import_optional
-from ...reading import inside_folder
-from ..budget import Inflation
+from ...system.optional import import_optional
+from ...system.reading import inside_folder
+from ..common.budget import Inflation
 from ..vtk.arrays import MAX_INFLATION
 
 #: The tags of XInclude elements, which are not followed.

@@ -8,7 +8,7 @@ One temporal collection of one uniform grid per frame, each with its own ``<Geom
 or mixed sizes, Polyvertex for a point sequence). The attribute names are XDMF 2's, which XDMF 3
 readers accept too, so that VTK's and ParaView's XDMF readers read it. Both targets are checked
 first (never overwritten without ``overwrite``); the .h5 is written under a hidden name and put
-in place whole (:func:`~tuckercodec.atomic.atomic_path`), then the .xdmf, atomically.
+in place whole (:func:`~tuckercodec.system.atomic.atomic_path`), then the .xdmf, atomically.
 """
 
 from __future__ import annotations
@@ -18,9 +18,9 @@ from xml.etree import ElementTree
 
 import numpy as np
 
-from ...atomic import atomic_path, refuse_existing, write_atomic
-from ...optional import import_optional
-from ...sequence import MeshSequence
+from ...model.sequence import MeshSequence
+from ...system.atomic import atomic_path, refuse_existing, write_atomic
+from ...system.optional import import_optional
 from ..registry import WriteOptions
 
 

@@ -12,7 +12,7 @@ import stat
 from pathlib import Path
 from typing import BinaryIO
 
-from .errors import InputError
+from ..errors import InputError
 
 
 def open_regular_file(path: str | os.PathLike[str], what: str) -> BinaryIO:

@@ -11,7 +11,7 @@ For every N-rank (i, 3, k) this module gives:
   reduction rate Theta = S / (3*K*F).
 
 All errors are KG errors with the Karni-Gotsman denominator (each frame's centroid removed);
-see :mod:`tuckercodec.metrics`.
+see :mod:`tuckercodec.measures.distortion`.
 """
 
 from __future__ import annotations
@@ -21,9 +21,9 @@ from typing import Literal
 
 import numpy as np
 
-from .errors import InputError
+from ..errors import InputError
+from ..model.sequence import MeshSequence
 from .hosvd import HOSVD, centre_frames, hosvd
-from .sequence import MeshSequence
 
 Selection = Literal["exact", "bound"]
 

@@ -9,15 +9,16 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .analysis import Analysis, Curve
+from ..decomposition.analysis import Analysis, Curve
 
 DEFAULT_TARGETS = (1.0, 0.5, 0.1, 0.05, 0.02)
 
 
 def worst_vertex(distance: float, at: tuple[int, int] | None) -> str:
     """A worst vertex as every command prints it: ``0.00123457 at frame 6, vertex 11`` (the
-    distance in the sequence's units, :data:`tuckercodec.metrics.MAX_DISTANCE_DEFINITION`;
-    the frame as the file numbers it). ``at`` None: a distance whose place is not known."""
+    distance in the sequence's units,
+    :data:`tuckercodec.measures.distortion.MAX_DISTANCE_DEFINITION`; the frame as the file numbers
+    it). ``at`` None: a distance whose place is not known."""
     where = "" if at is None else f" at frame {at[0]}, vertex {at[1]}"
     return f"{distance:.6g}{where}"
 

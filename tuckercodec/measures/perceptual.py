@@ -14,9 +14,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .errors import InputError
-from .sequence import MeshSequence
-from .topology import mesh_edges
+from ..errors import InputError
+from ..model.sequence import MeshSequence
+from ..model.topology import mesh_edges
 
 if TYPE_CHECKING:  # imported where used: scipy.sparse costs about 0.13 s at start-up
     from scipy import sparse

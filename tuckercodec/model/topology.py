@@ -22,7 +22,7 @@ from typing import Literal
 
 import numpy as np
 
-from .errors import InputError
+from ..errors import InputError
 
 #: The parent of a vertex that has none (a root of the forest, or a vertex on no face).
 NO_PARENT = -1

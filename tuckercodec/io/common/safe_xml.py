@@ -16,7 +16,7 @@ from typing import Any, NoReturn
 from xml.etree import ElementTree
 from xml.parsers import expat
 
-from ..errors import InputError
+from ...errors import InputError
 
 #: The encodings expat reads itself. For any other it asks Python's codecs, which fail in many
 #: ways on a crafted name: LookupError ("utf4", "rot13"), ValueError (every multi-byte one),

@@ -1,7 +1,7 @@
 """Rate: bits per frame per vertex (bpfv), the size measure of the dynamic-mesh literature.
 
-Kept apart from :mod:`tuckercodec.metrics` so that reading a file's size never imports the
-error measures (STED needs scipy.sparse).
+Kept apart from :mod:`tuckercodec.measures.distortion` so that reading a file's size never imports
+the error measures (STED needs scipy.sparse).
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ import importlib
 import importlib.util
 from types import ModuleType
 
-from .errors import DependencyError
+from ..errors import DependencyError
 
 #: The module that tells whether each extra of pyproject.toml is installed.
 EXTRA_MODULES = {

@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import os
 
-from ..encoder.plan import default_max_memory, human_bytes
-from ..errors import InputError
+from ...encoder.plan import default_max_memory, human_bytes
+from ...errors import InputError
 
 
 def memory_ceiling(max_memory: int | None) -> int:

@@ -7,14 +7,22 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import InputError
-from .format.header import UP_AXES  # USD's (UsdGeom allows only Y and Z), glTF's Y
-from .format.names import default_frame_names
+from ..errors import InputError
 from .topology import checked_face_table
 
 #: Frames per second assumed where a format needs a rate and the sequence has none: 24, the
 #: default of USD (timeCodesPerSecond), Blender and film.
 DEFAULT_FRAME_RATE = 24.0
+
+#: The up axes a sequence may name: USD's (UsdGeom allows only Y and Z), and glTF's Y. The
+#: file format's header stores the same two (spec/FORMAT.md §4).
+UP_AXES = ("Y", "Z")
+
+
+def default_frame_names(count: int) -> list[str]:
+    """``frame_00000``, ``frame_00001``...: the names of frames that have none of their own (a
+    file without a NAME section, spec/FORMAT.md §6.5)."""
+    return [f"frame_{n:05d}" for n in range(count)]
 
 
 @dataclass(eq=False)

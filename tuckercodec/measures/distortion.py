@@ -17,8 +17,8 @@ vertex where it is. :class:`ErrorAccumulator` measures it and the KG error toget
 over blocks of frames, so that a long sequence (or one read a range of frames at a time) never
 needs a difference array of its whole size.
 
-The perception-correlated STED error of Váša and Skala (2011) is in :mod:`tuckercodec.perceptual`;
-the rate measure bpfv in :mod:`tuckercodec.rate`.
+The perception-correlated STED error of Váša and Skala (2011) is in
+:mod:`tuckercodec.measures.perceptual`; the rate measure bpfv in :mod:`tuckercodec.measures.rate`.
 """
 
 from __future__ import annotations
@@ -30,8 +30,8 @@ from typing import Literal
 
 import numpy as np
 
-from .errors import InputError
-from .sequence import MeshSequence
+from ..errors import InputError
+from ..model.sequence import MeshSequence
 
 KG_DEFINITION = "KG (Karni-Gotsman 2004): 100*||A-B||_F / ||A - per-frame vertex mean of A||_F"
 

@@ -20,9 +20,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .analysis import Analysis
-from .atomic import write_atomic
-from .errors import DependencyError
+from ..decomposition.analysis import Analysis
+from ..errors import DependencyError
+from ..system.atomic import write_atomic
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -127,8 +127,8 @@ def plot_frame_errors(
     overwrite: bool = False,
 ) -> None:
     """Draw two panels over the frame number: each frame's share of the KG error
-    (:func:`tuckercodec.metrics.per_frame_kg`) and its largest vertex displacement in scene
-    units (:func:`tuckercodec.metrics.per_frame_max_displacement`)."""
+    (:func:`tuckercodec.measures.distortion.per_frame_kg`) and its largest vertex displacement in
+    scene units (:func:`tuckercodec.measures.distortion.per_frame_max_displacement`)."""
     frame_kg = np.asarray(frame_kg, dtype=np.float64)
     worst_vertex = np.asarray(worst_vertex, dtype=np.float64)
     if frame_kg.ndim != 1 or frame_kg.shape != worst_vertex.shape or frame_kg.size == 0:

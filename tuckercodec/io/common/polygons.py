@@ -14,7 +14,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..errors import InputError
+from ...errors import InputError
 
 #: The face table may hold this many entries per corner of the file...
 PADDED_PER_CORNER = 16
@@ -93,7 +93,7 @@ def first_change(
 
 def polygons_from_faces(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The corner counts and flat vertex indices (both int32, as USD and Alembic store them)
-    of a face table that follows the rule of :mod:`tuckercodec.topology`."""
+    of a face table that follows the rule of :mod:`tuckercodec.model.topology`."""
     real = np.asarray(faces) >= 0
     counts = real.sum(axis=1).astype(np.int32)
     return counts, np.asarray(faces)[real].astype(np.int32)

@@ -23,7 +23,7 @@ Which formats stream, and how (a format's :attr:`~.registry.SequenceFormat.open`
 Every format streams: ``open`` is the one way a whole-sequence format reads (``load()`` reads
 all the frames). :class:`SequenceFrames` is a sequence in memory as a source.
 
-Every source checks what it reads as :class:`~tuckercodec.sequence.MeshSequence` does (finite
+Every source checks what it reads as :class:`~tuckercodec.model.sequence.MeshSequence` does (finite
 positions, the first frame's vertex count and faces), when it reads it: an error in frame 900
 is raised by the read of a range holding frame 900, naming the file and the frame. A source is
 picklable, so that a process or a Dask worker can read its own ranges: it keeps its path and
@@ -43,15 +43,15 @@ from typing import IO, Any, BinaryIO, ClassVar
 import numpy as np
 
 from ..errors import InputError
-from ..format.names import default_frame_names
-from ..reading import open_input
-from ..sequence import (
+from ..system.reading import open_input
+from .sequence import (
     MeshSequence,
     checked_meters_per_unit,
     checked_time_codes,
     checked_up_axis,
+    default_frame_names,
 )
-from ..topology import checked_face_table
+from .topology import checked_face_table
 
 #: The most bytes of the file's own type that :class:`RawFrames` reads at a time (a frame more
 #: if one frame is larger): what reading costs beyond the float64 array it returns.
@@ -65,7 +65,7 @@ class FrameSource(abc.ABC):
         path: the file or folder read, named in errors (``None`` if there is none).
         frame_count: F, the number of frames.
         vertex_count: K, the number of vertices of every frame.
-        faces: (M, n) int64 as :class:`~tuckercodec.sequence.MeshSequence` holds them ((0, 3)
+        faces: (M, n) int64 as :class:`~tuckercodec.model.sequence.MeshSequence` holds them ((0, 3)
             for a point sequence).
         frame_names: F names (``frame_00000``... where the source has none).
         frame_rate: frames per second, if known.

@@ -54,8 +54,8 @@ from dataclasses import dataclass
 from types import TracebackType
 from typing import Any, Generic, TypeVar
 
-from ._version import __version__
-from .errors import TuckerCodecError
+from .._version import __version__
+from ..errors import TuckerCodecError
 from .optional import import_optional
 from .progress import progress as progress_bar
 
