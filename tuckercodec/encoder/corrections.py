@@ -54,7 +54,8 @@ GRID_ROOM = 1e-6
 DECODE_SLACK = 0.03
 #: The most U1 columns a lossless file's Tucker part has (unless no coarser part exists): its
 #: decode is then about 2 * 128 multiply-adds per value in §8.1's product, a fraction of the
-#: 80 ns a value that issue 23's 50 MB/s of float32 output allows on 2 cores.
+#: 80 ns a value that the lossless decode's target, 50 MB/s of float32 output on 2 cores
+#: (``python -m tools.bench lossless``), allows.
 LOSSLESS_COLUMNS = 128
 #: zstd level of the corrections in the final file: above it, minutes for a percent or two.
 CORRECTION_LEVEL = 9
