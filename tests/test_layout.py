@@ -164,7 +164,7 @@ def test_every_rule_is_raised_from_exactly_one_function_with_the_class_the_spec_
 # ------------------------------------------------------------------------------------------
 # sizes and surfaces
 
-#: The length rule (issue 21): what a reader must hold at once is a function, not a module, so
+#: The length rule: what a reader must hold at once is a function, not a module, so
 #: the package caps functions and leaves a module to be as long as its one concern.
 FUNCTION_LINES = 120
 LONG_FUNCTION_LINES = 80
