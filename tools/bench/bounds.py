@@ -1,4 +1,4 @@
-"""Size against a bound on every vertex (issue 23): tuckercodec's ``max_error`` against SZ3 and
+"""Size against a bound on every vertex: tuckercodec's ``max_error`` against SZ3 and
 zfp with the same guarantee, and what a bound costs beside a KG target.
 
 For each sequence (default: every one of ../shared/data present) and each bound D, given as a
@@ -62,9 +62,9 @@ from tuckercodec.internal import KG_DEFINITION
 
 DEFAULT_BOUNDS = [1e-3, 1e-4]
 DEFAULT_PLOT_BOUNDS = [3e-3, 1e-3, 3e-4, 1e-4]
-#: Issue 23: tuckercodec's file at most this fraction of SZ3's with the same guarantee.
+#: Target: tuckercodec's file at most this fraction of SZ3's with the same guarantee.
 TARGET_SZ3_RATIO = 0.5
-#: Issue 23: ``--kg 0.1 --max-error 2W`` at most this much larger than the plain KG 0.1 file.
+#: Target: ``--kg 0.1 --max-error 2W`` at most this much larger than the plain KG 0.1 file.
 TARGET_COMBINED_RATIO = 1.10
 #: tuckercodec's report of its worst vertex may differ from the measure here by this much
 #: (relative): both are float64 sums of three squares, perhaps in another order.
@@ -336,7 +336,7 @@ def combined_rows(rows: list[Combined]) -> list[str]:
 
 
 def misses(entries: list[Entry], rows: list[Combined], relatives: list[float]) -> list[str]:
-    """What broke a promise or missed a target of issue 23."""
+    """What broke a promise or missed a target of the bound mode."""
     found = []
     for e in entries:
         label = f"{e.sequence} {e.coder} at {e.relative:g} of the diagonal"
