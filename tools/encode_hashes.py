@@ -24,7 +24,7 @@ import tempfile
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-#: The modes of the issue's check, and the segmented ones beside them.
+#: The modes of the restructuring's check, and the segmented ones beside them.
 MODES: dict[str, list[str]] = {
     "kg0.1": ["--kg", "0.1"],
     "kg1": ["--kg", "1"],

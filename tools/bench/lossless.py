@@ -31,7 +31,7 @@ Then tuckercodec's decode part by part (``--no-parts`` leaves it out): opening t
 the corrections) and the whole ``decode``, medians of ``--repeat`` runs, for the lossless file
 and for the plain file at KG 0.1 beside it: what the lossless mode adds to a decode.
 
-Last, the misses against the issue's targets: every file bit-exact; tuckercodec's smaller than
+Last, the misses against the targets: every file bit-exact; tuckercodec's smaller than
 the smallest peer's on every sequence; tuckercodec decoding at least ``TARGET_MB_S``.
 
 Output: lossless.md (what is printed) and results.json (every file tried) in ``--out``.

@@ -11,7 +11,7 @@ everything); encodes are deterministic on one machine, so one run per point is t
 Printed per point: both sizes in bytes and bpfv, the change, the connectivity (section FACE) in
 bits per vertex before and after, the decoded KG error of the new file measured here with
 ``kg_error`` (Karni-Gotsman, per-frame centroid, in percent) against the target, and the new
-file's format version. Then the issue's absolute targets.
+file's format version. Then the absolute targets.
 
     python -m tools.bench size
     python -m tools.bench size ../shared/data/chicken.npz --targets 0.1

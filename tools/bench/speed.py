@@ -15,7 +15,7 @@ and an OBJ folder are the child's first call, as from the command line.
 For each sequence (default: every one of ../shared/data present):
 
 1. **Encode** at KG 0.1 and 0.02 (``encode(sequence, target_kg=t)`` on the loaded sequence):
-   seconds, the file size and its ratio now/baseline (issue: at most 1.01), and the decoded KG
+   seconds, the file size and its ratio now/baseline (target: at most 1.01), and the decoded KG
    error of the new file, measured here with ``kg_error``, against the target.
 2. **Decode** the KG 0.1 files: ``Decoder(data)`` plus ``frame(0)``, and
    ``Decoder(data).positions()``, from bytes in memory; once with each package decoding the file
@@ -38,7 +38,7 @@ is the whole child process's peak resident set (``ru_maxrss``: the interpreter, 
 all) after frame 0.
 
 Printed: a table per measure with both packages' seconds and the ratio baseline/now, the
-verdicts against the issue's targets, the machine, the load average before and after, and the
+verdicts against the speed targets, the machine, the load average before and after, and the
 command. The exit status is 1 if a child failed or the same file decoded to different
 positions or text, 0 otherwise (targets missed are reported, not an error).
 
