@@ -1,4 +1,4 @@
-"""The .npz sequence format (tuckercodec/io/npz.py): round trips, the variants it accepts, and
+"""The .npz sequence format (tuckercodec/io/npz/): round trips, the variants it accepts, and
 broken, corrupt or crafted archives.
 
 A bad archive ends in an :class:`InputError` that names the file (and the key, and the frame

@@ -1,4 +1,4 @@
-"""VTK time series (tuckercodec/io/vtk.py): a ParaView .pvd of .vtp or .vtu files, read and
+"""VTK time series (tuckercodec/io/vtk/): a ParaView .pvd of .vtp or .vtu files, read and
 written in plain numpy (no extra library).
 
 Round trips are exact (float32 and float64 positions, mixed polygons, time codes, names), in

@@ -1,4 +1,4 @@
-"""XDMF time series (tuckercodec/io/xdmf.py): temporal collections of grids that each have
+"""XDMF time series (tuckercodec/io/xdmf/): temporal collections of grids that each have
 their own geometry, with data inline (no extra needed) or in HDF5 (h5py, the [xdmf] extra).
 
 Round trips are exact (float32 and float64 positions, polygons, time codes, names); series

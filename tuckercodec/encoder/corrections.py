@@ -147,7 +147,8 @@ def exact_segment(
     u2: np.ndarray,
 ) -> tuple[np.ndarray, int]:
     """One decomposition's frames as §8.1 reconstructs them, with the exponent e that keeps
-    its integer product exact and most precise (:func:`~.residual.choose_exponent`)."""
+    its integer product exact and most precise
+    (:func:`~tuckercodec.format.residual.choose_exponent`)."""
     exact_u1 = residual.ExactU1.of(u1.q, u1.steps)
     i = u1.q.shape[1]
     u3_values = u3.values()
