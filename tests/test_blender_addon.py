@@ -59,7 +59,7 @@ NO_BPY = (
 
 def test_faces_become_blender_polygons_and_come_back():
     # Blender's loops (vertex indices, polygon after polygon) and loop totals are the corner
-    # counts and flat indices of io.polygons, which the add-on reads them with
+    # counts and flat indices of io.common.polygons, which the add-on reads them with
     faces = np.array([[0, 1, 2, -1], [2, 1, 3, 4], [4, 3, 5, -1]])
     totals, loops = polygons_from_faces(faces)
     assert loops.tolist() == [0, 1, 2, 2, 1, 3, 4, 4, 3, 5]

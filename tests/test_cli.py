@@ -221,7 +221,7 @@ def test_encode_decode_info_eval(wave_npz, tmp_path, capsys):
 
 
 # ------------------------------------------------------------------------------------------
-# the worst vertex beside the KG error (issue 23, item 4)
+# the worst vertex beside the KG error: what a bound on every vertex (--max-error) promises
 
 WORST = re.compile(r"worst vertex (?:against \S+: )?(\S+) at frame (\d+), vertex (\d+) \((.*)\)")
 

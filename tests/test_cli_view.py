@@ -158,7 +158,7 @@ def test_a_request_for_another_host_name_is_refused(served):
 
 
 def test_every_request_needs_the_runs_token(served):
-    """Finding 9 of issue 22: any local user could read the served files. The token comes in
+    """Without a token any local user could read the served files. The token comes in
     the printed URL's query; that response sets it as a cookie for the page's other requests."""
     server, site, folder = served
     assert len(server.token) >= 32
@@ -217,7 +217,7 @@ def _closed_within(connection: socket.socket, seconds: float) -> bool:
 
 
 def test_half_sent_requests_are_closed_at_the_timeout_and_others_still_served(served):
-    """Finding 9 of issue 22: half-sent requests held a thread each, forever."""
+    """Half-sent requests once held a thread each, forever."""
     _, site, folder = served
     assert 1 <= server_module.CONNECTION_TIMEOUT <= 10  # a few seconds by default
     with ViewerServer(folder, site.files, 0, connection_timeout=1.0) as server:
@@ -385,7 +385,7 @@ def test_export_force_uses_an_empty_folder(files, tmp_path):
 
 
 def test_export_force_refuses_a_folder_that_is_not_an_export_and_leaves_it(files, tmp_path, capsys):
-    """Finding 2 of issue 22: --force deleted a project's src/ and notes."""
+    """--force once deleted a project's src/ and notes."""
     out = tmp_path / "project"
     (out / "src").mkdir(parents=True)
     (out / "src/main.py").write_text("print(1)")

@@ -1,4 +1,4 @@
-"""A size target uses its budget (issue 13 item 5): the whole file never exceeds B bits per
+"""A size target uses its budget, not only keeps under it: the whole file never exceeds B bits per
 frame per vertex and fills at least 0.98 of it where B is reachable; the budget fillers find
 such a D even when the size jumps between nearly equal D, as zstd's strongest levels make it."""
 

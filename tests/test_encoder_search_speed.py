@@ -1,5 +1,6 @@
-"""The encoder's faster paths (issue 24) against the slower ones they replace or the
-definitions they implement: each must give the same answer, or the one its docstring says."""
+"""The encoder's faster paths against the slower ones they replace or the definitions they
+implement: a speed-up must not change an answer, so each must give the same answer, or the one
+its docstring says."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""The fuzzers' findings stay fixed, and a short fuzz run on every test run (issues 5 and 22).
+"""The fuzzers' findings stay fixed, and a short fuzz run on every test run: a crafted input
+ends in a clear error, never a crash, a hang or a flood of memory.
 
 - Every saved input of every door (tests/fuzz/corpus/<target>, tests/fuzz/regressions/<target>,
   and anything a fuzz run left in tests/fuzz/crashes/<target>) ends in the door's documented

@@ -331,7 +331,7 @@ def test_a_missing_external_buffer_and_uris_out_of_the_folder_are_refused(tmp_pa
 def test_an_accessor_without_a_buffer_view_is_bounded_by_the_bytes_the_file_holds(
     tmp_path: Path,
 ) -> None:
-    """Issue 22, finding 4: a .gltf of a few hundred bytes whose buffer declares 3 GB and is
+    """A crafted file: a .gltf of a few hundred bytes whose buffer declares 3 GB and is
     never loaded (no uri) asked for 3 GB of zeros; it is refused at once, naming the accessor.
     Zeros within the file's real data still read."""
     import tracemalloc
@@ -372,7 +372,7 @@ def test_an_accessor_without_a_buffer_view_is_bounded_by_the_bytes_the_file_hold
 
 
 def test_buffers_of_one_file_read_it_once_and_count_its_bytes_once(tmp_path: Path) -> None:
-    """Issue 22, finding 8: a thousand buffers naming one file read it a thousand times, and
+    """A crafted file: a thousand buffers naming one file read it a thousand times, and
     counted it a thousand times as the data that bounds an accessor without a buffer view."""
     (tmp_path / "data.bin").write_bytes(bytes(48))
     gltf: dict[str, Any] = {
@@ -413,7 +413,7 @@ def _chain(path: Path, count: int, meshes: bool) -> Path:
 
 
 def test_a_deep_hierarchy_costs_work_in_proportion_to_its_nodes(tmp_path: Path) -> None:
-    """Issue 22: the check for cycles walked from every node to its root, the scene's order
+    """Quadratic work: the check for cycles walked from every node to its root, the scene's order
     was a list searched for every node, and each mesh node multiplied its whole chain of
     transforms: a chain of 30,000 nodes (1 MB of JSON) took 450 million steps to check, and
     30,000 mesh nodes nested each in the one before 450 million matrix products a frame.
@@ -429,7 +429,7 @@ def test_a_deep_hierarchy_costs_work_in_proportion_to_its_nodes(tmp_path: Path) 
 def test_the_weights_of_many_targets_are_evaluated_a_few_frames_at_a_time(
     tmp_path: Path,
 ) -> None:
-    """Issue 22, finding 8: the weights of every frame of a read were one (frames x targets)
+    """A crafted file: the weights of every frame of a read were one (frames x targets)
     array, which 400 KB of JSON and keyframes made 800 MB: 5,000 targets that name one
     accessor, and 20,000 keyframes of a translation. They are evaluated a few frames at a
     time now, and the frames come out the same."""
@@ -538,7 +538,7 @@ def test_a_meshopt_view_claiming_more_than_its_codec_can_expand_is_refused(
 
 
 def test_meshopt_views_decode_within_max_memory_together(tmp_path: Path) -> None:
-    """Issue 22, finding 8: the attribute codec turns 16 bytes of zeros into 2 bits, so a
+    """A decompression bomb: the attribute codec turns 16 bytes of zeros into 2 bits, so a
     meshopt view may honestly declare 64 times its bytes; the views a file decodes (and keeps)
     are bounded by --max-memory together, before each is decoded."""
     pytest.importorskip("meshoptimizer", reason="meshoptimizer (the 'gltf' extra) is missing")

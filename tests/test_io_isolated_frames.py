@@ -2,7 +2,7 @@
 for USD and Alembic): the frames come back as the source reads them; the file's own errors
 leave the child serving; a crash, a hang or a bug ends in the error a one-shot read gives,
 and the next read starts a new child; no child outlives its source; a pickled source starts
-its own. The sources are tests/streaming_hooks.py."""
+its own. The sources are tests/support/streaming_hooks.py."""
 
 from __future__ import annotations
 

@@ -226,7 +226,8 @@ def _sparse(path: Path, size: int = 2**40) -> Path:
 
 
 def test_a_sparse_file_gets_the_limits_of_the_bytes_it_stores(tmp_path, monkeypatch):
-    # issue 22, finding 5: 943 bytes and a 1 TiB hole got 16,386 GiB and 36 hours
+    # the limits grew with st_size, which a hole inflates for free: 943 bytes and a 1 TiB hole
+    # got 16,386 GiB and 36 hours
     monkeypatch.delenv(MEMORY_VARIABLE, raising=False)
     monkeypatch.delenv(TIMEOUT_VARIABLE, raising=False)
     path = tmp_path / "padded.usdc"

@@ -34,7 +34,7 @@ OFF_QUAD = "OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n"
 
 @pytest.mark.parametrize("suffix", [".zip", ".bz2", ".tar.gz", ".tar.bz2", ".ZIP"])
 def test_archives_trimesh_would_inflate_whole_are_refused(tmp_path: Path, suffix: str) -> None:
-    """Issue 22, finding 8: trimesh inflates an archive whole before it reads a mesh (a bz2
+    """A decompression bomb: trimesh inflates an archive whole before it reads a mesh (a bz2
     stream without any limit), so a small archive could fill the memory."""
     path = tmp_path / f"mesh{suffix}"
     with zipfile.ZipFile(path, "w") as archive:  # whatever the kind: refused by its name

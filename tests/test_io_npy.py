@@ -1,4 +1,4 @@
-"""The ``.npy`` sequence format (tuckercodec/io/npy.py): round trips, faces from ``--faces``,
+"""The ``.npy`` sequence format (tuckercodec/io/npz/npy.py): round trips, faces from ``--faces``,
 a range read touching only its range in bounded memory, and broken or crafted files."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The .npz sequence format (tuckercodec/io/npz.py): round trips, the variants it accepts, and
+"""The .npz sequence format (tuckercodec/io/npz/): round trips, the variants it accepts, and
 broken, corrupt or crafted archives.
 
 A bad archive ends in an :class:`InputError` that names the file (and the key, and the frame
@@ -496,7 +496,7 @@ def zeros_npz(path: Path, **shapes: tuple[tuple[int, ...], str]) -> Path:
 
 
 def test_an_honest_bomb_is_refused_beyond_max_memory_before_inflating(tmp_path, capsys):
-    """Issue 22, finding 8: a member of zeros that declares, truly, the size it inflates to
+    """A decompression bomb: a member of zeros that declares, truly, the size it inflates to
     (1,100 times its own) is bounded by --max-memory; reading a range at a time still works."""
     path = zeros_npz(tmp_path / "bomb.npz", V=((64, 2**16, 3), "<f8"))  # 96 MiB from 94 KB
     limit = 16 * 2**20

@@ -1,4 +1,4 @@
-"""The PC2 and MDD point caches (tuckercodec/io/pc2.py, mdd.py, pointcache.py): exact round
+"""The PC2 and MDD point caches (tuckercodec/io/pointcache/): exact round
 trips, the header fields and times kept, the faces from ``--faces``, the layouts real exporters
 write, and broken or crafted files.
 

@@ -390,7 +390,8 @@ def test_a_pipe_named_like_a_stage_is_refused_without_hanging(tmp_path):
 
 
 # ------------------------------------------------------------------------------------------
-# confinement (issue 22): a stage reads only files inside its own folder
+# confinement: a stage reads only files inside its own folder, so a crafted one cannot read
+# another file of the machine
 
 
 def _arc(kind: str, asset: str):

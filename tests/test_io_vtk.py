@@ -1,4 +1,4 @@
-"""VTK time series (tuckercodec/io/vtk.py): a ParaView .pvd of .vtp or .vtu files, read and
+"""VTK time series (tuckercodec/io/vtk/): a ParaView .pvd of .vtp or .vtu files, read and
 written in plain numpy (no extra library).
 
 Round trips are exact (float32 and float64 positions, mixed polygons, time codes, names), in
@@ -23,8 +23,8 @@ from tests.support.sequences import grid_faces, shared_file, wave_sequence
 from tuckercodec import InputError, MeshSequence, load_sequence, save_sequence
 from tuckercodec.cli import main
 from tuckercodec.io import vtk as vtk_format
-from tuckercodec.io.vtk import series as vtk_series
 from tuckercodec.io.registry import WriteOptions, format_named
+from tuckercodec.io.vtk import series as vtk_series
 from tuckercodec.io.vtk.datasets import DatasetWriter
 
 DATA = Path(__file__).parent / "data" / "vtk"
@@ -305,7 +305,7 @@ LAUGHS = "".join(f'<!ENTITY lol{n} "{f"&lol{n - 1};" * 10 if n else "lol"}">' fo
 
 
 def test_declarations_are_refused_by_the_parser_whatever_comes_first(tmp_path):
-    """Issue 22, finding 7: a comment before the DOCTYPE, or UTF-16, hid it from a byte filter,
+    """An entity bomb: a comment before the DOCTYPE, or UTF-16, hid it from a byte filter,
     and the entities expanded."""
     pvd = series(tmp_path, [square_frame()])
     frame = tmp_path / "f" / "0.vtu"
@@ -344,7 +344,8 @@ def test_a_listed_file_that_is_missing_or_not_vtk_is_named(tmp_path):
 
 
 def test_a_listed_file_outside_the_folder_is_refused(tmp_path, capsys):
-    """Issue 22, finding 1: a .pvd may list only files inside its own folder."""
+    """Confinement: a .pvd may list only files inside its own folder, so a crafted one cannot
+    read another file of the machine."""
     (tmp_path / "sub").mkdir()
     (tmp_path / "a.vtp").write_text(square_frame())
     (tmp_path / "sub" / "link.vtp").symlink_to(tmp_path / "a.vtp")

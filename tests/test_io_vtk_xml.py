@@ -273,7 +273,7 @@ def zeros_block(size: int) -> bytes:
 
 
 def test_an_honest_bomb_is_refused_beyond_max_memory_before_inflating(tmp_path, capsys):
-    """Issue 22, finding 8: a block of zeros that declares, consistently, the size it inflates
+    """A decompression bomb: a block of zeros that declares, consistently, the size it inflates
     to (a 467 KB .vtp was 1.06 GB of points) is bounded by --max-memory, not by the file."""
     count = 2**22  # 96 MiB of Float64 points, from a block of 98 KB
     block = zeros_block(count * 24)

@@ -1,4 +1,4 @@
-"""XDMF time series (tuckercodec/io/xdmf.py): temporal collections of grids that each have
+"""XDMF time series (tuckercodec/io/xdmf/): temporal collections of grids that each have
 their own geometry, with data inline (no extra needed) or in HDF5 (h5py, the [xdmf] extra).
 
 Round trips are exact (float32 and float64 positions, polygons, time codes, names); series
@@ -104,7 +104,7 @@ def test_float64_polygons_points_and_time_codes_are_kept(tmp_path, faces):
 
 def test_horse_gallop_round_trips_exactly(tmp_path):
     # how fast it reads is the read suite's to measure (python -m tools.bench read --formats),
-    # not a unit test's: a wall-clock limit failed here on a loaded machine (issue 22)
+    # not a unit test's: a wall-clock limit failed here on a loaded machine
     pytest.importorskip("h5py", reason=H5PY_MISSING)
     horse = load_sequence(shared_file("horse-gallop"), progress=False)
     save_sequence(horse, tmp_path / "horse.xdmf")
@@ -197,7 +197,7 @@ def test_references_to_a_shared_topology_are_followed(tmp_path):
 
 
 def test_references_other_than_plain_child_paths_are_refused(tmp_path, capsys):
-    """Issue 22, finding 3: ElementTree's // and * over a few hundred nested elements never
+    """A crafted file's hang: ElementTree's // and * over a few hundred nested elements never
     end (8 KB took 9.5 s), so only plain paths of child steps are followed."""
     nested = "<Information>" * 300 + "</Information>" * 300
     hostile = "/Xdmf/Domain//*//*//*//Nope"
@@ -227,7 +227,7 @@ def _store(count: int, geometry: str) -> str:
 
 
 def test_following_references_costs_work_in_proportion_to_the_document(tmp_path):
-    """Issue 22, item D: ElementTree lists the siblings again for every candidate of a [n]
+    """Quadratic work: ElementTree lists the siblings again for every candidate of a [n]
     step, so one Reference to the 20,000th of 20,000 grids took 4e8 steps (minutes), and
     References that search far for their targets cost the document's size each. Children
     are indexed once by name and by the value a predicate names; all the following of one
@@ -321,7 +321,7 @@ UCHAR = (
         (document(grid(POINTS).replace(" 0.5 ", " nan ")), "point 4 has a non-finite", 0),
         # beyond the NumberType: once a silent wrap (258 as a UChar was 2, a valid index)
         (document(grid(POINTS, 0.0, UCHAR.replace(" 3<", " 258<"))), "beyond the 0..255", 0),
-        # once numpy's overflow warning (fuzzing, issue 22)
+        # once numpy's overflow warning (found by fuzzing)
         (
             document(
                 grid(POINTS)
@@ -353,7 +353,7 @@ def test_entity_declarations_are_refused_and_a_plain_doctype_is_not(tmp_path):
 
 
 def test_entities_are_refused_by_the_parser_in_utf_16(tmp_path):
-    """Issue 22, finding 7: UTF-16 hid a billion laughs from the byte filter."""
+    """An entity bomb: UTF-16 hid a billion laughs from the byte filter."""
     laughs = "".join(f'<!ENTITY l{n} "{f"&l{n - 1};" * 10 if n else "lol"}">' for n in range(10))
     text = document(grid(POINTS), head=f"<!DOCTYPE Xdmf [{laughs}]>").replace(
         '<?xml version="1.0"?>', '<?xml version="1.0" encoding="UTF-16"?>'
@@ -405,7 +405,7 @@ def test_broken_or_hostile_hdf5_data_is_refused_before_reading_it(tmp_path):
 
 
 def test_an_honest_bomb_is_refused_beyond_max_memory_before_reading(tmp_path, capsys):
-    """Issue 22, finding 8: a gzip dataset of zeros that stores 1/1000 of what it holds is
+    """A decompression bomb: a gzip dataset of zeros that stores 1/1000 of what it holds is
     bounded by --max-memory before h5py inflates it; each time step has the whole ceiling."""
     h5py = pytest.importorskip("h5py", reason=H5PY_MISSING)
     count, rows = 2**22, 2**16  # 96 MiB of float64 points
@@ -439,7 +439,7 @@ def test_an_honest_bomb_is_refused_beyond_max_memory_before_reading(tmp_path, ca
 
 
 def test_hdf5_data_kept_outside_the_file_is_refused(tmp_path):
-    """Issue 22, finding 1: external storage, a virtual dataset or an external link would read
+    """Confinement: external storage, a virtual dataset or an external link would read
     another file of the machine (/etc/passwd) into the output."""
     h5py = pytest.importorskip("h5py", reason=H5PY_MISSING)
     secret = tmp_path / "secret.bin"

@@ -136,7 +136,7 @@ def test_an_array_that_is_not_positions_is_refused(tmp_path, shape, dtype, chunk
 
 
 def test_chunks_and_faces_beyond_max_memory_are_refused_before_reading(tmp_path):
-    """Issue 22, finding 8: a chunk is decompressed whole, and the faces read whole."""
+    """A decompression bomb: a chunk is decompressed whole, and the faces read whole."""
     target = tmp_path / "x.zarr"
     group = zarr.create_group(store=str(target))
     group.create_array("vertices", data=np.zeros((4, 1000, 3)), chunks=(2, 1000, 3))

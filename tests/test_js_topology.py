@@ -37,7 +37,8 @@ SCRIPT = Path(__file__).resolve().parent / "js" / "tkc_topology.mjs"
 VECTORS = Path(__file__).resolve().parents[1] / "spec" / "vectors"
 NODE_SECONDS = 120.0  # a whole group; a walk that loops trips it
 DAMAGE_RULES = {"R39-traversal", "R30-planes", "R29-zstd-content-size"}
-#: Where the reference differs from the spec (reported in issue 14): it accepts corner_order 1.0,
+#: Where the reference differs from the spec (a known leniency of the reference's; the spec is
+#: what both decoders must follow): it accepts corner_order 1.0,
 #: a msgpack float, as 1, but §6.8 says "an int 0 or 1" and §1 "an int is never a float".
 SPEC_OVER_REFERENCE = {"corner-order-float": ("error", "R39-traversal")}
 

@@ -256,7 +256,7 @@ def test_every_rule_is_raised_from_exactly_one_function_with_the_class_the_spec_
 # ------------------------------------------------------------------------------------------
 # sizes and surfaces
 
-#: The length rule (issue 21): what a reader must hold at once is a function, not a module, so
+#: The length rule: what a reader must hold at once is a function, not a module, so
 #: the package caps functions and leaves a module to be as long as its one concern.
 FUNCTION_LINES = 120
 LONG_FUNCTION_LINES = 80
@@ -387,3 +387,64 @@ def test_no_test_or_tool_edits_sys_path():
 
 def test_the_package_ships_its_type_information():
     assert (PACKAGE / "py.typed").exists()
+
+
+# ------------------------------------------------------------------------------------------
+# no tracker references: a reader of the repository cannot see the tracker, so a comment, a
+# docstring or a document says the reason in words instead of pointing at an issue's number
+
+#: "issue" or "issues", a space, perhaps "#", and a number (written so as not to match itself).
+TRACKER_REFERENCE = re.compile(r"\b[Ii]ssues? #?\d+")
+#: The package, the tools, the tests, the spec and docs, and the top-level documents.
+CHECKED_FOLDERS = ("tuckercodec", "tools", "tests", "spec", "docs")
+CHECKED_SUFFIXES = {".py", ".md", ".toml", ".js", ".mjs", ".ts", ".mts", ".html", ".css", ".txt"}
+#: Installed or third-party code, not the project's words.
+UNCHECKED_FOLDERS = {"node_modules", "vendor", "__pycache__"}
+
+
+def _text_files(folder: Path) -> list[Path]:
+    files = []
+    for path in folder.iterdir():
+        if path.is_dir() and path.name not in UNCHECKED_FOLDERS:
+            files += _text_files(path)
+        elif path.is_file() and path.suffix in CHECKED_SUFFIXES:
+            files.append(path)
+    return files
+
+
+def _checked_files() -> list[Path]:
+    files = [p for p in ROOT.iterdir() if p.is_file() and p.suffix in {".md", ".toml"}]
+    for folder in CHECKED_FOLDERS:
+        files += _text_files(ROOT / folder)
+    return sorted(files)
+
+
+def _tracker_references(files: list[Path], root: Path = ROOT) -> list[str]:
+    found = []
+    for path in files:
+        for number, line in enumerate(path.read_text(errors="replace").splitlines(), 1):
+            if TRACKER_REFERENCE.search(line):
+                found.append(f"{path.relative_to(root)}:{number}: {line.strip()}")
+    return found
+
+
+def test_no_comment_or_document_cites_a_tracker_issue_number():
+    files = _checked_files()
+    assert ROOT / "README.md" in files and Path(__file__) in files and len(files) > 300
+    found = _tracker_references(files)
+    assert not found, "tracker issue numbers; say the reason instead:\n" + "\n".join(found)
+
+
+def test_a_tracker_issue_number_is_found(tmp_path):
+    number = 22  # the citations below are made at run time, so this file cites none
+    cited = tmp_path / "cited.py"
+    lines = [
+        f"# a crafted file (Issue {number}, finding 7)",
+        f"x = 1  # issues {number - 17} and {number}",
+        f"# see issue #{number}",
+        "# an issue of the format, 22 issues, tissue 3",
+    ]
+    cited.write_text("\n".join(lines))
+    assert _tracker_references([cited], tmp_path) == [
+        f"cited.py:{n}: {lines[n - 1]}" for n in (1, 2, 3)
+    ]

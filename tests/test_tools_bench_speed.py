@@ -54,7 +54,7 @@ def test_every_measure_runs_against_the_baseline_and_agrees_with_it(short, tmp_p
     assert decodes["baseline's"][-1] == "yes"  # bit-identical positions of the same file
     (obj,) = [row for row in rows if row[1] == "5"]  # five OBJ files, the short input's frames
     assert obj[-1] == "yes"  # the same text from both packages
-    assert "Verdicts against issue 24's targets" in out
+    assert "Verdicts against the speed targets" in out
     assert "FAILED" not in out and "machine: " in out and "command: python -m tools.bench" in out
     assert (out_folder / speed.MARKER).read_text() == out
     assert not list(out_folder.glob("*.obj-*"))  # the OBJ folders are removed once hashed

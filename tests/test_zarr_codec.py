@@ -414,7 +414,7 @@ def _refused(call) -> tuple[int, str]:
 
 
 def test_a_chunk_declaring_more_than_the_arrays_chunks_is_refused_before_decompressing(cloth):
-    """Issue 22, finding 6: a 1x10x3 array's chunk of a few KB declaring millions of
+    """A crafted chunk: a 1x10x3 array's chunk of a few KB declaring millions of
     positions is refused from its head, not decompressed to what it declares."""
     import zstandard
 

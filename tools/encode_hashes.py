@@ -1,9 +1,9 @@
 """The sha256 of encodes through the command line: to show that a change writes the same bytes.
 
-A restructuring (issue 21) or a speed change must not move a byte of any file. This encodes
-each sequence in each mode with ``python -m tuckercodec encode`` (one BLAS thread, so that the
-sums are made in one order), prints and saves the digests as JSON, and with ``--compare`` says
-which differ from an earlier run's:
+A restructuring (code moved between modules) or a speed change must not move a byte of any
+file. This encodes each sequence in each mode with ``python -m tuckercodec encode`` (one BLAS
+thread, so that the sums are made in one order), prints and saves the digests as JSON, and with
+``--compare`` says which differ from an earlier run's:
 
     python -m tools.encode_hashes --out /tmp/before.json           # on the old commit
     python -m tools.encode_hashes --out /tmp/after.json --compare /tmp/before.json
@@ -24,7 +24,7 @@ import tempfile
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-#: The modes of the issue's check, and the segmented ones beside them.
+#: The modes of the restructuring's check, and the segmented ones beside them.
 MODES: dict[str, list[str]] = {
     "kg0.1": ["--kg", "0.1"],
     "kg1": ["--kg", "1"],

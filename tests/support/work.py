@@ -1,5 +1,5 @@
 """Work counted in lines of Python, not seconds: a test that a cost does not grow with some
-size holds on any machine, however slow or busy (issue 22, finding 10)."""
+size holds on any machine, however slow or busy (wall-clock limits failed on a loaded one)."""
 
 from __future__ import annotations
 

@@ -20,11 +20,11 @@ ready for BENCHMARKS.md, with the machine and the command that made it.
 - ``viewer``: the viewer page in headless Chromium;
 - ``faces``: the faces-traverse encoder and decoder on fans of triangles sharing one edge;
 - ``bounds``: size against a bound on every vertex, against SZ3 and zfp with the same
-  guarantee, and a bound beside a KG target (issue 23);
+  guarantee, and a bound beside a KG target;
 - ``lossless``: the lossless mode against fpzip, pcodec, zstd and Blosc2, bit for bit, and its
-  decoding speed (issue 23);
+  decoding speed;
 - ``speed``: encode, decode, OBJ output and a large file's first frame against a baseline
-  revision, both run alternately in one run (issue 24).
+  revision, both run alternately in one run.
 
 The options several suites take mean the same in each (:mod:`tools.bench.arguments`): the
 sequences measured (positional: files, folders of OBJ frames, or ``sample``, the built-in

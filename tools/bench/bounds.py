@@ -1,9 +1,9 @@
-"""Size against a bound on every vertex (issue 23): tuckercodec's ``max_error`` against SZ3 and
+"""Size against a bound on every vertex: tuckercodec's ``max_error`` against SZ3 and
 zfp with the same guarantee, and what a bound costs beside a KG target.
 
 For each sequence (default: every one of ../shared/data present) and each bound D, given as a
 fraction of the bounding-box diagonal of the whole sequence (every vertex of every frame):
-``--bounds`` (default 1e-3 and 1e-4, the issue's targets) in the tables, and those with
+``--bounds`` (default 1e-3 and 1e-4, the target bounds) in the tables, and those with
 ``--plot-bounds`` (default 3e-3, 1e-3, 3e-4, 1e-4) in the plot. The coders (``--coders``):
 
 * ``tuckercodec``: ``Encoder(EncodeOptions(max_error=D)).encode_with_report``, D as a length;
@@ -23,7 +23,7 @@ Then the bound beside a KG target: the plain ``target_kg=0.1`` file, its worst v
 measured here, and the file of ``target_kg=0.1, max_error=2 W`` (``--combined-kg``,
 ``--combined-factor``): both sizes and their ratio, the second file's worst vertex and KG.
 
-Last, the misses against the issue's targets: every vertex within D; tuckercodec's file at most
+Last, the misses against the targets: every vertex within D; tuckercodec's file at most
 half of SZ3's (``TARGET_SZ3_RATIO``); the combined file at most 10 % above the plain one.
 
 Times (encode, decode) are medians of ``--repeat`` runs, for the bounds of the tables. Output:
@@ -62,9 +62,9 @@ from tuckercodec.internal import KG_DEFINITION
 
 DEFAULT_BOUNDS = [1e-3, 1e-4]
 DEFAULT_PLOT_BOUNDS = [3e-3, 1e-3, 3e-4, 1e-4]
-#: Issue 23: tuckercodec's file at most this fraction of SZ3's with the same guarantee.
+#: Target: tuckercodec's file at most this fraction of SZ3's with the same guarantee.
 TARGET_SZ3_RATIO = 0.5
-#: Issue 23: ``--kg 0.1 --max-error 2W`` at most this much larger than the plain KG 0.1 file.
+#: Target: ``--kg 0.1 --max-error 2W`` at most this much larger than the plain KG 0.1 file.
 TARGET_COMBINED_RATIO = 1.10
 #: tuckercodec's report of its worst vertex may differ from the measure here by this much
 #: (relative): both are float64 sums of three squares, perhaps in another order.
@@ -336,7 +336,7 @@ def combined_rows(rows: list[Combined]) -> list[str]:
 
 
 def misses(entries: list[Entry], rows: list[Combined], relatives: list[float]) -> list[str]:
-    """What broke a promise or missed a target of issue 23."""
+    """What broke a promise or missed a target of the bound mode."""
     found = []
     for e in entries:
         label = f"{e.sequence} {e.coder} at {e.relative:g} of the diagonal"

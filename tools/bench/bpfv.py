@@ -1,4 +1,4 @@
-"""How well a size target uses its budget (issue 13 item 5): ``encode(seq, target_bpfv=B)``.
+"""How well a size target uses its budget: ``encode(seq, target_bpfv=B)``.
 
 For each sequence (default: every one of ../shared/data present; ``sample`` is the built-in
 cloth) and each budget B (``--bpfv``, default 0.5 1 2 4), the file is encoded from scratch (the
@@ -42,7 +42,7 @@ from tuckercodec import (
 )
 
 DEFAULT_BUDGETS = [0.5, 1.0, 2.0, 4.0]
-#: Issue 13: the whole file between this share of B and B, wherever B is reachable.
+#: Target: the whole file between this share of B and B, wherever B is reachable.
 LEAST_FILL = 0.98
 
 

@@ -58,7 +58,7 @@ REFERENCE_GEOMETRY = {
 #: ../shared/NOTES.md: zstd level 19 on the plain int32 triangle list, in bpfv.
 REFERENCE_FACES = {"chicken": 0.13, "samba": 0.34, "horse": 1.11, "cloth": 1.40}
 
-#: The issue's targets, for samba (the timings) and every sequence (the memory).
+#: The codec's targets, for samba (the timings) and every sequence (the memory).
 TARGET_END_TO_END_S = 3.0
 TARGET_DECODE_ALL_S = 0.5
 TARGET_ONE_FRAME_S = 0.005
@@ -436,7 +436,7 @@ def run(args: argparse.Namespace) -> int:
         )
     print()
 
-    print("## Targets (issue)")
+    print("## Targets")
     print()
     samba = next((r for r in results if reference_key(Path(r.sequence)) == "samba"), None)
     if samba is not None:

@@ -1,6 +1,6 @@
 """Would context coding pay? zstd byte planes against adaptive arithmetic coding of the factors.
 
-Issue 13 item 3. For each sequence and KG target the file is encoded as the codec does today,
+For each sequence and KG target the file is encoded as the codec does today,
 its U1, U3, CORE and CENT sections are taken apart into the integers they stream (§6.3: a
 predicted column's residuals, else its values, column after column) and each section's integers
 are sized by:
@@ -31,7 +31,7 @@ symbol and the bits under the leading one raw. The adaptive sizes are ideal code
 (``pip install constriction``) using the same probabilities, to show that a real coder reaches
 them within a few bytes. Nothing here is part of the codec.
 
-``--rdo`` measures item 4 instead: each file encoded with nearest rounding and with the
+``--rdo`` measures the quantizer instead: each file encoded with nearest rounding and with the
 encoder's rate-distortion optimized quantization (:mod:`tuckercodec.encoder.rdo`), at the same
 KG target (each encode meets it, measured with the decoder's reconstruction): sizes, the decoded
 KG and the encode time.
@@ -228,7 +228,7 @@ def verify(stream: np.ndarray, parents: np.ndarray) -> tuple[int, float]:
 
 
 def compare_rdo(paths: list[Path], targets: list[float]) -> int:
-    """Item 4's table: nearest rounding against the encoder's RDO at each KG target."""
+    """The RDO table: nearest rounding against the encoder's RDO at each KG target."""
     print(f"{'sequence':14} {'KG':>5} {'quantizer':9} {'file':>9} {'no FACE':>9} {'U1':>9}")
     print(f"{'':30}{'U3':>9} {'CORE':>8} {'gain':>7} {'gain*':>7} {'KG out':>8} {'s':>6}")
     for path in paths:

@@ -1,6 +1,6 @@
 """Benchmark of faces-traverse (spec §6.8) on fans: M triangles that all share one edge.
 
-Issue 22: the reference encoder looks across a gate for the first unvisited face, in the input's
+Why fans: the reference encoder looks across a gate for the first unvisited face, in the input's
 order, with the gate's edge; on an edge of very many faces a search that starts from the first
 face each time was quadratic (5,000 faces took 1.1 s, 50,000 faces 115 s). For each M of
 ``--faces`` (default 5000 50000) and each fan (``same``: every face (0, 1, v); ``alternating``:

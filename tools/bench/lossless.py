@@ -1,4 +1,4 @@
-"""Lossless (issue 23): tuckercodec's lossless mode against fpzip, pcodec, zstd 19 and Blosc2,
+"""Lossless: tuckercodec's lossless mode against fpzip, pcodec, zstd 19 and Blosc2,
 every file checked bit for bit, and how fast tuckercodec decodes.
 
 For each sequence (default: every one of ../shared/data present), every coder of ``--coders``
@@ -31,7 +31,7 @@ Then tuckercodec's decode part by part (``--no-parts`` leaves it out): opening t
 the corrections) and the whole ``decode``, medians of ``--repeat`` runs, for the lossless file
 and for the plain file at KG 0.1 beside it: what the lossless mode adds to a decode.
 
-Last, the misses against the issue's targets: every file bit-exact; tuckercodec's smaller than
+Last, the misses against the targets: every file bit-exact; tuckercodec's smaller than
 the smallest peer's on every sequence; tuckercodec decoding at least ``TARGET_MB_S``.
 
 Output: lossless.md (what is printed) and results.json (every file tried) in ``--out``.
@@ -74,7 +74,7 @@ from tuckercodec import (
     decode,
 )
 
-#: Issue 23: tuckercodec decodes at least this many MB (1e6 bytes) of float32 output a second.
+#: Target: tuckercodec decodes at least this many MB (1e6 bytes) of float32 output a second.
 TARGET_MB_S = 50.0
 #: The plain file whose decode the lossless file's is compared with, part by part.
 REFERENCE_KG = 0.1
@@ -300,7 +300,7 @@ def parts_rows(parts: list[DecodeParts]) -> list[str]:
 
 
 def misses(entries: list[Entry], names: list[str]) -> list[str]:
-    """What broke a promise or missed a target of issue 23."""
+    """What broke a promise or missed a target of the lossless mode."""
     found = []
     for e in entries:
         label = f"{e.sequence} {e.coder}"

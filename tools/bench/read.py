@@ -40,7 +40,7 @@ from tuckercodec import DependencyError, MeshSequence, formats, load_sequence, s
 
 DEFAULT_SOURCE = common.SHARED_DATA / "horse-gallop"
 OBJ_TARGET_SECONDS = 1.5  # the goal for horse gallop (48 frames, 32 MB) on a 2-core machine
-FORMAT_TARGET_SECONDS = 1.0  # issue 11: reading horse gallop from each format, on a 2-core machine
+FORMAT_TARGET_SECONDS = 1.0  # the goal for horse gallop read from each format, on a 2-core machine
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -1,4 +1,5 @@
-"""Benchmark of issue 12's scale targets: large encodes, one frame from disk, 1 or 2 workers.
+"""Benchmark of the segmented encoder's scale targets: large encodes, one frame from disk,
+1 or 2 workers.
 
 It measures a sequence larger than memory, one frame read from disk, two workers against one,
 and what forced segments cost on the real sequences; it prints Markdown for BENCHMARKS.md.
@@ -33,7 +34,7 @@ median of ``--repeat`` runs (``--big-repeat`` for the large sequence), with [min
    skipped and named): at each ``--real-targets`` KG, the size with ``--segment-frames 100``
    against without (target: at most 1.3 times), the decoded KG of each, and whether the file
    written without forcing segments is byte-identical to the one the encoder of
-   ``--baseline-ref`` writes (the last commit before issue 12 changed the format, extracted
+   ``--baseline-ref`` writes (the last commit before segmented files changed the format, extracted
    with ``git archive``, never checked out).
 
 The children run the working tree's package, or with ``--encoder-ref REF`` the package of a
@@ -79,7 +80,7 @@ from tools.generate import sequence as make_sequence
 from tuckercodec import Decoder, kg_error, load_sequence
 
 DEFAULT_WORKDIR = Path("~/.cache/tuckercodec-bench").expanduser()
-#: The last commit before issue 12 changed the format: "today's" encoder.
+#: The last commit before segmented files changed the format: "today's" encoder.
 BASELINE_REF = "ff92b12ee4b1334dfa52e58ea87afa0f811c5d7d"
 REAL = ("chicken.npz", "samba.npz", "horse-gallop")
 SECTIONS = ("encode", "frame", "jobs", "real")

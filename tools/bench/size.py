@@ -1,17 +1,17 @@
-"""File sizes now against a baseline revision of the package, side by side in one run (issue 13).
+"""File sizes now against a baseline revision of the package, side by side in one run.
 
 For each sequence (default: every one of ../shared/data present) and each KG target
 (``--targets``, default 2 1 0.5 0.1 0.05 0.02), the file is encoded by this checkout and by the
-package as it was at ``--baseline`` (a git revision, default the last commit before issue 13),
-extracted with ``git archive`` into a temporary folder and run in a child Python whose
-``PYTHONPATH`` puts it first. Both encode the same sequence with ``encode(seq, target_kg=t)``.
-Sizes are whole files (preamble, header, connectivity, names: everything); encodes are
-deterministic on one machine, so one run per point is the figure.
+package as it was at ``--baseline`` (a git revision, default the last commit before the work on
+smaller files), extracted with ``git archive`` into a temporary folder and run in a child
+Python whose ``PYTHONPATH`` puts it first. Both encode the same sequence with
+``encode(seq, target_kg=t)``. Sizes are whole files (preamble, header, connectivity, names:
+everything); encodes are deterministic on one machine, so one run per point is the figure.
 
 Printed per point: both sizes in bytes and bpfv, the change, the connectivity (section FACE) in
 bits per vertex before and after, the decoded KG error of the new file measured here with
 ``kg_error`` (Karni-Gotsman, per-frame centroid, in percent) against the target, and the new
-file's format version. Then the issue's absolute targets.
+file's format version. Then the absolute targets.
 
     python -m tools.bench size
     python -m tools.bench size ../shared/data/chicken.npz --targets 0.1
@@ -35,18 +35,20 @@ from tools.bench import arguments
 from tuckercodec import Decoder, bpfv, encode, info, internal, kg_error
 
 DEFAULT_TARGETS = [2.0, 1.0, 0.5, 0.1, 0.05, 0.02]
-#: The last commit before issue 13: format 1.1, faces-delta, mesh-parent prediction.
+#: The last commit before the work on smaller files: format 1.1, faces-delta, mesh-parent
+#: prediction.
 DEFAULT_BASELINE = "c4b76d8"
-#: Issue 13's absolute targets: (sequence stem, KG target) -> largest whole-file bpfv.
+#: The absolute targets of the work on smaller files: (sequence stem, KG target) -> largest
+#: whole-file bpfv.
 ABSOLUTE_TARGETS = {
     ("cloth-vellum", 1.0): 0.75,
     ("horse-gallop", 1.0): 0.85,
     ("chicken", 0.1): 1.15,
     ("samba", 0.1): 2.6,
 }
-#: Issue 13: connectivity of at most this many bits per vertex, vertex order kept.
+#: Target: connectivity of at most this many bits per vertex, vertex order kept.
 CONNECTIVITY_BITS_PER_VERTEX = 12.0
-#: Issue 13: at least this much smaller than the baseline at every target.
+#: Target: at least this much smaller than the baseline at every target.
 LEAST_GAIN = 0.10
 
 _CHILD = """

@@ -1,7 +1,7 @@
-"""Speed now against a baseline revision of the package, side by side in one run (issue 24).
+"""Speed now against a baseline revision of the package, side by side in one run.
 
 Both packages run in fresh child Pythons: this checkout's, and the package as it was at
-``--baseline`` (a git revision, default the last commit before issue 24), extracted with
+``--baseline`` (a git revision, default the last commit before the work on speed), extracted with
 ``git archive`` into a temporary folder first on the child's ``PYTHONPATH``. Every measure runs
 as rounds of one child per package, baseline and now (A B B A A B...), so that whatever else
 the machine does falls on both alike (the order turns each round: on a loaded machine a run's
@@ -9,13 +9,13 @@ place in the round was seen to matter); the first round is a warm-up (it also co
 extracted package's bytecode) and is thrown away, and each figure is the median of the
 ``--repeat`` rounds after it. A child times only the call measured, after its imports and
 reading its input. A decode is timed after one untimed call in the same child (lazy imports
-paid, as in ``tools.bench codec``, whose figures issue 24 quotes); an encode and an OBJ folder
-are the child's first call, as from the command line.
+paid, as in ``tools.bench codec``, whose figures the speed targets were set against); an encode
+and an OBJ folder are the child's first call, as from the command line.
 
 For each sequence (default: every one of ../shared/data present):
 
 1. **Encode** at KG 0.1 and 0.02 (``encode(sequence, target_kg=t)`` on the loaded sequence):
-   seconds, the file size and its ratio now/baseline (issue: at most 1.01), and the decoded KG
+   seconds, the file size and its ratio now/baseline (target: at most 1.01), and the decoded KG
    error of the new file, measured here with ``kg_error``, against the target.
 2. **Decode** the KG 0.1 files: ``Decoder(data)`` plus ``frame(0)``, and
    ``Decoder(data).positions()``, from bytes in memory; once with each package decoding the file
@@ -28,9 +28,9 @@ For each sequence (default: every one of ../shared/data present):
    be the same from both packages.
 
 With ``--large``, the first frame from disk of a large segmented file: the skinned body of
-``tools.generate.sequence`` (100,000 vertices, 1,000 frames, the size issue 24 gives), made once in
-``--workdir`` and encoded there once by the baseline's CLI at KG 0.1 in segments of 250 frames
-(the encoder's default length), so that both packages read the same file. Each child opens
+``tools.generate.sequence`` (100,000 vertices, 1,000 frames, the size of the large-file target),
+made once in ``--workdir`` and encoded there once by the baseline's CLI at KG 0.1 in segments of 250
+frames (the encoder's default length), so that both packages read the same file. Each child opens
 ``Decoder(path)`` and decodes frame 0 (timed together, and with the child's ``import
 tuckercodec`` added: a package that imports its modules lazily pays them inside the call, so
 the target is judged on the sum), then a few later frames (the median reported); the memory
@@ -38,7 +38,7 @@ is the whole child process's peak resident set (``ru_maxrss``: the interpreter, 
 all) after frame 0.
 
 Printed: a table per measure with both packages' seconds and the ratio baseline/now, the
-verdicts against the issue's targets, the machine, the load average before and after, and the
+verdicts against the speed targets, the machine, the load average before and after, and the
 command. The exit status is 1 if a child failed or the same file decoded to different
 positions or text, 0 otherwise (targets missed are reported, not an error).
 
@@ -68,14 +68,14 @@ from tools.generate import sequence as make_sequence
 from tuckercodec import Decoder, kg_error
 from tuckercodec.internal import sample_path
 
-#: Main before issue 24's work.
+#: Main before the work on speed.
 DEFAULT_BASELINE = "70b9332"
 TARGETS = (0.1, 0.02)
 #: The KG target of the files decoded, written as OBJ and, with --large, read from disk.
 DECODE_TARGET = 0.1
 MB = 1e6
 
-# issue 24's targets
+# the speed targets: a run's verdicts say whether each is met
 ENCODE_SPEEDUP = 3.0
 SIZE_RATIO = 1.01
 OPEN_SPEEDUP = 3.0  # Decoder(bytes) + frame(0), on samba
@@ -758,7 +758,7 @@ def run(args: argparse.Namespace) -> int:
     obj_table(report, results)
     if large is not None:
         large_table(report, large)
-    report.lines += ["Verdicts against issue 24's targets:", ""]
+    report.lines += ["Verdicts against the speed targets:", ""]
     report.lines += [f"- {line}" for line in report.verdicts]
     report.lines += [""] + [f"FAILED: {line}" for line in report.failures]
     report.lines += [

@@ -16,7 +16,7 @@ free port of 127.0.0.1) and opened in Chromium with the browser tests' driver
 - frame alone: every frame reconstructed again, three passes, with nothing drawn meanwhile
   (``decodedPositions(t, out)``, the decoder's binary64 frame into one buffer): the decoder's
   own time, apart from the renderer that shares the machine's cores while the page plays;
-- both frame columns also count the frames over the issue's 2 ms;
+- both frame columns also count the frames over the 2 ms target;
 - playback: ``play()`` for ``--play-seconds`` from frame 0; the frames shown and dropped (a
   frame the clock passed without it being shown) the page counts.
 
@@ -223,7 +223,7 @@ def table(results: list[Result], target_kg: float) -> str:
     return "\n".join(lines)
 
 
-#: The issue's bound on one frame's reconstruction, in milliseconds.
+#: The target bound on one frame's reconstruction, in milliseconds.
 FRAME_TARGET_MS = 2.0
 
 

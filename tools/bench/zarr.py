@@ -38,7 +38,7 @@ from tuckercodec import MeshSequence, encode_with_report, info, kg_error
 from tuckercodec.internal import parse_container
 
 DEFAULT_INPUT = common.SHARED_DATA / "chicken.npz"
-#: The issue's target: the zarr array within this many times the .tkc's size.
+#: The target: the zarr array within this many times the .tkc's size.
 TARGET_RATIO = 1.3
 
 

@@ -1,4 +1,5 @@
-"""Coverage-guided fuzzing of every door into tuckercodec with atheris (issues 5 and 22).
+"""Coverage-guided fuzzing of every door into tuckercodec with atheris, so that a crafted
+input ends in a clear error, never a crash, a hang or a flood of memory.
 
     python -m tools.fuzz --list                                  # the targets, one line each
     python -m tools.fuzz --target obj --seconds 600              # a long run, one process

@@ -12,8 +12,12 @@ KG target too, only parts that meet it (a correction only moves a vertex nearer 
 the file still meets it). Where the Tucker part alone already keeps every vertex within D, with
 room for §8's tolerance, the file needs no corrections and is written as before.
 
-Everything is checked on the bytes written: :func:`verify` decodes them with the decoder and
-measures every vertex (or compares every bit) before the file is returned.
+The promise is checked before the file is returned, without the decoder: :func:`verify`
+measures every vertex (or compares every bit) of the positions the encoder computed as a decoder
+does (§8.1's exact reconstruction plus the corrections, :func:`corrected_positions`), and
+:func:`check_written` reads each correction section back from the packed bytes as a decoder
+does (§6.9) and checks that it holds those integers. §8.1 and §6.9 leave no freedom in the
+arithmetic, so every decoder then returns the positions measured.
 """
 
 from __future__ import annotations
@@ -54,7 +58,8 @@ GRID_ROOM = 1e-6
 DECODE_SLACK = 0.03
 #: The most U1 columns a lossless file's Tucker part has (unless no coarser part exists): its
 #: decode is then about 2 * 128 multiply-adds per value in §8.1's product, a fraction of the
-#: 80 ns a value that issue 23's 50 MB/s of float32 output allows on 2 cores.
+#: 80 ns a value that the lossless decode's target, 50 MB/s of float32 output on 2 cores
+#: (``python -m tools.bench lossless``), allows.
 LOSSLESS_COLUMNS = 128
 #: zstd level of the corrections in the final file: above it, minutes for a percent or two.
 CORRECTION_LEVEL = 9
@@ -142,7 +147,8 @@ def exact_segment(
     u2: np.ndarray,
 ) -> tuple[np.ndarray, int]:
     """One decomposition's frames as §8.1 reconstructs them, with the exponent e that keeps
-    its integer product exact and most precise (:func:`~.residual.choose_exponent`)."""
+    its integer product exact and most precise
+    (:func:`~tuckercodec.format.residual.choose_exponent`)."""
     exact_u1 = residual.ExactU1.of(u1.q, u1.steps)
     i = u1.q.shape[1]
     u3_values = u3.values()
@@ -221,9 +227,11 @@ def worst_vertex(positions: np.ndarray, original: np.ndarray) -> tuple[float, tu
 def verify(
     decoded: np.ndarray, original: np.ndarray, goal: Goal | None, bound: float | None
 ) -> tuple[float, tuple[int, int]]:
-    """Check decoded positions against the promise: bit for bit (lossless), or every vertex
-    within ``bound``. Returns the worst vertex's distance and (frame, vertex). A broken promise
-    is an ``UnreachableTargetError``: the file is never returned."""
+    """Check positions against the promise: bit for bit (lossless), or every vertex within
+    ``bound``. ``decoded`` is what the encoder computed a decoder returns (§8.1 plus the
+    corrections), not a decode of the packed bytes: :func:`check_written` checks those.
+    Returns the worst vertex's distance and (frame, vertex). A broken promise is an
+    ``UnreachableTargetError``: the file is never returned."""
     distance, where = worst_vertex(decoded, original)
     if goal is not None and goal.lossless:
         if not np.array_equal(decoded.view(np.int64), original.view(np.int64)):

@@ -1,4 +1,4 @@
-"""Sizes of trial files from their integers, without packing them (issue 24).
+"""Sizes of trial files from their integers, without packing them, for the search's speed.
 
 The search's trials only rank truncations against each other, so they need a size that moves
 as the packed size moves, not the packed size itself. Packing a trial (predicting every column

@@ -88,10 +88,6 @@ class SegmentPlan:
     block_frames: int
     sketch_columns: int
 
-    @property
-    def segment_count(self) -> int:
-        return len(self.bounds)
-
 
 def plan_segments(
     frames: int, vertices: int, *, segment_frames: int | None, max_memory: int

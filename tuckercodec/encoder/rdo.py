@@ -67,8 +67,8 @@ NEAREST = Settings(lam=None)
 
 class Levels:
     """The rows of a prediction tree grouped by depth: rows at one depth depend only on rows
-    above them, so each group is chosen at once. ``parents`` as in :mod:`.format.prediction`
-    (``parents[r] < 0``: a root, predicted by 0)."""
+    above them, so each group is chosen at once. ``parents`` as in
+    :mod:`tuckercodec.format.prediction` (``parents[r] < 0``: a root, predicted by 0)."""
 
     def __init__(self, parents: np.ndarray) -> None:
         self.parents = np.asarray(parents, dtype=np.int64)

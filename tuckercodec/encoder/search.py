@@ -195,7 +195,7 @@ def encode_ranks(
 # ------------------------------------------------------------------------------------------
 # a size target
 
-#: A size target's file lies between FILL_LEAST and 1 times the budget (issue 13).
+#: A size target's file lies between FILL_LEAST and 1 times the budget: it uses what it is given.
 #: Each fill aims at the middle of its window: the packed size is only roughly monotone in D.
 FILL_LEAST = 0.98
 #: Trial sizes are filled to within this fraction below their aim, so that candidates compare

@@ -320,9 +320,6 @@ class ResidualLayout:
         """Its domain, with the grid's step or the decimals' places or digits."""
         return Domain(self.domain, self.step, self.scale)
 
-    def chunk_of(self, frame: int) -> int:
-        return frame // self.chunk_frames
-
     def chunk_range(self, chunk: int) -> tuple[int, int]:
         start = chunk * self.chunk_frames
         return start, min(self.frames, start + self.chunk_frames)

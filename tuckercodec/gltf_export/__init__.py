@@ -61,7 +61,7 @@ from ..io.gltf.reader import sample_gltf
 from ..measures.distortion import KG_DEFINITION, Displacement, ErrorAccumulator, kg_error
 from ..model.sequence import DEFAULT_FRAME_RATE, MeshSequence
 from ..system.atomic import refuse_existing, write_atomic
-from .quantization import Quantized, quantize_animation, weight_values
+from .quantization import QuantizedAnimation, quantize_animation, weight_values
 
 Compression = Literal["none", "quantize", "meshopt"]
 COMPRESSIONS: tuple[str, ...] = ("none", "quantize", "meshopt")
@@ -252,7 +252,7 @@ def _report(
     size: int,
     compress: str,
     animation: _Animation,
-    quantized: Quantized | None,
+    quantized: QuantizedAnimation | None,
     reference: MeshSequence | np.ndarray | None,
 ) -> GltfReport:
     """What was written, with the KG error of the file read back as a viewer plays it."""
@@ -317,7 +317,7 @@ def decomposition_bytes(
     base: np.ndarray,
     targets: np.ndarray,
     centroids: np.ndarray,
-    quantized: Quantized | None,
+    quantized: QuantizedAnimation | None,
     compress: str,
 ) -> bytes:
     """The file: ``weights`` (F, k), ``base`` (K, 3), ``targets`` (k, K, 3) and ``centroids``
@@ -386,7 +386,7 @@ def _float32_numbers(
     return _Stored(position, morphs, stored_weights, stored_weights, centroids.astype(np.float32))
 
 
-def _quantized_numbers(builder: BufferBuilder, quantized: Quantized) -> _Stored:
+def _quantized_numbers(builder: BufferBuilder, quantized: QuantizedAnimation) -> _Stored:
     """The quantized variants' numbers (KHR_mesh_quantization), dequantized by the child node's
     translation and scale; with the meshopt variant's EXPONENTIAL filters, if any."""
     position = builder.add_accessor(

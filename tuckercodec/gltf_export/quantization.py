@@ -64,7 +64,7 @@ _WEIGHT_TYPES = ((np.uint8, 255), (np.uint16, 65535))
 
 
 @dataclass(frozen=True)
-class Quantized:
+class QuantizedAnimation:
     """The numbers of a quantized morph animation, as stored.
 
     ``targets`` (k, K, 3) int16, normalized. ``base`` (K, 3) in local units: int16 normalized,
@@ -105,7 +105,7 @@ def quantize_animation(
     recorded_kg: float | None,
     *,
     filters: bool = False,
-) -> Quantized | None:
+) -> QuantizedAnimation | None:
     """The stored numbers of frame ``f = centroids[f] + base + Σ_b weights[f, b] · targets[b]``
     within the budget against ``decoded`` (module docstring), or ``None`` if 16 bits cannot.
 
@@ -167,7 +167,7 @@ class _Problem:
 
     def fit(
         self, stored: np.ndarray, exponents: np.ndarray | None, filters: bool
-    ) -> Quantized | None:
+    ) -> QuantizedAnimation | None:
         """Targets, translation and the fitted base for these weights, checked; or None."""
         shown = weight_values(stored)
         spread = shown - shown.mean(axis=0)
@@ -212,7 +212,7 @@ class _Problem:
             placed += self.offset + scale * base_local
             error = float(np.sum((placed - self.decoded) ** 2))
             if error <= self.energy:
-                return Quantized(
+                return QuantizedAnimation(
                     base=base,
                     targets=q,
                     weights=stored,

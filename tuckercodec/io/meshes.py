@@ -8,7 +8,7 @@ codec needs: the vertices of every frame must correspond. OBJ is never read this
 What trimesh would decompress is bounded first: an archive (``.zip``, ``.bz2``, ``.tar.gz``,
 ``.tar.bz2``, which trimesh inflates whole, a bz2 stream without any limit) is refused, and a
 ``.3mf`` (a zip) is opened only if the sizes its members declare, which zipfile never inflates
-beyond, fit ``--max-memory`` together (:mod:`.budget`). The files a mesh names (a PLY's
+beyond, fit ``--max-memory`` together (:mod:`.common.budget`). The files a mesh names (a PLY's
 ``TextureFile``) trimesh reads only inside the mesh's folder (trimesh 5's resolver; and
 materials are not loaded at all).
 """

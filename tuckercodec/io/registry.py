@@ -5,9 +5,9 @@ Each format is one module (or package) of :mod:`tuckercodec.io`, and one
 whole sequence in one file (``open``/``write``: ``.npz``), or one frame per file (``read_frame``
 /``write_frame``: ``.obj``, and the meshes trimesh reads), which a folder, a glob or a list of
 files makes into a sequence (:mod:`.frames`). ``open`` is the one loader of a whole-sequence
-format: it reads a range of frames at a time (:mod:`.streaming`), and ``.load()`` reads them
-all. Modules import their heavy libraries only inside their functions, so that looking a format
-up costs nothing.
+format: it reads a range of frames at a time (:class:`~tuckercodec.model.sources.FrameSource`), and
+``.load()`` reads them all. Modules import their heavy libraries only inside their functions, so
+that looking a format up costs nothing.
 """
 
 from __future__ import annotations
@@ -56,7 +56,7 @@ class ReadOptions:
         fps: glTF: sample the animation at this many frames per second instead of at its
             keyframes.
         max_memory: every format: the most bytes a read may decompress and hold at once
-            (``--max-memory``; ``None``: half the machine's memory), :mod:`.budget`.
+            (``--max-memory``; ``None``: half the machine's memory), :mod:`.common.budget`.
     """
 
     prim: str | None = None

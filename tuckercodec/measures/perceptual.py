@@ -230,10 +230,10 @@ def sted(
     """STED of ``approx`` against ``original`` (Váša and Skala 2011, "A perception correlated
     comparison method for dynamic meshes"): ``sqrt(STED_s**2 + c**2 * STED_t**2)``.
 
-    The definitions below are the paper's as summarised in the project's issue 4. Neither the
+    The definitions below are the paper's as a secondary summary of it gives them. Neither the
     authors' reference tool nor the paper's text could be consulted when this was written, so
     values have not been checked against the tool's output, and every choice where the summary
-    leaves room is ours and is stated here. The defaults are those the issue attributes to the
+    leaves room is ours and is stated here. The defaults are those the summary attributes to the
     reference tool: width 1, window 5, dt 0.0003, c 9.144e-05, and s the inverse of the first
     frame's bounding-box diagonal.
 

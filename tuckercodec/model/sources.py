@@ -2,22 +2,23 @@
 :func:`~tuckercodec.io.open_frames` opens on any source :func:`~tuckercodec.io.load_sequence`
 reads, so that a sequence larger than memory can be encoded in passes.
 
-Which formats stream, and how (a format's :attr:`~.registry.SequenceFormat.open`):
+Which formats stream, and how (a format's
+:attr:`~tuckercodec.io.registry.SequenceFormat.open`; the readers are in :mod:`tuckercodec.io`):
 
-* ``.npy`` (:mod:`.npy`), PC2 and MDD (:mod:`.pc2`, :mod:`.mdd`): by offset in the file
+* ``.npy`` (``io.npz.npy``), PC2 and MDD (``io.pointcache``): by offset in the file
   (:class:`RawFrames`): a range is read with ``readinto`` in pieces of at most
   :data:`PIECE_BYTES`, so that reading costs the range's float64 array and no more. Nothing
   is memory-mapped: the pages of a mapped file count in the process's resident memory.
-* ``.npz`` (:mod:`.npz`): key ``V`` by offset when stored, by decompressing forward when
+* ``.npz`` (``io.npz``): key ``V`` by offset when stored, by decompressing forward when
   deflated (the member stays open, so a forward read of ranges never starts again from the
   beginning; a range before the last one does).
-* zarr stores (:mod:`.zarr_store`): chunk by chunk, through zarr.
-* Folders, globs and lists of one-frame files (:mod:`.frames`): file by file.
-* VTK series (:mod:`.vtk`) and XDMF (:mod:`.xdmf`): time step by time step (an XDMF's XML,
+* zarr stores (``io.zarr_store``): chunk by chunk, through zarr.
+* Folders, globs and lists of one-frame files (``io.frames``): file by file.
+* VTK series (``io.vtk``) and XDMF (``io.xdmf``): time step by time step (an XDMF's XML,
   with any inline data, is held; its HDF5 datasets are read per step).
-* glTF (:mod:`.gltf`): the file is held and the frames of a range evaluated on demand.
-* USD and Alembic (:mod:`.usd`, :mod:`.alembic`): sample by sample, in a child process that
-  stays open for the source's life (:mod:`.isolation`), so that a crash of the library
+* glTF (``io.gltf``): the file is held and the frames of a range evaluated on demand.
+* USD and Alembic (``io.usd``, ``io.alembic``): sample by sample, in a child process that
+  stays open for the source's life (``io.isolation``), so that a crash of the library
   is still an :class:`~tuckercodec.errors.InputError`.
 
 Every format streams: ``open`` is the one way a whole-sequence format reads (``load()`` reads

@@ -13,7 +13,7 @@ Each coder is a module of its own beside this one (:mod:`~tools.bench.peers.tkc`
 suites list theirs); what they share is here: one run measured (:class:`Trial`), what every
 coder of one sequence shares (:class:`Context`), the search of an error bound that the
 error-bounded float compressors (SZ3, zfp, TTHRESH) make for each KG target, and, for the
-suites of issue 23, the positions in their own precision, the layouts a float compressor is
+bounds and lossless suites, the positions in their own precision, the layouts a float compressor is
 given them in, and the worst vertex measured independently of every coder.
 """
 
@@ -188,8 +188,8 @@ def worst_vertex(original: np.ndarray, decoded: np.ndarray) -> tuple[float, int,
 
 
 def bounding_box_diagonal(vertices: np.ndarray) -> float:
-    """The diagonal of the box around every vertex of every frame: what ``P%`` bounds of
-    issue 23 are a fraction of."""
+    """The diagonal of the box around every vertex of every frame: what the bounds suite's
+    ``P%`` bounds are a fraction of."""
     return float(np.linalg.norm(vertices.max(axis=(0, 1)) - vertices.min(axis=(0, 1))))
 
 

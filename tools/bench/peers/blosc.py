@@ -1,7 +1,7 @@
 """Blosc2, lossless: zstd at clevel 9 behind a byte shuffle, a bit shuffle, or a byte shuffle
 and bytedelta (Blosc's suggestion for floats), typesize the values' itemsize, one chunk; on the
 positions in their own precision (float32 where exact, else float64) in each layout of
-:data:`~tools.bench.peers.base.LAYOUTS`, the faces once: a lossless peer of issue 23."""
+:data:`~tools.bench.peers.base.LAYOUTS`, the faces once: a peer of the lossless suite."""
 
 from __future__ import annotations
 

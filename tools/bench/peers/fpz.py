@@ -1,7 +1,7 @@
 """fpzip (Lindstrom and Isenburg 2006) at precision 0, lossless, on the positions in their own
 precision (float32 where exact, else float64) in each layout of
 :data:`~tools.bench.peers.base.LAYOUTS` (fpzip's predictor is three-dimensional: the layout
-decides which neighbours predict a value), the faces once: a lossless peer of issue 23."""
+decides which neighbours predict a value), the faces once: a peer of the lossless suite."""
 
 from __future__ import annotations
 

@@ -1,8 +1,8 @@
 """pcodec (pco) standalone, lossless, at its strongest level (12; the default 8 is up to 20 %
 larger on chicken), on the flattened positions in their own precision (float32 where exact,
 else float64) in each layout of :data:`~tools.bench.peers.base.LAYOUTS` (pco predicts along one
-dimension, so the layout decides what is next to what), the faces once: a lossless peer of
-issue 23."""
+dimension, so the layout decides what is next to what), the faces once: a peer of the lossless
+suite."""
 
 from __future__ import annotations
 

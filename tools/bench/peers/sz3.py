@@ -4,7 +4,7 @@ For the peers suite: the L2-norm error bound, on the 3 x K x F layout of the cen
 tensor, with the per-frame centroids as float32 and the faces once; the bound is searched so
 that the decoded KG error meets each target.
 
-For the bounds suite (issue 23): the absolute error bound D / sqrt(3) on every coordinate, so
+For the bounds suite: the absolute error bound D / sqrt(3) on every coordinate, so
 that no vertex moves more than D (Euclidean), on the positions in their own precision (float32
 where exact) in the 3 x K x F layout (time fastest: 1.3-2.2x smaller than F x K x 3 on the four
 shared sequences at 1e-3 and 1e-4 of the diagonal), with the faces once.

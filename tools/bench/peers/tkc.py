@@ -1,5 +1,5 @@
 """tuckercodec itself: at each KG target (the encoder's own search is part of its encode), or
-with any :class:`~tuckercodec.EncodeOptions` (the bound and lossless modes of issue 23)."""
+with any :class:`~tuckercodec.EncodeOptions` (the bound and lossless modes)."""
 
 from __future__ import annotations
 

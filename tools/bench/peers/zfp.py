@@ -4,7 +4,7 @@ For the peers suite: on the centred float64 tensor (K x 3 x F), with the per-fra
 float32 and the faces once; the tolerance is searched so that the decoded KG error meets each
 target.
 
-For the bounds suite (issue 23): the tolerance D / sqrt(3) on the positions in their own
+For the bounds suite: the tolerance D / sqrt(3) on the positions in their own
 precision (float32 where exact), 3 x K x F like SZ3 (zfp's size hardly depends on the layout:
 within 3 % over four of them on the shared sequences), with the faces once. zfp rounds the
 tolerance down to a power of two and its errors stay well under it: its worst vertex is 0.1-0.16

@@ -1,7 +1,7 @@
 """zstd level 19 on the plain positions: the lossless reference.
 
 For the peers suite, the positions as float32 (exact for float32 input only). For the lossless
-suite (issue 23), the positions in their own precision (float32 where exact, else float64) in
+suite, the positions in their own precision (float32 where exact, else float64) in
 each layout of :data:`~tools.bench.peers.base.LAYOUTS`, bit-exact by construction.
 """
 

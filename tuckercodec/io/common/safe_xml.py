@@ -1,4 +1,4 @@
-"""XML parsed with every declaration refused by the parser itself (issue 22, finding 7).
+"""XML parsed with every declaration refused by the parser itself, not by a byte filter.
 
 A DOCTYPE's internal subset may declare entities that expand a few hundred bytes into
 gigabytes (billion laughs), or attribute defaults that change what elements say. Looking for
@@ -20,7 +20,7 @@ from ...errors import InputError
 
 #: The encodings expat reads itself. For any other it asks Python's codecs, which fail in many
 #: ways on a crafted name: LookupError ("utf4", "rot13"), ValueError (every multi-byte one),
-#: UnicodeError ("idna"), a DeprecationWarning ("unicode_escape"). Found by fuzzing (issue 22).
+#: UnicodeError ("idna"), a DeprecationWarning ("unicode_escape"). Found by fuzzing (tools.fuzz).
 EXPAT_ENCODINGS = frozenset({"utf-8", "utf-16", "utf-16be", "utf-16le", "iso-8859-1", "us-ascii"})
 _DECLARED = re.compile(r"<\?xml\s[^>]*?\bencoding\s*=\s*(['\"])(.*?)\1", re.DOTALL)
 

@@ -81,7 +81,7 @@ def _merge_primitives(doc: Document, index: int) -> Mesh:
         weights = numbers(doc, mesh["weights"], target_count or 0, f"meshes[{index}].weights")
     # float64 whatever the accessors' type: integer positions (KHR_mesh_quantization without
     # normalization) gave an int64 base, to which the morph targets' float deltas could not be
-    # added in place (found by fuzzing, issue 22)
+    # added in place (found by fuzzing the glTF reader, tools.fuzz)
     base = np.concatenate(bases).astype(np.float64)
     return Mesh(base, np.concatenate(targets, axis=1), np.concatenate(faces), weights)
 
