@@ -62,25 +62,63 @@ export function readLayout(container, limits) {
   const K = count(header, 'vertices', limits.max_vertices, 'max_vertices');
   const F = count(header, 'frames', limits.max_frames, 'max_frames');
   /** @type {Segment[]} (their sections are set at step 12) */
-  let segments;
-  if (segmented) {
-    segments = readSegmentIndex(header, K, F, limits);
-  } else {
-    if (K * F > limits.max_positions) {
-      throw limitError('R21-header-limit', `vertices × frames = ${K * F} exceeds max_positions = ${limits.max_positions}`);
-    }
-    const [i, k] = ranks(header.get('ranks'), K, F, 'R22-ranks', 'ranks', Math.min(K, 3 * F));
-    const factorValues = K * i + F * k + 3 * i * k + 3 * F;
-    if (factorValues > limits.max_factor_values) {
-      throw limitError('R21-header-limit', `the factors hold ${factorValues} values, max_factor_values = ${limits.max_factor_values}`);
-    }
-    segments = [/** @type {Segment} */ ({ start: 0, frames: F, ranks: [i, k], u2: u2(header.get('u2'), 'u2'), basis: 'whole', resd: null })];
-  }
+  const segments = segmented ? readSegmentIndex(header, K, F, limits) : [wholeSegment(header, K, F, limits)];
   // step 11: every entry known, critical as it should be, with its codec
-  /** @type {Map<string, Section>} */
+  const known = knownSections(sections, { segmented, corrections, codingTools }, segments.length);
+  // step 12 / 12s: the required sections
+  const { face, sharedU1 } = requiredSections(known, segments, segmented, corrections);
+  // step 13 / 13s: shapes and sizes
+  const [M, n] = faceShape(face, limits);
+  let sharedColumns = 0;
+  if (segmented) {
+    if (sharedU1 !== null) sharedColumns = sharedBasis(sharedU1, segments, K, limits);
+    segments.forEach((segment, s) => checkSegmentShapes(segment, s, K, sharedColumns, limits));
+  } else {
+    const [segment] = segments;
+    const [i, k] = segment.ranks;
+    expectShape(segment.u1, K, i, limits);
+    expectShape(segment.u3, F, k, limits);
+    expectShape(segment.core, i * 3 * k, 1, limits);
+    expectShape(segment.cent, F, 3, limits);
+  }
+  // step 14: the frame rate; (1.4) the time codes, the unit and the up axis
+  const frameRate = readFrameRate(header);
+  const { timeCodes, metersPerUnit, upAxis } = readScene(header, F);
+  return { vertices: K, frames: F, frameRate, timeCodes, metersPerUnit, upAxis, segmented, codingTools, corrections, segments, face, faceShape: [M, n], name: known.get('NAME') ?? null, sharedU1, sharedColumns };
+}
+
+/**
+ * Step 10, not segmented: the one segment of the whole file, its ranks, u2 and sizes checked.
+ * @param {Map<string, MsgValue>} header
+ * @param {number} K vertices
+ * @param {number} F frames
+ * @param {Limits} limits
+ * @returns {Segment} (its sections are set at step 12)
+ */
+function wholeSegment(header, K, F, limits) {
+  if (K * F > limits.max_positions) {
+    throw limitError('R21-header-limit', `vertices × frames = ${K * F} exceeds max_positions = ${limits.max_positions}`);
+  }
+  const [i, k] = ranks(header.get('ranks'), K, F, 'R22-ranks', 'ranks', Math.min(K, 3 * F));
+  const factorValues = K * i + F * k + 3 * i * k + 3 * F;
+  if (factorValues > limits.max_factor_values) {
+    throw limitError('R21-header-limit', `the factors hold ${factorValues} values, max_factor_values = ${limits.max_factor_values}`);
+  }
+  return /** @type {Segment} */ ({ start: 0, frames: F, ranks: [i, k], u2: u2(header.get('u2'), 'u2'), basis: 'whole', resd: null });
+}
+
+/**
+ * Step 11: the sections this decoder knows, by id, each critical as §6.6 says and with a codec
+ * it reads; an unknown section is skipped unless it is critical.
+ * @param {Section[]} sections the section table
+ * @param {{segmented: boolean, corrections: boolean, codingTools: boolean}} flags the file's
+ * @param {number} segmentCount
+ * @returns {Map<string, Section>}
+ */
+function knownSections(sections, flags, segmentCount) {
   const known = new Map();
   for (const section of sections) {
-    const kind = kindOf(section.id, segmented, corrections, segments.length);
+    const kind = kindOf(section.id, flags.segmented, flags.corrections, segmentCount);
     if (kind === null) {
       if (section.critical) {
         throw unsupported('R24-unknown-critical-section', `section '${section.id}' is critical and unknown to this decoder`);
@@ -91,13 +129,25 @@ export function readLayout(container, limits) {
     if (section.critical !== critical) {
       throw formatError('R27-criticality', `section '${section.id}' has critical = ${section.critical}; §6.6 says ${critical}`);
     }
-    const allowed = kind === 'FACE' && codingTools ? [codec, 'faces-traverse'] : [codec];
+    const allowed = kind === 'FACE' && flags.codingTools ? [codec, 'faces-traverse'] : [codec];
     if (!allowed.includes(section.codec)) {
       throw unsupported('R25-unknown-codec', `section '${section.id}' has codec '${section.codec}'; this decoder reads ${allowed.map((c) => `'${c}'`).join(' or ')}`);
     }
     known.set(section.id, section);
   }
-  // step 12 / 12s: the required sections
+  return known;
+}
+
+/**
+ * Step 12 / 12s: the sections the file must have, set on its segments; FACE, and a segmented
+ * file's shared U1 if any segment uses it.
+ * @param {Map<string, Section>} known
+ * @param {Segment[]} segments
+ * @param {boolean} segmented
+ * @param {boolean} corrections
+ * @returns {{face: Section, sharedU1: Section | null}}
+ */
+function requiredSections(known, segments, segmented, corrections) {
   /** @param {string} id */
   const need = (id) => {
     const section = known.get(id);
@@ -123,61 +173,70 @@ export function readLayout(container, limits) {
     segment.cent = need('CENT');
     if (corrections) segment.resd = need('RESD');
   }
-  // step 13 / 13s: shapes and sizes
-  const [M, n] = faceShape(face, limits);
-  let sharedColumns = 0;
-  if (segmented) {
-    if (sharedU1 !== null) {
-      const [rows, cols] = shape(sharedU1);
-      if (rows !== K || cols < 1 || cols > K) {
-        throw formatError('R28-shape', `section 'U1' has shape [${rows}, ${cols}]; a shared basis is [${K}, c] with 1 <= c <= ${K}`);
-      }
-      sectionBytes(sharedU1, rows, cols, limits);
-      sharedColumns = cols;
-      for (const segment of segments) {
-        if (segment.basis === 'shared') segment.u1 = sharedU1;
-      }
-    }
-    segments.forEach((segment, s) => {
-      const [i, k] = segment.ranks;
-      if (segment.basis === 'shared' && i > sharedColumns) {
-        throw formatError('R38-segment-ranks', `segment ${s} uses ${i} columns of a shared U1 of ${sharedColumns}`);
-      }
-      if (segment.basis === 'own') expectShape(segment.u1, K, i, limits);
-      expectShape(segment.u3, segment.frames, k, limits);
-      expectShape(segment.core, i * 3 * k, 1, limits);
-      expectShape(segment.cent, segment.frames, 3, limits);
-      const basisColumns = segment.basis === 'shared' ? sharedColumns : i;
-      const factorValues = K * basisColumns + segment.frames * k + 3 * i * k + 3 * segment.frames;
-      if (factorValues > limits.max_factor_values) {
-        throw limitError('R21-header-limit', `segment ${s}'s factors hold ${factorValues} values, max_factor_values = ${limits.max_factor_values}`);
-      }
-      if (K * segment.frames > limits.max_positions) {
-        throw limitError('R21-header-limit', `segment ${s} decodes ${K * segment.frames} positions, max_positions = ${limits.max_positions}`);
-      }
-    });
-  } else {
-    const [segment] = segments;
-    const [i, k] = segment.ranks;
-    expectShape(segment.u1, K, i, limits);
-    expectShape(segment.u3, F, k, limits);
-    expectShape(segment.core, i * 3 * k, 1, limits);
-    expectShape(segment.cent, F, 3, limits);
+  return { face, sharedU1 };
+}
+
+/**
+ * Step 13s: the shared U1's shape [K, c] and size, set as the u1 of the segments that use it.
+ * @param {Section} sharedU1
+ * @param {Segment[]} segments
+ * @param {number} K
+ * @param {Limits} limits
+ * @returns {number} its columns, c
+ */
+function sharedBasis(sharedU1, segments, K, limits) {
+  const [rows, cols] = shape(sharedU1);
+  if (rows !== K || cols < 1 || cols > K) {
+    throw formatError('R28-shape', `section 'U1' has shape [${rows}, ${cols}]; a shared basis is [${K}, c] with 1 <= c <= ${K}`);
   }
-  // step 14: the frame rate
-  let frameRate = null;
-  if (header.has('frame_rate')) {
-    const rate = header.get('frame_rate');
-    if (rate !== null) {
-      if (!(rate instanceof MsgFloat) || !Number.isFinite(rate.value) || !(rate.value > 0)) {
-        throw formatError('R20-header-field', `"frame_rate" is ${describe(rate)}; it must be nil or a finite float > 0`);
-      }
-      frameRate = rate.value;
-    }
+  sectionBytes(sharedU1, rows, cols, limits);
+  for (const segment of segments) {
+    if (segment.basis === 'shared') segment.u1 = sharedU1;
   }
-  // step 14 (1.4): the time codes, the unit and the up axis
-  const { timeCodes, metersPerUnit, upAxis } = readScene(header, F);
-  return { vertices: K, frames: F, frameRate, timeCodes, metersPerUnit, upAxis, segmented, codingTools, corrections, segments, face, faceShape: [M, n], name: known.get('NAME') ?? null, sharedU1, sharedColumns };
+  return cols;
+}
+
+/**
+ * Step 13s for segment s: its ranks within the shared basis, its sections' shapes, and what it
+ * decodes within the limits.
+ * @param {Segment} segment
+ * @param {number} s its number
+ * @param {number} K
+ * @param {number} sharedColumns the shared U1's columns (0 without one)
+ * @param {Limits} limits
+ */
+function checkSegmentShapes(segment, s, K, sharedColumns, limits) {
+  const [i, k] = segment.ranks;
+  if (segment.basis === 'shared' && i > sharedColumns) {
+    throw formatError('R38-segment-ranks', `segment ${s} uses ${i} columns of a shared U1 of ${sharedColumns}`);
+  }
+  if (segment.basis === 'own') expectShape(segment.u1, K, i, limits);
+  expectShape(segment.u3, segment.frames, k, limits);
+  expectShape(segment.core, i * 3 * k, 1, limits);
+  expectShape(segment.cent, segment.frames, 3, limits);
+  const basisColumns = segment.basis === 'shared' ? sharedColumns : i;
+  const factorValues = K * basisColumns + segment.frames * k + 3 * i * k + 3 * segment.frames;
+  if (factorValues > limits.max_factor_values) {
+    throw limitError('R21-header-limit', `segment ${s}'s factors hold ${factorValues} values, max_factor_values = ${limits.max_factor_values}`);
+  }
+  if (K * segment.frames > limits.max_positions) {
+    throw limitError('R21-header-limit', `segment ${s} decodes ${K * segment.frames} positions, max_positions = ${limits.max_positions}`);
+  }
+}
+
+/**
+ * Step 14: the frame rate, nil or a finite float > 0 (absent: null).
+ * @param {Map<string, MsgValue>} header
+ * @returns {number | null}
+ */
+function readFrameRate(header) {
+  if (!header.has('frame_rate')) return null;
+  const rate = header.get('frame_rate');
+  if (rate === null) return null;
+  if (!(rate instanceof MsgFloat) || !Number.isFinite(rate.value) || !(rate.value > 0)) {
+    throw formatError('R20-header-field', `"frame_rate" is ${describe(rate)}; it must be nil or a finite float > 0`);
+  }
+  return rate.value;
 }
 
 /**

@@ -258,27 +258,197 @@ function grow(array) {
  * @param {number} n
  */
 function walk(streams, cornerOrder, K, M, n) {
-  const [ops, degrees, vertices, references] = streams;
-  let opsAt = 0;
-  let degreesAt = 0;
-  let verticesAt = 0;
-  let referencesAt = 0;
-  let faces = new Int32Array(Math.min(M, 1024) * n).fill(-1);
-  const seen = new VertexTable(vertices.length);
-  const index = seen.index; // each seen vertex's index in the file
-  let last = -1;
-  const edges = new EdgeTable();
-  // into(v) and out(v): stacks of entries; entry t (one per 0 → 1 of an edge) is node 2t in
-  // into(to) and node 2t + 1 in out(from). It is live while its edge is present and entered == t.
-  let entryEdge = new Int32Array(512);
-  let below = new Int32Array(1024); // the node under each node in its stack
-  let entries = 0;
-  const topInto = new Int32Array(vertices.length).fill(-1);
-  const topOut = new Int32Array(vertices.length).fill(-1);
-  let gates = new Int32Array(1024); // pairs a, b
-  let gateCount = 0;
-  const corners = new Int32Array(n); // the face being decoded, in walk order
-  let face = 0;
+  return new Walk(streams, cornerOrder, K, M, n).run();
+}
+
+/**
+ * One walk's state: the streams and how far each is read, the vertices seen, the boundary (its
+ * edges, the into/out stacks of their entries, the gates) and the faces decoded so far.
+ */
+class Walk {
+  /**
+   * @param {Int32Array[]} streams ops, degrees, vertices, references
+   * @param {0 | 1} cornerOrder
+   * @param {number} K
+   * @param {number} M
+   * @param {number} n
+   */
+  constructor(streams, cornerOrder, K, M, n) {
+    this.ops = streams[0];
+    this.degrees = streams[1];
+    this.vertices = streams[2];
+    this.references = streams[3];
+    this.cornerOrder = cornerOrder;
+    this.K = K;
+    this.M = M;
+    this.n = n;
+    this.opsAt = 0;
+    this.degreesAt = 0;
+    this.verticesAt = 0;
+    this.referencesAt = 0;
+    this.faces = new Int32Array(Math.min(M, 1024) * n).fill(-1);
+    this.seen = new VertexTable(this.vertices.length);
+    this.index = this.seen.index; // each seen vertex's index in the file
+    this.last = -1; // the latest NEW's vertex index
+    this.edges = new EdgeTable();
+    // into(v) and out(v): stacks of entries; entry t (one per 0 → 1 of an edge) is node 2t in
+    // into(to) and node 2t + 1 in out(from). It is live while its edge is present and entered == t.
+    this.entryEdge = new Int32Array(512);
+    this.below = new Int32Array(1024); // the node under each node in its stack
+    this.entries = 0;
+    this.topInto = new Int32Array(this.vertices.length).fill(-1);
+    this.topOut = new Int32Array(this.vertices.length).fill(-1);
+    this.gates = new Int32Array(1024); // pairs a, b
+    this.gateCount = 0;
+    this.corners = new Int32Array(n); // the face being decoded, in walk order
+    this.face = 0;
+  }
+
+  /** Decodes the M faces, then checks that every stream is read to its end. */
+  run() {
+    while (this.face < this.M) {
+      const row = this.face * this.n;
+      if (row === this.faces.length) this.growFaces();
+      if (this.gateCount === 0) this.seed(row);
+      else this.acrossGate(row);
+    }
+    this.checkEveryValueRead();
+    return this.faces;
+  }
+
+  /** The decoded faces double as they come, up to M*n: M is a claim until they are decoded. */
+  growFaces() {
+    const faces = this.faces;
+    const more = new Int32Array(Math.min(2 * faces.length, this.M * this.n)).fill(-1, faces.length);
+    more.set(faces);
+    this.faces = more;
+  }
+
+  /**
+   * A seed, when no gate is left: the degree, then m tips; stored as decoded.
+   * @param {number} row where the face goes in the table
+   */
+  seed(row) {
+    const { corners, index } = this;
+    const m = this.readDegree();
+    for (let j = 0; j < m; j++) corners[j] = this.tip(this.nextOp(`operation of seed corner ${j}`), j);
+    for (let j = 0; j < m; j++) this.faces[row + j] = index[corners[j]];
+    this.addFace(m, 0);
+    this.face++;
+  }
+
+  /**
+   * The next gate: nothing if it closed meanwhile or its operation is 0, else the face across
+   * it, its first two corners the gate's (flipped or not), rotated as the operation says.
+   * @param {number} row where a face goes in the table
+   */
+  acrossGate(row) {
+    const { corners, index, n } = this;
+    const b = this.gates[--this.gateCount];
+    const a = this.gates[--this.gateCount];
+    const gate = this.edges.find(a, b);
+    if (gate < 0 || this.edges.count[gate] === 0) return; // closed meanwhile: nothing is read
+    const o = this.nextOp(`gate ${index[a]} → ${index[b]}`);
+    if (o === 0) return;
+    if (o < 0 || o > 8 * n) throw fail(`face ${this.face}: operation ${o} across gate ${index[a]} → ${index[b]} is outside 0..${8 * n}`);
+    const v = o - 1;
+    const q = v >> 3;
+    const flipped = (v & 7) >= 4;
+    const m = this.readDegree();
+    if (q >= m) throw fail(`face ${this.face}: rotation ${q} is not below its degree ${m}`);
+    corners[0] = flipped ? a : b;
+    corners[1] = flipped ? b : a;
+    corners[2] = this.tip(v & 3, 2);
+    for (let j = 3; j < m; j++) corners[j] = this.tip(this.nextOp(`operation of corner ${j}`), j);
+    let s = q;
+    if (this.cornerOrder === 1) {
+      let h = 0;
+      for (let j = 1; j < m; j++) if (index[corners[j]] < index[corners[h]]) h = j;
+      s = q - h + m; // the same place mod m, kept non-negative
+    }
+    for (let j = 0; j < m; j++) this.faces[row + ((s + j) % m)] = index[corners[j]];
+    this.addFace(m, 1);
+    this.face++;
+  }
+
+  /**
+   * The next value of the ops stream.
+   * @param {string} what what it is read for, to name in the error where the stream ends
+   */
+  nextOp(what) {
+    if (this.opsAt === this.ops.length) throw fail(`face ${this.face}: the ops stream ends before the ${what}`);
+    return this.ops[this.opsAt++];
+  }
+
+  /** The face's degree: 3 without a degrees stream, else the next value + 3, within 3..n. */
+  readDegree() {
+    const degrees = this.degrees;
+    if (degrees.length === 0) return 3;
+    if (this.degreesAt === degrees.length) throw fail(`face ${this.face}: the degrees stream ends before its degree`);
+    const m = 3 + degrees[this.degreesAt++];
+    if (m < 3 || m > this.n) throw fail(`face ${this.face}: degree ${m} is outside 3..${this.n}`);
+    return m;
+  }
+
+  /**
+   * The vertex (its number) named by tip j (c_0 .. c_{j−1} in corners) with operation op.
+   * @param {number} op
+   * @param {number} j
+   */
+  tip(op, j) {
+    if (op === NEW) return this.newVertex(j);
+    if (op === PREV || op === NEXT) return this.listedVertex(op, j);
+    if (op === FAR) return this.farVertex(j);
+    throw fail(`face ${this.face} corner ${j}: operation ${op} is not 0..3`);
+  }
+
+  /**
+   * NEW: a vertex not seen yet, the next value of *vertices* past the latest NEW's.
+   * @param {number} j the corner
+   */
+  newVertex(j) {
+    const { K, face } = this;
+    if (this.verticesAt === this.vertices.length) throw fail(`face ${face} corner ${j}: the vertices stream ends before this NEW`);
+    const w = this.last + 1 + this.vertices[this.verticesAt++];
+    if (w < 0 || w >= K) throw fail(`face ${face} corner ${j}: NEW names vertex ${w}, outside 0..${K - 1}`);
+    if (this.seen.find(w) >= 0) throw fail(`face ${face} corner ${j}: NEW names vertex ${w}, which is already seen`);
+    this.last = w;
+    return this.seen.add(w);
+  }
+
+  /**
+   * PREV: the last live entry of into(c_{j−1}), from where it comes; NEXT: the last live entry
+   * of out(c_0), where it goes.
+   * @param {number} op PREV or NEXT
+   * @param {number} j the corner
+   */
+  listedVertex(op, j) {
+    const { corners, edges, face } = this;
+    const name = op === PREV ? 'PREV' : 'NEXT';
+    if (j === 0) throw fail(`face ${face} corner 0: ${name} at the first corner of a face`);
+    const w = op === PREV ? this.lastOf(this.topInto, corners[j - 1], edges.from) : this.lastOf(this.topOut, corners[0], edges.to);
+    if (w < 0) {
+      const list = op === PREV ? `into(${this.index[corners[j - 1]]})` : `out(${this.index[corners[0]]})`;
+      throw fail(`face ${face} corner ${j}: ${name} on an empty ${list}`);
+    }
+    return w;
+  }
+
+  /**
+   * FAR: a vertex already seen, the next value of *references* away from c_{j−1} (from 0 at the
+   * first corner).
+   * @param {number} j the corner
+   */
+  farVertex(j) {
+    const { K, face, references } = this;
+    const p = j === 0 ? 0 : this.index[this.corners[j - 1]];
+    if (this.referencesAt === references.length) throw fail(`face ${face} corner ${j}: the references stream ends before this FAR`);
+    const w = p + references[this.referencesAt++];
+    if (w < 0 || w >= K) throw fail(`face ${face} corner ${j}: FAR names vertex ${w}, outside 0..${K - 1}`);
+    const number = this.seen.find(w);
+    if (number < 0) throw fail(`face ${face} corner ${j}: FAR names vertex ${w}, which is not seen yet`);
+    return number;
+  }
 
   /**
    * The last live entry of into(v) (other = from) or out(v) (other = to), or −1.
@@ -286,7 +456,8 @@ function walk(streams, cornerOrder, K, M, n) {
    * @param {number} v
    * @param {Int32Array} other
    */
-  const lastOf = (tops, v, other) => {
+  lastOf(tops, v, other) {
+    const { entryEdge, below, edges } = this;
     let node = tops[v];
     while (node >= 0) {
       const t = node >> 1;
@@ -296,65 +467,17 @@ function walk(streams, cornerOrder, K, M, n) {
     }
     tops[v] = node;
     return node < 0 ? -1 : other[entryEdge[node >> 1]];
-  };
-
-  /** @param {string} what */
-  const nextOp = (what) => {
-    if (opsAt === ops.length) throw fail(`face ${face}: the ops stream ends before the ${what}`);
-    return ops[opsAt++];
-  };
-
-  const readDegree = () => {
-    if (degrees.length === 0) return 3;
-    if (degreesAt === degrees.length) throw fail(`face ${face}: the degrees stream ends before its degree`);
-    const m = 3 + degrees[degreesAt++];
-    if (m < 3 || m > n) throw fail(`face ${face}: degree ${m} is outside 3..${n}`);
-    return m;
-  };
-
-  /**
-   * The vertex (its number) named by tip j (c_0 .. c_{j−1} in corners) with operation op.
-   * @param {number} op
-   * @param {number} j
-   */
-  const tip = (op, j) => {
-    const p = j === 0 ? 0 : index[corners[j - 1]];
-    if (op === NEW) {
-      if (verticesAt === vertices.length) throw fail(`face ${face} corner ${j}: the vertices stream ends before this NEW`);
-      const w = last + 1 + vertices[verticesAt++];
-      if (w < 0 || w >= K) throw fail(`face ${face} corner ${j}: NEW names vertex ${w}, outside 0..${K - 1}`);
-      if (seen.find(w) >= 0) throw fail(`face ${face} corner ${j}: NEW names vertex ${w}, which is already seen`);
-      last = w;
-      return seen.add(w);
-    }
-    if (op === PREV || op === NEXT) {
-      const name = op === PREV ? 'PREV' : 'NEXT';
-      if (j === 0) throw fail(`face ${face} corner 0: ${name} at the first corner of a face`);
-      const w = op === PREV ? lastOf(topInto, corners[j - 1], edges.from) : lastOf(topOut, corners[0], edges.to);
-      if (w < 0) {
-        const list = op === PREV ? `into(${p})` : `out(${index[corners[0]]})`;
-        throw fail(`face ${face} corner ${j}: ${name} on an empty ${list}`);
-      }
-      return w;
-    }
-    if (op === FAR) {
-      if (referencesAt === references.length) throw fail(`face ${face} corner ${j}: the references stream ends before this FAR`);
-      const w = p + references[referencesAt++];
-      if (w < 0 || w >= K) throw fail(`face ${face} corner ${j}: FAR names vertex ${w}, outside 0..${K - 1}`);
-      const number = seen.find(w);
-      if (number < 0) throw fail(`face ${face} corner ${j}: FAR names vertex ${w}, which is not seen yet`);
-      return number;
-    }
-    throw fail(`face ${face} corner ${j}: operation ${op} is not 0..3`);
-  };
+  }
 
   /**
    * Adds corners[0..m−1] to the boundary and pushes its gates from corner g on.
    * @param {number} m
    * @param {number} g
    */
-  const addFace = (m, g) => {
-    if (gateCount + 2 * m > gates.length) gates = grow(gates);
+  addFace(m, g) {
+    const { corners, edges } = this;
+    if (this.gateCount + 2 * m > this.gates.length) this.gates = grow(this.gates);
+    const gates = this.gates;
     for (let j = 0; j < m; j++) {
       const x = corners[j];
       const y = corners[j + 1 === m ? 0 : j + 1];
@@ -363,79 +486,49 @@ function walk(streams, cornerOrder, K, M, n) {
         edges.count[back]--; // its last copy gone: its entries in into(x), out(y) go stale
       } else {
         const e = edges.add(x, y);
-        if (edges.count[e]++ === 0) {
-          if (entries === entryEdge.length) {
-            entryEdge = grow(entryEdge);
-            below = grow(below);
-          }
-          const t = entries++;
-          entryEdge[t] = e;
-          edges.entered[e] = t;
-          below[2 * t] = topInto[y];
-          topInto[y] = 2 * t;
-          below[2 * t + 1] = topOut[x];
-          topOut[x] = 2 * t + 1;
-        }
+        if (edges.count[e]++ === 0) this.enter(e, x, y);
       }
       if (j >= g) {
-        gates[gateCount++] = x;
-        gates[gateCount++] = y;
+        gates[this.gateCount++] = x;
+        gates[this.gateCount++] = y;
       }
     }
-  };
+  }
 
-  while (face < M) {
-    const row = face * n;
-    if (row === faces.length) {
-      // the decoded faces double as they come, up to M*n: M is a claim until they are decoded
-      const more = new Int32Array(Math.min(2 * faces.length, M * n)).fill(-1, faces.length);
-      more.set(faces);
-      faces = more;
+  /**
+   * A new entry for edge e = x → y, which has just entered the boundary: on top of into(y) and
+   * of out(x).
+   * @param {number} e
+   * @param {number} x
+   * @param {number} y
+   */
+  enter(e, x, y) {
+    if (this.entries === this.entryEdge.length) {
+      this.entryEdge = grow(this.entryEdge);
+      this.below = grow(this.below);
     }
-    if (gateCount === 0) {
-      // a seed: the degree, then m tips; stored as decoded
-      const m = readDegree();
-      for (let j = 0; j < m; j++) corners[j] = tip(nextOp(`operation of seed corner ${j}`), j);
-      for (let j = 0; j < m; j++) faces[row + j] = index[corners[j]];
-      addFace(m, 0);
-      face++;
-      continue;
-    }
-    const b = gates[--gateCount];
-    const a = gates[--gateCount];
-    const gate = edges.find(a, b);
-    if (gate < 0 || edges.count[gate] === 0) continue; // closed meanwhile: nothing is read
-    const o = nextOp(`gate ${index[a]} → ${index[b]}`);
-    if (o === 0) continue;
-    if (o < 0 || o > 8 * n) throw fail(`face ${face}: operation ${o} across gate ${index[a]} → ${index[b]} is outside 0..${8 * n}`);
-    const v = o - 1;
-    const q = v >> 3;
-    const flipped = (v & 7) >= 4;
-    const m = readDegree();
-    if (q >= m) throw fail(`face ${face}: rotation ${q} is not below its degree ${m}`);
-    corners[0] = flipped ? a : b;
-    corners[1] = flipped ? b : a;
-    corners[2] = tip(v & 3, 2);
-    for (let j = 3; j < m; j++) corners[j] = tip(nextOp(`operation of corner ${j}`), j);
-    let s = q;
-    if (cornerOrder === 1) {
-      let h = 0;
-      for (let j = 1; j < m; j++) if (index[corners[j]] < index[corners[h]]) h = j;
-      s = q - h + m; // the same place mod m, kept non-negative
-    }
-    for (let j = 0; j < m; j++) faces[row + ((s + j) % m)] = index[corners[j]];
-    addFace(m, 1);
-    face++;
+    const { below, topInto, topOut } = this;
+    const t = this.entries++;
+    this.entryEdge[t] = e;
+    this.edges.entered[e] = t;
+    below[2 * t] = topInto[y];
+    topInto[y] = 2 * t;
+    below[2 * t + 1] = topOut[x];
+    topOut[x] = 2 * t + 1;
   }
-  for (const [s, stream, used] of /** @type {[number, Int32Array, number][]} */ ([
-    [0, ops, opsAt],
-    [1, degrees, degrees.length === 0 ? 0 : degreesAt],
-    [2, vertices, verticesAt],
-    [3, references, referencesAt],
-  ])) {
-    if (used !== stream.length) {
-      throw fail(`stream ${s} (${STREAMS[s]}) has ${stream.length - used} values left after the ${M} faces`);
+
+  /** Every stream read to its end by the M faces: a value left over is an error. */
+  checkEveryValueRead() {
+    const { ops, degrees, vertices, references } = this;
+    for (const [s, stream, used] of /** @type {[number, Int32Array, number][]} */ ([
+      [0, ops, this.opsAt],
+      [1, degrees, degrees.length === 0 ? 0 : this.degreesAt],
+      [2, vertices, this.verticesAt],
+      [3, references, this.referencesAt],
+    ])) {
+      if (used !== stream.length) {
+        throw fail(`stream ${s} (${STREAMS[s]}) has ${stream.length - used} values left after the ${this.M} faces`);
+      }
     }
   }
-  return faces;
 }

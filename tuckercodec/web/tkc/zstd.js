@@ -33,6 +33,49 @@ function fail(where, message) {
  */
 export function decompressExact(payload, size, where) {
   const length = payload.length;
+  const { position: blocksStart, windowSize, declared, hasChecksum } = readFrameHeader(payload, where);
+  if (declared !== size) {
+    throw fail(where, `the frame declares ${declared} content bytes, the section needs ${size}`);
+  }
+  if (size > MAX_EXPANSION * length) {
+    throw fail(where, `${length} bytes cannot regenerate ${size}`);
+  }
+  const position = blocksEnd(payload, blocksStart, Math.min(MAX_BLOCK, windowSize), where);
+  const frameEnd = position + (hasChecksum ? 4 : 0);
+  if (frameEnd > length) throw fail(where, 'the frame is truncated before its checksum');
+  if (frameEnd < length) {
+    throw fail(where, `${length - frameEnd} bytes follow the Zstandard frame`);
+  }
+  const output = new Uint8Array(size);
+  let produced;
+  try {
+    produced = decompressFrameInto(payload.subarray(0, position), output);
+  } catch (error) {
+    throw fail(where, `the Zstandard frame is corrupt (${error && /** @type {Error} */ (error).message})`);
+  }
+  if (produced !== size) {
+    throw fail(where, `the frame regenerates ${produced} bytes, it declares ${size}`);
+  }
+  if (hasChecksum) {
+    const stored =
+      (payload[position] | (payload[position + 1] << 8) | (payload[position + 2] << 16) |
+        (payload[position + 3] << 24)) >>> 0;
+    if (xxh64Low32(output) !== stored) throw fail(where, 'the frame content checksum differs');
+  }
+  return output;
+}
+
+/**
+ * The frame header (RFC 8878 §3.1.1.1): the magic, no reserved bit, no dictionary, a declared
+ * content size, and the window size the blocks are bounded by.
+ * @param {Uint8Array} payload
+ * @param {string} where the section, for messages
+ * @returns {{position: number, windowSize: number, declared: number, hasChecksum: number}}
+ *   where the first block header starts, the window size, the declared content size, and
+ *   whether a checksum follows the blocks
+ */
+function readFrameHeader(payload, where) {
+  const length = payload.length;
   if (length < 5 || MAGIC.some((byte, i) => payload[i] !== byte)) {
     throw fail(where, 'the payload is not a Zstandard frame (magic 28 B5 2F FD)');
   }
@@ -66,14 +109,20 @@ export function decompressExact(payload, size, where) {
   if (sizeBytes === 2) declared += 256;
   position += sizeBytes;
   if (singleSegment) windowSize = declared;
-  if (declared !== size) {
-    throw fail(where, `the frame declares ${declared} content bytes, the section needs ${size}`);
-  }
-  if (size > MAX_EXPANSION * length) {
-    throw fail(where, `${length} bytes cannot regenerate ${size}`);
-  }
-  // the blocks, to find the frame's end without decoding anything
-  const blockLimit = Math.min(MAX_BLOCK, windowSize);
+  return { position, windowSize, declared, hasChecksum };
+}
+
+/**
+ * Where the frame's blocks end, read from their headers alone (RFC 8878 §3.1.1.2), to find the
+ * frame's end without decoding anything: no block of the reserved type or over `blockLimit`.
+ * @param {Uint8Array} payload
+ * @param {number} position where the first block header starts
+ * @param {number} blockLimit the largest block allowed, min(128 KiB, the window size)
+ * @param {string} where the section, for messages
+ * @returns {number} the position after the last block
+ */
+function blocksEnd(payload, position, blockLimit, where) {
+  const length = payload.length;
   for (;;) {
     if (position + 3 > length) throw fail(where, 'the frame ends inside a block header');
     const header = payload[position] | (payload[position + 1] << 8) | (payload[position + 2] << 16);
@@ -87,28 +136,6 @@ export function decompressExact(payload, size, where) {
     }
     position += type === 1 ? 1 : blockSize;
     if (position > length) throw fail(where, 'the frame is truncated inside a block');
-    if (last) break;
+    if (last) return position;
   }
-  const frameEnd = position + (hasChecksum ? 4 : 0);
-  if (frameEnd > length) throw fail(where, 'the frame is truncated before its checksum');
-  if (frameEnd < length) {
-    throw fail(where, `${length - frameEnd} bytes follow the Zstandard frame`);
-  }
-  const output = new Uint8Array(size);
-  let produced;
-  try {
-    produced = decompressFrameInto(payload.subarray(0, position), output);
-  } catch (error) {
-    throw fail(where, `the Zstandard frame is corrupt (${error && /** @type {Error} */ (error).message})`);
-  }
-  if (produced !== size) {
-    throw fail(where, `the frame regenerates ${produced} bytes, it declares ${size}`);
-  }
-  if (hasChecksum) {
-    const stored =
-      (payload[position] | (payload[position + 1] << 8) | (payload[position + 2] << 16) |
-        (payload[position + 3] << 24)) >>> 0;
-    if (xxh64Low32(output) !== stored) throw fail(where, 'the frame content checksum differs');
-  }
-  return output;
 }
