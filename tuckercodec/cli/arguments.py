@@ -12,9 +12,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from .._version import __version__
+from ..analysis import SELECTIONS
 from ..blender.package import PLATFORM_TAGS
 from ..encoder import DEFAULT_TARGET_KG
-from ..encoder.options import BASES, SELECTIONS, parse_max_error
+from ..encoder.options import BASES, parse_max_error
 from ..encoder.plan import DEFAULT_SEGMENT_FRAMES, parse_size
 from ..files import SUFFIX
 from ..gltf_export import COMPRESSIONS

@@ -17,7 +17,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..analysis import Selection
+from ..analysis import DEFAULT_SELECTION, SELECTIONS, Selection
 from ..format import streams
 from ..format.segments import BASIS_OWN, BASIS_SHARED
 
@@ -27,7 +27,6 @@ Mode = Literal["kg", "ranks", "bpfv", "max-error", "lossless"]
 DEFAULT_TARGET_KG = 0.1
 #: The bases of a segmented file: one U1 shared by every segment, or one per segment.
 BASES = (BASIS_SHARED, BASIS_OWN)
-SELECTIONS = ("exact", "bound")
 #: The zstd levels a section may be compressed at.
 LEVELS = range(1, 23)
 
@@ -69,7 +68,7 @@ class EncodeOptions:
     target_kg: float | None = None
     ranks: tuple[int, int] | None = None
     target_bpfv: float | None = None
-    select: Selection = "exact"
+    select: Selection = DEFAULT_SELECTION
     level: int = streams.DEFAULT_LEVEL
     segment_frames: int | None = None
     max_memory: int | None = None
