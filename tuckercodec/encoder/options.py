@@ -3,8 +3,9 @@
 :class:`EncodeOptions` is the encoder's whole configuration, checked once when it is made:
 the mode (a target KG error, fixed ranks or a target size), how ranks are selected, the zstd
 level, when and how to segment, and where a segmented encode's passes run. The one-shot
-functions (:func:`tuckercodec.encode`, :func:`tuckercodec.encode_file`), the zarr codecs,
-``batch`` and the command line all build one and hand it to :class:`~tuckercodec.encoder.Encoder`.
+functions (:func:`tuckercodec.encode`, :func:`tuckercodec.encode_file` and the others) take it
+whole, as keywords named as its fields, or both, all through :func:`resolve_options`; they, the
+zarr codecs, ``batch`` and the command line hand it to :class:`~tuckercodec.encoder.Encoder`.
 :meth:`EncodeOptions.to_config` and :meth:`EncodeOptions.from_config` carry it as a plain dict
 (JSON's types only), for a task sent to a worker or a codec's stored configuration.
 """
