@@ -93,7 +93,7 @@ def test_modes_are_exclusive_and_checked(wave):
     with pytest.raises(ValueError, match="ranks must be"):
         encode(wave, ranks=(5, 10_000))
     with pytest.raises(ValueError, match="select"):
-        encode(wave, select="guess")  # type: ignore[arg-type]  # what is refused
+        encode(wave, select="guess")
 
 
 def test_metadata_travels(wave):

@@ -16,12 +16,10 @@ from typing import Any
 import numpy as np
 
 from .decoder import Decoder, FrameSelection
-from .decomposition.analysis import Selection
 from .encoder import EncodeOptions, Encoder, EncodeReport, resolve_options
 from .errors import InputError
 from .format.container import SIGNATURE
 from .format.limits import DEFAULT_LIMITS, Limits
-from .format.segments import BASIS_SHARED
 from .gltf_export import DEFAULT_COMPRESSION, Compression, write_decomposition_gltf
 from .io import format_named, format_of, open_frames, save_sequence
 from .io.dispatch import Source
@@ -49,46 +47,34 @@ def is_compressed_file(path: str | os.PathLike[str]) -> bool:
 def encode_file(
     source: Source,
     output: str | os.PathLike[str],
+    options: EncodeOptions | None = None,
     *,
-    target_kg: float | None = None,
-    ranks: tuple[int, int] | None = None,
-    target_bpfv: float | None = None,
-    select: Selection = "exact",
     overwrite: bool = False,
     progress: bool = False,
-    segment_frames: int | None = None,
-    max_memory: int | None = None,
-    basis: str = BASIS_SHARED,
     executor: Executor | None = None,
     prim: str | None = None,
     object_path: str | None = None,
     faces: str | os.PathLike[str] | None = None,
     fps: float | None = None,
-    options: EncodeOptions | None = None,
+    **fields: Any,
 ) -> EncodeReport:
     """Read a sequence (folder of OBJ files, glob, .npz...), encode it and write ``output``.
 
     The output is checked before any work (it must not exist unless ``overwrite``) and written
     atomically. The encoder's options are given whole (``options``, an
-    :class:`~tuckercodec.encoder.EncodeOptions`) or as its keywords (``target_kg`` to
-    ``basis``); a sequence whose whole encode would not fit ``max_memory`` (or given
-    ``segment_frames``) is read a range of frames at a time and written in segments (format
-    1.1, :meth:`tuckercodec.encoder.Encoder.encode_source`). ``prim``, ``object_path``,
-    ``faces`` and ``fps`` are the reading options of :func:`tuckercodec.io.load_sequence`
-    (``faces`` gives a ``.npy``, PC2 or MDD cache its faces); ``max_memory`` bounds what the
-    read may decompress as well. ``progress`` prints a line on standard error as each pass of a
-    segmented encode starts. Returns the encoder's report.
+    :class:`~tuckercodec.encoder.EncodeOptions`), as keywords named as its fields
+    (``target_kg``, ``ranks``, ``target_bpfv``, ``max_error``, ``lossless``, ``level``,
+    ``max_memory``...), or both, the keywords put over ``options`` as :func:`dataclasses.replace`
+    does (:func:`~tuckercodec.encoder.resolve_options`; any other keyword is a ``TypeError``). A
+    sequence whose whole encode would not fit ``max_memory`` (or given ``segment_frames``) is read
+    a range of frames at a time and written in segments (format 1.1,
+    :meth:`tuckercodec.encoder.Encoder.encode_source`). ``prim``, ``object_path``, ``faces`` and
+    ``fps`` are the reading options of :func:`tuckercodec.io.load_sequence` (``faces`` gives a
+    ``.npy``, PC2 or MDD cache its faces); ``max_memory`` bounds what the read may decompress as
+    well. ``progress`` prints a line on standard error as each pass of a segmented encode
+    starts; ``executor``: where a segmented encode's passes run. Returns the encoder's report.
     """
-    options = resolve_options(
-        options,
-        target_kg=target_kg,
-        ranks=ranks,
-        target_bpfv=target_bpfv,
-        select=select,
-        segment_frames=segment_frames,
-        max_memory=max_memory,
-        basis=basis,
-    )
+    options = resolve_options(options, **fields)
     encoder = Encoder(options, executor=executor, progress=_say if progress else None)
     reading = {"prim": prim, "object_path": object_path, "faces": faces, "fps": fps}
     reading["max_memory"] = options.max_memory  # what the read may inflate, too

@@ -28,6 +28,8 @@ package sees at once what the tools rely on.
   work both zarr codecs share, without zarr or numcodecs (the fuzzer's door into the codec).
 * Sample data: :func:`sample_path`, and the synthetic :func:`wave_sheet` with its
   :func:`sheet_triangles`.
+* Defaults the benchmarks offer as their own: :data:`DEFAULT_TARGET_KG` (the encoder's KG
+  target) and :func:`default_max_memory` (half the machine's memory, what an encode may use).
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ from __future__ import annotations
 from .decomposition.analysis import Curve
 from .decomposition.hosvd import centre_frames, reconstruct
 from .encoder import rdo
+from .encoder.options import DEFAULT_TARGET_KG
 from .format import faces, qmat, residual, sections, streams, traversal
 from .format.container import (
     CRC,
@@ -55,11 +58,13 @@ from .measures.perceptual import STED_DEFINITION
 from .model.topology import mesh_parents, mesh_prediction
 from .reports.plots import plot_rd_curve, pyplot, save_figure
 from .system.atomic import refuse_existing, write_atomic
+from .system.memory import default_max_memory
 from .zarr_codec.chunk import chunk_mode, decode_chunk, encode_chunk
 
 __all__ = [
     "CRC",
     "DEFAULT_LIMITS",
+    "DEFAULT_TARGET_KG",
     "HEAD_SIZE",
     "KG_DEFINITION",
     "MAX_DISTANCE_DEFINITION",
@@ -70,6 +75,7 @@ __all__ = [
     "centre_frames",
     "chunk_mode",
     "decode_chunk",
+    "default_max_memory",
     "encode_chunk",
     "faces",
     "max_distance",

@@ -39,7 +39,12 @@ import numpy as np
 from tools import common
 from tools.bench import arguments
 from tuckercodec import Decoder, MeshSequence, encode, kg_error, load_sequence, save_sequence
-from tuckercodec.internal import KG_DEFINITION, sample_gltf, write_decomposition_gltf
+from tuckercodec.internal import (
+    DEFAULT_TARGET_KG,
+    KG_DEFINITION,
+    sample_gltf,
+    write_decomposition_gltf,
+)
 
 JS = common.REPO / "tests" / "js"
 VARIANTS = ("none", "quantize", "meshopt")
@@ -220,7 +225,12 @@ def bench_read(source: str, repeat: int, folder: Path) -> None:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The glTF suite's options."""
     arguments.sequence(parser, "chicken.npz", "chicken.npz of ../shared/data")
-    parser.add_argument("--kg", type=float, default=0.1, help="target KG of the .tkc")
+    parser.add_argument(
+        "--kg",
+        type=float,
+        default=DEFAULT_TARGET_KG,
+        help="target KG of the .tkc (default: the encoder's)",
+    )
     parser.add_argument("--read", default="horse-gallop", help="sequence to read back as .glb")
     arguments.repeat(parser, 5, "timed reads, the median reported")
     parser.add_argument(

@@ -78,6 +78,7 @@ from tools.bench import arguments
 from tools.bench.arguments import UsageError
 from tools.generate import sequence as make_sequence
 from tuckercodec import Decoder, kg_error, load_sequence
+from tuckercodec.internal import default_max_memory
 
 DEFAULT_WORKDIR = Path("~/.cache/tuckercodec-bench").expanduser()
 #: The last commit before segmented files changed the format: "today's" encoder.
@@ -718,15 +719,6 @@ def real_table(results: list[RealResult], absent: list[Path], segment_frames: in
 # the command line
 
 
-def _physical_memory() -> int:
-    """This machine's memory in bytes (MemTotal), 16 GB if /proc does not say."""
-    with suppress(OSError, ValueError), open("/proc/meminfo", encoding="ascii") as handle:
-        for line in handle:
-            if line.startswith("MemTotal:"):
-                return int(line.split()[1]) * 1024
-    return int(16 * GB)
-
-
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The scale suite's options."""
     parser.add_argument("--kind", choices=make_sequence.KINDS, default="body")
@@ -771,7 +763,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--kill-above",
         type=float,
-        default=_physical_memory() / 2 / GB,
+        default=default_max_memory() / GB,
         help="stop an encode whose anonymous memory passes this many GB (default: half of "
         "this machine's memory), so that an encoder that does not stream cannot starve the "
         "machine",

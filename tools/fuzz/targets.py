@@ -384,18 +384,15 @@ def segmented_seeds() -> dict[str, bytes]:
     frames = wave_sheet(12, 4)
     triangles = sheet_triangles(4)
 
-    def encode(sequence: Any, **options: Any) -> bytes:
-        return tc.Encoder(tc.EncodeOptions(**options)).encode(sequence)
-
     sequence = tc.MeshSequence(frames, triangles)
     seeds = {
-        f"seed-{basis}.tkc": encode(sequence, target_kg=1.0, segment_frames=4, basis=basis)
+        f"seed-{basis}.tkc": tc.encode(sequence, target_kg=1.0, segment_frames=4, basis=basis)
         for basis in ("shared", "own")
     }
     points = tc.MeshSequence(
         frames[:11], np.zeros((0, 3), int), frame_names=[str(n) for n in range(11)]
     )
-    seeds["seed-ragged-points.tkc"] = encode(points, target_kg=0.5, segment_frames=3)
+    seeds["seed-ragged-points.tkc"] = tc.encode(points, target_kg=0.5, segment_frames=3)
     for data in seeds.values():
         assert tc.Decoder(data).segmented
     return seeds

@@ -35,7 +35,7 @@ import msgpack
 import numpy as np
 
 from tools import common
-from tuckercodec import Decoder, EncodeOptions, MeshSequence, encode, encode_with_report, internal
+from tuckercodec import Decoder, MeshSequence, encode, encode_with_report, internal
 from tuckercodec.internal import (
     DEFAULT_LIMITS,
     HEAD_SIZE,
@@ -509,35 +509,36 @@ def correction_vectors() -> dict[str, tuple[bytes, str]]:
     )
     return {
         "v1.3-bound-grid": (
-            encode(wave, options=EncodeOptions(max_error="0.05%")),
+            encode(wave, max_error="0.05%"),
             "format 1.3: every vertex of a noisy sheet within 0.05 % of the diagonal, on a grid",
         ),
         "v1.3-lossless-float32": (
-            encode(single, options=EncodeOptions(lossless=True)),
+            encode(single, lossless=True),
             "format 1.3: lossless float32 values, corrections of binary32 ordered integers",
         ),
         "v1.3-lossless-float64": (
-            encode(named, options=EncodeOptions(lossless=True)),
+            encode(named, lossless=True),
             "format 1.3: lossless float64 values far from the origin, polygons and names",
         ),
         "v1.3-lossless-digits": (
-            encode(as_text(rough, "{:.6g}"), options=EncodeOptions(lossless=True)),
+            encode(as_text(rough, "{:.6g}"), lossless=True),
             "format 1.3: lossless values read from %.6g text, decimals of 6 significant digits",
         ),
         "v1.3-lossless-digits-float32": (
-            encode(as_text(rough, "{:.6g}", np.float32), options=EncodeOptions(lossless=True)),
+            encode(as_text(rough, "{:.6g}", np.float32), lossless=True),
             "format 1.3: lossless float32 values read from %.6g text",
         ),
         "v1.3-segments-lossless": (
             encode_with_report(
                 MeshSequence(rough.astype(np.float32).astype(np.float64), sheet_triangles(9)),
-                options=EncodeOptions(lossless=True, segment_frames=8),
+                lossless=True,
+                segment_frames=8,
             ).data,
             "format 1.3 and 1.1 together: lossless float32 values in three segments sharing U1, "
             "each with its RESD.s",
         ),
         "v1.3-lossless-places": (
-            encode(as_text(rough + 20.0, "{:.5f}"), options=EncodeOptions(lossless=True)),
+            encode(as_text(rough + 20.0, "{:.5f}"), lossless=True),
             "format 1.3: lossless values read from %.5f text, decimals of 5 places",
         ),
     }

@@ -28,6 +28,7 @@ from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, St
 from bpy_extras.io_utils import ExportHelper, ImportHelper
 
 from ..decoder import Decoder
+from ..encoder.options import DEFAULT_TARGET_KG
 from ..errors import TuckerCodecError
 from ..io.common.polygons import faces_from_polygons
 from ..model.sequence import MeshSequence
@@ -333,7 +334,7 @@ class ExportTKC(bpy.types.Operator, ExportHelper):
         ),
         default="KG",
     )
-    kg: FloatProperty(name="KG Error (%)", default=0.1, min=1e-6, precision=4)
+    kg: FloatProperty(name="KG Error (%)", default=DEFAULT_TARGET_KG, min=1e-6, precision=4)
     bpfv: FloatProperty(name="Bits per Frame per Vertex", default=2.0, min=1e-3)
     rank_i: IntProperty(name="Rank i (vertices)", default=16, min=1)
     rank_k: IntProperty(name="Rank k (frames)", default=8, min=1)

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 from .._version import __version__
 from ..blender.package import PLATFORM_TAGS
+from ..decomposition.analysis import SELECTIONS
 from ..encoder import DEFAULT_TARGET_KG
 from ..encoder.options import BASES, parse_max_error
 from ..encoder.plan import DEFAULT_SEGMENT_FRAMES, parse_size
@@ -538,7 +539,6 @@ def _add_segment_options(encode: argparse.ArgumentParser) -> None:
     large.add_argument(
         "--basis",
         choices=BASES,
-        default=BASES[0],
         help="with segments: one U1 shared by all (default, smaller) or one per segment",
     )
     _add_executor_options(
@@ -579,12 +579,12 @@ def _add_mode_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--lossless",
         action="store_true",
+        default=None,  # not given: EncodeOptions' default
         help="decode to the input's values bit for bit (format 1.3); alone",
     )
     parser.add_argument(
         "--select",
-        choices=("exact", "bound"),
-        default="exact",
+        choices=SELECTIONS,
         help="choose ranks by the exact error table (default) or by the seed paper's bound",
     )
 

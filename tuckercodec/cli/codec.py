@@ -13,10 +13,9 @@ import numpy as np
 
 from ..decoder import Decoder, FileInfo
 from ..decoder import info as read_info
-from ..encoder import EncodeOptions, Encoder, EncodeReport
+from ..encoder import EncodeOptions, Encoder, EncodeReport, resolve_options
 from ..errors import EXIT_OK, InputError
 from ..files import decode_file, decoded_output_path, is_gltf_output, write_encoded
-from ..format.segments import BASIS_SHARED
 from ..gltf_export import DEFAULT_COMPRESSION, write_decomposition_gltf
 from ..measures.distortion import (
     KG_DEFINITION,
@@ -103,22 +102,24 @@ def run_encode(args: argparse.Namespace) -> int:
 
 
 def encode_options(args: argparse.Namespace, *, passes: bool = True) -> EncodeOptions:
-    """The encoder's options from ``encode``'s or ``batch``'s arguments (no mode given: the
-    encoder's default target). ``passes``: whether ``--jobs`` and ``--scheduler`` say where a
-    segmented encode's passes run (``batch``'s say where its tasks run)."""
-    return EncodeOptions(
-        target_kg=args.kg,
-        ranks=args.ranks,
-        target_bpfv=args.bpfv,
-        select=args.select,
-        segment_frames=getattr(args, "segment_frames", None),
-        max_memory=getattr(args, "max_memory", None),
-        basis=getattr(args, "basis", BASIS_SHARED),
-        jobs=args.jobs if passes else None,
-        scheduler=args.scheduler if passes else None,
-        max_error=getattr(args, "max_error", None),
-        lossless=getattr(args, "lossless", False),
-    )
+    """The encoder's options from ``encode``'s or ``batch``'s arguments; what is not given on
+    the command line takes :class:`EncodeOptions`' default (no mode: its default target).
+    ``passes``: whether ``--jobs`` and ``--scheduler`` say where a segmented encode's passes run
+    (``batch``'s say where its tasks run)."""
+    given = {
+        "target_kg": args.kg,
+        "ranks": args.ranks,
+        "target_bpfv": args.bpfv,
+        "select": args.select,
+        "segment_frames": getattr(args, "segment_frames", None),
+        "max_memory": getattr(args, "max_memory", None),
+        "basis": getattr(args, "basis", None),
+        "jobs": args.jobs if passes else None,
+        "scheduler": args.scheduler if passes else None,
+        "max_error": getattr(args, "max_error", None),
+        "lossless": getattr(args, "lossless", None),
+    }
+    return resolve_options(**{name: value for name, value in given.items() if value is not None})
 
 
 def _say(line: str) -> None:

@@ -17,7 +17,7 @@ see :mod:`tuckercodec.measures.distortion`.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
+from typing import Literal, get_args
 
 import numpy as np
 
@@ -26,6 +26,10 @@ from ..model.sequence import MeshSequence
 from .hosvd import HOSVD, centre_frames, hosvd
 
 Selection = Literal["exact", "bound"]
+#: How ranks may be selected: by the exact error table, or by the seed paper's bound alone.
+SELECTIONS: tuple[Selection, ...] = get_args(Selection)
+#: How ranks are selected unless told otherwise.
+DEFAULT_SELECTION: Selection = "exact"
 
 
 @dataclass(frozen=True)
@@ -165,7 +169,7 @@ class Analysis:
         return self._floats / (3 * self.vertex_count * self.frame_count)
 
     # ----- choosing ranks -------------------------------------------------------------------
-    def cheapest(self, target_kg: float, *, select: Selection = "exact") -> RankChoice:
+    def cheapest(self, target_kg: float, *, select: Selection = DEFAULT_SELECTION) -> RankChoice:
         """The (i, 3, k) with the fewest stored floats whose KG error is at most ``target_kg``.
 
         ``select="exact"`` uses the exact table; ``select="bound"`` uses the paper's estimate
@@ -176,12 +180,7 @@ class Analysis:
             raise ValueError(f"target KG error must be a finite number, got {target_kg!r}")
         if target_kg <= 0:
             raise ValueError(f"target KG error must be positive, got {target_kg}")
-        if select == "exact":
-            judged = self.kg_table()
-        elif select == "bound":
-            judged = self.kg_bound_table()
-        else:
-            raise ValueError(f"select must be 'exact' or 'bound', got {select!r}")
+        judged = self._judged(select)
         # Always feasible: the full ranks (R1, R3) discard nothing, so their error is 0.
         feasible = judged <= target_kg
         feasible[0, :] = False
@@ -192,16 +191,20 @@ class Analysis:
         i, k = (int(v) for v in candidates[int(np.argmin(errors))])
         return self.choice(i, k)
 
-    def rd_curve(self, *, select: Selection = "exact") -> Curve:
+    def _judged(self, select: Selection) -> np.ndarray:
+        """The table ranks are chosen by: the exact KG errors, or the paper's bound."""
+        if select not in SELECTIONS:
+            raise ValueError(f"select must be 'exact' or 'bound', got {select!r}")
+        return self.kg_table() if select == "exact" else self.kg_bound_table()
+
+    def rd_curve(self, *, select: Selection = DEFAULT_SELECTION) -> Curve:
         """The rate-distortion curve (the paper's Algorithm 2): the Pareto front of all
         (i, k), those no other truncation beats in both stored floats and error.
 
         ``select="bound"`` builds the front from the estimate, as the seed method would; the
         curve still carries the exact error of each point.
         """
-        if select not in ("exact", "bound"):
-            raise ValueError(f"select must be 'exact' or 'bound', got {select!r}")
-        judged = self.kg_table() if select == "exact" else self.kg_bound_table()
+        judged = self._judged(select)
         i_grid, k_grid = np.meshgrid(
             np.arange(1, self.max_ranks[0] + 1), np.arange(1, self.max_ranks[1] + 1), indexing="ij"
         )

@@ -30,10 +30,9 @@ search), :mod:`.rdo` (rate-distortion rounding) and :mod:`.results` (what an enc
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
-from ..decomposition.analysis import Analysis, Selection
-from ..format import streams
-from ..format.segments import BASIS_SHARED
+from ..decomposition.analysis import Analysis
 from ..model.sequence import MeshSequence
 from ..model.sources import FrameSource
 from ..system.parallel import Executor
@@ -45,142 +44,89 @@ from .segmented import SharedBasis
 
 def encode_with_report(
     sequence: MeshSequence,
-    *,
-    target_kg: float | None = None,
-    ranks: tuple[int, int] | None = None,
-    target_bpfv: float | None = None,
-    select: Selection = "exact",
-    level: int = streams.DEFAULT_LEVEL,
-    analysis: Analysis | None = None,
-    segment_frames: int | None = None,
-    max_memory: int | None = None,
-    basis: str = BASIS_SHARED,
-    executor: Executor | None = None,
     options: EncodeOptions | None = None,
+    *,
+    analysis: Analysis | None = None,
+    executor: Executor | None = None,
+    **fields: Any,
 ) -> EncodeResult:
     """Encode a sequence; the file's bytes and a report of ranks, errors and sizes.
 
-    Shorthand for ``Encoder(options, executor=executor).encode_with_report(sequence)``, the
-    options given whole (``options``) or as the keywords of :class:`EncodeOptions`.
+    Shorthand for ``Encoder(resolve_options(options, **fields), executor=executor)
+    .encode_with_report(sequence)``.
 
     Args:
         sequence: the mesh sequence (any number of frames; not every frame a single point).
-        target_kg, ranks, target_bpfv, select, level, segment_frames, max_memory, basis: as
-            the fields of :class:`EncodeOptions` (one mode at a time; default: KG 0.1).
+        options: what to encode for, whole (default: a KG error of 0.1).
         analysis: the sequence's :func:`~tuckercodec.analyze` result, if already computed.
         executor: with segments, where the passes' tasks run (:mod:`tuckercodec.system.parallel`);
             the bytes written do not depend on it.
-        options: all of the above at once, instead of the keywords.
+        **fields: any field of :class:`EncodeOptions` by name (``target_kg``, ``ranks``,
+            ``max_error``, ``lossless``, ``level``...), put over ``options`` as
+            :func:`dataclasses.replace` does (:func:`resolve_options`).
 
     Raises:
+        TypeError: a keyword that is not a field of :class:`EncodeOptions`.
         InputError: the sequence cannot be encoded (every frame a single point, or coordinates
             float64 cannot square).
         UnreachableTargetError: no file of the format meets the target: a ``target_bpfv``
             below the coarsest file's size, or an error target too small for the format's
             32-bit integers (centroids far from the origin, or a target within rounding of 0).
-        ValueError: a mode argument that is out of range (ranks, a non-positive target).
+        ValueError: an option that is out of range (ranks, a non-positive target), or two
+            modes at once.
     """
-    options = resolve_options(
-        options,
-        target_kg=target_kg,
-        ranks=ranks,
-        target_bpfv=target_bpfv,
-        select=select,
-        level=level,
-        segment_frames=segment_frames,
-        max_memory=max_memory,
-        basis=basis,
-    )
-    return Encoder(options, executor=executor).encode_with_report(sequence, analysis=analysis)
+    encoder = Encoder(resolve_options(options, **fields), executor=executor)
+    return encoder.encode_with_report(sequence, analysis=analysis)
 
 
 def encode_source(
     frames: FrameSource,
-    *,
-    target_kg: float | None = None,
-    ranks: tuple[int, int] | None = None,
-    target_bpfv: float | None = None,
-    select: Selection = "exact",
-    segment_frames: int | None = None,
-    max_memory: int | None = None,
-    basis: str = BASIS_SHARED,
-    executor: Executor | None = None,
-    level: int = streams.DEFAULT_LEVEL,
-    progress: Callable[[str], None] | None = None,
     options: EncodeOptions | None = None,
+    *,
+    executor: Executor | None = None,
+    progress: Callable[[str], None] | None = None,
+    **fields: Any,
 ) -> EncodeResult:
     """Encode an opened sequence (:func:`tuckercodec.io.open_frames`): whole (loaded, format
     1.0) when that fits ``max_memory`` (default half the machine's memory) and no
     ``segment_frames`` is given, else in segments read a range at a time (format 1.1).
-    Shorthand for :meth:`Encoder.encode_source`; arguments as for :func:`encode_with_report`;
-    ``progress`` is called with a line as each pass starts."""
-    options = resolve_options(
-        options,
-        target_kg=target_kg,
-        ranks=ranks,
-        target_bpfv=target_bpfv,
-        select=select,
-        level=level,
-        segment_frames=segment_frames,
-        max_memory=max_memory,
-        basis=basis,
-    )
-    return Encoder(options, executor=executor, progress=progress).encode_source(frames)
+    Shorthand for :meth:`Encoder.encode_source`; ``options``, ``executor`` and ``**fields``
+    (any field of :class:`EncodeOptions` by name, over ``options``) as for
+    :func:`encode_with_report`; ``progress`` is called with a line as each pass starts."""
+    encoder = Encoder(resolve_options(options, **fields), executor=executor, progress=progress)
+    return encoder.encode_source(frames)
 
 
 def encode_frames(
     source: FrameSource,
+    options: EncodeOptions | None = None,
     *,
-    target_kg: float | None = None,
-    ranks: tuple[int, int] | None = None,
-    target_bpfv: float | None = None,
-    segment_frames: int | None = None,
-    max_memory: int | None = None,
-    basis: str = BASIS_SHARED,
     executor: Executor | None = None,
-    level: int = streams.DEFAULT_LEVEL,
     progress: Callable[[str], None] | None = None,
     shared_basis: SharedBasis | None = None,
-    options: EncodeOptions | None = None,
+    **fields: Any,
 ) -> EncodeResult:
     """Encode a sequence read a range of frames at a time into a segmented file (format 1.1),
-    however small: shorthand for :meth:`Encoder.encode_segments`. Arguments as for
-    :func:`encode_source`; the KG error is of the whole sequence. ``shared_basis``: a shared U1
-    to use as it is (:func:`tuckercodec.encoder.segmented.shared_basis_of`)."""
-    options = resolve_options(
-        options,
-        target_kg=target_kg,
-        ranks=ranks,
-        target_bpfv=target_bpfv,
-        level=level,
-        segment_frames=segment_frames,
-        max_memory=max_memory,
-        basis=basis,
-    )
-    encoder = Encoder(options, executor=executor, progress=progress)
+    however small: shorthand for :meth:`Encoder.encode_segments`. ``options``, ``executor``,
+    ``progress`` and ``**fields`` (any field of :class:`EncodeOptions` by name, over
+    ``options``) as for :func:`encode_source`; the KG error is of the whole sequence.
+    ``shared_basis``: a shared U1 to use as it is
+    (:func:`tuckercodec.encoder.segmented.shared_basis_of`)."""
+    encoder = Encoder(resolve_options(options, **fields), executor=executor, progress=progress)
     return encoder.encode_segments(source, shared_basis=shared_basis)
 
 
-def encode(
-    sequence: MeshSequence,
-    *,
-    target_kg: float | None = None,
-    ranks: tuple[int, int] | None = None,
-    target_bpfv: float | None = None,
-    select: Selection = "exact",
-    options: EncodeOptions | None = None,
-) -> bytes:
+def encode(sequence: MeshSequence, options: EncodeOptions | None = None, **fields: Any) -> bytes:
     """Encode a sequence into the bytes of a file (``spec/FORMAT.md``).
 
-    One mode at a time: ``target_kg`` (default 0.1, a KG error in percent that the decoded
-    sequence never exceeds), ``ranks`` (i, k), or ``target_bpfv`` (the smallest error that fits);
-    or every option at once as ``options`` (:class:`EncodeOptions`).
+    The options are given whole (``options``, an :class:`EncodeOptions`), as keywords named as
+    its fields (``target_kg=0.05``, ``ranks=(i, k)``, ``target_bpfv``, ``max_error``,
+    ``lossless=True``, ``level``...), or both, the keywords put over ``options`` as
+    :func:`dataclasses.replace` does; a keyword that is not a field is a ``TypeError``. One
+    mode at a time; the default is a KG error of 0.1 that the decoded sequence never exceeds.
     :func:`encode_with_report` also says what was chosen and measured.
     """
-    options = resolve_options(
-        options, target_kg=target_kg, ranks=ranks, target_bpfv=target_bpfv, select=select
-    )
-    return Encoder(options).encode(sequence)
+    return Encoder(resolve_options(options, **fields)).encode(sequence)
 
 
 __all__ = [

@@ -23,10 +23,11 @@ from ..errors import UnreachableTargetError
 from ..format import residual, streams
 from ..model.sequence import MeshSequence
 from ..model.sources import FrameSource, SequenceFrames
+from ..system.memory import memory_allowed
 from ..system.parallel import Executor, InProcessExecutor, open_executor
 from . import corrections, search
 from .options import DEFAULT_TARGET_KG, EncodeOptions
-from .plan import default_max_memory, needs_segments, plan_segments
+from .plan import needs_segments, plan_segments
 from .results import EncodeReport, EncodeResult
 from .segmented import SegmentedWorkspace, SharedBasis
 from .trial import Quantized, Workspace
@@ -106,7 +107,7 @@ class Encoder:
         options = self.options
         if options.select != "exact":
             raise ValueError("a segmented encode chooses its ranks by the exact error (select)")
-        memory = default_max_memory() if options.max_memory is None else options.max_memory
+        memory = memory_allowed(options.max_memory)
         plan = plan_segments(
             frames.frame_count,
             frames.vertex_count,

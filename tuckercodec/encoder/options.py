@@ -3,8 +3,9 @@
 :class:`EncodeOptions` is the encoder's whole configuration, checked once when it is made:
 the mode (a target KG error, fixed ranks or a target size), how ranks are selected, the zstd
 level, when and how to segment, and where a segmented encode's passes run. The one-shot
-functions (:func:`tuckercodec.encode`, :func:`tuckercodec.encode_file`), the zarr codecs,
-``batch`` and the command line all build one and hand it to :class:`~tuckercodec.encoder.Encoder`.
+functions (:func:`tuckercodec.encode`, :func:`tuckercodec.encode_file` and the others) take it
+whole, as keywords named as its fields, or both, all through :func:`resolve_options`; they, the
+zarr codecs, ``batch`` and the command line hand it to :class:`~tuckercodec.encoder.Encoder`.
 :meth:`EncodeOptions.to_config` and :meth:`EncodeOptions.from_config` carry it as a plain dict
 (JSON's types only), for a task sent to a worker or a codec's stored configuration.
 """
@@ -12,12 +13,12 @@ functions (:func:`tuckercodec.encode`, :func:`tuckercodec.encode_file`), the zar
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, fields, replace
 from typing import Any, Literal
 
 import numpy as np
 
-from ..decomposition.analysis import Selection
+from ..decomposition.analysis import DEFAULT_SELECTION, SELECTIONS, Selection
 from ..format import streams
 from ..format.segments import BASIS_OWN, BASIS_SHARED
 
@@ -27,7 +28,6 @@ Mode = Literal["kg", "ranks", "bpfv", "max-error", "lossless"]
 DEFAULT_TARGET_KG = 0.1
 #: The bases of a segmented file: one U1 shared by every segment, or one per segment.
 BASES = (BASIS_SHARED, BASIS_OWN)
-SELECTIONS = ("exact", "bound")
 #: The zstd levels a section may be compressed at.
 LEVELS = range(1, 23)
 
@@ -69,7 +69,7 @@ class EncodeOptions:
     target_kg: float | None = None
     ranks: tuple[int, int] | None = None
     target_bpfv: float | None = None
-    select: Selection = "exact"
+    select: Selection = DEFAULT_SELECTION
     level: int = streams.DEFAULT_LEVEL
     segment_frames: int | None = None
     max_memory: int | None = None
@@ -171,14 +171,17 @@ class EncodeOptions:
     def from_config(cls, config: dict[str, Any]) -> EncodeOptions:
         """The options of a :meth:`to_config` dict (missing fields take their defaults);
         ``ValueError`` naming a field it does not know."""
-        known = {field.name for field in fields(cls)}
-        unknown = sorted(set(config) - known)
+        unknown = sorted(set(config) - set(FIELDS))
         if unknown:
             raise ValueError(f"unknown encode options: {', '.join(map(str, unknown))}")
         values = dict(config)
         if isinstance(values.get("ranks"), list):
             values["ranks"] = tuple(values["ranks"])
         return cls(**values)
+
+
+#: The names of :class:`EncodeOptions`' fields: the keywords every front door takes.
+FIELDS = tuple(field.name for field in fields(EncodeOptions))
 
 
 def _refuse_two_modes(target_kg: object, ranks: object, target_bpfv: object) -> None:
@@ -239,14 +242,26 @@ def _two_ranks(ranks: object) -> tuple[int, int]:
     return int(pair[0]), int(pair[1])
 
 
-def resolve_options(options: EncodeOptions | None, **keywords: object) -> EncodeOptions:
-    """``options``, or the options the keywords name (fields of :class:`EncodeOptions` left at
-    their defaults are not counted): what the one-shot functions accept. Both at once is a
-    ``ValueError``, since one would silently lose to the other."""
-    defaults = EncodeOptions()
-    changed = {name: value for name, value in keywords.items() if value != getattr(defaults, name)}
+def resolve_options(options: EncodeOptions | None = None, /, **fields: Any) -> EncodeOptions:
+    """The options of a front door (:func:`~tuckercodec.encode`, :func:`~tuckercodec.encode_file`
+    and the others): ``options`` (default: every field at its default) with ``fields``, keywords
+    named as :class:`EncodeOptions`' fields, put over it as :func:`dataclasses.replace` does. The
+    result is checked as a whole, so a keyword that names another mode than ``options``' is a
+    ``ValueError`` naming both, as it would be in one :class:`EncodeOptions`.
+
+    Raises:
+        TypeError: ``options`` that is not an :class:`EncodeOptions`, or a keyword that is not
+            one of its fields (named).
+        ValueError: a value :class:`EncodeOptions` refuses.
+    """
     if options is None:
-        return EncodeOptions(**changed)  # type: ignore[arg-type]  # each field checks its value
-    if changed:
-        raise ValueError(f"give options or {', '.join(sorted(changed))}, not both")
-    return options
+        options = EncodeOptions()
+    elif not isinstance(options, EncodeOptions):
+        raise TypeError(f"options must be EncodeOptions, got {type(options).__name__}")
+    unknown = sorted(set(fields) - set(FIELDS))
+    if unknown:
+        raise TypeError(
+            f"unexpected keyword argument {unknown[0]!r}: an encode takes the fields of "
+            f"EncodeOptions ({', '.join(FIELDS)})"
+        )
+    return replace(options, **fields) if fields else options

@@ -10,9 +10,10 @@ and the small projected tensor (r x 3 x F), so its memory does not grow with F.
 
 from __future__ import annotations
 
-import os
 import re
 from dataclasses import dataclass
+
+from ..system.memory import memory_allowed
 
 #: Peak memory of a whole (one-segment) encode over the float64 positions, measured on samba
 #: (144 MiB for 40 MiB) and on a 100,000-vertex, 1,000-frame cloth (16.6 GB for 2.4 GB).
@@ -51,21 +52,6 @@ def parse_size(text: str) -> int:
     if value <= 0:
         raise ValueError(f"a size must be positive: {text!r}")
     return value
-
-
-def physical_memory() -> int | None:
-    """The machine's physical memory in bytes, where the system says (Linux, macOS)."""
-    try:
-        return int(os.sysconf("SC_PAGE_SIZE")) * int(os.sysconf("SC_PHYS_PAGES"))
-    except (ValueError, OSError, AttributeError):
-        return None
-
-
-def default_max_memory() -> int:
-    """Half the machine's memory (4 GB where it is unknown): what an encode may use unless
-    told otherwise, so that encoding a large cache does not push the machine into swap."""
-    total = physical_memory()
-    return total // 2 if total else 4 * 10**9
 
 
 def whole_encode_bytes(frames: int, vertices: int) -> int:
@@ -114,19 +100,9 @@ def needs_segments(
     """Whether to segment: when asked, or when the whole encode would not fit ``max_memory``."""
     if segment_frames is not None:
         return True
-    limit = default_max_memory() if max_memory is None else max_memory
-    return whole_encode_bytes(frames, vertices) > limit
+    return whole_encode_bytes(frames, vertices) > memory_allowed(max_memory)
 
 
 def blocks(start: int, stop: int, block_frames: int) -> list[tuple[int, int]]:
     """The blocks of frames ``start .. stop - 1`` read at once."""
     return [(a, min(a + block_frames, stop)) for a in range(start, stop, block_frames)]
-
-
-def human_bytes(count: float) -> str:
-    """``1.5 GB``: a size for messages."""
-    for unit in ("B", "kB", "MB", "GB"):
-        if count < 1000 or unit == "GB":
-            return f"{count:.3g} {unit}" if unit != "B" else f"{int(count)} B"
-        count /= 1000
-    return f"{count:.3g} TB"  # pragma: no cover

@@ -90,7 +90,7 @@ class WholeWorkspace:
         sequence: MeshSequence,
         analysis: Analysis,
         level: int,
-        select: Selection = "exact",
+        select: Selection,
         connectivity: Connectivity | None = None,
     ) -> None:
         self.sequence = sequence

@@ -9,7 +9,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..decomposition.analysis import Analysis, Curve
+from ..decomposition.analysis import SELECTIONS, Analysis, Curve
 
 DEFAULT_TARGETS = (1.0, 0.5, 0.1, 0.05, 0.02)
 
@@ -31,7 +31,7 @@ def targets_table(analysis: Analysis, targets: Sequence[float] = DEFAULT_TARGETS
     )
     lines = [header, "-" * len(header)]
     for target in targets:
-        for select in ("exact", "bound"):
+        for select in SELECTIONS:
             try:
                 c = analysis.cheapest(target, select=select)
             except ValueError:

@@ -11,8 +11,9 @@ from ...format import qmat, streams
 from ...format.container import parse_container
 from ...format.segments import BASIS_SHARED
 from ...model.sources import FrameSource
+from ...system.memory import memory_allowed
 from ...system.parallel import InProcessExecutor
-from ..plan import default_max_memory, plan_segments
+from ..plan import plan_segments
 from ..whole import column_steps
 from .workspace import SegmentedWorkspace, SharedBasis
 
@@ -50,7 +51,7 @@ def fit_basis(
     its steps make its quantization add at most :data:`FIT_BASIS_NOISE_SHARE` of it (about D/12
     per value, reaching segment s in proportion to its share of each column's core energy).
     """
-    memory = default_max_memory() if max_memory is None else max_memory
+    memory = memory_allowed(max_memory)
     plan = plan_segments(
         source.frame_count, source.vertex_count, segment_frames=segment_frames, max_memory=memory
     )

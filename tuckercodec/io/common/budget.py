@@ -17,13 +17,13 @@ from __future__ import annotations
 
 import os
 
-from ...encoder.plan import default_max_memory, human_bytes
 from ...errors import InputError
+from ...system.memory import human_bytes, memory_allowed
 
 
 def memory_ceiling(max_memory: int | None) -> int:
     """The most bytes a read may decompress: ``max_memory``, else half the machine's memory."""
-    return default_max_memory() if max_memory is None else max_memory
+    return memory_allowed(max_memory)
 
 
 class Inflation:
