@@ -146,7 +146,7 @@ def _capture(options: tc.EncodeOptions, **_: object) -> None:
 @pytest.mark.parametrize("fields", EVERY_FIELD, ids=lambda fields: ",".join(fields))
 @pytest.mark.parametrize("door", list(FRONT_DOORS))
 def test_every_front_door_takes_every_field(door, fields, monkeypatch, wave, tmp_path):
-    monkeypatch.setattr(tc.encoder, "Encoder", _capture)
+    monkeypatch.setattr(tc.encoder.shorthands, "Encoder", _capture)
     monkeypatch.setattr(tc.files, "Encoder", _capture)
     source = wave if door in ("encode", "encode_with_report") else SequenceFrames(wave)
     where = [tmp_path / "w.tkc"] if door == "encode_file" else []

@@ -65,7 +65,7 @@ What runs in the child is :mod:`.child`; the caller's side of the conversation, 
 limits, is :mod:`.channel`.
 """
 
-from .parent import (
+from .channel import (
     MEMORY_BASE,
     MEMORY_CEILING,
     MEMORY_PER_BYTE,
@@ -74,10 +74,9 @@ from .parent import (
     TIMEOUT_BYTES_PER_SECOND,
     TIMEOUT_CEILING,
     TIMEOUT_VARIABLE,
-    IsolatedFrames,
-    note,
-    read_isolated,
 )
+from .child import note  # the readers' and hooks' name for it
+from .parent import IsolatedFrames, read_isolated
 
 __all__ = [
     "MEMORY_BASE",

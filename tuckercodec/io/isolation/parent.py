@@ -14,34 +14,11 @@ from ...model.sequence import MeshSequence
 from ...model.sources import FrameSource, SequenceFrames
 from ..registry import ReadOptions
 from .channel import (
-    MEMORY_BASE,
-    MEMORY_CEILING,
-    MEMORY_PER_BYTE,
-    MEMORY_VARIABLE,
-    TIMEOUT_BASE,
-    TIMEOUT_BYTES_PER_SECOND,
-    TIMEOUT_CEILING,
-    TIMEOUT_VARIABLE,
     Child,
     Description,
     can_isolate,
     child_request,
 )
-from .child import note as note  # the readers' and hooks' name for it
-
-__all__ = [
-    "MEMORY_BASE",
-    "MEMORY_CEILING",
-    "MEMORY_PER_BYTE",
-    "MEMORY_VARIABLE",
-    "TIMEOUT_BASE",
-    "TIMEOUT_BYTES_PER_SECOND",
-    "TIMEOUT_CEILING",
-    "TIMEOUT_VARIABLE",
-    "IsolatedFrames",
-    "note",
-    "read_isolated",
-]
 
 
 class IsolatedFrames(FrameSource):
