@@ -19,14 +19,7 @@ with a C++ library in a child process (:mod:`.isolation`, for USD and Alembic).
 from ..model.sources import FrameSource, SequenceFrames
 from .dispatch import load_sequence, open_frames, save_sequence
 from .frames import natural_sort_key
-from .registry import (
-    ReadOptions,
-    SequenceFormat,
-    WriteOptions,
-    format_named,
-    format_of,
-    formats,
-)
+from .registry import ReadOptions, SequenceFormat, WriteOptions, format_named, format_of, formats
 
 __all__ = [
     "FrameSource",
