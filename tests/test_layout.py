@@ -188,6 +188,63 @@ def test_package_imports_form_no_cycle():
 
 
 # ------------------------------------------------------------------------------------------
+# ARCHITECTURE.md's table: every numbered section of the spec, and the files that implement it
+
+ARCHITECTURE = ROOT / "ARCHITECTURE.md"
+
+
+def _spec_sections(spec: str) -> list[str]:
+    """The numbers of spec/FORMAT.md's numbered sections (``## 6.`` and ``### 6.2``)."""
+    return re.findall(r"^#{2,3} (\d+(?:\.\d+)*)\.? ", spec, re.M)
+
+
+def _architecture_rows(text: str) -> dict[str, tuple[list[str], list[str]]]:
+    """section number -> (Python files, JavaScript files) of ARCHITECTURE.md's spec table."""
+    table = text[text.index("| spec section | Python | JavaScript |") :]
+    rows: dict[str, tuple[list[str], list[str]]] = {}
+    for line in table.splitlines()[2:]:
+        if not line.startswith("|"):
+            break
+        section, python, javascript = (cell.strip() for cell in line.strip("|").split("|"))
+        number = section.split()[0].rstrip(".")
+        assert number not in rows, f"ARCHITECTURE.md lists section {number} twice"
+        rows[number] = (re.findall(r"`([^`]+)`", python), re.findall(r"`([^`]+)`", javascript))
+    return rows
+
+
+def _architecture_problems(spec: str, text: str) -> list[str]:
+    rows = _architecture_rows(text)
+    problems = [f"section {n} is not in the table" for n in _spec_sections(spec) if n not in rows]
+    problems += [f"section {n} is not in the spec" for n in rows if n not in _spec_sections(spec)]
+    for number, (python, javascript) in rows.items():
+        if not python:
+            problems.append(f"section {number} names no Python module")
+        problems += [
+            f"section {number}: {name} does not exist"
+            for name in python + javascript
+            if not (ROOT / name).is_file()
+        ]
+    return problems
+
+
+def test_the_architecture_table_covers_the_spec():
+    assert len(_spec_sections(SPEC.read_text())) > 20
+    problems = _architecture_problems(SPEC.read_text(), ARCHITECTURE.read_text())
+    assert not problems, "ARCHITECTURE.md's spec table: " + "; ".join(problems)
+
+
+def test_the_architecture_check_sees_a_missing_section_and_a_missing_file():
+    spec = SPEC.read_text() + "\n### 12.1 A new part\n"
+    text = ARCHITECTURE.read_text().replace(
+        "`tuckercodec/format/qmat.py`", "`tuckercodec/format/qmat_gone.py`"
+    )
+    assert _architecture_problems(spec, text) == [
+        "section 12.1 is not in the table",
+        "section 6.3: tuckercodec/format/qmat_gone.py does not exist",
+    ]
+
+
+# ------------------------------------------------------------------------------------------
 # one error contract: every rule of §11 raised from one place, with the class §11 names
 
 
@@ -339,6 +396,17 @@ def test_no_function_is_long():
         f"{len(long)} functions longer than {LONG_FUNCTION_LINES} lines, at most "
         f"{LONG_FUNCTIONS_ALLOWED} may be: {', '.join(long)}"
     )
+
+
+def test_the_javascript_side_keeps_the_same_function_sizes():
+    """tools/js/function_sizes.mjs holds our JavaScript to the same three numbers."""
+    script = (ROOT / "tools" / "js" / "function_sizes.mjs").read_text()
+    for name, value in (
+        ("FUNCTION_LINES", FUNCTION_LINES),
+        ("LONG_FUNCTION_LINES", LONG_FUNCTION_LINES),
+        ("LONG_FUNCTIONS_ALLOWED", LONG_FUNCTIONS_ALLOWED),
+    ):
+        assert re.search(rf"^export const {name} = {value};$", script, re.M), name
 
 
 def _tool_imports() -> list[tuple[str, str]]:
