@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import UnreachableTargetError
+from ..errors import InternalError, UnreachableTargetError
 from ..format import residual, streams
 from ..format.container import parse_container
 from ..format.limits import DEFAULT_LIMITS
@@ -227,9 +227,9 @@ def verify(
     if goal is not None and goal.lossless:
         if not np.array_equal(decoded.view(np.int64), original.view(np.int64)):
             mismatch = np.argwhere(decoded.view(np.int64) != original.view(np.int64))[0]
-            raise UnreachableTargetError(
+            raise InternalError(
                 f"the lossless file does not decode to the input's bits (frame {mismatch[0]}, "
-                f"vertex {mismatch[1]}); this is a bug: please report it"
+                f"vertex {mismatch[1]})"
             )
     elif bound is not None and distance > bound:
         raise UnreachableTargetError(
@@ -369,9 +369,9 @@ def check_written(
         start, stop = layout.chunk_range(chunk)
         stored = residual.decode_chunk(payload, layout, chunk, vertices, where)
         if not np.array_equal(stored, integers[start:stop]):
-            raise UnreachableTargetError(
+            raise InternalError(
                 f"the corrections of frames {start}..{stop - 1} read back differently from what "
-                "was packed; this is a bug: please report it"
+                "was packed"
             )
 
 

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from ..analysis import Analysis, analyze
-from ..errors import UnreachableTargetError
+from ..errors import InternalError
 from ..format import residual, streams
 from ..io.streaming import FrameSource, SequenceFrames
 from ..parallel import Executor, InProcessExecutor, open_executor
@@ -202,9 +202,9 @@ class Encoder:
         if integers is not None:
             corrections.check_written(data, integers)
         if target_kg is not None and work.kg(error2) > target_kg:
-            raise UnreachableTargetError(
+            raise InternalError(
                 f"the corrected file's KG error {work.kg(error2):.6g} is above the target "
-                f"{target_kg}: this is a bug, please report it"
+                f"{target_kg}"
             )
         return self._report(
             work,
@@ -255,9 +255,9 @@ class Encoder:
         for number, integers in enumerate(fixed.integers):
             corrections.check_written(data, integers, f"{residual.SECTION_STEM}.{number}")
         if target_kg is not None and work.kg(fixed.error2) > target_kg:
-            raise UnreachableTargetError(
+            raise InternalError(
                 f"the corrected file's KG error {work.kg(fixed.error2):.6g} is above the target "
-                f"{target_kg}: this is a bug, please report it"
+                f"{target_kg}"
             )
         choice = quantized.choice
         names = sorted({domain.describe() for domain in fixed.domains})
