@@ -12,19 +12,22 @@ KG target too, only parts that meet it (a correction only moves a vertex nearer 
 the file still meets it). Where the Tucker part alone already keeps every vertex within D, with
 room for §8's tolerance, the file needs no corrections and is written as before.
 
-Everything is checked on the bytes written: :func:`verify` decodes them with the decoder and
-measures every vertex (or compares every bit) before the file is returned.
+:class:`Corrector` is the one way in, for a file encoded whole and one in segments alike.
+Everything is checked before the file is returned: every vertex of what a decoder returns is
+measured (or every bit compared, :func:`measure`), and the corrections are read back from the
+bytes (:func:`check_written`).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Iterator
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from ..analysis import analyze
 from ..errors import InternalError, UnreachableTargetError
 from ..format import residual, streams
 from ..format.container import parse_container
@@ -35,8 +38,8 @@ from ..format.residual import FLOAT32, FLOAT64, GRID, Domain
 from ..io.streaming import FrameSource
 from ..metrics import Displacement, ErrorAccumulator, max_distance
 from ..sequence import MeshSequence
-from . import search
-from .options import EncodeOptions
+from . import promises, search
+from .options import DEFAULT_TARGET_KG, EncodeOptions
 from .segmented import SegmentedWorkspace
 from .trial import Quantized
 from .whole import Ranks, WholeWorkspace
@@ -71,12 +74,6 @@ class Goal:
     @property
     def lossless(self) -> bool:
         return self.bound is None
-
-
-def goal_of(options: EncodeOptions, sequence: MeshSequence) -> Goal:
-    """The corrections ``options`` ask for on ``sequence``; ``UnreachableTargetError`` for a
-    bound below what float64 positions can resolve."""
-    return goal_of_blocks(options, [sequence.vertices])
 
 
 def lossless_domains(values: np.ndarray) -> tuple[Domain, ...]:
@@ -217,26 +214,17 @@ def worst_vertex(positions: np.ndarray, original: np.ndarray) -> tuple[float, tu
     return worst.distance, worst.at
 
 
-def verify(
-    decoded: np.ndarray, original: np.ndarray, goal: Goal | None, bound: float | None
-) -> tuple[float, tuple[int, int]]:
-    """Check decoded positions against the promise: bit for bit (lossless), or every vertex
-    within ``bound``. Returns the worst vertex's distance and (frame, vertex). A broken promise
-    is an ``UnreachableTargetError``: the file is never returned."""
-    distance, where = worst_vertex(decoded, original)
-    if goal is not None and goal.lossless:
-        if not np.array_equal(decoded.view(np.int64), original.view(np.int64)):
-            mismatch = np.argwhere(decoded.view(np.int64) != original.view(np.int64))[0]
-            raise InternalError(
-                f"the lossless file does not decode to the input's bits (frame {mismatch[0]}, "
-                f"vertex {mismatch[1]})"
-            )
-    elif bound is not None and distance > bound:
-        raise UnreachableTargetError(
-            f"vertex {where[1]} of frame {where[0]} decodes {distance:.6g} from the input, above "
-            f"the bound {bound:.6g}: float64 cannot resolve this bound on these positions"
-        )
-    return distance, where
+def measure(decoded: np.ndarray, original: np.ndarray, goal: Goal) -> Displacement:
+    """The worst vertex of ``decoded`` (a whole file's frames, or a segment's), with the
+    promise of ``goal`` checked on them: bit for bit (:func:`.promises.check_lossless`), or
+    every vertex within the bound (:func:`.promises.check_bound`). The one place either is
+    checked, for both kinds of file."""
+    worst = max_distance(original, decoded)
+    if goal.lossless:
+        promises.check_lossless(decoded, original)
+    else:
+        promises.check_bound(worst, goal.bound)
+    return worst
 
 
 __all__ = [
@@ -244,13 +232,14 @@ __all__ = [
     "LADDER",
     "TRUNCATION_SHARE",
     "Corrected",
+    "CorrectedFile",
+    "Corrector",
     "Goal",
     "check_written",
     "correct",
     "corrected_positions",
-    "goal_of",
+    "measure",
     "search_whole",
-    "verify",
     "worst_vertex",
 ]
 
@@ -378,13 +367,6 @@ def check_written(
 # -- a segmented file (§6.7): corrections per segment -------------------------------------------
 
 
-def goal_of_source(options: EncodeOptions, source: FrameSource, block_frames: int) -> Goal:
-    """:func:`goal_of` for a sequence read a range of frames at a time: one pass."""
-    starts = range(0, source.frame_count, block_frames)
-    blocks = (source.read(a, min(source.frame_count, a + block_frames)) for a in starts)
-    return goal_of_blocks(options, blocks)
-
-
 def goal_of_blocks(options: EncodeOptions, blocks: Iterable[np.ndarray]) -> Goal:
     """The goal from the frames, given a block at a time: the bounding box's diagonal (and the
     largest coordinate) for a bound, or the lossless domains that hold every block."""
@@ -464,7 +446,7 @@ def correct_segments(
         assert best is not None
         section, integers, domain = best
         decoded = corrected_positions(exact, integers, domain)
-        verify(decoded, original, goal, goal.bound)
+        measure(decoded, original, goal)
         measured.add(original, decoded, frames=range(part.segment.start, part.segment.stop))
         out.sections.append(section)
         out.integers.append(integers)
@@ -473,3 +455,113 @@ def correct_segments(
     out.worst = measured.worst
     out.error2 = float(np.sum(measured.per_frame_squared()))
     return out
+
+
+# -- the one way in: a file that keeps its promise ----------------------------------------------
+
+
+@dataclass
+class CorrectedFile:
+    """A file made with corrections, packed and checked: its Tucker part, what it measures
+    and what the report says of it."""
+
+    quantized: Quantized[Any]
+    #: the RESD section's (a whole file, ``None`` if it needs none) or each segment's RESD.s
+    sections: list[tuple[dict[str, Any], bytes]] | None
+    error2: float  # the decoded squared error, corrections applied
+    worst: Displacement  # the decoded worst vertex, corrections applied
+    bound: float | None  # the bound D asked for, as a length (``None``: lossless)
+    trials: int  # the Tucker parts tried, or the search's trials
+    domains: str | None  # the domains of the corrections, as the report names them
+    data: bytes = b""
+    sizes: dict[str, int] = field(default_factory=dict)
+
+
+#: What packs a corrected file (the encoder's, which decides the header's claims).
+Pack = Callable[[CorrectedFile], tuple[bytes, dict[str, int]]]
+
+
+class Corrector:
+    """The one way into the corrections for a bound on every vertex (``max_error``) or
+    lossless, for a file encoded whole and one in segments alike.
+
+    Made before the work (one pass over the input, ``block_frames`` at a time: the bound as a
+    length, or the lossless domains the input fits), so that a bound no file can resolve is
+    refused before the passes; :meth:`file` then makes the file on a workspace, checks each
+    promise on what it decodes to (:func:`measure`), packs it with ``pack`` and checks the
+    corrections in the bytes (:func:`check_written`).
+    """
+
+    def __init__(
+        self,
+        options: EncodeOptions,
+        frames: FrameSource | MeshSequence,
+        block_frames: int | None = None,
+    ) -> None:
+        self.options = options
+        if isinstance(frames, MeshSequence):
+            self.goal = goal_of_blocks(options, [frames.vertices])
+        else:
+            step = frames.frame_count if block_frames is None else block_frames
+            starts = range(0, frames.frame_count, step)
+            blocks = (frames.read(a, min(frames.frame_count, a + step)) for a in starts)
+            self.goal = goal_of_blocks(options, blocks)
+
+    def file(self, work: WholeWorkspace | SegmentedWorkspace, pack: Pack) -> CorrectedFile:
+        """The smallest file found that keeps the promise, packed by ``pack`` and checked."""
+        if isinstance(work, WholeWorkspace):
+            fixed, written = self._whole(work)
+        else:
+            fixed, written = self._segments(work)
+        fixed.data, fixed.sizes = pack(fixed)
+        for section_id, integers in written:
+            check_written(fixed.data, integers, section_id)
+        return fixed
+
+    def _whole(self, work: WholeWorkspace) -> tuple[CorrectedFile, list[tuple[str, np.ndarray]]]:
+        """The smallest Tucker part plus its corrections (:func:`search_whole`), on §8.1's
+        exact positions."""
+        goal, original = self.goal, work.sequence.vertices
+        chosen, trials = search_whole(work, self.options, goal)
+        u2 = work.analysis.decomposition.u2
+        final = final_section(chosen, goal, original, u2, self.options.level)
+        written: list[tuple[str, np.ndarray]] = []
+        sections = None
+        if final is not None:
+            section, integers, decoded = final
+            sections, written = [section], [(residual.SECTION_STEM, integers)]
+        else:
+            decoded = plain_positions(chosen.quantized, u2)
+        worst = measure(decoded, original, goal)
+        error2 = float(np.square(decoded - original).sum())
+        domain = chosen.domain.describe() if chosen.domain and sections else None
+        return CorrectedFile(
+            chosen.quantized, sections, error2, worst, goal.bound, trials, domain
+        ), written
+
+    def _segments(
+        self, work: SegmentedWorkspace
+    ) -> tuple[CorrectedFile, list[tuple[str, np.ndarray]]]:
+        """The Tucker part for the KG target, or for the KG error whose part made the smallest
+        file of the first segment encoded whole; then a pass that corrects every segment."""
+        options, goal = self.options, self.goal
+        if options.ranks is not None:
+            quantized, _, trials = search.encode_ranks(work, options.ranks)
+        else:
+            kg = options.target_kg
+            if kg is None:
+                first, frames = work.ranges[0], work.source
+                head = MeshSequence(frames.read(first.start, first.stop), frames.faces)
+                whole = WholeWorkspace(head, analyze(head), streams.SEARCH_LEVEL, "exact")
+                chosen, _ = search_whole(whole, options, goal)
+                kg = chosen.kg if chosen.kg is not None else DEFAULT_TARGET_KG
+            quantized, _, trials = search.search_kg(work, kg)
+        fixed = correct_segments(work, quantized, goal, options.level)
+        written = [
+            (f"{residual.SECTION_STEM}.{number}", integers)
+            for number, integers in enumerate(fixed.integers)
+        ]
+        domains = ", ".join(sorted({domain.describe() for domain in fixed.domains}))
+        return CorrectedFile(
+            quantized, fixed.sections, fixed.error2, fixed.worst, goal.bound, trials, domains
+        ), written
