@@ -191,12 +191,33 @@ def correct(
         distance, _ = worst_vertex(plain_positions, original)
         if distance <= goal.bound - tolerance(plain_positions):
             return Corrected(quantized, None, None, tucker_bytes)
-    best: Corrected | None = None
-    for domain in goal.domains:  # lossless: the smallest of the domains the values fit
-        integers = integers_for(plain_positions, original, goal, domain)
-        section = residual.encode_section(integers, domain, level)
-        if best is None or best.section is None or len(section[1]) < len(best.section[1]):
-            best = Corrected(quantized, domain, section, tucker_bytes)
+    # lossless: the smallest of the domains the values fit
+    domain, section, _ = smallest_section(plain_positions, original, goal, goal.domains, level)
+    return Corrected(quantized, domain, section, tucker_bytes)
+
+
+def smallest_section(
+    exact: np.ndarray,
+    original: np.ndarray,
+    goal: Goal,
+    domains: Iterable[Domain],
+    level: int,
+    *,
+    exponent: int = 0,
+    predict: int | None = None,
+) -> tuple[Domain, tuple[dict[str, Any], bytes], np.ndarray]:
+    """Of ``domains``, the one whose corrections from ``exact`` to ``original`` pack smallest
+    at zstd ``level`` (the first of equal sizes): the domain, its RESD section (§6.9) and its
+    integers. The one place the corrections are put in the format's terms, for sizing a part
+    and for the file, whole or in segments."""
+    best: tuple[Domain, tuple[dict[str, Any], bytes], np.ndarray] | None = None
+    for domain in domains:
+        integers = integers_for(exact, original, goal, domain)
+        section = residual.encode_section(
+            integers, domain, level, exponent=exponent, predict=predict
+        )
+        if best is None or len(section[1]) < len(best[1][1]):
+            best = (domain, section, integers)
     assert best is not None
     return best
 
@@ -329,12 +350,16 @@ def final_section(
     integers and the positions they decode to; ``None`` if the part needs none."""
     if corrected.section is None or corrected.domain is None:
         return None
-    domain = corrected.domain
     exact, exponent = exact_positions(corrected.quantized, u2)
-    integers = integers_for(exact, original, goal, domain)
     predict = int(corrected.section[0]["predict"])
-    section = residual.encode_section(
-        integers, domain, min(level, CORRECTION_LEVEL), exponent=exponent, predict=predict
+    domain, section, integers = smallest_section(
+        exact,
+        original,
+        goal,
+        (corrected.domain,),
+        min(level, CORRECTION_LEVEL),
+        exponent=exponent,
+        predict=predict,
     )
     return section, integers, corrected_positions(exact, integers, domain)
 
@@ -435,16 +460,9 @@ def correct_segments(
             u1, factors.core, factors.u3, factors.centroids, work.models[number].u2
         )
         original = work.source.read(part.segment.start, part.segment.stop)
-        best: tuple[tuple[dict[str, Any], bytes], np.ndarray, Domain] | None = None
-        for domain in goal.domains:
-            integers = integers_for(exact, original, goal, domain)
-            section = residual.encode_section(
-                integers, domain, min(level, CORRECTION_LEVEL), exponent=exponent
-            )
-            if best is None or len(section[1]) < len(best[0][1]):
-                best = (section, integers, domain)
-        assert best is not None
-        section, integers, domain = best
+        domain, section, integers = smallest_section(
+            exact, original, goal, goal.domains, min(level, CORRECTION_LEVEL), exponent=exponent
+        )
         decoded = corrected_positions(exact, integers, domain)
         measure(decoded, original, goal)
         measured.add(original, decoded, frames=range(part.segment.start, part.segment.stop))
