@@ -28,6 +28,7 @@ def test_public_surface():
             "FormatError",
             "FrameSource",
             "InputError",
+            "InternalError",
             "LimitError",
             "Limits",
             "MeshSequence",

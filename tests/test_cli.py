@@ -16,6 +16,8 @@ import pytest
 from tests.support.sequences import grid_faces, wave_sequence
 from tuckercodec import __version__
 from tuckercodec.cli import main
+from tuckercodec.encoder import corrections
+from tuckercodec.errors import InternalError
 
 
 @pytest.fixture
@@ -434,6 +436,25 @@ def test_a_target_no_file_can_meet_exits_5(wave_npz, tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.startswith("tuckercodec: target cannot be met: no file fits 0.01 bpfv")
     assert len(err.splitlines()) == 1 and not packed.exists()
+
+
+def test_a_bug_exits_70_in_one_line_asking_for_a_report(wave_npz, tmp_path, capsys, monkeypatch):
+    """An impossible state found by the encoder's own checks is tuckercodec's bug: exit 70 and
+    one line saying so, not "loosen the target", no traceback and no file."""
+
+    def read_back_wrong(*args: Any, **kwargs: Any) -> None:
+        raise InternalError("the corrections of frames 0..19 read back differently")
+
+    monkeypatch.setattr(corrections, "check_written", read_back_wrong)
+    packed = tmp_path / "bounded.tkc"
+    command = ["encode", str(wave_npz), "-o", str(packed), "--max-error", "0.001%"]
+    assert main(command) == 70
+    err = capsys.readouterr().err
+    assert err == (
+        "tuckercodec: internal error: the corrections of frames 0..19 read back differently. "
+        "This is a bug in tuckercodec: please report it\n"
+    )
+    assert not packed.exists()
 
 
 def test_a_missing_optional_package_exits_6_naming_the_extra(

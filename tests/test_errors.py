@@ -22,7 +22,7 @@ def _error_classes() -> list[type[tuckercodec.TuckerCodecError]]:
 
 def test_every_error_class_is_exported():
     classes = _error_classes()
-    assert len(classes) == 9
+    assert len(classes) == 10
     for cls in classes:
         assert cls.__name__ in tuckercodec.__all__
         assert getattr(tuckercodec, cls.__name__) is cls
@@ -37,6 +37,7 @@ def test_every_error_class_is_exported():
         (tuckercodec.ChecksumError, 3),
         (tuckercodec.UnreachableTargetError, 5),
         (tuckercodec.DependencyError, 6),
+        (tuckercodec.InternalError, 70),
     ],
 )
 def test_each_class_carries_its_exit_code(cls, code):
@@ -65,6 +66,7 @@ def test_a_format_error_names_path_field_offset_and_rule():
         tuckercodec.FormatError("bad", rule="R12-header-not-map", path="x.tkc", offset=3),
         tuckercodec.InputError("not a number", path="a.obj", line=7, frame=2),
         tuckercodec.UnreachableTargetError("no file fits 0.1 bpfv"),
+        tuckercodec.InternalError("the corrections read back differently"),
     ],
     ids=lambda error: type(error).__name__,
 )

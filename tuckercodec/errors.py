@@ -5,6 +5,9 @@ catch one class. Misuse of the API (a wrong argument type, an impossible paramet
 does not exist) raises the plain ``TypeError``/``ValueError`` as usual. The classes that describe
 a bad value (:class:`InputError`, :class:`FormatError`, :class:`UnreachableTargetError`) are also
 ``ValueError``\\ s, so that code written against generic exceptions keeps working.
+:class:`InternalError` is the one that is nobody's fault but tuckercodec's: a state the code
+checks for and holds impossible (a file that does not decode to what was measured), reported
+as a bug rather than as something the caller could change.
 
 Each class carries the exit code the command line returns for it
 (:attr:`TuckerCodecError.exit_code`).
@@ -23,6 +26,8 @@ EXIT_CORRUPT = 3  # an invalid or corrupt compressed file (FormatError)
 EXIT_BAD_INPUT = 4  # a mesh sequence that cannot be read or used (InputError)
 EXIT_UNREACHABLE = 5  # a target no file of the format can meet (UnreachableTargetError)
 EXIT_MISSING_DEPENDENCY = 6  # an optional package a feature needs is absent (DependencyError)
+# 7: `batch`, some inputs failed (cli.batch.EXIT_SOME_FAILED)
+EXIT_INTERNAL = 70  # a bug in tuckercodec (InternalError): sysexits.h's EX_SOFTWARE
 
 
 class TuckerCodecError(Exception):
@@ -71,6 +76,19 @@ class UnreachableTargetError(TuckerCodecError, ValueError):
     coarsest file needs, or an error below what the format's 32-bit integers can resolve."""
 
     exit_code = EXIT_UNREACHABLE
+
+
+class InternalError(TuckerCodecError, RuntimeError):
+    """A bug in tuckercodec: a state the code holds impossible, found by one of its own checks
+    (say, a file that would not decode to the positions the encoder measured). Nothing the
+    caller can change avoids it, so its message says so and asks for a report; no file is
+    returned. A ``RuntimeError``, never a ``ValueError``: code that retries on a bad value
+    (a search trying another step) must not swallow it."""
+
+    exit_code = EXIT_INTERNAL
+
+    def __str__(self) -> str:
+        return f"{super().__str__()}. This is a bug in tuckercodec: please report it"
 
 
 class DependencyError(TuckerCodecError, RuntimeError):

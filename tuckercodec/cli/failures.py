@@ -9,6 +9,7 @@ from ..errors import (
     DependencyError,
     FormatError,
     InputError,
+    InternalError,
     TuckerCodecError,
     UnreachableTargetError,
 )
@@ -18,6 +19,7 @@ KINDS: tuple[tuple[type[TuckerCodecError], str], ...] = (
     (InputError, "bad input: "),
     (FormatError, "invalid or corrupt file: "),
     (UnreachableTargetError, "target cannot be met: "),
+    (InternalError, "internal error: "),  # its message asks for a report
     (DependencyError, ""),  # its message names the package and the extra to install
     (TuckerCodecError, "error: "),
 )

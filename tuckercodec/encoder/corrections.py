@@ -12,24 +12,23 @@ KG target too, only parts that meet it (a correction only moves a vertex nearer 
 the file still meets it). Where the Tucker part alone already keeps every vertex within D, with
 room for §8's tolerance, the file needs no corrections and is written as before.
 
-The promise is checked before the file is returned, without the decoder: :func:`verify`
-measures every vertex (or compares every bit) of the positions the encoder computed as a decoder
-does (§8.1's exact reconstruction plus the corrections, :func:`corrected_positions`), and
-:func:`check_written` reads each correction section back from the packed bytes as a decoder
-does (§6.9) and checks that it holds those integers. §8.1 and §6.9 leave no freedom in the
-arithmetic, so every decoder then returns the positions measured.
+:class:`Corrector` is the one way in, for a file encoded whole and one in segments alike.
+Everything is checked before the file is returned: every vertex of what a decoder returns is
+measured (or every bit compared, :func:`measure`), and the corrections are read back from the
+bytes (:func:`check_written`).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Iterator
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from ..errors import UnreachableTargetError
+from ..decomposition.analysis import analyze
+from ..errors import InternalError, UnreachableTargetError
 from ..format import residual, streams
 from ..format.container import parse_container
 from ..format.limits import DEFAULT_LIMITS
@@ -39,8 +38,8 @@ from ..format.residual import FLOAT32, FLOAT64, GRID, Domain
 from ..measures.distortion import Displacement, ErrorAccumulator, max_distance
 from ..model.sequence import MeshSequence
 from ..model.sources import FrameSource
-from . import search
-from .options import EncodeOptions
+from . import promises, search
+from .options import DEFAULT_TARGET_KG, EncodeOptions
 from .segmented import SegmentedWorkspace
 from .trial import Quantized
 from .whole import Ranks, WholeWorkspace
@@ -76,12 +75,6 @@ class Goal:
     @property
     def lossless(self) -> bool:
         return self.bound is None
-
-
-def goal_of(options: EncodeOptions, sequence: MeshSequence) -> Goal:
-    """The corrections ``options`` ask for on ``sequence``; ``UnreachableTargetError`` for a
-    bound below what float64 positions can resolve."""
-    return goal_of_blocks(options, [sequence.vertices])
 
 
 def lossless_domains(values: np.ndarray) -> tuple[Domain, ...]:
@@ -200,12 +193,33 @@ def correct(
         distance, _ = worst_vertex(plain_positions, original)
         if distance <= goal.bound - tolerance(plain_positions):
             return Corrected(quantized, None, None, tucker_bytes)
-    best: Corrected | None = None
-    for domain in goal.domains:  # lossless: the smallest of the domains the values fit
-        integers = integers_for(plain_positions, original, goal, domain)
-        section = residual.encode_section(integers, domain, level)
-        if best is None or best.section is None or len(section[1]) < len(best.section[1]):
-            best = Corrected(quantized, domain, section, tucker_bytes)
+    # lossless: the smallest of the domains the values fit
+    domain, section, _ = smallest_section(plain_positions, original, goal, goal.domains, level)
+    return Corrected(quantized, domain, section, tucker_bytes)
+
+
+def smallest_section(
+    exact: np.ndarray,
+    original: np.ndarray,
+    goal: Goal,
+    domains: Iterable[Domain],
+    level: int,
+    *,
+    exponent: int = 0,
+    predict: int | None = None,
+) -> tuple[Domain, tuple[dict[str, Any], bytes], np.ndarray]:
+    """Of ``domains``, the one whose corrections from ``exact`` to ``original`` pack smallest
+    at zstd ``level`` (the first of equal sizes): the domain, its RESD section (§6.9) and its
+    integers. The one place the corrections are put in the format's terms, for sizing a part
+    and for the file, whole or in segments."""
+    best: tuple[Domain, tuple[dict[str, Any], bytes], np.ndarray] | None = None
+    for domain in domains:
+        integers = integers_for(exact, original, goal, domain)
+        section = residual.encode_section(
+            integers, domain, level, exponent=exponent, predict=predict
+        )
+        if best is None or len(section[1]) < len(best[1][1]):
+            best = (domain, section, integers)
     assert best is not None
     return best
 
@@ -224,28 +238,17 @@ def worst_vertex(positions: np.ndarray, original: np.ndarray) -> tuple[float, tu
     return worst.distance, worst.at
 
 
-def verify(
-    decoded: np.ndarray, original: np.ndarray, goal: Goal | None, bound: float | None
-) -> tuple[float, tuple[int, int]]:
-    """Check positions against the promise: bit for bit (lossless), or every vertex within
-    ``bound``. ``decoded`` is what the encoder computed a decoder returns (§8.1 plus the
-    corrections), not a decode of the packed bytes: :func:`check_written` checks those.
-    Returns the worst vertex's distance and (frame, vertex). A broken promise is an
-    ``UnreachableTargetError``: the file is never returned."""
-    distance, where = worst_vertex(decoded, original)
-    if goal is not None and goal.lossless:
-        if not np.array_equal(decoded.view(np.int64), original.view(np.int64)):
-            mismatch = np.argwhere(decoded.view(np.int64) != original.view(np.int64))[0]
-            raise UnreachableTargetError(
-                f"the lossless file does not decode to the input's bits (frame {mismatch[0]}, "
-                f"vertex {mismatch[1]}); this is a bug: please report it"
-            )
-    elif bound is not None and distance > bound:
-        raise UnreachableTargetError(
-            f"vertex {where[1]} of frame {where[0]} decodes {distance:.6g} from the input, above "
-            f"the bound {bound:.6g}: float64 cannot resolve this bound on these positions"
-        )
-    return distance, where
+def measure(decoded: np.ndarray, original: np.ndarray, goal: Goal) -> Displacement:
+    """The worst vertex of ``decoded`` (a whole file's frames, or a segment's), with the
+    promise of ``goal`` checked on them: bit for bit (:func:`.promises.check_lossless`), or
+    every vertex within the bound (:func:`.promises.check_bound`). The one place either is
+    checked, for both kinds of file."""
+    worst = max_distance(original, decoded)
+    if goal.lossless:
+        promises.check_lossless(decoded, original)
+    else:
+        promises.check_bound(worst, goal.bound)
+    return worst
 
 
 __all__ = [
@@ -253,13 +256,14 @@ __all__ = [
     "LADDER",
     "TRUNCATION_SHARE",
     "Corrected",
+    "CorrectedFile",
+    "Corrector",
     "Goal",
     "check_written",
     "correct",
     "corrected_positions",
-    "goal_of",
+    "measure",
     "search_whole",
-    "verify",
     "worst_vertex",
 ]
 
@@ -349,12 +353,16 @@ def final_section(
     integers and the positions they decode to; ``None`` if the part needs none."""
     if corrected.section is None or corrected.domain is None:
         return None
-    domain = corrected.domain
     exact, exponent = exact_positions(corrected.quantized, u2)
-    integers = integers_for(exact, original, goal, domain)
     predict = int(corrected.section[0]["predict"])
-    section = residual.encode_section(
-        integers, domain, min(level, CORRECTION_LEVEL), exponent=exponent, predict=predict
+    domain, section, integers = smallest_section(
+        exact,
+        original,
+        goal,
+        (corrected.domain,),
+        min(level, CORRECTION_LEVEL),
+        exponent=exponent,
+        predict=predict,
     )
     return section, integers, corrected_positions(exact, integers, domain)
 
@@ -378,20 +386,13 @@ def check_written(
         start, stop = layout.chunk_range(chunk)
         stored = residual.decode_chunk(payload, layout, chunk, vertices, where)
         if not np.array_equal(stored, integers[start:stop]):
-            raise UnreachableTargetError(
+            raise InternalError(
                 f"the corrections of frames {start}..{stop - 1} read back differently from what "
-                "was packed; this is a bug: please report it"
+                "was packed"
             )
 
 
 # -- a segmented file (§6.7): corrections per segment -------------------------------------------
-
-
-def goal_of_source(options: EncodeOptions, source: FrameSource, block_frames: int) -> Goal:
-    """:func:`goal_of` for a sequence read a range of frames at a time: one pass."""
-    starts = range(0, source.frame_count, block_frames)
-    blocks = (source.read(a, min(source.frame_count, a + block_frames)) for a in starts)
-    return goal_of_blocks(options, blocks)
 
 
 def goal_of_blocks(options: EncodeOptions, blocks: Iterable[np.ndarray]) -> Goal:
@@ -462,18 +463,11 @@ def correct_segments(
             u1, factors.core, factors.u3, factors.centroids, work.models[number].u2
         )
         original = work.source.read(part.segment.start, part.segment.stop)
-        best: tuple[tuple[dict[str, Any], bytes], np.ndarray, Domain] | None = None
-        for domain in goal.domains:
-            integers = integers_for(exact, original, goal, domain)
-            section = residual.encode_section(
-                integers, domain, min(level, CORRECTION_LEVEL), exponent=exponent
-            )
-            if best is None or len(section[1]) < len(best[0][1]):
-                best = (section, integers, domain)
-        assert best is not None
-        section, integers, domain = best
+        domain, section, integers = smallest_section(
+            exact, original, goal, goal.domains, min(level, CORRECTION_LEVEL), exponent=exponent
+        )
         decoded = corrected_positions(exact, integers, domain)
-        verify(decoded, original, goal, goal.bound)
+        measure(decoded, original, goal)
         measured.add(original, decoded, frames=range(part.segment.start, part.segment.stop))
         out.sections.append(section)
         out.integers.append(integers)
@@ -482,3 +476,113 @@ def correct_segments(
     out.worst = measured.worst
     out.error2 = float(np.sum(measured.per_frame_squared()))
     return out
+
+
+# -- the one way in: a file that keeps its promise ----------------------------------------------
+
+
+@dataclass
+class CorrectedFile:
+    """A file made with corrections, packed and checked: its Tucker part, what it measures
+    and what the report says of it."""
+
+    quantized: Quantized[Any]
+    #: the RESD section's (a whole file, ``None`` if it needs none) or each segment's RESD.s
+    sections: list[tuple[dict[str, Any], bytes]] | None
+    error2: float  # the decoded squared error, corrections applied
+    worst: Displacement  # the decoded worst vertex, corrections applied
+    bound: float | None  # the bound D asked for, as a length (``None``: lossless)
+    trials: int  # the Tucker parts tried, or the search's trials
+    domains: str | None  # the domains of the corrections, as the report names them
+    data: bytes = b""
+    sizes: dict[str, int] = field(default_factory=dict)
+
+
+#: What packs a corrected file (the encoder's, which decides the header's claims).
+Pack = Callable[[CorrectedFile], tuple[bytes, dict[str, int]]]
+
+
+class Corrector:
+    """The one way into the corrections for a bound on every vertex (``max_error``) or
+    lossless, for a file encoded whole and one in segments alike.
+
+    Made before the work (one pass over the input, ``block_frames`` at a time: the bound as a
+    length, or the lossless domains the input fits), so that a bound no file can resolve is
+    refused before the passes; :meth:`file` then makes the file on a workspace, checks each
+    promise on what it decodes to (:func:`measure`), packs it with ``pack`` and checks the
+    corrections in the bytes (:func:`check_written`).
+    """
+
+    def __init__(
+        self,
+        options: EncodeOptions,
+        frames: FrameSource | MeshSequence,
+        block_frames: int | None = None,
+    ) -> None:
+        self.options = options
+        if isinstance(frames, MeshSequence):
+            self.goal = goal_of_blocks(options, [frames.vertices])
+        else:
+            step = frames.frame_count if block_frames is None else block_frames
+            starts = range(0, frames.frame_count, step)
+            blocks = (frames.read(a, min(frames.frame_count, a + step)) for a in starts)
+            self.goal = goal_of_blocks(options, blocks)
+
+    def file(self, work: WholeWorkspace | SegmentedWorkspace, pack: Pack) -> CorrectedFile:
+        """The smallest file found that keeps the promise, packed by ``pack`` and checked."""
+        if isinstance(work, WholeWorkspace):
+            fixed, written = self._whole(work)
+        else:
+            fixed, written = self._segments(work)
+        fixed.data, fixed.sizes = pack(fixed)
+        for section_id, integers in written:
+            check_written(fixed.data, integers, section_id)
+        return fixed
+
+    def _whole(self, work: WholeWorkspace) -> tuple[CorrectedFile, list[tuple[str, np.ndarray]]]:
+        """The smallest Tucker part plus its corrections (:func:`search_whole`), on §8.1's
+        exact positions."""
+        goal, original = self.goal, work.sequence.vertices
+        chosen, trials = search_whole(work, self.options, goal)
+        u2 = work.analysis.decomposition.u2
+        final = final_section(chosen, goal, original, u2, self.options.level)
+        written: list[tuple[str, np.ndarray]] = []
+        sections = None
+        if final is not None:
+            section, integers, decoded = final
+            sections, written = [section], [(residual.SECTION_STEM, integers)]
+        else:
+            decoded = plain_positions(chosen.quantized, u2)
+        worst = measure(decoded, original, goal)
+        error2 = float(np.square(decoded - original).sum())
+        domain = chosen.domain.describe() if chosen.domain and sections else None
+        return CorrectedFile(
+            chosen.quantized, sections, error2, worst, goal.bound, trials, domain
+        ), written
+
+    def _segments(
+        self, work: SegmentedWorkspace
+    ) -> tuple[CorrectedFile, list[tuple[str, np.ndarray]]]:
+        """The Tucker part for the KG target, or for the KG error whose part made the smallest
+        file of the first segment encoded whole; then a pass that corrects every segment."""
+        options, goal = self.options, self.goal
+        if options.ranks is not None:
+            quantized, _, trials = search.encode_ranks(work, options.ranks)
+        else:
+            kg = options.target_kg
+            if kg is None:
+                first, frames = work.ranges[0], work.source
+                head = MeshSequence(frames.read(first.start, first.stop), frames.faces)
+                whole = WholeWorkspace(head, analyze(head), streams.SEARCH_LEVEL, "exact")
+                chosen, _ = search_whole(whole, options, goal)
+                kg = chosen.kg if chosen.kg is not None else DEFAULT_TARGET_KG
+            quantized, _, trials = search.search_kg(work, kg)
+        fixed = correct_segments(work, quantized, goal, options.level)
+        written = [
+            (f"{residual.SECTION_STEM}.{number}", integers)
+            for number, integers in enumerate(fixed.integers)
+        ]
+        domains = ", ".join(sorted({domain.describe() for domain in fixed.domains}))
+        return CorrectedFile(
+            quantized, fixed.sections, fixed.error2, fixed.worst, goal.bound, trials, domains
+        ), written

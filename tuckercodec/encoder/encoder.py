@@ -16,17 +16,13 @@ from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
-import numpy as np
-
 from ..decomposition.analysis import Analysis, analyze
-from ..errors import UnreachableTargetError
-from ..format import residual, streams
 from ..model.sequence import MeshSequence
 from ..model.sources import FrameSource, SequenceFrames
 from ..system.memory import memory_allowed
 from ..system.parallel import Executor, InProcessExecutor, open_executor
-from . import corrections, search
-from .options import DEFAULT_TARGET_KG, EncodeOptions
+from . import corrections, promises, search
+from .options import EncodeOptions
 from .plan import needs_segments, plan_segments
 from .results import EncodeReport, EncodeResult
 from .segmented import SegmentedWorkspace, SharedBasis
@@ -114,30 +110,17 @@ class Encoder:
             segment_frames=options.segment_frames,
             max_memory=memory,
         )
-        goal = None
+        corrector = None
         if options.corrections:  # a pass for the bound's length or the lossless domains
-            goal = corrections.goal_of_source(options, frames, plan.block_frames)
+            corrector = corrections.Corrector(options, frames, plan.block_frames)
         with self._executor() as executor:
             work = SegmentedWorkspace(
                 frames, plan, options.basis, executor, options.level, self.progress, shared_basis
             )
-            if goal is not None:
-                return self._segments_corrected(work, frames, goal, start)
+            if corrector is not None:
+                return self._corrected(work, corrector, start)
             quantized, error2, trials = self._search(work)
-        choice = quantized.choice
-        largest_i = choice.shared or max(i for i, _ in choice.ranks)
-        return self._result(
-            work,
-            quantized,
-            error2,
-            start,
-            ranks=(largest_i, max(k for _, k in choice.ranks)),
-            truncation2=choice.truncation2,
-            select="exact",
-            trials=trials + work.passes,
-            segments=len(work.models),
-            basis=options.basis,
-        )
+        return self._result(work, quantized, error2, start, trials)
 
     def _encode_whole(self, sequence: MeshSequence, analysis: Analysis | None) -> EncodeResult:
         """One decomposition of the sequence in memory (format 1.0)."""
@@ -151,7 +134,7 @@ class Encoder:
             coded = connectivity.result()
         work = WholeWorkspace(sequence, analysis, options.level, options.select, coded)
         if options.corrections:
-            return self._encode_corrected(work, start)
+            return self._corrected(work, corrections.Corrector(options, sequence), start)
         quantized, error2, trials = self._search(work)
         extra: dict[str, Any] = {}
         if options.mode == "kg":  # what each way of choosing ranks alone would pick
@@ -159,129 +142,34 @@ class Encoder:
             bound = analysis.cheapest(options.kg_target, select="bound")
             extra = {"exact_ranks": (exact.i, exact.k), "bound_ranks": (bound.i, bound.k)}
         extra["max_distance"], extra["max_distance_at"] = work.worst_vertex(quantized)
-        return self._result(
-            work,
-            quantized,
-            error2,
-            start,
-            ranks=quantized.choice,
-            truncation2=work.truncation_error2(quantized.choice),
-            select=options.select,
-            trials=trials,
-            **extra,
-        )
+        return self._result(work, quantized, error2, start, trials, **extra)
 
-    def _encode_corrected(self, work: WholeWorkspace, start: float) -> EncodeResult:
-        """A bound on every vertex, or lossless (format 1.3 where corrections are needed):
-        the smallest Tucker part plus corrections (:mod:`.corrections`), packed, then decoded
-        and checked before it is returned."""
-        options = self.options
-        sequence = work.sequence
-        goal = corrections.goal_of(options, sequence)
-        chosen, trials = corrections.search_whole(work, options, goal)
-        u2 = work.analysis.decomposition.u2
-        final = corrections.final_section(chosen, goal, sequence.vertices, u2, options.level)
-        quantized = chosen.quantized
-        target_kg = options.target_kg if options.mode == "kg" else None
-        section, integers = None, None
-        if final is not None:
-            section, integers, decoded = final
-        else:
-            decoded = corrections.plain_positions(quantized, u2)
-        distance, where = corrections.worst_vertex(decoded, sequence.vertices)
-        difference = decoded - sequence.vertices
-        error2 = float(np.square(difference).sum())
-        claims = {
-            "max_distance": distance,
-            "max_distance_at": [where[0], where[1]],
-            "target_max_distance": goal.bound,
-            "lossless": goal.lossless,
-        }
-        data, sizes = work.pack(quantized, error2, target_kg, correction=section, claims=claims)
-        # the promise, checked on the positions measured and on the bytes returned
-        corrections.verify(decoded, sequence.vertices, goal if section else None, goal.bound)
-        if integers is not None:
-            corrections.check_written(data, integers)
-        if target_kg is not None and work.kg(error2) > target_kg:
-            raise UnreachableTargetError(
-                f"the corrected file's KG error {work.kg(error2):.6g} is above the target "
-                f"{target_kg}: this is a bug, please report it"
-            )
-        return self._report(
-            work,
-            data,
-            sizes,
-            start,
-            select=options.select,
-            ranks=quantized.choice,
-            kg=work.kg(error2),
-            truncation_kg=work.kg(work.truncation_error2(quantized.choice)),
-            trials=trials,
-            max_distance=distance,
-            max_distance_at=where,
-            max_error=goal.bound,
-            lossless=goal.lossless,
-            corrections=chosen.domain.describe() if chosen.domain and section else None,
-        )
-
-    def _segments_corrected(
-        self, work: SegmentedWorkspace, frames: FrameSource, goal: corrections.Goal, start: float
+    def _corrected(
+        self,
+        work: WholeWorkspace | SegmentedWorkspace,
+        corrector: corrections.Corrector,
+        start: float,
     ) -> EncodeResult:
-        """A segmented file with corrections (format 1.3): the Tucker part for the KG target,
-        or for the KG error whose part made the smallest file of the first segment encoded
-        whole; then a pass that corrects every segment, measured and read back."""
-        options = self.options
-        if options.ranks is not None:
-            quantized, _, trials = search.encode_ranks(work, options.ranks)
-        else:
-            kg = options.target_kg
-            if kg is None:
-                first = work.ranges[0]
-                head = MeshSequence(frames.read(first.start, first.stop), frames.faces)
-                whole = WholeWorkspace(head, analyze(head), streams.SEARCH_LEVEL, "exact")
-                chosen, _ = corrections.search_whole(whole, options, goal)
-                kg = chosen.kg if chosen.kg is not None else DEFAULT_TARGET_KG
-            quantized, _, trials = search.search_kg(work, kg)
-        fixed = corrections.correct_segments(work, quantized, goal, options.level)
-        claims = {
-            "max_distance": fixed.worst.distance,
-            "max_distance_at": list(fixed.worst.at),
-            "target_max_distance": goal.bound,
-            "lossless": goal.lossless,
-        }
-        target_kg = options.target_kg if options.mode == "kg" else None
-        data, sizes = work.pack(
-            quantized, fixed.error2, target_kg, corrections=fixed.sections, claims=claims
-        )
-        for number, integers in enumerate(fixed.integers):
-            corrections.check_written(data, integers, f"{residual.SECTION_STEM}.{number}")
-        if target_kg is not None and work.kg(fixed.error2) > target_kg:
-            raise UnreachableTargetError(
-                f"the corrected file's KG error {work.kg(fixed.error2):.6g} is above the target "
-                f"{target_kg}: this is a bug, please report it"
-            )
-        choice = quantized.choice
-        names = sorted({domain.describe() for domain in fixed.domains})
+        """A bound on every vertex, or lossless (format 1.3 where corrections are needed), the
+        same for either workspace: the file the corrections make, check and read back
+        (:class:`.corrections.Corrector`), packed with the header's claims (:meth:`_pack`)."""
+
+        def pack(fixed: corrections.CorrectedFile) -> tuple[bytes, dict[str, int]]:
+            return self._pack(work, fixed.quantized, fixed.error2, fixed)
+
+        fixed = corrector.file(work, pack)
         return self._report(
             work,
-            data,
-            sizes,
+            fixed.data,
+            fixed.sizes,
             start,
-            select="exact",
-            ranks=(
-                choice.shared or max(i for i, _ in choice.ranks),
-                max(k for _, k in choice.ranks),
-            ),
             kg=work.kg(fixed.error2),
-            truncation_kg=work.kg(choice.truncation2),
-            trials=trials + work.passes,
-            segments=len(work.models),
-            basis=options.basis,
+            **self._shape(work, fixed.quantized, fixed.trials),
             max_distance=fixed.worst.distance,
             max_distance_at=fixed.worst.at,
-            max_error=goal.bound,
-            lossless=goal.lossless,
-            corrections=", ".join(names),
+            max_error=fixed.bound,
+            lossless=self.options.lossless,
+            corrections=fixed.domains,
         )
 
     def _report(
@@ -318,30 +206,70 @@ class Encoder:
 
     def _result(
         self,
-        work: Workspace[Any],
+        work: WholeWorkspace | SegmentedWorkspace,
         quantized: Quantized[Any],
         error2: float,
         start: float,
-        *,
-        ranks: tuple[int, int],
-        truncation2: float,
+        trials: int,
         **report: Any,
     ) -> EncodeResult:
-        """Pack the file (its header states the KG target of an error target only) and report
-        on it; ``report``: the fields only one kind of workspace knows."""
-        options = self.options
-        header_target = options.kg_target if options.mode == "kg" else None
-        data, sizes = work.pack(quantized, error2, header_target)
+        """Pack a file without corrections and report on it; ``report``: the fields only a
+        whole encode knows."""
+        data, sizes = self._pack(work, quantized, error2)
         return self._report(
             work,
             data,
             sizes,
             start,
-            ranks=ranks,
             kg=work.kg(error2),
-            truncation_kg=work.kg(truncation2),
+            **self._shape(work, quantized, trials),
             **report,
         )
+
+    def _pack(
+        self,
+        work: WholeWorkspace | SegmentedWorkspace,
+        quantized: Quantized[Any],
+        error2: float,
+        fixed: corrections.CorrectedFile | None = None,
+    ) -> tuple[bytes, dict[str, int]]:
+        """The file's bytes and section sizes, for every kind of file: what its header claims
+        (the KG target, and the worst vertex, bound and lossless claim of a file made with
+        corrections) decided by :func:`.promises.header_claims`, which checks the KG promise."""
+        if fixed is None:
+            stated = promises.header_claims(self.options, work.kg(error2))
+            return work.pack(quantized, error2, stated.target_kg, claims=stated.error)
+        stated = promises.header_claims(self.options, work.kg(error2), fixed.worst, fixed.bound)
+        return work.pack(
+            quantized, error2, stated.target_kg, corrections=fixed.sections, claims=stated.error
+        )
+
+    def _shape(
+        self, work: WholeWorkspace | SegmentedWorkspace, quantized: Quantized[Any], trials: int
+    ) -> dict[str, Any]:
+        """The report's fields that depend on the kind of file: the ranks (a segmented file's:
+        the shared basis's columns or the largest i, and the largest k), the truncation's KG
+        error, how ranks were chosen, the trials (a segmented encode's passes counted) and the
+        segments."""
+        choice = quantized.choice
+        if isinstance(work, WholeWorkspace):
+            return {
+                "ranks": choice,
+                "truncation_kg": work.kg(work.truncation_error2(choice)),
+                "select": self.options.select,
+                "trials": trials,
+            }
+        return {
+            "ranks": (
+                choice.shared or max(i for i, _ in choice.ranks),
+                max(k for _, k in choice.ranks),
+            ),
+            "truncation_kg": work.kg(choice.truncation2),
+            "select": "exact",
+            "trials": trials + work.passes,
+            "segments": len(work.models),
+            "basis": self.options.basis,
+        }
 
     def _say(self, line: str) -> None:
         if self.progress is not None:

@@ -373,12 +373,13 @@ class WholeWorkspace:
         target_kg: float | None,
         level: int | None = None,
         *,
-        correction: tuple[dict[str, Any], bytes] | None = None,
+        corrections: list[tuple[dict[str, Any], bytes]] | None = None,
         claims: dict[str, Any] | None = None,
     ) -> tuple[bytes, dict[str, int]]:
         """The file's bytes, and the size of each section (zstd ``level``: the final one unless
-        given). ``correction``: a RESD section's parameters and payload (format 1.3, §6.9);
-        ``claims``: more keys of the header's ``error`` map."""
+        given). ``corrections``: the RESD section's parameters and payload (one; format 1.3,
+        §6.9), as a segmented file's are given; ``claims``: more keys of the header's ``error``
+        map (:func:`.promises.header_claims`)."""
         header = header_map(
             vertices=self.vertex_count,
             frames=self.frame_count,
@@ -394,7 +395,8 @@ class WholeWorkspace:
         )
         packed = self.sections(quantized, self.level if level is None else level)
         flags, minor = 0, FORMAT_MINOR
-        if correction is not None:
+        if corrections is not None:
+            (correction,) = corrections
             entry = {"id": residual.SECTION_STEM, "critical": True, "codec": residual.RESIDUAL}
             at = next((n for n, (e, _) in enumerate(packed) if e["id"] == "NAME"), len(packed))
             packed.insert(at, ({**entry, **correction[0]}, correction[1]))
