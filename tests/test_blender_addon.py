@@ -16,6 +16,7 @@ import importlib.util
 import json
 import os
 import re
+import shutil
 import subprocess
 import sys
 import tomllib
@@ -133,6 +134,49 @@ def test_the_own_wheel_holds_the_package_and_a_record_that_checks(tmp_path):
     ):
         assert needed in names
     assert not any("__pycache__" in name or name.endswith(".pyc") for name in names)
+
+
+def test_the_own_wheel_takes_only_declared_files_never_hidden_ones_or_links(tmp_path):
+    """A developer's package folder holds more than the package: a ``.env``, editor and
+    tool files, links to files elsewhere. The wheel takes the Python modules and pyproject's
+    package data only, no hidden file or folder, and follows no symbolic link."""
+    source = tmp_path / "src" / "tuckercodec"
+    shutil.copytree(
+        Path(tuckercodec.__file__).parent,
+        source,
+        symlinks=True,
+        ignore=shutil.ignore_patterns("__pycache__"),
+    )
+    elsewhere = tmp_path / "elsewhere"
+    (elsewhere / "pkg").mkdir(parents=True)
+    (elsewhere / "secret.py").write_text("TOKEN = 'tkc-test-secret'\n")
+    (elsewhere / "pkg" / "__init__.py").write_text("TOKEN = 'tkc-test-secret'\n")
+    (source / ".env").write_text("API_TOKEN=tkc-test-secret\n")
+    (source / "blender" / ".env").write_text("API_TOKEN=tkc-test-secret\n")
+    (source / ".idea").mkdir()
+    (source / ".idea" / "workspace.py").write_text("")
+    (source / ".hidden.py").write_text("")
+    (source / "web" / "vendor" / "three" / ".DS_Store").write_bytes(b"\0")
+    (source / "notes.txt").write_text("not package data")  # no pattern declares it
+    (source / "linked.py").symlink_to(elsewhere / "secret.py")
+    (source / "linked_package").symlink_to(elsewhere / "pkg", target_is_directory=True)
+    (source / "web" / "vendor" / "three" / "linked.js").symlink_to(elsewhere / "secret.py")
+    wheel = build_own_wheel(tmp_path, root=source)
+    with zipfile.ZipFile(wheel) as archive:
+        names = set(archive.namelist())
+        shipped = b"".join(archive.read(name) for name in names)
+    assert "tkc-test-secret" not in shipped.decode("latin-1")
+    for stray in (".env", ".idea", ".hidden.py", ".DS_Store", "notes.txt", "linked"):
+        assert not any(stray in name for name in names), (stray, sorted(names))
+    for needed in ("tuckercodec/decoder.py", "tuckercodec/py.typed", "tuckercodec/data/"):
+        assert any(name.startswith(needed) for name in names), needed
+    assert "tuckercodec/web/vendor/three/LICENSE" in names
+
+
+def test_the_wheels_patterns_are_pyprojects_package_data():
+    config = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())
+    declared = config["tool"]["setuptools"]["package-data"]["tuckercodec"]
+    assert tuple(declared) == package.PACKAGE_DATA
 
 
 def test_the_command_refuses_an_existing_zip_before_any_work(tmp_path, capsys):
