@@ -28,6 +28,7 @@ import numpy as np
 import pytest
 
 import tuckercodec
+from tests.support.inputs import measure
 from tuckercodec import (
     Decoder,
     DependencyError,
@@ -38,15 +39,23 @@ from tuckercodec import (
 )
 from tuckercodec.blender import package
 from tuckercodec.blender.meshes import (
+    BAKE_FRAMES,
+    BLENDER_LIMITS,
+    MAX_FRAME,
     ExportFrames,
+    bake_pc2,
+    bake_span,
     file_frame,
     placement,
     scene_frames,
+    scene_range,
     scene_rate,
 )
 from tuckercodec.blender.package import ADDON_ID, build_own_wheel, manifest
 from tuckercodec.cli import main
+from tuckercodec.format.limits import DEFAULT_LIMITS
 from tuckercodec.io.common.polygons import faces_from_polygons, polygons_from_faces
+from tuckercodec.io.pointcache.pc2 import HEADER
 
 SESSION = Path(__file__).parent / "support" / "blender_session.py"
 NO_BPY = (
@@ -96,6 +105,72 @@ def test_an_export_refuses_a_change_of_topology_naming_the_frame_and_object():
         frames.add(4, np.zeros((4, 3)), faces)
     sequence = frames.sequence(25.0)
     assert sequence.vertices.shape == (2, 3, 3) and sequence.frame_rate == 25.0
+
+
+def spread_file(spans: float = 199_999.0, first: float = 0.0) -> bytes:
+    """A small file whose 24 time codes spread over ``spans`` scene frames from ``first``: 24
+    frames of 81 vertices (a 9 x 9 grid) that a bake holds over every scene frame between."""
+    rows = np.arange(81)
+    grid = np.stack([rows % 9, rows // 9, np.zeros(81)], axis=1).astype(np.float64)
+    frames = np.stack([grid + np.array([0, 0, 0.1 * f]) for f in range(24)])
+    faces = np.array(
+        [[r * 9 + c, r * 9 + c + 1, r * 9 + c + 10] for r in range(8) for c in range(8)]
+    )
+    codes = first + np.round(np.linspace(0.0, spans, 24))
+    return tuckercodec.encode(MeshSequence(frames, faces, time_codes=codes), target_kg=0.5)
+
+
+def test_a_bake_is_bounded_and_holds_one_frame_in_memory_whatever_its_span(tmp_path):
+    """24 time codes spread over 200,000 scene frames: a bake is refused beyond Max Bake
+    Frames, naming the span and the limit; asked for, it writes the whole cache holding one
+    frame at a time (decoding every frame shown first took 1.08 GB for a 194 MB cache)."""
+    (tmp_path / "spread.tkc").write_bytes(spread_file())
+    decoder = Decoder(tmp_path / "spread.tkc", limits=BLENDER_LIMITS)
+    cache = tmp_path / "spread.pc2"
+    with pytest.raises(
+        InputError, match=f"24 frames span 200000 scene frames, beyond the {BAKE_FRAMES}"
+    ):
+        bake_pc2(decoder, cache, 1)
+    assert not cache.exists()
+    assert bake_span(decoder, 1, 200_000) == 200_000
+    error, _, peak = measure(lambda: bake_pc2(decoder, cache, 1, max_frames=200_000))
+    assert error is None, error
+    written = cache.stat().st_size
+    assert written == HEADER.size + 200_000 * 81 * 12
+    assert peak < 2_000_000, peak  # a frame and a chunk of frame numbers, not 194 MB
+    baked = tuckercodec.load_sequence(cache, progress=False)
+    codes = decoder.info.time_codes
+    for scene in (0, 1, 8695, 8696, 199_999):  # 8696: the second time code, then held
+        expected = decoder.frame(file_frame(1 + scene, 1, 24, codes)).astype(np.float32)
+        np.testing.assert_array_equal(baked.vertices[scene].astype(np.float32), expected)
+    with pytest.raises(FileExistsError):
+        bake_pc2(decoder, cache, 1, max_frames=200_000)
+
+
+def test_frames_beyond_blenders_are_refused_before_an_import_makes_anything():
+    """A first time code of 2**31 overflowed the object's 32-bit property half-way through
+    an import; every end is checked against Blender's frames first."""
+    assert scene_range(1.0, 60, None) == (1, 60)
+    assert scene_range(1001.0, 12, [1001.0, 1013.0]) == (1001, 1013)
+    assert scene_range(-MAX_FRAME, 1, None) == (-MAX_FRAME, -MAX_FRAME)
+    for first, count, codes in [
+        (2.0**31, 2, [2.0**31, 2.0**31 + 1]),
+        (MAX_FRAME, 2, None),
+        (1.0, 3, [0.0, 1.0, 2.0 * MAX_FRAME]),
+        (float("nan"), 1, None),
+        (-float("inf"), 1, None),
+    ]:
+        with pytest.raises(InputError, match=r"beyond Blender's frames \(-1048574 to 1048574\)"):
+            scene_range(first, count, codes)
+
+
+def test_blenders_decoder_limits_are_no_looser_than_the_defaults(cloth):
+    for field in dataclasses.fields(BLENDER_LIMITS):
+        assert getattr(BLENDER_LIMITS, field.name) <= getattr(DEFAULT_LIMITS, field.name)
+    assert BLENDER_LIMITS.max_header_bytes <= 1 << 20
+    assert BLENDER_LIMITS.max_section_bytes <= 1 << 29
+    data = tuckercodec.encode(cloth, target_kg=0.5)
+    assert Decoder(data, limits=BLENDER_LIMITS).frame(59).shape == (3101, 3)
 
 
 # ------------------------------------------------------------------------------------------
@@ -260,6 +335,8 @@ def session(cloth, tmp_path_factory) -> Session:
     tkc = work / "cloth.tkc"
     tkc.write_bytes(tuckercodec.encode(dataclasses.replace(cloth, frame_rate=29.97), target_kg=0.1))
     (work / "film.tkc").write_bytes(tuckercodec.encode(_film(cloth), target_kg=0.5))
+    (work / "far.tkc").write_bytes(spread_file(23.0, first=2.0**31))
+    (work / "spread.tkc").write_bytes(spread_file())
     addon = work / "tuckercodec_blender.zip"
     assert main(["blender-addon", str(addon)]) == 0
     environment = {name: value for name, value in os.environ.items() if name != "PYTHONPATH"}
@@ -350,9 +427,27 @@ def test_a_render_plays_the_decoders_frames(session):
 
 
 @needs_bpy
-def test_a_saved_blend_plays_again_when_reopened(session):
+def test_a_saved_blend_plays_its_paths_only_when_asked(session):
+    """A path saved in a .blend is not opened when the .blend opens or its frames change: a
+    crafted .blend could name any file, decoded at the first frame change with no prompt.
+    Enable .tkc Playback opens it; a file that fails is tried once, not at every frame."""
+    report, arrays = session.report, session.arrays
     expected = Decoder(session.tkc).frame(32).astype(np.float32)
-    np.testing.assert_array_equal(session.arrays["reopened_33"], expected)
+    assert report["opened_unasked"] == []
+    assert not np.array_equal(arrays["reopened_33_unasked"], expected)  # the mesh as saved
+    np.testing.assert_array_equal(arrays["reopened_33"], expected)
+    assert "object 'stranger'" in report["enable"] and "broken.tkc" in report["enable"]
+    assert sorted(report["opened_asked"]) == ["broken.tkc", "cloth.tkc"]  # each once
+    assert "not opened until you ask" in session.stdout
+
+
+@needs_bpy
+def test_frames_beyond_blenders_and_a_bake_beyond_its_limit_are_refused_leaving_nothing(session):
+    report = session.report
+    assert "beyond Blender's frames (-1048574 to 1048574)" in report["far"]
+    assert "far.tkc" in report["far"] and report["far_objects"] == 0
+    assert f"span 200000 scene frames, beyond the {BAKE_FRAMES}" in report["spread"]
+    assert report["spread_objects"] == 0 and not report["spread_cache"]
 
 
 @needs_bpy
