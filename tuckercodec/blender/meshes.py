@@ -28,9 +28,10 @@ BAKE_FRAMES = 10_000
 _BAKE_CHUNK = 4096
 #: The decoder's limits inside Blender, for an import and for playback: what a mesh object in
 #: Blender holds and plays (8 Mi vertices, 16 Mi faces, Blender's frame count), a header of at
-#: most 1 MiB and sections of at most 512 MiB decompressed, so that a small crafted file
-#: costs Blender at most a few hundred MB before it is refused, instead of the GiBs of the
-#: defaults, which suit files of a few GiB of positions on the command line.
+#: most 1 MiB (a 16 MiB header of empty maps costs about 1.3 GiB to parse), sections of at most
+#: 512 MiB decompressed and 32 Mi factor values (256 MiB): what a small crafted file can make
+#: Blender allocate is bounded by these, a fraction of the defaults' GiBs, which suit files of
+#: a few GiB of positions on the command line.
 BLENDER_LIMITS = Limits(
     max_header_bytes=1 << 20,
     max_vertices=1 << 23,
