@@ -16,6 +16,7 @@ import importlib.util
 import json
 import os
 import re
+import shutil
 import subprocess
 import sys
 import tomllib
@@ -27,6 +28,7 @@ import numpy as np
 import pytest
 
 import tuckercodec
+from tests.support.inputs import measure
 from tuckercodec import (
     Decoder,
     DependencyError,
@@ -37,15 +39,23 @@ from tuckercodec import (
 )
 from tuckercodec.blender import package
 from tuckercodec.blender.meshes import (
+    BAKE_FRAMES,
+    BLENDER_LIMITS,
+    MAX_FRAME,
     ExportFrames,
+    bake_pc2,
+    bake_span,
     file_frame,
     placement,
     scene_frames,
+    scene_range,
     scene_rate,
 )
 from tuckercodec.blender.package import ADDON_ID, build_own_wheel, manifest
 from tuckercodec.cli import main
+from tuckercodec.format.limits import DEFAULT_LIMITS
 from tuckercodec.io.common.polygons import faces_from_polygons, polygons_from_faces
+from tuckercodec.io.pointcache.pc2 import HEADER
 
 SESSION = Path(__file__).parent / "support" / "blender_session.py"
 NO_BPY = (
@@ -97,6 +107,72 @@ def test_an_export_refuses_a_change_of_topology_naming_the_frame_and_object():
     assert sequence.vertices.shape == (2, 3, 3) and sequence.frame_rate == 25.0
 
 
+def spread_file(spans: float = 199_999.0, first: float = 0.0) -> bytes:
+    """A small file whose 24 time codes spread over ``spans`` scene frames from ``first``: 24
+    frames of 81 vertices (a 9 x 9 grid) that a bake holds over every scene frame between."""
+    rows = np.arange(81)
+    grid = np.stack([rows % 9, rows // 9, np.zeros(81)], axis=1).astype(np.float64)
+    frames = np.stack([grid + np.array([0, 0, 0.1 * f]) for f in range(24)])
+    faces = np.array(
+        [[r * 9 + c, r * 9 + c + 1, r * 9 + c + 10] for r in range(8) for c in range(8)]
+    )
+    codes = first + np.round(np.linspace(0.0, spans, 24))
+    return tuckercodec.encode(MeshSequence(frames, faces, time_codes=codes), target_kg=0.5)
+
+
+def test_a_bake_is_bounded_and_holds_one_frame_in_memory_whatever_its_span(tmp_path):
+    """24 time codes spread over 200,000 scene frames: a bake is refused beyond Max Bake
+    Frames, naming the span and the limit; asked for, it writes the whole cache holding one
+    frame at a time (decoding every frame shown first took 1.08 GB for a 194 MB cache)."""
+    (tmp_path / "spread.tkc").write_bytes(spread_file())
+    decoder = Decoder(tmp_path / "spread.tkc", limits=BLENDER_LIMITS)
+    cache = tmp_path / "spread.pc2"
+    with pytest.raises(
+        InputError, match=f"24 frames span 200000 scene frames, beyond the {BAKE_FRAMES}"
+    ):
+        bake_pc2(decoder, cache, 1)
+    assert not cache.exists()
+    assert bake_span(decoder, 1, 200_000) == 200_000
+    error, _, peak = measure(lambda: bake_pc2(decoder, cache, 1, max_frames=200_000))
+    assert error is None, error
+    written = cache.stat().st_size
+    assert written == HEADER.size + 200_000 * 81 * 12
+    assert peak < 2_000_000, peak  # a frame and a chunk of frame numbers, not 194 MB
+    baked = tuckercodec.load_sequence(cache, progress=False)
+    codes = decoder.info.time_codes
+    for scene in (0, 1, 8695, 8696, 199_999):  # 8696: the second time code, then held
+        expected = decoder.frame(file_frame(1 + scene, 1, 24, codes)).astype(np.float32)
+        np.testing.assert_array_equal(baked.vertices[scene].astype(np.float32), expected)
+    with pytest.raises(FileExistsError):
+        bake_pc2(decoder, cache, 1, max_frames=200_000)
+
+
+def test_frames_beyond_blenders_are_refused_before_an_import_makes_anything():
+    """A first time code of 2**31 overflowed the object's 32-bit property half-way through
+    an import; every end is checked against Blender's frames first."""
+    assert scene_range(1.0, 60, None) == (1, 60)
+    assert scene_range(1001.0, 12, [1001.0, 1013.0]) == (1001, 1013)
+    assert scene_range(-MAX_FRAME, 1, None) == (-MAX_FRAME, -MAX_FRAME)
+    for first, count, codes in [
+        (2.0**31, 2, [2.0**31, 2.0**31 + 1]),
+        (MAX_FRAME, 2, None),
+        (1.0, 3, [0.0, 1.0, 2.0 * MAX_FRAME]),
+        (float("nan"), 1, None),
+        (-float("inf"), 1, None),
+    ]:
+        with pytest.raises(InputError, match=r"beyond Blender's frames \(-1048574 to 1048574\)"):
+            scene_range(first, count, codes)
+
+
+def test_blenders_decoder_limits_are_no_looser_than_the_defaults(cloth):
+    for field in dataclasses.fields(BLENDER_LIMITS):
+        assert getattr(BLENDER_LIMITS, field.name) <= getattr(DEFAULT_LIMITS, field.name)
+    assert BLENDER_LIMITS.max_header_bytes <= 1 << 20
+    assert BLENDER_LIMITS.max_section_bytes <= 1 << 29
+    data = tuckercodec.encode(cloth, target_kg=0.5)
+    assert Decoder(data, limits=BLENDER_LIMITS).frame(59).shape == (3101, 3)
+
+
 # ------------------------------------------------------------------------------------------
 # the zip, without Blender
 
@@ -133,6 +209,49 @@ def test_the_own_wheel_holds_the_package_and_a_record_that_checks(tmp_path):
     ):
         assert needed in names
     assert not any("__pycache__" in name or name.endswith(".pyc") for name in names)
+
+
+def test_the_own_wheel_takes_only_declared_files_never_hidden_ones_or_links(tmp_path):
+    """A developer's package folder holds more than the package: a ``.env``, editor and
+    tool files, links to files elsewhere. The wheel takes the Python modules and pyproject's
+    package data only, no hidden file or folder, and follows no symbolic link."""
+    source = tmp_path / "src" / "tuckercodec"
+    shutil.copytree(
+        Path(tuckercodec.__file__).parent,
+        source,
+        symlinks=True,
+        ignore=shutil.ignore_patterns("__pycache__"),
+    )
+    elsewhere = tmp_path / "elsewhere"
+    (elsewhere / "pkg").mkdir(parents=True)
+    (elsewhere / "secret.py").write_text("TOKEN = 'tkc-test-secret'\n")
+    (elsewhere / "pkg" / "__init__.py").write_text("TOKEN = 'tkc-test-secret'\n")
+    (source / ".env").write_text("API_TOKEN=tkc-test-secret\n")
+    (source / "blender" / ".env").write_text("API_TOKEN=tkc-test-secret\n")
+    (source / ".idea").mkdir()
+    (source / ".idea" / "workspace.py").write_text("")
+    (source / ".hidden.py").write_text("")
+    (source / "web" / "vendor" / "three" / ".DS_Store").write_bytes(b"\0")
+    (source / "notes.txt").write_text("not package data")  # no pattern declares it
+    (source / "linked.py").symlink_to(elsewhere / "secret.py")
+    (source / "linked_package").symlink_to(elsewhere / "pkg", target_is_directory=True)
+    (source / "web" / "vendor" / "three" / "linked.js").symlink_to(elsewhere / "secret.py")
+    wheel = build_own_wheel(tmp_path, root=source)
+    with zipfile.ZipFile(wheel) as archive:
+        names = set(archive.namelist())
+        shipped = b"".join(archive.read(name) for name in names)
+    assert "tkc-test-secret" not in shipped.decode("latin-1")
+    for stray in (".env", ".idea", ".hidden.py", ".DS_Store", "notes.txt", "linked"):
+        assert not any(stray in name for name in names), (stray, sorted(names))
+    for needed in ("tuckercodec/decoder.py", "tuckercodec/py.typed", "tuckercodec/data/"):
+        assert any(name.startswith(needed) for name in names), needed
+    assert "tuckercodec/web/vendor/three/LICENSE" in names
+
+
+def test_the_wheels_patterns_are_pyprojects_package_data():
+    config = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())
+    declared = config["tool"]["setuptools"]["package-data"]["tuckercodec"]
+    assert tuple(declared) == package.PACKAGE_DATA
 
 
 def test_the_command_refuses_an_existing_zip_before_any_work(tmp_path, capsys):
@@ -216,6 +335,8 @@ def session(cloth, tmp_path_factory) -> Session:
     tkc = work / "cloth.tkc"
     tkc.write_bytes(tuckercodec.encode(dataclasses.replace(cloth, frame_rate=29.97), target_kg=0.1))
     (work / "film.tkc").write_bytes(tuckercodec.encode(_film(cloth), target_kg=0.5))
+    (work / "far.tkc").write_bytes(spread_file(23.0, first=2.0**31))
+    (work / "spread.tkc").write_bytes(spread_file())
     addon = work / "tuckercodec_blender.zip"
     assert main(["blender-addon", str(addon)]) == 0
     environment = {name: value for name, value in os.environ.items() if name != "PYTHONPATH"}
@@ -306,9 +427,27 @@ def test_a_render_plays_the_decoders_frames(session):
 
 
 @needs_bpy
-def test_a_saved_blend_plays_again_when_reopened(session):
+def test_a_saved_blend_plays_its_paths_only_when_asked(session):
+    """A path saved in a .blend is not opened when the .blend opens or its frames change: a
+    crafted .blend could name any file, decoded at the first frame change with no prompt.
+    Enable .tkc Playback opens it; a file that fails is tried once, not at every frame."""
+    report, arrays = session.report, session.arrays
     expected = Decoder(session.tkc).frame(32).astype(np.float32)
-    np.testing.assert_array_equal(session.arrays["reopened_33"], expected)
+    assert report["opened_unasked"] == []
+    assert not np.array_equal(arrays["reopened_33_unasked"], expected)  # the mesh as saved
+    np.testing.assert_array_equal(arrays["reopened_33"], expected)
+    assert "object 'stranger'" in report["enable"] and "broken.tkc" in report["enable"]
+    assert sorted(report["opened_asked"]) == ["broken.tkc", "cloth.tkc"]  # each once
+    assert "not opened until you ask" in session.stdout
+
+
+@needs_bpy
+def test_frames_beyond_blenders_and_a_bake_beyond_its_limit_are_refused_leaving_nothing(session):
+    report = session.report
+    assert "beyond Blender's frames (-1048574 to 1048574)" in report["far"]
+    assert "far.tkc" in report["far"] and report["far_objects"] == 0
+    assert f"span 200000 scene frames, beyond the {BAKE_FRAMES}" in report["spread"]
+    assert report["spread_objects"] == 0 and not report["spread_cache"]
 
 
 @needs_bpy

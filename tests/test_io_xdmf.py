@@ -10,8 +10,10 @@ own XDMF reader reads what we write, bit for bit. Hostile files end in an InputE
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
+import subprocess
 import sys
 from pathlib import Path
 from typing import Any
@@ -461,6 +463,48 @@ def test_hdf5_data_kept_outside_the_file_is_refused(tmp_path):
     }
     for name, message in cases.items():
         refused(tmp_path, document(hdf_grid(f"d.h5:/{name}")), message)
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="named pipes are POSIX")
+def test_a_soft_link_through_an_external_link_is_refused_before_anything_is_opened(tmp_path):
+    """A soft link whose target crosses an external link: HDF5 follows both when it is asked
+    for the path behind the soft link, and opens the outside file before any later check; a
+    named pipe there blocks ``convert`` forever. The reader resolves each link itself, so the
+    pipe is never opened: the convert ends at once, refused, naming the file and the link."""
+    h5py = pytest.importorskip("h5py", reason=H5PY_MISSING)
+    outside, inside = tmp_path / "outside", tmp_path / "inside"
+    outside.mkdir()
+    inside.mkdir()
+    os.mkfifo(outside / "pipe.h5")
+    with h5py.File(inside / "d.h5", "w") as file:
+        file["points"] = POINTS
+        file["door"] = h5py.ExternalLink(str(outside / "pipe.h5"), "/")
+        file["soft"] = h5py.SoftLink("/door/points")  # names no external link itself
+        file["relative"] = h5py.SoftLink("door")  # a relative target, then a child of it
+        file["chain"] = h5py.SoftLink("/soft")  # a soft link to that soft link
+        file["loop"] = h5py.SoftLink("/loop")
+        file["fine"] = h5py.SoftLink("/points")  # stays inside: read
+    cases = {
+        "soft": "d.h5:/soft leads through an external link (/door)",
+        "relative/points": "d.h5:/relative/points leads through an external link (/door)",
+        "chain": "d.h5:/chain leads through an external link (/door)",
+        "loop": "d.h5:/loop: its soft links nest too deep",
+    }
+    for name, message in cases.items():
+        (inside / "bad.xdmf").write_text(document(hdf_grid(f"d.h5:/{name}")))
+        command = [sys.executable, "-m", "tuckercodec", "convert", str(inside / "bad.xdmf")]
+        try:  # a hang (the pipe opened, waiting for a writer) fails the test, not the run
+            done = subprocess.run(
+                [*command, str(inside / "o.npz")], capture_output=True, text=True, timeout=30
+            )
+        except subprocess.TimeoutExpired:
+            pytest.fail(f"{name}: convert hung: the pipe outside the folder was opened")
+        said = done.stderr.strip().splitlines()
+        assert done.returncode == 4 and len(said) == 1, (name, done.returncode, done.stderr)
+        assert "bad.xdmf" in said[0] and message in said[0], (name, said)
+        assert not (inside / "o.npz").exists()
+    (inside / "ok.xdmf").write_text(document(hdf_grid("d.h5:/fine")))
+    assert exact(load_sequence(inside / "ok.xdmf").vertices[0], POINTS)
 
 
 def test_hdf5_files_outside_the_xdmf_folder_are_refused(tmp_path):

@@ -6,7 +6,8 @@ script in a process of its own so that a crash of Blender cannot take pytest wit
 It installs the add-on's zip as Blender installs an extension from disk, imports FILE.tkc,
 reads the evaluated vertices at several scene frames, exports the object back, tries the
 refusals (an existing file, a change of topology), imports a baked copy, renders two frames,
-saves and reopens the .blend, and writes what it saw
+refuses files beyond Blender's frames and a bake beyond its limit, saves and reopens the .blend
+(whose paths are played only once playback is enabled), and writes what it saw
 to WORKDIR/session.npz (arrays) and WORKDIR/session.json (the rest), for the test to judge.
 Nothing here compares: the test does, against the Python decoder in its own process.
 """
@@ -102,14 +103,64 @@ def render(obj: Any, work: Path, arrays: dict[str, np.ndarray]) -> list[str]:
     return sorted(path.name for path in work.glob("render_*.png"))
 
 
-def reopened(name: str, work: Path, arrays: dict[str, np.ndarray]) -> None:
-    """Save the .blend, open it again (the decoders closed, the handler kept) and read object
-    ``name`` at scene frame 33."""
+def reopened(name: str, work: Path, arrays: dict[str, np.ndarray]) -> dict[str, Any]:
+    """Save the .blend with a stranger beside object ``name``: a plane carrying a path it never
+    played here (as a crafted .blend would), to WORKDIR/broken.tkc. Open it again (the decoders
+    closed, the handler kept), change frames, read ``name`` at scene frame 33 (no file may be
+    opened: nobody asked); then enable playback of both and change frames again (the cloth
+    plays, the stranger fails once and is not tried again). Every Decoder the add-on makes is
+    counted."""
+    bpy.ops.mesh.primitive_plane_add()
+    stranger = bpy.context.active_object
+    stranger.name = "stranger"
+    stranger["tkc_path"] = str(work / "broken.tkc")
     blend = str(work / "scene.blend")
     bpy.ops.wm.save_as_mainfile(filepath=blend)
     bpy.ops.wm.open_mainfile(filepath=blend)
-    bpy.context.scene.frame_set(33)
-    arrays["reopened_33"] = evaluated_vertices(bpy.data.objects[name])
+    addon: Any = sys.modules["tuckercodec.blender.addon"]
+    original, opened = addon.Decoder, []
+
+    def counted(source: Any, *args: Any, **kwargs: Any) -> Any:
+        opened.append(Path(source).name)
+        return original(source, *args, **kwargs)
+
+    addon.Decoder = counted
+    scene, seen = bpy.context.scene, dict[str, Any]()
+    try:
+        for frame in (34, 35, 33):
+            scene.frame_set(frame)
+        arrays["reopened_33_unasked"] = evaluated_vertices(bpy.data.objects[name])
+        seen["opened_unasked"] = list(opened)
+        for obj in bpy.context.view_layer.objects:
+            obj.select_set(obj.name in (name, "stranger"))
+        try:
+            seen["enable"] = str(sorted(bpy.ops.object.tkc_enable_playback()))
+        except (RuntimeError, AttributeError) as error:  # the stranger's file is refused
+            seen["enable"] = str(error)
+        scene.frame_set(33)
+        arrays["reopened_33"] = evaluated_vertices(bpy.data.objects[name])
+        for frame in (34, 35, 36):
+            scene.frame_set(frame)
+        seen["opened_asked"] = opened[len(seen["opened_unasked"]) :]
+    finally:
+        addon.Decoder = original
+    return seen
+
+
+def hostile(work: Path) -> dict[str, Any]:
+    """Import WORKDIR/far.tkc (a first time code of 2**31) and bake WORKDIR/spread.tkc (24
+    time codes over 200,000 scene frames): what each refusal said and the objects each left."""
+    seen: dict[str, Any] = {}
+    for name, options in (("far", {}), ("spread", {"bake": True})):
+        before = len(bpy.data.objects)
+        seen[name] = refusal(
+            lambda name=name, options=options: bpy.ops.import_scene.tkc(
+                filepath=str(work / f"{name}.tkc"), **options
+            )
+        )
+        seen[f"{name}_objects"] = len(bpy.data.objects) - before
+    seen["spread_cache"] = (work / "spread.pc2").exists()
+    return seen
 
 
 def refusal(call: Any) -> str | None:
@@ -191,7 +242,8 @@ def main(addon: Path, tkc: Path, work: Path) -> None:
     bpy.ops.object.camera_add()
     seen["camera"] = refusal(lambda: bpy.ops.export_scene.tkc(filepath=str(work / "camera.tkc")))
     seen.update(film(work, arrays))
-    reopened(seen["object"], work, arrays)
+    seen.update(hostile(work))
+    seen.update(reopened(seen["object"], work, arrays))
     np.savez(work / "session.npz", **arrays)  # type: ignore[arg-type] # (the names are keys)
     (work / "session.json").write_text(json.dumps(seen, indent=2))
 

@@ -5,7 +5,16 @@ order, sets the scene's frame range and rate from the file, and plays it by deco
 asked for when the frame changes (a ``frame_change_pre`` handler, one open
 :class:`~tuckercodec.Decoder` per object: random access, nothing decoded up front), in the
 viewport and in renders. Baked instead, the file is decoded once into a ``.pc2`` point cache
-read by a Mesh Cache modifier, which any Blender plays without this add-on.
+read by a Mesh Cache modifier, which any Blender plays without this add-on (at most
+:data:`~tuckercodec.blender.meshes.BAKE_FRAMES` scene frames unless asked for more).
+
+*Playback* opens only the files the user asked for in this session: the one an import opened,
+or the path an object carries once the user runs *Enable .tkc Playback*
+(``bpy.ops.object.tkc_enable_playback``, in the Object menu). A path saved in a ``.blend`` is
+not opened when the file is loaded or its frames change: a ``.blend`` from elsewhere could name
+any file, and decoding it costs time and memory. A file that fails is not opened again, frame
+after frame, until the user asks again. Inside Blender the decoder's limits are
+:data:`~tuckercodec.blender.meshes.BLENDER_LIMITS`.
 
 *Export* (``bpy.ops.export_scene.tkc``) encodes the active object's evaluated mesh (armature,
 shape keys, modifiers, simulations: whatever Blender evaluates) over the scene's frame range, in
@@ -31,14 +40,17 @@ from ..decoder import Decoder
 from ..encoder.options import DEFAULT_TARGET_KG
 from ..errors import TuckerCodecError
 from ..io.common.polygons import faces_from_polygons
-from ..model.sequence import MeshSequence
 from ..system.atomic import write_atomic
 from .meshes import (
+    BAKE_FRAMES,
+    BLENDER_LIMITS,
+    MAX_FRAME,
     ExportFrames,
+    bake_pc2,
+    bake_span,
     file_frame,
-    file_frames,
     placement,
-    scene_frames,
+    scene_range,
     scene_rate,
 )
 
@@ -53,8 +65,14 @@ BAKED_PROPERTY = "tkc_baked"
 
 #: Open decoders, by object (its session id): (absolute path, decoder, frame shown).
 _OPEN: dict[int, tuple[str, Decoder, int | None]] = {}
-#: Objects whose file failed, by session id: their message is printed once, not every frame.
+#: The file each object may play, by session id: what this session's import opened, or what
+#: the user enabled (:class:`EnablePlayback`). Any other path an object carries is not opened.
+_ALLOWED: dict[int, str] = {}
+#: Objects whose file failed, by session id, with the message printed: not tried again until
+#: the user asks (an import, :class:`EnablePlayback`).
 _FAILED: dict[int, str] = {}
+#: Objects whose path, not enabled, was already named once (printed once, not every frame).
+_WAITING: set[int] = set()
 
 #: The object types whose evaluated geometry is a mesh (``to_mesh``): what Export takes.
 GEOMETRY_TYPES = frozenset({"MESH", "CURVE", "SURFACE", "META", "FONT"})
@@ -76,16 +94,41 @@ def _played(obj: Any) -> bool:
     return bool(obj.type == "MESH" and PATH_PROPERTY in obj and not obj.get(BAKED_PROPERTY))
 
 
+def _file(obj: Any) -> str:
+    """The absolute path of the file ``obj`` carries (``ValueError`` if it carries no text)."""
+    stored = obj.get(PATH_PROPERTY)
+    if not isinstance(stored, str) or not stored:
+        raise ValueError(f"object {obj.name!r}: its {PATH_PROPERTY} is not a file's path")
+    return str(bpy.path.abspath(stored))
+
+
+def allow(obj: Any) -> str:
+    """Let ``obj`` play the file it carries (the user asked): its failure forgotten, so that
+    the next frame opens it again. Returns the file's absolute path."""
+    path = _file(obj)
+    key = obj.session_uid
+    _ALLOWED[key] = path
+    _FAILED.pop(key, None)
+    _WAITING.discard(key)
+    return path
+
+
 def show_frame(obj: Any, scene_frame: int) -> int:
     """Put the file's frame for ``scene_frame`` in ``obj``'s mesh; returns the file's frame.
     The object's decoder is opened at its first frame and kept; a frame already shown is not
-    decoded again. Raises what the decoder raises, and ``ValueError`` when the mesh no longer
-    has the file's vertex count."""
-    path = bpy.path.abspath(obj[PATH_PROPERTY])
+    decoded again. Only a file the user allowed (:func:`allow`) is opened: another is a
+    ``PermissionError``. Raises what the decoder raises, and ``ValueError`` when the mesh no
+    longer has the file's vertex count."""
+    path = _file(obj)
     key = obj.session_uid
+    if _ALLOWED.get(key) != path:
+        raise PermissionError(
+            f"object {obj.name!r} carries {path}, which was not opened in this session: "
+            "select it and run Object > Enable .tkc Playback to play it"
+        )
     cached = _OPEN.get(key)
     if cached is None or cached[0] != path:
-        cached = (path, Decoder(path), None)
+        cached = (path, Decoder(path, limits=BLENDER_LIMITS), None)
     decoder = cached[1]
     first = int(obj.get(FIRST_FRAME_PROPERTY, 1))
     frame = file_frame(scene_frame, first, decoder.frame_count, decoder.info.time_codes)
@@ -108,28 +151,83 @@ def _persistent(handler: _Handler) -> _Handler:
     return cast(_Handler, bpy.app.handlers.persistent(handler))
 
 
+def _forget() -> None:
+    _OPEN.clear()
+    _ALLOWED.clear()
+    _FAILED.clear()
+    _WAITING.clear()
+
+
 @_persistent
 def _on_frame_change(scene: Any, depsgraph: Any = None) -> None:
     """Before each frame is evaluated (viewport, render, ``frame_set``): every played object
-    of the scene shows its file's frame. A failure is printed once per object, naming it."""
+    of the scene whose file the user allowed shows its file's frame. An object whose file is
+    not allowed is named once, and not opened; a failure is printed once, and the file is not
+    opened again until the user asks."""
     for obj in scene.objects:
-        if not _played(obj):
+        key = obj.session_uid
+        if not _played(obj) or key in _FAILED:
             continue
         try:
+            if _ALLOWED.get(key) != _file(obj):
+                if key not in _WAITING:
+                    _WAITING.add(key)
+                    print(
+                        f"tuckercodec: object {obj.name!r} carries {_file(obj)}, a path saved "
+                        "in the .blend: not opened until you ask (select the object, Object > "
+                        "Enable .tkc Playback)"
+                    )
+                continue
             show_frame(obj, scene.frame_current)
-            _FAILED.pop(obj.session_uid, None)
         except (TuckerCodecError, OSError, ValueError) as error:
             message = f"tuckercodec: object {obj.name!r}, frame {scene.frame_current}: {error}"
-            if _FAILED.get(obj.session_uid) != message:
-                _FAILED[obj.session_uid] = message
-                print(message)
+            _FAILED[key] = message
+            _OPEN.pop(key, None)
+            print(f"{message} (not tried again until you run Object > Enable .tkc Playback)")
 
 
 @_persistent
 def _on_load(*_: Any) -> None:
-    """A new .blend: close the decoders of the last one."""
-    _OPEN.clear()
-    _FAILED.clear()
+    """A new .blend: close the decoders of the last one, and forget what the user allowed: the
+    paths the new file's objects carry are not opened until the user asks."""
+    _forget()
+
+
+class EnablePlayback(bpy.types.Operator):
+    """Play the .tkc files that the selected objects (or every object of the scene) carry, as
+    saved in the .blend: they are opened now, and again after a failure"""
+
+    bl_idname = "object.tkc_enable_playback"
+    bl_label = "Enable .tkc Playback"
+    bl_options = {"REGISTER", "UNDO"}  # noqa: RUF012 - Blender reads a set here
+
+    all_objects: BoolProperty(
+        name="All Objects",
+        default=False,
+        description="Every object of the scene that carries a .tkc file, not the selected ones",
+    )
+
+    def execute(self, context: Any) -> set[str]:
+        chosen = context.scene.objects if self.all_objects else context.selected_objects
+        played = [obj for obj in chosen if _played(obj)]
+        if not played:
+            self.report({"ERROR"}, "no object that plays a .tkc file (select one)")
+            return {"CANCELLED"}
+        failed = []
+        for obj in played:
+            try:
+                path = allow(obj)
+                show_frame(obj, context.scene.frame_current)
+            except (TuckerCodecError, OSError, ValueError) as error:
+                _FAILED[obj.session_uid] = str(error)
+                _OPEN.pop(obj.session_uid, None)
+                failed.append(f"object {obj.name!r}: {error}")
+                continue
+            self.report({"INFO"}, f"object {obj.name!r} plays {path}")
+        if failed:
+            self.report({"ERROR"}, "; ".join(failed))
+            return {"CANCELLED"} if len(failed) == len(played) else {"FINISHED"}
+        return {"FINISHED"}
 
 
 # ------------------------------------------------------------------------------------------
@@ -164,28 +262,21 @@ def _stored_path(source: Path) -> str:
         return absolute
 
 
-def _bake_pc2(obj: Any, decoder: Decoder, source: Path, first: int, overwrite: bool) -> Path:
-    """Decode every frame into a ``.pc2`` beside the .blend (beside the ``.tkc`` while the
-    .blend is unsaved) and play it with a Mesh Cache modifier instead of the handler."""
-    from ..io import save_sequence
-
+def _cache_path(source: Path) -> Path:
+    """Where a bake writes: beside the .blend (beside the ``.tkc`` while it is unsaved)."""
     folder = Path(bpy.path.abspath("//")) if bpy.data.filepath else source.parent
-    cache = folder / f"{source.stem}.pc2"
-    # one sample per scene frame, the frame the handler would show there: a .pc2 is evenly
-    # spaced, so a file's uneven time codes become held frames
-    codes, count = decoder.info.time_codes, decoder.frame_count
-    scene = first + np.arange(scene_frames(first, count, codes))
-    shown = file_frames(scene, first, count, codes).tolist()
-    baked = MeshSequence(
-        decoder.positions(shown), decoder.faces, frame_rate=decoder.info.frame_rate
-    )
-    save_sequence(baked, cache, overwrite=overwrite, progress=False)
+    return folder / f"{source.stem}.pc2"
+
+
+def _bake_pc2(obj: Any, decoder: Decoder, cache: Path, first: int, options: Any) -> None:
+    """Decode the file into the ``.pc2`` ``cache`` (:func:`~.meshes.bake_pc2`) and play it with
+    a Mesh Cache modifier instead of the handler."""
+    bake_pc2(decoder, cache, first, overwrite=options.overwrite, max_frames=options.max_bake_frames)
     modifier = obj.modifiers.new("tuckercodec point cache", "MESH_CACHE")
     modifier.cache_format = "PC2"
     modifier.filepath = str(cache)
     modifier.frame_start = first
     obj[BAKED_PROPERTY] = True
-    return cache
 
 
 class ImportTKC(bpy.types.Operator, ImportHelper):
@@ -198,7 +289,11 @@ class ImportTKC(bpy.types.Operator, ImportHelper):
     filename_ext = ".tkc"
     filter_glob: StringProperty(default="*.tkc", options={"HIDDEN"})
     first_frame: IntProperty(
-        name="First Frame", default=1, description="The scene frame that shows the file's frame 0"
+        name="First Frame",
+        default=1,
+        min=-MAX_FRAME,
+        max=MAX_FRAME,
+        description="The scene frame that shows the file's frame 0",
     )
     use_time_codes: BoolProperty(
         name="Use File Time Codes",
@@ -233,17 +328,35 @@ class ImportTKC(bpy.types.Operator, ImportHelper):
     overwrite: BoolProperty(
         name="Overwrite Cache", default=False, description="Replace a .pc2 that exists"
     )
+    max_bake_frames: IntProperty(
+        name="Max Bake Frames",
+        default=BAKE_FRAMES,
+        min=1,
+        max=2 * MAX_FRAME + 1,
+        description=(
+            "The most scene frames a bake writes (a file of a few frames may span many, each "
+            "a whole frame of the cache): a file that spans more is refused, saying how many"
+        ),
+    )
 
     def execute(self, context: Any) -> set[str]:
         source = Path(self.filepath)
+        obj = None
         try:
-            decoder = Decoder(source)
+            decoder = Decoder(source, limits=BLENDER_LIMITS)
+            info = decoder.info
+            # everything checked before anything is made: no half-imported object
+            first_code = float(self.first_frame)
+            if self.use_time_codes and info.time_codes is not None:
+                first_code = info.time_codes[0]
+            first, last = scene_range(first_code, info.frames, info.time_codes)
+            cache = _cache_path(source) if self.bake else None
+            if cache is not None:
+                bake_span(decoder, first, self.max_bake_frames)
+                if cache.exists() and not self.overwrite:
+                    raise FileExistsError(f"{cache} already exists (set Overwrite Cache)")
             obj = _new_object(context, source.stem, decoder)
             obj[PATH_PROPERTY] = _stored_path(source)
-            info = decoder.info
-            first = self.first_frame
-            if self.use_time_codes and info.time_codes is not None:
-                first = round(info.time_codes[0])
             obj[FIRST_FRAME_PROPERTY] = first
             # the object's own space is the file's: an export of it says so again
             if info.meters_per_unit is not None:
@@ -257,17 +370,21 @@ class ImportTKC(bpy.types.Operator, ImportHelper):
                 obj.scale = (scale, scale, scale)
             if self.set_scene:
                 scene = context.scene
-                scene.frame_start = first
-                scene.frame_end = first + scene_frames(first, info.frames, info.time_codes) - 1
+                scene.frame_start, scene.frame_end = first, last
                 if info.frame_rate is not None:  # else the scene keeps its own rate
                     scene.render.fps, scene.render.fps_base = scene_rate(info.frame_rate)
             how = "decoded on demand"
-            if self.bake:
-                cache = _bake_pc2(obj, decoder, source, first, self.overwrite)
+            if cache is not None:
+                _bake_pc2(obj, decoder, cache, first, self)
                 how = f"baked to {cache}"
             else:
+                allow(obj)  # the user opened this file: the object plays it
                 show_frame(obj, context.scene.frame_current)
         except (TuckerCodecError, OSError, ValueError) as error:
+            if obj is not None:  # a bake that failed half-way: no object left behind
+                mesh = obj.data
+                bpy.data.objects.remove(obj)
+                bpy.data.meshes.remove(mesh)
             self.report({"ERROR"}, naming(source, error))
             return {"CANCELLED"}
         rate = "unknown rate" if info.frame_rate is None else f"{info.frame_rate:g} fps"
@@ -420,7 +537,11 @@ def _export_menu(self: Any, context: Any) -> None:
     self.layout.operator(ExportTKC.bl_idname, text="tuckercodec (.tkc)")
 
 
-_CLASSES = (ImportTKC, ExportTKC)
+def _object_menu(self: Any, context: Any) -> None:
+    self.layout.operator(EnablePlayback.bl_idname)
+
+
+_CLASSES = (ImportTKC, ExportTKC, EnablePlayback)
 
 
 def register() -> None:
@@ -429,6 +550,7 @@ def register() -> None:
         bpy.utils.register_class(cls)
     bpy.types.TOPBAR_MT_file_import.append(_import_menu)
     bpy.types.TOPBAR_MT_file_export.append(_export_menu)
+    bpy.types.VIEW3D_MT_object.append(_object_menu)
     handlers = bpy.app.handlers
     for handler_list, handler in (
         (handlers.frame_change_pre, _on_frame_change),
@@ -447,12 +569,21 @@ def unregister() -> None:
     ):
         if handler in handler_list:
             handler_list.remove(handler)
+    bpy.types.VIEW3D_MT_object.remove(_object_menu)
     bpy.types.TOPBAR_MT_file_export.remove(_export_menu)
     bpy.types.TOPBAR_MT_file_import.remove(_import_menu)
     for cls in reversed(_CLASSES):
         bpy.utils.unregister_class(cls)
-    _OPEN.clear()
-    _FAILED.clear()
+    _forget()
 
 
-__all__ = ["ExportTKC", "ImportTKC", "gather_frames", "register", "show_frame", "unregister"]
+__all__ = [
+    "EnablePlayback",
+    "ExportTKC",
+    "ImportTKC",
+    "allow",
+    "gather_frames",
+    "register",
+    "show_frame",
+    "unregister",
+]

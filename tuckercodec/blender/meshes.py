@@ -1,16 +1,49 @@
-"""What the Blender add-on does to arrays, kept apart from ``bpy`` so that it is tested anywhere:
-which frame of a file a scene frame shows, the scene's
-frame rate, and the frames of an export gathered with their topology checked."""
+"""What the Blender add-on does to arrays and files, kept apart from ``bpy`` so that it is tested
+anywhere: which frame of a file a scene frame shows and the scene frames a file spans (within
+Blender's), the scene's frame rate, the decoder's limits inside Blender, the point cache a baked
+import writes, and the frames of an export gathered with their topology checked."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 
+from ..decoder import Decoder
 from ..errors import InputError
+from ..format.limits import Limits
+from ..io.pointcache.pc2 import HEADER, SIGNATURE, VERSION
 from ..model.sequence import MeshSequence
+from ..system.atomic import atomic_output
+
+#: Blender's frame numbers run from -MAX_FRAME to MAX_FRAME (MINAFRAME and MAXFRAME in its
+#: source); the object keeps its first frame in a 32-bit custom property.
+MAX_FRAME = 1_048_574
+#: The scene frames a baked import writes unless it is asked for more (Max Bake Frames): a
+#: file of a few time codes may span any number of frames, each a full frame of the cache.
+BAKE_FRAMES = 10_000
+#: The scene frames a bake decides at a time (which file frame each shows).
+_BAKE_CHUNK = 4096
+#: The decoder's limits inside Blender, for an import and for playback: what a mesh object in
+#: Blender holds and plays (8 Mi vertices, 16 Mi faces, Blender's frame count), a header of at
+#: most 1 MiB (a 16 MiB header of empty maps costs about 1.3 GiB to parse), sections of at most
+#: 512 MiB decompressed and 32 Mi factor values (256 MiB): what a small crafted file can make
+#: Blender allocate is bounded by these, a fraction of the defaults' GiBs, which suit files of
+#: a few GiB of positions on the command line.
+BLENDER_LIMITS = Limits(
+    max_header_bytes=1 << 20,
+    max_vertices=1 << 23,
+    max_frames=1 << 20,
+    max_positions=1 << 28,
+    max_faces=1 << 24,
+    max_face_width=64,
+    max_sections=1 << 14,
+    max_segments=1 << 12,
+    max_section_bytes=1 << 29,
+    max_factor_values=1 << 25,
+)
 
 
 def file_frames(
@@ -41,6 +74,79 @@ def scene_frames(first: int, frame_count: int, time_codes: Sequence[float] | Non
     if time_codes is None:
         return frame_count
     return math.floor(time_codes[-1] - time_codes[0]) + 1
+
+
+def scene_range(
+    first: float, frame_count: int, time_codes: Sequence[float] | None
+) -> tuple[int, int]:
+    """The first and last scene frames of a file whose frame 0 is at ``first`` (the import's
+    First Frame, or the file's first time code): an InputError when they are beyond Blender's
+    frames (:data:`MAX_FRAME`), checked before anything is made: a first time code of 2**31
+    overflowed the object's 32-bit property half-way through an import."""
+    span = frame_count - 1 if time_codes is None else time_codes[-1] - time_codes[0]
+    ends = (first, first + span)
+    if all(math.isfinite(end) and abs(end) <= MAX_FRAME + 1 for end in ends):
+        start = round(first)
+        last = start + scene_frames(start, frame_count, time_codes) - 1
+        if start >= -MAX_FRAME and last <= MAX_FRAME:
+            return start, last
+    raise InputError(
+        f"its frames would lie at scene frames {ends[0]:.17g} to {ends[1]:.17g}, beyond "
+        f"Blender's frames ({-MAX_FRAME} to {MAX_FRAME}): import it with Use File Time "
+        "Codes off and a First Frame within them"
+    )
+
+
+def bake_span(decoder: Decoder, first: int, max_frames: int = BAKE_FRAMES) -> int:
+    """The scene frames a bake of ``decoder``'s file from ``first`` writes; an InputError,
+    naming the span and the limit, beyond ``max_frames``."""
+    count = decoder.frame_count
+    span = scene_frames(first, count, decoder.info.time_codes)
+    if span > max_frames:
+        raise InputError(
+            f"its {count} frames span {span} scene frames, beyond the {max_frames} a bake "
+            f"writes (a cache of {span * decoder.info.vertices * 12} bytes): raise Max Bake "
+            "Frames to bake them all, or play the file instead",
+            path=decoder.path,
+        )
+    return span
+
+
+def bake_pc2(
+    decoder: Decoder,
+    cache: Path,
+    first: int,
+    *,
+    overwrite: bool = False,
+    max_frames: int = BAKE_FRAMES,
+) -> int:
+    """Write ``cache``, a ``.pc2`` of one sample per scene frame from ``first`` (the frame the
+    add-on's playback shows there: a .pc2 is evenly spaced, so uneven time codes become held
+    frames), atomically; returns the number of frames written. The frames a file spans are
+    counted first and refused beyond ``max_frames``, naming both; then each file frame is
+    decoded once and written as often as it is held, so that memory holds one frame whatever
+    the span (decoding every frame shown first took 1.08 GB for a 194 MB cache)."""
+    codes, count = decoder.info.time_codes, decoder.frame_count
+    span = bake_span(decoder, first, max_frames)
+    header = HEADER.pack(SIGNATURE, VERSION, decoder.info.vertices, 0.0, 1.0, span)
+    with atomic_output(cache, overwrite=overwrite) as stream:
+        stream.write(header)
+        decoded, data = -1, b""
+        for start in range(0, span, _BAKE_CHUNK):
+            scene = first + np.arange(start, min(start + _BAKE_CHUNK, span))
+            for frame in file_frames(scene, first, count, codes).tolist():
+                if frame != decoded:
+                    with np.errstate(over="ignore"):
+                        positions = decoder.frame(frame).astype("<f4")
+                    if not np.isfinite(positions).all():
+                        raise InputError(
+                            f"frame {frame} has a position beyond float32, which a .pc2 holds",
+                            path=decoder.path,
+                            frame=frame,
+                        )
+                    decoded, data = frame, positions.tobytes()
+                stream.write(data)
+    return span
 
 
 def placement(

@@ -5,7 +5,8 @@ holds::
 
     blender_manifest.toml        id "tuckercodec_blender", its platforms and wheels
     __init__.py                  imports register/unregister from tuckercodec.blender.addon
-    wheels/tuckercodec-V-py3-none-any.whl   this package, built here from its installed files
+    wheels/tuckercodec-V-py3-none-any.whl   this package, built here from its installed files:
+                                 its modules and package data, no hidden file, no link
     wheels/scipy-..., msgpack-..., zstandard-...   fetched by ``pip download`` for each platform
 
 Blender installs the wheels into the extensions' own site-packages, ahead of its bundled
@@ -18,6 +19,7 @@ platforms it has wheels for, and Blender refuses it on any other.
 from __future__ import annotations
 
 import base64
+import fnmatch
 import hashlib
 import os
 import platform
@@ -122,24 +124,66 @@ def _zip_member(archive: zipfile.ZipFile, name: str, data: bytes, *, deflate: bo
     archive.writestr(info, data)
 
 
+#: pyproject's package data of ``tuckercodec`` (``[tool.setuptools.package-data]``), which the
+#: wheel takes beside the Python modules; tests/test_blender_addon.py checks the two agree. The
+#: package is read from where it is installed, where pyproject.toml is not.
+PACKAGE_DATA = (
+    "data/*.npz",
+    "data/*.txt",
+    "py.typed",
+    "web/viewer/*.html",
+    "web/viewer/*.js",
+    "web/viewer/*.css",
+    "web/tkc/*.js",
+    "web/tkc/*.md",
+    "web/three/*.js",
+    "web/vendor/*/*",
+)
+
+
+def _declared(relative: tuple[str, ...]) -> bool:
+    """Whether a file (its path's parts inside the package) is one setuptools puts in the
+    wheel: a Python module, or a match of a :data:`PACKAGE_DATA` pattern (``*`` within one
+    part, as glob matches, and not a hidden name)."""
+    if relative[-1].endswith(".py"):
+        return True
+    return any(
+        len(parts) == len(relative) and all(map(fnmatch.fnmatchcase, relative, parts))
+        for parts in (pattern.split("/") for pattern in PACKAGE_DATA)
+    )
+
+
 def package_files(root: Path | None = None) -> list[tuple[str, Path]]:
-    """(name in the wheel, file) of every file of the installed package, caches left out."""
+    """(name in the wheel, file) of every file the package declares: its Python modules and
+    :data:`PACKAGE_DATA`, as setuptools builds its wheel. Never a hidden file or folder (a
+    developer's ``.env``, an editor's settings), nor a folder with a dot in its name (setuptools
+    takes no package there), nor ``__pycache__``; a symbolic link is not followed, whether to a
+    file or a folder, so nothing outside the package ships."""
     root = Path(__file__).resolve().parents[1] if root is None else root
-    files = []
-    for path in sorted(root.rglob("*")):
-        relative = path.relative_to(root.parent)
-        if path.is_file() and "__pycache__" not in relative.parts and path.suffix != ".pyc":
-            files.append((relative.as_posix(), path))
-    return files
+    files: list[tuple[str, Path]] = []
+    pending: list[tuple[Path, tuple[str, ...]]] = [(root, ())]
+    while pending:
+        folder, parts = pending.pop()
+        with os.scandir(folder) as entries:
+            for entry in entries:
+                if entry.name.startswith(".") or entry.is_symlink():
+                    continue
+                relative = (*parts, entry.name)
+                if entry.is_dir(follow_symlinks=False):
+                    if "." not in entry.name and entry.name != "__pycache__":
+                        pending.append((Path(entry.path), relative))
+                elif entry.is_file(follow_symlinks=False) and _declared(relative):
+                    files.append(("/".join((root.name, *relative)), Path(entry.path)))
+    return sorted(files)
 
 
-def build_own_wheel(folder: Path) -> Path:
+def build_own_wheel(folder: Path, root: Path | None = None) -> Path:
     """This package as a pure-Python wheel in ``folder``, built from its installed files (no
     build tools, no network): the package, then METADATA, WHEEL and RECORD in its dist-info.
     Its dependencies are not declared: Blender does not resolve them, the zip bundles them."""
     name = f"tuckercodec-{__version__}-py3-none-any.whl"
     info = f"tuckercodec-{__version__}.dist-info"
-    members = [(arcname, path.read_bytes()) for arcname, path in package_files()]
+    members = [(arcname, path.read_bytes()) for arcname, path in package_files(root)]
     members.append(
         (
             f"{info}/METADATA",

@@ -223,21 +223,57 @@ class HeavyData:
         return values, (file, dataset)
 
 
+#: The soft links followed on the way to one dataset, in all (HDF5's own default).
+_SOFT_LINKS = 16
+
+
 def _dataset(h5py: Any, handle: Any, dataset: str, file: Path, what: str) -> Any:
-    """The object at ``dataset`` in the open ``file``, refused if the way to it goes through an
-    external link (to another file) before h5py follows it."""
-    at = ""
-    for part in dataset.split("/"):
-        if part:
-            at += "/" + part
-            link = handle.get(at, getlink=True)
-            if isinstance(link, h5py.ExternalLink):
+    """The object at ``dataset`` in the open ``file``, or None, reached by following its path
+    here one link at a time, each link's kind read before anything behind it is opened: a hard
+    link is stepped through, a soft link's target is followed here (at most
+    :data:`_SOFT_LINKS` of them), an external link (to another file) or a user-defined one is
+    refused. HDF5 itself would follow a soft link whose target crosses an external link, and
+    open the other file (a named pipe there blocks for ever) before any check of the path."""
+    h5l = h5py.h5l
+    parts = [part for part in reversed(dataset.split("/")) if part not in ("", ".")]
+    at: list[str] = []  # the path reached, through hard links only: safe to open
+    followed = 0
+    while parts:
+        part = parts.pop()
+        group = handle["/" + "/".join(at)]
+        if not isinstance(group, h5py.Group) or not group.id.links.exists(part.encode()):
+            return None
+        kind = group.id.links.get_info(part.encode()).type
+        if kind == h5l.TYPE_HARD:
+            at.append(part)
+            continue
+        link = "/" + "/".join([*at, part])
+        if kind == h5l.TYPE_SOFT:
+            followed += 1
+            if followed > _SOFT_LINKS:
                 raise InputError(
-                    f"{what}: {file}:{dataset} leads through an external link ({at}) to "
-                    f"{link.filename}:{link.path}, outside {file.name}: refused (only data "
-                    "inside the HDF5 file is read)"
+                    f"{what}: {file}:{dataset}: its soft links nest too deep (more than "
+                    f"{_SOFT_LINKS} followed; a cycle?): refused"
                 )
-    return handle.get(dataset)
+            target = group.id.links.get_val(part.encode()).decode("utf-8", "replace")
+            if target.startswith("/"):
+                at = []
+            parts.extend(p for p in reversed(target.split("/")) if p not in ("", "."))
+            continue
+        if kind == h5l.TYPE_EXTERNAL:
+            name, path = (
+                v.decode("utf-8", "replace") for v in group.id.links.get_val(part.encode())
+            )
+            raise InputError(
+                f"{what}: {file}:{dataset} leads through an external link ({link}) to "
+                f"{name}:{path}, outside {file.name}: refused (only data inside the HDF5 file "
+                "is read)"
+            )
+        raise InputError(
+            f"{what}: {file}:{dataset} leads through a user-defined link ({link}): refused "
+            "(only hard and soft links inside the HDF5 file are followed)"
+        )
+    return handle["/" + "/".join(at)]
 
 
 def _stored_outside(found: Any, file: Path) -> str:
