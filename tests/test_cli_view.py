@@ -26,6 +26,7 @@ from tests.support.sequences import grid_faces, wave_sequence
 from tuckercodec import MeshSequence, decode, encode
 from tuckercodec.cli import main
 from tuckercodec.measures.distortion import kg_error
+from tuckercodec.system.atomic import OUTPUT_MARKER
 from tuckercodec.web import server as server_module
 from tuckercodec.web.server import ViewerServer
 from tuckercodec.web.site import build_site, page_files, web_root
@@ -332,7 +333,7 @@ def test_export_writes_the_folder_and_refuses_an_existing_one_without_force(
     printed = capsys.readouterr().out
     assert "python -m http.server -d" in printed
     written = sorted(str(p.relative_to(out)) for p in out.rglob("*") if p.is_file())
-    marker = ".tuckercodec-viewer"  # what --force later recognises as an export
+    marker = OUTPUT_MARKER  # what --force later recognises as a folder the tool wrote
     assert written == sorted([*page_files(), marker, "data/wave_one.tkc", "index.html"])
     assert (out / "data/wave_one.tkc").read_bytes() == files["tkc"].read_bytes()
     index = (out / "index.html").read_text()
@@ -348,6 +349,7 @@ def test_export_writes_the_folder_and_refuses_an_existing_one_without_force(
     assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 1
     err = capsys.readouterr().err.strip()
     assert "would delete 1 entry (stray.txt)" in err and "\n" not in err
+    assert "holds files tuckercodec did not write" in err
     assert (out / "stray.txt").read_text() == "mine"
 
     (out / "stray.txt").unlink()
@@ -365,14 +367,12 @@ def test_export_force_replaces_a_previous_export_whole(files, tmp_path, capsys):
     out = tmp_path / "site"
     args = ["view", str(files["tkc"]), "--reference", str(files["original"])]
     assert main([*args, "--export-html", str(out)]) == 0
-    assert (out / ".tuckercodec-viewer").read_text().startswith("tuckercodec viewer export")
+    assert json.loads((out / OUTPUT_MARKER).read_text())["format"].startswith("tuckercodec")
     assert "data/reference.bin" in _exported(out)
-    (out / "data/leftover.bin").write_bytes(b"x")  # inside the export's own folders: replaced
+    (out / "data/reference.bin").write_bytes(b"x")  # a file the export wrote, changed: replaced
     assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 0
     written = _exported(out)
-    assert written == sorted(
-        [*page_files(), ".tuckercodec-viewer", "data/wave_one.tkc", "index.html"]
-    )
+    assert written == sorted([*page_files(), OUTPUT_MARKER, "data/wave_one.tkc", "index.html"])
     assert not [p for p in tmp_path.iterdir() if p.name != "site"]  # no staging, nothing aside
 
 
@@ -381,7 +381,24 @@ def test_export_force_uses_an_empty_folder(files, tmp_path):
     out.mkdir()
     assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 0
     assert (out / "data/wave_one.tkc").read_bytes() == files["tkc"].read_bytes()
-    assert (out / ".tuckercodec-viewer").is_file()
+    assert (out / OUTPUT_MARKER).is_file()
+
+
+def test_export_force_keeps_a_users_file_inside_the_exports_own_folders(files, tmp_path, capsys):
+    """--force once looked only at the export's top-level names, so a file a user put in its
+    data/ or viewer/ was deleted with it."""
+    out = tmp_path / "site"
+    assert main(["view", str(files["tkc"]), "--export-html", str(out)]) == 0
+    for mine in ("data/notes.txt", "viewer/custom.css"):
+        (out / mine).write_text("mine")
+        capsys.readouterr()
+        assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 1
+        err = capsys.readouterr().err.strip()
+        assert f"would delete 1 entry ({mine})" in err and "\n" not in err
+        assert (out / mine).read_text() == "mine"
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["site"]  # nothing staged or aside
+        (out / mine).unlink()
+    assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 0
 
 
 def test_export_force_refuses_a_folder_that_is_not_an_export_and_leaves_it(files, tmp_path, capsys):
@@ -393,7 +410,7 @@ def test_export_force_refuses_a_folder_that_is_not_an_export_and_leaves_it(files
     before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
     assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 1
     err = capsys.readouterr().err.strip()
-    assert err.startswith(f"tuckercodec: {out} is no export") and "\n" not in err
+    assert err.startswith(f"tuckercodec: {out} was not written by tuckercodec") and "\n" not in err
     assert "would delete 2 entries (notes.txt, src/)" in err
     assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
     assert sorted(p.name for p in out.iterdir()) == ["notes.txt", "src"]
