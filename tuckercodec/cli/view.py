@@ -13,6 +13,11 @@ tuckercodec wrote (nothing in it beyond what its manifest lists) or an empty fol
 refuses anything else (a file, a folder with other files, at any depth) before writing, naming
 what it would delete (exit 1, as for an existing output).
 
+``--open`` starts a web browser without putting the token on its command line, which other
+users of the machine can read (``/proc/PID/cmdline``): as Jupyter does, the URL with the token
+goes into a redirect page readable by this user only (0600, in a private temporary folder,
+removed when the server stops), and the browser is given that file's path.
+
 Ctrl-C is how a server is stopped, not a failure: it shuts the server down, removes the
 temporary folder and exits 0 (other verbs exit 130, since Ctrl-C cut their work short).
 SIGTERM still ends it as every verb: the same clean-up, then exit 143.
@@ -27,7 +32,7 @@ import tempfile
 import threading
 import webbrowser
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -43,6 +48,7 @@ from ..web.site import (
     Site,
     build_site,
     data_name,
+    redirect_page,
 )
 from .inputs import is_compressed, read_options, sequence_source
 
@@ -188,12 +194,31 @@ def _serve(args: argparse.Namespace, folder: Path, site: Site) -> int:
             _summary(site)
             print(f"serving {args.input} on {server.url} (this machine only); open:", flush=True)
             print(url, flush=True)
-            if args.open and not webbrowser.open(url):
-                print("note: no web browser could be started; open the URL above", file=sys.stderr)
-            print("press Ctrl-C to stop", flush=True)
-            threading.Event().wait()  # the server answers in its own thread until Ctrl-C
+            with ExitStack() as opened:  # the redirect page lives as long as the server
+                if args.open:
+                    private = opened.enter_context(
+                        tempfile.TemporaryDirectory(prefix="tuckercodec-open-")
+                    )
+                    if not open_browser(url, Path(private)):
+                        print(
+                            "note: no web browser could be started; open the URL above",
+                            file=sys.stderr,
+                        )
+                print("press Ctrl-C to stop", flush=True)
+                threading.Event().wait()  # the server answers in its own thread until Ctrl-C
         except KeyboardInterrupt as interrupt:
             if type(interrupt) is not KeyboardInterrupt:  # SIGTERM: exit as every verb does
                 raise
     print("stopped the server", flush=True)
     return EXIT_OK
+
+
+def open_browser(url: str, private: Path) -> bool:
+    """Start a web browser on ``url`` without putting it (and its token) on the browser's
+    command line: write a redirect page to it, readable by this user only, into ``private``
+    (a folder only this user can enter) and open that file. Whether a browser started."""
+    page = private / "open.html"
+    descriptor = os.open(page, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    with os.fdopen(descriptor, "w", encoding="utf-8") as handle:
+        handle.write(redirect_page(url))
+    return webbrowser.open(page.as_uri())

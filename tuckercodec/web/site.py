@@ -160,13 +160,14 @@ def build_site(
         files += [REFERENCE_JSON, REFERENCE_BIN]
         query += f"&reference={quote('../' + REFERENCE_JSON)}"
     entry = f"{PAGE}?{query}"
-    (folder / "index.html").write_text(_redirect(entry), encoding="utf-8")
+    (folder / "index.html").write_text(redirect_page(entry), encoding="utf-8")
     files.append("index.html")
     return Site(tuple(sorted(files)), entry, summary)
 
 
-def _redirect(entry: str) -> str:
-    """The folder's own index.html: sends a browser to the page with its query."""
+def redirect_page(entry: str) -> str:
+    """A page that sends a browser to ``entry`` (a URL, relative or not): the folder's own
+    index.html, and the private file ``view --open`` gives the browser."""
     entry = html.escape(entry)
     return (
         '<!doctype html>\n<html lang="en">\n<head>\n<meta charset="utf-8">\n'
