@@ -8,6 +8,7 @@ import re
 import shutil
 import subprocess
 import sys
+import unicodedata
 from typing import Any
 
 import numpy as np
@@ -754,3 +755,26 @@ def test_force_refuses_a_folder_the_tool_did_not_write(name, wave_npz, tmp_path,
     assert err.startswith(f"tuckercodec: {folder} was not written by tuckercodec")
     assert "would delete 1 entry (src/)" in err
     assert (folder / "src" / "main.py").read_text() == "print(1)"
+
+
+def test_info_escapes_the_files_strings_so_a_terminal_runs_none_of_them(packed, capsys):
+    """info printed the file's encoder and error definition raw: a crafted file could send a
+    terminal escape sequences (clear the screen, set the title, reorder the line)."""
+    from tests.support.compressed import Parts
+
+    parts = Parts(packed.read_bytes())
+    hostile = "evil\x1b]0;owned\x07\x1b[2J\u202e\x9b\u2028\\x1b"
+    parts.header["encoder"] = hostile
+    parts.header["error"] = {**parts.header["error"], "definition": "kg\x1b[31m" + hostile}
+    crafted = packed.with_name("crafted.tkc")
+    crafted.write_bytes(parts.pack())
+    capsys.readouterr()
+    assert main(["info", str(crafted)]) == 0
+    out = capsys.readouterr().out
+    assert not [c for c in out if unicodedata.category(c) in {"Cc", "Cf", "Zl"} and c != "\n"]
+    assert r"written by evil\x1b]0;owned\x07\x1b[2J\u202e\x9b\u2028\\x1b" in out
+    assert r"(kg\x1b[31mevil" in out
+    assert main(["info", str(crafted), "--json"]) == 0
+    text = capsys.readouterr().out
+    assert text.isascii() and "\x1b" not in text  # JSON escapes them itself
+    assert json.loads(text)["encoder"] == hostile
