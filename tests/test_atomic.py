@@ -298,8 +298,8 @@ def test_a_failed_decode_over_an_existing_folder_keeps_every_old_frame(tmp_path,
 
     old = tc.MeshSequence(wave_sequence(6, 4), grid_faces(4))
     tc.save_sequence(old, tmp_path / "frames", progress=False)
-    (tmp_path / "frames" / "notes.txt").write_text("not ours")
     before = {p.name: p.read_bytes() for p in (tmp_path / "frames").iterdir()}
+    assert atomic.OUTPUT_MARKER in before  # the folder is marked as the tool's
     new = tc.MeshSequence(wave_sequence(6, 4, seed=1), grid_faces(4))
     with pytest.raises(FileExistsError):
         tc.save_sequence(new, tmp_path / "frames", progress=False)  # no overwrite: refused first
@@ -310,30 +310,146 @@ def test_a_failed_decode_over_an_existing_folder_keeps_every_old_frame(tmp_path,
     assert _listing(tmp_path) == ["frames"]
     monkeypatch.undo()
     tc.save_sequence(new, tmp_path / "frames", overwrite=True, progress=False)
-    assert (tmp_path / "frames" / "notes.txt").read_text() == "not ours"  # never touched
     np.testing.assert_array_equal(
         tc.load_sequence(tmp_path / "frames", progress=False).vertices, new.vertices
     )
+    assert _listing(tmp_path) == ["frames"]
 
 
-def test_atomic_store_asks_replaceable_before_replacing_and_keeps_a_refused_folder(tmp_path):
-    """The export's --force check runs again as the folder is replaced (it may have changed
-    while the new one was built); a refusal leaves the folder as it was and no staging."""
+def _user_files(folder: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
+
+
+def test_force_keeps_a_folder_of_frames_holding_a_users_file(tmp_path):
+    """--force once replaced whatever the folder held; now only a folder the tool wrote."""
+    old = tc.MeshSequence(wave_sequence(6, 4), grid_faces(4))
+    new = tc.MeshSequence(wave_sequence(6, 4, seed=1), grid_faces(4))
+    frames = tmp_path / "frames"
+    tc.save_sequence(old, frames, progress=False)
+    (frames / "notes.txt").write_text("not ours")
+    before = _user_files(frames)
+    with pytest.raises(atomic.NotOursError, match=r"frames holds files .* \(notes.txt\)"):
+        tc.save_sequence(new, frames, overwrite=True, progress=False)
+    assert _user_files(frames) == before and _listing(tmp_path) == ["frames"]
+    # a folder of frames the tool did not write (no manifest) is refused the same way
+    foreign = tmp_path / "foreign"
+    foreign.mkdir()
+    (foreign / "frame_00000.obj").write_text("v 0 0 0\n")
+    with pytest.raises(atomic.NotOursError, match="was not written by tuckercodec"):
+        tc.save_sequence(new, foreign, overwrite=True, progress=False)
+    assert (foreign / "frame_00000.obj").read_text() == "v 0 0 0\n"
+
+
+def test_force_replaces_a_folder_of_frames_it_wrote_whole(tmp_path):
+    """No frame of a longer earlier output lingers: the folder is replaced, not merged."""
+    frames = tmp_path / "frames"
+    tc.save_sequence(tc.MeshSequence(wave_sequence(9, 4), grid_faces(4)), frames, progress=False)
+    new = tc.MeshSequence(wave_sequence(4, 4, seed=1), grid_faces(4))
+    tc.save_sequence(new, frames, overwrite=True, progress=False)
+    back = tc.load_sequence(frames, progress=False)
+    np.testing.assert_array_equal(back.vertices, new.vertices)
+    assert len(list(frames.glob("*.obj"))) == 4 and _listing(tmp_path) == ["frames"]
+
+
+def test_frames_merged_into_an_empty_or_foreign_folder(tmp_path):
+    """Without --force an existing folder gets the new files beside its own, untouched; an
+    empty folder (even with --force) becomes the tool's, a folder of other files does not."""
+    sequence = tc.MeshSequence(wave_sequence(3, 4), grid_faces(4))
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    tc.save_sequence(sequence, empty, overwrite=True, progress=False)
+    atomic.refuse_unless_ours(empty)  # the tool's now: --force may replace it
+    mixed = tmp_path / "mixed"
+    mixed.mkdir()
+    (mixed / "mine.txt").write_text("mine")
+    tc.save_sequence(sequence, mixed, progress=False)
+    assert (mixed / "mine.txt").read_text() == "mine"
+    assert not (mixed / atomic.OUTPUT_MARKER).exists()
+    with pytest.raises(atomic.NotOursError, match=r"mine\.txt"):
+        atomic.refuse_unless_ours(mixed)
+
+
+def test_the_manifest_is_checked_at_every_depth(tmp_path):
+    """A file put inside a folder the tool wrote (its data/, say) makes it not the tool's."""
     target = tmp_path / "store"
-    target.mkdir()
-    (target / "mine.txt").write_text("mine")
-    seen: list[Path] = []
+    with atomic.atomic_store(target) as staging:
+        (staging / "data").mkdir()
+        (staging / "data" / "x.bin").write_bytes(b"x")
+    atomic.refuse_unless_ours(target)
+    (target / "data" / "mine.txt").write_text("mine")
+    (target / "data" / "sub").mkdir()
+    with pytest.raises(atomic.NotOursError) as refused:
+        atomic.refuse_unless_ours(target)
+    assert "2 entries (data/mine.txt, data/sub/)" in str(refused.value)
+    (target / "data" / "mine.txt").unlink()
+    (target / "data" / "sub").rmdir()
+    (target / "data" / "x.bin").unlink()
+    (target / "data" / "x.bin").symlink_to(tmp_path)  # a link where a file was: not ours
+    with pytest.raises(atomic.NotOursError, match=r"data/x\.bin"):
+        atomic.refuse_unless_ours(target)
+    (target / "data" / "x.bin").unlink()
+    (target / atomic.OUTPUT_MARKER).write_text("{not json")
+    with pytest.raises(atomic.NotOursError, match="was not written by tuckercodec"):
+        atomic.refuse_unless_ours(target)
 
-    def refuse(path: Path) -> None:
-        seen.append(path)
-        raise FileExistsError(f"{path} is not ours")
 
-    store = atomic.atomic_store(target, overwrite=True, replaceable=refuse)
-    with pytest.raises(FileExistsError, match="is not ours"), store as staging:
-        (staging / "new.txt").write_text("new")
-    assert seen == [target]
-    assert sorted(p.name for p in target.iterdir()) == ["mine.txt"]
+def test_atomic_store_checks_the_folder_again_as_it_replaces_it(tmp_path):
+    """A file put into the folder while the new one was built is seen when the old folder is
+    moved aside: the replacement is refused and the folder put back as it was."""
+    target = tmp_path / "store"
+    with atomic.atomic_store(target) as staging:
+        (staging / "old.txt").write_text("old")
+
+    def replace_while_a_user_adds_a_file() -> None:
+        with atomic.atomic_store(target, overwrite=True) as staging:
+            (staging / "new.txt").write_text("new")
+            (target / "mine.txt").write_text("mine")  # meanwhile, by someone else
+
+    with pytest.raises(atomic.NotOursError, match=r"mine\.txt"):
+        replace_while_a_user_adds_a_file()
+    assert sorted(p.name for p in target.iterdir()) == [
+        atomic.OUTPUT_MARKER,
+        "mine.txt",
+        "old.txt",
+    ]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["store"]
+    (target / "mine.txt").unlink()
+    with atomic.atomic_store(target, overwrite=True) as staging:
+        (staging / "new.txt").write_text("new")
+    assert sorted(p.name for p in target.iterdir()) == [atomic.OUTPUT_MARKER, "new.txt"]
+
+
+def test_a_stale_staging_folder_of_a_dead_writer_is_removed_by_the_next_write(tmp_path):
+    """SIGKILL while a store is written leaves its staging folder; the next write to the same
+    target removes it, and only it: a live writer's, or a look-alike of another host or with
+    no such name, is left."""
+    target = tmp_path / "out.zarr"
+    script = (
+        "import sys, time\n"
+        "from tuckercodec.system.atomic import atomic_store\n"
+        "with atomic_store(sys.argv[1]) as staging:\n"
+        "    (staging / 'part').write_bytes(b'x')\n"
+        "    print(staging, flush=True)\n"
+        "    time.sleep(120)\n"
+    )
+    child = subprocess.Popen(
+        [sys.executable, "-c", script, str(target)], stdout=subprocess.PIPE, text=True
+    )
+    assert child.stdout is not None
+    staged = Path(child.stdout.readline().strip())
+    os.kill(child.pid, signal.SIGKILL)
+    child.wait(timeout=60)
+    child.stdout.close()
+    assert staged.is_dir()
+    alive = atomic._make_staging(target)  # this process's: running
+    other_host = tmp_path / f".out.zarr.tkc-00000000-{child.pid}-abc.tmp"
+    other_host.mkdir()
+    plain = tmp_path / ".out.zarr.mine.tmp"
+    plain.mkdir()
+    with atomic.atomic_store(target) as staging:
+        (staging / "part").write_bytes(b"y")
+    assert not staged.exists()
+    assert alive.is_dir() and other_host.is_dir() and plain.is_dir()
 
 
 def test_frames_written_plainly_are_synced_before_their_folder_appears(tmp_path, monkeypatch):
@@ -353,7 +469,7 @@ def test_frames_written_plainly_are_synced_before_their_folder_appears(tmp_path,
     monkeypatch.setattr(os, "fsync", fsync)
     tc.save_sequence(sequence, target, progress=False)
     files = list(target.iterdir())
-    assert len(files) == 5
+    assert len(files) == 6  # five frames and the manifest, all synced
     assert synced >= {path.stat().st_ino for path in files}
     assert target.stat().st_ino in synced or os.name != "posix"  # a folder is synced on POSIX
 

@@ -8,6 +8,7 @@ import re
 import shutil
 import subprocess
 import sys
+import unicodedata
 from typing import Any
 
 import numpy as np
@@ -719,3 +720,82 @@ def test_decode_help_names_only_suffixes_it_writes(capsys):
     listed = text.split("chosen by its suffix (")[1].split(")")[0]
     written = {s for f in formats() if f.write is not None for s in f.suffixes}
     assert set(re.findall(r"\.[a-z0-9]+", listed)) <= written
+
+
+@pytest.mark.parametrize(
+    ("verb", "name", "inside"),
+    [
+        ("convert", "out.zarr", "vertices/notes.txt"),
+        ("decode", "out.zarr", "notes.txt"),
+        ("decode", "frames", "notes.txt"),
+        ("convert", "frames", "notes/todo.txt"),
+        ("convert", "out.pvd", "notes.txt"),  # its frames' folder, out/
+    ],
+)
+def test_force_replaces_only_a_folder_it_wrote(
+    verb, name, inside, wave_npz, packed, tmp_path, capsys
+):
+    """--force once deleted the whole existing folder of a zarr store, or the frames of a folder
+    it did not write; now a user's file anywhere inside keeps the folder, with exit 1 naming
+    it, and a folder the tool wrote is replaced."""
+    if name.endswith(".zarr"):
+        pytest.importorskip("zarr")
+    source = str(packed) if verb == "decode" else str(wave_npz)
+    output = tmp_path / "out" / name
+    output.parent.mkdir()
+    args = [verb, source, "-o", str(output)] if verb == "decode" else [verb, source, str(output)]
+    assert main(args) == 0
+    folder = output.with_suffix("") if name.endswith(".pvd") else output
+    mine = folder / inside
+    mine.parent.mkdir(exist_ok=True)
+    mine.write_text("mine")
+    capsys.readouterr()
+    assert main([*args, "--force"]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"tuckercodec: {folder} holds files tuckercodec did not write")
+    assert "--force would delete 1 entry" in err and "\n" not in err
+    assert mine.read_text() == "mine"
+    assert not [p for p in output.parent.iterdir() if p.name.startswith(".")]  # nothing left
+    if mine.parent == folder:
+        mine.unlink()
+    else:
+        shutil.rmtree(mine.parent)
+    assert main([*args, "--force"]) == 0
+    assert not [p for p in output.parent.iterdir() if p.name.startswith(".")]
+
+
+@pytest.mark.parametrize("name", ["out.zarr", "frames"])
+def test_force_refuses_a_folder_the_tool_did_not_write(name, wave_npz, tmp_path, capsys):
+    if name.endswith(".zarr"):
+        pytest.importorskip("zarr")
+    folder = tmp_path / name
+    (folder / "src").mkdir(parents=True)
+    (folder / "src" / "main.py").write_text("print(1)")
+    assert main(["convert", str(wave_npz), str(folder), "--force"]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"tuckercodec: {folder} was not written by tuckercodec")
+    assert "would delete 1 entry (src/)" in err
+    assert (folder / "src" / "main.py").read_text() == "print(1)"
+
+
+def test_info_escapes_the_files_strings_so_a_terminal_runs_none_of_them(packed, capsys):
+    """info printed the file's encoder and error definition raw: a crafted file could send a
+    terminal escape sequences (clear the screen, set the title, reorder the line)."""
+    from tests.support.compressed import Parts
+
+    parts = Parts(packed.read_bytes())
+    hostile = "evil\x1b]0;owned\x07\x1b[2J\u202e\x9b\u2028\\x1b"
+    parts.header["encoder"] = hostile
+    parts.header["error"] = {**parts.header["error"], "definition": "kg\x1b[31m" + hostile}
+    crafted = packed.with_name("crafted.tkc")
+    crafted.write_bytes(parts.pack())
+    capsys.readouterr()
+    assert main(["info", str(crafted)]) == 0
+    out = capsys.readouterr().out
+    assert not [c for c in out if unicodedata.category(c) in {"Cc", "Cf", "Zl"} and c != "\n"]
+    assert r"written by evil\x1b]0;owned\x07\x1b[2J\u202e\x9b\u2028\\x1b" in out
+    assert r"(kg\x1b[31mevil" in out
+    assert main(["info", str(crafted), "--json"]) == 0
+    text = capsys.readouterr().out
+    assert text.isascii() and "\x1b" not in text  # JSON escapes them itself
+    assert json.loads(text)["encoder"] == hostile

@@ -6,8 +6,10 @@ from __future__ import annotations
 
 import base64
 import hashlib
+import html
 import http.client
 import json
+import os
 import re
 import shutil
 import signal
@@ -26,6 +28,7 @@ from tests.support.sequences import grid_faces, wave_sequence
 from tuckercodec import MeshSequence, decode, encode
 from tuckercodec.cli import main
 from tuckercodec.measures.distortion import kg_error
+from tuckercodec.system.atomic import OUTPUT_MARKER
 from tuckercodec.web import server as server_module
 from tuckercodec.web.server import ViewerServer
 from tuckercodec.web.site import build_site, page_files, web_root
@@ -259,27 +262,87 @@ def test_a_request_that_trickles_in_is_closed_at_its_deadline(served):
         assert _get(server, "/index.html")[0] == 200  # and others are served as before
 
 
-def test_connections_over_the_cap_are_closed_at_once(served):
+def test_the_longest_waiting_connection_makes_room_for_a_new_one(served):
+    """Connections that have sent no whole request are capped by closing the oldest, so a new
+    one (a browser's, which sends its headers at once) is always heard."""
     _, site, folder = served
-    with ViewerServer(folder, site.files, 0, connection_timeout=60, max_connections=4) as server:
+    with ViewerServer(folder, site.files, 0, connection_timeout=60, max_waiting=4) as server:
         held = _half_sent(server.port, 4)
         try:
-            extra = socket.create_connection(("127.0.0.1", server.port), timeout=10)
-            with extra:
-                assert _closed_within(extra, 30)  # not the 60 s of the timeout
             assert not any(_closed_within(connection, 0.2) for connection in held)
+            extra = _half_sent(server.port, 1)[0]
+            with extra:
+                assert _closed_within(held[0], 30)  # the oldest, not at the 60 s timeout
+                assert not any(_closed_within(connection, 0.2) for connection in held[1:])
+                assert not _closed_within(extra, 0.2)
+                assert _get(server, "/index.html")[0] == 200  # closes the next oldest
         finally:
             for connection in held:
                 connection.close()
-        # the slots come back when the held connections end (their threads see the close)
-        for _ in range(100):
-            try:
-                if _get(server, "/index.html")[0] == 200:
-                    break
-            except (ConnectionError, http.client.HTTPException):
-                time.sleep(0.1)
-        else:
-            pytest.fail("the server answers no request after the held connections closed")
+
+
+def test_trickling_connections_without_the_token_cannot_starve_the_page(served):
+    """80 connections sending part of a request, without the token, once filled the server's
+    64 places until their timeout: 27 of 34 of the page's requests were refused. Waiting
+    connections now hold no place, and the oldest is closed for a new one."""
+    _, site, folder = served
+    with ViewerServer(folder, site.files, 0, connection_timeout=60) as server:
+        held = _half_sent(server.port, 80)
+        try:
+            statuses: list[int | str] = []
+            for _ in range(34):
+                try:
+                    statuses.append(_get(server, "/index.html")[0])
+                except (ConnectionError, http.client.HTTPException) as error:
+                    statuses.append(type(error).__name__)
+            assert statuses == [200] * 34
+        finally:
+            for connection in held:
+                connection.close()
+
+
+def test_admitted_connections_over_the_cap_get_503_and_refused_ones_are_closed(served):
+    """Connections whose request carried the token are capped (503 beyond); a connection whose
+    request was refused (403) is closed after its answer, holding nothing."""
+    _, site, folder = served
+    with ViewerServer(folder, site.files, 0, connection_timeout=60, max_connections=2) as server:
+        assert server.admit() and server.admit()  # two places taken, as by two answers
+        assert _get(server, "/index.html")[0] == 503
+        server.leave()
+        assert _get(server, "/index.html")[0] == 200
+        server.leave()
+        refused = _half_sent(server.port, 1)[0]
+        with refused:
+            refused.sendall(b"\r\n")  # the request, whole, without the token: 403, then closed
+            refused.settimeout(30)
+            answer = b""
+            while chunk := refused.recv(65536):
+                answer += chunk
+            assert answer.startswith((b"HTTP/1.0 403", b"HTTP/1.1 403"))
+
+
+@pytest.mark.parametrize(
+    "others",
+    [
+        'a="b; c=d',  # an unterminated quote: SimpleCookie gave up on the whole header
+        "weird[name]=1",
+        "noequals",
+        'x="\\q"; y=1',
+    ],
+)
+def test_a_cookie_of_another_app_does_not_hide_the_viewers(served, others):
+    """Another localhost app's cookie that http.cookies cannot parse hid the viewer's, so every
+    request of the page got 403."""
+    server, _, _ = served
+    for cookie in (
+        f"{others}; {server.cookie}={server.token}",
+        f"{server.cookie}={server.token}; {others}",
+        f'{others};{server.cookie}="{server.token}"',
+    ):
+        assert _get(server, "/index.html", cookie=cookie)[0] == 200, cookie
+    assert _get(server, "/index.html", cookie=f"{others}; {server.cookie}=wrong")[0] == 403
+    assert _get(server, "/index.html", cookie=f"x{server.cookie}={server.token}")[0] == 403
+    assert _get(server, "/index.html", cookie=f"{server.cookie}=é")[0] == 403  # not ASCII
 
 
 def test_the_page_loads_only_shipped_files_and_its_policy_allows_its_import_map():
@@ -332,7 +395,7 @@ def test_export_writes_the_folder_and_refuses_an_existing_one_without_force(
     printed = capsys.readouterr().out
     assert "python -m http.server -d" in printed
     written = sorted(str(p.relative_to(out)) for p in out.rglob("*") if p.is_file())
-    marker = ".tuckercodec-viewer"  # what --force later recognises as an export
+    marker = OUTPUT_MARKER  # what --force later recognises as a folder the tool wrote
     assert written == sorted([*page_files(), marker, "data/wave_one.tkc", "index.html"])
     assert (out / "data/wave_one.tkc").read_bytes() == files["tkc"].read_bytes()
     index = (out / "index.html").read_text()
@@ -348,6 +411,7 @@ def test_export_writes_the_folder_and_refuses_an_existing_one_without_force(
     assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 1
     err = capsys.readouterr().err.strip()
     assert "would delete 1 entry (stray.txt)" in err and "\n" not in err
+    assert "holds files tuckercodec did not write" in err
     assert (out / "stray.txt").read_text() == "mine"
 
     (out / "stray.txt").unlink()
@@ -365,14 +429,12 @@ def test_export_force_replaces_a_previous_export_whole(files, tmp_path, capsys):
     out = tmp_path / "site"
     args = ["view", str(files["tkc"]), "--reference", str(files["original"])]
     assert main([*args, "--export-html", str(out)]) == 0
-    assert (out / ".tuckercodec-viewer").read_text().startswith("tuckercodec viewer export")
+    assert json.loads((out / OUTPUT_MARKER).read_text())["format"].startswith("tuckercodec")
     assert "data/reference.bin" in _exported(out)
-    (out / "data/leftover.bin").write_bytes(b"x")  # inside the export's own folders: replaced
+    (out / "data/reference.bin").write_bytes(b"x")  # a file the export wrote, changed: replaced
     assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 0
     written = _exported(out)
-    assert written == sorted(
-        [*page_files(), ".tuckercodec-viewer", "data/wave_one.tkc", "index.html"]
-    )
+    assert written == sorted([*page_files(), OUTPUT_MARKER, "data/wave_one.tkc", "index.html"])
     assert not [p for p in tmp_path.iterdir() if p.name != "site"]  # no staging, nothing aside
 
 
@@ -381,7 +443,24 @@ def test_export_force_uses_an_empty_folder(files, tmp_path):
     out.mkdir()
     assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 0
     assert (out / "data/wave_one.tkc").read_bytes() == files["tkc"].read_bytes()
-    assert (out / ".tuckercodec-viewer").is_file()
+    assert (out / OUTPUT_MARKER).is_file()
+
+
+def test_export_force_keeps_a_users_file_inside_the_exports_own_folders(files, tmp_path, capsys):
+    """--force once looked only at the export's top-level names, so a file a user put in its
+    data/ or viewer/ was deleted with it."""
+    out = tmp_path / "site"
+    assert main(["view", str(files["tkc"]), "--export-html", str(out)]) == 0
+    for mine in ("data/notes.txt", "viewer/custom.css"):
+        (out / mine).write_text("mine")
+        capsys.readouterr()
+        assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 1
+        err = capsys.readouterr().err.strip()
+        assert f"would delete 1 entry ({mine})" in err and "\n" not in err
+        assert (out / mine).read_text() == "mine"
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["site"]  # nothing staged or aside
+        (out / mine).unlink()
+    assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 0
 
 
 def test_export_force_refuses_a_folder_that_is_not_an_export_and_leaves_it(files, tmp_path, capsys):
@@ -393,7 +472,7 @@ def test_export_force_refuses_a_folder_that_is_not_an_export_and_leaves_it(files
     before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
     assert main(["view", str(files["tkc"]), "--export-html", str(out), "--force"]) == 1
     err = capsys.readouterr().err.strip()
-    assert err.startswith(f"tuckercodec: {out} is no export") and "\n" not in err
+    assert err.startswith(f"tuckercodec: {out} was not written by tuckercodec") and "\n" not in err
     assert "would delete 2 entries (notes.txt, src/)" in err
     assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == before
     assert sorted(p.name for p in out.iterdir()) == ["notes.txt", "src"]
@@ -583,3 +662,66 @@ def test_measure_js_gives_the_frame_error_python_gives(files, wave, tmp_path):
         np.add.at(sums, triangles[:, corner], np.cross(e1, e2))
     expected = sums / np.linalg.norm(sums, axis=1, keepdims=True)
     np.testing.assert_allclose(normals, expected, atol=1e-5)
+
+
+def test_open_gives_the_browser_a_private_file_not_the_token(files, tmp_path):
+    """--open once passed the URL with its token on the browser's command line, which every
+    local user can read in /proc/PID/cmdline; the browser now gets the path of a redirect page
+    that only this user can read (0600 in a 0700 folder)."""
+    record = tmp_path / "record"
+    launcher = tmp_path / "browser.sh"
+    launcher.write_text(
+        "#!/bin/sh\n"
+        f'printf "%s\\n" "$0" "$@" > "{record}.argv"\n'
+        'page="${1#file://}"\n'
+        f'stat -c "%a" "$page" "$(dirname "$page")" > "{record}.mode"\n'
+        f'cat "$page" > "{record}.page"\n'
+        f'mv "{record}.argv" "{record}.done"\n'
+    )
+    launcher.chmod(0o700)
+    arguments = ["view", str(files["tkc"]), "--open"]
+    start = (
+        "import runpy, signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
+        f"sys.argv = ['tuckercodec', *{arguments!r}]; "
+        "runpy.run_module('tuckercodec', run_name='__main__')"
+    )
+    environment = {**os.environ, "BROWSER": f"{launcher} %s"}
+    child = subprocess.Popen(
+        [sys.executable, "-c", start],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
+        env=environment,
+    )
+    try:
+        assert child.stdout is not None
+        url = ""
+        while not url:
+            line = child.stdout.readline()
+            assert line, f"the command ended early: {child.communicate(timeout=30)}"
+            if line.startswith("http://127.0.0.1:"):
+                url = line.strip()
+        token = url.rsplit("token=", 1)[1]
+        done = Path(f"{record}.done")
+        for _ in range(600):  # generous: the launcher runs once the server is up
+            if done.exists():
+                break
+            time.sleep(0.1)
+        else:
+            pytest.fail("the browser was never started")
+        command_line = done.read_text().splitlines()
+        assert command_line[0] == str(launcher) and len(command_line) == 2
+        assert token not in done.read_text() and "token" not in done.read_text()
+        page = Path(command_line[1].removeprefix("file://"))
+        assert command_line[1].startswith("file://") and page.name == "open.html"
+        assert Path(f"{record}.mode").read_text().split() == ["600", "700"]
+        assert html.escape(url) in Path(f"{record}.page").read_text()  # it redirects there
+        child.send_signal(signal.SIGINT)
+        _, err = child.communicate(timeout=30)
+    finally:
+        if child.poll() is None:
+            child.kill()
+            child.communicate()
+    assert child.returncode == 0, err
+    assert not page.exists() and not page.parent.exists()  # removed with the server

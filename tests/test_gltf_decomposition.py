@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from tests.support.sequences import grid_faces, wave_sequence
 from tuckercodec import Decoder, MeshSequence, decode_file, encode, load_sequence
 from tuckercodec.cli.main import main
 from tuckercodec.gltf_export import COMPRESSIONS, write_decomposition_gltf
@@ -242,3 +243,22 @@ def test_the_quantized_targets_share_one_buffer_view_of_8_byte_rows(
     assert [a.get("byteOffset", 0) for a in accessors] == [
         8 * count * b for b in range(len(targets))
     ]
+
+
+def test_a_frame_rate_whose_times_float32_cannot_hold_is_a_clean_refusal(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A valid frame rate of 5e-324 puts frame 1 at 2e323 s, beyond float32: the export once
+    failed in its JSON with exit 2 (the usage code); it is now exit 4 naming the output and
+    the frame, with nothing written."""
+    seq = MeshSequence(wave_sequence(4, 4), grid_faces(4), frame_rate=5e-324)
+    packed = tmp_path / "tiny_rate.tkc"
+    packed.write_bytes(encode(seq, ranks=(2, 2)))
+    out = tmp_path / "tiny_rate.glb"
+    assert main(["decode", str(packed), "-o", str(out)]) == 4
+    err = capsys.readouterr().err.strip()
+    assert err == (
+        f"tuckercodec: bad input: {out}, frame 1: its time is beyond the range of float32, in "
+        "which the file stores times"
+    )
+    assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["tiny_rate.tkc"]

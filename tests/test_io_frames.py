@@ -286,7 +286,7 @@ def test_save_folder_round_trip_refuses_overwrite(tmp_path: Path) -> None:
     (out / "f1.obj").unlink()  # one missing target: still nothing may be written
     with pytest.raises(FileExistsError, match=r"f0\.obj"):
         save_sequence(seq, out)
-    assert sorted(p.name for p in out.iterdir()) == ["f0.obj", "f2.obj"]
+    assert sorted(p.name for p in out.glob("*.obj")) == ["f0.obj", "f2.obj"]
     save_sequence(seq, out, overwrite=True)
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before  # and no temporary files
 
@@ -298,7 +298,7 @@ def test_saved_names_are_safe_unique_and_keep_the_order(tmp_path: Path) -> None:
         frame_names=["z/walk.ply", "walk.obj", "a b", ""],
     )
     save_sequence(seq, tmp_path / "out", precision=6)
-    names = sorted((p.name for p in (tmp_path / "out").iterdir()), key=natural_sort_key)
+    names = sorted((p.name for p in (tmp_path / "out").glob("*.obj")), key=natural_sort_key)
     assert names == ["00000_walk.obj", "00001_walk_2.obj", "00002_a_b.obj", "00003_frame_00003.obj"]
     again = load_sequence(tmp_path / "out", progress=False)
     np.testing.assert_array_equal(again.vertices, seq.vertices)

@@ -326,6 +326,10 @@ def test_a_missing_external_buffer_and_uris_out_of_the_folder_are_refused(tmp_pa
         gltf["buffers"][0]["uri"] = uri
         path.write_text(json.dumps(gltf))
         _refused(path, r"buffers\[0\]: its uri names .*(leads out of its folder|absolute path)")
+    for uri in ("frames%00.bin", "frames.bin\u0000"):  # a bare ValueError once, with no file named
+        gltf["buffers"][0]["uri"] = uri
+        path.write_text(json.dumps(gltf))
+        _refused(path, r"buffers\[0\]: its uri names .* with a NUL character")
 
 
 def test_an_accessor_without_a_buffer_view_is_bounded_by_the_bytes_the_file_holds(

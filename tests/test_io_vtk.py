@@ -26,6 +26,7 @@ from tuckercodec.io import vtk as vtk_format
 from tuckercodec.io.registry import WriteOptions, format_named
 from tuckercodec.io.vtk import series as vtk_series
 from tuckercodec.io.vtk.datasets import DatasetWriter
+from tuckercodec.system.atomic import NotOursError
 
 DATA = Path(__file__).parent / "data" / "vtk"
 FIXTURE = DATA / "series.pvd"
@@ -205,6 +206,10 @@ def test_writing_never_overwrites_and_checks_every_target_first(tmp_path):
     with pytest.raises(FileExistsError):
         save_sequence(seq, path)
     assert not path.exists() and list((tmp_path / "out").iterdir()) == [taken]
+    with pytest.raises(NotOursError, match="not written by tuckercodec"):
+        save_sequence(seq, path, overwrite=True)  # the frames' folder is not the tool's
+    assert not path.exists() and list((tmp_path / "out").iterdir()) == [taken]
+    taken.unlink()
     save_sequence(seq, path, overwrite=True)
     assert load_sequence(path).frame_count == 12
 
@@ -240,7 +245,7 @@ def test_vtu_frames_round_trip_too(tmp_path):
     for seq in (MeshSequence(vertices, faces), MeshSequence(vertices, NO_FACES)):
         path = tmp_path / f"u{len(seq.faces)}.pvd"
         vtk_format.write_pvd(seq, path, WriteOptions(), frame_suffix=".vtu")
-        assert sorted(p.suffix for p in path.with_suffix("").iterdir()) == [".vtu"] * 3
+        assert sorted(p.suffix for p in path.with_suffix("").glob("frame*")) == [".vtu"] * 3
         back = load_sequence(path)
         assert exact(back.vertices, vertices) and np.array_equal(back.faces, seq.faces)
     with pytest.raises(ValueError, match="frame_suffix"):

@@ -346,6 +346,17 @@ def test_update_follows_the_clock_at_the_frame_rate_and_loops(loader_runs, name)
     assert played["shown"][10:] == [2, frames - 1]
     assert played["afterSetFrame"] == 1  # half a frame on from the start of frame 1
     assert played["clamped"] == frames - 1  # loop = false stops at the last frame
+    # a step back from 0 lands in the last frame, even one smaller than the pass's rounding
+    assert played["tinyBack"] == [frames - 1, True]
+
+
+@pytest.mark.parametrize("name", LOADER_FILES)
+def test_update_keeps_the_time_finite_at_the_smallest_frame_rate(loader_runs, name):
+    """At 5e-324 fps (a valid rate) a step back once made the time Infinity, then NaN: the
+    frame times and a pass are infinite, so playback clamps instead of looping."""
+    played = loader_runs[name]["update"]
+    # frame 1 starts at 1 / 5e-324 s, beyond every double: frame 0 shows whatever the steps
+    assert played["tinyRate"] == [[0, True]] * 7
 
 
 def test_update_plays_a_file_with_time_codes_at_their_times(loader_runs):

@@ -20,7 +20,9 @@ from typing import Any
 
 #: The command line's exit codes (also listed in the README).
 EXIT_OK = 0
-EXIT_FAILURE = 1  # an output that exists (without --force), or another I/O failure
+#: an output that exists (without --force; with it, a folder the tool did not write), or
+#: another I/O failure
+EXIT_FAILURE = 1
 EXIT_USAGE = 2  # a usage error: an option out of range, a frame that does not exist
 EXIT_CORRUPT = 3  # an invalid or corrupt compressed file (FormatError)
 EXIT_BAD_INPUT = 4  # a mesh sequence that cannot be read or used (InputError)

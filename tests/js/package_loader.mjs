@@ -105,9 +105,22 @@ function updated() {
     animation.setFrame(0);
     aroundStarts.push([justBefore, animation.update(animation.frameTimes[f]).frame]);
   }
+  // a step back from 0 smaller than the pass's rounding stays within [0, duration)
+  animation.setFrame(0);
+  const tinyBack = [animation.update(-1e-300).frame, animation.time < animation.duration];
+  // the smallest valid frame rate: frame times and the pass are infinite, the time never is
+  let tiny = null;
+  new TKCLoader().parse(new Uint8Array(bytes), (a) => { tiny = a; });
+  tiny.frameRate = 5e-324;
+  for (let f = 0; f < tiny.frameCount; f++) tiny.frameTimes[f] = f / tiny.frameRate;
+  const tinyRate = [];
+  for (const step of [-1, -1, 1, 1e308, 1e308, -1e308, 0.5]) {
+    tiny.update(step);
+    tinyRate.push([tiny.frame, Number.isFinite(tiny.time)]);
+  }
   return {
     shown, decodedByQuarters, afterSetFrame, clamped, duration: animation.duration,
-    frameTimes: Array.from(animation.frameTimes), aroundStarts,
+    frameTimes: Array.from(animation.frameTimes), aroundStarts, tinyBack, tinyRate,
   };
 }
 

@@ -7,6 +7,7 @@ import argparse
 import json
 import sys
 import time
+import unicodedata
 from pathlib import Path
 
 import numpy as np
@@ -202,7 +203,7 @@ def _print_recorded(header: FileInfo) -> None:
         )
     print(
         f"file: {header.total_bytes} bytes = {header.bpfv:.4f} bpfv; KG error recorded by the "
-        f"encoder {_number(header.kg)} ({header.kg_definition or 'no definition recorded'})"
+        f"encoder {_number(header.kg)} ({_text(header.kg_definition) or 'no definition recorded'})"
         f"{recorded}"
     )
 
@@ -253,6 +254,24 @@ def _decode_gltf(
     return EXIT_OK
 
 
+#: Unicode categories never printed raw from a file: control characters (a terminal's escape
+#: sequences start with one), format characters (bidirectional overrides reorder the line) and
+#: line or paragraph separators.
+_UNPRINTED = frozenset({"Cc", "Cf", "Zl", "Zp"})
+
+
+def _text(value: str | None) -> str | None:
+    """A string read from a file, safe to print to a terminal: every control or format
+    character escaped as Python writes it (``\\x1b``, ``\\u202e``), a backslash doubled so the
+    escapes cannot be forged."""
+    if value is None:
+        return None
+    return "".join(
+        "\\\\" if c == "\\" else repr(c)[1:-1] if unicodedata.category(c) in _UNPRINTED else c
+        for c in value
+    )
+
+
 def _number(value: float | None) -> str:
     return "unknown" if value is None else f"{value:.5f}"
 
@@ -290,8 +309,8 @@ def run_info(args: argparse.Namespace) -> int:
         else f"{header.target_kg:g}"
     )
     print(
-        f"  KG error {_number(header.kg)} ({header.kg_definition or 'no definition recorded'}), "
-        f"target {target}"
+        f"  KG error {_number(header.kg)} "
+        f"({_text(header.kg_definition) or 'no definition recorded'}), target {target}"
     )
     if header.max_distance is None:
         print(
@@ -314,9 +333,9 @@ def run_info(args: argparse.Namespace) -> int:
     if header.meters_per_unit is not None:
         print(f"  {header.meters_per_unit:g} metres per unit")
     if header.up_axis is not None:
-        print(f"  {header.up_axis} up")
-    print(f"  written by {header.encoder or 'an unnamed encoder'}")
+        print(f"  {_text(header.up_axis)} up")
+    print(f"  written by {_text(header.encoder) or 'an unnamed encoder'}")
     for section_id, length, codec, critical in header.sections:
         kind = "" if critical else " (ancillary)"
-        print(f"  section {section_id:<8} {length:>10} bytes  {codec}{kind}")
+        print(f"  section {_text(section_id):<8} {length:>10} bytes  {_text(codec)}{kind}")
     return EXIT_OK

@@ -1,11 +1,11 @@
 """The ``tuckercodec`` command line: parse, run one verb, turn failures into exit codes.
 
-Exit codes (also in the README): 0 success; 1 an output that exists (without --force) or
-another I/O failure; 2 a usage error; 3 an invalid or corrupt compressed file; 4 a bad input
-mesh sequence; 5 a target no file can meet; 6 a missing optional dependency; 7 some inputs of
-a batch failed (the others were written); 130 or 143 interrupted by Ctrl-C or SIGTERM (but
-``view`` exits 0 on Ctrl-C, the way its server is meant to stop). Every failure is one line on
-standard error.
+Exit codes (also in the README): 0 success; 1 an output that exists (without --force; with it, a
+folder tuckercodec did not write) or another I/O failure; 2 a usage error; 3 an invalid or
+corrupt compressed file; 4 a bad input mesh sequence; 5 a target no file can meet; 6 a missing
+optional dependency; 7 some inputs of a batch failed (the others were written); 130 or 143
+interrupted by Ctrl-C or SIGTERM (but ``view`` exits 0 on Ctrl-C, the way its server is meant to
+stop). Every failure is one line on standard error.
 """
 
 from __future__ import annotations

@@ -7,9 +7,16 @@ folder (:mod:`tuckercodec.web.site`) in a temporary folder and serves it on 127.
 the server requires; the browser decodes the file itself, with the JavaScript decoder.
 ``--reference ORIGINAL`` adds the original's positions (its frame and vertex
 counts must be the file's, else exit 4). ``--export-html DIR`` writes the same folder instead,
-for any static web server, with a marker file (``.tuckercodec-viewer``): ``--force`` replaces
-only such a previous export or an empty folder, and refuses anything else (a file, a folder of
-other files) before writing, naming what it would delete (exit 1, as for an existing output).
+for any static web server, with the manifest every folder output has
+(:func:`tuckercodec.system.atomic.refuse_unless_ours`): ``--force`` replaces only a folder
+tuckercodec wrote (nothing in it beyond what its manifest lists) or an empty folder, and
+refuses anything else (a file, a folder with other files, at any depth) before writing, naming
+what it would delete (exit 1, as for an existing output).
+
+``--open`` starts a web browser without putting the token on its command line, which other
+users of the machine can read (``/proc/PID/cmdline``): as Jupyter does, the URL with the token
+goes into a redirect page readable by this user only (0600, in a private temporary folder,
+removed when the server stops), and the browser is given that file's path.
 
 Ctrl-C is how a server is stopped, not a failure: it shuts the server down, removes the
 temporary folder and exits 0 (other verbs exit 130, since Ctrl-C cut their work short).
@@ -25,7 +32,7 @@ import tempfile
 import threading
 import webbrowser
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -34,15 +41,14 @@ from ..decoder import Decoder
 from ..errors import EXIT_OK, FormatError, InputError
 from ..format.disk import read_file
 from ..io import open_frames
-from ..system.atomic import atomic_store, refuse_existing
+from ..system.atomic import atomic_store, refuse_existing, refuse_unless_ours
 from ..web.server import ViewerServer
 from ..web.site import (
     ReferenceFrames,
     Site,
     build_site,
     data_name,
-    replaceable,
-    write_export_marker,
+    redirect_page,
 )
 from .inputs import is_compressed, read_options, sequence_source
 
@@ -50,9 +56,10 @@ from .inputs import is_compressed, read_options, sequence_source
 def run_view(args: argparse.Namespace) -> int:
     _check_options(args)
     if args.export_html is not None:
-        refuse_existing([args.export_html], args.force)  # before the work, not after it
+        # before the work, not after it; with --force, only a folder tuckercodec wrote
+        refuse_existing([args.export_html], args.force)
         if args.force:
-            replaceable(args.export_html)  # only a previous export or an empty folder
+            refuse_unless_ours(args.export_html)  # a file there, too, is refused
     data, decoder = _validated(args.input)
     name = data_name(args.input)
     if args.export_html is not None:
@@ -153,7 +160,7 @@ def _export(
 ) -> int:
     destination = Path(args.export_html)
     # checked again as it is replaced: the folder may have changed while the site was built
-    with atomic_store(destination, overwrite=args.force, replaceable=replaceable) as staging:
+    with atomic_store(destination, overwrite=args.force) as staging:
         site = build_site(
             staging,
             data,
@@ -162,7 +169,6 @@ def _export(
             reference=reference,
             reference_name=_shown(args),
         )
-        write_export_marker(staging)
     size = sum((destination / file).stat().st_size for file in site.files)
     print(f"wrote {destination}: the viewer and {name} ({len(site.files)} files, {size} bytes)")
     _summary(site)
@@ -188,12 +194,31 @@ def _serve(args: argparse.Namespace, folder: Path, site: Site) -> int:
             _summary(site)
             print(f"serving {args.input} on {server.url} (this machine only); open:", flush=True)
             print(url, flush=True)
-            if args.open and not webbrowser.open(url):
-                print("note: no web browser could be started; open the URL above", file=sys.stderr)
-            print("press Ctrl-C to stop", flush=True)
-            threading.Event().wait()  # the server answers in its own thread until Ctrl-C
+            with ExitStack() as opened:  # the redirect page lives as long as the server
+                if args.open:
+                    private = opened.enter_context(
+                        tempfile.TemporaryDirectory(prefix="tuckercodec-open-")
+                    )
+                    if not open_browser(url, Path(private)):
+                        print(
+                            "note: no web browser could be started; open the URL above",
+                            file=sys.stderr,
+                        )
+                print("press Ctrl-C to stop", flush=True)
+                threading.Event().wait()  # the server answers in its own thread until Ctrl-C
         except KeyboardInterrupt as interrupt:
             if type(interrupt) is not KeyboardInterrupt:  # SIGTERM: exit as every verb does
                 raise
     print("stopped the server", flush=True)
     return EXIT_OK
+
+
+def open_browser(url: str, private: Path) -> bool:
+    """Start a web browser on ``url`` without putting it (and its token) on the browser's
+    command line: write a redirect page to it, readable by this user only, into ``private``
+    (a folder only this user can enter) and open that file. Whether a browser started."""
+    page = private / "open.html"
+    descriptor = os.open(page, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    with os.fdopen(descriptor, "w", encoding="utf-8") as handle:
+        handle.write(redirect_page(url))
+    return webbrowser.open(page.as_uri())

@@ -12,6 +12,7 @@ from typing import Any, Literal, Protocol
 import numpy as np
 
 from ..decoder import selected_time_codes
+from ..errors import InputError
 from ..format.reconstruction import reconstruction_basis
 from ..io.gltf.accessors import ARRAY_BUFFER, BufferBuilder, padded_rows
 from ..io.gltf.document import add_triangles, file_bytes, new_gltf
@@ -145,7 +146,7 @@ def write_decomposition_gltf(
         raise ValueError(f"compress must be one of {', '.join(COMPRESSIONS)}, got {compress!r}")
     path = Path(path)
     refuse_existing([path], overwrite)  # before the work, not after it
-    animation = _Animation.of(decoder, frames)
+    animation = _Animation.of(decoder, frames, path)
     quantized = None
     if compress != "none":
         quantized = quantize_animation(
@@ -188,8 +189,10 @@ class _Animation:
     centroids: np.ndarray
 
     @classmethod
-    def of(cls, decoder: Decomposed, frames: Any) -> _Animation:
-        """The frames ``frames`` selects of the file (ValueError if none)."""
+    def of(cls, decoder: Decomposed, frames: Any, path: Path) -> _Animation:
+        """The frames ``frames`` selects of the file (ValueError if none), to be written to
+        ``path`` (an InputError naming it and the frame if float32 seconds cannot hold the
+        frames' times: a frame rate as small as 5e-324 puts frame 1 beyond float32's range)."""
         chosen = decoder.frame_indices(frames)
         if chosen.size == 0:
             raise ValueError(f"the selection {frames!r} names no frame of the file")
@@ -201,8 +204,31 @@ class _Animation:
             codes = np.arange(chosen.size, dtype=np.float64)
         decoded = decoder.positions(chosen)
         weights, base, targets = morph_parts(decoder, chosen)
-        times = (codes / rate).astype(np.float32)
+        with np.errstate(over="ignore"):
+            times = (codes / rate).astype(np.float32)
+        _check_times(times, path)
         return cls(chosen, decoded, rate, times, weights, base, targets, decoder.centroids[chosen])
+
+
+def _check_times(times: np.ndarray, path: Path) -> None:
+    """glTF keyframe times are float32 seconds, finite and increasing (as
+    :func:`~tuckercodec.model.sequence.float32_seconds` checks for a sequence's glTF)."""
+    bad = np.flatnonzero(~np.isfinite(times))
+    if bad.size:
+        raise InputError(
+            "its time is beyond the range of float32, in which the file stores times",
+            path=path,
+            frame=int(bad[0]),
+        )
+    same = np.flatnonzero(np.diff(times) <= 0)
+    if same.size:
+        frame = int(same[0]) + 1
+        raise InputError(
+            f"frames {frame - 1} and {frame} fall on the same float32 time, {times[frame]} s, "
+            "in which the file stores times: time codes this far from 0 need more precision",
+            path=path,
+            frame=frame,
+        )
 
 
 def _report(

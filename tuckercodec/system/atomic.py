@@ -18,6 +18,18 @@ a folder that a library writes (a zarr store) with :func:`atomic_store`. The fil
 :func:`atomic_folder` may be written plainly into its staging folder (:func:`write_staged`),
 since no one sees them there: ``sync=True`` makes them durable, all at once, before they are
 moved in.
+
+Every folder output is marked as the tool's: both write, at the folder's root, a small manifest
+(:data:`OUTPUT_MARKER`) listing every file and folder they put there. ``overwrite`` (the command
+line's ``--force``) replaces an existing folder only if it is empty or one the tool wrote (its
+manifest present, and nothing in it beyond what that lists); anything else is refused with
+:class:`NotOursError` naming the path and what replacing it would delete, so that ``--force``
+never deletes a file a user put in the folder (:func:`refuse_unless_ours`). Without
+``overwrite`` an existing folder is never replaced.
+
+A staging folder is named after its writer (host and process), so that one a hard kill left
+behind is removed by the next write to the same target once that process is gone
+(:func:`clean_stale_staging`).
 """
 
 from __future__ import annotations
@@ -25,10 +37,14 @@ from __future__ import annotations
 import ctypes
 import errno
 import functools
+import hashlib
+import json
 import os
+import re
 import shutil
+import socket
 import tempfile
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager, suppress
 from pathlib import Path
@@ -41,8 +57,10 @@ _NO_TMPFILE = {errno.EOPNOTSUPP, errno.EISDIR, errno.EINVAL, errno.ENOENT}
 def refuse_existing(paths: list[Path], overwrite: bool) -> None:
     """Check, before any work, that every output can be written.
 
-    Raises ``FileExistsError`` naming the first path that exists (unless ``overwrite``), and
-    ``FileNotFoundError``/``NotADirectoryError`` naming a path whose folder is missing.
+    Raises ``FileExistsError`` naming the first path that exists (unless ``overwrite``;
+    with it, :class:`NotOursError` for a folder the tool did not write, see
+    :func:`refuse_unless_ours`), and ``FileNotFoundError``/``NotADirectoryError`` naming a path
+    whose folder is missing.
     """
     for path in paths:
         folder = Path(path).parent
@@ -54,6 +72,8 @@ def refuse_existing(paths: list[Path], overwrite: bool) -> None:
             )
         if not overwrite and Path(path).exists():
             raise _exists(path)
+        if overwrite and Path(path).is_dir() and not Path(path).is_symlink():
+            refuse_unless_ours(path)  # a folder is replaced only if the tool wrote it
 
 
 def _exists(path: str | Path) -> FileExistsError:
@@ -322,20 +342,239 @@ def sync_files(folder: Path, names: list[str]) -> None:
             os.close(descriptor)
 
 
+#: The manifest at the root of every folder the tool writes: what it wrote there (see the module
+#: docstring). A JSON object: ``format`` (:data:`MARKER_FORMAT`), ``files`` and ``folders``
+#: (POSIX paths relative to the folder, sorted).
+OUTPUT_MARKER = ".tuckercodec-output.json"
+MARKER_FORMAT = "tuckercodec folder output, version 1"
+#: How many names a refusal lists before "and N more".
+SHOWN_NAMES = 5
+
+
+class NotOursError(FileExistsError):
+    """A folder that ``overwrite`` (``--force``) may not replace: not a folder, or one holding
+    something the tool did not write there. The command line exits 1, as for an output that
+    exists without ``--force``."""
+
+
+def _walk(folder: Path) -> tuple[list[str], list[str], list[str]]:
+    """The regular files, folders and other entries (links, devices...) under ``folder``,
+    as POSIX paths relative to it; links are not followed."""
+    files: list[str] = []
+    folders: list[str] = []
+    others: list[str] = []
+    pending = [(folder, "")]
+    while pending:
+        current, prefix = pending.pop()
+        with os.scandir(current) as entries:
+            for entry in entries:
+                relative = prefix + entry.name
+                if entry.is_dir(follow_symlinks=False):
+                    folders.append(relative)
+                    pending.append((Path(entry.path), relative + "/"))
+                elif entry.is_file(follow_symlinks=False):
+                    files.append(relative)
+                else:
+                    others.append(relative)
+    return files, folders, others
+
+
+def _manifest(files: Iterable[str], folders: Iterable[str]) -> bytes:
+    listed = {"format": MARKER_FORMAT, "files": sorted(files), "folders": sorted(folders)}
+    return json.dumps(listed, indent=0).encode()
+
+
+def mark_output(folder: Path) -> None:
+    """Write :data:`OUTPUT_MARKER` into ``folder`` (a staging folder, complete), listing every
+    file and folder in it: the folder is then the tool's, which ``overwrite`` may replace."""
+    files, folders, _ = _walk(folder)
+    write_staged(folder / OUTPUT_MARKER, [_manifest(files, folders)])
+
+
+def _listed(folder: Path) -> tuple[set[str], set[str]] | None:
+    """The files and folders ``folder``'s manifest lists; None without a valid one."""
+    marker = folder / OUTPUT_MARKER
+    if marker.is_symlink() or not marker.is_file():
+        return None
+    try:
+        listed = json.loads(marker.read_bytes())
+    except (OSError, ValueError):
+        return None
+    if not isinstance(listed, dict) or listed.get("format") != MARKER_FORMAT:
+        return None
+    files, folders = listed.get("files"), listed.get("folders")
+    if not isinstance(files, list) or not isinstance(folders, list):
+        return None
+    if not all(isinstance(name, str) for name in [*files, *folders]):
+        return None
+    return set(files), set(folders)
+
+
+def _strays(folder: Path, listed: tuple[set[str], set[str]] | None) -> list[str]:
+    """What in ``folder`` its manifest ``listed`` does not list (everything without one): the
+    topmost such entries, a folder ending with ``/``, sorted."""
+    if listed is None:
+        return sorted(
+            e.name + ("/" if e.is_dir(follow_symlinks=False) else "") for e in os.scandir(folder)
+        )
+    files, folders = listed
+    strays: list[str] = []
+    pending = [(folder, "")]
+    while pending:
+        current, prefix = pending.pop()
+        with os.scandir(current) as entries:
+            for entry in entries:
+                relative = prefix + entry.name
+                if relative == OUTPUT_MARKER:
+                    continue
+                if entry.is_dir(follow_symlinks=False):
+                    if relative in folders:
+                        pending.append((Path(entry.path), relative + "/"))
+                    else:
+                        strays.append(relative + "/")
+                elif not (entry.is_file(follow_symlinks=False) and relative in files):
+                    strays.append(relative)
+    return sorted(strays)
+
+
+def refuse_unless_ours(folder: str | Path, *, shown: str | Path | None = None) -> None:
+    """Check that ``folder``, a folder output's destination, may be replaced in whole: missing,
+    empty, or a folder the tool wrote (its :data:`OUTPUT_MARKER`, and nothing in it, at any
+    depth, that the marker does not list). ``shown`` names it in the message (default
+    ``folder``: a folder moved aside is checked under its own name).
+
+    Raises:
+        NotOursError: ``folder`` is a file or a link, or holds what the tool did not write,
+            which the message names.
+    """
+    path = Path(folder)
+    name = path if shown is None else shown
+    if not os.path.lexists(path):
+        return
+    if path.is_symlink() or not path.is_dir():
+        raise NotOursError(
+            f"{name} is not a folder: --force replaces only a folder tuckercodec wrote or an "
+            "empty folder"
+        )
+    listed = _listed(path)
+    strays = _strays(path, listed)
+    if not strays:
+        return
+    shown_names = ", ".join(strays[:SHOWN_NAMES])
+    more = f" and {len(strays) - SHOWN_NAMES} more" if len(strays) > SHOWN_NAMES else ""
+    what = (
+        f"was not written by tuckercodec (no {OUTPUT_MARKER})"
+        if listed is None
+        else "holds files tuckercodec did not write"
+    )
+    count = f"{len(strays)} entr{'y' if len(strays) == 1 else 'ies'}"
+    raise NotOursError(
+        f"{name} {what}: --force would delete {count} ({shown_names}{more}), so it is refused; "
+        "--force replaces only a folder tuckercodec wrote or an empty folder (move or delete "
+        "it yourself)"
+    )
+
+
+#: A staging folder's name: ``.<target>.tkc-<host>-<pid>-<random>.tmp`` (``.old`` for a
+#: replaced folder on its way out), ``<host>`` a digest of the host's name.
+_STAGING = re.compile(r"\.tkc-([0-9a-f]{8})-([0-9]+)-[^.]+\.tmp")
+
+
+@functools.lru_cache(maxsize=1)
+def _host() -> str:
+    return hashlib.sha256(socket.gethostname().encode()).hexdigest()[:8]
+
+
+def _make_staging(target: Path) -> Path:
+    """A new, empty, private staging folder beside ``target``, named after this process."""
+    prefix = f".{target.name}.tkc-{_host()}-{os.getpid()}-"
+    return Path(tempfile.mkdtemp(dir=target.parent, prefix=prefix, suffix=".tmp"))
+
+
+def _running(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # another user's process: it exists
+        return True
+    return True
+
+
+def clean_stale_staging(target: str | Path) -> list[Path]:
+    """Remove the staging folders of writes to ``target`` that a hard kill (SIGKILL, a power
+    cut) left behind, where that is safe: named as this module names them, on this host, owned
+    by this user, and their process no longer running. Returns what was removed. A folder
+    whose process still runs (or whose number a new process took) is left."""
+    path = Path(target)
+    prefix = f".{path.name}"
+    removed: list[Path] = []
+    try:
+        entries = list(os.scandir(path.parent))
+    except OSError:
+        return removed
+    for entry in entries:
+        if not entry.name.startswith(prefix):
+            continue
+        found = _STAGING.fullmatch(entry.name[len(prefix) :])
+        if found is None or found.group(1) != _host() or not entry.is_dir(follow_symlinks=False):
+            continue
+        pid = int(found.group(2))
+        if pid == os.getpid() or _running(pid):
+            continue
+        with suppress(OSError):
+            if entry.stat(follow_symlinks=False).st_uid != os.getuid():
+                continue
+            shutil.rmtree(entry.path)
+            removed.append(Path(entry.path))
+    return removed
+
+
+def _replace_folder(staging: Path, target: Path) -> None:
+    """Put the complete folder ``staging`` in place of ``target`` (replacing one that
+    :func:`refuse_unless_ours` allows): the old folder is renamed aside, checked again there
+    (what it holds now is what would be deleted; refused, it is put back), the new one renamed
+    in, and the old one removed."""
+    aside: Path | None = None
+    try:
+        if os.path.lexists(target):
+            aside = staging.with_suffix(".old")  # the staging folder's random name: free
+            os.rename(target, aside)
+            try:
+                refuse_unless_ours(aside, shown=target)
+            except BaseException:
+                os.rename(aside, target)
+                aside = None
+                raise
+        try:
+            os.rename(staging, target)
+        except OSError:
+            if aside is not None:
+                os.rename(aside, target)  # put the old one back
+                aside = None
+            raise
+    finally:
+        if aside is not None:
+            shutil.rmtree(aside, ignore_errors=True)
+
+
 @contextmanager
 def atomic_folder(
     destination: str | Path, names: list[str], *, overwrite: bool = False, sync: bool = False
 ) -> Iterator[Path]:
     """Write the files ``names`` of a folder as a whole: yield a hidden staging folder beside
-    ``destination``; when the block ends without an exception, its files are moved into
-    ``destination`` (created if missing), and on any exception the staging folder is removed,
-    leaving ``destination`` as it was.
+    ``destination``; when the block ends without an exception, its files are put in place, and
+    on any exception the staging folder is removed, leaving ``destination`` as it was.
 
-    A new ``destination`` appears at once, complete (one rename). Into an existing folder the
-    files are moved one rename each, after all of them have been written, so an interruption
-    can only fall in that short last step. Existing files among ``names`` are refused unless
-    ``overwrite``; other files in ``destination`` are never touched. Only a hard kill while the
-    files are being written can leave the staging folder (``.<destination>.<random>.tmp``).
+    A new ``destination`` appears at once, complete, with its manifest (one rename). With
+    ``overwrite`` an existing folder must be one the tool wrote, or empty
+    (:func:`refuse_unless_ours`, checked before the block runs and again when it is
+    replaced); it is then replaced in whole, so no frame of an earlier, longer output lingers.
+    Without it, existing files among ``names`` are refused before the block runs and the files
+    are moved into the existing folder one rename each, after all of them have been written;
+    other files there are never touched (a folder that was the tool's, or empty, keeps a
+    manifest listing them all). A hard kill while the files are written can leave the staging
+    folder, which the next write to ``destination`` removes (:func:`clean_stale_staging`).
 
     With ``sync``, the files and the staging folder are made durable (:func:`sync_files`)
     before anything is moved in, so files written plainly into it (:func:`write_staged`) are
@@ -351,68 +590,71 @@ def atomic_folder(
             errno.ENOENT, "the output folder's parent does not exist", str(parent)
         )
     if target.is_dir():
-        refuse_existing([target / name for name in names], overwrite)
-    staging = Path(tempfile.mkdtemp(dir=parent, prefix=f".{target.name}.", suffix=".tmp"))
+        if overwrite:
+            refuse_unless_ours(target)
+        else:
+            refuse_existing([target / name for name in names], overwrite)
+    clean_stale_staging(target)
+    staging = _make_staging(target)
     try:
         yield staging
+        mark_output(staging)
         if sync:
-            sync_files(staging, names)
-        if not target.exists():
-            os.chmod(staging, 0o777 & ~_umask())  # mkdtemp makes 0700; match a plain mkdir
+            sync_files(staging, [*names, OUTPUT_MARKER])
+        os.chmod(staging, 0o777 & ~_umask())  # mkdtemp makes 0700; match a plain mkdir
+        if not os.path.lexists(target) or (overwrite and _holds_anything(target)):
             try:
-                os.rename(staging, target)  # fails if someone made target meanwhile
+                _replace_folder(staging, target)
                 return
             except OSError:
-                if not target.is_dir():
+                if overwrite or not target.is_dir():  # someone made it meanwhile: merge
                     raise
-        for name in names:
-            _move_in(staging / name, target / name, overwrite)
+        _merge(staging, target, names)
     finally:
         shutil.rmtree(staging, ignore_errors=True)
+
+
+def _holds_anything(folder: Path) -> bool:
+    with os.scandir(folder) as entries:
+        return next(entries, None) is not None
+
+
+def _merge(staging: Path, target: Path, names: list[str]) -> None:
+    """Move the files ``names`` into the existing folder ``target`` (none replaced); if it was
+    the tool's or empty, its manifest lists them too, written before they appear."""
+    listed = _listed(target)
+    if not _strays(target, listed):
+        files, folders = listed or (set(), set())
+        write_atomic(target / OUTPUT_MARKER, _manifest(files | set(names), folders), overwrite=True)
+    for name in names:
+        _move_in(staging / name, target / name, False)
 
 
 @contextmanager
-def atomic_store(
-    destination: str | Path,
-    *,
-    overwrite: bool = False,
-    replaceable: Callable[[Path], None] | None = None,
-) -> Iterator[Path]:
-    """A folder that a library writes as a whole (a zarr store): yield a hidden, empty staging
-    folder beside ``destination``; when the block ends without an exception it becomes
-    ``destination`` in one rename, and on any exception it is removed.
+def atomic_store(destination: str | Path, *, overwrite: bool = False) -> Iterator[Path]:
+    """A folder that a library writes as a whole (a zarr store, the viewer's export): yield a
+    hidden, empty staging folder beside ``destination``; when the block ends without an
+    exception it gets its manifest and becomes ``destination`` in one rename, and on any
+    exception it is removed.
 
     An existing ``destination`` is refused before the block runs (``FileExistsError``) unless
-    ``overwrite``; then it is replaced in whole (renamed aside, the new folder renamed in, the
+    ``overwrite``, and then unless it is empty or a folder the tool wrote
+    (:func:`refuse_unless_ours`: :class:`NotOursError`, checked before the block runs and again
+    as it is replaced); it is replaced in whole (renamed aside, the new folder renamed in, the
     old one removed), never merged with the new files, which would mix two stores.
-    ``replaceable``, if given, is called with an existing ``destination`` just before it is
-    renamed aside, and may refuse it by raising (the staging folder is then removed).
     """
     target = Path(destination)
     refuse_existing([target], overwrite)
-    staging = Path(tempfile.mkdtemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp"))
-    aside: Path | None = None
+    if overwrite:
+        refuse_unless_ours(target)
+    clean_stale_staging(target)
+    staging = _make_staging(target)
     try:
         yield staging
+        mark_output(staging)
         os.chmod(staging, 0o777 & ~_umask())  # mkdtemp makes 0700; match a plain mkdir
-        if os.path.lexists(target):
-            if not overwrite:
-                raise _exists(target)
-            if replaceable is not None:
-                replaceable(target)
-            aside = staging.with_suffix(".old")  # the staging folder's random name: free
-            os.rename(target, aside)
-        try:
-            os.rename(staging, target)
-        except OSError:
-            if aside is not None:
-                os.rename(aside, target)  # put the old one back
-                aside = None
-            raise
+        if not overwrite and os.path.lexists(target):
+            raise _exists(target)
+        _replace_folder(staging, target)
     finally:
         shutil.rmtree(staging, ignore_errors=True)
-        if aside is not None:
-            if aside.is_dir() and not aside.is_symlink():
-                shutil.rmtree(aside, ignore_errors=True)
-            else:
-                aside.unlink(missing_ok=True)

@@ -51,10 +51,13 @@ def open_input(path: str | os.PathLike[str], what: str) -> BinaryIO:
 def inside_folder(folder: Path, name: str) -> Path:
     """The resolved path of ``name``, a file that another file lists (a .pvd's frames, an
     .xdmf's HDF5 files), which must lie inside ``folder``, the lister's own: an absolute path, or
-    one that leads out through ``..`` or a symbolic link, is an :class:`InputError` without a
-    path (the caller names the file that lists it), as glTF keeps its buffers beside it. A
-    service that converts uploads must not hand out its own files."""
+    one that leads out through ``..`` or a symbolic link, or one with a NUL character, is an
+    :class:`InputError` without a path (the caller names the file that lists it), as glTF
+    keeps its buffers beside it. A service that converts uploads must not hand out its own
+    files."""
     text = name.replace("\\", "/")
+    if "\0" in text:  # no file system has such a name; os refuses it with a bare ValueError
+        raise InputError(f"names {name!r}, with a NUL character, which no file name holds")
     if "://" in text or text.startswith("/") or Path(text).is_absolute() or text[1:2] == ":":
         raise InputError(f"names {name!r}, an absolute path: only files inside its folder are read")
     base = folder.resolve()

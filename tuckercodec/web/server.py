@@ -15,14 +15,25 @@ sending, mid-request or between requests, is disconnected, so half-sent requests
 threads. A request's line and headers must also arrive whole within :data:`REQUEST_DEADLINE`
 of when the server starts waiting for them: a client that sends a byte every few seconds,
 never idle for long, is disconnected there too (otherwise 64 kB of request line and a hundred
-headers at a byte every 4 s would hold a thread for weeks). At most :data:`MAX_CONNECTIONS`
-connections are open at once; one more is closed as soon as it is accepted.
+headers at a byte every 4 s would hold a thread for weeks).
+
+A connection holds no place until it has shown the token: until its first request's line and
+headers have arrived it is *waiting*, and at most :data:`MAX_WAITING` connections wait at once;
+one more makes room by closing the one that has waited longest. A browser sends a request's
+headers at once, so it waits for milliseconds, while a client that connects and trickles (or
+sends nothing) is the oldest soon: connections without the token cannot crowd out the page's
+requests. A connection whose request carries the token is *admitted* and may stay open for the
+next (keep-alive), at most :data:`MAX_CONNECTIONS` at once (503 beyond); a connection whose
+request is refused, or is no GET or HEAD, is closed after its response.
 
 Each run has a random token (as Jupyter does), in the URL to open (:meth:`ViewerServer.address`,
 ``...&token=...``) and required on every request: other users of the machine can reach
 127.0.0.1 too. The first request that carries it in its query gets it back as a cookie (named
 with the port, since cookies do not tell ports apart), which the page's module, script and file
-requests then carry; a request with neither is refused (403). A request whose ``Host`` is not
+requests then carry; a request with neither is refused (403). The Cookie header is split by
+hand (``;`` between cookies, the first ``=`` in each), not with ``http.cookies``, which gives
+up on the whole header at one cookie it cannot parse: another local app's cookie for
+127.0.0.1 must not hide this one. A request whose ``Host`` is not
 this server's address is refused (403) too, which stops a web page elsewhere from reaching it
 through a name that resolves to 127.0.0.1 (DNS rebinding).
 
@@ -35,11 +46,13 @@ from __future__ import annotations
 import io
 import secrets
 import shutil
+import socket
 import sys
 import threading
 import time
+from collections import OrderedDict
+from contextlib import suppress
 from http import HTTPStatus
-from http.cookies import CookieError, SimpleCookie
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path, PurePosixPath
 from types import TracebackType
@@ -61,8 +74,12 @@ CONNECTION_TIMEOUT = 5.0
 #: server starts waiting for the request.
 REQUEST_DEADLINE = 15.0
 
-#: Connections open at once (a browser opens about six); more are closed when accepted.
+#: Admitted connections (whose request carried the token) open at once; a browser opens about
+#: six. Another is answered 503 and closed.
 MAX_CONNECTIONS = 64
+
+#: Connections waiting for their first request's headers at once; one more closes the oldest.
+MAX_WAITING = 64
 
 #: What every response adds to the page's own policy: no page may frame this one.
 FRAME_POLICY = "frame-ancestors 'none'"
@@ -95,7 +112,7 @@ class ViewerServer(ThreadingHTTPServer):
     """
 
     daemon_threads = True  # a browser's open connection must not hold up the shutdown
-    request_queue_size = MAX_CONNECTIONS  # accepted at once, then closed if over the cap
+    request_queue_size = MAX_WAITING  # accepted at once, then the oldest waiting one closed
 
     def __init__(
         self,
@@ -106,6 +123,7 @@ class ViewerServer(ThreadingHTTPServer):
         connection_timeout: float = CONNECTION_TIMEOUT,
         request_deadline: float = REQUEST_DEADLINE,
         max_connections: int = MAX_CONNECTIONS,
+        max_waiting: int = MAX_WAITING,
         token: str | None = None,
     ):
         root = Path(folder)
@@ -117,25 +135,45 @@ class ViewerServer(ThreadingHTTPServer):
         self.token = token if token is not None else secrets.token_urlsafe(32)
         self.policy = f"{page_policy()}; {FRAME_POLICY}"
         self._slots = threading.BoundedSemaphore(max_connections)
+        self._max_waiting = max_waiting
+        self._waiting: OrderedDict[int, socket.socket] = OrderedDict()  # oldest first
+        self._lock = threading.Lock()
         self._thread: threading.Thread | None = None
         super().__init__((HOST, port), _Handler)
 
     def process_request(self, request: Any, client_address: Any) -> None:
-        """Answer in a thread of its own, if fewer than the cap are open; else close at once."""
-        if not self._slots.acquire(blocking=False):
-            self.shutdown_request(request)
-            return
+        """Answer in a thread of its own, the connection waiting for its request's headers;
+        if more than the cap wait, the one that has waited longest is closed."""
+        with self._lock:
+            self._waiting[id(request)] = request
+            while len(self._waiting) > self._max_waiting:
+                _, oldest = self._waiting.popitem(last=False)
+                with suppress(OSError):  # its thread sees the end of its input and stops
+                    oldest.shutdown(socket.SHUT_RDWR)
         try:
             super().process_request(request, client_address)
         except BaseException:
-            self._slots.release()
+            self.arrived(request)
             raise
 
     def process_request_thread(self, request: Any, client_address: Any) -> None:
         try:
             super().process_request_thread(request, client_address)
         finally:
-            self._slots.release()
+            self.arrived(request)  # one that never sent a request waits no more
+
+    def arrived(self, request: Any) -> None:
+        """``request``'s headers have arrived (or it ended): it no longer waits."""
+        with self._lock:
+            self._waiting.pop(id(request), None)
+
+    def admit(self) -> bool:
+        """Take a place for a connection whose request carried the token; False if none is
+        free (the handler gives it back with :meth:`leave`)."""
+        return self._slots.acquire(blocking=False)
+
+    def leave(self) -> None:
+        self._slots.release()
 
     @property
     def port(self) -> int:
@@ -162,15 +200,14 @@ class ViewerServer(ThreadingHTTPServer):
         """Whether a request with this query and Cookie header carries the token, and whether
         it did so in its query (then it gets the cookie)."""
         given = parse_qs(query).get("token", [])
-        if any(secrets.compare_digest(value, self.token) for value in given):
+        if any(self._is_token(value) for value in given):
             return True, True
-        jar = SimpleCookie()
-        try:
-            jar.load(cookies)
-        except CookieError:
-            return False, False
-        morsel = jar.get(self.cookie)
-        return morsel is not None and secrets.compare_digest(morsel.value, self.token), False
+        return any(self._is_token(value) for value in cookie_values(cookies, self.cookie)), False
+
+    def _is_token(self, value: str) -> bool:
+        # as bytes: compare_digest refuses a str with characters beyond ASCII
+        expected = self.token.encode()
+        return secrets.compare_digest(value.encode("utf-8", "surrogateescape"), expected)
 
     def allowed_hosts(self) -> set[str]:
         """The ``Host`` headers this server answers: its own address, by number or name."""
@@ -205,6 +242,21 @@ class ViewerServer(ThreadingHTTPServer):
         super().handle_error(request, client_address)  # type: ignore[arg-type]
 
 
+def cookie_values(header: str, name: str) -> list[str]:
+    """The values of the cookies called ``name`` in a Cookie header, found by splitting it on
+    ``;`` and each part at its first ``=``: a part that is no cookie is skipped, not the
+    header (``http.cookies`` gives up on the whole header at one cookie it cannot parse)."""
+    values = []
+    for part in header.split(";"):
+        key, equals, value = part.partition("=")
+        if equals and key.strip() == name:
+            value = value.strip()
+            if len(value) >= 2 and value[0] == value[-1] == '"':
+                value = value[1:-1]
+            values.append(value)
+    return values
+
+
 class _DeadlineReader(io.RawIOBase):
     """A handler's connection read raw, each read within what is left of its deadline."""
 
@@ -226,6 +278,8 @@ class _Handler(BaseHTTPRequestHandler):
 
     #: When the request being read must have arrived (``time.monotonic``); None once it has.
     _deadline: float | None = None
+    #: Whether the connection holds one of the server's places (a request carried the token).
+    _admitted = False
 
     def setup(self) -> None:
         super().setup()
@@ -238,12 +292,23 @@ class _Handler(BaseHTTPRequestHandler):
     def handle_one_request(self) -> None:
         self._deadline = time.monotonic() + self.server.request_deadline
         super().handle_one_request()  # a TimeoutError while reading ends the connection
+        if not self._admitted:  # refused, or no GET: it may not wait for another request
+            self.close_connection = True
 
     def parse_request(self) -> bool:
         parsed = super().parse_request()  # the request line and the headers
         self._deadline = None  # arrived: the response has the plain timeout
         self.connection.settimeout(self.server.connection_timeout)
+        self.server.arrived(self.request)
         return parsed
+
+    def finish(self) -> None:
+        try:
+            super().finish()
+        finally:
+            if self._admitted:
+                self._admitted = False
+                self.server.leave()
 
     def before_read(self) -> None:
         """Cut the socket's timeout to what is left of the request's deadline, or end the
@@ -272,6 +337,11 @@ class _Handler(BaseHTTPRequestHandler):
         if not allowed:
             self.send_error(HTTPStatus.FORBIDDEN, "open the URL tuckercodec view printed")
             return
+        if not self._admitted:
+            if not self.server.admit():
+                self.send_error(HTTPStatus.SERVICE_UNAVAILABLE, "too many connections")
+                return
+            self._admitted = True
         path = self.server.routes.get(unquote(parts.path))
         if path is None:
             self.send_error(HTTPStatus.NOT_FOUND)

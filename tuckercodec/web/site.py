@@ -11,7 +11,8 @@ page served is the page exported. Its layout::
     data/NAME.tkc               the compressed file, byte for byte
     data/reference.json         with a reference: what data/reference.bin holds
     data/reference.bin          F*K*3 little-endian float32, frame by frame, vertex by vertex
-    .tuckercodec-viewer         an exported folder only: its marker (see :func:`replaceable`)
+    .tuckercodec-output.json    an exported folder only: the manifest of every folder output
+                                (:func:`tuckercodec.system.atomic.refuse_unless_ours`)
 
 The reference is the original's positions rounded to float32 (half the size of float64, and
 what the GPU draws anyway); ``reference.json`` says so, and also carries two numbers measured
@@ -23,7 +24,6 @@ from __future__ import annotations
 
 import html
 import json
-import os
 import re
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -52,14 +52,6 @@ REFERENCE_JSON = "data/reference.json"
 REFERENCE_BIN = "data/reference.bin"
 #: Frames of the reference read, converted and compared at a time.
 CHUNK_FRAMES = 32
-#: The file an export writes at its root, so that ``--force`` knows a folder it may replace.
-EXPORT_MARKER = ".tuckercodec-viewer"
-#: Its content: what wrote the folder, and the marker's version.
-EXPORT_MARKER_TEXT = "tuckercodec viewer export, marker version 1\n"
-#: The names at the root of an export (the marker's folders and files; see the layout above).
-EXPORT_NAMES = frozenset({EXPORT_MARKER, "index.html", "data", *SHIPPED})
-#: How many names a refusal lists before "and N more".
-SHOWN_NAMES = 5
 
 
 class ReferenceFrames(Protocol):
@@ -168,49 +160,14 @@ def build_site(
         files += [REFERENCE_JSON, REFERENCE_BIN]
         query += f"&reference={quote('../' + REFERENCE_JSON)}"
     entry = f"{PAGE}?{query}"
-    (folder / "index.html").write_text(_redirect(entry), encoding="utf-8")
+    (folder / "index.html").write_text(redirect_page(entry), encoding="utf-8")
     files.append("index.html")
     return Site(tuple(sorted(files)), entry, summary)
 
 
-def write_export_marker(folder: Path) -> None:
-    """Mark ``folder`` (a built site) as an export, which ``--force`` may later replace."""
-    (folder / EXPORT_MARKER).write_text(EXPORT_MARKER_TEXT, encoding="utf-8")
-
-
-def replaceable(folder: Path) -> None:
-    """Check that ``folder``, an export's destination that exists, may be replaced whole: an
-    empty folder, or a previous export (its marker at the root, and no other names there than
-    an export writes). Anything else is refused, naming what replacing it would delete.
-
-    Raises:
-        FileExistsError: ``folder`` is a file, a link, or a folder with other files.
-    """
-    if not os.path.lexists(folder):
-        return
-    if folder.is_symlink() or not folder.is_dir():
-        raise FileExistsError(
-            f"{folder} is not a folder: --force replaces only a previous export or an empty folder"
-        )
-    names = sorted(entry.name + ("/" if entry.is_dir() else "") for entry in folder.iterdir())
-    if not names:
-        return
-    marked = (folder / EXPORT_MARKER).is_file() and not (folder / EXPORT_MARKER).is_symlink()
-    others = [name for name in names if name.rstrip("/") not in EXPORT_NAMES] if marked else names
-    if not others:
-        return
-    shown = ", ".join(others[:SHOWN_NAMES])
-    more = f" and {len(others) - SHOWN_NAMES} more" if len(others) > SHOWN_NAMES else ""
-    what = "has files an export does not write" if marked else f"is no export (no {EXPORT_MARKER})"
-    count = f"{len(others)} entr{'y' if len(others) == 1 else 'ies'}"
-    raise FileExistsError(
-        f"{folder} {what}: --force would delete {count} ({shown}{more}), so it is refused; "
-        "--force replaces only a previous export or an empty folder"
-    )
-
-
-def _redirect(entry: str) -> str:
-    """The folder's own index.html: sends a browser to the page with its query."""
+def redirect_page(entry: str) -> str:
+    """A page that sends a browser to ``entry`` (a URL, relative or not): the folder's own
+    index.html, and the private file ``view --open`` gives the browser."""
     entry = html.escape(entry)
     return (
         '<!doctype html>\n<html lang="en">\n<head>\n<meta charset="utf-8">\n'

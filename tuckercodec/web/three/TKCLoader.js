@@ -125,7 +125,7 @@ export class TKCAnimation {
     }
     this._bound(this._positions);
     this.frame = t;
-    this.time = this.frameTimes[t];
+    this.time = Math.min(this.frameTimes[t], Number.MAX_VALUE); // finite at any frame rate
     return this;
   }
 
@@ -141,11 +141,17 @@ export class TKCAnimation {
     if (!Number.isFinite(seconds)) throw new RangeError(`update takes a finite number of seconds, not ${seconds}`);
     const duration = this.duration;
     let time = this.time + seconds;
-    if (this.loop) {
+    // A valid frame rate as small as 5e-324 makes frame times, and a pass, infinite: such a
+    // pass never ends, so it is played without looping, and the time stays finite (it once
+    // went to Infinity on a step back, then NaN).
+    if (this.loop && Number.isFinite(duration)) {
       time %= duration;
       if (time < 0) time += duration;
+      // a tiny step back from 0 rounds to duration itself: the end of the last frame
+      if (!(time < duration)) time = duration * (1 - Number.EPSILON);
     } else {
-      time = Math.min(Math.max(time, 0), this.frameTimes[this.frameCount - 1]);
+      const last = Math.min(this.frameTimes[this.frameCount - 1], Number.MAX_VALUE);
+      time = Math.min(Math.max(time, 0), last);
     }
     const frame = this._frameAt(time);
     if (frame !== this.frame) this.setFrame(frame);
