@@ -12,13 +12,12 @@ from typing import Any, Literal, Protocol
 import numpy as np
 
 from ..decoder import selected_time_codes
-from ..errors import InputError
 from ..format.reconstruction import reconstruction_basis
 from ..io.gltf.accessors import ARRAY_BUFFER, BufferBuilder, padded_rows
 from ..io.gltf.document import add_triangles, file_bytes, new_gltf
 from ..io.gltf.reader import sample_gltf
 from ..measures.distortion import KG_DEFINITION, Displacement, ErrorAccumulator, kg_error
-from ..model.sequence import DEFAULT_FRAME_RATE, MeshSequence
+from ..model.sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_times
 from ..system.atomic import refuse_existing, write_atomic
 from .quantization import QuantizedAnimation, quantize_animation, weight_values
 
@@ -205,30 +204,9 @@ class _Animation:
         decoded = decoder.positions(chosen)
         weights, base, targets = morph_parts(decoder, chosen)
         with np.errstate(over="ignore"):
-            times = (codes / rate).astype(np.float32)
-        _check_times(times, path)
+            seconds = codes / rate
+        times = float32_times(seconds, path)
         return cls(chosen, decoded, rate, times, weights, base, targets, decoder.centroids[chosen])
-
-
-def _check_times(times: np.ndarray, path: Path) -> None:
-    """glTF keyframe times are float32 seconds, finite and increasing (as
-    :func:`~tuckercodec.model.sequence.float32_seconds` checks for a sequence's glTF)."""
-    bad = np.flatnonzero(~np.isfinite(times))
-    if bad.size:
-        raise InputError(
-            "its time is beyond the range of float32, in which the file stores times",
-            path=path,
-            frame=int(bad[0]),
-        )
-    same = np.flatnonzero(np.diff(times) <= 0)
-    if same.size:
-        frame = int(same[0]) + 1
-        raise InputError(
-            f"frames {frame - 1} and {frame} fall on the same float32 time, {times[frame]} s, "
-            "in which the file stores times: time codes this far from 0 need more precision",
-            path=path,
-            frame=frame,
-        )
 
 
 def _report(

@@ -159,8 +159,15 @@ def float32_seconds(seq: MeshSequence, path: str | os.PathLike[str]) -> np.ndarr
     """Each frame's time in seconds as float32, as glTF and MDD store it; an InputError naming
     the frame where float32 cannot hold a time, or rounds two frames onto the same time (time
     codes far from 0: float32 has 24 bits)."""
+    return float32_times(seq.seconds(), path)
+
+
+def float32_times(seconds: np.ndarray, path: str | os.PathLike[str]) -> np.ndarray:
+    """``seconds`` (each frame's time, increasing) as float32; an InputError naming the frame
+    (and ``path``, the file to be written) where float32 cannot hold a time or rounds two
+    frames onto the same one."""
     with np.errstate(over="ignore"):
-        times = seq.seconds().astype(np.float32)
+        times = np.asarray(seconds, dtype=np.float64).astype(np.float32)
     bad = np.flatnonzero(~np.isfinite(times))
     if bad.size:
         raise InputError(

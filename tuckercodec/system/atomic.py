@@ -357,26 +357,33 @@ class NotOursError(FileExistsError):
     exists without ``--force``."""
 
 
-def _walk(folder: Path) -> tuple[list[str], list[str], list[str]]:
-    """The regular files, folders and other entries (links, devices...) under ``folder``,
-    as POSIX paths relative to it; links are not followed."""
-    files: list[str] = []
-    folders: list[str] = []
-    others: list[str] = []
+def _entries(
+    folder: Path, descend: Callable[[str], bool] = lambda relative: True
+) -> Iterator[tuple[str, os.DirEntry[str]]]:
+    """Every entry under ``folder`` with its POSIX path relative to it, links not followed,
+    going into a folder only where ``descend(relative)`` says so."""
     pending = [(folder, "")]
     while pending:
         current, prefix = pending.pop()
         with os.scandir(current) as entries:
             for entry in entries:
                 relative = prefix + entry.name
-                if entry.is_dir(follow_symlinks=False):
-                    folders.append(relative)
+                yield relative, entry
+                if entry.is_dir(follow_symlinks=False) and descend(relative):
                     pending.append((Path(entry.path), relative + "/"))
-                elif entry.is_file(follow_symlinks=False):
-                    files.append(relative)
-                else:
-                    others.append(relative)
-    return files, folders, others
+
+
+def _walk(folder: Path) -> tuple[list[str], list[str]]:
+    """The regular files and the folders under ``folder``, as POSIX paths relative to it;
+    links are not followed (nor listed: a link is never the tool's)."""
+    files: list[str] = []
+    folders: list[str] = []
+    for relative, entry in _entries(folder):
+        if entry.is_dir(follow_symlinks=False):
+            folders.append(relative)
+        elif entry.is_file(follow_symlinks=False):
+            files.append(relative)
+    return files, folders
 
 
 def _manifest(files: Iterable[str], folders: Iterable[str]) -> bytes:
@@ -387,7 +394,7 @@ def _manifest(files: Iterable[str], folders: Iterable[str]) -> bytes:
 def mark_output(folder: Path) -> None:
     """Write :data:`OUTPUT_MARKER` into ``folder`` (a staging folder, complete), listing every
     file and folder in it: the folder is then the tool's, which ``overwrite`` may replace."""
-    files, folders, _ = _walk(folder)
+    files, folders = _walk(folder)
     write_staged(folder / OUTPUT_MARKER, [_manifest(files, folders)])
 
 
@@ -419,21 +426,14 @@ def _strays(folder: Path, listed: tuple[set[str], set[str]] | None) -> list[str]
         )
     files, folders = listed
     strays: list[str] = []
-    pending = [(folder, "")]
-    while pending:
-        current, prefix = pending.pop()
-        with os.scandir(current) as entries:
-            for entry in entries:
-                relative = prefix + entry.name
-                if relative == OUTPUT_MARKER:
-                    continue
-                if entry.is_dir(follow_symlinks=False):
-                    if relative in folders:
-                        pending.append((Path(entry.path), relative + "/"))
-                    else:
-                        strays.append(relative + "/")
-                elif not (entry.is_file(follow_symlinks=False) and relative in files):
-                    strays.append(relative)
+    for relative, entry in _entries(folder, descend=lambda relative: relative in folders):
+        if relative == OUTPUT_MARKER:
+            continue
+        if entry.is_dir(follow_symlinks=False):
+            if relative not in folders:
+                strays.append(relative + "/")
+        elif not (entry.is_file(follow_symlinks=False) and relative in files):
+            strays.append(relative)
     return sorted(strays)
 
 
