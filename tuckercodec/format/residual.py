@@ -320,9 +320,16 @@ class ResidualLayout:
         """Its domain, with the grid's step or the decimals' places or digits."""
         return Domain(self.domain, self.step, self.scale)
 
+    @property
+    def span(self) -> int:
+        """L as a decoder uses it: ``chunk_frames``, or F' when the file declares more (any
+        int >= 1 is valid, up to 2**64 - 1: then the section is one chunk), so that it fits
+        the int64 of frame numbers."""
+        return min(self.chunk_frames, self.frames)
+
     def chunk_range(self, chunk: int) -> tuple[int, int]:
-        start = chunk * self.chunk_frames
-        return start, min(self.frames, start + self.chunk_frames)
+        start = chunk * self.span
+        return start, min(self.frames, start + self.span)
 
 
 def _is_int(value: object) -> bool:
