@@ -446,14 +446,26 @@ def read_layout(
     )
     for number, chunk_planes in enumerate(planes):
         start, stop = layout.chunk_range(number)
+        count = (stop - start) * vertices * 3
         check_limit(
-            (stop - start) * vertices * 3 * chunk_planes,
+            count * chunk_planes,
             limits,
             "max_section_bytes",
-            what=f"chunk {number}'s {(stop - start) * vertices * 3} integers of {chunk_planes} "
-            "bytes",
+            what=f"chunk {number}'s {count} integers of {chunk_planes} bytes",
             field=f"{where}.chunks[{number}]",
         )
+        if stop - start > 1:
+            # a frame is decoded with its whole chunk (its byte planes are plane-major, and
+            # with predict 1 it sums every frame before it): a chunk of several frames is held
+            # to a size that does not grow with the file, one of a single frame costs the frame
+            check_limit(
+                count,
+                limits,
+                "max_chunk_values",
+                what=f"chunk {number}'s {count} integers ({stop - start} frames of {vertices} "
+                "vertices)",
+                field=f"{where}.chunks[{number}]",
+            )
     return layout
 
 
@@ -465,8 +477,8 @@ def decode_chunk(
     count = (stop - start) * vertices * 3
     planes = layout.planes[chunk]
     piece = payload[layout.offsets[chunk] : layout.offsets[chunk + 1]]
-    raw = streams.decompress_exact(piece, count * planes, f"{where}.chunks[{chunk}]")
-    values = streams.unzigzag(streams.from_planes(raw, count, planes))
+    # in place, a block at a time: the chunk's integers are the one array of its size
+    values = streams.unpack_integers(piece, count, planes, f"{where}.chunks[{chunk}]")
     values = values.reshape(stop - start, vertices, 3)
     if layout.predict == 1:
         np.cumsum(values, axis=0, out=values)  # int64 addition wraps, as §6.9 wraps
