@@ -444,7 +444,14 @@ def read_layout(
         scale,
         exponent,
     )
-    for number, chunk_planes in enumerate(planes):
+    _check_chunk_sizes(layout, vertices, limits, where)
+    return layout
+
+
+def _check_chunk_sizes(layout: ResidualLayout, vertices: int, limits: Limits, where: str) -> None:
+    """§5 step 18's limits, chunk by chunk: its decompressed size against ``max_section_bytes``,
+    then, for a chunk of more than one frame, its integers against ``max_chunk_values`` (R21)."""
+    for number, chunk_planes in enumerate(layout.planes):
         start, stop = layout.chunk_range(number)
         count = (stop - start) * vertices * 3
         check_limit(
@@ -466,7 +473,6 @@ def read_layout(
                 "vertices)",
                 field=f"{where}.chunks[{number}]",
             )
-    return layout
 
 
 def decode_chunk(
