@@ -323,7 +323,7 @@ class Decoder:
                 f"section {part.residual_id}",
             )
         out = np.empty_like(exact)
-        chunks = local // layout.chunk_frames
+        chunks = local // layout.span
         needed = np.unique(chunks).tolist()
         payload = (
             self._payload(part.residual_id)

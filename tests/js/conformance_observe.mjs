@@ -81,7 +81,9 @@ export async function observeVector(tkc, npy) {
       // segment's restored integers e (little-endian int64)
       const residual = file.residual(s);
       if (residual !== null) {
-        observed.residual ??= { domain: residual.domain, scale: residual.scale, predict: residual.predict, chunk_frames: residual.chunkFrames, sha256: {} };
+        // L as decoded: a chunk_frames above the segment's frames is one chunk of them all
+        const L = Math.min(residual.chunkFrames, file.segments[s].frames);
+        observed.residual ??= { domain: residual.domain, scale: residual.scale, predict: residual.predict, chunk_frames: L, sha256: {} };
         observed.residual.sha256[`residual${suffix}`] = await sha256(littleEndianInt64(file.residualIntegers(s)));
       }
     }

@@ -375,7 +375,7 @@ def corrections_of(decoder: Decoder) -> dict[str, Any]:
         "domain": first.domain,
         "scale": first.scale,
         "predict": first.predict,
-        "chunk_frames": first.chunk_frames,
+        "chunk_frames": first.span,  # L as decoded: a larger chunk_frames is one chunk
         "sha256": {},
     }
     for segment in decoder.segments:
@@ -540,6 +540,18 @@ def correction_vectors() -> dict[str, tuple[bytes, str]]:
         "v1.3-lossless-places": (
             encode(as_text(rough + 20.0, "{:.5f}"), lossless=True),
             "format 1.3: lossless values read from %.5f text, decimals of 5 places",
+        ),
+    }
+
+
+def derived_valid_vectors(corrected: bytes) -> dict[str, tuple[bytes, str]]:
+    """Valid vectors made by editing the committed 1.3 file ``corrected`` (lossless float32,
+    one chunk), as the invalid ones are: what an encoder may write that ours does not."""
+    return {
+        "v1.3-chunk-frames-u64": (
+            _edit(corrected, _entry("RESD", chunk_frames=2**64 - 1)),
+            "format 1.3: chunk_frames 2**64 - 1, the largest a msgpack int holds, which §6.9 "
+            "allows: more than the frames, so the section is one chunk",
         ),
     }
 
@@ -716,6 +728,10 @@ def write_only(out: Path, names: list[str]) -> int:
         if name in valid:
             write_valid(out, name, *valid[name])
     sources = {key: (out / f"{name}.tkc").read_bytes() for key, name in INVALID_SOURCES.items()}
+    derived = derived_valid_vectors(sources["corrections"])
+    for name in names:
+        if name in derived:
+            write_valid(out, name, *derived[name])
     invalid = {
         **invalid_vectors(sources["invalid"]),
         **segmented_invalid_vectors(sources["segmented"]),
@@ -725,7 +741,7 @@ def write_only(out: Path, names: list[str]) -> int:
     for name in names:
         if name in invalid:
             write_invalid_vector(out, name, *invalid[name])
-        elif name not in valid:
+        elif name not in valid and name not in derived:
             unknown.append(name)
     if unknown:
         print(f"no vector is named {', '.join(unknown)}", file=sys.stderr)
@@ -764,6 +780,9 @@ def main(argv: list[str] | None = None) -> int:
     valid = valid_vectors()
     for name, (data, purpose) in valid.items():
         write_valid(out, name, data, purpose)
+    derived = derived_valid_vectors(valid["v1.3-lossless-float32"][0])
+    for name, (data, purpose) in derived.items():
+        write_valid(out, name, data, purpose)
     invalid = write_invalid(
         out,
         valid["v1-wave-triangles"][0],
@@ -771,7 +790,7 @@ def main(argv: list[str] | None = None) -> int:
         valid["v1.2-traverse-triangles"][0],
         valid["v1.3-lossless-float32"][0],
     )
-    print(f"wrote {len(valid)} valid and {invalid} invalid vectors to {out}")
+    print(f"wrote {len(valid) + len(derived)} valid and {invalid} invalid vectors to {out}")
     return 0
 
 

@@ -32,6 +32,8 @@ class Limits:
     max_section_bytes: int = 1 << 32  # decompressed size of one section
     # K*i + F*k + 3*i*k + 3*F, the numbers decoded before any frame
     max_factor_values: int = 1 << 27
+    # the integers N_c of a RESD chunk of more than one frame (§6.9): a frame costs its chunk
+    max_chunk_values: int = 1 << 21
 
 
 DEFAULT_LIMITS = Limits()

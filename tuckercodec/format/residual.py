@@ -320,9 +320,16 @@ class ResidualLayout:
         """Its domain, with the grid's step or the decimals' places or digits."""
         return Domain(self.domain, self.step, self.scale)
 
+    @property
+    def span(self) -> int:
+        """L as a decoder uses it: ``chunk_frames``, or F' when the file declares more (any
+        int >= 1 is valid, up to 2**64 - 1: then the section is one chunk), so that it fits
+        the int64 of frame numbers."""
+        return min(self.chunk_frames, self.frames)
+
     def chunk_range(self, chunk: int) -> tuple[int, int]:
-        start = chunk * self.chunk_frames
-        return start, min(self.frames, start + self.chunk_frames)
+        start = chunk * self.span
+        return start, min(self.frames, start + self.span)
 
 
 def _is_int(value: object) -> bool:
@@ -437,17 +444,35 @@ def read_layout(
         scale,
         exponent,
     )
-    for number, chunk_planes in enumerate(planes):
+    _check_chunk_sizes(layout, vertices, limits, where)
+    return layout
+
+
+def _check_chunk_sizes(layout: ResidualLayout, vertices: int, limits: Limits, where: str) -> None:
+    """§5 step 18's limits, chunk by chunk: its decompressed size against ``max_section_bytes``,
+    then, for a chunk of more than one frame, its integers against ``max_chunk_values`` (R21)."""
+    for number, chunk_planes in enumerate(layout.planes):
         start, stop = layout.chunk_range(number)
+        count = (stop - start) * vertices * 3
         check_limit(
-            (stop - start) * vertices * 3 * chunk_planes,
+            count * chunk_planes,
             limits,
             "max_section_bytes",
-            what=f"chunk {number}'s {(stop - start) * vertices * 3} integers of {chunk_planes} "
-            "bytes",
+            what=f"chunk {number}'s {count} integers of {chunk_planes} bytes",
             field=f"{where}.chunks[{number}]",
         )
-    return layout
+        if stop - start > 1:
+            # a frame is decoded with its whole chunk (its byte planes are plane-major, and
+            # with predict 1 it sums every frame before it): a chunk of several frames is held
+            # to a size that does not grow with the file, one of a single frame costs the frame
+            check_limit(
+                count,
+                limits,
+                "max_chunk_values",
+                what=f"chunk {number}'s {count} integers ({stop - start} frames of {vertices} "
+                "vertices)",
+                field=f"{where}.chunks[{number}]",
+            )
 
 
 def decode_chunk(
@@ -458,8 +483,8 @@ def decode_chunk(
     count = (stop - start) * vertices * 3
     planes = layout.planes[chunk]
     piece = payload[layout.offsets[chunk] : layout.offsets[chunk + 1]]
-    raw = streams.decompress_exact(piece, count * planes, f"{where}.chunks[{chunk}]")
-    values = streams.unzigzag(streams.from_planes(raw, count, planes))
+    # in place, a block at a time: the chunk's integers are the one array of its size
+    values = streams.unpack_integers(piece, count, planes, f"{where}.chunks[{chunk}]")
     values = values.reshape(stop - start, vertices, 3)
     if layout.predict == 1:
         np.cumsum(values, axis=0, out=values)  # int64 addition wraps, as §6.9 wraps

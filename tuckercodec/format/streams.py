@@ -156,7 +156,8 @@ def pack_integers(values: np.ndarray, level: int = DEFAULT_LEVEL) -> tuple[bytes
 
 
 def unpack_integers(payload: bytes | memoryview, count: int, planes: int, where: str) -> np.ndarray:
-    """``count`` signed integers (int64) from a payload written by :func:`pack_integers`."""
+    """``count`` signed integers (int64) from a payload written by :func:`pack_integers` (or of
+    §6.9, whose 64-bit integers take up to 8 planes)."""
     raw = decompress_exact(payload, count * planes, where)
     unsigned = from_planes(raw, count, planes)
     del raw

@@ -25,10 +25,41 @@ export { TkcError } from '../tkc/decoder.js';
 export const DEFAULT_FRAME_RATE = 24;
 
 /**
+ * The decoder limits (spec §7) TKCLoader opens files with unless told otherwise: sized for a
+ * browser tab, whose memory is a few GiB at most (often less on a phone), where the decoder's
+ * own defaults (DEFAULT_LIMITS, the reference's, for a workstation) let a crafted file of a few
+ * KB ask for several GiB and seconds. At these limits a file costs at most about half a GiB:
+ *
+ * - `max_vertices` 2^21 (2,097,152): one frame is then 24 MiB as float32 for the GPU, as much
+ *   for its normals, 48 MiB as binary64 (twice with corrections);
+ * - `max_faces` 2^22 (4,194,304): the triangle index, 48 MiB or more for polygons;
+ * - `max_frames` 2^19 (524,288): two and a half hours at 60 frames a second; time codes then
+ *   fit the header limit;
+ * - `max_header_bytes` 2^23 (8 MiB), for such time codes: the header is parsed whole;
+ * - `max_factor_values` 2^24 (16,777,216): what is decoded before any frame, 128 MiB as
+ *   binary64, held two or three times over (U1, its integers with corrections, its SIMD copy):
+ *   130,000 vertices with 128 basis columns (a lossless file), or 2 million with 8;
+ * - `max_section_bytes` 2^28 (256 MiB): the largest buffer one section decompresses into.
+ *
+ * The other limits are the decoder's defaults. A page that plays larger files it trusts raises
+ * any of them with setDecoderOptions({limits: {...}}), the rest staying as here.
+ */
+export const WEB_LIMITS = Object.freeze({
+  max_vertices: 2 ** 21,
+  max_faces: 2 ** 22,
+  max_frames: 2 ** 19,
+  max_header_bytes: 2 ** 23,
+  max_factor_values: 2 ** 24,
+  max_section_bytes: 2 ** 28,
+});
+
+/**
  * @typedef {import('../tkc/decoder.js').TkcFile} TkcFile
- * @typedef {{limits?: {[name: string]: number}, simd?: boolean}} DecoderOptions what openTkc
- *   takes: lower decoder limits (spec §7) for a page that should not be asked for gigabytes, or
- *   `simd: false` for the plain JavaScript reconstruction
+ * @typedef {{limits?: {[name: string]: number}, simd?: boolean, cachedSegments?: number}} DecoderOptions
+ *   what openTkc takes: decoder limits (spec §7) instead of WEB_LIMITS, name by name (higher
+ *   for large files a page trusts, lower for one that should be asked for less); `simd: false`
+ *   for the plain JavaScript reconstruction; `cachedSegments`, the decoded segments of a
+ *   segmented file kept (default 2)
  */
 
 /**
@@ -219,13 +250,22 @@ export class TKCLoader extends Loader {
   }
 
   /**
-   * The options every file is opened with (see DecoderOptions).
+   * The options every file is opened with (see DecoderOptions): the limits given replace
+   * WEB_LIMITS' (or the decoder's default) one by one, the others stay.
    * @param {DecoderOptions} options
    * @returns {this}
    */
   setDecoderOptions(options) {
     this.decoderOptions = { ...options };
     return this;
+  }
+
+  /**
+   * What openTkc is given: the options, with WEB_LIMITS under the caller's limits.
+   * @returns {DecoderOptions}
+   */
+  _openOptions() {
+    return { ...this.decoderOptions, limits: { ...WEB_LIMITS, ...this.decoderOptions.limits } };
   }
 
   /**
@@ -269,9 +309,10 @@ export class TKCLoader extends Loader {
 
   /**
    * Opens a whole .tkc file held in memory and calls onLoad with its animation, showing frame 0,
-   * before returning (so it can be used synchronously). A file that breaks a rule of the format
-   * calls onError with the decoder's TkcError (its `rule` names the rule), or throws it when
-   * there is no onError.
+   * before returning (so it can be used synchronously). A file that breaks a rule of the format,
+   * or declares more than the limits (WEB_LIMITS unless raised: rule R21-header-limit, the
+   * limit named in the message), calls onError with the decoder's TkcError (its `rule` names
+   * the rule), or throws it when there is no onError.
    * @param {ArrayBuffer | Uint8Array} buffer
    * @param {(animation: TKCAnimation) => void} onLoad
    * @param {(error: unknown) => void} [onError]
@@ -279,7 +320,7 @@ export class TKCLoader extends Loader {
   parse(buffer, onLoad, onError) {
     let animation;
     try {
-      animation = new TKCAnimation(openTkc(buffer, this.decoderOptions));
+      animation = new TKCAnimation(openTkc(buffer, this._openOptions()));
     } catch (error) {
       if (!onError) throw error;
       onError(error);

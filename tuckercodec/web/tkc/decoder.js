@@ -1,7 +1,8 @@
 // The JavaScript decoder of the tuckercodec format, written from spec/FORMAT.md (version 1.3):
 // openTkc(bytes) checks the container and header, decodes the faces and names, and, for a file
 // that is not segmented, every factor and its corrections' parameters; a segmented file's
-// segments are decoded when one of their frames is first asked for (§6.7). A file with
+// segments are decoded when one of their frames is asked for (§6.7), and the two most recently
+// used are kept (as the Python decoder keeps them; openTkc's cachedSegments). A file with
 // corrections (§6.9) decodes a chunk of them when one of its frames is first asked for, and
 // keeps the last few chunks. Every failure is a TkcError carrying its §11 rule.
 //
@@ -29,6 +30,11 @@ export { DEFAULT_LIMITS } from './limits.js';
 
 /** Bytes of decoded correction chunks a file keeps (at least the last one, whatever its size). */
 const CHUNK_CACHE_BYTES = 64 * 2 ** 20;
+/**
+ * Decoded segments a file keeps by default, the most recently used: the Python decoder's two, so
+ * that playing a long segmented file (in a loop, say) holds two segments' factors, not all.
+ */
+export const CACHED_SEGMENTS = 2;
 
 /**
  * @typedef {import('./reconstruct.js').Factors} Factors
@@ -40,15 +46,19 @@ const CHUNK_CACHE_BYTES = 64 * 2 ** 20;
 /**
  * Opens a .tkc file held in memory.
  * @param {Uint8Array|ArrayBuffer} bytes the whole file
- * @param {{limits?: {[name: string]: number}, simd?: boolean}} [options] decoder limits (§7) to use instead of the
+ * @param {{limits?: {[name: string]: number}, simd?: boolean, cachedSegments?: number}} [options] decoder limits (§7) to use instead of the
  *   defaults; `simd: false` reconstructs frames with the JavaScript loop instead of WebAssembly
- *   SIMD (the same bits, five times slower: for tests and engines that misbehave)
+ *   SIMD (the same bits, five times slower: for tests and engines that misbehave);
+ *   `cachedSegments`: how many decoded segments of a segmented file to keep, the most recently
+ *   used (an int >= 1, default CACHED_SEGMENTS = 2; the others are decoded again when needed)
  * @returns {TkcFile}
  * @throws {TkcError} when the file breaks a rule of §11
  */
 export function openTkc(bytes, options = {}) {
   const data = bytes instanceof Uint8Array ? bytes : new Uint8Array(bytes);
-  return new TkcFile(data, resolveLimits(options.limits), options.simd !== false);
+  const cached = options.cachedSegments ?? CACHED_SEGMENTS;
+  if (!Number.isInteger(cached) || cached < 1) throw new TypeError(`cachedSegments must be an int >= 1, not ${cached}`);
+  return new TkcFile(data, resolveLimits(options.limits), options.simd !== false, cached);
 }
 
 /** An opened file: its header facts, faces and names, and its frames on demand. */
@@ -56,10 +66,13 @@ export class TkcFile {
   /**
    * @param {Uint8Array} bytes
    * @param {import('./limits.js').Limits} limits
+   * @param {boolean} [simd]
+   * @param {number} [cachedSegments] decoded segments kept, the most recently used
    */
-  constructor(bytes, limits, simd = true) {
+  constructor(bytes, limits, simd = true, cachedSegments = CACHED_SEGMENTS) {
     this.bytes = bytes;
     this._useSimd = simd;
+    this._cachedSegments = cachedSegments;
     this.limits = limits;
     const container = readContainer(bytes, limits);
     const layout = readLayout(container, limits);
@@ -93,8 +106,10 @@ export class TkcFile {
     this._sharedKept = {};
     /** @type {SimdBasis | null | undefined} */
     this._sharedSimd = undefined;
-    /** @type {(Factors | null)[]} */
-    this._decoded = new Array(layout.segments.length).fill(null);
+    /** @type {Map<number, Factors>} decoded segments, the most recently used last (an LRU) */
+    this._decoded = new Map();
+    /** @type {Map<string, Int32Array>} decoded correction chunks, the most recent last */
+    this._chunks = new Map();
     this.segments = layout.segments.map(({ start, frames, ranks, basis }) => ({ start, frames, ranks: [...ranks], basis }));
     // [i, k]; for a segmented file the summary §12 reports: the shared U1's columns (else the
     // largest i_s) and the largest k_s
@@ -115,8 +130,6 @@ export class TkcFile {
     this._scratch = new Float64Array(0);
     /** @type {Float64Array} P of §8.1, before its corrections */
     this._exact = new Float64Array(0);
-    /** @type {Map<string, Int32Array>} decoded correction chunks, the most recent last */
-    this._chunks = new Map();
     // step 18: the corrections' parameters (a segmented file's, with their segment)
     if (!layout.segmented && layout.corrections) this._readResidual(this._segment(0), 0);
   }
@@ -319,7 +332,12 @@ export class TkcFile {
    * @returns {Factors}
    */
   _segment(s) {
-    if (this._decoded[s] !== null) return this._decoded[s];
+    const cached = this._decoded.get(s);
+    if (cached !== undefined) {
+      this._decoded.delete(s); // the most recently used: last
+      this._decoded.set(s, cached);
+      return cached;
+    }
     const segment = this.layout.segments[s];
     const [i, k] = segment.ranks;
     const K = this.vertices;
@@ -356,8 +374,23 @@ export class TkcFile {
     }
     // step 16s: a segment's RESD.s after its factors (a whole file's RESD comes after NAME)
     if (this.layout.segmented && this.layout.corrections) this._readResidual(decoded, s);
-    this._decoded[s] = decoded;
+    this._keepSegment(s, decoded);
     return decoded;
+  }
+
+  /**
+   * Keeps segment s decoded, forgetting the least recently used beyond the bound, with its
+   * correction chunks: a forgotten segment is decoded again (and checked again) when needed.
+   * @param {number} s
+   * @param {Factors} decoded
+   */
+  _keepSegment(s, decoded) {
+    this._decoded.set(s, decoded);
+    for (const old of this._decoded.keys()) {
+      if (this._decoded.size <= this._cachedSegments) break;
+      this._decoded.delete(old);
+      for (const key of [...this._chunks.keys()]) if (key.startsWith(`${old}/`)) this._chunks.delete(key);
+    }
   }
 }
 

@@ -13,6 +13,7 @@ export const DEFAULT_LIMITS = Object.freeze({
   max_faces: 2 ** 28,
   max_face_width: 64,
   max_section_bytes: 2 ** 32,
+  max_chunk_values: 2 ** 21,
 });
 
 /** @typedef {{readonly [name in keyof typeof DEFAULT_LIMITS]: number}} Limits */

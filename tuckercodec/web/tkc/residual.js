@@ -66,7 +66,8 @@ export const LITTLE_ENDIAN = new Uint8Array(new Uint16Array([1]).buffer)[0] === 
 /**
  * §5 step 18 up to the CRC: the parameters of a RESD section covering `frames` frames of K
  * vertices, in the order §6.9 lists them (R40-residual), then each chunk's decompressed size
- * against max_section_bytes (R21-header-limit).
+ * against max_section_bytes and, for a chunk of several frames, its integers against
+ * max_chunk_values (R21-header-limit).
  * @param {import('./container.js').Section} section
  * @param {number} frames F' (F for RESD, F_s for RESD.s)
  * @param {number} K
@@ -141,6 +142,11 @@ export function readResidual(section, frames, K, limits) {
     const size = chunk.frames * K * 3 * chunk.planes;
     if (size > limits.max_section_bytes) {
       throw limitError('R21-header-limit', `${where}: chunk ${c} decodes to ${size} bytes, max_section_bytes = ${limits.max_section_bytes}`);
+    }
+    // a frame is decoded with its whole chunk: one of several frames is held to a bounded size
+    const count = chunk.frames * K * 3;
+    if (chunk.frames > 1 && count > limits.max_chunk_values) {
+      throw limitError('R21-header-limit', `${where}: chunk ${c} holds ${count} integers (${chunk.frames} frames of ${K} vertices), max_chunk_values = ${limits.max_chunk_values}`);
     }
   });
   // chunkFrames as the file gives it (a BigInt one made a Number: still above F', one chunk)

@@ -1,6 +1,11 @@
 import { formatError } from './errors.js';
 export { TkcError } from './errors.js';
 export { DEFAULT_LIMITS } from './limits.js';
+/**
+ * Decoded segments a file keeps by default, the most recently used: the Python decoder's two, so
+ * that playing a long segmented file (in a loop, say) holds two segments' factors, not all.
+ */
+export declare const CACHED_SEGMENTS = 2;
 export type Factors = import('./reconstruct.js').Factors;
 export type Residual = import('./residual.js').Residual;
 export type SimdBasis = import('./simd.js').SimdBasis;
@@ -14,9 +19,11 @@ export type Topology = import('./topology.js').Topology;
 /**
  * Opens a .tkc file held in memory.
  * @param {Uint8Array|ArrayBuffer} bytes the whole file
- * @param {{limits?: {[name: string]: number}, simd?: boolean}} [options] decoder limits (§7) to use instead of the
+ * @param {{limits?: {[name: string]: number}, simd?: boolean, cachedSegments?: number}} [options] decoder limits (§7) to use instead of the
  *   defaults; `simd: false` reconstructs frames with the JavaScript loop instead of WebAssembly
- *   SIMD (the same bits, five times slower: for tests and engines that misbehave)
+ *   SIMD (the same bits, five times slower: for tests and engines that misbehave);
+ *   `cachedSegments`: how many decoded segments of a segmented file to keep, the most recently
+ *   used (an int >= 1, default CACHED_SEGMENTS = 2; the others are decoded again when needed)
  * @returns {TkcFile}
  * @throws {TkcError} when the file breaks a rule of §11
  */
@@ -25,11 +32,13 @@ export declare function openTkc(bytes: Uint8Array | ArrayBuffer, options?: {
         [name: string]: number;
     };
     simd?: boolean;
+    cachedSegments?: number;
 }): TkcFile;
 /** An opened file: its header facts, faces and names, and its frames on demand. */
 export declare class TkcFile {
     bytes: Uint8Array<ArrayBufferLike>;
     _useSimd: boolean;
+    _cachedSegments: number;
     limits: import("./limits.js").Limits;
     container: import("./container.js").Container;
     layout: import("./header.js").Layout;
@@ -70,8 +79,10 @@ export declare class TkcFile {
     };
     /** @type {SimdBasis | null | undefined} */
     _sharedSimd: SimdBasis | null | undefined;
-    /** @type {(Factors | null)[]} */
-    _decoded: (Factors | null)[];
+    /** @type {Map<number, Factors>} decoded segments, the most recently used last (an LRU) */
+    _decoded: Map<number, Factors>;
+    /** @type {Map<string, Int32Array>} decoded correction chunks, the most recent last */
+    _chunks: Map<string, Int32Array>;
     segments: {
         start: number;
         frames: number;
@@ -84,13 +95,13 @@ export declare class TkcFile {
     _scratch: Float64Array<ArrayBuffer>;
     /** @type {Float64Array} P of §8.1, before its corrections */
     _exact: Float64Array;
-    /** @type {Map<string, Int32Array>} decoded correction chunks, the most recent last */
-    _chunks: Map<string, Int32Array>;
     /**
      * @param {Uint8Array} bytes
      * @param {import('./limits.js').Limits} limits
+     * @param {boolean} [simd]
+     * @param {number} [cachedSegments] decoded segments kept, the most recently used
      */
-    constructor(bytes: Uint8Array, limits: import('./limits.js').Limits, simd?: boolean);
+    constructor(bytes: Uint8Array, limits: import('./limits.js').Limits, simd?: boolean, cachedSegments?: number);
     /**
      * Frame f's positions (§8), K*3 binary64 values; `out` is reused when given.
      * @param {number} f
@@ -184,5 +195,12 @@ export declare class TkcFile {
      * @returns {Factors}
      */
     _segment(s: number): Factors;
+    /**
+     * Keeps segment s decoded, forgetting the least recently used beyond the bound, with its
+     * correction chunks: a forgotten segment is decoded again (and checked again) when needed.
+     * @param {number} s
+     * @param {Factors} decoded
+     */
+    _keepSegment(s: number, decoded: Factors): void;
 }
 export { formatError };

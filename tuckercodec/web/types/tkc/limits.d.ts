@@ -9,6 +9,7 @@ export declare const DEFAULT_LIMITS: Readonly<{
     max_faces: number;
     max_face_width: 64;
     max_section_bytes: number;
+    max_chunk_values: number;
 }>;
 export type Limits = {
     readonly [name in keyof typeof DEFAULT_LIMITS]: number;

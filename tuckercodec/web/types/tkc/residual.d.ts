@@ -32,7 +32,8 @@ export type Residual = {
 /**
  * §5 step 18 up to the CRC: the parameters of a RESD section covering `frames` frames of K
  * vertices, in the order §6.9 lists them (R40-residual), then each chunk's decompressed size
- * against max_section_bytes (R21-header-limit).
+ * against max_section_bytes and, for a chunk of several frames, its integers against
+ * max_chunk_values (R21-header-limit).
  * @param {import('./container.js').Section} section
  * @param {number} frames F' (F for RESD, F_s for RESD.s)
  * @param {number} K
