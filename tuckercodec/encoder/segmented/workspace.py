@@ -224,9 +224,9 @@ class SegmentedWorkspace:
         plan = self.plan
         if self.fixed_u1 is not None or plan.sketch_columns >= plan.most_columns:
             return False
-        wider = plan.with_columns(2 * plan.sketch_columns)
-        if wider.max_rank < plan.max_rank:  # the file's arrays, not the sketch, are the limit
+        if plan.max_rank < plan.sketch_columns:  # the file's arrays, not the sketch, limit
             return False
+        wider = plan.with_columns(2 * plan.sketch_columns)
         self.say(
             f"the sketch of {plan.sketch_columns} columns leaves no room for the target: "
             f"sketching again with {wider.sketch_columns}"
@@ -315,39 +315,41 @@ class SegmentedWorkspace:
         """The largest ranks the model holds, if their truncation leaves room for quantization."""
         largest = self.fixed_choice((self.vertex_count, self.frame_count))
         if largest.truncation2 + self.floor_error2 >= limit2:
+            limit, advice = self._binding_limit()
             raise UnreachableTargetError(
-                f"a KG error of {target_kg:g} is below what {self._binding_limit()} resolves: "
-                f"KG {self.kg(largest.truncation2):.3g} at its largest ranks"
+                f"a KG error of {target_kg:g} is below what {limit} resolves (KG "
+                f"{self.kg(largest.truncation2):.3g} at its largest ranks). {advice}"
             )
         room = limit2 - largest.truncation2 - self.floor_error2
         return largest, self.initial_step(largest, room)
 
-    def _binding_limit(self) -> str:
+    def _binding_limit(self) -> tuple[str, str]:
         """What bounds the ranks of this encode, and what to do about it, for a refusal."""
         plan = self.plan
-        memory = f"max_memory, --max-memory: {human_bytes(plan.memory)}"
+        memory = f"{human_bytes(plan.memory)} (max_memory, --max-memory)"
+        more_memory = "Allow more memory, or ask for a larger error"
         if self.fixed_basis is not None:
-            return "the given basis. Ask for a larger error, or fit a basis for this target"
+            return "the given basis", "Ask for a larger error, or fit a basis for this target"
         if plan.max_rank < plan.sketch_columns:
             return (
-                f"a U1 of {plan.max_rank} columns, the most whose file the memory allowed "
-                f"({memory}) holds for {self.vertex_count} vertices. Allow more memory or ask "
-                "for a larger error"
+                f"a U1 of {plan.max_rank} columns, the most whose file fits the memory allowed, "
+                f"{memory}, for {self.vertex_count} vertices",
+                more_memory,
             )
         if plan.columns_limited_by == "memory":
             return (
-                f"the sketch of {plan.sketch_columns} columns, the most the memory allowed "
-                f"({memory}) holds for {self.vertex_count} vertices. Allow more memory or ask "
-                "for a larger error"
+                f"a sketch of {plan.sketch_columns} columns, the most that fit the memory "
+                f"allowed, {memory}, for {self.vertex_count} vertices",
+                more_memory,
             )
         size = (
-            f"the sequence's {self.vertex_count} vertices"
+            f"its {self.vertex_count} vertices"
             if plan.columns_limited_by == "K"
-            else f"three times the sequence's {self.frame_count} frames"
+            else f"three times its {self.frame_count} frames"
         )
         return (
-            f"the sketch of {plan.sketch_columns} columns, every direction of the sequence "
-            f"({size}). Ask for a larger error, or longer segments"
+            f"a sketch of {plan.sketch_columns} columns, every direction of the sequence ({size})",
+            "Ask for a larger error",
         )
 
     def prepare(self, choices: Sequence[SegmentRanks]) -> None:
