@@ -11,7 +11,13 @@ from tests.support.compressed import assert_same_faces
 from tests.support.sequences import shared_encoded, shared_sequence
 from tools.generate import vectors as make_vectors
 from tuckercodec import Decoder, FormatError, LimitError, Limits, MeshSequence, encode_with_report
-from tuckercodec.encoder.plan import needs_segments, parse_size, plan_segments
+from tuckercodec.encoder.plan import (
+    PROCESS_BASELINE,
+    needs_segments,
+    parse_size,
+    plan_segments,
+    whole_encode_bytes,
+)
 from tuckercodec.format.segments import SEGMENTED
 from tuckercodec.internal import HEAD_SIZE
 from tuckercodec.io.samples import sample_path
@@ -84,10 +90,12 @@ def test_without_segments_the_file_is_todays(cloth):
 
 def test_segments_when_the_whole_encode_would_not_fit(cloth):
     frames, vertices = cloth.frame_count, cloth.vertex_count
-    whole = 7 * frames * vertices * 24
-    assert needs_segments(frames, vertices, segment_frames=None, max_memory=whole // 2)
+    whole = PROCESS_BASELINE + 7 * frames * vertices * 24
+    assert whole_encode_bytes(frames, vertices) == whole
+    assert needs_segments(frames, vertices, segment_frames=None, max_memory=whole - 1)
     assert not needs_segments(frames, vertices, segment_frames=None, max_memory=2 * whole)
-    result = encode_with_report(cloth, target_kg=0.5, max_memory=whole // 2)
+    # below the whole encode's peak, above the segmented encode's least
+    result = encode_with_report(cloth, target_kg=0.5, max_memory=whole - 1)
     assert result.report.segments >= 1 and Decoder(result.data).segmented
 
 

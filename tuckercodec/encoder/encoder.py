@@ -17,6 +17,7 @@ from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 from ..decomposition.analysis import Analysis, analyze
+from ..format.segments import BASIS_OWN
 from ..model.sequence import MeshSequence
 from ..model.sources import FrameSource, SequenceFrames
 from ..system.memory import memory_allowed
@@ -109,6 +110,9 @@ class Encoder:
             frames.vertex_count,
             segment_frames=options.segment_frames,
             max_memory=memory,
+            faces=len(frames.faces),
+            basis_own=options.basis == BASIS_OWN,
+            level=options.level,
         )
         corrector = None
         if options.corrections:  # a pass for the bound's length or the lossless domains

@@ -138,6 +138,8 @@ def search_kg(
         room = limit2 - work.truncation_error2(choice) - work.floor_error2
         if room > 0:
             candidates.append((choice, work.initial_step(choice, room)))
+    if not candidates and shares != work.late_shares and work.resolve_finer():
+        return search_kg(work, target_kg, shares)  # a closer look at the input: start over
     if not candidates and work.late_shares and shares != work.late_shares:
         return search_kg(work, target_kg, work.late_shares)
     if not candidates:  # the target is within rounding of zero error, or a basis leaves no room

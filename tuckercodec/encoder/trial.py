@@ -92,6 +92,12 @@ class Workspace(Protocol[Choice]):
         """The choice for fixed ranks (i, k); ``ValueError`` for ranks the input cannot have."""
         ...
 
+    def resolve_finer(self) -> bool:
+        """When no usual share of the budget leaves room for quantization: look at the input
+        more closely if the workspace can (a segmented encode sketches again with more
+        columns), True if it did; the search then starts over."""
+        ...
+
     def largest_choice(self, limit2: float, target_kg: float) -> tuple[Choice, float]:
         """When no share of the budget leaves room for quantization: the largest ranks and the
         D to start from (``UnreachableTargetError`` if even they miss ``limit2``)."""

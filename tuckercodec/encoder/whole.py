@@ -85,6 +85,10 @@ class WholeWorkspace:
     late_shares: tuple[float, ...] = ()
     first_room_floor = FIRST_ROOM_FLOOR
 
+    def resolve_finer(self) -> bool:
+        """False: the whole sequence's decomposition is exact already."""
+        return False
+
     def __init__(
         self,
         sequence: MeshSequence,

@@ -53,7 +53,12 @@ def fit_basis(
     """
     memory = memory_allowed(max_memory)
     plan = plan_segments(
-        source.frame_count, source.vertex_count, segment_frames=segment_frames, max_memory=memory
+        source.frame_count,
+        source.vertex_count,
+        segment_frames=segment_frames,
+        max_memory=memory,
+        faces=len(source.faces),
+        level=level,
     )
     work = SegmentedWorkspace(source, plan, BASIS_SHARED, InProcessExecutor(), level, None)
     budgets = [(target_kg / 100.0) ** 2 * model.energy for model in work.models]

@@ -35,6 +35,7 @@ from ...format.segments import (
 )
 from ...model.sources import FrameSource
 from ...model.topology import MeshPrediction
+from ...system.memory import human_bytes
 from ...system.parallel import Background, Executor, InProcessExecutor
 from .. import estimate
 from ..plan import SegmentPlan
@@ -211,6 +212,30 @@ class SegmentedWorkspace:
                 self.ranges, coefficients, rotations, energies, centroids, strict=True
             )
         ]
+        if self.fixed_u1 is None:
+            for model in self.models:  # no more columns of U1 than the file's arrays fit
+                model.error_table = model.error_table[: self.plan.max_rank + 1]
+
+    def resolve_finer(self) -> bool:
+        """Sketch again with twice the columns, up to the most the plan allows (K, 3F or the
+        memory), when no usual share of the budget leaves quantization room: the sketch is what
+        limits then (a target the whole encoder meets needs U1 ranks the sketch does not
+        resolve). True if it did; False with a given basis, or at the most columns."""
+        plan = self.plan
+        if self.fixed_u1 is not None or plan.sketch_columns >= plan.most_columns:
+            return False
+        if plan.max_rank < plan.sketch_columns:  # the file's arrays, not the sketch, limit
+            return False
+        wider = plan.with_columns(2 * plan.sketch_columns)
+        self.say(
+            f"the sketch of {plan.sketch_columns} columns leaves no room for the target: "
+            f"sketching again with {wider.sketch_columns}"
+        )
+        self.plan = wider
+        self._read_and_model()
+        self._u1_predictors.clear()
+        self._packing = None
+        return True
 
     def _in_order(
         self, function: Callable[..., Any], items: list[Any], *common: Any
@@ -290,19 +315,42 @@ class SegmentedWorkspace:
         """The largest ranks the model holds, if their truncation leaves room for quantization."""
         largest = self.fixed_choice((self.vertex_count, self.frame_count))
         if largest.truncation2 + self.floor_error2 >= limit2:
-            resolved = (
-                "the given basis"
-                if self.fixed_basis is not None
-                else f"the sketch of {self.plan.sketch_columns} columns (what the memory "
-                f"allowed for {self.vertex_count} vertices)"
-            )
+            limit, advice = self._binding_limit()
             raise UnreachableTargetError(
-                f"a KG error of {target_kg:g} is below what {resolved} resolves: KG "
-                f"{self.kg(largest.truncation2):.3g} at its largest ranks. Allow more memory "
-                "(max_memory, --max-memory) or ask for a larger error"
+                f"a KG error of {target_kg:g} is below what {limit} resolves (KG "
+                f"{self.kg(largest.truncation2):.3g} at its largest ranks). {advice}"
             )
         room = limit2 - largest.truncation2 - self.floor_error2
         return largest, self.initial_step(largest, room)
+
+    def _binding_limit(self) -> tuple[str, str]:
+        """What bounds the ranks of this encode, and what to do about it, for a refusal."""
+        plan = self.plan
+        memory = f"{human_bytes(plan.memory)} (max_memory, --max-memory)"
+        more_memory = "Allow more memory, or ask for a larger error"
+        if self.fixed_basis is not None:
+            return "the given basis", "Ask for a larger error, or fit a basis for this target"
+        if plan.max_rank < plan.sketch_columns:
+            return (
+                f"a U1 of {plan.max_rank} columns, the most whose file fits the memory allowed, "
+                f"{memory}, for {self.vertex_count} vertices",
+                more_memory,
+            )
+        if plan.columns_limited_by == "memory":
+            return (
+                f"a sketch of {plan.sketch_columns} columns, the most that fit the memory "
+                f"allowed, {memory}, for {self.vertex_count} vertices",
+                more_memory,
+            )
+        size = (
+            f"its {self.vertex_count} vertices"
+            if plan.columns_limited_by == "K"
+            else f"three times its {self.frame_count} frames"
+        )
+        return (
+            f"a sketch of {plan.sketch_columns} columns, every direction of the sequence ({size})",
+            "Ask for a larger error",
+        )
 
     def prepare(self, choices: Sequence[SegmentRanks]) -> None:
         """Nothing to form ahead: the model holds every factor."""
