@@ -6,6 +6,7 @@ the file, the object and the frame."""
 from __future__ import annotations
 
 import functools
+import os
 import shutil
 import subprocess
 import sys
@@ -139,6 +140,96 @@ def test_nothing_is_replaced_without_overwrite(cloth, tmp_path):
     save_sequence(cloth, path, overwrite=True)
     assert exact(load_sequence(path), cloth)
     assert [p.name for p in tmp_path.iterdir()] == ["out.abc"]
+
+
+# ------------------------------------------------------------------------------------------
+# a write that fails: the disk fills
+#
+# alembic3d raises when a write fails, then aborts the process (SIGABRT, a C++ exception thrown
+# from the archive's destructors) once its objects are released; so it writes in a child.
+
+REPOSITORY = Path(__file__).resolve().parents[1]
+#: The file size the writer may reach: a few samples of the sequence below, not all of them.
+FILE_LIMIT = 64 * 1024
+
+
+def _small_file_limit() -> None:  # in the child, before it runs: the disk "fills" at 64 KiB
+    import resource
+    import signal
+
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails with EFBIG
+    resource.setrlimit(resource.RLIMIT_FSIZE, (FILE_LIMIT, FILE_LIMIT))
+
+
+@pytest.fixture
+def full_tmpfs(tmp_path):
+    """A 64 KiB tmpfs (needs root and mount; else skipped), unmounted after the test."""
+    if not hasattr(os, "geteuid") or os.geteuid() != 0:
+        pytest.skip("mounting a small tmpfs needs root: the file-size limit test covers the rest")
+    folder = tmp_path / "full"
+    folder.mkdir()
+    mounted = subprocess.run(
+        ["mount", "-t", "tmpfs", "-o", f"size={FILE_LIMIT}", "tmpfs", str(folder)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    if mounted.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here: {mounted.stderr.strip() or mounted.returncode}")
+    try:
+        yield folder
+    finally:
+        subprocess.run(["umount", str(folder)], check=False)
+
+
+def _convert_into(folder: Path, tmp_path: Path, limit: bool) -> subprocess.CompletedProcess[str]:
+    """``tuckercodec convert`` of 40 frames of 600 vertices (about 290 KB of positions) to
+    ``folder/out.abc``, in a new process."""
+    source = tmp_path / "in.npz"
+    vertices = np.random.default_rng(5).standard_normal((40, 600, 3))
+    save_sequence(MeshSequence(vertices, np.array([[0, 1, 2], [2, 3, 4]])), source)
+    return subprocess.run(
+        [sys.executable, "-m", "tuckercodec", "convert", str(source), str(folder / "out.abc")],
+        cwd=REPOSITORY,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        preexec_fn=_small_file_limit if limit else None,
+        check=False,
+    )
+
+
+@pytest.mark.parametrize("disk", ["file size limit", "full tmpfs"])
+def test_a_full_disk_is_one_line_and_exit_1_leaving_nothing(disk, tmp_path, request):
+    if disk == "full tmpfs":
+        folder = request.getfixturevalue("full_tmpfs")
+    else:
+        folder = tmp_path / "out"
+        folder.mkdir()
+    done = _convert_into(folder, tmp_path, limit=disk == "file size limit")
+    assert done.returncode == 1, done.stderr  # not killed by a signal (-6: SIGABRT)
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"tuckercodec: {folder / 'out.abc'}: "), lines
+    assert "Alembic could not write it" in lines[0]
+    if disk == "full tmpfs":
+        assert "no space left on device" in lines[0]
+    assert list(folder.iterdir()) == []  # neither the output nor its staging file
+
+
+def _aborting_writer(path: Path, arrays: dict[str, Any], values: dict[str, Any]) -> None:
+    """What alembic3d does when the disk fills as the archive is released on return."""
+    path.write_bytes(b"Ogawa, half")
+    os.abort()
+
+
+def test_a_writer_that_aborts_is_an_oserror_naming_the_output(cloth, tmp_path, monkeypatch):
+    from tuckercodec.io import alembic
+
+    monkeypatch.setattr(alembic, "write_archive_file", _aborting_writer)  # run in the child
+    with pytest.raises(OSError, match=r"Alembic library died writing it \(SIGABRT\)") as raised:
+        save_sequence(cloth, tmp_path / "out.abc")
+    assert raised.value.filename == str(tmp_path / "out.abc")
+    assert list(tmp_path.iterdir()) == []
 
 
 # ------------------------------------------------------------------------------------------

@@ -44,10 +44,15 @@ themselves go in the mesh's user property ``tuckercodec_time_codes``. The rate (
 sequence has none) is the archive's DCC FPS and, exactly, its ``tuckercodec_frame_rate``. The
 file is written to a hidden temporary name beside the target, opened again to check its
 samples, and put in place when complete (:func:`~tuckercodec.system.atomic.atomic_path`).
+The library writes in a child process (:func:`~.isolation.write_isolated`): when a write fails
+(a full disk) alembic3d raises, then aborts the process that releases the archive (a C++
+exception out of a destructor), so a failure ends as an ``OSError`` naming the file (the
+command line's exit code 1), with the temporary file removed, not as a dead process.
 """
 
 from __future__ import annotations
 
+import errno
 import math
 from pathlib import Path
 from types import SimpleNamespace
@@ -68,7 +73,7 @@ from .common.polygons import (
     polygons_from_faces,
     reverse_winding,
 )
-from .isolation import IsolatedFrames, note
+from .isolation import IsolatedFrames, note, write_isolated
 from .registry import ReadOptions, WriteOptions
 from .usd import listing, prim_name
 
@@ -267,38 +272,53 @@ def _faces(
 
 
 def write_alembic(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
-    """Write the sequence as an Ogawa Alembic archive (see the module docstring), atomically."""
-    abc = _alembic("writing Alembic files")
+    """Write the sequence as an Ogawa Alembic archive (see the module docstring), atomically,
+    in a child process (:func:`.isolation.write_isolated`): alembic3d aborts the process that
+    releases an archive whose write failed (a full disk), so only the child may hold one."""
     rate, name = seq.frame_rate or DEFAULT_FRAME_RATE, prim_name(path.stem)
     positions = float32_vertices(seq, path)  # an infinity is refused, not written
+    arrays = {"positions": positions, "faces": seq.faces, "codes": seq.codes()}
     with atomic_path(path, overwrite=options.overwrite) as temporary:
-        try:
-            _write_archive(abc, seq, positions, temporary, name, rate)
-            written = _written_samples(abc, temporary, f"/{name}/{name}Shape")
-        except _LIBRARY_ERRORS as error:
-            raise OSError(f"{path}: Alembic could not write it: {_message(error)}") from None
-        if written != seq.frame_count:
-            raise OSError(
-                f"{path}: Alembic wrote {written} of {seq.frame_count} samples; the file was "
-                "not kept"
-            )
+        write_isolated(
+            write_archive_file,
+            temporary,
+            arrays,
+            {"name": name, "rate": rate},
+            shown=path,
+            library="Alembic",
+            extra="alembic",
+            preload=_MODULES,
+        )
+
+
+def write_archive_file(path: Path, arrays: dict[str, np.ndarray], values: dict[str, Any]) -> None:
+    """Write the archive and check that it holds every sample (what the writing child runs).
+
+    Raises:
+        OSError: the library failed, or wrote fewer samples.
+    """
+    abc = _alembic("writing Alembic files")
+    name, positions = values["name"], arrays["positions"]
+    try:
+        _write_archive(abc, arrays, path, name, values["rate"])
+        written = _written_samples(abc, path, f"/{name}/{name}Shape")
+    except _LIBRARY_ERRORS as error:
+        raise OSError(errno.EIO, f"Alembic could not write it: {_message(error)}") from None
+    if written != len(positions):
+        raise OSError(errno.EIO, f"Alembic wrote {written} of {len(positions)} samples")
 
 
 def _write_archive(
-    abc: SimpleNamespace,
-    seq: MeshSequence,
-    positions: np.ndarray,
-    path: Path,
-    name: str,
-    rate: float,
+    abc: SimpleNamespace, arrays: dict[str, np.ndarray], path: Path, name: str, rate: float
 ) -> None:
-    """Write the archive; it is complete once every object is released, on return."""
+    """Write the archive of ``arrays`` (float32 positions, faces, time codes); it is complete
+    once every object is released, on return."""
+    positions, codes = arrays["positions"], arrays["codes"]
     metadata = abc.AbcA.MetaData()
     metadata.set(RATE_KEY, repr(rate))
     archive = abc.Abc.CreateArchiveWithInfo(
         str(path), rate, f"tuckercodec {__version__}", "", abc.Abc.Argument(metadata)
     )
-    codes = seq.codes()
     sampling, exact = time_sampling(abc, codes, rate)
     xform = abc.AbcGeom.OXform(archive.getTop(), name)
     xform.getSchema().set(abc.AbcGeom.XformSample())  # identity, constant
@@ -307,8 +327,8 @@ def _write_archive(
     if not exact:
         kept = abc.Abc.ODoubleArrayProperty(schema.getUserProperties(), CODES_KEY)
         kept.setValue(abc.imath.DoubleArrayFromBuffer(codes))
-    counts, indices = polygons_from_faces(reverse_winding(seq.faces))
-    for frame in range(seq.frame_count):
+    counts, indices = polygons_from_faces(reverse_winding(arrays["faces"]))
+    for frame in range(len(positions)):
         points = abc.imath.V3fArrayFromBuffer(positions[frame])  # a copy
         if frame == 0:
             topology = (abc.imath.IntArrayFromBuffer(a) for a in (indices, counts))

@@ -60,9 +60,10 @@ BENCHMARKS for the measured figures). After a crash the next read starts a new c
 the first read after unpickling (workers of a process pool or Dask each start their own).
 :func:`read_isolated` is the same child for a function that reads a whole sequence at once.
 
-Writing is not isolated: the data is ours, and the library only re-reads what it just wrote.
-What runs in the child is :mod:`.child`; the caller's side of the conversation, with the
-limits, is :mod:`.channel`.
+Writing a file with Alembic runs in a child too (:func:`write_isolated`, :mod:`.writing`), not
+for the data, which is ours, but because alembic3d aborts the process once a write has failed
+(a full disk). What runs in a reading child is :mod:`.child`; the caller's side of the
+conversation, with the limits, is :mod:`.channel`.
 """
 
 from .channel import (
@@ -77,6 +78,7 @@ from .channel import (
 )
 from .child import note  # the readers' and hooks' name for it
 from .parent import IsolatedFrames, read_isolated
+from .writing import write_isolated
 
 __all__ = [
     "MEMORY_BASE",
@@ -90,4 +92,5 @@ __all__ = [
     "IsolatedFrames",
     "note",
     "read_isolated",
+    "write_isolated",
 ]

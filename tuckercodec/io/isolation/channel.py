@@ -59,7 +59,7 @@ CHILD_ENVIRONMENT = {"MALLOC_ARENA_MAX": "2"} | dict.fromkeys(
 #: What the child runs: the caller's import path, then :func:`.child.serve`.
 _BOOTSTRAP = (
     "import json, sys; sys.path[:] = json.loads(sys.argv[1])['sys_path']; "
-    "from tuckercodec.io.isolation.child import serve; serve(sys.argv[1])"
+    "from tuckercodec.io.isolation.{module} import {function}; {function}(sys.argv[1])"
 )
 #: How Windows reports a crash: the NTSTATUS exit codes of the usual ones.
 _WINDOWS_CRASHES = {0xC0000005: "an access violation", 0xC00000FD: "a stack overflow"}
@@ -98,11 +98,14 @@ def last_words(stderr: IO[bytes]) -> list[str]:
     return [line for line in said if line and not line[0] == line[-1] == "#"]
 
 
-def can_isolate(preload: tuple[str, ...], library: str, extra: str) -> bool:
+def can_isolate(
+    preload: tuple[str, ...], library: str, extra: str, purpose: str = "reading"
+) -> bool:
     """Whether a child can be started (not where ``sys.executable`` cannot run Python: a
-    frozen application); first, a DependencyError for a ``preload`` module that is absent."""
+    frozen application); first, a DependencyError for a ``preload`` module that is absent
+    (``purpose``: "reading" or "writing" in its message)."""
     for module in filter(_absent, preload):
-        import_optional(module, extra, f"reading {library} files")  # DependencyError
+        import_optional(module, extra, f"{purpose} {library} files")  # DependencyError
     return bool(sys.executable) and not getattr(sys, "frozen", False)
 
 
@@ -156,12 +159,18 @@ def _limits(path: Path) -> tuple[int | None, float | None]:
     return (None if gib is None else int(gib * GIB)), timeout
 
 
-def spawn(request: dict[str, Any], stderr: IO[bytes]) -> subprocess.Popen[bytes]:
-    """Start ``python -P -c`` running :func:`.child.serve` on the request, with the caller's
-    import path and :data:`CHILD_ENVIRONMENT`, talking through pipes, printing to ``stderr``."""
+def spawn(
+    request: dict[str, Any], stderr: IO[bytes], entry: str = "child:serve"
+) -> subprocess.Popen[bytes]:
+    """Start ``python -P -c`` running ``entry`` (a function of this package, by default
+    :func:`.child.serve`; :func:`.writing.serve_writer` for a writing child) on the request,
+    with the caller's import path and :data:`CHILD_ENVIRONMENT`, talking through pipes,
+    printing to ``stderr``."""
     environment = {**CHILD_ENVIRONMENT, **os.environ}
     environment.pop("PYTHONINSPECT", None)  # would wait at a prompt once the child is done
-    command = [sys.executable, "-P", "-c", _BOOTSTRAP, json.dumps(request)]
+    module, _, function = entry.partition(":")
+    bootstrap = _BOOTSTRAP.format(module=module, function=function)
+    command = [sys.executable, "-P", "-c", bootstrap, json.dumps(request)]
     pipe = subprocess.PIPE
     return subprocess.Popen(command, stdin=pipe, stdout=pipe, stderr=stderr, env=environment)
 
@@ -188,7 +197,7 @@ class Ending:
         path, said, returncode, memory = self.path, self.said, self.returncode, self.memory
         kind = header.get("result")
         if kind == "error":
-            raised = _ErrorUnpickler(io.BytesIO(base64.b64decode(header["pickle"]))).load()
+            raised = ErrorUnpickler(io.BytesIO(base64.b64decode(header["pickle"]))).load()
             if isinstance(raised, errors.TuckerCodecError):
                 return raised
         if kind in ("bug", "error"):
@@ -222,14 +231,14 @@ class Ending:
         else:
             given = os.environ.get(MEMORY_VARIABLE, "").strip()  # a low cap can crash pxr too
             given = f", or {MEMORY_VARIABLE}={given} is too little" if given and memory else ""
-            how = _how(returncode)
+            how = how_it_died(returncode)
             reason = f"the {self.library} library crashed reading it ({how}): the file is damaged"
             reason += given + last
         where = self.where
         return InputError(f"{where}: {reason}" if where else reason, path=path, frame=self.frame)
 
 
-def _how(returncode: int) -> str:
+def how_it_died(returncode: int) -> str:
     """A crashed child's exit status in words: the signal's name, or Windows's crash code."""
     if returncode < 0:
         with contextlib.suppress(ValueError):
@@ -237,7 +246,7 @@ def _how(returncode: int) -> str:
     return _WINDOWS_CRASHES.get(returncode, f"exit status {returncode}")
 
 
-class _ErrorUnpickler(pickle.Unpickler):
+class ErrorUnpickler(pickle.Unpickler):
     """Unpickles tuckercodec's errors and nothing else: no other class or function runs."""
 
     def find_class(self, module: str, name: str) -> Any:

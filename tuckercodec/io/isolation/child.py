@@ -49,7 +49,7 @@ def start_child(request: dict[str, Any]) -> Any:
     global _notes
     _notes = os.fdopen(os.dup(1), "wb", buffering=0)  # unbuffered: notes survive a crash
     os.dup2(2, 1)  # what the libraries print to stdout goes with their stderr
-    _guard(request)
+    guard(request)
     module, _, name = request["reader"].partition(":")
     reader = getattr(importlib.import_module(module), name)
     for library in request["preload"]:  # their own mappings are not the file's doing
@@ -85,9 +85,10 @@ def send(message: dict[str, Any]) -> None:
     _notes.write(json.dumps(message).encode() + b"\n")
 
 
-def _guard(request: dict[str, Any]) -> None:
-    """Signals and limits of the child: Ctrl-C is the caller's to handle (it kills us), no
-    core dump of a crash, death with the caller (Linux) or after the time allowed."""
+def guard(request: dict[str, Any]) -> None:
+    """Signals and limits of a child, reading or writing: Ctrl-C is the caller's to handle (it
+    kills us), no core dump of a crash, death with the caller (Linux) or after the time
+    allowed."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
         import resource
