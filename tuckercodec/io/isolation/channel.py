@@ -195,14 +195,10 @@ class Ending:
         """What to raise: what the child's result ``header`` says (its error, a bug, memory),
         or what its exit status says (a crash, the time limit)."""
         path, said, returncode, memory = self.path, self.said, self.returncode, self.memory
+        raised = reported_error(header, path, "reading")
+        if raised is not None:
+            return raised
         kind = header.get("result")
-        if kind == "error":
-            raised = ErrorUnpickler(io.BytesIO(base64.b64decode(header["pickle"]))).load()
-            if isinstance(raised, errors.TuckerCodecError):
-                return raised
-        if kind in ("bug", "error"):
-            detail = header.get("traceback", "an error that is not tuckercodec's")
-            return RuntimeError(f"{path}: reading it failed in a child process:\n{detail}")
         last = f" (it printed: {said[-1][:200]})" if said else ""
         if returncode is not None and not self.started:
             return RuntimeError(
@@ -400,3 +396,18 @@ class Child:
         for stream in [*streams, self.stderr]:
             if stream is not None:
                 stream.close()
+
+
+def reported_error(header: dict[str, Any], path: object, doing: str) -> Exception | None:
+    """The error a child's result ``header`` reports, if it reports one: our own error as it
+    was raised there, or any other (a bug) as a RuntimeError with the child's traceback, saying
+    what it was ``doing`` with ``path``. None for a result that is not an error."""
+    kind = header.get("result")
+    if kind == "error":
+        raised = ErrorUnpickler(io.BytesIO(base64.b64decode(header["pickle"]))).load()
+        if isinstance(raised, errors.TuckerCodecError):
+            return raised
+    if kind in ("bug", "error"):
+        detail = header.get("traceback", "an error that is not tuckercodec's")
+        return RuntimeError(f"{path}: {doing} it failed in a child process:\n{detail}")
+    return None

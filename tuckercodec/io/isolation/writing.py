@@ -27,7 +27,6 @@ from __future__ import annotations
 import base64
 import errno
 import importlib
-import io
 import json
 import os
 import pickle
@@ -43,7 +42,7 @@ from typing import IO, Any
 import numpy as np
 
 from ... import errors
-from .channel import ErrorUnpickler, can_isolate, how_it_died, last_words, spawn
+from .channel import can_isolate, how_it_died, last_words, reported_error, spawn
 from .child import guard
 
 #: What a writer is: ``writer(path, arrays, values)`` writes ``path``; it raises OSError when the
@@ -147,13 +146,9 @@ def _outcome(
         return
     if kind == "failed":
         raise _failed(answer["errno"], answer["message"], shown)
-    if kind == "error":
-        raised = ErrorUnpickler(io.BytesIO(base64.b64decode(answer["pickle"]))).load()
-        if isinstance(raised, errors.TuckerCodecError):
-            raise raised
-    if kind in ("bug", "error"):
-        detail = answer.get("traceback", "an error that is not tuckercodec's")
-        raise RuntimeError(f"{shown}: writing it failed in a child process:\n{detail}")
+    raised = reported_error(answer, shown, "writing")
+    if raised is not None:
+        raise raised
     last = f" (it printed: {said[-1][:200]})" if said else ""
     raise _failed(
         None, f"the {library} library died writing it ({how_it_died(returncode)}){last}", shown
