@@ -57,6 +57,28 @@ class Target:
     isolated: bool = False  # each input starts a process: run a few thousand, not millions
     needs: tuple[str, ...] = ()  # libraries it reads with: imported before the memory cap
     max_len: int = 8192
+    #: the modules it exercises, each package with every module below it: imported under
+    #: atheris' instrumentation before fuzzing (the package imports lazily)
+    modules: tuple[str, ...] = ()
+
+
+#: What every door goes through: the package's errors, the machine and the model, and the
+#: tools' surface the checks and seeds import (which imports the codec).
+COMMON_MODULES = (
+    "tuckercodec.errors",
+    "tuckercodec.system",
+    "tuckercodec.model",
+    "tuckercodec.internal",
+)
+#: The decoder and the parts of the format it reads.
+DECODER_MODULES = (
+    *COMMON_MODULES,
+    "tuckercodec.decoder",
+    "tuckercodec.format",
+    "tuckercodec.files",
+)
+#: The readers, the isolated child's parent side and what the readers share.
+READER_MODULES = (*COMMON_MODULES, "tuckercodec.io")
 
 
 def _atheris_mutate(data: bytes, max_size: int) -> bytes:
@@ -338,6 +360,7 @@ def _reader(
         isolated=isolated,
         needs=needs,
         max_len=max_len,
+        modules=READER_MODULES,
     )
 
 
@@ -650,6 +673,7 @@ TARGETS: dict[str, Target] = {
             seeds=decoder_seeds,
             mutate=mutate_container,
             extra_seeds=("spec/vectors/*.tkc",),
+            modules=DECODER_MODULES,
         ),
         Target(
             name="segmented",
@@ -661,7 +685,9 @@ TARGETS: dict[str, Target] = {
                 "spec/vectors/v1.1-*.tkc",
                 "spec/vectors/v1.2-*segments.tkc",
                 "spec/vectors/v1.3-segments-*.tkc",
+                "spec/vectors/v1.4-scene-segments.tkc",
             ),
+            modules=DECODER_MODULES,
         ),
         Target(
             name="face",
@@ -669,6 +695,7 @@ TARGETS: dict[str, Target] = {
             check=face_check,
             seeds=face_seeds,
             mutate=mutate_face,
+            modules=DECODER_MODULES,
         ),
         Target(
             name="zarr-chunk",
@@ -676,6 +703,7 @@ TARGETS: dict[str, Target] = {
             check=zarr_check,
             seeds=zarr_seeds,
             mutate=mutate_zarr,
+            modules=(*DECODER_MODULES, "tuckercodec.zarr_codec"),
         ),
         _reader("obj", ".obj", "one OBJ frame", _obj_seeds),
         _reader("npz", ".npz", "a NumPy .npz archive (zip of .npy members)"),
@@ -762,6 +790,7 @@ ALL = Target(
     mutate=all_mutate,
     needs=tuple(sorted({module for t in IN_PROCESS for module in t.needs})),
     max_len=16384,
+    modules=tuple(dict.fromkeys(module for t in IN_PROCESS for module in t.modules)),
 )
 
 
