@@ -343,9 +343,30 @@ def _parser() -> argparse.ArgumentParser:
         type=Path,
         help="check these inputs (default: the target's corpus, regressions and crashes)",
     )
+    add(
+        "--js-replay",
+        nargs="*",
+        type=Path,
+        help="decode these .tkc inputs (files or folders; default: the decoders' committed "
+        "inputs and the vectors) with the JavaScript decoder in node and the Python one; fail on "
+        "a crash of node or a disagreement on accepting a file",
+    )
+    add("--js-mutations", type=int, default=0, help="with --js-replay: also this many mutations")
     add("--make-seeds", action="store_true", help="write the target's seeds into its corpus")
     add("--worker", action="store_true", help=argparse.SUPPRESS)
     return parser
+
+
+def _js_replay(args: argparse.Namespace) -> int:
+    from .javascript import js_replay
+
+    summary = js_replay(args.js_replay, args.js_mutations, args.seed)
+    print(json.dumps(summary, indent=2))
+    if args.json:
+        Path(args.json).write_text(json.dumps(summary, indent=2) + "\n")
+    for failure in summary["failures"]:
+        print(f"FAILED: {failure}", file=sys.stderr)
+    return 1 if summary["failures"] else 0
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -368,6 +389,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.merge_from:
         print(json.dumps(merge_corpus(target, args.merge_from, args.corpus_kb)))
         return 0
+    if args.js_replay is not None:
+        return _js_replay(args)
     if args.replay is not None:
         folders = [root / target.name for root in (CORPUS, REGRESSIONS, CRASHES)]
         return 1 if replay(target, args.replay or saved_inputs(*folders)) else 0
