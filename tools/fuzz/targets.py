@@ -39,6 +39,7 @@ from .container import (
     _set_path,
     check_input,
     decoder_seeds,
+    decompressed_start,
     mutate_container,
 )
 from .mutators import bundle, mutate_bundle, unbundle
@@ -517,10 +518,7 @@ def _mutate_face_payload(rng: random.Random, item: list[Any]) -> None:
     else:
         index, start, length = -1, 0, len(payload)
     part = payload[start : start + length]
-    try:
-        raw = bytearray(zstandard.ZstdDecompressor().decompress(part, max_output_size=1 << 20))
-    except zstandard.ZstdError:
-        raw = bytearray(part)
+    raw = decompressed_start(part)
     what = rng.randrange(4)
     if raw and what <= 1:
         for _ in range(rng.choice([1, 1, 2, 4])):
