@@ -265,6 +265,39 @@ def _arcs(target: Target, data: bytes) -> set[tuple[str, int, int]]:
     return arcs
 
 
+def line_coverage(target: Target, work: Path) -> dict[str, int]:
+    """Python's own count, independent of atheris: the line transitions inside tuckercodec
+    (as coverage.py's branch mode counts them) and the lines that the target's seeds execute,
+    and that the seeds and a run's scratch corpus ``work`` execute together."""
+    if target.name == "all":  # its seeds are made, not committed
+        with tempfile.TemporaryDirectory(prefix="tkc-fuzz-seeds-") as folder:
+            return _line_coverage(target, write_seeds(target, Path(folder)), work)
+    return _line_coverage(target, seed_inputs(target), work)
+
+
+def _line_coverage(target: Target, seeds: list[Path], work: Path) -> dict[str, int]:
+    known = {hashlib.sha1(p.read_bytes()).hexdigest() for p in seeds}
+    start: set[tuple[str, int, int]] = set()
+    for path in seeds:
+        start |= _arcs(target, path.read_bytes())
+    end = set(start)
+    found = [p for p in saved_inputs(work) if hashlib.sha1(p.read_bytes()).hexdigest() not in known]
+    for path in found:
+        end |= _arcs(target, path.read_bytes())
+
+    def lines(arcs: set[tuple[str, int, int]]) -> int:
+        return len({(name, line) for name, _, line in arcs})
+
+    return {
+        "seeds": len(seeds),
+        "inputs": len(found),
+        "arcs_start": len(start),
+        "arcs_end": len(end),
+        "lines_start": lines(start),
+        "lines_end": lines(end),
+    }
+
+
 def merge_corpus(target: Target, work: Path, budget_kb: int) -> dict[str, int]:
     """Add to the target's corpus the inputs of ``work`` that execute a line transition no
     seed and no input added before executes: smallest inputs first, until the corpus reaches
@@ -329,6 +362,12 @@ def _parser() -> argparse.ArgumentParser:
     add("--crashes", default=str(CRASHES), help="where crashing inputs go (a folder per target)")
     add("--merge", action="store_true", help="fold new coverage into the target's corpus")
     add("--merge-from", type=Path, help="only merge this scratch corpus into the corpus")
+    add(
+        "--line-coverage",
+        type=Path,
+        help="count the Python lines and line transitions the seeds reach, and the seeds with "
+        "this scratch corpus",
+    )
     add("--corpus-kb", type=int, default=32, help="size budget of the target's corpus")
     add(
         "--no-growth-ok",
@@ -385,6 +424,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.make_seeds:
         for path in write_seeds(target):
             print(f"{path}: {path.stat().st_size} bytes")
+        return 0
+    if args.line_coverage:
+        print(json.dumps(line_coverage(target, args.line_coverage)))
         return 0
     if args.merge_from:
         print(json.dumps(merge_corpus(target, args.merge_from, args.corpus_kb)))
