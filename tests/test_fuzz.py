@@ -6,11 +6,16 @@ ends in a clear error, never a crash, a hang or a flood of memory.
   error or reads consistently, quickly, in bounded memory, without a warning (the target's
   ``check`` in tools.fuzz.targets is the oracle); a seed (``seed-*``) reads without error.
   USD and Alembic inputs go through their isolated child, half a second each.
+- Every finding not fixed yet (tests/data/fuzz/<target>/) still reproduces: once fixed, it is
+  to move to the regressions.
 - The structure-aware mutators, driven by a plain random generator, make variants of the
   seeds: this part needs no atheris, so it runs everywhere.
 - A bounded atheris run (``TKC_FUZZ_SECONDS``, 30 s by default) of target ``all`` (every
   in-process door in one process, the first byte of an input choosing) in a subprocess with a
   hard timeout; skipped, saying why, where atheris is not installed (it has no Windows build).
+  It must see coverage and reach beyond its seeds: a harness that instruments nothing the doors
+  run fails here, not silently.
+- The JavaScript decoder on the decoders' inputs and mutations of them, against the Python one.
 """
 
 from __future__ import annotations
@@ -103,6 +108,31 @@ def test_saved_input(item):
     assert peak < INPUT_PEAK_BYTES, f"{_label(item)} peaked at {peak >> 20} MiB"
     if path.name.startswith("seed-"):
         assert outcome.split("/")[0] == "ok", f"the seed {_label(item)} is refused: {outcome}"
+
+
+#: Findings not fixed yet (tests/data/fuzz/README.md), by target.
+OPEN_FINDINGS = [
+    (folder.name, path)
+    for folder in sorted((ROOT / "tests" / "data" / "fuzz").glob("*/"))
+    for path in fuzz_tool.saved_inputs(folder)
+]
+
+
+@pytest.mark.parametrize("item", OPEN_FINDINGS, ids=[f"{n}/{p.name}" for n, p in OPEN_FINDINGS])
+def test_an_open_finding_still_reproduces(item):
+    """An input the fuzzer found that breaks a door outside the fuzzer, kept until the door is
+    fixed: it still fails the door's oracle. Once fixed, this fails, asking for the input to
+    become a regression."""
+    name, path = item
+    _needs(name)
+    try:
+        outcome = TARGETS[name].check(path.read_bytes())
+    except Exception:  # the finding, as recorded
+        return
+    pytest.fail(
+        f"{path.relative_to(ROOT)} now ends in {outcome!r}: fixed. Move it to "
+        f"tests/fuzz/regressions/{name}/ and drop its line in tests/data/fuzz/README.md"
+    )
 
 
 def test_structural_mutations_of_the_seeds():
