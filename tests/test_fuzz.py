@@ -135,6 +135,18 @@ def test_an_open_finding_still_reproduces(item):
     )
 
 
+def _open_signatures() -> set[str]:
+    """The crash names (``crash-<type>-<module>-<line>``) the open findings make today."""
+    names = set()
+    for name, path in OPEN_FINDINGS:
+        if all(importlib.util.find_spec(module) for module in TARGETS[name].needs):
+            try:
+                TARGETS[name].check(path.read_bytes())
+            except Exception as error:
+                names.add(f"crash-{fuzz_tool.signature_of(error)}")
+    return names
+
+
 def test_structural_mutations_of_the_seeds():
     """Re-signed structural edits of every decoder seed, without libFuzzer: each ends in
     FormatError or decodes consistently."""
@@ -264,6 +276,8 @@ def test_a_short_bounded_fuzz_run(tmp_path):
     summary = json.loads(summary_path.read_text())
     folder = crashes / "all"
     found = sorted(p for p in folder.iterdir() if p.suffix != ".txt") if folder.exists() else []
+    known = _open_signatures()  # recorded, another's to fix: not this run's failure
+    found = [p for p in found if p.name.rsplit("-", 1)[0] not in known]
     report = []
     for path in found:
         notes = path.with_suffix(".txt")
