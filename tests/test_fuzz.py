@@ -114,6 +114,7 @@ def test_saved_input(item):
 OPEN_FINDINGS = [
     (folder.name, path)
     for folder in sorted((ROOT / "tests" / "data" / "fuzz").glob("*/"))
+    if folder.name in TARGETS  # javascript/: a disagreement kept for the record, not a crash
     for path in fuzz_tool.saved_inputs(folder)
 ]
 
