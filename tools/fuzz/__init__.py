@@ -7,6 +7,8 @@ input ends in a clear error, never a crash, a hang or a flood of memory.
     python -m tools.fuzz --target npz --replay                   # re-check its saved inputs
     python -m tools.fuzz --target gltf --seconds 600 --merge     # then fold new coverage in
     python -m tools.fuzz --target vtk --make-seeds               # (re)write its valid seeds
+    python -m tools.fuzz --target obj --line-coverage /tmp/work  # Python lines: seeds, + a run
+    python -m tools.fuzz --js-replay /tmp/work/decoder           # the JavaScript decoder on them
 
 A *target* is one door: the decoder (``decode``, ``info``, frame 0), the segmented decoder
 (the same on format 1.1 files, plus a range across a segment boundary and a read from a path),
@@ -30,9 +32,23 @@ The fuzzing runs in a child process (``--worker``) so that the driver can stop i
 restart it after a hang or an out-of-memory (libFuzzer exits on those), and sum the inputs
 tried over the restarts from libFuzzer's final statistics.
 
+A run reports libFuzzer's coverage at its start (the seeds: libFuzzer's ``INITED`` line) and
+its end: ``cov``, the distinct edges (bytecode branches) reached, ``ft``, the features (edges
+with hit counts, comparisons), and the corpus kept. A run fails (exit 1, saying why) if it saw
+no coverage at all, if its corpus never grew past its seeds (``--no-growth-ok`` for a run too
+short to grow), or if a module of the package was first imported after the instrumentation.
+
 No module of this package imports tuckercodec (or :mod:`tools.common`, which does) at its top:
 the worker must import the package for the first time under atheris' instrumentation, or the
-fuzzer runs blind to its coverage.
+fuzzer runs blind to its coverage. And since the package imports its modules when first used
+(``import tuckercodec`` loads ``__init__`` and ``_version`` alone), the worker imports, inside
+the instrumented block, each target's ``modules`` (every module below each) and runs the first
+inputs of its corpus there, so that what the check imports lazily is instrumented too
+(:func:`.worker.instrument_target`).
+
+The JavaScript decoder (``tuckercodec/web/tkc/``) runs in node, out of libFuzzer's sight: it is
+given the .tkc inputs the decoders' runs kept, and mutations of them, and must agree with the
+Python decoder on accepting each (:mod:`.javascript`).
 """
 
 from __future__ import annotations

@@ -23,7 +23,7 @@ from . import __doc__ as PACKAGE_DOC
 from .container import signature_of
 from .paths import CORPUS, CRASHES, NOT_INPUTS, REGRESSIONS, ROOT, saved_inputs
 from .targets import SCRATCH_VARIABLE, TARGETS, Target, target_named
-from .worker import quiet_check, run_worker
+from .worker import LATE_IMPORT, quiet_check, run_worker
 
 
 def seed_inputs(target: Target) -> list[Path]:
@@ -48,6 +48,56 @@ def write_seeds(target: Target, folder: Path | None = None) -> list[Path]:
 def _stat(text: str, name: str) -> int:
     found = re.findall(rf"stat::{name}:\s+(\d+)", text)
     return int(found[-1]) if found else 0
+
+
+_PROGRESS = re.compile(r"^#(\d+)\s+(\w+)\s+cov: (\d+) ft: (\d+) corp: (\d+)/", re.MULTILINE)
+
+
+def coverage_lines(text: str) -> list[dict[str, int | str]]:
+    """libFuzzer's progress lines that carry coverage (INITED, NEW, pulse, REDUCE, DONE...):
+    ``cov`` is the number of distinct edges (atheris: bytecode branches) reached, ``ft`` the
+    number of features (edges with hit counts, comparisons), ``corpus`` the inputs kept."""
+    return [
+        {"event": event, "inputs": int(n), "cov": int(c), "ft": int(f), "corpus": int(k)}
+        for n, event, c, f, k in _PROGRESS.findall(text)
+    ]
+
+
+def judge_coverage(
+    outputs: list[str], late: list[str], expect_growth: bool
+) -> tuple[dict[str, Any], list[str]]:
+    """The coverage at the start (libFuzzer's INITED line of the first worker: the seeds) and at
+    the end (its last line of the last worker), and what makes the run a failure: no coverage at
+    all, a corpus that never grew past its seeds, a module of the package imported after the
+    instrumentation (its coverage unseen)."""
+    lines = [line for text in outputs for line in coverage_lines(text)]
+    inited = [line for line in lines if line["event"] == "INITED"]
+    start = inited[0] if inited else (lines[0] if lines else None)
+    end = lines[-1] if lines else None
+    added = sum(_stat(text, "new_units_added") for text in outputs)
+    coverage: dict[str, Any] = {
+        "start": None if start is None else {k: start[k] for k in ("cov", "ft", "corpus")},
+        "end": None if end is None else {k: end[k] for k in ("cov", "ft", "corpus")},
+        "new_units_added": added,
+    }
+    failures = []
+    if start is None or not int(start["cov"]):
+        failures.append(
+            "libFuzzer reported no coverage (no 'cov:' on its INITED line): the worker "
+            "instruments nothing the target runs, the fuzzer is blind"
+        )
+    elif expect_growth and (not added or end is None or int(end["ft"]) <= int(start["ft"])):
+        failures.append(
+            f"the corpus did not grow past its seeds (cov {start['cov']}, ft {start['ft']}, "
+            f"corpus {start['corpus']} at the start; {added} inputs added): the fuzzer "
+            "found nothing new to reach, which a run of this length should"
+        )
+    if late:
+        failures.append(
+            "modules of tuckercodec were imported after the instrumented block, their coverage "
+            f"unseen by libFuzzer: {', '.join(late)} (add them to the target's modules)"
+        )
+    return coverage, failures
 
 
 def _worker_command(args: argparse.Namespace, crashes: Path, libfuzzer: list[str]) -> list[str]:
@@ -79,7 +129,11 @@ def _run_worker_once(
         sys.stderr.write(output)
     else:
         for line in output.splitlines():
-            if "=== new crash" in line or "ERROR: libFuzzer" in line or line.startswith("Done "):
+            if (
+                any(mark in line for mark in ("=== new crash", "ERROR: libFuzzer", LATE_IMPORT))
+                or line.startswith("Done ")
+                or re.match(r"#\d+\s+(INITED|DONE)", line)
+            ):
                 print(line, file=sys.stderr)
     return output
 
@@ -110,6 +164,7 @@ def fuzz(args: argparse.Namespace) -> dict[str, Any]:
     env[SCRATCH_VARIABLE] = scratch
     timeout = max(args.timeout, 120) if target.isolated else args.timeout
     seed = args.seed
+    outputs: list[str] = []
     while True:
         left = args.seconds - (time.monotonic() - started) if args.seconds else None
         if (left is not None and left < 2) or (args.runs and runs >= args.runs):
@@ -133,6 +188,7 @@ def fuzz(args: argparse.Namespace) -> dict[str, Any]:
             None if left is None else left + timeout + 60,
             args.verbose,
         )
+        outputs.append(output)
         executed = _stat(output, "number_of_executed_units")
         if not executed:  # no final stats (killed): the last progress line
             progress = re.findall(r"^#(\d+)\s", output, flags=re.MULTILINE)
@@ -150,12 +206,23 @@ def fuzz(args: argparse.Namespace) -> dict[str, Any]:
             break
     shutil.rmtree(scratch, ignore_errors=True)
     new = sorted(str(p) for p in set(crashes.iterdir()) - before if p.suffix not in NOT_INPUTS)
+    late = sorted(
+        {
+            line.split(LATE_IMPORT, 1)[1].strip()
+            for t in outputs
+            for line in t.splitlines()
+            if LATE_IMPORT in line
+        }
+    )
+    coverage, failures = judge_coverage(outputs, late, not args.no_growth_ok)
     summary = {
         "target": target.name,
         "inputs_tried": runs,
         "seconds": round(time.monotonic() - started, 1),
         "restarts": restarts,
         "peak_rss_mb": peak_rss,
+        "coverage": coverage,
+        "failures": failures,
         "new_crashes": new,
         "work_corpus": str(work),
         "work_corpus_files": sum(1 for _ in work.iterdir()),
@@ -196,6 +263,39 @@ def _arcs(target: Target, data: bytes) -> set[tuple[str, int, int]]:
     finally:
         sys.settrace(previous)
     return arcs
+
+
+def line_coverage(target: Target, work: Path) -> dict[str, int]:
+    """Python's own count, independent of atheris: the line transitions inside tuckercodec
+    (as coverage.py's branch mode counts them) and the lines that the target's seeds execute,
+    and that the seeds and a run's scratch corpus ``work`` execute together."""
+    if target.name == "all":  # its seeds are made, not committed
+        with tempfile.TemporaryDirectory(prefix="tkc-fuzz-seeds-") as folder:
+            return _line_coverage(target, write_seeds(target, Path(folder)), work)
+    return _line_coverage(target, seed_inputs(target), work)
+
+
+def _line_coverage(target: Target, seeds: list[Path], work: Path) -> dict[str, int]:
+    known = {hashlib.sha1(p.read_bytes()).hexdigest() for p in seeds}
+    start: set[tuple[str, int, int]] = set()
+    for path in seeds:
+        start |= _arcs(target, path.read_bytes())
+    end = set(start)
+    found = [p for p in saved_inputs(work) if hashlib.sha1(p.read_bytes()).hexdigest() not in known]
+    for path in found:
+        end |= _arcs(target, path.read_bytes())
+
+    def lines(arcs: set[tuple[str, int, int]]) -> int:
+        return len({(name, line) for name, _, line in arcs})
+
+    return {
+        "seeds": len(seeds),
+        "inputs": len(found),
+        "arcs_start": len(start),
+        "arcs_end": len(end),
+        "lines_start": lines(start),
+        "lines_end": lines(end),
+    }
 
 
 def merge_corpus(target: Target, work: Path, budget_kb: int) -> dict[str, int]:
@@ -262,7 +362,18 @@ def _parser() -> argparse.ArgumentParser:
     add("--crashes", default=str(CRASHES), help="where crashing inputs go (a folder per target)")
     add("--merge", action="store_true", help="fold new coverage into the target's corpus")
     add("--merge-from", type=Path, help="only merge this scratch corpus into the corpus")
+    add(
+        "--line-coverage",
+        type=Path,
+        help="count the Python lines and line transitions the seeds reach, and the seeds with "
+        "this scratch corpus",
+    )
     add("--corpus-kb", type=int, default=32, help="size budget of the target's corpus")
+    add(
+        "--no-growth-ok",
+        action="store_true",
+        help="do not fail a run whose corpus does not grow past its seeds (a replay-like run)",
+    )
     add("--json", help="also write the summary to this file")
     add("--verbose", action="store_true", help="show libFuzzer's whole output")
     add(
@@ -271,9 +382,30 @@ def _parser() -> argparse.ArgumentParser:
         type=Path,
         help="check these inputs (default: the target's corpus, regressions and crashes)",
     )
+    add(
+        "--js-replay",
+        nargs="*",
+        type=Path,
+        help="decode these .tkc inputs (files or folders; default: the decoders' committed "
+        "inputs and the vectors) with the JavaScript decoder in node and the Python one; fail on "
+        "a crash of node or a disagreement on accepting a file",
+    )
+    add("--js-mutations", type=int, default=0, help="with --js-replay: also this many mutations")
     add("--make-seeds", action="store_true", help="write the target's seeds into its corpus")
     add("--worker", action="store_true", help=argparse.SUPPRESS)
     return parser
+
+
+def _js_replay(args: argparse.Namespace) -> int:
+    from .javascript import js_replay
+
+    summary = js_replay(args.js_replay, args.js_mutations, args.seed)
+    print(json.dumps(summary, indent=2))
+    if args.json:
+        Path(args.json).write_text(json.dumps(summary, indent=2) + "\n")
+    for failure in summary["failures"]:
+        print(f"FAILED: {failure}", file=sys.stderr)
+    return 1 if summary["failures"] else 0
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -293,9 +425,14 @@ def main(argv: list[str] | None = None) -> int:
         for path in write_seeds(target):
             print(f"{path}: {path.stat().st_size} bytes")
         return 0
+    if args.line_coverage:
+        print(json.dumps(line_coverage(target, args.line_coverage)))
+        return 0
     if args.merge_from:
         print(json.dumps(merge_corpus(target, args.merge_from, args.corpus_kb)))
         return 0
+    if args.js_replay is not None:
+        return _js_replay(args)
     if args.replay is not None:
         folders = [root / target.name for root in (CORPUS, REGRESSIONS, CRASHES)]
         return 1 if replay(target, args.replay or saved_inputs(*folders)) else 0
@@ -308,4 +445,6 @@ def main(argv: list[str] | None = None) -> int:
     if args.json:
         with contextlib.suppress(OSError):
             Path(args.json).write_text(json.dumps(summary, indent=2) + "\n")
-    return 1 if summary["new_crashes"] else 0
+    for failure in summary["failures"]:
+        print(f"FAILED: {failure}", file=sys.stderr)
+    return 1 if summary["new_crashes"] or summary["failures"] else 0

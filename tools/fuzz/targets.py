@@ -39,6 +39,7 @@ from .container import (
     _set_path,
     check_input,
     decoder_seeds,
+    decompressed_start,
     mutate_container,
 )
 from .mutators import bundle, mutate_bundle, unbundle
@@ -57,6 +58,28 @@ class Target:
     isolated: bool = False  # each input starts a process: run a few thousand, not millions
     needs: tuple[str, ...] = ()  # libraries it reads with: imported before the memory cap
     max_len: int = 8192
+    #: the modules it exercises, each package with every module below it: imported under
+    #: atheris' instrumentation before fuzzing (the package imports lazily)
+    modules: tuple[str, ...] = ()
+
+
+#: What every door goes through: the package's errors, the machine and the model, and the
+#: tools' surface the checks and seeds import (which imports the codec).
+COMMON_MODULES = (
+    "tuckercodec.errors",
+    "tuckercodec.system",
+    "tuckercodec.model",
+    "tuckercodec.internal",
+)
+#: The decoder and the parts of the format it reads.
+DECODER_MODULES = (
+    *COMMON_MODULES,
+    "tuckercodec.decoder",
+    "tuckercodec.format",
+    "tuckercodec.files",
+)
+#: The readers, the isolated child's parent side and what the readers share.
+READER_MODULES = (*COMMON_MODULES, "tuckercodec.io")
 
 
 def _atheris_mutate(data: bytes, max_size: int) -> bytes:
@@ -338,6 +361,7 @@ def _reader(
         isolated=isolated,
         needs=needs,
         max_len=max_len,
+        modules=READER_MODULES,
     )
 
 
@@ -494,10 +518,7 @@ def _mutate_face_payload(rng: random.Random, item: list[Any]) -> None:
     else:
         index, start, length = -1, 0, len(payload)
     part = payload[start : start + length]
-    try:
-        raw = bytearray(zstandard.ZstdDecompressor().decompress(part, max_output_size=1 << 20))
-    except zstandard.ZstdError:
-        raw = bytearray(part)
+    raw = decompressed_start(part)
     what = rng.randrange(4)
     if raw and what <= 1:
         for _ in range(rng.choice([1, 1, 2, 4])):
@@ -650,6 +671,7 @@ TARGETS: dict[str, Target] = {
             seeds=decoder_seeds,
             mutate=mutate_container,
             extra_seeds=("spec/vectors/*.tkc",),
+            modules=DECODER_MODULES,
         ),
         Target(
             name="segmented",
@@ -661,7 +683,9 @@ TARGETS: dict[str, Target] = {
                 "spec/vectors/v1.1-*.tkc",
                 "spec/vectors/v1.2-*segments.tkc",
                 "spec/vectors/v1.3-segments-*.tkc",
+                "spec/vectors/v1.4-scene-segments.tkc",
             ),
+            modules=DECODER_MODULES,
         ),
         Target(
             name="face",
@@ -669,6 +693,7 @@ TARGETS: dict[str, Target] = {
             check=face_check,
             seeds=face_seeds,
             mutate=mutate_face,
+            modules=DECODER_MODULES,
         ),
         Target(
             name="zarr-chunk",
@@ -676,6 +701,7 @@ TARGETS: dict[str, Target] = {
             check=zarr_check,
             seeds=zarr_seeds,
             mutate=mutate_zarr,
+            modules=(*DECODER_MODULES, "tuckercodec.zarr_codec"),
         ),
         _reader("obj", ".obj", "one OBJ frame", _obj_seeds),
         _reader("npz", ".npz", "a NumPy .npz archive (zip of .npy members)"),
@@ -762,6 +788,7 @@ ALL = Target(
     mutate=all_mutate,
     needs=tuple(sorted({module for t in IN_PROCESS for module in t.needs})),
     max_len=16384,
+    modules=tuple(dict.fromkeys(module for t in IN_PROCESS for module in t.modules)),
 )
 
 

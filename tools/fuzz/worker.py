@@ -20,6 +20,66 @@ from .targets import Target
 # ------------------------------------------------------------------------------------------
 # the worker (inside libFuzzer)
 
+#: What the worker prints when a module of the package is first imported after the instrumented
+#: block (the driver counts these lines): libFuzzer cannot see that module's coverage.
+LATE_IMPORT = "=== uninstrumented module imported late:"
+#: How many of the corpus' inputs are run inside the instrumented block, to import what the
+#: target's checks import lazily (the package imports its modules when first used).
+WARM_UP_INPUTS = 64
+
+
+def package_modules() -> list[str]:
+    return [
+        name for name in sys.modules if name == "tuckercodec" or name.startswith("tuckercodec.")
+    ]
+
+
+def _import_tree(name: str) -> None:
+    """Import a module, and every module below it if it is a package. A module whose optional
+    library is missing (a reader's) is left out: its door cannot run here either."""
+    import importlib
+    import pkgutil
+
+    try:
+        module = importlib.import_module(name)
+    except ImportError as error:
+        print(f"(not instrumented: {name}: {error})", file=sys.stderr)
+        return
+    for info in pkgutil.iter_modules(getattr(module, "__path__", None) or []):
+        _import_tree(f"{name}.{info.name}")
+
+
+def corpus_of(libfuzzer_args: list[str]) -> Path | None:
+    """The corpus folder among libFuzzer's arguments (the one that is not a flag)."""
+    folders = [Path(a) for a in libfuzzer_args if not a.startswith("-") and Path(a).is_dir()]
+    return folders[0] if folders else None
+
+
+def instrument_target(target: Target, corpus: Path | None) -> set[str]:
+    """Import, under atheris' instrumentation, the modules the target exercises: its
+    ``modules`` (each package with every module below it), then whatever its check imports on
+    the first inputs of its corpus. ``import tuckercodec`` alone loads only the package's
+    ``__init__`` and ``_version`` (every other module is imported when first used): a worker
+    that instrumented that alone fuzzed blind, its corpus never growing past one input.
+    Returns the names of the package's modules so instrumented."""
+    import atheris
+
+    if "tuckercodec" in sys.modules:  # see the package's docstring
+        raise RuntimeError("tuckercodec was imported before atheris could instrument it")
+    with atheris.instrument_imports(include=["tuckercodec"]):
+        import tuckercodec  # noqa: F401 - instrumented for coverage
+
+        for name in target.modules:
+            _import_tree(name)
+        count = 4 if target.isolated else WARM_UP_INPUTS  # a process per input
+        inputs = sorted(corpus.iterdir())[:count] if corpus else []
+        for path in inputs:
+            if path.is_file():
+                quiet_check(target, path.read_bytes())
+    names = set(package_modules())
+    print(f"(instrumented {len(names)} modules of tuckercodec)", file=sys.stderr, flush=True)
+    return names
+
 
 def _limit_address_space(memory_mb: int) -> None:
     """Cap the address space at what the process holds now plus ``memory_mb``: a huge
@@ -70,10 +130,7 @@ def run_worker(
     """
     import atheris
 
-    if "tuckercodec" in sys.modules:  # see the module's docstring
-        raise RuntimeError("tuckercodec was imported before atheris could instrument it")
-    with atheris.instrument_imports(include=["tuckercodec"]):
-        import tuckercodec  # noqa: F401 - instrumented for coverage
+    instrumented = instrument_target(target, corpus_of(libfuzzer_args))
 
     import numpy  # noqa: F401 - imported before the address-space cap
 
@@ -90,6 +147,8 @@ def run_worker(
     else:
         _limit_address_space(memory_mb)
     memory_alarm = [lifetime_peak_rss_mib() + report_mb]
+    modules_seen = [len(sys.modules)]
+    late: set[str] = set()
 
     def save(name: str, data: bytes, notes: str) -> None:
         path = crashes / f"{name}-{hashlib.sha1(data).hexdigest()[:12]}"
@@ -125,6 +184,11 @@ def run_worker(
                     file=sys.stderr,
                     flush=True,
                 )
+        if len(sys.modules) != modules_seen[0]:  # cheap: only when something was imported
+            modules_seen[0] = len(sys.modules)
+            for name in sorted(set(package_modules()) - instrumented - late):
+                late.add(name)
+                print(f"{LATE_IMPORT} {name}", file=sys.stderr, flush=True)
         if failure is None:
             return
         name = f"crash-{signature_of(failure)}"
