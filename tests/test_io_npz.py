@@ -206,6 +206,11 @@ def test_bad_npz_names_file_and_key(
     assert key in str(caught.value)
 
 
+def _code_points(*points: int) -> np.ndarray:
+    """Two one-character names holding these code points as numpy stores them, unchecked."""
+    return np.frombuffer(np.array(points, dtype="<u4").tobytes(), dtype="<U1")
+
+
 @pytest.mark.parametrize(
     ("arrays", "message"),
     [
@@ -260,6 +265,9 @@ def test_bad_npz_names_file_and_key(
         ({"V": V3, "frame_files": np.array([1, 2])}, "'frame_files' must be 2 strings"),
         ({"V": V3, "frame_files": np.array(["a", "b"], dtype=object)}, "Python objects"),
         ({"V": V3, "frame_files": np.array([b"a", b"\xff"])}, "not UTF-8"),
+        # numpy stores code points it never checks: one beyond Unicode, and a lone surrogate
+        ({"V": V3, "frame_files": _code_points(0x61, 0x110000)}, "not Unicode"),
+        ({"V": V3, "frame_files": _code_points(0x61, 0xD800)}, "not Unicode"),
         ({"V": V3, "frame_rate": np.array(np.nan)}, "'frame_rate' must be a positive"),
         ({"V": V3, "frame_rate": np.array([25.0, 30.0])}, "'frame_rate' must be one number"),
         ({"V": V3, "frame_rate": np.array("25")}, "'frame_rate' must be one number"),

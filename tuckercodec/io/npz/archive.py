@@ -318,6 +318,15 @@ def _npz_names(values: np.ndarray, frame_count: int, path: Path) -> list[str]:
             raise InputError(
                 "key 'frame_files' holds names that are not UTF-8", path=path
             ) from None
+    # numpy stores each character as a 32-bit code point it does not check: one beyond
+    # Unicode makes tolist() raise SystemError, and a lone surrogate cannot be written as UTF-8
+    points = np.ascontiguousarray(values, dtype=values.dtype.newbyteorder("=")).view(np.uint32)
+    if np.any((points > 0x10FFFF) | ((points >= 0xD800) & (points <= 0xDFFF))):
+        raise InputError(
+            "key 'frame_files' holds characters that are not Unicode (a code point above "
+            "U+10FFFF, or a surrogate)",
+            path=path,
+        )
     return [str(name) for name in values.tolist()]
 
 
