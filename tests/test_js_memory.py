@@ -49,7 +49,6 @@ def test_a_chunk_of_every_frame_does_not_inflate_frame_0(tmp_path):
     assert not got["accepted"]
     assert got["rule"] == "R21-header-limit" and "max_chunk_values" in got["message"]
     assert got["maxRssMiB"] < 200, got
-    assert got["seconds"] < 2.0
 
 
 def test_a_chunk_beyond_the_limit_decodes_when_the_caller_raises_it(tmp_path):
@@ -103,7 +102,7 @@ def test_the_loader_refuses_a_file_over_its_web_limits_and_accepts_it_when_raise
     refused = _measure(tmp_path, data, via="loader")
     assert not refused["accepted"]
     assert refused["rule"] == "R21-header-limit" and "max_vertices" in refused["message"]
-    assert refused["seconds"] < 1.0 and refused["maxRssMiB"] < 200, refused
+    assert refused["maxRssMiB"] < 200, refused
     assert _measure(tmp_path, data, via="decoder")["accepted"]  # the decoder's own defaults
     raised = _measure(tmp_path, data, via="loader", options={"limits": {"max_vertices": 2**22}})
     assert raised["accepted"], raised
