@@ -115,6 +115,15 @@ def test_pc2_keeps_its_start_frame_and_sample_rate(tmp_path):
     assert (tmp_path / "out.pc2").read_bytes() == original  # header and positions, every byte
 
 
+@pytest.mark.parametrize("rate", [np.inf, np.nan, -1.0, 0.0])
+def test_a_single_samples_sample_rate_is_never_used(tmp_path, rate):
+    """One sample has no step to check, so any sampleRate reads (an infinite one made
+    0 x inf a NaN, and a warning, found by the fuzzer)."""
+    (tmp_path / "one.pc2").write_bytes(pc2_bytes(moving(1), start=7.0, rate=rate))
+    seq = load_sequence(tmp_path / "one.pc2")
+    assert seq.time_codes is not None and seq.time_codes.tolist() == [7.0]
+
+
 @pytest.mark.parametrize(
     "times",
     [

@@ -85,6 +85,8 @@ def _time_codes(start: float, step: float, frames: int, path: Path) -> np.ndarra
             "positive number",
             path=path,
         )
+    if frames == 1:  # a single sample's sampleRate is never used, so it may be anything
+        return np.array([start], dtype=np.float64)
     return start + np.arange(frames, dtype=np.float64) * step
 
 
