@@ -564,29 +564,41 @@ def test_a_port_in_use_is_exit_1_naming_it(files, capsys):
     assert err.startswith(f"tuckercodec: 127.0.0.1:{port}: ") and "\n" not in err
 
 
-def test_the_view_command_serves_until_ctrl_c_then_exits_0(files):
-    """The real command in a child process: the URL it prints serves the file, byte for byte;
-    SIGINT stops it cleanly (exit 0, no traceback) and the port is closed."""
-    arguments = ["view", str(files["tkc"]), "--reference", str(files["original"])]
-    # Python's own Ctrl-C handler, even where this test runs with SIGINT ignored (a shell's
-    # background job), which the child would inherit
+def _start_view(arguments: list[str], env: dict[str, str] | None = None):
+    """The real command in a child process, and the URL it prints once it serves. Python's own
+    Ctrl-C handler, even where this test runs with SIGINT ignored (a shell's background job),
+    which the child would inherit."""
     start = (
         "import runpy, signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
         f"sys.argv = ['tuckercodec', *{arguments!r}]; "
         "runpy.run_module('tuckercodec', run_name='__main__')"
     )
-    command = [sys.executable, "-c", start]
     child = subprocess.Popen(
-        command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT
+        [sys.executable, "-c", start],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
+        env=env,
     )
+    assert child.stdout is not None
+    url = ""
+    while not url:
+        line = child.stdout.readline()
+        if not line:
+            child.kill()
+            raise AssertionError(f"the command ended early: {child.communicate(timeout=30)}")
+        if line.startswith("http://127.0.0.1:"):
+            url = line.strip()
+    return child, url
+
+
+def test_the_view_command_serves_until_ctrl_c_then_exits_0(files):
+    """The real command in a child process: the URL it prints serves the file, byte for byte;
+    SIGINT stops it cleanly (exit 0, no traceback) and the port is closed."""
+    arguments = ["view", str(files["tkc"]), "--reference", str(files["original"])]
+    child, url = _start_view(arguments)
     try:
-        assert child.stdout is not None
-        url = ""
-        while not url:
-            line = child.stdout.readline()
-            assert line, f"the command ended early: {child.communicate(timeout=30)}"
-            if line.startswith("http://127.0.0.1:"):
-                url = line.strip()
         match = re.fullmatch(r"http://127\.0\.0\.1:(\d+)/viewer/index\.html\?file=(.+)", url)
         assert match is not None, url
         port = int(match.group(1))
@@ -680,28 +692,8 @@ def test_open_gives_the_browser_a_private_file_not_the_token(files, tmp_path):
     )
     launcher.chmod(0o700)
     arguments = ["view", str(files["tkc"]), "--open"]
-    start = (
-        "import runpy, signal, sys; signal.signal(signal.SIGINT, signal.default_int_handler); "
-        f"sys.argv = ['tuckercodec', *{arguments!r}]; "
-        "runpy.run_module('tuckercodec', run_name='__main__')"
-    )
-    environment = {**os.environ, "BROWSER": f"{launcher} %s"}
-    child = subprocess.Popen(
-        [sys.executable, "-c", start],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        cwd=ROOT,
-        env=environment,
-    )
+    child, url = _start_view(arguments, {**os.environ, "BROWSER": f"{launcher} %s"})
     try:
-        assert child.stdout is not None
-        url = ""
-        while not url:
-            line = child.stdout.readline()
-            assert line, f"the command ended early: {child.communicate(timeout=30)}"
-            if line.startswith("http://127.0.0.1:"):
-                url = line.strip()
         token = url.rsplit("token=", 1)[1]
         done = Path(f"{record}.done")
         for _ in range(600):  # generous: the launcher runs once the server is up

@@ -6,6 +6,8 @@ and on what else runs): BENCHMARKS.md gives the peaks measured against it."""
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pytest
 
@@ -57,8 +59,10 @@ def test_every_term_of_the_planned_peak_is_within_the_limit(frames, vertices, fa
         )
         use = plan.use
         assert use is not None
+
         # the plan's use is the accounting of its own choices, each term counted
-        assert use == planned_memory(
+        planned = functools.partial(
+            planned_memory,
             vertices,
             frames,
             faces,
@@ -66,9 +70,9 @@ def test_every_term_of_the_planned_peak_is_within_the_limit(frames, vertices, fa
             own_basis=own,
             block_frames=plan.block_frames,
             columns=plan.sketch_columns,
-            rank=plan.max_rank,
             level=DEFAULT_LEVEL,
         )
+        assert use == planned(rank=plan.max_rank)
         assert use.baseline == PROCESS_BASELINE  # the process itself: numpy, scipy, ...
         assert use.blocks == BLOCK_COPIES * plan.block_frames * vertices * 24
         assert use.sketch >= 2 * plan.sketch_columns * vertices * 8  # the sum and its Q
@@ -81,18 +85,7 @@ def test_every_term_of_the_planned_peak_is_within_the_limit(frames, vertices, fa
         # a wider sketch, a longer block or one more column of U1 would not fit
         if plan.max_rank < plan.sketch_columns:
             assert plan.with_columns(plan.sketch_columns).max_rank == plan.max_rank
-            wider = planned_memory(
-                vertices,
-                frames,
-                faces,
-                segments=len(plan.bounds),
-                own_basis=own,
-                block_frames=plan.block_frames,
-                columns=plan.sketch_columns,
-                rank=plan.max_rank + 1,
-                level=DEFAULT_LEVEL,
-            )
-            assert wider.peak > (1 - MEMORY_MARGIN) * limit
+            assert planned(rank=plan.max_rank + 1).peak > (1 - MEMORY_MARGIN) * limit
         if previous is not None:  # the limit shrank: nothing grows
             assert plan.block_frames <= previous.block_frames
             assert plan.sketch_columns <= previous.sketch_columns
