@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from .._version import __version__
 from ..blender.package import PLATFORM_TAGS
@@ -17,12 +17,14 @@ from ..decomposition.analysis import SELECTIONS
 from ..encoder import DEFAULT_TARGET_KG
 from ..encoder.options import BASES, parse_max_error
 from ..encoder.plan import DEFAULT_SEGMENT_FRAMES, parse_size
+from ..errors import DependencyError
 from ..files import SUFFIX
 from ..gltf_export import COMPRESSIONS
 from ..io.registry import writable_formats
 from ..measures.distortion import KG_DEFINITION
 from ..measures.perceptual import STED_DEFINITION
 from ..reports.text import DEFAULT_TARGETS
+from ..system import native
 
 if TYPE_CHECKING:
     _Verbs = argparse._SubParsersAction[argparse.ArgumentParser]
@@ -113,6 +115,28 @@ def _port(text: str) -> int:
     return value
 
 
+class _VersionAction(argparse.Action):
+    """``--version``: the package's version and the implementation that runs (the compiled core
+    or pure Python, tuckercodec.system.native), which is looked for only when asked."""
+
+    def __init__(self, option_strings: list[str], dest: str, **kwargs: Any) -> None:
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, **kwargs)
+
+    def __call__(
+        self,
+        parser: argparse.ArgumentParser,
+        namespace: argparse.Namespace,
+        values: Any,
+        option_string: str | None = None,
+    ) -> None:
+        try:
+            implementation = native.describe()
+        except DependencyError as error:  # TUCKERCODEC_NATIVE misspelt, or =1 with no core
+            parser.exit(error.exit_code, f"tuckercodec: error: {error}\n")
+        print(f"tuckercodec {__version__}, {implementation}")
+        parser.exit()
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The parser of every verb and option, the verbs in the order ``--help`` lists them."""
     parser = argparse.ArgumentParser(
@@ -120,7 +144,10 @@ def build_parser() -> argparse.ArgumentParser:
         description="Compression of animated meshes (fixed connectivity) by truncated HOSVD.",
         epilog=f"Errors are KG errors in percent: {KG_DEFINITION}.",
     )
-    parser.add_argument("--version", action="version", version=f"tuckercodec {__version__}")
+    parser.add_argument(
+        "--version", action=_VersionAction, help="print the version, and whether the compiled "
+        "core or pure Python runs, and exit"
+    )
     verbs = parser.add_subparsers(dest="verb", metavar="VERB")
     verbs.required = True
     for add_verb in (

@@ -26,6 +26,7 @@ from ..measures.distortion import (
 )
 from ..model.sequence import MeshSequence
 from ..reports.text import worst_vertex
+from ..system import native
 from .inputs import check_precision, load_input, read_options, sequence_source
 
 
@@ -338,4 +339,5 @@ def run_info(args: argparse.Namespace) -> int:
     for section_id, length, codec, critical in header.sections:
         kind = "" if critical else " (ancillary)"
         print(f"  section {_text(section_id):<8} {length:>10} bytes  {_text(codec)}{kind}")
+    print(f"  decoded here by tuckercodec's {native.describe()}")
     return EXIT_OK

@@ -1,0 +1,8 @@
+//! The loops of tuckercodec that Python cannot run fast, in memory-safe Rust.
+//!
+//! Every function here reads values that came from a file, so each count, index and length is
+//! checked before it is used, and a bad value is an [`error::Broken`] naming the same rule and
+//! saying the same thing as the Python reference (`tuckercodec/format/`), never a panic.
+#![forbid(unsafe_code)]
+
+pub mod error;
