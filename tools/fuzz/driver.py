@@ -391,6 +391,13 @@ def _parser() -> argparse.ArgumentParser:
         "a crash of node or a disagreement on accepting a file",
     )
     add("--js-mutations", type=int, default=0, help="with --js-replay: also this many mutations")
+    add(
+        "--differential",
+        type=int,
+        metavar="N",
+        help="decode the vectors, the decoders' committed inputs and N mutations of them with "
+        "the compiled core and in pure Python; fail unless both agree on every one",
+    )
     add("--make-seeds", action="store_true", help="write the target's seeds into its corpus")
     add("--worker", action="store_true", help=argparse.SUPPRESS)
     return parser
@@ -400,6 +407,18 @@ def _js_replay(args: argparse.Namespace) -> int:
     from .javascript import js_replay
 
     summary = js_replay(args.js_replay, args.js_mutations, args.seed)
+    print(json.dumps(summary, indent=2))
+    if args.json:
+        Path(args.json).write_text(json.dumps(summary, indent=2) + "\n")
+    for failure in summary["failures"]:
+        print(f"FAILED: {failure}", file=sys.stderr)
+    return 1 if summary["failures"] else 0
+
+
+def _differential(args: argparse.Namespace) -> int:
+    from .differential import compare
+
+    summary = compare(args.differential, args.seed)
     print(json.dumps(summary, indent=2))
     if args.json:
         Path(args.json).write_text(json.dumps(summary, indent=2) + "\n")
@@ -433,6 +452,8 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     if args.js_replay is not None:
         return _js_replay(args)
+    if args.differential is not None:
+        return _differential(args)
     if args.replay is not None:
         folders = [root / target.name for root in (CORPUS, REGRESSIONS, CRASHES)]
         return 1 if replay(target, args.replay or saved_inputs(*folders)) else 0
