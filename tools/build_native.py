@@ -3,7 +3,8 @@
 ``pip install .`` builds it as a user gets it; an editable checkout needs this after each change
 to ``tuckercodec/native/``: cargo builds the release library, and it is copied into the
 package as ``_native`` with this Python's extension suffix (git ignores it), where
-``import tuckercodec._native`` finds it. ``--debug`` builds without optimisation (faster to build, slower to run).
+``import tuckercodec._native`` finds it. ``--debug`` builds without optimisation (faster to
+build, slower to run).
 """
 
 from __future__ import annotations
