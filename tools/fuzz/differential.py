@@ -131,4 +131,3 @@ def compare(count: int, seed: int, failures_kept: int = 20) -> dict[str, Any]:
         "seconds": round(time.perf_counter() - started, 1),
         "failures": failures,
     }
-
