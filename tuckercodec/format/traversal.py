@@ -34,12 +34,13 @@ from __future__ import annotations
 
 import operator
 from collections import defaultdict
-from collections.abc import Iterator, Mapping
-from typing import Any
+from collections.abc import Iterator, Mapping, Sequence
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from ..errors import FormatError
+from ..system import native
 from . import streams
 from .limits import DEFAULT_LIMITS, Limits, check_limit
 from .sections import section_shape
@@ -135,17 +136,41 @@ def encode_traversal(
     """
     table = np.asarray(faces, dtype=np.int64)
     count, width = table.shape if table.ndim == 2 and table.size else (0, 3)
-    rows = [[v for v in row if v >= 0] for row in table.tolist()]
-    walk = _Walk(rows, vertex_count)
+    walk = _walked(table, count, vertex_count)
     best: tuple[dict[str, Any], bytes] | None = None
     for corner_order in (ROTATE_FROM_GATE, ROTATE_FROM_SMALLEST):
-        coded = [walk.ops_for(corner_order), walk.degrees, walk.new_residuals, walk.references]
+        coded = [walk.ops[corner_order], walk.degrees, walk.new_residuals, walk.references]
         params, payload = pack_streams(coded, count, width, corner_order, level)
         if best is None or len(payload) < len(best[1]):
             best = params, payload
     assert best is not None
     walked = table[walk.order] if count else np.zeros((0, width), dtype=np.int64)
     return best[0], best[1], walked
+
+
+class _Streams(NamedTuple):
+    """A walk's streams: the ops for each corner order (0, 1), the degrees, the NEW and FAR
+    residuals, and the input's row of each walked face in walk order (lists or int64 arrays)."""
+
+    ops: tuple[Sequence[int], Sequence[int]]
+    degrees: Sequence[int]
+    new_residuals: Sequence[int]
+    references: Sequence[int]
+    order: Sequence[int]
+
+
+def _walked(table: np.ndarray, count: int, vertex_count: int) -> _Streams:
+    """The streams of the walk over ``table``: by the compiled core where it is installed and
+    the table is one it takes (it answers None otherwise), else by :class:`_Walk`."""
+    core = native.core()
+    if core is not None and count and 0 <= vertex_count <= 1 << 32:
+        walked = core.encode_traversal(np.ascontiguousarray(table), vertex_count)
+        if walked is not None:
+            ops_from_gate, ops_from_smallest, *rest = walked
+            return _Streams((ops_from_gate, ops_from_smallest), *rest)
+    walk = _Walk([[v for v in row if v >= 0] for row in table.tolist()], vertex_count)
+    ops = (walk.ops_for(ROTATE_FROM_GATE), walk.ops_for(ROTATE_FROM_SMALLEST))
+    return _Streams(ops, walk.degrees, walk.new_residuals, walk.references, walk.order)
 
 
 def pack_streams(
@@ -408,6 +433,15 @@ def decode_traversal(
     arrays, corner_order = read_stream_arrays(
         payload, params, count, width, vertex_count, where, limits
     )
+    core = native.core()
+    if core is not None and 0 <= vertex_count < 1 << 62:  # K as the core's int64
+        try:
+            faces: np.ndarray = core.decode_traversal(
+                arrays, count, width, vertex_count, corner_order
+            )
+        except core.Broken as error:
+            raise _broken(where, error.args[1]) from None
+        return faces
     try:
         if not arrays[1].size:
             return _walk_triangles(arrays, count, width, vertex_count, corner_order, where)
