@@ -27,7 +27,9 @@ corner). What is not: the order of the faces, which is the walk's (§6.8 makes i
 The decoder is one pass in Python over the faces, on integers in lists and dicts, with numpy
 doing what is not sequential before and after it (:func:`_walk_triangles`; :func:`_walk` holds
 every case and is its reference); the encoder runs the same walk with the mesh to answer each
-question. The encoder and :func:`_walk` share :class:`_Boundary`.
+question. The encoder and :func:`_walk` share :class:`_Boundary`. Where the compiled core is
+installed (:mod:`..system.native`), both walks run there instead (``tuckercodec/native/core/src/
+traversal``), giving the same streams, faces and errors; the Python here is their reference.
 """
 
 from __future__ import annotations
@@ -424,29 +426,37 @@ def decode_traversal(
     """The (M, n) faces of a FACE section with codec faces-traverse (§6.8), in walk order.
 
     In §5 step 15's order: the streams' table is checked and the streams read
-    (:func:`read_stream_arrays`), then the walk rebuilds the faces from them: a table of
-    triangles (no degrees) by :func:`_walk_triangles`, any other by :func:`_walk`, which holds
-    every case of §6.8 and is the reference the first is tested against. The walk's state grows
-    with the values it reads; the (M, n) table is made once M faces are decoded.
+    (:func:`read_stream_arrays`), then the walk rebuilds the faces from them
+    (:func:`walk_streams`). The walk's state grows with the values it reads; the (M, n) table is
+    made once M faces are decoded.
     """
     count, width = section_shape(params, where, min_cols=3)
     arrays, corner_order = read_stream_arrays(
         payload, params, count, width, vertex_count, where, limits
     )
+    return walk_streams(arrays, count, width, vertex_count, corner_order, where)
+
+
+def walk_streams(
+    arrays: list[np.ndarray], count: int, width: int, k: int, corner_order: int, where: str
+) -> np.ndarray:
+    """The (count, width) faces the walk decodes from the four int64 streams ``arrays``, or
+    R39-traversal. The compiled core's walk runs where it is installed and the values fit its
+    int64 (K) and u32 (edges) counts; else a table of triangles (no degrees) is walked by
+    :func:`_walk_triangles`, any other by :func:`_walk`, which holds every case of §6.8 and is
+    the reference both are tested against (same faces, same first error)."""
     core = native.core()
-    if core is not None and 0 <= vertex_count < 1 << 62:  # K as the core's int64
+    if core is not None and 0 <= k < 1 << 62 and sum(a.size for a in arrays) <= 1 << 30:
         try:
-            faces: np.ndarray = core.decode_traversal(
-                arrays, count, width, vertex_count, corner_order
-            )
+            faces: np.ndarray = core.decode_traversal(arrays, count, width, k, corner_order)
         except core.Broken as error:
             raise _broken(where, error.args[1]) from None
         return faces
     try:
         if not arrays[1].size:
-            return _walk_triangles(arrays, count, width, vertex_count, corner_order, where)
+            return _walk_triangles(arrays, count, width, k, corner_order, where)
         values = [stream.tolist() for stream in arrays]
-        rows = _walk(values, count, width, vertex_count, corner_order, where)
+        rows = _walk(values, count, width, k, corner_order, where)
     except StopIteration:  # a stream read past its end
         raise _broken(where, "a stream ends early") from None
     return _padded(rows, count, width)

@@ -1,17 +1,19 @@
 //! The boundary of the walk (traversal.py's `_Boundary`): the directed edges of the faces so far
 //! whose opposite edge no face has yet, and the gates to pop.
 
+use std::collections::hash_map::Entry as MapEntry;
+
+use super::edge;
 use super::hash::FastMap;
-use super::{edge, ends};
 
 /// No entry below (the bottom of a stack).
-const BOTTOM: usize = usize::MAX;
+const BOTTOM: u32 = u32::MAX;
 
-/// One entry of a vertex's stack of edges: an edge's key and the entry below it.
+/// One entry of a vertex's stack of edges: the edge's other end, and the entry below it.
 #[derive(Clone, Copy)]
 struct Entry {
-    key: u64,
-    below: usize,
+    other: u32,
+    below: u32,
 }
 
 /// `open[x -> y]` counts how often x -> y is open (more than once only where faces overlap).
@@ -19,20 +21,26 @@ struct Entry {
 /// an entry stays when its edge closes and is popped for good once found on top while closed,
 /// so that reading the newest open edge is O(1) amortized (as in the reference). The stacks
 /// are linked lists in two arenas, which grow with the corners, never with a file's claims.
+///
+/// Entries are numbered by u32: the walk opens fewer than 2**32 - 1 edges (the callers bound
+/// the streams' lengths, [`MAX_VALUES`](super::MAX_VALUES)); one past it is not pushed.
 pub struct Boundary {
-    pub open: FastMap<u64, u64>,
+    pub open: FastMap<u64, u32>,
     pub gates: Vec<u64>,
-    into_top: Vec<usize>,
-    out_of_top: Vec<usize>,
+    into_top: Vec<u32>,
+    out_of_top: Vec<u32>,
     into_entries: Vec<Entry>,
     out_of_entries: Vec<Entry>,
 }
 
 impl Boundary {
-    /// A boundary of `vertices` vertex ids (more are added by [`Boundary::add_vertex`]).
-    pub fn new(vertices: usize) -> Self {
+    /// A boundary of `vertices` vertex ids (more are added by [`Boundary::add_vertex`]), with
+    /// room for `open_edges` open edges (a hint: growing the table as it fills costs more).
+    pub fn new(vertices: usize, open_edges: usize) -> Self {
+        let mut open = FastMap::default();
+        open.reserve(open_edges);
         Boundary {
-            open: FastMap::default(),
+            open,
             gates: Vec::new(),
             into_top: vec![BOTTOM; vertices],
             out_of_top: vec![BOTTOM; vertices],
@@ -57,21 +65,24 @@ impl Boundary {
     /// more). Its key.
     pub fn join(&mut self, x: u32, y: u32) -> u64 {
         let key = edge(x, y);
-        let opposite = edge(y, x);
-        if let Some(count) = self.open.get_mut(&opposite) {
-            if *count == 1 {
+        // one probe for each edge looked at: entry() finds and removes alike
+        if let MapEntry::Occupied(mut opposite) = self.open.entry(edge(y, x)) {
+            if *opposite.get() == 1 {
                 // y -> x closes: its entries in into(x) and out_of(y) go stale
-                self.open.remove(&opposite);
+                opposite.remove();
             } else {
-                *count -= 1;
+                *opposite.get_mut() -= 1;
             }
-        } else if let Some(count) = self.open.get_mut(&key) {
-            *count += 1;
-        } else {
-            // x -> y opens: the newest entry of both ends
-            self.open.insert(key, 1);
-            push(&mut self.into_top, &mut self.into_entries, y, key);
-            push(&mut self.out_of_top, &mut self.out_of_entries, x, key);
+            return key;
+        }
+        match self.open.entry(key) {
+            MapEntry::Occupied(mut open) => *open.get_mut() += 1,
+            MapEntry::Vacant(vacant) => {
+                // x -> y opens: the newest entry of both ends
+                vacant.insert(1);
+                push(&mut self.into_top, &mut self.into_entries, y, x);
+                push(&mut self.out_of_top, &mut self.out_of_entries, x, y);
+            }
         }
         key
     }
@@ -89,33 +100,39 @@ impl Boundary {
 
     /// The u of the newest open u -> v (PREV), closed entries on top popped for good.
     pub fn newest_into(&mut self, v: u32) -> Option<u32> {
-        newest(&mut self.into_top, &self.into_entries, &self.open, v).map(|key| ends(key).0)
+        let open = &self.open;
+        newest(&mut self.into_top, &self.into_entries, v, |u| open.contains_key(&edge(u, v)))
     }
 
     /// The w of the newest open v -> w (NEXT), closed entries on top popped for good.
     pub fn newest_out_of(&mut self, v: u32) -> Option<u32> {
-        newest(&mut self.out_of_top, &self.out_of_entries, &self.open, v).map(|key| ends(key).1)
+        let open = &self.open;
+        newest(&mut self.out_of_top, &self.out_of_entries, v, |w| open.contains_key(&edge(v, w)))
     }
 }
 
-fn push(tops: &mut [usize], entries: &mut Vec<Entry>, vertex: u32, key: u64) {
-    // every vertex id on an edge was added before (the walk's ids are checked)
+/// Pushes `other` on the stack of `vertex` (a vertex id the walk added).
+fn push(tops: &mut [u32], entries: &mut Vec<Entry>, vertex: u32, other: u32) {
+    let Some(number) = u32::try_from(entries.len()).ok().filter(|&n| n != BOTTOM) else {
+        return;
+    };
     if let Some(top) = tops.get_mut(vertex as usize) {
-        entries.push(Entry { key, below: *top });
-        *top = entries.len() - 1;
+        entries.push(Entry { other, below: *top });
+        *top = number;
     }
 }
 
+/// The other end of the newest open edge on the stack of `vertex`.
 fn newest(
-    tops: &mut [usize],
+    tops: &mut [u32],
     entries: &[Entry],
-    open: &FastMap<u64, u64>,
     vertex: u32,
-) -> Option<u64> {
+    is_open: impl Fn(u32) -> bool,
+) -> Option<u32> {
     let top = tops.get_mut(vertex as usize)?;
-    while let Some(entry) = entries.get(*top) {
-        if open.contains_key(&entry.key) {
-            return Some(entry.key);
+    while let Some(entry) = entries.get(*top as usize) {
+        if is_open(entry.other) {
+            return Some(entry.other);
         }
         *top = entry.below;
     }

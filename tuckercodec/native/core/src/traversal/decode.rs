@@ -4,7 +4,7 @@
 use super::boundary::Boundary;
 use super::hash::FastMap;
 use super::{
-    ends, first_smallest, GATE_NONE, ROTATE_FROM_SMALLEST, RULE, STREAM_NAMES, TIP_FAR,
+    ends, first_smallest, GATE_NONE, MAX_VALUES, ROTATE_FROM_SMALLEST, RULE, STREAM_NAMES, TIP_FAR,
     TIP_NEW, TIP_NEXT, TIP_PREV,
 };
 use crate::error::Broken;
@@ -31,8 +31,8 @@ pub struct Streams<'a> {
 /// a stream's end). Never panics, whatever the values. Memory grows with the values read (the
 /// walk stops at a stream's end), never with `k` or `count`, except that each decoded face
 /// takes `width` entries: the caller bounds `width` (the reader checks the shape against the
-/// limits first). A file whose vertices stream holds 2**32 values or more is refused (the
-/// limits on a section keep it far below).
+/// limits first). Streams of more than [`MAX_VALUES`] values in all are refused (the limits on
+/// a section keep a file far below; the Python caller runs its reference beyond).
 pub fn decode(
     streams: &Streams<'_>,
     count: usize,
@@ -40,9 +40,12 @@ pub fn decode(
     k: i64,
     corner_order: i64,
 ) -> Result<Vec<i64>, Broken> {
-    if u32::try_from(streams.vertices.len()).is_err() {
-        return Err(broken("more than 2**32 new vertices"));
+    let values = [streams.ops, streams.degrees, streams.vertices, streams.references];
+    if values.iter().map(|stream| stream.len() as u128).sum::<u128>() > MAX_VALUES as u128 {
+        return Err(broken("streams of more than 2**30 values"));
     }
+    // at most one face per op, and a face opens about two edges (a hint for the tables)
+    let faces_at_most = count.min(streams.ops.len());
     let mut walk = Walk {
         ops: Reader::new(streams.ops),
         degrees: Reader::new(streams.degrees),
@@ -50,14 +53,16 @@ pub fn decode(
         references: Reader::new(streams.references),
         polygons: !streams.degrees.is_empty(),
         k,
-        placed: Vec::new(),
-        id_of: FastMap::default(),
+        placed: Vec::with_capacity(streams.vertices.len()),
+        id_of: VertexIds::new(k, streams.vertices.len()),
         last_new: -1,
-        boundary: Boundary::new(0),
+        boundary: Boundary::new(0, 2 * faces_at_most),
         width,
         smallest: corner_order == ROTATE_FROM_SMALLEST,
     };
     let mut table = Vec::new();
+    // a hint only, so a failure to reserve is no error here
+    let _ = table.try_reserve(faces_at_most.saturating_mul(width));
     let mut cycle = Vec::new();
     let mut values = Vec::new();
     let mut faces = 0;
@@ -108,7 +113,7 @@ struct Walk<'a> {
     k: i64,
     /// The vertex of each id.
     placed: Vec<i64>,
-    id_of: FastMap<i64, u32>,
+    id_of: VertexIds,
     last_new: i64,
     boundary: Boundary,
     width: usize,
@@ -202,14 +207,14 @@ impl Walk<'_> {
                 let w = i128::from(self.last_new) + 1 + i128::from(self.vertices.next()?);
                 let known = i64::try_from(w)
                     .ok()
-                    .filter(|&v| v >= 0 && v < self.k && !self.id_of.contains_key(&v));
+                    .filter(|&v| v >= 0 && v < self.k && self.id_of.get(v).is_none());
                 let Some(vertex) = known else {
                     let last = i128::from(self.k) - 1;
                     return Err(broken(format!(
                         "new vertex {w} is outside 0..{last} or placed"
                     )));
                 };
-                // fewer ids than values in the vertices stream, checked below 2**32
+                // fewer ids than values in the streams, checked below 2**30
                 let id = self.placed.len() as u32;
                 self.placed.push(vertex);
                 self.id_of.insert(vertex, id);
@@ -221,7 +226,7 @@ impl Walk<'_> {
                 let w = i128::from(previous) + i128::from(self.references.next()?);
                 let id = i64::try_from(w)
                     .ok()
-                    .and_then(|v| self.id_of.get(&v).copied());
+                    .and_then(|v| self.id_of.get(v));
                 id.ok_or_else(|| broken(format!("referenced vertex {w} is not one seen before")))
             }
             TIP_PREV | TIP_NEXT if !cycle.is_empty() => {
@@ -247,5 +252,53 @@ impl Walk<'_> {
             }
         }
         Ok(())
+    }
+}
+
+/// The id of each placed vertex: a table by vertex where `k` is within a few times the number
+/// of values of the vertices stream (its memory bounded by the values the file holds, as for
+/// the rest of the walk), else a hash map (a header claiming many more vertices than placed).
+enum VertexIds {
+    Table(Vec<u32>),
+    Map(FastMap<i64, u32>),
+}
+
+/// No id in the table.
+const NO_ID: u32 = u32::MAX;
+
+impl VertexIds {
+    fn new(k: i64, placed_at_most: usize) -> Self {
+        let bound = 4 * placed_at_most as u128 + 1024;
+        match usize::try_from(k) {
+            Ok(size) if (size as u128) <= bound => VertexIds::Table(vec![NO_ID; size]),
+            _ => VertexIds::Map(FastMap::default()),
+        }
+    }
+
+    /// The id of vertex `v` (any value), if it was placed.
+    #[inline]
+    fn get(&self, v: i64) -> Option<u32> {
+        match self {
+            VertexIds::Table(ids) => usize::try_from(v)
+                .ok()
+                .and_then(|v| ids.get(v).copied())
+                .filter(|&id| id != NO_ID),
+            VertexIds::Map(ids) => ids.get(&v).copied(),
+        }
+    }
+
+    /// Places vertex `v` (in 0..k, checked) as `id` (below 2**32 - 1).
+    #[inline]
+    fn insert(&mut self, v: i64, id: u32) {
+        match self {
+            VertexIds::Table(ids) => {
+                if let Some(slot) = usize::try_from(v).ok().and_then(|v| ids.get_mut(v)) {
+                    *slot = id;
+                }
+            }
+            VertexIds::Map(ids) => {
+                ids.insert(v, id);
+            }
+        }
     }
 }

@@ -2,8 +2,9 @@
 //! the mesh's answer, recording the four streams.
 
 use super::boundary::Boundary;
-use super::hash::FastMap;
-use super::{edge, ends, first_smallest, GATE_NONE, TIP_FAR, TIP_NEW, TIP_NEXT, TIP_PREV};
+use super::{
+    edge, ends, first_smallest, GATE_NONE, MAX_VALUES, TIP_FAR, TIP_NEW, TIP_NEXT, TIP_PREV,
+};
 
 /// The streams of a face table's walk, the values of Python's `_Walk`.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -24,10 +25,10 @@ pub struct Walked {
 /// wherever they are) over `k` vertices: the same streams and order as the Python reference.
 ///
 /// `None` where the input is outside what this port handles, so that the caller runs the
-/// reference (which raises what it raises): a row of fewer than 3 corners, a vertex `>= k`, or
-/// `k > 2**32`. Memory: tables of `k` entries, as the reference's `bytearray(k)`.
+/// reference (which raises what it raises): a row of fewer than 3 corners, a vertex `>= k`,
+/// `k > 2**32`, or a table of more than [`MAX_VALUES`] entries. Memory: tables of `k` entries, as the reference's `bytearray(k)`.
 pub fn encode(table: &[i64], width: usize, k: u64) -> Option<Walked> {
-    if width == 0 || table.len() % width != 0 || k > 1 << 32 {
+    if width == 0 || table.len() % width != 0 || table.len() > MAX_VALUES || k > 1 << 32 {
         return None;
     }
     let rows = Rows::new(table, width, k)?;
@@ -74,17 +75,22 @@ impl Rows {
 
 /// Per directed edge, the faces with that edge (consecutive corners), each once, the input's
 /// first last: the walk pops the visited ones off the end as it meets them, so its searches
-/// together take time linear in the corners.
+/// together take time linear in the corners. The edges x -> y are sorted by (x, y) into slots;
+/// a vertex's slots are found by its first slot and searched by y (a vertex of many edges, as
+/// a fan's hub, costs a binary search, not a scan).
 struct FacesWith {
-    slot_of: FastMap<u64, usize>,
-    faces: Vec<u32>,
-    /// each slot's range in `faces`: its start, and its end, which moves down as faces pop
+    /// each vertex's first slot (k + 1 entries)
+    first_slot: Vec<usize>,
+    /// each slot's y, and its range in `faces`: its start, and its end, which moves down as
+    /// faces pop
+    slot_y: Vec<u32>,
     start: Vec<usize>,
     end: Vec<usize>,
+    faces: Vec<u32>,
 }
 
 impl FacesWith {
-    fn new(rows: &Rows) -> Self {
+    fn new(rows: &Rows, k: usize) -> Self {
         let mut pairs: Vec<(u64, u32)> = Vec::with_capacity(rows.corners.len());
         for f in 0..rows.len() {
             let row = rows.row(f);
@@ -97,16 +103,19 @@ impl FacesWith {
         pairs.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(b.1.cmp(&a.1)));
         pairs.dedup();
         let mut with = FacesWith {
-            slot_of: FastMap::default(),
-            faces: Vec::with_capacity(pairs.len()),
+            first_slot: vec![0; k + 1],
+            slot_y: Vec::new(),
             start: Vec::new(),
             end: Vec::new(),
+            faces: Vec::with_capacity(pairs.len()),
         };
         let mut previous_key = None;
         for (key, f) in pairs {
             if previous_key != Some(key) {
                 previous_key = Some(key);
-                with.slot_of.insert(key, with.start.len());
+                let (x, y) = ends(key);
+                with.first_slot[x as usize + 1] += 1;
+                with.slot_y.push(y);
                 with.start.push(with.faces.len());
                 with.end.push(with.faces.len());
             }
@@ -114,12 +123,16 @@ impl FacesWith {
             let last = with.end.len() - 1;
             with.end[last] += 1;
         }
+        for x in 0..k {
+            with.first_slot[x + 1] += with.first_slot[x];
+        }
         with
     }
 
-    /// The first unvisited face with the edge `key`, visited ones popped for good.
-    fn first_unvisited(&mut self, key: u64, done: &[bool]) -> Option<usize> {
-        let slot = *self.slot_of.get(&key)?;
+    /// The first unvisited face with the edge x -> y, visited ones popped for good.
+    fn first_unvisited(&mut self, x: u32, y: u32, done: &[bool]) -> Option<usize> {
+        let (low, high) = (self.first_slot[x as usize], self.first_slot[x as usize + 1]);
+        let slot = low + self.slot_y[low..high].binary_search(&y).ok()?;
         let (start, end) = (self.start[slot], &mut self.end[slot]);
         while *end > start && done[self.faces[*end - 1] as usize] {
             *end -= 1;
@@ -160,12 +173,12 @@ impl EncoderWalk {
         let m = rows.len();
         let polygons = (0..m).any(|f| rows.row(f).len() != 3);
         EncoderWalk {
-            faces_with: FacesWith::new(&rows),
+            faces_with: FacesWith::new(&rows, k),
             rows,
             polygons,
             done: vec![false; m],
             seen: vec![false; k],
-            boundary: Boundary::new(k),
+            boundary: Boundary::new(k, 2 * m),
             ops: Vec::new(),
             gate_ops: Vec::new(),
             degrees: Vec::new(),
@@ -256,7 +269,7 @@ impl EncoderWalk {
     /// gate face's orientation), else a, b: (face, corner where the walk starts, flipped).
     fn across(&mut self, a: u32, b: u32) -> Option<(usize, usize, bool)> {
         for (first, second, flipped) in [(b, a, false), (a, b, true)] {
-            if let Some(f) = self.faces_with.first_unvisited(edge(first, second), &self.done) {
+            if let Some(f) = self.faces_with.first_unvisited(first, second, &self.done) {
                 let row = self.rows.row(f);
                 let n = row.len();
                 // the first such corner, as the face's corners are stored

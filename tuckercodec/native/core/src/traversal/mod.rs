@@ -26,6 +26,10 @@ pub const TIP_FAR: i64 = 3;
 /// `corner_order`: the rotation counts from the walk's first corner, or from the smallest vertex.
 pub const ROTATE_FROM_GATE: i64 = 0;
 pub const ROTATE_FROM_SMALLEST: i64 = 1;
+/// The most values the four streams may hold together (2**30): the walk numbers its edges by
+/// u32 (a face's corners are at most 3 per op). A section's limits keep real files far below;
+/// the callers run the Python reference beyond it.
+pub const MAX_VALUES: usize = 1 << 30;
 /// The four streams' names, in the payload's order (error messages name them).
 pub const STREAM_NAMES: [&str; 4] = ["ops", "degrees", "vertices", "references"];
 
