@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -99,7 +100,7 @@ def test_every_faces_traverse_section_of_the_vectors(monkeypatch):
     """Every FACE section of codec faces-traverse that a vector's decode reaches, valid or not,
     decodes to the same faces or fails the same way; and the decoders agree on every vector."""
     sections: list[tuple[Any, ...]] = []
-    decode = face_sections.decode_traversal
+    decode = traversal.decode_traversal  # the function faces.py calls
 
     def recorded(*args: Any, **kwargs: Any) -> np.ndarray:
         sections.append((args, kwargs))
@@ -109,11 +110,11 @@ def test_every_faces_traverse_section_of_the_vectors(monkeypatch):
     for path in VECTORS:
         expected = json.loads(path.read_text())
         data = (path.parent / expected["file"]).read_bytes()
-        compiled, reference = both(lambda data=data: _opened(data))
+        compiled, reference = both(partial(_opened, data))
         assert compiled == reference, path.name
     assert sections, "no vector has a faces-traverse FACE section"
     for args, kwargs in sections:
-        compiled, reference = both(lambda args=args, kwargs=kwargs: decode(*args, **kwargs))
+        compiled, reference = both(partial(decode, *args, **kwargs))
         assert compiled == reference
 
 
@@ -195,7 +196,7 @@ def test_fans_and_tables_the_core_hands_back_to_python():
         (np.array([[0, 1, 2], [2, 1, 5]]), 4),
         (np.zeros((0, 3), dtype=np.int64), 4),
     ):
-        compiled, reference = both(lambda table=table, k=k: _encoded(table, k))
+        compiled, reference = both(partial(_encoded, table, k))
         assert compiled == reference
 
 

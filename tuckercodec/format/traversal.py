@@ -176,7 +176,7 @@ def _walked(table: np.ndarray, count: int, vertex_count: int) -> _Streams:
 
 
 def pack_streams(
-    coded: list[list[int]], count: int, width: int, corner_order: int, level: int
+    coded: Sequence[Sequence[int]], count: int, width: int, corner_order: int, level: int
 ) -> tuple[dict[str, Any], bytes]:
     """``(params, payload)`` of the four streams ``coded`` (ops, degrees, vertices, references)."""
     parts, table = [], []

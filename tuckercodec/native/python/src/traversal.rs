@@ -1,7 +1,9 @@
 //! The binding of §6.8 faces-traverse (tuckercodec_core::traversal): the walk of the decoder
 //! and of the encoder, called by tuckercodec/format/traversal.py.
 
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{
+    PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
+};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use tuckercodec_core::traversal::{self, Streams};

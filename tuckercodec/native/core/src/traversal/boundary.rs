@@ -101,13 +101,17 @@ impl Boundary {
     /// The u of the newest open u -> v (PREV), closed entries on top popped for good.
     pub fn newest_into(&mut self, v: u32) -> Option<u32> {
         let open = &self.open;
-        newest(&mut self.into_top, &self.into_entries, v, |u| open.contains_key(&edge(u, v)))
+        newest(&mut self.into_top, &self.into_entries, v, |u| {
+            open.contains_key(&edge(u, v))
+        })
     }
 
     /// The w of the newest open v -> w (NEXT), closed entries on top popped for good.
     pub fn newest_out_of(&mut self, v: u32) -> Option<u32> {
         let open = &self.open;
-        newest(&mut self.out_of_top, &self.out_of_entries, v, |w| open.contains_key(&edge(v, w)))
+        newest(&mut self.out_of_top, &self.out_of_entries, v, |w| {
+            open.contains_key(&edge(v, w))
+        })
     }
 }
 

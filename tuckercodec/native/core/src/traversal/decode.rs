@@ -40,8 +40,18 @@ pub fn decode(
     k: i64,
     corner_order: i64,
 ) -> Result<Vec<i64>, Broken> {
-    let values = [streams.ops, streams.degrees, streams.vertices, streams.references];
-    if values.iter().map(|stream| stream.len() as u128).sum::<u128>() > MAX_VALUES as u128 {
+    let values = [
+        streams.ops,
+        streams.degrees,
+        streams.vertices,
+        streams.references,
+    ];
+    if values
+        .iter()
+        .map(|stream| stream.len() as u128)
+        .sum::<u128>()
+        > MAX_VALUES as u128
+    {
         return Err(broken("streams of more than 2**30 values"));
     }
     // at most one face per op, and a face opens about two edges (a hint for the tables)
@@ -163,7 +173,9 @@ impl Walk<'_> {
         };
         if n < 3 || n > self.width as i128 {
             let width = self.width;
-            return Err(broken(format!("a face of {n} corners in a table of width {width}")));
+            return Err(broken(format!(
+                "a face of {n} corners in a table of width {width}"
+            )));
         }
         let n = n as usize;
         values.clear();
@@ -179,7 +191,9 @@ impl Walk<'_> {
             }
         }
         if rotation >= n as i64 {
-            return Err(broken(format!("rotation {rotation} of a face of {n} corners")));
+            return Err(broken(format!(
+                "rotation {rotation} of a face of {n} corners"
+            )));
         }
         let mut offset = rotation as usize;
         if self.smallest && first_gate == 1 {
@@ -188,7 +202,10 @@ impl Walk<'_> {
         // stored[(offset + j) % n] = cycle[j]
         let start = table.len();
         if table.try_reserve(self.width).is_err() {
-            return Err(broken(format!("a table of width {} does not fit", self.width)));
+            return Err(broken(format!(
+                "a table of width {} does not fit",
+                self.width
+            )));
         }
         table.resize(start + self.width, -1);
         let row = &mut table[start..start + n];
@@ -224,9 +241,7 @@ impl Walk<'_> {
             }
             TIP_FAR => {
                 let w = i128::from(previous) + i128::from(self.references.next()?);
-                let id = i64::try_from(w)
-                    .ok()
-                    .and_then(|v| self.id_of.get(v));
+                let id = i64::try_from(w).ok().and_then(|v| self.id_of.get(v));
                 id.ok_or_else(|| broken(format!("referenced vertex {w} is not one seen before")))
             }
             TIP_PREV | TIP_NEXT if !cycle.is_empty() => {
@@ -237,7 +252,9 @@ impl Walk<'_> {
                 };
                 found.ok_or_else(|| broken(format!("tip operation {tip_op} names no vertex here")))
             }
-            _ => Err(broken(format!("tip operation {tip_op} names no vertex here"))),
+            _ => Err(broken(format!(
+                "tip operation {tip_op} names no vertex here"
+            ))),
         }
     }
 

@@ -273,8 +273,7 @@ impl EncoderWalk {
                 let row = self.rows.row(f);
                 let n = row.len();
                 // the first such corner, as the face's corners are stored
-                if let Some(j) = (0..n).find(|&j| row[j] == first && row[(j + 1) % n] == second)
-                {
+                if let Some(j) = (0..n).find(|&j| row[j] == first && row[(j + 1) % n] == second) {
                     return Some((f, j, flipped));
                 }
             }
