@@ -232,7 +232,8 @@ def damaged(values: list[list[int]], rng: np.random.Generator) -> list[list[int]
         elif change == 2:
             del stream[position]
         else:
-            stream[position] = int(rng.choice([-(2**40), 2**40, 2**62]))
+            # the extremes a stream holds (at most 4 planes: 32 bits after zigzag)
+            stream[position] = int(rng.choice([-(2**31), 2**31 - 1]))
     return out
 
 
