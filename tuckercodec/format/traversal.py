@@ -27,19 +27,22 @@ corner). What is not: the order of the faces, which is the walk's (§6.8 makes i
 The decoder is one pass in Python over the faces, on integers in lists and dicts, with numpy
 doing what is not sequential before and after it (:func:`_walk_triangles`; :func:`_walk` holds
 every case and is its reference); the encoder runs the same walk with the mesh to answer each
-question. The encoder and :func:`_walk` share :class:`_Boundary`.
+question. The encoder and :func:`_walk` share :class:`_Boundary`. Where the compiled core is
+installed (:mod:`..system.native`), both walks run there instead (``tuckercodec/native/core/src/
+traversal``), giving the same streams, faces and errors; the Python here is their reference.
 """
 
 from __future__ import annotations
 
 import operator
 from collections import defaultdict
-from collections.abc import Iterator, Mapping
-from typing import Any
+from collections.abc import Iterator, Mapping, Sequence
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from ..errors import FormatError
+from ..system import native
 from . import streams
 from .limits import DEFAULT_LIMITS, Limits, check_limit
 from .sections import section_shape
@@ -135,11 +138,10 @@ def encode_traversal(
     """
     table = np.asarray(faces, dtype=np.int64)
     count, width = table.shape if table.ndim == 2 and table.size else (0, 3)
-    rows = [[v for v in row if v >= 0] for row in table.tolist()]
-    walk = _Walk(rows, vertex_count)
+    walk = _walked(table, count, vertex_count)
     best: tuple[dict[str, Any], bytes] | None = None
     for corner_order in (ROTATE_FROM_GATE, ROTATE_FROM_SMALLEST):
-        coded = [walk.ops_for(corner_order), walk.degrees, walk.new_residuals, walk.references]
+        coded = [walk.ops[corner_order], walk.degrees, walk.new_residuals, walk.references]
         params, payload = pack_streams(coded, count, width, corner_order, level)
         if best is None or len(payload) < len(best[1]):
             best = params, payload
@@ -148,8 +150,33 @@ def encode_traversal(
     return best[0], best[1], walked
 
 
+class _Streams(NamedTuple):
+    """A walk's streams: the ops for each corner order (0, 1), the degrees, the NEW and FAR
+    residuals, and the input's row of each walked face in walk order (lists or int64 arrays)."""
+
+    ops: tuple[Sequence[int], Sequence[int]]
+    degrees: Sequence[int]
+    new_residuals: Sequence[int]
+    references: Sequence[int]
+    order: Sequence[int]
+
+
+def _walked(table: np.ndarray, count: int, vertex_count: int) -> _Streams:
+    """The streams of the walk over ``table``: by the compiled core where it is installed and
+    the table is one it takes (it answers None otherwise), else by :class:`_Walk`."""
+    core = native.core()
+    if core is not None and count and 0 <= vertex_count <= 1 << 32:
+        walked = core.encode_traversal(np.ascontiguousarray(table), vertex_count)
+        if walked is not None:
+            ops_from_gate, ops_from_smallest, *rest = walked
+            return _Streams((ops_from_gate, ops_from_smallest), *rest)
+    walk = _Walk([[v for v in row if v >= 0] for row in table.tolist()], vertex_count)
+    ops = (walk.ops_for(ROTATE_FROM_GATE), walk.ops_for(ROTATE_FROM_SMALLEST))
+    return _Streams(ops, walk.degrees, walk.new_residuals, walk.references, walk.order)
+
+
 def pack_streams(
-    coded: list[list[int]], count: int, width: int, corner_order: int, level: int
+    coded: Sequence[Sequence[int]], count: int, width: int, corner_order: int, level: int
 ) -> tuple[dict[str, Any], bytes]:
     """``(params, payload)`` of the four streams ``coded`` (ops, degrees, vertices, references)."""
     parts, table = [], []
@@ -399,20 +426,37 @@ def decode_traversal(
     """The (M, n) faces of a FACE section with codec faces-traverse (§6.8), in walk order.
 
     In §5 step 15's order: the streams' table is checked and the streams read
-    (:func:`read_stream_arrays`), then the walk rebuilds the faces from them: a table of
-    triangles (no degrees) by :func:`_walk_triangles`, any other by :func:`_walk`, which holds
-    every case of §6.8 and is the reference the first is tested against. The walk's state grows
-    with the values it reads; the (M, n) table is made once M faces are decoded.
+    (:func:`read_stream_arrays`), then the walk rebuilds the faces from them
+    (:func:`walk_streams`). The walk's state grows with the values it reads; the (M, n) table is
+    made once M faces are decoded.
     """
     count, width = section_shape(params, where, min_cols=3)
     arrays, corner_order = read_stream_arrays(
         payload, params, count, width, vertex_count, where, limits
     )
+    return walk_streams(arrays, count, width, vertex_count, corner_order, where)
+
+
+def walk_streams(
+    arrays: list[np.ndarray], count: int, width: int, k: int, corner_order: int, where: str
+) -> np.ndarray:
+    """The (count, width) faces the walk decodes from the four int64 streams ``arrays``, or
+    R39-traversal. The compiled core's walk runs where it is installed and the values fit its
+    int64 (K) and u32 (edges) counts; else a table of triangles (no degrees) is walked by
+    :func:`_walk_triangles`, any other by :func:`_walk`, which holds every case of §6.8 and is
+    the reference both are tested against (same faces, same first error)."""
+    core = native.core()
+    if core is not None and 0 <= k < 1 << 62 and sum(a.size for a in arrays) <= 1 << 30:
+        try:
+            faces: np.ndarray = core.decode_traversal(arrays, count, width, k, corner_order)
+        except core.Broken as error:
+            raise _broken(where, error.args[1]) from None
+        return faces
     try:
         if not arrays[1].size:
-            return _walk_triangles(arrays, count, width, vertex_count, corner_order, where)
+            return _walk_triangles(arrays, count, width, k, corner_order, where)
         values = [stream.tolist() for stream in arrays]
-        rows = _walk(values, count, width, vertex_count, corner_order, where)
+        rows = _walk(values, count, width, k, corner_order, where)
     except StopIteration:  # a stream read past its end
         raise _broken(where, "a stream ends early") from None
     return _padded(rows, count, width)
