@@ -28,6 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...system import native
+
 _U64 = np.uint64
 _LOW32 = _U64(0xFFFFFFFF)
 _SHIFT = 128
@@ -201,6 +203,9 @@ def vertex_text(vertices: np.ndarray) -> bytes:
     """The ``v x y z`` lines of a (K, 3) float64 array, each ended by a newline, every number as
     ``repr`` writes it."""
     vertices = np.ascontiguousarray(vertices, dtype=np.float64)
+    core = native.core()
+    if core is not None and vertices.ndim == 2 and vertices.shape[1] == 3:
+        return bytes(core.obj_vertex_text(vertices))
     if len(vertices) <= BLOCK_ROWS:
         return _block_text(vertices)
     blocks = range(0, len(vertices), BLOCK_ROWS)

@@ -60,21 +60,43 @@ fn float_repr_text<'py>(
     Ok(PyBytes::new(py, &text))
 }
 
-/// Parses a whole OBJ text: `(vertices (K, 3) float64, faces (M, n) int64)`, or raises
-/// `ObjError(line, message, value_error)` with the reference's first error.
+/// What `obj_parse` returns: vertices, faces (or None: the known ones), the face key.
+type ParsedObj<'py> = (
+    Bound<'py, PyAny>,
+    Option<Bound<'py, PyAny>>,
+    Option<Bound<'py, PyBytes>>,
+);
+
+/// Parses a whole OBJ text: `(vertices (K, 3) float64, faces (M, n) int64 or None, face_key
+/// bytes or None)`, or raises `ObjError(line, message, value_error)` with the reference's first
+/// error. Given the `face_key` and vertex count of an earlier frame, faces equal to that
+/// frame's are not parsed again: `None` in their place.
 #[pyfunction]
+#[pyo3(signature = (data, face_key=None, vertex_count=0))]
 fn obj_parse<'py>(
     py: Python<'py>,
     data: &[u8],
-) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-    let parsed = py.detach(|| obj_read::parse_obj(data));
+    face_key: Option<&[u8]>,
+    vertex_count: usize,
+) -> PyResult<ParsedObj<'py>> {
+    let known = face_key.map(|face_key| obj_read::KnownFaces {
+        face_key,
+        vertex_count,
+    });
+    let parsed = py.detach(|| obj_read::parse_obj_frame(data, known));
     match parsed {
-        Ok(mesh) => {
+        Ok(frame) => {
+            let mesh = frame.mesh;
             let count = mesh.vertices.len() / 3;
             let vertices = PyArray1::from_vec(py, mesh.vertices).reshape([count, 3])?;
-            let faces =
-                PyArray1::from_vec(py, mesh.faces).reshape([mesh.face_count, mesh.width])?;
-            Ok((vertices.into_any(), faces.into_any()))
+            let faces = if frame.shared {
+                None
+            } else {
+                let table = PyArray1::from_vec(py, mesh.faces);
+                Some(table.reshape([mesh.face_count, mesh.width])?.into_any())
+            };
+            let key = frame.face_key.map(|key| PyBytes::new(py, &key));
+            Ok((vertices.into_any(), faces, key))
         }
         Err(error) => Err(ObjError::new_err((
             error.line,

@@ -47,12 +47,26 @@ const MAX_INDEX_DIGITS: usize = 18;
 const PADDED_PER_CORNER: u128 = 16;
 const PADDED_AT_LEAST: u128 = 1 << 24;
 
-fn is_space(c: u8) -> bool {
-    matches!(c, b' ' | b'\t' | b'\n' | b'\r' | 0x0b | 0x0c)
-}
+/// The class of each byte for the tokenizer: part of a token, a blank between tokens, a line
+/// end, or the start of a comment.
+const TOKEN: u8 = 0;
+const BLANK: u8 = 1;
+const LINE_END: u8 = 2;
+const COMMENT: u8 = 3;
+const CLASSES: [u8; 256] = {
+    let mut classes = [TOKEN; 256];
+    classes[b' ' as usize] = BLANK;
+    classes[b'\t' as usize] = BLANK;
+    classes[0x0b] = BLANK;
+    classes[0x0c] = BLANK;
+    classes[b'\n' as usize] = LINE_END;
+    classes[b'\r' as usize] = LINE_END;
+    classes[b'#' as usize] = COMMENT;
+    classes
+};
 
 /// Calls `statement(line number, tokens)` for every statement with tokens, in order.
-fn statements<'a, E>(
+pub fn statements<'a, E>(
     data: &'a [u8],
     mut statement: impl FnMut(u64, &[&'a [u8]]) -> Result<(), E>,
 ) -> Result<(), E> {
@@ -60,39 +74,67 @@ fn statements<'a, E>(
     let mut pending = false;
     let mut pending_line = 0u64;
     let mut number = 0u64;
-    let mut start = 0usize;
-    while start < data.len() {
+    let mut at = 0usize;
+    while at < data.len() {
         number += 1;
-        let end = data[start..]
-            .iter()
-            .position(|&c| c == b'\n' || c == b'\r')
-            .map_or(data.len(), |at| start + at);
-        let mut next = end.saturating_add(1);
-        if data.get(end) == Some(&b'\r') && data.get(end + 1) == Some(&b'\n') {
-            next = end + 2;
+        // one pass over the line: its tokens up to its end or its comment
+        let mut content_end = data.len();
+        loop {
+            while data
+                .get(at)
+                .is_some_and(|&c| CLASSES[usize::from(c)] == BLANK)
+            {
+                at += 1;
+            }
+            let start = at;
+            while data
+                .get(at)
+                .is_some_and(|&c| CLASSES[usize::from(c)] == TOKEN)
+            {
+                at += 1;
+            }
+            if at > start {
+                tokens.push(&data[start..at]);
+            }
+            match data.get(at) {
+                Some(&c) if CLASSES[usize::from(c)] == BLANK => {}
+                Some(_) => {
+                    content_end = at;
+                    break;
+                }
+                None => break,
+            }
         }
-        let mut line = &data[start..end];
-        start = next;
-        if let Some(hash) = line.iter().position(|&c| c == b'#') {
-            line = &line[..hash];
+        // past the comment to the line end, and past that ("\r\n" is one)
+        while let Some(&c) = data.get(at) {
+            if c == b'\n' || c == b'\r' {
+                break;
+            }
+            at += 1;
         }
-        let continued = line.last() == Some(&b'\\');
+        if data.get(at) == Some(&b'\r') && data.get(at + 1) == Some(&b'\n') {
+            at += 1;
+        }
+        at += 1;
+        // a backslash last (before the comment) continues the statement on the next line; it
+        // ends the last token, which loses it (and is gone if it was only that)
+        let continued = content_end > 0 && data.get(content_end - 1) == Some(&b'\\');
         if continued {
-            line = &line[..line.len() - 1];
+            if let Some(last) = tokens.pop() {
+                if last.len() > 1 {
+                    tokens.push(&last[..last.len() - 1]);
+                }
+            }
             if !pending {
                 pending_line = number;
                 pending = true;
             }
-        }
-        // pieces of a continued statement are joined by a space, so their tokens never merge
-        tokens.extend(line.split(|&c| is_space(c)).filter(|t| !t.is_empty()));
-        if continued {
             continue;
         }
-        let at = if pending { pending_line } else { number };
+        let line = if pending { pending_line } else { number };
         pending = false;
         if !tokens.is_empty() {
-            statement(at, &tokens)?;
+            statement(line, &tokens)?;
             tokens.clear();
         }
     }
@@ -124,6 +166,114 @@ pub fn parse_obj(data: &[u8]) -> Result<ObjMesh, ObjError> {
         }
         Ok(())
     })?;
+    finish(vertices, corners, &face_starts, &face_lines)
+}
+
+/// The faces of an earlier frame, which a frame of the same face statements shares.
+#[derive(Debug, Clone, Copy)]
+pub struct KnownFaces<'a> {
+    /// The [`ParsedFrame::face_key`] of the earlier frame.
+    pub face_key: &'a [u8],
+    /// Its vertex count.
+    pub vertex_count: usize,
+}
+
+/// A frame parsed by [`parse_obj_frame`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParsedFrame {
+    /// The mesh; its `faces` empty when `shared` (the known faces are the frame's).
+    pub mesh: ObjMesh,
+    /// The faces are the known ones, not parsed again.
+    pub shared: bool,
+    /// The face statements' tokens (each statement's joined by a space, ended by a newline),
+    /// when none holds a `-`: equal keys then mean equal faces, wherever the vertices are.
+    pub face_key: Option<Vec<u8>>,
+}
+
+/// [`parse_obj`] for a frame of a sequence: when its face statements are those of `known`
+/// (without negative, relative indices) and it has as many vertices, its faces are not parsed
+/// again (they are the known ones, and valid: nothing else in the file changes that). Any
+/// other frame is parsed whole, so results and errors are always [`parse_obj`]'s.
+pub fn parse_obj_frame(
+    data: &[u8],
+    known: Option<KnownFaces<'_>>,
+) -> Result<ParsedFrame, ObjError> {
+    let Some(known) = known else {
+        let mesh = parse_obj(data)?;
+        return Ok(ParsedFrame {
+            face_key: face_key(data),
+            mesh,
+            shared: false,
+        });
+    };
+    let mut vertices: Vec<f64> = Vec::new();
+    let mut key: Vec<u8> = Vec::with_capacity(known.face_key.len());
+    statements(data, |line, tokens| {
+        match tokens[0] {
+            b"v" => {
+                let xyz = vertex(&tokens[1..], line)?;
+                vertices.extend_from_slice(&xyz);
+            }
+            b"f" => append_key(&mut key, tokens),
+            _ => {}
+        }
+        Ok(())
+    })?;
+    let reusable = !key.contains(&b'-');
+    if reusable
+        && key == known.face_key
+        && vertices.len() / 3 == known.vertex_count
+        && !vertices.is_empty()
+    {
+        let mesh = ObjMesh {
+            vertices,
+            faces: Vec::new(),
+            face_count: 0,
+            width: 0,
+        };
+        return Ok(ParsedFrame {
+            mesh,
+            shared: true,
+            face_key: Some(key),
+        });
+    }
+    let mesh = parse_obj(data)?;
+    Ok(ParsedFrame {
+        mesh,
+        shared: false,
+        face_key: reusable.then_some(key),
+    })
+}
+
+/// The face key of [`ParsedFrame::face_key`] of a whole text.
+fn face_key(data: &[u8]) -> Option<Vec<u8>> {
+    let mut key = Vec::new();
+    let _ = statements::<()>(data, |_, tokens| {
+        if tokens[0] == b"f" {
+            append_key(&mut key, tokens);
+        }
+        Ok(())
+    });
+    (!key.contains(&b'-')).then_some(key)
+}
+
+fn append_key(key: &mut Vec<u8>, tokens: &[&[u8]]) {
+    for (at, token) in tokens.iter().enumerate() {
+        if at > 0 {
+            key.push(b' ');
+        }
+        key.extend_from_slice(token);
+    }
+    key.push(b'\n');
+}
+
+/// The checks after all statements, and the padded face table.
+fn finish(
+    vertices: Vec<f64>,
+    corners: Vec<i64>,
+    face_starts: &[usize],
+    face_lines: &[u64],
+) -> Result<ObjMesh, ObjError> {
     let vertex_count = vertices.len() / 3;
     if vertex_count == 0 {
         return Err(ObjError {
@@ -247,8 +397,50 @@ pub fn is_decimal(token: &[u8]) -> bool {
     at == token.len()
 }
 
+/// Exact powers of ten as f64 (10**22 is the last).
+const POWERS_OF_TEN: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+];
+
+/// The value of a plain decimal `[+-]?\d*(\.\d*)?` (no exponent, a digit somewhere) when its
+/// digits as an integer are at most 2**53 and at most 22 of them follow the point: then one
+/// correctly rounded division of two exact floats gives it (Clinger's fast path), the same
+/// float as Python's `float()`. `None` for anything else (left to the full parse).
+fn simple_decimal(token: &[u8]) -> Option<f64> {
+    let negative = token.first() == Some(&b'-');
+    let unsigned = &token[usize::from(matches!(token.first(), Some(b'+' | b'-')))..];
+    // at most 19 digits and a point: the integer cannot overflow u64
+    if unsigned.is_empty() || unsigned.len() > 20 {
+        return None;
+    }
+    let mut mantissa = 0u64;
+    let mut point: Option<usize> = None;
+    for (at, &c) in unsigned.iter().enumerate() {
+        let digit = c.wrapping_sub(b'0');
+        if digit < 10 {
+            mantissa = mantissa * 10 + u64::from(digit);
+        } else if c == b'.' && point.is_none() {
+            point = Some(at);
+        } else {
+            return None;
+        }
+    }
+    let digits = unsigned.len() - usize::from(point.is_some());
+    if digits == 0 || digits > 19 || mantissa > 1 << 53 {
+        return None;
+    }
+    let decimals = point.map_or(0, |at| unsigned.len() - at - 1);
+    let divisor = POWERS_OF_TEN.get(decimals)?;
+    let magnitude = mantissa as f64 / divisor;
+    Some(if negative { -magnitude } else { magnitude })
+}
+
 /// A number of a `v` line: a decimal number, or nan/inf (to be refused as x, y or z).
 fn number(token: &[u8], line: u64) -> Result<f64, ObjError> {
+    if let Some(value) = simple_decimal(token) {
+        return Ok(value);
+    }
     if is_decimal(token) {
         // ASCII by the check above; Rust's parse is correctly rounded, as Python's float()
         let parsed = std::str::from_utf8(token)
@@ -299,6 +491,16 @@ fn face(
         ));
     }
     for corner in corners {
+        if let Some(value) = plain_index(corner) {
+            if value <= vertices_so_far as u64 || !corner.starts_with(b"-") {
+                out.push(if corner.starts_with(b"-") {
+                    vertices_so_far as i64 - value as i64
+                } else {
+                    value as i64 - 1
+                });
+                continue;
+            }
+        }
         let text = corner.split(|&c| c == b'/').next().unwrap_or(&[]);
         let negative = text.first() == Some(&b'-');
         let unsigned = &text[usize::from(matches!(text.first(), Some(b'+' | b'-')))..];
@@ -349,6 +551,29 @@ fn face(
         }
     }
     Ok(())
+}
+
+/// The vertex number of a tidy corner in one pass: a sign or none, 1 to 18 digits, not zero,
+/// then the end or a `/`; `None` for anything else (left to the full checks).
+fn plain_index(corner: &[u8]) -> Option<u64> {
+    let unsigned = &corner[usize::from(matches!(corner.first(), Some(b'+' | b'-')))..];
+    let mut value = 0u64;
+    let mut digits = 0usize;
+    for &c in unsigned {
+        let digit = c.wrapping_sub(b'0');
+        if digit >= 10 {
+            if c == b'/' {
+                break;
+            }
+            return None;
+        }
+        value = value.wrapping_mul(10).wrapping_add(u64::from(digit));
+        digits += 1;
+        if digits > MAX_INDEX_DIGITS {
+            return None; // leading zeros too: the full checks count without them
+        }
+    }
+    (digits > 0 && value > 0).then_some(value)
 }
 
 /// A token as the reference's messages show it (`_short`): its first 40 characters and

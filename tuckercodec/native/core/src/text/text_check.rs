@@ -73,7 +73,8 @@ impl TextCheck {
 
     /// Checks the next chunk.
     pub fn feed(&mut self, chunk: &[u8]) -> Result<(), TextFault> {
-        if let Some(nul) = chunk.iter().position(|&c| c == 0) {
+        if count_byte(chunk, 0) > 0 {
+            let nul = chunk.iter().position(|&c| c == 0).unwrap_or(0);
             return Err(self.fault(FaultKind::Nul, chunk, nul));
         }
         if !chunk.is_ascii() || !self.pending.is_empty() {
@@ -136,15 +137,29 @@ impl TextCheck {
 /// The number of line ends in `data`: `\n`, `\r\n` or a lone `\r`; `after_cr`: the bytes
 /// before ended in `\r` (so a `\n` first here is the second half of a `\r\n`).
 pub fn line_ends(data: &[u8], after_cr: bool) -> u64 {
-    let mut ends = 0u64;
-    let mut previous_cr = after_cr;
-    for &c in data {
-        if c == b'\r' || (c == b'\n' && !previous_cr) {
-            ends += 1;
-        }
-        previous_cr = c == b'\r';
-    }
-    ends
+    // counted as "\n" + "\r" - "\r\n": loops the compiler vectorizes
+    let newlines = count_byte(data, b'\n');
+    let returns = count_byte(data, b'\r');
+    let pairs = if returns == 0 {
+        0
+    } else {
+        data.windows(2).filter(|pair| pair == b"\r\n").count()
+    };
+    let split_pair = usize::from(after_cr && data.first() == Some(&b'\n'));
+    (newlines + returns - pairs - split_pair) as u64
+}
+
+/// How many times `byte` occurs in `data`: counted in blocks of 255 in u8 lanes, which the
+/// compiler vectorizes (16 or 32 bytes a step, where a plain count takes 4).
+pub fn count_byte(data: &[u8], byte: u8) -> usize {
+    data.chunks(255)
+        .map(|block| {
+            let found = block
+                .iter()
+                .fold(0u8, |total, &c| total.wrapping_add(u8::from(c == byte)));
+            usize::from(found)
+        })
+        .sum()
 }
 
 #[cfg(test)]
