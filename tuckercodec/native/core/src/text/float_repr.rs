@@ -87,6 +87,11 @@ pub fn write_repr(value: f64, out: &mut Vec<u8>) {
         out.extend_from_slice(b"0.0");
         return;
     }
+    let mut buffer = ryu::Buffer::new();
+    let text = buffer.format_finite(magnitude).as_bytes();
+    if write_ryu_as_python(text, out) {
+        return;
+    }
     let found = shortest(magnitude);
     let digits = &found.digits[..found.count];
     let point = found.point;
@@ -118,6 +123,47 @@ pub fn write_repr(value: f64, out: &mut Vec<u8>) {
         out.extend_from_slice(&digits[..split]);
         out.push(b'.');
         out.extend_from_slice(&digits[split..]);
+    }
+}
+
+/// Appends ryu's text of a positive float as Python's when only its layout differs in the
+/// usual ways: positional from 1e-4 up (ryu's from 1e-5: `0.0000ddd` is left out), and an
+/// exponent of a sign and at least two digits. `false` (nothing appended) for the rest: a
+/// `0.0000` start, or a mantissa ending in a zero that Python's digits would not have.
+fn write_ryu_as_python(text: &[u8], out: &mut Vec<u8>) -> bool {
+    match text.iter().position(|&c| c == b'e') {
+        None => {
+            let len = text.len();
+            let stray_zero = len >= 2 && text[len - 1] == b'0' && text[len - 2] != b'.';
+            if text.starts_with(b"0.0000") || stray_zero {
+                return false;
+            }
+            out.extend_from_slice(text);
+            true
+        }
+        Some(at) => {
+            let (mantissa, exponent) = (&text[..at], &text[at + 1..]);
+            if mantissa.last() == Some(&b'0') {
+                return false;
+            }
+            out.extend_from_slice(mantissa);
+            out.push(b'e');
+            let digits = match exponent.first() {
+                Some(b'-') => {
+                    out.push(b'-');
+                    &exponent[1..]
+                }
+                _ => {
+                    out.push(b'+');
+                    exponent
+                }
+            };
+            if digits.len() < 2 {
+                out.push(b'0');
+            }
+            out.extend_from_slice(digits);
+            true
+        }
     }
 }
 
