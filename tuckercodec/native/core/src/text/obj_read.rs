@@ -208,7 +208,7 @@ pub fn parse_obj_frame(
     };
     let mut vertices: Vec<f64> = Vec::new();
     let mut key: Vec<u8> = Vec::with_capacity(known.face_key.len());
-    statements(data, |line, tokens| {
+    let first_pass: Result<(), ObjError> = statements(data, |line, tokens| {
         match tokens[0] {
             b"v" => {
                 let xyz = vertex(&tokens[1..], line)?;
@@ -218,7 +218,16 @@ pub fn parse_obj_frame(
             _ => {}
         }
         Ok(())
-    })?;
+    });
+    if first_pass.is_err() {
+        // a face statement above the vertex at fault may be at fault first: parsed whole
+        let mesh = parse_obj(data)?;
+        return Ok(ParsedFrame {
+            face_key: face_key(data),
+            mesh,
+            shared: false,
+        });
+    }
     let reusable = !key.contains(&b'-');
     if reusable
         && key == known.face_key
@@ -622,7 +631,7 @@ pub fn quoted(token: &[u8]) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::{is_decimal, parse_obj};
+    use super::{is_decimal, parse_obj, parse_obj_frame, KnownFaces};
 
     #[test]
     fn decimals() {
@@ -684,6 +693,76 @@ mod tests {
             assert_eq!(found.line, line);
             let prefix = &start[..start.len().min(found.message.len())];
             assert!(found.message.starts_with(prefix), "{}", found.message);
+        }
+    }
+
+    #[test]
+    fn frames_share_known_faces() {
+        let first = parse_obj_frame(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", None).unwrap();
+        let key = first.face_key.clone().unwrap();
+        let known = KnownFaces {
+            face_key: &key,
+            vertex_count: 3,
+        };
+        let same = parse_obj_frame(b"v 0 0 1\nv 1 0 1\nf  1 2\t3\nv 0 1 1\n", Some(known)).unwrap();
+        assert!(same.shared);
+        assert_eq!(
+            same.mesh.vertices,
+            vec![0.0, 0.0, 1.0, 1.0, 0.0, 1.0, 0.0, 1.0, 1.0]
+        );
+        // another vertex count: parsed whole, and refused as parse_obj refuses it
+        let fewer = parse_obj_frame(b"v 0 0 1\nv 1 0 1\nf 1 2 3\n", Some(known));
+        assert_eq!(
+            fewer,
+            Err(parse_obj(b"v 0 0 1\nv 1 0 1\nf 1 2 3\n").unwrap_err())
+        );
+        // relative indices: never a key
+        let relative = parse_obj_frame(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n", None);
+        assert_eq!(relative.unwrap().face_key, None);
+    }
+
+    /// Random bytes and mutated texts: no panic, and a frame read against known faces gives
+    /// what the whole parse gives.
+    #[test]
+    fn any_bytes() {
+        let seed_text: &[u8] = b"v 0 0 0\nv 1 0 0 # c\nv 0 1 0 \\\n\nf 1 2/1 3//4\nf 3 2 1 1\n";
+        let first = parse_obj_frame(seed_text, None).unwrap();
+        let key = first.face_key.clone().unwrap();
+        let pieces: [&[u8]; 12] = [
+            b" ", b"\n", b"\r", b"#", b"\\", b"-", b"/", b"0", b"f ", b"v ", b"1e999", b"\xff",
+        ];
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move |bound: usize| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % bound as u64) as usize
+        };
+        for _ in 0..20_000 {
+            let mut text = seed_text.to_vec();
+            for _ in 0..1 + next(3) {
+                let at = next(text.len() + 1);
+                if next(2) == 0 && at < text.len() {
+                    text.remove(at);
+                } else {
+                    let piece = pieces[next(pieces.len())];
+                    text.splice(at..at, piece.iter().copied());
+                }
+            }
+            let whole = parse_obj(&text);
+            let known = KnownFaces {
+                face_key: &key,
+                vertex_count: 3,
+            };
+            match parse_obj_frame(&text, Some(known)) {
+                Ok(frame) if frame.shared => {
+                    let mesh = whole.unwrap();
+                    assert_eq!(mesh.vertices, frame.mesh.vertices);
+                    assert_eq!(mesh.faces, first.mesh.faces);
+                }
+                Ok(frame) => assert_eq!(Ok(frame.mesh), whole),
+                Err(error) => assert_eq!(Err(error), whole),
+            }
         }
     }
 }
