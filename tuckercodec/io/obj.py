@@ -36,6 +36,12 @@ Two parsers share one set of rules:
 The fast parser gives up on every input the careful one might read differently, so the two always
 agree; the tests check this, also on random input.
 
+Where the compiled core is installed (:mod:`tuckercodec.system.native`), it runs instead of the
+fast parser: the careful parser's rules in one pass over the bytes (``tuckercodec_core::text``),
+faces equal to the first frame's shared rather than parsed again, and the checks of the reading
+chunk by chunk. Whatever it refuses goes to the careful parser, which raises the error, so the
+errors are the careful parser's own; ``tests/test_native_text.py`` compares the two.
+
 Before either parser runs, the file is read a chunk at a time and refused at the first NUL byte,
 the first byte that is not UTF-8, or the first line longer than :data:`MAX_LINE_BYTES`, so that a
 binary or hostile file (say a single 2 GB line) is refused after a few megabytes, never read
