@@ -36,6 +36,12 @@ Two parsers share one set of rules:
 The fast parser gives up on every input the careful one might read differently, so the two always
 agree; the tests check this, also on random input.
 
+Where the compiled core is installed (:mod:`tuckercodec.system.native`), it runs instead of the
+fast parser: the careful parser's rules in one pass over the bytes (``tuckercodec_core::text``),
+faces equal to the first frame's shared rather than parsed again, and the checks of the reading
+chunk by chunk. Whatever it refuses goes to the careful parser, which raises the error, so the
+errors are the careful parser's own; ``tests/test_native_text.py`` compares the two.
+
 Before either parser runs, the file is read a chunk at a time and refused at the first NUL byte,
 the first byte that is not UTF-8, or the first line longer than :data:`MAX_LINE_BYTES`, so that a
 binary or hostile file (say a single 2 GB line) is refused after a few megabytes, never read
@@ -51,12 +57,14 @@ import re
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from types import ModuleType
 from typing import BinaryIO
 
 import numpy as np
 
 from ..errors import InputError
 from ..model.topology import face_table_problem
+from ..system import native
 from ..system.atomic import write_atomic, write_staged
 from ..system.reading import open_regular_file
 from .common.float_text import vertex_text
@@ -149,7 +157,11 @@ def read_obj_frame(
     """
     path = Path(path)
     data = _read_text(path)
-    mesh = _parse_fast(data, reference)
+    core = native.core()
+    if core is not None:
+        mesh = _parse_native(core, data, path, reference)
+    else:
+        mesh = _parse_fast(data, reference)
     if mesh is None:
         located = _parse_careful(data, path)
         mesh = MeshFrame(located.vertices, located.faces)
@@ -185,6 +197,9 @@ def _read_checked(stream: BinaryIO, path: Path) -> bytes:
     """Read a whole stream a chunk at a time, refusing it at the first NUL byte, byte that is
     not UTF-8 or line longer than :data:`MAX_LINE_BYTES`, before reading any further."""
     limit = MAX_LINE_BYTES  # read at call time, so that the tests can lower it
+    core = native.core()
+    if core is not None:
+        return _read_checked_native(core, stream, path, limit)
     decoder = codecs.getincrementaldecoder("utf-8")()
     chunks: list[bytes] = []
     line = 1  # the number of the line the chunk starts in
@@ -198,7 +213,7 @@ def _read_checked(stream: BinaryIO, path: Path) -> bytes:
     while chunk := stream.read(min(_CHUNK_BYTES, limit)):
         nul = chunk.find(b"\0")
         if nul >= 0:
-            raise refuse("contains NUL bytes: this is binary data, not an OBJ text file", nul)
+            raise refuse(_FAULTS["nul"], nul)
         # decode only to validate; an ASCII chunk is valid unless a character is left open
         if not chunk.isascii() or decoder.getstate()[0]:
             try:
@@ -206,7 +221,7 @@ def _read_checked(stream: BinaryIO, path: Path) -> bytes:
             except UnicodeDecodeError as error:
                 # error.start counts the bytes the decoder kept from the chunk before
                 at = max(0, error.start - (len(error.object) - len(chunk)))
-                raise refuse("is not UTF-8 text (binary data?), so not an OBJ file", at) from None
+                raise refuse(_FAULTS["utf8"], at) from None
         last_end = max(chunk.rfind(b"\n"), chunk.rfind(b"\r"))
         if last_end < 0:
             line_length += len(chunk)
@@ -222,9 +237,32 @@ def _read_checked(stream: BinaryIO, path: Path) -> bytes:
     try:
         decoder.decode(b"", final=True)
     except UnicodeDecodeError:
-        raise InputError(
-            "is not UTF-8 text: it ends inside a character", path=path, line=line
-        ) from None
+        raise InputError(_FAULTS["truncated"], path=path, line=line) from None
+    return b"".join(chunks)
+
+
+#: What a refused text file is told, by the kind of fault the compiled core reports.
+_FAULTS = {
+    "nul": "contains NUL bytes: this is binary data, not an OBJ text file",
+    "utf8": "is not UTF-8 text (binary data?), so not an OBJ file",
+    "truncated": "is not UTF-8 text: it ends inside a character",
+}
+
+
+def _read_checked_native(core: ModuleType, stream: BinaryIO, path: Path, limit: int) -> bytes:
+    """:func:`_read_checked` with its checks run by the compiled core, chunk by chunk alike."""
+    check = core.ObjTextCheck(limit)
+    chunks: list[bytes] = []
+    while chunk := stream.read(min(_CHUNK_BYTES, limit)):
+        fault = check.feed(chunk)
+        if fault is None:
+            chunks.append(chunk)
+            continue
+        kind, line = fault
+        raise InputError(_FAULTS.get(kind) or _too_long(limit), path=path, line=line)
+    fault = check.finish()
+    if fault is not None:
+        raise InputError(_FAULTS["truncated"], path=path, line=fault[1])
     return b"".join(chunks)
 
 
@@ -249,6 +287,29 @@ def _first_line_end(data: bytes) -> int:
     """The offset of the first ``\\n`` or ``\\r`` in ``data``, which has one."""
     ends = [at for at in (data.find(b"\n"), data.find(b"\r")) if at >= 0]
     return min(ends)
+
+
+# --------------------------------------------------------------------------------------------
+# the compiled core's parser
+
+
+def _parse_native(
+    core: ModuleType, data: bytes, path: Path, reference: MeshFrame | None
+) -> MeshFrame | None:
+    """The careful parser's result, from the compiled core (the rules of
+    :func:`_parse_careful`, in Rust); ``None`` where the core refuses the text, so that the
+    careful parser itself raises the error: the reference's class, message and line. The face
+    statements of a frame equal to the reference's (its ``face_text``, the core's key) are
+    not parsed again."""
+    known = reference.face_text if reference is not None else None
+    count = len(reference.vertices) if reference is not None else 0
+    try:
+        vertices, faces, face_key = core.obj_parse(data, known, count)
+    except core.ObjError:
+        return None
+    if reference is not None and (faces is None or np.array_equal(faces, reference.faces)):
+        faces = reference.faces  # one table for the whole sequence, as the fast parser shares
+    return MeshFrame(vertices, faces, face_key)
 
 
 # --------------------------------------------------------------------------------------------
@@ -731,8 +792,13 @@ def _faces_cached(faces: np.ndarray) -> tuple[str, bytes]:
         and np.array_equal(cached[0], faces)
     ):
         return cached[1], cached[2]
-    text = "".join(line + "\n" for line in _face_lines(faces))
-    encoded = text.encode("ascii")
+    core = native.core()
+    if core is not None and faces.ndim == 2 and faces.size:
+        encoded = core.obj_face_text(np.ascontiguousarray(faces, dtype=np.int64))
+        text = encoded.decode("ascii")
+    else:
+        text = "".join(line + "\n" for line in _face_lines(faces))
+        encoded = text.encode("ascii")
     _last_faces = (faces.copy(), text, encoded)
     return text, encoded
 

@@ -18,6 +18,10 @@ integer to decide in float64) is left to ``repr`` itself, a line at a time, so t
 is ``repr``'s for every float; the tests compare the two on millions of values, edge values
 included.
 
+Where the compiled core is installed, :func:`vertex_text` is the core's (Ryū's digits from the
+``ryu`` crate, laid out as ``repr`` lays them out); this module is then the reference it is
+tested against.
+
 Our power of five for a binary exponent is 5**i * 2**(128 - q) rounded down, at least 132
 bits (Ryū's table keeps 125, its shift being 118 to 121 where ours is 128): it lies between
 Ryū's value and the exact one, so its products round down to the same integers Ryū proves
@@ -27,6 +31,8 @@ exact.
 from __future__ import annotations
 
 import numpy as np
+
+from ...system import native
 
 _U64 = np.uint64
 _LOW32 = _U64(0xFFFFFFFF)
@@ -201,6 +207,9 @@ def vertex_text(vertices: np.ndarray) -> bytes:
     """The ``v x y z`` lines of a (K, 3) float64 array, each ended by a newline, every number as
     ``repr`` writes it."""
     vertices = np.ascontiguousarray(vertices, dtype=np.float64)
+    core = native.core()
+    if core is not None and vertices.ndim == 2 and vertices.shape[1] == 3:
+        return bytes(core.obj_vertex_text(vertices))
     if len(vertices) <= BLOCK_ROWS:
         return _block_text(vertices)
     blocks = range(0, len(vertices), BLOCK_ROWS)

@@ -6,4 +6,5 @@
 #![forbid(unsafe_code)]
 
 pub mod error;
+pub mod text;
 pub mod traversal;

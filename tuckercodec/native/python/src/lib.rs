@@ -11,6 +11,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use tuckercodec_core::error::Broken;
 
+mod text;
 mod traversal;
 
 create_exception!(
@@ -36,5 +37,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("Broken", m.py().get_type::<NativeBroken>())?;
     m.add_function(wrap_pyfunction!(core_version, m)?)?;
     traversal::register(m)?;
+    text::register(m)?;
     Ok(())
 }
