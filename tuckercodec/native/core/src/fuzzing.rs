@@ -1,0 +1,439 @@
+//! The fuzz targets' input framing and checks (`tuckercodec/native/fuzz/`, run by cargo-fuzz),
+//! here so that `cargo test` replays the committed seeds through the very same code
+//! (`core/tests/fuzz_seeds.rs`, seeds in `tests/fuzz/native/<target>/`).
+//!
+//! Each target takes any bytes, decodes them into the arguments of one entry point of the core
+//! with a small framing (below), calls it, and panics only where a property fails: the entry
+//! points themselves must never panic, whatever the bytes. Sizes are bounded by the framing
+//! (widths up to 8, counts up to 2**16, vertex counts of the encoder up to 2**20), so that the
+//! memory a run takes is bounded too.
+//!
+//! Integers in the framings are LEB128 varints ([`Framing::varint`]: 7 bits a byte, low
+//! first, a set high bit means more; at most 10 bytes; a varint cut by the end of the input
+//! reads what it has) and signed ones are zigzag varints ([`Framing::signed`]: 0, -1, 1, -2,
+//! 2, ...). Bytes read past the end of the input are 0. `tools/fuzz/native_seeds.py` writes
+//! the same framings from the conformance vectors.
+
+use crate::text::float_repr::{repr, write_signed, write_unsigned};
+use crate::text::obj_read::{parse_obj, parse_obj_frame, KnownFaces, ObjMesh};
+use crate::text::obj_write::{face_text, vertex_text};
+use crate::text::text_check::TextCheck;
+use crate::traversal::{self, Streams};
+
+/// A fuzz target: any bytes in, a panic only where a property fails.
+pub type Target = fn(&[u8]);
+
+/// Every fuzz target: its name (the cargo-fuzz target and the seed folder) and its function.
+pub const TARGETS: &[(&str, Target)] = &[
+    ("traversal_decode", traversal_decode),
+    ("traversal_roundtrip", traversal_roundtrip),
+    ("obj_parse", obj_parse),
+    ("float_repr", float_repr),
+    ("text_check", text_check),
+];
+
+/// The most faces a decode is asked for, and the most rows an encode is given.
+pub const MAX_COUNT: u64 = 1 << 16;
+/// The widest face table.
+pub const MAX_WIDTH: usize = 8;
+/// The most vertices an encode is given (its tables take one entry a vertex).
+pub const MAX_ENCODER_VERTICES: u64 = 1 << 20;
+
+/// A cursor over the fuzzer's bytes.
+pub struct Framing<'a> {
+    data: &'a [u8],
+    at: usize,
+}
+
+impl<'a> Framing<'a> {
+    /// Reads `data` from its start.
+    pub fn new(data: &'a [u8]) -> Self {
+        Framing { data, at: 0 }
+    }
+
+    /// The input is read to its end.
+    pub fn is_empty(&self) -> bool {
+        self.at >= self.data.len()
+    }
+
+    /// The next byte, 0 past the end.
+    pub fn byte(&mut self) -> u8 {
+        let value = self.data.get(self.at).copied().unwrap_or(0);
+        self.at = self.at.saturating_add(1);
+        value
+    }
+
+    /// The next LEB128 varint (at most 10 bytes; bits beyond 64 are dropped).
+    pub fn varint(&mut self) -> u64 {
+        let mut value = 0u64;
+        for shift in (0..70).step_by(7) {
+            if self.is_empty() {
+                break;
+            }
+            let byte = self.byte();
+            if shift < 64 {
+                value |= u64::from(byte & 0x7f) << shift;
+            }
+            if byte & 0x80 == 0 {
+                break;
+            }
+        }
+        value
+    }
+
+    /// The next zigzag varint.
+    pub fn signed(&mut self) -> i64 {
+        let value = self.varint();
+        ((value >> 1) as i64) ^ -((value & 1) as i64)
+    }
+
+    /// Up to `count` zigzag varints, fewer where the input ends first.
+    pub fn signed_values(&mut self, count: u64) -> Vec<i64> {
+        let mut values = Vec::new();
+        let mut left = count;
+        while left > 0 && !self.is_empty() {
+            values.push(self.signed());
+            left -= 1;
+        }
+        values
+    }
+
+    /// The bytes not read yet.
+    pub fn rest(&self) -> &'a [u8] {
+        self.data.get(self.at..).unwrap_or(&[])
+    }
+}
+
+/// `traversal::decode` of any streams. Framing: a byte whose low bit is `corner_order`; a byte
+/// `b` for `width = 1 + b % 8`; a varint `count` (at most 2**16); a signed `k`; four varint
+/// stream lengths (ops, degrees, vertices, references); then the streams' values, signed, in
+/// that order (a stream cut short by the end of the input is shorter).
+///
+/// Checks: no panic, and a decoded table is `count` rows of `width`, each a face of 3 or more
+/// distinct vertices in `0..k` followed by -1 padding.
+pub fn traversal_decode(data: &[u8]) {
+    let mut input = Framing::new(data);
+    let corner_order = i64::from(input.byte() & 1);
+    let width = 1 + usize::from(input.byte()) % MAX_WIDTH;
+    let count = input.varint().min(MAX_COUNT) as usize;
+    let k = input.signed();
+    let lengths = [0; 4].map(|_: u8| input.varint());
+    let [ops, degrees, vertices, references] = lengths.map(|length| input.signed_values(length));
+    let streams = Streams {
+        ops: &ops,
+        degrees: &degrees,
+        vertices: &vertices,
+        references: &references,
+    };
+    if let Ok(table) = traversal::decode(&streams, count, width, k, corner_order) {
+        assert_eq!(table.len(), count * width, "the table's size");
+        for row in table.chunks_exact(width) {
+            check_face(row, k);
+        }
+    }
+}
+
+/// A decoded row: 3 or more distinct vertices in `0..k`, then only padding.
+fn check_face(row: &[i64], k: i64) {
+    let corners = row.iter().take_while(|&&v| v >= 0).count();
+    assert!(corners >= 3, "a face of {corners} corners: {row:?}");
+    assert!(row[corners..].iter().all(|&v| v == -1), "padding: {row:?}");
+    let face = &row[..corners];
+    assert!(
+        face.iter().all(|&v| v < k),
+        "a vertex outside 0..{k}: {row:?}"
+    );
+    for (j, v) in face.iter().enumerate() {
+        assert!(!face[..j].contains(v), "a vertex twice in a face: {row:?}");
+    }
+}
+
+/// `traversal::encode` of any face table, then `traversal::decode` of its streams for both
+/// corner orders. Framing: a byte `b` for `width = 3 + b % 6`; a varint `k` (inputs above
+/// 2**20 are skipped); then the table's entries, signed, row-major (negative ones are padding;
+/// a last incomplete row is dropped; at most 2**16 rows).
+///
+/// Checks: no panic; where the encoder takes the table (`Some`), its order is a permutation of
+/// the rows and, for a table the writer accepts (each face's corners distinct), the decoder
+/// gives back exactly the table's rows in that order, padding moved to the end.
+pub fn traversal_roundtrip(data: &[u8]) {
+    let mut input = Framing::new(data);
+    let width = 3 + usize::from(input.byte()) % 6;
+    let k = input.varint();
+    if k > MAX_ENCODER_VERTICES {
+        return;
+    }
+    let mut table = input.signed_values(MAX_COUNT * width as u64);
+    table.truncate(table.len() / width * width);
+    let Some(walked) = traversal::encode(&table, width, k) else {
+        return;
+    };
+    let rows = table.len() / width;
+    let mut seen = vec![false; rows];
+    for &row in &walked.order {
+        let row = usize::try_from(row).expect("an order entry below 0");
+        assert!(!seen[row], "row {row} twice in the order");
+        seen[row] = true;
+    }
+    assert!(seen.iter().all(|&s| s), "a row missing from the order");
+    if !table.chunks_exact(width).all(distinct_corners) {
+        return;
+    }
+    let mut expected = Vec::with_capacity(table.len());
+    for &row in &walked.order {
+        let start = row as usize * width;
+        let corners = table[start..start + width].iter().filter(|&&v| v >= 0);
+        let before = expected.len();
+        expected.extend(corners);
+        expected.resize(before + width, -1);
+    }
+    for (corner_order, ops) in walked.ops.iter().enumerate() {
+        let streams = Streams {
+            ops,
+            degrees: &walked.degrees,
+            vertices: &walked.new_residuals,
+            references: &walked.references,
+        };
+        let decoded = traversal::decode(&streams, rows, width, k as i64, corner_order as i64);
+        assert_eq!(
+            decoded.as_ref(),
+            Ok(&expected),
+            "corner order {corner_order}: decoded faces differ from the encoded"
+        );
+    }
+}
+
+/// The row's corners (padding left out) are distinct.
+fn distinct_corners(row: &[i64]) -> bool {
+    let corners: Vec<i64> = row.iter().copied().filter(|&v| v >= 0).collect();
+    corners
+        .iter()
+        .enumerate()
+        .all(|(j, v)| !corners[..j].contains(v))
+}
+
+/// `parse_obj` of any bytes (the whole input is the file).
+///
+/// Checks: no panic; a parsed mesh is consistent (whole `x y z` triples, `face_count` rows of
+/// `width`, indices in range); `parse_obj_frame` gives the same mesh, with or without the
+/// faces known from the mesh itself; and the mesh written as OBJ text (`vertex_text`,
+/// `face_text`) parses back to the same mesh, bit for bit.
+pub fn obj_parse(data: &[u8]) {
+    let parsed = parse_obj(data);
+    let framed = parse_obj_frame(data, None).map(|frame| frame.mesh);
+    assert!(same_result(&parsed, &framed), "parse_obj_frame(None)");
+    let Ok(mesh) = parsed else {
+        return;
+    };
+    assert_eq!(mesh.vertices.len() % 3, 0, "vertices in triples");
+    assert_eq!(
+        mesh.faces.len(),
+        mesh.face_count * mesh.width,
+        "the table's size"
+    );
+    let vertex_count = (mesh.vertices.len() / 3) as i64;
+    assert!(
+        mesh.faces
+            .iter()
+            .all(|&v| v == -1 || (0..vertex_count).contains(&v)),
+        "a face index out of range"
+    );
+    if let Ok(Some(face_key)) = parse_obj_frame(data, None).map(|frame| frame.face_key) {
+        let known = KnownFaces {
+            face_key: &face_key,
+            vertex_count: mesh.vertices.len() / 3,
+        };
+        let frame = parse_obj_frame(data, Some(known)).expect("the frame parses again");
+        assert!(same_vertices(&frame.mesh.vertices, &mesh.vertices));
+        if !frame.shared {
+            assert!(same_mesh(&frame.mesh, &mesh), "the frame's mesh");
+        }
+    }
+    let mut text = vertex_text(&mesh.vertices);
+    text.extend(face_text(&mesh.faces, mesh.width));
+    let again = parse_obj(&text).expect("the written mesh parses");
+    assert!(
+        same_vertices(&again.vertices, &mesh.vertices),
+        "vertices written and read"
+    );
+    if mesh.face_count > 0 {
+        assert_eq!(again.faces, mesh.faces, "faces written and read");
+        assert_eq!(again.width, mesh.width);
+    }
+    assert_eq!(again.face_count, mesh.face_count);
+}
+
+fn same_result<E: PartialEq>(a: &Result<ObjMesh, E>, b: &Result<ObjMesh, E>) -> bool {
+    match (a, b) {
+        (Ok(a), Ok(b)) => same_mesh(a, b),
+        (Err(a), Err(b)) => a == b,
+        _ => false,
+    }
+}
+
+fn same_mesh(a: &ObjMesh, b: &ObjMesh) -> bool {
+    same_vertices(&a.vertices, &b.vertices)
+        && a.faces == b.faces
+        && a.face_count == b.face_count
+        && a.width == b.width
+}
+
+fn same_vertices(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+}
+
+/// `repr` of any `f64` (the first 8 bytes, little-endian, short inputs padded with 0), and
+/// `write_signed` / `write_unsigned` of the same bits.
+///
+/// Checks: the text parses back to the same bits (any NaN to a NaN, written `nan`); it is laid
+/// out as Python lays out the shortest digits, which are rebuilt here independently from
+/// Rust's `{:e}`; and the integers' texts are Rust's.
+pub fn float_repr(data: &[u8]) {
+    let mut bytes = [0u8; 8];
+    for (slot, byte) in bytes.iter_mut().zip(data) {
+        *slot = *byte;
+    }
+    let value = f64::from_le_bytes(bytes);
+    let text = repr(value);
+    let back: f64 = text.parse().expect("repr parses as a float");
+    if value.is_nan() {
+        assert!(back.is_nan() && text == "nan", "{text}");
+    } else {
+        assert_eq!(
+            back.to_bits(),
+            value.to_bits(),
+            "{text} reads back to another float"
+        );
+        assert_eq!(text, python_layout(value), "laid out unlike Python");
+    }
+    assert_eq!(repr(back), text, "the same value, another text");
+    let mut out = Vec::new();
+    write_signed(i64::from_le_bytes(bytes), &mut out);
+    assert_eq!(out, i64::from_le_bytes(bytes).to_string().as_bytes());
+    out.clear();
+    write_unsigned(u64::from_le_bytes(bytes), &mut out);
+    assert_eq!(out, u64::from_le_bytes(bytes).to_string().as_bytes());
+}
+
+/// Python's `repr` of a non-NaN float from Rust's shortest digits (`{:e}`: `d.ddde-x`):
+/// positional where the decimal exponent is in -4..16, else `d.ddde+XX`.
+fn python_layout(value: f64) -> String {
+    if value.is_infinite() {
+        return if value > 0.0 { "inf" } else { "-inf" }.to_string();
+    }
+    let sign = if value.is_sign_negative() { "-" } else { "" };
+    if value == 0.0 {
+        return format!("{sign}0.0");
+    }
+    let scientific = format!("{:e}", value.abs());
+    let (mantissa, exponent) = scientific.split_once('e').expect("{:e} has an exponent");
+    let exponent: i32 = exponent.parse().expect("an exponent");
+    let digits: String = mantissa.chars().filter(|c| *c != '.').collect();
+    if (-4..16).contains(&exponent) {
+        let point = exponent + 1; // digits before the point
+        let text = if point <= 0 {
+            format!("0.{}{digits}", "0".repeat((-point) as usize))
+        } else if point as usize >= digits.len() {
+            format!("{digits}{}.0", "0".repeat(point as usize - digits.len()))
+        } else {
+            let (whole, fraction) = digits.split_at(point as usize);
+            format!("{whole}.{fraction}")
+        };
+        format!("{sign}{text}")
+    } else {
+        let (first, others) = digits.split_at(1);
+        let fraction = if others.is_empty() {
+            String::new()
+        } else {
+            format!(".{others}")
+        };
+        let exponent_sign = if exponent < 0 { '-' } else { '+' };
+        format!(
+            "{sign}{first}{fraction}e{exponent_sign}{:02}",
+            exponent.abs()
+        )
+    }
+}
+
+/// `TextCheck` of any text cut into chunks anywhere. Framing: a varint line-length `limit`; a
+/// byte `c`, then `c % 8` varints, each a cut position (modulo the text's length + 1); the
+/// rest is the text.
+///
+/// Checks: no panic; the chunked check and the whole-text check both accept exactly the texts
+/// with no NUL byte, that are UTF-8, and whose lines (ended by `\n`, `\r\n` or a lone `\r`)
+/// are at most `limit` bytes long; a fault's line is within the text's lines.
+pub fn text_check(data: &[u8]) {
+    let mut input = Framing::new(data);
+    let limit = input.varint();
+    let cuts = usize::from(input.byte() % 8);
+    let mut positions: Vec<u64> = (0..cuts).map(|_| input.varint()).collect();
+    let text = input.rest();
+    let length = text.len() as u64;
+    for position in &mut positions {
+        *position %= length + 1;
+    }
+    positions.sort_unstable();
+    let mut chunks = Vec::new();
+    let mut start = 0;
+    for &cut in &positions {
+        chunks.push(&text[start..cut as usize]);
+        start = cut as usize;
+    }
+    chunks.push(&text[start..]);
+    let expected = text_is_fine(text, limit);
+    let lines = 1 + crate::text::text_check::line_ends(text, false);
+    for pieces in [chunks.as_slice(), &[text]] {
+        let mut check = TextCheck::new(limit);
+        let result = pieces
+            .iter()
+            .try_for_each(|chunk| check.feed(chunk))
+            .and_then(|()| check.finish());
+        assert_eq!(
+            result.is_ok(),
+            expected,
+            "{result:?} for {} chunks",
+            pieces.len()
+        );
+        if let Err(fault) = result {
+            assert!(
+                (1..=lines).contains(&fault.line),
+                "{fault:?} of {lines} lines"
+            );
+        }
+    }
+}
+
+/// The text has no NUL byte, is UTF-8, and no line is longer than `limit` bytes.
+fn text_is_fine(text: &[u8], limit: u64) -> bool {
+    !text.contains(&0)
+        && std::str::from_utf8(text).is_ok()
+        && text
+            .split(|&c| c == b'\n' || c == b'\r')
+            .all(|line| line.len() as u64 <= limit)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{python_layout, Framing};
+
+    #[test]
+    fn varints() {
+        let mut input = Framing::new(&[0x96, 0x01, 0x03, 0x80]);
+        assert_eq!(input.varint(), 150);
+        assert_eq!(input.signed(), -2);
+        // cut by the end: what it has
+        assert_eq!(input.varint(), 0);
+        assert!(input.is_empty());
+        assert_eq!(input.byte(), 0);
+    }
+
+    #[test]
+    fn layout() {
+        assert_eq!(python_layout(1e16), "1e+16");
+        assert_eq!(python_layout(1e15), "1000000000000000.0");
+        assert_eq!(python_layout(0.0001), "0.0001");
+        assert_eq!(python_layout(-1.5e-5), "-1.5e-05");
+        assert_eq!(python_layout(123.25), "123.25");
+        assert_eq!(python_layout(-0.0), "-0.0");
+    }
+}
