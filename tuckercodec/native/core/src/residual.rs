@@ -20,6 +20,9 @@ pub const CHUNK_RULE: &str = "R29-zstd-content-size";
 /// The most byte planes of a chunk (64-bit integers).
 pub const MAX_PLANES: usize = 8;
 
+/// Integers restored at once by [`restore_chunk`] (16 KiB of scratch).
+const RESTORE_BLOCK: usize = 2048;
+
 /// The ordered integers of the finite binary32 values: -max and +max.
 pub const FINITE32: (i64, i64) = (-2_139_095_040, 2_139_095_039);
 /// The ordered integers of the finite binary64 values: -max and +max.
@@ -116,22 +119,29 @@ pub fn restore_chunk(
             format!("{count} integers are not whole frames of {frame_values}"),
         ));
     }
-    let mut unsigned = vec![0u64; count];
-    for (plane, bytes) in raw.chunks_exact(count.max(1)).take(planes).enumerate() {
-        let shift = 8 * plane as u32;
-        for (value, byte) in unsigned.iter_mut().zip(bytes) {
-            *value |= u64::from(*byte) << shift;
-        }
-    }
-    let mut values: Vec<i64> = unsigned.into_iter().map(unzigzag).collect();
-    if predict && count > 0 {
-        // e[t] = s[t] + e[t - 1], frame by frame
-        for t in 1..count / frame_values {
-            let (before, rest) = values.split_at_mut(t * frame_values);
-            let previous = &before[(t - 1) * frame_values..];
-            for (value, earlier) in rest[..frame_values].iter_mut().zip(previous) {
-                *value = value.wrapping_add(*earlier);
+    // one pass over the output, a block at a time: each plane's bytes of the block gathered
+    // while the block stays in cache, then unzigzagged and summed with the frame before
+    let mut values = vec![0i64; count];
+    let mut block = [0u64; RESTORE_BLOCK];
+    for first in (0..count).step_by(RESTORE_BLOCK) {
+        let length = RESTORE_BLOCK.min(count - first);
+        let unsigned = &mut block[..length];
+        unsigned.fill(0);
+        for plane in 0..planes {
+            let bytes = &raw[plane * count + first..plane * count + first + length];
+            let shift = 8 * plane as u32;
+            for (value, byte) in unsigned.iter_mut().zip(bytes) {
+                *value |= u64::from(*byte) << shift;
             }
+        }
+        for (offset, value) in unsigned.iter().enumerate() {
+            let index = first + offset;
+            let restored = unzigzag(*value);
+            values[index] = if predict && index >= frame_values {
+                restored.wrapping_add(values[index - frame_values]) // e[t] = s[t] + e[t - 1]
+            } else {
+                restored
+            };
         }
     }
     Ok(values)
@@ -187,6 +197,22 @@ pub fn pack_chunk(
     Ok((planes, raw))
 }
 
+/// The integer nearest `value`, ties to even, as `f64::round_ties_even` (and numpy's `rint`)
+/// gives it, without the call to libm's `rint` that the baseline x86-64 target makes of it:
+/// below 2**52 in magnitude, adding and subtracting 2**52 rounds so (each sum rounded to
+/// nearest, ties to even); above it every binary64 is an integer already.
+#[inline]
+pub fn rint(value: f64) -> f64 {
+    const TWO52: f64 = 4_503_599_627_370_496.0;
+    let magnitude = value.abs();
+    if magnitude < TWO52 {
+        // the sign kept, so that -0.4 is -0, as rint gives it
+        ((magnitude + TWO52) - TWO52).copysign(value)
+    } else {
+        value // an integer, an infinity or a NaN
+    }
+}
+
 // -- the ordered integers (§6.9) --------------------------------------------------------------
 
 /// The ordered integer of a binary32 value.
@@ -231,7 +257,7 @@ pub fn from_ordered64(ordered: i64) -> f64 {
 /// within +-2**53 (a NaN is 0, as the reference's `nan_to_num` makes it).
 pub fn places_ordered(value: f64, places: u32) -> i64 {
     let limit = LARGEST_PLACES_INTEGER as f64;
-    let scaled = (value * TEN[places.min(22) as usize]).round_ties_even();
+    let scaled = rint(value * TEN[places.min(22) as usize]);
     if scaled.is_nan() {
         return 0;
     }
@@ -284,26 +310,29 @@ impl Digits {
     /// 0, -0 is -1, a positive value 1 + decade * B + (m - 10**(p-1)), a negative one -1
     /// minus that of its magnitude (the reference's `digits_ordered`, value by value).
     pub fn ordered(&self, value: f64) -> i64 {
+        self.ordered_in_decade(value).0
+    }
+
+    /// [`Digits::ordered`], and the decade of the value's magnitude (0 for a zero).
+    fn ordered_in_decade(&self, value: f64) -> (i64, i64) {
         let magnitude = value.abs();
         let mut ordered = 0;
+        let mut decade = 0;
         if magnitude != 0.0 {
             // searchsorted(powers, magnitude, side="right") - 1, clipped to 0..=44 (numpy
             // sorts a NaN after every number)
-            let above = if magnitude.is_nan() {
-                self.powers.len()
+            decade = if magnitude.is_nan() {
+                44
             } else {
-                self.powers.partition_point(|power| *power <= magnitude)
+                self.decade(magnitude)
             };
-            let decade = above.saturating_sub(1).min(44);
             let shift = 22 - decade as i64; // -22 ..= 22
             let scaled = if shift >= 0 {
                 magnitude * TEN[shift as usize]
             } else {
                 magnitude / TEN[(-shift) as usize]
             };
-            let significand = scaled
-                .round_ties_even()
-                .clamp(self.low as f64, (10 * self.low - 1) as f64);
+            let significand = rint(scaled).clamp(self.low as f64, (10 * self.low - 1) as f64);
             // a NaN's significand casts to i64::MIN, as numpy's cast does on x86-64, and the
             // sums wrap, as numpy's do
             let integer = if significand.is_nan() {
@@ -315,35 +344,68 @@ impl Digits {
                 .wrapping_add(integer)
                 .wrapping_add(1 - self.low);
         }
-        if value.is_sign_negative() {
-            (-1i64).wrapping_sub(ordered)
-        } else {
-            ordered
+        // -1 - ordered for a negative value, without a branch: !x is -1 - x
+        let sign = (value.to_bits() as i64) >> 63;
+        (ordered ^ sign, decade as i64)
+    }
+
+    /// The decade of a magnitude (not NaN): `searchsorted(powers, magnitude, side="right") - 1`
+    /// clipped to 0..=44, found from an estimate of log10 by the binary exponent, then a step
+    /// or two along the table (a binary search per value cost more than the rest together).
+    fn decade(&self, magnitude: f64) -> usize {
+        let binary_exponent = ((magnitude.to_bits() >> 52) & 0x7ff) as i64 - 1023;
+        // floor(binary_exponent * log10(2)) within one, in integers (78913 / 2**18)
+        let estimate = ((binary_exponent * 78913) >> 18) - (self.digits as i64 - 23);
+        let mut decade = estimate.clamp(0, 44) as usize;
+        // the estimate is the decade or one below, but for the table's rounding: two steps
+        // without branches (the signs and decades of positions are not predictable), then
+        // the rare rest
+        for _ in 0..2 {
+            let next = (decade + 1).min(44);
+            decade += usize::from((decade < 44) & (self.powers[next] <= magnitude));
         }
+        while decade < 44 && self.powers[decade + 1] <= magnitude {
+            decade += 1;
+        }
+        while decade > 0 && self.powers[decade] > magnitude {
+            decade -= 1;
+        }
+        decade
+    }
+
+    /// The decade of an ordered integer's magnitude m >= 1, `(m - 1) / B`.
+    fn decade_of(&self, magnitude: i64) -> i64 {
+        (magnitude - 1).div_euclid(self.per_decade)
     }
 
     /// The binary64 value of an ordered decimal integer within -1 - L ..= L: m / 10**s or
     /// m * 10**-s, one correctly rounded operation.
     pub fn value(&self, ordered: i64) -> f64 {
-        let negative = ordered < 0;
-        let magnitude = if negative { -1 - ordered } else { ordered };
+        self.value_near(ordered, None)
+    }
+
+    /// [`Digits::value`], told the decade the integer's magnitude is likely in (that of the
+    /// value it corrects): the division by B is skipped when it is.
+    fn value_near(&self, ordered: i64, likely_decade: Option<i64>) -> f64 {
+        let sign = ordered >> 63; // 0, or -1 for a negative integer
+        let magnitude = ordered ^ sign; // -1 - ordered for a negative one
+        let sign_bit = (sign as u64) & (1 << 63);
         if magnitude == 0 {
-            return if negative { -0.0 } else { 0.0 };
+            return f64::from_bits(sign_bit);
         }
         let index = magnitude - 1;
-        let decade = index.div_euclid(self.per_decade);
-        let significand = (index.rem_euclid(self.per_decade) + self.low) as f64;
+        let decade = match likely_decade {
+            Some(d) if index >= d * self.per_decade && index < (d + 1) * self.per_decade => d,
+            _ => self.decade_of(magnitude),
+        };
+        let significand = (index - decade * self.per_decade + self.low) as f64;
         let shift = 22 - decade;
         let value = if shift > 0 {
             significand / TEN[shift.min(22) as usize]
         } else {
             significand * TEN[(-shift).clamp(0, 22) as usize]
         };
-        if negative {
-            -value
-        } else {
-            value
-        }
+        f64::from_bits(value.to_bits() | sign_bit)
     }
 
     /// p, the significant digits.
@@ -502,12 +564,14 @@ fn correct_digits(
             *o = f64::NAN; // R36, whatever e says
             continue;
         }
-        let ordered = decimals.ordered(*p).wrapping_add(*e);
+        let (before, decade) = decimals.ordered_in_decade(*p);
+        let ordered = before.wrapping_add(*e);
         if ordered < -1 - limit || ordered > limit {
             failed.corrected = true;
             continue; // no value: the call fails
         }
-        let value = decimals.value(ordered);
+        // a small correction stays in P's decade
+        let value = decimals.value_near(ordered, Some(decade));
         *o = if binary32 {
             f64::from(value as f32)
         } else {
@@ -645,6 +709,69 @@ mod tests {
         assert_eq!(decimals.ordered(-0.0), -1);
         assert_eq!(decimals.value(-1).to_bits(), (-0.0f64).to_bits());
         assert_eq!(decimals.value(decimals.largest()), 9.99999e27);
+    }
+
+    #[test]
+    fn rint_is_round_ties_even() {
+        let mut value: f64 = 1e-3;
+        while value < 1e20 {
+            for probe in [
+                value,
+                value + 0.5,
+                -value,
+                -value - 0.5,
+                value.floor() + 0.5,
+            ] {
+                assert_eq!(
+                    rint(probe).to_bits(),
+                    probe.round_ties_even().to_bits(),
+                    "{probe}"
+                );
+            }
+            value *= 1.37;
+        }
+        for probe in [
+            0.5,
+            1.5,
+            2.5,
+            -0.5,
+            -2.5,
+            -0.0,
+            0.0,
+            4503599627370495.5,
+            f64::INFINITY,
+        ] {
+            assert_eq!(
+                rint(probe).to_bits(),
+                probe.round_ties_even().to_bits(),
+                "{probe}"
+            );
+        }
+        assert!(rint(f64::NAN).is_nan());
+    }
+
+    #[test]
+    fn decade_is_the_tables_search() {
+        for digits in [1, 6, 15] {
+            let decimals = Digits::new(digits);
+            let mut value = 1e-320;
+            while value < 1e300 {
+                for probe in [value, value * 0.999_999_999, value * 1.000_000_001] {
+                    let above = decimals.powers.partition_point(|power| *power <= probe);
+                    assert_eq!(
+                        decimals.decade(probe),
+                        above.saturating_sub(1).min(44),
+                        "{probe}"
+                    );
+                }
+                value *= 1.7;
+            }
+            for power in decimals.powers {
+                let above = decimals.powers.partition_point(|p| *p <= power);
+                assert_eq!(decimals.decade(power), above - 1);
+            }
+            assert_eq!(decimals.decade(f64::INFINITY), 44);
+        }
     }
 
     #[test]
