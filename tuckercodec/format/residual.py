@@ -19,7 +19,7 @@ from typing import Any, NoReturn
 
 import numpy as np
 
-from ..errors import FormatError
+from ..errors import FormatError, InternalError
 from ..system import native
 from . import streams
 from .limits import Limits, check_limit
@@ -495,8 +495,8 @@ def decode_chunk(
             restored = core.residual_restore_chunk(
                 raw, count, planes, layout.predict == 1, vertices * 3
             )
-        except core.Broken as error:
-            raise FormatError(error.args[1], rule=error.args[0], field=field) from None
+        except core.Broken as error:  # the frame held count * planes bytes: unreachable
+            raise InternalError(f"{field}: {error.args[1]}") from None
         return restored.reshape(stop - start, vertices, 3)
     # in place, a block at a time: the chunk's integers are the one array of its size
     values = streams.unpack_integers(piece, count, planes, field)
@@ -546,17 +546,27 @@ def _native_correct(
     core: Any, exact: np.ndarray, residual: np.ndarray, domain: Domain, where: str
 ) -> np.ndarray:
     """:func:`correct` in the compiled core: the same values, and the same R41 first."""
+    name, step, scale = domain.name, float(domain.step or 0.0), int(domain.scale or 0)
     try:
-        out = core.residual_correct(
-            np.ascontiguousarray(exact, dtype=np.float64).reshape(-1),
-            np.ascontiguousarray(residual, dtype=np.int64).reshape(-1),
-            domain.name,
-            float(domain.step or 0.0),
-            int(domain.scale or 0),
+        return _in_memory_order(
+            lambda flat, integers: core.residual_correct(flat, integers, name, step, scale),
+            exact,
+            residual,
         )
     except core.Broken as error:
         _value_error(where, error.args[1])
-    result: np.ndarray = out.reshape(exact.shape)
+
+
+def _in_memory_order(compute: Any, values: np.ndarray, *more: np.ndarray) -> np.ndarray:
+    """``compute`` (a map of the compiled core, value by value, on flat contiguous arrays) on
+    ``values`` (float64) and ``more`` (int64, of the same shape), taken in the order of
+    ``values``' memory: positions made by a transposed product would cost a transposed copy
+    in C order. The result has the shape, and the layout, of ``values``."""
+    axes = np.argsort([-abs(stride) for stride in values.strides], kind="stable")
+    permuted = values.transpose(axes)
+    flats = [np.ascontiguousarray(permuted, dtype=np.float64).reshape(-1)]
+    flats += [np.ascontiguousarray(m.transpose(axes), dtype=np.int64).reshape(-1) for m in more]
+    result: np.ndarray = compute(*flats).reshape(permuted.shape).transpose(np.argsort(axes))
     return result
 
 
@@ -618,9 +628,10 @@ def ordered_in(values: np.ndarray, domain: Domain) -> np.ndarray:
     """The ordered integers of a lossless domain: what e is a difference of (§6.9)."""
     core = native.core()
     if core is not None:
-        flat = np.ascontiguousarray(values, dtype=np.float64).reshape(-1)
-        ordered: np.ndarray = core.residual_ordered(flat, domain.name, int(domain.scale or 0))
-        return ordered.reshape(np.shape(values))
+        name, scale = domain.name, int(domain.scale or 0)
+        return _in_memory_order(
+            lambda flat: core.residual_ordered(flat, name, scale), np.asarray(values)
+        )
     if domain.name == FLOAT32:
         with np.errstate(over="ignore"):
             return ordered32(values.astype(np.float32))

@@ -188,10 +188,15 @@ pub fn pack_chunk(
     let bits = 64 - largest.leading_zeros() as usize;
     let planes = bits.div_ceil(8).max(1);
     let mut raw = vec![0u8; count * planes];
-    for (plane, bytes) in raw.chunks_exact_mut(count.max(1)).enumerate() {
-        let shift = 8 * plane as u32;
-        for (byte, value) in bytes.iter_mut().zip(&unsigned) {
-            *byte = (value >> shift) as u8;
+    // a block of values at a time, each plane's bytes of it written while it is in cache
+    for first in (0..count).step_by(RESTORE_BLOCK) {
+        let block = &unsigned[first..count.min(first + RESTORE_BLOCK)];
+        for plane in 0..planes {
+            let start = plane * count + first;
+            let shift = 8 * plane as u32;
+            for (byte, value) in raw[start..start + block.len()].iter_mut().zip(block) {
+                *byte = (value >> shift) as u8;
+            }
         }
     }
     Ok((planes, raw))
