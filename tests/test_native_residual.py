@@ -31,29 +31,30 @@ def _needs_core() -> None:
         pytest.skip("the compiled core is not installed (python -m tools.build_native)")
 
 
-def _outcome(call: Callable[[], Any]) -> tuple[Any, ...]:
+def _outcome(call: Callable[..., Any], *args: Any, **kwargs: Any) -> tuple[Any, ...]:
     """What a call gives, comparable bit for bit: its arrays' bytes, or its error's class,
     rule, field and message."""
     try:
-        result = call()
+        result = call(*args, **kwargs)
     except FormatError as error:
         return ("error", type(error).__name__, error.rule, error.field, str(error))
+    return _comparable(result)
+
+
+def _comparable(result: Any) -> tuple[Any, ...]:
     if isinstance(result, tuple):
-        return tuple(_outcome(lambda item=item: item) for item in result)
+        return tuple(_comparable(item) for item in result)
     if isinstance(result, np.ndarray):
         return ("array", result.dtype.str, result.shape, result.tobytes())
     return ("value", result)
 
 
-def _both(call: Callable[[], Any]) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
-    compiled = _outcome(call)
+def _assert_alike(call: Callable[..., Any], *args: Any, **kwargs: Any) -> tuple[Any, ...]:
+    """The outcome of ``call(*args, **kwargs)`` with the compiled core, checked to be the pure
+    Python reference's."""
+    compiled = _outcome(call, *args, **kwargs)
     with native.pure_python():
-        reference = _outcome(call)
-    return compiled, reference
-
-
-def _assert_alike(call: Callable[[], Any]) -> tuple[Any, ...]:
-    compiled, reference = _both(call)
+        reference = _outcome(call, *args, **kwargs)
     assert compiled == reference
     return compiled
 
@@ -110,7 +111,7 @@ def _mutate(data: bytes, rng: np.random.Generator) -> bytes:
     if kind == 0:  # a parameter: any of §6.9's, to a value in range or not
         key = str(rng.choice(["domain", "step", "places", "digits", "exponent", "predict"]))
         choices: dict[str, list[Any]] = {
-            "domain": list(residual.DOMAINS) + ["float16", 3],
+            "domain": [*residual.DOMAINS, "float16", 3],
             "step": [1e-9, 0.5, 1e300, -1.0, float("nan"), 2],
             "places": [0, 3, 22, 23, -1],
             "digits": [1, 6, 15, 16, 0],
@@ -205,7 +206,7 @@ def test_correct_is_alike_on_random_values():
         size = int(rng.integers(0, 40))
         exact = _random_positions(rng, size).reshape(-1, 1, 1) if size else np.empty((0, 1, 1))
         corrections = _random_corrections(rng, size).reshape(exact.shape)
-        outcome = _assert_alike(lambda: residual.correct(exact, corrections, domain, "RESD"))
+        outcome = _assert_alike(residual.correct, exact, corrections, domain, "RESD")
         errors += outcome[0] == "error"
     assert 300 < errors < 2700  # both the valid and the refused are well covered
 
@@ -218,9 +219,9 @@ def test_ordered_integers_are_alike_on_random_values():
             continue
         values = _random_positions(rng, int(rng.integers(0, 40)))
         values = values[np.isfinite(values)]  # the encoder's input is finite
-        _assert_alike(lambda: residual.ordered_in(values, domain))
+        _assert_alike(residual.ordered_in, values, domain)
         back = residual.ordered_in(values, domain)
-        _assert_alike(lambda: residual.correct(values, back - back, domain, "input"))
+        _assert_alike(residual.correct, values, back - back, domain, "input")
 
 
 def test_chunks_restore_alike_from_random_planes():
@@ -234,13 +235,11 @@ def test_chunks_restore_alike_from_random_planes():
         raw = rng.integers(0, 256, size=count * planes, dtype=np.uint8)
         if rng.random() < 0.5:  # mostly small integers, as real corrections are
             raw[count:] = 0
-        payload = zstandard.ZstdCompressor(level=1, write_content_size=True).compress(
-            raw.tobytes()
-        )
+        payload = zstandard.ZstdCompressor(level=1, write_content_size=True).compress(raw.tobytes())
         layout = residual.ResidualLayout(
             residual.FLOAT64, None, predict, frames, (planes,), (0, len(payload)), frames
         )
-        _assert_alike(lambda: residual.decode_chunk(payload, layout, 0, vertices, "RESD"))
+        _assert_alike(residual.decode_chunk, payload, layout, 0, vertices, "RESD")
 
 
 def test_sections_pack_alike():
@@ -251,9 +250,7 @@ def test_sections_pack_alike():
         values[rng.random(shape) < 0.05] = rng.choice(EXTREMES)
         chunk_frames = int(rng.integers(1, 4))
         domain = _random_domain(rng)
-        _assert_alike(
-            lambda: residual.encode_section(values, domain, 1, chunk_frames=chunk_frames)
-        )
+        _assert_alike(residual.encode_section, values, domain, 1, chunk_frames=chunk_frames)
 
 
 # -- real data ----------------------------------------------------------------------------------

@@ -339,10 +339,10 @@ class Decoder:
             values = self._chunks.get((number, chunk))
             if values is None:
                 values = self._chunk(part, chunk, payload)
-            rows = np.flatnonzero(chunks == chunk)
+            indices = np.flatnonzero(chunks == chunk)
             start, _ = layout.chunk_range(chunk)
-            taken = _run_or_indices(local[rows] - start)
-            rows = _run_or_indices(rows)  # the usual case: runs of frames, views not copies
+            taken = _run_or_indices(local[indices] - start)
+            rows = _run_or_indices(indices)  # the usual case: runs of frames, views not copies
             with self._naming_path():
                 out[rows] = residual.correct(
                     exact[rows],

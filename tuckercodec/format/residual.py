@@ -564,7 +564,7 @@ def _in_memory_order(compute: Any, values: np.ndarray, *more: np.ndarray) -> np.
     in C order. The result has the shape, and the layout, of ``values``."""
     axes = np.argsort([-abs(stride) for stride in values.strides], kind="stable")
     permuted = values.transpose(axes)
-    flats = [np.ascontiguousarray(permuted, dtype=np.float64).reshape(-1)]
+    flats: list[np.ndarray] = [np.ascontiguousarray(permuted, dtype=np.float64).reshape(-1)]
     flats += [np.ascontiguousarray(m.transpose(axes), dtype=np.int64).reshape(-1) for m in more]
     result: np.ndarray = compute(*flats).reshape(permuted.shape).transpose(np.argsort(axes))
     return result
