@@ -8,8 +8,15 @@
 //! itself is decompressed by the caller (R29 is checked there).
 //!
 //! Every function takes plain slices and returns a [`Broken`] for any input it refuses, never
-//! a panic, so a fuzzer may call them with anything: [`restore_chunk`] and [`correct`] are the
-//! entry points meant for it.
+//! a panic, so a fuzzer may call them with anything. The entry points meant for it:
+//!
+//! - [`restore_chunk`]`(raw, count, planes, predict, frame_values)`: any bytes and sizes; the
+//!   integers, or R29 for a shape the bytes do not hold;
+//! - [`correct`]`(exact, residual, domain, out)`: any positions and integers in any
+//!   [`Domain`] (from [`Domain::named`], or built directly: a grid's step is then whatever
+//!   the fuzzer gives); the corrected positions, or R41 with the reference's message;
+//! - [`pack_chunk`] then [`restore_chunk`]: a round trip that must give the integers back;
+//! - [`ordered_in`] then [`correct`] with zero corrections: a lossless domain's values back.
 
 use crate::error::Broken;
 
@@ -840,6 +847,52 @@ mod tests {
             correct(&[f64::INFINITY, 1.0], &[5, 0], domain, &mut out).unwrap();
             assert!(out[0].is_nan());
             assert_eq!(out[1], 1.0);
+        }
+    }
+
+    /// A cheap stand-in for the fuzzer: random bytes, sizes, values and domains never panic.
+    #[test]
+    fn random_inputs_never_panic() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        for _ in 0..3000 {
+            let length = (next() % 64) as usize;
+            let raw: Vec<u8> = (0..length).map(|_| next() as u8).collect();
+            let planes = (next() % 10) as usize;
+            let count = (next() % 40) as usize;
+            let _ = restore_chunk(&raw, count, planes, next() % 2 == 0, (next() % 7) as usize);
+            let exact: Vec<f64> = (0..count).map(|_| f64::from_bits(next())).collect();
+            let residual: Vec<i64> = (0..count).map(|_| next() as i64 >> (next() % 64)).collect();
+            let domain = match next() % 6 {
+                0 => Domain::Grid {
+                    step: f64::from_bits(next()),
+                },
+                1 => Domain::Float32,
+                2 => Domain::Float64,
+                3 => Domain::Places {
+                    places: (next() % 40) as u32,
+                },
+                4 => Domain::Digits {
+                    digits: (next() % 40) as u32,
+                },
+                _ => Domain::Digits32 {
+                    digits: (next() % 40) as u32,
+                },
+            };
+            let mut out = vec![0.0; count];
+            let _ = correct(&exact, &residual, domain, &mut out);
+            let mut ordered = vec![0; count];
+            ordered_in(&exact, domain, &mut ordered);
+            let frame_values = (next() % 4) as usize;
+            if let Ok((planes, bytes)) = pack_chunk(&residual, true, frame_values) {
+                let back = restore_chunk(&bytes, count, planes, true, frame_values).unwrap();
+                assert_eq!(back, residual);
+            }
         }
     }
 
