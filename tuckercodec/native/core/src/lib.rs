@@ -6,5 +6,6 @@
 #![forbid(unsafe_code)]
 
 pub mod error;
+pub mod residual;
 pub mod text;
 pub mod traversal;
