@@ -5,4 +5,5 @@
 //! saying the same thing as the Python reference (`tuckercodec/format/`), never a panic.
 #![forbid(unsafe_code)]
 
+pub mod encoder;
 pub mod error;

@@ -11,6 +11,8 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use tuckercodec_core::error::Broken;
 
+mod encoder;
+
 create_exception!(
     _native,
     NativeBroken,
@@ -33,5 +35,6 @@ fn core_version() -> &'static str {
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("Broken", m.py().get_type::<NativeBroken>())?;
     m.add_function(wrap_pyfunction!(core_version, m)?)?;
+    encoder::register(m)?;
     Ok(())
 }
