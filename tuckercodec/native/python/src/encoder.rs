@@ -90,13 +90,16 @@ fn rdo_choose<'py>(
     matrix(py, q, rows, cols)
 }
 
+/// Two int64 arrays for Python.
+type Int64Pair<'py> = (Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>);
+
 /// estimate.entropy_bits's integers: (nonzero counts, escaped zigzag values), int64 each.
 #[pyfunction]
 fn entropy_counts<'py>(
     py: Python<'py>,
     stream: PyReadonlyArray2<'py, i64>,
     table_size: usize,
-) -> PyResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>)> {
+) -> PyResult<Int64Pair<'py>> {
     let (rows, cols) = shape2(&stream);
     let stream = stream.as_slice()?;
     let (seen, escaped) = py
