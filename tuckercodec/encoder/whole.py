@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
@@ -331,24 +330,17 @@ class WholeWorkspace:
     ) -> list[tuple[dict[str, Any], bytes]]:
         """The file's sections, in the order of :data:`~.format.sections.WRITE_ORDER`."""
         (factors,) = quantized.segments
-        assert factors.u1 is not None  # a whole file's U1 is its own
         coded = {"FACE": self.face_section}
-        # zstd releases the GIL: U1 (most of the file, and of the time) is packed beside the
-        # three others, each section exactly as alone
-        with ThreadPoolExecutor(max_workers=2) as pool:
-            packing = {
-                section_id: pool.submit(
-                    qmat.encode_matrix, matrix, parents, allow_predict=predict, level=level
-                )
-                for section_id, matrix, parents, predict in (
-                    ("U1", factors.u1, self.mesh, True),
-                    ("CENT", factors.centroids, None, True),
-                    ("U3", factors.u3, None, True),
-                    ("CORE", factors.core, None, False),
-                )
-            }
-            for section_id in ("CENT", "U3", "CORE", "U1"):  # a refusal: the first as alone
-                coded[section_id] = packing[section_id].result()
+        for section_id, matrix, parents, predict in (
+            ("CENT", factors.centroids, None, True),
+            ("U3", factors.u3, None, True),
+            ("CORE", factors.core, None, False),
+            ("U1", factors.u1, self.mesh, True),
+        ):
+            assert matrix is not None  # a whole file's U1 is its own
+            coded[section_id] = qmat.encode_matrix(
+                matrix, parents, allow_predict=predict, level=level
+            )
         if self.name_section is not None:
             coded["NAME"] = self.name_section
         return [
