@@ -11,6 +11,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use tuckercodec_core::error::Broken;
 
+mod encoder;
 mod residual;
 mod text;
 mod traversal;
@@ -40,5 +41,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     traversal::register(m)?;
     text::register(m)?;
     residual::register(m)?;
+    encoder::register(m)?;
     Ok(())
 }
