@@ -377,6 +377,7 @@ def test_bad_obj_names_file_and_line(
         # not numbers
         ("v 1 two 3\n", 1, "not a number: 'two'"),
         ("v 1 0x10 3\n", 1, "not a number: '0x10'"),
+        ("v 1 +-inf 3\n", 1, r"not a number: '\+-inf'"),  # float() takes one sign
         ("v 1,5 2 3\n", 1, "not a number: '1,5'"),
         ("v 1 2 3,\n", 1, "not a number: '3,'"),
         ("v 1_0 2 3\n", 1, "not a number: '1_0'"),

@@ -308,9 +308,11 @@ class Decoder:
         while len(self._chunks) > CACHED_CHUNKS:
             self._chunks.popitem(last=False)
 
-    def _corrected(self, number: int, part: SegmentFactors, local: np.ndarray) -> np.ndarray:
+    def _corrected(
+        self, number: int, part: SegmentFactors, local: np.ndarray, out: np.ndarray | None = None
+    ) -> np.ndarray:
         """Frames ``local`` (numbers within the segment) of a file with corrections: §8.1's
-        exact reconstruction, corrected chunk by chunk (§6.9)."""
+        exact reconstruction, corrected chunk by chunk (§6.9), written to ``out`` if given."""
         layout = part.corrections
         assert layout is not None and part.exact_u1 is not None and part.exact_basis is not None
         with self._naming_path(), np.errstate(over="ignore", invalid="ignore"):
@@ -322,7 +324,7 @@ class Decoder:
                 layout.exponent,
                 f"section {part.residual_id}",
             )
-        out = np.empty_like(exact)
+        out = np.empty_like(exact) if out is None else out
         chunks = local // layout.span
         needed = np.unique(chunks).tolist()
         payload = (
@@ -337,12 +339,14 @@ class Decoder:
             values = self._chunks.get((number, chunk))
             if values is None:
                 values = self._chunk(part, chunk, payload)
-            rows = np.flatnonzero(chunks == chunk)
+            indices = np.flatnonzero(chunks == chunk)
             start, _ = layout.chunk_range(chunk)
+            taken = _run_or_indices(local[indices] - start)
+            rows = _run_or_indices(indices)  # the usual case: runs of frames, views not copies
             with self._naming_path():
                 out[rows] = residual.correct(
                     exact[rows],
-                    values[local[rows] - start],
+                    values[taken],
                     layout.kind,
                     f"section {part.residual_id}",
                 )
@@ -462,7 +466,11 @@ class Decoder:
             # Overflow is a property of the file, reported below as R36: numpy must not warn
             # (or, under np.seterr(all="raise"), raise FloatingPointError) before that check.
             if part.corrections is not None:
-                positions[picked] = self._corrected(number, part, local)
+                run = _run_or_indices(picked)
+                if isinstance(run, slice):  # written where it goes
+                    self._corrected(number, part, local, out=positions[run])
+                else:
+                    positions[picked] = self._corrected(number, part, local)
                 continue
             with np.errstate(over="ignore", invalid="ignore"):
                 if picked[-1] - picked[0] == picked.size - 1:  # a run: written where it goes
@@ -516,6 +524,15 @@ def selected_time_codes(info: FileInfo, chosen: np.ndarray) -> np.ndarray | None
     if info.time_codes is not None:
         return np.asarray(info.time_codes, dtype=np.float64)[chosen]
     return np.asarray(chosen, dtype=np.float64) if chosen.size < info.frames else None
+
+
+def _run_or_indices(indices: np.ndarray) -> slice | np.ndarray:
+    """``indices`` as a slice when they are a run (each one more than the one before), for
+    views instead of copies; else the indices themselves."""
+    if indices.size and (indices.size == 1 or bool((np.diff(indices) == 1).all())):
+        first = int(indices[0])
+        return slice(first, first + indices.size)
+    return indices
 
 
 def _frame_numbers(frames: int | Sequence[int] | np.ndarray) -> list[int]:

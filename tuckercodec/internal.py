@@ -28,6 +28,8 @@ package sees at once what the tools rely on.
   work both zarr codecs share, without zarr or numcodecs (the fuzzer's door into the codec).
 * Sample data: :func:`sample_path`, and the synthetic :func:`wave_sheet` with its
   :func:`sheet_triangles`.
+* The compiled core's switch, :mod:`~tuckercodec.system.native` (``native.core()``, and
+  ``native.pure_python()`` to run the reference), for the differential test of the two.
 * Defaults the benchmarks offer as their own: :data:`DEFAULT_TARGET_KG` (the encoder's KG
   target) and :func:`default_max_memory` (half the machine's memory, what an encode may use).
 """
@@ -57,6 +59,7 @@ from .measures.distortion import KG_DEFINITION, MAX_DISTANCE_DEFINITION, max_dis
 from .measures.perceptual import STED_DEFINITION
 from .model.topology import mesh_parents, mesh_prediction
 from .reports.plots import plot_rd_curve, pyplot, save_figure
+from .system import native
 from .system.atomic import refuse_existing, write_atomic
 from .system.memory import default_max_memory
 from .zarr_codec.chunk import chunk_mode, decode_chunk, encode_chunk
@@ -81,6 +84,7 @@ __all__ = [
     "max_distance",
     "mesh_parents",
     "mesh_prediction",
+    "native",
     "pack_container",
     "pack_raw",
     "parse_container",

@@ -70,7 +70,7 @@ def outcome(data: bytes) -> tuple[Any, ...]:
 
 def both(data: bytes) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
     """``(compiled core's outcome, pure Python's outcome)`` on one input."""
-    from tuckercodec.system import native
+    from tuckercodec.internal import native
 
     compiled = outcome(data)
     with native.pure_python():
@@ -98,7 +98,7 @@ def mutations(seeds: list[bytes], count: int, seed: int) -> list[bytes]:
 def compare(count: int, seed: int, failures_kept: int = 20) -> dict[str, Any]:
     """Run the seeds and ``count`` mutations through both implementations; a summary with the
     verdicts counted and the first disagreements (``failures``: empty when all agree)."""
-    from tuckercodec.system import native
+    from tuckercodec.internal import native
 
     if native.core() is None:
         return {"failures": [f"no compiled core to compare: {native.describe()}"]}

@@ -16,6 +16,7 @@ see :mod:`tuckercodec.measures.distortion`.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Literal, get_args
 
@@ -23,6 +24,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..model.sequence import MeshSequence
+from ..system import native
 from .hosvd import HOSVD, centre_frames, hosvd
 
 Selection = Literal["exact", "bound"]
@@ -273,15 +275,19 @@ def analyze(sequence: MeshSequence | np.ndarray) -> Analysis:
         raise InputError(
             f"a sequence needs at least one frame and one vertex, got {vertices.shape}"
         )
-    if not np.isfinite(vertices).all():
+    # one pass: the largest |coordinate| is NaN or infinite where a coordinate is
+    largest = _max_abs(vertices) if vertices.dtype == np.float64 else None
+    if not (np.isfinite(vertices).all() if largest is None else math.isfinite(largest)):
         raise InputError("the positions contain a non-finite coordinate")
     with np.errstate(over="ignore"):
-        if not np.isfinite(np.square(vertices).sum()):
+        # the squares sum to at most size * largest**2: summed only where that could overflow
+        could_overflow = largest is None or largest * largest * vertices.size > 1e300
+        if could_overflow and not np.isfinite(np.square(vertices).sum()):
             raise InputError(
                 "the coordinates are too large: their squared norm overflows float64 (rescale them)"
             )
     tensor, centroids = centre_frames(vertices)
-    _check_resolvable(vertices, tensor)
+    _check_resolvable(vertices, tensor, largest)
     return Analysis(hosvd(tensor), centroids)
 
 
@@ -291,10 +297,13 @@ SMALLEST_COORDINATE = 1e-140
 SMALLEST_RELATIVE_SHAPE = 1e-11
 
 
-def _check_resolvable(vertices: np.ndarray, tensor: np.ndarray) -> None:
-    """Refuse positions whose shape float64 cannot resolve, with a message that says why."""
-    largest = float(np.abs(vertices).max())
-    spread = float(np.abs(tensor).max())  # the farthest vertex from its frame's centroid
+def _check_resolvable(
+    vertices: np.ndarray, tensor: np.ndarray, largest: float | None = None
+) -> None:
+    """Refuse positions whose shape float64 cannot resolve, with a message that says why
+    (``largest``: the largest |coordinate|, if known)."""
+    largest = _max_abs(vertices) if largest is None else largest
+    spread = _max_abs(tensor)  # the farthest vertex from its frame's centroid
     if spread == 0.0:
         return  # every frame exactly a point: Analysis names the zero KG denominator
     if largest < SMALLEST_COORDINATE:
@@ -308,6 +317,20 @@ def _check_resolvable(vertices: np.ndarray, tensor: np.ndarray) -> None:
             f"{spread:.3g} from its frame's centroid, while the coordinates reach {largest:.3g}, "
             "so the shape that the KG error measures is rounding noise"
         )
+
+
+def _max_abs(values: np.ndarray) -> float:
+    """``np.abs(values).max()`` (exact in any order), in one pass without a temporary where
+    the compiled core runs."""
+    core = native.core()
+    if (
+        core is not None
+        and values.size
+        and values.dtype == np.float64
+        and values.flags.c_contiguous
+    ):
+        return float(core.max_abs(values))
+    return float(np.abs(values).max())
 
 
 def _tail_sums(values: np.ndarray) -> np.ndarray:

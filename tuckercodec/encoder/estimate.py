@@ -21,6 +21,7 @@ import numpy as np
 from ..format import qmat
 from ..format.prediction import mean_residuals, residuals
 from ..model.topology import MeshPrediction
+from ..system import native
 from .trial import QuantizedSegment
 
 #: Zigzag residuals counted by their own histogram entry; larger ones are escapes.
@@ -33,17 +34,28 @@ def entropy_bits(stream: np.ndarray) -> float:
     rows, cols = stream.shape
     if stream.size == 0:
         return 0.0
+    core = native.core()
+    if core is not None and stream.dtype == np.int64:
+        counts, escaped = core.entropy_counts(np.ascontiguousarray(stream), TABLE_SIZE)
+    else:
+        counts, escaped = _entropy_counts(stream)
+    seen = counts.astype(np.float64)
+    # sum over columns of -sum c log2(c / rows) = rows log2(rows) per column - sum c log2 c
+    bits = cols * rows * np.log2(rows) - float(seen @ np.log2(seen))
+    if escaped.size:
+        bits += float(2.0 * np.log2(escaped / TABLE_SIZE).sum())
+    return float(bits)
+
+
+def _entropy_counts(stream: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The integers :func:`entropy_bits` sums: the nonzero counts of the columns' histograms
+    (column after column) and the zigzag values past the table, in row-major order."""
+    cols = stream.shape[1]
     zig = (stream << 1) ^ (stream >> 63)  # streams.zigzag, kept signed
     clipped = np.minimum(zig, TABLE_SIZE)
     clipped += np.arange(cols, dtype=np.int64)[None, :] * (TABLE_SIZE + 1)
     counts = np.bincount(clipped.reshape(-1), minlength=cols * (TABLE_SIZE + 1))
-    seen = counts[counts > 0].astype(np.float64)
-    # sum over columns of -sum c log2(c / rows) = rows log2(rows) per column - sum c log2 c
-    bits = cols * rows * np.log2(rows) - float(seen @ np.log2(seen))
-    escaped = zig[zig >= TABLE_SIZE]
-    if escaped.size:
-        bits += float(2.0 * np.log2(escaped / TABLE_SIZE).sum())
-    return float(bits)
+    return counts[counts > 0], zig[zig >= TABLE_SIZE]
 
 
 class U1Predictors:

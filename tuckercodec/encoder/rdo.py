@@ -32,12 +32,14 @@ The result is deterministic (pure numpy, ties to the nearest integer).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from ..format import qmat
 from ..format.prediction import tree_depths
 from ..format.qmat import QuantizedMatrix
+from ..system import native
 
 #: Rate weight (step**2 per bit) used by the encoder; ``None`` in :class:`Settings` turns RDO off.
 DEFAULT_LAMBDA = 0.05
@@ -74,6 +76,8 @@ class Levels:
         self.parents = np.asarray(parents, dtype=np.int64)
         depth = tree_depths(self.parents)
         order = np.argsort(depth, kind="stable")
+        #: every row once, the levels one after the other: each row after its parent
+        self.order = np.ascontiguousarray(order, dtype=np.int64)
         ends = np.cumsum(np.bincount(depth, minlength=int(depth.max(initial=0)) + 1))
         self.groups = [
             order[start:end] for start, end in zip(np.r_[0, ends[:-1]], ends, strict=True)
@@ -131,6 +135,11 @@ def _quantize_block(
     nearest = qmat.quantize(values, steps)  # checks the steps and the integer range
     if settings.lam is None or nearest.q.size == 0:
         return nearest
+    core = native.core()
+    if core is not None and settings.dead_zone is None:
+        return QuantizedMatrix(
+            _native_choice(core, values, nearest, levels, settings), nearest.steps
+        )
     scaled = values / nearest.steps.astype(np.float64)[None, :]
     low = np.floor(scaled)
     error_low = np.square(scaled - low)
@@ -145,6 +154,28 @@ def _quantize_block(
         table = _bit_table(_residuals(q, levels, predicted))
         q = _choose(low, error_low, error_high, table, levels, predicted, settings.lam)
     return QuantizedMatrix(q, nearest.steps)
+
+
+def _native_choice(
+    core: Any, values: np.ndarray, nearest: QuantizedMatrix, levels: Levels, settings: Settings
+) -> np.ndarray:
+    """The passes of :func:`_quantize_block` in the compiled core: the same integers (the
+    bit tables, float sums whose order numpy decides, are made here from the core's counts)."""
+    assert settings.lam is not None
+    q = np.ascontiguousarray(nearest.q, dtype=np.int64)
+    if q.shape[1] > 1:
+        predicted = core.rdo_predicted_columns(q, levels.parents)
+    else:  # numpy sums a single column pairwise: the reference decides it
+        predicted = _predicted_columns(q, levels)
+    predicted = np.ascontiguousarray(predicted, dtype=bool)
+    values = np.ascontiguousarray(values, dtype=np.float64)
+    steps = np.ascontiguousarray(nearest.steps, dtype=np.float64)
+    for _ in range(settings.passes):
+        table = _bits_of_counts(core.rdo_residual_counts(q, levels.parents, predicted, TABLE_SIZE))
+        q = core.rdo_choose(
+            values, steps, levels.parents, levels.order, predicted, table, settings.lam
+        )
+    return np.asarray(q)
 
 
 def _dead_zone(
@@ -186,11 +217,21 @@ def _predicted_columns(q: np.ndarray, levels: Levels) -> np.ndarray:
 def _bit_table(residual: np.ndarray) -> np.ndarray:
     """(cols, TABLE_SIZE + 1) bits of each zigzag residual per column; the last entry is the
     escape's base cost, to which larger residuals add 2 log2 of their size over the table's."""
+    return _bits_of_counts(_residual_counts(residual))
+
+
+def _residual_counts(residual: np.ndarray) -> np.ndarray:
+    """(cols, TABLE_SIZE + 1) counts of each column's zigzag residuals, clipped to the table."""
     cols = residual.shape[1]
     zig = np.minimum(_zigzag(residual), TABLE_SIZE)
     zig += np.arange(cols) * (TABLE_SIZE + 1)  # one histogram per column, side by side
-    counts = np.bincount(zig.reshape(-1), minlength=cols * (TABLE_SIZE + 1)).astype(np.float64)
-    counts = counts.reshape(cols, TABLE_SIZE + 1)
+    counts = np.bincount(zig.reshape(-1), minlength=cols * (TABLE_SIZE + 1))
+    return counts.reshape(cols, TABLE_SIZE + 1)
+
+
+def _bits_of_counts(counts: np.ndarray) -> np.ndarray:
+    """:func:`_bit_table` from the histograms of :func:`_residual_counts`."""
+    counts = counts.astype(np.float64)
     # Laplace-style smoothing keeps an unseen residual finite but dear
     counts += 0.05
     bits: np.ndarray = np.log2(counts.sum(axis=1, keepdims=True)) - np.log2(counts)

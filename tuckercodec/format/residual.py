@@ -19,7 +19,8 @@ from typing import Any, NoReturn
 
 import numpy as np
 
-from ..errors import FormatError
+from ..errors import FormatError, InternalError
+from ..system import native
 from . import streams
 from .limits import Limits, check_limit
 
@@ -293,8 +294,11 @@ def exact_frames(
     i = u1.integers.shape[1]
     product = u1.integers @ weights.transpose(1, 0, 2).reshape(i, 3 * n)  # (K, 3n), exact
     positions = product.reshape(-1, n, 3).transpose(1, 0, 2)
+    out = np.empty(positions.shape)  # frame-major, so that a run of frames is a view
     with np.errstate(over="ignore", invalid="ignore"):
-        return positions * (2.0**exponent) + centroid_rows[:, None, :]
+        np.multiply(positions, 2.0**exponent, out=out)
+        out += centroid_rows[:, None, :]
+    return out
 
 
 # -- the section's layout (§6.9 parameters) ----------------------------------------------------
@@ -483,8 +487,19 @@ def decode_chunk(
     count = (stop - start) * vertices * 3
     planes = layout.planes[chunk]
     piece = payload[layout.offsets[chunk] : layout.offsets[chunk + 1]]
+    field = f"{where}.chunks[{chunk}]"
+    core = native.core()
+    if core is not None:  # the planes, the zigzag and the prediction in one pass
+        raw = streams.decompress_exact(piece, count * planes, field)
+        try:
+            restored = core.residual_restore_chunk(
+                raw, count, planes, layout.predict == 1, vertices * 3
+            )
+        except core.Broken as error:  # the frame held count * planes bytes: unreachable
+            raise InternalError(f"{field}: {error.args[1]}") from None
+        return restored.reshape(stop - start, vertices, 3)
     # in place, a block at a time: the chunk's integers are the one array of its size
-    values = streams.unpack_integers(piece, count, planes, f"{where}.chunks[{chunk}]")
+    values = streams.unpack_integers(piece, count, planes, field)
     values = values.reshape(stop - start, vertices, 3)
     if layout.predict == 1:
         np.cumsum(values, axis=0, out=values)  # int64 addition wraps, as §6.9 wraps
@@ -496,6 +511,9 @@ def correct(exact: np.ndarray, residual: np.ndarray, domain: Domain, where: str)
     ``residual`` (e), R41 checked. In the domains grid and float64 a P that is not finite
     stays so (the decoder reports it as R36, as for any file); in float32 it rounds to
     +-infinity, which e may bring back."""
+    core = native.core()
+    if core is not None and exact.shape == residual.shape:
+        return _native_correct(core, exact, residual, domain, where)
     with np.errstate(over="ignore", invalid="ignore"):
         if domain.name == FLOAT32:
             if _beyond(residual, FLOAT32_LARGEST):
@@ -522,6 +540,34 @@ def correct(exact: np.ndarray, residual: np.ndarray, domain: Domain, where: str)
         out = np.full(exact.shape, np.nan)
         out[finite] = from_ordered64(ordered)
         return out
+
+
+def _native_correct(
+    core: Any, exact: np.ndarray, residual: np.ndarray, domain: Domain, where: str
+) -> np.ndarray:
+    """:func:`correct` in the compiled core: the same values, and the same R41 first."""
+    name, step, scale = domain.name, float(domain.step or 0.0), int(domain.scale or 0)
+    try:
+        return _in_memory_order(
+            lambda flat, integers: core.residual_correct(flat, integers, name, step, scale),
+            exact,
+            residual,
+        )
+    except core.Broken as error:
+        _value_error(where, error.args[1])
+
+
+def _in_memory_order(compute: Any, values: np.ndarray, *more: np.ndarray) -> np.ndarray:
+    """``compute`` (a map of the compiled core, value by value, on flat contiguous arrays) on
+    ``values`` (float64) and ``more`` (int64, of the same shape), taken in the order of
+    ``values``' memory: positions made by a transposed product would cost a transposed copy
+    in C order. The result has the shape, and the layout, of ``values``."""
+    axes = np.argsort([-abs(stride) for stride in values.strides], kind="stable")
+    permuted = values.transpose(axes)
+    flats: list[np.ndarray] = [np.ascontiguousarray(permuted, dtype=np.float64).reshape(-1)]
+    flats += [np.ascontiguousarray(m.transpose(axes), dtype=np.int64).reshape(-1) for m in more]
+    result: np.ndarray = compute(*flats).reshape(permuted.shape).transpose(np.argsort(axes))
+    return result
 
 
 def _beyond(values: np.ndarray, limit: int) -> bool:
@@ -580,6 +626,12 @@ CHUNK_VALUES = 1 << 20
 
 def ordered_in(values: np.ndarray, domain: Domain) -> np.ndarray:
     """The ordered integers of a lossless domain: what e is a difference of (§6.9)."""
+    core = native.core()
+    if core is not None:
+        name, scale = domain.name, int(domain.scale or 0)
+        return _in_memory_order(
+            lambda flat: core.residual_ordered(flat, name, scale), np.asarray(values)
+        )
     if domain.name == FLOAT32:
         with np.errstate(over="ignore"):
             return ordered32(values.astype(np.float32))
@@ -623,13 +675,8 @@ def encode_section(
         chunks: list[list[int]] = []
         payloads: list[bytes] = []
         for start in range(0, frames, chunk_frames):
-            values = residual[start : start + chunk_frames]
-            if choice == 1:
-                values = values.copy()
-                values[1:] -= residual[start : start + chunk_frames][:-1]  # wraps like e
-            unsigned = streams.zigzag(values.reshape(-1))
-            planes = streams.planes_needed(unsigned)
-            payload = streams.compress(streams.to_planes(unsigned, planes), level)
+            planes, raw = _chunk_planes(residual[start : start + chunk_frames], choice)
+            payload = streams.compress(raw, level)
             chunks.append([planes, len(payload)])
             payloads.append(payload)
         params = domain.params()
@@ -640,3 +687,20 @@ def encode_section(
             best = (params, body)
     assert best is not None
     return best
+
+
+def _chunk_planes(values: np.ndarray, predict: int) -> tuple[int, bytes]:
+    """A chunk's integers (n_c, K, 3) as §6.9 stores them before zstd: with ``predict`` 1 each
+    frame less the one before, zigzagged, in the fewest byte planes; ``(planes, bytes)``."""
+    core = native.core()
+    if core is not None:
+        frame_values = int(np.prod(values.shape[1:]))
+        flat = np.ascontiguousarray(values, dtype=np.int64).reshape(-1)
+        packed: tuple[int, bytes] = core.residual_pack_chunk(flat, predict == 1, frame_values)
+        return packed
+    if predict == 1:
+        values = values.copy()
+        values[1:] -= values[:-1].copy()  # wraps like e
+    unsigned = streams.zigzag(values.reshape(-1))
+    planes = streams.planes_needed(unsigned)
+    return planes, streams.to_planes(unsigned, planes)

@@ -557,7 +557,8 @@ def _number(token: bytes, path: Path, line: int) -> float:
     """A decimal number; nan and inf are returned so that the caller can say "non-finite"."""
     if _NUMBER.fullmatch(token):
         return float(token)
-    if token.lower().lstrip(b"+-") in _NON_FINITE:
+    unsigned = token[1:] if token[:1] in (b"+", b"-") else token  # one sign, as float() takes
+    if unsigned.lower() in _NON_FINITE:
         return float(token)
     raise InputError(f"not a number: {_short(token)!r}", path=path, line=line)
 

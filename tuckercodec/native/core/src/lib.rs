@@ -5,7 +5,9 @@
 //! saying the same thing as the Python reference (`tuckercodec/format/`), never a panic.
 #![forbid(unsafe_code)]
 
+pub mod encoder;
 pub mod error;
 pub mod fuzzing;
+pub mod residual;
 pub mod text;
 pub mod traversal;

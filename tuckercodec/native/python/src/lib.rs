@@ -11,6 +11,8 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use tuckercodec_core::error::Broken;
 
+mod encoder;
+mod residual;
 mod text;
 mod traversal;
 
@@ -38,5 +40,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(core_version, m)?)?;
     traversal::register(m)?;
     text::register(m)?;
+    residual::register(m)?;
+    encoder::register(m)?;
     Ok(())
 }

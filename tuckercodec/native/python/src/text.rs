@@ -13,7 +13,7 @@ create_exception!(
     _native,
     ObjError,
     PyValueError,
-    "An OBJ text the reader refuses: args (line or None, message, value_error)."
+    "An OBJ text the reader refuses: args (line or None, message)."
 );
 
 /// The `v x y z` lines of a (K, 3) float64 array, every number as Python's `repr` writes it.
@@ -68,7 +68,7 @@ type ParsedObj<'py> = (
 );
 
 /// Parses a whole OBJ text: `(vertices (K, 3) float64, faces (M, n) int64 or None, face_key
-/// bytes or None)`, or raises `ObjError(line, message, value_error)` with the reference's first
+/// bytes or None)`, or raises `ObjError(line, message)` with the reference's first
 /// error. Given the `face_key` and vertex count of an earlier frame, faces equal to that
 /// frame's are not parsed again: `None` in their place.
 #[pyfunction]
@@ -98,11 +98,7 @@ fn obj_parse<'py>(
             let key = frame.face_key.map(|key| PyBytes::new(py, &key));
             Ok((vertices.into_any(), faces, key))
         }
-        Err(error) => Err(ObjError::new_err((
-            error.line,
-            error.message,
-            error.value_error,
-        ))),
+        Err(error) => Err(ObjError::new_err((error.line, error.message))),
     }
 }
 

@@ -27,16 +27,12 @@ pub struct ObjError {
     /// The reference's message (the tokens quoted approximately where they are not printable
     /// ASCII, see [`quoted`]).
     pub message: String,
-    /// The reference raises a plain `ValueError` here (`float()` of a token such as `+-inf`,
-    /// which its check lets through), not an `InputError`.
-    pub value_error: bool,
 }
 
 fn error(line: u64, message: String) -> ObjError {
     ObjError {
         line: Some(line),
         message,
-        value_error: false,
     }
 }
 
@@ -288,7 +284,6 @@ fn finish(
         return Err(ObjError {
             line: None,
             message: "no vertices: the file has no 'v' lines".to_string(),
-            value_error: false,
         });
     }
     let face_count = face_starts.len();
@@ -457,26 +452,13 @@ fn number(token: &[u8], line: u64) -> Result<f64, ObjError> {
             .and_then(|t| t.parse::<f64>().ok());
         return parsed.ok_or_else(|| error(line, format!("not a number: {}", quoted(token))));
     }
-    let unsigned = {
-        let signs = token
-            .iter()
-            .take_while(|&&c| c == b'+' || c == b'-')
-            .count();
-        &token[signs..]
+    // one sign at most, as float() takes: "+-inf" is not a number
+    let unsigned = match token.first() {
+        Some(b'+' | b'-') => &token[1..],
+        _ => token,
     };
     let lower = unsigned.to_ascii_lowercase();
     if matches!(lower.as_slice(), b"nan" | b"inf" | b"infinity") {
-        if token.len() - unsigned.len() > 1 {
-            // the reference's float() refuses two signs with a ValueError
-            return Err(ObjError {
-                line: Some(line),
-                message: format!(
-                    "could not convert string to float: b'{}'",
-                    String::from_utf8_lossy(token)
-                ),
-                value_error: true,
-            });
-        }
         return Ok(if lower == b"nan" {
             f64::NAN
         } else {
