@@ -119,13 +119,77 @@ def recorded_traversals(calls: list[tuple[Any, ...]]) -> Iterator[None]:
         traversal.walk_streams = walk
 
 
+#: The domains of §6.9 in the order of the residual_correct framing's first byte.
+DOMAINS = (
+    "grid",
+    "float32",
+    "float64",
+    "decimal-places",
+    "decimal-digits",
+    "decimal-digits-float32",
+)
+#: The most (P, e) pairs a residual_correct seed keeps.
+MAX_PAIRS = 256
+
+
+def residual_restore_input(raw: bytes, count: int, planes: int, predict: bool, frame: int) -> bytes:
+    """A ``residual_restore`` input: flags, planes, count, frame values, the chunk's bytes."""
+    return bytes([int(predict), planes]) + varint(count) + varint(frame) + raw
+
+
+def residual_correct_input(exact: np.ndarray, residual: np.ndarray, domain: Any) -> bytes:
+    """A ``residual_correct`` input: the domain, its scale and step, (P, e) pairs."""
+    head = bytes([DOMAINS.index(domain.name), domain.scale or 0])
+    if domain.name == "grid":
+        head += struct.pack("<d", domain.step)
+    exact, residual = exact.reshape(-1)[:MAX_PAIRS], residual.reshape(-1)[:MAX_PAIRS]
+    pairs = zip(exact.tolist(), residual.tolist(), strict=True)
+    return head + b"".join(struct.pack("<d", p) + signed(e) for p, e in pairs)
+
+
+@contextmanager
+def recorded_corrections(seeds: dict[str, list[bytes]]) -> Iterator[None]:
+    """Records every chunk of corrections restored and every correction made inside the
+    block, as seeds of ``residual_restore`` and ``residual_correct``."""
+    from tuckercodec import internal
+
+    format_residual, streams = internal.residual, internal.streams
+    decode_chunk, correct = format_residual.decode_chunk, format_residual.correct
+
+    def recording_chunk(
+        payload: bytes | memoryview, layout: Any, chunk: int, vertices: int, where: str
+    ) -> np.ndarray:
+        start, stop = layout.chunk_range(chunk)
+        count, planes = (stop - start) * vertices * 3, layout.planes[chunk]
+        piece = payload[layout.offsets[chunk] : layout.offsets[chunk + 1]]
+        raw = streams.decompress_exact(piece, count * planes, where)
+        seeds.setdefault("residual_restore", []).append(
+            residual_restore_input(raw, count, planes, layout.predict == 1, vertices * 3)
+        )
+        return decode_chunk(payload, layout, chunk, vertices, where)
+
+    def recording_correct(
+        exact: np.ndarray, residual: np.ndarray, domain: internal.residual.Domain, where: str
+    ) -> np.ndarray:
+        seeds.setdefault("residual_correct", []).append(
+            residual_correct_input(exact, residual, domain)
+        )
+        return correct(exact, residual, domain, where)
+
+    format_residual.decode_chunk, format_residual.correct = recording_chunk, recording_correct
+    try:
+        yield
+    finally:
+        format_residual.decode_chunk, format_residual.correct = decode_chunk, correct
+
+
 def vector_seeds(path: Path) -> dict[str, list[bytes]]:
     """The seeds of one vector, by target."""
     import tuckercodec
 
     seeds: dict[str, list[bytes]] = {}
     calls: list[tuple[Any, ...]] = []
-    with recorded_traversals(calls):
+    with recorded_traversals(calls), recorded_corrections(seeds):
         try:
             mesh = tuckercodec.decode(path)
         except (tuckercodec.TuckerCodecError, ValueError):

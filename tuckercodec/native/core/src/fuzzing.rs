@@ -14,6 +14,7 @@
 //! 2, ...). Bytes read past the end of the input are 0. `tools/fuzz/native_seeds.py` writes
 //! the same framings from the conformance vectors.
 
+use crate::residual::{correct, pack_chunk, restore_chunk, Domain};
 use crate::text::float_repr::{repr, write_signed, write_unsigned};
 use crate::text::obj_read::{parse_obj, parse_obj_frame, KnownFaces, ObjMesh};
 use crate::text::obj_write::{face_text, vertex_text};
@@ -30,6 +31,8 @@ pub const TARGETS: &[(&str, Target)] = &[
     ("obj_parse", obj_parse),
     ("float_repr", float_repr),
     ("text_check", text_check),
+    ("residual_restore", residual_restore),
+    ("residual_correct", residual_correct),
 ];
 
 /// The most faces a decode is asked for, and the most rows an encode is given.
@@ -96,6 +99,11 @@ impl<'a> Framing<'a> {
             left -= 1;
         }
         values
+    }
+
+    /// The next 8 bytes as a little-endian `f64` (0 bytes past the end).
+    pub fn float(&mut self) -> f64 {
+        f64::from_le_bytes([0; 8].map(|_: u8| self.byte()))
     }
 
     /// The bytes not read yet.
@@ -432,6 +440,101 @@ fn text_is_fine(text: &[u8], limit: u64) -> bool {
         && text
             .split(|&c| c == b'\n' || c == b'\r')
             .all(|line| line.len() as u64 <= limit)
+}
+
+/// `residual::restore_chunk` of any bytes and shape, then `pack_chunk` of what it restores.
+/// Framing: a byte of flags (bit 0: `predict`; bit 1: `count` is the bytes' length / `planes`,
+/// the bytes cut to whole planes, else a varint `count` follows, at most 2**16 + 1); a byte `b`
+/// for `planes = b % 10` (0 and 9 are refused); a varint `frame_values` (at most 2**16 + 1);
+/// the rest is the decompressed chunk.
+///
+/// Checks: no panic; restored integers packed again take at most `planes` planes, restore to
+/// the same integers, and in exactly `planes` planes are the same bytes.
+pub fn residual_restore(data: &[u8]) {
+    let mut input = Framing::new(data);
+    let flags = input.byte();
+    let predict = flags & 1 != 0;
+    let planes = usize::from(input.byte() % 10);
+    let whole_planes = flags & 2 != 0;
+    let count = if whole_planes {
+        0
+    } else {
+        input.varint().min(MAX_COUNT + 1) as usize
+    };
+    let frame_values = input.varint().min(MAX_COUNT + 1) as usize;
+    let mut raw = input.rest();
+    let count = if whole_planes {
+        let count = raw.len() / planes.max(1);
+        raw = &raw[..count * planes.min(8)];
+        count
+    } else {
+        count
+    };
+    let Ok(values) = restore_chunk(raw, count, planes, predict, frame_values) else {
+        return;
+    };
+    assert_eq!(values.len(), count);
+    let (packed_planes, packed) = pack_chunk(&values, predict, frame_values).expect("packs");
+    assert!(
+        packed_planes <= planes,
+        "{packed_planes} planes for {planes}"
+    );
+    let again = restore_chunk(&packed, count, packed_planes, predict, frame_values);
+    assert_eq!(again.as_ref(), Ok(&values), "packed and restored");
+    if packed_planes == planes {
+        assert_eq!(
+            packed, raw,
+            "the same integers in as many planes, other bytes"
+        );
+    }
+}
+
+/// `residual::correct` of any positions and corrections in any domain. Framing: a byte `d` for
+/// the domain (`d % 6`: grid, float32, float64, decimal-places, decimal-digits,
+/// decimal-digits-float32); a byte `s` for the scale (`s % 23` places, `1 + s % 15` digits); a
+/// grid's step as 8 bytes (a little-endian `f64`, any value); then pairs of a position P (8
+/// bytes, `f64`) and a correction e (signed varint), at most 2**16 pairs.
+///
+/// Checks: no panic; outputs as many as inputs; in the lossless domains, corrected values that
+/// are all finite are the domain's own: corrected again by zeros, they stay the same bits.
+pub fn residual_correct(data: &[u8]) {
+    let mut input = Framing::new(data);
+    let kind = input.byte() % 6;
+    let scale = u32::from(input.byte());
+    let domain = match kind {
+        0 => Domain::Grid {
+            step: input.float(),
+        },
+        1 => Domain::Float32,
+        2 => Domain::Float64,
+        3 => Domain::Places { places: scale % 23 },
+        4 => Domain::Digits {
+            digits: 1 + scale % 15,
+        },
+        _ => Domain::Digits32 {
+            digits: 1 + scale % 15,
+        },
+    };
+    let mut exact = Vec::new();
+    let mut residual = Vec::new();
+    while !input.is_empty() && (exact.len() as u64) < MAX_COUNT {
+        exact.push(input.float());
+        residual.push(input.signed());
+    }
+    let mut out = vec![0.0; exact.len()];
+    let Ok(()) = correct(&exact, &residual, domain, &mut out) else {
+        return;
+    };
+    if matches!(domain, Domain::Grid { .. }) || !out.iter().all(|v| v.is_finite()) {
+        return;
+    }
+    let zeros = vec![0; out.len()];
+    let mut again = vec![0.0; out.len()];
+    correct(&out, &zeros, domain, &mut again).expect("a domain's values, corrected by zeros");
+    assert!(
+        same_vertices(&again, &out),
+        "{domain:?}: corrected by zeros, moved"
+    );
 }
 
 #[cfg(test)]
