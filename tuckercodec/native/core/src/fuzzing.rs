@@ -495,8 +495,11 @@ pub fn residual_restore(data: &[u8]) {
 /// grid's step as 8 bytes (a little-endian `f64`, any value); then pairs of a position P (8
 /// bytes, `f64`) and a correction e (signed varint), at most 2**16 pairs.
 ///
-/// Checks: no panic; outputs as many as inputs; in the lossless domains, corrected values that
-/// are all finite are the domain's own: corrected again by zeros, they stay the same bits.
+/// Checks: no panic; in the lossless domains whose values are binary64 (float32, float64,
+/// decimal-places, decimal-digits), corrected values that are all finite are the domain's
+/// own: corrected again by zeros, they stay the same bits. (Not in decimal-digits-float32: its
+/// values are binary32 roundings, and one just below a power of ten, such as the binary32 of
+/// 1e-20, has the ordered integer of the decimal below it, as §6.9 defines it.)
 pub fn residual_correct(data: &[u8]) {
     let mut input = Framing::new(data);
     let kind = input.byte() % 6;
@@ -525,7 +528,8 @@ pub fn residual_correct(data: &[u8]) {
     let Ok(()) = correct(&exact, &residual, domain, &mut out) else {
         return;
     };
-    if matches!(domain, Domain::Grid { .. }) || !out.iter().all(|v| v.is_finite()) {
+    let binary64 = !matches!(domain, Domain::Grid { .. } | Domain::Digits32 { .. });
+    if !binary64 || !out.iter().all(|v| v.is_finite()) {
         return;
     }
     let zeros = vec![0; out.len()];
