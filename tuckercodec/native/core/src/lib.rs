@@ -6,3 +6,5 @@
 #![forbid(unsafe_code)]
 
 pub mod error;
+pub mod prediction;
+pub mod streams;

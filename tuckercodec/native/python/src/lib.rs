@@ -6,6 +6,9 @@
 //! `FormatError` of that rule (tuckercodec/system/native.py).
 #![forbid(unsafe_code)]
 
+mod prediction;
+mod streams;
+
 use pyo3::create_exception;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -33,5 +36,7 @@ fn core_version() -> &'static str {
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("Broken", m.py().get_type::<NativeBroken>())?;
     m.add_function(wrap_pyfunction!(core_version, m)?)?;
+    prediction::register(m)?;
+    streams::register(m)?;
     Ok(())
 }
