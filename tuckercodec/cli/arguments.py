@@ -145,8 +145,9 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=f"Errors are KG errors in percent: {KG_DEFINITION}.",
     )
     parser.add_argument(
-        "--version", action=_VersionAction, help="print the version, and whether the compiled "
-        "core or pure Python runs, and exit"
+        "--version",
+        action=_VersionAction,
+        help="print the version, and whether the compiled core or pure Python runs, and exit",
     )
     verbs = parser.add_subparsers(dest="verb", metavar="VERB")
     verbs.required = True

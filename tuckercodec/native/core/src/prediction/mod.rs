@@ -48,7 +48,8 @@ pub struct MeanPlan {
     pub pointers: Vec<usize>,
     pub columns: Vec<u32>,
     pub weights: Vec<f64>,
-    /// The number of vertices every index lies below.
+    /// Every index lies below this (the mesh's vertex count): the columns restored must have
+    /// at least this many values.
     pub vertex_count: usize,
     /// The float path is exact (no row has `FLOAT_SOURCES` sources or more).
     pub exact_in_float: bool,
@@ -198,9 +199,9 @@ impl MeanPlan {
         column: &mut [i64],
         scratch: &mut Vec<f64>,
     ) -> Result<(), PredictionError> {
-        if column.len() != self.vertex_count {
+        if column.len() < self.vertex_count {
             return Err(format!(
-                "a column of {} values, not {}",
+                "a column of {} values, fewer than the {} the steps index",
                 column.len(),
                 self.vertex_count
             ));
@@ -292,9 +293,13 @@ impl MeanPlan {
         values: &[i64],
         width: usize,
     ) -> Result<Option<Vec<i64>>, PredictionError> {
-        if values.len() != self.vertex_count.saturating_mul(width) {
+        if width == 0 {
+            return Ok(Some(Vec::new()));
+        }
+        let height = values.len() / width;
+        if values.len() % width != 0 || height < self.vertex_count {
             return Err(format!(
-                "a matrix of {} values, not {} x {width}",
+                "a matrix of {} values in rows of {width}, fewer rows than the {} the steps index",
                 values.len(),
                 self.vertex_count
             ));
@@ -322,7 +327,7 @@ impl MeanPlan {
                 }
             }
         } else {
-            let mut column = vec![0i64; self.vertex_count];
+            let mut column = vec![0i64; height];
             for c in 0..width {
                 for (v, slot) in column.iter_mut().enumerate() {
                     *slot = values[v * width + c];
