@@ -43,14 +43,61 @@ pub fn unpack_planes(raw: &[u8], count: usize, planes: usize) -> Result<Vec<i64>
             format!("the zstd frame holds {} bytes, not {shape}", raw.len()),
         ));
     }
-    let mut out = vec![0u64; count];
-    for (plane, bytes) in raw.chunks_exact(count.max(1)).enumerate().take(planes) {
-        let shift = 8 * plane as u32;
-        for (value, &byte) in out.iter_mut().zip(bytes) {
-            *value |= u64::from(byte) << shift;
+    Ok(match planes {
+        1 => gather::<1>(raw, count),
+        2 => gather::<2>(raw, count),
+        3 => gather::<3>(raw, count),
+        4 => gather::<4>(raw, count),
+        5 => gather::<5>(raw, count),
+        6 => gather::<6>(raw, count),
+        7 => gather::<7>(raw, count),
+        _ => gather::<8>(raw, count),
+    })
+}
+
+/// Values handled at once by [`gather`] and [`scatter`]: a piece of every plane and of the
+/// values, small enough to stay in the first-level cache.
+const PIECE: usize = 4096;
+
+/// The values of `PLANES` planes of `count` bytes (`raw` holds exactly them), unzigzagged: a
+/// piece of the values at a time, each plane added to it in turn.
+fn gather<const PLANES: usize>(raw: &[u8], count: usize) -> Vec<i64> {
+    let mut out = vec![0i64; count];
+    let mut unsigned = [0u64; PIECE];
+    for (index, piece) in out.chunks_mut(PIECE).enumerate() {
+        let offset = index * PIECE;
+        let unsigned = &mut unsigned[..piece.len()];
+        unsigned.fill(0);
+        for plane in 0..PLANES {
+            let start = plane * count + offset;
+            let bytes = &raw[start..start + piece.len()];
+            for (value, &byte) in unsigned.iter_mut().zip(bytes) {
+                *value |= u64::from(byte) << (8 * plane);
+            }
+        }
+        for (out, &value) in piece.iter_mut().zip(unsigned.iter()) {
+            *out = unzigzag(value);
         }
     }
-    Ok(out.into_iter().map(unzigzag).collect())
+    out
+}
+
+/// The `PLANES` byte planes of `values` after zigzag: a piece of the values at a time, each
+/// plane's bytes of it in turn.
+fn scatter<const PLANES: usize>(values: &[i64]) -> Vec<u8> {
+    let count = values.len();
+    let mut out = vec![0u8; count * PLANES];
+    for (index, piece) in values.chunks(PIECE).enumerate() {
+        let offset = index * PIECE;
+        for plane in 0..PLANES {
+            let start = plane * count + offset;
+            let bytes = &mut out[start..start + piece.len()];
+            for (byte, &value) in bytes.iter_mut().zip(piece) {
+                *byte = (zigzag(value) >> (8 * plane)) as u8;
+            }
+        }
+    }
+    out
 }
 
 /// `(planes, bytes)` of integers in stream order: zigzag, the fewest byte planes (at least 1)
@@ -60,15 +107,17 @@ pub fn pack_planes(values: &[i64]) -> (usize, Vec<u8>) {
     let largest = values.iter().map(|&v| zigzag(v)).max().unwrap_or(0);
     let bits = 64 - largest.leading_zeros() as usize;
     let planes = bits.div_ceil(8).max(1);
-    let count = values.len();
-    let mut out = vec![0u8; count * planes];
-    for (plane, bytes) in out.chunks_exact_mut(count.max(1)).enumerate().take(planes) {
-        let shift = 8 * plane as u32;
-        for (byte, &value) in bytes.iter_mut().zip(values) {
-            *byte = (zigzag(value) >> shift) as u8;
-        }
-    }
-    (planes, out)
+    let raw = match planes {
+        1 => scatter::<1>(values),
+        2 => scatter::<2>(values),
+        3 => scatter::<3>(values),
+        4 => scatter::<4>(values),
+        5 => scatter::<5>(values),
+        6 => scatter::<6>(values),
+        7 => scatter::<7>(values),
+        _ => scatter::<8>(values),
+    };
+    (planes, raw)
 }
 
 #[cfg(test)]
@@ -133,5 +182,23 @@ mod tests {
         assert_eq!(unpack_planes(&[], 0, 9).unwrap_err().rule, "R30-planes");
         assert!(unpack_planes(&[0; 3], usize::MAX, 2).is_err());
         assert_eq!(unpack_planes(&[], 0, 3).unwrap(), Vec::<i64>::new());
+    }
+}
+#[cfg(test)]
+mod probe {
+    #[test]
+    #[ignore]
+    fn timing_probe() {
+        let values: Vec<i64> = (0..1_000_000i64)
+            .map(|i| (i * 7919) % 100_000 - 50_000)
+            .collect();
+        let (planes, raw) = super::pack_planes(&values);
+        for _ in 0..5 {
+            let t = std::time::Instant::now();
+            let out = super::unpack_planes(&raw, values.len(), planes).unwrap();
+            let a = t.elapsed();
+            let _ = super::pack_planes(&out);
+            eprintln!("{planes} {:?} {:?}", a, t.elapsed());
+        }
     }
 }

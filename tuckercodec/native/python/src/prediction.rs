@@ -152,14 +152,8 @@ impl MeanPlan {
     ) -> PyResult<()> {
         let height = columns.shape()[1];
         let flat = columns.as_slice_mut()?;
-        py.detach(|| {
-            let mut scratch = Vec::new();
-            for column in flat.chunks_exact_mut(height.max(1)) {
-                self.plan.restore_column(column, &mut scratch)?;
-            }
-            Ok(())
-        })
-        .map_err(value_error)
+        py.detach(|| self.plan.restore_columns(flat, height))
+            .map_err(value_error)
     }
 
     /// `mean_residuals` of a C-contiguous (K, cols) int64 array: a new array, or `None` if a

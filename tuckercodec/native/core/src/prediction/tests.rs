@@ -41,16 +41,17 @@ fn restore_inverts_residuals_in_float_and_in_int64() {
     let mut integer = plan.clone();
     integer.exact_in_float = false;
     assert_eq!(integer.residuals(&values, 3).unwrap().unwrap(), residual);
-    let mut scratch = Vec::new();
-    for c in 0..3 {
-        let mut column: Vec<i64> = (0..count).map(|v| residual[v * 3 + c]).collect();
-        let mut other = column.clone();
-        plan.restore_column(&mut column, &mut scratch).unwrap();
-        integer.restore_column(&mut other, &mut scratch).unwrap();
-        let expected: Vec<i64> = (0..count).map(|v| values[v * 3 + c]).collect();
-        assert_eq!(column, expected);
-        assert_eq!(other, expected);
-    }
+    let transpose = |m: &[i64]| -> Vec<i64> {
+        (0..3)
+            .flat_map(|c| (0..count).map(move |v| m[v * 3 + c]))
+            .collect()
+    };
+    let mut columns = transpose(&residual);
+    let mut other = columns.clone();
+    plan.restore_columns(&mut columns, count).unwrap();
+    integer.restore_columns(&mut other, count).unwrap();
+    assert_eq!(columns, transpose(&values));
+    assert_eq!(other, transpose(&values));
 }
 
 #[test]
@@ -59,12 +60,13 @@ fn out_of_range_is_refused() {
     let plan = plan_of(&faces, 4, count);
     let mut column = vec![1i64 << 31; count];
     assert_eq!(
-        plan.restore_column(&mut column, &mut Vec::new())
-            .unwrap_err(),
+        plan.restore_columns(&mut column, count).unwrap_err(),
         MEAN_RANGE
     );
     let mut short = vec![0i64; count - 1];
-    assert!(plan.restore_column(&mut short, &mut Vec::new()).is_err());
+    assert!(plan.restore_columns(&mut short, count - 1).is_err());
+    assert!(plan.restore_columns(&mut short, count).is_err());
+    assert!(plan.restore_columns(&mut [], count).is_ok());
     let too_large = vec![MEAN_LIMIT + 1; count];
     assert_eq!(plan.residuals(&too_large, 1).unwrap(), None);
 }
@@ -105,4 +107,56 @@ fn linear_limits() {
     );
     let mut high = vec![LINEAR_LIMIT, LINEAR_LIMIT];
     assert_eq!(linear_accumulate(&mut high, 1).unwrap_err(), LINEAR_RANGE);
+}
+
+#[test]
+#[ignore]
+fn timing_probe() {
+    let (faces, count) = grid(300);
+    let forest = Forest::new(&faces, 4, count).unwrap();
+    let plan = MeanPlan::from_arrays(&forest.mean_steps(), count);
+    let values = pseudo_random(count * 71, 3, 1 << 20);
+    let residual = plan.residuals(&values, 71).unwrap().unwrap();
+    let values: Vec<i64> = (0..71)
+        .flat_map(|c| residual.iter().skip(c).step_by(71).copied())
+        .collect();
+    // CPU time of this thread (the machine is shared: wall time says little)
+    let cpu = || -> u64 {
+        let text = std::fs::read_to_string("/proc/thread-self/schedstat").unwrap_or_default();
+        text.split_whitespace()
+            .next()
+            .and_then(|t| t.parse().ok())
+            .unwrap_or(0)
+    };
+    let mut best = u64::MAX;
+    for _ in 0..10 {
+        let mut columns = values.clone();
+        let t = cpu();
+        plan.restore_columns(&mut columns, count).unwrap();
+        best = best.min(cpu() - t);
+    }
+    eprintln!("restore {} ms of CPU", best / 1_000_000);
+}
+
+#[test]
+fn exact_floor_is_floor() {
+    for x in [
+        0.0,
+        -0.5,
+        0.5,
+        -1.0,
+        1.0,
+        -1.5,
+        2.5,
+        1e300,
+        -1e300,
+        4503599627370495.5,
+        -4503599627370495.5,
+        4503599627370496.0,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    ] {
+        assert_eq!(exact_floor(x), x.floor(), "{x}");
+    }
+    assert!(exact_floor(f64::NAN).is_nan());
 }
