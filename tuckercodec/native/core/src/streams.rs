@@ -43,16 +43,42 @@ pub fn unpack_planes(raw: &[u8], count: usize, planes: usize) -> Result<Vec<i64>
             format!("the zstd frame holds {} bytes, not {shape}", raw.len()),
         ));
     }
-    Ok(match planes {
-        1 => gather::<1>(raw, count),
-        2 => gather::<2>(raw, count),
-        3 => gather::<3>(raw, count),
-        4 => gather::<4>(raw, count),
-        5 => gather::<5>(raw, count),
-        6 => gather::<6>(raw, count),
-        7 => gather::<7>(raw, count),
-        _ => gather::<8>(raw, count),
-    })
+    let mut out = vec![0i64; count];
+    unpack_planes_into(raw, planes, &mut out)?;
+    Ok(out)
+}
+
+/// [`unpack_planes`] into `out`, whose length is the count (an array the caller allocated: numpy
+/// backs a large one with huge pages, which a fresh `Vec` fills a page fault at a time).
+pub fn unpack_planes_into(raw: &[u8], planes: usize, out: &mut [i64]) -> Result<(), Broken> {
+    let count = out.len();
+    if !(1..=MAX_STORED_PLANES).contains(&planes) {
+        return Err(Broken::new(
+            "R30-planes",
+            format!("planes must be 1..{MAX_STORED_PLANES}, got {planes}"),
+        ));
+    }
+    if count.checked_mul(planes) != Some(raw.len()) {
+        return Err(Broken::new(
+            "R29-zstd-content-size",
+            format!(
+                "the zstd frame holds {} bytes, not {}",
+                raw.len(),
+                count * planes
+            ),
+        ));
+    }
+    match planes {
+        1 => gather::<1>(raw, out),
+        2 => gather::<2>(raw, out),
+        3 => gather::<3>(raw, out),
+        4 => gather::<4>(raw, out),
+        5 => gather::<5>(raw, out),
+        6 => gather::<6>(raw, out),
+        7 => gather::<7>(raw, out),
+        _ => gather::<8>(raw, out),
+    }
+    Ok(())
 }
 
 /// Values handled at once by [`gather`] and [`scatter`]: a piece of every plane and of the
@@ -61,8 +87,8 @@ const PIECE: usize = 4096;
 
 /// The values of `PLANES` planes of `count` bytes (`raw` holds exactly them), unzigzagged: a
 /// piece of the values at a time, each plane added to it in turn.
-fn gather<const PLANES: usize>(raw: &[u8], count: usize) -> Vec<i64> {
-    let mut out = vec![0i64; count];
+fn gather<const PLANES: usize>(raw: &[u8], out: &mut [i64]) {
+    let count = out.len();
     let mut unsigned = [0u64; PIECE];
     for (index, piece) in out.chunks_mut(PIECE).enumerate() {
         let offset = index * PIECE;
@@ -79,7 +105,6 @@ fn gather<const PLANES: usize>(raw: &[u8], count: usize) -> Vec<i64> {
             *out = unzigzag(value);
         }
     }
-    out
 }
 
 /// The `PLANES` byte planes of `values` after zigzag: a piece of the values at a time, each

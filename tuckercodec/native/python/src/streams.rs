@@ -1,7 +1,7 @@
 //! The integer streams of spec section 6.1 (`tuckercodec/format/streams.py`): the byte planes
 //! after zstd has decompressed them, and before it compresses them.
 
-use numpy::{PyArray1, PyReadonlyArray1};
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 use tuckercodec_core::streams;
@@ -15,10 +15,15 @@ fn unpack_planes<'py>(
     count: usize,
     planes: usize,
 ) -> PyResult<Bound<'py, PyArray1<i64>>> {
-    let values = py
-        .detach(|| streams::unpack_planes(raw, count, planes))
-        .map_err(crate::broken)?;
-    Ok(PyArray1::from_vec(py, values))
+    // numpy's allocation: a large array gets huge pages (a Vec faults 4 KiB at a time)
+    let array = PyArray1::<i64>::zeros(py, count, false);
+    {
+        let mut writable = array.readwrite();
+        let out = writable.as_slice_mut()?;
+        py.detach(|| streams::unpack_planes_into(raw, planes, out))
+            .map_err(crate::broken)?;
+    }
+    Ok(array)
 }
 
 /// `(planes, bytes)` of int64 integers in stream order (`zigzag`, `planes_needed`, `to_planes`);
