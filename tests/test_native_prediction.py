@@ -25,7 +25,7 @@ from tuckercodec.system import native
 
 ROOT = Path(__file__).resolve().parents[1]
 VECTORS = sorted((ROOT / "spec" / "vectors").glob("*.json"))
-SHARED = ["samba", "chicken", "cloth-vellum", "horse-gallop"]
+SHARED = ["samba.npz", "chicken.npz", "cloth-vellum.npz", "horse-gallop"]
 
 
 @pytest.fixture(autouse=True)
