@@ -209,21 +209,3 @@ mod tests {
         assert_eq!(unpack_planes(&[], 0, 3).unwrap(), Vec::<i64>::new());
     }
 }
-#[cfg(test)]
-mod probe {
-    #[test]
-    #[ignore]
-    fn timing_probe() {
-        let values: Vec<i64> = (0..1_000_000i64)
-            .map(|i| (i * 7919) % 100_000 - 50_000)
-            .collect();
-        let (planes, raw) = super::pack_planes(&values);
-        for _ in 0..5 {
-            let t = std::time::Instant::now();
-            let out = super::unpack_planes(&raw, values.len(), planes).unwrap();
-            let a = t.elapsed();
-            let _ = super::pack_planes(&out);
-            eprintln!("{planes} {:?} {:?}", a, t.elapsed());
-        }
-    }
-}

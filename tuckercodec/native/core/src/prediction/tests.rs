@@ -110,35 +110,6 @@ fn linear_limits() {
 }
 
 #[test]
-#[ignore]
-fn timing_probe() {
-    let (faces, count) = grid(300);
-    let forest = Forest::new(&faces, 4, count).unwrap();
-    let plan = MeanPlan::from_arrays(&forest.mean_steps(), count);
-    let values = pseudo_random(count * 71, 3, 1 << 20);
-    let residual = plan.residuals(&values, 71).unwrap().unwrap();
-    let values: Vec<i64> = (0..71)
-        .flat_map(|c| residual.iter().skip(c).step_by(71).copied())
-        .collect();
-    // CPU time of this thread (the machine is shared: wall time says little)
-    let cpu = || -> u64 {
-        let text = std::fs::read_to_string("/proc/thread-self/schedstat").unwrap_or_default();
-        text.split_whitespace()
-            .next()
-            .and_then(|t| t.parse().ok())
-            .unwrap_or(0)
-    };
-    let mut best = u64::MAX;
-    for _ in 0..10 {
-        let mut columns = values.clone();
-        let t = cpu();
-        plan.restore_columns(&mut columns, count).unwrap();
-        best = best.min(cpu() - t);
-    }
-    eprintln!("restore {} ms of CPU", best / 1_000_000);
-}
-
-#[test]
 fn exact_floor_is_floor() {
     for x in [
         0.0,
