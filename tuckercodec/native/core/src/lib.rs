@@ -7,6 +7,8 @@
 
 pub mod encoder;
 pub mod error;
+pub mod prediction;
 pub mod residual;
+pub mod streams;
 pub mod text;
 pub mod traversal;
