@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from ..model.topology import MeanSteps
+from ..system import native
 
 
 def residuals(values: np.ndarray, parents: np.ndarray | None) -> np.ndarray:
@@ -46,6 +47,15 @@ def accumulate(
     pass p every row holds the sum over its 2**p nearest ancestors, about log2(depth) passes.
     With ``in_place`` the residuals are overwritten (no copy of a large U1).
     """
+    core = native.core()
+    if core is not None and residual.ndim == 2 and residual.dtype == np.int64:
+        total = residual if in_place else residual.copy()
+        if total.flags.c_contiguous:  # the same wrapping int64 sums, in one pass
+            if parents is None:
+                core.accumulate_rows(total)
+            else:
+                core.accumulate_tree(total, np.ascontiguousarray(parents, dtype=np.int64))
+            return total
     if parents is None:
         return np.cumsum(residual, axis=0, out=residual if in_place else None)
     depth = tree_depths(parents)
@@ -127,6 +137,12 @@ def _checked(block: np.ndarray | None) -> np.ndarray:
 def mean_residuals(values: np.ndarray, steps: MeanSteps) -> np.ndarray | None:
     """Each row minus predictor 2's prediction of it (rows of depth 0 as they are), or
     ``None`` if a value leaves +-MEAN_LIMIT (predictor 2 cannot hold such a column)."""
+    core = native.core()
+    if core is not None:  # the same floats and integers, no temporaries
+        result: np.ndarray | None = steps.native_plan().residuals(
+            np.ascontiguousarray(values, dtype=np.int64)
+        )
+        return result
     if values.size and np.abs(values).max() > MEAN_LIMIT:
         return None
     if values.shape[1] > _MEAN_COLUMN_BLOCK:  # blocks of columns: smaller float temporaries
@@ -159,6 +175,12 @@ def mean_accumulate(residual: np.ndarray, steps: MeanSteps) -> np.ndarray:
     division whose floor is exact below 2**52. So the first value that leaves the limit is
     itself exact, and one check of the whole result at the end finds it.
     """
+    core = native.core()
+    if core is not None and residual.ndim == 2:  # column after column, in place in a copy
+        columns = np.array(residual.T, dtype=np.int64, order="C")
+        steps.native_plan().restore_columns(columns)
+        restored: np.ndarray = columns.T
+        return restored
     rows, ends = steps.rows, steps.step_ends
     if rows.size and int(steps.counts.max()) >= _FLOAT_SOURCES:  # only a crafted mesh
         total = residual.copy()
@@ -188,6 +210,10 @@ def mean_accumulate_columns(columns: np.ndarray, steps: MeanSteps) -> None:
     the residuals as the stream holds them, column after column: a block of columns at a time,
     so that a large U1 is never copied whole (each block's floats are the temporary). Raises
     ``ValueError`` as :func:`mean_accumulate` does, at the first block that leaves the range."""
+    core = native.core()
+    if core is not None and columns.dtype == np.int64 and columns.flags.c_contiguous:
+        steps.native_plan().restore_columns(columns)  # a column at a time: one column's floats
+        return
     count = columns.shape[0]
     blocks = max(1, -(-columns.size // MEAN_RESTORE_VALUES))
     width = max(1, -(-count // blocks))
@@ -299,6 +325,11 @@ def linear_accumulate(residual: np.ndarray) -> np.ndarray:
     """The inverse of :func:`linear_residuals`: two running sums. Raises ``ValueError`` when a
     first difference leaves +-2**33 or a value +-2**32 (R32 for the caller): within those the
     int64 sums are exact (F <= 2**24 rows of at most 2**33)."""
+    core = native.core()
+    if core is not None and residual.ndim == 2 and residual.dtype == np.int64:
+        restored = np.array(residual, order="C")
+        core.linear_accumulate(restored)  # the same sums, checks and ValueError
+        return restored
     first = np.cumsum(residual, axis=0)
     if first.size and np.abs(first).max() > LINEAR_STEP_LIMIT:
         raise ValueError("a difference restored with predictor 3 leaves the range")

@@ -16,6 +16,7 @@ import numpy as np
 import zstandard
 
 from ..errors import FormatError, UnreachableTargetError
+from ..system import native
 
 #: zstd level of the final file; the size is entropy-coder bound, so higher levels gain little.
 DEFAULT_LEVEL = 19
@@ -145,20 +146,31 @@ def checked_planes(params: Mapping[str, Any], where: str) -> int:
 
 def pack_integers(values: np.ndarray, level: int = DEFAULT_LEVEL) -> tuple[bytes, int]:
     """``(payload, planes)`` for integers in stream order."""
-    unsigned = zigzag(values.reshape(-1))
-    planes = planes_needed(unsigned)
+    core = native.core()
+    if core is not None:  # zigzag and planes in one pass
+        planes, raw = core.pack_planes(np.ascontiguousarray(values.reshape(-1), dtype=np.int64))
+    else:
+        unsigned = zigzag(values.reshape(-1))
+        planes = planes_needed(unsigned)
     if planes > MAX_PLANES:
         raise UnreachableTargetError(
             f"a quantized value of {int(np.abs(values).max())} does not fit the format's 32-bit "
             "range: the error target is too small for the size of the coordinates"
         )
-    return compress(to_planes(unsigned, planes), level), planes
+    if core is None:
+        raw = to_planes(unsigned, planes)
+    return compress(raw, level), planes
 
 
 def unpack_integers(payload: bytes | memoryview, count: int, planes: int, where: str) -> np.ndarray:
     """``count`` signed integers (int64) from a payload written by :func:`pack_integers` (or of
     §6.9, whose 64-bit integers take up to 8 planes)."""
     raw = decompress_exact(payload, count * planes, where)
+    core = native.core()
+    if core is not None and 1 <= planes <= 8:  # planes and unzigzag in one pass, no scratch
+        # raw holds count * planes bytes (checked above): the core has nothing to refuse
+        values: np.ndarray = core.unpack_planes(raw, count, planes)
+        return values
     unsigned = from_planes(raw, count, planes)
     del raw
     # unzigzag in place, a block at a time: the stream's integers are the largest array the

@@ -16,13 +16,14 @@ module is the one home of its rules:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
 from ..errors import InputError
+from ..system import native
 
 #: The parent of a vertex that has none (a root of the forest, or a vertex on no face).
 NO_PARENT = -1
@@ -131,7 +132,19 @@ def mesh_parents(faces: np.ndarray, vertex_count: int) -> np.ndarray:
     earlier neighbour" was 7 % smaller on chicken but 12 % larger on the cloth, whose vertex
     order leaves a fifth of the vertices without an earlier neighbour.
     """
+    core = native.core()
+    if core is not None:
+        parents: np.ndarray = _native_forest(core, faces, vertex_count).parents()
+        return parents
     return _mesh_forest(faces, vertex_count).parents(vertex_count)
+
+
+def _native_forest(core: Any, faces: np.ndarray, vertex_count: int) -> Any:
+    """The compiled core's forest (the same walk as :func:`_mesh_forest`, over every vertex)."""
+    table = np.asarray(faces, dtype=np.int64)
+    if table.ndim != 2:
+        table = table.reshape(0, 0)  # an empty table: no edges
+    return core.MeshForest(np.ascontiguousarray(table), vertex_count)
 
 
 #: Predictor 2's phases: a vertex's rank among the vertices of its depth, in the order of the
@@ -162,11 +175,30 @@ class MeanSteps:
     anchors: np.ndarray  # (E,) int64
     source_ends: np.ndarray  # (R + 1,) int64
     levels: int  # depths, 0 included
+    #: the compiled core's plan of these steps, when it made them
+    plan: Any = field(default=None, compare=False, repr=False)
 
     @property
     def counts(self) -> np.ndarray:
         """Each row's number of sources (at least 1)."""
         return np.diff(self.source_ends)
+
+    def native_plan(self) -> Any:
+        """The compiled core's ``MeanPlan`` of these steps (made from the arrays once)."""
+        return self.plan if self.plan is not None else self._made_plan
+
+    @cached_property
+    def _made_plan(self) -> Any:
+        core = native.core()
+        assert core is not None, "only the compiled core restores with a plan"
+        return core.MeanPlan(
+            self.rows,
+            self.step_ends,
+            self.sources,
+            self.anchors,
+            self.source_ends,
+            int(max(a.max(initial=-1) for a in (self.rows, self.sources, self.anchors))) + 1,
+        )
 
     @cached_property
     def matrix(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -201,10 +233,22 @@ class MeshPrediction:
     asked for (they cost about as much again)."""
 
     def __init__(self, faces: np.ndarray, vertex_count: int) -> None:
-        self._forest = _mesh_forest(faces, vertex_count)
+        core = native.core()
+        # the compiled core's forest (its whole walk at once), or the numpy one
+        self._native: Any = None
+        self._forest: _Forest | None = None
+        if core is not None:
+            self._native = _native_forest(core, faces, vertex_count)
+            self.parents: np.ndarray = self._native.parents()
+        else:
+            self._forest = _mesh_forest(faces, vertex_count)
+            self.parents = self._forest.parents(vertex_count)
         self.vertex_count = vertex_count
-        self.parents = self._forest.parents(vertex_count)
         self._mean: MeanSteps | None = None
+
+    def _built(self) -> _Forest:
+        assert self._forest is not None
+        return self._forest
 
     @property
     def levels(self) -> int:
@@ -213,12 +257,20 @@ class MeshPrediction:
         allowed, is not walked level by level."""
         if self._mean is not None:
             return self._mean.levels
-        return self._forest.level_ends(MAX_MEAN_LEVELS + 1).size - 1
+        if self._native is not None:
+            return min(int(self._native.levels()), MAX_MEAN_LEVELS + 1)
+        return self._built().level_ends(MAX_MEAN_LEVELS + 1).size - 1
 
     @property
     def mean_steps(self) -> MeanSteps:
         if self._mean is None:
-            self._mean = self._forest.mean_steps()
+            if self._native is not None:
+                rows, step_ends, sources, anchors, source_ends, levels, plan = (
+                    self._native.mean_steps()
+                )
+                self._mean = MeanSteps(rows, step_ends, sources, anchors, source_ends, levels, plan)
+            else:
+                self._mean = self._built().mean_steps()
         return self._mean
 
 

@@ -8,6 +8,8 @@
 pub mod encoder;
 pub mod error;
 pub mod fuzzing;
+pub mod prediction;
 pub mod residual;
+pub mod streams;
 pub mod text;
 pub mod traversal;

@@ -6,6 +6,9 @@
 //! `FormatError` of that rule (tuckercodec/system/native.py).
 #![forbid(unsafe_code)]
 
+mod prediction;
+mod streams;
+
 use pyo3::create_exception;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -42,5 +45,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     text::register(m)?;
     residual::register(m)?;
     encoder::register(m)?;
+    prediction::register(m)?;
+    streams::register(m)?;
     Ok(())
 }

@@ -1,0 +1,217 @@
+//! Prediction (spec section 6.2, `tuckercodec/format/prediction.py`) and the mesh relations it
+//! follows (`tuckercodec/model/topology.py`): a caller's error or a restored value out of range
+//! is a `ValueError` with the Python's words.
+
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
+use numpy::{PyReadwriteArray2, PyUntypedArrayMethods};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use tuckercodec_core::prediction::{self, topology};
+
+/// A one-dimensional numpy array handed to Python.
+type Array<'py, T> = Bound<'py, PyArray1<T>>;
+
+fn value_error(message: String) -> PyErr {
+    PyValueError::new_err(message)
+}
+
+fn int64_array<'py, T: Copy + TryInto<i64>>(
+    py: Python<'py>,
+    values: &[T],
+) -> Bound<'py, PyArray1<i64>> {
+    // indices below 2**32 and lengths of memory: always representable
+    PyArray1::from_vec(
+        py,
+        values
+            .iter()
+            .map(|&v| v.try_into().unwrap_or(i64::MAX))
+            .collect(),
+    )
+}
+
+/// `MeshForest.mean_steps`'s result.
+type MeanStepsTuple<'py> = (
+    Array<'py, i64>,
+    Array<'py, i64>,
+    Array<'py, i64>,
+    Array<'py, i64>,
+    Array<'py, i64>,
+    usize,
+    MeanPlan,
+);
+
+/// The breadth-first forest of a face table (`_mesh_forest`), held in the core.
+#[pyclass(frozen, module = "tuckercodec._native")]
+struct MeshForest {
+    forest: topology::Forest,
+}
+
+#[pymethods]
+impl MeshForest {
+    /// The forest of an (M, n) int64 face table padded with -1, over `vertex_count` vertices.
+    #[new]
+    fn new(
+        py: Python<'_>,
+        faces: PyReadonlyArray2<'_, i64>,
+        vertex_count: usize,
+    ) -> PyResult<Self> {
+        let width = faces.shape()[1];
+        let table = faces.as_slice()?;
+        let forest = py
+            .detach(|| topology::Forest::new(table, width, vertex_count))
+            .map_err(value_error)?;
+        Ok(MeshForest { forest })
+    }
+
+    /// Each vertex's parent, or -1 (`mesh_parents`).
+    fn parents<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        PyArray1::from_vec(py, self.forest.parents.clone())
+    }
+
+    /// The number of depths, 0 included (1 without edges).
+    fn levels(&self) -> usize {
+        self.forest.levels()
+    }
+
+    /// `(rows, step_ends, sources, anchors, source_ends, levels, plan)`: predictor 2's
+    /// `MeanSteps` arrays (int64) and their [`MeanPlan`].
+    fn mean_steps<'py>(&self, py: Python<'py>) -> MeanStepsTuple<'py> {
+        let (steps, plan) = py.detach(|| {
+            let steps = self.forest.mean_steps();
+            let plan = prediction::MeanPlan::from_arrays(&steps, self.forest.vertex_count);
+            (steps, plan)
+        });
+        (
+            int64_array(py, &steps.rows),
+            int64_array(py, &steps.step_ends),
+            int64_array(py, &steps.sources),
+            int64_array(py, &steps.anchors),
+            int64_array(py, &steps.source_ends),
+            steps.levels,
+            MeanPlan { plan },
+        )
+    }
+}
+
+/// Predictor 2's steps with their sparse sums (`MeanSteps` and its `matrix`), held in the core.
+#[pyclass(frozen, module = "tuckercodec._native")]
+struct MeanPlan {
+    plan: prediction::MeanPlan,
+}
+
+#[pymethods]
+impl MeanPlan {
+    /// The plan of `MeanSteps` arrays over `vertex_count` vertices, every index checked.
+    #[new]
+    fn new(
+        py: Python<'_>,
+        rows: PyReadonlyArray1<'_, i64>,
+        step_ends: PyReadonlyArray1<'_, i64>,
+        sources: PyReadonlyArray1<'_, i64>,
+        anchors: PyReadonlyArray1<'_, i64>,
+        source_ends: PyReadonlyArray1<'_, i64>,
+        vertex_count: usize,
+    ) -> PyResult<Self> {
+        let (rows, step_ends) = (rows.as_slice()?, step_ends.as_slice()?);
+        let (sources, anchors, source_ends) = (
+            sources.as_slice()?,
+            anchors.as_slice()?,
+            source_ends.as_slice()?,
+        );
+        let plan = py
+            .detach(|| {
+                prediction::MeanPlan::from_steps(
+                    rows,
+                    step_ends,
+                    sources,
+                    anchors,
+                    source_ends,
+                    vertex_count,
+                )
+            })
+            .map_err(value_error)?;
+        Ok(MeanPlan { plan })
+    }
+
+    /// `(indptr, indices, data)` of the matrix, as `MeanSteps.matrix` makes it with scipy.
+    fn matrix<'py>(&self, py: Python<'py>) -> (Array<'py, i64>, Array<'py, i64>, Array<'py, f64>) {
+        (
+            int64_array(py, &self.plan.pointers),
+            int64_array(py, &self.plan.columns),
+            PyArray1::from_vec(py, self.plan.weights.clone()),
+        )
+    }
+
+    /// Restores predictor 2's residuals in place, a C-contiguous (cols, K) int64 array whose
+    /// rows are columns of U1 (`mean_accumulate_columns`); `ValueError` if a value leaves the
+    /// range.
+    fn restore_columns(
+        &self,
+        py: Python<'_>,
+        mut columns: PyReadwriteArray2<'_, i64>,
+    ) -> PyResult<()> {
+        let height = columns.shape()[1];
+        let flat = columns.as_slice_mut()?;
+        py.detach(|| self.plan.restore_columns(flat, height))
+            .map_err(value_error)
+    }
+
+    /// `mean_residuals` of a C-contiguous (K, cols) int64 array: a new array, or `None` if a
+    /// value leaves the range.
+    fn residuals<'py>(
+        &self,
+        py: Python<'py>,
+        values: PyReadonlyArray2<'py, i64>,
+    ) -> PyResult<Option<Bound<'py, PyArray2<i64>>>> {
+        let (rows, width) = (values.shape()[0], values.shape()[1]);
+        let flat = values.as_slice()?;
+        let out = py
+            .detach(|| self.plan.residuals(flat, width))
+            .map_err(value_error)?;
+        out.map(|v| PyArray1::from_vec(py, v).reshape([rows, width]))
+            .transpose()
+    }
+}
+
+/// Predictor 1 along a tree, in place on a C-contiguous (rows, cols) int64 array.
+#[pyfunction]
+fn accumulate_tree(
+    py: Python<'_>,
+    mut values: PyReadwriteArray2<'_, i64>,
+    parents: PyReadonlyArray1<'_, i64>,
+) -> PyResult<()> {
+    let width = values.shape()[1];
+    let flat = values.as_slice_mut()?;
+    let parents = parents.as_slice()?;
+    py.detach(|| prediction::accumulate_tree(flat, width, parents))
+        .map_err(value_error)
+}
+
+/// Predictor 1 along the rows (time), in place on a C-contiguous (rows, cols) int64 array.
+#[pyfunction]
+fn accumulate_rows(py: Python<'_>, mut values: PyReadwriteArray2<'_, i64>) -> PyResult<()> {
+    let width = values.shape()[1];
+    let flat = values.as_slice_mut()?;
+    py.detach(|| prediction::accumulate_rows(flat, width));
+    Ok(())
+}
+
+/// Predictor 3, in place on a C-contiguous (rows, cols) int64 array; `ValueError` with
+/// `linear_accumulate`'s words when a difference or a value leaves its range.
+#[pyfunction]
+fn linear_accumulate(py: Python<'_>, mut values: PyReadwriteArray2<'_, i64>) -> PyResult<()> {
+    let width = values.shape()[1];
+    let flat = values.as_slice_mut()?;
+    py.detach(|| prediction::linear_accumulate(flat, width))
+        .map_err(value_error)
+}
+
+/// Adds the classes and functions of this module to `_native`.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<MeshForest>()?;
+    m.add_class::<MeanPlan>()?;
+    m.add_function(wrap_pyfunction!(accumulate_tree, m)?)?;
+    m.add_function(wrap_pyfunction!(accumulate_rows, m)?)?;
+    m.add_function(wrap_pyfunction!(linear_accumulate, m)?)?;
+    Ok(())
+}
