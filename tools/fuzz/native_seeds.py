@@ -183,13 +183,61 @@ def recorded_corrections(seeds: dict[str, list[bytes]]) -> Iterator[None]:
         format_residual.decode_chunk, format_residual.correct = decode_chunk, correct
 
 
+def streams_unpack_input(raw: bytes, count: int, planes: int) -> bytes:
+    """A ``streams_unpack`` input: flags, planes, count, the decompressed stream."""
+    return bytes([0, planes]) + varint(count) + raw
+
+
+@contextmanager
+def recorded_streams(seeds: dict[str, list[bytes]]) -> Iterator[None]:
+    """Records every integer stream unpacked inside the block (those that decompress), as
+    seeds of ``streams_unpack``."""
+    import tuckercodec
+    from tuckercodec import internal
+
+    streams = internal.streams
+    unpack = streams.unpack_integers
+
+    def recording(payload: bytes | memoryview, count: int, planes: int, where: str) -> np.ndarray:
+        try:
+            raw = streams.decompress_exact(payload, count * planes, where)
+        except tuckercodec.FormatError:
+            raw = None
+        if raw is not None and 0 <= planes < 256:
+            seeds.setdefault("streams_unpack", []).append(streams_unpack_input(raw, count, planes))
+        return unpack(payload, count, planes, where)
+
+    streams.unpack_integers = recording
+    try:
+        yield
+    finally:
+        streams.unpack_integers = unpack
+
+
+def prediction_inputs(faces: np.ndarray, vertices: np.ndarray) -> list[bytes]:
+    """``prediction_restore`` inputs of a mesh: predictor 2 over its faces with its first
+    frame's positions in thousandths as the columns, and predictors 1 and 3 along its
+    breadth-first forest (``mesh_parents``) with the same values."""
+    from tuckercodec import internal
+
+    k, width = len(vertices), faces.shape[1]
+    values = np.rint(vertices * 1000).astype(np.int64)
+    mean = bytes([0, (width - 3) % 6]) + varint(k) + varint(len(faces))
+    mean += signed_values(faces.reshape(-1).tolist()) + bytes([2])
+    mean += signed_values(values.reshape(-1).tolist())
+    parents = internal.mesh_parents(faces, k)
+    tree = bytes([2]) + varint(k) + bytes([2]) + signed_values(parents.tolist())
+    tree += signed_values(values.reshape(-1).tolist())
+    return [mean, tree]
+
+
 def vector_seeds(path: Path) -> dict[str, list[bytes]]:
     """The seeds of one vector, by target."""
     import tuckercodec
 
     seeds: dict[str, list[bytes]] = {}
     calls: list[tuple[Any, ...]] = []
-    with recorded_traversals(calls), recorded_corrections(seeds):
+    with recorded_traversals(calls), recorded_corrections(seeds), recorded_streams(seeds):
         try:
             mesh = tuckercodec.decode(path)
         except (tuckercodec.TuckerCodecError, ValueError):
@@ -205,6 +253,7 @@ def vector_seeds(path: Path) -> dict[str, list[bytes]]:
         # the tight limit for the small texts only: a long text is refused at its first line
         limit = TEXT_LIMITS[len(text) < 1024]
         seeds["text_check"] = [text_check_input(text, limit, [len(text) // 3, len(text) // 2])]
+        seeds["prediction_restore"] = prediction_inputs(faces, vertices)
         values = vertices.reshape(-1)[:4].tolist()
         seeds["float_repr"] = [struct.pack("<d", v) for v in values]
     return seeds

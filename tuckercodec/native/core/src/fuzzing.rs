@@ -14,7 +14,10 @@
 //! 2, ...). Bytes read past the end of the input are 0. `tools/fuzz/native_seeds.py` writes
 //! the same framings from the conformance vectors.
 
+use crate::prediction::topology::Forest;
+use crate::prediction::{accumulate_rows, accumulate_tree, linear_accumulate, MeanPlan};
 use crate::residual::{correct, pack_chunk, restore_chunk, Domain};
+use crate::streams::{pack_planes, unpack_planes, unpack_planes_into};
 use crate::text::float_repr::{repr, write_signed, write_unsigned};
 use crate::text::obj_read::{parse_obj, parse_obj_frame, KnownFaces, ObjMesh};
 use crate::text::obj_write::{face_text, vertex_text};
@@ -33,10 +36,14 @@ pub const TARGETS: &[(&str, Target)] = &[
     ("text_check", text_check),
     ("residual_restore", residual_restore),
     ("residual_correct", residual_correct),
+    ("streams_unpack", streams_unpack),
+    ("prediction_restore", prediction_restore),
 ];
 
 /// The most faces a decode is asked for, and the most rows an encode is given.
 pub const MAX_COUNT: u64 = 1 << 16;
+/// The most vertices (and rows) a prediction is given.
+pub const MAX_PREDICTION_VERTICES: u64 = 1 << 12;
 /// The widest face table.
 pub const MAX_WIDTH: usize = 8;
 /// The most vertices an encode is given (its tables take one entry a vertex).
@@ -539,6 +546,161 @@ pub fn residual_correct(data: &[u8]) {
         same_vertices(&again, &out),
         "{domain:?}: corrected by zeros, moved"
     );
+}
+
+/// `streams::unpack_planes` of any bytes and shape, then `pack_planes` of what it unpacks.
+/// Framing: a byte of flags (bit 1: `count` is the bytes' length / `planes`, the bytes cut to
+/// whole planes, else a varint `count` follows, at most 2**16 + 1); a byte `b` for
+/// `planes = b % 10` (0 and 9 are refused); the rest is the decompressed stream.
+///
+/// Checks: no panic; `unpack_planes_into` gives the same; the integers packed again take at
+/// most `planes` planes, unpack to the same integers, and in exactly `planes` planes are the
+/// same bytes.
+pub fn streams_unpack(data: &[u8]) {
+    let mut input = Framing::new(data);
+    let whole_planes = input.byte() & 2 != 0;
+    let planes = usize::from(input.byte() % 10);
+    let count = if whole_planes {
+        0
+    } else {
+        input.varint().min(MAX_COUNT + 1) as usize
+    };
+    let mut raw = input.rest();
+    let count = if whole_planes {
+        let count = raw.len() / planes.max(1);
+        raw = &raw[..count * planes.min(8)];
+        count
+    } else {
+        count
+    };
+    let unpacked = unpack_planes(raw, count, planes);
+    let mut into = vec![0; count];
+    let filled = unpack_planes_into(raw, planes, &mut into).map(|()| into);
+    let Ok(values) = unpacked else {
+        assert!(
+            filled.is_err(),
+            "unpack_planes_into takes what unpack_planes refuses"
+        );
+        return;
+    };
+    assert_eq!(filled.as_ref(), Ok(&values), "unpack_planes_into");
+    let (packed_planes, packed) = pack_planes(&values);
+    assert!(
+        packed_planes <= planes,
+        "{packed_planes} planes for {planes}"
+    );
+    let again = unpack_planes(&packed, count, packed_planes);
+    assert_eq!(again.as_ref(), Ok(&values), "packed and unpacked");
+    if packed_planes == planes {
+        assert_eq!(
+            packed, raw,
+            "the same integers in as many planes, other bytes"
+        );
+    }
+}
+
+/// Predictor 1, 2 and 3's restoring loops (§6.2). Framing: a byte `m`, then by `m % 3`:
+///
+/// - 0, predictor 2 over a mesh: a byte `b` for `width = 3 + b % 6`; a varint vertex count K
+///   and a varint face count (each at most 2**12); the faces' entries, signed (any values: the
+///   forest checks them); a byte `c` for `1 + c % 4` columns; then K rows of the columns'
+///   values, signed (0 past the end). Checks: the forest's mean steps make a plan; where the
+///   values are in predictor 2's range, their residuals restore to the values.
+/// - 1, predictor 2 from any steps: a varint K (at most 2**12); five arrays (rows, step ends,
+///   sources, anchors, source ends), each a varint length (at most 2**12) and signed values;
+///   then columns of K values, signed, restored with the plan if it is made. Checks: no panic.
+/// - 2, predictors 1 and 3: a varint row count (at most 2**12); a byte `w` for `1 + w % 4`
+///   columns; each row's parent, signed; the rows' values, signed (0 past the end). Checks:
+///   no panic in `accumulate_tree` and `linear_accumulate`, and `accumulate_rows`' running
+///   sums give the values back as differences.
+pub fn prediction_restore(data: &[u8]) {
+    let mut input = Framing::new(data);
+    match input.byte() % 3 {
+        0 => mean_over_mesh(&mut input),
+        1 => mean_from_steps(&mut input),
+        _ => along_rows_and_tree(&mut input),
+    }
+}
+
+fn bounded(input: &mut Framing<'_>, most: u64) -> usize {
+    input.varint().min(most) as usize
+}
+
+/// `count` signed values, 0 past the end of the input.
+fn padded_values(input: &mut Framing<'_>, count: usize) -> Vec<i64> {
+    let mut values = input.signed_values(count as u64);
+    values.resize(count, 0);
+    values
+}
+
+fn mean_over_mesh(input: &mut Framing<'_>) {
+    let width = 3 + usize::from(input.byte()) % 6;
+    let vertex_count = bounded(input, MAX_PREDICTION_VERTICES);
+    let face_count = bounded(input, MAX_PREDICTION_VERTICES);
+    let faces = input.signed_values((face_count * width) as u64);
+    let faces = &faces[..faces.len() / width * width];
+    let columns = 1 + usize::from(input.byte()) % 4;
+    let values = padded_values(input, vertex_count * columns);
+    let Ok(forest) = Forest::new(faces, width, vertex_count) else {
+        return;
+    };
+    let plan = MeanPlan::from_arrays(&forest.mean_steps(), vertex_count);
+    let Ok(Some(residuals)) = plan.residuals(&values, columns) else {
+        return;
+    };
+    // the residuals column after column, as the decoder restores them
+    let mut restored: Vec<i64> = (0..columns)
+        .flat_map(|c| residuals.iter().skip(c).step_by(columns).copied())
+        .collect();
+    plan.restore_columns(&mut restored, vertex_count)
+        .expect("residuals of values in range restore");
+    let expected: Vec<i64> = (0..columns)
+        .flat_map(|c| values.iter().skip(c).step_by(columns).copied())
+        .collect();
+    assert_eq!(
+        restored, expected,
+        "predictor 2: residuals restored to other values"
+    );
+}
+
+fn mean_from_steps(input: &mut Framing<'_>) {
+    let vertex_count = bounded(input, MAX_PREDICTION_VERTICES);
+    let [rows, step_ends, sources, anchors, source_ends] = [0u8; 5].map(|_| {
+        let length = bounded(input, MAX_PREDICTION_VERTICES);
+        input.signed_values(length as u64)
+    });
+    let values = input.signed_values(MAX_PREDICTION_VERTICES * 4);
+    let Ok(plan) = MeanPlan::from_steps(
+        &rows,
+        &step_ends,
+        &sources,
+        &anchors,
+        &source_ends,
+        vertex_count,
+    ) else {
+        return;
+    };
+    let mut columns = values;
+    if let Some(whole) = columns.len().checked_div(vertex_count) {
+        columns.truncate(whole * vertex_count);
+    }
+    let _ = plan.restore_columns(&mut columns, vertex_count);
+    let _ = plan.residuals(&columns, 1);
+}
+
+fn along_rows_and_tree(input: &mut Framing<'_>) {
+    let rows = bounded(input, MAX_PREDICTION_VERTICES);
+    let width = 1 + usize::from(input.byte()) % 4;
+    let parents = padded_values(input, rows);
+    let values = padded_values(input, rows * width);
+    let _ = accumulate_tree(&mut values.clone(), width, &parents);
+    let _ = linear_accumulate(&mut values.clone(), width);
+    let mut sums = values.clone();
+    accumulate_rows(&mut sums, width);
+    for (j, value) in values.iter().enumerate() {
+        let before = if j >= width { sums[j - width] } else { 0 };
+        assert_eq!(sums[j].wrapping_sub(before), *value, "running sums");
+    }
 }
 
 #[cfg(test)]
