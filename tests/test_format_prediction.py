@@ -283,6 +283,20 @@ def test_predictor_2_refuses_values_beyond_its_range():
         mean_accumulate(residual * 3, steps)
 
 
+def test_minus_two_to_the_63_is_beyond_every_predictor_range():
+    """Its abs() is itself (int64 wraps), so a check by abs() let it through; found by the
+    compiled core's fuzzer (predictor 2's residuals of such a column did not restore)."""
+    faces = np.array([[0, 1, 2], [1, 2, 3]])
+    steps = mesh_prediction(faces, 4).mean_steps
+    column = np.zeros((4, 1), dtype=np.int64)
+    column[0] = np.iinfo(np.int64).min
+    assert mean_residuals(column, steps) is None
+    # the running sums wrap back to -2**63 and 0
+    wraps = np.array([[np.iinfo(np.int64).min], [0]], dtype=np.int64)
+    with pytest.raises(ValueError, match="difference restored with predictor 3"):
+        prediction.linear_accumulate(wraps)
+
+
 def test_mesh_prediction_steps_on_a_strip_and_without_edges():
     assert mesh_prediction(np.zeros((0, 3), np.int64), 4).mean_steps.rows.size == 0
     count = 2 * MAX_MEAN_LEVELS + 10  # one strip: about count / 2 levels

@@ -129,6 +129,12 @@ def mean_predictions(
 _MEAN_COLUMN_BLOCK = 16
 
 
+def _beyond(values: np.ndarray, limit: int) -> bool:
+    """Whether a value is outside -limit..limit (by its extremes: abs() of -2**63 wraps to
+    itself, and would pass)."""
+    return bool(values.size) and (int(values.min()) < -limit or int(values.max()) > limit)
+
+
 def _checked(block: np.ndarray | None) -> np.ndarray:
     assert block is not None  # the whole was checked against MEAN_LIMIT before the blocks
     return block
@@ -143,7 +149,7 @@ def mean_residuals(values: np.ndarray, steps: MeanSteps) -> np.ndarray | None:
             np.ascontiguousarray(values, dtype=np.int64)
         )
         return result
-    if values.size and np.abs(values).max() > MEAN_LIMIT:
+    if _beyond(values, MEAN_LIMIT):
         return None
     if values.shape[1] > _MEAN_COLUMN_BLOCK:  # blocks of columns: smaller float temporaries
         return np.concatenate(
@@ -188,7 +194,7 @@ def mean_accumulate(residual: np.ndarray, steps: MeanSteps) -> np.ndarray:
             start, stop = int(ends[step]), int(ends[step + 1])
             if start < stop:
                 total[rows[start:stop]] += mean_predictions(total, steps, start, stop)
-                if np.abs(total[rows[start:stop]]).max() > MEAN_LIMIT:
+                if _beyond(total[rows[start:stop]], MEAN_LIMIT):
                     raise ValueError("a restored value leaves the range of predictor 2")
         return total
     work = np.array(residual, dtype=np.float64, order="C")  # C: the product reads it flat
@@ -331,9 +337,9 @@ def linear_accumulate(residual: np.ndarray) -> np.ndarray:
         core.linear_accumulate(restored)  # the same sums, checks and ValueError
         return restored
     first = np.cumsum(residual, axis=0)
-    if first.size and np.abs(first).max() > LINEAR_STEP_LIMIT:
+    if _beyond(first, LINEAR_STEP_LIMIT):
         raise ValueError("a difference restored with predictor 3 leaves the range")
     values: np.ndarray = np.cumsum(first, axis=0)
-    if values.size and np.abs(values).max() > LINEAR_LIMIT:
+    if _beyond(values, LINEAR_LIMIT):
         raise ValueError("a value restored with predictor 3 leaves the range")
     return values

@@ -59,6 +59,13 @@ pub struct MeanPlan {
     source_ends: Vec<usize>,
 }
 
+/// `value` lies outside `-limit..=limit` (compared, not by `abs`, which wraps at -2**63 and
+/// would let it through).
+#[inline]
+fn beyond(value: i64, limit: i64) -> bool {
+    value < -limit || value > limit
+}
+
 fn index_below(value: i64, bound: usize, what: &str) -> Result<u32, PredictionError> {
     if value < 0 || value as u64 >= bound as u64 || value > i64::from(u32::MAX) {
         return Err(format!("{what} {value} outside 0..{bound}"));
@@ -317,8 +324,7 @@ impl MeanPlan {
                 let slot = &mut column[self.rows[j] as usize];
                 *slot = slot.wrapping_add(prediction);
             }
-            if (span[0]..span[1]).any(|j| column[self.rows[j] as usize].wrapping_abs() > MEAN_LIMIT)
-            {
+            if (span[0]..span[1]).any(|j| beyond(column[self.rows[j] as usize], MEAN_LIMIT)) {
                 return Err(MEAN_RANGE.to_string());
             }
         }
@@ -344,7 +350,7 @@ impl MeanPlan {
                 self.vertex_count
             ));
         }
-        if values.iter().any(|&v| v.wrapping_abs() > MEAN_LIMIT) {
+        if values.iter().any(|&v| beyond(v, MEAN_LIMIT)) {
             return Ok(None);
         }
         let mut out = values.to_vec();
@@ -490,11 +496,11 @@ pub fn accumulate_rows(values: &mut [i64], width: usize) {
 /// a first difference leaves +-2**33 (checked over the whole matrix first) or a value +-2**32.
 pub fn linear_accumulate(values: &mut [i64], width: usize) -> Result<(), PredictionError> {
     accumulate_rows(values, width);
-    if values.iter().any(|&v| v.wrapping_abs() > LINEAR_STEP_LIMIT) {
+    if values.iter().any(|&v| beyond(v, LINEAR_STEP_LIMIT)) {
         return Err(LINEAR_STEP_RANGE.to_string());
     }
     accumulate_rows(values, width);
-    if values.iter().any(|&v| v.wrapping_abs() > LINEAR_LIMIT) {
+    if values.iter().any(|&v| beyond(v, LINEAR_LIMIT)) {
         return Err(LINEAR_RANGE.to_string());
     }
     Ok(())

@@ -72,6 +72,22 @@ fn out_of_range_is_refused() {
 }
 
 #[test]
+fn minus_two_to_the_63_is_out_of_range() {
+    // its abs() wraps to itself: compared by abs, it would pass every range check
+    let (faces, count) = grid(4);
+    let plan = plan_of(&faces, 4, count);
+    let mut values = vec![0; count];
+    values[0] = i64::MIN;
+    assert_eq!(plan.residuals(&values, 1).unwrap(), None);
+    // the sums wrap back to -2**63 and 0: both checks passed it
+    let mut wraps = vec![i64::MIN, 0];
+    assert_eq!(
+        linear_accumulate(&mut wraps, 1).unwrap_err(),
+        LINEAR_STEP_RANGE
+    );
+}
+
+#[test]
 fn plans_from_bad_arrays_are_errors() {
     assert!(MeanPlan::from_steps(&[5], &[0, 1], &[0], &[0], &[0, 1], 3).is_err());
     assert!(MeanPlan::from_steps(&[1], &[0, 2], &[0], &[0], &[0, 1], 3).is_err());
