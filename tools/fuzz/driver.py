@@ -406,22 +406,20 @@ def _parser() -> argparse.ArgumentParser:
 def _js_replay(args: argparse.Namespace) -> int:
     from .javascript import js_replay
 
-    summary = js_replay(args.js_replay, args.js_mutations, args.seed)
-    print(json.dumps(summary, indent=2))
-    if args.json:
-        Path(args.json).write_text(json.dumps(summary, indent=2) + "\n")
-    for failure in summary["failures"]:
-        print(f"FAILED: {failure}", file=sys.stderr)
-    return 1 if summary["failures"] else 0
+    return _report(js_replay(args.js_replay, args.js_mutations, args.seed), args.json)
 
 
 def _differential(args: argparse.Namespace) -> int:
     from .differential import compare
 
-    summary = compare(args.differential, args.seed)
+    return _report(compare(args.differential, args.seed), args.json)
+
+
+def _report(summary: dict[str, Any], json_path: str | None) -> int:
+    """Print a check's summary (and write it to ``json_path``); exit 1 if it lists failures."""
     print(json.dumps(summary, indent=2))
-    if args.json:
-        Path(args.json).write_text(json.dumps(summary, indent=2) + "\n")
+    if json_path:
+        Path(json_path).write_text(json.dumps(summary, indent=2) + "\n")
     for failure in summary["failures"]:
         print(f"FAILED: {failure}", file=sys.stderr)
     return 1 if summary["failures"] else 0

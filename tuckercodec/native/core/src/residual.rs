@@ -19,6 +19,7 @@
 //! - [`ordered_in`] then [`correct`] with zero corrections: a lossless domain's values back.
 
 use crate::error::Broken;
+use crate::streams::{unzigzag, zigzag};
 
 /// The rule every correction check reports (spec section 11).
 pub const VALUE_RULE: &str = "R41-residual-value";
@@ -152,16 +153,6 @@ pub fn restore_chunk(
         }
     }
     Ok(values)
-}
-
-/// Unsigned to signed: 0, 1, 2, 3 ... -> 0, -1, 1, -2 ... on 64 bits.
-pub fn unzigzag(value: u64) -> i64 {
-    ((value >> 1) as i64) ^ -((value & 1) as i64)
-}
-
-/// Signed to unsigned: 0, -1, 1, -2 ... -> 0, 1, 2, 3 ... on 64 bits (wraps as §6.9 says).
-pub fn zigzag(value: i64) -> u64 {
-    ((value << 1) ^ (value >> 63)) as u64
 }
 
 /// A chunk's integers packed as §6.9 stores them, before zstd: with `predict`, each frame of
