@@ -502,11 +502,12 @@ pub fn residual_restore(data: &[u8]) {
 /// grid's step as 8 bytes (a little-endian `f64`, any value); then pairs of a position P (8
 /// bytes, `f64`) and a correction e (signed varint), at most 2**16 pairs.
 ///
-/// Checks: no panic; in the lossless domains whose values are binary64 (float32, float64,
-/// decimal-places, decimal-digits), corrected values that are all finite are the domain's
-/// own: corrected again by zeros, they stay the same bits. (Not in decimal-digits-float32: its
-/// values are binary32 roundings, and one just below a power of ten, such as the binary32 of
-/// 1e-20, has the ordered integer of the decimal below it, as §6.9 defines it.)
+/// Checks: no panic; in float32, float64 and decimal-digits, corrected values that are all
+/// finite are the domain's own: corrected again by zeros, they stay the same bits. (Not in
+/// decimal-places: `k / 10**d` times `10**d` rounds to `k + 1` where k has about as many digits
+/// as binary64 holds, as §6.9 defines it (0.3600163170749445 with 16 places); nor in
+/// decimal-digits-float32: its values are binary32 roundings, and one just below a power of
+/// ten, such as the binary32 of 1e-20, has the ordered integer of the decimal below it.)
 pub fn residual_correct(data: &[u8]) {
     let mut input = Framing::new(data);
     let kind = input.byte() % 6;
@@ -535,8 +536,11 @@ pub fn residual_correct(data: &[u8]) {
     let Ok(()) = correct(&exact, &residual, domain, &mut out) else {
         return;
     };
-    let binary64 = !matches!(domain, Domain::Grid { .. } | Domain::Digits32 { .. });
-    if !binary64 || !out.iter().all(|v| v.is_finite()) {
+    let fixed_points = matches!(
+        domain,
+        Domain::Float32 | Domain::Float64 | Domain::Digits { .. }
+    );
+    if !fixed_points || !out.iter().all(|v| v.is_finite()) {
         return;
     }
     let zeros = vec![0; out.len()];
