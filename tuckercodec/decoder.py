@@ -207,6 +207,16 @@ class Decoder:
             coding_tools=self._container.coding_tools,  # predictor 2 only in format 1.2
         )
 
+    def _decode_u1_values(self, section_id: str) -> np.ndarray:
+        """:meth:`_decode_u1`'s dequantized floats, for a file without corrections."""
+        return qmat.decode_values(
+            self._payload(section_id),
+            self._section(section_id).params,
+            self._mesh_prediction,
+            f"section {section_id}",
+            coding_tools=self._container.coding_tools,
+        )
+
     def segment_factors(self, number: int) -> SegmentFactors:
         """Segment ``number``'s dequantized factors, decoded (§5 step 16, in its order) and
         kept for the next frames; the shared U1 is decoded once for every segment."""
@@ -219,13 +229,18 @@ class Decoder:
         with self._naming_path():
             u1_quantized: qmat.QuantizedMatrix | None
             if segment.basis == BASIS_SHARED:
+                if self._shared_u1_values is None and not self._container.corrections:
+                    # no integers wanted: the floats straight from the stream
+                    self._shared_u1_values = self._decode_u1_values("U1")
+                    if all(other.basis == BASIS_SHARED for other in self._index):
+                        self._mesh = None  # no other U1 to restore
                 if self._shared_u1_values is None:
                     decoded = self._decode_u1("U1")
                     if all(other.basis == BASIS_SHARED for other in self._index):
                         self._mesh = None  # no other U1 to restore: free it before the values
                     self._shared_u1_values = decoded.values()
-                    # its integers only for §8.1: a large U1's are as large as its values
-                    self._shared_u1 = decoded if self._container.corrections else None
+                    # its integers for §8.1: a large U1's are as large as its values
+                    self._shared_u1 = decoded
                     del decoded
                 shared = self._shared_u1
                 u1_quantized = (
@@ -234,9 +249,12 @@ class Decoder:
                     else qmat.QuantizedMatrix(shared.q[:, :i], shared.steps[:i])
                 )
                 u1 = self._shared_u1_values[:, :i]
-            else:
+            elif self._container.corrections:  # §8.1 multiplies U1's integers
                 u1_quantized = self._decode_u1(self._section_id(segment, "U1"))
                 u1 = u1_quantized.values()
+            else:
+                u1_quantized = None
+                u1 = self._decode_u1_values(self._section_id(segment, "U1"))
 
             def matrix(stem: str, allow_predict: bool = True) -> np.ndarray:
                 section_id = self._section_id(segment, stem)

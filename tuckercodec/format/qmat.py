@@ -20,7 +20,8 @@ from typing import Any, NoReturn
 import numpy as np
 
 from ..errors import FormatError, UnreachableTargetError
-from ..model.topology import MAX_MEAN_LEVELS, MeshPrediction
+from ..model.topology import MAX_MEAN_LEVELS, MeanSteps, MeshPrediction
+from ..system import native
 from . import streams
 from .prediction import (
     LINEAR_LIMIT,
@@ -182,34 +183,9 @@ def decode_matrix(
     Predictor 2 (the mean of the decoded neighbours) is accepted only with ``coding_tools``
     (the preamble's flag bit 1, format 1.2) and a mesh (``parents`` not ``None``).
     """
-    rows, cols = section_shape(params, where)
-    planes = streams.checked_planes(params, where)
-    steps_raw, predict_raw = params.get("steps"), params.get("predict")
-    # §5 step 16: the lengths and types of steps and predict, then their values
-    if not isinstance(steps_raw, bytes) or len(steps_raw) != 4 * cols:
-        raise FormatError(
-            f"steps must be {cols} float32 values as {4 * cols} bytes",
-            rule="R31-steps",
-            field=f"{where}.steps",
-        )
-    if not isinstance(predict_raw, bytes) or len(predict_raw) != cols:
-        _refuse_predictor(f"predict must be {cols} bytes", where)
-    steps = np.frombuffer(steps_raw, dtype="<f4").astype(np.float32)
-    if not (np.isfinite(steps).all() and (steps > 0).all()):
-        raise FormatError(
-            "every step must be a positive finite float32", rule="R31-steps", field=f"{where}.steps"
-        )
-    predict = np.frombuffer(predict_raw, dtype=np.uint8)
-    # 2 (mesh mean) for a mesh relation, 3 (linear) for the previous row, both only in 1.2
-    extra = PREDICT_MEAN if parents is not None else PREDICT_LINEAR
-    allowed = {PREDICT_NONE, PREDICT_PARENT} | ({extra} if coding_tools else set())
-    if not allow_predict:
-        allowed = {PREDICT_NONE}
-    if not set(predict.tolist()) <= allowed:
-        named = "0 (no parent relation here)" if not allow_predict else f"in {sorted(allowed)}"
-        if allow_predict and not coding_tools and (predict == extra).any():
-            named += f" ({extra} needs the coding tools flag of format 1.2)"
-        _refuse_predictor(f"every predictor must be {named}", where)
+    rows, cols, planes, steps, predict = _checked_params(
+        params, where, parents is not None, allow_predict, coding_tools
+    )
     stream = streams.unpack_integers(payload, rows * cols, planes, where)
     chosen = np.flatnonzero(predict == PREDICT_PARENT)
     meaned = np.flatnonzero(predict == PREDICT_MEAN)
@@ -239,11 +215,85 @@ def decode_matrix(
     return QuantizedMatrix(q, steps)
 
 
+def _checked_params(
+    params: dict[str, Any], where: str, mesh_relation: bool, allow_predict: bool, coding_tools: bool
+) -> tuple[int, int, int, np.ndarray, np.ndarray]:
+    """``(rows, cols, planes, steps, predict)`` of a qmat section, checked in §5 step 16's
+    order (R30, R31, R32); ``mesh_relation``: the rows follow a mesh (predictor 2's relation)."""
+    rows, cols = section_shape(params, where)
+    planes = streams.checked_planes(params, where)
+    steps_raw, predict_raw = params.get("steps"), params.get("predict")
+    # §5 step 16: the lengths and types of steps and predict, then their values
+    if not isinstance(steps_raw, bytes) or len(steps_raw) != 4 * cols:
+        raise FormatError(
+            f"steps must be {cols} float32 values as {4 * cols} bytes",
+            rule="R31-steps",
+            field=f"{where}.steps",
+        )
+    if not isinstance(predict_raw, bytes) or len(predict_raw) != cols:
+        _refuse_predictor(f"predict must be {cols} bytes", where)
+    steps = np.frombuffer(steps_raw, dtype="<f4").astype(np.float32)
+    if not (np.isfinite(steps).all() and (steps > 0).all()):
+        raise FormatError(
+            "every step must be a positive finite float32", rule="R31-steps", field=f"{where}.steps"
+        )
+    predict = np.frombuffer(predict_raw, dtype=np.uint8)
+    # 2 (mesh mean) for a mesh relation, 3 (linear) for the previous row, both only in 1.2
+    extra = PREDICT_MEAN if mesh_relation else PREDICT_LINEAR
+    allowed = {PREDICT_NONE, PREDICT_PARENT} | ({extra} if coding_tools else set())
+    if not allow_predict:
+        allowed = {PREDICT_NONE}
+    if not set(predict.tolist()) <= allowed:
+        named = "0 (no parent relation here)" if not allow_predict else f"in {sorted(allowed)}"
+        if allow_predict and not coding_tools and (predict == extra).any():
+            named += f" ({extra} needs the coding tools flag of format 1.2)"
+        _refuse_predictor(f"every predictor must be {named}", where)
+    return rows, cols, planes, steps, predict
+
+
+def decode_values(
+    payload: bytes | memoryview,
+    params: dict[str, Any],
+    parents: Mesh | Callable[[], Mesh],
+    where: str,
+    *,
+    coding_tools: bool = False,
+) -> np.ndarray:
+    """``decode_matrix(...).values()`` of a section whose rows follow a mesh (U1), for a caller
+    that needs no integers. When every column has predictor 2 (U1's usual case) the compiled
+    core goes from the stream's bytes to the floats in one pass, its threads sharing the
+    columns, without the int64 matrix (as large as the floats)."""
+    core = native.core()
+    rows, cols, planes, steps, predict = _checked_params(params, where, True, True, coding_tools)
+    if core is None or not (rows and cols) or not (predict == PREDICT_MEAN).all():
+        return decode_matrix(payload, params, parents, where, coding_tools=coding_tools).values()
+    raw = streams.decompress_exact(payload, rows * cols * planes, where)
+    mesh = parents() if callable(parents) else parents
+    plan = _mean_mesh(mesh if isinstance(mesh, MeshPrediction) else None, where).native_plan()
+    try:
+        values: np.ndarray = plan.restore_values(raw, planes, rows, steps, 0)
+    except ValueError:
+        _refuse_predictor(MEAN_RANGE_MESSAGE, where)
+    return values
+
+
 def _restore_mean(
     residual: np.ndarray, mesh: MeshPrediction | None, where: str, in_columns: bool = False
 ) -> np.ndarray:
     """Predictor 2's columns restored (§6.2), or R32 when its conditions fail; with
     ``in_columns``, ``residual`` is (cols, rows) and restored in place."""
+    steps = _mean_mesh(mesh, where)
+    try:
+        if in_columns:
+            mean_accumulate_columns(residual, steps)
+            return residual
+        return mean_accumulate(residual, steps)
+    except ValueError:
+        _refuse_predictor(MEAN_RANGE_MESSAGE, where)
+
+
+def _mean_mesh(mesh: MeshPrediction | None, where: str) -> MeanSteps:
+    """The mesh's predictor-2 steps, or R32 when the mesh is too deep for predictor 2."""
     if mesh is None:
         raise ValueError("predictor 2 needs the mesh's MeshPrediction, not only its parents")
     if mesh.levels > MAX_MEAN_LEVELS:
@@ -252,13 +302,11 @@ def _restore_mean(
             f"{MAX_MEAN_LEVELS} levels; this one has {mesh.levels}",
             where,
         )
-    try:
-        if in_columns:
-            mean_accumulate_columns(residual, mesh.mean_steps)
-            return residual
-        return mean_accumulate(residual, mesh.mean_steps)
-    except ValueError:
-        _refuse_predictor("a value restored with predictor 2 is outside -2**32..2**32", where)
+    return mesh.mean_steps
+
+
+#: R32's words for a value that predictor 2 restores out of range.
+MEAN_RANGE_MESSAGE = "a value restored with predictor 2 is outside -2**32..2**32"
 
 
 def _refuse_predictor(message: str, where: str) -> NoReturn:

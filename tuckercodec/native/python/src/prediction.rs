@@ -6,7 +6,7 @@ use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArra
 use numpy::{PyReadwriteArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use tuckercodec_core::prediction::{self, topology};
+use tuckercodec_core::prediction::{self, topology, values};
 
 /// A one-dimensional numpy array handed to Python.
 type Array<'py, T> = Bound<'py, PyArray1<T>>;
@@ -154,6 +154,41 @@ impl MeanPlan {
         let flat = columns.as_slice_mut()?;
         py.detach(|| self.plan.restore_columns(flat, height))
             .map_err(value_error)
+    }
+
+    /// `decode_matrix(...).values()` of a qmat section whose every column has predictor 2:
+    /// the (height, cols) float64 matrix from the stream's `raw` bytes (zstd's output, `planes`
+    /// byte planes of `cols * height` integers, column after column) and the float32 `steps`,
+    /// in one pass and without the integers, on up to `threads` threads (0: as many as the
+    /// machine offers, capped); `ValueError` if a value leaves the range.
+    fn restore_values<'py>(
+        &self,
+        py: Python<'py>,
+        raw: &[u8],
+        planes: usize,
+        height: usize,
+        steps: PyReadonlyArray1<'py, f32>,
+        threads: usize,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let steps = steps.as_slice()?;
+        let width = steps.len();
+        // numpy's allocation: a large array gets huge pages (a Vec faults 4 KiB at a time)
+        let array = PyArray2::<f64>::zeros(py, [height, width], false);
+        {
+            let mut writable = array.readwrite();
+            let out = writable.as_slice_mut()?;
+            let threads = if threads == 0 {
+                values::thread_count(width.div_ceil(values::VALUE_BLOCK))
+            } else {
+                threads
+            };
+            py.detach(|| {
+                self.plan
+                    .restore_values(raw, planes, height, steps, out, threads)
+            })
+            .map_err(value_error)?;
+        }
+        Ok(array)
     }
 
     /// `mean_residuals` of a C-contiguous (K, cols) int64 array: a new array, or `None` if a

@@ -9,6 +9,7 @@
 //! [`linear_accumulate`] for the other predictors.
 
 pub mod topology;
+pub mod values;
 
 use topology::MeanStepsArrays;
 
@@ -244,26 +245,7 @@ impl MeanPlan {
                     *value = block[c * height + v] as f64;
                 }
             }
-            for span in self.step_ends.windows(2) {
-                // a step's predictions all read the values before the step (no row of a mesh's
-                // step is a source of another, but a caller's arrays may say otherwise)
-                predictions.clear();
-                predictions.resize((span[1] - span[0]) * width, 0.0f64);
-                for (j, sums) in (span[0]..span[1]).zip(predictions.chunks_exact_mut(width)) {
-                    self.float_predictions(j, &work, width, sums);
-                }
-                for (j, sums) in (span[0]..span[1]).zip(predictions.chunks_exact(width)) {
-                    let base = self.rows[j] as usize * width;
-                    for (value, &prediction) in work[base..base + width].iter_mut().zip(sums) {
-                        *value += prediction;
-                    }
-                }
-            }
-            let limit = MEAN_LIMIT as f64;
-            // the comparison fails for NaN too, as the Python's min and max do
-            if !work.iter().all(|&v| v >= -limit && v <= limit) {
-                return Err(MEAN_RANGE.to_string());
-            }
+            self.restore_block_float(&mut work, width, &mut predictions)?;
             for (v, row) in work.chunks_exact(width).enumerate() {
                 for (c, &value) in row.iter().enumerate() {
                     block[c * height + v] = value as i64; // an integer within 2**32: exact

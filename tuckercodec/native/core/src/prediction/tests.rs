@@ -147,3 +147,62 @@ fn exact_floor_is_floor() {
     }
     assert!(exact_floor(f64::NAN).is_nan());
 }
+
+/// `restore_values` of residual columns given as a stream: the same floats as `restore_columns`
+/// then the product by each column's step, on any number of threads.
+#[test]
+fn restore_values_matches_restore_columns_times_steps() {
+    let (faces, count) = grid(11);
+    let plan = plan_of(&faces, 4, count);
+    let width = 19; // two full blocks and a narrower one
+    let values = pseudo_random(count * width, 3, 1 << 20);
+    let residual = plan.residuals(&values, width).unwrap().unwrap();
+    let mut columns: Vec<i64> = (0..width)
+        .flat_map(|c| residual.iter().skip(c).step_by(width).copied())
+        .collect();
+    let (planes, raw) = crate::streams::pack_planes(&columns);
+    let steps: Vec<f32> = (0..width).map(|c| 0.001 * (c as f32 + 1.0)).collect();
+    plan.restore_columns(&mut columns, count).unwrap();
+    let mut integer = plan.clone();
+    integer.exact_in_float = false;
+    for threads in [1, 2, 3] {
+        for plan in [&plan, &integer] {
+            let mut out = vec![0.0; count * width];
+            plan.restore_values(&raw, planes, count, &steps, &mut out, threads)
+                .unwrap();
+            for (v, row) in out.chunks_exact(width).enumerate() {
+                for (c, &value) in row.iter().enumerate() {
+                    let expected = columns[c * count + v] as f64 * f64::from(steps[c]);
+                    assert_eq!(value.to_bits(), expected.to_bits());
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn restore_values_refuses_bad_sizes_and_values_out_of_range() {
+    let (faces, count) = grid(5);
+    let plan = plan_of(&faces, 4, count);
+    let steps = [1.0f32; 9];
+    let mut out = vec![0.0; count * 9];
+    // a stream that does not fit the columns, and columns shorter than the mesh
+    assert!(plan
+        .restore_values(&[0; 5], 1, count, &steps, &mut out, 2)
+        .is_err());
+    let mut short = vec![0.0; (count - 1) * 9];
+    let raw = vec![0u8; (count - 1) * 9];
+    assert!(plan
+        .restore_values(&raw, 1, count - 1, &steps, &mut short, 2)
+        .is_err());
+    // residuals that push a restored value beyond 2**32, in the last block only
+    let mut stream = vec![0i64; count * 9];
+    for v in 0..count {
+        stream[8 * count + v] = (1 << 31) - 1;
+    }
+    let (planes, raw) = crate::streams::pack_planes(&stream);
+    for threads in [1, 2] {
+        let result = plan.restore_values(&raw, planes, count, &steps, &mut out, threads);
+        assert_eq!(result, Err(MEAN_RANGE.to_string()));
+    }
+}

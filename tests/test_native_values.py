@@ -1,0 +1,73 @@
+"""The compiled core's fused decoding of a mesh-predicted qmat section (U1): from the stream's
+bytes to the dequantized floats in one pass, on threads, against the pure-Python reference
+(``decode_matrix(...).values()``): the same floats to the bit, or the same error."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pytest
+
+from tests.test_native_prediction import assert_same, both, random_faces
+from tuckercodec.format import qmat, streams
+from tuckercodec.model.topology import MeshPrediction
+from tuckercodec.system import native
+
+
+@pytest.fixture(autouse=True)
+def _needs_core() -> None:
+    if native.core() is None:
+        pytest.skip("the compiled core is not installed (python -m tools.build_native)")
+
+
+def variants(
+    rng: np.random.Generator, params: dict[str, Any], payload: bytes, size: int
+) -> list[tuple[dict[str, Any], bytes]]:
+    """The section as encoded, with every column on predictor 2, and broken ways."""
+    cols = len(params["predict"])
+    meaned = dict(params, predict=bytes([qmat.PREDICT_MEAN] * cols))
+    wild = dict(meaned)
+    stream = rng.integers(-(2**31), 2**31, size=size)
+    wild_payload, wild["planes"] = streams.pack_integers(stream, level=1)
+    return [
+        (params, payload),
+        (meaned, payload),  # the residuals of other predictors restored with 2
+        (wild, wild_payload),  # values that leave the range of predictor 2
+        (meaned, payload[: len(payload) // 2]),  # a cut zstd frame
+        (dict(meaned, steps=params["steps"][:-1]), payload),  # steps of the wrong length
+    ]
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_mesh_sections_decode_to_the_same_values(seed: int) -> None:
+    rng = np.random.default_rng(300 + seed)
+    count = int(rng.integers(3, 150))
+    faces = random_faces(rng, count, 2 * count)
+    cols = int(rng.integers(1, 40))  # up to five blocks of columns, the threads share them
+    values = np.cumsum(rng.integers(-500, 501, size=(count, cols)), axis=0)
+    steps = rng.uniform(1e-4, 1.0, size=cols).astype(np.float32)
+    matrix = qmat.QuantizedMatrix(values, steps)
+    params, payload = qmat.encode_matrix(matrix, MeshPrediction(faces, count), level=1)
+    for mutated, data in variants(rng, params, payload, count * cols):
+        for tools in [True, False]:
+
+            def decode(
+                mutated: dict[str, Any] = mutated, data: bytes = data, tools: bool = tools
+            ) -> Any:
+                mesh = lambda: MeshPrediction(faces, count)  # noqa: E731
+                return qmat.decode_values(data, mutated, mesh, "test", coding_tools=tools)
+
+            def reference(
+                mutated: dict[str, Any] = mutated, data: bytes = data, tools: bool = tools
+            ) -> Any:
+                mesh = MeshPrediction(faces, count)
+                return qmat.decode_matrix(data, mutated, mesh, "test", coding_tools=tools)
+
+            fused, pure = both(decode)
+            assert_same(fused, pure)
+            with native.pure_python():
+                expected = both(reference)[1]
+            if isinstance(expected, qmat.QuantizedMatrix):
+                expected = expected.values()
+            assert_same(fused, expected)

@@ -1,0 +1,254 @@
+//! Predictor 2's columns of a qmat section straight from their byte planes to the dequantized
+//! float64 matrix (`decode_matrix(...).values()` of `tuckercodec/format/qmat.py`) in one pass,
+//! without the section's int64 integers: a block of columns at a time, the blocks shared
+//! between threads (columns do not depend on each other, so the bits do not depend on them).
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+use super::{MeanPlan, PredictionError, MEAN_LIMIT, MEAN_RANGE};
+use crate::streams::unzigzag;
+
+/// Columns restored at once: a block's floats of a 10,000-vertex mesh stay in a core's
+/// second-level cache.
+pub const VALUE_BLOCK: usize = 8;
+
+/// The most threads [`MeanPlan::restore_values`] starts.
+pub const MAX_THREADS: usize = 8;
+
+/// The threads worth starting for `blocks` blocks of work on this machine (at least 1).
+pub fn thread_count(blocks: usize) -> usize {
+    let available = std::thread::available_parallelism().map_or(1, |n| n.get());
+    available.min(MAX_THREADS).min(blocks).max(1)
+}
+
+impl MeanPlan {
+    /// The (`height`, `steps.len()`) float64 matrix, row after row, into `out`: column c is
+    /// predictor 2's restoration of the stream's c-th run of `height` integers (zigzagged in
+    /// `planes` byte planes, `raw` holding exactly `steps.len() * height * planes` bytes),
+    /// times `steps[c]` as float64, as `np.multiply(q, steps.astype(float64))` computes it.
+    ///
+    /// Errors: a caller's error (sizes that do not fit together) or [`MEAN_RANGE`] when a
+    /// restored value leaves +-`MEAN_LIMIT` (`out` is then left partly written).
+    pub fn restore_values(
+        &self,
+        raw: &[u8],
+        planes: usize,
+        height: usize,
+        steps: &[f32],
+        out: &mut [f64],
+        threads: usize,
+    ) -> Result<(), PredictionError> {
+        let width = steps.len();
+        let count = width.checked_mul(height);
+        if !(1..=8).contains(&planes)
+            || count.and_then(|n| n.checked_mul(planes)) != Some(raw.len())
+            || count != Some(out.len())
+        {
+            return Err(format!(
+                "{} bytes of {planes} planes and {} values are not {width} columns of {height}",
+                raw.len(),
+                out.len()
+            ));
+        }
+        if width == 0 {
+            return Ok(());
+        }
+        if height < self.vertex_count || height == 0 {
+            return Err(format!(
+                "columns of {height} values, fewer than the {} the steps index",
+                self.vertex_count
+            ));
+        }
+        let count = width * height;
+        let blocks = width.div_ceil(VALUE_BLOCK);
+        let next = AtomicUsize::new(0);
+        let output = Mutex::new(out);
+        let worker = || -> Result<(), PredictionError> {
+            let mut work = Vec::new();
+            let mut scratch = Vec::new();
+            let mut predictions = Vec::new();
+            loop {
+                let block = next.fetch_add(1, Ordering::Relaxed);
+                if block >= blocks {
+                    return Ok(());
+                }
+                let first = block * VALUE_BLOCK;
+                let block_width = VALUE_BLOCK.min(width - first);
+                self.block_values(
+                    raw,
+                    planes,
+                    count,
+                    height,
+                    first,
+                    block_width,
+                    &mut work,
+                    &mut scratch,
+                    &mut predictions,
+                )?;
+                let mut out = output.lock().unwrap_or_else(|e| e.into_inner());
+                let steps = &steps[first..first + block_width];
+                for (row, values) in out
+                    .chunks_exact_mut(width)
+                    .zip(work.chunks_exact(block_width))
+                {
+                    for ((slot, &value), &step) in row[first..first + block_width]
+                        .iter_mut()
+                        .zip(values)
+                        .zip(steps)
+                    {
+                        // an exact integer: through int64 as numpy's product of q reads it
+                        *slot = (value as i64) as f64 * f64::from(step);
+                    }
+                }
+            }
+        };
+        let threads = threads.clamp(1, blocks);
+        if threads == 1 {
+            return worker();
+        }
+        std::thread::scope(|scope| {
+            let handles: Vec<_> = (1..threads).map(|_| scope.spawn(worker)).collect();
+            let mine = worker();
+            // every thread's result, then the first error (all errors say the same)
+            let theirs: Vec<_> = handles
+                .into_iter()
+                .map(|h| {
+                    h.join()
+                        .unwrap_or_else(|_| Err("a restoring thread failed".into()))
+                })
+                .collect();
+            theirs.into_iter().fold(mine, |all, one| all.and(one))
+        })
+    }
+
+    /// Columns `first..first + block_width` restored into `work` (row after row, the block's
+    /// columns side by side) as exact integers in float64, checked against +-`MEAN_LIMIT`.
+    #[allow(clippy::too_many_arguments)]
+    fn block_values(
+        &self,
+        raw: &[u8],
+        planes: usize,
+        count: usize,
+        height: usize,
+        first: usize,
+        block_width: usize,
+        work: &mut Vec<f64>,
+        scratch: &mut Vec<u64>,
+        predictions: &mut Vec<f64>,
+    ) -> Result<(), PredictionError> {
+        work.clear();
+        work.resize(height * block_width, 0.0);
+        scratch.clear();
+        scratch.resize(height, 0);
+        for c in 0..block_width {
+            let start = (first + c) * height;
+            scratch.fill(0);
+            for plane in 0..planes {
+                let bytes = &raw[plane * count + start..plane * count + start + height];
+                for (value, &byte) in scratch.iter_mut().zip(bytes) {
+                    *value |= u64::from(byte) << (8 * plane);
+                }
+            }
+            for (v, &value) in scratch.iter().enumerate() {
+                work[v * block_width + c] = unzigzag(value) as f64;
+            }
+        }
+        if self.exact_in_float && block_width == VALUE_BLOCK {
+            self.restore_block_fixed::<VALUE_BLOCK>(work, predictions)
+        } else if self.exact_in_float {
+            self.restore_block_float(work, block_width, predictions)
+        } else {
+            // a crafted mesh: the int64 steps of `mean_accumulate`, a column at a time
+            let mut column = vec![0i64; height];
+            for c in 0..block_width {
+                for (v, slot) in column.iter_mut().enumerate() {
+                    *slot = work[v * block_width + c] as i64;
+                }
+                self.restore_column_integer(&mut column)?;
+                for (v, &value) in column.iter().enumerate() {
+                    work[v * block_width + c] = value as f64;
+                }
+            }
+            Ok(())
+        }
+    }
+
+    /// [`MeanPlan::restore_block_float`] for a block of exactly `W` columns: the same sums in
+    /// the same order, with the width known to the compiler (the sums stay in registers and
+    /// each source's `W` values are added without a loop over a slice of unknown length).
+    fn restore_block_fixed<const W: usize>(
+        &self,
+        work: &mut [f64],
+        predictions: &mut Vec<f64>,
+    ) -> Result<(), PredictionError> {
+        for span in self.step_ends.windows(2) {
+            // a step's predictions all read the values before the step
+            predictions.clear();
+            predictions.resize((span[1] - span[0]) * W, 0.0f64);
+            for (j, out) in (span[0]..span[1]).zip(predictions.chunks_exact_mut(W)) {
+                let count = self.counts[j] as f64;
+                let mut sums = [1.5 * count; W];
+                let (start, stop) = (self.pointers[j], self.pointers[j + 1]);
+                for (&column, &weight) in self.columns[start..stop]
+                    .iter()
+                    .zip(&self.weights[start..stop])
+                {
+                    let base = column as usize * W;
+                    let values: &[f64; W] = work[base..base + W]
+                        .try_into()
+                        .expect("a slice of W values");
+                    for (sum, &value) in sums.iter_mut().zip(values) {
+                        *sum += weight * value;
+                    }
+                }
+                let divisor = 3.0 * count;
+                for (slot, &sum) in out.iter_mut().zip(&sums) {
+                    *slot = super::exact_floor(sum / divisor);
+                }
+            }
+            for (j, sums) in (span[0]..span[1]).zip(predictions.chunks_exact(W)) {
+                let base = self.rows[j] as usize * W;
+                for (value, &prediction) in work[base..base + W].iter_mut().zip(sums) {
+                    *value += prediction;
+                }
+            }
+        }
+        let limit = MEAN_LIMIT as f64;
+        // the comparison fails for NaN too, as the Python's min and max do
+        if !work.iter().all(|&v| v >= -limit && v <= limit) {
+            return Err(MEAN_RANGE.to_string());
+        }
+        Ok(())
+    }
+
+    /// The float steps of [`MeanPlan::restore_columns`] on one block (`work` row after row,
+    /// `width` columns), then the block's range check.
+    pub(super) fn restore_block_float(
+        &self,
+        work: &mut [f64],
+        width: usize,
+        predictions: &mut Vec<f64>,
+    ) -> Result<(), PredictionError> {
+        for span in self.step_ends.windows(2) {
+            // a step's predictions all read the values before the step
+            predictions.clear();
+            predictions.resize((span[1] - span[0]) * width, 0.0f64);
+            for (j, sums) in (span[0]..span[1]).zip(predictions.chunks_exact_mut(width)) {
+                self.float_predictions(j, work, width, sums);
+            }
+            for (j, sums) in (span[0]..span[1]).zip(predictions.chunks_exact(width)) {
+                let base = self.rows[j] as usize * width;
+                for (value, &prediction) in work[base..base + width].iter_mut().zip(sums) {
+                    *value += prediction;
+                }
+            }
+        }
+        let limit = MEAN_LIMIT as f64;
+        // the comparison fails for NaN too, as the Python's min and max do
+        if !work.iter().all(|&v| v >= -limit && v <= limit) {
+            return Err(MEAN_RANGE.to_string());
+        }
+        Ok(())
+    }
+}
