@@ -38,6 +38,18 @@ MIB = 1 << 20
 # sequences
 
 
+def package_environment(folder: str | Path) -> dict[str, str]:
+    """The environment of a child that runs the package in ``folder`` (first on its
+    ``PYTHONPATH``). A revision extracted with ``git archive`` holds sources only, no compiled
+    core, so it runs in pure Python: a ``TUCKERCODEC_NATIVE=1`` of this process (which CI sets,
+    to require its own core) must not make that child fail. The working tree's package, run
+    with ``folder`` the repository itself, keeps the setting."""
+    environment = {**os.environ, "PYTHONPATH": str(folder)}
+    if Path(folder).resolve() != REPO:
+        environment.pop("TUCKERCODEC_NATIVE", None)
+    return environment
+
+
 def in_shared_data(names: Iterable[str]) -> tuple[list[Path], list[Path]]:
     """The paths of ``names`` in :data:`SHARED_DATA`: ``(present, absent)``, each in order."""
     paths = [SHARED_DATA / name for name in names]

@@ -230,7 +230,7 @@ class Package:
 
     @property
     def env(self) -> dict[str, str] | None:
-        return None if self.folder is None else dict(os.environ, PYTHONPATH=str(self.folder))
+        return None if self.folder is None else common.package_environment(self.folder)
 
 
 def encode_command(

@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import subprocess
 import sys
 import tarfile
@@ -76,7 +75,7 @@ def baseline_sizes(revision: str, jobs: list[tuple[str, list[float]]]) -> dict[s
     with tempfile.TemporaryDirectory(prefix="tuckercodec-baseline-") as folder:
         with tarfile.open(fileobj=BytesIO(archive)) as tar:
             tar.extractall(folder, filter="data")
-        environment = {**os.environ, "PYTHONPATH": folder}
+        environment = common.package_environment(folder)
         result = subprocess.run(
             [sys.executable, "-c", _CHILD, json.dumps(jobs)],
             check=True,

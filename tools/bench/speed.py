@@ -181,7 +181,7 @@ class Package:
         done = subprocess.run(
             [sys.executable, "-c", _CHILD, json.dumps(job)],
             cwd=self.folder,
-            env={**os.environ, "PYTHONPATH": str(self.folder)},
+            env=common.package_environment(self.folder),
             capture_output=True,
             text=True,
             check=False,
@@ -347,7 +347,7 @@ def large_file(workdir: Path, old: Package, revision: str) -> tuple[Path, str]:
     subprocess.run(
         command,
         cwd=old.folder,
-        env={**os.environ, "PYTHONPATH": str(old.folder)},
+        env=common.package_environment(old.folder),
         check=True,
         capture_output=True,
     )
