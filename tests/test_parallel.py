@@ -41,13 +41,15 @@ _SIGINT = signal.getsignal(signal.SIGINT)
 
 
 def _after(item: int, folder: str) -> int:
-    """Item 0 finishes only once another item has (a file every other item leaves in
-    ``folder``, polled for at most a minute), whatever the machine's speed; the others at once.
-    Any other item will do: the scheduler may queue item 1 behind item 0 on the same worker,
-    but not all five others."""
+    """Item 0 finishes only once two other items have started (a file every other item leaves
+    in ``folder``, polled for at most a minute), whatever the machine's speed; the others at
+    once. Two, not one: the first of them has then returned before the second began, so its
+    result is reported before item 0's (with one, the item that wrote the file and item 0 could
+    finish together, and either be reported first). Any two will do: the scheduler may queue
+    item 1 behind item 0 on the same worker, but not all five others."""
     if item == 0:
         deadline = time.monotonic() + 60.0
-        while not any(Path(folder).iterdir()) and time.monotonic() < deadline:
+        while len(list(Path(folder).iterdir())) < 2 and time.monotonic() < deadline:
             time.sleep(0.01)
     else:
         (Path(folder) / str(item)).touch()
@@ -151,11 +153,12 @@ def executor(request) -> Executor:
 def test_map_gives_results_in_item_order_whatever_finishes_first(executor, tmp_path):
     # item 0 waits on one worker for another item, which another worker runs: on workers item
     # 0 cannot complete first, however slow the machine (in process the items run in order,
-    # so item 1's file is there from the start)
+    # so items 1 and 2's files are there from the start)
     folder = tmp_path / "as_completed"
     folder.mkdir()
     if executor.workers == 1:
         (folder / "1").touch()
+        (folder / "2").touch()
     order = [done.index for done in executor.as_completed(_after, range(6), str(folder))]
     assert sorted(order) == list(range(6))
     if executor.workers > 1:
@@ -163,6 +166,7 @@ def test_map_gives_results_in_item_order_whatever_finishes_first(executor, tmp_p
     ready = tmp_path / "map"
     ready.mkdir()
     (ready / "1").touch()  # item 0 need not wait here: map's order is the items'
+    (ready / "2").touch()
     assert executor.map(_after, range(6), str(ready)) == [0, 10, 20, 30, 40, 50]
     assert executor.map(_after, [], str(ready)) == []
 

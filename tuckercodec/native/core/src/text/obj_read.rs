@@ -414,7 +414,8 @@ const POWERS_OF_TEN: [f64; 23] = [
 fn simple_decimal(token: &[u8]) -> Option<f64> {
     let negative = token.first() == Some(&b'-');
     let unsigned = &token[usize::from(matches!(token.first(), Some(b'+' | b'-')))..];
-    // at most 19 digits and a point: the integer cannot overflow u64
+    // at most 19 digits and a point; 20 digits without one would overflow u64, and go to the
+    // general parse (checked below, so that no build wraps or panics)
     if unsigned.is_empty() || unsigned.len() > 20 {
         return None;
     }
@@ -423,7 +424,7 @@ fn simple_decimal(token: &[u8]) -> Option<f64> {
     for (at, &c) in unsigned.iter().enumerate() {
         let digit = c.wrapping_sub(b'0');
         if digit < 10 {
-            mantissa = mantissa * 10 + u64::from(digit);
+            mantissa = mantissa.checked_mul(10)?.checked_add(u64::from(digit))?;
         } else if c == b'.' && point.is_none() {
             point = Some(at);
         } else {
