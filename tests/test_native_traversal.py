@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from tests.support.sequences import shared_sequence
+from tests.test_format_traversal import grid
 from tuckercodec import Decoder
 from tuckercodec.errors import TuckerCodecError
 from tuckercodec.format import faces as face_sections
@@ -135,14 +136,6 @@ def test_the_shared_sequences_walk_the_same_both_ways(name):
 
 
 # --------------------------------------------------------------------------------- random meshes
-
-
-def grid(n: int, quads: bool = False) -> np.ndarray:
-    index = np.arange(n * n).reshape(n, n)
-    a, b, c, d = index[:-1, :-1], index[1:, :-1], index[1:, 1:], index[:-1, 1:]
-    if quads:
-        return np.stack([a, b, c, d], -1).reshape(-1, 4)
-    return np.concatenate([np.stack([a, b, c], -1), np.stack([a, c, d], -1)]).reshape(-1, 3)
 
 
 def random_mesh(rng: np.random.Generator) -> tuple[np.ndarray, int]:
