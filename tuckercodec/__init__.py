@@ -75,6 +75,9 @@ _PUBLIC = {
     "sted": "measures.perceptual",
     "bpfv": "measures.rate",
     "MeshSequence": "model.sequence",
+    "Attribute": "model.attributes",
+    "FaceSet": "model.attributes",
+    "Field": "model.attributes",
 }
 
 if TYPE_CHECKING:
@@ -106,6 +109,7 @@ if TYPE_CHECKING:
     from .measures.distortion import kg_error, max_vertex_displacement, relative_error
     from .measures.perceptual import sted
     from .measures.rate import bpfv
+    from .model.attributes import Attribute, FaceSet, Field
     from .model.sequence import MeshSequence
 
 
@@ -128,6 +132,7 @@ def __dir__() -> list[str]:
 
 __all__ = [
     "Analysis",
+    "Attribute",
     "ChecksumError",
     "Decoder",
     "DependencyError",
@@ -135,6 +140,8 @@ __all__ = [
     "EncodeReport",
     "EncodeResult",
     "Encoder",
+    "FaceSet",
+    "Field",
     "FileInfo",
     "FormatError",
     "FrameSource",

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InputError
+from .attributes import Attribute, FaceSet, Field, check_attached
 from .topology import checked_face_table
 
 #: Frames per second assumed where a format needs a rate and the sequence has none: 24, the
@@ -44,6 +45,12 @@ class MeshSequence:
         meters_per_unit: the length of one unit of the positions in metres (USD's
             ``metersPerUnit``: 0.01 for centimetres, 1.0 for metres), if known.
         up_axis: ``"Y"`` or ``"Z"``, the axis that points up in the source, if known.
+        attributes: static values per vertex, corner or face (UVs, normals, colours...),
+            :class:`~.attributes.Attribute`; their corners and faces are in the order of
+            :attr:`faces`.
+        face_sets: named sets of faces (materials, groups), :class:`~.attributes.FaceSet`.
+        fields: animated values per vertex or face (velocities, simulation data),
+            :class:`~.attributes.Field`, one row per frame.
     """
 
     vertices: np.ndarray
@@ -53,6 +60,9 @@ class MeshSequence:
     time_codes: np.ndarray | None = None
     meters_per_unit: float | None = None
     up_axis: str | None = None
+    attributes: list[Attribute] = field(default_factory=list)
+    face_sets: list[FaceSet] = field(default_factory=list)
+    fields: list[Field] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         vertices = np.asarray(self.vertices)
@@ -90,6 +100,35 @@ class MeshSequence:
             self.time_codes = checked_time_codes(self.time_codes, self.frame_count)
         self.meters_per_unit = checked_meters_per_unit(self.meters_per_unit)
         self.up_axis = checked_up_axis(self.up_axis)
+        self.attributes, self.face_sets = list(self.attributes), list(self.face_sets)
+        self.fields = list(self.fields)
+        check_attached(
+            self.attributes,
+            self.face_sets,
+            self.fields,
+            self.frame_count,
+            self.vertex_count,
+            self.faces,
+        )
+
+    @property
+    def attached(self) -> bool:
+        """Whether the sequence carries attributes, face sets or fields."""
+        return bool(self.attributes or self.face_sets or self.fields)
+
+    def attribute_named(self, name: str) -> Attribute:
+        """The attribute named ``name`` (KeyError if none)."""
+        for attribute in self.attributes:
+            if attribute.name == name:
+                return attribute
+        raise KeyError(name)
+
+    def field_named(self, name: str) -> Field:
+        """The field named ``name`` (KeyError if none)."""
+        for item in self.fields:
+            if item.name == name:
+                return item
+        raise KeyError(name)
 
     @property
     def frame_count(self) -> int:

@@ -45,6 +45,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..system.reading import open_input
+from .attributes import Attribute, FaceSet, Field, check_attached
 from .sequence import (
     MeshSequence,
     checked_meters_per_unit,
@@ -87,6 +88,11 @@ class FrameSource(abc.ABC):
     time_codes: np.ndarray | None
     meters_per_unit: float | None = None
     up_axis: str | None = None
+    #: static attributes and face sets, read when the source is opened (empty by default)
+    attributes: list[Attribute]
+    face_sets: list[FaceSet]
+    #: the names of the source's animated fields; :meth:`read_fields` reads them
+    field_names: list[str]
 
     #: The attributes that hold open files or processes: ``None`` when closed or unpickled,
     #: opened again on first use (each needs a class-level default of ``None``).
@@ -105,8 +111,13 @@ class FrameSource(abc.ABC):
         time_codes: object = None,
         meters_per_unit: object = None,
         up_axis: object = None,
+        attributes: list[Attribute] | None = None,
+        face_sets: list[FaceSet] | None = None,
+        field_names: list[str] | None = None,
     ) -> None:
-        """Set the description, checked as MeshSequence checks it; errors name ``path``."""
+        """Set the description, checked as MeshSequence checks it; errors name ``path``.
+        ``field_names``: the fields :meth:`_read_fields` reads (a source with fields
+        overrides it)."""
         self.path = None if path is None else os.fspath(path)
         try:
             if frame_count < 1 or vertex_count < 1:
@@ -128,6 +139,12 @@ class FrameSource(abc.ABC):
                 self.time_codes = checked_time_codes(np.asarray(time_codes), frame_count)
             self.meters_per_unit = checked_meters_per_unit(meters_per_unit)
             self.up_axis = checked_up_axis(up_axis)
+            self.attributes = list(attributes or [])
+            self.face_sets = list(face_sets or [])
+            self.field_names = list(field_names or [])
+            check_attached(
+                self.attributes, self.face_sets, [], frame_count, self.vertex_count, self.faces
+            )
         except InputError as error:
             raise InputError(error.reason, path=error.path or path, frame=error.frame) from None
 
@@ -169,6 +186,25 @@ class FrameSource(abc.ABC):
         """The frames of a valid, non-empty range as an (n, K, 3) array of real numbers;
         :meth:`read` converts and checks them."""
 
+    def read_fields(self, start: int, stop: int) -> list[Field]:
+        """The animated fields (:attr:`field_names`) of frames ``start`` to ``stop``
+        (excluded), each with ``stop - start`` rows; an InputError names the file and frame."""
+        start, stop = operator.index(start), operator.index(stop)
+        if not 0 <= start <= stop <= self.frame_count:
+            raise ValueError(
+                f"frames {start}:{stop} are not a range of the {self.frame_count} frames"
+            )
+        if not self.field_names:
+            return []
+        fields = self._read_fields(start, stop)
+        if [item.name for item in fields] != self.field_names:  # a reader's bug
+            raise RuntimeError(f"{type(self).__name__} read fields {[f.name for f in fields]}")
+        return fields
+
+    def _read_fields(self, start: int, stop: int) -> list[Field]:
+        """The fields of a valid range; a source with :attr:`field_names` overrides it."""
+        raise NotImplementedError(f"{type(self).__name__} reads no fields")
+
     def blocks(self, size: int) -> Iterator[tuple[int, np.ndarray]]:
         """Every frame in order, ``size`` at a time: ``(start, read(start, start + size))``."""
         if size < 1:
@@ -189,6 +225,9 @@ class FrameSource(abc.ABC):
                 time_codes=self.time_codes,
                 meters_per_unit=self.meters_per_unit,
                 up_axis=self.up_axis,
+                attributes=self.attributes,
+                face_sets=self.face_sets,
+                fields=self.read_fields(0, self.frame_count),
             )
         except InputError as error:
             raise InputError(
@@ -247,10 +286,19 @@ class SequenceFrames(FrameSource):
             sequence.time_codes,
             sequence.meters_per_unit,
             sequence.up_axis,
+            sequence.attributes,
+            sequence.face_sets,
+            [item.name for item in sequence.fields],
         )
 
     def _read(self, start: int, stop: int) -> np.ndarray:
         return self.sequence.vertices[start:stop].copy()
+
+    def _read_fields(self, start: int, stop: int) -> list[Field]:
+        return [
+            Field(item.name, item.values[start:stop], item.domain, item.role)
+            for item in self.sequence.fields
+        ]
 
     def load(self, progress: bool = False) -> MeshSequence:
         return self.sequence
