@@ -17,6 +17,9 @@ def test_public_surface():
     assert sorted(tuckercodec.__all__) == sorted(
         [
             "Analysis",
+            "Attribute",
+            "FaceSet",
+            "Field",
             "ChecksumError",
             "Decoder",
             "DependencyError",
