@@ -30,7 +30,8 @@ from typing import Any
 import numpy as np
 
 from .errors import FormatError
-from .format import faces, names, qmat, residual
+from .format import attributes, face_order, face_sets, faces, names, qmat, residual
+from .format.attachments import find_attachments
 from .format.container import parse_container
 from .format.disk import FileRanges, open_file_container, read_file
 from .format.header import FileInfo, read_header
@@ -38,6 +39,7 @@ from .format.limits import DEFAULT_LIMITS, Limits, check_limit
 from .format.reconstruction import reconstruct_frames, reconstruction_basis
 from .format.sections import Section
 from .format.segments import BASIS_OWN, BASIS_SHARED, SegmentEntry
+from .model.attributes import Attribute, FaceSet, Field
 from .model.sequence import MeshSequence, default_frame_names
 from .model.topology import MeshPrediction
 
@@ -132,11 +134,16 @@ class Decoder:
                 "section FACE",
                 limits,
             )
+            self._coded_faces = self.faces  # as FACE decodes them: U1's mesh predictors' faces
             if not self.segmented:  # §5 steps 16-17 in order: U1, U3, CORE, CENT, then NAME
                 self.segment_factors(0)
             self.frame_names = self._decode_names()
             if self._container.corrections and not self.segmented:
                 self._segments[0] = self._with_corrections(self._segments[0], self._index[0])
+            self._attached = find_attachments(self._container.sections)
+            self.faces = self._faces_in_given_order()
+            self.attributes: list[Attribute] = self._decode_attributes()
+            self.face_sets: list[FaceSet] = self._decode_face_sets()
 
     @property
     def corrections(self) -> str | None:
@@ -195,7 +202,7 @@ class Decoder:
         # bound K by the file's size, and only if a column of U1 is predicted
         # (the parents of predictor 1 at once; predictor 2's steps only if a column uses it)
         if self._mesh is None:
-            self._mesh = MeshPrediction(self.faces, self.info.vertices)
+            self._mesh = MeshPrediction(self._coded_faces, self.info.vertices)
         return self._mesh
 
     def _decode_u1(self, section_id: str) -> qmat.QuantizedMatrix:
@@ -387,6 +394,85 @@ class Decoder:
             part = self.segment_factors(number)
             if part.corrections is not None:  # every chunk's frame and values (R29, R41)
                 self._corrected(number, part, np.arange(part.stop - part.start))
+        self.fields()  # every field's sections
+
+    # -- format 1.5: the faces' order, attributes, face sets and fields ---------------------------
+
+    def _faces_in_given_order(self) -> np.ndarray:
+        """The faces in the order they were given (ORDER, §6.10), or as FACE decodes them."""
+        section = self._attached.order
+        if section is None:
+            return self.faces
+        order = face_order.decode_face_order(
+            self._container.payload(self._data, section),
+            section.params,
+            len(self.faces),
+            "section ORDER",
+        )
+        return face_order.in_given_order(self.faces, order)
+
+    def _decode_attributes(self) -> list[Attribute]:
+        """Every ATTR.n, in order (§6.11): parameters, sizes, then the payload."""
+        mesh = attributes.Mesh(self.info.vertices, self.faces)
+        decoded = []
+        for section in self._attached.attributes:
+            where = f"section {section.id}"
+            params = attributes.check_attribute_params(
+                section.params, mesh, section.length, self.limits, where
+            )
+            payload = self._container.payload(self._data, section)
+            decoded.append(attributes.decode_attribute(payload, params, mesh, where))
+        names_seen = [a.name for a in decoded]
+        for number, name in enumerate(names_seen):
+            if name in names_seen[:number]:
+                raise FormatError(
+                    f"two attributes are named {name!r}",
+                    rule=attributes.RULE,
+                    field=f"section {self._attached.attributes[number].id}.name",
+                )
+        return decoded
+
+    def _decode_face_sets(self) -> list[FaceSet]:
+        section = self._attached.face_sets
+        if section is None:
+            return []
+        return face_sets.decode_face_sets(
+            self._container.payload(self._data, section),
+            section.params,
+            len(self.faces),
+            self.limits,
+            "section FSET",
+        )
+
+    @property
+    def field_names(self) -> list[str]:
+        """The names of the file's animated fields (format 1.5, §6.13), in order."""
+        return [str(section.params.get("name")) for section in self._attached.fields]
+
+    def fields(self, frames: FrameSelection = None) -> list[Field]:
+        """The file's animated fields for the selected frames (each decoded to its target,
+        §6.13), in order."""
+        if not self._attached.fields:
+            return []
+        from .format.fields import decode_field
+
+        chosen = self._selected(frames)
+        mesh = self._mesh_prediction()
+        with self._naming_path():
+            return [
+                decode_field(
+                    number,
+                    self._container.section,
+                    self._payload,
+                    self.info.vertices,
+                    len(self.faces),
+                    self.info.frames,
+                    mesh,
+                    self.limits,
+                    chosen,
+                )
+                for number in range(len(self._attached.fields))
+            ]
 
     def _decode_names(self) -> list[str]:
         name_section = self._container.section("NAME")
@@ -529,6 +615,9 @@ class Decoder:
             time_codes=selected_time_codes(self.info, chosen),
             meters_per_unit=self.info.meters_per_unit,
             up_axis=self.info.up_axis,
+            attributes=self.attributes,
+            face_sets=self.face_sets,
+            fields=self.fields(chosen),
         )
 
 

@@ -133,10 +133,14 @@ class Encoder:
         # The faces' coding (Python loops) runs beside the decomposition (BLAS, which releases
         # the GIL): on two cores about the shorter of the two is saved. The same bytes.
         with ThreadPoolExecutor(max_workers=1) as pool:
-            connectivity = pool.submit(Connectivity.of, sequence, options.level)
+            connectivity = pool.submit(
+                Connectivity.of, sequence, options.level, options.face_order, options.attachments
+            )
             analysis = analyze(sequence) if analysis is None else analysis
             coded = connectivity.result()
         work = WholeWorkspace(sequence, analysis, options.level, options.select, coded)
+        if options.attachments and sequence.fields:
+            work.attached += self._field_sections(sequence, coded)
         if options.corrections:
             return self._corrected(work, corrections.Corrector(options, sequence), start)
         quantized, error2, trials = self._search(work)
@@ -147,6 +151,20 @@ class Encoder:
             extra = {"exact_ranks": (exact.i, exact.k), "bound_ranks": (bound.i, bound.k)}
         extra["max_distance"], extra["max_distance_at"] = work.worst_vertex(quantized)
         return self._result(work, quantized, error2, start, trials, **extra)
+
+    def _field_sections(
+        self, sequence: MeshSequence, coded: Connectivity
+    ) -> list[tuple[dict[str, Any], bytes]]:
+        """The sections of every animated field, each meeting its own target (format 1.5)."""
+        from .fields import FieldTarget, encode_field
+
+        packed: list[tuple[dict[str, Any], bytes]] = []
+        for number, item in enumerate(sequence.fields):
+            target = FieldTarget.parse(self.options.target_of_field(item.name))
+            mesh = coded.mesh if item.domain == "vertex" else None
+            encoded = encode_field(item, number, target, mesh, self.options.level)
+            packed += encoded.sections
+        return packed
 
     def _corrected(
         self,

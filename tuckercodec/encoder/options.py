@@ -12,7 +12,9 @@ zarr codecs, ``batch`` and the command line hand it to :class:`~tuckercodec.enco
 
 from __future__ import annotations
 
+import contextlib
 import math
+import re
 from dataclasses import asdict, dataclass, fields, replace
 from typing import Any, Literal
 
@@ -60,6 +62,18 @@ class EncodeOptions:
             corrections are format 1.3 (spec §6.9).
         lossless: decode to the input's values bit for bit (mode ``"lossless"``, format 1.3),
             alone.
+        face_order: ``"auto"`` (the default) keeps the faces in the order given when the
+            sequence has data per corner or per face (UVs, materials), so that they line up
+            with the original topology, and lets the connectivity coder reorder them
+            otherwise; ``"given"`` always keeps it, ``"walk"`` never (format 1.5, §6.10).
+        field_targets: the error target of each animated field, by name: ``"rel:P"`` (a
+            relative error of P percent, Karni-Gotsman's measure generalised to the field's
+            components), ``"max:E"`` (no value farther than E, in the field's units) or
+            ``"lossless"``; a mapping, or (name, target) pairs.
+        field_target: the target of every field :attr:`field_targets` does not name (default:
+            ``"lossless"`` in mode lossless, else ``"rel:P"`` with P the positions' KG target).
+        attachments: keep the sequence's attributes, face sets and fields (the default); False
+            writes the positions and faces alone, as format 1.4 did.
 
     At most one of ``target_kg``, ``ranks`` and ``target_bpfv``; ``jobs`` or ``scheduler``, not
     both. A bad value raises ``ValueError`` naming it. Whether ranks fit the sequence is known
@@ -78,6 +92,10 @@ class EncodeOptions:
     scheduler: str | None = None
     max_error: float | str | None = None
     lossless: bool = False
+    face_order: str = "auto"
+    field_targets: Any = ()
+    field_target: str | None = None
+    attachments: bool = True
 
     def __post_init__(self) -> None:
         _refuse_two_modes(self.target_kg, self.ranks, self.target_bpfv)
@@ -122,6 +140,39 @@ class EncodeOptions:
             raise ValueError(f"scheduler must be an address, got {self.scheduler!r}")
         if self.jobs is not None and self.scheduler is not None:
             raise ValueError("give jobs or scheduler, not both")
+        if self.face_order not in FACE_ORDERS:
+            raise ValueError(
+                f"face_order must be one of {', '.join(FACE_ORDERS)}, got {self.face_order!r}"
+            )
+        pairs = (
+            self.field_targets.items()
+            if isinstance(self.field_targets, dict)
+            else self.field_targets
+        )
+        checked = []
+        for pair in pairs:
+            is_pair = isinstance(pair, (tuple, list)) and len(pair) == 2
+            if not (is_pair and isinstance(pair[0], str)):
+                raise ValueError(f"field_targets holds (name, target) pairs, got {pair!r}")
+            checked.append((pair[0], parse_field_target(pair[1], pair[0])))
+        object.__setattr__(self, "field_targets", tuple(sorted(checked)))
+        if self.field_target is not None:
+            object.__setattr__(
+                self, "field_target", parse_field_target(self.field_target, "every field")
+            )
+        if not isinstance(self.attachments, (bool, np.bool_)):
+            raise ValueError(f"attachments must be true or false, got {self.attachments!r}")
+        object.__setattr__(self, "attachments", bool(self.attachments))
+
+    def target_of_field(self, name: str) -> str:
+        """The error target of the field ``name``: its own, :attr:`field_target`, or the
+        default that follows the positions' mode."""
+        own = dict(self.field_targets).get(name)
+        if own is not None:
+            return own
+        if self.field_target is not None:
+            return self.field_target
+        return "lossless" if self.lossless else f"rel:{self.kg_target!r}"
 
     @property
     def mode(self) -> Mode:
@@ -165,6 +216,7 @@ class EncodeOptions:
         config = asdict(self)
         if self.ranks is not None:
             config["ranks"] = list(self.ranks)
+        config["field_targets"] = dict(self.field_targets)
         return config
 
     @classmethod
@@ -178,6 +230,31 @@ class EncodeOptions:
         if isinstance(values.get("ranks"), list):
             values["ranks"] = tuple(values["ranks"])
         return cls(**values)
+
+
+#: How the faces are ordered in the file (:attr:`EncodeOptions.face_order`).
+FACE_ORDERS = ("auto", "given", "walk")
+
+_FIELD_TARGET = re.compile(r"(rel|max):([0-9.eE+-]+)")
+
+
+def parse_field_target(value: object, name: str) -> str:
+    """A field's target, ``"rel:P"``, ``"max:E"`` or ``"lossless"``, checked (P and E
+    positive numbers); ValueError naming the field otherwise."""
+    text = value.strip() if isinstance(value, str) else value
+    if text == "lossless":
+        return "lossless"
+    match = _FIELD_TARGET.fullmatch(text) if isinstance(text, str) else None
+    number = None
+    if match is not None:
+        with contextlib.suppress(ValueError):
+            number = float(match.group(2))
+    if match is None or number is None or not (math.isfinite(number) and number > 0):
+        raise ValueError(
+            f"the target of {name} must be 'rel:P' (percent), 'max:E' (in the field's units) "
+            f"or 'lossless', got {value!r}"
+        )
+    return f"{match.group(1)}:{number!r}"
 
 
 #: The names of :class:`EncodeOptions`' fields: the keywords every front door takes.

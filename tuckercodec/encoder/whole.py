@@ -21,7 +21,7 @@ from .._version import __version__
 from ..decomposition.analysis import Analysis, Selection
 from ..decomposition.hosvd import project
 from ..errors import UnreachableTargetError
-from ..format import faces, names, qmat, residual, sections, streams
+from ..format import attributes, faces, names, qmat, residual, sections, streams
 from ..format.container import FORMAT_MINOR, pack_container
 from ..format.header import header_map, scene_keys
 from ..format.qmat import QuantizedMatrix
@@ -29,7 +29,7 @@ from ..format.reconstruction import factor_value_count, reconstruct_frames, reco
 from ..measures.distortion import WorstVertex
 from ..model.sequence import MeshSequence
 from ..model.topology import MeshPrediction
-from . import estimate, rdo
+from . import attachments, estimate, rdo
 from .trial import TRIAL_RATIO, Quantized, QuantizedSegment
 
 #: The largest |integer| a section may stream: after zigzag it must fit streams.MAX_PLANES bytes.
@@ -58,16 +58,47 @@ class Connectivity:
     face_codec: str
     face_section: tuple[dict[str, Any], bytes]
     name_section: tuple[dict[str, Any], bytes] | None
+    #: the sections of format 1.5 coded once (ORDER, ATTR.n, FSET): empty without attachments
+    attached: tuple[tuple[dict[str, Any], bytes], ...] = ()
+    #: the faces as a decoder returns them (given order, or the walk's)
+    decoded_faces: np.ndarray | None = None
 
     @classmethod
-    def of(cls, sequence: MeshSequence, level: int) -> Connectivity:
-        """The connectivity of ``sequence``, its sections at zstd ``level``."""
-        face = faces.encode_face_section(sequence.faces, sequence.vertex_count, level)
+    def of(
+        cls, sequence: MeshSequence, level: int, face_order: str = "auto", keep: bool = True
+    ) -> Connectivity:
+        """The connectivity of ``sequence``, its sections at zstd ``level``; with ``keep``, its
+        attributes and face sets too, the faces in the order ``face_order`` decides
+        (:func:`.attachments.keeps_face_order`)."""
+        carried = (sequence.attributes, sequence.face_sets) if keep else ([], [])
+        keep_order = bool(keep) and attachments.keeps_face_order(
+            face_order, *carried, sequence.fields
+        )
+        face, order, walk = faces.encode_face_sections(
+            sequence.faces, sequence.vertex_count, level, keep_order=keep_order
+        )
+        decoded = face.faces
+        attached_attributes, attached_sets = carried
+        if order is not None:
+            decoded = sequence.faces
+        elif walk is not None and any(carried):
+            attached_attributes, attached_sets = attachments.walk_ordered(
+                sequence.faces, walk, *carried
+            )
+        attached = attachments.static_sections(
+            attached_attributes,
+            attached_sets,
+            attributes.Mesh(sequence.vertex_count, decoded),
+            order,
+            level,
+        )
         return cls(
             MeshPrediction(sequence.faces, sequence.vertex_count),
             face.codec,
             (face.params, face.payload),
             names.encode_names(sequence.frame_names, level),
+            tuple(attached),
+            decoded,
         )
 
 
@@ -117,6 +148,8 @@ class WholeWorkspace:
         self.face_codec = connectivity.face_codec
         self.face_section = connectivity.face_section
         self.name_section = connectivity.name_section
+        # the sections of format 1.5 (ORDER, ATTR.n, FSET, then the fields' FLD.n...)
+        self.attached = list(connectivity.attached)
         self.centroid_floor_step, self.floor_error2 = self._centroid_floor()
         r1, r3 = analysis.max_ranks
         self.first_fill_values = factor_value_count(self.vertex_count, self.frame_count, r1, r3)
@@ -343,7 +376,7 @@ class WholeWorkspace:
             )
         if self.name_section is not None:
             coded["NAME"] = self.name_section
-        return [
+        packed = [
             (
                 sections.entry(
                     section_id,
@@ -355,6 +388,7 @@ class WholeWorkspace:
             for section_id in sections.WRITE_ORDER
             if section_id in coded
         ]
+        return packed[:1] + self.attached + packed[1:]
 
     def trial_bytes(self, quantized: Quantized[Ranks]) -> int:
         """The quantized sections' bytes estimated from their integers (:mod:`.estimate`), and

@@ -33,6 +33,7 @@ from ..errors import (
     TruncatedFileError,
     UnsupportedVersionError,
 )
+from .attachments import ATTACHMENTS_MINOR, attachment_codec
 from .limits import DEFAULT_LIMITS, Limits
 from .residual import CORRECTIONS
 from .sections import CODING_TOOLS, Section, read_section_table, with_coding_tools
@@ -164,7 +165,8 @@ def pack_container(
             ``crc32`` are filled in from the payload.
         flags: the preamble flags (0 in format 1.0; :data:`SEGMENTED` for a segmented file).
         minor: the format's minor version (0, or 1 for a segmented file); raised to 4 when the
-            header has a key of format 1.4 (:data:`SCENE_KEYS`).
+            header has a key of format 1.4 (:data:`SCENE_KEYS`), and to 5 when a section is
+            one of format 1.5 (:mod:`.attachments`).
         coding_tools: whether to set flag bit 1 and minor version 2 (§6.8); by default, when a
             section needs it (:func:`.sections.uses_coding_tools`). Only files that break the
             rules on purpose (conformance vectors) say ``False`` for such sections.
@@ -172,6 +174,8 @@ def pack_container(
     flags, minor = with_coding_tools([entry for entry, _ in sections], flags, minor, coding_tools)
     if any(key in header for key in SCENE_KEYS):
         minor = max(minor, SCENE_MINOR)
+    if any(attachment_codec(entry.get("id")) is not None for entry, _ in sections):
+        minor = max(minor, ATTACHMENTS_MINOR)
     table = []
     offset = 0
     for entry, payload in sections:

@@ -18,9 +18,10 @@ import numpy as np
 from ..errors import FormatError
 from ..model.topology import face_table_problem
 from . import streams
+from .face_order import encode_face_order
 from .limits import DEFAULT_LIMITS, Limits
 from .sections import FACES_DELTA, FACES_TRAVERSE, section_shape
-from .traversal import decode_traversal, encode_traversal
+from .traversal import decode_traversal, encode_traversal_ordered
 
 
 class FaceSection(NamedTuple):
@@ -38,14 +39,28 @@ def encode_face_section(
     """The smaller of faces-traverse (format 1.2, the face order becomes the walk's) and
     faces-delta (format 1.0, faces as given). Either way every face keeps its corners, their
     order and its orientation."""
+    section, _, _ = encode_face_sections(faces, vertex_count, level, keep_order=False)
+    return section
+
+
+def encode_face_sections(
+    faces: np.ndarray, vertex_count: int, level: int, *, keep_order: bool
+) -> tuple[FaceSection, tuple[dict[str, Any], bytes] | None, np.ndarray | None]:
+    """The FACE section; when ``keep_order`` asks for the faces as given and the walk is
+    chosen, the ORDER section that restores their order (format 1.5, §6.10): the smaller
+    of faces-delta alone and faces-traverse with ORDER; and when the walk is chosen, its
+    order (the given number of each walked face)."""
     table = np.asarray(faces, dtype=np.int64)
     delta_params, delta_payload = encode_faces(table, level)
-    walk_params, walk_payload, walked = encode_traversal(table, vertex_count, level)
-    if len(walk_payload) < len(delta_payload) and _walk_holds(
+    walk_params, walk_payload, walked, order = encode_traversal_ordered(table, vertex_count, level)
+    order_section = encode_face_order(order, level) if keep_order else None
+    walk_size = len(walk_payload) + (0 if order_section is None else len(order_section[1]))
+    if walk_size < len(delta_payload) and _walk_holds(
         walk_params, walk_payload, walked, table, vertex_count
     ):
-        return FaceSection(FACES_TRAVERSE, walk_params, walk_payload, walked)
-    return FaceSection(FACES_DELTA, delta_params, delta_payload, table)
+        walk = FaceSection(FACES_TRAVERSE, walk_params, walk_payload, walked)
+        return walk, order_section, order
+    return FaceSection(FACES_DELTA, delta_params, delta_payload, table), None, None
 
 
 def _walk_holds(

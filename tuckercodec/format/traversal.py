@@ -136,6 +136,14 @@ def encode_traversal(
     The encoder tries both corner orders and keeps the smaller. The faces it returns are the
     ones a decoder gives back: the same rows, corners and orientation, in the walk's order.
     """
+    params, payload, walked, _ = encode_traversal_ordered(faces, vertex_count, level)
+    return params, payload, walked
+
+
+def encode_traversal_ordered(
+    faces: np.ndarray, vertex_count: int, level: int = streams.DEFAULT_LEVEL
+) -> tuple[dict[str, Any], bytes, np.ndarray, np.ndarray]:
+    """:func:`encode_traversal`, and the walk's order: the input's row of each walked face."""
     table = np.asarray(faces, dtype=np.int64)
     count, width = table.shape if table.ndim == 2 and table.size else (0, 3)
     walk = _walked(table, count, vertex_count)
@@ -146,8 +154,9 @@ def encode_traversal(
         if best is None or len(payload) < len(best[1]):
             best = params, payload
     assert best is not None
-    walked = table[walk.order] if count else np.zeros((0, width), dtype=np.int64)
-    return best[0], best[1], walked
+    order = np.asarray(walk.order, dtype=np.int64)
+    walked = table[order] if count else np.zeros((0, width), dtype=np.int64)
+    return best[0], best[1], walked, order
 
 
 class _Streams(NamedTuple):

@@ -183,7 +183,10 @@ class Attribute:
             and self.values.shape == other.values.shape
             and self.values.tobytes() == other.values.tobytes()
             and (self.indices is None) == (other.indices is None)
-            and (self.indices is None or np.array_equal(self.indices, other.indices))
+            and (
+                self.indices is None
+                or (other.indices is not None and np.array_equal(self.indices, other.indices))
+            )
         )
 
     def reordered_faces(self, faces: np.ndarray, order: np.ndarray) -> Attribute:

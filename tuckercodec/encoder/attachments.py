@@ -1,0 +1,67 @@
+"""The sections of format 1.5 an encode adds (:mod:`tuckercodec.format.attachments`): whether
+the faces keep their given order, and the static attributes and face sets, coded once for the
+whole file. Animated fields are coded by :mod:`.fields`, with their targets.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from ..format import attributes, face_order, face_sets
+from ..model.attributes import CORNER, FACE, Attribute, FaceSet, Field
+
+Coded = tuple[dict[str, Any], bytes]
+
+
+def keeps_face_order(
+    choice: str, attributes_: Sequence[Attribute], sets: Sequence[FaceSet], fields: Sequence[Field]
+) -> bool:
+    """Whether the file keeps the faces in their given order: always for ``"given"``, never for
+    ``"walk"``, and for ``"auto"`` when data per corner or per face would otherwise be reordered
+    (a user who re-attaches data to the original topology needs the order)."""
+    if choice != "auto":
+        return choice == "given"
+    per_face = any(a.domain in (CORNER, FACE) for a in attributes_)
+    return per_face or bool(sets) or any(f.domain == FACE for f in fields)
+
+
+def walk_ordered(
+    given_faces: np.ndarray,
+    order: np.ndarray,
+    attributes_: Sequence[Attribute],
+    sets: Sequence[FaceSet],
+) -> tuple[list[Attribute], list[FaceSet]]:
+    """The attributes and face sets moved onto the faces in the walk's order (face t of the walk
+    is given face ``order[t]``), for a file that does not keep the given order."""
+    moved = [a.reordered_faces(given_faces, order) for a in attributes_]
+    new_number = np.empty_like(order)
+    new_number[order] = np.arange(order.size)
+    return moved, [FaceSet(s.name, np.sort(new_number[s.faces]), s.family) for s in sets]
+
+
+def static_sections(
+    attributes_: Sequence[Attribute],
+    sets: Sequence[FaceSet],
+    mesh: attributes.Mesh,
+    order: Coded | None,
+    level: int,
+) -> list[Coded]:
+    """The entries and payloads of ORDER, ATTR.0, ATTR.1... and FSET (those that apply), the
+    attributes and sets numbered as ``mesh`` (the faces as the decoder returns them)."""
+    out: list[Coded] = []
+    if order is not None:
+        out.append((_entry(face_order.SECTION_ID, face_order.CODEC, order[0]), order[1]))
+    for number, attribute in enumerate(attributes_):
+        params, payload = attributes.encode_attribute(attribute, mesh, level)
+        out.append((_entry(attributes.section_id(number), attributes.CODEC, params), payload))
+    if sets:
+        params, payload = face_sets.encode_face_sets(sets, level)
+        out.append((_entry(face_sets.SECTION_ID, face_sets.CODEC, params), payload))
+    return out
+
+
+def _entry(section_id: str, codec: str, params: dict[str, Any]) -> dict[str, Any]:
+    return {"id": section_id, "critical": False, "codec": codec, **params}
