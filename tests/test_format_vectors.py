@@ -56,6 +56,9 @@ def test_valid_vector(path):
     # any single frame decodes alone to the same positions
     last = reference.shape[0] - 1
     np.testing.assert_allclose(decoder.frame(last), reference[last], rtol=0, atol=tolerance)
+    if "attributes" in expected:  # format 1.5: every value and index, bit for bit
+        got = make_vectors.attachments_of(decoder)
+        assert got == {key: expected[key] for key in got}
     if "residual" in expected:  # format 1.3 (§6.9, §8.1): the integers, and every bit
         assert make_vectors.corrections_of(decoder) == expected["residual"]
         assert positions.tobytes() == reference.tobytes()
@@ -131,7 +134,8 @@ def test_the_invalid_vectors_come_from_the_committed_valid_one(tmp_path):
     segmented = (SPEC / "vectors" / "v1.1-segments-shared.tkc").read_bytes()
     traversed = (SPEC / "vectors" / "v1.2-traverse-triangles.tkc").read_bytes()
     corrected = (SPEC / "vectors" / "v1.3-lossless-float32.tkc").read_bytes()
-    count = make_vectors.write_invalid(tmp_path, good, segmented, traversed, corrected)
+    attached = (SPEC / "vectors" / "v1.5-attributes.tkc").read_bytes()
+    count = make_vectors.write_invalid(tmp_path, good, segmented, traversed, corrected, attached)
     assert count == len([p for p in VECTORS if not json.loads(p.read_text())["valid"]])
     for path in sorted(tmp_path.iterdir()):
         committed = (SPEC / "vectors" / path.name).read_bytes()

@@ -35,7 +35,15 @@ import msgpack
 import numpy as np
 
 from tools import common
-from tuckercodec import Decoder, MeshSequence, encode, encode_with_report, internal
+from tuckercodec import (
+    Attribute,
+    Decoder,
+    FaceSet,
+    MeshSequence,
+    encode,
+    encode_with_report,
+    internal,
+)
 from tuckercodec.internal import (
     DEFAULT_LIMITS,
     HEAD_SIZE,
@@ -47,6 +55,7 @@ from tuckercodec.internal import (
     traversal,
     wave_sheet,
 )
+from tuckercodec.model.attributes import CORNER, FACE, VERTEX, corner_vertices
 
 VECTORS = common.REPO / "spec" / "vectors"
 #: What a vector folder holds: the files, their JSON and the valid ones' reference positions.
@@ -394,6 +403,35 @@ def corrections_of(decoder: Decoder) -> dict[str, Any]:
     return found
 
 
+def attachments_of(decoder: Decoder) -> dict[str, Any]:
+    """Format 1.5: the faces' digest in the given order, each attribute's form and the SHA-256
+    of its values (little-endian, C order, bit for bit) and indices (little-endian int64), and
+    each face set's name, family and the digest of its face numbers (little-endian int64)."""
+
+    def sha(array: np.ndarray, dtype: str) -> str:
+        return hashlib.sha256(np.ascontiguousarray(array, dtype=dtype).tobytes()).hexdigest()
+
+    return {
+        "faces_given_order": sha(decoder.faces, "<i8"),
+        "attributes": [
+            {
+                "name": a.name,
+                "domain": a.domain,
+                "role": a.role,
+                "type": a.values.dtype.name,
+                "shape": list(a.values.shape),
+                "values": sha(a.values, a.values.dtype.newbyteorder("<").str),
+                "indices": None if a.indices is None else sha(a.indices, "<i8"),
+            }
+            for a in decoder.attributes
+        ],
+        "face_sets": [
+            {"name": s.name, "family": s.family, "faces": sha(s.faces, "<i8")}
+            for s in decoder.face_sets
+        ],
+    }
+
+
 def segment_index(decoder: Decoder) -> list[dict[str, Any]]:
     """The segment index a decoder must report (§6.7): empty for a file of format 1.0."""
     return [
@@ -422,6 +460,7 @@ def valid_vectors() -> dict[str, tuple[bytes, str]]:
         **traverse_vectors(),
         **correction_vectors(),
         **scene_vectors(),
+        **attachment_vectors(),
         "v1-wave-triangles": (basic, "triangles, no names: the basic file"),
         "v1.1-segments-shared": (
             encode_with_report(long_wave, target_kg=0.5, segment_frames=12).data,
@@ -439,6 +478,83 @@ def valid_vectors() -> dict[str, tuple[bytes, str]]:
             extended.pack(),
             "v1-wave-triangles plus an ignorable flag, header key and ancillary section",
         ),
+    }
+
+
+def attached_sheet(grid: int, frames: int) -> MeshSequence:
+    """A scrambled wave sheet (so that the walk reorders its faces) with an attribute of every
+    domain and type, and face sets: what the valid vectors of format 1.5 hold."""
+    sheet = scrambled(MeshSequence(wave_sheet(frames, grid), sheet_triangles(grid)), seed=15)
+    faces, vertex_count = sheet.faces, sheet.vertex_count
+    rng = np.random.default_rng(15)
+    corners = corner_vertices(faces)
+    seams = np.where(np.arange(corners.size) % 7 == 0, corners + vertex_count, corners)
+    table = np.unique(seams, return_inverse=True)[1]
+    uv = rng.random((int(table.max()) + 1, 2)).astype(np.float32)
+    uv[3] = np.float32(np.nan)  # any bit pattern is stored
+    attached = [
+        Attribute("st", CORNER, uv, table, "uv"),
+        Attribute(
+            "displayColor", FACE, rng.random((len(faces), 3)).astype(np.float32), None, "color"
+        ),
+        Attribute("rest", VERTEX, sheet.vertices[0] * np.pi, None, "generic"),
+        Attribute("id", FACE, rng.integers(-(2**31), 2**31, (len(faces), 1), dtype=np.int32)),
+        Attribute("N", VERTEX, rng.random((5, 3)), rng.integers(0, 5, vertex_count), "normal"),
+    ]
+    sets = [
+        FaceSet("left", np.arange(0, len(faces) // 2), "materialBind"),
+        FaceSet("right", np.arange(len(faces) // 2, len(faces)), "materialBind"),
+        FaceSet("odd", np.arange(1, len(faces), 2), "group"),
+        FaceSet("none", np.zeros(0, dtype=np.int64), ""),
+    ]
+    return MeshSequence(sheet.vertices, faces, attributes=attached, face_sets=sets)
+
+
+def attachment_vectors() -> dict[str, tuple[bytes, str]]:
+    """The valid vectors of format 1.5 (§6.10-§6.12): attributes and face sets, with the faces'
+    given order, and in the walk's order in a segmented file."""
+    sheet = attached_sheet(9, 24)
+    return {
+        "v1.5-attributes": (
+            encode(sheet, target_kg=0.5),
+            "format 1.5: ORDER, an attribute of every domain and type (indexed UVs with a NaN, "
+            "face colours, float64 per vertex, int32 per face, indexed normals), face sets",
+        ),
+        "v1.5-attributes-walk-segments": (
+            encode_with_report(sheet, target_kg=0.5, segment_frames=12, face_order="walk").data,
+            "format 1.5 and 1.1: the same attributes following the walk's face order, no "
+            "ORDER, two segments",
+        ),
+    }
+
+
+def attachment_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
+    """rule id -> (file bytes, error class name): the 1.5 file ``good`` with a rule of §6.10 to
+    §6.13 broken. R42: ORDER's first step repeated (two faces get one number). R43: ATTR.0's
+    value stream declared one value short. R44: a set names the face M. R45: a field section
+    FLD.1 without FLD.0."""
+    parts = Parts(good)
+    order = parts.entries[parts.index("ORDER")]
+    faces = order["faces"]
+    steps = np.zeros(faces, dtype=np.int64)
+    steps[1] = -1  # faces 0 and 1 both numbered 0
+    broken_order, planes = streams.pack_integers(steps, 19)
+    attribute = parts.entries[parts.index("ATTR.0")]
+    short = [list(entry) for entry in attribute["streams"]]
+    short[0][0] -= 1
+    past, past_planes = streams.pack_integers(np.array([faces], dtype=np.int64), 19)
+    field = {"id": "FLD.1", "critical": False, "codec": "field"}
+    return {
+        "R42-face-order": (
+            _edit(good, _payload("ORDER", broken_order, planes=planes)),
+            "FormatError",
+        ),
+        "R43-attribute": (_edit(good, _entry("ATTR.0", streams=short)), "FormatError"),
+        "R44-face-sets": (
+            _edit(good, _payload("FSET", past, sets=[["past", "", 1]], planes=past_planes)),
+            "FormatError",
+        ),
+        "R45-field": (_edit(good, _append_section(field, b"")), "FormatError"),
     }
 
 
@@ -663,6 +779,8 @@ def write_valid(folder: Path, name: str, data: bytes, purpose: str) -> None:
     }
     if exact:
         expected["residual"] = corrections_of(decoder)
+    if decoder.attributes or decoder.face_sets:  # 1.5, only where a file has them
+        expected.update(attachments_of(decoder))
     if header.time_codes is not None:  # 1.4 (§4): only where a file has them, so that the
         expected["header"]["time_codes"] = list(header.time_codes)  # older JSON stays as it is
     if header.meters_per_unit is not None:
@@ -687,15 +805,17 @@ def segmented_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
 
 
 def write_invalid(
-    folder: Path, good: bytes, segmented: bytes, traversed: bytes, corrected: bytes
+    folder: Path, good: bytes, segmented: bytes, traversed: bytes, corrected: bytes, attached: bytes
 ) -> int:
     """The invalid vectors made from the valid files ``good`` (format 1.0), ``segmented``
-    (1.1), ``traversed`` (1.2) and ``corrected`` (1.3), with their JSON; how many."""
+    (1.1), ``traversed`` (1.2), ``corrected`` (1.3) and ``attached`` (1.5), with their JSON;
+    how many."""
     vectors = {
         **invalid_vectors(good),
         **segmented_invalid_vectors(segmented),
         **traverse_invalid_vectors(traversed),
         **correction_invalid_vectors(corrected),
+        **attachment_invalid_vectors(attached),
     }
     for name, (data, error) in vectors.items():
         write_invalid_vector(folder, name, data, error)
@@ -712,6 +832,7 @@ def write_invalid_vector(folder: Path, name: str, data: bytes, error: str) -> No
 
 #: The valid file each group of invalid vectors is made from.
 INVALID_SOURCES = {
+    "attachments": "v1.5-attributes",
     "invalid": "v1-wave-triangles",
     "segmented": "v1.1-segments-shared",
     "traverse": "v1.2-traverse-triangles",
@@ -737,6 +858,7 @@ def write_only(out: Path, names: list[str]) -> int:
         **segmented_invalid_vectors(sources["segmented"]),
         **traverse_invalid_vectors(sources["traverse"]),
         **correction_invalid_vectors(sources["corrections"]),
+        **attachment_invalid_vectors(sources["attachments"]),
     }
     for name in names:
         if name in invalid:
@@ -789,6 +911,7 @@ def main(argv: list[str] | None = None) -> int:
         valid["v1.1-segments-shared"][0],
         valid["v1.2-traverse-triangles"][0],
         valid["v1.3-lossless-float32"][0],
+        valid["v1.5-attributes"][0],
     )
     print(f"wrote {len(valid) + len(derived)} valid and {invalid} invalid vectors to {out}")
     return 0

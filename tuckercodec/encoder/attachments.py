@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from ..format import attributes, face_order, face_sets
+from ..format import attributes, face_order, face_sets, faces
 from ..model.attributes import CORNER, FACE, Attribute, FaceSet, Field
 
 Coded = tuple[dict[str, Any], bytes]
@@ -65,3 +65,28 @@ def static_sections(
 
 def _entry(section_id: str, codec: str, params: dict[str, Any]) -> dict[str, Any]:
     return {"id": section_id, "critical": False, "codec": codec, **params}
+
+
+def coded_faces(
+    given_faces: np.ndarray,
+    vertex_count: int,
+    attributes_: Sequence[Attribute],
+    sets: Sequence[FaceSet],
+    fields: Sequence[Field],
+    level: int,
+    choice: str = "auto",
+) -> tuple[faces.FaceSection, list[Coded]]:
+    """The FACE section, and the sections of 1.5 coded once (ORDER, ATTR.n, FSET) with the
+    attributes and sets numbered as the decoder will return the faces: in the given order when
+    :func:`keeps_face_order` says so, else in the order FACE decodes them."""
+    keep_order = keeps_face_order(choice, attributes_, sets, fields)
+    face, order, walk = faces.encode_face_sections(
+        given_faces, vertex_count, level, keep_order=keep_order
+    )
+    decoded = face.faces
+    if order is not None or not (attributes_ or sets):
+        decoded = given_faces if order is not None else decoded
+    elif walk is not None:
+        attributes_, sets = walk_ordered(given_faces, walk, attributes_, sets)
+    mesh = attributes.Mesh(vertex_count, decoded)
+    return face, static_sections(attributes_, sets, mesh, order, level)

@@ -18,8 +18,10 @@ from typing import Any
 
 from ..decomposition.analysis import Analysis, analyze
 from ..format.segments import BASIS_OWN
+from ..model.attributes import Field
 from ..model.sequence import MeshSequence
 from ..model.sources import FrameSource, SequenceFrames
+from ..model.topology import MeshPrediction
 from ..system.memory import memory_allowed
 from ..system.parallel import Executor, InProcessExecutor, open_executor
 from . import corrections, promises, search
@@ -119,8 +121,19 @@ class Encoder:
             corrector = corrections.Corrector(options, frames, plan.block_frames)
         with self._executor() as executor:
             work = SegmentedWorkspace(
-                frames, plan, options.basis, executor, options.level, self.progress, shared_basis
+                frames,
+                plan,
+                options.basis,
+                executor,
+                options.level,
+                self.progress,
+                shared_basis,
+                face_order=options.face_order,
+                keep=options.attachments,
             )
+            if options.attachments and frames.field_names:
+                fields = frames.read_fields(0, frames.frame_count)  # whole: see §6.13
+                work.attached += self._field_sections(fields, work.mesh)
             if corrector is not None:
                 return self._corrected(work, corrector, start)
             quantized, error2, trials = self._search(work)
@@ -140,7 +153,7 @@ class Encoder:
             coded = connectivity.result()
         work = WholeWorkspace(sequence, analysis, options.level, options.select, coded)
         if options.attachments and sequence.fields:
-            work.attached += self._field_sections(sequence, coded)
+            work.attached += self._field_sections(sequence.fields, coded.mesh)
         if options.corrections:
             return self._corrected(work, corrections.Corrector(options, sequence), start)
         quantized, error2, trials = self._search(work)
@@ -153,15 +166,15 @@ class Encoder:
         return self._result(work, quantized, error2, start, trials, **extra)
 
     def _field_sections(
-        self, sequence: MeshSequence, coded: Connectivity
+        self, fields: list[Field], mesh_prediction: MeshPrediction
     ) -> list[tuple[dict[str, Any], bytes]]:
         """The sections of every animated field, each meeting its own target (format 1.5)."""
         from .fields import FieldTarget, encode_field
 
         packed: list[tuple[dict[str, Any], bytes]] = []
-        for number, item in enumerate(sequence.fields):
+        for number, item in enumerate(fields):
             target = FieldTarget.parse(self.options.target_of_field(item.name))
-            mesh = coded.mesh if item.domain == "vertex" else None
+            mesh = mesh_prediction if item.domain == "vertex" else None
             encoded = encode_field(item, number, target, mesh, self.options.level)
             packed += encoded.sections
         return packed

@@ -21,7 +21,7 @@ from .._version import __version__
 from ..decomposition.analysis import Analysis, Selection
 from ..decomposition.hosvd import project
 from ..errors import UnreachableTargetError
-from ..format import attributes, faces, names, qmat, residual, sections, streams
+from ..format import names, qmat, residual, sections, streams
 from ..format.container import FORMAT_MINOR, pack_container
 from ..format.header import header_map, scene_keys
 from ..format.qmat import QuantizedMatrix
@@ -60,8 +60,6 @@ class Connectivity:
     name_section: tuple[dict[str, Any], bytes] | None
     #: the sections of format 1.5 coded once (ORDER, ATTR.n, FSET): empty without attachments
     attached: tuple[tuple[dict[str, Any], bytes], ...] = ()
-    #: the faces as a decoder returns them (given order, or the walk's)
-    decoded_faces: np.ndarray | None = None
 
     @classmethod
     def of(
@@ -70,27 +68,14 @@ class Connectivity:
         """The connectivity of ``sequence``, its sections at zstd ``level``; with ``keep``, its
         attributes and face sets too, the faces in the order ``face_order`` decides
         (:func:`.attachments.keeps_face_order`)."""
-        carried = (sequence.attributes, sequence.face_sets) if keep else ([], [])
-        keep_order = bool(keep) and attachments.keeps_face_order(
-            face_order, *carried, sequence.fields
-        )
-        face, order, walk = faces.encode_face_sections(
-            sequence.faces, sequence.vertex_count, level, keep_order=keep_order
-        )
-        decoded = face.faces
-        attached_attributes, attached_sets = carried
-        if order is not None:
-            decoded = sequence.faces
-        elif walk is not None and any(carried):
-            attached_attributes, attached_sets = attachments.walk_ordered(
-                sequence.faces, walk, *carried
-            )
-        attached = attachments.static_sections(
-            attached_attributes,
-            attached_sets,
-            attributes.Mesh(sequence.vertex_count, decoded),
-            order,
+        face, attached = attachments.coded_faces(
+            sequence.faces,
+            sequence.vertex_count,
+            sequence.attributes if keep else [],
+            sequence.face_sets if keep else [],
+            sequence.fields if keep else [],
             level,
+            face_order,
         )
         return cls(
             MeshPrediction(sequence.faces, sequence.vertex_count),
@@ -98,7 +83,6 @@ class Connectivity:
             (face.params, face.payload),
             names.encode_names(sequence.frame_names, level),
             tuple(attached),
-            decoded,
         )
 
 

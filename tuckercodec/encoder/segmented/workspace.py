@@ -17,7 +17,7 @@ import numpy as np
 
 from ..._version import __version__
 from ...errors import InputError, UnreachableTargetError
-from ...format import faces, names, qmat, residual, streams
+from ...format import names, qmat, residual, streams
 from ...format.container import pack_container
 from ...format.header import KG_DEFINITION_ID, scene_keys
 from ...format.qmat import QuantizedMatrix
@@ -37,7 +37,7 @@ from ...model.sources import FrameSource
 from ...model.topology import MeshPrediction
 from ...system.memory import human_bytes
 from ...system.parallel import Background, Executor, InProcessExecutor
-from .. import estimate
+from .. import attachments, estimate
 from ..plan import SegmentPlan
 from ..trial import TRIAL_RATIO, Quantized, QuantizedSegment
 from ..whole import LARGEST_STREAMED, column_steps
@@ -109,6 +109,9 @@ class SegmentedWorkspace:
         level: int,
         progress: Callable[[str], None] | None,
         fixed_basis: SharedBasis | None = None,
+        *,
+        face_order: str = "auto",
+        keep: bool = True,
     ) -> None:
         self.source, self.plan, self.basis = source, plan, basis
         self.executor, self.level = executor, level
@@ -133,17 +136,27 @@ class SegmentedWorkspace:
         # passes: it runs in a thread beside them, while the workers, or BLAS in process, read
         # and multiply. The smaller connectivity codec; faces-traverse reorders them (§6.8).
         coding = Background(
-            faces.encode_face_section, source.faces, self.vertex_count, level, name="faces"
+            attachments.coded_faces,
+            source.faces,
+            self.vertex_count,
+            source.attributes if keep else [],
+            source.face_sets if keep else [],
+            [],  # fields per face are read with the frames: the order follows the others
+            level,
+            face_order,
+            name="faces",
         )
         self._read_and_model()
-        face = coding.result()
+        face, attached = coding.result()
+        # the sections of format 1.5 (ORDER, ATTR.n, FSET, then any field's)
+        self.attached = attached
         self.face_codec = face.codec
         self.face_section = (face.params, face.payload)
         self.name_section = names.encode_names(source.frame_names, level)
         self.floor_step, self.floor_error2 = self._centroid_floor()
         # about the numbers the largest ranks store: the first guess of the size's slope in KG
         self.first_fill_values = self.vertex_count * self.frame_count
-        fixed = len(self.face_section[1])
+        fixed = len(self.face_section[1]) + sum(len(payload) for _, payload in attached)
         fixed += 0 if self.name_section is None else len(self.name_section[1])
         if fixed_basis is not None:
             fixed += len(fixed_basis.payload)
@@ -524,7 +537,7 @@ class SegmentedWorkspace:
                 out.append((_entry(segment_section_id(stem, s), params, stem), payload))
         if self.name_section is not None:
             out.append((_entry("NAME", self.name_section[0]), self.name_section[1]))
-        return out
+        return out[:1] + self.attached + out[1:]
 
     def trial_bytes(self, quantized: Quantized[SegmentRanks]) -> int:
         """The quantized sections' bytes estimated from their integers (:mod:`..estimate`),
