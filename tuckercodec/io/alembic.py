@@ -62,11 +62,13 @@ import numpy as np
 
 from .._version import __version__
 from ..errors import InputError
+from ..model.attributes import Field
 from ..model.sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_vertices
 from ..model.sources import FrameByFrame, FrameSource
 from ..system.atomic import atomic_path
 from ..system.optional import import_optional
 from ..system.reading import open_regular_file
+from .alembic_attached import Mesh, read_attached
 from .common.polygons import (
     faces_from_polygons,
     first_change,
@@ -161,10 +163,35 @@ class ArchiveFrames(FrameByFrame):
         faces = _faces(schema, self._selectors, times, len(self._first), where, path)
         rate = frame_rate(abc, self._archive, sampling)
         codes = kept_codes(abc, schema, codes_from_times(times, rate or DEFAULT_FRAME_RATE))
+        mesh = Mesh(path, where, faces, len(self._first), self._selectors)
+        attached = read_attached(abc, item, schema, mesh)
+        self._fields = attached.fields
         try:
-            self._describe(path, count, len(self._first), faces, None, rate, codes)
+            self._describe(
+                path,
+                count,
+                len(self._first),
+                faces,
+                None,
+                rate,
+                codes,
+                attributes=attached.attributes,
+                face_sets=attached.face_sets,
+                field_names=[reader.name for reader in attached.fields],
+            )
         except InputError as error:
             raise InputError(f"{where}: {error.reason}", path=path, frame=error.frame) from None
+
+    def _read_fields(self, start: int, stop: int) -> list[Field]:
+        note(self._where, start)  # where the library crashed, if it does
+        try:
+            return [reader.read(start, stop) for reader in self._fields]
+        except _LIBRARY_ERRORS as error:
+            raise InputError(
+                f"{self._where}: cannot read its fields: {_message(error)}",
+                path=self._file,
+                frame=start,
+            ) from None
 
     def _frame(self, frame: int) -> np.ndarray:
         """Frame ``frame``'s positions, (K, 3), finite."""
