@@ -69,6 +69,9 @@ from ..system.atomic import atomic_path
 from ..system.optional import import_optional
 from ..system.reading import open_regular_file
 from .alembic_attached import Mesh, read_attached
+from .alembic_plan import cannot_keep as cannot_keep  # the format's registry hook
+from .alembic_plan import plan
+from .alembic_writing import ParamWriter, pack_plan, unpack_plan
 from .common.polygons import (
     faces_from_polygons,
     first_change,
@@ -304,13 +307,14 @@ def write_alembic(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
     releases an archive whose write failed (a full disk), so only the child may hold one."""
     rate, name = seq.frame_rate or DEFAULT_FRAME_RATE, prim_name(path.stem)
     positions = float32_vertices(seq, path)  # an infinity is refused, not written
+    attached, attached_arrays = pack_plan(plan(seq))
     arrays = {"positions": positions, "faces": seq.faces, "codes": seq.codes()}
     with atomic_path(path, overwrite=options.overwrite) as temporary:
         write_isolated(
             write_archive_file,
             temporary,
-            arrays,
-            {"name": name, "rate": rate},
+            arrays | attached_arrays,
+            {"name": name, "rate": rate, "attached": attached},
             shown=path,
             library="Alembic",
             extra="alembic",
@@ -327,7 +331,8 @@ def write_archive_file(path: Path, arrays: dict[str, np.ndarray], values: dict[s
     abc = _alembic("writing Alembic files")
     name, positions = values["name"], arrays["positions"]
     try:
-        _write_archive(abc, arrays, path, name, values["rate"])
+        params = ParamWriter(abc, unpack_plan(values["attached"], arrays))
+        _write_archive(abc, arrays, path, name, values["rate"], params)
         written = _written_samples(abc, path, f"/{name}/{name}Shape")
     except _LIBRARY_ERRORS as error:
         raise OSError(errno.EIO, f"Alembic could not write it: {_message(error)}") from None
@@ -336,10 +341,16 @@ def write_archive_file(path: Path, arrays: dict[str, np.ndarray], values: dict[s
 
 
 def _write_archive(
-    abc: SimpleNamespace, arrays: dict[str, np.ndarray], path: Path, name: str, rate: float
+    abc: SimpleNamespace,
+    arrays: dict[str, np.ndarray],
+    path: Path,
+    name: str,
+    rate: float,
+    params: ParamWriter,
 ) -> None:
-    """Write the archive of ``arrays`` (float32 positions, faces, time codes); it is complete
-    once every object is released, on return."""
+    """Write the archive of ``arrays`` (float32 positions, faces, time codes) and ``params``
+    (attributes, fields, face sets); it is complete once every object is released, on
+    return."""
     positions, codes = arrays["positions"], arrays["codes"]
     metadata = abc.AbcA.MetaData()
     metadata.set(RATE_KEY, repr(rate))
@@ -349,12 +360,14 @@ def _write_archive(
     sampling, exact = time_sampling(abc, codes, rate)
     xform = abc.AbcGeom.OXform(archive.getTop(), name)
     xform.getSchema().set(abc.AbcGeom.XformSample())  # identity, constant
-    mesh = abc.AbcGeom.OPolyMesh(xform, f"{name}Shape", archive.addTimeSampling(sampling))
+    sampling_index = archive.addTimeSampling(sampling)
+    mesh = abc.AbcGeom.OPolyMesh(xform, f"{name}Shape", sampling_index)
     schema = mesh.getSchema()
     if not exact:
         kept = abc.Abc.ODoubleArrayProperty(schema.getUserProperties(), CODES_KEY)
         kept.setValue(abc.imath.DoubleArrayFromBuffer(codes))
     counts, indices = polygons_from_faces(reverse_winding(arrays["faces"]))
+    params.name_uvs(schema)
     for frame in range(len(positions)):
         points = abc.imath.V3fArrayFromBuffer(positions[frame])  # a copy
         if frame == 0:
@@ -362,7 +375,9 @@ def _write_archive(
             sample = abc.AbcGeom.OPolyMeshSchemaSample(points, *topology)
         else:  # the faces stay: Alembic repeats the previous sample's
             sample = abc.AbcGeom.OPolyMeshSchemaSample(points)
+        params.fill(sample, frame)
         schema.set(sample)
+    params.write_beside(schema, sampling_index, len(positions))
 
 
 def _written_samples(abc: SimpleNamespace, path: Path, name: str) -> int:
