@@ -28,6 +28,9 @@ Reading:
   samples are refused, naming the first frame where they differ.
 * Positions are read as stored, in the object's own space: no Xform is applied (see
   :mod:`.usd` for why).
+* UVs, normals, arbitrary geom params, velocities and face sets become the sequence's
+  attributes, fields and face sets (:mod:`.alembic_attached`), per-corner values reversed
+  with their faces so that each corner keeps its value.
 * A file Alembic cannot read, a sample whose point count differs, NaN or Inf are
   :class:`InputError`\\ s naming the file, the object and the frame; so are the library's crashes
   and runaway allocations on damaged files, as it reads in a child process (:mod:`.isolation`).
@@ -36,7 +39,10 @@ Reading:
 
 Writing: an Ogawa archive holding an Xform ``/<name>`` (identity) and a PolyMesh
 ``/<name>/<name>Shape`` named after the file (``horse.abc`` gives ``/horse/horseShape``): the
-faces (reversed, as above) in its first sample, float32 positions in every sample. Its time
+faces (reversed, as above) in its first sample, float32 positions in every sample, and the
+sequence's attributes, fields and face sets as :mod:`.alembic_plan` lays them out (UVs, normals
+and velocities in the schema's own params, the rest as arbitrary geom params and FaceSet
+objects; :func:`cannot_keep` lists what does not fit). Its time
 sampling is uniform, starting at ``codes()[0] / rate`` and stepping by the codes' step / rate,
 when the codes are evenly spaced and so read back exactly; otherwise acyclic, one time per
 frame (code / rate), and where those times cannot give back every code exactly, the codes

@@ -233,8 +233,8 @@ def _pod(header: Any) -> tuple[str, int]:
 
 def _role(metadata: Any, components: int) -> str:
     """The role of an arbitrary param (module docstring)."""
-    kept = metadata.get(ROLE_KEY)
-    if kept in ROLE_COMPONENTS and components in ROLE_COMPONENTS[kept]:
+    kept = metadata.get(ROLE_KEY)  # an attribute's or a field's: checked by what it becomes
+    if kept in ROLE_COMPONENTS or kept in FIELD_ROLES:
         return str(kept)
     if metadata.get("interpretation") in ("rgb", "rgba"):
         return "color"
@@ -261,7 +261,7 @@ def _sample(param: _Param, mesh: Mesh, frame: int) -> tuple[np.ndarray, np.ndarr
     count = len(values) if indices is None else len(indices)
     if count != expected:
         raise mesh.error(
-            label, f"has {count} {domain} values, the mesh has {expected} {domain}s", frame
+            label, f"has {count} values for the mesh's {expected} {domain} elements", frame
         )
     if indices is not None:
         bad = np.flatnonzero((indices < 0) | (indices >= len(values)))
@@ -287,8 +287,11 @@ def _static(param: _Param, mesh: Mesh) -> list[Attribute]:
             values = values[order]
         else:
             indices = indices[order]
+    role = param.role
+    if param.components not in ROLE_COMPONENTS.get(role, ()):
+        role = GENERIC  # a field's role, or a role foreign to its components
     try:
-        return [Attribute(param.name, param.domain, values, indices, param.role)]
+        return [Attribute(param.name, param.domain, values, indices, role)]
     except InputError as error:
         raise mesh.error(param.label, error.reason, 0) from None
 
