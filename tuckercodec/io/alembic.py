@@ -28,6 +28,9 @@ Reading:
   samples are refused, naming the first frame where they differ.
 * Positions are read as stored, in the object's own space: no Xform is applied (see
   :mod:`.usd` for why).
+* UVs, normals, arbitrary geom params, velocities and face sets become the sequence's
+  attributes, fields and face sets (:mod:`.alembic_attached`), per-corner values reversed
+  with their faces so that each corner keeps its value.
 * A file Alembic cannot read, a sample whose point count differs, NaN or Inf are
   :class:`InputError`\\ s naming the file, the object and the frame; so are the library's crashes
   and runaway allocations on damaged files, as it reads in a child process (:mod:`.isolation`).
@@ -36,7 +39,10 @@ Reading:
 
 Writing: an Ogawa archive holding an Xform ``/<name>`` (identity) and a PolyMesh
 ``/<name>/<name>Shape`` named after the file (``horse.abc`` gives ``/horse/horseShape``): the
-faces (reversed, as above) in its first sample, float32 positions in every sample. Its time
+faces (reversed, as above) in its first sample, float32 positions in every sample, and the
+sequence's attributes, fields and face sets as :mod:`.alembic_plan` lays them out (UVs, normals
+and velocities in the schema's own params, the rest as arbitrary geom params and FaceSet
+objects; :func:`cannot_keep` lists what does not fit). Its time
 sampling is uniform, starting at ``codes()[0] / rate`` and stepping by the codes' step / rate,
 when the codes are evenly spaced and so read back exactly; otherwise acyclic, one time per
 frame (code / rate), and where those times cannot give back every code exactly, the codes
@@ -62,11 +68,16 @@ import numpy as np
 
 from .._version import __version__
 from ..errors import InputError
+from ..model.attributes import Field
 from ..model.sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_vertices
 from ..model.sources import FrameByFrame, FrameSource
 from ..system.atomic import atomic_path
 from ..system.optional import import_optional
 from ..system.reading import open_regular_file
+from .alembic_attached import Mesh, read_attached
+from .alembic_plan import cannot_keep as cannot_keep  # the format's registry hook
+from .alembic_plan import plan
+from .alembic_writing import ParamWriter, pack_plan, unpack_plan
 from .common.polygons import (
     faces_from_polygons,
     first_change,
@@ -161,10 +172,35 @@ class ArchiveFrames(FrameByFrame):
         faces = _faces(schema, self._selectors, times, len(self._first), where, path)
         rate = frame_rate(abc, self._archive, sampling)
         codes = kept_codes(abc, schema, codes_from_times(times, rate or DEFAULT_FRAME_RATE))
+        mesh = Mesh(path, where, faces, len(self._first), self._selectors)
+        attached = read_attached(abc, item, schema, mesh)
+        self._fields = attached.fields
         try:
-            self._describe(path, count, len(self._first), faces, None, rate, codes)
+            self._describe(
+                path,
+                count,
+                len(self._first),
+                faces,
+                None,
+                rate,
+                codes,
+                attributes=attached.attributes,
+                face_sets=attached.face_sets,
+                field_names=[reader.name for reader in attached.fields],
+            )
         except InputError as error:
             raise InputError(f"{where}: {error.reason}", path=path, frame=error.frame) from None
+
+    def _read_fields(self, start: int, stop: int) -> list[Field]:
+        note(self._where, start)  # where the library crashed, if it does
+        try:
+            return [reader.read(start, stop) for reader in self._fields]
+        except _LIBRARY_ERRORS as error:
+            raise InputError(
+                f"{self._where}: cannot read its fields: {_message(error)}",
+                path=self._file,
+                frame=start,
+            ) from None
 
     def _frame(self, frame: int) -> np.ndarray:
         """Frame ``frame``'s positions, (K, 3), finite."""
@@ -277,13 +313,14 @@ def write_alembic(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
     releases an archive whose write failed (a full disk), so only the child may hold one."""
     rate, name = seq.frame_rate or DEFAULT_FRAME_RATE, prim_name(path.stem)
     positions = float32_vertices(seq, path)  # an infinity is refused, not written
+    attached, attached_arrays = pack_plan(plan(seq))
     arrays = {"positions": positions, "faces": seq.faces, "codes": seq.codes()}
     with atomic_path(path, overwrite=options.overwrite) as temporary:
         write_isolated(
             write_archive_file,
             temporary,
-            arrays,
-            {"name": name, "rate": rate},
+            arrays | attached_arrays,
+            {"name": name, "rate": rate, "attached": attached},
             shown=path,
             library="Alembic",
             extra="alembic",
@@ -300,7 +337,8 @@ def write_archive_file(path: Path, arrays: dict[str, np.ndarray], values: dict[s
     abc = _alembic("writing Alembic files")
     name, positions = values["name"], arrays["positions"]
     try:
-        _write_archive(abc, arrays, path, name, values["rate"])
+        params = ParamWriter(abc, unpack_plan(values["attached"], arrays))
+        _write_archive(abc, arrays, path, name, values["rate"], params)
         written = _written_samples(abc, path, f"/{name}/{name}Shape")
     except _LIBRARY_ERRORS as error:
         raise OSError(errno.EIO, f"Alembic could not write it: {_message(error)}") from None
@@ -309,10 +347,16 @@ def write_archive_file(path: Path, arrays: dict[str, np.ndarray], values: dict[s
 
 
 def _write_archive(
-    abc: SimpleNamespace, arrays: dict[str, np.ndarray], path: Path, name: str, rate: float
+    abc: SimpleNamespace,
+    arrays: dict[str, np.ndarray],
+    path: Path,
+    name: str,
+    rate: float,
+    params: ParamWriter,
 ) -> None:
-    """Write the archive of ``arrays`` (float32 positions, faces, time codes); it is complete
-    once every object is released, on return."""
+    """Write the archive of ``arrays`` (float32 positions, faces, time codes) and ``params``
+    (attributes, fields, face sets); it is complete once every object is released, on
+    return."""
     positions, codes = arrays["positions"], arrays["codes"]
     metadata = abc.AbcA.MetaData()
     metadata.set(RATE_KEY, repr(rate))
@@ -322,12 +366,14 @@ def _write_archive(
     sampling, exact = time_sampling(abc, codes, rate)
     xform = abc.AbcGeom.OXform(archive.getTop(), name)
     xform.getSchema().set(abc.AbcGeom.XformSample())  # identity, constant
-    mesh = abc.AbcGeom.OPolyMesh(xform, f"{name}Shape", archive.addTimeSampling(sampling))
+    sampling_index = archive.addTimeSampling(sampling)
+    mesh = abc.AbcGeom.OPolyMesh(xform, f"{name}Shape", sampling_index)
     schema = mesh.getSchema()
     if not exact:
         kept = abc.Abc.ODoubleArrayProperty(schema.getUserProperties(), CODES_KEY)
         kept.setValue(abc.imath.DoubleArrayFromBuffer(codes))
     counts, indices = polygons_from_faces(reverse_winding(arrays["faces"]))
+    params.name_uvs(schema)
     for frame in range(len(positions)):
         points = abc.imath.V3fArrayFromBuffer(positions[frame])  # a copy
         if frame == 0:
@@ -335,7 +381,9 @@ def _write_archive(
             sample = abc.AbcGeom.OPolyMeshSchemaSample(points, *topology)
         else:  # the faces stay: Alembic repeats the previous sample's
             sample = abc.AbcGeom.OPolyMeshSchemaSample(points)
+        params.fill(sample, frame)
         schema.set(sample)
+    params.write_beside(schema, sampling_index, len(positions))
 
 
 def _written_samples(abc: SimpleNamespace, path: Path, name: str) -> int:

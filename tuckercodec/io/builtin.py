@@ -79,6 +79,7 @@ FORMATS = (
         ),
         open=alembic.open_alembic,
         write=alembic.write_alembic,
+        cannot_keep=alembic.cannot_keep,
         read_options=frozenset({"object_path"}),
         extra="alembic",
         carries=_SCENE,

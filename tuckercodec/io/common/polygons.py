@@ -113,3 +113,17 @@ def reverse_winding(faces: np.ndarray) -> np.ndarray:
     rows = np.broadcast_to(np.arange(table.shape[0])[:, np.newaxis], table.shape)
     out[real] = table[rows[real], source[real]]
     return out
+
+
+def reversed_corners(faces: np.ndarray) -> np.ndarray:
+    """For each corner of ``faces`` (in corner order: the real entries in C order), the number
+    of the same corner in ``reverse_winding(faces)``: face f's corner j of n is corner n-1-j of
+    the reversed face. Per-corner values follow the faces with it (``values[order]``,
+    ``indices[order]``); it is its own inverse, as the reversal is."""
+    table = np.asarray(faces)
+    degrees = (table >= 0).sum(axis=1).astype(np.int64)
+    starts = np.zeros(degrees.size + 1, dtype=np.int64)
+    np.cumsum(degrees, out=starts[1:])
+    face_of = np.repeat(np.arange(degrees.size), degrees)
+    local = np.arange(starts[-1], dtype=np.int64) - starts[face_of]
+    return starts[face_of] + degrees[face_of] - 1 - local

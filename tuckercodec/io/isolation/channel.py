@@ -29,8 +29,10 @@ import numpy as np
 
 from ... import errors
 from ...errors import InputError
+from ...model.attributes import Field
 from ...system.optional import import_optional
 from ..registry import ReadOptions
+from .attached import unpack_attached, unpack_fields
 
 GIB = 2**30
 #: The address space a reading child may add to what its interpreter and libraries take.
@@ -267,6 +269,8 @@ class Description:
         # checked by FrameSource._describe, as every value a child sends
         self.meters_per_unit = header.get("meters_per_unit")
         self.up_axis = header.get("up_axis")
+        self.attributes, self.face_sets = unpack_attached(header, arrays)
+        self.field_names = [str(name) for name in header.get("field_names", [])]
 
 
 class Child:
@@ -291,14 +295,23 @@ class Child:
 
     def read(self, start: int, stop: int) -> np.ndarray:
         """Frames ``start`` to ``stop`` as the child's source reads them."""
+        self._ask({"read": [start, stop]})
+        return self._answer()[1]["vertices"]
+
+    def read_fields(self, start: int, stop: int) -> list[Field]:
+        """The animated fields of frames ``start`` to ``stop`` as the child's source reads them."""
+        self._ask({"fields": [start, stop]})
+        return unpack_fields(*self._answer())
+
+    def _ask(self, request: dict[str, Any]) -> None:
+        """Send one request line (a dead child's answer says how it ended)."""
         stdin = self.process.stdin
         assert stdin is not None
         try:
-            stdin.write(json.dumps({"read": [start, stop]}).encode() + b"\n")
+            stdin.write(json.dumps(request).encode() + b"\n")
             stdin.flush()
         except OSError:
             pass  # it died: reading its answer says how
-        return self._answer()[1]["vertices"]
 
     def _answer(self) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
         """The next result the child sends, with its arrays, within the time limit; or the
@@ -307,7 +320,7 @@ class Child:
             self._watch(self.timeout if self.ending.started else self.timeout + STARTUP_SECONDS)
         try:
             header = self._header()
-            if header.get("result") in ("description", "frames"):
+            if header.get("result") in ("description", "frames", "fields"):
                 arrays = {}
                 for name, dtype, shape in header["arrays"]:
                     array = self._array(dtype, shape)

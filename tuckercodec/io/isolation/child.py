@@ -5,10 +5,12 @@ One protocol, over the child's stdin and stdout. The child writes to its stdout,
 that nothing is lost in a crash, one JSON line at a time: ``{"started": true}`` once its
 libraries are imported and its memory capped, the reader's notes (:func:`note`: where it
 reads, for the error should it crash there), then a result header: the description of the
-opened source (``"description"``) or frames (``"frames"``), each followed by its arrays as raw
-bytes (the header lists their names, dtypes and shapes), or an error (our own errors pickled; a
-failed allocation; a bug's traceback). It reads one request ``{"read": [start, stop]}`` a line
-on its stdin, and leaves when its stdin ends. What the libraries print goes to stderr.
+opened source (``"description"``, with its attributes and face sets), frames (``"frames"``)
+or a range of its animated fields (``"fields"``), each followed by its arrays as raw bytes (the
+header lists their names, dtypes and shapes; :mod:`.attached` packs the attributes and
+fields), or an error (our own errors pickled; a failed allocation; a bug's traceback). It reads
+one request a line on its stdin, ``{"read": [start, stop]}`` (positions) or ``{"fields":
+[start, stop]}``, and leaves when its stdin ends. What the libraries print goes to stderr.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ from ... import errors
 from ...model.sequence import MeshSequence
 from ...model.sources import SequenceFrames
 from ..registry import ReadOptions
+from .attached import pack_attached, pack_fields
 
 #: In the child: where :func:`note` writes (its stdout); None in any other process.
 _notes: IO[bytes] | None = None
@@ -145,7 +148,8 @@ def serve(argument: str) -> None:
     """The child's whole life: open the request's source (a
     :class:`~tuckercodec.model.sources.FrameSource` class, or a function that reads a whole
     sequence, served from memory), send its description, then for each line ``{"read": [start,
-    stop]}`` on stdin send the frames, until stdin ends; then exit (never returns). Our own errors
+    stop]}`` (or ``{"fields": [start, stop]}``) on stdin send the frames (or fields), until stdin
+    ends; then exit (never returns). Our own errors
     are sent and the child serves on; anything else ends it. The time limit (``alarm``) runs while
     the child opens the file or reads, not while it waits."""
     request = json.loads(argument)
@@ -155,7 +159,8 @@ def serve(argument: str) -> None:
         source = opener(path, child_options(request))
         if isinstance(source, MeshSequence):  # read whole: served from memory
             source = SequenceFrames(source, path)
-        arrays = {"faces": source.faces}
+        attached, arrays = pack_attached(source.attributes, source.face_sets)
+        arrays["faces"] = source.faces
         if source.time_codes is not None:
             arrays["time_codes"] = source.time_codes
         description = {
@@ -165,6 +170,8 @@ def serve(argument: str) -> None:
             "frame_rate": source.frame_rate,
             "meters_per_unit": source.meters_per_unit,
             "up_axis": source.up_axis,
+            "field_names": source.field_names,
+            **attached,
         }
         send_arrays({"result": "description", **description}, arrays)
     except BaseException as error:
@@ -174,11 +181,15 @@ def serve(argument: str) -> None:
     if alarm is not None:
         signal.alarm(0)  # waiting for the caller is not reading
     for line in sys.stdin.buffer:
-        start, stop = json.loads(line)["read"]
+        request = json.loads(line)
         if alarm is not None:
             signal.alarm(alarm)
         try:
-            send_arrays({"result": "frames"}, {"vertices": source.read(start, stop)})
+            if "fields" in request:
+                listed, arrays = pack_fields(source.read_fields(*request["fields"]))
+                send_arrays({"result": "fields", **listed}, arrays)
+            else:
+                send_arrays({"result": "frames"}, {"vertices": source.read(*request["read"])})
         except errors.TuckerCodecError as error:
             send_failure(error)  # the file's fault in these frames: others may still be read
         except BaseException as error:
