@@ -118,6 +118,7 @@ FORMATS = (
         description="VTK time series: a ParaView .pvd of .vtp or .vtu files, one per time step",
         open=vtk.PvdFrames,
         write=vtk.write_pvd,
+        cannot_keep=vtk.cannot_keep,
         carries=_SERIES,
     ),
     SequenceFormat(
