@@ -9,7 +9,7 @@ writes, and how.
 from __future__ import annotations
 
 from . import alembic, gltf, meshes, obj, usd, vtk, xdmf, zarr_store
-from .npz import NpzFrames, npy, write_npz
+from .npz import NpzFrames, cannot_keep_npz, npy, write_npz
 from .pointcache import mdd, pc2
 from .registry import SequenceFormat
 from .xdmf.writer import write_xdmf
@@ -46,10 +46,11 @@ FORMATS = (
         suffixes=(".npz",),
         description=(
             "NumPy archive: V (frames, vertices, 3), F faces, frame_files, frame_rate, "
-            "time_codes, meters_per_unit, up_axis"
+            "time_codes, meters_per_unit, up_axis, attributes, face sets, fields"
         ),
         open=NpzFrames,
         write=write_npz,
+        cannot_keep=cannot_keep_npz,
         carries=_EVERYTHING,
     ),
     SequenceFormat(
@@ -58,6 +59,7 @@ FORMATS = (
         description="NumPy array of positions (frames, vertices, 3), float32 or float64",
         open=npy.NpyFrames,
         write=npy.write_npy,
+        cannot_keep=npy.cannot_keep,
         read_options=frozenset({"faces"}),
         carries=frozenset({"float64"}),
     ),
