@@ -186,3 +186,32 @@ def test_a_non_finite_field_value_names_its_frame(tmp_path):
     ) as caught:
         source.read_fields(1, 4)
     assert (caught.value.path, caught.value.frame) == (str(path), 2)
+
+
+# ------------------------------------------------------------------------------------------
+# zarr stores: the same layout as arrays of the group
+
+
+def test_a_zarr_store_keeps_everything_bit_for_bit(tmp_path):
+    pytest.importorskip("zarr", reason="zarr (the [zarr] extra) is not installed")
+    from tuckercodec.io.zarr_store import ZarrFrames
+
+    seq = every_kind(frames=5)
+    save_sequence(seq, tmp_path / "a.zarr")
+    back = load_sequence(tmp_path / "a.zarr")
+    assert np.array_equal(back.vertices, seq.vertices)
+    same(back, seq)
+    source = ZarrFrames(tmp_path / "a.zarr")
+    for found, item in zip(source.read_fields(2, 4), seq.fields, strict=True):
+        assert found.values.tobytes() == item.values[2:4].tobytes()
+    hook = format_named("zarr").cannot_keep
+    assert hook is not None and hook(seq) == []
+
+
+def test_a_zarr_store_missing_a_field_array_is_named(tmp_path):
+    zarr = pytest.importorskip("zarr", reason="zarr (the [zarr] extra) is not installed")
+    save_sequence(every_kind(), tmp_path / "a.zarr")
+    group = zarr.open_group(store=str(tmp_path / "a.zarr"), mode="a")
+    del group["field/1"]
+    with pytest.raises(InputError, match=r"its array 'field/1' \(field 'heat'\) has shape None"):
+        load_sequence(tmp_path / "a.zarr")

@@ -140,6 +140,7 @@ FORMATS = (
         ),
         open=zarr_store.ZarrFrames,
         write=zarr_store.write_zarr,
+        cannot_keep=zarr_store.cannot_keep,
         extra="zarr",
         folder=True,
         carries=_EVERYTHING,
