@@ -12,6 +12,7 @@ from . import alembic, gltf, meshes, obj, usd, vtk, xdmf, zarr_store
 from .npz import NpzFrames, cannot_keep_npz, npy, write_npz
 from .pointcache import mdd, pc2
 from .registry import SequenceFormat
+from .xdmf.writer import cannot_keep as cannot_keep_xdmf
 from .xdmf.writer import write_xdmf
 
 #: What each format keeps of a sequence beyond float32 positions (``SequenceFormat.carries``).
@@ -129,6 +130,7 @@ FORMATS = (
         description="XDMF time series: a temporal collection of grids, HDF5 or XML data (h5py)",
         open=xdmf.XdmfFrames,
         write=write_xdmf,
+        cannot_keep=cannot_keep_xdmf,
         extra="xdmf",
         carries=_SERIES,
     ),
