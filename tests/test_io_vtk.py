@@ -217,11 +217,11 @@ def test_writing_never_overwrites_and_checks_every_target_first(tmp_path):
 def test_a_failure_while_writing_leaves_nothing(tmp_path, monkeypatch):
     written: list[np.ndarray] = []
 
-    def failing_write(self, points):
+    def failing_write(self, points, *arrays):
         if len(written) == 2:
             raise OSError("disk full")
         written.append(points)
-        return real_write(self, points)
+        return real_write(self, points, *arrays)
 
     real_write = DatasetWriter.__call__
     monkeypatch.setattr(DatasetWriter, "__call__", failing_write)

@@ -9,9 +9,10 @@ writes, and how.
 from __future__ import annotations
 
 from . import alembic, gltf, meshes, obj, usd, vtk, xdmf, zarr_store
-from .npz import NpzFrames, npy, write_npz
+from .npz import NpzFrames, cannot_keep_npz, npy, write_npz
 from .pointcache import mdd, pc2
 from .registry import SequenceFormat
+from .xdmf.writer import cannot_keep as cannot_keep_xdmf
 from .xdmf.writer import write_xdmf
 
 #: What each format keeps of a sequence beyond float32 positions (``SequenceFormat.carries``).
@@ -46,10 +47,11 @@ FORMATS = (
         suffixes=(".npz",),
         description=(
             "NumPy archive: V (frames, vertices, 3), F faces, frame_files, frame_rate, "
-            "time_codes, meters_per_unit, up_axis"
+            "time_codes, meters_per_unit, up_axis, attributes, face sets, fields"
         ),
         open=NpzFrames,
         write=write_npz,
+        cannot_keep=cannot_keep_npz,
         carries=_EVERYTHING,
     ),
     SequenceFormat(
@@ -58,6 +60,7 @@ FORMATS = (
         description="NumPy array of positions (frames, vertices, 3), float32 or float64",
         open=npy.NpyFrames,
         write=npy.write_npy,
+        cannot_keep=npy.cannot_keep,
         read_options=frozenset({"faces"}),
         carries=frozenset({"float64"}),
     ),
@@ -119,6 +122,7 @@ FORMATS = (
         description="VTK time series: a ParaView .pvd of .vtp or .vtu files, one per time step",
         open=vtk.PvdFrames,
         write=vtk.write_pvd,
+        cannot_keep=vtk.cannot_keep,
         carries=_SERIES,
     ),
     SequenceFormat(
@@ -127,6 +131,7 @@ FORMATS = (
         description="XDMF time series: a temporal collection of grids, HDF5 or XML data (h5py)",
         open=xdmf.XdmfFrames,
         write=write_xdmf,
+        cannot_keep=cannot_keep_xdmf,
         extra="xdmf",
         carries=_SERIES,
     ),
@@ -138,6 +143,7 @@ FORMATS = (
         ),
         open=zarr_store.ZarrFrames,
         write=zarr_store.write_zarr,
+        cannot_keep=zarr_store.cannot_keep,
         extra="zarr",
         folder=True,
         carries=_EVERYTHING,

@@ -131,8 +131,9 @@ class SequenceFormat:
     #: its "files" are folders (a zarr store), read by this format rather than as a folder
     #: of frames
     folder: bool = False
-    #: what ``write`` leaves out of a sequence's attributes, face sets and fields, one sentence
-    #: each (``None``: the format says nothing of them)
+    #: what a file of this format cannot keep of a sequence's attributes, face sets and
+    #: fields, one line each ("attribute 'st': per face corner"); ``None``: it keeps none of
+    #: them (or the format has not said)
     cannot_keep: Callable[[MeshSequence], list[str]] | None = None
 
 

@@ -5,7 +5,11 @@ Reading: the store's root array, or in a group the array ``vertices``, of real n
 dtype zarr reads as one); with a group, optionally an integer array ``faces`` (M, n), 0-based,
 -1 padding, and the attributes ``frame_rate`` (a number), ``frame_names`` (one string per
 frame), ``time_codes`` (one number per frame), ``meters_per_unit`` (a number) and ``up_axis``
-(``Y`` or ``Z``). Frames are read chunk by chunk: a range reads
+(``Y`` or ``Z``); attributes, face sets and fields as the arrays ``attribute/<i>/values``,
+``attribute/<i>/indices``, ``face_set/<i>``, ``field/<i>`` and the attribute ``attached``, the
+JSON description that names them (:mod:`~tuckercodec.io.common.attached_keys`, as in an
+``.npz``; attributes and face sets read whole at opening, fields a range at a time).
+Frames are read chunk by chunk: a range reads
 only the chunks it overlaps (:class:`ZarrFrames`), so a store larger than memory streams. A
 chunk larger than :data:`MAX_CHUNK_BYTES` is refused (it would be read whole for one frame), or
 than ``--max-memory`` if less (it is decompressed whole), and so are faces beyond either.
@@ -14,8 +18,9 @@ so a lost chunk is an error, not zeros.
 
 Writing ``out.zarr``: a zarr format 3 group holding ``vertices`` (float32 where exact, else
 float64; chunked by :data:`CHUNK_FRAMES` frames, each chunk all vertices; zarr's default
-compressor), ``faces`` (int64, when the sequence has faces) and the attributes above. The store
-is written in a hidden folder beside the target and renamed into place when complete
+compressor), ``faces`` (int64, when the sequence has faces), the attributes above, and the
+sequence's attributes, face sets and fields, bit for bit (fields chunked as the positions).
+The store is written in a hidden folder beside the target and renamed into place when complete
 (:func:`~tuckercodec.system.atomic.atomic_store`).
 """
 
@@ -28,10 +33,12 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ..errors import InputError
+from ..model.attributes import Field
 from ..model.sequence import MeshSequence
 from ..model.sources import FrameSource
 from ..system.atomic import atomic_store
 from ..system.optional import import_optional
+from .common.attached_keys import DESCRIPTION, Attached, attached_arrays, read_attached
 from .common.budget import memory_ceiling
 from .registry import ReadOptions, WriteOptions
 
@@ -77,10 +84,13 @@ class ZarrFrames(FrameSource):
         self._array = array
         faces: object = np.zeros((0, 3), dtype=np.int64)
         attributes: dict[str, Any] = {}
+        attached = Attached([], [], [])
         if group is not None:
             attributes = dict(group.attrs)
             if "faces" in group:
                 faces = _faces(_member(group, "faces", path), path, largest)
+            attached = _attached(group, attributes, shape[0], shape[1], faces, path, largest)
+        self._fields = attached.fields
         self._describe(
             path,
             shape[0],
@@ -91,7 +101,31 @@ class ZarrFrames(FrameSource):
             _attribute(attributes, "time_codes", path),
             _attribute(attributes, "meters_per_unit", path),
             _attribute(attributes, "up_axis", path),
+            attached.attributes,
+            attached.face_sets,
+            [entry.name for entry in attached.fields],
         )
+
+    def _read_fields(self, start: int, stop: int) -> list[Field]:
+        group = _open(self._file)
+        fields = []
+        for entry in self._fields:
+            try:
+                values = np.asarray(group[entry.key][start:stop])
+            except Exception as error:  # zarr and its codecs raise many kinds
+                raise InputError(
+                    f"array {entry.key!r} cannot be read: {type(error).__name__}: {error}",
+                    path=self._file,
+                    frame=start,
+                ) from None
+            try:
+                fields.append(entry.field(values))
+            except InputError as error:
+                frame = None if error.frame is None else start + error.frame
+                raise InputError(
+                    f"array {entry.key!r}: {error.reason}", path=self._file, frame=frame
+                ) from None
+        return fields
 
     def _read(self, start: int, stop: int) -> np.ndarray:
         if self._array is None:
@@ -105,6 +139,59 @@ class ZarrFrames(FrameSource):
                 path=self._file,
                 frame=start,
             ) from None
+
+
+def _attached(
+    group: Any,
+    attributes: dict[str, Any],
+    frames: int,
+    vertices: int,
+    faces: object,
+    path: Path,
+    largest: int,
+) -> Attached:
+    """The group's attributes, face sets (read whole, within ``largest`` bytes each) and
+    field entries (their arrays' shapes and chunks checked), from its description."""
+    text = attributes.get(DESCRIPTION)
+    if text is None:
+        return Attached([], [], [])
+    if not isinstance(text, str):
+        raise InputError(f"its attribute {DESCRIPTION!r} is not a string (JSON)", path=path)
+
+    def array(key: str) -> np.ndarray:
+        if key not in group:
+            raise InputError("is missing")
+        member = group[key]
+        if not _is_array(member) or math.prod(member.shape) * 8 > largest:
+            raise InputError(f"is not an array of at most {largest} bytes")
+        return np.asarray(member[...])
+
+    try:
+        attached = read_attached(text, array)
+    except InputError as error:
+        raise InputError(error.reason, path=path) from None
+    face_count = np.asarray(faces).shape[0]
+    for entry in attached.fields:
+        member = group.get(entry.key, None)
+        count = vertices if entry.domain == "vertex" else face_count
+        shape = tuple(member.shape) if _is_array(member) else None
+        if member is None or shape is None or len(shape) != 3 or shape[:2] != (frames, count):
+            raise InputError(
+                f"its array {entry.key!r} (field {entry.name!r}) has shape {shape}, not "
+                f"({frames}, {count}, components)",
+                path=path,
+            )
+        if math.prod(member.chunks) * np.dtype(member.dtype).itemsize > largest:
+            raise InputError(
+                f"its array {entry.key!r} has chunks of more than {largest} bytes", path=path
+            )
+    return attached
+
+
+def cannot_keep(seq: MeshSequence) -> list[str]:
+    """What a zarr store cannot keep of ``seq``: nothing, every attribute, face set and field
+    is kept bit for bit."""
+    return []
 
 
 def _open(path: Path) -> Any:
@@ -215,4 +302,14 @@ def write_zarr(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
             vertices[start : start + frames] = values[start : start + frames]
         if seq.faces.shape[0]:
             group.create_array("faces", data=np.asarray(seq.faces, dtype=np.int64))
+        description, arrays = attached_arrays(seq)
+        for key, values in arrays.items():
+            if key.startswith("field/"):  # chunked by frames, as the positions
+                chunks = (frames, *values.shape[1:])
+                group.create_array(key, shape=values.shape, chunks=chunks, dtype=values.dtype)
+                group[key][...] = values
+            else:
+                group.create_array(key, data=values)
+        if description:
+            attributes[DESCRIPTION] = description
         group.attrs.update(attributes)

@@ -108,6 +108,47 @@ def surface(points: np.ndarray, double: bool) -> vtk.vtkPolyData:
     return out
 
 
+# the series with point and cell data: DATA_STEPS time steps of the PolyData (and of the
+# UnstructuredGrid of CELLS), each array's values a formula of the step number n
+DATA_STEPS = [0.0, 0.5, 1.0]
+
+
+def numbers(name: str, values: np.ndarray, kind: type = vtk.vtkFloatArray) -> vtk.vtkDataArray:
+    """A VTK array named ``name`` of ``values`` (N, c)."""
+    values = np.asarray(values).reshape(len(values), -1)
+    out = kind()
+    out.SetName(name)
+    out.SetNumberOfComponents(values.shape[1])
+    for row in values.tolist():
+        out.InsertNextTuple(row)
+    return out
+
+
+def surface_data(n: int) -> vtk.vtkPolyData:
+    """The PolyData at step n (float64 points) with its point and cell data (README.md)."""
+    out = surface(SURFACE + np.array([0.5, -0.25, 1.0]) * DATA_STEPS[n], True)
+    points, cells = out.GetPointData(), out.GetCellData()
+    points.SetScalars(numbers("pressure", np.arange(9) * 0.25 + n))
+    points.SetVectors(
+        numbers("velocity", np.arange(27).reshape(9, 3) / 7 * (n + 1), vtk.vtkDoubleArray)
+    )
+    points.SetNormals(numbers("Normals", np.tile([0.0, 0.1 * n, 1.0], (9, 1))))
+    points.SetTCoords(numbers("uv_map", SURFACE[:, :2] / 4))
+    points.AddArray(numbers("ids", np.arange(9), vtk.vtkIdTypeArray))
+    points.AddArray(numbers("stress", np.arange(54).reshape(9, 6) + n))
+    cells.SetScalars(numbers("heat", np.arange(5) * 1.5 + n / 7, vtk.vtkDoubleArray))
+    cells.AddArray(numbers("material", np.array([7, 1, 2, 3, 4]), vtk.vtkIntArray))
+    return out
+
+
+def grid_data(n: int) -> vtk.vtkUnstructuredGrid:
+    """The UnstructuredGrid of CELLS at step n with its point and cell data (README.md)."""
+    out = grid(POINTS + n, CELLS)
+    out.GetPointData().AddArray(numbers("temperature", np.arange(8) / 3 + n, vtk.vtkDoubleArray))
+    out.GetCellData().AddArray(numbers("heat", np.arange(5) + n * 0.5))
+    return out
+
+
 def write(writer: vtk.vtkXMLWriter, data: object, path: Path, layout: tuple[Any, ...]) -> None:
     """ParaView's default layout is ("appended", True, True, 64, "little")."""
     mode, raw, compress, header, order = layout
@@ -159,6 +200,14 @@ def main() -> None:
         path = HERE / "encodings" / f"{name}.vtp"
         write(vtk.vtkXMLPolyDataWriter(), surface(SURFACE, True), path, layout)
     write(vtk.vtkXMLUnstructuredGridWriter(), grid(SURFACE, MIXED), HERE / "cells.vtu", paraview)
+    for number in range(len(DATA_STEPS)):
+        path = HERE / "datasurface" / f"step{number}.vtp"
+        write(vtk.vtkXMLPolyDataWriter(), surface_data(number), path, paraview)
+        path = HERE / "datagrid" / f"step{number}.vtu"
+        write(vtk.vtkXMLUnstructuredGridWriter(), grid_data(number), path, paraview)
+    for name, suffix in (("datasurface", "vtp"), ("datagrid", "vtu")):
+        files = [f"{name}/step{n}.{suffix}" for n in range(3)]
+        collection(HERE / f"{name}.pvd", files, DATA_STEPS, [0, 1, 2])
 
 
 if __name__ == "__main__":

@@ -28,6 +28,7 @@ from ...model.sequence import MeshSequence
 from ...model.sources import RawFrames
 from ...system.atomic import atomic_output
 from ...system.reading import open_input
+from ..common.attached_keys import everything_attached
 from ..pointcache import cache_faces, check_size
 from ..registry import ReadOptions, WriteOptions
 from .archive import npy_header
@@ -82,6 +83,12 @@ class NpyFrames(RawFrames):
         self._stream = stream
         self._file, self._offset, self._dtype = path, header.size, dtype
         self._describe(path, shape[0], shape[1], cache_faces(options, shape[1], path))
+
+
+def cannot_keep(seq: MeshSequence) -> list[str]:
+    """What a ``.npy`` cannot keep of ``seq``: every attribute, face set and field (it holds
+    positions only)."""
+    return everything_attached(seq)
 
 
 def write_npy(seq: MeshSequence, path: Path, options: WriteOptions) -> None:

@@ -12,10 +12,12 @@ from typing import IO, Any, ClassVar
 import numpy as np
 
 from ...errors import InputError
+from ...model.attributes import Field
 from ...model.sequence import MeshSequence
 from ...model.sources import RawFrames, read_into
 from ...system.atomic import atomic_output
 from ...system.reading import open_input
+from ..common.attached_keys import DESCRIPTION, Attached, attached_arrays, read_attached
 from ..registry import ReadOptions, WriteOptions
 from .archive import ZIP_ERRORS, NpzArchive, member_header
 
@@ -35,6 +37,8 @@ class NpzFrames(RawFrames):
     _archive: zipfile.ZipFile | None = None
     #: Key V read whole: for :meth:`load`, or in Fortran order (read on first use)
     _whole: np.ndarray | None = None
+    #: The fields' values, read whole on the first :meth:`read_fields`
+    _field_values: list[np.ndarray] | None
 
     def __init__(self, path: Path, options: ReadOptions | None = None):
         # what the arrays read whole may inflate to: the metadata's, held, then V's when read
@@ -54,6 +58,7 @@ class NpzFrames(RawFrames):
                 )
             faces, names, rate, codes = archive.metadata(*shape)
             unit, axis = archive.scene()
+            attached = self._attached(archive, shape[0], shape[1], faces, path)
             self._name = info.filename
             self._deflated = info.compress_type == zipfile.ZIP_DEFLATED
             self._scattered = header.fortran_order and shape[0] > 1
@@ -62,7 +67,76 @@ class NpzFrames(RawFrames):
             if not self._deflated:
                 self._data_start = _data_start(archive.stream, info, archive.size, path)
         self._file, self._dtype = path, header.dtype
-        self._describe(path, *shape, faces, names, rate, codes, unit, axis)
+        self._fields, self._field_values = attached.fields, None
+        self._describe(
+            path,
+            *shape,
+            faces,
+            names,
+            rate,
+            codes,
+            unit,
+            axis,
+            attached.attributes,
+            attached.face_sets,
+            [entry.name for entry in attached.fields],
+        )
+
+    @staticmethod
+    def _attached(
+        archive: NpzArchive, frames: int, vertices: int, faces: object, path: Path
+    ) -> Attached:
+        """The attributes, face sets and field entries of the archive (none without its
+        description), each field's shape checked from its header."""
+        if DESCRIPTION not in archive.members:
+            return Attached([], [], [])
+        text = archive.array(DESCRIPTION)
+        if text.dtype.kind != "U" or text.size != 1:
+            raise InputError(
+                f"key {DESCRIPTION!r} must be one string, got dtype {text.dtype} shape "
+                f"{text.shape}",
+                path=path,
+            )
+
+        def array(key: str) -> np.ndarray:
+            if key not in archive.members:
+                raise InputError("is missing")
+            return archive.array(key)
+
+        try:
+            attached = read_attached(str(text.reshape(())), array)
+        except InputError as error:
+            raise InputError(error.reason, path=path) from None
+        face_count = np.asarray(faces).shape[0]
+        for entry in attached.fields:
+            if entry.key not in archive.members:
+                raise InputError(f"key {entry.key!r} is missing", path=path)
+            header = member_header(
+                archive.zip, archive.info(entry.key), entry.key, archive.size, path
+            )
+            count = vertices if entry.domain == "vertex" else face_count
+            if len(header.shape) != 3 or header.shape[:2] != (frames, count):
+                raise InputError(
+                    f"key {entry.key!r} (field {entry.name!r}) has shape {header.shape}, not "
+                    f"({frames}, {count}, components)",
+                    path=path,
+                )
+        return attached
+
+    def _read_fields(self, start: int, stop: int) -> list[Field]:
+        if self._field_values is None:  # read whole on first use (CRC checked), then kept
+            with NpzArchive(self._file, copy.copy(self._inflation)) as archive:
+                self._field_values = [archive.array(entry.key) for entry in self._fields]
+        fields = []
+        for entry, values in zip(self._fields, self._field_values, strict=True):
+            try:
+                fields.append(entry.field(values[start:stop]))
+            except InputError as error:
+                frame = None if error.frame is None else start + error.frame
+                raise InputError(
+                    f"key {entry.key!r}: {error.reason}", path=self._file, frame=frame
+                ) from None
+        return fields
 
     def load(self, progress: bool = False) -> MeshSequence:
         """The whole sequence, key V read in one piece through zipfile, which checks its CRC."""
@@ -121,6 +195,12 @@ def _data_start(stream: IO[bytes], info: zipfile.ZipInfo, size: int, path: Path)
     return start
 
 
+def cannot_keep(seq: MeshSequence) -> list[str]:
+    """What an ``.npz`` cannot keep of ``seq``: nothing, every attribute, face set and field is
+    kept bit for bit."""
+    return []
+
+
 def write_npz(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
     """Write the sequence as an .npz archive, atomically."""
     arrays: dict[str, Any] = {
@@ -136,6 +216,10 @@ def write_npz(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
         arrays["meters_per_unit"] = np.float64(seq.meters_per_unit)
     if seq.up_axis is not None:
         arrays["up_axis"] = np.array(seq.up_axis, dtype=str)
+    description, attached = attached_arrays(seq)
+    if description:
+        arrays[DESCRIPTION] = np.array(description, dtype=str)
+        arrays.update(attached)
     # np.savez adds ".npz" to a file *name* without it, so it gets an open file instead
     with atomic_output(path, overwrite=options.overwrite) as stream:
         np.savez(stream, **arrays)

@@ -15,6 +15,14 @@ writes; triangles, quads, polygons, strips; what is refused) is :mod:`.datasets`
 Positions keep their precision (float64 stays float64). :class:`PvdFrames` reads the files as
 their frames are asked for, a range at a time. XDMF is not read here.
 
+Point and cell data (:mod:`.data`, :mod:`~tuckercodec.io.common.data_arrays` for the rules):
+float arrays are animated fields (per vertex, or per face: a cell's value goes to the faces it
+makes, a strip's to each of its triangles, a vertex cell's nowhere), read a range of steps at a
+time (:meth:`PvdFrames.read_fields`); the active normals and texture coordinates are static
+attributes of the first step's values; integer arrays static int32 attributes, which every
+later step must repeat. Arrays of more than 4 components, strings and bits are not read: each
+is noted in :attr:`PvdFrames.skipped`. Attributes list point arrays before cell arrays.
+
 Hostile input: a ``.pvd`` larger than :data:`MAX_INDEX_BYTES` is refused before it is parsed;
 one that declares a DOCTYPE or an ENTITY (the way to an entity-expansion attack; a ``.pvd``
 needs neither) is refused by the parser, whatever its encoding, as is such a ``.vtu``/``.vtp``
@@ -27,7 +35,12 @@ by default half the machine's memory; :mod:`.arrays`).
 Writing ``out.pvd``: one ``.vtp`` per frame (:data:`FRAME_SUFFIX`; ``.vtu`` on request) in the
 folder ``out/`` beside it (names from :func:`~tuckercodec.io.frames.frame_file_names`), in
 ParaView's own layout (appended raw binary, zlib blocks, UInt64 headers), Float32 when every
-position is a float32 (exact either way), Float64 otherwise. PolyData is ParaView's surface type:
+position is a float32 (exact either way), Float64 otherwise. Vertex and face attributes and
+fields are point and cell arrays of every file (static ones repeated), in their own types,
+tagged with their role and whether they are static so that reading gives them back; the
+normals and texture coordinates are VTK's active ones. What the files cannot hold (attributes
+per face corner, the indices of indexed attributes, face sets) is listed by
+:func:`cannot_keep`. PolyData is ParaView's surface type:
 its surface filters (normals, smoothing, decimation) take it directly, where an UnstructuredGrid
 first needs Extract Surface. Every target is checked first (never overwritten without
 ``overwrite``), the frames are staged in a hidden folder and moved in whole
@@ -38,6 +51,7 @@ from .series import (
     FRAME_SUFFIX,
     MAX_INDEX_BYTES,
     PvdFrames,
+    cannot_keep,
     write_pvd,
 )
 
@@ -45,5 +59,6 @@ __all__ = [
     "FRAME_SUFFIX",
     "MAX_INDEX_BYTES",
     "PvdFrames",
+    "cannot_keep",
     "write_pvd",
 ]

@@ -29,16 +29,20 @@ the cells are encoded once for every frame of a series.
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass, field
 from xml.etree import ElementTree
 
 import numpy as np
 
 from ...errors import InputError
+from ...model.attributes import FACE, VERTEX
 from ...model.sources import as_float64
 from ..common.budget import Inflation, memory_ceiling
+from ..common.data_arrays import SourceArray, TargetArray
 from ..common.polygons import faces_from_polygons, polygons_from_faces
 from ..common.safe_xml import parse_xml
 from .arrays import Encoding, Layout, encode_array, file_encoding, read_array, type_name
+from .data import PieceData, data_xml, quoted, read_piece_data
 
 #: The dataset types read and written, by the suffix VTK gives their files.
 DATASETS = {".vtu": "UnstructuredGrid", ".vtp": "PolyData"}
@@ -78,10 +82,40 @@ _ENCODING = re.compile(rb"""\bencoding\s*=\s*["']([^"']*)["']""")
 _INT64_MAX = np.iinfo(np.int64).max
 
 
+@dataclass(eq=False)
+class Dataset:
+    """What one file holds: points, faces, and its point and cell arrays.
+
+    Attributes:
+        points: (K, 3) float64, finite.
+        faces: (M, n) int64, -1 padded; (0, 3) without faces.
+        arrays: by (domain, name): point arrays (one row per point) and cell arrays (one row
+            per face: a strip's value repeated for each of its triangles; the values of
+            vertex cells, which are no faces, left out).
+        skipped: the notes of arrays not read (:mod:`.data`).
+    """
+
+    points: np.ndarray
+    faces: np.ndarray
+    arrays: dict[tuple[str, str], SourceArray] = field(default_factory=dict)
+    skipped: list[str] = field(default_factory=list)
+
+
 def read_dataset(data: bytes, inflation: Inflation | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The points ((K, 3) float64, finite) and face table ((M, n) int64, -1 padded; (0, 3)
     without faces) of the bytes of a ``.vtu`` or ``.vtp`` file (see the module docstring); its
     compressed arrays inflate within ``inflation`` (default: half the machine's memory)."""
+    found = parse_dataset(data, inflation, wanted=set())
+    return found.points, found.faces
+
+
+def parse_dataset(
+    data: bytes,
+    inflation: Inflation | None = None,
+    wanted: set[tuple[str, str]] | None = None,
+) -> Dataset:
+    """The :class:`Dataset` of the bytes of a ``.vtu`` or ``.vtp`` file, with the point and
+    cell arrays in ``wanted`` (by (domain, name); ``None``: all of them)."""
     root, encoding = _parse(data, inflation or Inflation(memory_ceiling(None)))
     kind = root.get("type", "")
     if root.tag != "VTKFile" or kind not in DATASETS.values():
@@ -93,13 +127,17 @@ def read_dataset(data: bytes, inflation: Inflation | None = None) -> tuple[np.nd
     pieces = [] if grid is None else grid.findall("Piece")
     if not pieces:
         raise InputError(f"has no <{kind}><Piece>: there is nothing to read")
-    points, counts, corners = [], [], []
+    points, counts, corners, datas = [], [], [], []
     start = 0
     for number, piece in enumerate(pieces):
         label = f"piece {number}: " if len(pieces) > 1 else ""
         try:
             piece_points = _points(piece, encoding)
-            sizes, flat = (_unstructured if kind == "UnstructuredGrid" else _poly)(piece, encoding)
+            reader = _unstructured if kind == "UnstructuredGrid" else _poly
+            sizes, flat, face_cells, cells = reader(piece, encoding)
+            piece_data = read_piece_data(
+                piece, encoding, {VERTEX: len(piece_points), FACE: cells}, wanted
+            )
         except InputError as error:
             raise InputError(label + error.reason) from None
         if flat.size and flat.min() < 0:  # -1 would pass for the face table's padding
@@ -112,6 +150,7 @@ def read_dataset(data: bytes, inflation: Inflation | None = None) -> tuple[np.nd
         points.append(piece_points)
         counts.append(sizes)
         corners.append(flat + start if start else flat)
+        datas.append(_on_faces(piece_data, face_cells))
         start += len(piece_points)
     vertices = points[0] if len(points) == 1 else np.concatenate(points)
     if len(vertices) == 0:
@@ -121,10 +160,49 @@ def read_dataset(data: bytes, inflation: Inflation | None = None) -> tuple[np.nd
         vertex = int(np.argwhere(bad)[0, 0])
         raise InputError(f"point {vertex} has a non-finite coordinate")
     if len(counts) > 1:
-        return vertices, faces_from_polygons(
-            np.concatenate(counts), np.concatenate(corners), len(vertices)
-        )
-    return vertices, faces_from_polygons(counts[0], corners[0], len(vertices))
+        faces = faces_from_polygons(np.concatenate(counts), np.concatenate(corners), len(vertices))
+    else:
+        faces = faces_from_polygons(counts[0], corners[0], len(vertices))
+    arrays, skipped = _joined(datas)
+    if not len(faces):
+        skipped += [
+            f"cell array {name!r}: the mesh has no faces" for d, name in arrays if d == FACE
+        ]
+        arrays = {key: value for key, value in arrays.items() if key[0] != FACE}
+    return Dataset(vertices, faces, arrays, skipped)
+
+
+def _on_faces(piece: PieceData, face_cells: np.ndarray) -> PieceData:
+    """The piece's cell arrays with one row per face (``face_cells``: each face's cell)."""
+    arrays = {
+        key: value
+        if key[0] != FACE
+        else SourceArray(value.name, FACE, value.values[face_cells], value.role, value.static)
+        for key, value in piece.arrays.items()
+    }
+    return PieceData(arrays, piece.skipped)
+
+
+def _joined(pieces: list[PieceData]) -> tuple[dict[tuple[str, str], SourceArray], list[str]]:
+    """The arrays of several pieces joined, in order (those every piece holds alike)."""
+    if len(pieces) == 1:
+        return pieces[0].arrays, list(pieces[0].skipped)
+    skipped = [note for piece in pieces for note in piece.skipped]
+    arrays = {}
+    for key, first in pieces[0].arrays.items():
+        parts = [piece.arrays.get(key) for piece in pieces]
+        if any(
+            part is None
+            or part.values.dtype != first.values.dtype
+            or part.values.shape[1] != first.values.shape[1]
+            for part in parts
+        ):
+            where = "point" if key[0] == VERTEX else "cell"
+            skipped.append(f"{where} array {key[1]!r}: not alike in every piece")
+            continue
+        values = np.concatenate([part.values for part in parts if part is not None])
+        arrays[key] = SourceArray(first.name, first.domain, values, first.role, first.static)
+    return arrays, skipped
 
 
 def _parse(data: bytes, inflation: Inflation) -> tuple[ElementTree.Element, Encoding]:
@@ -222,12 +300,16 @@ def _not_surface(count: int, name: str) -> InputError:
     )
 
 
-def _unstructured(piece: ElementTree.Element, encoding: Encoding) -> tuple[np.ndarray, np.ndarray]:
-    """The face corner counts and corners of an UnstructuredGrid piece."""
+def _unstructured(
+    piece: ElementTree.Element, encoding: Encoding
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """The face corner counts, corners and cells (each face's) of an UnstructuredGrid piece,
+    and its number of cells."""
     cells = _count(piece, "NumberOfCells")
     element = piece.find("Cells")
     if element is None and cells == 0:
-        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty, empty, 0
     connectivity, offsets, sizes = _cell_array(element, encoding, "Cells", cells)
     (types_element,) = _arrays(element, ("types",), "Cells")
     types = _ints(read_array(types_element, encoding, "Cells types", count=cells), "Cells")
@@ -248,15 +330,20 @@ def _unstructured(piece: ElementTree.Element, encoding: Encoding) -> tuple[np.nd
             raise InputError(
                 f"cell {cell} is a {CELL_NAMES[code]} of {sizes[cell]} points, fewer than {least}"
             )
-    return _corners(connectivity, offsets, sizes, _LOOKUP[types])
+    return (*_corners(connectivity, offsets, sizes, _LOOKUP[types]), cells)
 
 
-def _poly(piece: ElementTree.Element, encoding: Encoding) -> tuple[np.ndarray, np.ndarray]:
-    """The face corner counts and corners of a PolyData piece: its polygons, then its strips."""
+def _poly(
+    piece: ElementTree.Element, encoding: Encoding
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """The face corner counts, corners and cells (each face's) of a PolyData piece (its
+    polygons, then its strips), and its number of cells (VTK numbers its verts, lines, polygons
+    and strips in that order, which its cell data follows)."""
     lines = _count(piece, "NumberOfLines")
     if lines:
         raise _not_surface(lines, "line")
-    counts, corners = [], []
+    counts, corners, face_cells = [], [], []
+    first = _count(piece, "NumberOfVerts")
     for section, kind, least in (("Polys", _POLYGON, 3), ("Strips", _STRIP, 3)):
         cells = _count(piece, f"NumberOf{section}")
         if cells == 0:
@@ -266,21 +353,27 @@ def _poly(piece: ElementTree.Element, encoding: Encoding) -> tuple[np.ndarray, n
             cell = int(np.argmin(sizes))
             raise InputError(f"{section}: cell {cell} has {sizes[cell]} points, fewer than 3")
         kinds = np.full(cells, kind, dtype=np.int8)
-        section_counts, section_corners = _corners(connectivity, offsets, sizes, kinds)
+        section_counts, section_corners, section_cells = _corners(
+            connectivity, offsets, sizes, kinds
+        )
         counts.append(section_counts)
         corners.append(section_corners)
+        face_cells.append(section_cells + first)
+        first += cells
     if not counts:
-        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
-    return np.concatenate(counts), np.concatenate(corners)
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty, empty, first
+    return np.concatenate(counts), np.concatenate(corners), np.concatenate(face_cells), first
 
 
 def _corners(
     connectivity: np.ndarray, offsets: np.ndarray, sizes: np.ndarray, kinds: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """The corner count of each face and the corners of all faces, in the cells' order:
-    markers dropped, strips split into triangles, pixels reordered as quads."""
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The corner count of each face, the corners of all faces, in the cells' order, and
+    each face's cell: markers dropped, strips split into triangles, pixels reordered as
+    quads."""
     if (kinds == _POLYGON).all():
-        return sizes, connectivity
+        return sizes, connectivity, np.arange(len(kinds), dtype=np.int64)
     rows = np.where(kinds == _STRIP, sizes - 2, kinds != _MARKER).astype(np.int64)
     row_cell = np.repeat(np.arange(len(kinds)), rows)
     step = np.arange(row_cell.size) - (np.cumsum(rows) - rows)[row_cell]  # triangle in strip
@@ -295,7 +388,7 @@ def _corners(
     corner = np.where(flip, 1 - corner, corner)
     pixel = (row_kind == _PIXEL)[corner_row] & (corner >= 2)  # pixel corners 0 1 3 2
     corner = np.where(pixel, 5 - corner, corner)
-    return counts, connectivity[base[corner_row] + corner]
+    return counts, connectivity[base[corner_row] + corner], row_cell.astype(np.int64)
 
 
 # ------------------------------------------------------------------------------------------
@@ -341,25 +434,39 @@ class DatasetWriter:
             (name, values.dtype, encode_array(values, self.layout)) for name, values in arrays
         ]
 
-    def __call__(self, points: np.ndarray) -> bytes:
-        """The file of one frame: ``points`` (K, 3), float32 or float64, stored as they are."""
+    def __call__(
+        self,
+        points: np.ndarray,
+        data: list[TargetArray] | None = None,
+        frame: int = 0,
+    ) -> bytes:
+        """The file of one frame: ``points`` (K, 3), float32 or float64, stored as they are,
+        and the arrays of ``data`` (point and cell arrays by their domain) at ``frame``."""
         layout = self.layout
         appended: list[bytes] = []
         offset = 0
 
-        def element(name: str, dtype: np.dtype, data: bytes, extra: str = "") -> str:
+        def element(name: str, dtype: np.dtype, values: np.ndarray | bytes, extra: str = "") -> str:
+            """One <DataArray> of ``values`` (or of their encoding, given as bytes)."""
             nonlocal offset
-            head = f'<DataArray type="{type_name(dtype)}" Name="{name}"{extra}'
+            encoded = (
+                values if isinstance(values, bytes) else encode_array(values.reshape(-1), layout)
+            )
+            head = f'<DataArray type="{type_name(dtype)}" Name="{quoted(name)}"{extra}'
             if layout.format == "appended":
-                appended.append(data)
+                appended.append(encoded)
                 head += f' format="appended" offset="{offset}"/>'
-                offset += len(data)
+                offset += len(encoded)
                 return head
-            return f'{head} format="{layout.format}">\n{data.decode("ascii")}\n</DataArray>'
+            return f'{head} format="{layout.format}">\n{encoded.decode("ascii")}\n</DataArray>'
 
-        encoded = encode_array(np.ascontiguousarray(points).reshape(-1), layout)
-        point_xml = element("Points", points.dtype, encoded, ' NumberOfComponents="3"')
+        point_xml = element("Points", points.dtype, points, ' NumberOfComponents="3"')
         cell_xml = "\n".join(element(name, dtype, data) for name, dtype, data in self.cells)
+        targets = data or []
+        point_data = data_xml(
+            [t for t in targets if t.domain == VERTEX], frame, element, "PointData"
+        )
+        cell_data = data_xml([t for t in targets if t.domain == FACE], frame, element, "CellData")
         version = "1.0" if layout.header == "UInt64" else "0.1"  # as VTK writes them
         compressor = (
             ' compressor="vtkZLibDataCompressor"'
@@ -370,15 +477,16 @@ class DatasetWriter:
             f'<?xml version="1.0"?>\n<VTKFile type="{self.kind}" version="{version}" '
             f'byte_order="{layout.byte_order}" header_type="{layout.header}"{compressor}>\n'
             f'<{self.kind}>\n<Piece NumberOfPoints="{len(points)}" {self.counts}>\n'
-            f"<Points>\n{point_xml}\n</Points>\n<{self.section}>\n{cell_xml}\n"
+            f"{point_data}{cell_data}<Points>\n{point_xml}\n</Points>\n"
+            f"<{self.section}>\n{cell_xml}\n"
             f"</{self.section}>\n</Piece>\n</{self.kind}>\n"
         )
         if not appended:
-            return (head + "</VTKFile>\n").encode("ascii")
+            return (head + "</VTKFile>\n").encode("utf-8")
         encoding = "base64" if layout.base64 else "raw"
         return b"".join(
             [
-                head.encode("ascii"),
+                head.encode("utf-8"),
                 f'<AppendedData encoding="{encoding}">\n_'.encode("ascii"),
                 *appended,
                 b"\n</AppendedData>\n</VTKFile>\n",

@@ -3,8 +3,10 @@ at a time) and written (:func:`write_pvd`)."""
 
 from __future__ import annotations
 
+import importlib
 import itertools
 import os
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from xml.etree import ElementTree
@@ -12,15 +14,17 @@ from xml.etree import ElementTree
 import numpy as np
 
 from ...errors import InputError
+from ...model.attributes import FACE, NORMAL, VERTEX, Field
 from ...model.sequence import MeshSequence
 from ...model.sources import FrameSource
 from ...system.atomic import atomic_folder, refuse_existing, write_atomic
 from ...system.reading import inside_folder, open_input, open_regular_file
+from ..common.data_arrays import TargetArray, arrays_to_write, cannot_keep_arrays, plan_arrays
 from ..common.safe_xml import parse_xml
 from ..frames import frame_file_names
 from ..registry import ReadOptions, WriteOptions
 from .arrays import Layout
-from .datasets import DATASETS, DatasetWriter, read_dataset
+from .datasets import DATASETS, Dataset, DatasetWriter, parse_dataset
 
 #: The largest .pvd index read: about a million time steps, far beyond any real series.
 MAX_INDEX_BYTES = 64 * 1024 * 1024
@@ -38,12 +42,29 @@ class PvdFrames(FrameSource):
         self._options = options or ReadOptions()
         self._entries = _collection(path)
         _refuse_repeated_files(self._entries, path)
-        points, faces = _read_frame(self._entries[0].file, path, 0, self._options)
-        self._points = np.asarray(points, dtype=np.float64)
+        first = _read_frame(self._entries[0].file, path, 0, self._options, None)
+        self._points = first.points
+        try:
+            self._plan = plan_arrays(first.arrays.values())
+        except InputError as error:
+            raise InputError(error.reason, path=self._entries[0].file, frame=0) from None
+        #: the notes of the point and cell arrays not read (:mod:`~..common.data_arrays`)
+        self.skipped = first.skipped + self._plan.skipped
+        self._first_rows = self._step_rows(first, 0)
         timed = self._entries[0].timestep is not None
         codes = [entry.timestep for entry in self._entries] if timed else None
         names = [entry.name for entry in self._entries]
-        self._describe(path, len(self._entries), len(self._points), faces, names, None, codes)
+        self._describe(
+            path,
+            len(self._entries),
+            len(self._points),
+            first.faces,
+            names,
+            None,
+            codes,
+            attributes=self._plan.attributes,
+            field_names=self._plan.field_names,
+        )
 
     def _read(self, start: int, stop: int) -> np.ndarray:
         # frames are gathered as read, not into one array sized by the index: an index may
@@ -56,7 +77,12 @@ class PvdFrames(FrameSource):
             if index == 0:
                 frames.append(self._points)
                 continue
-            points, cells = _read_frame(entry.file, pvd, index, self._options)
+            found = _read_frame(entry.file, pvd, index, self._options, set(self._plan.repeated))
+            points, cells = found.points, found.faces
+            try:
+                self._plan.check_repeated({k: a.values for k, a in found.arrays.items()})
+            except InputError as error:
+                raise InputError(error.reason, path=entry.file, frame=index) from None
             if len(points) != self.vertex_count:
                 raise InputError(
                     f"has {len(points)} points but the first frame ({first}) has "
@@ -73,6 +99,27 @@ class PvdFrames(FrameSource):
                 )
             frames.append(np.asarray(points, dtype=np.float64))
         return np.stack(frames)
+
+    def _read_fields(self, start: int, stop: int) -> list[Field]:
+        steps = []
+        wanted = self._plan.wanted()
+        for index in range(start, stop):
+            if index == 0:
+                steps.append(self._first_rows)
+                continue
+            entry = self._entries[index]
+            found = _read_frame(entry.file, Path(self.path or ""), index, self._options, wanted)
+            steps.append(self._step_rows(found, index))
+        return self._plan.fields(steps)  # each step's rows checked by _step_rows
+
+    def _step_rows(self, found: Dataset, index: int) -> list[np.ndarray]:
+        """One step's rows of each field, its integer arrays checked against the first's."""
+        counts = {VERTEX: len(found.points), FACE: len(found.faces)}
+        arrays = {key: array.values for key, array in found.arrays.items()}
+        try:
+            return self._plan.step_rows(arrays, counts)
+        except InputError as error:
+            raise InputError(error.reason, path=self._entries[index].file, frame=index) from None
 
 
 def _refuse_repeated_files(entries: list[_Entry], path: Path) -> None:
@@ -199,10 +246,15 @@ def _check_parts(datasets: list[ElementTree.Element], path: Path) -> None:
 
 
 def _read_frame(
-    file: Path, pvd: Path, index: int, options: ReadOptions
-) -> tuple[np.ndarray, np.ndarray]:
-    """The points (K, 3) float64 and faces of one .vtp/.vtu frame, checked; its compressed
-    arrays inflate within ``options.max_memory``, together."""
+    file: Path,
+    pvd: Path,
+    index: int,
+    options: ReadOptions,
+    wanted: set[tuple[str, str]] | None,
+) -> Dataset:
+    """The points (K, 3) float64, faces and the ``wanted`` arrays (``None``: all) of one
+    .vtp/.vtu frame, checked; its compressed arrays inflate within ``options.max_memory``,
+    together."""
     try:
         stream = open_regular_file(file, "a VTK XML file")
     except OSError as error:
@@ -218,7 +270,7 @@ def _read_frame(
             frame=index,
         )
     try:
-        return read_dataset(data, options.inflation())
+        return parse_dataset(data, options.inflation(), wanted)
     except InputError as error:
         raise InputError(error.reason, path=file, frame=index) from None
 
@@ -245,12 +297,54 @@ def write_pvd(
         raise ValueError(f"{path}: a .pvd needs a name with a suffix, for its frames' folder")
     names = frame_file_names(seq.frame_names, frame_suffix)
     refuse_existing([path], options.overwrite)  # before the frames are written
+    try:
+        targets = arrays_to_write(seq)
+    except InputError as error:
+        raise InputError(error.reason, path=path) from None
     writer = DatasetWriter(seq.faces, seq.vertex_count, DATASETS[frame_suffix], layout)
     points = seq.compact_vertices()  # float32 where exact, else float64
     with atomic_folder(folder, names, overwrite=options.overwrite) as staging:
         for index, name in enumerate(names):
-            (staging / name).write_bytes(writer(points[index]))
+            data = _moving_normals(seq, targets, index)
+            (staging / name).write_bytes(writer(points[index], data, index))
     write_atomic(path, _index_xml(folder.name, names, seq.codes()), overwrite=options.overwrite)
+
+
+def cannot_keep(seq: MeshSequence) -> list[str]:
+    """What a VTK series cannot keep of ``seq`` (the format's ``cannot_keep``): attributes per
+    face corner, the indices of indexed attributes (written one value per element), face
+    sets."""
+    return cannot_keep_arrays(seq)
+
+
+def _moving_normals(seq: MeshSequence, targets: list[TargetArray], frame: int) -> list[TargetArray]:
+    """The arrays of ``frame``: static normals are the stored ones at frame 0 and, where the
+    normals helper is there, recomputed from each later frame's positions (the normals of a
+    moving mesh move with it)."""
+    recompute = _normals_helper()
+    if frame == 0 or recompute is None:
+        return targets
+    moved = []
+    for target in targets:
+        if target.static and target.role == NORMAL and target.domain == VERTEX:
+            attribute = seq.attribute_named(target.name)
+            values = np.asarray(recompute(seq.vertices[frame], seq.faces, attribute))
+            if attribute.indices is not None:
+                values = values[attribute.indices]
+            values = values.astype(attribute.values.dtype, copy=False)
+            target = TargetArray(target.name, target.domain, target.role, values, None)
+        moved.append(target)
+    return moved
+
+
+def _normals_helper() -> Callable[..., np.ndarray] | None:
+    """``tuckercodec.model.normals.recomputed_normals``, or None before it lands."""
+    try:
+        module = importlib.import_module("tuckercodec.model.normals")
+    except ImportError:
+        return None
+    helper: Callable[..., np.ndarray] = module.recomputed_normals
+    return helper
 
 
 def _index_xml(folder: str, names: list[str], codes: np.ndarray) -> bytes:

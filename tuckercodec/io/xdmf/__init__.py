@@ -30,6 +30,13 @@ before it is used; an HDF dataset must hold as many values as its ``Dimensions``
 least 1/1032 of its size (no more than zlib can inflate), and one step's datasets inflate
 within ``--max-memory`` together (:mod:`.items`). Errors name the .xdmf, the frame and the
 grid. Writing is :mod:`.writer`'s.
+
+A grid's ``<Attribute>``s centred on nodes or cells (one row per point or cell; a cell's value
+goes to the face it is, a polyvertex's nowhere) are read as VTK's point and cell data are
+(:mod:`~tuckercodec.io.common.data_arrays`): float ones animated fields read a range of steps at
+a time, normals and UVs static attributes of the first step's values, integer ones static
+attributes every later step must repeat; others (of more than 4 components, centred on edges or
+grids) are noted in :attr:`XdmfFrames.skipped`.
 """
 
 from .series import (

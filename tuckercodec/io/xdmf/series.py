@@ -12,8 +12,10 @@ from xml.etree import ElementTree
 import numpy as np
 
 from ...errors import InputError
+from ...model.attributes import FACE, VERTEX, Field
 from ...model.sources import FrameSource, as_float64
 from ...system.reading import open_input
+from ..common.data_arrays import ROLE_TAG, STATIC_TAG, SourceArray, plan_arrays
 from ..common.polygons import faces_from_polygons
 from ..common.safe_xml import parse_xml
 from ..registry import ReadOptions
@@ -39,14 +41,34 @@ class XdmfFrames(FrameSource):
         self._file, self._options = path, options or ReadOptions()
         _, steps = self._tree()
         self._topology = np.zeros(0, dtype=np.int64)
+        self._face_cells, self._cell_count = np.zeros(0, dtype=np.int64), 0
+        self._skipped: list[str] = []
         faces = np.zeros((0, 3), dtype=np.int64)
         self._points, faces = self._step(0, steps[0], faces, None)
+        first = self._arrays(0, steps[0], None)
+        try:
+            self._plan = plan_arrays(first.values())
+        except InputError as error:
+            raise InputError(error.reason, path=path, frame=0) from None
+        #: the notes of the attributes (XDMF's point and cell data) not read
+        self.skipped = self._skipped + self._plan.skipped
+        self._first_rows = self._rows(0, first, len(faces))
         timed = steps[0].time is not None
         codes = [step.time for step in steps] if timed else None
         names = [step.name for step in steps]
         if not (all(names) and len(set(names)) == len(names)):
             names = []
-        self._describe(path, len(steps), len(self._points), faces, names, None, codes)
+        self._describe(
+            path,
+            len(steps),
+            len(self._points),
+            faces,
+            names,
+            None,
+            codes,
+            attributes=self._plan.attributes,
+            field_names=self._plan.field_names,
+        )
 
     def _tree(self) -> tuple[References, list[_Step]]:
         """The parsed XML (with its References' follower) and its steps (parsed again after
@@ -75,10 +97,11 @@ class XdmfFrames(FrameSource):
                 raise _shared(first, index, source)
             values, kind = _topology_values(step.grid, root, self._heavy)
             if count is None or not np.array_equal(values, self._topology):
-                step_faces = _faces(values, kind, step.grid, len(points))
+                step_faces, face_cells, cells = _faces(values, kind, step.grid, len(points))
                 if count is not None and not np.array_equal(step_faces, faces):
                     raise InputError("its faces differ from the first time step's")
                 self._topology, faces = values, step_faces
+                self._face_cells, self._cell_count = face_cells, cells
             if count is not None and len(points) != count:
                 raise InputError(
                     f"has {len(points)} points but the first time step has {count}: every "
@@ -98,7 +121,66 @@ class XdmfFrames(FrameSource):
             else:
                 step = steps[index]
                 vertices[index - start] = self._step(index, step, self.faces, self.vertex_count)[0]
+                if self._plan.repeated:
+                    arrays = self._arrays(index, step, set(self._plan.repeated))
+                    try:
+                        self._plan.check_repeated({k: a.values for k, a in arrays.items()})
+                    except InputError as error:
+                        raise self._at(index, step, error) from None
         return vertices
+
+    def _read_fields(self, start: int, stop: int) -> list[Field]:
+        _, steps = self._tree()
+        rows = []
+        for index in range(start, stop):
+            if index == 0:
+                rows.append(self._first_rows)
+                continue
+            arrays = self._arrays(index, steps[index], self._plan.wanted())
+            rows.append(self._rows(index, arrays, len(self.faces)))
+        return self._plan.fields(rows)
+
+    def _rows(
+        self, index: int, arrays: dict[tuple[str, str], SourceArray], face_count: int
+    ) -> list[np.ndarray]:
+        """Step ``index``'s rows of each field, checked."""
+        _, steps = self._tree()
+        values = {key: array.values for key, array in arrays.items()}
+        try:
+            return self._plan.step_rows(values, {VERTEX: len(self._points), FACE: face_count})
+        except InputError as error:
+            raise self._at(index, steps[index], error) from None
+
+    def _at(self, index: int, step: _Step, error: InputError) -> InputError:
+        """``error`` of step ``index``, naming the .xdmf, the frame and the grid."""
+        where = f"time step {index} (grid {step.name!r})"
+        return InputError(f"{where}: {error.reason}", path=self._file, frame=index)
+
+    def _arrays(
+        self, index: int, step: _Step, wanted: set[tuple[str, str]] | None
+    ) -> dict[tuple[str, str], SourceArray]:
+        """The ``<Attribute>``s of a step's grid (those in ``wanted``, by (domain, name);
+        ``None``: all, noting in :attr:`_skipped` those not read), cell values mapped to the
+        faces."""
+        root, _ = self._tree()
+        assert self._heavy is not None  # opened by _step, which reads every step first
+        self._heavy.inflation = self._options.inflation()
+        skipped: list[str] = []
+        try:
+            arrays = _grid_arrays(
+                step.grid,
+                root,
+                self._heavy,
+                {VERTEX: len(self._points), FACE: self._cell_count},
+                self._face_cells,
+                wanted,
+                skipped,
+            )
+        except InputError as error:
+            raise self._at(index, step, error) from None
+        if wanted is None:
+            self._skipped = skipped
+        return arrays
 
 
 def _shared(first: int, index: int, source: object) -> InputError:
@@ -296,37 +378,42 @@ def _topology_values(
     return values, kind
 
 
-def _faces(values: np.ndarray, kind: str, grid: ElementTree.Element, count: int) -> np.ndarray:
-    """The face table of a topology's values."""
+def _faces(
+    values: np.ndarray, kind: str, grid: ElementTree.Element, count: int
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """The face table of a topology's values, each face's cell, and the number of cells."""
     topology = grid.find("Topology")
     assert topology is not None
     if kind == "polyvertex":
-        return np.zeros((0, 3), dtype=np.int64)
+        return np.zeros((0, 3), dtype=np.int64), np.zeros(0, dtype=np.int64), count
     if kind in _FIXED or kind == "polygon":
         width = _FIXED.get(kind) or int(lower(topology, "NodesPerElement", default="0") or 0)
         if width < 3 or values.size % width:
             raise InputError(f"its {kind} Topology of {values.size} values has no {width}-gons")
         sizes, flat = np.full(values.size // width, width), values
+        cells, face_cells = len(sizes), np.arange(len(sizes), dtype=np.int64)
     elif kind == "mixed":
-        sizes, flat = _mixed(values)
+        sizes, flat, face_cells, cells = _mixed(values)
     else:
         raise InputError(
             f"has a {kind} Topology: only surfaces are read (Triangle, Quadrilateral, Polygon, "
             "Mixed of these); extract the surface first (ParaView: Extract Surface)"
         )
-    return faces_from_polygons(sizes, flat, count)
+    return faces_from_polygons(sizes, flat, count), face_cells, cells
 
 
-def _mixed(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _mixed(values: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """Corner counts and corners of a Mixed topology (each cell: its code, for a polygon or
-    polyvertex its point count, then its points); polyvertices only mark points."""
+    polyvertex its point count, then its points; polyvertices only mark points), each face's
+    cell, and the number of cells."""
     for code, size in ((_TRIANGLE, 3), (_QUADRILATERAL, 4)):  # one cell type: at numpy speed
         if values.size % (size + 1) == 0 and (values[:: size + 1] == code).all():
             table = values.reshape(-1, size + 1)[:, 1:]
-            return np.full(len(table), size), table.reshape(-1)
+            cells = len(table)
+            return np.full(cells, size), table.reshape(-1), np.arange(cells, dtype=np.int64), cells
     numbers = values.tolist()
-    sizes, starts = [], []
-    at = 0
+    sizes, starts, face_cells = [], [], []
+    at = cells = 0
     while at < len(numbers):
         code = numbers[at]
         if code in (_POLYGON, _POLYVERTEX):
@@ -344,7 +431,70 @@ def _mixed(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         if code != _POLYVERTEX:
             sizes.append(size)
             starts.append(at)
+            face_cells.append(cells)
         at += size
+        cells += 1
     counts = np.array(sizes, dtype=np.int64)
     index = np.repeat(np.array(starts, dtype=np.int64) - np.cumsum(counts) + counts, counts)
-    return counts, values[index + np.arange(index.size)]
+    return counts, values[index + np.arange(index.size)], np.array(face_cells, np.int64), cells
+
+
+#: XDMF attribute types whose values are one row per element with this many components (a
+#: Vector's width is its Dimensions', 2 to 4, as meshio and this package write them).
+_WIDTHS = {"scalar": 1, "tensor": 9, "tensor6": 6}
+
+
+def _grid_arrays(
+    grid: ElementTree.Element,
+    root: References,
+    heavy: HeavyData,
+    counts: dict[str, int],
+    face_cells: np.ndarray,
+    wanted: set[tuple[str, str]] | None,
+    skipped: list[str],
+) -> dict[tuple[str, str], SourceArray]:
+    """The grid's node- and cell-centred ``<Attribute>``s (``counts``: its points and cells),
+    cell values mapped to the faces (``face_cells``); others noted in ``skipped``."""
+    arrays: dict[tuple[str, str], SourceArray] = {}
+    for number, element in enumerate(grid.findall("Attribute")):
+        attribute = resolve(element, root)
+        name = attribute.get("Name", "")
+        center = lower(attribute, "Center", default="node")
+        domain = {"node": VERTEX, "cell": FACE}.get(center)
+        label = f"attribute {name!r}" if name else f"attribute {number}"
+        if domain is None or not name:
+            reason = "it has no name" if not name else f"it is centred on {center}s"
+            if wanted is None:
+                skipped.append(f"{label}: {reason} (node and cell attributes are read)")
+            continue
+        if wanted is not None and (domain, name) not in wanted:
+            continue
+        items = attribute.findall("DataItem")
+        if len(items) != 1:
+            if wanted is None:
+                skipped.append(f"{label}: {len(items)} DataItems (one is read)")
+            continue
+        values = read_item(items[0], root, heavy, f"Attribute {name!r}")[0]
+        count = counts[domain]
+        width = values.size // count if count else 0
+        kind = lower(attribute, "AttributeType", "Type", default="scalar")
+        if not count or values.size != count * width or _WIDTHS.get(kind, width) != width:
+            raise InputError(
+                f"{label} holds {values.size} values ({kind}), not a row per "
+                f"{'point' if domain == VERTEX else 'cell'} of the {count}"
+            )
+        if (domain, name) in arrays:
+            raise InputError(f"the grid has two {center} attributes named {name!r}")
+        table = values.reshape(count, width)
+        if domain == FACE:
+            table = table[face_cells]
+        role = attribute.get(ROLE_TAG)  # else plan_arrays goes by the name
+        static = attribute.get(STATIC_TAG) == "1"
+        arrays[domain, name] = SourceArray(name, domain, table, role, static)
+    if not len(face_cells):
+        face_keys = [key for key in arrays if key[0] == FACE]
+        if wanted is None:
+            skipped.extend(f"cell attribute {key[1]!r}: the mesh has no faces" for key in face_keys)
+        for key in face_keys:
+            del arrays[key]
+    return arrays

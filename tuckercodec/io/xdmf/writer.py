@@ -6,9 +6,14 @@ One temporal collection of one uniform grid per frame, each with its own ``<Geom
 ``<Time Value>`` (the time code) and its ``Name`` (the frame's name); every grid's
 ``<Topology>`` reads the one ``/topology`` dataset (Triangle, Quadrilateral, Mixed for polygons
 or mixed sizes, Polyvertex for a point sequence). The attribute names are XDMF 2's, which XDMF 3
-readers accept too, so that VTK's and ParaView's XDMF readers read it. Both targets are checked
-first (never overwritten without ``overwrite``); the .h5 is written under a hidden name and put
-in place whole (:func:`~tuckercodec.system.atomic.atomic_path`), then the .xdmf, atomically.
+readers accept too, so that VTK's and ParaView's XDMF readers read it. Vertex and face
+attributes and fields are ``<Attribute>``s of every grid (``Center="Node"`` or ``"Cell"``,
+Scalar, or Vector for 2 to 4 components, in their own types, tagged with their role
+and whether they are static): a static one's grids all read one dataset (``/static/<i>``), a
+field's each its frame's (``/field/<i>/<frame>``); what cannot be kept is :func:`cannot_keep`'s.
+Both targets are checked first (never overwritten without ``overwrite``); the .h5 is written
+under a hidden name and put in place whole (:func:`~tuckercodec.system.atomic.atomic_path`), then
+the .xdmf, atomically.
 """
 
 from __future__ import annotations
@@ -18,9 +23,18 @@ from xml.etree import ElementTree
 
 import numpy as np
 
+from ...errors import InputError
+from ...model.attributes import VERTEX
 from ...model.sequence import MeshSequence
 from ...system.atomic import atomic_path, refuse_existing, write_atomic
 from ...system.optional import import_optional
+from ..common.data_arrays import (
+    ROLE_TAG,
+    STATIC_TAG,
+    TargetArray,
+    arrays_to_write,
+    cannot_keep_arrays,
+)
 from ..registry import WriteOptions
 
 
@@ -31,6 +45,10 @@ def write_xdmf(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
     if heavy == path:
         raise ValueError(f"{path}: an XDMF file needs a name other than its heavy data's (.h5)")
     refuse_existing([path, heavy], options.overwrite)
+    try:
+        targets = arrays_to_write(seq)
+    except InputError as error:
+        raise InputError(error.reason, path=path) from None
     points = seq.compact_vertices()  # float32 where exact, else float64
     kind, topology, attributes = _topology(seq.faces, seq.vertex_count)
     with (
@@ -40,7 +58,13 @@ def write_xdmf(seq: MeshSequence, path: Path, options: WriteOptions) -> None:
         file.create_dataset("topology", data=topology)
         for index in range(seq.frame_count):
             file.create_dataset(f"points/{index:06d}", data=points[index])
-    xml = _xml(seq, heavy.name, kind, topology, attributes, points.dtype)
+        for number, target in enumerate(targets):
+            if target.static:
+                file.create_dataset(f"static/{number}", data=target.at(0))
+            else:
+                for index in range(seq.frame_count):
+                    file.create_dataset(f"field/{number}/{index:06d}", data=target.at(index))
+    xml = _xml(seq, heavy.name, kind, topology, attributes, points.dtype, targets)
     write_atomic(path, xml, overwrite=options.overwrite)
 
 
@@ -79,6 +103,7 @@ def _xml(
     topology: np.ndarray,
     attributes: dict[str, str],
     point_type: np.dtype,
+    targets: list[TargetArray],
 ) -> bytes:
     """The XDMF document of the written heavy data."""
     root = ElementTree.Element("Xdmf", Version="3.0")
@@ -108,5 +133,49 @@ def _xml(
             Format="HDF",
         )
         item.text = f"{heavy}:/points/{index:06d}"
+        for number, target in enumerate(targets):
+            _attribute_xml(grid, target, heavy, number, index)
     ElementTree.indent(root)
     return ElementTree.tostring(root, encoding="utf-8", xml_declaration=True) + b"\n"
+
+
+#: XDMF's attribute type of each component count: Vector for 2 to 4, as meshio writes them
+#: (VTK's XDMF reader reads 4 components as they are and pads 2 with a zero third; its
+#: Matrix is one row for the whole grid).
+
+
+def _attribute_xml(
+    grid: ElementTree.Element, target: TargetArray, heavy: str, number: int, frame: int
+) -> None:
+    """The ``<Attribute>`` of ``target`` at ``frame`` in ``grid``: a static one reads one
+    dataset at every step, a field its frame's."""
+    values = target.at(frame)
+    element = ElementTree.SubElement(
+        grid,
+        "Attribute",
+        {
+            "Name": target.name,
+            "AttributeType": "Scalar" if values.shape[1] == 1 else "Vector",
+            "Center": "Node" if target.domain == VERTEX else "Cell",
+            ROLE_TAG: target.role,
+        },
+    )
+    if target.static:
+        element.set(STATIC_TAG, "1")
+    item = ElementTree.SubElement(
+        element,
+        "DataItem",
+        Dimensions=" ".join(map(str, values.shape)),
+        NumberType="Float" if values.dtype.kind == "f" else "Int",
+        Precision=str(values.dtype.itemsize),
+        Format="HDF",
+    )
+    dataset = f"static/{number}" if target.static else f"field/{number}/{frame:06d}"
+    item.text = f"{heavy}:/{dataset}"
+
+
+def cannot_keep(seq: MeshSequence) -> list[str]:
+    """What an XDMF series cannot keep of ``seq`` (the format's ``cannot_keep``): attributes
+    per face corner, the indices of indexed attributes (written one value per element), face
+    sets."""
+    return cannot_keep_arrays(seq)
