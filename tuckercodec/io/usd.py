@@ -68,6 +68,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from ..model.attributes import Field
 from ..model.sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_vertices
 from ..model.sources import FrameByFrame, FrameSource
 from ..system.atomic import atomic_path
@@ -81,6 +82,7 @@ from .common.polygons import (
 )
 from .isolation import IsolatedFrames, note
 from .registry import ReadOptions, WriteOptions
+from .usd_primvars import MeshReading
 
 #: Where the written mesh lives: the root Xform (also the stage's defaultPrim).
 ROOT = "/Root"
@@ -187,6 +189,9 @@ class StageFrames(FrameByFrame):
         self._first = self._frame(0)
         note(where)  # the faces, read from every frame if they may change
         faces = _faces(pxr, mesh, self._frame_times, times, len(self._first), where, path)
+        left_handed = mesh.GetOrientationAttr().Get() == pxr.UsdGeom.Tokens.leftHanded
+        self._carried = MeshReading(pxr, mesh, len(self._first), faces, left_handed, where, path)
+        self._carried.read(self._frame_times[0])
         rate = float(self._stage.GetTimeCodesPerSecond())
         if not (np.isfinite(rate) and rate > 0):
             raise InputError(f"timeCodesPerSecond must be a positive number, got {rate}", path=path)
@@ -196,7 +201,18 @@ class StageFrames(FrameByFrame):
         axis = str(pxr.UsdGeom.GetStageUpAxis(self._stage))
         try:
             self._describe(
-                path, len(self._frame_times), len(self._first), faces, None, rate, codes, unit, axis
+                path,
+                len(self._frame_times),
+                len(self._first),
+                faces,
+                None,
+                rate,
+                codes,
+                unit,
+                axis,
+                self._carried.attributes,
+                self._carried.face_sets,
+                [plan.primvar.name for plan in self._carried.fields],
             )
         except InputError as error:
             raise InputError(f"{where}: {error.reason}", path=path, frame=error.frame) from None
@@ -227,6 +243,18 @@ class StageFrames(FrameByFrame):
     def _read(self, start: int, stop: int) -> np.ndarray:
         with _quiet(self._pxr):
             return super()._read(start, stop)
+
+    def _read_fields(self, start: int, stop: int) -> list[Field]:
+        note(self._where, start)
+        with _quiet(self._pxr):
+            try:
+                return self._carried.read_fields(self._frame_times[start:stop], start)
+            except _errors(self._pxr) as error:
+                raise InputError(
+                    f"{self._where}: cannot read its fields: {_tf_message(error)}",
+                    path=self._file,
+                    frame=start,
+                ) from None
 
 
 def _confine(pxr: SimpleNamespace, path: Path) -> None:
