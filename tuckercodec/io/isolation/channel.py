@@ -29,6 +29,7 @@ import numpy as np
 
 from ... import errors
 from ...errors import InputError
+from ...model.attributes import Attribute, FaceSet, Field
 from ...system.optional import import_optional
 from ..registry import ReadOptions
 
@@ -255,9 +256,14 @@ class ErrorUnpickler(pickle.Unpickler):
 
 
 class Description:
-    """What a child says of the file when it has opened it."""
+    """What a child says of the file when it has opened it (:func:`.child.described`).
 
-    def __init__(self, header: dict[str, Any], arrays: dict[str, np.ndarray]):
+    Raises:
+        InputError: an attribute or face set that the model refuses (the child built them,
+            so only a child that is not ours sends one); names the file.
+    """
+
+    def __init__(self, header: dict[str, Any], arrays: dict[str, np.ndarray], path: Path):
         self.frame_count = int(header["frame_count"])
         self.vertex_count = int(header["vertex_count"])
         self.frame_names = [str(name) for name in header["frame_names"]]
@@ -267,6 +273,39 @@ class Description:
         # checked by FrameSource._describe, as every value a child sends
         self.meters_per_unit = header.get("meters_per_unit")
         self.up_axis = header.get("up_axis")
+        self.field_names = [str(name) for name in header.get("field_names", [])]
+        try:
+            self.attributes = [
+                Attribute(
+                    name,
+                    domain,
+                    arrays[f"attribute.{number}.values"],
+                    arrays.get(f"attribute.{number}.indices"),
+                    role,
+                )
+                for number, (name, domain, role) in enumerate(header.get("attributes", []))
+            ]
+            self.face_sets = [
+                FaceSet(name, arrays[f"face_set.{number}"], family)
+                for number, (name, family) in enumerate(header.get("face_sets", []))
+            ]
+        except InputError as error:
+            raise InputError(error.reason, path=path) from None
+
+
+def received_fields(
+    header: dict[str, Any], arrays: dict[str, np.ndarray], path: Path, start: int
+) -> list[Field]:
+    """The fields of a ``"fields"`` result (:func:`.child.fields_sent`) of frames from
+    ``start``; an InputError (from a child that is not ours) names the file and frame."""
+    try:
+        return [
+            Field(name, arrays[f"field.{number}"], domain, role)
+            for number, (name, domain, role) in enumerate(header["fields"])
+        ]
+    except InputError as error:
+        frame = None if error.frame is None else start + error.frame
+        raise InputError(error.reason, path=path, frame=frame) from None
 
 
 class Child:
@@ -281,7 +320,7 @@ class Child:
         self.watchdog: threading.Timer | None = None
         try:
             header, arrays = self._answer()
-            self.description = Description(header, arrays)
+            self.description = Description(header, arrays, path)
         except BaseException:
             self.close()
             raise
@@ -300,6 +339,18 @@ class Child:
             pass  # it died: reading its answer says how
         return self._answer()[1]["vertices"]
 
+    def read_fields(self, start: int, stop: int) -> list[Field]:
+        """The fields of frames ``start`` to ``stop`` as the child's source reads them."""
+        stdin = self.process.stdin
+        assert stdin is not None
+        try:
+            stdin.write(json.dumps({"fields": [start, stop]}).encode() + b"\n")
+            stdin.flush()
+        except OSError:
+            pass  # it died: reading its answer says how
+        header, arrays = self._answer()
+        return received_fields(header, arrays, self.ending.path, start)
+
     def _answer(self) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
         """The next result the child sends, with its arrays, within the time limit; or the
         error it sends, or the one that says how it ended."""
@@ -307,7 +358,7 @@ class Child:
             self._watch(self.timeout if self.ending.started else self.timeout + STARTUP_SECONDS)
         try:
             header = self._header()
-            if header.get("result") in ("description", "frames"):
+            if header.get("result") in ("description", "frames", "fields"):
                 arrays = {}
                 for name, dtype, shape in header["arrays"]:
                     array = self._array(dtype, shape)

@@ -7,8 +7,12 @@ libraries are imported and its memory capped, the reader's notes (:func:`note`: 
 reads, for the error should it crash there), then a result header: the description of the
 opened source (``"description"``) or frames (``"frames"``), each followed by its arrays as raw
 bytes (the header lists their names, dtypes and shapes), or an error (our own errors pickled; a
-failed allocation; a bug's traceback). It reads one request ``{"read": [start, stop]}`` a line
-on its stdin, and leaves when its stdin ends. What the libraries print goes to stderr.
+failed allocation; a bug's traceback). The description carries the source's attributes and face
+sets (names, domains, roles and families in the header, values as arrays) and its field names.
+It reads one request a line on its stdin, ``{"read": [start, stop]}`` for frames or ``{"fields":
+[start, stop]}`` for the animated fields of a range (result ``"fields"``: each field's name,
+domain and role, its values an array), and leaves when its stdin ends. What the libraries print
+goes to stderr.
 """
 
 from __future__ import annotations
@@ -28,8 +32,9 @@ from typing import IO, Any
 import numpy as np
 
 from ... import errors
+from ...model.attributes import Field
 from ...model.sequence import MeshSequence
-from ...model.sources import SequenceFrames
+from ...model.sources import FrameSource, SequenceFrames
 from ..registry import ReadOptions
 
 #: In the child: where :func:`note` writes (its stdout); None in any other process.
@@ -145,8 +150,9 @@ def serve(argument: str) -> None:
     """The child's whole life: open the request's source (a
     :class:`~tuckercodec.model.sources.FrameSource` class, or a function that reads a whole
     sequence, served from memory), send its description, then for each line ``{"read": [start,
-    stop]}`` on stdin send the frames, until stdin ends; then exit (never returns). Our own errors
-    are sent and the child serves on; anything else ends it. The time limit (``alarm``) runs while
+    stop]}`` on stdin send the frames (for ``{"fields": [start, stop]}`` the fields), until stdin
+    ends; then exit (never returns). Our own errors are sent and the child serves on; anything
+    else ends it. The time limit (``alarm``) runs while
     the child opens the file or reads, not while it waits."""
     request = json.loads(argument)
     try:
@@ -155,18 +161,7 @@ def serve(argument: str) -> None:
         source = opener(path, child_options(request))
         if isinstance(source, MeshSequence):  # read whole: served from memory
             source = SequenceFrames(source, path)
-        arrays = {"faces": source.faces}
-        if source.time_codes is not None:
-            arrays["time_codes"] = source.time_codes
-        description = {
-            "frame_count": source.frame_count,
-            "vertex_count": source.vertex_count,
-            "frame_names": source.frame_names,
-            "frame_rate": source.frame_rate,
-            "meters_per_unit": source.meters_per_unit,
-            "up_axis": source.up_axis,
-        }
-        send_arrays({"result": "description", **description}, arrays)
+        send_arrays(*described(source))
     except BaseException as error:
         send_failure(error)
         os._exit(0)
@@ -174,11 +169,15 @@ def serve(argument: str) -> None:
     if alarm is not None:
         signal.alarm(0)  # waiting for the caller is not reading
     for line in sys.stdin.buffer:
-        start, stop = json.loads(line)["read"]
+        request = json.loads(line)
+        start, stop = request["read"] if "read" in request else request["fields"]
         if alarm is not None:
             signal.alarm(alarm)
         try:
-            send_arrays({"result": "frames"}, {"vertices": source.read(start, stop)})
+            if "read" in request:
+                send_arrays({"result": "frames"}, {"vertices": source.read(start, stop)})
+            else:
+                send_arrays(*fields_sent(source.read_fields(start, stop)))
         except errors.TuckerCodecError as error:
             send_failure(error)  # the file's fault in these frames: others may still be read
         except BaseException as error:
@@ -187,6 +186,43 @@ def serve(argument: str) -> None:
         if alarm is not None:
             signal.alarm(0)
     os._exit(0)
+
+
+def described(source: FrameSource) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    """The description of an opened source as a result header and its arrays: the faces and
+    time codes, each attribute's values (and indices) and each face set's faces as arrays
+    ``attribute.N.values``, ``attribute.N.indices``, ``face_set.N``, listed in the header."""
+    arrays = {"faces": source.faces}
+    if source.time_codes is not None:
+        arrays["time_codes"] = source.time_codes
+    attributes = []
+    for number, attribute in enumerate(source.attributes):
+        attributes.append([attribute.name, attribute.domain, attribute.role])
+        arrays[f"attribute.{number}.values"] = attribute.values
+        if attribute.indices is not None:
+            arrays[f"attribute.{number}.indices"] = attribute.indices
+    for number, face_set in enumerate(source.face_sets):
+        arrays[f"face_set.{number}"] = face_set.faces
+    description = {
+        "frame_count": source.frame_count,
+        "vertex_count": source.vertex_count,
+        "frame_names": source.frame_names,
+        "frame_rate": source.frame_rate,
+        "meters_per_unit": source.meters_per_unit,
+        "up_axis": source.up_axis,
+        "attributes": attributes,
+        "face_sets": [[face_set.name, face_set.family] for face_set in source.face_sets],
+        "field_names": source.field_names,
+    }
+    return {"result": "description", **description}, arrays
+
+
+def fields_sent(fields: list[Field]) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    """Fields read for a range as a result header (each field's name, domain and role) and
+    their values as arrays ``field.N``."""
+    listed = [[item.name, item.domain, item.role] for item in fields]
+    arrays = {f"field.{number}": item.values for number, item in enumerate(fields)}
+    return {"result": "fields", "fields": listed}, arrays
 
 
 def send_arrays(header: dict[str, Any], arrays: dict[str, np.ndarray]) -> None:

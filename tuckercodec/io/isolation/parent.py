@@ -5,11 +5,12 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 from pathlib import Path
-from typing import ClassVar
+from typing import ClassVar, TypeVar
 
 import numpy as np
 
 from ...errors import InputError
+from ...model.attributes import Field
 from ...model.sequence import MeshSequence
 from ...model.sources import FrameSource, SequenceFrames
 from ..registry import ReadOptions
@@ -19,6 +20,8 @@ from .channel import (
     can_isolate,
     child_request,
 )
+
+T = TypeVar("T")
 
 
 class IsolatedFrames(FrameSource):
@@ -60,6 +63,9 @@ class IsolatedFrames(FrameSource):
             opened.time_codes,
             opened.meters_per_unit,
             opened.up_axis,
+            opened.attributes,
+            opened.face_sets,
+            opened.field_names,
         )
 
     def _start(self) -> FrameSource | Description:
@@ -76,6 +82,19 @@ class IsolatedFrames(FrameSource):
         return self._child.description
 
     def _read(self, start: int, stop: int) -> np.ndarray:
+        self._ready()
+        if self._local is not None:
+            return self._local.read(start, stop)
+        return self._asked(lambda child: child.read(start, stop))
+
+    def _read_fields(self, start: int, stop: int) -> list[Field]:
+        self._ready()
+        if self._local is not None:
+            return self._local.read_fields(start, stop)
+        return self._asked(lambda child: child.read_fields(start, stop))
+
+    def _ready(self) -> None:
+        """A child to ask (a new one if the last is gone), unless the source reads here."""
         if self._local is None and (self._child is None or not self._child.alive()):
             if self._child is not None:  # gone while idle (its caller's thread ended)
                 self._child.close()
@@ -83,13 +102,14 @@ class IsolatedFrames(FrameSource):
             opened = self._start()
             if (opened.frame_count, opened.vertex_count) != (self.frame_count, self.vertex_count):
                 raise InputError("has changed since it was opened", path=self._file)
-        if self._local is not None:
-            return self._local.read(start, stop)
+
+    def _asked(self, request: Callable[[Child], T]) -> T:
+        """What the child answers to ``request``; after a crash the next read starts afresh."""
         assert self._child is not None
         try:
-            return self._child.read(start, stop)
+            return request(self._child)
         except InputError:
-            if not self._child.alive():  # it crashed: the next read starts afresh
+            if not self._child.alive():
                 self._child.close()
                 self._child = None
             raise
