@@ -82,6 +82,8 @@ from .common.polygons import (
 )
 from .isolation import IsolatedFrames, note
 from .registry import ReadOptions, WriteOptions
+from .usd_authoring import cannot_keep as cannot_keep  # the format's hook, in the registry
+from .usd_authoring import write_attached
 from .usd_primvars import MeshReading
 
 #: Where the written mesh lives: the root Xform (also the stage's defaultPrim).
@@ -490,6 +492,7 @@ def _stage(pxr: SimpleNamespace, seq: MeshSequence, vertices: np.ndarray, name: 
         points.Set(Vt.Vec3fArray.FromNumpy(positions), time)
         bounds = np.stack([positions.min(axis=0), positions.max(axis=0)])
         extent.Set(Vt.Vec3fArray.FromNumpy(bounds), time)
+    write_attached(pxr, mesh, seq, vertices, codes.tolist())
     rate = seq.frame_rate or DEFAULT_FRAME_RATE
     stage.SetTimeCodesPerSecond(rate)
     stage.SetFramesPerSecond(rate)

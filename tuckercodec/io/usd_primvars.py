@@ -193,7 +193,9 @@ class MeshReading:
                 item = self._described(NORMALS, "attribute normals", normals, None, interpolation)
                 found += [item] if item is not None else []
         velocities = mesh.GetVelocitiesAttr()
-        if VELOCITIES not in names and velocities.HasAuthoredValue():
+        # beside a static primvars:velocities (an attribute) it is a field of the same name
+        fields = {item.name for item in found if item.animated()}
+        if VELOCITIES not in fields and velocities.HasAuthoredValue():
             item = self._described(VELOCITIES, _VELOCITIES_LABEL, velocities, None, "vertex")
             found += [item] if item is not None else []
         return found
