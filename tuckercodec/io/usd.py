@@ -36,6 +36,15 @@ Reading:
   capped, and which may crash without taking the caller along: each is an InputError.
   :func:`open_usd` reads the frames sample by sample, a range at a time, in a child that stays
   open (:mod:`.isolation`; :class:`StageFrames` is what it runs).
+* Beside the points (:mod:`.usd_primvars`): primvars of vertex, varying, faceVarying and
+  uniform interpolation are attributes (vertex, corner, face) named without ``primvars:``,
+  indexed ones with their indices, of float, double or int values of 1 to 4 components, their
+  role from the value type (texCoord, color, normal) or USD's names (``st``, ``displayColor``,
+  ``normals``); ``constant`` primvars, other value types and ``elementSize`` > 1 are not read.
+  ``primvars:normals``, else the ``normals`` attribute, is the normal attribute, frame 0's
+  values if time-sampled. Other time-sampled vertex or uniform primvars, and ``velocities``,
+  are fields read a range at a time; GeomSubsets of faces are face sets of their
+  ``familyName``. Primvars are listed by name (pxr's order), ``velocities`` last.
 * A stage reads only files inside its own folder: pxr resolves any asset path, absolute or
   ``../``, so before the stage opens, each layer's sublayers, references and payloads (in
   variants too) and its value clips (asset paths, manifests, templates) are resolved as pxr
@@ -51,8 +60,11 @@ because usdchecker requires it: the file means what an unauthored one would). ``
 sampled at the sequence's time codes, its faces as counts and indices, and
 ``timeCodesPerSecond`` = ``framesPerSecond`` = the frame rate (24, USD's default, for a
 sequence without one, which then reads back at 24) with ``startTimeCode``/``endTimeCode``.
-``.usda`` is text; ``.usdc`` and ``.usd`` are binary crate files. The file is written to a
-hidden temporary name beside the target and put in place when complete
+Attributes are primvars, face sets GeomSubsets, fields time-sampled primvars or
+``velocities``, normals of an animated mesh recomputed per frame after frame 0
+(:mod:`.usd_authoring`, whose :func:`cannot_keep` lists what a file loses: names USD refuses,
+roles its types cannot say). ``.usda`` is text; ``.usdc`` and ``.usd`` are binary crate files.
+The file is written to a hidden temporary name beside the target and put in place when complete
 (:func:`~tuckercodec.system.atomic.atomic_path`). Writing runs in this process: the data is ours.
 """
 

@@ -293,10 +293,10 @@ def recomputed_normals(positions: np.ndarray, faces: np.ndarray, attribute: Attr
     rows = attribute.values.shape[0]
     if attribute.domain == FACE:
         owner, contribution = np.arange(table.shape[0]), face_normals
-    else:
-        owner = corner_vertices(table) if attribute.domain == VERTEX else None
+    else:  # each corner brings its face's normal to its vertex, or to itself
         contribution = face_normals[corner_faces(table)]
-        if owner is None:  # corners
+        owner = corner_vertices(table)
+        if attribute.domain == CORNER:
             owner = np.arange(contribution.shape[0])
     if attribute.indices is not None:
         owner = attribute.indices[owner]

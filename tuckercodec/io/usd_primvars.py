@@ -74,6 +74,7 @@ _VECTOR_SCALARS = {"f": np.float32, "d": np.float64, "i": np.int32}
 _TYPE_ROLES = {"TextureCoordinate": (UV, (2,)), "Color": (COLOR, (3, 4)), "Normal": (NORMAL, (3,))}
 #: USD's names that mean a role where the value type has none (``float2 primvars:st``).
 _NAMED_ROLES = {"st": (UV, (2,)), "displayColor": (COLOR, (3, 4)), "normals": (NORMAL, (3,))}
+_PLURALS = {VERTEX: "vertices", CORNER: "corners", FACE: "faces"}
 NORMALS, VELOCITIES = "normals", "velocities"
 #: The mesh's own ``velocities`` attribute (a primvar of that name is not it).
 _VELOCITIES_LABEL = "attribute velocities"
@@ -216,7 +217,7 @@ class MeshReading:
     def _expected(self, domain: str) -> int:
         return element_count(domain, self._vertex_count, self._faces)
 
-    def _values(self, primvar: _Primvar, time: Any, frame: int) -> np.ndarray | None:
+    def _values(self, primvar: _Primvar, time: Any, frame: int | None) -> np.ndarray | None:
         """The primvar's values at ``time``, as (N, c) of its type; ``None`` if blocked."""
         value = primvar.values.Get(time)
         if value is None:
@@ -236,14 +237,14 @@ class MeshReading:
     def _attribute(self, primvar: _Primvar, domain: str, time: Any) -> Attribute | None:
         """A static attribute: the primvar's values (and indices) at ``time``; ``None`` if
         blocked there."""
-        values = self._values(primvar, time, 0)
+        values = self._values(primvar, time, None)  # static: the file's, not a frame's
         if values is None:
             return None
         indices = None
         if primvar.indices is not None:
             indices = np.asarray(primvar.indices.Get(time) or [], dtype=np.int64)
         count = len(values) if indices is None else len(indices)
-        self._check_count(primvar, domain, count, 0)
+        self._check_count(primvar, domain, count, None)
         if domain == CORNER and self._left_handed:  # the corners as the reversed faces have them
             order = reversed_corners(self._faces)
             if indices is not None:
@@ -257,13 +258,13 @@ class MeshReading:
                 f"{self._where}: {primvar.label}: {error.reason}", path=self._path
             ) from None
 
-    def _check_count(self, primvar: _Primvar, domain: str, count: int, frame: int) -> None:
+    def _check_count(self, primvar: _Primvar, domain: str, count: int, frame: int | None) -> None:
         expected = self._expected(domain)
         if count != expected:
             kind = "indices" if primvar.indices is not None else "values"
             raise InputError(
                 f"{self._where}: {primvar.label} ({primvar.interpolation}) has {count} {kind}, "
-                f"where the mesh has {expected} {domain}s",
+                f"where the mesh has {expected} {_PLURALS[domain]}",
                 path=self._path,
                 frame=frame,
             )
