@@ -73,6 +73,7 @@ FORMATS = (
         read_options=frozenset({"prim"}),
         extra="usd",
         carries=_SCENE | {"meters_per_unit", "up_axis"},
+        cannot_keep=usd.cannot_keep,
     ),
     SequenceFormat(
         name="alembic",

@@ -36,6 +36,15 @@ Reading:
   capped, and which may crash without taking the caller along: each is an InputError.
   :func:`open_usd` reads the frames sample by sample, a range at a time, in a child that stays
   open (:mod:`.isolation`; :class:`StageFrames` is what it runs).
+* Beside the points (:mod:`.usd_primvars`): primvars of vertex, varying, faceVarying and
+  uniform interpolation are attributes (vertex, corner, face) named without ``primvars:``,
+  indexed ones with their indices, of float, double or int values of 1 to 4 components, their
+  role from the value type (texCoord, color, normal) or USD's names (``st``, ``displayColor``,
+  ``normals``); ``constant`` primvars, other value types and ``elementSize`` > 1 are not read.
+  ``primvars:normals``, else the ``normals`` attribute, is the normal attribute, frame 0's
+  values if time-sampled. Other time-sampled vertex or uniform primvars, and ``velocities``,
+  are fields read a range at a time; GeomSubsets of faces are face sets of their
+  ``familyName``. Primvars are listed by name (pxr's order), ``velocities`` last.
 * A stage reads only files inside its own folder: pxr resolves any asset path, absolute or
   ``../``, so before the stage opens, each layer's sublayers, references and payloads (in
   variants too) and its value clips (asset paths, manifests, templates) are resolved as pxr
@@ -51,8 +60,11 @@ because usdchecker requires it: the file means what an unauthored one would). ``
 sampled at the sequence's time codes, its faces as counts and indices, and
 ``timeCodesPerSecond`` = ``framesPerSecond`` = the frame rate (24, USD's default, for a
 sequence without one, which then reads back at 24) with ``startTimeCode``/``endTimeCode``.
-``.usda`` is text; ``.usdc`` and ``.usd`` are binary crate files. The file is written to a
-hidden temporary name beside the target and put in place when complete
+Attributes are primvars, face sets GeomSubsets, fields time-sampled primvars or
+``velocities``, normals of an animated mesh recomputed per frame after frame 0
+(:mod:`.usd_authoring`, whose :func:`cannot_keep` lists what a file loses: names USD refuses,
+roles its types cannot say). ``.usda`` is text; ``.usdc`` and ``.usd`` are binary crate files.
+The file is written to a hidden temporary name beside the target and put in place when complete
 (:func:`~tuckercodec.system.atomic.atomic_path`). Writing runs in this process: the data is ours.
 """
 
@@ -68,6 +80,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from ..model.attributes import Field
 from ..model.sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_vertices
 from ..model.sources import FrameByFrame, FrameSource
 from ..system.atomic import atomic_path
@@ -81,6 +94,9 @@ from .common.polygons import (
 )
 from .isolation import IsolatedFrames, note
 from .registry import ReadOptions, WriteOptions
+from .usd_authoring import cannot_keep as cannot_keep  # the format's hook, in the registry
+from .usd_authoring import write_attached
+from .usd_primvars import MeshReading
 
 #: Where the written mesh lives: the root Xform (also the stage's defaultPrim).
 ROOT = "/Root"
@@ -187,6 +203,9 @@ class StageFrames(FrameByFrame):
         self._first = self._frame(0)
         note(where)  # the faces, read from every frame if they may change
         faces = _faces(pxr, mesh, self._frame_times, times, len(self._first), where, path)
+        left_handed = mesh.GetOrientationAttr().Get() == pxr.UsdGeom.Tokens.leftHanded
+        self._carried = MeshReading(pxr, mesh, len(self._first), faces, left_handed, where, path)
+        self._carried.read(self._frame_times[0])
         rate = float(self._stage.GetTimeCodesPerSecond())
         if not (np.isfinite(rate) and rate > 0):
             raise InputError(f"timeCodesPerSecond must be a positive number, got {rate}", path=path)
@@ -196,7 +215,18 @@ class StageFrames(FrameByFrame):
         axis = str(pxr.UsdGeom.GetStageUpAxis(self._stage))
         try:
             self._describe(
-                path, len(self._frame_times), len(self._first), faces, None, rate, codes, unit, axis
+                path,
+                len(self._frame_times),
+                len(self._first),
+                faces,
+                None,
+                rate,
+                codes,
+                unit,
+                axis,
+                self._carried.attributes,
+                self._carried.face_sets,
+                [plan.primvar.name for plan in self._carried.fields],
             )
         except InputError as error:
             raise InputError(f"{where}: {error.reason}", path=path, frame=error.frame) from None
@@ -227,6 +257,18 @@ class StageFrames(FrameByFrame):
     def _read(self, start: int, stop: int) -> np.ndarray:
         with _quiet(self._pxr):
             return super()._read(start, stop)
+
+    def _read_fields(self, start: int, stop: int) -> list[Field]:
+        note(self._where, start)
+        with _quiet(self._pxr):
+            try:
+                return self._carried.read_fields(self._frame_times[start:stop], start)
+            except _errors(self._pxr) as error:
+                raise InputError(
+                    f"{self._where}: cannot read its fields: {_tf_message(error)}",
+                    path=self._file,
+                    frame=start,
+                ) from None
 
 
 def _confine(pxr: SimpleNamespace, path: Path) -> None:
@@ -462,6 +504,7 @@ def _stage(pxr: SimpleNamespace, seq: MeshSequence, vertices: np.ndarray, name: 
         points.Set(Vt.Vec3fArray.FromNumpy(positions), time)
         bounds = np.stack([positions.min(axis=0), positions.max(axis=0)])
         extent.Set(Vt.Vec3fArray.FromNumpy(bounds), time)
+    write_attached(pxr, mesh, seq, vertices, codes.tolist())
     rate = seq.frame_rate or DEFAULT_FRAME_RATE
     stage.SetTimeCodesPerSecond(rate)
     stage.SetFramesPerSecond(rate)
