@@ -23,6 +23,7 @@ ready for BENCHMARKS.md, with the machine and the command that made it.
   guarantee, and a bound beside a KG target;
 - ``lossless``: the lossless mode against fpzip, pcodec, zstd and Blosc2, bit for bit, and its
   decoding speed;
+- ``fields``: the animated fields' codec in each mode, against SZ3 and zfp at the same bound;
 - ``speed``: encode, decode, OBJ output and a large file's first frame against a baseline
   revision, both run alternately in one run.
 

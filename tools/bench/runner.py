@@ -33,6 +33,7 @@ SUITES = {
     "bounds": "tools.bench.bounds",
     "lossless": "tools.bench.lossless",
     "speed": "tools.bench.speed",
+    "fields": "tools.bench.fields",
 }
 
 
