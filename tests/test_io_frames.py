@@ -116,10 +116,27 @@ def test_next_frame_reuses_identical_faces(tmp_path: Path) -> None:
 
 def test_same_faces_written_differently_are_accepted(tmp_path: Path) -> None:
     paths = write_cube_frames(tmp_path, 2)
-    text = paths[1].read_text().replace("f 1 2 3 4", "f 1/1 2/2 3/3 -5/4")
+    text = paths[1].read_text().replace("f 1 2 3 4", "f 1  +2 3 -5")  # -5: vertex 4 of 8
     write_file(paths[1], text)
     seq = load_sequence(tmp_path, progress=False)
     assert seq.frame_count == 2
+
+
+def test_a_frame_whose_faces_index_texture_coordinates_the_first_does_not(
+    tmp_path: Path,
+) -> None:
+    """The vertices of the faces are the same, but only the later frame has UVs: the
+    sequence's UVs are the first frame's, so the later frame is refused, named."""
+    paths = write_cube_frames(tmp_path, 2)
+    text = paths[1].read_text()
+    faces = [line for line in text.splitlines() if line.startswith("f ")]
+    with_uv = ["f " + " ".join(f"{c}/1" for c in line.split()[1:]) for line in faces]
+    for old, new in zip(faces, with_uv, strict=True):
+        text = text.replace(old + "\n", new + "\n")
+    write_file(paths[1], "vt 0 0\n" + text)
+    with pytest.raises(InputError, match="this frame has them, the first frame") as caught:
+        load_sequence(tmp_path, progress=False)
+    assert caught.value.path == str(paths[1]) and caught.value.frame == 1
 
 
 # ------------------------------------------------------------------------------------------

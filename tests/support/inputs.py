@@ -22,7 +22,8 @@ VALID_OBJ = (
     b"# cube corner\r\nmtllib m.mtl\no thing\n"
     b"v 0 0 0\nv 1 0 0\nv 1 1 0 1.0\nv 0 1 0\nv 0 0 1\nv 1 0 1\n"
     b"vt 0 0\nvt 1 0\nvn 0 0 1\ng side\nusemtl red\ns off\n"
-    b"f 1/1/1 2/2/1 3/2/1 4/1/1\nf 1//1 2//1 5//1\nf -1 -2 2\nf 5 6 2\n"
+    b"f 1/1/1 2/2/1 3/2/1 4/1/1\nf 1/1/1 2/2/1 5/1/1\nf -1/-1/-1 -2/-2/1 2/2/1\n"
+    b"f 5/1/1 6/2/1 2/2/1\n"
 )
 
 #: Tokens that have broken OBJ readers: non-numbers, huge numbers, odd separators and line

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 
 import numpy as np
@@ -49,7 +50,10 @@ def run_convert(args: argparse.Namespace) -> int:
         f"({target.name if target else 'a folder of OBJ files'}) in "
         f"{time.perf_counter() - start:.2f} s"
     )
-    kept = target.carries if target else format_named(FOLDER_FORMAT).carries
+    written = target or format_named(FOLDER_FORMAT)
+    for item in written.cannot_keep(sequence) if written.cannot_keep else []:
+        print(f"note: {written.name.upper()} cannot keep {item}; dropped", file=sys.stderr)
+    kept = written.carries
     lost = [what for what, present in _contents(sequence).items() if present and what not in kept]
     if lost:
         named = ", ".join(_PARTS[what] + _LOSSES.get(what, "") for what in lost)

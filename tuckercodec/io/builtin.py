@@ -8,7 +8,17 @@ writes, and how.
 
 from __future__ import annotations
 
-from . import alembic, gltf, meshes, obj, usd, vtk, xdmf, zarr_store
+from . import (
+    alembic,
+    gltf,
+    meshes,
+    obj_attribute_writer,
+    obj_attributes,
+    usd,
+    vtk,
+    xdmf,
+    zarr_store,
+)
 from .npz import NpzFrames, cannot_keep_npz, npy, write_npz
 from .pointcache import mdd, pc2
 from .registry import SequenceFormat
@@ -37,8 +47,9 @@ FORMATS = (
         name="obj",
         suffixes=(".obj",),
         description="Wavefront OBJ, one frame per file (a folder of them, or a glob)",
-        read_frame=obj.read_obj_frame,
-        write_frame=obj.write_obj_frame,
+        read_frame=obj_attributes.read_obj_frame,
+        write_frame=obj_attribute_writer.obj_frame_writer,
+        cannot_keep=obj_attribute_writer.cannot_keep,
         # exact text (repr) unless a precision is asked for; the frame names are the file names
         carries=frozenset({"float64", "faces", "polygons", "frame_names"}),
     ),

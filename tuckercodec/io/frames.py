@@ -111,7 +111,15 @@ class FileFrames(FrameSource):
         self._reference = self._frame(0, None)
         vertices, faces = self._reference.vertices, self._reference.faces
         names = [file.name for file in self._files]
-        self._describe(where, len(self._files), len(vertices), faces, names)
+        self._describe(
+            where,
+            len(self._files),
+            len(vertices),
+            faces,
+            names,
+            attributes=self._reference.attributes,
+            face_sets=self._reference.face_sets,
+        )
 
     def _frame(self, index: int, reference: MeshFrame | None) -> MeshFrame:
         """Frame ``index``, checked against ``reference`` (the first frame, if read yet)."""
@@ -142,7 +150,13 @@ class FileFrames(FrameSource):
     def load(self, progress: bool = False) -> MeshSequence:
         """The whole sequence, with a progress bar on a terminal if asked."""
         vertices = self._read(0, self.frame_count, progress)
-        return MeshSequence(vertices, self.faces, frame_names=self.frame_names)
+        return MeshSequence(
+            vertices,
+            self.faces,
+            frame_names=self.frame_names,
+            attributes=self.attributes,
+            face_sets=self.face_sets,
+        )
 
 
 def _check_matches(frame: MeshFrame, reference: MeshFrame, path: Path) -> None:
@@ -175,10 +189,10 @@ def write_frames(
     names = frame_file_names(seq.frame_names, frame_format.suffixes[0])
     destination.parent.mkdir(parents=True, exist_ok=True)
 
-    staged = dataclasses.replace(options, staged=True)
+    frame_writer = write_frame(seq, dataclasses.replace(options, staged=True))
 
     def write(index: int) -> None:
-        write_frame(staging / names[index], seq.vertices[index], seq.faces, staged)
+        frame_writer(staging / names[index], index)
 
     # The frames are written plainly into the staging folder, their writeback started at
     # once, and made durable all together (sync) before anything is moved in: the same

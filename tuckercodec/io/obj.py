@@ -3,10 +3,12 @@
 (At about 700 lines this module is longer than the others on purpose: OBJ's two parsers share
 one set of rules and must agree on every input, so they stay side by side with those rules.)
 
-Only what a mesh sequence needs is read: the ``v`` positions, in file order, and the ``f`` faces.
-Everything else (``vt``, ``vn``, ``vp``, ``o``, ``g``, ``s``, ``usemtl``, ``mtllib``, ``l``,
-comments, unknown statements) is ignored. trimesh is never used for OBJ because it reorders and
-merges vertices, which would break the vertex correspondence between frames.
+This module reads the ``v`` positions, in file order, and the ``f`` faces. Everything else
+(``vt``, ``vn``, ``vp``, ``o``, ``g``, ``s``, ``usemtl``, ``mtllib``, ``l``, comments, unknown
+statements) is ignored here: :mod:`.obj_attributes` reads ``vt``, ``vn``, ``usemtl`` and ``g``
+into attributes and face sets (the format's frame reader), and :mod:`.obj_attribute_writer`
+writes them. trimesh is never used for OBJ because it reorders and merges vertices, which would
+break the vertex correspondence between frames.
 
 What the two lines that matter may hold:
 
@@ -68,7 +70,7 @@ from ..system import native
 from ..system.atomic import write_atomic, write_staged
 from ..system.reading import open_regular_file
 from .common.float_text import vertex_text
-from .registry import MeshFrame, ReadOptions, WriteOptions
+from .registry import MeshFrame, ReadOptions
 
 #: The longest line the OBJ reader accepts, in bytes, its line end not counted: 4 MiB, a face of
 #: about half a million corners, far beyond any real mesh. A longer line is refused as soon as
@@ -155,6 +157,14 @@ def read_obj_frame(
         InputError: as :func:`read_obj`, and when the vertex count or the faces differ from the
             reference (naming the first line that differs).
     """
+    return read_obj_frame_text(path, reference)[0]
+
+
+def read_obj_frame_text(
+    path: str | os.PathLike[str], reference: MeshFrame | None = None
+) -> tuple[MeshFrame, bytes]:
+    """:func:`read_obj_frame`, and the file's text (line ends made ``\\n``), which
+    :mod:`.obj_attributes` reads the other statements of."""
     path = Path(path)
     data = _read_text(path)
     core = native.core()
@@ -168,7 +178,7 @@ def read_obj_frame(
     mesh.path = str(path)
     if reference is not None:
         _check_matches(mesh, reference, data, path)
-    return mesh
+    return mesh, data
 
 
 def _read_text(path: Path) -> bytes:
@@ -813,17 +823,3 @@ def _face_lines(faces: np.ndarray) -> list[str]:
         line = "f " + " ".join(["%d"] * faces.shape[1])
         return [line % tuple(row) for row in rows]
     return ["f " + " ".join(str(index) for index in row if index > 0) for row in rows]
-
-
-def write_obj_frame(
-    path: Path, vertices: np.ndarray, faces: np.ndarray, options: WriteOptions
-) -> None:
-    """One frame as an OBJ file (the format's frame writer: a folder of frames)."""
-    write_obj(
-        path,
-        vertices,
-        faces,
-        precision=options.precision,
-        overwrite=options.overwrite,
-        staged=options.staged,
-    )

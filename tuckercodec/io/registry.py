@@ -15,12 +15,13 @@ from __future__ import annotations
 import importlib
 import os
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cache
 from pathlib import Path
 
 import numpy as np
 
+from ..model.attributes import Attribute, FaceSet
 from ..model.sequence import MeshSequence
 from ..model.sources import FrameSource
 from .common.budget import Inflation, memory_ceiling
@@ -36,12 +37,17 @@ class MeshFrame:
         face_text: a reader's key for "the same faces as the reference frame" that is cheaper
             to compare than the faces (OBJ: the raw ``f`` lines), or ``None``.
         path: the file it was read from, which errors about a later frame name beside their own.
+        attributes: the static attributes the file holds (read from the first frame; a later
+            frame's reader may leave them out, the first frame's are the sequence's).
+        face_sets: its face sets, as ``attributes``.
     """
 
     vertices: np.ndarray
     faces: np.ndarray
     face_text: bytes | None = None
     path: str | None = None
+    attributes: list[Attribute] = field(default_factory=list)
+    face_sets: list[FaceSet] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -105,7 +111,9 @@ class WriteOptions:
 #: itself), which a reader may use to skip work or to name the first difference it finds; the
 #: third the read options (only ``max_memory`` applies to a frame's file).
 FrameReader = Callable[[Path, MeshFrame | None, ReadOptions], MeshFrame]
-FrameWriter = Callable[[Path, np.ndarray, np.ndarray, WriteOptions], None]
+#: Prepares the writing of a sequence's frames, one file each: what they share is made once,
+#: and the function returned writes frame ``index`` to a file (``(path, index)``).
+FrameWriter = Callable[[MeshSequence, WriteOptions], Callable[[Path, int], None]]
 
 
 @dataclass(frozen=True)
@@ -119,7 +127,7 @@ class SequenceFormat:
     open: Callable[[Path, ReadOptions], FrameSource] | None = None
     write: Callable[[MeshSequence, Path, WriteOptions], None] | None = None
     read_frame: FrameReader | None = None  # one frame from one file
-    write_frame: FrameWriter | None = None  # one frame (vertices, faces) to one file
+    write_frame: FrameWriter | None = None  # the frames of a sequence, one file each
     #: the :class:`ReadOptions` fields ``open`` uses; giving another one is an error
     read_options: frozenset[str] = frozenset()
     #: the optional extra that installs the library the format needs (``None``: core only)
