@@ -131,6 +131,9 @@ class SequenceFormat:
     #: its "files" are folders (a zarr store), read by this format rather than as a folder
     #: of frames
     folder: bool = False
+    #: what a file written from a sequence would not keep of its attributes, face sets and
+    #: fields, one line each (empty: all of it); ``None``: the format says nothing
+    cannot_keep: Callable[[MeshSequence], list[str]] | None = None
 
 
 @cache

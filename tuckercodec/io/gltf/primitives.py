@@ -1,14 +1,21 @@
-"""A glTF mesh's primitives merged into one: positions, morph target deltas, triangles.
+"""A glTF mesh's primitives merged into one: positions, morph target deltas, triangles, the
+other vertex attributes and each triangle's material.
 
-Primitives that share a POSITION accessor share its vertices; others follow one another.
+Primitives that share their vertex attributes (the same accessor for every semantic, and the
+same morph targets) share their vertices; others follow one another (two primitives that share
+POSITION but not NORMAL give two copies of the positions, as glTF's vertices are the tuples of
+all their attributes). Triangles are in the primitives' order, then in their index order.
 TRIANGLES give triangles, TRIANGLE_STRIP and TRIANGLE_FAN are converted to triangles (a strip's
 degenerate joining triangles dropped), POINTS add vertices without faces; line modes are
-refused. Every primitive must have as many morph targets as the first.
+refused. Every primitive must have as many morph targets as the first. The attributes beside
+POSITION are read as :mod:`.vertex_attributes` says, and combined over the vertex blocks by
+:func:`.vertex_attributes.combined`.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import json
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -16,6 +23,7 @@ import numpy as np
 from .accessors import read_accessor
 from .animation import numbers
 from .container import Document
+from .vertex_attributes import VertexValues, combined, read_vertex_attribute
 
 _TRIANGLES, _STRIP, _FAN, _POINTS = 4, 5, 6, 0
 #: The most numbers one mesh's morph targets may hold (2 GiB of float64), checked first.
@@ -24,12 +32,18 @@ MAX_NUMBERS = 1 << 28
 
 @dataclass
 class Mesh:
-    """The merged primitives of one mesh: base positions (K, 3), targets (J, K, 3), faces."""
+    """The merged primitives of one mesh: base positions (K, 3), targets (J, K, 3), faces, the
+    default weights (J,); the other vertex attributes by semantic, each face's material (an
+    index of ``materials``, -1 for none), and each target's NORMAL deltas (J, K, 3), zero where
+    a target has none (``None``: no target has)."""
 
     base: np.ndarray
     targets: np.ndarray
     faces: np.ndarray
-    weights: np.ndarray  # the default weights (J,)
+    weights: np.ndarray
+    attributes: dict[str, VertexValues] = field(default_factory=dict)
+    materials: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    normal_targets: np.ndarray | None = None
 
 
 def read_mesh(doc: Document, index: int) -> Mesh:
@@ -48,8 +62,11 @@ def _merge_primitives(doc: Document, index: int) -> Mesh:
         raise doc.fail(f"meshes[{index}] has no primitives")
     bases: list[np.ndarray] = []
     targets: list[np.ndarray] = []
+    normal_targets: list[np.ndarray | None] = []
+    attributes: list[dict[str, VertexValues]] = []
     faces: list[np.ndarray] = []
-    blocks: dict[Any, tuple[int, int]] = {}  # POSITION accessor -> (offset, vertex count)
+    materials: list[np.ndarray] = []
+    blocks: dict[str, tuple[int, int]] = {}  # vertex attributes and targets -> (offset, count)
     target_count: int | None = None
     for number, primitive in enumerate(primitives):
         where = f"meshes[{index}].primitives[{number}]"
@@ -69,13 +86,18 @@ def _merge_primitives(doc: Document, index: int) -> Mesh:
             )
         if not isinstance(accessor, int) or isinstance(accessor, bool):
             raise doc.fail(f"{where}: POSITION must be an accessor index")
-        if accessor not in blocks:
+        key = json.dumps([primitive["attributes"], morphs], sort_keys=True)
+        if key not in blocks:
             base = read_accessor(doc, accessor, f"{where} POSITION", width=3)
-            blocks[accessor] = (sum(len(b) for b in bases), len(base))
+            blocks[key] = (sum(len(b) for b in bases), len(base))
             bases.append(base)
             targets.append(_deltas(doc, morphs, len(base), where))
-        offset, count = blocks[accessor]
-        faces.append(_faces(doc, primitive, count, where) + offset)
+            normal_targets.append(_deltas(doc, morphs, len(base), where, "NORMAL"))
+            attributes.append(_attributes(doc, primitive["attributes"], len(base), where))
+        offset, count = blocks[key]
+        triangles = _faces(doc, primitive, count, where) + offset
+        faces.append(triangles)
+        materials.append(np.full(len(triangles), _material(doc, primitive, where)))
     weights = np.zeros(target_count or 0)
     if "weights" in mesh:
         weights = numbers(doc, mesh["weights"], target_count or 0, f"meshes[{index}].weights")
@@ -83,23 +105,69 @@ def _merge_primitives(doc: Document, index: int) -> Mesh:
     # normalization) gave an int64 base, to which the morph targets' float deltas could not be
     # added in place (found by fuzzing the glTF reader, tools.fuzz)
     base = np.concatenate(bases).astype(np.float64)
-    return Mesh(base, np.concatenate(targets, axis=1), np.concatenate(faces), weights)
+    counts = [len(b) for b in bases]
+    normals = None
+    if any(n is not None for n in normal_targets):
+        normals = np.concatenate(
+            [
+                np.zeros_like(t) if n is None else n
+                for n, t in zip(normal_targets, targets, strict=True)
+            ],
+            axis=1,
+        )
+    return Mesh(
+        base,
+        np.concatenate(targets, axis=1),
+        np.concatenate(faces),
+        weights,
+        combined(attributes, counts),
+        np.concatenate(materials).astype(np.int64),
+        normals,
+    )
 
 
-def _deltas(doc: Document, morphs: list[Any], vertices: int, where: str) -> np.ndarray:
-    """The morph targets' POSITION deltas, (J, K, 3); a target without POSITION moves nothing."""
+def _attributes(
+    doc: Document, semantics: dict[str, Any], vertices: int, where: str
+) -> dict[str, VertexValues]:
+    """A primitive's vertex attributes other than POSITION, by semantic."""
+    found: dict[str, VertexValues] = {}
+    for semantic, accessor in semantics.items():
+        if semantic == "POSITION":
+            continue
+        values = read_vertex_attribute(doc, accessor, str(semantic), vertices, where)
+        if values is not None:
+            found[str(semantic)] = values
+    return found
+
+
+def _material(doc: Document, primitive: dict[str, Any], where: str) -> int:
+    """The primitive's material index, checked, or -1 for none."""
+    if "material" not in primitive:
+        return -1
+    doc.item("materials", primitive["material"], f"{where}.material")
+    return int(primitive["material"])
+
+
+def _deltas(
+    doc: Document, morphs: list[Any], vertices: int, where: str, semantic: str = "POSITION"
+) -> Any:
+    """The morph targets' ``semantic`` deltas, (J, K, 3); a target without it moves nothing.
+    For NORMAL: ``None`` when no target has NORMAL deltas."""
+    if semantic != "POSITION" and not any(
+        isinstance(morph, dict) and semantic in morph for morph in morphs
+    ):
+        return None
     if len(morphs) * vertices * 3 > MAX_NUMBERS:
         raise doc.fail(f"{where}: {len(morphs)} morph targets of {vertices} vertices are too many")
     deltas = np.zeros((len(morphs), vertices, 3))
     for j, morph in enumerate(morphs):
         if not isinstance(morph, dict):
             raise doc.fail(f"{where}.targets[{j}] must be an object")
-        if "POSITION" in morph:
-            delta = read_accessor(doc, morph["POSITION"], f"{where}.targets[{j}] POSITION", width=3)
+        if semantic in morph:
+            label = f"{where}.targets[{j}] {semantic}"
+            delta = read_accessor(doc, morph[semantic], label, width=3)
             if len(delta) != vertices:
-                raise doc.fail(
-                    f"{where}.targets[{j}] has {len(delta)} positions for {vertices} vertices"
-                )
+                raise doc.fail(f"{label}: {len(delta)} values for {vertices} vertices")
             deltas[j] = delta
     return deltas
 
