@@ -100,8 +100,9 @@ def _named(
     renamed: dict[str, VertexValues] = {}
     for semantic, found in attributes.items():
         entry = table.get(semantic)
-        name = entry.get("name") if isinstance(entry, dict) else None
-        if not _usable(name) or name in renamed or (name in attributes and name != semantic):
+        recorded = entry.get("name") if isinstance(entry, dict) else None
+        name = recorded if isinstance(recorded, str) and _usable(recorded) else semantic
+        if name in renamed or (name in attributes and name != semantic):
             name = semantic
         renamed[name] = _recorded(entry, found) if isinstance(entry, dict) else found
     if len(renamed) != len(attributes):
