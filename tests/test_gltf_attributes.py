@@ -8,18 +8,21 @@ Khronos glTF-Validator finds no error nor warning."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 
 from tests.support.js_interop import issues, validate_gltf_files
 from tests.support.sequences import shared_sequence
-from tuckercodec import MeshSequence, load_sequence, save_sequence
+from tuckercodec import Decoder, MeshSequence, encode, load_sequence, save_sequence
+from tuckercodec.gltf_export import morph_parts, write_decomposition_gltf
 from tuckercodec.io import format_of
 from tuckercodec.io.gltf.accessors import BufferBuilder, read_accessor
 from tuckercodec.io.gltf.container import read_document
 from tuckercodec.io.gltf.document import add_triangles, file_bytes, new_gltf
-from tuckercodec.io.gltf.normals import face_area_vectors
+from tuckercodec.io.gltf.normals import face_area_vectors, recomputed_corner_normals
+from tuckercodec.io.samples import sample_path
 from tuckercodec.model.attributes import (
     CORNER,
     FACE,
@@ -326,3 +329,104 @@ def test_samba_with_a_synthetic_uv_map_round_trips(tmp_path: Path) -> None:
     assert back.vertex_count == sides + unused > frames.vertex_count
     single = frames.vertices.astype(np.float32).astype(np.float64)
     assert np.array_equal(back.vertices[0][back.faces], single[0][frames.faces])
+
+
+@pytest.fixture(scope="module")
+def exported(tmp_path_factory: pytest.TempPathFactory) -> dict[str, object]:
+    """The cloth sample's decomposition exported in each variant with a seamed UV map and
+    smooth per-vertex normals, and once without them."""
+    folder = tmp_path_factory.mktemp("export")
+    cloth = load_sequence(sample_path())
+    (folder / "cloth.tkc").write_bytes(encode(cloth, target_kg=0.1))
+    decoder = Decoder(str(folder / "cloth.tkc"))
+    # per-corner values follow the faces in the decoder's order (this one's are reordered)
+    faces = decoder.faces
+    rest = cloth.vertices[0]
+    corners = corner_vertices(faces)
+    right = np.repeat(rest[faces].mean(axis=1)[:, 0] > np.median(rest[:, 0]), 3)
+    uv = rest[corners][:, [0, 2]].astype(np.float32)
+    uv[right, 0] += 1  # a seam: the faces right of the middle take other UVs
+    uvs = Attribute("UVMap", CORNER, uv, role="uv")
+    smooth = Attribute("N", VERTEX, np.zeros((cloth.vertex_count, 3), np.float32), role="normal")
+    normals = np.zeros((cloth.vertex_count, 3))
+    normals[corners] = recomputed_corner_normals(rest, faces, smooth)
+    normal = Attribute("N", VERTEX, normals.astype(np.float32), role="normal")
+    written: dict[str, object] = {"decoder": decoder, "uv": uv, "faces": faces}
+    for compress in ("none", "quantize", "meshopt"):
+        path = folder / f"{compress}.glb"
+        written[compress] = write_decomposition_gltf(
+            decoder,
+            path,
+            compress=compress,
+            attributes=[uvs, normal],
+        )
+        written[f"plain {compress}"] = write_decomposition_gltf(
+            decoder,
+            folder / f"plain-{compress}.glb",
+            compress=compress,
+        )
+    return written
+
+
+@pytest.mark.parametrize("compress", ["none", "quantize", "meshopt"])
+def test_the_export_carries_the_uvs_at_the_corners_and_shows_the_same_frames(
+    exported: dict[str, Any], compress: str
+) -> None:
+    if compress == "meshopt":
+        pytest.importorskip("meshoptimizer", reason="meshoptimizer (extra gltf) is missing")
+    report, plain = exported[compress], exported[f"plain {compress}"]
+    back = load_sequence(report.path)
+    assert back.vertex_count > exported["decoder"].u1.shape[0]  # the seam split vertices
+    uv = back.attribute_named("TEXCOORD_0")
+    assert uv.role == "uv" and uv.values.dtype == np.float32
+    assert _triangle_uvs(uv.values[back.faces]) == _triangle_uvs(exported["uv"].reshape(-1, 3, 2))
+    # splitting copies vertices, it moves none: the viewer shows the same frames
+    assert report.viewer_kg == plain.viewer_kg
+    assert report.size > plain.size
+
+
+def _triangle_uvs(per_triangle: np.ndarray) -> list[bytes]:
+    """Each triangle's three UVs (T, 3, 2) as bytes, sorted: the same whatever the order of
+    the triangles and of their corners (the meshopt variant orders them for the vertex cache)."""
+    rows = np.ascontiguousarray(per_triangle, dtype=np.float32)
+    return sorted(b"".join(sorted(uv.tobytes() for uv in row)) for row in rows)
+
+
+def test_the_export_s_normals_follow_the_animation(exported: dict[str, Any]) -> None:
+    report = exported["none"]
+    decoder = exported["decoder"]
+    doc = read_document(report.path)
+    primitive = doc.gltf["meshes"][0]["primitives"][0]
+    base = read_accessor(doc, primitive["attributes"]["NORMAL"], "test")
+    assert np.allclose(np.linalg.norm(base, axis=1), 1, atol=1e-6)
+    offsets = np.stack([read_accessor(doc, t["NORMAL"], "test") for t in primitive["targets"]])
+    weights, _, _ = morph_parts(decoder, np.arange(decoder.u3.shape[0]))
+    decoded = decoder.positions()
+    faces = exported["faces"]
+    smooth = Attribute("N", VERTEX, np.zeros((decoded.shape[1], 3), np.float32), role="normal")
+    shown = load_sequence(report.path)
+    first = np.zeros(shown.vertex_count, dtype=np.int64)
+    first[corner_vertices(shown.faces)] = corner_vertices(faces)  # each written vertex's own
+    fitted, still = [], []
+    for frame in range(0, len(weights), 7):
+        normals = base + np.einsum("b,bvx->vx", weights[frame], offsets)
+        normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+        true = np.zeros((decoded.shape[1], 3))
+        true[corner_vertices(faces)] = recomputed_corner_normals(decoded[frame], faces, smooth)
+        fitted.append(_angles(normals, true[first]))
+        still.append(_angles(base, true[first]))
+    # a linear blend of the targets' offsets: close, not exact (the cloth folds), and far
+    # closer than one set of normals for every frame
+    assert np.median(fitted) < 1 and np.max(fitted) < 15
+    assert np.median(still) > 5 * np.median(fitted)
+
+
+def _angles(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The angles in degrees between unit vectors, row by row."""
+    return np.degrees(np.arccos(np.clip((a * b).sum(axis=1), -1, 1)))
+
+
+def test_the_exports_with_uvs_and_normals_pass_the_validator(exported: dict[str, Any]) -> None:
+    paths = [exported[c].path for c in ("none", "quantize")]
+    for report in validate_gltf_files(paths):
+        assert report["numErrors"] == 0 and report["numWarnings"] == 0, issues(report)
