@@ -15,7 +15,7 @@ import pytest
 
 from tests.support.js_interop import issues, validate_gltf_files
 from tests.support.sequences import shared_sequence
-from tuckercodec import Decoder, MeshSequence, encode, load_sequence, save_sequence
+from tuckercodec import Decoder, InputError, MeshSequence, encode, load_sequence, save_sequence
 from tuckercodec.gltf_export import morph_parts, write_decomposition_gltf
 from tuckercodec.io import format_of
 from tuckercodec.io.gltf.accessors import BufferBuilder, read_accessor
@@ -430,3 +430,66 @@ def test_the_exports_with_uvs_and_normals_pass_the_validator(exported: dict[str,
     paths = [exported[c].path for c in ("none", "quantize")]
     for report in validate_gltf_files(paths):
         assert report["numErrors"] == 0 and report["numWarnings"] == 0, issues(report)
+
+
+def _morphed_normals(tmp_path: Path, change: dict[str, object] | None = None) -> Path:
+    """A still mesh shown at its default weight 0.5 of a target that moves its normals."""
+    builder = BufferBuilder()
+    positions = np.random.default_rng(8).normal(size=(6, 3)).astype(np.float32)
+    normals = np.tile(np.array([[0, 0, 1]], np.float32), (6, 1))
+    delta = np.tile(np.array([[2, 0, -1]], np.float32), (6, 1))
+    primitive: dict[str, object] = {
+        "attributes": {
+            "POSITION": builder.add_accessor(positions, bounds=True, vertex_attribute=True),
+            "NORMAL": builder.add_accessor(normals, vertex_attribute=True),
+            "TEXCOORD_0": builder.add_accessor(positions[:, :2], vertex_attribute=True),
+        },
+        "targets": [
+            {
+                "POSITION": builder.add_accessor(0 * positions, bounds=True, vertex_attribute=True),
+                "NORMAL": builder.add_accessor(delta, vertex_attribute=True),
+            }
+        ],
+        "material": 0,
+    }
+    add_triangles(builder, primitive, FACES, 6)
+    primitive.update(change or {})
+    gltf = new_gltf()
+    gltf.update(
+        {
+            "scene": 0,
+            "scenes": [{"nodes": [0]}],
+            "nodes": [{"mesh": 0}],
+            "meshes": [{"primitives": [primitive], "weights": [0.5]}],
+            "materials": [{"name": "bad\nname"}],
+        }
+    )
+    path = tmp_path / "morphed.gltf"
+    path.write_bytes(file_bytes(gltf, builder, path))
+    return path
+
+
+def test_frame_0_s_normals_add_the_weighted_normal_offsets(tmp_path: Path) -> None:
+    seq = load_sequence(_morphed_normals(tmp_path))
+    normals = seq.attribute_named("NORMAL").values
+    assert normals.dtype == np.float32
+    assert np.allclose(normals, np.array([1, 0, 0.5]) / np.sqrt(1.25), atol=1e-7)
+    # a material name that is not a valid name (a control character) falls back to its number
+    assert [s.name for s in seq.face_sets] == ["material_0"]
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"material": 3}, r"primitives\[0\]\.material refers to materials\[3\]"),
+        ({"attributes": {"POSITION": 0, "TEXCOORD_0": 1}}, r"TEXCOORD_0 needs 2 components"),
+        ({"attributes": {"POSITION": 0, "_CUSTOM": 5}}, r"15 values for the 6 vertices"),
+    ],
+)
+def test_bad_attributes_and_materials_are_refused_naming_them(
+    tmp_path: Path, change: dict[str, object], message: str
+) -> None:
+    path = _morphed_normals(tmp_path, change)
+    with pytest.raises(InputError, match=message) as caught:
+        load_sequence(path)
+    assert caught.value.path == str(path) or str(path) in str(caught.value)

@@ -34,8 +34,8 @@ MAX_NUMBERS = 1 << 28
 class Mesh:
     """The merged primitives of one mesh: base positions (K, 3), targets (J, K, 3), faces, the
     default weights (J,); the other vertex attributes by semantic, each face's material (an
-    index of ``materials``, -1 for none), and each target's NORMAL deltas (J, K, 3), zero where
-    a target has none (``None``: no target has)."""
+    index of ``materials``, -1 for none), and where each vertex block's morph targets are (for
+    their NORMAL deltas, read only when asked: :meth:`normal_delta`)."""
 
     base: np.ndarray
     targets: np.ndarray
@@ -43,7 +43,21 @@ class Mesh:
     weights: np.ndarray
     attributes: dict[str, VertexValues] = field(default_factory=dict)
     materials: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
-    normal_targets: np.ndarray | None = None
+    #: each vertex block's first vertex, vertex count, morph targets (JSON) and primitive
+    morph_blocks: list[tuple[int, int, list[Any], str]] = field(default_factory=list)
+
+    def normal_delta(self, doc: Document, target: int) -> np.ndarray:
+        """Morph target ``target``'s NORMAL deltas (K, 3), zero where a block has none."""
+        deltas = np.zeros_like(self.base)
+        for offset, count, morphs, where in self.morph_blocks:
+            morph = morphs[target]
+            if isinstance(morph, dict) and "NORMAL" in morph:
+                label = f"{where}.targets[{target}] NORMAL"
+                delta = read_accessor(doc, morph["NORMAL"], label, width=3)
+                if len(delta) != count:
+                    raise doc.fail(f"{label}: {len(delta)} values for {count} vertices")
+                deltas[offset : offset + count] = delta
+        return deltas
 
 
 def read_mesh(doc: Document, index: int) -> Mesh:
@@ -62,7 +76,7 @@ def _merge_primitives(doc: Document, index: int) -> Mesh:
         raise doc.fail(f"meshes[{index}] has no primitives")
     bases: list[np.ndarray] = []
     targets: list[np.ndarray] = []
-    normal_targets: list[np.ndarray | None] = []
+    morph_blocks: list[tuple[int, int, list[Any], str]] = []
     attributes: list[dict[str, VertexValues]] = []
     faces: list[np.ndarray] = []
     materials: list[np.ndarray] = []
@@ -92,7 +106,7 @@ def _merge_primitives(doc: Document, index: int) -> Mesh:
             blocks[key] = (sum(len(b) for b in bases), len(base))
             bases.append(base)
             targets.append(_deltas(doc, morphs, len(base), where))
-            normal_targets.append(_deltas(doc, morphs, len(base), where, "NORMAL"))
+            morph_blocks.append((blocks[key][0], len(base), morphs, where))
             attributes.append(_attributes(doc, primitive["attributes"], len(base), where))
         offset, count = blocks[key]
         triangles = _faces(doc, primitive, count, where) + offset
@@ -106,15 +120,6 @@ def _merge_primitives(doc: Document, index: int) -> Mesh:
     # added in place (found by fuzzing the glTF reader, tools.fuzz)
     base = np.concatenate(bases).astype(np.float64)
     counts = [len(b) for b in bases]
-    normals = None
-    if any(n is not None for n in normal_targets):
-        normals = np.concatenate(
-            [
-                np.zeros_like(t) if n is None else n
-                for n, t in zip(normal_targets, targets, strict=True)
-            ],
-            axis=1,
-        )
     return Mesh(
         base,
         np.concatenate(targets, axis=1),
@@ -122,7 +127,7 @@ def _merge_primitives(doc: Document, index: int) -> Mesh:
         weights,
         combined(attributes, counts),
         np.concatenate(materials).astype(np.int64),
-        normals,
+        morph_blocks,
     )
 
 
@@ -148,26 +153,20 @@ def _material(doc: Document, primitive: dict[str, Any], where: str) -> int:
     return int(primitive["material"])
 
 
-def _deltas(
-    doc: Document, morphs: list[Any], vertices: int, where: str, semantic: str = "POSITION"
-) -> Any:
-    """The morph targets' ``semantic`` deltas, (J, K, 3); a target without it moves nothing.
-    For NORMAL: ``None`` when no target has NORMAL deltas."""
-    if semantic != "POSITION" and not any(
-        isinstance(morph, dict) and semantic in morph for morph in morphs
-    ):
-        return None
+def _deltas(doc: Document, morphs: list[Any], vertices: int, where: str) -> np.ndarray:
+    """The morph targets' POSITION deltas, (J, K, 3); a target without POSITION moves nothing."""
     if len(morphs) * vertices * 3 > MAX_NUMBERS:
         raise doc.fail(f"{where}: {len(morphs)} morph targets of {vertices} vertices are too many")
     deltas = np.zeros((len(morphs), vertices, 3))
     for j, morph in enumerate(morphs):
         if not isinstance(morph, dict):
             raise doc.fail(f"{where}.targets[{j}] must be an object")
-        if semantic in morph:
-            label = f"{where}.targets[{j}] {semantic}"
-            delta = read_accessor(doc, morph[semantic], label, width=3)
+        if "POSITION" in morph:
+            delta = read_accessor(doc, morph["POSITION"], f"{where}.targets[{j}] POSITION", width=3)
             if len(delta) != vertices:
-                raise doc.fail(f"{label}: {len(delta)} values for {vertices} vertices")
+                raise doc.fail(
+                    f"{where}.targets[{j}] has {len(delta)} positions for {vertices} vertices"
+                )
             deltas[j] = delta
     return deltas
 

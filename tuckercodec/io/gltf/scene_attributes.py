@@ -52,7 +52,7 @@ class PlacedMesh:
 
 def scene_attributes(doc: Document, placed: list[PlacedMesh]) -> list[Attribute]:
     """The chosen meshes' vertex attributes, their vertices one after the other."""
-    blocks = [_named(doc, item, _frame0(item)) for item in placed]
+    blocks = [_named(doc, item, _frame0(doc, item)) for item in placed]
     result = []
     for name, found in combined(blocks, [len(item.mesh.base) for item in placed]).items():
         try:
@@ -62,7 +62,7 @@ def scene_attributes(doc: Document, placed: list[PlacedMesh]) -> list[Attribute]
     return result
 
 
-def _frame0(item: PlacedMesh) -> dict[str, VertexValues]:
+def _frame0(doc: Document, item: PlacedMesh) -> dict[str, VertexValues]:
     """The mesh's attributes with NORMAL as frame 0 shows it (module docstring)."""
     attributes = dict(item.mesh.attributes)
     normal = attributes.get("NORMAL")
@@ -70,9 +70,10 @@ def _frame0(item: PlacedMesh) -> dict[str, VertexValues]:
         return attributes
     values = normal.values.astype(np.float64)
     changed = False
-    if item.mesh.normal_targets is not None:
-        for j in np.flatnonzero(item.weights):
-            values = values + item.weights[j] * item.mesh.normal_targets[j]
+    for j in np.flatnonzero(item.weights):  # the targets frame 0 shows, read only those
+        delta = item.mesh.normal_delta(doc, int(j))
+        if delta.any():
+            values = values + item.weights[j] * delta
             changed = True
     linear = item.world[:3, :3]
     if not np.array_equal(linear, np.eye(3)):
