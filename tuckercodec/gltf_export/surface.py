@@ -14,7 +14,11 @@ normals of the sequence, where it has them.
   viewer normalizes the sum, so the normals follow the animation as far as a linear blend of k
   offsets can (exactly when the normals are linear in the weights, closely for the smooth
   motions the decomposition keeps). Cost: float32, 12 bytes per vertex for NORMAL and 12 more
-  per vertex per target, about 1.5 times what the quantized targets' positions take (8 bytes).
+  per vertex per target, about 1.5 times what the quantized targets' positions take (8 bytes);
+  the meshopt variant rounds the offsets to 2^-12 for its codec. Measured on the cloth sample
+  (3101 vertices, 14 targets, KG 0.1): quantize 414 KB, 439 KB with UVs, 999 KB with UVs and
+  normals; meshopt 140, 163 and 433 KB. Normals are worth it where lighting matters; static
+  normals would cost only the 12 bytes per vertex but light every frame as the first.
 """
 
 from __future__ import annotations
