@@ -65,7 +65,8 @@ def test_polygons_are_written_as_triangle_fans_and_points_as_points(tmp_path: Pa
     quads = np.array([[0, 1, 2, 3], [1, 4, 2, -1]])
     vertices = np.random.default_rng(1).normal(size=(3, 5, 3))
     save_sequence(MeshSequence(vertices, quads), tmp_path / "quads.glb")
-    assert load_sequence(tmp_path / "quads.glb").faces.tolist() == [[0, 1, 2], [1, 4, 2], [0, 2, 3]]
+    # in face order: each polygon's fan, then the next face's
+    assert load_sequence(tmp_path / "quads.glb").faces.tolist() == [[0, 1, 2], [0, 2, 3], [1, 4, 2]]
     save_sequence(MeshSequence(vertices, np.zeros((0, 3))), tmp_path / "points.glb")
     points = load_sequence(tmp_path / "points.glb")
     assert points.faces.shape == (0, 3) and points.frame_count == 3

@@ -40,6 +40,13 @@ variant:
   it fits the codec's 256 bytes, so it codes differences over time; the triangles reordered
   for the vertex cache (never the vertices) and coded with the index codec.
 
+UVs and normals (:mod:`.surface`), where the sequence has them (``attributes``, by default the
+decoder's): the first UV as TEXCOORD_0, per-corner UVs splitting vertices as the sequence writer
+does; the normals as a NORMAL and an offset per target fitted to every frame's recomputed
+normals (float32; the meshopt variant rounds the offsets to 2^-12 under the EXPONENTIAL
+filter). A sequence without normals gets none: viewers compute flat normals, and the file keeps
+its size.
+
 It sits beside :mod:`tuckercodec.files` rather than in :mod:`tuckercodec.io`: it takes a
 decoder, not a sequence. The glTF container and accessors are :mod:`tuckercodec.io.gltf`'s.
 """

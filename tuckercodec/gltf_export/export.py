@@ -5,7 +5,8 @@ the error a viewer shows."""
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal, Protocol
 
@@ -17,9 +18,11 @@ from ..io.gltf.accessors import ARRAY_BUFFER, BufferBuilder, padded_rows
 from ..io.gltf.document import add_triangles, file_bytes, new_gltf
 from ..io.gltf.reader import sample_gltf
 from ..measures.distortion import KG_DEFINITION, Displacement, ErrorAccumulator, kg_error
+from ..model.attributes import Attribute
 from ..model.sequence import DEFAULT_FRAME_RATE, MeshSequence, float32_times
 from ..system.atomic import refuse_existing, write_atomic
 from .quantization import QuantizedAnimation, quantize_animation, weight_values
+from .surface import Surface, surface_of
 
 Compression = Literal["none", "quantize", "meshopt"]
 COMPRESSIONS: tuple[str, ...] = ("none", "quantize", "meshopt")
@@ -29,6 +32,8 @@ COMPRESSIONS: tuple[str, ...] = ("none", "quantize", "meshopt")
 #: decoder is registered (three.js: GLTFLoader.setMeshoptDecoder), so it is asked for by name.
 DEFAULT_COMPRESSION: Compression = "quantize"
 _MAX_CODEC_STRIDE = 256  # EXT_meshopt_compression's ATTRIBUTES mode
+#: The power of two the meshopt variant rounds the normals' target offsets to.
+NORMAL_OFFSET_EXPONENT = -12
 
 
 class Decomposed(Protocol):
@@ -116,6 +121,7 @@ def write_decomposition_gltf(
     compress: Compression = DEFAULT_COMPRESSION,
     overwrite: bool = False,
     reference: MeshSequence | np.ndarray | None = None,
+    attributes: Sequence[Attribute] | None = None,
 ) -> GltfReport:
     """Write the decomposition of a compressed file as a playable glTF morph animation.
 
@@ -132,6 +138,9 @@ def write_decomposition_gltf(
         overwrite: replace an existing file.
         reference: the original frames (all of the file's, or those of ``frames``), to report
             the viewer's KG error against them beside the .tkc's.
+        attributes: the sequence's attributes (default: the decoder's ``attributes``, if it
+            has them): its first UV is written as TEXCOORD_0 and its normals as fitted NORMAL
+            offsets per target (:mod:`.surface`); per-corner UVs split vertices.
 
     Returns:
         A :class:`GltfReport`; its ``viewer_kg`` is measured by reading the written file back
@@ -157,20 +166,32 @@ def write_decomposition_gltf(
             decoder.info.kg,
             filters=compress == "meshopt",
         )
-    triangles = MeshSequence(animation.base[None], decoder.faces).triangles()
+    if attributes is None:
+        attributes = getattr(decoder, "attributes", None) or []
+    surface = surface_of(decoder.faces, attributes, animation.decoded, animation.weights)
+    base, targets, faces = animation.base, animation.targets, decoder.faces
+    if surface is not None:  # the vertices split for the UVs' seams, as copies
+        copies = surface.layout.vertex_of
+        base, targets, faces = base[copies], targets[:, copies], surface.layout.faces
+        if quantized is not None:
+            quantized = replace(
+                quantized, base=quantized.base[copies], targets=quantized.targets[:, copies]
+            )
     data = decomposition_bytes(
         path,
-        triangles,
+        MeshSequence(base[None], faces).triangles(),
         animation.times,
         animation.weights,
-        animation.base,
-        animation.targets,
+        base,
+        targets,
         animation.centroids,
         quantized,
         compress,
+        surface,
     )
     write_atomic(path, data, overwrite=overwrite)
-    return _report(path, len(data), compress, animation, quantized, reference)
+    shown = None if surface is None else surface.representative
+    return _report(path, len(data), compress, animation, quantized, reference, shown)
 
 
 @dataclass(frozen=True)
@@ -216,10 +237,14 @@ def _report(
     animation: _Animation,
     quantized: QuantizedAnimation | None,
     reference: MeshSequence | np.ndarray | None,
+    shown: np.ndarray | None = None,
 ) -> GltfReport:
-    """What was written, with the KG error of the file read back as a viewer plays it."""
+    """What was written, with the KG error of the file read back as a viewer plays it;
+    ``shown``: the written vertex that shows each vertex, where vertices were split."""
     decoded = animation.decoded
     viewer = sample_gltf(path, animation.times.astype(np.float64)).positions
+    if shown is not None:
+        viewer = viewer[:, shown]
     original = None if reference is None else _reference(reference, decoded, animation.chosen)
     tkc = None
     if original is not None:
@@ -281,10 +306,11 @@ def decomposition_bytes(
     centroids: np.ndarray,
     quantized: QuantizedAnimation | None,
     compress: str,
+    surface: Surface | None = None,
 ) -> bytes:
     """The file: ``weights`` (F, k), ``base`` (K, 3), ``targets`` (k, K, 3) and ``centroids``
     (F, 3) as :func:`morph_parts` gives them (written as float32 when ``quantized`` is None),
-    else the stored numbers of ``quantized``."""
+    else the stored numbers of ``quantized``; and the ``surface``'s UVs and normals, if any."""
     builder = BufferBuilder()
     if quantized is None:
         stored = _float32_numbers(builder, weights, base, targets, centroids)
@@ -298,6 +324,8 @@ def decomposition_bytes(
         triangles = vertex_cache_order(triangles, len(base))
     add_triangles(builder, primitive, triangles, len(base))
     primitive["targets"] = [{"POSITION": m} for m in stored.morphs]
+    if surface is not None:
+        _add_surface(builder, primitive, surface, filtered)
     mesh = {
         "name": "decomposition",
         "primitives": [primitive],
@@ -307,6 +335,32 @@ def decomposition_bytes(
     if filtered:
         return _meshopt_file(gltf, builder, path)
     return file_bytes(gltf, builder, path)
+
+
+def _add_surface(
+    builder: BufferBuilder, primitive: dict[str, Any], surface: Surface, filtered: bool
+) -> None:
+    """The surface's vertex attributes, and its NORMAL offsets in the targets; ``filtered``
+    (the meshopt variant): the offsets rounded to multiples of 2^-12 (0.014 degrees on a unit
+    normal) and stored with the EXPONENTIAL filter, which the codec then packs to about a
+    fifth of their float32 size."""
+    for semantic, values in surface.attributes.items():
+        primitive["attributes"][semantic] = builder.add_accessor(
+            values, target=ARRAY_BUFFER, vertex_attribute=True
+        )
+    if surface.normal_offsets is None:
+        return
+    codec = None
+    offsets = surface.normal_offsets
+    if filtered:
+        step = NORMAL_OFFSET_EXPONENT
+        whole = np.clip(np.round(np.ldexp(offsets, -step)), -(2**22), 2**22)  # the filter's 24 bits
+        offsets = np.ldexp(whole, step).astype(np.float32)
+        codec = _exponential(np.full(3, step), 12)
+    for target, values in zip(primitive["targets"], offsets, strict=True):
+        target["NORMAL"] = builder.add_accessor(
+            values, target=ARRAY_BUFFER, vertex_attribute=True, codec=codec
+        )
 
 
 @dataclass

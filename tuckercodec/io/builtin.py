@@ -127,6 +127,7 @@ FORMATS = (
         read_frame=gltf.read_gltf_frame,
         read_options=frozenset({"object_path", "fps"}),
         carries=frozenset({"faces", "frame_names", "frame_rate", "time_codes"}),
+        cannot_keep=gltf.cannot_keep,
     ),
     SequenceFormat(
         name="vtk",

@@ -14,10 +14,15 @@ Modules, one job each: :mod:`.container` (the .glb/.gltf container and its buffe
 and node transforms), :mod:`.primitives` (a mesh's primitives merged), :mod:`.reader` (a morph
 animation sampled into a sequence), :mod:`.timing` (its frame rate and time codes),
 :mod:`.document` (the shared skeleton of written files) and :mod:`.writer` (a sequence as morph
-targets). A compressed file's decomposition written as glTF is :mod:`tuckercodec.gltf_export`,
-which uses this library.
+targets). Beside positions: :mod:`.vertex_attributes` (attribute semantics read as values),
+:mod:`.scene_attributes` (the meshes' attributes and materials as the sequence's),
+:mod:`.attribute_writing` (attributes as semantics, and :func:`cannot_keep`), :mod:`.split`
+(per-corner values as split vertices) and :mod:`.normals` (normals recomputed per frame). A
+compressed file's decomposition written as glTF is :mod:`tuckercodec.gltf_export`, which uses
+this library.
 """
 
+from .attribute_writing import cannot_keep
 from .sequence import (
     GltfFrames,
     read_gltf_frame,
@@ -26,6 +31,7 @@ from .sequence import (
 
 __all__ = [
     "GltfFrames",
+    "cannot_keep",
     "read_gltf_frame",
     "write_gltf",
 ]

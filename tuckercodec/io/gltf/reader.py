@@ -11,10 +11,14 @@ Choices (documented for users in :func:`read_gltf`):
   scene order; with ``object_path``, the one node (or the nodes of the one mesh) of that name.
   Several are merged into one mesh, their vertices one after the other, as a viewer shows them.
   Skinned meshes are refused (the skinning is not evaluated).
-* Primitives of a mesh are merged the same way (primitives that share a POSITION accessor share
-  its vertices). TRIANGLES give triangles; TRIANGLE_STRIP and TRIANGLE_FAN are converted to
+* Primitives of a mesh are merged the same way (primitives that share all their vertex
+  attributes and morph targets share their vertices), faces in primitive order then index
+  order. TRIANGLES give triangles; TRIANGLE_STRIP and TRIANGLE_FAN are converted to
   triangles (a strip's degenerate joining triangles dropped); POINTS add vertices without faces;
-  line modes are refused.
+  line modes are refused (:mod:`.primitives`).
+* What the meshes carry beside positions: their vertex attributes (TEXCOORD_n, NORMAL at frame
+  0, COLOR_n, _CUSTOM...) as static vertex-domain attributes, and one ``materialBind`` face set
+  per material (:mod:`.scene_attributes`).
 * Which times: the first animation (others are ignored), at the union of the keyframe times of
   the channels that move the chosen nodes (default) or at ``fps`` frames per second from its
   first to its last keyframe. No animation: one frame.
@@ -34,11 +38,13 @@ from typing import Any
 import numpy as np
 
 from ...errors import InputError
+from ...model.attributes import Attribute, FaceSet
 from ...model.sequence import MeshSequence
 from ..common.budget import Inflation
 from .animation import PATH_WIDTHS, Sampler, node_matrix, numbers, read_sampler
 from .container import Document, integer, read_document
 from .primitives import MAX_NUMBERS, Mesh, read_mesh
+from .scene_attributes import PlacedMesh, material_face_sets, scene_attributes
 from .timing import timing
 
 #: Extensions a file may require that this reader understands.
@@ -68,6 +74,8 @@ class Sampled:
     times: np.ndarray
     animated: bool
     extras: dict[str, Any] = field(default_factory=dict)
+    attributes: list[Attribute] = field(default_factory=list)
+    face_sets: list[FaceSet] = field(default_factory=list)
 
 
 def read_gltf(
@@ -97,6 +105,8 @@ def read_gltf(
             time_codes=codes,
             meters_per_unit=METERS_PER_UNIT,
             up_axis=UP_AXIS,
+            attributes=sampled.attributes,
+            face_sets=sampled.face_sets,
         )
     except InputError as error:
         raise InputError(error.reason, path=path, frame=error.frame) from None
@@ -113,7 +123,15 @@ def sample_gltf(
     """Evaluate the file's mesh at ``times`` (seconds), or at its keyframes or ``fps``."""
     scene = Scene(path, times, object_path=object_path, fps=fps, inflation=inflation)
     positions = scene.evaluate(0, len(scene.times))
-    return Sampled(positions, scene.faces, scene.times, scene.animated, scene.extras)
+    return Sampled(
+        positions,
+        scene.faces,
+        scene.times,
+        scene.animated,
+        scene.extras,
+        scene.attributes,
+        scene.face_sets,
+    )
 
 
 class Scene:
@@ -126,6 +144,8 @@ class Scene:
         faces: the merged meshes' triangles.
         animated: whether the file has an animation.
         extras: the tuckercodec writer's record in the asset's ``extras``, if any.
+        attributes: the meshes' vertex attributes (:mod:`.scene_attributes`).
+        face_sets: their materials' faces.
 
     ``inflation``: what the file's compressed views may inflate to (default: half the
     machine's memory).
@@ -175,6 +195,22 @@ class Scene:
             faces.append(mesh.faces + offset)
             offset += len(mesh.base)
         self.faces = np.concatenate(faces)
+        self.attributes = scene_attributes(doc, self._placed())
+        materials = [self.meshes[_mesh_of(doc, node)].materials for node in self.chosen]
+        self.face_sets = material_face_sets(doc, np.concatenate(materials))
+
+    def _placed(self) -> list[PlacedMesh]:
+        """The chosen mesh nodes at the first frame, for their attributes' frame-0 values."""
+        doc, first = self.doc, self.times[:1]
+        placed = []
+        for node in self.chosen:
+            mesh = self.meshes[_mesh_of(doc, node)]
+            channels = self.channels.get(node, {})
+            weights = morph_weights(doc, node, mesh, channels, first)[0]
+            world = world_matrices(doc, node, self.parents, self.channels, first)[0]
+            extras = doc.item("meshes", _mesh_of(doc, node), f"nodes[{node}]").get("extras")
+            placed.append(PlacedMesh(mesh, extras, weights, world))
+        return placed
 
     def evaluate(self, start: int, stop: int) -> np.ndarray:
         """The positions (n, K, 3) at ``times[start:stop]``, each frame's numbers the same
@@ -199,7 +235,7 @@ class Scene:
         for node in self.chosen:
             mesh = self.meshes[_mesh_of(doc, node)]
             local = _morphed(doc, node, mesh, self.channels.get(node, {}), times)
-            world = _world(doc, node, self.parents, self.channels, times)
+            world = world_matrices(doc, node, self.parents, self.channels, times)
             placed = np.einsum("nij,nkj->nki", world[:, :3, :3], local) + world[:, None, :3, 3]
             positions.append(placed)
         result = np.concatenate(positions, axis=1)
@@ -385,15 +421,7 @@ def _morphed(
     writer does) costs one target per frame, not all of them.
     """
     count = len(mesh.weights)
-    if "weights" in channels:
-        weights = channels["weights"].at(times)
-    else:
-        default = mesh.weights
-        if "weights" in doc.array("nodes")[node]:
-            default = numbers(
-                doc, doc.array("nodes")[node]["weights"], count, f"nodes[{node}].weights"
-            )
-        weights = np.repeat(default[None], len(times), axis=0)
+    weights = morph_weights(doc, node, mesh, channels, times)
     moved = np.repeat(mesh.base[None], len(times), axis=0)
     with np.errstate(over="ignore", invalid="ignore"):  # found as non-finite by the caller
         for target in range(count):
@@ -406,7 +434,22 @@ def _morphed(
     return moved
 
 
-def _world(
+def morph_weights(
+    doc: Document, node: int, mesh: Mesh, channels: dict[str, Sampler], times: np.ndarray
+) -> np.ndarray:
+    """The node's morph weights at each time, (n, J): animated, else the node's or the mesh's
+    default weights."""
+    if "weights" in channels:
+        return channels["weights"].at(times)
+    default = mesh.weights
+    if "weights" in doc.array("nodes")[node]:
+        default = numbers(
+            doc, doc.array("nodes")[node]["weights"], len(default), f"nodes[{node}].weights"
+        )
+    return np.repeat(default[None], len(times), axis=0)
+
+
+def world_matrices(
     doc: Document,
     node: int,
     parents: dict[int, int],

@@ -39,6 +39,8 @@ class GltfFrames(FrameSource):
             codes,
             METERS_PER_UNIT,
             UP_AXIS,
+            scene.attributes,
+            scene.face_sets,
         )
 
     def _opened(self) -> Scene:
