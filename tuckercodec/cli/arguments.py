@@ -15,7 +15,7 @@ from .._version import __version__
 from ..blender.package import PLATFORM_TAGS
 from ..decomposition.analysis import SELECTIONS
 from ..encoder import DEFAULT_TARGET_KG
-from ..encoder.options import BASES, parse_max_error
+from ..encoder.options import BASES, FACE_ORDERS, parse_field_target, parse_max_error
 from ..encoder.plan import DEFAULT_SEGMENT_FRAMES, parse_size
 from ..errors import DependencyError
 from ..files import SUFFIX
@@ -588,6 +588,17 @@ def _max_error(text: str) -> float | str:
         ) from None
 
 
+def _field_target(text: str) -> tuple[str, str]:
+    """--field NAME=TARGET: the name and its target, checked."""
+    name, equals, target = text.rpartition("=")
+    if not equals or not name:
+        raise argparse.ArgumentTypeError(f"expected NAME=TARGET, got {text!r}")
+    try:
+        return name, parse_field_target(target, f"field {name!r}")
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
 def _add_mode_options(parser: argparse.ArgumentParser) -> None:
     """The encoder's three modes, one at a time, and how ranks are selected."""
     mode = parser.add_mutually_exclusive_group()
@@ -614,6 +625,32 @@ def _add_mode_options(parser: argparse.ArgumentParser) -> None:
         "--select",
         choices=SELECTIONS,
         help="choose ranks by the exact error table (default) or by the seed paper's bound",
+    )
+    parser.add_argument(
+        "--face-order",
+        choices=FACE_ORDERS,
+        help="keep the faces in their given order: when they carry data (auto, the default), "
+        "always (given) or never (walk: smallest, the data follow the walk's order)",
+    )
+    parser.add_argument(
+        "--field",
+        action="append",
+        type=_field_target,
+        metavar="NAME=TARGET",
+        help="the error target of an animated field: rel:P (P percent, the KG measure over its "
+        "components), max:E (no value off by more than E) or lossless; repeat for each field",
+    )
+    parser.add_argument(
+        "--fields",
+        metavar="TARGET",
+        help="the target of every field --field does not name (default: lossless with "
+        "--lossless, else rel: the positions' KG target)",
+    )
+    parser.add_argument(
+        "--no-attributes",
+        action="store_true",
+        default=None,
+        help="write the positions and faces alone: no UVs, normals, colours, face sets or fields",
     )
 
 

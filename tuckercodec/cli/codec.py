@@ -120,6 +120,10 @@ def encode_options(args: argparse.Namespace, *, passes: bool = True) -> EncodeOp
         "scheduler": args.scheduler if passes else None,
         "max_error": getattr(args, "max_error", None),
         "lossless": getattr(args, "lossless", None),
+        "face_order": getattr(args, "face_order", None),
+        "field_targets": getattr(args, "field", None),
+        "field_target": getattr(args, "fields", None),
+        "attachments": False if getattr(args, "no_attributes", None) else None,
     }
     return resolve_options(**{name: value for name, value in given.items() if value is not None})
 

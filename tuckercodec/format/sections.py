@@ -211,8 +211,10 @@ def uses_coding_tools(entries: list[dict[str, Any]]) -> bool:
         if kind is not None and codec in kind.coding_tools_codecs:
             return True
         predict = item.get("predict")
+        ancillary = item.get("critical") is False  # a field's factors (1.5) allow them anyway
         if codec == QMAT and isinstance(predict, bytes) and any(b > 1 for b in predict):
-            return True
+            if not ancillary:
+                return True
     return False
 
 
