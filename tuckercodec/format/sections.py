@@ -212,9 +212,13 @@ def uses_coding_tools(entries: list[dict[str, Any]]) -> bool:
             return True
         predict = item.get("predict")
         ancillary = item.get("critical") is False  # a field's factors (1.5) allow them anyway
-        if codec == QMAT and isinstance(predict, bytes) and any(b > 1 for b in predict):
-            if not ancillary:
-                return True
+        if (
+            codec == QMAT
+            and not ancillary
+            and isinstance(predict, bytes)
+            and any(b > 1 for b in predict)
+        ):
+            return True
     return False
 
 
