@@ -24,7 +24,7 @@ process.stdout.write(JSON.stringify({
   index: base64(/** @type {Uint32Array} */ (/** @type {import('three').BufferAttribute} */ (geometry.index).array)),
   groups: geometry.groups,
   materialNames: geometry.userData.materialNames,
-  vertexOf: base64(animation.layout.vertexOf),
+  vertexOf: base64(animation.drawLayout.vertexOf),
   frame: base64(animation.file.frameFloat32(Number(frame))),
   updateNormals: animation.updateNormals,
   vertexColors: /** @type {import('three').MeshStandardMaterial} */ (animation.mesh.material).vertexColors,

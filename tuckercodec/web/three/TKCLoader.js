@@ -102,15 +102,15 @@ export class TKCAnimation {
     this.decodeMs = 0;
 
     /** How the faces and attributes are drawn (three.js's one value per vertex: draw.js). */
-    this.layout = new DrawLayout(file);
-    const layout = this.layout;
+    this.drawLayout = new DrawLayout(file);
+    const layout = this.drawLayout;
     const K = file.vertices;
     /** The positions of the frame shown, K*3 (the position attribute's array, unless split). */
     this._frame = new Float32Array(3 * K);
     /** The drawn vertices' positions (the position attribute's array). */
     this._positions = layout.count === K ? this._frame : new Float32Array(3 * layout.count);
     /** Their normals (the normal attribute's array): the authored ones until a frame recomputes them. */
-    this._normals = layout.normal ?? new Float32Array(3 * layout.count);
+    this._normals = layout.normal ? layout.normal.slice() : new Float32Array(3 * layout.count);
     /** The triangles (the index's array), grouped by material. */
     this._triangles = layout.triangles;
     const geometry = this._geometry(layout);
@@ -168,10 +168,10 @@ export class TKCAnimation {
     const began = performance.now();
     this.file.frameFloat32(t, this._frame);
     this.decodeMs = performance.now() - began;
-    this.layout.positionsInto(this._frame, this._positions);
+    this.drawLayout.positionsInto(this._frame, this._positions);
     this._position.needsUpdate = true;
     if (this.updateNormals) {
-      this.layout.normalsInto(this._frame, this._normals);
+      this.drawLayout.normalsInto(this._frame, this._normals);
       this._normal.needsUpdate = true;
     }
     this._bound(this._frame);

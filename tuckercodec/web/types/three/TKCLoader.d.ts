@@ -74,7 +74,7 @@ export declare class TKCAnimation {
     /** Milliseconds the last setFrame spent decoding the frame (file.frameFloat32 alone). */
     decodeMs: number;
     /** How the faces and attributes are drawn (three.js's one value per vertex: draw.js). */
-    layout: DrawLayout;
+    drawLayout: DrawLayout;
     /** The positions of the frame shown, K*3 (the position attribute's array, unless split). */
     _frame: Float32Array<ArrayBuffer>;
     /** The drawn vertices' positions (the position attribute's array). */
