@@ -101,10 +101,14 @@ def _attributes(
         Attribute("Cd", "face", rng.random((face_count, 3)).astype(np.float32), None, "color"),
         Attribute("rest", "vertex", _special_float64(rng, (vertex_count, 3)), None, "generic"),
         Attribute("id", "face", ids, None, "generic"),
-        Attribute("paint", "face", palette, rng.integers(0, 5, face_count), "color"),
+        Attribute(
+            "paint", "face", palette, np.asarray(rng.integers(0, 5, size=face_count)), "color"
+        ),
         Attribute("weight", "corner", _special_float64(rng, (corners.size, 1)), None, "generic"),
-        Attribute("bone", "vertex", extremes.repeat(2, axis=1), rng.integers(0, 4, vertex_count)),
-        Attribute("crease", "corner", rng.random((3, 2)), rng.integers(0, 3, corners.size)),
+        Attribute(
+            "bone", "vertex", extremes.repeat(2, axis=1), rng.integers(0, 4, size=vertex_count)
+        ),
+        Attribute("crease", "corner", rng.random((3, 2)), rng.integers(0, 3, size=corners.size)),
     ]
 
 
@@ -164,7 +168,11 @@ def _js_attached(data: bytes, tmp_path: Path, name: str = "in") -> tuple[dict[st
     return result, output.read_bytes() if result["accepted"] else b""
 
 
-TYPES = {"f32": np.dtype("<f4"), "f64": np.dtype("<f8"), "i32": np.dtype("<i4")}
+TYPES: dict[str, np.dtype[Any]] = {
+    "f32": np.dtype("<f4"),
+    "f64": np.dtype("<f8"),
+    "i32": np.dtype("<i4"),
+}
 
 
 def _check_same_as_python(data: bytes, tmp_path: Path) -> None:
@@ -189,10 +197,10 @@ def _check_same_as_python(data: bytes, tmp_path: Path) -> None:
             indices = np.frombuffer(raw, "<u4", got["indices"], got["indices_at"])
             assert np.array_equal(indices, want.indices), f"{want.name}: indices differ"
     assert len(facts["face_sets"]) == len(expected.face_sets)
-    for got, want in zip(facts["face_sets"], expected.face_sets, strict=True):
-        assert (got["name"], got["family"]) == (want.name, want.family)
+    for got, face_set in zip(facts["face_sets"], expected.face_sets, strict=True):
+        assert (got["name"], got["family"]) == (face_set.name, face_set.family)
         numbers = np.frombuffer(raw, "<u4", got["faces"], got["faces_at"])
-        assert np.array_equal(numbers, want.faces)
+        assert np.array_equal(numbers, face_set.faces)
 
 
 def test_cloth_attributes_bit_for_bit(tmp_path):

@@ -137,6 +137,7 @@ def test_every_corner_shows_its_values(tmp_path):
     uv = {a.name: a for a in decoder.attributes}["st"]
     drawn_uv = _array(got["attributes"]["uv"]["array"], "<f4", 2)
     assert drawn_uv.tobytes() != b"" and vertex_of.size > decoder.info.vertices  # split
+    assert uv.indices is not None
     assert np.array_equal(drawn_uv[index], uv.values[uv.indices[corners]])
     colour = {a.name: a for a in decoder.attributes}["Cd"]
     drawn_colour = _array(got["attributes"]["color"]["array"], "<f4", 3)
@@ -168,6 +169,7 @@ def test_recomputed_normals_keep_the_hard_edges(tmp_path):
     normals = _array(got["attributes"]["normal"]["array"], "<f4", 3)
     assert np.allclose(np.linalg.norm(normals, axis=1), 1, atol=1e-5)
     authored = {a.name: a for a in decoder.attributes}["N"]
+    assert authored.indices is not None
     rows = authored.indices[corners]
     vertices = corner_vertices(decoder.faces)[corners]
     # two corners of one vertex share a normal exactly when their authored rows are the same
@@ -188,6 +190,7 @@ def test_a_single_frame_shows_the_authored_normals(tmp_path):
     corners, _ = _expected_corners(decoder)
     authored = {a.name: a for a in decoder.attributes}["N"]
     normals = _array(got["attributes"]["normal"]["array"], "<f4", 3)
+    assert authored.indices is not None
     assert np.array_equal(normals[index], authored.values[authored.indices[corners]])
 
 
