@@ -306,3 +306,66 @@ def test_corrections_same_bits_and_bound_shown(browser, cloth, tmp_path, mode, o
             assert page.problems() == []
         finally:
             page.close()
+
+
+# ------------------------------------------------------------------------------------------
+# a file with attributes and face sets (format 1.5)
+
+
+def cloth_with_attributes(cloth: MeshSequence) -> MeshSequence:
+    """The cloth with UVs per corner (a seam: the corners of every fifth face have a row of
+    their own), a colour per face and two materials."""
+    from tuckercodec import Attribute, FaceSet
+    from tuckercodec.model.attributes import corner_vertices
+
+    faces = cloth.faces
+    corners = corner_vertices(faces)
+    first = cloth.vertices[0]
+    uv_vertex = ((first[:, [0, 2]] - first[:, [0, 2]].min(0)) / np.ptp(first[:, [0, 2]])).astype(
+        np.float32
+    )
+    degrees = (faces >= 0).sum(axis=1)
+    face_of = np.repeat(np.arange(faces.shape[0]), degrees)
+    own = face_of % 5 == 0
+    uv_index = np.where(own, cloth.vertex_count + np.arange(corners.size), corners)
+    uv_rows = np.concatenate([uv_vertex, uv_vertex[corners] * np.float32(0.5)])
+    rng = np.random.default_rng(2)
+    count = faces.shape[0]
+    return MeshSequence(
+        cloth.vertices,
+        faces,
+        attributes=[
+            Attribute("st", "corner", uv_rows, uv_index, "uv"),
+            Attribute("Cd", "face", rng.random((count, 3)).astype(np.float32), None, "color"),
+        ],
+        face_sets=[
+            FaceSet("cotton", np.arange(count // 2), "materialBind"),
+            FaceSet("silk", np.arange(count // 2, count), "materialBind"),
+        ],
+    )
+
+
+def test_a_file_with_attributes_plays_and_lists_them(browser, cloth, tmp_path):
+    """The drawn positions of the file's vertices, the error colours and the KG are right
+    although its vertices are split for the UVs and colours; the panel lists the attributes
+    and face sets, and the UV toggle puts a checker texture on the mesh."""
+    sequence = cloth_with_attributes(cloth)
+    data = tuckercodec.encode(sequence, target_kg=TARGET_KG)
+    with serve(tmp_path, data, "cloth-uv.tkc", sequence.vertices) as url:
+        page = open_page(browser, url)
+        try:
+            check_frames(page, data, sequence.vertices)
+            listed = page.evaluate("document.getElementById('attached-list').textContent")
+            assert "st" in listed and "uv per corner" in listed and "cotton" in listed, listed
+            assert page.evaluate("document.getElementById('attached').hidden") is False
+            assert page.evaluate("document.getElementById('uv-control').hidden") is False
+            plain = page.screenshot()
+            page.evaluate(
+                "(() => { const box = document.getElementById('uv'); box.click();"
+                " return box.checked; })()"
+            )
+            page.evaluate("window.tkcViewer.setFrame(0)")
+            assert page.screenshot() != plain, "the checker texture changed nothing"
+            assert page.problems() == []
+        finally:
+            page.close()

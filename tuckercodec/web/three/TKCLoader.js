@@ -17,7 +17,8 @@ import {
   MeshStandardMaterial, Sphere,
 } from 'three';
 import { openTkc } from '../tkc/decoder.js';
-import { computeBounds, computeNormals } from './normals.js';
+import { DrawLayout } from './draw.js';
+import { computeBounds } from './normals.js';
 
 export { TkcError } from '../tkc/decoder.js';
 
@@ -100,33 +101,51 @@ export class TKCAnimation {
     /** Milliseconds the last setFrame spent decoding the frame (file.frameFloat32 alone). */
     this.decodeMs = 0;
 
+    /** How the faces and attributes are drawn (three.js's one value per vertex: draw.js). */
+    this.drawLayout = new DrawLayout(file);
+    const layout = this.drawLayout;
     const K = file.vertices;
-    /** The positions of the frame shown (the position attribute's array), K*3. */
-    this._positions = new Float32Array(3 * K);
-    /** Their vertex normals (the normal attribute's array), K*3. */
-    this._normals = new Float32Array(3 * K);
-    /** The faces fanned into triangles (the index's array). */
-    this._triangles = file.triangles();
-    const geometry = new BufferGeometry();
-    const position = new BufferAttribute(this._positions, 3).setUsage(DynamicDrawUsage);
-    const normal = new BufferAttribute(this._normals, 3).setUsage(DynamicDrawUsage);
-    geometry.setAttribute('position', position);
-    geometry.setAttribute('normal', normal);
-    geometry.setIndex(new BufferAttribute(this._triangles, 1));
-    geometry.boundingBox = new Box3();
-    geometry.boundingSphere = new Sphere();
+    /** The positions of the frame shown, K*3 (the position attribute's array, unless split). */
+    this._frame = new Float32Array(3 * K);
+    /** The drawn vertices' positions (the position attribute's array). */
+    this._positions = layout.count === K ? this._frame : new Float32Array(3 * layout.count);
+    /** Their normals (the normal attribute's array): the authored ones until a frame recomputes them. */
+    this._normals = layout.normal ? layout.normal.slice() : new Float32Array(3 * layout.count);
+    /** The triangles (the index's array), grouped by material. */
+    this._triangles = layout.triangles;
+    const geometry = this._geometry(layout);
     /** @type {import('three').BufferAttribute} */
-    this._position = position;
+    this._position = /** @type {import('three').BufferAttribute} */ (geometry.getAttribute('position'));
     /** @type {import('three').BufferAttribute} */
-    this._normal = normal;
+    this._normal = /** @type {import('three').BufferAttribute} */ (geometry.getAttribute('normal'));
+    if (layout.normal !== null && file.frames === 1) this.updateNormals = false; // the authored normals
     /** @type {import('three').Material | null} the material made here, disposed by dispose() */
-    this._ownMaterial = material ? null : new MeshStandardMaterial({ side: DoubleSide });
+    this._ownMaterial = material ? null : new MeshStandardMaterial({ side: DoubleSide, vertexColors: layout.color !== null });
     /** @type {number[]} */
     this._box = new Array(6).fill(0);
     /** The mesh to add to a scene; its geometry and material are the animation's. */
     this.mesh = new Mesh(geometry, material || /** @type {import('three').Material} */ (this._ownMaterial));
     this.mesh.name = 'tkc';
     this.setFrame(0);
+  }
+
+  /**
+   * The geometry: position and normal (updated per frame), uv and color when the file has them
+   * (static), the index, a group per material (userData.materialNames) and bounds.
+   * @param {DrawLayout} layout
+   */
+  _geometry(layout) {
+    const geometry = new BufferGeometry();
+    geometry.setAttribute('position', new BufferAttribute(this._positions, 3).setUsage(DynamicDrawUsage));
+    geometry.setAttribute('normal', new BufferAttribute(this._normals, 3).setUsage(DynamicDrawUsage));
+    if (layout.uv !== null) geometry.setAttribute('uv', new BufferAttribute(layout.uv, 2));
+    if (layout.color !== null) geometry.setAttribute('color', new BufferAttribute(layout.color, layout.colorSize));
+    geometry.setIndex(new BufferAttribute(this._triangles, 1));
+    for (const { start, count, materialIndex } of layout.groups) geometry.addGroup(start, count, materialIndex);
+    geometry.userData.materialNames = layout.materialNames;
+    geometry.boundingBox = new Box3();
+    geometry.boundingSphere = new Sphere();
+    return geometry;
   }
 
   /** The length of one pass through every frame, in seconds (the last frame lasts 1 / frameRate). */
@@ -147,14 +166,15 @@ export class TKCAnimation {
       throw new RangeError(`frame ${t} does not exist: the file has frames 0..${this.frameCount - 1}`);
     }
     const began = performance.now();
-    this.file.frameFloat32(t, this._positions);
+    this.file.frameFloat32(t, this._frame);
     this.decodeMs = performance.now() - began;
+    this.drawLayout.positionsInto(this._frame, this._positions);
     this._position.needsUpdate = true;
     if (this.updateNormals) {
-      computeNormals(this._positions, this._triangles, this._normals);
+      this.drawLayout.normalsInto(this._frame, this._normals);
       this._normal.needsUpdate = true;
     }
-    this._bound(this._positions);
+    this._bound(this._frame);
     this.frame = t;
     this.time = Math.min(this.frameTimes[t], Number.MAX_VALUE); // finite at any frame rate
     return this;

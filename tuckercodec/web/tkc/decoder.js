@@ -12,8 +12,12 @@
 //
 // No DOM and no build step: the same modules run in node and in browsers.
 
+import { findAttachments } from './attachments.js';
+import { checkAttributeParams, decodeAttribute } from './attributes.js';
 import { readContainer, sectionPayload } from './container.js';
 import { formatError } from './errors.js';
+import { decodeFaceOrder, inGivenOrder } from './face_order.js';
+import { decodeFaceSets } from './face_sets.js';
 import { decodeFaces, fanTriangles } from './faces.js';
 import { readLayout } from './header.js';
 import { resolveLimits } from './limits.js';
@@ -41,6 +45,8 @@ export const CACHED_SEGMENTS = 2;
  * @typedef {import('./residual.js').Residual} Residual
  * @typedef {import('./simd.js').SimdBasis} SimdBasis
  * @typedef {import('./topology.js').Topology} Topology
+ * @typedef {import('./attributes.js').Attribute} Attribute
+ * @typedef {import('./face_sets.js').FaceSet} FaceSet
  */
 
 /**
@@ -97,7 +103,10 @@ export class TkcFile {
     const [M, n] = layout.faceShape;
     this.faceCount = M;
     this.faceWidth = n;
+    /** @type {Int32Array} the M × n faces, -1 padded, in the order they were given (§6.10) */
     this.faces = decodeFaces(layout.face, this._payload(layout.face), this.vertices, M, n, limits);
+    /** The faces as FACE decodes them (the walk's order): the mesh predictors' (§6.8). */
+    this._codedFaces = this.faces;
     /** @type {Topology | null} */
     this._topology = null;
     /** @type {Float64Array | null} */
@@ -132,6 +141,44 @@ export class TkcFile {
     this._exact = new Float64Array(0);
     // step 18: the corrections' parameters (a segmented file's, with their segment)
     if (!layout.segmented && layout.corrections) this._readResidual(this._segment(0), 0);
+    // step 19 (1.5): the faces' given order, the attributes and the face sets
+    this.attached = findAttachments(container.sections);
+    this.faces = this._facesInGivenOrder();
+    /** @type {Attribute[]} the static attributes (§6.11), in order */
+    this.attributes = this._decodeAttributes();
+    /** @type {FaceSet[]} the face sets (§6.12), in order */
+    this.faceSets = this.attached.faceSets === null ? [] : decodeFaceSets(this.attached.faceSets, this._payload(this.attached.faceSets), M, limits);
+  }
+
+  /**
+   * The faces in the order they were given (ORDER, §6.10), or as FACE decodes them.
+   * @returns {Int32Array}
+   */
+  _facesInGivenOrder() {
+    const section = this.attached.order;
+    if (section === null) return this.faces;
+    const order = decodeFaceOrder(section, this._payload(section), this.faceCount);
+    return inGivenOrder(this.faces, order, this.faceWidth);
+  }
+
+  /** Every ATTR.n in order (§6.11): its parameters and sizes, then its payload; names unique. */
+  _decodeAttributes() {
+    let corners = 0;
+    for (const v of this.faces) if (v >= 0) corners++;
+    /** @type {import('./attributes.js').Mesh} */
+    const mesh = { vertices: this.vertices, faces: this.faces, faceCount: this.faceCount, faceWidth: this.faceWidth, corners };
+    /** @type {Attribute[]} */
+    const decoded = [];
+    for (const section of this.attached.attributes) {
+      const params = checkAttributeParams(section, mesh, this.limits);
+      decoded.push(decodeAttribute(params, this._payload(section), mesh, section.id));
+    }
+    decoded.forEach(({ name }, n) => {
+      if (decoded.findIndex((a) => a.name === name) < n) {
+        throw formatError('R43-attribute', `section '${this.attached.attributes[n].id}': two attributes are named ${JSON.stringify(name)}`);
+      }
+    });
+    return decoded;
   }
 
   /**
@@ -323,7 +370,7 @@ export class TkcFile {
   }
 
   _topologyOnce() {
-    if (this._topology === null) this._topology = meshTopology(this.faces, this.faceCount, this.faceWidth, this.vertices);
+    if (this._topology === null) this._topology = meshTopology(this._codedFaces, this.faceCount, this.faceWidth, this.vertices);
     return this._topology;
   }
 

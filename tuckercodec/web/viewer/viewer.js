@@ -9,7 +9,8 @@
 // The file is loaded and played by TKCLoader (../three/TKCLoader.js), as any page using the npm
 // package plays one: every frame is reconstructed when it is shown, animation.setFrame(t)
 // writing X_t straight into the position attribute of one indexed BufferGeometry, in the file's
-// vertex order, whose index is file.triangles(); nothing is allocated per frame. Playback follows
+// vertex order (then the copies of the vertices a file's UVs, normals or colours split), whose
+// index is the faces fanned into triangles; nothing is allocated per frame. Playback follows
 // the real clock: the frame shown is floor(elapsed * rate), so it never runs slow; a frame index
 // skipped on the way counts as dropped.
 //
@@ -17,6 +18,7 @@
 // headless Chromium): ready, info, setFrame, drawnPositions, decodedPositions, frameError,
 // play, pause, stats.
 
+import { attachedRows, checkerTexture } from './attached.js';
 import {
   FRAME_KG_DEFINITION, colourScale, computeNormals, emptyBox, extendBox, frameError,
   paintDistances,
@@ -71,7 +73,7 @@ ready.catch(() => {}); // shown on the page and logged; not also an "uncaught" r
  *   frameMs: number[], updateMs: number[], renderMs: number[], played: number, dropped: number,
  *   openMs: number | null, error: unknown,
  *   lastError: {kg: number | null, maxError: number, definition: string} | null,
- *   box: number[] | null, offset: number,
+ *   box: number[] | null, offset: number, authoredNormals: boolean,
  * }}
  */
 const state = /** @type {any} */ ({
@@ -84,7 +86,7 @@ const state = /** @type {any} */ ({
   frame: 0, rate: 0, rateNote: '', bytes: 0,
   playing: false, clockStart: 0, lastTick: 0, rafPending: false, dirty: false,
   frameMs: [], updateMs: [], renderMs: [], played: 0, dropped: 0, openMs: null, error: null,
-  lastError: null, box: null, offset: 0,
+  lastError: null, box: null, offset: 0, authoredNormals: false,
   // set when the controls first change (undefined before, which read as these)
   colourByError: false, layout: 'beside', up: 'y', shading: 'smooth', startFrame: 0,
 });
@@ -111,7 +113,8 @@ const info = {
     await nextPaint();
   },
   drawnPositions() {
-    return state.positions ? state.positions.slice() : null;
+    // the file's vertices: the drawn copies of split vertices follow them
+    return state.positions ? state.positions.slice(0, 3 * state.file.vertices) : null;
   },
   /**
    * @param {number} t
@@ -353,6 +356,12 @@ function setupScene(THREE, OrbitControls, animation) {
   const mesh = /** @type {SolidMesh} */ (animation.mesh);
   mesh.material.dispose(); // the loader's default, never drawn
   mesh.material = material;
+  // a file of one frame with authored normals shows them (the loader's choice) unless flat
+  state.authoredNormals = !animation.updateNormals;
+  if (animation.drawLayout.color !== null) { // the file's colours (format 1.5)
+    material.vertexColors = true;
+    material.color.set(0xffffff);
+  }
   const wire = new THREE.Mesh(geometry, new THREE.MeshBasicMaterial({
     color: 0x000000, wireframe: true, transparent: true, opacity: 0.35,
   }));
@@ -425,11 +434,14 @@ function setupReference(THREE, file) {
   state.refPositions = new Float32Array(K * 3);
   state.refNormals = new Float32Array(K * 3);
   state.distances = new Float32Array(K);
-  state.colours = new Float32Array(K * 3);
+  // the error colours of the drawn vertices: the file's K, then the copies of split vertices
+  state.colours = new Float32Array(state.animation.drawLayout.count * 3);
   const geometry = new THREE.BufferGeometry();
   geometry.setAttribute('position', dynamic(new THREE.BufferAttribute(state.refPositions, 3), THREE));
   geometry.setAttribute('normal', dynamic(new THREE.BufferAttribute(state.refNormals, 3), THREE));
-  geometry.setIndex(state.geometry.getIndex());
+  // the original has the file's vertices, not the drawn copies: its own index
+  state.index = file.triangles();
+  geometry.setIndex(new THREE.BufferAttribute(state.index, 1));
   const material = new THREE.MeshStandardMaterial({
     color: 0x9fb4c8, roughness: 0.7, metalness: 0, side: THREE.DoubleSide, transparent: true, opacity: 1,
   });
@@ -500,7 +512,8 @@ function sampledBox() {
   const first = file.segments && file.segments.length ? file.segments[0] : { start: 0, frames: file.frames };
   const count = Math.min(FRAMING_SAMPLES, first.frames);
   const box = emptyBox();
-  const scratch = state.positions; // overwritten by showFrame(0) right after
+  // the file's vertices (the drawn copies of split ones follow): overwritten by showFrame after
+  const scratch = state.positions.subarray(0, 3 * file.vertices);
   for (let s = 0; s < count; s++) {
     const t = first.start + (count === 1 ? 0 : Math.round((s * (first.frames - 1)) / (count - 1)));
     extendBox(box, file.frameFloat32(t, scratch));
@@ -581,7 +594,7 @@ function showFrame(t) {
   const began = performance.now();
   // smooth normals are only kept up to date while they are used
   const smooth = state.shading !== 'flat';
-  animation.updateNormals = smooth;
+  animation.updateNormals = smooth && !state.authoredNormals;
   animation.setFrame(t); // the frame, its normals and bounds
   const took = animation.decodeMs;
   if (state.frameMs.length >= MAX_TIMINGS) {
@@ -604,6 +617,7 @@ function showFrame(t) {
     if (!state.scaleFixed && maxError > state.scale) state.scale = maxError;
     if (state.colourByError) {
       paintDistances(state.distances, state.scale, state.lut, state.colours);
+      copyToSplit(state.colours, animation.drawLayout.vertexOf, file.vertices);
       geometry.attributes.color.needsUpdate = true;
     }
     updateLegend();
@@ -617,6 +631,16 @@ function showFrame(t) {
   $('frame-label').textContent = `frame ${t} of 0–${file.frames - 1}${name}`;
   $('frame-ms').textContent = `${took.toFixed(2)} ms (frame ${t})`;
   requestRender();
+}
+
+/**
+ * The values of each drawn copy of a split vertex, from its vertex's (3 each).
+ * @param {Float32Array} values
+ * @param {Uint32Array} vertexOf the file's vertex of each drawn vertex
+ * @param {number} K
+ */
+function copyToSplit(values, vertexOf, K) {
+  for (let d = K; d < vertexOf.length; d++) values.set(values.subarray(3 * vertexOf[d], 3 * vertexOf[d] + 3), 3 * d);
 }
 
 function render() {
@@ -756,13 +780,20 @@ function setupControls() {
   });
   $('colour').addEventListener('change', (event) => {
     state.colourByError = ticked(event);
-    state.material.vertexColors = state.colourByError;
-    state.material.color.set(state.colourByError ? 0xffffff : 0xd8d2c4);
+    const fileColours = state.animation.drawLayout.color;
+    if (!state.colourByError && fileColours !== null) { // back to the file's own colours
+      state.geometry.setAttribute('color', new state.THREE.BufferAttribute(fileColours, state.animation.drawLayout.colorSize));
+    } else if (state.colourByError) {
+      state.geometry.setAttribute('color', dynamic(new state.THREE.BufferAttribute(state.colours, 3), state.THREE));
+    }
+    state.material.vertexColors = state.colourByError || fileColours !== null;
+    state.material.color.set(state.material.vertexColors ? 0xffffff : 0xd8d2c4);
     state.material.needsUpdate = true;
     $('legend').hidden = !state.colourByError;
     showFrame(state.frame);
   });
   $('reframe').addEventListener('click', frameCamera);
+  setupAttached();
   window.addEventListener('keydown', (event) => {
     if (event.target instanceof HTMLInputElement && event.target.type !== 'range' && event.target.type !== 'checkbox') return;
     if (event.target instanceof HTMLSelectElement) return;
@@ -771,6 +802,33 @@ function setupControls() {
     else if (event.key === 'ArrowLeft') { event.preventDefault(); step(-1); }
   });
   updatePlayed();
+}
+
+/** The UV checker toggle, when the file has UVs, and the list of its attributes (format 1.5). */
+function setupAttached() {
+  const file = state.file;
+  if (state.animation.drawLayout.uv !== null) {
+    $('uv-control').hidden = false;
+    /** @type {import('three').Texture | null} */
+    let texture = null;
+    $('uv').addEventListener('change', (event) => {
+      texture ??= checkerTexture(state.THREE);
+      state.material.map = ticked(event) ? texture : null;
+      state.material.needsUpdate = true;
+      requestRender();
+    });
+  }
+  const rows = attachedRows(file);
+  if (rows.length === 0) return;
+  const list = $('attached-list');
+  for (const [term, value] of rows) {
+    const dt = document.createElement('dt');
+    dt.textContent = term;
+    const dd = document.createElement('dd');
+    dd.textContent = value;
+    list.append(dt, dd);
+  }
+  $('attached').hidden = false;
 }
 
 /**

@@ -1,4 +1,5 @@
 import { BufferGeometry, FileLoader, Loader, Mesh } from 'three';
+import { DrawLayout } from './draw.js';
 export { TkcError } from '../tkc/decoder.js';
 /** The rate, in frames per second, of a file that records none. */
 export declare const DEFAULT_FRAME_RATE = 24;
@@ -72,12 +73,16 @@ export declare class TKCAnimation {
     frameTimes: Float64Array<ArrayBuffer>;
     /** Milliseconds the last setFrame spent decoding the frame (file.frameFloat32 alone). */
     decodeMs: number;
-    /** The positions of the frame shown (the position attribute's array), K*3. */
+    /** How the faces and attributes are drawn (three.js's one value per vertex: draw.js). */
+    drawLayout: DrawLayout;
+    /** The positions of the frame shown, K*3 (the position attribute's array, unless split). */
+    _frame: Float32Array<ArrayBuffer>;
+    /** The drawn vertices' positions (the position attribute's array). */
     _positions: Float32Array<ArrayBuffer>;
-    /** Their vertex normals (the normal attribute's array), K*3. */
+    /** Their normals (the normal attribute's array): the authored ones until a frame recomputes them. */
     _normals: Float32Array<ArrayBuffer>;
-    /** The faces fanned into triangles (the index's array). */
-    _triangles: Uint32Array<ArrayBuffer>;
+    /** The triangles (the index's array), grouped by material. */
+    _triangles: Uint32Array<ArrayBufferLike>;
     /** @type {import('three').BufferAttribute} */
     _position: import('three').BufferAttribute;
     /** @type {import('three').BufferAttribute} */
@@ -94,6 +99,12 @@ export declare class TKCAnimation {
      *   MeshStandardMaterial drawn on both sides, which dispose() disposes)
      */
     constructor(file: TkcFile, material?: import('three').Material);
+    /**
+     * The geometry: position and normal (updated per frame), uv and color when the file has them
+     * (static), the index, a group per material (userData.materialNames) and bounds.
+     * @param {DrawLayout} layout
+     */
+    _geometry(layout: DrawLayout): BufferGeometry<import("three").NormalBufferAttributes, import("three").BufferGeometryEventMap>;
     /** The length of one pass through every frame, in seconds (the last frame lasts 1 / frameRate). */
     get duration(): number;
     /**

@@ -10,11 +10,15 @@ export type Factors = import('./reconstruct.js').Factors;
 export type Residual = import('./residual.js').Residual;
 export type SimdBasis = import('./simd.js').SimdBasis;
 export type Topology = import('./topology.js').Topology;
+export type Attribute = import('./attributes.js').Attribute;
+export type FaceSet = import('./face_sets.js').FaceSet;
 /**
  * @typedef {import('./reconstruct.js').Factors} Factors
  * @typedef {import('./residual.js').Residual} Residual
  * @typedef {import('./simd.js').SimdBasis} SimdBasis
  * @typedef {import('./topology.js').Topology} Topology
+ * @typedef {import('./attributes.js').Attribute} Attribute
+ * @typedef {import('./face_sets.js').FaceSet} FaceSet
  */
 /**
  * Opens a .tkc file held in memory.
@@ -67,7 +71,10 @@ export declare class TkcFile {
     } | null;
     faceCount: number;
     faceWidth: number;
-    faces: Int32Array<ArrayBufferLike>;
+    /** @type {Int32Array} the M × n faces, -1 padded, in the order they were given (§6.10) */
+    faces: Int32Array;
+    /** The faces as FACE decodes them (the walk's order): the mesh predictors' (§6.8). */
+    _codedFaces: Int32Array<ArrayBufferLike>;
     /** @type {Topology | null} */
     _topology: Topology | null;
     /** @type {Float64Array | null} */
@@ -95,6 +102,11 @@ export declare class TkcFile {
     _scratch: Float64Array<ArrayBuffer>;
     /** @type {Float64Array} P of §8.1, before its corrections */
     _exact: Float64Array;
+    attached: import("./attachments.js").Attached;
+    /** @type {Attribute[]} the static attributes (§6.11), in order */
+    attributes: Attribute[];
+    /** @type {FaceSet[]} the face sets (§6.12), in order */
+    faceSets: FaceSet[];
     /**
      * @param {Uint8Array} bytes
      * @param {import('./limits.js').Limits} limits
@@ -102,6 +114,13 @@ export declare class TkcFile {
      * @param {number} [cachedSegments] decoded segments kept, the most recently used
      */
     constructor(bytes: Uint8Array, limits: import('./limits.js').Limits, simd?: boolean, cachedSegments?: number);
+    /**
+     * The faces in the order they were given (ORDER, §6.10), or as FACE decodes them.
+     * @returns {Int32Array}
+     */
+    _facesInGivenOrder(): Int32Array;
+    /** Every ATTR.n in order (§6.11): its parameters and sizes, then its payload; names unique. */
+    _decodeAttributes(): import("./attributes.js").Attribute[];
     /**
      * Frame f's positions (§8), K*3 binary64 values; `out` is reused when given.
      * @param {number} f
