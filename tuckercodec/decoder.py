@@ -422,14 +422,7 @@ class Decoder:
             )
             payload = self._container.payload(self._data, section)
             decoded.append(attributes.decode_attribute(payload, params, mesh, where))
-        names_seen = [a.name for a in decoded]
-        for number, name in enumerate(names_seen):
-            if name in names_seen[:number]:
-                raise FormatError(
-                    f"two attributes are named {name!r}",
-                    rule=attributes.RULE,
-                    field=f"section {self._attached.attributes[number].id}.name",
-                )
+        attributes.check_unique_names(decoded, [s.id for s in self._attached.attributes])
         return decoded
 
     def _decode_face_sets(self) -> list[FaceSet]:

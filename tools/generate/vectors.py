@@ -55,7 +55,6 @@ from tuckercodec.internal import (
     traversal,
     wave_sheet,
 )
-from tuckercodec.model.attributes import CORNER, FACE, VERTEX, corner_vertices
 
 VECTORS = common.REPO / "spec" / "vectors"
 #: What a vector folder holds: the files, their JSON and the valid ones' reference positions.
@@ -487,19 +486,19 @@ def attached_sheet(grid: int, frames: int) -> MeshSequence:
     sheet = scrambled(MeshSequence(wave_sheet(frames, grid), sheet_triangles(grid)), seed=15)
     faces, vertex_count = sheet.faces, sheet.vertex_count
     rng = np.random.default_rng(15)
-    corners = corner_vertices(faces)
+    corners = faces[faces >= 0]  # each corner's vertex, in corner order (§6.11)
     seams = np.where(np.arange(corners.size) % 7 == 0, corners + vertex_count, corners)
     table = np.unique(seams, return_inverse=True)[1]
     uv = rng.random((int(table.max()) + 1, 2)).astype(np.float32)
     uv[3] = np.float32(np.nan)  # any bit pattern is stored
     attached = [
-        Attribute("st", CORNER, uv, table, "uv"),
+        Attribute("st", "corner", uv, table, "uv"),
         Attribute(
-            "displayColor", FACE, rng.random((len(faces), 3)).astype(np.float32), None, "color"
+            "displayColor", "face", rng.random((len(faces), 3)).astype(np.float32), None, "color"
         ),
-        Attribute("rest", VERTEX, sheet.vertices[0] * np.pi, None, "generic"),
-        Attribute("id", FACE, rng.integers(-(2**31), 2**31, (len(faces), 1), dtype=np.int32)),
-        Attribute("N", VERTEX, rng.random((5, 3)), rng.integers(0, 5, vertex_count), "normal"),
+        Attribute("rest", "vertex", sheet.vertices[0] * np.pi, None, "generic"),
+        Attribute("id", "face", rng.integers(-(2**31), 2**31, (len(faces), 1), dtype=np.int32)),
+        Attribute("N", "vertex", rng.random((5, 3)), rng.integers(0, 5, vertex_count), "normal"),
     ]
     sets = [
         FaceSet("left", np.arange(0, len(faces) // 2), "materialBind"),

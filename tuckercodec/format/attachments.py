@@ -19,9 +19,8 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from ..errors import FormatError, UnsupportedVersionError
-from . import attributes, face_order, face_sets
-from .sections import QMAT, Section
+from . import attributes, face_order, face_sets, fields
+from .sections import QMAT, Section, check_kind
 
 #: The minor version of a file with any of these sections.
 ATTACHMENTS_MINOR = 5
@@ -83,17 +82,7 @@ def find_attachments(table: tuple[Section, ...]) -> AttachedSections:
         codec = attachment_codec(section.id)
         if codec is None:
             continue
-        where = f"section {section.id}"
-        if section.critical:
-            raise FormatError(
-                "must be marked critical=False", rule="R27-criticality", field=f"{where}.critical"
-            )
-        if section.codec != codec:
-            raise UnsupportedVersionError(
-                f"unknown codec {section.codec!r} (expected {codec!r})",
-                rule="R25-unknown-codec",
-                field=f"{where}.codec",
-            )
+        check_kind(section, False, (codec,))
         found[section.id] = section
     numbered = {
         stem: sorted(
@@ -101,14 +90,13 @@ def find_attachments(table: tuple[Section, ...]) -> AttachedSections:
         )
         for stem, pattern in ((attributes.STEM, _ATTRIBUTE_ID), (FIELD_STEM, _FIELD_ID))
     }
-    for stem, rule in ((attributes.STEM, attributes.RULE), (FIELD_STEM, "R45-field")):
+    for stem, refuse in ((attributes.STEM, attributes.refuse), (FIELD_STEM, fields.refuse)):
         numbers = numbered[stem]
         if numbers != list(range(len(numbers))):
             gap = next(n for n in range(len(numbers) + 1) if n not in numbers)
-            raise FormatError(
+            refuse(
                 f"sections {stem}.n are numbered 0, 1, 2... without a gap: {stem}.{gap} is missing",
-                rule=rule,
-                field=f"section {stem}.{gap}",
+                f"section {stem}.{gap}",
             )
     factors = {}
     for section_id, section in found.items():
@@ -116,11 +104,10 @@ def find_attachments(table: tuple[Section, ...]) -> AttachedSections:
         if match is None:
             continue
         if int(match.group(1)) >= len(numbered[FIELD_STEM]):
-            raise FormatError(
+            fields.refuse(
                 f"a factor of field {match.group(1)}, which has no section "
                 f"{field_id(int(match.group(1)))}",
-                rule="R45-field",
-                field=f"section {section_id}",
+                f"section {section_id}",
             )
         factors[section_id] = section
     return AttachedSections(

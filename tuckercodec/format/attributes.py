@@ -30,7 +30,6 @@ from .limits import Limits, check_limit
 
 CODEC = "attribute"
 STEM = "ATTR"
-RULE = "R43-attribute"
 
 #: The value types and their names in the file.
 TYPES = {"f32": np.dtype("<f4"), "f64": np.dtype("<f8"), "i32": np.dtype("<i4")}
@@ -152,7 +151,7 @@ def _indices_of(
                 predicted = last_used.get(corner_vertices[element], predicted)
             index = predicted + residual
             if not 0 <= index < rows:
-                _refuse(f"element {element} has index {index}, outside 0..{rows - 1}", where)
+                refuse(f"element {element} has index {index}, outside 0..{rows - 1}", where)
             if corner_vertices is not None:
                 last_used[corner_vertices[element]] = index
             indices[element] = index
@@ -161,7 +160,7 @@ def _indices_of(
     if bad.size:
         element = int(bad[0])
         index = int(indices[element])
-        _refuse(f"element {element} has index {index}, outside 0..{rows - 1}", where)
+        refuse(f"element {element} has index {index}, outside 0..{rows - 1}", where)
     return indices
 
 
@@ -205,28 +204,38 @@ def encode_attribute(attribute: Attribute, mesh: Mesh, level: int) -> tuple[dict
 # -- decoding -----------------------------------------------------------------------------------
 
 
-def _refuse(message: str, field: str) -> NoReturn:
-    raise FormatError(message, rule=RULE, field=field)
+def refuse(message: str, field: str) -> NoReturn:
+    """R43-attribute: an attribute's parameter or value is not as §6.11 says."""
+    raise FormatError(message, rule="R43-attribute", field=field)
+
+
+def check_unique_names(decoded: list[Attribute], section_ids: list[str]) -> None:
+    """No two attributes share a name (R43)."""
+    seen: set[str] = set()
+    for attribute, section_id in zip(decoded, section_ids, strict=True):
+        if attribute.name in seen:
+            refuse(f"two attributes are named {attribute.name!r}", f"section {section_id}.name")
+        seen.add(attribute.name)
 
 
 def _int_param(params: Mapping[str, Any], key: str, where: str) -> int:
     value = params.get(key)
     if not isinstance(value, int) or isinstance(value, bool):
-        _refuse(f"{key} must be an int, got {value!r}", f"{where}.{key}")
+        refuse(f"{key} must be an int, got {value!r}", f"{where}.{key}")
     return int(value)
 
 
 def _str_param(params: Mapping[str, Any], key: str, where: str) -> str:
     value = params.get(key)
     if not isinstance(value, str) or not value:
-        _refuse(f"{key} must be a non-empty str, got {value!r}", f"{where}.{key}")
+        refuse(f"{key} must be a non-empty str, got {value!r}", f"{where}.{key}")
     return str(value)
 
 
 def _checked_streams(params: Mapping[str, Any], payload_length: int, where: str) -> list[list[int]]:
     table = params.get("streams")
     if not isinstance(table, list) or len(table) != 2:
-        _refuse("streams must be an array of two [count, planes, length]", f"{where}.streams")
+        refuse("streams must be an array of two [count, planes, length]", f"{where}.streams")
     for number, entry in enumerate(table):
         if (
             not isinstance(entry, list)
@@ -234,12 +243,12 @@ def _checked_streams(params: Mapping[str, Any], payload_length: int, where: str)
             or not all(isinstance(x, int) and not isinstance(x, bool) and x >= 0 for x in entry)
             or not 1 <= entry[1] <= 8
         ):
-            _refuse(
+            refuse(
                 f"stream {number} must be [count, planes 1..8, length] of ints >= 0, got {entry!r}",
                 f"{where}.streams",
             )
     if table[0][2] + table[1][2] != payload_length:
-        _refuse(
+        refuse(
             f"the streams' lengths add up to {table[0][2] + table[1][2]}, the payload has "
             f"{payload_length} bytes",
             f"{where}.streams",
@@ -255,12 +264,12 @@ def check_attribute_params(
     name = _str_param(params, "name", where)
     domain = _str_param(params, "domain", where)
     if domain not in DOMAINS:
-        _refuse(f"domain must be one of {', '.join(DOMAINS)}, got {domain!r}", f"{where}.domain")
+        refuse(f"domain must be one of {', '.join(DOMAINS)}, got {domain!r}", f"{where}.domain")
     role = params.get("role")
     role = role if isinstance(role, str) and role in ROLES else GENERIC
     type_name = _str_param(params, "type", where)
     if type_name not in TYPES:
-        _refuse(f"type must be one of {', '.join(TYPES)}, got {type_name!r}", f"{where}.type")
+        refuse(f"type must be one of {', '.join(TYPES)}, got {type_name!r}", f"{where}.type")
     shape = params.get("shape")
     if (
         not isinstance(shape, list)
@@ -269,25 +278,25 @@ def check_attribute_params(
         or shape[0] < 0
         or not 1 <= shape[1] <= 4
     ):
-        _refuse(f"shape must be [rows >= 0, components 1..4], got {shape!r}", f"{where}.shape")
+        refuse(f"shape must be [rows >= 0, components 1..4], got {shape!r}", f"{where}.shape")
     rows, cols = shape
     indexed = params.get("indexed")
     if not isinstance(indexed, bool):
-        _refuse(f"indexed must be a bool, got {indexed!r}", f"{where}.indexed")
+        refuse(f"indexed must be a bool, got {indexed!r}", f"{where}.indexed")
     elements = mesh.element_count(domain)
     if not indexed and rows != elements:
-        _refuse(
+        refuse(
             f"an attribute that is not indexed has one row per {domain}: {elements}, not {rows}",
             f"{where}.shape",
         )
     predict = _int_param(params, "predict", where)
     if predict not in (PREDICT_NONE, PREDICT_PREVIOUS):
-        _refuse(f"predict must be 0 or 1, got {predict}", f"{where}.predict")
+        refuse(f"predict must be 0 or 1, got {predict}", f"{where}.predict")
     table = _checked_streams(params, payload_length, where)
     want = [rows * cols, elements if indexed else 0]
     for number, (entry, count) in enumerate(zip(table, want, strict=True)):
         if entry[0] != count:
-            _refuse(f"stream {number} must hold {count} values, not {entry[0]}", f"{where}.streams")
+            refuse(f"stream {number} must hold {count} values, not {entry[0]}", f"{where}.streams")
     role_components = {"uv": (2,), "normal": (3,), "color": (3, 4)}
     if cols not in role_components.get(role, (1, 2, 3, 4)):
         role = GENERIC  # a role that does not fit is only a hint: the values are still read
@@ -329,10 +338,13 @@ def decode_attribute(
             payload[value_length:], index_count, index_planes, f"{where} indices"
         )
         indices = _indices_of(residuals, params["domain"], mesh, params["rows"], where)
-    return Attribute(
-        params["name"],
-        params["domain"],
-        values.astype(values.dtype.newbyteorder("=")),
-        indices,
-        params["role"],
-    )
+    try:
+        return Attribute(
+            params["name"],
+            params["domain"],
+            values.astype(values.dtype.newbyteorder("=")),
+            indices,
+            params["role"],
+        )
+    except ValueError as error:  # InputError: a name the model refuses
+        refuse(f"{error}", f"{where}.name")

@@ -19,7 +19,6 @@ from . import streams
 
 SECTION_ID = "ORDER"
 CODEC = "face-order"
-RULE = "R42-face-order"
 
 
 def encode_face_order(order: np.ndarray, level: int) -> tuple[dict[str, Any], bytes]:
@@ -38,7 +37,7 @@ def decode_face_order(
     if not isinstance(faces, int) or isinstance(faces, bool) or faces != face_count:
         raise FormatError(
             f"faces must be the FACE section's {face_count} faces, got {faces!r}",
-            rule=RULE,
+            rule="R42-face-order",
             field=f"{where}.faces",
         )
     planes = streams.checked_planes(params, where)
@@ -48,7 +47,7 @@ def decode_face_order(
         bad = int(np.flatnonzero((order < 0) | (order >= face_count))[0])
         raise FormatError(
             f"face {bad} of the walk has the number {int(order[bad])}, outside 0..{face_count - 1}",
-            rule=RULE,
+            rule="R42-face-order",
             field=where,
         )
     seen = np.zeros(face_count, dtype=bool)
@@ -57,7 +56,7 @@ def decode_face_order(
         missing = int(np.flatnonzero(~seen)[0])
         raise FormatError(
             f"no face has the number {missing}: the numbers are not a permutation",
-            rule=RULE,
+            rule="R42-face-order",
             field=where,
         )
     return order

@@ -20,7 +20,6 @@ from .limits import Limits, check_limit
 
 SECTION_ID = "FSET"
 CODEC = "face-sets"
-RULE = "R44-face-sets"
 
 
 def encode_face_sets(sets: Sequence[FaceSet], level: int) -> tuple[dict[str, Any], bytes]:
@@ -33,7 +32,7 @@ def encode_face_sets(sets: Sequence[FaceSet], level: int) -> tuple[dict[str, Any
 
 
 def _refuse(message: str, field: str) -> NoReturn:
-    raise FormatError(message, rule=RULE, field=field)
+    raise FormatError(message, rule="R44-face-sets", field=field)
 
 
 def _checked_table(
@@ -85,7 +84,11 @@ def decode_face_sets(
     planes = streams.checked_planes(params, where)
     stream = streams.unpack_integers(payload, total, planes, where)
     sets, start = [], 0
+    named: set[tuple[str, str]] = set()
     for name, family, count in table:
+        if (family, name) in named:
+            _refuse(f"two sets of family {family!r} are named {name!r}", f"{where}.sets")
+        named.add((family, name))
         steps = stream[start : start + count]
         start += count
         if count and steps[1:].min(initial=0) < 0:

@@ -280,22 +280,26 @@ def check_known_sections(
                     field=where,
                 )
             continue  # unknown ancillary sections are skipped unread
-        if section.critical != kind.critical:
-            raise FormatError(
-                f"must be marked critical={kind.critical}",
-                rule="R27-criticality",
-                field=f"{where}.critical",
-            )
-        if section.codec != kind.codec and not (
-            coding_tools and section.codec in kind.coding_tools_codecs
-        ):
-            raise UnsupportedVersionError(
-                f"unknown codec {section.codec!r} (expected {kind.codec!r})",
-                rule="R25-unknown-codec",
-                field=f"{where}.codec",
-            )
+        codecs = (kind.codec, *kind.coding_tools_codecs) if coding_tools else (kind.codec,)
+        check_kind(section, kind.critical, codecs)
         present[section.id] = section
     return present
+
+
+def check_kind(section: Section, critical: bool, codecs: tuple[str, ...]) -> None:
+    """A known section's criticality (R27), then its codec, the first of ``codecs`` or one of
+    the others (R25): §5 step 11, and step 19 for the sections of 1.5."""
+    where = f"section {section.id}"
+    if section.critical != critical:
+        raise FormatError(
+            f"must be marked critical={critical}", rule="R27-criticality", field=f"{where}.critical"
+        )
+    if section.codec not in codecs:
+        raise UnsupportedVersionError(
+            f"unknown codec {section.codec!r} (expected {codecs[0]!r})",
+            rule="R25-unknown-codec",
+            field=f"{where}.codec",
+        )
 
 
 def require_sections(present: Mapping[str, Section], required: list[str]) -> None:
