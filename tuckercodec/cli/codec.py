@@ -128,6 +128,19 @@ def encode_options(args: argparse.Namespace, *, passes: bool = True) -> EncodeOp
     return resolve_options(**{name: value for name, value in given.items() if value is not None})
 
 
+def _print_attachments(header: FileInfo) -> None:
+    """What the file carries beside positions and faces (format 1.5), one line each: the
+    encoder's claims from the section table, as ``info`` reads it (nothing decoded)."""
+    for item in header.attachments:
+        label = f"{item.kind} {_text(item.name)!r}" if item.name else item.kind
+        claim = ""
+        if item.error is not None:
+            definition, value, target = item.error
+            target_text = "none" if target is None else f"{target:g}"
+            claim = f"; error {_number(value)} ({_text(definition)}), target {target_text}"
+        print(f"  {label}: {_text(item.description)}, {item.bytes} bytes{claim}")
+
+
 def _say(line: str) -> None:
     """A segmented encode's progress, one line per pass, on standard error."""
     print(line, file=sys.stderr, flush=True)
@@ -340,6 +353,7 @@ def run_info(args: argparse.Namespace) -> int:
     if header.up_axis is not None:
         print(f"  {_text(header.up_axis)} up")
     print(f"  written by {_text(header.encoder) or 'an unnamed encoder'}")
+    _print_attachments(header)
     for section_id, length, codec, critical in header.sections:
         kind = "" if critical else " (ancillary)"
         print(f"  section {_text(section_id):<8} {length:>10} bytes  {_text(codec)}{kind}")

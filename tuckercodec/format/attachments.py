@@ -117,3 +117,87 @@ def find_attachments(table: tuple[Section, ...]) -> AttachedSections:
         fields=tuple(found[field_id(n)] for n in numbered[FIELD_STEM]),
         factors=factors,
     )
+
+
+@dataclass(frozen=True)
+class AttachmentSummary:
+    """One attribute, the face sets or one field, as the section table describes it (read
+    without decoding: the parameters are the file's claims, checked only when decoded).
+
+    ``kind`` is ``"attribute"``, ``"face sets"``, ``"field"`` or ``"face order"``; ``bytes``
+    counts every section it takes (a field's factors included); ``error`` is a field's
+    ``(definition, value, target)`` as its encoder measured it, where recorded."""
+
+    kind: str
+    name: str
+    description: str
+    bytes: int
+    error: tuple[str, float | None, float | None] | None = None
+
+
+def summarize(table: tuple[Section, ...]) -> tuple[AttachmentSummary, ...]:
+    """What a file carries beside positions and faces, for ``info``: never fails, whatever the
+    parameters hold (a value of the wrong type is shown as it is, or left out)."""
+    out: list[AttachmentSummary] = []
+    sizes: dict[str, int] = {}
+    for section in table:
+        match = _FIELD_FACTOR_ID.fullmatch(section.id)
+        if match is not None:
+            owner = field_id(int(match.group(1)))
+            sizes[owner] = sizes.get(owner, 0) + section.length
+    for section in table:
+        codec = attachment_codec(section.id)
+        params = section.params
+        if codec == face_order.CODEC:
+            out.append(AttachmentSummary("face order", "", "kept as given", section.length))
+        elif codec == attributes.CODEC:
+            shape = params.get("shape")
+            rows = shape[0] if isinstance(shape, list) and len(shape) == 2 else "?"
+            cols = shape[1] if isinstance(shape, list) and len(shape) == 2 else "?"
+            indexed = ", indexed" if params.get("indexed") is True else ""
+            text = (
+                f"{_shown(params.get('domain'))}, {_shown(params.get('role'))}, "
+                f"{_shown(params.get('type'))} x {cols}, {rows} rows{indexed}"
+            )
+            out.append(
+                AttachmentSummary("attribute", _shown(params.get("name")), text, section.length)
+            )
+        elif codec == face_sets.CODEC:
+            sets = params.get("sets")
+            count = len(sets) if isinstance(sets, list) else 0
+            families = (
+                sorted(
+                    {str(entry[1]) for entry in sets if isinstance(entry, list) and len(entry) == 3}
+                )
+                if isinstance(sets, list)
+                else []
+            )
+            text = f"{count} sets, families {', '.join(f or '(none)' for f in families) or '-'}"
+            out.append(AttachmentSummary("face sets", "", text, section.length))
+        elif codec == FIELD_CODEC:
+            error = params.get("error")
+            claim = None
+            if isinstance(error, dict):
+                claim = (
+                    _shown(error.get("definition")),
+                    _real(error.get("value")),
+                    _real(error.get("target")),
+                )
+            text = (
+                f"{_shown(params.get('domain'))}, {_shown(params.get('role'))}, "
+                f"{_shown(params.get('type'))} x {_shown(params.get('components'))}, "
+                f"mode {_shown(params.get('mode'))}"
+            )
+            total = section.length + sizes.get(section.id, 0)
+            out.append(AttachmentSummary("field", _shown(params.get("name")), text, total, claim))
+    return tuple(out)
+
+
+def _shown(value: object) -> str:
+    return value if isinstance(value, str) else repr(value)
+
+
+def _real(value: object) -> float | None:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    return float(value)

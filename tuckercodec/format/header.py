@@ -17,6 +17,7 @@ import numpy as np
 from ..errors import FormatError
 from ..measures.rate import bpfv
 from ..model.sequence import UP_AXES
+from .attachments import AttachmentSummary, summarize
 from .container import Container
 from .limits import Limits, check_limit
 from .reconstruction import factor_value_count
@@ -65,6 +66,9 @@ class FileInfo:
     time_codes: tuple[float, ...] | None = None
     meters_per_unit: float | None = None  # the length of a unit of the positions, in metres
     up_axis: str | None = None  # "Y" or "Z", the source's up axis (None: not recorded)
+    #: (1.5) the attributes, face sets, fields and kept face order, as the section table
+    #: describes them (:func:`.attachments.summarize`); empty for a file without them
+    attachments: tuple[AttachmentSummary, ...] = ()
 
     @property
     def bpfv(self) -> float:
@@ -96,6 +100,22 @@ class FileInfo:
             "time_codes": None if self.time_codes is None else list(self.time_codes),
             "meters_per_unit": self.meters_per_unit,
             "up_axis": self.up_axis,
+            "attachments": [
+                {
+                    "kind": item.kind,
+                    "name": item.name,
+                    "description": item.description,
+                    "bytes": item.bytes,
+                    "error": None
+                    if item.error is None
+                    else {
+                        "definition": item.error[0],
+                        "value": _json_number(item.error[1]),
+                        "target": _json_number(item.error[2]),
+                    },
+                }
+                for item in self.attachments
+            ],
             "encoder": self.encoder,
             "sections": [
                 {"id": s, "bytes": n, "codec": c, "critical": crit}
@@ -298,6 +318,7 @@ def read_header(container: Container, limits: Limits) -> FileInfo:
         encoder=encoder if isinstance(encoder, str) else None,
         sections=tuple((s.id, s.length, s.codec, s.critical) for s in container.sections),
         segments=segments,
+        attachments=summarize(container.sections),
     )
 
 
