@@ -48,8 +48,13 @@ def _print_encode_report(report: EncodeReport, format_version: str) -> None:
     _print_encode_bounds(report)
     print(
         f"format {format_version}; size {report.total_bytes} bytes = {report.bpfv:.4f} bpfv "
-        f"(whole file; connectivity "
-        f"{report.connectivity_bpfv:.4f} bpfv of it), {report.ratio:.1f}x smaller than raw float32"
+        f"(whole file; connectivity {report.connectivity_bpfv:.4f} bpfv of it"
+        + (
+            f", attributes and fields {report.attachments_bpfv:.4f}"
+            if report.attachments_bpfv
+            else ""
+        )
+        + f"), {report.ratio:.1f}x smaller than raw float32"
     )
     if report.exact_ranks is not None:
         print(
@@ -93,7 +98,9 @@ def run_encode(args: argparse.Namespace) -> int:
         f"{args.input}: {encoded.frame_count} frames, {encoded.vertex_count} vertices "
         f"-> {args.output}"
     )
-    _print_encode_report(encoded.report, read_info(encoded.data).format_version)
+    written = read_info(encoded.data)
+    _print_encode_report(encoded.report, written.format_version)
+    _print_attachments(written)
     elapsed = time.perf_counter() - start
     megabytes = encoded.frame_count * encoded.vertex_count * 12 / 1e6
     print(

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from ..decomposition.analysis import Selection
+from ..format.attachments import attachment_codec
 from ..measures.rate import bpfv as bits_per_frame_vertex
 from .options import Mode
 
@@ -46,6 +47,15 @@ class EncodeReport:
     def connectivity_bpfv(self) -> float:
         """The faces section's share of :attr:`bpfv`."""
         return bits_per_frame_vertex(self.section_bytes.get("FACE", 0), self.frames, self.vertices)
+
+    @property
+    def attachments_bpfv(self) -> float:
+        """The share of :attr:`bpfv` of the sections of format 1.5: the faces' order,
+        attributes, face sets and fields."""
+        attached = sum(
+            size for name, size in self.section_bytes.items() if attachment_codec(name) is not None
+        )
+        return bits_per_frame_vertex(attached, self.frames, self.vertices)
 
     @property
     def raw_float32_bytes(self) -> int:
