@@ -32,6 +32,8 @@ package sees at once what the tools rely on.
   ``native.pure_python()`` to run the reference), for the differential test of the two.
 * Animated fields (§6.13): :func:`encode_field` with its :class:`FieldTarget`, and the
   measures :func:`relative_rms` and :func:`max_abs`, for ``python -m tools.bench fields``.
+* Static attributes (§6.11): the module :mod:`~tuckercodec.format.attributes`
+  (``attributes.encode_attribute`` and its ``Mesh``), for ``python -m tools.bench attributes``.
 * Defaults the benchmarks offer as their own: :data:`DEFAULT_TARGET_KG` (the encoder's KG
   target) and :func:`default_max_memory` (half the machine's memory, what an encode may use).
 """
@@ -43,7 +45,7 @@ from .decomposition.hosvd import centre_frames, reconstruct
 from .encoder import rdo
 from .encoder.fields import FieldTarget, encode_field, max_abs, relative_rms
 from .encoder.options import DEFAULT_TARGET_KG
-from .format import faces, qmat, residual, sections, streams, traversal
+from .format import attributes, faces, qmat, residual, sections, streams, traversal
 from .format.container import (
     CRC,
     HEAD_SIZE,
@@ -79,6 +81,7 @@ __all__ = [
     "STED_DEFINITION",
     "Curve",
     "FieldTarget",
+    "attributes",
     "centre_frames",
     "chunk_mode",
     "decode_chunk",

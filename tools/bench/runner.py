@@ -34,6 +34,7 @@ SUITES = {
     "lossless": "tools.bench.lossless",
     "speed": "tools.bench.speed",
     "fields": "tools.bench.fields",
+    "attributes": "tools.bench.attributes",
 }
 
 

@@ -1,9 +1,10 @@
 """§6.12 Section FSET (codec ``face-sets``, format 1.5): named sets of faces.
 
 Materials, groups and GeomSubsets. Each set's face numbers (in the given order, §6.10) are
-strictly increasing; the stream holds, set after set, the first number and then each number's
-difference from the one before less one, so that a run of consecutive faces (a material's faces
-usually are) is a run of zeros.
+strictly increasing; the stream holds, set after set, the first number less the one after the
+previous set's last, and then each number's difference from the one before less one: a
+material's faces are usually a run, and materials follow each other, so a partition into runs
+is a stream of zeros.
 """
 
 from __future__ import annotations
@@ -24,7 +25,11 @@ CODEC = "face-sets"
 
 def encode_face_sets(sets: Sequence[FaceSet], level: int) -> tuple[dict[str, Any], bytes]:
     """``(params, payload)`` of FSET."""
-    parts = [np.diff(s.faces, prepend=np.int64(-1)) - 1 for s in sets]
+    parts, following = [], 0
+    for face_set in sets:
+        parts.append(np.diff(face_set.faces, prepend=np.int64(following - 1)) - 1)
+        if face_set.faces.size:
+            following = int(face_set.faces[-1]) + 1
     stream = np.concatenate(parts) if parts else np.zeros(0, dtype=np.int64)
     payload, planes = streams.pack_integers(stream, level)
     table = [[s.name, s.family, int(s.faces.size)] for s in sets]
@@ -83,7 +88,7 @@ def decode_face_sets(
     )
     planes = streams.checked_planes(params, where)
     stream = streams.unpack_integers(payload, total, planes, where)
-    sets, start = [], 0
+    sets, start, following = [], 0, 0
     named: set[tuple[str, str]] = set()
     for name, family, count in table:
         if (family, name) in named:
@@ -93,9 +98,11 @@ def decode_face_sets(
         start += count
         if count and steps[1:].min(initial=0) < 0:
             _refuse(f"set {name!r}: its face numbers do not increase", where)
-        faces = np.cumsum(steps + 1) - 1
+        faces = np.cumsum(steps + 1) - 1 + following
         if count and not 0 <= faces[0] <= faces[-1] < face_count:
             _refuse(f"set {name!r} names a face outside 0..{face_count - 1}", where)
+        if count:
+            following = int(faces[-1]) + 1
         try:
             sets.append(FaceSet(name, faces, family))
         except ValueError as error:  # InputError: a name the model refuses

@@ -56,8 +56,9 @@ from ..model.attributes import (
 from ..model.normals import recomputed_normals
 from ..model.sequence import MeshSequence
 from ..system.atomic import write_atomic, write_staged
+from . import obj
 from .common.float_text import vertex_text
-from .obj import _check_writable, _vertex_lines, write_obj
+from .obj import _check_writable, _vertex_lines
 from .registry import WriteOptions
 
 
@@ -91,7 +92,7 @@ def obj_frame_writer(seq: MeshSequence, options: WriteOptions) -> Callable[[Path
     if plan.plain:
 
         def write_plain(path: Path, index: int) -> None:
-            write_obj(
+            obj.write_obj(  # looked up at call time: one place writes a frame's file
                 path,
                 seq.vertices[index],
                 seq.faces,

@@ -66,19 +66,28 @@ export function decodeFaceSets(section, payload, M, limits) {
   }
   const stream = decodeIntStream(payload, total, Number(planes), WHERE);
   let start = 0;
+  // one past the last face of the nearest earlier set that has any: where the next set's first
+  // face is counted from
+  let following = 0;
+  const named = new Set();
   return table.map(([name, family, count]) => {
+    const key = JSON.stringify([family, name]);
+    if (named.has(key)) refuse(`two sets of family ${JSON.stringify(family)} are named ${JSON.stringify(name)}`);
+    named.add(key);
     const steps = stream.subarray(start, start + count);
     start += count;
     for (let j = 1; j < count; j++) if (steps[j] < 0) refuse(`set ${JSON.stringify(name)}: its face numbers do not increase`);
     const faces = new Uint32Array(count);
     // increasing after the first, so the last is the largest: the sum is exact until it is
     // beyond every face
-    let face = -1;
+    const first = following + (count ? steps[0] : 0);
+    let face = first;
     for (let j = 0; j < count; j++) {
-      face += steps[j] + 1;
+      if (j) face += steps[j] + 1;
       faces[j] = face;
     }
-    if (count && !(steps[0] >= 0 && face < M)) refuse(`set ${JSON.stringify(name)} names a face outside 0..${M - 1}`);
+    if (count && !(first >= 0 && face < M)) refuse(`set ${JSON.stringify(name)} names a face outside 0..${M - 1}`);
+    if (count) following = face + 1;
     const problem = nameProblem(name) ?? (family ? nameProblem(family) : null);
     if (problem !== null) refuse(`set ${JSON.stringify(name)}: its name or family ${problem}`);
     return { name, family, faces };
