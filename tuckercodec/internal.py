@@ -33,7 +33,9 @@ package sees at once what the tools rely on.
 * Animated fields (§6.13): :func:`encode_field` with its :class:`FieldTarget`, and the
   measures :func:`relative_rms` and :func:`max_abs`, for ``python -m tools.bench fields``.
 * Static attributes (§6.11): the module :mod:`~tuckercodec.format.attributes`
-  (``attributes.encode_attribute`` and its ``Mesh``), for ``python -m tools.bench attributes``.
+  (``attributes.encode_attribute`` and its ``Mesh``), and :mod:`~tuckercodec.model.normals`
+  (normals recomputed from positions, and their angle error), for
+  ``python -m tools.bench attributes``.
 * Defaults the benchmarks offer as their own: :data:`DEFAULT_TARGET_KG` (the encoder's KG
   target) and :func:`default_max_memory` (half the machine's memory, what an encode may use).
 """
@@ -62,6 +64,7 @@ from .io.gltf.reader import sample_gltf
 from .io.samples import sample_path, sheet_triangles, wave_sheet
 from .measures.distortion import KG_DEFINITION, MAX_DISTANCE_DEFINITION, max_distance
 from .measures.perceptual import STED_DEFINITION
+from .model import normals
 from .model.topology import mesh_parents, mesh_prediction
 from .reports.plots import plot_rd_curve, pyplot, save_figure
 from .system import native
@@ -94,6 +97,7 @@ __all__ = [
     "mesh_parents",
     "mesh_prediction",
     "native",
+    "normals",
     "pack_container",
     "pack_raw",
     "parse_container",
