@@ -16,8 +16,9 @@ from tuckercodec.io import load_sequence, open_frames, save_sequence
 from tuckercodec.io.registry import format_named
 
 pxr = pytest.importorskip("pxr", reason="usd-core (the 'usd' extra) is not installed")
-from pxr import Sdf, Usd, UsdGeom, UsdValidation, Vt  # noqa: E402
+from pxr import Sdf, Usd, UsdGeom, Vt  # noqa: E402
 
+from tests.test_io_usd import usdchecker_errors  # noqa: E402
 from tuckercodec.io import usd  # noqa: E402
 
 SUFFIXES = [".usda", ".usdc", ".usd"]
@@ -170,16 +171,7 @@ def test_pxr_reads_the_written_primvars_subsets_and_velocities(tmp_path):
 def test_usds_validators_find_nothing_in_a_file_with_attributes(tmp_path, suffix):
     path = tmp_path / f"checked{suffix}"
     save_sequence(carrying_sequence(), path)
-    registry = UsdValidation.ValidationRegistry()
-    names = [
-        meta.name
-        for meta in registry.GetAllValidatorMetadata()
-        if "UsdzValidators" not in meta.GetKeywords()
-        and meta.name != "usdUtilsValidators:RootPackageValidator"
-    ]
-    context = UsdValidation.ValidationContext(registry.GetOrLoadValidatorsByName(names))
-    found = [error.GetErrorAsString() for error in context.Validate(Usd.Stage.Open(str(path)))]
-    assert found == []
+    assert usdchecker_errors(path) == []
 
 
 # ------------------------------------------------------------------------------------------
