@@ -21,7 +21,7 @@ from tuckercodec.io import format_of
 from tuckercodec.io.gltf.accessors import BufferBuilder, read_accessor
 from tuckercodec.io.gltf.container import read_document
 from tuckercodec.io.gltf.document import add_triangles, file_bytes, new_gltf
-from tuckercodec.io.gltf.normals import face_area_vectors, recomputed_corner_normals
+from tuckercodec.io.gltf.normals import recomputed_corner_normals
 from tuckercodec.io.samples import sample_path
 from tuckercodec.model.attributes import (
     CORNER,
@@ -33,6 +33,7 @@ from tuckercodec.model.attributes import (
     Field,
     corner_vertices,
 )
+from tuckercodec.model.normals import face_area_normals
 
 FACES = np.array([[0, 1, 2], [0, 2, 3], [1, 4, 2], [2, 4, 5], [3, 2, 5]])
 
@@ -159,7 +160,7 @@ def test_an_animated_mesh_s_targets_hold_each_frame_s_recomputed_normals(tmp_pat
         [[[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]] for a in angles]
     )
     vertices = np.einsum("fij,kj->fki", turns, cube)
-    area = face_area_vectors(cube, quads)
+    area = face_area_normals(cube, quads)
     authored = _unit(np.repeat(area, 4, axis=0))  # one normal per corner: the face's
     normal = Attribute("N", CORNER, authored, role="normal")
     seq = MeshSequence(vertices, quads, attributes=[normal])
@@ -179,6 +180,26 @@ def test_an_animated_mesh_s_targets_hold_each_frame_s_recomputed_normals(tmp_pat
     # the triangles are the quads' fans, corners 0, 1, 2 then 0, 2, 3 of each
     fans = (np.arange(6)[:, None] * 4 + np.array([0, 1, 2, 0, 2, 3])[None]).reshape(-1)
     assert np.array_equal(read.values[corner_vertices(back.faces)], authored[fans])
+
+
+def test_recomputed_corner_normals_follow_each_vertex_s_own_faces() -> None:
+    """A sheet authored flat with one normal row for all its corners (an exporter that merges
+    equal normals), folded: each corner gets the normal of its own vertex's faces, not one
+    average of the sheet (glTF writes a normal per corner, it need not keep the shared rows);
+    a face normal indexed the same way gives each face its own."""
+    points = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 1], [2, 1, 1]], float)
+    faces = np.array([[0, 1, 2, 3], [1, 4, 5, 2]])  # folded along the edge 1-2
+    up = np.array([[0, 0, 1]], np.float32)
+    one_row = Attribute("N", CORNER, up, np.zeros(8, dtype=np.int64), role="normal")
+    weighted = face_area_normals(points, faces)
+    flat = weighted / np.linalg.norm(weighted, axis=1, keepdims=True)
+    fold = (weighted[0] + weighted[1]) / np.linalg.norm(weighted[0] + weighted[1])
+    by_vertex = np.array([flat[0], fold, fold, flat[0], flat[1], flat[1]])
+    result = recomputed_corner_normals(points, faces, one_row)
+    np.testing.assert_allclose(result, by_vertex[corner_vertices(faces)], atol=1e-12)
+    per_face = Attribute("N", FACE, up, np.zeros(2, dtype=np.int64), role="normal")
+    result = recomputed_corner_normals(points, faces, per_face)
+    np.testing.assert_allclose(result, np.repeat(flat, 4, axis=0), atol=1e-12)
 
 
 def test_what_gltf_cannot_keep_is_reported() -> None:

@@ -14,9 +14,10 @@ import pytest
 
 from tuckercodec import Attribute, FaceSet, Field, InputError, MeshSequence
 from tuckercodec.io import load_sequence, open_frames, save_sequence
-from tuckercodec.io.alembic_plan import _recomputed, cannot_keep
+from tuckercodec.io.alembic_plan import cannot_keep, per_frame_normals
 from tuckercodec.io.registry import format_named
 from tuckercodec.model.attributes import corner_faces, corner_vertices
+from tuckercodec.model.normals import recomputed_normals
 
 pytest.importorskip("alembic3d", reason="alembic3d (the 'alembic' extra) is not installed")
 import imath
@@ -296,19 +297,12 @@ def test_params_that_do_not_fit_the_mesh_are_refused_naming_file_and_param(
 # normals per frame
 
 
-def test_recomputed_normals_follow_the_frame_and_keep_hard_edges():
-    # two triangles folded along the edge 1-2: flat corners at vertex 1 and 2 split by face
-    faces = np.array([[0, 1, 2], [2, 1, 3]])
-    points = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 1]], dtype=np.float64)
-    up = np.array([0, 0, 1], dtype=np.float32)
-    hard = Attribute(
-        "N", "corner", np.array([up] * 3 + [[1, 1, 1]] * 3, np.float32), None, "normal"
-    )
-    values = _recomputed(points, faces, hard)
-    assert np.allclose(values[:3], [0, 0, 1])
-    second = np.cross(points[1] - points[2], points[3] - points[2])
-    assert np.allclose(values[3:], second / np.linalg.norm(second))
-    smooth = Attribute("N", "vertex", np.tile(up, (4, 1)), None, "normal")
-    shared = _recomputed(points, faces, smooth)
-    assert np.allclose(np.linalg.norm(shared, axis=1), 1)
-    assert np.allclose(shared[0], [0, 0, 1]) and not np.allclose(shared[1], [0, 0, 1])
+def test_per_frame_normals_keep_frame_0_s_bits_and_recompute_the_others():
+    seq = rich_sequence()
+    normal = seq.attribute_named("normals")
+    frames = per_frame_normals(seq, normal)
+    assert frames.shape == (3, *normal.values.shape) and frames.dtype == np.float32
+    assert frames[0].tobytes() == normal.values.tobytes()
+    for frame in (1, 2):
+        expected = recomputed_normals(seq.vertices[frame], seq.faces, normal)
+        assert np.array_equal(frames[frame], expected)

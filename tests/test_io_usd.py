@@ -120,7 +120,7 @@ def test_a_point_sequence_round_trips(tmp_path, suffix):
     save_sequence(seq, tmp_path / f"p{suffix}")
     back = load_sequence(tmp_path / f"p{suffix}")
     assert exact(back, seq) and back.faces.shape == (0, 3)
-    assert _usdchecker_errors(tmp_path / f"p{suffix}") == []
+    assert usdchecker_errors(tmp_path / f"p{suffix}") == []
 
 
 def test_nothing_is_replaced_without_overwrite(cloth, tmp_path):
@@ -138,7 +138,7 @@ def test_nothing_is_replaced_without_overwrite(cloth, tmp_path):
 # usdchecker
 
 
-def _usdchecker_errors(path: Path) -> list[str]:
+def usdchecker_errors(path: Path) -> list[str]:
     """What ``usdchecker --useNewValidationFramework`` reports for the file, errors and
     warnings: the usd-core wheel ships no usdchecker command (nor, since 25.x, the Python
     ComplianceChecker), so this is that command's code path run directly: every registered
@@ -160,7 +160,7 @@ def _usdchecker_errors(path: Path) -> list[str]:
 def test_usdchecker_finds_no_error_or_warning_in_written_files(tmp_path, suffix):
     path = tmp_path / f"poly{suffix}"
     save_sequence(polygon_sequence(), path)
-    assert _usdchecker_errors(path) == []
+    assert usdchecker_errors(path) == []
 
 
 def test_usdchecker_does_find_errors_in_a_stage_that_lacks_them(tmp_path):
@@ -169,7 +169,7 @@ def test_usdchecker_does_find_errors_in_a_stage_that_lacks_them(tmp_path):
     stage = Usd.Stage.CreateNew(str(path))
     UsdGeom.Mesh.Define(stage, "/m")
     stage.Save()
-    found = " ".join(_usdchecker_errors(path))
+    found = " ".join(usdchecker_errors(path))
     for rule in ("MissingUpAxisMetadata", "MissingMetersPerUnitMetadata", "MissingDefaultPrim"):
         assert rule in found
 

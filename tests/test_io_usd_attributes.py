@@ -16,10 +16,10 @@ from tuckercodec.io import load_sequence, open_frames, save_sequence
 from tuckercodec.io.registry import format_named
 
 pxr = pytest.importorskip("pxr", reason="usd-core (the 'usd' extra) is not installed")
-from pxr import Sdf, Usd, UsdGeom, UsdValidation, Vt  # noqa: E402
+from pxr import Sdf, Usd, UsdGeom, Vt  # noqa: E402
 
+from tests.test_io_usd import usdchecker_errors  # noqa: E402
 from tuckercodec.io import usd  # noqa: E402
-from tuckercodec.io.usd_authoring import recomputed_normals  # noqa: E402
 
 SUFFIXES = [".usda", ".usdc", ".usd"]
 #: A quad and a triangle over 5 vertices, then a quad and a triangle again.
@@ -171,16 +171,7 @@ def test_pxr_reads_the_written_primvars_subsets_and_velocities(tmp_path):
 def test_usds_validators_find_nothing_in_a_file_with_attributes(tmp_path, suffix):
     path = tmp_path / f"checked{suffix}"
     save_sequence(carrying_sequence(), path)
-    registry = UsdValidation.ValidationRegistry()
-    names = [
-        meta.name
-        for meta in registry.GetAllValidatorMetadata()
-        if "UsdzValidators" not in meta.GetKeywords()
-        and meta.name != "usdUtilsValidators:RootPackageValidator"
-    ]
-    context = UsdValidation.ValidationContext(registry.GetOrLoadValidatorsByName(names))
-    found = [error.GetErrorAsString() for error in context.Validate(Usd.Stage.Open(str(path)))]
-    assert found == []
+    assert usdchecker_errors(path) == []
 
 
 # ------------------------------------------------------------------------------------------
@@ -452,18 +443,3 @@ def test_written_normals_turn_with_the_surface_and_keep_their_hard_edges(tmp_pat
     assert np.allclose(turned, flat @ turn.T.astype(np.float32), atol=1e-6)
     assert np.array_equal(np.asarray(primvar.GetIndices()), indices_of(normals))
     assert load_sequence(path).attribute_named("normals").same_as(normals)
-
-
-@pytest.mark.parametrize("domain", ["vertex", "corner", "face"])
-def test_recomputed_normals_are_unit_and_in_the_attributes_layout(domain):
-    seq = carrying_sequence(frames=1)
-    count = {"vertex": 7, "corner": CORNERS, "face": 4}[domain]
-    stored = np.tile(np.array([[0, 0, 1]], np.float64), (count, 1))
-    attribute = Attribute("normals", domain, stored, role="normal")
-    values = recomputed_normals(seq.vertices[0], seq.faces, attribute)
-    assert values.shape == stored.shape and values.dtype == np.float64
-    assert np.allclose(np.linalg.norm(values, axis=1), 1)
-    if domain == "corner":  # unindexed corners of a vertex that shared a value stay together
-        vertex = seq.faces[seq.faces >= 0]
-        for v in range(7):
-            assert np.allclose(values[vertex == v], values[vertex == v][0])

@@ -97,6 +97,41 @@ def test_face_domain_and_degenerate_faces() -> None:
     np.testing.assert_allclose(result, np.array([[0, 0, -1], [0.6, 0.8, 0.0]]))
 
 
+CUBE_COUNTS = {"vertex": 8, "corner": 24, "face": 6}
+
+
+@pytest.mark.parametrize("domain", ["vertex", "corner", "face"])
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_every_domain_gives_unit_rows_in_the_stored_layout(domain: str, dtype: type) -> None:
+    """Not indexed: one row per element, of the stored dtype, unit length; a corner normal
+    stored equal at all corners of a vertex comes back equal at them (smooth)."""
+    count = CUBE_COUNTS[domain]
+    stored = Attribute(
+        "n", domain, np.tile(np.array([[0, 0, 1]], dtype), (count, 1)), None, "normal"
+    )
+    result = recomputed_normals(CUBE @ rotation(0.4).T, CUBE_FACES, stored)
+    assert result.shape == (count, 3) and result.dtype == dtype
+    np.testing.assert_allclose(np.linalg.norm(result, axis=1), 1, rtol=1e-6)
+    if domain == "corner":
+        vertex_of = CUBE_FACES.reshape(-1)
+        for vertex in range(8):
+            assert np.ptp(result[vertex_of == vertex], axis=0).max() == 0
+
+
+@pytest.mark.parametrize("domain", ["vertex", "corner", "face"])
+def test_indexed_rows_no_element_uses_keep_their_value(domain: str) -> None:
+    """Indices that leave out the last rows (an OBJ vn table or a USD indexed primvar may
+    hold more values than are used): all rows come back, the unused ones as stored."""
+    count = CUBE_COUNTS[domain]
+    stored = np.tile(np.array([[0.6, 0.8, 0.0]]), (count + 2, 1))
+    indexed = Attribute("n", domain, stored, np.arange(count), "normal")
+    result = recomputed_normals(CUBE, CUBE_FACES, indexed)
+    assert result.shape == stored.shape
+    np.testing.assert_array_equal(result[count:], stored[count:])
+    exact = Attribute("n", domain, stored[:count], np.arange(count), "normal")
+    np.testing.assert_array_equal(result[:count], recomputed_normals(CUBE, CUBE_FACES, exact))
+
+
 def test_a_normal_attribute_of_the_wrong_size_is_refused() -> None:
     stored = Attribute("n", "vertex", np.zeros((3, 3)), role="normal")
     with pytest.raises(ValueError, match="3 vertex values, the mesh has 8"):

@@ -11,7 +11,7 @@ from tools.generate import textured_character
 from tuckercodec.io import load_sequence
 
 pytest.importorskip("pxr", reason="usd-core (the 'usd' extra) is not installed")
-from pxr import Usd, UsdValidation
+from tests.test_io_usd import usdchecker_errors
 
 
 @pytest.fixture(scope="module")
@@ -43,16 +43,7 @@ def test_the_character_reads_back_with_everything_the_demo_needs(stage_path):
 
 
 def test_usds_validators_find_nothing(stage_path):
-    registry = UsdValidation.ValidationRegistry()
-    names = [
-        meta.name
-        for meta in registry.GetAllValidatorMetadata()
-        if "UsdzValidators" not in meta.GetKeywords()
-        and meta.name != "usdUtilsValidators:RootPackageValidator"
-    ]
-    context = UsdValidation.ValidationContext(registry.GetOrLoadValidatorsByName(names))
-    stage = Usd.Stage.Open(str(stage_path))
-    assert [error.GetErrorAsString() for error in context.Validate(stage)] == []
+    assert usdchecker_errors(stage_path) == []
 
 
 def test_an_existing_output_is_kept_without_force(stage_path, capsys):

@@ -23,7 +23,6 @@ mesh's user property :data:`~.alembic_attached.NAMES_KEY`.
 
 from __future__ import annotations
 
-import importlib
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -32,16 +31,14 @@ import numpy as np
 from ..model.attributes import (
     COLOR,
     CORNER,
-    FACE,
     NORMAL,
     UV,
     VELOCITY,
     VERTEX,
     Attribute,
     FaceSet,
-    corner_faces,
-    corner_vertices,
 )
+from ..model.normals import recomputed_normals
 from ..model.sequence import MeshSequence
 from .common.polygons import reversed_corners
 
@@ -236,64 +233,10 @@ def _plan_face_sets(sequence: MeshSequence, result: Plan) -> None:
 
 def per_frame_normals(sequence: MeshSequence, attribute: Attribute) -> np.ndarray:
     """The normal attribute's values for each frame, (F, rows, 3) of its type: frame 0's as
-    stored, later frames' recomputed from their positions in the attribute's layout (the
-    model's ``recomputed_normals``, where the model has it; else :func:`_recomputed`)."""
-    frames = [attribute.values]
-    if sequence.frame_count > 1:
-        recompute = _recompute_function()
-        for frame in range(1, sequence.frame_count):
-            values = recompute(sequence.vertices[frame], sequence.faces, attribute)
-            frames.append(np.asarray(values, dtype=attribute.values.dtype))
-    return np.stack(frames)
-
-
-def _recompute_function() -> Any:
-    """``tuckercodec.model.normals.recomputed_normals``, or this module's stand-in until the
-    model has it."""
-    try:
-        module = importlib.import_module("tuckercodec.model.normals")
-    except ImportError:
-        return _recomputed
-    return getattr(module, "recomputed_normals", _recomputed)
-
-
-def _recomputed(positions: np.ndarray, faces: np.ndarray, attribute: Attribute) -> np.ndarray:
-    """Normals of ``positions`` in ``attribute``'s layout: area-weighted face normals (Newell's),
-    summed over what shares a value (an indexed row; a vertex; or for unindexed corners, the
-    corners of a vertex that share a stored normal, so hard edges stay hard), normalised; a
-    value with no area keeps its stored one."""
-    points = np.asarray(positions, dtype=np.float64)
-    vertices, face_of = corner_vertices(faces), corner_faces(faces)
-    degrees = (np.asarray(faces) >= 0).sum(axis=1)
-    starts = np.concatenate([[0], np.cumsum(degrees)])
-    local = np.arange(vertices.size) - starts[face_of]
-    following = vertices[starts[face_of] + (local + 1) % degrees[face_of]]
-    face_normals = np.zeros((len(degrees), 3))
-    np.add.at(face_normals, face_of, np.cross(points[vertices], points[following]))
-    if attribute.domain == FACE:
-        element = face_normals
-    elif attribute.domain == VERTEX:
-        element = np.zeros((len(points), 3))
-        np.add.at(element, vertices, face_normals[face_of])
-    else:
-        element = face_normals[face_of]
-    if attribute.indices is not None:
-        groups, rows = attribute.indices, len(attribute.values)
-    elif attribute.domain == CORNER:
-        keys = np.column_stack([vertices, attribute.values.view(_bits(attribute))])
-        _, groups = np.unique(keys, axis=0, return_inverse=True)
-        groups, rows = groups.reshape(-1), int(groups.max(initial=-1)) + 1
-    else:
-        groups, rows = np.arange(len(element)), len(element)
-    summed = np.zeros((rows, 3))
-    np.add.at(summed, groups, element)
-    if attribute.indices is None and attribute.domain == CORNER:
-        summed = summed[groups]
-    length = np.linalg.norm(summed, axis=1, keepdims=True)
-    stored = attribute.values.astype(np.float64)
-    return np.where(length > 0, summed / np.where(length > 0, length, 1), stored)
-
-
-def _bits(attribute: Attribute) -> np.dtype[Any]:
-    """An integer type of the values' size, to compare them bit for bit."""
-    return np.dtype(np.int32 if attribute.values.dtype.itemsize == 4 else np.int64)
+    stored, later frames' recomputed from their positions in the attribute's layout
+    (:func:`~tuckercodec.model.normals.recomputed_normals`)."""
+    later = [
+        recomputed_normals(positions, sequence.faces, attribute)
+        for positions in sequence.vertices[1:]
+    ]
+    return np.stack([attribute.values, *later])

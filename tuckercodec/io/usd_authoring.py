@@ -11,8 +11,9 @@ GeomSubsets, fields as time-sampled primvars (``velocities`` as the mesh's own a
   ``normals`` attribute and which, unlike it, may be indexed (the hard edges).
 * On an animated mesh (two or more frames) a normal attribute is time-sampled: frame 0's sample
   is its stored values, bit for bit (what a reader takes), each later frame's is recomputed from
-  that frame's positions with the same indices (:func:`recomputed_normals`): the normals turn
-  with the surface. A single frame's are written as they are.
+  that frame's positions with the same indices
+  (:func:`~tuckercodec.model.normals.recomputed_normals`): the normals turn with the surface.
+  A single frame's are written as they are.
 * A field is ``primvars:NAME`` sampled at every frame's time code (interpolation ``vertex`` or
   ``uniform``), except a float32 3-component vertex field of role velocity named
   ``velocities``, which is the mesh's ``velocities`` attribute (``vector3f[]``), sampled so.
@@ -46,9 +47,8 @@ from ..model.attributes import (
     VERTEX,
     Attribute,
     Field,
-    corner_faces,
-    corner_vertices,
 )
+from ..model.normals import recomputed_normals
 from ..model.sequence import MeshSequence
 from .usd_primvars import VELOCITIES, attribute_role
 
@@ -236,8 +236,9 @@ def _write_attribute(
         return
     for frame, code in enumerate(codes):
         values = attribute.values
-        if frame:  # frame 0's are the stored normals, bit for bit
-            values = recomputed_normals(vertices[frame], seq.faces, attribute)
+        if frame:  # frame 0's are the stored normals, bit for bit; all samples of one type
+            fresh = recomputed_normals(vertices[frame], seq.faces, attribute)
+            values = fresh.astype(attribute.values.dtype, copy=False)
         primvar.Set(_vt_array(pxr, values), pxr.Usd.TimeCode(code))
 
 
@@ -273,53 +274,3 @@ def _write_face_sets(pxr: SimpleNamespace, mesh: Any, seq: MeshSequence, names: 
             complete = joined.size == face_count
             kind = UsdGeom.Tokens.partition if complete else UsdGeom.Tokens.nonOverlapping
         UsdGeom.Subset.SetFamilyType(mesh, family, kind)
-
-
-def recomputed_normals(positions: np.ndarray, faces: np.ndarray, attribute: Attribute) -> Any:
-    """Normals of ``attribute``'s layout (its values' rows, its dtype) recomputed from
-    ``positions`` (K, 3): each row the normalised sum of the area-weighted normals of the faces
-    whose elements use it, so that rows shared across faces stay smooth and rows not shared
-    (hard edges) stay apart; an unindexed corner normal is smooth across the corners of its
-    vertex that shared its value. A row no element uses, or of zero length, keeps its value.
-
-    The model's shared ``recomputed_normals`` (``tuckercodec.model.normals``) takes this
-    one's place where it exists: the same arguments and result."""
-    points = np.asarray(positions, dtype=np.float64)
-    table = np.asarray(faces)
-    first = table[:, :1]
-    ring = points[np.where(table >= 0, table, first)] - points[first]
-    # Newell's sum: padding repeats the first corner, whose edges add nothing
-    face_normals = np.cross(ring, np.roll(ring, -1, axis=1)).sum(axis=1)
-    rows = attribute.values.shape[0]
-    if attribute.domain == FACE:
-        owner, contribution = np.arange(table.shape[0]), face_normals
-    else:  # each corner brings its face's normal to its vertex, or to itself
-        contribution = face_normals[corner_faces(table)]
-        owner = corner_vertices(table)
-        if attribute.domain == CORNER:
-            owner = np.arange(contribution.shape[0])
-    if attribute.indices is not None:
-        owner = attribute.indices[owner]
-    elif attribute.domain == CORNER:  # smooth across a vertex's corners of the same value
-        keys = np.concatenate(
-            [corner_vertices(table)[:, None].view(np.uint8), attribute.values.view(np.uint8)],
-            axis=1,
-        )
-        _, group = np.unique(keys, axis=0, return_inverse=True)
-        sums = _summed(group.reshape(-1), contribution, int(group.max(initial=-1)) + 1)
-        return _normalised(sums[group.reshape(-1)], attribute.values)
-    return _normalised(_summed(owner, contribution, rows), attribute.values)
-
-
-def _summed(owner: np.ndarray, contribution: np.ndarray, rows: int) -> np.ndarray:
-    return np.stack(
-        [np.bincount(owner, contribution[:, axis], minlength=rows) for axis in range(3)], axis=1
-    )
-
-
-def _normalised(sums: np.ndarray, stored: np.ndarray) -> Any:
-    length = np.linalg.norm(sums, axis=1)
-    kept = length > 0
-    result = stored.astype(np.float64)
-    result[kept] = sums[kept] / length[kept, None]
-    return result.astype(stored.dtype)

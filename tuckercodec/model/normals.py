@@ -76,12 +76,14 @@ def recomputed_normals(
             f"values, the mesh has {len(element_normals)}"
         )
     if attribute.indices is not None:
-        rows = attribute.indices
+        # every stored row, also those past the largest index (they keep their value)
+        rows, count = attribute.indices, len(stored)
     elif attribute.domain == CORNER:
         rows = _smoothing_groups(corner_vertices(table), stored)
+        count = int(rows.max(initial=-1)) + 1
     else:
-        rows = np.arange(len(element_normals))
-    sums = _summed(element_normals, rows, int(rows.max(initial=-1)) + 1)
+        rows, count = np.arange(len(element_normals)), len(element_normals)
+    sums = _summed(element_normals, rows, count)
     if attribute.indices is None and attribute.domain == CORNER:
         sums = sums[rows]  # back from the smoothing groups to one row per corner
     lengths = np.linalg.norm(sums, axis=1)

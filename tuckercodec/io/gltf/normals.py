@@ -1,70 +1,38 @@
-"""Normals recomputed from a frame's positions with the split structure of the authored ones, for
-the frames of an animated mesh after the first (the first keeps its authored normals).
+"""Each corner's normal recomputed from a frame's positions, for the frames of an animated mesh
+after the first (the first keeps its authored normals): the shared
+:func:`~tuckercodec.model.normals.recomputed_normals` expanded to one row per corner, the
+layout the glTF writers need (a written vertex is a corner's).
 
-Each face's normal is its area vector (Newell's formula, which polygons share with triangles);
-the corners that share a normal in the authored attribute (the same vertex for a per-vertex
-normal, the same index for an indexed one, the same vertex and value for a per-corner one, the
-same face for a per-face one) get the unit sum of their faces' area vectors, so hard edges stay
-hard. Where that sum is zero (degenerate faces) the authored normal is kept.
-
-This is the writer's own until the shared ``tuckercodec.model.normals.recomputed_normals``
-exists; it answers per corner, the layout the glTF writer needs.
+glTF writes a normal per written vertex, so it is not held to the authored rows: the attribute
+is given one row per element first (its indices resolved). A vertex's normal is then smoothed
+over its own faces, a face's is its own, and a corner's over the corners of its vertex with the
+same authored value (the hard edges), rather than over every element that happened to share a
+row of equal values.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ...model.attributes import CORNER, FACE, VERTEX, Attribute, corner_faces, corner_vertices
-
-
-def face_area_vectors(positions: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Each face's area vector (M, 3): its normal times its area (Newell)."""
-    faces = np.asarray(faces)
-    total = np.zeros((faces.shape[0], 3))
-    first = faces[:, 0]
-    for column in range(faces.shape[1]):
-        here = faces[:, column]
-        following = faces[:, column + 1] if column + 1 < faces.shape[1] else first
-        following = np.where(following >= 0, following, first)  # the row's end wraps to 0
-        real = here >= 0
-        total[real] += np.cross(positions[here[real]], positions[following[real]])
-    return total / 2
+from ...model.attributes import FACE, VERTEX, Attribute, corner_faces, corner_vertices
+from ...model.normals import recomputed_normals
 
 
 def recomputed_corner_normals(
     positions: np.ndarray, faces: np.ndarray, attribute: Attribute
 ) -> np.ndarray:
-    """The normals of ``positions`` (K, 3) at every corner (C, 3), float64, smoothed over the
-    corners that share a normal in ``attribute`` (module docstring)."""
-    corners = corner_vertices(faces)
-    face_of = corner_faces(faces)
-    authored = attribute.element_values().astype(np.float64)
+    """The normals of ``positions`` (K, 3) at every corner (C, 3), float64, smoothed as the
+    module docstring says; a corner whose faces have no area keeps its authored normal."""
+    # float64 rows: the result keeps that precision; equal float32 values stay equal
+    own_rows = Attribute(
+        attribute.name,
+        attribute.domain,
+        attribute.element_values().astype(np.float64),
+        role=attribute.role,
+    )
+    values = recomputed_normals(positions, faces, own_rows)
     if attribute.domain == VERTEX:
-        groups = corners
-        fallback = authored[corners]
-    elif attribute.domain == FACE:
-        groups = face_of
-        fallback = authored[face_of]
-    else:
-        assert attribute.domain == CORNER
-        fallback = authored
-        if attribute.indices is not None:
-            groups = attribute.indices
-        else:
-            keyed = np.column_stack([corners, _row_ids(attribute.values)])
-            groups = np.unique(keyed, axis=0, return_inverse=True)[1].reshape(-1)
-    area = face_area_vectors(positions, faces)
-    sums = np.zeros((int(groups.max(initial=-1)) + 1, 3))
-    np.add.at(sums, groups, area[face_of])
-    per_corner = sums[groups]
-    length = np.linalg.norm(per_corner, axis=1, keepdims=True)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        unit = per_corner / length
-    return np.where(length > 0, unit, fallback)
-
-
-def _row_ids(values: np.ndarray) -> np.ndarray:
-    values = np.ascontiguousarray(values)
-    rows = values.view(np.dtype((np.void, values.dtype.itemsize * values.shape[1]))).reshape(-1)
-    return np.unique(rows, return_inverse=True)[1].reshape(-1)
+        return values[corner_vertices(faces)]
+    if attribute.domain == FACE:
+        return values[corner_faces(faces)]
+    return values

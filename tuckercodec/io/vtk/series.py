@@ -3,10 +3,8 @@ at a time) and written (:func:`write_pvd`)."""
 
 from __future__ import annotations
 
-import importlib
 import itertools
 import os
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from xml.etree import ElementTree
@@ -15,6 +13,7 @@ import numpy as np
 
 from ...errors import InputError
 from ...model.attributes import FACE, NORMAL, VERTEX, Field
+from ...model.normals import recomputed_normals
 from ...model.sequence import MeshSequence
 from ...model.sources import FrameSource
 from ...system.atomic import atomic_folder, refuse_existing, write_atomic
@@ -318,33 +317,21 @@ def cannot_keep(seq: MeshSequence) -> list[str]:
 
 
 def _moving_normals(seq: MeshSequence, targets: list[TargetArray], frame: int) -> list[TargetArray]:
-    """The arrays of ``frame``: static normals are the stored ones at frame 0 and, where the
-    normals helper is there, recomputed from each later frame's positions (the normals of a
-    moving mesh move with it)."""
-    recompute = _normals_helper()
-    if frame == 0 or recompute is None:
+    """The arrays of ``frame``: static normals are the stored ones at frame 0 and recomputed
+    from each later frame's positions (the normals of a moving mesh move with it)."""
+    if frame == 0:
         return targets
     moved = []
     for target in targets:
         if target.static and target.role == NORMAL and target.domain == VERTEX:
             attribute = seq.attribute_named(target.name)
-            values = np.asarray(recompute(seq.vertices[frame], seq.faces, attribute))
+            values = recomputed_normals(seq.vertices[frame], seq.faces, attribute)
             if attribute.indices is not None:
                 values = values[attribute.indices]
-            values = values.astype(attribute.values.dtype, copy=False)
+            values = values.astype(attribute.values.dtype, copy=False)  # each frame's one type
             target = TargetArray(target.name, target.domain, target.role, values, None)
         moved.append(target)
     return moved
-
-
-def _normals_helper() -> Callable[..., np.ndarray] | None:
-    """``tuckercodec.model.normals.recomputed_normals``, or None before it lands."""
-    try:
-        module = importlib.import_module("tuckercodec.model.normals")
-    except ImportError:
-        return None
-    helper: Callable[..., np.ndarray] = module.recomputed_normals
-    return helper
 
 
 def _index_xml(folder: str, names: list[str], codes: np.ndarray) -> bytes:
