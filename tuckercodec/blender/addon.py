@@ -16,6 +16,12 @@ any file, and decoding it costs time and memory. A file that fails is not opened
 after frame, until the user asks again. Inside Blender the decoder's limits are
 :data:`~tuckercodec.blender.meshes.BLENDER_LIMITS`.
 
+*Layers*: an import gives the mesh the file's UV maps, colour and other attributes, custom
+normals and material slots (its ``materialBind`` face sets), and sets its animated fields as
+attributes at every frame it shows; an export keeps the same (:mod:`.mesh_layers`), an
+attribute that changes over the frames becoming a field, and names what it cannot keep (edge
+attributes, strings, matrices). Faces are imported smooth unless the file says which are flat.
+
 *Export* (``bpy.ops.export_scene.tkc``) encodes the active object's evaluated mesh (armature,
 shape keys, modifiers, simulations: whatever Blender evaluates) over the scene's frame range, in
 object space, and reports the error and size reached; a change of topology is refused.
