@@ -4,6 +4,7 @@ when present (a test that needs an absent one is skipped, saying why)."""
 from __future__ import annotations
 
 import functools
+import os
 from pathlib import Path
 from typing import Any
 
@@ -14,7 +15,12 @@ import tuckercodec
 from tuckercodec import EncodeResult, MeshSequence
 from tuckercodec.io.samples import sheet_triangles, wave_sheet
 
-SHARED_DATA = Path(__file__).resolve().parents[3] / "shared" / "data"
+#: ../shared/data beside the repository, or the folder TUCKERCODEC_SHARED_DATA names (a git
+#: worktree elsewhere than the repository's folder).
+SHARED_DATA = Path(
+    os.environ.get("TUCKERCODEC_SHARED_DATA")
+    or Path(__file__).resolve().parents[3] / "shared" / "data"
+)
 
 
 def shared_file(name: str) -> Path:

@@ -16,6 +16,12 @@ any file, and decoding it costs time and memory. A file that fails is not opened
 after frame, until the user asks again. Inside Blender the decoder's limits are
 :data:`~tuckercodec.blender.meshes.BLENDER_LIMITS`.
 
+*Layers*: an import gives the mesh the file's UV maps, colour and other attributes, custom
+normals and material slots (its ``materialBind`` face sets), and sets its animated fields as
+attributes at every frame it shows; an export keeps the same (:mod:`.mesh_layers`), an
+attribute that changes over the frames becoming a field, and names what it cannot keep (edge
+attributes, strings, matrices). Faces are imported smooth unless the file says which are flat.
+
 *Export* (``bpy.ops.export_scene.tkc``) encodes the active object's evaluated mesh (armature,
 shape keys, modifiers, simulations: whatever Blender evaluates) over the scene's frame range, in
 object space, and reports the error and size reached; a change of topology is refused.
@@ -41,6 +47,8 @@ from ..encoder.options import DEFAULT_TARGET_KG
 from ..errors import TuckerCodecError
 from ..io.common.polygons import faces_from_polygons
 from ..system.atomic import write_atomic
+from .layers import may_animate
+from .mesh_layers import put_fields, put_layers, read_layers, read_values
 from .meshes import (
     BAKE_FRAMES,
     BLENDER_LIMITS,
@@ -141,6 +149,8 @@ def show_frame(obj: Any, scene_frame: int) -> int:
     if cached[2] != frame:
         positions = decoder.frame(frame).astype(np.float32)
         mesh.vertices.foreach_set("co", positions.reshape(-1))
+        if decoder.field_names:  # the animated attributes follow the positions
+            put_fields(mesh, decoder.fields([frame]))
         mesh.update()
     _OPEN[key] = (path, decoder, frame)
     return frame
@@ -234,12 +244,17 @@ class EnablePlayback(bpy.types.Operator):
 # import
 
 
-def _new_object(context: Any, name: str, decoder: Decoder) -> Any:
-    """A mesh object with the file's vertex order and faces, showing frame 0, linked into the
-    active collection, selected and active."""
+def _new_object(context: Any, name: str, decoder: Decoder) -> tuple[Any, list[str]]:
+    """A mesh object with the file's vertex order and faces (in the file's order: Blender's
+    loops are the file's corners), its attributes, face sets and frame 0 of its fields
+    (:func:`~.mesh_layers.put_layers`), showing frame 0, linked into the active collection,
+    selected and active; and the notes on what was not imported as it is."""
     faces = [row[row >= 0].tolist() for row in decoder.faces]
     mesh = bpy.data.meshes.new(name)
     mesh.from_pydata(decoder.frame(0).astype(np.float32), [], faces)
+    notes = put_layers(mesh, decoder.attributes, decoder.face_sets, decoder.faces)
+    if decoder.field_names:
+        notes += put_fields(mesh, decoder.fields([0]))
     mesh.update()
     obj = bpy.data.objects.new(name, mesh)
     context.collection.objects.link(obj)
@@ -247,7 +262,7 @@ def _new_object(context: Any, name: str, decoder: Decoder) -> Any:
         other.select_set(False)
     obj.select_set(True)
     context.view_layer.objects.active = obj
-    return obj
+    return obj, notes
 
 
 def _stored_path(source: Path) -> str:
@@ -355,7 +370,7 @@ class ImportTKC(bpy.types.Operator, ImportHelper):
                 bake_span(decoder, first, self.max_bake_frames)
                 if cache.exists() and not self.overwrite:
                     raise FileExistsError(f"{cache} already exists (set Overwrite Cache)")
-            obj = _new_object(context, source.stem, decoder)
+            obj, notes = _new_object(context, source.stem, decoder)
             obj[PATH_PROPERTY] = _stored_path(source)
             obj[FIRST_FRAME_PROPERTY] = first
             # the object's own space is the file's: an export of it says so again
@@ -388,6 +403,8 @@ class ImportTKC(bpy.types.Operator, ImportHelper):
             self.report({"ERROR"}, naming(source, error))
             return {"CANCELLED"}
         rate = "unknown rate" if info.frame_rate is None else f"{info.frame_rate:g} fps"
+        for note in notes:
+            self.report({"WARNING"}, f"{source.name}: {note}")
         self.report(
             {"INFO"},
             f"Imported {source.name}: {info.frames} frames of {info.vertices} vertices, "
@@ -413,9 +430,12 @@ def _mesh_arrays(mesh: Any) -> tuple[np.ndarray, np.ndarray]:
     return coordinates.reshape(-1, 3), faces_from_polygons(totals, loops, len(mesh.vertices))
 
 
-def gather_frames(context: Any, obj: Any) -> ExportFrames:
+def gather_frames(context: Any, obj: Any, layers: bool = True) -> ExportFrames:
     """``obj``'s evaluated mesh at every frame of the scene's range, the scene's current frame
-    restored afterwards. Raises ``InputError`` naming the frame where the topology changes."""
+    restored afterwards; with ``layers``, the first frame's attributes, custom normals and
+    material slots (:func:`~.mesh_layers.read_layers`) and, at every frame, the values of the
+    attributes that may be animated. Raises ``InputError`` naming the frame where the topology
+    changes."""
     scene = context.scene
     frames = ExportFrames(obj.name)
     current = scene.frame_current
@@ -426,11 +446,32 @@ def gather_frames(context: Any, obj: Any) -> ExportFrames:
             mesh = evaluated.to_mesh()
             try:
                 frames.add(number, *_mesh_arrays(mesh))
+                if layers:
+                    _gather_layers(frames, evaluated, mesh)
             finally:
                 evaluated.to_mesh_clear()
     finally:
         scene.frame_set(current)
     return frames
+
+
+def _gather_layers(frames: ExportFrames, evaluated: Any, mesh: Any) -> None:
+    """At the first frame, the mesh's layers; at each, the values of those that may change (an
+    attribute gone or resized at a frame stays static, frame 0's values)."""
+    if len(frames.frames) == 1:
+        slots = [slot.material.name if slot.material else None for slot in evaluated.material_slots]
+        kept = read_layers(mesh, slots)
+        frames.attributes, frames.face_sets, frames.dropped = kept
+        frames.animated = {a.name: [] for a in kept.attributes if may_animate(a)}
+    for name, gathered in list(frames.animated.items()):
+        layer = mesh.attributes.get(name)
+        values = None if layer is None else read_values(layer)
+        if values is None or (
+            gathered and (values.shape, values.dtype) != (gathered[0].shape, gathered[0].dtype)
+        ):
+            del frames.animated[name]
+        else:
+            gathered.append(values)
 
 
 class ExportTKC(bpy.types.Operator, ExportHelper):
@@ -469,6 +510,15 @@ class ExportTKC(bpy.types.Operator, ExportHelper):
         default=False,
         description="Replace a file that exists (the file browser asks first)",
     )
+    keep_layers: BoolProperty(
+        name="UVs, Attributes and Materials",
+        default=True,
+        description=(
+            "Keep the UV maps, colour and other attributes (point, corner and face), custom "
+            "normals and material slots; attributes that change over the frames become "
+            "animated fields"
+        ),
+    )
 
     def invoke(self, context: Any, event: Any) -> set[str]:
         self.overwrite = True  # the file browser shows an existing name in red and asks
@@ -503,7 +553,8 @@ class ExportTKC(bpy.types.Operator, ExportHelper):
             # the object's space: an imported file's (its unit and axis, kept on the object),
             # else the scene's (Z up, its unit scale in metres unless it has no unit system)
             unit = None if units.system == "NONE" else units.scale_length
-            sequence = gather_frames(context, obj).sequence(
+            frames = gather_frames(context, obj, self.keep_layers)
+            sequence = frames.sequence(
                 render.fps / render.fps_base,
                 first_frame=scene.frame_start,  # the time codes: the scene's frame numbers
                 meters_per_unit=obj.get(UNIT_PROPERTY, unit),
@@ -514,6 +565,8 @@ class ExportTKC(bpy.types.Operator, ExportHelper):
         except (TuckerCodecError, OSError, ValueError) as error:
             self.report({"ERROR"}, naming(target, error))
             return {"CANCELLED"}
+        for dropped in frames.dropped:
+            self.report({"WARNING"}, f"{target.name}: not kept: {dropped}")
         report = result.report
         worst = "" if report.max_distance is None else f", worst vertex {report.max_distance:.6g}"
         self.report(

@@ -15,8 +15,10 @@ from ..decoder import Decoder
 from ..errors import InputError
 from ..format.limits import Limits
 from ..io.pointcache.pc2 import HEADER, SIGNATURE, VERSION
+from ..model.attributes import Attribute, FaceSet
 from ..model.sequence import MeshSequence
 from ..system.atomic import atomic_output
+from .layers import split_animated
 
 #: Blender's frame numbers run from -MAX_FRAME to MAX_FRAME (MINAFRAME and MAXFRAME in its
 #: source); the object keeps its first frame in a 32-bit custom property.
@@ -173,13 +175,20 @@ def scene_rate(frame_rate: float | None) -> tuple[int, float]:
 class ExportFrames:
     """The frames of an export, gathered one at a time with their topology checked against the
     first: every frame must have the first frame's vertices and faces (a change is refused,
-    naming the scene frame and the object)."""
+    naming the scene frame and the object). Beside them, the first frame's attributes and
+    face sets, and by name the values at every frame of the attributes that may be animated
+    (:attr:`animated`): those that change become fields."""
 
     def __init__(self, name: str) -> None:
         self.name = name
         self.frames: list[np.ndarray] = []
         self.faces: np.ndarray | None = None
         self._first_frame = 0
+        self.attributes: list[Attribute] = []
+        self.face_sets: list[FaceSet] = []
+        self.animated: dict[str, list[np.ndarray]] = {}
+        #: What the export cannot keep (edge attributes, strings...), named.
+        self.dropped: list[str] = []
 
     def add(self, scene_frame: int, vertices: np.ndarray, faces: np.ndarray) -> None:
         """One frame's vertices (K x 3 values) and (M, n) faces, at ``scene_frame``."""
@@ -206,10 +215,12 @@ class ExportFrames:
     ) -> MeshSequence:
         """The gathered frames as a sequence at ``frame_rate``: their time codes the scene's
         frame numbers from ``first_frame`` (a file imported again lands on the same frames),
-        with the unit and up axis of the object's space."""
+        with the unit and up axis of the object's space, the attributes and face sets, and the
+        attributes whose values changed over the frames as fields."""
         if self.faces is None:
             raise InputError(f"object {self.name!r}: no frame to export")
         codes = first_frame + np.arange(len(self.frames), dtype=np.float64)
+        static, fields = split_animated(self.attributes, self.animated)
         return MeshSequence(
             np.stack(self.frames),
             self.faces,
@@ -217,4 +228,7 @@ class ExportFrames:
             time_codes=codes,
             meters_per_unit=meters_per_unit,
             up_axis=up_axis,
+            attributes=static,
+            face_sets=self.face_sets,
+            fields=fields,
         )
