@@ -386,19 +386,29 @@ export function tuckerFrame(params, factors, f, out) {
   const { i, k } = /** @type {TuckerParams} */ (params.tucker);
   const { elements: n, components: c } = params;
   const { u1, u3, mean, basis } = factors;
-  const weights = new Float64Array(i * c);
-  for (let j = 0; j < i * c; j++) {
-    let sum = 0;
-    for (let b = 0; b < k; b++) sum += basis[j * k + b] * u3[f * k + b];
-    weights[j] = sum;
-  }
-  for (let e = 0; e < n; e++) {
+  // the frame's weights, component-major so that each value is a dot product of two rows
+  const weights = new Float64Array(c * i);
+  for (let a = 0; a < i; a++) {
     for (let x = 0; x < c; x++) {
       let sum = 0;
-      for (let a = 0; a < i; a++) sum += u1[e * i + a] * weights[a * c + x];
-      const at = e * c + x;
-      out[at] = sum + mean[f * c + x];
-      if (!Number.isFinite(out[at])) refuse(`section '${params.id}'`, `frame ${f}, ${params.domain} ${e}: a reconstructed value is not finite`);
+      for (let b = 0; b < k; b++) sum += basis[(a * c + x) * k + b] * u3[f * k + b];
+      weights[x * i + a] = sum;
+    }
+  }
+  const sums = new Float64Array(n * c); // binary64, then rounded to the type by out.set
+  for (let e = 0; e < n; e++) {
+    const row = e * i;
+    for (let x = 0; x < c; x++) {
+      const w = x * i;
+      let sum = 0;
+      for (let a = 0; a < i; a++) sum += u1[row + a] * weights[w + a];
+      sums[e * c + x] = sum + mean[f * c + x];
+    }
+  }
+  out.set(sums);
+  for (let at = 0; at < out.length; at++) {
+    if (!Number.isFinite(out[at])) {
+      refuse(`section '${params.id}'`, `frame ${f}, ${params.domain} ${Math.floor(at / c)}: a reconstructed value is not finite`);
     }
   }
   return out;
