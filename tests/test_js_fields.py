@@ -20,14 +20,16 @@ import tuckercodec
 from tests.support.compressed import Parts, deadline
 from tests.support.js_decoder import run_node
 from tests.support.sequences import load_shared_npz
+from tools.generate import vectors as make_vectors
 from tuckercodec import Field, FormatError, MeshSequence
 from tuckercodec.format import fields as fmt
+from tuckercodec.format.residual import FINITE32
 
 FRAMES = slice(24, 36)  # frames where the cloth moves: every field changes
 FRAME_RATE = 24.0
 TARGETS = {"tucker": "rel:1", "grid": "max:0.001", "exact": "lossless"}
 TOLERANCE = 1e-9  # spec/FORMAT.md §8, relative to the largest |value|
-DTYPES = {"f32": np.dtype("<f4"), "f64": np.dtype("<f8")}
+DTYPES: dict[str, np.dtype[Any]] = {"f32": np.dtype("<f4"), "f64": np.dtype("<f8")}
 
 
 @functools.cache
@@ -55,8 +57,7 @@ def cloth_with_fields(mode: str) -> bytes:
     positions, faces, fields = _cloth()
     sequence = MeshSequence(positions, faces, fields=fields)
     data = tuckercodec.encode(sequence, target_kg=0.5, field_target=TARGETS[mode])
-    decoder = tuckercodec.Decoder(data)
-    modes = [decoder._container.section(f"FLD.{n}").params["mode"] for n in range(len(fields))]
+    modes = make_vectors.field_modes(tuckercodec.Decoder(data))
     assert modes == [mode] * len(fields), modes  # the test covers the mode it names
     return data
 
@@ -174,7 +175,7 @@ def test_crafted_values_out_of_range_refused(tmp_path):
     beyond = np.zeros(shape, dtype=np.int64)
     beyond[3, 7, 0] = 2**53 + 1
     infinity = np.zeros(shape, dtype=np.int64)
-    infinity[5, 2, 0] = fmt.FINITE32[1] + 1
+    infinity[5, 2, 0] = FINITE32[1] + 1
     huge = np.full(shape, 2**40, dtype=np.int64)
     cases = [
         _with_chunks(data, {2: (beyond, {"predict": 1, "chunk_frames": 4})}),
