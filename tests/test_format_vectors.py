@@ -59,6 +59,13 @@ def test_valid_vector(path):
     if "attributes" in expected:  # format 1.5: every value and index, bit for bit
         got = make_vectors.attachments_of(decoder)
         assert got == {key: expected[key] for key in got}
+    if "fields" in expected:  # format 1.5: grid and exact bit for bit, tucker within §8's bound
+        assert make_vectors.fields_of(decoder, path.stem) == expected["fields"]
+        for field, entry in zip(decoder.fields(), expected["fields"], strict=True):
+            if "reference" in entry:
+                want = np.load(path.parent / entry["reference"], allow_pickle=False)
+                bound = entry["tolerance"]["relative_to_max_abs"] * np.abs(want).max() + 1e-12
+                np.testing.assert_allclose(field.values, want, rtol=0, atol=bound)
     if "residual" in expected:  # format 1.3 (§6.9, §8.1): the integers, and every bit
         assert make_vectors.corrections_of(decoder) == expected["residual"]
         assert positions.tobytes() == reference.tobytes()

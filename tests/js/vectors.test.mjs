@@ -10,7 +10,8 @@ import { readFileSync, readdirSync } from 'node:fs';
 import { dirname, join } from 'node:path';
 import { test } from 'node:test';
 import { fileURLToPath } from 'node:url';
-import { observeVector } from './conformance_observe.mjs';
+import { observeVector, readNpyFloat64 } from './conformance_observe.mjs';
+import { openTkc } from '../../tuckercodec/web/tkc/decoder.js';
 
 const VECTORS = join(dirname(fileURLToPath(import.meta.url)), '..', '..', 'spec', 'vectors');
 const names = readdirSync(VECTORS).filter((n) => n.endsWith('.json')).sort();
@@ -47,6 +48,39 @@ function checkValid(expected, got) {
   );
 }
 
+/**
+ * Format 1.5's fields (§6.13): each one's description, every frame's values in modes grid and
+ * exact by their SHA-256 (bit for bit), in mode tucker within the tolerance of its reference.
+ * @param {{fields: object[]}} expected
+ */
+async function checkFields(expected) {
+  const file = openTkc(new Uint8Array(readFileSync(join(VECTORS, expected.file))));
+  assert.equal(file.fieldNames.length, expected.fields.length);
+  for (const [n, entry] of expected.fields.entries()) {
+    const { name, role, domain, components, type, mode } = entry;
+    assert.deepEqual(file.fieldInfo(n), { name, role, domain, components, type, mode });
+    const frames = Array.from({ length: file.frames }, (_, f) => file.field(n, f));
+    const size = frames[0].length;
+    const all = new (type === 'f32' ? Float32Array : Float64Array)(size * file.frames);
+    frames.forEach((values, f) => all.set(values, f * size));
+    assert.equal(all.length, entry.shape.reduce((a, b) => a * b));
+    if (entry.reference === undefined) {
+      const digest = await globalThis.crypto.subtle.digest('SHA-256', all); // little-endian hosts
+      assert.equal(Buffer.from(digest).toString('hex'), entry.sha256, `field ${name}'s values`);
+      continue;
+    }
+    const reference = readNpyFloat64(new Uint8Array(readFileSync(join(VECTORS, entry.reference)))).values;
+    let largest = 0;
+    let worst = 0;
+    reference.forEach((value, j) => {
+      largest = Math.max(largest, Math.abs(value));
+      worst = Math.max(worst, Math.abs(all[j] - value));
+    });
+    const tolerance = entry.tolerance.relative_to_max_abs * largest + 1e-12;
+    assert.ok(worst <= tolerance, `field ${name} differs by ${worst}, more than ${tolerance}`);
+  }
+}
+
 /** An invalid vector: refused by a TkcError with its rule and error class. */
 function checkInvalid(expected, got) {
   assert.ok(!got.accepted, `accepted a file that breaks ${expected.rule}`);
@@ -64,5 +98,6 @@ for (const name of names) {
     const { expected, got } = await observe(name);
     if (expected.valid) checkValid(expected, got);
     else checkInvalid(expected, got);
+    if (expected.fields) await checkFields(expected);
   });
 }

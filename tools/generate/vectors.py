@@ -39,6 +39,7 @@ from tuckercodec import (
     Attribute,
     Decoder,
     FaceSet,
+    Field,
     MeshSequence,
     encode,
     encode_with_report,
@@ -431,6 +432,39 @@ def attachments_of(decoder: Decoder) -> dict[str, Any]:
     }
 
 
+def field_modes(decoder: Decoder) -> list[str]:
+    """Each field's mode (``tucker``, ``grid`` or ``exact``), as its FLD.n says."""
+    return [str(section.params.get("mode")) for section in decoder._attached.fields]
+
+
+def fields_of(decoder: Decoder, name: str) -> list[dict[str, Any]]:
+    """Format 1.5: each animated field's description (§6.13) and its values: in modes grid and
+    exact the SHA-256 of every frame's values (little-endian, C order, bit for bit); in mode
+    tucker, whose values a decoder may round otherwise (§8), the reference ``.npy`` (float64)
+    beside the vector and the tolerance relative to its largest |value|."""
+    out = []
+    modes = field_modes(decoder)
+    for number, field in enumerate(decoder.fields()):
+        mode = modes[number]
+        entry: dict[str, Any] = {
+            "name": field.name,
+            "role": field.role,
+            "domain": field.domain,
+            "components": field.components,
+            "type": "f32" if field.values.dtype == np.float32 else "f64",
+            "mode": mode,
+            "shape": list(field.values.shape),
+        }
+        if mode == "tucker":
+            entry["reference"] = f"{name}.field{number}.npy"
+            entry["tolerance"] = {"relative_to_max_abs": RELATIVE_TOLERANCE}
+        else:
+            values = np.ascontiguousarray(field.values, field.values.dtype.newbyteorder("<"))
+            entry["sha256"] = hashlib.sha256(values.tobytes()).hexdigest()
+        out.append(entry)
+    return out
+
+
 def segment_index(decoder: Decoder) -> list[dict[str, Any]]:
     """The segment index a decoder must report (§6.7): empty for a file of format 1.0."""
     return [
@@ -460,6 +494,7 @@ def valid_vectors() -> dict[str, tuple[bytes, str]]:
         **correction_vectors(),
         **scene_vectors(),
         **attachment_vectors(),
+        **fields_vector(),
         "v1-wave-triangles": (basic, "triangles, no names: the basic file"),
         "v1.1-segments-shared": (
             encode_with_report(long_wave, target_kg=0.5, segment_frames=12).data,
@@ -524,6 +559,36 @@ def attachment_vectors() -> dict[str, tuple[bytes, str]]:
             "format 1.5 and 1.1: the same attributes following the walk's face order, no "
             "ORDER, two segments",
         ),
+    }
+
+
+def fields_vector() -> dict[str, tuple[bytes, str]]:
+    """The valid vector of format 1.5's animated fields (§6.13): one field in each mode."""
+    sheet = MeshSequence(wave_sheet(24, 9), sheet_triangles(9))
+    velocity = np.gradient(sheet.vertices, axis=0) * 24.0
+    faces = sheet.faces
+    face_velocity = velocity[:, faces].mean(axis=2).astype(np.float32)
+    fields = [
+        Field("velocity", velocity, "vertex", "velocity"),
+        Field("speed", np.linalg.norm(velocity, axis=2).astype(np.float32)),
+        Field("face velocity", face_velocity, "face", "velocity"),
+        Field("height", sheet.vertices[..., 2:] * np.pi, "vertex"),
+    ]
+    targets = {"velocity": "rel:1", "speed": "max:0.001", "face velocity": "lossless"}
+    data = encode(
+        MeshSequence(sheet.vertices, faces, fields=fields),
+        target_kg=0.5,
+        field_targets={**targets, "height": "lossless"},
+    )
+    modes = field_modes(Decoder(data))
+    assert modes == ["tucker", "grid", "exact", "exact"], modes
+    return {
+        "v1.5-fields": (
+            data,
+            "format 1.5: animated fields, one in each mode: a float64 velocity per vertex "
+            "(tucker), a float32 speed (grid), a float32 velocity per face and a float64 value "
+            "per vertex (exact)",
+        )
     }
 
 
@@ -780,6 +845,11 @@ def write_valid(folder: Path, name: str, data: bytes, purpose: str) -> None:
         expected["residual"] = corrections_of(decoder)
     if decoder.attributes or decoder.face_sets:  # 1.5, only where a file has them
         expected.update(attachments_of(decoder))
+    if decoder.field_names:  # 1.5's fields, a tucker field's values beside the vector
+        expected["fields"] = fields_of(decoder, name)
+        for number, field in enumerate(decoder.fields()):
+            if expected["fields"][number]["mode"] == "tucker":
+                np.save(folder / f"{name}.field{number}.npy", field.values.astype("<f8"))
     if header.time_codes is not None:  # 1.4 (§4): only where a file has them, so that the
         expected["header"]["time_codes"] = list(header.time_codes)  # older JSON stays as it is
     if header.meters_per_unit is not None:

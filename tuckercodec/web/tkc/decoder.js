@@ -19,6 +19,7 @@ import { formatError } from './errors.js';
 import { decodeFaceOrder, inGivenOrder } from './face_order.js';
 import { decodeFaceSets } from './face_sets.js';
 import { decodeFaces, fanTriangles } from './faces.js';
+import { FieldReader } from './fields.js';
 import { readLayout } from './header.js';
 import { resolveLimits } from './limits.js';
 import { MsgFloat, isInt } from './msgpack.js';
@@ -47,6 +48,7 @@ export const CACHED_SEGMENTS = 2;
  * @typedef {import('./topology.js').Topology} Topology
  * @typedef {import('./attributes.js').Attribute} Attribute
  * @typedef {import('./face_sets.js').FaceSet} FaceSet
+ * @typedef {import('./fields.js').FieldInfo} FieldInfo
  */
 
 /**
@@ -148,6 +150,45 @@ export class TkcFile {
     this.attributes = this._decodeAttributes();
     /** @type {FaceSet[]} the face sets (§6.12), in order */
     this.faceSets = this.attached.faceSets === null ? [] : decodeFaceSets(this.attached.faceSets, this._payload(this.attached.faceSets), M, limits);
+    // the fields (§6.13): each checked and decoded when asked for
+    const counts = { vertices: this.vertices, faces: M, frames: this.frames };
+    this._fields = new FieldReader(this.attached.fields, this.attached.factors, counts, limits, (section) => this._payload(section), () => this._topologyOnce());
+  }
+
+  /**
+   * The names of the animated fields (FLD.n, §6.13), in order; each field's parameters are
+   * checked (a damaged one is a TkcError R45-field, or R21 beyond a limit).
+   * @returns {string[]}
+   */
+  get fieldNames() {
+    return Array.from({ length: this._fields.count }, (_, n) => this._fields.params(n).name);
+  }
+
+  /**
+   * Field `which` (its number, or its name)'s description: name, role (`velocity`, `color`,
+   * `generic`), domain (`vertex`: a value per vertex, `face`: per face), components (1 to 4),
+   * type (`f32` or `f64`: the values' array) and mode (how it is stored: `tucker`, `grid` or
+   * `exact`). Its parameters are checked, nothing is decoded.
+   * @param {number | string} which
+   * @returns {FieldInfo}
+   */
+  fieldInfo(which) {
+    const { name, role, domain, components, type, mode } = this._fields.params(this._fields.number(which));
+    return { name, role, domain, components, type, mode };
+  }
+
+  /**
+   * Frame f of field `which` (its number, or its name): N·c values (N the vertices or the
+   * faces, c the components), element-major, a Float32Array for type `f32`, a Float64Array for
+   * `f64`. Grid and exact fields are the Python decoder's bits; a tucker field is its §6.13 sum
+   * (to the rounding of the sum's order). Decodes only what the frame needs: a tucker field's
+   * factors (once), a chunked field's chunk (the last one is kept).
+   * @param {number | string} which
+   * @param {number} f
+   * @returns {Float32Array | Float64Array}
+   */
+  field(which, f) {
+    return this._fields.frame(this._fields.number(which), f);
   }
 
   /**
@@ -220,8 +261,8 @@ export class TkcFile {
 
   /**
    * Decodes every segment and, with corrections, each segment's chunks and values, after its
-   * factors (R29, R41; §5 step 16s): checks the whole file, as the Python `Decoder.check()`
-   * does. Like it, it does not look for R36 (frames are asked for that).
+   * factors (R29, R41; §5 step 16s), then every frame of every field (§6.13): checks the whole
+   * file, as the Python `Decoder.check()` does. Like it, it does not look for R36 (frames are asked for that).
    */
   check() {
     const out = new Float64Array(3 * this.vertices);
@@ -233,6 +274,7 @@ export class TkcFile {
       for (let t = 0; t < segment.frames; t++) this._weights(d, t, segment.start + t);
       for (let f = segment.start; f < segment.start + segment.frames; f++) this._reconstruct(f, out, false);
     });
+    this._fields.checkAll(); // every frame of every field (§6.13)
     return this;
   }
 

@@ -1,4 +1,5 @@
 import { formatError } from './errors.js';
+import { FieldReader } from './fields.js';
 export { TkcError } from './errors.js';
 export { DEFAULT_LIMITS } from './limits.js';
 /**
@@ -12,6 +13,7 @@ export type SimdBasis = import('./simd.js').SimdBasis;
 export type Topology = import('./topology.js').Topology;
 export type Attribute = import('./attributes.js').Attribute;
 export type FaceSet = import('./face_sets.js').FaceSet;
+export type FieldInfo = import('./fields.js').FieldInfo;
 /**
  * @typedef {import('./reconstruct.js').Factors} Factors
  * @typedef {import('./residual.js').Residual} Residual
@@ -19,6 +21,7 @@ export type FaceSet = import('./face_sets.js').FaceSet;
  * @typedef {import('./topology.js').Topology} Topology
  * @typedef {import('./attributes.js').Attribute} Attribute
  * @typedef {import('./face_sets.js').FaceSet} FaceSet
+ * @typedef {import('./fields.js').FieldInfo} FieldInfo
  */
 /**
  * Opens a .tkc file held in memory.
@@ -107,6 +110,7 @@ export declare class TkcFile {
     attributes: Attribute[];
     /** @type {FaceSet[]} the face sets (§6.12), in order */
     faceSets: FaceSet[];
+    _fields: FieldReader;
     /**
      * @param {Uint8Array} bytes
      * @param {import('./limits.js').Limits} limits
@@ -114,6 +118,32 @@ export declare class TkcFile {
      * @param {number} [cachedSegments] decoded segments kept, the most recently used
      */
     constructor(bytes: Uint8Array, limits: import('./limits.js').Limits, simd?: boolean, cachedSegments?: number);
+    /**
+     * The names of the animated fields (FLD.n, §6.13), in order; each field's parameters are
+     * checked (a damaged one is a TkcError R45-field, or R21 beyond a limit).
+     * @returns {string[]}
+     */
+    get fieldNames(): string[];
+    /**
+     * Field `which` (its number, or its name)'s description: name, role (`velocity`, `color`,
+     * `generic`), domain (`vertex`: a value per vertex, `face`: per face), components (1 to 4),
+     * type (`f32` or `f64`: the values' array) and mode (how it is stored: `tucker`, `grid` or
+     * `exact`). Its parameters are checked, nothing is decoded.
+     * @param {number | string} which
+     * @returns {FieldInfo}
+     */
+    fieldInfo(which: number | string): FieldInfo;
+    /**
+     * Frame f of field `which` (its number, or its name): N·c values (N the vertices or the
+     * faces, c the components), element-major, a Float32Array for type `f32`, a Float64Array for
+     * `f64`. Grid and exact fields are the Python decoder's bits; a tucker field is its §6.13 sum
+     * (to the rounding of the sum's order). Decodes only what the frame needs: a tucker field's
+     * factors (once), a chunked field's chunk (the last one is kept).
+     * @param {number | string} which
+     * @param {number} f
+     * @returns {Float32Array | Float64Array}
+     */
+    field(which: number | string, f: number): Float32Array | Float64Array;
     /**
      * The faces in the order they were given (ORDER, §6.10), or as FACE decodes them.
      * @returns {Int32Array}
@@ -149,8 +179,8 @@ export declare class TkcFile {
     };
     /**
      * Decodes every segment and, with corrections, each segment's chunks and values, after its
-     * factors (R29, R41; §5 step 16s): checks the whole file, as the Python `Decoder.check()`
-     * does. Like it, it does not look for R36 (frames are asked for that).
+     * factors (R29, R41; §5 step 16s), then every frame of every field (§6.13): checks the whole
+     * file, as the Python `Decoder.check()` does. Like it, it does not look for R36 (frames are asked for that).
      */
     check(): this;
     /**
