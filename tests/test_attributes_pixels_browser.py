@@ -23,6 +23,7 @@ file, TKCLoader's mesh.
   17% of pixels, means 7.3 and 10.4.
 
 The thresholds sit between the two with a wide margin each way (see the constants).
+``python -m tools.pixels`` writes the two pictures for a person to look at; it is run here too.
 Skips, naming what is missing, without chromium or usd-core.
 """
 
@@ -45,6 +46,8 @@ from tests.support.pixels import (
     per_corner,
     pixels_page,
 )
+from tests.support.png import decode_png
+from tools import pixels as pixels_tool
 from tuckercodec import Decoder, MeshSequence
 from tuckercodec.cli import main as cli
 from tuckercodec.model.attributes import corner_faces, corner_vertices
@@ -174,3 +177,16 @@ def test_broken_uvs_change_the_pixels(page, control, request):
     assert found.fraction >= LEAST_CONTROL_DIFFERING, found
     assert found.mean >= LEAST_CONTROL_MEAN, found
     assert found.fraction > MOST_DIFFERING and found.mean > MOST_MEAN
+
+
+def test_the_tool_writes_both_pictures_and_the_comparison(files, tmp_path, capsys):
+    usd, tkc = files
+    assert pixels_tool.main([str(usd), str(tkc), "--frame", str(FRAME), "-o", str(tmp_path)]) == 0
+    printed = capsys.readouterr().out
+    assert f"frame {FRAME}" in printed and "reversed-uv" in printed, printed
+    original = decode_png((tmp_path / "original.png").read_bytes())
+    decoded = decode_png((tmp_path / "decoded.png").read_bytes())
+    assert original.shape[:2] == decoded.shape[:2] == (480, 480)
+    assert not np.array_equal(original, decoded)  # not one picture twice: the edges moved
+    assert pixels_tool.main([str(usd), str(tkc), "-o", str(tmp_path)]) == 1  # kept unasked
+    assert "already exists" in capsys.readouterr().err
