@@ -447,10 +447,12 @@ class Decoder:
         §6.13), in order."""
         if not self._attached.fields:
             return []
-        from .format.fields import decode_field
+        from .format.fields import check_unique_names, decode_field
 
         chosen = self._selected(frames)
         mesh = self._mesh_prediction()
+        with self._naming_path():  # each field's name, checked with its parameters below
+            check_unique_names(self.field_names)
         with self._naming_path():
             return [
                 decode_field(

@@ -118,6 +118,13 @@ class ChunkLayout:
         return start, min(self.frames, start + self.chunk_frames)
 
 
+def check_unique_names(names: list[str]) -> None:
+    """No two fields share a name (R45)."""
+    for number, name in enumerate(names):
+        if name in names[:number]:
+            refuse(f"two fields are named {name!r}", f"section FLD.{number}.name")
+
+
 def refuse(message: str, where: str) -> NoReturn:
     """R45-field: a field's parameter or value is not as §6.13 says."""
     raise FormatError(message, rule="R45-field", field=where)
@@ -342,7 +349,9 @@ def _chunk_integers(
 
 def grid_values(q: np.ndarray, step: float, dtype: np.dtype[Any]) -> np.ndarray:
     """A grid's values: q * step in binary64, rounded to ``dtype`` (nearest, ties to even)."""
-    return (q.astype(np.float64) * step).astype(dtype)
+    # a product beyond float64 is a property of the file, refused as R45 by the caller
+    with np.errstate(over="ignore", invalid="ignore"):
+        return (q.astype(np.float64) * step).astype(dtype)
 
 
 def exact_integers(values: np.ndarray) -> np.ndarray:

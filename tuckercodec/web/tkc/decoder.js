@@ -157,11 +157,12 @@ export class TkcFile {
 
   /**
    * The names of the animated fields (FLD.n, §6.13), in order; each field's parameters are
-   * checked (a damaged one is a TkcError R45-field, or R21 beyond a limit).
+   * checked (a damaged one is a TkcError R45-field, or R21 beyond a limit), and no two fields
+   * may share a name (R45-field).
    * @returns {string[]}
    */
   get fieldNames() {
-    return Array.from({ length: this._fields.count }, (_, n) => this._fields.params(n).name);
+    return this._fields.names();
   }
 
   /**

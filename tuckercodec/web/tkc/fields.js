@@ -466,6 +466,18 @@ export class FieldReader {
   }
 
   /**
+   * Every field's name, each field's parameters checked, and no two the same (R45-field).
+   * @returns {string[]}
+   */
+  names() {
+    const names = Array.from({ length: this.count }, (_, n) => this.params(n).name);
+    names.forEach((name, n) => {
+      if (names.indexOf(name) !== n) refuse(`section FLD.${n}.name`, `two fields are named ${JSON.stringify(name)}`);
+    });
+    return names;
+  }
+
+  /**
    * The number of the field `which` names (its number, or the first of that name).
    * @param {number | string} which
    */
@@ -512,6 +524,7 @@ export class FieldReader {
 
   /** Decodes every frame of every field, in order (the Python `Decoder.check()`'s fields). */
   checkAll() {
+    this.names();
     for (let n = 0; n < this.count; n++) {
       const { frames } = this.params(n);
       for (let f = 0; f < frames; f++) this.frame(n, f);
