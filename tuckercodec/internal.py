@@ -30,7 +30,8 @@ package sees at once what the tools rely on.
   :func:`sheet_triangles`.
 * The compiled core's switch, :mod:`~tuckercodec.system.native` (``native.core()``, and
   ``native.pure_python()`` to run the reference), for the differential test of the two.
-* Animated fields (§6.13): :func:`encode_field` with its :class:`FieldTarget`, and the
+* Animated fields (§6.13): :func:`encode_field` with its :class:`FieldTarget`,
+  :func:`decoded_field` (an encoded field's sections decoded as a file's would be), and the
   measures :func:`relative_rms` and :func:`max_abs`, for ``python -m tools.bench fields``.
 * Defaults the benchmarks offer as their own: :data:`DEFAULT_TARGET_KG` (the encoder's KG
   target) and :func:`default_max_memory` (half the machine's memory, what an encode may use).
@@ -42,6 +43,7 @@ from .decomposition.analysis import Curve
 from .decomposition.hosvd import centre_frames, reconstruct
 from .encoder import rdo
 from .encoder.fields import FieldTarget, encode_field, max_abs, relative_rms
+from .encoder.fields import decoded as decoded_field
 from .encoder.options import DEFAULT_TARGET_KG
 from .format import faces, qmat, residual, sections, streams, traversal
 from .format.container import (
@@ -82,6 +84,7 @@ __all__ = [
     "centre_frames",
     "chunk_mode",
     "decode_chunk",
+    "decoded_field",
     "default_max_memory",
     "encode_chunk",
     "encode_field",
