@@ -21,7 +21,7 @@ SIDE = 6
 FRAMES = 8
 
 
-def _grid_series() -> tuple[np.ndarray, np.ndarray, dict, dict]:
+def _grid_series() -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray]]:
     """Coordinates (N, 2), quads, point data and cell data (each (F, n, c) float64)."""
     rows, cols = np.meshgrid(np.arange(SIDE), np.arange(SIDE), indexing="ij")
     coordinates = np.stack([cols.ravel(), rows.ravel()], axis=1).astype(np.float64) * 0.1
