@@ -30,7 +30,8 @@ package sees at once what the tools rely on.
   :func:`sheet_triangles`.
 * The compiled core's switch, :mod:`~tuckercodec.system.native` (``native.core()``, and
   ``native.pure_python()`` to run the reference), for the differential test of the two.
-* Animated fields (§6.13): :func:`encode_field` with its :class:`FieldTarget`, and the
+* Animated fields (§6.13): :func:`encode_field` with its :class:`FieldTarget`,
+  :func:`decoded_field` (an encoded field's sections decoded as a file's would be), and the
   measures :func:`relative_rms` and :func:`max_abs`, for ``python -m tools.bench fields``.
 * Static attributes (§6.11): the module :mod:`~tuckercodec.format.attributes`
   (``attributes.encode_attribute`` and its ``Mesh``), and :mod:`~tuckercodec.model.normals`
@@ -46,6 +47,7 @@ from .decomposition.analysis import Curve
 from .decomposition.hosvd import centre_frames, reconstruct
 from .encoder import rdo
 from .encoder.fields import FieldTarget, encode_field, max_abs, relative_rms
+from .encoder.fields import decoded as decoded_field
 from .encoder.options import DEFAULT_TARGET_KG
 from .format import attributes, faces, qmat, residual, sections, streams, traversal
 from .format.container import (
@@ -88,6 +90,7 @@ __all__ = [
     "centre_frames",
     "chunk_mode",
     "decode_chunk",
+    "decoded_field",
     "default_max_memory",
     "encode_chunk",
     "encode_field",

@@ -23,7 +23,8 @@ ready for BENCHMARKS.md, with the machine and the command that made it.
   guarantee, and a bound beside a KG target;
 - ``lossless``: the lossless mode against fpzip, pcodec, zstd and Blosc2, bit for bit, and its
   decoding speed;
-- ``fields``: the animated fields' codec in each mode, against SZ3 and zfp at the same bound;
+- ``fields``: the animated fields' codec in each mode, against SZ3 and zfp at the same bound,
+  on fields made from positions, a series' own fields, or (``--simulation``) a real solver's;
 - ``speed``: encode, decode, OBJ output and a large file's first frame against a baseline
   revision, both run alternately in one run.
 
