@@ -138,9 +138,6 @@ def test_the_fast_path_agrees_on_random_tidy_files(tmp_path: Path) -> None:
         (SQUARE + "vt 0 0\nf 1/1 2/0 3/1\n", 6, "0 is invalid"),
         (SQUARE + "vt 0 0\nf 1/1 2/-2 3/1\n", 6, "counts back past the first texture"),
         (SQUARE + "vn 0 0 1\nf 1//1 2//1 3//4\n", 6, "normal 4, but the file has only 1"),
-        (SQUARE + "vt 0 0\nf 1/1 2/1 3/1\nf 4 2 3\n", 7, "has no texture coordinate index"),
-        (SQUARE + "vt 0 0\nf 1/1 2 3/1\n", 6, "has no texture coordinate index"),
-        (SQUARE + "vn 0 0 1\nf 1 2 3\nf 4//1 2//1 3//1\n", 7, "has normal index"),
         (SQUARE + "vt 0 0\nf 1/x 2/1 3/1\n", 6, "no valid texture coordinate index"),
         (SQUARE + "vt 0 0\nf 1/1/1/1 2/1 3/1\n", 6, "more than vertex/texture/normal"),
         (SQUARE + "vt 0 nan\nf 1/1 2/1 3/1\n", 5, "non-finite texture coordinate"),
@@ -154,6 +151,26 @@ def test_bad_attribute_statements_name_the_file_and_line(
 ) -> None:
     path = write_file(tmp_path / "bad.obj", text)
     expect_input_error(lambda: read_one(path), path, line=line, match=match)
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        SQUARE + "vt 0 0\nf 1/1 2/1 3/1\nf 4 2 3\n",
+        SQUARE + "vt 0 0\nf 1/1 2 3/1\n",
+        SQUARE + "vn 0 0 1\nf 1 2 3\nf 4//1 2//1 3//1\n",
+    ],
+)
+def test_a_table_only_some_corners_index_is_left_out_and_the_mesh_read(
+    tmp_path: Path, text: str
+) -> None:
+    """Objects with and without UVs in one file (as exporters write them): the positions and
+    faces are read as before; the table cannot be a value per corner, so it is not read."""
+    path = write_file(tmp_path / "mixed.obj", text)
+    sequence = read_one(path)
+    assert sequence.attributes == []
+    assert sequence.vertex_count == 4
+    assert len(sequence.faces) == text.count("\nf ")
 
 
 def write_frames(folder: Path, texts: list[str]) -> list[Path]:

@@ -17,14 +17,14 @@ frame reader that puts the two together:
 
 Face sets are listed materials first, then groups, each in the order of their first face;
 a name no face follows makes no set. Texture and normal indices are 1-based, or negative to
-count back from the last ``vt`` (``vn``) above the face's line, as OBJ says. The faces must all
-have texture indices or all lack them (and the same for normals): a file where only some do has
-no value for the others' corners, which an attribute cannot say, and is an InputError naming
-the first face that differs. Without any face using them, ``vt`` and ``vn`` lines make no
-attribute. ``o``, ``s``, ``mtllib`` and the rest are not read.
+count back from the last ``vt`` (``vn``) above the face's line, as OBJ says. A table that only
+some corners index (objects with and without UVs in one file) has no value for the others'
+corners, which an attribute cannot say: it is not read, and the positions and faces are, as
+they always were. Without any face using them, ``vt`` and ``vn`` lines make no attribute.
+``o``, ``s``, ``mtllib`` and the rest are not read.
 
-Only the first frame of a sequence gives attributes and face sets (COMMON to all formats: a
-sequence's static attributes are frame 0's, normals included when they change). A later frame
+Only the first frame of a sequence gives attributes and face sets (a sequence's static
+attributes are frame 0's, normals included when they change). A later frame
 whose ``f`` lines are its text for text the first frame's has the same indices; any other has
 them parsed and compared, and an InputError names the first corner whose index differs.
 
@@ -149,6 +149,8 @@ class _ExtrasReader:
         # (has texture indices, has normal indices, line) of the first face
         self.first_face: tuple[bool, bool, int] | None = None
         self.face_lines: list[int] = []
+        # the tables some corners index and others do not: left out (see _check_kind)
+        self.partial: set[str] = set()
         self.material: str | None = None
         self.groups: tuple[str, ...] = ()
         self.materials: dict[str, list[int]] = {}
@@ -221,24 +223,17 @@ class _ExtrasReader:
             self.group_faces.setdefault(group, []).append(face)
 
     def _check_kind(self, corner: bytes, texture: bool, normal: bool, line: int) -> None:
-        """Every corner of every face has what the first corner of the first face has."""
+        """Whether every corner of every face has what the first corner of the first face has:
+        a table that some corners index and others do not (an exporter's objects with and
+        without UVs in one file) cannot be a value per corner, so it is not read (the faces and
+        positions are, as they always were)."""
         if self.first_face is None:
             self.first_face = (texture, normal, line)
             return
-        first_texture, first_normal, first_line = self.first_face
-        for has, had, (what, keyword) in (
-            (texture, first_texture, _TEXTURE),
-            (normal, first_normal, _NORMAL),
-        ):
+        first_texture, first_normal, _ = self.first_face
+        for has, had, keyword in ((texture, first_texture, "vt"), (normal, first_normal, "vn")):
             if has != had:
-                raise InputError(
-                    f"face corner {_short(corner)!r} {'has' if has else 'has no'} {what} index "
-                    f"but the first face's (line {first_line}) {'has none' if has else 'has'}: "
-                    f"an OBJ sequence's faces must all index their {keyword} or none may "
-                    f"(give every face its {keyword}, or remove them all)",
-                    path=self.path,
-                    line=line,
-                )
+                self.partial.add(keyword)
 
     def _index(self, text: bytes, corner: bytes, so_far: int, what: str, line: int) -> int:
         """A 0-based row of a corner's 1-based or negative (relative) index ``text``; a
@@ -286,6 +281,8 @@ class _ExtrasReader:
             indices = self.indices[keyword]
             found.indices[keyword] = np.array(indices, dtype=np.int64) if indices else None
             self._check_range(keyword, found.indices[keyword], len(table))
+            if keyword in self.partial:
+                found.indices[keyword] = None
         return found
 
     def _check_range(self, keyword: str, indices: np.ndarray | None, count: int) -> None:
