@@ -120,7 +120,8 @@ export declare class TkcFile {
     constructor(bytes: Uint8Array, limits: import('./limits.js').Limits, simd?: boolean, cachedSegments?: number);
     /**
      * The names of the animated fields (FLD.n, §6.13), in order; each field's parameters are
-     * checked (a damaged one is a TkcError R45-field, or R21 beyond a limit).
+     * checked (a damaged one is a TkcError R45-field, or R21 beyond a limit), and no two fields
+     * may share a name (R45-field).
      * @returns {string[]}
      */
     get fieldNames(): string[];

@@ -128,6 +128,11 @@ export declare class FieldReader {
      */
     params(n: number): FieldParams;
     /**
+     * Every field's name, each field's parameters checked, and no two the same (R45-field).
+     * @returns {string[]}
+     */
+    names(): string[];
+    /**
      * The number of the field `which` names (its number, or the first of that name).
      * @param {number | string} which
      */
