@@ -14,10 +14,10 @@ from typing import Any
 import numpy as np
 
 import tuckercodec
-from tests.support.compressed import Parts, deadline
-from tests.support.js_decoder import run_node
+from tests.support.compressed import Parts
+from tests.support.js_decoder import compare_verdicts, python_verdict, run_node
 from tests.support.sequences import load_shared_npz, wave_sequence
-from tuckercodec import Attribute, FaceSet, FormatError, InputError, MeshSequence
+from tuckercodec import Attribute, FaceSet, MeshSequence
 from tuckercodec.format import streams
 from tuckercodec.model.attributes import corner_vertices
 
@@ -261,13 +261,13 @@ def test_crafted_streams_same_bits(tmp_path):
     palette = rng.integers(-100, 100, 20, dtype=np.int64)
     cases.append(_with_attribute(data, 5, {}, [palette, residuals]))
     for n, case in enumerate(cases):
-        python = _python_verdict(case)
+        python = python_verdict(case)
         if python["accepted"]:
             _check_same_as_python(case, tmp_path)
         else:
             facts, _ = _js_attached(case, tmp_path, f"case{n}")
             assert (facts.get("rule"), facts.get("kind")) == (python["rule"], python["kind"])
-    assert sum(_python_verdict(c)["accepted"] for c in cases) >= 6  # the values cases decode
+    assert sum(python_verdict(c)["accepted"] for c in cases) >= 6  # the values cases decode
 
 
 # ------------------------------------------------------------------------------------------
@@ -275,21 +275,6 @@ def test_crafted_streams_same_bits(tmp_path):
 
 ATTACHED = ("ORDER", "FSET", "ATTR.")
 CASES = 240
-
-
-def _python_verdict(data: bytes) -> dict[str, Any]:
-    with deadline():
-        try:
-            tuckercodec.decode(data)
-        except FormatError as error:
-            return {"accepted": False, "rule": error.rule, "kind": type(error).__name__}
-        except InputError as error:
-            # the reference lets the model's InputError through for an attribute name the model
-            # refuses (too long, a control character); the JavaScript decoder refuses it as R43
-            if not str(error).startswith("an attribute"):
-                raise
-            return {"accepted": False, "rule": "R43-attribute", "kind": "FormatError"}
-    return {"accepted": True}
 
 
 def _damaged_value(value: Any, rng: np.random.Generator) -> Any:
@@ -354,27 +339,7 @@ def test_damaged_sections_same_verdict(tmp_path):
     rng = np.random.default_rng(31)
     bases = [polygons_with_attributes(), cloth_with_attributes()]
     files = [_damaged(bases[n % 2], rng) for n in range(CASES)]
-    paths = []
-    for n, data in enumerate(files):
-        path = tmp_path / f"case{n:04d}.tkc"
-        path.write_bytes(data)
-        paths.append(path)
-    javascript = run_node("outcomes.mjs", *paths)
-    crashed = [
-        (p.name, o["message"]) for p, o in zip(paths, javascript, strict=True) if o.get("crashed")
-    ]
-    assert not crashed, crashed
-    differ, zstd_only, rules = [], [], set()
-    for path, data, js in zip(paths, files, javascript, strict=True):
-        python = _python_verdict(data)
-        rules.add(python.get("rule"))
-        mine = {k: js.get(k) for k in python}
-        if mine == python:
-            continue
-        if _zstd_strictness(python, js):
-            zstd_only.append(path.name)
-        else:
-            differ.append((path.name, python, js))
+    differ, zstd_only, rules = compare_verdicts(files, tmp_path, _zstd_strictness)
     assert not differ, f"{len(differ)} of {len(files)} verdicts differ: {differ[:5]}"
     assert len(zstd_only) <= len(files) // 25, f"zstd disagrees too often: {zstd_only}"
     # the damage reaches every rule of the 1.5 sections

@@ -17,11 +17,11 @@ import numpy as np
 import pytest
 
 import tuckercodec
-from tests.support.compressed import Parts, deadline
-from tests.support.js_decoder import run_node
+from tests.support.compressed import Parts
+from tests.support.js_decoder import compare_verdicts, python_verdict, run_node
 from tests.support.sequences import load_shared_npz
 from tools.generate import vectors as make_vectors
-from tuckercodec import Field, FormatError, MeshSequence
+from tuckercodec import Field, MeshSequence
 from tuckercodec.format import fields as fmt
 from tuckercodec.format.residual import FINITE32
 
@@ -186,7 +186,7 @@ def test_crafted_values_out_of_range_refused(tmp_path):
     for n, case in enumerate(cases):
         # the reference's q * step overflows with a RuntimeWarning before its R45
         with np.errstate(over="ignore"):
-            python = _python_verdict(case)
+            python = python_verdict(case)
         assert python == {"accepted": False, "rule": "R45-field", "kind": "FormatError"}
         facts, _ = _js_fields(case, tmp_path, f"case{n}")
         assert (facts.get("rule"), facts.get("kind")) == (python["rule"], python["kind"])
@@ -196,15 +196,6 @@ def test_crafted_values_out_of_range_refused(tmp_path):
 # damaged files: the same verdict from both decoders
 
 CASES = 240
-
-
-def _python_verdict(data: bytes) -> dict[str, Any]:
-    with deadline():
-        try:
-            tuckercodec.decode(data)
-        except FormatError as error:
-            return {"accepted": False, "rule": error.rule, "kind": type(error).__name__}
-    return {"accepted": True}
 
 
 def _damaged_value(value: Any, rng: np.random.Generator) -> Any:
@@ -288,27 +279,7 @@ def test_damaged_fields_same_verdict(tmp_path):
     rng = np.random.default_rng(45)
     bases = [cloth_with_fields(mode) for mode in sorted(TARGETS)]
     files = [_damaged(bases[n % len(bases)], rng) for n in range(CASES)]
-    paths = []
-    for n, data in enumerate(files):
-        path = tmp_path / f"case{n:04d}.tkc"
-        path.write_bytes(data)
-        paths.append(path)
-    javascript = run_node("outcomes.mjs", *paths)
-    crashed = [
-        (p.name, o["message"]) for p, o in zip(paths, javascript, strict=True) if o.get("crashed")
-    ]
-    assert not crashed, crashed
-    differ, zstd_only, rules = [], [], set()
-    for path, data, js in zip(paths, files, javascript, strict=True):
-        python = _python_verdict(data)
-        rules.add(python.get("rule"))
-        mine = {k: js.get(k) for k in python}
-        if mine == python:
-            continue
-        if _zstd_strictness(python, js):
-            zstd_only.append(path.name)
-        else:
-            differ.append((path.name, python, js))
+    differ, zstd_only, rules = compare_verdicts(files, tmp_path, _zstd_strictness)
     assert not differ, f"{len(differ)} of {len(files)} verdicts differ: {differ[:5]}"
     assert len(zstd_only) <= len(files) // 25, f"zstd disagrees too often: {zstd_only}"
     # the damage reaches the field's rule, the qmat factors' and the zstd frames'

@@ -91,3 +91,50 @@ def check_invalid_observation(observed: dict[str, Any], name: str) -> None:
     assert not got["accepted"], f"accepted a file that breaks {expected['rule']}"
     assert (got["rule"], got["kind"]) == (expected["rule"], expected["error"]), got["message"]
     assert got["message"].endswith(f"[{expected['rule']}]")
+
+
+def python_verdict(data: bytes) -> dict[str, Any]:
+    """The reference decoder's verdict on a whole file, as ``outcomes.mjs`` gives the
+    JavaScript one: accepted, or the rule and error class it refused with."""
+    import tuckercodec
+
+    from .compressed import deadline
+
+    with deadline():
+        try:
+            tuckercodec.decode(data)
+        except tuckercodec.FormatError as error:
+            return {"accepted": False, "rule": error.rule, "kind": type(error).__name__}
+    return {"accepted": True}
+
+
+def compare_verdicts(
+    files: list[bytes], folder: Path, zstd_strictness: Any
+) -> tuple[list[Any], list[str], set[Any]]:
+    """Each file decoded by both decoders (none may crash): the files whose verdicts differ,
+    those that differ only as ``zstd_strictness(python, javascript)`` allows, and the rules
+    the reference refused with."""
+    paths = []
+    for n, data in enumerate(files):
+        path = folder / f"case{n:04d}.tkc"
+        path.write_bytes(data)
+        paths.append(path)
+    javascript = run_node("outcomes.mjs", *paths)
+    crashed = [
+        (p.name, o["message"]) for p, o in zip(paths, javascript, strict=True) if o.get("crashed")
+    ]
+    assert not crashed, crashed
+    differ: list[Any] = []
+    zstd_only: list[str] = []
+    rules: set[Any] = set()
+    for path, data, js in zip(paths, files, javascript, strict=True):
+        python = python_verdict(data)
+        rules.add(python.get("rule"))
+        mine = {k: js.get(k) for k in python}
+        if mine == python:
+            continue
+        if zstd_strictness(python, js):
+            zstd_only.append(path.name)
+        else:
+            differ.append((path.name, python, js))
+    return differ, zstd_only, rules
