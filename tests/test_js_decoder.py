@@ -13,10 +13,9 @@ import numpy as np
 import pytest
 
 import tuckercodec
-from tests.support.compressed import Parts, deadline, vector
-from tests.support.js_decoder import run_node
+from tests.support.compressed import Parts, vector
+from tests.support.js_decoder import compare_verdicts, run_node
 from tests.support.sequences import shared_case, shared_encoded
-from tuckercodec import FormatError
 from tuckercodec.format.container import HEAD_SIZE, PREAMBLE, SIGNATURE, pack_raw
 from tuckercodec.io.samples import sample_path
 
@@ -184,15 +183,6 @@ def _mutate_fields(parts: Parts, rng: np.random.Generator) -> bytes:
     return parts.pack()
 
 
-def _python_verdict(data: bytes) -> dict[str, Any]:
-    with deadline():
-        try:
-            tuckercodec.decode(data)
-        except FormatError as error:
-            return {"accepted": False, "rule": error.rule, "kind": type(error).__name__}
-    return {"accepted": True}
-
-
 def _damaged_files() -> list[bytes]:
     rng = np.random.default_rng(14)
     files = []
@@ -213,28 +203,8 @@ def _damaged_files() -> list[bytes]:
 
 def test_damaged_files_same_verdict(tmp_path):
     files = _damaged_files()
-    paths = []
-    for n, data in enumerate(files):
-        path = tmp_path / f"case{n:04d}.tkc"
-        path.write_bytes(data)
-        paths.append(path)
-    javascript = run_node("outcomes.mjs", *paths)
-    crashed = [
-        (p.name, o["message"]) for p, o in zip(paths, javascript, strict=True) if o.get("crashed")
-    ]
-    assert not crashed, crashed
-    differ, zstd_only = [], []
-    rejected = 0
-    for path, data, js in zip(paths, files, javascript, strict=True):
-        python = _python_verdict(data)
-        rejected += not python["accepted"]
-        mine = {k: js.get(k) for k in python}
-        if mine == python:
-            continue
-        if _zstd_strictness(python, js):
-            zstd_only.append(path.name)
-        else:
-            differ.append((path.name, python, js))
+    differ, zstd_only, verdicts = compare_verdicts(files, tmp_path, _zstd_strictness)
+    rejected = sum(not verdict["accepted"] for verdict in verdicts)
     assert not differ, f"{len(differ)} of {len(files)} verdicts differ: {differ[:5]}"
     # 11 of these 640 cases (all payload damage): libzstd and fzstd each refuse some the other takes
     assert len(zstd_only) <= len(files) // 25, f"zstd disagrees too often: {zstd_only}"

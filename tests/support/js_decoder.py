@@ -110,10 +110,10 @@ def python_verdict(data: bytes) -> dict[str, Any]:
 
 def compare_verdicts(
     files: list[bytes], folder: Path, zstd_strictness: Any
-) -> tuple[list[Any], list[str], set[Any]]:
+) -> tuple[list[Any], list[str], list[dict[str, Any]]]:
     """Each file decoded by both decoders (none may crash): the files whose verdicts differ,
-    those that differ only as ``zstd_strictness(python, javascript)`` allows, and the rules
-    the reference refused with."""
+    those that differ only as ``zstd_strictness(python, javascript)`` allows, and the
+    reference's verdict on each file."""
     paths = []
     for n, data in enumerate(files):
         path = folder / f"case{n:04d}.tkc"
@@ -126,10 +126,10 @@ def compare_verdicts(
     assert not crashed, crashed
     differ: list[Any] = []
     zstd_only: list[str] = []
-    rules: set[Any] = set()
+    verdicts: list[dict[str, Any]] = []
     for path, data, js in zip(paths, files, javascript, strict=True):
         python = python_verdict(data)
-        rules.add(python.get("rule"))
+        verdicts.append(python)
         mine = {k: js.get(k) for k in python}
         if mine == python:
             continue
@@ -137,4 +137,4 @@ def compare_verdicts(
             zstd_only.append(path.name)
         else:
             differ.append((path.name, python, js))
-    return differ, zstd_only, rules
+    return differ, zstd_only, verdicts
