@@ -1,0 +1,171 @@
+"""What small crafted files cost the decoders within their limits: the Blender add-on's import
+(Python ``Decoder`` with ``BLENDER_LIMITS``) and ``TKCLoader.parse`` (node, ``WEB_LIMITS``).
+
+    python -m tests.support.crafted_cost build DIR  # writes the crafted .tkc files into DIR
+    python -m tests.support.crafted_cost python FILE [default|blender]  # one import
+    python -m tests.support.crafted_cost measure DIR  # each file, 3 runs a case, medians
+
+Each file is built part by part (as ``tests/test_decoder_memory.chunked_file``): rank (1, 1)
+factors that decode to zeros, corrections of zeros one frame a chunk, and a face table of one
+triangle repeated; zstd shrinks all of it to a few KB whatever it decodes to. Every file is
+accepted by the decoder it is built for, at that decoder's limits. A measurement is a process of
+its own; its peak resident memory is Linux's VmHWM (reset at exec)."""
+
+from __future__ import annotations
+
+import json
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from tuckercodec.format import faces, qmat, residual, sections
+from tuckercodec.format.container import pack_container
+from tuckercodec.format.header import header_map
+
+ROOT = Path(__file__).resolve().parents[2]
+JS = ROOT / "tests" / "js"
+
+#: name: (vertices, frames, faces, later frame decoded), at the limits of the decoder they target
+FILES = {
+    # BLENDER_LIMITS: 8 Mi vertices, K x F = 2^28 positions, 16 Mi faces
+    "blender-vertices": (1 << 23, 32, 1, 31),
+    "blender-both": (1 << 23, 32, 1 << 24, 31),
+    # WEB_LIMITS: 2 Mi vertices, 2^28 positions (the decoder's default), 4 Mi faces
+    "web-vertices": (1 << 21, 128, 1, 127),
+    "web-both": (1 << 21, 128, 1 << 22, 127),
+}
+
+
+def crafted(vertices: int, frames: int, face_count: int) -> bytes:
+    """A format 1.3 file of ``vertices`` x ``frames`` zeros and ``face_count`` faces (0, 1, 2)."""
+    ones = qmat.QuantizedMatrix(np.ones((vertices, 1), np.int64), np.ones(1, np.float32))
+    zero_core = qmat.QuantizedMatrix(np.zeros((3, 1), np.int64), np.ones(1, np.float32))
+    time_factor = qmat.QuantizedMatrix(np.ones((frames, 1), np.int64), np.ones(1, np.float32))
+    cent = qmat.QuantizedMatrix(np.zeros((frames, 3), np.int64), np.ones(3, np.float32))
+    triangles = np.broadcast_to(np.array([0, 1, 2]), (face_count, 3))
+    face_params, face_payload = faces.encode_faces(triangles, 19)
+    table = [(sections.entry("FACE", face_params), face_payload)]
+    for section_id, matrix in (
+        ("CENT", cent),
+        ("U3", time_factor),
+        ("CORE", zero_core),
+        ("U1", ones),
+    ):
+        params, payload = qmat.encode_matrix(matrix, None, allow_predict=False, level=19)
+        table.append((sections.entry(section_id, params), payload))
+    params, payload = residual.encode_section(
+        np.broadcast_to(np.zeros((1, 1, 1), np.int64), (frames, vertices, 3)),
+        residual.Domain(residual.GRID, 1e-3),
+        19,
+        chunk_frames=1,
+    )
+    table.append(({"id": "RESD", "critical": True, "codec": residual.RESIDUAL, **params}, payload))
+    header = header_map(
+        vertices=vertices,
+        frames=frames,
+        ranks=(1, 1),
+        u2=[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+        kg=0.0,
+        truncation_kg=0.0,
+        target_kg=None,
+        encoder="crafted",
+        frame_rate=None,
+    )
+    return pack_container(
+        header, table, flags=residual.CORRECTIONS, minor=residual.CORRECTIONS_MINOR
+    )
+
+
+def peak_resident_mib() -> float:
+    """This process's peak resident memory (VmHWM), MiB."""
+    status = Path("/proc/self/status").read_text()
+    line = next(row for row in status.splitlines() if row.startswith("VmHWM:"))
+    return int(line.split()[1]) / 1024
+
+
+def python_import(path: Path, limits_name: str) -> dict[str, object]:
+    """What the add-on's import decodes (addon.py: ``Decoder(path, limits=BLENDER_LIMITS)``, its
+    faces as lists for ``from_pydata``, frame 0 as float32, then a later frame as
+    ``show_frame`` does), without Blender itself."""
+    from tuckercodec import Decoder
+    from tuckercodec.blender.meshes import BLENDER_LIMITS
+    from tuckercodec.errors import InputError
+    from tuckercodec.format.limits import DEFAULT_LIMITS
+
+    limits = BLENDER_LIMITS if limits_name == "blender" else DEFAULT_LIMITS
+    later = FILES[path.stem][3]
+    began = time.perf_counter()
+    result: dict[str, object] = {"accepted": True}
+    try:
+        decoder = Decoder(path, limits=limits)
+        face_lists = [row[row >= 0].tolist() for row in decoder.faces]
+        decoder.frame(0).astype(np.float32)
+        result["attributes"] = len(decoder.attributes)
+        decoder.frame(later).astype(np.float32)
+        result["faces"] = len(face_lists)
+    except InputError as error:
+        result.update(accepted=False, message=str(error)[:160])
+    result["seconds"] = time.perf_counter() - began
+    result["maxRssMiB"] = peak_resident_mib()
+    return result
+
+
+def _run(command: list[str], cwd: Path) -> dict[str, object]:
+    done = subprocess.run(command, cwd=cwd, capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        return {"accepted": False, "message": done.stderr.strip()[-200:]}
+    return dict(json.loads(done.stdout.strip().splitlines()[-1]))
+
+
+def node_parse(path: Path, limits_name: str) -> dict[str, object]:
+    """TKCLoader.parse (WEB_LIMITS) or openTkc at the decoder's defaults, frame 0 (memory.mjs)."""
+    job = path.with_suffix(f".{limits_name}.json")
+    via = "loader" if limits_name == "web" else "decoder"
+    job.write_text(json.dumps({"path": str(path), "via": via, "frames": "first"}))
+    command = ["node", "--expose-gc", "--import", "./three_from_vendor.mjs", "memory.mjs", str(job)]
+    return _run(command, JS)
+
+
+def measure(folder: Path, runs: int = 3) -> None:
+    """Prints a Markdown row per file and case: medians of ``runs`` processes."""
+    print("| file | size | case | accepted | seconds | peak RSS MiB |")
+    print("|---|---|---|---|---|---|")
+    for name in FILES:
+        path = folder / f"{name}.tkc"
+        cases = ["blender"] if name.startswith("blender") else ["web"]
+        for case in cases:
+            results = []
+            for _ in range(runs):
+                if case == "web" or (case == "default" and name.startswith("web")):
+                    results.append(node_parse(path, case))
+                else:
+                    module = [sys.executable, "-m", "tests.support.crafted_cost"]
+                    command = [*module, "python", str(path), case]
+                    results.append(_run(command, ROOT))
+            seconds = statistics.median(float(str(r.get("seconds", "nan"))) for r in results)
+            rss = statistics.median(float(str(r.get("maxRssMiB", "nan"))) for r in results)
+            accepted = results[0]["accepted"] or results[0].get("message", "")
+            size = path.stat().st_size
+            print(f"| {name} | {size:,} B | {case} | {accepted} | {seconds:.2f} | {rss:.0f} |")
+
+
+def main(arguments: list[str]) -> None:
+    action, target = arguments[0], Path(arguments[1])
+    if action == "build":
+        target.mkdir(parents=True, exist_ok=True)
+        for name, (vertices, frames, face_count, _) in FILES.items():
+            data = crafted(vertices, frames, face_count)
+            (target / f"{name}.tkc").write_bytes(data)
+            print(f"{name}: {len(data):,} bytes")
+    elif action == "python":
+        print(json.dumps(python_import(target, arguments[2] if len(arguments) > 2 else "default")))
+    else:
+        measure(target)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
