@@ -10,12 +10,9 @@ import numpy as np
 import pytest
 
 import tuckercodec as tc
-from tests.support.compressed import vector
+from tests.support.compressed import chunked_file, vector
 from tuckercodec import Decoder, Limits
 from tuckercodec.errors import LimitError
-from tuckercodec.format import faces, qmat, residual, sections
-from tuckercodec.format.container import pack_container
-from tuckercodec.format.header import header_map
 from tuckercodec.format.limits import DEFAULT_LIMITS
 
 # -- chunk_frames beyond int64 (§6.9: any int >= 1; above the frames, one chunk) -------------
@@ -32,44 +29,6 @@ def test_chunk_frames_of_two_to_the_64_minus_one_decodes_as_one_chunk():
 
 
 # -- one frame costs its chunk, and a chunk of several frames is bounded (§6.9, §7) -----------
-
-
-def chunked_file(vertices: int, frames: int, chunk_frames: int, predict: int = 0) -> bytes:
-    """A file of format 1.3 of ``vertices`` x ``frames`` built part by part (the encoder would
-    take minutes on so many positions): rank (1, 1) factors that decode to zeros and grid
-    corrections of zeros in chunks of ``chunk_frames`` frames, a few KB however large they
-    decode."""
-    ones = qmat.QuantizedMatrix(np.ones((vertices, 1), np.int64), np.ones(1, np.float32))
-    zero_core = qmat.QuantizedMatrix(np.zeros((3, 1), np.int64), np.ones(1, np.float32))
-    time = qmat.QuantizedMatrix(np.ones((frames, 1), np.int64), np.ones(1, np.float32))
-    cent = qmat.QuantizedMatrix(np.zeros((frames, 3), np.int64), np.ones(3, np.float32))
-    face_params, face_payload = faces.encode_faces(np.array([[0, 1, 2]]), 3)
-    table = [(sections.entry("FACE", face_params), face_payload)]
-    for section_id, matrix in (("CENT", cent), ("U3", time), ("CORE", zero_core), ("U1", ones)):
-        params, payload = qmat.encode_matrix(matrix, None, allow_predict=False, level=3)
-        table.append((sections.entry(section_id, params), payload))
-    params, payload = residual.encode_section(
-        np.zeros((frames, vertices, 3), np.int64),
-        residual.Domain(residual.GRID, 1e-3),
-        3,
-        chunk_frames=chunk_frames,
-        predict=predict,
-    )
-    table.append(({"id": "RESD", "critical": True, "codec": residual.RESIDUAL, **params}, payload))
-    header = header_map(
-        vertices=vertices,
-        frames=frames,
-        ranks=(1, 1),
-        u2=[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
-        kg=0.0,
-        truncation_kg=0.0,
-        target_kg=None,
-        encoder="tests",
-        frame_rate=None,
-    )
-    return pack_container(
-        header, table, flags=residual.CORRECTIONS, minor=residual.CORRECTIONS_MINOR
-    )
 
 
 def _peak(work: Callable[[], object]) -> int:

@@ -18,11 +18,11 @@ from tuckercodec.encoder.fields import (
     encode_field,
     max_abs,
     relative_rms,
+    section_lookup,
 )
 from tuckercodec.errors import FormatError, LimitError
 from tuckercodec.format import fields as fmt
 from tuckercodec.format.limits import DEFAULT_LIMITS, Limits
-from tuckercodec.format.sections import Section
 from tuckercodec.model.attributes import Field
 from tuckercodec.model.topology import MeshPrediction
 
@@ -56,23 +56,6 @@ def face_velocity(name: str, frames: int = 30) -> Field:
     return Field("face velocity", values[:, faces].mean(axis=2), "face", "velocity")
 
 
-def _table(sections: list[tuple[dict[str, Any], bytes]]) -> tuple[Any, Any]:
-    table = {
-        entry["id"]: Section(
-            entry["id"],
-            0,
-            len(payload),
-            0,
-            entry["critical"],
-            entry["codec"],
-            {k: v for k, v in entry.items() if k not in ("id", "critical", "codec")},
-        )
-        for entry, payload in sections
-    }
-    payloads = {entry["id"]: memoryview(payload) for entry, payload in sections}
-    return table.get, payloads.__getitem__
-
-
 def decode(
     encoded: EncodedField | list[tuple[dict[str, Any], bytes]],
     item: Field,
@@ -83,7 +66,7 @@ def decode(
     number: int = 3,
 ) -> Field:
     sections = encoded.sections if isinstance(encoded, EncodedField) else encoded
-    section, payload = _table(sections)
+    section, payload = section_lookup(sections)
     frames, count, _ = item.values.shape
     return fmt.decode_field(
         number, section, payload, count, count, frames, mesh, limits, frames_wanted

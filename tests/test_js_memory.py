@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 import tuckercodec as tc
+from tests.support.compressed import chunked_file
 from tests.support.js_decoder import JS, RUN_TIMEOUT, node
 from tests.support.sequences import grid_faces, wave_sequence
-from tests.test_decoder_memory import chunked_file
 
 
 def _measure(tmp_path: Path, data: bytes, **job: Any) -> dict[str, Any]:

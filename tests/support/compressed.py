@@ -20,6 +20,7 @@ import numpy as np
 
 import tuckercodec
 from tuckercodec import Decoder, FormatError, MeshSequence
+from tuckercodec.format import faces, qmat, residual, sections
 from tuckercodec.format.container import (
     CRC,
     HEAD_SIZE,
@@ -29,6 +30,7 @@ from tuckercodec.format.container import (
     pack_raw,
     parse_container,
 )
+from tuckercodec.format.header import header_map
 
 VECTORS = Path(__file__).resolve().parents[2] / "spec" / "vectors"
 #: The valid conformance vectors.
@@ -278,3 +280,50 @@ HOSTILE = {
 }
 #: A field removed instead of set.
 MISSING = object()
+
+
+def chunked_file(
+    vertices: int,
+    frames: int,
+    chunk_frames: int,
+    predict: int = 0,
+    *,
+    face_count: int = 1,
+    level: int = 3,
+) -> bytes:
+    """A file of format 1.3 of ``vertices`` x ``frames`` built part by part (the encoder would
+    take minutes on so many positions): rank (1, 1) factors that decode to zeros, grid
+    corrections of zeros in chunks of ``chunk_frames`` frames, and ``face_count`` copies of the
+    triangle (0, 1, 2); a few KB however large they decode."""
+    ones = qmat.QuantizedMatrix(np.ones((vertices, 1), np.int64), np.ones(1, np.float32))
+    zero_core = qmat.QuantizedMatrix(np.zeros((3, 1), np.int64), np.ones(1, np.float32))
+    time = qmat.QuantizedMatrix(np.ones((frames, 1), np.int64), np.ones(1, np.float32))
+    cent = qmat.QuantizedMatrix(np.zeros((frames, 3), np.int64), np.ones(3, np.float32))
+    triangles = np.broadcast_to(np.array([0, 1, 2]), (face_count, 3))
+    face_params, face_payload = faces.encode_faces(triangles, level)
+    table = [(sections.entry("FACE", face_params), face_payload)]
+    for section_id, matrix in (("CENT", cent), ("U3", time), ("CORE", zero_core), ("U1", ones)):
+        params, payload = qmat.encode_matrix(matrix, None, allow_predict=False, level=level)
+        table.append((sections.entry(section_id, params), payload))
+    params, payload = residual.encode_section(
+        np.broadcast_to(np.zeros((1, 1, 1), np.int64), (frames, vertices, 3)),
+        residual.Domain(residual.GRID, 1e-3),
+        level,
+        chunk_frames=chunk_frames,
+        predict=predict,
+    )
+    table.append(({"id": "RESD", "critical": True, "codec": residual.RESIDUAL, **params}, payload))
+    header = header_map(
+        vertices=vertices,
+        frames=frames,
+        ranks=(1, 1),
+        u2=[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+        kg=0.0,
+        truncation_kg=0.0,
+        target_kg=None,
+        encoder="tests",
+        frame_rate=None,
+    )
+    return pack_container(
+        header, table, flags=residual.CORRECTIONS, minor=residual.CORRECTIONS_MINOR
+    )

@@ -22,9 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tuckercodec.format import faces, qmat, residual, sections
-from tuckercodec.format.container import pack_container
-from tuckercodec.format.header import header_map
+from tests.support.compressed import chunked_file
 
 ROOT = Path(__file__).resolve().parents[2]
 JS = ROOT / "tests" / "js"
@@ -41,43 +39,9 @@ FILES = {
 
 
 def crafted(vertices: int, frames: int, face_count: int) -> bytes:
-    """A format 1.3 file of ``vertices`` x ``frames`` zeros and ``face_count`` faces (0, 1, 2)."""
-    ones = qmat.QuantizedMatrix(np.ones((vertices, 1), np.int64), np.ones(1, np.float32))
-    zero_core = qmat.QuantizedMatrix(np.zeros((3, 1), np.int64), np.ones(1, np.float32))
-    time_factor = qmat.QuantizedMatrix(np.ones((frames, 1), np.int64), np.ones(1, np.float32))
-    cent = qmat.QuantizedMatrix(np.zeros((frames, 3), np.int64), np.ones(3, np.float32))
-    triangles = np.broadcast_to(np.array([0, 1, 2]), (face_count, 3))
-    face_params, face_payload = faces.encode_faces(triangles, 19)
-    table = [(sections.entry("FACE", face_params), face_payload)]
-    for section_id, matrix in (
-        ("CENT", cent),
-        ("U3", time_factor),
-        ("CORE", zero_core),
-        ("U1", ones),
-    ):
-        params, payload = qmat.encode_matrix(matrix, None, allow_predict=False, level=19)
-        table.append((sections.entry(section_id, params), payload))
-    params, payload = residual.encode_section(
-        np.broadcast_to(np.zeros((1, 1, 1), np.int64), (frames, vertices, 3)),
-        residual.Domain(residual.GRID, 1e-3),
-        19,
-        chunk_frames=1,
-    )
-    table.append(({"id": "RESD", "critical": True, "codec": residual.RESIDUAL, **params}, payload))
-    header = header_map(
-        vertices=vertices,
-        frames=frames,
-        ranks=(1, 1),
-        u2=[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
-        kg=0.0,
-        truncation_kg=0.0,
-        target_kg=None,
-        encoder="crafted",
-        frame_rate=None,
-    )
-    return pack_container(
-        header, table, flags=residual.CORRECTIONS, minor=residual.CORRECTIONS_MINOR
-    )
+    """A format 1.3 file of ``vertices`` x ``frames`` zeros and ``face_count`` faces (0, 1, 2),
+    a correction chunk per frame (so that ``max_chunk_values`` never applies)."""
+    return chunked_file(vertices, frames, chunk_frames=1, face_count=face_count, level=19)
 
 
 def peak_resident_mib() -> float:

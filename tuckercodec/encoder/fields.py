@@ -152,10 +152,11 @@ def _descriptor(
     }
 
 
-def decoded(
-    sections: Sections, number: int, item: Field, mesh: MeshPrediction | None
-) -> np.ndarray:
-    """What a decoder returns for ``sections``: decoded as a file's would be."""
+def section_lookup(
+    sections: Sections,
+) -> tuple[Callable[[str], Section | None], Callable[[str], memoryview]]:
+    """A field's sections as a decoder finds them in a file: its section by id (``None`` where
+    there is none) and its payload by id."""
     table = {
         entry["id"]: Section(
             entry["id"],
@@ -169,11 +170,19 @@ def decoded(
         for entry, payload in sections
     }
     payloads = {entry["id"]: memoryview(payload) for entry, payload in sections}
+    return table.get, payloads.__getitem__
+
+
+def decoded(
+    sections: Sections, number: int, item: Field, mesh: MeshPrediction | None
+) -> np.ndarray:
+    """What a decoder returns for ``sections``: decoded as a file's would be."""
+    section_of, payload_of = section_lookup(sections)
     frames, count, _ = item.values.shape
     return fmt.decode_field(
         number,
-        table.get,
-        payloads.__getitem__,
+        section_of,
+        payload_of,
         count,
         count,
         frames,

@@ -195,15 +195,13 @@ class Attribute:
             return self
         if self.domain == FACE:
             picked = order
-        else:
+        else:  # each face's corners, faces in the new order
             starts = face_corner_starts(faces)
-            picked = (
-                np.concatenate(
-                    [np.arange(starts[f], starts[f + 1]) for f in order.tolist()]
-                ).astype(np.int64)
-                if order.size
-                else np.zeros(0, dtype=np.int64)
+            degrees = (starts[1:] - starts[:-1])[order]
+            offsets = np.arange(int(degrees.sum())) - np.repeat(
+                np.cumsum(degrees) - degrees, degrees
             )
+            picked = np.repeat(starts[:-1][order], degrees) + offsets
         if self.indices is not None:
             return Attribute(self.name, self.domain, self.values, self.indices[picked], self.role)
         return Attribute(self.name, self.domain, self.values[picked], None, self.role)
