@@ -147,7 +147,7 @@ def test_every_vertex_of_the_cloth_is_within_the_bound(cloth, fraction):
     assert worst <= bound
     assert result.report.max_distance == pytest.approx(worst, rel=1e-12)
     assert result.report.max_error == pytest.approx(bound)
-    assert tc.info(result.data).format_version == "1.3"
+    assert tc.info(result.data).format_version == "1.6"  # corrections (1.3), adaptive coding
 
 
 def test_a_bound_the_tucker_part_already_meets_writes_the_file_of_before(cloth):

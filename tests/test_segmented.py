@@ -45,7 +45,7 @@ def test_the_whole_sequence_meets_the_target(cloth, basis, target):
     assert measured <= target
     assert measured == pytest.approx(result.report.kg, rel=1e-9)
     assert measured > 0.5 * target  # the budget is used, not wasted
-    assert decoder.info.format_version == "1.2"  # segments (1.1) and 1.2's coding tools
+    assert decoder.info.format_version == "1.6"  # segments (1.1), coding tools, adaptive coding
 
 
 def test_segments_decode_alone_to_the_frames_of_the_whole(shared_file, cloth):
@@ -83,7 +83,7 @@ def test_a_frame_from_disk_reads_only_its_segment(shared_file, tmp_path):
 
 def test_without_segments_the_file_is_todays(cloth):
     plain = encode_with_report(cloth, target_kg=0.1).data
-    assert plain[10:12] == b"\x02\x00"  # minor version 2: the cloth's faces are walked (§6.8)
+    assert plain[10:12] == b"\x06\x00"  # minor 6: walked faces (§6.8), adaptive coding (§6.14)
     assert int.from_bytes(plain[12:16], "little") & SEGMENTED == 0
     assert not Decoder(plain).segmented
 
@@ -256,7 +256,7 @@ def test_encode_in_segments_on_the_command_line(tmp_path, capsys):
     out = tmp_path / "cloth.tkc"
     assert main(["encode", str(sample_path()), "-o", str(out), "--segment-frames", "20"]) == 0
     printed = capsys.readouterr().out
-    assert "3 segments of frames with one shared U1 (format 1.2)" in printed
+    assert "3 segments of frames with one shared U1 (format 1.6)" in printed
     assert "of the whole sequence" in printed
     assert main(["info", str(out)]) == 0
     printed = capsys.readouterr().out

@@ -212,6 +212,7 @@ class Decoder:
             self._mesh_prediction,
             f"section {section_id}",
             coding_tools=self._container.coding_tools,  # predictor 2 only in format 1.2
+            adaptive_coding=self._container.adaptive,  # §6.14 only in format 1.6
         )
 
     def _decode_u1_values(self, section_id: str) -> np.ndarray:
@@ -222,6 +223,7 @@ class Decoder:
             self._mesh_prediction,
             f"section {section_id}",
             coding_tools=self._container.coding_tools,
+            adaptive_coding=self._container.adaptive,
         )
 
     def segment_factors(self, number: int) -> SegmentFactors:
@@ -272,6 +274,7 @@ class Decoder:
                     f"section {section_id}",
                     allow_predict=allow_predict,
                     coding_tools=self._container.coding_tools,  # predictor 3 only in 1.2
+                    adaptive_coding=self._container.adaptive,
                 ).values()
 
             u3 = matrix("U3")

@@ -49,7 +49,7 @@ from .encoder import rdo
 from .encoder.fields import FieldTarget, encode_field, max_abs, relative_rms
 from .encoder.fields import decoded as decoded_field
 from .encoder.options import DEFAULT_TARGET_KG
-from .format import attributes, faces, qmat, residual, sections, streams, traversal
+from .format import adaptive, attributes, faces, qmat, residual, sections, streams, traversal
 from .format.container import (
     CRC,
     HEAD_SIZE,
@@ -86,6 +86,7 @@ __all__ = [
     "STED_DEFINITION",
     "Curve",
     "FieldTarget",
+    "adaptive",
     "attributes",
     "centre_frames",
     "chunk_mode",

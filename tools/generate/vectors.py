@@ -47,9 +47,11 @@ from tuckercodec import (
 )
 from tuckercodec.internal import (
     DEFAULT_LIMITS,
+    adaptive,
     HEAD_SIZE,
     faces,
     parse_container,
+    qmat,
     residual,
     sheet_triangles,
     streams,
@@ -217,7 +219,7 @@ def invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
         "R03-preamble-truncated": (good[:20], "TruncatedFileError"),
         "R04-preamble-crc": (good[:10] + bytes([good[10] ^ 0x04]) + good[11:], "ChecksumError"),
         "R05-major-version": (_set_preamble(good, 8, "<H", 2), "UnsupportedVersionError"),
-        "R06-critical-flag": (_set_preamble(good, 12, "<I", 0x0008), "UnsupportedVersionError"),
+        "R06-critical-flag": (_set_preamble(good, 12, "<I", 0x0010), "UnsupportedVersionError"),
         "R07-header-limit": (_set_preamble(good, 16, "<I", (16 << 20) + 1), "LimitError"),
         "R08-total-length": (
             _set_preamble(good, 20, "<Q", HEAD_SIZE + header_length),
@@ -495,6 +497,7 @@ def valid_vectors() -> dict[str, tuple[bytes, str]]:
         **scene_vectors(),
         **attachment_vectors(),
         **fields_vector(),
+        **adaptive_vectors(),
         "v1-wave-triangles": (basic, "triangles, no names: the basic file"),
         "v1.1-segments-shared": (
             encode_with_report(long_wave, target_kg=0.5, segment_frames=12).data,
@@ -512,6 +515,67 @@ def valid_vectors() -> dict[str, tuple[bytes, str]]:
             extended.pack(),
             "v1-wave-triangles plus an ignorable flag, header key and ancillary section",
         ),
+    }
+
+
+def adaptive_everywhere(data: bytes) -> bytes:
+    """``data`` with every position factor (U1, U3, CORE, CENT and their ``.s`` forms) stored
+    by §6.14's adaptive coder, whichever coder the encoder chose: so that a vector exercises
+    both coding orders in every kind of section."""
+    parts = Parts(data)
+    decoder = Decoder(data)
+    mesh = internal.mesh_prediction(decoder._coded_faces, decoder.info.vertices)
+    for n, entry in enumerate(parts.entries):
+        stem = str(entry["id"]).split(".")[0]
+        if stem not in adaptive.ADAPTIVE_STEMS or entry.get("coder", 0) == 1:
+            continue
+        rows, cols = entry["shape"]
+        stored = streams.unpack_integers(parts.payloads[n], rows * cols, entry["planes"], stem)
+        order = qmat.coding_order(mesh if stem == "U1" else None, rows)
+        parts.payloads[n] = adaptive.encode_columns(stored.reshape(cols, rows), order)
+        entry["coder"] = adaptive.CODER_ADAPTIVE
+    parts.flags |= adaptive.ADAPTIVE
+    parts.minor = max(parts.minor, adaptive.ADAPTIVE_MINOR)
+    return parts.pack()
+
+
+def adaptive_vectors() -> dict[str, tuple[bytes, str]]:
+    """The valid vectors of format 1.6 (§6.14): every position factor adaptively coded, in a
+    whole file and in segments with their own U1."""
+    triangles = scrambled(MeshSequence(wave_sheet(24, 9), sheet_triangles(9)), seed=21)
+    named = MeshSequence(
+        wave_sheet(16, 7) * 3.0 + 10.0,
+        polygons(7),
+        [f"walk_{n:03d}.obj" for n in range(16)],
+        frame_rate=30.0,
+    )
+    return {
+        "v1.6-adaptive": (
+            adaptive_everywhere(encode(triangles, target_kg=0.1)),
+            "format 1.6: U1 (the mesh's coding order), U3, CORE and CENT (ascending) through the "
+            "adaptive range coder, faces-traverse of scrambled triangles",
+        ),
+        "v1.6-adaptive-segments": (
+            adaptive_everywhere(
+                encode_with_report(named, target_kg=0.1, segment_frames=8, basis="own").data
+            ),
+            "format 1.6 and 1.1: two segments with their own U1.s, U3.s, CORE.s and CENT.s, all "
+            "adaptively coded, polygons and names",
+        ),
+    }
+
+
+def adaptive_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
+    """rule id -> (file bytes, error class name): the 1.6 file ``good`` with §6.14 broken.
+    R46: U1's adaptive stream with a byte after its end; and U1's coder 1 in a file whose
+    preamble no longer sets flag bit 3."""
+    parts = Parts(good)
+    trailing = parts.payloads[parts.index("U1")] + b"\x00"
+    without_flag = Parts(good)
+    without_flag.flags &= ~adaptive.ADAPTIVE
+    return {
+        "R46-adaptive-stream": (_edit(good, _payload("U1", trailing)), "FormatError"),
+        "R46-adaptive-stream-coder": (without_flag.pack(), "FormatError"),
     }
 
 
@@ -809,6 +873,7 @@ SECOND_VECTORS = {
     "R39-traversal-vertex-count": "R39-traversal",
     "R21-header-limit-face-streams": "R21-header-limit",
     "R20-header-field-time-codes": "R20-header-field",
+    "R46-adaptive-stream-coder": "R46-adaptive-stream",
 }
 
 
@@ -874,17 +939,24 @@ def segmented_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
 
 
 def write_invalid(
-    folder: Path, good: bytes, segmented: bytes, traversed: bytes, corrected: bytes, attached: bytes
+    folder: Path,
+    good: bytes,
+    segmented: bytes,
+    traversed: bytes,
+    corrected: bytes,
+    attached: bytes,
+    adaptively_coded: bytes,
 ) -> int:
     """The invalid vectors made from the valid files ``good`` (format 1.0), ``segmented``
-    (1.1), ``traversed`` (1.2), ``corrected`` (1.3) and ``attached`` (1.5), with their JSON;
-    how many."""
+    (1.1), ``traversed`` (1.2), ``corrected`` (1.3), ``attached`` (1.5) and
+    ``adaptively_coded`` (1.6), with their JSON; how many."""
     vectors = {
         **invalid_vectors(good),
         **segmented_invalid_vectors(segmented),
         **traverse_invalid_vectors(traversed),
         **correction_invalid_vectors(corrected),
         **attachment_invalid_vectors(attached),
+        **adaptive_invalid_vectors(adaptively_coded),
     }
     for name, (data, error) in vectors.items():
         write_invalid_vector(folder, name, data, error)
@@ -901,6 +973,7 @@ def write_invalid_vector(folder: Path, name: str, data: bytes, error: str) -> No
 
 #: The valid file each group of invalid vectors is made from.
 INVALID_SOURCES = {
+    "adaptive": "v1.6-adaptive",
     "attachments": "v1.5-attributes",
     "invalid": "v1-wave-triangles",
     "segmented": "v1.1-segments-shared",
@@ -928,6 +1001,7 @@ def write_only(out: Path, names: list[str]) -> int:
         **traverse_invalid_vectors(sources["traverse"]),
         **correction_invalid_vectors(sources["corrections"]),
         **attachment_invalid_vectors(sources["attachments"]),
+        **adaptive_invalid_vectors(sources["adaptive"]),
     }
     for name in names:
         if name in invalid:
@@ -981,6 +1055,7 @@ def main(argv: list[str] | None = None) -> int:
         valid["v1.2-traverse-triangles"][0],
         valid["v1.3-lossless-float32"][0],
         valid["v1.5-attributes"][0],
+        valid["v1.6-adaptive"][0],
     )
     print(f"wrote {len(valid) + len(derived)} valid and {invalid} invalid vectors to {out}")
     return 0

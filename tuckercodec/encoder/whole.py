@@ -356,7 +356,7 @@ class WholeWorkspace:
         ):
             assert matrix is not None  # a whole file's U1 is its own
             coded[section_id] = qmat.encode_matrix(
-                matrix, parents, allow_predict=predict, level=level
+                matrix, parents, allow_predict=predict, level=level, adaptive_coding=True
             )
         if self.name_section is not None:
             coded["NAME"] = self.name_section

@@ -23,6 +23,15 @@ import numpy as np
 
 from ..errors import FormatError
 
+#: Preamble flag bit 3 (critical): some section stores its integers with ``coder`` 1 (§6.14).
+ADAPTIVE = 0x0008
+#: The minor version of a file that sets :data:`ADAPTIVE`.
+ADAPTIVE_MINOR = 6
+#: The ``coder`` values of a qmat section: §6.1's zstd frame, or this module's stream.
+CODER_ZSTD, CODER_ADAPTIVE = 0, 1
+#: The section stems that may use the adaptive coder (and their segment forms, ``U1.3``).
+ADAPTIVE_STEMS = ("U1", "U3", "CORE", "CENT")
+
 #: Probabilities are PROB_BITS-bit integers: the chance that a decision is 0, times 2**15.
 PROB_BITS = 15
 PROB_INIT = 1 << (PROB_BITS - 1)
@@ -267,7 +276,9 @@ def sequence_order(rows: int) -> CodingOrder:
     return CodingOrder(order, owner - 1 - offset, ends, mesh=False)
 
 
-def mesh_order(rows: int, mean_rows: np.ndarray, sources: np.ndarray, source_ends: np.ndarray) -> CodingOrder:
+def mesh_order(
+    rows: int, mean_rows: np.ndarray, sources: np.ndarray, source_ends: np.ndarray
+) -> CodingOrder:
     """U1's order (§6.14): the rows predictor 2 does not predict (depth 0) in ascending order,
     then predictor 2's rows in its order, each with its sources."""
     predicted = np.zeros(rows, dtype=bool)
@@ -344,3 +355,8 @@ def decode_columns(
         two_before, before = before, magnitudes
     coder.finish()
     return out
+
+
+def uses_adaptive(entries: list[dict[str, object]]) -> bool:
+    """Whether any of these section entries stores its integers with ``coder`` 1."""
+    return any(item.get("coder") == CODER_ADAPTIVE for item in entries)

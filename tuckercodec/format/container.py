@@ -33,6 +33,7 @@ from ..errors import (
     TruncatedFileError,
     UnsupportedVersionError,
 )
+from .adaptive import ADAPTIVE, ADAPTIVE_MINOR, uses_adaptive
 from .attachments import ATTACHMENTS_MINOR, attachment_codec
 from .limits import DEFAULT_LIMITS, Limits
 from .residual import CORRECTIONS
@@ -58,7 +59,7 @@ SCENE_MINOR = 4
 CRITICAL_FLAGS_MASK = 0x0000FFFF
 #: Critical flags this decoder knows: bit 0, a segmented file (format 1.1, §6.7), and bit 1,
 #: the coding tools of format 1.2, and bit 2, corrections (format 1.3, §6.9).
-KNOWN_CRITICAL_FLAGS = SEGMENTED | CODING_TOOLS | CORRECTIONS
+KNOWN_CRITICAL_FLAGS = SEGMENTED | CODING_TOOLS | CORRECTIONS | ADAPTIVE
 
 
 @dataclass(frozen=True)
@@ -125,6 +126,11 @@ class Container:
         """Whether the preamble sets flag bit 2: corrections (format 1.3, §6.9, §8.1)."""
         return bool(self.flags & CORRECTIONS)
 
+    @property
+    def adaptive(self) -> bool:
+        """Whether the preamble sets flag bit 3: adaptive coding (format 1.6, §6.14)."""
+        return bool(self.flags & ADAPTIVE)
+
     def payload(self, data: bytes | memoryview | RangeReader, entry: Section) -> memoryview:
         """The bytes of a section, after checking its CRC-32 (§5 step 9); ``data`` is the whole
         file, or a reader of the file's byte ranges (:class:`.disk.FileRanges`) that reads just
@@ -155,6 +161,7 @@ def pack_container(
     flags: int = 0,
     minor: int = FORMAT_MINOR,
     coding_tools: bool | None = None,
+    adaptive: bool | None = None,
 ) -> bytes:
     """Assemble a file from its header map and its sections.
 
@@ -170,12 +177,18 @@ def pack_container(
         coding_tools: whether to set flag bit 1 and minor version 2 (§6.8); by default, when a
             section needs it (:func:`.sections.uses_coding_tools`). Only files that break the
             rules on purpose (conformance vectors) say ``False`` for such sections.
+        adaptive: whether to set flag bit 3 and minor version 6 (§6.14); by default, when a
+            section stores its integers with ``coder`` 1.
     """
     flags, minor = with_coding_tools([entry for entry, _ in sections], flags, minor, coding_tools)
     if any(key in header for key in SCENE_KEYS):
         minor = max(minor, SCENE_MINOR)
     if any(attachment_codec(entry.get("id")) is not None for entry, _ in sections):
         minor = max(minor, ATTACHMENTS_MINOR)
+    if adaptive is None:
+        adaptive = uses_adaptive([entry for entry, _ in sections])
+    if adaptive:
+        flags, minor = flags | ADAPTIVE, max(minor, ADAPTIVE_MINOR)
     table = []
     offset = 0
     for entry, payload in sections:

@@ -22,7 +22,7 @@ import numpy as np
 from ..errors import FormatError, UnreachableTargetError
 from ..model.topology import MAX_MEAN_LEVELS, MeanSteps, MeshPrediction
 from ..system import native
-from . import streams
+from . import adaptive, streams
 from .prediction import (
     LINEAR_LIMIT,
     LINEAR_STEP_LIMIT,
@@ -97,6 +97,7 @@ def encode_matrix(
     allow_predict: bool = True,
     coding_tools: bool = True,
     level: int = streams.DEFAULT_LEVEL,
+    adaptive_coding: bool = False,
 ) -> tuple[dict[str, Any], bytes]:
     """``(params, payload)`` of the section, choosing per column the predictor whose residuals
     look cheapest.
@@ -106,17 +107,36 @@ def encode_matrix(
     the decoded neighbours) when ``coding_tools`` allows it and the mesh is not too deep
     (:data:`~tuckercodec.model.topology.MAX_MEAN_LEVELS`). :func:`.sections.uses_coding_tools` tells
     from the section entries whether the file needs the coding tools flag.
+
+    With ``adaptive_coding`` (a position factor of a file that may be of format 1.6), the
+    integers are also coded by §6.14's adaptive coder, and the smaller payload is kept: a
+    section never grows by it.
     """
     q = matrix.q
     stream, predict = section_stream(q, parents, allow_predict, coding_tools)
-    payload, planes = streams.pack_integers(np.ascontiguousarray(stream.T), level)
-    params = {
+    columns = np.ascontiguousarray(stream.T)
+    del stream
+    payload, planes = streams.pack_integers(columns, level)
+    params: dict[str, Any] = {
         "shape": [int(q.shape[0]), int(q.shape[1])],
         "planes": planes,
         "steps": matrix.steps.astype("<f4").tobytes(),
         "predict": predict.tobytes(),
     }
+    if adaptive_coding and columns.size:
+        coded = adaptive.encode_columns(columns, coding_order(parents, q.shape[0]))
+        if len(coded) < len(payload):
+            params["coder"] = adaptive.CODER_ADAPTIVE
+            payload = coded
     return params, payload
+
+
+def coding_order(parents: Mesh | None, rows: int) -> adaptive.CodingOrder:
+    """The order §6.14 codes a section's rows in: a mesh's for U1, ascending otherwise."""
+    if isinstance(parents, MeshPrediction):
+        steps = parents.mean_steps
+        return adaptive.mesh_order(rows, steps.rows, steps.sources, steps.source_ends)
+    return adaptive.sequence_order(rows)
 
 
 def section_stream(
@@ -172,9 +192,11 @@ def decode_matrix(
     *,
     allow_predict: bool = True,
     coding_tools: bool = False,
+    adaptive_coding: bool = False,
 ) -> QuantizedMatrix:
     """The quantized matrix of a qmat section (§6.3). The caller has checked ``shape`` against
-    the header and the limits.
+    the header and the limits. ``adaptive_coding``: the section may store its integers with
+    §6.14's coder (a position factor of a file with flag bit 3).
 
     ``parents`` as in :func:`.prediction.accumulate`, a mesh's
     :class:`~tuckercodec.model.topology.MeshPrediction`, or a function that makes either: it is
@@ -186,7 +208,12 @@ def decode_matrix(
     rows, cols, planes, steps, predict = _checked_params(
         params, where, parents is not None, allow_predict, coding_tools
     )
-    stream = streams.unpack_integers(payload, rows * cols, planes, where)
+    if _coder(params, where, adaptive_coding) == adaptive.CODER_ADAPTIVE:
+        if callable(parents):
+            parents = parents()
+        stream = _adaptive_stream(payload, rows, cols, planes, parents, where)
+    else:
+        stream = streams.unpack_integers(payload, rows * cols, planes, where)
     chosen = np.flatnonzero(predict == PREDICT_PARENT)
     meaned = np.flatnonzero(predict == PREDICT_MEAN)
     if cols and meaned.size == cols:  # U1's usual case: restored in the stream, no copy made
@@ -251,6 +278,35 @@ def _checked_params(
     return rows, cols, planes, steps, predict
 
 
+def _coder(params: dict[str, Any], where: str, adaptive_coding: bool) -> int:
+    """The section's ``coder`` (§6.14): 0 when absent; 1 only where ``adaptive_coding``."""
+    coder = params.get("coder", adaptive.CODER_ZSTD)
+    allowed = (adaptive.CODER_ZSTD, adaptive.CODER_ADAPTIVE) if adaptive_coding else (0,)
+    if not isinstance(coder, int) or isinstance(coder, bool) or coder not in allowed:
+        raise FormatError(
+            f"coder must be one of {list(allowed)} here, got {coder!r}"
+            + ("" if adaptive_coding else " (1 needs flag bit 3 and a position factor)"),
+            rule="R46-adaptive-stream",
+            field=f"{where}.coder",
+        )
+    return int(coder)
+
+
+def _adaptive_stream(
+    payload: bytes | memoryview, rows: int, cols: int, planes: int, parents: Mesh | None, where: str
+) -> np.ndarray:
+    """The column-major integers of an adaptive stream, each within the section's planes."""
+    columns = adaptive.decode_columns(payload, cols, rows, coding_order(parents, rows), where)
+    limit = 1 << (8 * planes - 1)  # zigzag below 2**(8P): -limit <= x < limit
+    if columns.size and (columns.min() < -limit or columns.max() >= limit):
+        raise FormatError(
+            f"an integer of the adaptive stream does not fit its {planes} planes",
+            rule="R46-adaptive-stream",
+            field=where,
+        )
+    return columns.reshape(-1)
+
+
 def decode_values(
     payload: bytes | memoryview,
     params: dict[str, Any],
@@ -258,6 +314,7 @@ def decode_values(
     where: str,
     *,
     coding_tools: bool = False,
+    adaptive_coding: bool = False,
 ) -> np.ndarray:
     """``decode_matrix(...).values()`` of a section whose rows follow a mesh (U1), for a caller
     that needs no integers. When every column has predictor 2 (U1's usual case) the compiled
@@ -265,8 +322,16 @@ def decode_values(
     columns, without the int64 matrix (as large as the floats)."""
     core = native.core()
     rows, cols, planes, steps, predict = _checked_params(params, where, True, True, coding_tools)
-    if core is None or not (rows and cols) or not (predict == PREDICT_MEAN).all():
-        return decode_matrix(payload, params, parents, where, coding_tools=coding_tools).values()
+    zstd = _coder(params, where, adaptive_coding) == adaptive.CODER_ZSTD
+    if core is None or not zstd or not (rows and cols) or not (predict == PREDICT_MEAN).all():
+        return decode_matrix(
+            payload,
+            params,
+            parents,
+            where,
+            coding_tools=coding_tools,
+            adaptive_coding=adaptive_coding,
+        ).values()
     raw = streams.decompress_exact(payload, rows * cols * planes, where)
     mesh = parents() if callable(parents) else parents
     plan = _mean_mesh(mesh if isinstance(mesh, MeshPrediction) else None, where).native_plan()

@@ -89,7 +89,7 @@ def fit_basis(
         work.shared_q @ work.models[0].rotation[:, :columns],
         column_steps(math.sqrt(step), np.sqrt(column_energy)),
     )
-    params, payload = qmat.encode_matrix(matrix, work.mesh, level=level)
+    params, payload = qmat.encode_matrix(matrix, work.mesh, level=level, adaptive_coding=True)
     return SharedBasis(params, payload)
 
 

@@ -85,7 +85,12 @@ class SharedBasis:
         """The quantized U1, its mesh prediction undone (any predictor: the file that held it
         set the coding tools flag if it needed it, and so will this encode's)."""
         return qmat.decode_matrix(
-            self.payload, self.params, mesh, "the shared basis (U1)", coding_tools=True
+            self.payload,
+            self.params,
+            mesh,
+            "the shared basis (U1)",
+            coding_tools=True,
+            adaptive_coding=True,
         )
 
 
@@ -517,7 +522,9 @@ class SegmentedWorkspace:
         if self.fixed_basis is not None:  # a given basis: its section, byte for byte
             out.append((_entry("U1", self.fixed_basis.params), self.fixed_basis.payload))
         elif quantized.shared_u1 is not None:
-            params, payload = qmat.encode_matrix(quantized.shared_u1, self.mesh, level=level)
+            params, payload = qmat.encode_matrix(
+                quantized.shared_u1, self.mesh, level=level, adaptive_coding=True
+            )
             out.append((_entry("U1", params), payload))
         for s, factors in enumerate(quantized.segments):
             matrices: dict[str, tuple[QuantizedMatrix, MeshPrediction | None, bool]] = {
@@ -532,7 +539,7 @@ class SegmentedWorkspace:
                     continue
                 matrix, parents, predict = matrices[stem]
                 params, payload = qmat.encode_matrix(
-                    matrix, parents, allow_predict=predict, level=level
+                    matrix, parents, allow_predict=predict, level=level, adaptive_coding=True
                 )
                 out.append((_entry(segment_section_id(stem, s), params, stem), payload))
         if self.name_section is not None:
