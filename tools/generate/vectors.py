@@ -47,8 +47,8 @@ from tuckercodec import (
 )
 from tuckercodec.internal import (
     DEFAULT_LIMITS,
-    adaptive,
     HEAD_SIZE,
+    adaptive,
     faces,
     parse_container,
     qmat,
