@@ -9,6 +9,8 @@ ready for BENCHMARKS.md, with the machine and the command that made it.
 - ``analysis``: the exact rate-distortion table against plain SVDs;
 - ``bpfv``: how well a size target uses its budget;
 - ``size``: this checkout's sizes against the package at a baseline revision;
+- ``rate``: whole-file sizes against two baselines (the rate work's reference and the previous
+  commit), on the shared sequences and generated ones;
 - ``entropy``: entropy coders of the sections' streams against zstd, and what RDO gains;
 - ``scale``: large encodes, one frame from disk, one or two workers, forced segments;
 - ``read``: reading a whole sequence, as it is (a folder of OBJ frames) or ``--formats``, from

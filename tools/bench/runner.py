@@ -22,6 +22,7 @@ SUITES = {
     "analysis": "tools.bench.analysis",
     "bpfv": "tools.bench.bpfv",
     "size": "tools.bench.size",
+    "rate": "tools.bench.rate",
     "entropy": "tools.bench.entropy",
     "scale": "tools.bench.scale",
     "read": "tools.bench.read",

@@ -164,7 +164,7 @@ class Cloth:
     LENGTH, HEIGHT = 2.0, 1.3
     WAVES, FOLDS = 7, 3
 
-    def __init__(self, vertices: int, frames: int, seed: int) -> None:
+    def __init__(self, vertices: int, frames: int, seed: int, noise: float = NOISE_SIZE) -> None:
         self.vertex_count, self.frame_count = vertices, frames
         self.columns = max(2, round(np.sqrt(vertices * self.LENGTH / self.HEIGHT)))
         self.rows = -(-vertices // self.columns)
@@ -212,7 +212,7 @@ class Cloth:
         self.sag_k = 2 * np.pi * rng.uniform(0.3, 1.0, 2) / self.LENGTH
         self.sag_amplitude = 0.08 * (0.5 + 0.5 * np.tanh(_smooth_random(rng, frames, 2.0, 2)))
         size = float(np.hypot(self.LENGTH, self.HEIGHT))
-        self.noise = SmoothNoise(seed, vertices, NOISE_SIZE * size)
+        self.noise = SmoothNoise(seed, vertices, noise * size)
 
     def frames(self, start: int, stop: int) -> np.ndarray:
         """Frames ``start`` to ``stop``, float64 (n, K, 3)."""
@@ -668,7 +668,7 @@ class _Corrective:
 class Body:
     """A skinned, articulated creature (see the module docstring)."""
 
-    def __init__(self, vertices: int, frames: int, seed: int) -> None:
+    def __init__(self, vertices: int, frames: int, seed: int, noise: float = NOISE_SIZE) -> None:
         self.vertex_count, self.frame_count = vertices, frames
         bones, tubes = _skeleton()
         surface = _surface(tubes, len(bones), vertices)
@@ -705,7 +705,7 @@ class Body:
             self._parts.append((rows, used, blend.reshape(len(on), -1)))
         self._correctives = _correctives(surface, bones, motion)
         size = float(np.linalg.norm(np.ptp(surface.rest, axis=0)))
-        self.noise = SmoothNoise(seed, vertices, NOISE_SIZE * size)
+        self.noise = SmoothNoise(seed, vertices, noise * size)
 
     def frames(self, start: int, stop: int) -> np.ndarray:
         """Frames ``start`` to ``stop``, float64 (n, K, 3)."""
@@ -756,7 +756,9 @@ def _correctives(surface: _Surface, bones: list[_Bone], motion: _Motion) -> list
 # making and writing
 
 
-def make(kind: str, vertices: int, frames: int, seed: int = 1) -> Sequence:
+def make(
+    kind: str, vertices: int, frames: int, seed: int = 1, noise: float = NOISE_SIZE
+) -> Sequence:
     """The generator of a sequence of ``kind`` (``cloth`` or ``body``): its faces at once, its
     frames on demand by range."""
     if kind not in KINDS:
@@ -765,7 +767,8 @@ def make(kind: str, vertices: int, frames: int, seed: int = 1) -> Sequence:
         raise ValueError(f"a {kind} needs at least {MIN_VERTICES[kind]} vertices, not {vertices}")
     if frames < 1:
         raise ValueError(f"frames must be at least 1, not {frames}")
-    return Cloth(vertices, frames, seed) if kind == "cloth" else Body(vertices, frames, seed)
+    kinds = {"cloth": Cloth, "body": Body}
+    return kinds[kind](vertices, frames, seed, noise)
 
 
 def block_frames(vertices: int) -> int:
@@ -864,6 +867,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--frames", type=int, default=2_000, help="F (default 2000)")
     parser.add_argument("-o", "--output", type=Path, required=True, help="OUT.npy or OUT.npz")
     parser.add_argument("--seed", type=int, default=1, help="the same seed, the same bytes")
+    parser.add_argument(
+        "--noise",
+        type=float,
+        default=NOISE_SIZE,
+        help=f"each vertex's own jitter, relative to the model's size (default {NOISE_SIZE:g})",
+    )
     parser.add_argument("--npz", action="store_true", help="write an .npz (V and F) instead")
     parser.add_argument("--force", action="store_true", help="replace existing outputs")
     parser.add_argument("--quiet", action="store_true", help="no progress on stderr")
@@ -874,7 +883,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("the output must end in .npy (or .npz, or give --npz)")
     start = time.perf_counter()
     try:
-        sequence = make(args.kind, args.vertices, args.frames, args.seed)
+        sequence = make(args.kind, args.vertices, args.frames, args.seed, args.noise)
     except ValueError as error:
         parser.error(str(error))
     total_bytes = args.frames * args.vertices * 12

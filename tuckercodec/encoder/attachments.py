@@ -28,6 +28,28 @@ def keeps_face_order(
     return per_face or bool(sets) or any(f.domain == FACE for f in fields)
 
 
+def keeps_corners(attributes_: Sequence[Attribute]) -> bool:
+    """Whether each face's first corner must stay as given: when data per corner follows it."""
+    return any(a.domain == CORNER for a in attributes_)
+
+
+def smallest_corner_first(given_faces: np.ndarray) -> np.ndarray:
+    """Each face rotated (its winding kept) so that its smallest vertex is its first corner, the
+    padding (-1) left at the end. Where the decoder returns the faces in the walk's order and
+    no data follows their corners, the first corner carries nothing, and a canonical one costs
+    faces-traverse no rotation (§6.8, corner order 1): about 3 bits per vertex less."""
+    table = np.asarray(given_faces, dtype=np.int64)
+    if table.size == 0:
+        return table
+    width = table.shape[1]
+    real = (table >= 0).sum(axis=1)
+    first = np.where(table >= 0, table, np.iinfo(np.int64).max).argmin(axis=1)
+    column = np.arange(width)[None, :]
+    source = (first[:, None] + column) % np.maximum(real, 1)[:, None]
+    rotated = np.take_along_axis(table, source, axis=1)
+    return np.where(column < real[:, None], rotated, table)
+
+
 def walk_ordered(
     given_faces: np.ndarray,
     order: np.ndarray,
@@ -78,8 +100,11 @@ def coded_faces(
 ) -> tuple[faces.FaceSection, list[Coded]]:
     """The FACE section, and the sections of 1.5 coded once (ORDER, ATTR.n, FSET) with the
     attributes and sets numbered as the decoder will return the faces: in the given order when
-    :func:`keeps_face_order` says so, else in the order FACE decodes them."""
+    :func:`keeps_face_order` says so, else in the order FACE decodes them, each then starting
+    at its smallest vertex unless data per corner follows its corners."""
     keep_order = keeps_face_order(choice, attributes_, sets, fields)
+    if not keep_order and not keeps_corners(attributes_):
+        given_faces = smallest_corner_first(given_faces)
     face, order, walk = faces.encode_face_sections(
         given_faces, vertex_count, level, keep_order=keep_order
     )

@@ -1,13 +1,13 @@
-"""Sizes of trial files from their integers, without packing them, for the search's speed.
+"""Sizes of trial files from their integers, for the search's choices.
 
-The search's trials only rank truncations against each other, so they need a size that moves
-as the packed size moves, not the packed size itself. Packing a trial (predicting every column
-three ways, choosing, zigzag, byte planes, zstd) cost about half a second on a 10,000-vertex U1
-of 300 columns; most of it was choosing the predictors. Here a trial is sized by the order-0
-entropy of each column's residuals (the column's own histogram of zigzag integers; a value past
-:data:`TABLE_SIZE` is priced as its escape plus twice its bits over the table's), which is within
-a few percent of what zstd makes of the byte planes (``python -m tools.bench entropy``), and the
-same on every trial, so the ranking holds.
+The search's trials rank truncations against each other, so their sizes must move as the final
+file's sizes move. A trial's sections are sized as the file codes them: each section's integers
+through §6.14's adaptive coder (:func:`coded_bits`), in its coding order, without zstd's
+alternative (which the file keeps only where it is smaller, by a few bytes, on short sections).
+An order-0 entropy of each column (:func:`entropy_bits`, the estimate before format 1.6) could
+not see what the coder's contexts gain, nor price a short column of wide integers, and ranked
+truncations of sequences unlike the shared ones up to 6 % off the real sizes. Choosing each
+column's predictor (three predictions of every column) is what packing a trial costs most.
 
 U1's predictors (§6.2) are chosen once, on the first trial that needs a column, and kept for the
 trials after: a column's predictor depends on its shape, not much on its step, and a trial's
@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..format import qmat
+from ..format import adaptive, qmat
 from ..format.prediction import mean_residuals, residuals
 from ..model.topology import MeshPrediction
 from ..system import native
@@ -65,6 +65,17 @@ class U1Predictors:
     def __init__(self, mesh: MeshPrediction) -> None:
         self.mesh = mesh
         self.predict = np.zeros(0, dtype=np.uint8)
+        self._order: adaptive.CodingOrder | None = None
+
+    def coding_order(self, rows: int) -> adaptive.CodingOrder:
+        """U1's coding order (§6.14), made once."""
+        if self._order is None:
+            self._order = qmat.coding_order(self.mesh, rows)
+        return self._order
+
+    def bits(self, q: np.ndarray) -> float:
+        """The bits of U1's integers ``q`` as the file codes them."""
+        return coded_bits(self.stream(q), self.coding_order(q.shape[0]))
 
     def stream(self, q: np.ndarray) -> np.ndarray:
         """The residuals ``q`` (rows, cols) would be streamed as under the predictors kept
@@ -88,6 +99,13 @@ class U1Predictors:
         return out
 
 
+def coded_bits(stream: np.ndarray, order: adaptive.CodingOrder) -> float:
+    """The bits of ``stream`` (rows, cols) through the adaptive coder in ``order``."""
+    if stream.size == 0:
+        return 0.0
+    return 8.0 * len(adaptive.encode_columns(np.ascontiguousarray(stream.T), order))
+
+
 def segment_bits(segment: QuantizedSegment, u1_predictors: U1Predictors | None) -> float:
     """The estimated bits of a decomposition's quantized sections: its own U1 (if it has one,
     under ``u1_predictors``), then U3 and CENT predicted and CORE as it is, each chosen as
@@ -95,7 +113,8 @@ def segment_bits(segment: QuantizedSegment, u1_predictors: U1Predictors | None) 
     bits = 0.0
     if segment.u1 is not None:
         assert u1_predictors is not None  # an own U1 is sized under its kept predictors
-        bits += entropy_bits(u1_predictors.stream(segment.u1.q))
+        bits += u1_predictors.bits(segment.u1.q)
     for matrix, predict in ((segment.u3, True), (segment.core, False), (segment.centroids, True)):
-        bits += entropy_bits(qmat.section_stream(matrix.q, None, predict, True)[0])
+        stream = qmat.section_stream(matrix.q, None, predict, True)[0]
+        bits += coded_bits(stream, adaptive.sequence_order(stream.shape[0]))
     return bits

@@ -551,7 +551,7 @@ class SegmentedWorkspace:
         and those coded once: to compare trials, not the final size."""
         bits = 0.0
         if self.fixed_basis is None and quantized.shared_u1 is not None:
-            bits += estimate.entropy_bits(self._predictors(-1).stream(quantized.shared_u1.q))
+            bits += self._predictors(-1).bits(quantized.shared_u1.q)
         for s, factors in enumerate(quantized.segments):
             bits += estimate.segment_bits(factors, self._predictors(s))
         return round(bits / 8.0) + self._coded_once
