@@ -214,6 +214,39 @@ def recorded_streams(seeds: dict[str, list[bytes]]) -> Iterator[None]:
         streams.unpack_integers = unpack
 
 
+def adaptive_decode_input(payload: bytes, cols: int, order: Any) -> bytes:
+    """An ``adaptive_decode`` input with the order's arrays as they are (kind 2, bit 2 for a
+    mesh's): the rows, the three arrays, the column count, the payload."""
+    head = bytes([2 | (4 if order.mesh else 0)]) + varint(order.order.size)
+    for array in (order.order, order.sources, order.ends):
+        head += varint(array.size) + signed_values(array.tolist())
+    return head + varint(cols) + bytes(payload)
+
+
+@contextmanager
+def recorded_adaptive(seeds: dict[str, list[bytes]]) -> Iterator[None]:
+    """Records every adaptive stream (§6.14) decoded inside the block, as seeds of
+    ``adaptive_decode``."""
+    from tuckercodec.internal import adaptive
+
+    decode = adaptive.decode_columns
+
+    def recording(
+        payload: bytes | memoryview, cols: int, rows: int, order: Any, where: str
+    ) -> np.ndarray:
+        if rows == order.order.size:
+            seeds.setdefault("adaptive_decode", []).append(
+                adaptive_decode_input(bytes(payload), cols, order)
+            )
+        return decode(payload, cols, rows, order, where)
+
+    adaptive.decode_columns = recording
+    try:
+        yield
+    finally:
+        adaptive.decode_columns = decode
+
+
 def prediction_inputs(faces: np.ndarray, vertices: np.ndarray) -> list[bytes]:
     """``prediction_restore`` inputs of a mesh: predictor 2 over its faces with its first
     frame's positions in thousandths as the columns, and predictors 1 and 3 along its
@@ -237,7 +270,12 @@ def vector_seeds(path: Path) -> dict[str, list[bytes]]:
 
     seeds: dict[str, list[bytes]] = {}
     calls: list[tuple[Any, ...]] = []
-    with recorded_traversals(calls), recorded_corrections(seeds), recorded_streams(seeds):
+    with (
+        recorded_traversals(calls),
+        recorded_corrections(seeds),
+        recorded_streams(seeds),
+        recorded_adaptive(seeds),
+    ):
         try:
             mesh = tuckercodec.decode(path)
         except (tuckercodec.TuckerCodecError, ValueError):

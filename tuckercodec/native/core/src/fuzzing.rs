@@ -712,7 +712,7 @@ fn along_rows_and_tree(input: &mut Framing<'_>) {
     }
 }
 
-/// A coding order of §6.14 from the framing (`kind % 3`) and whether it is one an encoder
+/// A coding order of §6.14 from the framing (`(kind & 3) % 3`) and whether it is one an encoder
 /// writes (each row once, every source coded before it):
 ///
 /// - 0, ascending: a varint row count (at most 2**12);
@@ -723,7 +723,7 @@ fn along_rows_and_tree(input: &mut Framing<'_>) {
 ///   each a varint length (at most 2**12) and signed values, `mesh` from bit 2 of `kind`
 ///   (arrays that are not an order give none).
 fn adaptive_order(input: &mut Framing<'_>, kind: u8) -> Option<(CodingOrder, bool)> {
-    match kind % 3 {
+    match (kind & 3) % 3 {
         0 => Some((
             CodingOrder::sequence(bounded(input, MAX_PREDICTION_VERTICES)),
             true,
