@@ -10,9 +10,10 @@ package sees at once what the tools rely on.
   :func:`pack_container` and :func:`parse_container`, :func:`pack_raw` for files that break
   one rule on purpose, and :data:`SIGNATURE`, :data:`HEAD_SIZE`, :data:`PREAMBLE`,
   :data:`CRC`; the modules :mod:`~tuckercodec.format.faces`, :mod:`~tuckercodec.format.qmat`,
-  :mod:`~tuckercodec.format.sections`, :mod:`~tuckercodec.format.streams` and
-  :mod:`~tuckercodec.format.traversal` (§6.8); the mesh parents of §6.2 and
-  :func:`mesh_prediction` (its predictor 2), and :func:`tree_depths` of a parent forest.
+  :mod:`~tuckercodec.format.sections`, :mod:`~tuckercodec.format.streams`,
+  :mod:`~tuckercodec.format.traversal` (§6.8) and :mod:`~tuckercodec.format.adaptive` (§6.14);
+  the mesh parents of §6.2 and :func:`mesh_prediction` (its predictor 2), and
+  :func:`tree_depths` of a parent forest.
 * The decomposition and its analysis: :func:`centre_frames`, :func:`reconstruct`, :class:`Curve`.
 * The definitions the reports quote: :data:`KG_DEFINITION`, :data:`MAX_DISTANCE_DEFINITION`
   (the worst vertex, measured with :func:`max_distance`), :data:`STED_DEFINITION`.

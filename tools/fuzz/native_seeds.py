@@ -214,6 +214,39 @@ def recorded_streams(seeds: dict[str, list[bytes]]) -> Iterator[None]:
         streams.unpack_integers = unpack
 
 
+def adaptive_decode_input(payload: bytes, cols: int, order: Any) -> bytes:
+    """An ``adaptive_decode`` input with the order's arrays as they are (kind 2, bit 2 for a
+    mesh's): the rows, the three arrays, the column count, the payload."""
+    head = bytes([2 | (4 if order.mesh else 0)]) + varint(order.order.size)
+    for array in (order.order, order.sources, order.ends):
+        head += varint(array.size) + signed_values(array.tolist())
+    return head + varint(cols) + bytes(payload)
+
+
+@contextmanager
+def recorded_adaptive(seeds: dict[str, list[bytes]]) -> Iterator[None]:
+    """Records every adaptive stream (§6.14) decoded inside the block, as seeds of
+    ``adaptive_decode``."""
+    from tuckercodec.internal import adaptive
+
+    decode = adaptive.decode_columns
+
+    def recording(
+        payload: bytes | memoryview, cols: int, rows: int, order: Any, where: str
+    ) -> np.ndarray:
+        if rows == order.order.size:
+            seeds.setdefault("adaptive_decode", []).append(
+                adaptive_decode_input(bytes(payload), cols, order)
+            )
+        return decode(payload, cols, rows, order, where)
+
+    adaptive.decode_columns = recording
+    try:
+        yield
+    finally:
+        adaptive.decode_columns = decode
+
+
 def prediction_inputs(faces: np.ndarray, vertices: np.ndarray) -> list[bytes]:
     """``prediction_restore`` inputs of a mesh: predictor 2 over its faces with its first
     frame's positions in thousandths as the columns, and predictors 1 and 3 along its
@@ -237,7 +270,12 @@ def vector_seeds(path: Path) -> dict[str, list[bytes]]:
 
     seeds: dict[str, list[bytes]] = {}
     calls: list[tuple[Any, ...]] = []
-    with recorded_traversals(calls), recorded_corrections(seeds), recorded_streams(seeds):
+    with (
+        recorded_traversals(calls),
+        recorded_corrections(seeds),
+        recorded_streams(seeds),
+        recorded_adaptive(seeds),
+    ):
         try:
             mesh = tuckercodec.decode(path)
         except (tuckercodec.TuckerCodecError, ValueError):
@@ -259,10 +297,39 @@ def vector_seeds(path: Path) -> dict[str, list[bytes]]:
     return seeds
 
 
+def adaptive_seeds() -> dict[str, list[bytes]]:
+    """``adaptive_decode`` and ``adaptive_roundtrip`` inputs: small matrices coded by the
+    reference coder (§6.14) in ascending order (kind 0) and in U1's order over a grid of
+    triangles (kind 1), and the stream of each cut short."""
+    from tuckercodec.internal import adaptive, mesh_prediction, native, sheet_triangles
+
+    rng = np.random.default_rng(46)
+    faces = sheet_triangles(5)
+    steps = mesh_prediction(faces, 25).mean_steps
+    mesh = (
+        bytes([1, 0]) + varint(25) + varint(len(faces)) + signed_values(faces.reshape(-1).tolist()),
+        adaptive.mesh_order(25, steps.rows, steps.sources, steps.source_ends),
+    )
+    seeds: dict[str, list[bytes]] = {"adaptive_decode": [], "adaptive_roundtrip": []}
+    for rows, scale in [(1, 3.0), (7, 40.0), (25, 2.0), (25, 1e6)]:
+        orders = [(bytes([0]) + varint(rows), adaptive.sequence_order(rows))]
+        if rows == 25:
+            orders.append(mesh)
+        for head, order in orders:
+            columns = np.rint(rng.laplace(0, scale, (3, rows))).astype(np.int64)
+            with native.pure_python():
+                payload = adaptive.encode_columns(columns, order)
+            framed = head + varint(3)
+            seeds["adaptive_decode"] += [framed + payload, framed + payload[:-1]]
+            seeds["adaptive_roundtrip"].append(framed + signed_values(columns.reshape(-1).tolist()))
+    return seeds
+
+
 def extra_seeds() -> dict[str, list[bytes]]:
     """Small hand-made inputs for the edges the vectors do not reach."""
     floats = [0.0, -0.0, 1e16, 1e-5, 0.0001, 5e-324, 1.7976931348623157e308, float("inf")]
     return {
+        **adaptive_seeds(),
         "float_repr": [struct.pack("<d", v) for v in floats] + [b"\xff" * 8],
         "text_check": [
             text_check_input("é\r\nv 1 2 3\rf 1 2 3\n".encode(), 8, [1, 2, 10]),

@@ -18,10 +18,12 @@ in the two columns before. Integers of similar expected size so share their stat
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NoReturn
 
 import numpy as np
 
 from ..errors import FormatError
+from ..system import native
 
 #: Preamble flag bit 3 (critical): some section stores its integers with ``coder`` 1 (§6.14).
 ADAPTIVE = 0x0008
@@ -58,6 +60,11 @@ MAX_EXPONENT = 62
 #: No stream of N integers takes fewer than N / this many bytes (each decision costs at least
 #: -log2(1 - 2**-9) bits with LAST_SHIFT 7 and 15-bit probabilities); the same bound as §6.1's.
 MAX_EXPANSION = 32768
+
+
+def _broken(message: str, where: str) -> NoReturn:
+    """R46, the one rule of an adaptive stream: from the reference's checks and the core's."""
+    raise FormatError(message, rule="R46-adaptive-stream", field=where) from None
 
 
 class RangeEncoder:
@@ -129,8 +136,8 @@ class RangeDecoder:
         self.position = 5
         self.range = MASK32
 
-    def _broken(self, message: str) -> None:
-        raise FormatError(message, rule="R46-adaptive-stream", field=self.where)
+    def _broken(self, message: str) -> NoReturn:
+        _broken(message, self.where)
 
     def _next(self) -> int:
         if self.position >= len(self.data):
@@ -302,9 +309,29 @@ def _neighbour_class(magnitudes: list[int], order: CodingOrder, j: int) -> int:
     return magnitude_class(2 * magnitudes[before[0]] + magnitudes[before[1]])
 
 
+def _order_arrays(order: CodingOrder) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``order``'s arrays as the compiled core takes them: contiguous int64."""
+
+    def contiguous(array: np.ndarray) -> np.ndarray:
+        return np.ascontiguousarray(array, dtype=np.int64)
+
+    return contiguous(order.order), contiguous(order.sources), contiguous(order.ends)
+
+
 def encode_columns(columns: np.ndarray, order: CodingOrder) -> bytes:
     """The adaptive stream of ``columns`` (cols, rows) int64: column after column, each in
-    ``order``."""
+    ``order``. The compiled core codes it where it is installed, else
+    :func:`_encode_columns_python` (the reference; the same bytes)."""
+    core = native.core()
+    if core is not None:
+        values = np.ascontiguousarray(columns, dtype=np.int64)
+        payload: bytes = core.adaptive_encode(values, *_order_arrays(order), bool(order.mesh))
+        return payload
+    return _encode_columns_python(columns, order)
+
+
+def _encode_columns_python(columns: np.ndarray, order: CodingOrder) -> bytes:
+    """:func:`encode_columns` one decision at a time in Python: the reference."""
     coder = RangeEncoder()
     probs, counts = fresh_models()
     cols, rows = columns.shape
@@ -327,14 +354,32 @@ def decode_columns(
     payload: bytes | memoryview, cols: int, rows: int, order: CodingOrder, where: str
 ) -> np.ndarray:
     """The (cols, rows) int64 integers of an adaptive stream (§6.14); R46 for any stream that
-    is not exactly the coding of cols x rows integers."""
-    if cols * rows > MAX_EXPANSION * len(payload):
-        raise FormatError(
+    is not exactly the coding of cols x rows integers. The compiled core decodes it where it is
+    installed, else :func:`_decode_columns_python` (the reference; the same integers, or the
+    same error)."""
+    if cols * rows > MAX_EXPANSION * len(payload):  # before anything is allocated
+        _broken(
             f"{cols * rows} integers cannot come from {len(payload)} bytes (at most "
             f"{MAX_EXPANSION} per byte)",
-            rule="R46-adaptive-stream",
-            field=where,
+            where,
         )
+    core = native.core()
+    if core is None:
+        return _decode_columns_python(payload, cols, rows, order, where)
+    try:
+        values: np.ndarray = core.adaptive_decode(
+            bytes(payload), cols, rows, *_order_arrays(order), bool(order.mesh)
+        )
+    except core.Broken as error:
+        _broken(error.args[1], where)
+    return values
+
+
+def _decode_columns_python(
+    payload: bytes | memoryview, cols: int, rows: int, order: CodingOrder, where: str
+) -> np.ndarray:
+    """:func:`decode_columns` one decision at a time in Python (after its size check): the
+    reference."""
     coder = RangeDecoder(payload, where)
     probs, counts = fresh_models()
     out = np.zeros((cols, rows), dtype=np.int64)

@@ -14,6 +14,7 @@
 //! 2, ...). Bytes read past the end of the input are 0. `tools/fuzz/native_seeds.py` writes
 //! the same framings from the conformance vectors.
 
+use crate::adaptive::{self, CodingOrder};
 use crate::prediction::topology::Forest;
 use crate::prediction::{accumulate_rows, accumulate_tree, linear_accumulate, MeanPlan};
 use crate::residual::{correct, pack_chunk, restore_chunk, Domain};
@@ -38,6 +39,8 @@ pub const TARGETS: &[(&str, Target)] = &[
     ("residual_correct", residual_correct),
     ("streams_unpack", streams_unpack),
     ("prediction_restore", prediction_restore),
+    ("adaptive_decode", adaptive_decode),
+    ("adaptive_roundtrip", adaptive_roundtrip),
 ];
 
 /// The most faces a decode is asked for, and the most rows an encode is given.
@@ -46,6 +49,8 @@ pub const MAX_COUNT: u64 = 1 << 16;
 pub const MAX_PREDICTION_VERTICES: u64 = 1 << 12;
 /// The widest face table.
 pub const MAX_WIDTH: usize = 8;
+/// The most columns an adaptive stream is decoded into, or encoded from.
+pub const MAX_ADAPTIVE_COLUMNS: u64 = 16;
 /// The most vertices an encode is given (its tables take one entry a vertex).
 pub const MAX_ENCODER_VERTICES: u64 = 1 << 20;
 
@@ -704,6 +709,104 @@ fn along_rows_and_tree(input: &mut Framing<'_>) {
     for (j, value) in values.iter().enumerate() {
         let before = if j >= width { sums[j - width] } else { 0 };
         assert_eq!(sums[j].wrapping_sub(before), *value, "running sums");
+    }
+}
+
+/// A coding order of §6.14 from the framing (`(kind & 3) % 3`) and whether it is one an encoder
+/// writes (each row once, every source coded before it):
+///
+/// - 0, ascending: a varint row count (at most 2**12);
+/// - 1, U1's over a mesh: a byte `b` for `width = 3 + b % 6`, a varint vertex count and a
+///   varint face count (each at most 2**12), the faces' entries, signed (the forest checks
+///   them; a table it refuses gives no order);
+/// - 2, any arrays: a varint row count (at most 2**12), then `order`, `sources` and `ends`,
+///   each a varint length (at most 2**12) and signed values, `mesh` from bit 2 of `kind`
+///   (arrays that are not an order give none).
+fn adaptive_order(input: &mut Framing<'_>, kind: u8) -> Option<(CodingOrder, bool)> {
+    match (kind & 3) % 3 {
+        0 => Some((
+            CodingOrder::sequence(bounded(input, MAX_PREDICTION_VERTICES)),
+            true,
+        )),
+        1 => {
+            let width = 3 + usize::from(input.byte()) % 6;
+            let vertex_count = bounded(input, MAX_PREDICTION_VERTICES);
+            let face_count = bounded(input, MAX_PREDICTION_VERTICES);
+            let faces = input.signed_values((face_count * width) as u64);
+            let faces = &faces[..faces.len() / width * width];
+            let steps = Forest::new(faces, width, vertex_count).ok()?.mean_steps();
+            let order = CodingOrder::mesh(
+                vertex_count,
+                &steps.rows,
+                &steps.sources,
+                &steps.source_ends,
+            );
+            Some((order.expect("the mean steps are an order"), true))
+        }
+        _ => {
+            let rows = bounded(input, MAX_PREDICTION_VERTICES);
+            let [order, sources, ends] = [0u8; 3].map(|_| {
+                let length = bounded(input, MAX_PREDICTION_VERTICES);
+                input.signed_values(length as u64)
+            });
+            let order = CodingOrder::new(&order, &sources, &ends, kind & 4 != 0, rows).ok()?;
+            Some((order, false))
+        }
+    }
+}
+
+/// `adaptive::decode_columns` of any payload. Framing: a byte `kind` and the order it frames
+/// ([`adaptive_order`]), a varint column count (at most 16), the rest is the payload.
+///
+/// Checks: no panic; `decode_columns_into` an array of other values gives the same; where the
+/// order is an encoder's, the integers decoded encode to a stream that decodes to them again.
+pub fn adaptive_decode(data: &[u8]) {
+    let mut input = Framing::new(data);
+    let kind = input.byte();
+    let Some((order, encodable)) = adaptive_order(&mut input, kind) else {
+        return;
+    };
+    let cols = input.varint().min(MAX_ADAPTIVE_COLUMNS) as usize;
+    let payload = input.rest();
+    let decoded = adaptive::decode_columns(payload, cols, &order);
+    let mut into = vec![-1; cols * order.row_count()];
+    let filled = adaptive::decode_columns_into(payload, &order, &mut into).map(|()| into);
+    assert_eq!(decoded, filled, "decode_columns_into");
+    let Ok(values) = decoded else {
+        return;
+    };
+    if encodable {
+        let again = adaptive::encode_columns(&values, cols, order.row_count(), &order)
+            .expect("an order's columns encode");
+        assert_eq!(
+            adaptive::decode_columns(&again, cols, &order),
+            Ok(values),
+            "decoded integers encoded and decoded again"
+        );
+    }
+}
+
+/// `adaptive::encode_columns` then `decode_columns`. Framing: a byte `kind` and the order it
+/// frames ([`adaptive_order`], `kind % 2`: ascending or a mesh's), a varint column count (at
+/// most 16), then the values column after column, signed (0 past the end).
+///
+/// Checks: no panic; the stream decodes to the values, but for a magnitude of 2**63 (`i64::MIN`,
+/// 64 bits), which it codes and no decoder takes (R46).
+pub fn adaptive_roundtrip(data: &[u8]) {
+    let mut input = Framing::new(data);
+    let kind = input.byte() % 2;
+    let Some((order, _)) = adaptive_order(&mut input, kind) else {
+        return;
+    };
+    let cols = input.varint().min(MAX_ADAPTIVE_COLUMNS) as usize;
+    let rows = order.row_count();
+    let values = padded_values(&mut input, cols * rows);
+    let payload = adaptive::encode_columns(&values, cols, rows, &order).expect("encodes");
+    let decoded = adaptive::decode_columns(&payload, cols, &order);
+    if values.contains(&i64::MIN) {
+        assert_eq!(decoded.map_err(|e| e.rule), Err(adaptive::RULE), "2**63");
+    } else {
+        assert_eq!(decoded, Ok(values), "encoded and decoded");
     }
 }
 

@@ -5,6 +5,7 @@
 //! saying the same thing as the Python reference (`tuckercodec/format/`), never a panic.
 #![forbid(unsafe_code)]
 
+pub mod adaptive;
 pub mod encoder;
 pub mod error;
 pub mod fuzzing;

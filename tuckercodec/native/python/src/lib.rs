@@ -14,6 +14,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use tuckercodec_core::error::Broken;
 
+mod adaptive;
 mod encoder;
 mod residual;
 mod text;
@@ -47,5 +48,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     encoder::register(m)?;
     prediction::register(m)?;
     streams::register(m)?;
+    adaptive::register(m)?;
     Ok(())
 }

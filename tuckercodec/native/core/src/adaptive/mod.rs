@@ -1,0 +1,345 @@
+//! Spec section 6.14, adaptive coding: a section's integers through a binary range coder with
+//! adaptive models and contexts, the same bytes and integers as `tuckercodec/format/adaptive.py`.
+//!
+//! The matrix is coded column after column (`cols` columns of `rows` integers, column-major as
+//! the Python side holds it, shape (cols, rows)), and within a column in a [`CodingOrder`]. Each
+//! integer's context is `6 * A + B`: `A` the class of its earlier neighbours in the column
+//! (coded before it), `B` the class of the same row in the two columns before.
+//!
+//! Entry points (each refuses what it cannot use, never panics):
+//!
+//! - [`CodingOrder::new`]`(order, sources, ends, mesh, rows)`: the order arrays of
+//!   `adaptive.CodingOrder`, checked (an [`InvalidOrder`] is the caller's mistake, not a file's);
+//! - [`encode_columns`]`(values, cols, rows, order)`: the stream's bytes;
+//! - [`decode_columns`] / [`decode_columns_into`]`(payload, order, out)`: the integers, or
+//!   R46-adaptive-stream with the reference's message, its first error first;
+//! - [`check_size`]`(cols, rows, payload_len)`: the up-front bound (at most 32768 integers a
+//!   byte), which a caller checks before it allocates the output.
+
+mod coder;
+#[cfg(test)]
+mod tests;
+
+use std::fmt;
+
+use crate::error::Broken;
+
+pub use coder::{
+    decode_integer, encode_integer, Context, Model, RangeDecoder, RangeEncoder, FRESH_CONTEXT,
+    MAX_EXPONENT, MODELS_PER_CONTEXT,
+};
+
+/// The rule every check of an adaptive stream reports (spec section 11).
+pub const RULE: &str = "R46-adaptive-stream";
+/// No payload of L bytes holds more than MAX_EXPANSION * L integers.
+pub const MAX_EXPANSION: u64 = 32768;
+/// Classes of the earlier neighbours (0 for none, then 1 + min(bit length, 14)).
+pub const NEIGHBOUR_CLASSES: usize = 16;
+/// Classes of the same row in the two columns before.
+pub const LEFT_CLASSES: usize = 6;
+/// Contexts: neighbour class times LEFT_CLASSES plus left class.
+pub const CONTEXTS: usize = NEIGHBOUR_CLASSES * LEFT_CLASSES;
+
+/// Order arrays that do not describe a coding order of `rows` rows.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct InvalidOrder(pub String);
+
+impl fmt::Display for InvalidOrder {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "invalid coding order: {}", self.0)
+    }
+}
+
+impl std::error::Error for InvalidOrder {}
+
+/// The order rows are coded in within a column, and each one's earlier neighbours
+/// (`adaptive.CodingOrder`): `sources[ends[j]..ends[j + 1]]` are those of `rows[j]`. With
+/// `mesh`, their magnitudes are averaged (`floor(3 * sum / count)`, U1's mesh sources);
+/// without, the first counts twice and the second once (`3 |x|` for a single one), the rows
+/// before in ascending order.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CodingOrder {
+    rows: Vec<usize>,
+    sources: Vec<usize>,
+    ends: Vec<usize>,
+    mesh: bool,
+    row_count: usize,
+}
+
+/// An index of the order arrays as a row or position: `None` outside `0..limit`.
+fn index(value: i64, limit: usize) -> Option<usize> {
+    usize::try_from(value).ok().filter(|&v| v < limit)
+}
+
+impl CodingOrder {
+    /// The order of the arrays of `adaptive.CodingOrder` for a matrix of `rows` rows: every
+    /// entry of `order` and `sources` a row, `ends` one longer than `order`, non-decreasing,
+    /// within `sources`. (Nothing requires each row once, or the sources to be coded before:
+    /// the reference's loops run on any such arrays, and so do these.)
+    pub fn new(
+        order: &[i64],
+        sources: &[i64],
+        ends: &[i64],
+        mesh: bool,
+        rows: usize,
+    ) -> Result<Self, InvalidOrder> {
+        let rows_of = |values: &[i64], what: &str| {
+            values
+                .iter()
+                .map(|&v| index(v, rows))
+                .collect::<Option<Vec<usize>>>()
+                .ok_or_else(|| InvalidOrder(format!("{what} holds an index outside 0..{rows}")))
+        };
+        let order_rows = rows_of(order, "order")?;
+        let source_rows = rows_of(sources, "sources")?;
+        if ends.len() != order.len() + 1 {
+            return Err(InvalidOrder(format!(
+                "{} ends for {} rows",
+                ends.len(),
+                order.len()
+            )));
+        }
+        let ends = ends
+            .iter()
+            .map(|&v| index(v, source_rows.len() + 1))
+            .collect::<Option<Vec<usize>>>()
+            .ok_or_else(|| InvalidOrder("ends point outside the sources".to_string()))?;
+        if ends.windows(2).any(|pair| pair[0] > pair[1]) {
+            return Err(InvalidOrder("ends decrease".to_string()));
+        }
+        Ok(CodingOrder {
+            rows: order_rows,
+            sources: source_rows,
+            ends,
+            mesh,
+            row_count: rows,
+        })
+    }
+
+    /// `adaptive.sequence_order(rows)`: ascending, each row after the (up to) two before it.
+    pub fn sequence(rows: usize) -> Self {
+        let mut sources = Vec::with_capacity(2 * rows);
+        let mut ends = Vec::with_capacity(rows + 1);
+        ends.push(0);
+        for r in 0..rows {
+            sources.extend((r.saturating_sub(2)..r).rev());
+            ends.push(sources.len());
+        }
+        CodingOrder {
+            rows: (0..rows).collect(),
+            sources,
+            ends,
+            mesh: false,
+            row_count: rows,
+        }
+    }
+
+    /// `adaptive.mesh_order`: the rows predictor 2 does not predict (not in `mean_rows`) in
+    /// ascending order, without neighbours, then `mean_rows` in order, each with its
+    /// `sources[source_ends[j]..source_ends[j + 1]]` (§6.2's mean steps).
+    pub fn mesh(
+        rows: usize,
+        mean_rows: &[u32],
+        sources: &[u32],
+        source_ends: &[usize],
+    ) -> Result<Self, InvalidOrder> {
+        let mut predicted = vec![false; rows];
+        for &row in mean_rows {
+            let slot = predicted
+                .get_mut(row as usize)
+                .ok_or_else(|| InvalidOrder(format!("mean row {row} of {rows}")))?;
+            *slot = true;
+        }
+        let mut order: Vec<i64> = (0..rows)
+            .filter(|&r| !predicted[r])
+            .map(|r| r as i64)
+            .collect();
+        let mut ends = vec![0i64; order.len()];
+        order.extend(mean_rows.iter().map(|&r| i64::from(r)));
+        ends.extend(source_ends.iter().map(|&e| i64::try_from(e).unwrap_or(-1)));
+        let sources: Vec<i64> = sources.iter().map(|&s| i64::from(s)).collect();
+        Self::new(&order, &sources, &ends, true, rows)
+    }
+
+    /// The number of rows of the matrices this order codes.
+    pub fn row_count(&self) -> usize {
+        self.row_count
+    }
+
+    /// The neighbour class of position `j` in `column` (its values so far): 0 without earlier
+    /// neighbours, else 1 + min(bit length of m, 14).
+    #[inline(always)]
+    fn neighbour_class(&self, column: &[i64], sources: &[usize]) -> usize {
+        let magnitude = |w: usize| column.get(w).map_or(0, |v| v.unsigned_abs());
+        let m = match *sources {
+            [] => return 0,
+            [single] if !self.mesh => u128::from(magnitude(single)) * 3,
+            [first, second, ..] if !self.mesh => {
+                u128::from(magnitude(first)) * 2 + u128::from(magnitude(second))
+            }
+            _ => mean_magnitude(sources, magnitude),
+        };
+        1 + (128 - m.leading_zeros() as usize).min(NEIGHBOUR_CLASSES - 2)
+    }
+}
+
+/// floor(3 * sum / count) of the sources' magnitudes, exact where the class depends on it (it
+/// only tells bit lengths up to 14 apart: a saturated value is far beyond).
+#[inline(always)]
+fn mean_magnitude(sources: &[usize], magnitude: impl Fn(usize) -> u64) -> u128 {
+    let mut total = 0u64;
+    let mut wide = false;
+    for &w in sources {
+        let (sum, carried) = total.overflowing_add(magnitude(w));
+        total = sum;
+        wide |= carried;
+    }
+    let count = sources.len() as u64;
+    if !wide && total < 1 << 62 {
+        return u128::from(total * 3 / count);
+    }
+    // magnitudes summing past 2**62: rare, exact in 128 bits (fewer than 2**64 sources)
+    let total: u128 = sources.iter().map(|&w| u128::from(magnitude(w))).sum();
+    total.saturating_mul(3) / u128::from(count)
+}
+
+/// The left classes of one column's rows: min(bit length of 2 |x[r, c-1]| + |x[r, c-2]|, 5),
+/// from the columns before, each as long as `out` (`None` before the first).
+fn left_classes(before: Option<&[i64]>, two_before: Option<&[i64]>, out: &mut [u8]) {
+    match (before, two_before) {
+        (None, _) => out.fill(0),
+        (Some(b), Some(bb)) => {
+            for ((class, &x), &y) in out.iter_mut().zip(b).zip(bb) {
+                let m = x
+                    .unsigned_abs()
+                    .saturating_mul(2)
+                    .saturating_add(y.unsigned_abs());
+                *class = left_class(m);
+            }
+        }
+        (Some(b), None) => {
+            for (class, &x) in out.iter_mut().zip(b) {
+                *class = left_class(x.unsigned_abs().saturating_mul(2));
+            }
+        }
+    }
+}
+
+/// min(bit length, 5): saturation beyond 2**5 does not change it.
+#[inline(always)]
+fn left_class(m: u64) -> u8 {
+    (64 - m.leading_zeros()).min(LEFT_CLASSES as u32 - 1) as u8
+}
+
+/// R46 where `cols * rows` integers cannot come from `payload_len` bytes (the reference's
+/// up-front check, before any allocation).
+pub fn check_size(cols: usize, rows: usize, payload_len: usize) -> Result<(), Broken> {
+    let count = cols as u128 * rows as u128;
+    if count > u128::from(MAX_EXPANSION) * payload_len as u128 {
+        return Err(Broken::new(
+            RULE,
+            format!(
+                "{count} integers cannot come from {payload_len} bytes (at most {MAX_EXPANSION} \
+                 per byte)"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Every context fresh.
+fn fresh_models() -> Vec<Context> {
+    vec![FRESH_CONTEXT; CONTEXTS]
+}
+
+/// The context of position `j` (row `row`) given the column so far and the left classes.
+#[inline(always)]
+fn context_of(order: &CodingOrder, column: &[i64], left: &[u8], j: usize, row: usize) -> usize {
+    let (start, end) = (order.ends[j], order.ends[j + 1]);
+    let sources = order.sources.get(start..end).unwrap_or(&[]);
+    let a = order.neighbour_class(column, sources);
+    let b = usize::from(left.get(row).copied().unwrap_or(0));
+    a * LEFT_CLASSES + b
+}
+
+/// The adaptive stream of `values`, `cols` columns of `rows` integers each (column-major,
+/// shape (cols, rows)), each column in `order` (whose rows must be `rows`).
+pub fn encode_columns(
+    values: &[i64],
+    cols: usize,
+    rows: usize,
+    order: &CodingOrder,
+) -> Result<Vec<u8>, InvalidOrder> {
+    if order.row_count != rows || cols.checked_mul(rows) != Some(values.len()) {
+        return Err(InvalidOrder(format!(
+            "{} values for {cols} columns of {rows} rows in an order of {} rows",
+            values.len(),
+            order.row_count
+        )));
+    }
+    let mut coder = RangeEncoder::new();
+    let mut models = fresh_models();
+    let mut left = vec![0u8; rows];
+    for c in 0..cols {
+        let column = &values[c * rows..(c + 1) * rows];
+        let before = c.checked_sub(1).map(|b| &values[b * rows..(b + 1) * rows]);
+        let two_before = c.checked_sub(2).map(|b| &values[b * rows..(b + 1) * rows]);
+        left_classes(before, two_before, &mut left);
+        for (j, &row) in order.rows.iter().enumerate() {
+            let t = context_of(order, column, &left, j, row);
+            encode_integer(&mut coder, &mut models[t], column[row]);
+        }
+    }
+    Ok(coder.finish())
+}
+
+/// The `cols` columns of `order.row_count()` integers of an adaptive stream (shape (cols,
+/// rows), column-major), or R46. Checks [`check_size`] first.
+pub fn decode_columns(
+    payload: &[u8],
+    cols: usize,
+    order: &CodingOrder,
+) -> Result<Vec<i64>, Broken> {
+    let rows = order.row_count;
+    check_size(cols, rows, payload.len())?;
+    // within the bound: at most 2**15 integers a byte of a payload that exists
+    let mut out = vec![0i64; cols * rows];
+    decode_columns_into(payload, order, &mut out)?;
+    Ok(out)
+}
+
+/// [`decode_columns`] into `out`, whose length must be a whole number of columns of the order's
+/// rows (an array the caller allocated after [`check_size`]); it is zeroed first.
+pub fn decode_columns_into(
+    payload: &[u8],
+    order: &CodingOrder,
+    out: &mut [i64],
+) -> Result<(), Broken> {
+    let rows = order.row_count;
+    let cols = out.len().checked_div(rows).unwrap_or(0);
+    check_size(cols, rows, payload.len())?;
+    if cols * rows != out.len() {
+        return Err(Broken::new(
+            RULE,
+            format!("{} integers are not columns of {rows} rows", out.len()),
+        ));
+    }
+    out.fill(0);
+    let mut coder = RangeDecoder::new(payload)?;
+    let mut models = fresh_models();
+    let mut left = vec![0u8; rows];
+    for c in 0..cols {
+        let (done, rest) = out.split_at_mut(c * rows);
+        let column = &mut rest[..rows];
+        let before = c.checked_sub(1).map(|b| &done[b * rows..(b + 1) * rows]);
+        let two_before = c.checked_sub(2).map(|b| &done[b * rows..(b + 1) * rows]);
+        left_classes(before, two_before, &mut left);
+        for (j, &row) in order.rows.iter().enumerate() {
+            let t = context_of(order, column, &left, j, row);
+            let value = decode_integer(&mut coder, &mut models[t])?;
+            coder.check_overrun()?;
+            column[row] = value;
+        }
+    }
+    coder.finish()
+}

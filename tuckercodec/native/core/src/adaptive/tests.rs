@@ -1,0 +1,283 @@
+use super::*;
+
+/// A small deterministic generator (xorshift64*), so the tests need no crate.
+struct Random(u64);
+
+impl Random {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+
+    /// Mostly small signed integers, some zero, now and then one of any size below 2**62.
+    fn integer(&mut self) -> i64 {
+        let r = self.next();
+        let magnitude = match r % 8 {
+            0 | 1 => 0,
+            2..=5 => (r >> 8) % 40,
+            6 => (r >> 8) % 100_000,
+            _ => (r >> 8) >> (r >> 58),
+        } as i64;
+        if r & 128 != 0 {
+            -magnitude
+        } else {
+            magnitude
+        }
+    }
+}
+
+fn hex(text: &str) -> Vec<u8> {
+    (0..text.len())
+        .step_by(2)
+        .map(|i| u8::from_str_radix(&text[i..i + 2], 16).unwrap())
+        .collect()
+}
+
+/// The (cols, rows) = (3, 5) matrix and the mesh order of the bytes below, which
+/// `tuckercodec/format/adaptive.py` wrote.
+const VALUES: [i64; 15] = [
+    0,
+    1,
+    -2,
+    3,
+    100,
+    5,
+    -7,
+    0,
+    1 << 40,
+    -(1 << 62),
+    1,
+    2,
+    3,
+    4,
+    5,
+];
+const SEQUENCE_BYTES: &str =
+    "004e56bd263790ffffffffd765d697000b2effffffffe561c7c0000000000c0f50f7e53000";
+const MESH_BYTES: &str =
+    "007605f97deecb7ffffff0d3885600040c8fffffffffec18c161000000000914e996c90000";
+
+fn small_mesh() -> CodingOrder {
+    CodingOrder::mesh(5, &[3, 1, 4], &[0, 2, 0, 3, 2, 3, 1], &[0, 2, 5, 7]).unwrap()
+}
+
+fn rule_and_detail(result: Result<Vec<i64>, Broken>) -> (&'static str, String) {
+    let error = result.unwrap_err();
+    (error.rule, error.detail)
+}
+
+#[test]
+fn the_reference_bytes() {
+    let sequence = CodingOrder::sequence(5);
+    let encoded = encode_columns(&VALUES, 3, 5, &sequence).unwrap();
+    assert_eq!(encoded, hex(SEQUENCE_BYTES));
+    assert_eq!(decode_columns(&encoded, 3, &sequence).unwrap(), VALUES);
+    let mesh = small_mesh();
+    let encoded = encode_columns(&VALUES, 3, 5, &mesh).unwrap();
+    assert_eq!(encoded, hex(MESH_BYTES));
+    assert_eq!(decode_columns(&encoded, 3, &mesh).unwrap(), VALUES);
+    // nothing to code: the five bytes of the coder's ending
+    let empty = encode_columns(&[], 0, 0, &CodingOrder::sequence(0)).unwrap();
+    assert_eq!(empty, vec![0; 5]);
+    assert_eq!(
+        decode_columns(&empty, 0, &CodingOrder::sequence(0)).unwrap(),
+        Vec::<i64>::new()
+    );
+}
+
+#[test]
+fn the_mesh_order_is_the_references() {
+    let mesh = small_mesh();
+    let expected = CodingOrder::new(
+        &[0, 2, 3, 1, 4],
+        &[0, 2, 0, 3, 2, 3, 1],
+        &[0, 0, 0, 2, 5, 7],
+        true,
+        5,
+    )
+    .unwrap();
+    assert_eq!(mesh, expected);
+    let sequence = CodingOrder::new(&[0, 1, 2, 3], &[0, 1, 0, 2, 1], &[0, 0, 1, 3, 5], false, 4);
+    assert_eq!(sequence.unwrap(), CodingOrder::sequence(4));
+}
+
+#[test]
+fn random_matrices_round_trip() {
+    let mut random = Random(0x9E37_79B9_7F4A_7C15);
+    for (cols, rows) in [(1, 1), (1, 7), (7, 1), (3, 50), (12, 33), (2, 400)] {
+        let values: Vec<i64> = (0..cols * rows).map(|_| random.integer()).collect();
+        for order in [CodingOrder::sequence(rows), reversed(rows)] {
+            let encoded = encode_columns(&values, cols, rows, &order).unwrap();
+            assert_eq!(decode_columns(&encoded, cols, &order).unwrap(), values);
+        }
+    }
+}
+
+/// Descending rows, each after the rows after it: a mesh-like order of another shape.
+fn reversed(rows: usize) -> CodingOrder {
+    let order: Vec<i64> = (0..rows as i64).rev().collect();
+    let mut sources = Vec::new();
+    let mut ends = vec![0i64];
+    for &row in &order {
+        sources.extend((row + 1..rows as i64).take(3));
+        ends.push(sources.len() as i64);
+    }
+    CodingOrder::new(&order, &sources, &ends, true, rows).unwrap()
+}
+
+#[test]
+fn the_largest_magnitudes() {
+    let values = [i64::MAX, -i64::MAX, 1 << 62, -(1 << 62), 3, i64::MAX - 1];
+    let order = CodingOrder::sequence(3);
+    let encoded = encode_columns(&values, 2, 3, &order).unwrap();
+    assert_eq!(decode_columns(&encoded, 2, &order).unwrap(), values);
+    // 2**63 takes 63 exponent decisions 1: written, but no decoder takes it
+    let encoded = encode_columns(&[i64::MIN], 1, 1, &CodingOrder::sequence(1)).unwrap();
+    assert_eq!(encoded, hex("00fffffffefffe13924d000000000000000000"));
+    assert_eq!(
+        rule_and_detail(decode_columns(&encoded, 1, &CodingOrder::sequence(1))),
+        (
+            RULE,
+            "an integer of the adaptive stream has more than 62 bits".into()
+        )
+    );
+}
+
+#[test]
+fn damaged_streams_are_r46() {
+    let order = CodingOrder::sequence(5);
+    let good = hex(SEQUENCE_BYTES);
+    let ends_early = (
+        RULE,
+        "the adaptive stream ends before its last integer".to_string(),
+    );
+    assert_eq!(
+        rule_and_detail(decode_columns(&good[..good.len() - 1], 3, &order)),
+        ends_early
+    );
+    assert_eq!(
+        rule_and_detail(decode_columns(&good[..6], 3, &order)),
+        ends_early
+    );
+    let mut longer = good.clone();
+    longer.extend([0, 0]);
+    assert_eq!(
+        rule_and_detail(decode_columns(&longer, 3, &order)),
+        (
+            RULE,
+            "the adaptive stream holds 2 bytes after its last integer".into()
+        )
+    );
+    let start = (
+        RULE,
+        "an adaptive stream starts with a zero byte and holds at least 5 bytes".to_string(),
+    );
+    let mut first = good.clone();
+    first[0] = 1;
+    assert_eq!(rule_and_detail(decode_columns(&first, 3, &order)), start);
+    assert_eq!(
+        rule_and_detail(decode_columns(&good[..4], 0, &order)),
+        start
+    );
+    // fewer integers than coded: bytes left over
+    assert_eq!(decode_columns(&good, 2, &order).unwrap_err().rule, RULE);
+    // a code at or above the range at the end
+    assert_eq!(
+        rule_and_detail(decode_columns(&[0, 0xFF, 0xFF, 0xFF, 0xFF], 0, &order)),
+        (
+            RULE,
+            "the adaptive stream's last bytes are not a range coder's ending".into()
+        )
+    );
+}
+
+#[test]
+fn every_damage_is_an_error_or_integers() {
+    let order = small_mesh();
+    let good = hex(MESH_BYTES);
+    for at in 0..good.len() {
+        for flip in [1u8, 0x80, 0xFF] {
+            let mut damaged = good.clone();
+            damaged[at] ^= flip;
+            if let Ok(values) = decode_columns(&damaged, 3, &order) {
+                // whatever it decodes to codes back to a stream of the same integers
+                let again = encode_columns(&values, 3, 5, &order).unwrap();
+                assert_eq!(decode_columns(&again, 3, &order).unwrap(), values);
+            }
+        }
+    }
+}
+
+#[test]
+fn too_many_integers_for_the_payload() {
+    let order = CodingOrder::sequence(1 << 20);
+    assert_eq!(
+        rule_and_detail(decode_columns(&[0; 5], 1 << 20, &order)),
+        (
+            RULE,
+            "1099511627776 integers cannot come from 5 bytes (at most 32768 per byte)".into()
+        )
+    );
+    assert!(check_size(usize::MAX, usize::MAX, usize::MAX).is_err());
+    assert!(check_size(32768, 5, 5).is_ok());
+    assert!(check_size(32769, 5, 5).is_err());
+    // a matrix whose columns do not fill the output
+    let mut out = vec![0i64; 7];
+    assert_eq!(
+        decode_columns_into(&[0; 5], &CodingOrder::sequence(2), &mut out)
+            .unwrap_err()
+            .rule,
+        RULE
+    );
+}
+
+#[test]
+fn invalid_orders_are_refused() {
+    assert!(CodingOrder::new(&[0, 3], &[], &[0, 0, 0], true, 3).is_err());
+    assert!(CodingOrder::new(&[0, -1], &[], &[0, 0, 0], true, 3).is_err());
+    assert!(CodingOrder::new(&[0, 1], &[5], &[0, 0, 1], true, 3).is_err());
+    assert!(CodingOrder::new(&[0, 1], &[0], &[0, 0], true, 3).is_err());
+    assert!(CodingOrder::new(&[0, 1], &[0], &[0, 1, 0], true, 3).is_err());
+    assert!(CodingOrder::new(&[0, 1], &[0], &[0, 0, 2], true, 3).is_err());
+    assert!(CodingOrder::new(&[0, 1], &[0], &[-1, 0, 1], true, 3).is_err());
+    assert!(CodingOrder::mesh(3, &[3], &[], &[0, 0]).is_err());
+    assert!(CodingOrder::mesh(3, &[1], &[0], &[0, 2]).is_err());
+    // rows missing or twice are the reference's business, not an error
+    let order = CodingOrder::new(&[1, 1], &[], &[0, 0, 0], true, 3).unwrap();
+    let encoded = encode_columns(&[4, 5, 6], 1, 3, &order).unwrap();
+    assert_eq!(decode_columns(&encoded, 1, &order).unwrap(), [0, 5, 0]);
+    assert!(encode_columns(&[1, 2], 1, 3, &order).is_err());
+    assert!(encode_columns(&[1, 2, 3], 1, 3, &CodingOrder::sequence(2)).is_err());
+}
+
+#[test]
+fn classes_at_their_edges() {
+    let mut left = [0u8; 4];
+    left_classes(
+        Some(&[0, 1, -8, i64::MIN]),
+        Some(&[1, 0, 0, i64::MIN]),
+        &mut left,
+    );
+    assert_eq!(left, [1, 2, 5, 5]);
+    let mesh = small_mesh();
+    let column = [i64::MIN, i64::MAX, 0, 1, 1];
+    assert_eq!(mesh.neighbour_class(&column, &[]), 0);
+    assert_eq!(mesh.neighbour_class(&column, &[2]), 1);
+    assert_eq!(mesh.neighbour_class(&column, &[3]), 3); // 3 * 1 = 3: bit length 2
+    assert_eq!(mesh.neighbour_class(&column, &[3, 4, 2]), 3); // floor(6 / 3) = 2
+    assert_eq!(mesh.neighbour_class(&column, &[0, 1, 0]), 15);
+    let sequence = CodingOrder::sequence(5);
+    assert_eq!(sequence.neighbour_class(&column, &[3]), 3);
+    assert_eq!(sequence.neighbour_class(&column, &[3, 2]), 3); // 2 * 1 + 0: bit length 2
+    assert_eq!(sequence.neighbour_class(&column, &[2, 3]), 2); // 0 + 1
+    assert_eq!(sequence.neighbour_class(&column, &[0, 0]), 15);
+    // a mean of many sources whose sum passes 2**64, exact in 128 bits
+    let big = [i64::MAX; 8];
+    let sources = [0usize; 8];
+    assert_eq!(
+        mean_magnitude(&sources, |w| big[w].unsigned_abs()),
+        3 * (i64::MAX as u128)
+    );
+}
