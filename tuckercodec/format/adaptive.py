@@ -58,7 +58,7 @@ MODELS_PER_CONTEXT = SECOND_BIT + 2 * EXPONENT_MODELS
 #: The largest bit length of a magnitude, less one: integers stay within -2**62..2**62.
 MAX_EXPONENT = 62
 #: No stream of N integers takes fewer than N / this many bytes (each decision costs at least
-#: -log2(1 - 2**-9) bits with LAST_SHIFT 7 and 15-bit probabilities); the same bound as §6.1's.
+#: -log2(1 - 2**-9) bits with LAST_SHIFT 6 and 15-bit probabilities); the same bound as §6.1's.
 MAX_EXPANSION = 32768
 
 
@@ -400,6 +400,28 @@ def _decode_columns_python(
         two_before, before = before, magnitudes
     coder.finish()
     return out
+
+
+def checked_coder(coder: object, where: str, adaptive_coding: bool) -> int:
+    """A qmat section's ``coder`` parameter, checked (R46): 0, or 1 where ``adaptive_coding``
+    (a position factor of a file with flag bit 3)."""
+    allowed = (CODER_ZSTD, CODER_ADAPTIVE) if adaptive_coding else (CODER_ZSTD,)
+    if not isinstance(coder, int) or isinstance(coder, bool) or coder not in allowed:
+        note = "" if adaptive_coding else " (1 needs flag bit 3 and a position factor)"
+        _broken(f"coder must be one of {list(allowed)} here, got {coder!r}{note}", f"{where}.coder")
+    return int(coder)
+
+
+def decode_within_planes(
+    payload: bytes | memoryview, cols: int, rows: int, planes: int, order: CodingOrder, where: str
+) -> np.ndarray:
+    """:func:`decode_columns`, and R46 unless every integer zigzags below 2**(8 planes), the
+    range its section's ``planes`` declares (§6.14)."""
+    columns = decode_columns(payload, cols, rows, order, where)
+    limit = 1 << (8 * planes - 1)  # zigzag below 2**(8P): -limit <= x < limit
+    if columns.size and (int(columns.min()) < -limit or int(columns.max()) >= limit):
+        _broken(f"an integer of the adaptive stream does not fit its {planes} planes", where)
+    return columns
 
 
 def uses_adaptive(entries: list[dict[str, object]]) -> bool:

@@ -280,31 +280,15 @@ def _checked_params(
 
 def _coder(params: dict[str, Any], where: str, adaptive_coding: bool) -> int:
     """The section's ``coder`` (§6.14): 0 when absent; 1 only where ``adaptive_coding``."""
-    coder = params.get("coder", adaptive.CODER_ZSTD)
-    allowed = (adaptive.CODER_ZSTD, adaptive.CODER_ADAPTIVE) if adaptive_coding else (0,)
-    if not isinstance(coder, int) or isinstance(coder, bool) or coder not in allowed:
-        raise FormatError(
-            f"coder must be one of {list(allowed)} here, got {coder!r}"
-            + ("" if adaptive_coding else " (1 needs flag bit 3 and a position factor)"),
-            rule="R46-adaptive-stream",
-            field=f"{where}.coder",
-        )
-    return int(coder)
+    return adaptive.checked_coder(params.get("coder", adaptive.CODER_ZSTD), where, adaptive_coding)
 
 
 def _adaptive_stream(
     payload: bytes | memoryview, rows: int, cols: int, planes: int, parents: Mesh | None, where: str
 ) -> np.ndarray:
     """The column-major integers of an adaptive stream, each within the section's planes."""
-    columns = adaptive.decode_columns(payload, cols, rows, coding_order(parents, rows), where)
-    limit = 1 << (8 * planes - 1)  # zigzag below 2**(8P): -limit <= x < limit
-    if columns.size and (columns.min() < -limit or columns.max() >= limit):
-        raise FormatError(
-            f"an integer of the adaptive stream does not fit its {planes} planes",
-            rule="R46-adaptive-stream",
-            field=where,
-        )
-    return columns.reshape(-1)
+    order = coding_order(parents, rows)
+    return adaptive.decode_within_planes(payload, cols, rows, planes, order, where).reshape(-1)
 
 
 def decode_values(
