@@ -55,9 +55,11 @@ def generated_sequences() -> list[Path]:
         if not path.exists():
             print(f"generating {path.name}...", flush=True)
             subprocess.run(
-                [sys.executable, "-m", "tools.generate.sequence", "--kind", kind]
-                + ["--vertices", str(vertices), "--frames", str(frames), "--seed", str(seed)]
-                + ["-o", str(path)],
+                [
+                    *(sys.executable, "-m", "tools.generate.sequence", "--kind", kind),
+                    *("--vertices", str(vertices), "--frames", str(frames)),
+                    *("--seed", str(seed), "-o", str(path)),
+                ],
                 check=True,
                 cwd=common.REPO,
                 capture_output=True,
@@ -105,7 +107,7 @@ def run(args: argparse.Namespace) -> int:
             measured = kg_error(sequence.vertices, Decoder(data).positions())
             if measured > target:
                 misses.append(f"{path.name} KG {target:g}: decoded {measured:.5f}")
-            face_bits = 8 * dict((s[0], s[1]) for s in info(data).sections)["FACE"] / vertices
+            face_bits = 8 * {s[0]: s[1] for s in info(data).sections}["FACE"] / vertices
             faces[path.name] = face_bits
             cells = []
             for revision in args.baselines:
