@@ -16,8 +16,15 @@ Printed: a table of every point (bytes and bpfv per revision, the ratios, the de
 median ratio per target against the first baseline, the largest ratio against each baseline,
 and the connectivity (FACE) in bits per vertex.
 
+``--speed`` measures the decoder instead, on each sequence's KG 0.1 file: the file as written
+(its position factors through the adaptive coder of §6.14) against its twin with the same
+integers in zstd frames (§6.1), both decoded by this checkout in one process, alternately,
+``--repeat`` times after a warm-up (medians): ``Decoder(data)`` + ``frame(0)``, and
+``positions()``. The twin isolates the coder: everything else is the same file.
+
     python -m tools.bench rate --generated
     python -m tools.bench rate ../shared/data/chicken.npz --targets 0.1 --baselines 338ced4
+    python -m tools.bench rate --speed --repeat 7
 """
 
 from __future__ import annotations
@@ -26,12 +33,16 @@ import argparse
 import statistics
 import subprocess
 import sys
+import time
+from collections.abc import Callable
 from pathlib import Path
+
+import numpy as np
 
 from tools import common
 from tools.bench import arguments
 from tools.bench.size import baseline_sizes
-from tuckercodec import Decoder, bpfv, encode, info, kg_error
+from tuckercodec import Decoder, bpfv, encode, info, internal, kg_error
 
 DEFAULT_TARGETS = [1.0, 0.1, 0.02]
 #: The revision the rate issue measures against, and the commit before this work.
@@ -76,6 +87,76 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--generated", action="store_true", help="add generated sequences (body, cloth)"
     )
+    parser.add_argument(
+        "--speed", action="store_true", help="decode speed: adaptive against zstd frames"
+    )
+    arguments.repeat(parser, 5)
+
+
+def zstd_twin(data: bytes) -> bytes:
+    """``data`` with every adaptively coded section's integers in a zstd frame instead."""
+    container = internal.parse_container(data)
+    entries, payloads = [], []
+    for section in container.sections:
+        entry = dict(container.header["sections"][len(entries)])
+        payload = bytes(container.payload(data, section))
+        if entry.get("coder") == internal.adaptive.CODER_ADAPTIVE:
+            rows, cols = entry["shape"]
+            stem = str(entry["id"]).split(".")[0]
+            mesh = None
+            if stem == "U1":
+                decoder = Decoder(data)
+                mesh = internal.mesh_prediction(decoder._coded_faces, decoder.info.vertices)
+            order = internal.qmat.coding_order(mesh, rows)
+            columns = internal.adaptive.decode_columns(payload, cols, rows, order, stem)
+            payload, entry["planes"] = internal.streams.pack_integers(columns.reshape(-1))
+            del entry["coder"]
+        for key in ("offset", "length", "crc32"):
+            entry.pop(key)
+        entries.append(entry)
+        payloads.append(payload)
+    header = {k: v for k, v in container.header.items() if k != "sections"}
+    flags = container.flags & ~internal.adaptive.ADAPTIVE
+    return internal.pack_container(
+        header, list(zip(entries, payloads, strict=True)), flags=flags, minor=container.minor
+    )
+
+
+def _median_seconds(calls: list[Callable[[], object]], repeat: int) -> list[float]:
+    """Each call's median seconds over ``repeat`` rounds after a warm-up, the calls alternating."""
+    times: list[list[float]] = [[] for _ in calls]
+    for round_number in range(repeat + 1):
+        for n, call in enumerate(calls):
+            start = time.perf_counter()
+            call()
+            if round_number:
+                times[n].append(time.perf_counter() - start)
+    return [statistics.median(t) for t in times]
+
+
+def speed(paths: list[Path], repeat: int) -> int:
+    """The decoder on each file and its zstd twin; the exit status."""
+    print(
+        "| sequence | bytes adaptive / zstd | open + frame 0: zstd ms | adaptive ms "
+        "| zstd/adaptive | all frames: zstd ms | adaptive ms | zstd/adaptive | same positions |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|")
+    for path in paths:
+        data = encode(common.load(path), target_kg=0.1)
+        twin = zstd_twin(data)
+        same = np.array_equal(Decoder(data).positions(), Decoder(twin).positions())
+        files = (twin, data)
+        first = _median_seconds([lambda f=f: Decoder(f).frame(0) for f in files], repeat)
+        every = _median_seconds([lambda f=f: Decoder(f).positions() for f in files], repeat)
+        print(
+            f"| {path.name} | {len(data)} / {len(twin)} | {1e3 * first[0]:.1f} | "
+            f"{1e3 * first[1]:.1f} | {first[0] / first[1]:.2f} | {1e3 * every[0]:.1f} | "
+            f"{1e3 * every[1]:.1f} | {every[0] / every[1]:.2f} | {'yes' if same else 'NO'} |",
+            flush=True,
+        )
+        if not same:
+            return 1
+    return 0
 
 
 def run(args: argparse.Namespace) -> int:
@@ -88,6 +169,8 @@ def run(args: argparse.Namespace) -> int:
     if not paths:
         print(f"no sequences: {common.SHARED_DATA} is absent", file=sys.stderr)
         return 1
+    if args.speed:
+        return speed(paths, args.repeat)
     jobs = [(str(path), list(args.targets)) for path in paths]
     before = {}
     for revision in args.baselines:
