@@ -10,7 +10,8 @@ export const SIGNATURE = Object.freeze([0x89, 0x54, 0x4b, 0x43, 0x0d, 0x0a, 0x1a
 export const FLAG_SEGMENTED = 1 << 0; // §6.7, version 1.1
 export const FLAG_CODING_TOOLS = 1 << 1; // §6.8, version 1.2
 export const FLAG_CORRECTIONS = 1 << 2; // §6.9 and §8.1, version 1.3
-const KNOWN_CRITICAL_FLAGS = FLAG_SEGMENTED | FLAG_CODING_TOOLS | FLAG_CORRECTIONS;
+export const FLAG_ADAPTIVE = 1 << 3; // §6.14, version 1.6
+const KNOWN_CRITICAL_FLAGS = FLAG_SEGMENTED | FLAG_CODING_TOOLS | FLAG_CORRECTIONS | FLAG_ADAPTIVE;
 const PREAMBLE_END = 32;
 
 /**
@@ -79,7 +80,7 @@ export function readContainer(bytes, limits) {
   if (major !== 1) throw unsupported('R05-major-version', `format major version ${major}; this decoder reads 1`);
   const unknown = flags & 0xffff & ~KNOWN_CRITICAL_FLAGS;
   if (unknown) {
-    throw unsupported('R06-critical-flag', `critical flag bits 0x${hex(unknown)} are set; this decoder knows bits 0 to 2 (version 1.3)`);
+    throw unsupported('R06-critical-flag', `critical flag bits 0x${hex(unknown)} are set; this decoder knows bits 0 to 3 (version 1.6)`);
   }
   // step 4: the header's size
   if (headerLength > limits.max_header_bytes) {

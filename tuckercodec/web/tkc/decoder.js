@@ -431,7 +431,9 @@ export class TkcFile {
     const segment = this.layout.segments[s];
     const [i, k] = segment.ranks;
     const K = this.vertices;
-    const tools = this.layout.codingTools;
+    // a position factor may use the adaptive coder in a file with flag bit 3 (§6.14)
+    /** @type {import('./qmat.js').Coding} */
+    const tools = { tools: this.layout.codingTools, adaptive: this.layout.adaptive };
     const topology = () => this._topologyOnce();
     let u1;
     let columns = i;

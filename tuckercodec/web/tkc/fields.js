@@ -355,10 +355,14 @@ function exact64(halves, where) {
 export function decodeTuckerFactors(params, payloadOf, topology) {
   const { i, k, u2, sections: [u1s, u3s, cores, means] } = /** @type {TuckerParams} */ (params.tucker);
   const { elements: n, frames, components: c } = params;
-  const u1 = decodeQmat(u1s, payloadOf(u1s), n, i, params.domain === 'vertex' ? 'mesh' : 'none', true, topology);
-  const u3 = decodeQmat(u3s, payloadOf(u3s), frames, k, 'time', true, topology);
-  const core = decodeQmat(cores, payloadOf(cores), i * c * k, 1, 'none', true, topology);
-  const mean = decodeQmat(means, payloadOf(means), frames, c, 'time', true, topology);
+  // every predictor of 1.2; zstd planes only (coder absent or 0: §6.14 allows 1 only in a
+  // position factor)
+  /** @type {import('./qmat.js').Coding} */
+  const coding = { tools: true, adaptive: false };
+  const u1 = decodeQmat(u1s, payloadOf(u1s), n, i, params.domain === 'vertex' ? 'mesh' : 'none', coding, topology);
+  const u3 = decodeQmat(u3s, payloadOf(u3s), frames, k, 'time', coding, topology);
+  const core = decodeQmat(cores, payloadOf(cores), i * c * k, 1, 'none', coding, topology);
+  const mean = decodeQmat(means, payloadOf(means), frames, c, 'time', coding, topology);
   const basis = new Float64Array(i * c * k);
   for (let a = 0; a < i; a++) {
     for (let x = 0; x < c; x++) {

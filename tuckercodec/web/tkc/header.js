@@ -4,7 +4,7 @@
 
 import { TkcError, formatError, limitError } from './errors.js';
 import { MsgFloat, describe, isInt } from './msgpack.js';
-import { FLAG_CODING_TOOLS, FLAG_CORRECTIONS, FLAG_SEGMENTED } from './container.js';
+import { FLAG_ADAPTIVE, FLAG_CODING_TOOLS, FLAG_CORRECTIONS, FLAG_SEGMENTED } from './container.js';
 
 /**
  * @typedef {import('./msgpack.js').MsgValue} MsgValue
@@ -26,8 +26,8 @@ import { FLAG_CODING_TOOLS, FLAG_CORRECTIONS, FLAG_SEGMENTED } from './container
  * @typedef {{vertices: number, frames: number, frameRate: number | null,
  *   timeCodes: Float64Array | null, metersPerUnit: number | null, upAxis: string | null,
  *   segmented: boolean,
- *   codingTools: boolean, corrections: boolean, segments: Segment[], face: Section, faceShape: number[],
- *   name: Section | null, sharedU1: Section | null, sharedColumns: number}} Layout
+ *   codingTools: boolean, corrections: boolean, adaptive: boolean, segments: Segment[], face: Section,
+ *   faceShape: number[], name: Section | null, sharedU1: Section | null, sharedColumns: number}} Layout
  */
 
 /** @type {(rule: string, message: string) => TkcError} */
@@ -58,6 +58,7 @@ export function readLayout(container, limits) {
   const segmented = (flags & FLAG_SEGMENTED) !== 0;
   const codingTools = (flags & FLAG_CODING_TOOLS) !== 0;
   const corrections = (flags & FLAG_CORRECTIONS) !== 0;
+  const adaptive = (flags & FLAG_ADAPTIVE) !== 0; // §6.14: a position factor may have coder 1
   // step 10 / 10s
   const K = count(header, 'vertices', limits.max_vertices, 'max_vertices');
   const F = count(header, 'frames', limits.max_frames, 'max_frames');
@@ -84,7 +85,7 @@ export function readLayout(container, limits) {
   // step 14: the frame rate; (1.4) the time codes, the unit and the up axis
   const frameRate = readFrameRate(header);
   const { timeCodes, metersPerUnit, upAxis } = readScene(header, F);
-  return { vertices: K, frames: F, frameRate, timeCodes, metersPerUnit, upAxis, segmented, codingTools, corrections, segments, face, faceShape: [M, n], name: known.get('NAME') ?? null, sharedU1, sharedColumns };
+  return { vertices: K, frames: F, frameRate, timeCodes, metersPerUnit, upAxis, segmented, codingTools, corrections, adaptive, segments, face, faceShape: [M, n], name: known.get('NAME') ?? null, sharedU1, sharedColumns };
 }
 
 /**

@@ -1,15 +1,27 @@
 // Codec `qmat` (spec/FORMAT.md §6.3): a matrix stored as integers with one quantization step per
 // column, each column optionally predicted (§6.2). Checked in the order of §5 step 16: planes,
-// the length and type of steps, of predict, the values of steps, of predict, then the stream.
+// the length and type of steps, of predict, the values of steps, of predict, (1.6) the coder,
+// then the stream: §6.1's zstd frame, or with coder 1 §6.14's adaptive stream.
 
+import { broken, decodeAdaptive } from './adaptive.js';
 import { formatError } from './errors.js';
 import { describe, isInt } from './msgpack.js';
 import { decodeIntStream } from './streams.js';
-import { restoreMeshColumn } from './topology.js';
+import { meshCodingOrder, restoreMeshColumn } from './topology.js';
 
 const EXACT = 2 ** 53; // float64 holds every integer up to here
 const LINEAR_VALUE = 2 ** 32; // §6.2 predictor 3: the restored values ...
 const LINEAR_STEP = 2 ** 33; // ... and the running differences
+const ZSTD = 0; // §6.14's coder values: §6.1's byte planes ...
+const ADAPTIVE = 1; // ... or the adaptive stream
+
+/**
+ * What the file allows a qmat section: `tools`, preamble flag bit 1 (version 1.2: predictors 2
+ * and 3); `adaptive` (§6.14), whether `coder` may be 1 (flag bit 3, in a position factor: U1,
+ * U3, CORE, CENT or a `.s` form), else it must be absent or 0 (R46; a field's factors too, as
+ * the reference decoder has it).
+ * @typedef {{tools: boolean, adaptive: boolean}} Coding
+ */
 
 /**
  * Decodes a qmat section into its dequantized matrix, row-major (C order).
@@ -18,7 +30,7 @@ const LINEAR_STEP = 2 ** 33; // ... and the running differences
  * @param {number} rows
  * @param {number} cols
  * @param {'mesh'|'time'|'none'} relation the parents §6.6 assigns: U1 mesh, U3/CENT time, CORE none
- * @param {boolean} codingTools preamble flag bit 1 (version 1.2)
+ * @param {Coding} coding what the file allows the section
  * @param {() => import('./topology.js').Topology} topology the mesh topology, built on first
  *   use (for U1 only)
  * @param {{q?: Float64Array, steps?: Float64Array}} [keep] when given, also the restored
@@ -26,9 +38,45 @@ const LINEAR_STEP = 2 ** 33; // ... and the running differences
  *   it: §8.1 multiplies U1's integers
  * @returns {Float64Array} rows*cols values
  */
-export function decodeQmat(section, payload, rows, cols, relation, codingTools, topology, keep) {
+export function decodeQmat(section, payload, rows, cols, relation, coding, topology, keep) {
   const where = `section '${section.id}'`;
-  const entry = section.entry;
+  const { planes, step, predict } = checkedParams(section.entry, cols, relation, coding.tools, where);
+  const coder = readCoder(section.entry, coding.adaptive, where);
+  const stream =
+    coder === ADAPTIVE
+      ? decodeAdaptive(payload, rows, cols, relation === 'mesh' ? () => meshCodingOrder(topology()) : null, planes, where)
+      : decodeIntStream(payload, rows * cols, planes, where);
+  const out = new Float64Array(rows * cols);
+  const integers = keep ? new Float64Array(rows * cols) : null;
+  if (keep) {
+    keep.q = /** @type {Float64Array} */ (integers);
+    keep.steps = step;
+  }
+  for (let c = 0; c < cols; c++) {
+    const offset = c * rows; // stream order is column-major (§6.3)
+    let q;
+    const p = predict[c];
+    if (p === 0) q = stream.subarray(offset, offset + rows);
+    else if (relation === 'mesh') q = restoreMeshColumn(stream, offset, p, topology(), `${where} column ${c}`);
+    else if (p === 1) q = restoreRunningSum(stream, offset, rows);
+    else q = restoreLinear(stream, offset, rows, `${where} column ${c}`);
+    const s = step[c];
+    for (let r = 0; r < rows; r++) out[r * cols + c] = s * q[r];
+    if (integers) for (let r = 0; r < rows; r++) integers[r * cols + c] = q[r];
+  }
+  return out;
+}
+
+/**
+ * §5 step 16's checks of the parameters before the coder: planes (R30), the length and type of
+ * steps (R31), of predict (R32), the values of steps (R31), of predict (R32).
+ * @param {Map<string, import('./msgpack.js').MsgValue>} entry
+ * @param {number} cols
+ * @param {'mesh'|'time'|'none'} relation
+ * @param {boolean} codingTools
+ * @param {string} where
+ */
+function checkedParams(entry, cols, relation, codingTools, where) {
   const planes = entry.get('planes');
   if (!isInt(planes) || planes < 1 || planes > 4) {
     throw formatError('R30-planes', `${where}: "planes" is ${planes === undefined ? 'missing' : describe(planes)}, not an int in 1..4`);
@@ -57,26 +105,23 @@ export function decodeQmat(section, payload, rows, cols, relation, codingTools, 
       throw formatError('R32-predictor', `${where}: column ${c} has predictor ${predict[c]}; this section allows ${allowed.join(', ')}`);
     }
   }
-  const stream = decodeIntStream(payload, rows * cols, Number(planes), where);
-  const out = new Float64Array(rows * cols);
-  const integers = keep ? new Float64Array(rows * cols) : null;
-  if (keep) {
-    keep.q = /** @type {Float64Array} */ (integers);
-    keep.steps = step;
-  }
-  for (let c = 0; c < cols; c++) {
-    const offset = c * rows; // stream order is column-major (§6.3)
-    let q;
-    const p = predict[c];
-    if (p === 0) q = stream.subarray(offset, offset + rows);
-    else if (relation === 'mesh') q = restoreMeshColumn(stream, offset, p, topology(), `${where} column ${c}`);
-    else if (p === 1) q = restoreRunningSum(stream, offset, rows);
-    else q = restoreLinear(stream, offset, rows, `${where} column ${c}`);
-    const s = step[c];
-    for (let r = 0; r < rows; r++) out[r * cols + c] = s * q[r];
-    if (integers) for (let r = 0; r < rows; r++) integers[r * cols + c] = q[r];
-  }
-  return out;
+  return { planes: Number(planes), step, predict };
+}
+
+/**
+ * The section's `coder` (§6.14): absent or 0, the zstd planes of §6.1; 1, the adaptive stream,
+ * only where `adaptive` allows it; anything else (a float, a bool, nil...) R46.
+ * @param {Map<string, import('./msgpack.js').MsgValue>} entry
+ * @param {boolean} adaptive
+ * @param {string} where
+ * @returns {number} ZSTD or ADAPTIVE
+ */
+function readCoder(entry, adaptive, where) {
+  const coder = entry.get('coder');
+  if (coder === undefined || coder === ZSTD) return ZSTD;
+  if (coder === ADAPTIVE && adaptive) return ADAPTIVE;
+  const allowed = adaptive ? '0 or 1' : '0 (1 needs preamble flag bit 3, format 1.6)';
+  throw broken(where, `"coder" is ${describe(coder)}; this section allows ${allowed}`);
 }
 
 /**

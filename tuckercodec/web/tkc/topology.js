@@ -3,6 +3,7 @@
 //
 //   const topo = meshTopology(faces, M, n, K);           // once per file (FACE is shared)
 //   const q = restoreMeshColumn(stream, c * K, predictor, topo, "section 'U1' column c");
+//   const order = meshCodingOrder(topo);                 // U1's adaptive coding order (§6.14)
 //
 // No DOM: runs in node and in browsers. Every restored value is the exact integer the spec
 // defines (float64 where the bounds below prove it exact, BigInt otherwise).
@@ -200,6 +201,27 @@ function meanPlan(topo) {
   }
   topo.plan = { restore, first, source, anchor, big };
   return topo.plan;
+}
+
+/**
+ * U1's adaptive coding order (§6.14): the depth-0 vertices (roots and vertices on no face) in
+ * ascending index, without earlier neighbours, then predictor 2's restoring order (by depth, then
+ * phase, then the walk's reach order), each vertex with its sources S(v). It holds whatever the
+ * mesh's depth (predictor 2's depth limit is not this order's), and shares predictor 2's plan,
+ * built once per topology.
+ * @param {Topology} topo
+ * @returns {import('./adaptive.js').CodingOrder}
+ */
+export function meshCodingOrder(topo) {
+  const { K, depth } = topo;
+  const { restore, first, source } = meanPlan(topo);
+  const roots = K - restore.length;
+  const order = new Int32Array(K);
+  for (let v = 0, j = 0; v < K; v++) if (depth[v] === 0) order[j++] = v;
+  order.set(restore, roots);
+  const ends = new Int32Array(K + 1); // a root's sources: none
+  ends.set(first, roots);
+  return { order, ends, source };
 }
 
 /**

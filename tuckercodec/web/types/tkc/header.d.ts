@@ -24,6 +24,7 @@ export type Layout = {
     segmented: boolean;
     codingTools: boolean;
     corrections: boolean;
+    adaptive: boolean;
     segments: Segment[];
     face: Section;
     faceShape: number[];

@@ -1,3 +1,14 @@
+export type Coding = {
+    tools: boolean;
+    adaptive: boolean;
+};
+/**
+ * What the file allows a qmat section: `tools`, preamble flag bit 1 (version 1.2: predictors 2
+ * and 3); `adaptive` (§6.14), whether `coder` may be 1 (flag bit 3, in a position factor: U1,
+ * U3, CORE, CENT or a `.s` form), else it must be absent or 0 (R46; a field's factors too, as
+ * the reference decoder has it).
+ * @typedef {{tools: boolean, adaptive: boolean}} Coding
+ */
 /**
  * Decodes a qmat section into its dequantized matrix, row-major (C order).
  * @param {import('./container.js').Section} section the section entry (readContainer)
@@ -5,7 +16,7 @@
  * @param {number} rows
  * @param {number} cols
  * @param {'mesh'|'time'|'none'} relation the parents §6.6 assigns: U1 mesh, U3/CENT time, CORE none
- * @param {boolean} codingTools preamble flag bit 1 (version 1.2)
+ * @param {Coding} coding what the file allows the section
  * @param {() => import('./topology.js').Topology} topology the mesh topology, built on first
  *   use (for U1 only)
  * @param {{q?: Float64Array, steps?: Float64Array}} [keep] when given, also the restored
@@ -13,7 +24,7 @@
  *   it: §8.1 multiplies U1's integers
  * @returns {Float64Array} rows*cols values
  */
-export declare function decodeQmat(section: import('./container.js').Section, payload: Uint8Array, rows: number, cols: number, relation: 'mesh' | 'time' | 'none', codingTools: boolean, topology: () => import('./topology.js').Topology, keep?: {
+export declare function decodeQmat(section: import('./container.js').Section, payload: Uint8Array, rows: number, cols: number, relation: 'mesh' | 'time' | 'none', coding: Coding, topology: () => import('./topology.js').Topology, keep?: {
     q?: Float64Array;
     steps?: Float64Array;
 }): Float64Array;

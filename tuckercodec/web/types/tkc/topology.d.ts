@@ -40,6 +40,16 @@ export type Topology = {
  */
 export declare function meshTopology(faces: Int32Array, M: number, n: number, K: number): Topology;
 /**
+ * U1's adaptive coding order (§6.14): the depth-0 vertices (roots and vertices on no face) in
+ * ascending index, without earlier neighbours, then predictor 2's restoring order (by depth, then
+ * phase, then the walk's reach order), each vertex with its sources S(v). It holds whatever the
+ * mesh's depth (predictor 2's depth limit is not this order's), and shares predictor 2's plan,
+ * built once per topology.
+ * @param {Topology} topo
+ * @returns {import('./adaptive.js').CodingOrder}
+ */
+export declare function meshCodingOrder(topo: Topology): import('./adaptive.js').CodingOrder;
+/**
  * Restores one predicted U1 column (§6.2) from its residuals.
  * @param {Int32Array} residuals the section's decoded stream
  * @param {number} offset where the column starts in it (column-major: c·K)

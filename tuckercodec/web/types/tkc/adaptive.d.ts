@@ -1,0 +1,63 @@
+/** No payload of L bytes holds more than MAX_EXPANSION·L integers (§6.14 "Bound"). */
+export declare const MAX_EXPANSION = 32768;
+export type CodingOrder = {
+    order: Int32Array;
+    ends: Int32Array;
+    source: Int32Array;
+};
+/**
+ * A coding order (§6.14): `order` lists the rows in the order they are coded, and the row coded
+ * j-th has the earlier neighbours `source[ends[j] .. ends[j+1]−1]` (rows coded before it in the
+ * same column; none for a depth-0 vertex). U1's is meshCodingOrder's (topology.js); the
+ * ascending order of U3, CORE and CENT, each row after the two before it, is given as null.
+ * @typedef {{order: Int32Array, ends: Int32Array, source: Int32Array}} CodingOrder
+ */
+/**
+ * The error of every R46 failure (also qmat.js's, for a `coder` that is not allowed).
+ * @param {string} where
+ * @param {string} message
+ */
+export declare function broken(where: string, message: string): import("./errors.js").TkcError;
+/**
+ * LZMA's range decoder over a payload, with the section's 12,480 adaptive models. Its registers
+ * `range` and `code` are unsigned 32-bit values: every operation that can pass 2^31 is taken
+ * back to unsigned with `>>> 0`, and (range >>> 15)·p, below 2^32, is Math.imul's low word.
+ */
+export declare class RangeDecoder {
+    data: Uint8Array<ArrayBufferLike>;
+    where: string;
+    code: number;
+    range: number;
+    next: number;
+    probs: Uint16Array<ArrayBuffer>;
+    shifts: Uint8Array<ArrayBuffer>;
+    planes: number;
+    /** 2^(8P − 1): a positive integer is below it, a negative one's magnitude at most it */
+    half: number;
+    /** the largest exponent (bit length − 1) of a magnitude within the planes (<= 31) */
+    longest: number;
+    /**
+     * @param {Uint8Array} data the payload
+     * @param {number} planes the section's P (1..4): every integer zigzags below 2^(8P)
+     * @param {string} where the section, for messages
+     */
+    constructor(data: Uint8Array, planes: number, where: string);
+    ended(): import("./errors.js").TkcError;
+    unbounded(): import("./errors.js").TkcError;
+    /** After the last integer: every byte read and code below range, else R46. */
+    finish(): void;
+}
+/**
+ * The integers of an adaptive stream (§6.14), in stream order (column-major, j = c·rows + r):
+ * what §6.1's decodeIntStream gives for a zstd payload. The caller has checked `planes` (1..4).
+ * @param {Uint8Array} payload the section's bytes, CRC checked
+ * @param {number} rows
+ * @param {number} cols
+ * @param {(() => CodingOrder) | null} meshOrder U1's order (meshCodingOrder), made once the
+ *   payload's size and first bytes have passed (its arrays are K long); null: ascending rows
+ * @param {number} planes P: every integer zigzags below 2^(8P)
+ * @param {string} where the section, for messages
+ * @returns {Int32Array}
+ * @throws {import('./errors.js').TkcError} R46-adaptive-stream
+ */
+export declare function decodeAdaptive(payload: Uint8Array, rows: number, cols: number, meshOrder: (() => CodingOrder) | null, planes: number, where: string): Int32Array;
