@@ -1,0 +1,76 @@
+// `npm test` (node --test): adaptive.js (spec/FORMAT.md §6.14) against the reference coder, on
+// the streams of adaptive_fixture.json (written by tools/generate/adaptive_fixture.py from
+// tuckercodec/format/adaptive.py): every stream decodes to the reference's integers, or is
+// refused with R46 where the reference refuses it; U1's coding order (meshCodingOrder) is the
+// reference's on the fixture's mesh; and a section declaring far more integers than its bytes can
+// hold is refused before anything of their size is made.
+
+import assert from 'node:assert/strict';
+import { readFileSync } from 'node:fs';
+import { dirname, join } from 'node:path';
+import { test } from 'node:test';
+import { fileURLToPath } from 'node:url';
+import { decodeAdaptive } from '../../tuckercodec/web/tkc/adaptive.js';
+import { TkcError } from '../../tuckercodec/web/tkc/errors.js';
+import { meshCodingOrder, meshTopology } from '../../tuckercodec/web/tkc/topology.js';
+
+const HERE = dirname(fileURLToPath(import.meta.url));
+const { cases } = JSON.parse(readFileSync(join(HERE, 'adaptive_fixture.json'), 'utf8'));
+const mesh = cases.find((c) => c.topology !== undefined).topology;
+
+/** The fixture mesh's coding order, as the decoder makes it from the faces. */
+function fixtureOrder() {
+  const faces = Int32Array.from(mesh.faces);
+  const K = Math.max(...mesh.order) + 1;
+  return meshCodingOrder(meshTopology(faces, mesh.face_count, mesh.face_width, K));
+}
+
+/** What decodeAdaptive makes of a case: its integers, or the rule it throws. */
+function observe(c) {
+  const payload = new Uint8Array(Buffer.from(c.payload, 'base64'));
+  const order = c.mesh ? () => fixtureOrder() : null;
+  try {
+    return { integers: Array.from(decodeAdaptive(payload, c.rows, c.cols, order, c.planes, `case ${c.name}`)) };
+  } catch (error) {
+    if (!(error instanceof TkcError)) throw error;
+    assert.equal(error.kind, 'FormatError');
+    return { rule: error.rule };
+  }
+}
+
+test('the fixture covers every way a stream is refused, and damaged streams both ways', () => {
+  const names = new Set(cases.map((c) => c.name));
+  for (const name of ['sequence-cut', 'sequence-byte-after', 'sequence-bad-ending', 'sequence-first-byte', 'sequence-short', 'sequence-too-many', 'bound-positive', 'bound-negative', 'bound-long']) {
+    assert.ok(names.has(name), name);
+  }
+  const damaged = cases.filter((c) => c.name.includes('damaged'));
+  assert.ok(damaged.some((c) => c.rule) && damaged.some((c) => c.integers), 'damaged streams refused and accepted');
+});
+
+for (const c of cases) {
+  test(`${c.name}: ${c.rule ?? `${c.integers.length} integers`}`, () => {
+    const got = observe(c);
+    if (c.rule !== undefined) assert.deepEqual(got, { rule: c.rule });
+    else assert.deepEqual(got, { integers: c.integers });
+  });
+}
+
+test("U1's coding order is the reference's: depth 0 ascending, then predictor 2's rows and sources", () => {
+  const { order, ends, source } = fixtureOrder();
+  assert.deepEqual(Array.from(order), mesh.order);
+  assert.deepEqual(Array.from(ends), mesh.ends);
+  // each row's sources as a set: only their magnitudes' sum is used
+  for (let j = 0; j < order.length; j++) {
+    const ours = Array.from(source.subarray(ends[j], ends[j + 1])).sort((a, b) => a - b);
+    const theirs = mesh.sources.slice(mesh.ends[j], mesh.ends[j + 1]).sort((a, b) => a - b);
+    assert.deepEqual(ours, theirs, `row ${order[j]}`);
+  }
+});
+
+test('a section of 2^36 integers in 5 bytes is refused before they are made', () => {
+  const payload = new Uint8Array([0, 0, 0, 0, 0]);
+  assert.throws(
+    () => decodeAdaptive(payload, 2 ** 26, 2 ** 10, () => assert.fail('no order is made'), 4, "section 'U1'"),
+    (error) => error instanceof TkcError && error.rule === 'R46-adaptive-stream' && /cannot come from 5 bytes/.test(error.message),
+  );
+});

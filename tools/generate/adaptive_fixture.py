@@ -1,0 +1,219 @@
+"""Write tests/js/adaptive_fixture.json: adaptive streams (spec/FORMAT.md §6.14) made by the
+reference coder (``tuckercodec/format/adaptive.py``), with what the reference decoder makes of
+each, for the JavaScript decoder's unit test (tests/js/adaptive.test.mjs, run by ``npm test``
+without Python).
+
+    python -m tools.generate.adaptive_fixture            # tests/js/adaptive_fixture.json
+    python -m tools.generate.adaptive_fixture --check    # exit 1 unless it is as committed
+
+Each case is a payload (base64), the section's rows, cols and planes, its coding order (the
+ascending one, or U1's from a small mesh given by its faces, with the reference's order, sources
+and ends so that the JavaScript order is checked too) and the verdict: the stream's integers in
+stream order (column-major), or the rule it breaks. The verdict is the reference's: its
+``decode_columns``, then every integer zigzagged below 2^(8·planes) (R46 otherwise), as §6.14
+says. Cases: streams of small, wide and boundary integers in both orders; the stream of no
+integers; each way a stream is refused (too short, a first byte other than 0, cut, a byte after
+its end, a last ``code`` not below ``range``, more integers than 32768 per byte, an integer
+outside the planes); and streams damaged at seeded random bytes, whatever the reference makes of
+them. Everything is deterministic (seeded, pure Python integers): ``--check`` regenerates it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import base64
+import json
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tuckercodec.errors import FormatError
+from tuckercodec.format import adaptive
+from tuckercodec.model.topology import mesh_prediction
+
+OUT = Path(__file__).resolve().parents[2] / "tests" / "js" / "adaptive_fixture.json"
+#: Damaged copies of a stream, each with one byte changed at a seeded place.
+DAMAGED_PER_STREAM = 12
+
+
+def mesh_faces() -> tuple[np.ndarray, int]:
+    """A small mesh: a 5 × 6 grid of triangles, a quad strip of 8 vertices (padded with -1
+    beside the triangles) and two vertices on no face; ``(faces M × 4, K)``."""
+    rows, cols = 5, 6
+    faces: list[list[int]] = []
+    for r in range(rows - 1):
+        for c in range(cols - 1):
+            a, b = r * cols + c, r * cols + c + 1
+            faces += [[a, b, a + cols, -1], [b, b + cols, a + cols, -1]]
+    base = rows * cols
+    for q in range(3):
+        a = base + 2 * q
+        faces.append([a, a + 2, a + 3, a + 1])
+    return np.array(faces, dtype=np.int64), base + 8 + 2
+
+
+@dataclass(frozen=True)
+class Section:
+    """What a stream is decoded as: its section's shape and planes, and its coding order."""
+
+    rows: int
+    cols: int
+    planes: int
+    order: adaptive.CodingOrder
+
+
+def sequence(rows: int, cols: int, planes: int) -> Section:
+    """A section coded in the ascending order (U3, CORE, CENT)."""
+    return Section(rows, cols, planes, adaptive.sequence_order(rows))
+
+
+def verdict(payload: bytes, section: Section) -> dict[str, Any]:
+    """The reference's integers (stream order) or rule for a stream."""
+    try:
+        columns = adaptive.decode_columns(
+            payload, section.cols, section.rows, section.order, "fixture"
+        )
+    except FormatError as error:
+        return {"rule": error.rule}
+    values = [int(v) for v in columns.reshape(-1)]
+    if any((2 * v if v >= 0 else -2 * v - 1) >= 2 ** (8 * section.planes) for v in values):
+        return {"rule": "R46-adaptive-stream"}
+    return {"integers": values}
+
+
+def case(name: str, payload: bytes, section: Section, **extra: Any) -> dict[str, Any]:
+    return {
+        "name": name,
+        "payload": base64.b64encode(payload).decode(),
+        "rows": section.rows,
+        "cols": section.cols,
+        "planes": section.planes,
+        "mesh": section.order.mesh,
+        **extra,
+        **verdict(payload, section),
+    }
+
+
+def encoded(name: str, columns: np.ndarray, section: Section, **extra: Any) -> dict[str, Any]:
+    """The case of ``columns`` (cols, rows) as the reference encodes them."""
+    return case(name, adaptive.encode_columns(columns, section.order), section, **extra)
+
+
+def damaged(name: str, payload: bytes, section: Section, seed: int) -> list[dict[str, Any]]:
+    """Copies of a stream with one byte replaced, at seeded places (the first byte never: that
+    case is its own)."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for n in range(DAMAGED_PER_STREAM):
+        broken = bytearray(payload)
+        at = int(rng.integers(1, len(payload)))
+        broken[at] = (broken[at] + int(rng.integers(1, 256))) % 256
+        out.append(case(f"{name}-damaged-{n}", bytes(broken), section))
+    return out
+
+
+def spread(rng: np.random.Generator, shape: tuple[int, int]) -> np.ndarray:
+    """Integers whose magnitudes are spread over every bit length up to 17: 2^k plus or minus
+    a little, k uniform in 0..16, either sign."""
+    k = rng.integers(0, 17, size=shape)
+    magnitude = (1 << k) + rng.integers(-1, 2, size=shape) * (k > 1)
+    return (magnitude * rng.choice([-1, 1], size=shape)).astype(np.int64)
+
+
+def sequence_cases() -> list[dict[str, Any]]:
+    """U3, CORE and CENT's ascending order."""
+    rng = np.random.default_rng(1)
+    small = np.rint(rng.laplace(0.0, 2.0, size=(3, 40)) * (rng.random((3, 40)) < 0.7))
+    small[:, 5:9] = 0  # a run of zeros
+    section = sequence(40, 3, 1)
+    payload = adaptive.encode_columns(small.astype(np.int64), section.order)
+    out = [case("sequence-small", payload, section)]
+    out += damaged("sequence-small", payload, section, seed=11)
+    out.append(case("sequence-cut", payload[:-1], section))
+    out.append(case("sequence-byte-after", payload + b"\0", section))
+    out.append(case("sequence-first-byte", b"\x01" + payload[1:], section))
+    out.append(case("sequence-short", b"\0\0\0\0", sequence(0, 0, 1)))
+    none = adaptive.encode_columns(np.zeros((0, 0), dtype=np.int64), sequence(0, 0, 1).order)
+    out.append(case("sequence-none", none, sequence(0, 0, 1)))
+    # read to its end, but code (0xFFFFFFFF) is not below range (0xFFFFFFFF); a stream with
+    # integers whose code is not below its range decodes ones until an exponent is too long
+    out.append(case("sequence-bad-ending", b"\0\xff\xff\xff\xff", sequence(0, 0, 1)))
+    # more integers than 32768 per byte of payload: refused before anything is decoded
+    out.append(case("sequence-too-many", none, sequence(32768 * len(none) + 1, 1, 1)))
+    wide = rng.integers(-(2**31), 2**31, size=(2, 30), dtype=np.int64)
+    wide[0, :6] = [-(2**31), 2**31 - 1, 0, 1, -1, 2**16]
+    wide[1, :4] = [2**30, -(2**30), 3, -3]
+    out.append(encoded("sequence-wide", wide, sequence(30, 2, 4)))
+    # magnitudes of every size up to 2^17, so that every class of both kinds is met
+    out.append(encoded("sequence-classes", spread(rng, (3, 200)), sequence(200, 3, 3)))
+    one = np.array([[5], [-7], [0], [1 << 20], [-(1 << 12)]], dtype=np.int64)
+    out.append(encoded("sequence-one-row", one, sequence(1, 5, 3)))
+    return out + bound_cases()
+
+
+def bound_cases() -> list[dict[str, Any]]:
+    """Integers at the planes' bound: -2^(8P-1) and 2^(8P-1)-1 fit, 2^(8P-1) does not, nor an
+    integer of 41 bits in four planes."""
+    out = []
+    for name, values, planes in [
+        ("bound-fits", [127, -128, 0], 1),
+        ("bound-positive", [128, 0, 0], 1),
+        ("bound-negative", [0, -129, 0], 1),
+        ("bound-fits-2", [-(2**15), 2**15 - 1, 1], 2),
+        ("bound-positive-2", [1, 2**15, 1], 2),
+        ("bound-long", [2**40, 0, 0], 4),
+    ]:
+        out.append(encoded(name, np.array([values], dtype=np.int64), sequence(3, 1, planes)))
+    return out
+
+
+def mesh_cases() -> list[dict[str, Any]]:
+    """U1's mesh order on a small mesh, smooth columns and rough ones."""
+    faces, vertices = mesh_faces()
+    steps = mesh_prediction(faces, vertices).mean_steps
+    order = adaptive.mesh_order(vertices, steps.rows, steps.sources, steps.source_ends)
+    rng = np.random.default_rng(2)
+    columns = np.cumsum(rng.integers(-3, 4, size=(4, vertices)), axis=1).astype(np.int64)
+    columns[2] = rng.integers(-300, 301, size=vertices)
+    columns[3] = spread(rng, (1, vertices))[0]
+    mesh = {
+        "faces": faces.reshape(-1).tolist(),
+        "face_count": int(faces.shape[0]),
+        "face_width": int(faces.shape[1]),
+        "order": order.order.tolist(),
+        "ends": order.ends.tolist(),
+        "sources": order.sources.tolist(),
+    }
+    section = Section(vertices, 4, 3, order)
+    payload = adaptive.encode_columns(columns, order)
+    out = [case("mesh", payload, section, topology=mesh)]
+    out += damaged("mesh", payload, section, seed=12)
+    return out
+
+
+def fixture() -> str:
+    cases = sequence_cases() + mesh_cases()
+    return json.dumps({"about": __doc__.split("\n\n")[0], "cases": cases}, indent=1) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--check", action="store_true", help="exit 1 unless the file is current")
+    args = parser.parse_args(argv)
+    text = fixture()
+    if args.check:
+        current = OUT.read_text() if OUT.exists() else ""
+        if current != text:
+            print(f"{OUT} is not what this script writes: run it again", file=sys.stderr)
+            return 1
+        return 0
+    OUT.write_text(text)
+    print(f"wrote {OUT}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
