@@ -1,0 +1,156 @@
+"""The JavaScript decoder's adaptive coding (format 1.6, spec/FORMAT.md §6.14:
+tuckercodec/web/tkc/adaptive.js, and the `coder` parameter in qmat.js), in node.
+
+Files of 1.6 are made here from valid files by re-coding their position factors with the
+reference coder (tests/support/adaptive_files.py): they hold the same integers, so the
+JavaScript decoder must give them the same positions, bit for bit, as the originals (which
+test_js_decoder.py holds to the Python decoder). Files that break §6.14 in one way each must be
+refused with the rule §5 step 16's order gives. The stream decoder itself is checked integer for
+integer against the reference by ``npm test`` (tests/js/adaptive.test.mjs) on
+tests/js/adaptive_fixture.json, which the first test here keeps as the reference writes it.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+import tuckercodec
+from tests.support.adaptive_files import AdaptiveParts, adaptive_copy, adaptive_parts
+from tests.support.compressed import Parts, vector
+from tests.support.js_decoder import VALID, run_node
+from tests.support.sequences import shared_case, shared_encoded
+from tools.generate import adaptive_fixture
+from tuckercodec.io.samples import sample_path
+
+R46 = "R46-adaptive-stream"
+
+
+def test_the_fixture_is_what_the_reference_writes():
+    """tests/js/adaptive_fixture.json is current: run ``python -m tools.generate.adaptive_fixture``
+    after a change to the reference coder or to the cases."""
+    assert adaptive_fixture.OUT.read_text() == adaptive_fixture.fixture()
+
+
+def _frames(data: bytes, tmp_path: Path, name: str) -> np.ndarray:
+    """Every frame the JavaScript decoder gives, (F, K, 3)."""
+    source, output = tmp_path / f"{name}.tkc", tmp_path / f"{name}.bin"
+    source.write_bytes(data)
+    facts = run_node("decode_file.mjs", source, output)
+    assert facts["accepted"], facts["message"]
+    raw = output.read_bytes()[facts["faces"] * facts["face_width"] * 4 :]
+    return np.frombuffer(raw, "<f8").reshape(facts["frames"], facts["vertices"], 3)
+
+
+def _same_as_original(original: bytes, tmp_path: Path) -> None:
+    copy = adaptive_copy(original)
+    assert tuckercodec.info(original).format_version != "1.6"
+    assert np.array_equal(
+        _frames(copy, tmp_path, "copy"), _frames(original, tmp_path, "original"), equal_nan=True
+    )
+
+
+@pytest.mark.parametrize("name", [n.removesuffix(".json") for n in VALID])
+def test_the_vectors_in_adaptive_streams_give_the_same_positions(tmp_path, name):
+    """Every valid vector (1.0 to 1.5: segments shared and own, traversed faces, corrections,
+    attributes, fields) re-coded: the same frames, bit for bit."""
+    _same_as_original(vector(name), tmp_path)
+
+
+@pytest.mark.parametrize(
+    "options",
+    [{"target_kg": 0.1}, {"target_kg": 0.1, "segment_frames": 16}],
+    ids=["whole", "segments"],
+)
+def test_the_sample_in_adaptive_streams_gives_the_same_positions(tmp_path, options):
+    sequence = tuckercodec.load_sequence(sample_path())
+    _same_as_original(tuckercodec.encode_with_report(sequence, **options).data, tmp_path)
+
+
+@pytest.mark.parametrize("name", [shared_case("samba.npz")])
+def test_samba_in_adaptive_streams_gives_the_same_positions(tmp_path, name):
+    """A real mesh: U1's mesh order over 9,971 vertices and 150 columns or so."""
+    _same_as_original(shared_encoded(name).data, tmp_path)
+
+
+# ------------------------------------------------------------------------------------------
+# files that break §6.14, one way each
+
+
+def _sample() -> bytes:
+    sequence = tuckercodec.load_sequence(sample_path())
+    return tuckercodec.encode_with_report(sequence, target_kg=0.1).data
+
+
+#: An entry value that removes the key.
+REMOVED = object()
+
+
+def _edited(
+    parts: AdaptiveParts, section_id: str, payload: bytes | None = None, **changes: Any
+) -> bytes:
+    """The file with one section's entry keys changed (REMOVED: the key taken out) and, when
+    given, its payload replaced."""
+    n = parts.index(section_id)
+    entry, old = parts.sections[n]
+    entry = {k: v for k, v in {**entry, **changes}.items() if v is not REMOVED}
+    sections = list(parts.sections)
+    sections[n] = (entry, old if payload is None else payload)
+    return AdaptiveParts(parts.flags, parts.minor, parts.header, sections).pack()
+
+
+def _crafted() -> list[tuple[str, bytes, str | None]]:
+    """(what, file, the rule it breaks or None for a valid file)."""
+    original = _sample()
+    parts = adaptive_parts(original)
+    zstd = Parts(original)
+    u3_zstd = zstd.sections[zstd.index("U3")][1]
+    u3 = parts.sections[parts.index("U3")][1]
+    u1_planes = parts.sections[parts.index("U1")][0]["planes"]
+    assert u1_planes >= 2  # so that one plane fewer breaks the bound
+    unflagged = AdaptiveParts(parts.flags & ~8, parts.minor, parts.header, parts.sections)
+    flagged_zstd = Parts(original)
+    flagged_zstd.flags |= 8
+    fields = adaptive_parts(vector("v1.5-fields"))
+    return [
+        ("the copy", parts.pack(), None),
+        ("flag bit 3 and no adaptive section", flagged_zstd.pack(), None),
+        ("coder 0 on a zstd payload", _edited(parts, "U3", u3_zstd, coder=0), None),
+        ("no coder on a zstd payload", _edited(parts, "U3", u3_zstd, coder=REMOVED), None),
+        ("coder on FACE, ignored", _edited(parts, "FACE", coder=7), None),
+        ("coder 0 on a field's factor", _edited(fields, "FLD.0.U1", coder=0), None),
+        ("coder 1 on a field's factor", _edited(fields, "FLD.0.U1", coder=1), R46),
+        ("coder 2", _edited(parts, "U3", coder=2), R46),
+        ("coder 1.0", _edited(parts, "U3", coder=1.0), R46),
+        ("coder true", _edited(parts, "U3", coder=True), R46),
+        ("coder nil", _edited(parts, "U3", coder=None), R46),
+        ("coder 1 without flag bit 3", unflagged.pack(), R46),
+        ("planes before coder", _edited(parts, "U1", planes=0, coder=2), "R30-planes"),
+        ("steps before coder", _edited(parts, "U1", steps=b"", coder=2), "R31-steps"),
+        ("predict before coder", _edited(parts, "U1", predict=b"", coder=2), "R32-predictor"),
+        ("coder 1 on a zstd payload", _edited(parts, "U3", u3_zstd), R46),
+        ("a cut stream", _edited(parts, "U3", u3[:-1]), R46),
+        ("a byte after the stream", _edited(parts, "U3", u3 + b"\0"), R46),
+        ("integers beyond the planes", _edited(parts, "U1", planes=u1_planes - 1), R46),
+    ]
+
+
+def test_coder_and_streams_are_checked_in_step_16s_order(tmp_path):
+    """Each file breaks §6.14 in one way (or is valid): refused with the rule of the first check
+    it fails in §5 step 16's order, planes, steps and predict before the coder, the coder before
+    its stream; a coder is no parameter of FACE (ignored), and a field's factors (1.5) keep zstd."""
+    cases = _crafted()
+    paths = []
+    for n, (_, data, _) in enumerate(cases):
+        paths.append(tmp_path / f"case{n}.tkc")
+        paths[-1].write_bytes(data)
+    outcomes = run_node("outcomes.mjs", *paths)
+    wrong = []
+    for (what, _, rule), got in zip(cases, outcomes, strict=True):
+        expected = {"accepted": True} if rule is None else {"accepted": False, "rule": rule}
+        if {k: got.get(k) for k in expected} != expected:
+            wrong.append((what, expected, got))
+    assert not wrong, wrong
