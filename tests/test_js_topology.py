@@ -24,6 +24,7 @@ import numpy as np
 import pytest
 
 import tuckercodec
+from tests.support.adaptive_files import stored_integers
 from tests.support.js_decoder import node
 from tests.support.sequences import shared_case, shared_encoded
 from tuckercodec import FormatError
@@ -570,13 +571,12 @@ def _file_cases(cases: Cases, label: str, data: bytes) -> None:
     if face.codec == "faces-traverse":
         cases.traverse(f"{label}-FACE", face.params, payload["FACE"], vertices)
     faces = tuckercodec.decode(data, frames=[0]).faces
+    mesh = MeshPrediction(faces, vertices)
     for section_id, section in sections.items():
         if section_id != "U1" and not section_id.startswith("U1."):
             continue
-        rows, cols = section.params["shape"]
-        stream = streams.unpack_integers(
-            payload[section_id], rows * cols, section.params["planes"], "U1"
-        )
+        # zstd planes or (1.6, the encoder's choice where smaller) an adaptive stream
+        stream = stored_integers(section_id, section.params, payload[section_id], mesh)
         cases.restore(
             f"{label}-{section_id}", faces, vertices, stream, list(section.params["predict"])
         )

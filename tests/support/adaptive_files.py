@@ -1,16 +1,17 @@
-"""Files of format 1.6 made by hand from any valid file: every position factor (U1, U3, CORE,
-CENT and their ``.s`` forms) re-coded through the reference adaptive coder
-(``tuckercodec/format/adaptive.py``, spec/FORMAT.md §6.14) with ``coder`` 1, flag bit 3 and
-minor 6. The integers, and so the positions, are the original file's: a decoder of 1.6 must
-decode the copy to the same positions as the original. For the JavaScript decoder's tests and
-measurements while the encoder does not write 1.6 itself.
+"""A valid file's twins that differ only in how its position factors (U1, U3, CORE, CENT and
+their ``.s`` forms) turn their integers into bytes: :func:`adaptive_copy`, every one through the
+reference adaptive coder (spec/FORMAT.md §6.14) with ``coder`` 1, whichever coder the encoder
+chose (tools/generate/vectors.py's ``adaptive_everywhere``, which wrote the vectors of 1.6); and
+:func:`zstd_copy`, every one in §6.1's zstd planes, as files were before 1.6. The integers, and
+so the positions, are the original file's. Taken apart as :class:`AdaptiveParts`, a file can be
+edited to break one rule, its preamble flags included, and put back together with every CRC
+right.
 
-    python -m tests.support.adaptive_files IN.tkc OUT.tkc
+    python -m tests.support.adaptive_files adaptive|zstd IN.tkc OUT.tkc
 """
 
 from __future__ import annotations
 
-import re
 import sys
 import zlib
 from dataclasses import dataclass
@@ -20,37 +21,19 @@ from typing import Any
 import msgpack
 import numpy as np
 
-from tuckercodec.format import adaptive, faces, streams
-from tuckercodec.format.container import pack_raw, parse_container
-from tuckercodec.model.topology import mesh_prediction
-
-#: The sections §6.14 allows ``coder`` 1 in.
-POSITION_FACTOR = re.compile(r"^(U1|U3|CORE|CENT)(\.\d+)?$")
-#: Preamble flag bit 3 (adaptive coding) and the minor version that goes with it.
-FLAG_ADAPTIVE = 1 << 3
-ADAPTIVE_MINOR = 6
-
-
-def stored_columns(params: dict[str, Any], payload: bytes, where: str) -> np.ndarray:
-    """A qmat section's stored integers (q or residuals, §6.3) as (cols, rows) int64."""
-    rows, cols = params["shape"]
-    stream = streams.unpack_integers(payload, rows * cols, params["planes"], where)
-    return np.asarray(stream, dtype=np.int64).reshape(cols, rows)
-
-
-def coding_order(section_id: str, rows: int, mesh: Any) -> adaptive.CodingOrder:
-    """§6.14's coding order: U1's mesh order from predictor 2's structure, else ascending."""
-    if section_id.split(".")[0] != "U1":
-        return adaptive.sequence_order(rows)
-    steps = mesh.mean_steps
-    return adaptive.mesh_order(rows, steps.rows, steps.sources, steps.source_ends)
+from tools.generate.vectors import adaptive_everywhere
+from tuckercodec.format import adaptive, faces, qmat, streams
+from tuckercodec.format.container import pack_container, pack_raw, parse_container
+from tuckercodec.format.residual import CORRECTIONS, CORRECTIONS_MINOR
+from tuckercodec.format.segments import SEGMENTED, SEGMENTED_MINOR
+from tuckercodec.model.topology import MeshPrediction, mesh_prediction
 
 
 @dataclass
 class AdaptiveParts:
-    """A file taken apart with its position factors re-coded: preamble flags (bit 3 set) and
-    minor version, header (without the table) and sections, ``(entry, payload)`` in file order,
-    to be edited (tests that break a rule) and put back together by :meth:`pack`."""
+    """A file taken apart: preamble flags and minor version, header (without the table) and
+    sections, ``(entry, payload)`` in file order. :meth:`pack` writes the flags as they are
+    (unlike ``pack_container``, which sets flag bit 3 wherever a section has ``coder`` 1)."""
 
     flags: int
     minor: int
@@ -72,40 +55,77 @@ class AdaptiveParts:
         return pack_raw(1, self.minor, self.flags, header_bytes, body)
 
 
+def adaptive_copy(data: bytes) -> bytes:
+    """``data`` (a valid file) with every position factor in an adaptive stream."""
+    return adaptive_everywhere(data)
+
+
 def adaptive_parts(data: bytes) -> AdaptiveParts:
-    """``data`` (a valid file of 1.5 or before) taken apart, every position factor re-coded
-    in an adaptive stream with ``coder`` 1."""
+    """:func:`adaptive_copy` of ``data``, taken apart."""
+    return taken_apart(adaptive_copy(data))
+
+
+def taken_apart(data: bytes) -> AdaptiveParts:
+    """A valid file as :class:`AdaptiveParts`."""
     container = parse_container(data)
     header = {k: v for k, v in container.header.items() if k != "sections"}
-    vertices = int(header["vertices"])
-    face = next(s for s in container.sections if s.id == "FACE")
-    coded_faces = faces.decode_face_section(
-        face.codec, container.payload(data, face), face.params, vertices, "section FACE"
+    sections = [
+        (
+            {"id": s.id, "critical": s.critical, "codec": s.codec, **s.params},
+            bytes(container.payload(data, s)),
+        )
+        for s in container.sections
+    ]
+    return AdaptiveParts(container.flags, container.minor, header, sections)
+
+
+def stored_integers(
+    section_id: str, params: dict[str, Any], payload: bytes, mesh: MeshPrediction
+) -> np.ndarray:
+    """The integers a position factor stores (q or residuals, §6.3), in stream order (int64),
+    whichever its coder: §6.1's planes, or §6.14's stream in its coding order (``mesh``: the
+    file's, from its faces as FACE decodes them)."""
+    rows, cols = params["shape"]
+    if params.get("coder", adaptive.CODER_ZSTD) == adaptive.CODER_ZSTD:
+        return streams.unpack_integers(payload, rows * cols, params["planes"], section_id)
+    order = qmat.coding_order(mesh if section_id.split(".")[0] == "U1" else None, rows)
+    return adaptive.decode_columns(payload, cols, rows, order, section_id).reshape(-1)
+
+
+def zstd_copy(data: bytes) -> bytes:
+    """``data`` (a valid file) with every adaptive stream stored as §6.1's zstd planes, in the
+    fewest planes that hold its integers, flag bit 3 cleared: a file of 1.5 or before, with the
+    minor version it would have had."""
+    parts = taken_apart(data)
+    face_entry, face_payload = parts.sections[parts.index("FACE")]
+    vertices = int(parts.header["vertices"])
+    params = {k: v for k, v in face_entry.items() if k not in ("id", "critical", "codec")}
+    coded = faces.decode_face_section(
+        face_entry["codec"], face_payload, params, vertices, "section FACE"
     )
-    mesh = mesh_prediction(coded_faces, vertices)
-    sections = []
-    for section in container.sections:
-        entry = {"id": section.id, "critical": section.critical, "codec": section.codec}
-        entry.update(section.params)
-        payload = bytes(container.payload(data, section))
-        if POSITION_FACTOR.match(section.id) and section.codec == "qmat":
-            columns = stored_columns(section.params, payload, f"section {section.id}")
-            order = coding_order(section.id, columns.shape[1], mesh)
-            payload = adaptive.encode_columns(columns, order)
-            entry["coder"] = 1
-        sections.append((entry, payload))
-    minor = max(container.minor, ADAPTIVE_MINOR)
-    return AdaptiveParts(container.flags | FLAG_ADAPTIVE, minor, header, sections)
-
-
-def adaptive_copy(data: bytes) -> bytes:
-    """``data`` with every position factor in an adaptive stream (format 1.6)."""
-    return adaptive_parts(data).pack()
+    mesh = mesh_prediction(coded, vertices)
+    for n, (entry, payload) in enumerate(parts.sections):
+        if entry.get("coder") != adaptive.CODER_ADAPTIVE:
+            continue
+        stream = stored_integers(str(entry["id"]), entry, payload, mesh)
+        packed, planes = streams.pack_integers(stream)
+        entry = {k: v for k, v in entry.items() if k != "coder"}
+        parts.sections[n] = ({**entry, "planes": planes}, packed)
+    # the minor version the file had before 1.6: pack_container raises it for the coding
+    # tools (1.2), the keys of 1.4 and the sections of 1.5
+    minor = 0
+    if parts.flags & SEGMENTED:
+        minor = SEGMENTED_MINOR
+    if parts.flags & CORRECTIONS:
+        minor = CORRECTIONS_MINOR
+    flags = parts.flags & ~adaptive.ADAPTIVE
+    return pack_container(parts.header, parts.sections, flags=flags, minor=minor, adaptive=False)
 
 
 def main(argv: list[str]) -> None:
-    source, target = (Path(a) for a in argv)
-    target.write_bytes(adaptive_copy(source.read_bytes()))
+    kind, source, target = argv
+    copy = {"adaptive": adaptive_copy, "zstd": zstd_copy}[kind]
+    Path(target).write_bytes(copy(Path(source).read_bytes()))
 
 
 if __name__ == "__main__":

@@ -30,9 +30,8 @@ from typing import Any
 
 import numpy as np
 
-from tuckercodec.errors import FormatError
-from tuckercodec.format import adaptive
-from tuckercodec.model.topology import mesh_prediction
+from tuckercodec import FormatError
+from tuckercodec.internal import adaptive, mesh_prediction
 
 OUT = Path(__file__).resolve().parents[2] / "tests" / "js" / "adaptive_fixture.json"
 #: Damaged copies of a stream, each with one byte changed at a seeded place.
