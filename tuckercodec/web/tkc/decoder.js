@@ -1,4 +1,4 @@
-// The JavaScript decoder of the tuckercodec format, written from spec/FORMAT.md (version 1.3):
+// The JavaScript decoder of the tuckercodec format, written from spec/FORMAT.md (version 1.6):
 // openTkc(bytes) checks the container and header, decodes the faces and names, and, for a file
 // that is not segmented, every factor and its corrections' parameters; a segmented file's
 // segments are decoded when one of their frames is asked for (§6.7), and the two most recently
