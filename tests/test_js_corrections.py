@@ -553,7 +553,10 @@ def encoded(tmp_path_factory) -> dict[str, Any]:
 def test_python_encoded_file_same_bits_as_python(encoded, name):
     path, results, folder = encoded[name]
     assert all(r["accepted"] for r in results), [r.get("message") for r in results]
-    assert results[0]["version"] == "1.3", "the encoder wrote no corrections"
+    # 1.3, or 1.6 where the encoder found a position factor smaller adaptively coded
+    assert results[0]["version"] in ("1.3", "1.6") and results[0]["residual"], (
+        "the encoder wrote no corrections"
+    )
     expected = tuckercodec.decode(path).vertices
     assert expected.dtype == np.float64
     size = expected.size
