@@ -49,7 +49,7 @@ const DIRECT = -1; // decodeColumn's stage for the bits at even odds
  * @param {string} where
  * @param {string} message
  */
-export function broken(where, message) {
+export function adaptiveError(where, message) {
   return formatError(RULE, `${where}: ${message}`);
 }
 
@@ -66,7 +66,7 @@ export class RangeDecoder {
    */
   constructor(data, planes, where) {
     if (data.length < 5 || data[0] !== 0) {
-      throw broken(where, `an adaptive stream starts with a zero byte and holds at least 5 bytes (this one: ${data.length} bytes${data.length ? `, the first ${data[0]}` : ''})`);
+      throw adaptiveError(where, `an adaptive stream starts with a zero byte and holds at least 5 bytes (this one: ${data.length} bytes${data.length ? `, the first ${data[0]}` : ''})`);
     }
     this.data = data;
     this.where = where;
@@ -83,19 +83,19 @@ export class RangeDecoder {
   }
 
   ended() {
-    return broken(this.where, 'the adaptive stream ends before its last integer');
+    return adaptiveError(this.where, 'the adaptive stream ends before its last integer');
   }
 
   unbounded() {
-    return broken(this.where, `an integer of the adaptive stream does not zigzag below 2^${8 * this.planes} (planes ${this.planes})`);
+    return adaptiveError(this.where, `an integer of the adaptive stream does not zigzag below 2^${8 * this.planes} (planes ${this.planes})`);
   }
 
   /** After the last integer: every byte read and code below range, else R46. */
   finish() {
     if (this.next !== this.data.length) {
-      throw broken(this.where, `the adaptive stream holds ${this.data.length - this.next} bytes after its last integer`);
+      throw adaptiveError(this.where, `the adaptive stream holds ${this.data.length - this.next} bytes after its last integer`);
     }
-    if (this.code >= this.range) throw broken(this.where, "the adaptive stream's last bytes are not a range coder's ending");
+    if (this.code >= this.range) throw adaptiveError(this.where, "the adaptive stream's last bytes are not a range coder's ending");
   }
 }
 
@@ -114,7 +114,7 @@ export class RangeDecoder {
  */
 export function decodeAdaptive(payload, rows, cols, meshOrder, planes, where) {
   if (rows * cols > MAX_EXPANSION * payload.length) {
-    throw broken(where, `${rows * cols} integers cannot come from ${payload.length} bytes (at most ${MAX_EXPANSION} per byte)`);
+    throw adaptiveError(where, `${rows * cols} integers cannot come from ${payload.length} bytes (at most ${MAX_EXPANSION} per byte)`);
   }
   const decoder = new RangeDecoder(payload, planes, where);
   const order = meshOrder === null ? null : meshOrder();

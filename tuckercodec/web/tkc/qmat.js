@@ -3,7 +3,7 @@
 // the length and type of steps, of predict, the values of steps, of predict, (1.6) the coder,
 // then the stream: §6.1's zstd frame, or with coder 1 §6.14's adaptive stream.
 
-import { broken, decodeAdaptive } from './adaptive.js';
+import { adaptiveError, decodeAdaptive } from './adaptive.js';
 import { formatError } from './errors.js';
 import { describe, isInt } from './msgpack.js';
 import { decodeIntStream } from './streams.js';
@@ -121,7 +121,7 @@ function readCoder(entry, adaptive, where) {
   if (coder === undefined || coder === ZSTD) return ZSTD;
   if (coder === ADAPTIVE && adaptive) return ADAPTIVE;
   const allowed = adaptive ? '0 or 1' : '0 (1 needs preamble flag bit 3, format 1.6)';
-  throw broken(where, `"coder" is ${describe(coder)}; this section allows ${allowed}`);
+  throw adaptiveError(where, `"coder" is ${describe(coder)}; this section allows ${allowed}`);
 }
 
 /**

@@ -17,7 +17,7 @@ export type CodingOrder = {
  * @param {string} where
  * @param {string} message
  */
-export declare function broken(where: string, message: string): import("./errors.js").TkcError;
+export declare function adaptiveError(where: string, message: string): import("./errors.js").TkcError;
 /**
  * LZMA's range decoder over a payload, with the section's 12,480 adaptive models. Its registers
  * `range` and `code` are unsigned 32-bit values: every operation that can pass 2^31 is taken
