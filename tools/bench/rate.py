@@ -35,7 +35,9 @@ import subprocess
 import sys
 import time
 from collections.abc import Callable
+from functools import partial
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -96,7 +98,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def zstd_twin(data: bytes) -> bytes:
     """``data`` with every adaptively coded section's integers in a zstd frame instead."""
     container = internal.parse_container(data)
-    entries, payloads = [], []
+    entries: list[dict[str, Any]] = []
+    payloads: list[bytes] = []
     for section in container.sections:
         entry = dict(container.header["sections"][len(entries)])
         payload = bytes(container.payload(data, section))
@@ -134,6 +137,14 @@ def _median_seconds(calls: list[Callable[[], object]], repeat: int) -> list[floa
     return [statistics.median(t) for t in times]
 
 
+def _first_frame(data: bytes) -> object:
+    return Decoder(data).frame(0)
+
+
+def _all_frames(data: bytes) -> object:
+    return Decoder(data).positions()
+
+
 def speed(paths: list[Path], repeat: int) -> int:
     """The decoder on each file and its zstd twin; the exit status."""
     print(
@@ -146,8 +157,8 @@ def speed(paths: list[Path], repeat: int) -> int:
         twin = zstd_twin(data)
         same = np.array_equal(Decoder(data).positions(), Decoder(twin).positions())
         files = (twin, data)
-        first = _median_seconds([lambda f=f: Decoder(f).frame(0) for f in files], repeat)
-        every = _median_seconds([lambda f=f: Decoder(f).positions() for f in files], repeat)
+        first = _median_seconds([partial(_first_frame, f) for f in files], repeat)
+        every = _median_seconds([partial(_all_frames, f) for f in files], repeat)
         print(
             f"| {path.name} | {len(data)} / {len(twin)} | {1e3 * first[0]:.1f} | "
             f"{1e3 * first[1]:.1f} | {first[0] / first[1]:.2f} | {1e3 * every[0]:.1f} | "

@@ -767,8 +767,9 @@ def make(
         raise ValueError(f"a {kind} needs at least {MIN_VERTICES[kind]} vertices, not {vertices}")
     if frames < 1:
         raise ValueError(f"frames must be at least 1, not {frames}")
-    kinds = {"cloth": Cloth, "body": Body}
-    return kinds[kind](vertices, frames, seed, noise)
+    if kind == "cloth":
+        return Cloth(vertices, frames, seed, noise)
+    return Body(vertices, frames, seed, noise)
 
 
 def block_frames(vertices: int) -> int:
