@@ -260,7 +260,7 @@ def test_encode_in_segments_on_the_command_line(tmp_path, capsys):
     assert "of the whole sequence" in printed
     assert main(["info", str(out)]) == 0
     printed = capsys.readouterr().out
-    assert "format 1.2" in printed and "segment 2: frames 40..59" in printed
+    assert "format 1.6" in printed and "segment 2: frames 40..59" in printed
     decoded = tmp_path / "back.npz"
     assert main(["decode", str(out), "-o", str(decoded), "--frames", "45:50"]) == 0
     assert tuckercodec.load_sequence(decoded, progress=False).frame_count == 5

@@ -20,6 +20,7 @@ import numpy as np
 
 import tuckercodec
 from tuckercodec import Decoder, FormatError, MeshSequence
+from tuckercodec.encoder.attachments import smallest_corner_first
 from tuckercodec.format import faces, qmat, residual, sections
 from tuckercodec.format.container import (
     CRC,
@@ -222,10 +223,12 @@ def spec_walk(faces: np.ndarray, count: int) -> SpecWalk:
 
 
 def assert_same_faces(decoded: np.ndarray, original: np.ndarray) -> None:
-    """The same faces, each with its corners in the same order, in any face order: what a file
-    keeps (faces-traverse, §6.8, lists them in its walk's order)."""
+    """The same faces, each with its corners in the same cyclic order (its winding), in any face
+    order and from any first corner: what a file keeps where no data follows the corners
+    (faces-traverse, §6.8, lists them in its walk's order, each from its smallest vertex)."""
     decoded, original = np.asarray(decoded), np.asarray(original)
     assert decoded.shape == original.shape
+    decoded, original = smallest_corner_first(decoded), smallest_corner_first(original)
     assert sorted(map(tuple, decoded.tolist())) == sorted(map(tuple, original.tolist()))
 
 

@@ -53,8 +53,16 @@ import numpy as np
 
 from tools.bench import arguments
 from tools.common import REAL_SEQUENCES, in_shared_data, load
-from tuckercodec import Decoder, encode_with_report
-from tuckercodec.internal import mesh_parents, parse_container, rdo, streams, tree_depths
+from tuckercodec import Decoder, encode_with_report, internal
+from tuckercodec.internal import (
+    adaptive,
+    mesh_parents,
+    parse_container,
+    qmat,
+    rdo,
+    streams,
+    tree_depths,
+)
 
 SECTIONS = ("U1", "U3", "CORE", "CENT")
 DIRECT = 16  # zigzag values below this are symbols of their own
@@ -128,8 +136,9 @@ def depth_order(parents: np.ndarray) -> np.ndarray:
 
 
 def section_streams(data: bytes) -> dict[str, tuple[np.ndarray, np.ndarray, int]]:
-    """Per section: (the integers its zstd frame holds, as (rows, cols): residuals of whichever
-    predictor each column uses; the parent of each row, for the contexts; stored bytes)."""
+    """Per section: (the integers it stores, as (rows, cols): residuals of whichever predictor
+    each column uses; the parent of each row, for the contexts; their bytes in a zstd frame,
+    as stored, or packed here where the file codes them adaptively, §6.14)."""
     container = parse_container(data)
     decoder = Decoder(data)
     mesh = mesh_parents(decoder.faces, decoder.info.vertices)
@@ -139,12 +148,24 @@ def section_streams(data: bytes) -> dict[str, tuple[np.ndarray, np.ndarray, int]
         if entry is None:
             continue
         rows, cols = entry.params["shape"]
-        stored = streams.unpack_integers(
-            container.payload(data, entry), rows * cols, entry.params["planes"], section_id
-        )
-        stream = np.ascontiguousarray(stored.reshape(cols, rows).T)
+        payload = container.payload(data, entry)
+        if entry.params.get("coder") == adaptive.CODER_ADAPTIVE:
+            order = qmat.coding_order(
+                internal.mesh_prediction(decoder._coded_faces, decoder.info.vertices)
+                if section_id == "U1"
+                else None,
+                rows,
+            )
+            columns = adaptive.decode_columns(payload, cols, rows, order, section_id)
+            length = len(streams.pack_integers(columns)[0])
+        else:
+            columns = streams.unpack_integers(
+                payload, rows * cols, entry.params["planes"], section_id
+            ).reshape(cols, rows)
+            length = entry.length
+        stream = np.ascontiguousarray(columns.T)
         parents = mesh if section_id == "U1" else np.arange(-1, rows - 1)
-        out[section_id] = (stream, parents, entry.length)
+        out[section_id] = (stream, parents, length)
     return out
 
 
