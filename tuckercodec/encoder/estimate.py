@@ -4,10 +4,9 @@ The search's trials rank truncations against each other, so their sizes must mov
 file's sizes move. A trial's sections are sized as the file codes them: each section's integers
 through §6.14's adaptive coder (:func:`coded_bits`), in its coding order, without zstd's
 alternative (which the file keeps only where it is smaller, by a few bytes, on short sections).
-An order-0 entropy of each column (:func:`entropy_bits`, the estimate before format 1.6) could
-not see what the coder's contexts gain, nor price a short column of wide integers, and ranked
-truncations of sequences unlike the shared ones up to 6 % off the real sizes. Choosing each
-column's predictor (three predictions of every column) is what packing a trial costs most.
+An order-0 entropy of each column (the estimate before format 1.6) could not see what the
+coder's contexts gain, nor price a short column of wide integers. Choosing each column's
+predictor (three predictions of every column) is what packing a trial costs most.
 
 U1's predictors (§6.2) are chosen once, on the first trial that needs a column, and kept for the
 trials after: a column's predictor depends on its shape, not much on its step, and a trial's
@@ -21,41 +20,7 @@ import numpy as np
 from ..format import adaptive, qmat
 from ..format.prediction import mean_residuals, residuals
 from ..model.topology import MeshPrediction
-from ..system import native
 from .trial import QuantizedSegment
-
-#: Zigzag residuals counted by their own histogram entry; larger ones are escapes.
-TABLE_SIZE = 4095
-
-
-def entropy_bits(stream: np.ndarray) -> float:
-    """The order-0 entropy of each column of ``stream`` (rows, cols) of integers, in bits,
-    summed over the columns."""
-    rows, cols = stream.shape
-    if stream.size == 0:
-        return 0.0
-    core = native.core()
-    if core is not None and stream.dtype == np.int64:
-        counts, escaped = core.entropy_counts(np.ascontiguousarray(stream), TABLE_SIZE)
-    else:
-        counts, escaped = _entropy_counts(stream)
-    seen = counts.astype(np.float64)
-    # sum over columns of -sum c log2(c / rows) = rows log2(rows) per column - sum c log2 c
-    bits = cols * rows * np.log2(rows) - float(seen @ np.log2(seen))
-    if escaped.size:
-        bits += float(2.0 * np.log2(escaped / TABLE_SIZE).sum())
-    return float(bits)
-
-
-def _entropy_counts(stream: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The integers :func:`entropy_bits` sums: the nonzero counts of the columns' histograms
-    (column after column) and the zigzag values past the table, in row-major order."""
-    cols = stream.shape[1]
-    zig = (stream << 1) ^ (stream >> 63)  # streams.zigzag, kept signed
-    clipped = np.minimum(zig, TABLE_SIZE)
-    clipped += np.arange(cols, dtype=np.int64)[None, :] * (TABLE_SIZE + 1)
-    counts = np.bincount(clipped.reshape(-1), minlength=cols * (TABLE_SIZE + 1))
-    return counts[counts > 0], zig[zig >= TABLE_SIZE]
 
 
 class U1Predictors:

@@ -255,38 +255,6 @@ pub fn rdo_choose(
     Ok(q)
 }
 
-/// What `estimate.entropy_bits` sums, as integers: the nonzero counts of the per-column
-/// histograms of zigzag values clipped to `table_size` (column after column, each in value
-/// order), and the zigzag values at or past `table_size` in row-major order (the escapes).
-pub fn entropy_counts(
-    stream: &[i64],
-    rows: usize,
-    cols: usize,
-    table_size: usize,
-) -> Result<(Vec<i64>, Vec<i64>), EncoderError> {
-    check_shape(stream.len(), rows, cols, "the stream")?;
-    let width = table_size + 1;
-    let top = i64::try_from(table_size).unwrap_or(i64::MAX);
-    let mut counts = vec![0u32; cols * width];
-    let mut escaped = Vec::new();
-    for (at, &value) in stream.iter().enumerate() {
-        let zig = zigzag(value);
-        if zig >= top {
-            escaped.push(zig);
-        }
-        match usize::try_from(zig.min(top)) {
-            Ok(index) => counts[(at % cols) * width + index] += 1,
-            Err(_) => return fail("a value too large for int64's zigzag"),
-        }
-    }
-    let seen = counts
-        .iter()
-        .filter(|&&c| c > 0)
-        .map(|&c| i64::from(c))
-        .collect();
-    Ok((seen, escaped))
-}
-
 /// The largest |x| of `values` (NaN if one is NaN, 0 for none), as numpy's
 /// `np.abs(values).max()` (the maximum is exact in any order).
 pub fn max_abs(values: &[f64]) -> f64 {
@@ -325,7 +293,6 @@ mod tests {
 
     #[test]
     fn shapes_must_agree() {
-        assert!(entropy_counts(&[1, 2, 3], 2, 2, 8).is_err());
         assert!(rdo_residual_counts(&[1, 2], 2, 1, &[-1, 0], &[true, false], 8).is_err());
     }
 
@@ -341,14 +308,6 @@ mod tests {
         expected[9] += 2;
         expected[9 + 8] += 1;
         assert_eq!(counts, expected);
-    }
-
-    #[test]
-    fn entropy_counts_list_nonzero_counts_and_escapes() {
-        let (seen, escaped) = entropy_counts(&[0, 5, 0, -7, 1, 5], 3, 2, 8).unwrap();
-        // column 0: zigzag 0, 0, 2; column 1: 10 (escape), 13 (escape), 10 -> clipped 8 three times
-        assert_eq!(seen, vec![2, 1, 3]);
-        assert_eq!(escaped, vec![10, 13, 10]);
     }
 
     #[test]

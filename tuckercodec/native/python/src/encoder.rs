@@ -90,27 +90,6 @@ fn rdo_choose<'py>(
     matrix(py, q, rows, cols)
 }
 
-/// Two int64 arrays for Python.
-type Int64Pair<'py> = (Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>);
-
-/// estimate.entropy_bits's integers: (nonzero counts, escaped zigzag values), int64 each.
-#[pyfunction]
-fn entropy_counts<'py>(
-    py: Python<'py>,
-    stream: PyReadonlyArray2<'py, i64>,
-    table_size: usize,
-) -> PyResult<Int64Pair<'py>> {
-    let (rows, cols) = shape2(&stream);
-    let stream = stream.as_slice()?;
-    let (seen, escaped) = py
-        .detach(|| encoder::entropy_counts(stream, rows, cols, table_size))
-        .map_err(value_error)?;
-    Ok((
-        PyArray1::from_vec(py, seen),
-        PyArray1::from_vec(py, escaped),
-    ))
-}
-
 /// np.abs(values).max() of a contiguous float64 array of any shape (0 for none).
 #[pyfunction]
 fn max_abs(py: Python<'_>, values: PyReadonlyArrayDyn<'_, f64>) -> PyResult<f64> {
@@ -123,7 +102,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(rdo_predicted_columns, m)?)?;
     m.add_function(wrap_pyfunction!(rdo_residual_counts, m)?)?;
     m.add_function(wrap_pyfunction!(rdo_choose, m)?)?;
-    m.add_function(wrap_pyfunction!(entropy_counts, m)?)?;
     m.add_function(wrap_pyfunction!(max_abs, m)?)?;
     Ok(())
 }
