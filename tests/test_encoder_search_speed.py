@@ -66,11 +66,12 @@ def test_u1_predictors_give_the_stream_the_file_would_store():
     predictors = estimate.U1Predictors(mesh)
     # first the leading columns, then all of them: the new ones chosen as the file would
     np.testing.assert_array_equal(
-        predictors.stream(q[:, :5]), qmat.predicted_stream(q[:, :5], mesh, True)[0]
+        predictors.stream(q[:, :5]), qmat.predicted_stream(q[:, :5], mesh, True, True).stream
     )
-    stream, predict = qmat.predicted_stream(q, mesh, True)
+    stream, predict, push = qmat.predicted_stream(q, mesh, True, True)
     np.testing.assert_array_equal(predictors.stream(q), stream)
     np.testing.assert_array_equal(predictors.predict, predict)
+    np.testing.assert_array_equal(predictors.push, push)
     # and a narrower trial reuses them
     np.testing.assert_array_equal(predictors.stream(q[:, :8]), stream[:, :8])
 

@@ -150,9 +150,12 @@ def test_a_deep_strip_of_faces_decodes_quickly():
 # -- predictor 2: the mean of the decoded neighbours (format 1.2) ------------------------------
 
 
-def _spec_mean_restore(residual: np.ndarray, faces: np.ndarray, count: int) -> np.ndarray:
-    """Predictor 2's restoration as /work/notes/spec13_prediction.md words it, vertex by vertex
-    in Python integers (no overflow, no float)."""
+def _spec_mean_restore(
+    residual: np.ndarray, faces: np.ndarray, count: int, push: list[int] | None = None
+) -> np.ndarray:
+    """Predictor 2's restoration as §6.2 words it, vertex by vertex in Python integers (no
+    overflow, no float); ``push``: each column's push (format 1.6), 2 by default."""
+    pushes = push or [2] * residual.shape[1]
     walk = spec_walk(faces, count)
     neighbours, parent, depth, reached_order = (
         walk.neighbours,
@@ -177,11 +180,11 @@ def _spec_mean_restore(residual: np.ndarray, faces: np.ndarray, count: int) -> n
         ]
         c = len(sources)
         for col in range(residual.shape[1]):
-            u = 0
+            a, total = pushes[col], 0
             for w in sources:
                 anchor = parent[w] if depth[w] == depth[v] - 1 and parent[w] >= 0 else w
-                u += 4 * q[w][col] - q[anchor][col]
-            q[v][col] += (2 * u + 3 * c) // (6 * c)
+                total += (6 + a) * q[w][col] - a * q[anchor][col]
+            q[v][col] += (2 * total + 6 * c) // (12 * c)
     return np.array(q, dtype=np.int64).reshape(residual.shape)
 
 
@@ -216,6 +219,34 @@ def test_predictor_2_follows_the_spec_text_exactly():
                     continue
                 np.testing.assert_array_equal(_spec_mean_restore(residual, faces, count), values)
                 np.testing.assert_array_equal(mean_accumulate(residual, steps), values)
+
+
+@pytest.mark.parametrize("crafted", [False, True], ids=["float", "int64"])
+def test_predictor_2_with_pushes_follows_the_spec_text_exactly(monkeypatch, crafted):
+    """Format 1.6's push per column (§6.2): residuals and restoration as the spec words them,
+    every push 0..9 in one matrix, in the float path and the int64 one; push 2 is 1.2's."""
+    if crafted:
+        monkeypatch.setattr(prediction, "_FLOAT_SOURCES", 1)
+        monkeypatch.setattr(prediction, "_PUSHED_FLOAT_SOURCES", 1)
+    rng = np.random.default_rng(23)
+    push = np.arange(10, dtype=np.uint8)
+    for count in (12, 40, 90):
+        faces = _random_mesh(rng, count)
+        steps = mesh_prediction(faces, count).mean_steps
+        for values in (
+            rng.integers(-(2**30), 2**30, size=(count, 10)),
+            rng.integers(-3, 4, size=(count, 10)),
+        ):
+            residual = mean_residuals(values, steps, push)
+            assert residual is not None
+            spec = _spec_mean_restore(residual, faces, count, push.tolist())
+            np.testing.assert_array_equal(spec, values)
+            np.testing.assert_array_equal(mean_accumulate(residual, steps, push), values)
+            columns = np.ascontiguousarray(residual.T)
+            prediction.mean_accumulate_columns(columns, steps, push)
+            np.testing.assert_array_equal(columns.T, values)
+            plain = mean_residuals(values[:, 2:3], steps)
+            np.testing.assert_array_equal(plain, residual[:, 2:3])  # push 2: format 1.2's
 
 
 @pytest.mark.parametrize("block_values", [1 << 22, 7, 1])

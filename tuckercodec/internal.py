@@ -50,7 +50,17 @@ from .encoder import rdo
 from .encoder.fields import FieldTarget, encode_field, max_abs, relative_rms
 from .encoder.fields import decoded as decoded_field
 from .encoder.options import DEFAULT_TARGET_KG
-from .format import adaptive, attributes, faces, qmat, residual, sections, streams, traversal
+from .format import (
+    adaptive,
+    attributes,
+    faces,
+    prediction,
+    qmat,
+    residual,
+    sections,
+    streams,
+    traversal,
+)
 from .format.container import (
     CRC,
     HEAD_SIZE,
@@ -107,6 +117,7 @@ __all__ = [
     "pack_raw",
     "parse_container",
     "plot_rd_curve",
+    "prediction",
     "pyplot",
     "qmat",
     "rdo",

@@ -51,6 +51,7 @@ from tuckercodec.internal import (
     adaptive,
     faces,
     parse_container,
+    prediction,
     qmat,
     residual,
     sheet_triangles,
@@ -539,6 +540,46 @@ def adaptive_everywhere(data: bytes) -> bytes:
     return parts.pack()
 
 
+def stored_integers(payload: bytes, entry: dict[str, Any], order: Any) -> np.ndarray:
+    """The (rows, cols) integers a qmat section stores, from either coder."""
+    rows, cols = entry["shape"]
+    if entry.get("coder") == adaptive.CODER_ADAPTIVE:
+        columns = adaptive.decode_columns(payload, cols, rows, order, str(entry["id"]))
+    else:
+        columns = streams.unpack_integers(payload, rows * cols, entry["planes"], "U1")
+    return np.ascontiguousarray(columns.reshape(cols, rows).T)
+
+
+def pushed_everywhere(data: bytes) -> bytes:
+    """``data`` with U1's columns stored with predictor 2 under every push 0..9 in turn (§6.2,
+    format 1.6), but the last, kept as the encoder stored it, adaptively coded: so that a
+    vector exercises each push whichever ones the encoder would choose."""
+    parts = Parts(data)
+    decoder = Decoder(data)
+    mesh = internal.mesh_prediction(decoder._coded_faces, decoder.info.vertices)
+    n = parts.index("U1")
+    entry = parts.entries[n]
+    rows, cols = entry["shape"]
+    q = decoder._decode_u1("U1").q
+    order = qmat.coding_order(mesh, rows)
+    residual = stored_integers(parts.payloads[n], entry, order)
+    meaned = np.arange(cols - 1)
+    predict = np.frombuffer(entry["predict"], dtype=np.uint8).copy()
+    predict[meaned] = qmat.PREDICT_MEAN
+    entry["predict"] = predict.tobytes()
+    push = np.full(cols, prediction.PUSH, dtype=np.uint8)
+    push[meaned] = np.arange(meaned.size) % len(prediction.PUSHES)
+    pushed = prediction.mean_residuals(q[:, meaned], mesh.mean_steps, push[meaned])
+    assert pushed is not None
+    residual[:, meaned] = pushed
+    parts.payloads[n] = adaptive.encode_columns(np.ascontiguousarray(residual.T), order)
+    entry.update(coder=adaptive.CODER_ADAPTIVE, mean_push=push.tobytes())
+    entry["planes"] = max(entry["planes"], streams.planes_needed(streams.zigzag(residual)))
+    parts.flags |= adaptive.ADAPTIVE
+    parts.minor = max(parts.minor, adaptive.ADAPTIVE_MINOR)
+    return parts.pack()
+
+
 def adaptive_vectors() -> dict[str, tuple[bytes, str]]:
     """The valid vectors of format 1.6 (§6.14): every position factor adaptively coded, in a
     whole file and in segments with their own U1."""
@@ -554,6 +595,10 @@ def adaptive_vectors() -> dict[str, tuple[bytes, str]]:
             adaptive_everywhere(encode(triangles, target_kg=0.1)),
             "format 1.6: U1 (the mesh's coding order), U3, CORE and CENT (ascending) through the "
             "adaptive range coder, faces-traverse of scrambled triangles",
+        ),
+        "v1.6-mean-push": (
+            pushed_everywhere(encode(triangles, ranks=(12, 6))),
+            "format 1.6: U1's predictor 2 with each push 0..9 (mean_push), adaptively coded",
         ),
         "v1.6-adaptive-segments": (
             adaptive_everywhere(
@@ -573,7 +618,12 @@ def adaptive_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
     trailing = parts.payloads[parts.index("U1")] + b"\x00"
     without_flag = Parts(good)
     without_flag.flags &= ~adaptive.ADAPTIVE
+    pushed = Parts(good)
+    n = pushed.index("U1")
+    cols = pushed.entries[n]["shape"][1]
+    pushed.entries[n]["mean_push"] = bytes([10] * cols)  # 0..9 only
     return {
+        "R32-predictor-push": (pushed.pack(), "FormatError"),
         "R46-adaptive-stream": (_edit(good, _payload("U1", trailing)), "FormatError"),
         "R46-adaptive-stream-coder": (without_flag.pack(), "FormatError"),
     }
@@ -874,6 +924,7 @@ SECOND_VECTORS = {
     "R21-header-limit-face-streams": "R21-header-limit",
     "R20-header-field-time-codes": "R20-header-field",
     "R46-adaptive-stream-coder": "R46-adaptive-stream",
+    "R32-predictor-push": "R32-predictor",
 }
 
 

@@ -24,12 +24,13 @@ from .trial import QuantizedSegment
 
 
 class U1Predictors:
-    """U1's predictor per column, chosen once by :func:`.format.qmat.encode_matrix`'s rule and
-    reused by later trials."""
+    """U1's predictor per column and predictor 2's push, chosen once by
+    :func:`.format.qmat.encode_matrix`'s rule and reused by later trials."""
 
     def __init__(self, mesh: MeshPrediction) -> None:
         self.mesh = mesh
         self.predict = np.zeros(0, dtype=np.uint8)
+        self.push = np.zeros(0, dtype=np.uint8)
         self._order: adaptive.CodingOrder | None = None
 
     def coding_order(self, rows: int) -> adaptive.CodingOrder:
@@ -47,8 +48,9 @@ class U1Predictors:
         (chosen now for columns not seen before)."""
         cols, known = q.shape[1], self.predict.size
         if cols > known:  # choose for the new columns, as the file would (each on its own)
-            new = qmat.predicted_stream(q[:, known:], self.mesh, True)[1]
-            self.predict = np.concatenate([self.predict, new])
+            new = qmat.predicted_stream(q[:, known:], self.mesh, True, pushes=True)
+            self.predict = np.concatenate([self.predict, new.predict])
+            self.push = np.concatenate([self.push, new.push])
         predict = self.predict[:cols]
         out = q.copy()
         parent = np.flatnonzero(predict == qmat.PREDICT_PARENT)
@@ -56,7 +58,7 @@ class U1Predictors:
             out[:, parent] = residuals(q[:, parent], self.mesh.parents)
         mean = np.flatnonzero(predict == qmat.PREDICT_MEAN)
         if mean.size:
-            predicted = mean_residuals(q[:, mean], self.mesh.mean_steps)
+            predicted = mean_residuals(q[:, mean], self.mesh.mean_steps, self.push[mean])
             # a column too large for predictor 2 falls back to its parent, as the file would
             out[:, mean] = (
                 predicted if predicted is not None else residuals(q[:, mean], self.mesh.parents)
@@ -80,6 +82,6 @@ def segment_bits(segment: QuantizedSegment, u1_predictors: U1Predictors | None) 
         assert u1_predictors is not None  # an own U1 is sized under its kept predictors
         bits += u1_predictors.bits(segment.u1.q)
     for matrix, predict in ((segment.u3, True), (segment.core, False), (segment.centroids, True)):
-        stream = qmat.section_stream(matrix.q, None, predict, True)[0]
+        stream = qmat.section_stream(matrix.q, None, predict, True).stream
         bits += coded_bits(stream, adaptive.sequence_order(stream.shape[0]))
     return bits

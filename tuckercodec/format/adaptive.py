@@ -425,5 +425,6 @@ def decode_within_planes(
 
 
 def uses_adaptive(entries: list[dict[str, object]]) -> bool:
-    """Whether any of these section entries stores its integers with ``coder`` 1."""
-    return any(item.get("coder") == CODER_ADAPTIVE for item in entries)
+    """Whether any of these section entries needs flag bit 3 (format 1.6): integers stored with
+    ``coder`` 1, or predictor 2's pushes (``mean_push``, §6.2)."""
+    return any(item.get("coder") == CODER_ADAPTIVE or "mean_push" in item for item in entries)

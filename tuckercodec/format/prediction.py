@@ -102,27 +102,46 @@ MEAN_LIMIT = 2**32
 #: Below this many sources per row, the sums of (4 q[w] - q[anchor]) (each within 5 * 2**32
 #: while the values are within MEAN_LIMIT) stay below 2**53: exact in float64.
 _FLOAT_SOURCES = 2**17
+#: The same for any other push: ((6 + a) q[w] - a q[anchor]) is within 24 * 2**32, and the sum
+#: plus 3c must stay below 2**52 for its floored quotient to be exact.
+_PUSHED_FLOAT_SOURCES = 2**15
+#: Predictor 2's push where a file gives none (§6.2): a third of a step, 2/6.
+PUSH = 2
+#: The pushes a file may give (format 1.6): 0..9 sixths of a step.
+PUSHES = range(10)
 
 
 def mean_predictions(
-    q: np.ndarray, steps: MeanSteps, start: int = 0, stop: int | None = None
+    q: np.ndarray, steps: MeanSteps, start: int = 0, stop: int | None = None, push: int = PUSH
 ) -> np.ndarray:
     """Predictor 2's prediction of rows ``steps.rows[start:stop]`` (§6.2) from ``q`` (int64,
-    every value within +-MEAN_LIMIT), exactly: with U the sum over the row's c sources w of
-    (4 q[w] - q[anchor(w)]), ``floor((2 U + 3 c) / (6 c))``, that is U / (3 c) rounded half
-    up: the sources' mean, pushed on by a third of each source's own step from its anchor.
-    (|2 U + 3 c| <= 10 c 2**32 + 3 c: int64 holds it for any c up to 2**27.)"""
+    every value within +-MEAN_LIMIT), exactly: with V the sum over the row's c sources w of
+    ((6 + a) q[w] - a q[anchor(w)]), a the push, ``floor((2 V + 6 c) / (12 c))``, that is
+    V / (6 c) rounded half up: the sources' mean, moved on by a/6 of each source's own step
+    from its anchor. (|2 V + 6 c| < 2**39 c: int64 holds it for any c below 2**24.)"""
     stop = steps.rows.size if stop is None else stop
     first, last = int(steps.source_ends[start]), int(steps.source_ends[stop])
     counts = np.diff(steps.source_ends[start : stop + 1])[:, None]
     terms = q[steps.sources[first:last]]
-    terms *= 4
-    terms -= q[steps.anchors[first:last]]
+    terms *= 6 + push
+    terms -= push * q[steps.anchors[first:last]]
     total: np.ndarray = np.add.reduceat(terms, steps.source_ends[start:stop] - first, axis=0)
     total *= 2
-    total += 3 * counts
-    np.floor_divide(total, 6 * counts, out=total)
+    total += 6 * counts
+    np.floor_divide(total, 12 * counts, out=total)
     return total
+
+
+def pushes_of(push: np.ndarray | None, cols: int) -> np.ndarray:
+    """Each column's push (§6.2, format 1.6): ``push`` as uint8, or PUSH for every column."""
+    if push is None:
+        return np.full(cols, PUSH, dtype=np.uint8)
+    return np.asarray(push, dtype=np.uint8)
+
+
+def _by_push(push: np.ndarray) -> list[tuple[int, np.ndarray]]:
+    """The columns of each push value, for the paths that take one push at a time."""
+    return [(int(a), np.flatnonzero(push == a)) for a in np.unique(push)]
 
 
 #: Columns whose predictor-2 residuals the encoder forms at once.
@@ -140,66 +159,111 @@ def _checked(block: np.ndarray | None) -> np.ndarray:
     return block
 
 
-def mean_residuals(values: np.ndarray, steps: MeanSteps) -> np.ndarray | None:
-    """Each row minus predictor 2's prediction of it (rows of depth 0 as they are), or
+def mean_residuals(
+    values: np.ndarray, steps: MeanSteps, push: np.ndarray | None = None
+) -> np.ndarray | None:
+    """Each row minus predictor 2's prediction of it (rows of depth 0 as they are), each column
+    with its push (``push``: one per column, format 1.6; ``None``: PUSH for every column), or
     ``None`` if a value leaves +-MEAN_LIMIT (predictor 2 cannot hold such a column)."""
     core = native.core()
+    pushes = pushes_of(push, values.shape[1])
     if core is not None:  # the same floats and integers, no temporaries
-        result: np.ndarray | None = steps.native_plan().residuals(
-            np.ascontiguousarray(values, dtype=np.int64)
+        plan = steps.native_plan()
+        contiguous = np.ascontiguousarray(values, dtype=np.int64)
+        result: np.ndarray | None = (
+            plan.residuals(contiguous)
+            if (pushes == PUSH).all()
+            else plan.residuals(contiguous, pushes)
         )
         return result
     if _beyond(values, MEAN_LIMIT):
         return None
-    if values.shape[1] > _MEAN_COLUMN_BLOCK:  # blocks of columns: smaller float temporaries
-        return np.concatenate(
-            [
-                _checked(mean_residuals(values[:, start : start + _MEAN_COLUMN_BLOCK], steps))
-                for start in range(0, values.shape[1], _MEAN_COLUMN_BLOCK)
-            ],
-            axis=1,
-        )
+    out = values.copy()
+    for a, columns in _by_push(pushes):
+        for start in range(0, columns.size, _MEAN_COLUMN_BLOCK):  # small float temporaries
+            block = columns[start : start + _MEAN_COLUMN_BLOCK]
+            out[:, block] = _pushed_residuals(values[:, block], steps, a)
+    return out
+
+
+def _pushed_residuals(values: np.ndarray, steps: MeanSteps, push: int) -> np.ndarray:
+    """:func:`mean_residuals` of columns that share one push (every value within the range)."""
     out = values.copy()
     if steps.rows.size:
-        if int(steps.counts.max()) >= _FLOAT_SOURCES:  # only a crafted mesh
-            out[steps.rows] -= mean_predictions(values, steps)
+        if int(steps.counts.max()) >= _float_sources(push):  # only a crafted mesh
+            out[steps.rows] -= mean_predictions(values, steps, push=push)
         else:  # all rows at once: the same exact floats as mean_accumulate's
             out[steps.rows] -= _float_predictions(
-                values.astype(np.float64), steps, 0, steps.rows.size
+                values.astype(np.float64), steps, 0, steps.rows.size, push
             ).astype(np.int64)
     return out
 
 
-def mean_accumulate(residual: np.ndarray, steps: MeanSteps) -> np.ndarray:
+def _float_sources(push: int) -> int:
+    """The fewest sources per row for which a push's float sums are no longer exact."""
+    return _FLOAT_SOURCES if push == PUSH else _PUSHED_FLOAT_SOURCES
+
+
+def _float_weights(
+    steps: MeanSteps, push: int
+) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray], float, float]:
+    """The matrix of a push's sums, and per source count the offset and the divisor whose
+    floored quotient is the prediction: (U + 1.5c) / 3c for PUSH (weights 4 and -1), else
+    (V + 3c) / 6c (weights 6 + a and -a); both V / 6c rounded half up."""
+    if push == PUSH:
+        return steps.matrix, 1.5, 3.0
+    return steps.pushed_matrix(push), 3.0, 6.0
+
+
+def mean_accumulate(
+    residual: np.ndarray, steps: MeanSteps, push: np.ndarray | None = None
+) -> np.ndarray:
     """The inverse of :func:`mean_residuals`, a step (a depth and phase) at a time, each row's
     sources restored before it. Raises ``ValueError`` if a restored value leaves +-MEAN_LIMIT.
 
     The sums run in float64, through the sparse matrix of the sources (``steps.matrix``):
     about three times faster than int64 gathers, and exact. Each value is computed once, from
     values computed before it; while all of those are within MEAN_LIMIT every sum is an
-    integer below 2**53, and (2U + 3c) / 6c equals (U + 1.5c) / 3c, one correctly rounded
+    integer below 2**52, and (2U + 3c) / 6c equals (U + 1.5c) / 3c, one correctly rounded
     division whose floor is exact below 2**52. So the first value that leaves the limit is
     itself exact, and one check of the whole result at the end finds it.
     """
     core = native.core()
+    pushes = pushes_of(push, residual.shape[1] if residual.ndim == 2 else 1)
     if core is not None and residual.ndim == 2:  # column after column, in place in a copy
         columns = np.array(residual.T, dtype=np.int64, order="C")
-        steps.native_plan().restore_columns(columns)
+        _native_restore(steps, columns, pushes)
         restored: np.ndarray = columns.T
         return restored
+    out = np.empty(residual.shape, dtype=np.int64)
+    for a, chosen in _by_push(pushes):
+        out[:, chosen] = _pushed_accumulate(residual[:, chosen], steps, a)
+    return out
+
+
+def _native_restore(steps: MeanSteps, columns: np.ndarray, pushes: np.ndarray) -> None:
+    plan = steps.native_plan()
+    if (pushes == PUSH).all():
+        plan.restore_columns(columns)
+    else:
+        plan.restore_columns(columns, pushes)
+
+
+def _pushed_accumulate(residual: np.ndarray, steps: MeanSteps, push: int) -> np.ndarray:
+    """:func:`mean_accumulate` of columns that share one push."""
     rows, ends = steps.rows, steps.step_ends
-    if rows.size and int(steps.counts.max()) >= _FLOAT_SOURCES:  # only a crafted mesh
+    if rows.size and int(steps.counts.max()) >= _float_sources(push):  # only a crafted mesh
         total = residual.copy()
         for step in range(ends.size - 1):
             start, stop = int(ends[step]), int(ends[step + 1])
             if start < stop:
-                total[rows[start:stop]] += mean_predictions(total, steps, start, stop)
+                total[rows[start:stop]] += mean_predictions(total, steps, start, stop, push)
                 if _beyond(total[rows[start:stop]], MEAN_LIMIT):
                     raise ValueError("a restored value leaves the range of predictor 2")
         return total
     work = np.array(residual, dtype=np.float64, order="C")  # C: the product reads it flat
     if rows.size:
-        _float_restore(work, steps)
+        _float_restore(work, steps, push)
     if work.size and not (work.min() >= -MEAN_LIMIT and work.max() <= MEAN_LIMIT):  # NaN fails
         raise ValueError("a restored value leaves the range of predictor 2")
     return work.astype(np.int64)
@@ -211,40 +275,35 @@ def mean_accumulate(residual: np.ndarray, steps: MeanSteps) -> np.ndarray:
 MEAN_RESTORE_VALUES = 1 << 22
 
 
-def mean_accumulate_columns(columns: np.ndarray, steps: MeanSteps) -> None:
+def mean_accumulate_columns(
+    columns: np.ndarray, steps: MeanSteps, push: np.ndarray | None = None
+) -> None:
     """:func:`mean_accumulate` of ``columns.T``, written back into ``columns`` (cols, rows),
     the residuals as the stream holds them, column after column: a block of columns at a time,
     so that a large U1 is never copied whole (each block's floats are the temporary). Raises
     ``ValueError`` as :func:`mean_accumulate` does, at the first block that leaves the range."""
     core = native.core()
+    pushes = pushes_of(push, columns.shape[0])
     if core is not None and columns.dtype == np.int64 and columns.flags.c_contiguous:
-        steps.native_plan().restore_columns(columns)  # a column at a time: one column's floats
+        _native_restore(steps, columns, pushes)  # a column at a time: one column's floats
         return
-    count = columns.shape[0]
-    blocks = max(1, -(-columns.size // MEAN_RESTORE_VALUES))
-    width = max(1, -(-count // blocks))
-    crafted = steps.rows.size and int(steps.counts.max()) >= _FLOAT_SOURCES
-    for start in range(0, count, width):
-        block = columns[start : start + width]
-        if crafted:  # only a crafted mesh: mean_accumulate's int64 steps
-            block[:] = mean_accumulate(block.T, steps).T
-            continue
-        work = np.array(block.T, dtype=np.float64, order="C")  # C: the product reads it flat
-        if steps.rows.size:
-            _float_restore(work, steps)
-        if work.size and not (work.min() >= -MEAN_LIMIT and work.max() <= MEAN_LIMIT):
-            raise ValueError("a restored value leaves the range of predictor 2")
-        block[:] = work.T  # exact integers: the cast is exact
+    for a, chosen in _by_push(pushes):
+        count = chosen.size
+        blocks = max(1, -(-(count * columns.shape[1]) // MEAN_RESTORE_VALUES))
+        width = max(1, -(-count // blocks))
+        for start in range(0, count, width):
+            block = chosen[start : start + width]
+            columns[block] = _pushed_accumulate(columns[block].T, steps, a).T
 
 
-def _float_restore(work: np.ndarray, steps: MeanSteps) -> None:
+def _float_restore(work: np.ndarray, steps: MeanSteps, push: int = PUSH) -> None:
     """:func:`mean_accumulate`'s steps on ``work`` (float64, C order), in place: each step the
     float products of :func:`_float_predictions`, with what does not change between steps (the
     counts, the matrix's arrays, the product) looked up once. A step costs a few numpy calls, and
     a mesh has eight per depth (samba: 929 steps)."""
-    ptr, idx, weights = steps.matrix
+    (ptr, idx, weights), offset, divisor = _float_weights(steps, push)
     counts = steps.counts.astype(np.float64)[:, None]
-    half, thirds = 1.5 * counts, 3.0 * counts
+    half, thirds = offset * counts, divisor * counts
     product = _csr_matvecs()
     rows, ends = steps.rows, steps.step_ends.tolist()
     flat, width, height = work.reshape(-1), work.shape[1], work.shape[0]
@@ -253,7 +312,7 @@ def _float_restore(work: np.ndarray, steps: MeanSteps) -> None:
         if start == stop:
             continue
         part = sums[: stop - start]
-        part[:] = half[start:stop]  # U + 1.5c: the product below adds U
+        part[:] = half[start:stop]  # the sum plus its offset: the product below adds the sum
         # the whole matrix's columns and weights, addressed by this step's row pointers
         pointers = ptr[start : stop + 1]
         product(stop - start, height, width, pointers, idx, weights, flat, part.reshape(-1))
@@ -262,14 +321,17 @@ def _float_restore(work: np.ndarray, steps: MeanSteps) -> None:
         work[rows[start:stop]] += part
 
 
-def _float_predictions(work: np.ndarray, steps: MeanSteps, start: int, stop: int) -> np.ndarray:
+def _float_predictions(
+    work: np.ndarray, steps: MeanSteps, start: int, stop: int, push: int = PUSH
+) -> np.ndarray:
     """:func:`mean_predictions` in float64 (exact while ``work`` is within MEAN_LIMIT and each
-    row has fewer than 2**17 sources: every partial sum, a half-integer, stays below 2**52)."""
-    ptr, idx, weights = steps.matrix
+    row has fewer sources than :func:`_float_sources` allows: every partial sum stays below
+    2**52)."""
+    (ptr, idx, weights), offset, divisor = _float_weights(steps, push)
     counts = steps.counts[start:stop, None]
     first, last = int(ptr[start]), int(ptr[stop])
     sums = np.empty((stop - start, work.shape[1]))
-    sums[:] = 1.5 * counts  # U + 1.5c: the product below adds U
+    sums[:] = offset * counts  # the sum plus its offset: the product below adds the sum
     _csr_matvecs()(
         stop - start,
         work.shape[0],
@@ -280,7 +342,7 @@ def _float_predictions(work: np.ndarray, steps: MeanSteps, start: int, stop: int
         work.reshape(-1),
         sums.reshape(-1),
     )
-    sums /= 3.0 * counts
+    sums /= divisor * counts
     np.floor(sums, out=sums)
     return sums
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, NoReturn
+from typing import Any, NamedTuple, NoReturn
 
 import numpy as np
 
@@ -26,12 +26,15 @@ from . import adaptive, streams
 from .prediction import (
     LINEAR_LIMIT,
     LINEAR_STEP_LIMIT,
+    PUSH,
+    PUSHES,
     accumulate,
     linear_accumulate,
     linear_residuals,
     mean_accumulate,
     mean_accumulate_columns,
     mean_residuals,
+    pushes_of,
     residuals,
 )
 from .sections import section_shape
@@ -113,7 +116,7 @@ def encode_matrix(
     section never grows by it.
     """
     q = matrix.q
-    stream, predict = section_stream(q, parents, allow_predict, coding_tools)
+    stream, predict, push = section_stream(q, parents, allow_predict, coding_tools, adaptive_coding)
     columns = np.ascontiguousarray(stream.T)
     del stream
     payload, planes = streams.pack_integers(columns, level)
@@ -123,6 +126,10 @@ def encode_matrix(
         "steps": matrix.steps.astype("<f4").tobytes(),
         "predict": predict.tobytes(),
     }
+    if ((push != PUSH) & (predict == PREDICT_MEAN)).any():  # format 1.6, like coder 1
+        params["mean_push"] = (
+            np.where(predict == PREDICT_MEAN, push, PUSH).astype(np.uint8).tobytes()
+        )
     if adaptive_coding and columns.size:
         coded = adaptive.encode_columns(columns, coding_order(parents, q.shape[0]))
         if len(coded) < len(payload):
@@ -139,27 +146,42 @@ def coding_order(parents: Mesh | None, rows: int) -> adaptive.CodingOrder:
     return adaptive.sequence_order(rows)
 
 
+class Predicted(NamedTuple):
+    """The integers a section streams, each column's predictor and each column's push of
+    predictor 2 (PUSH where it has none)."""
+
+    stream: np.ndarray
+    predict: np.ndarray
+    push: np.ndarray
+
+
 def section_stream(
-    q: np.ndarray, parents: Mesh | None, allow_predict: bool, coding_tools: bool
-) -> tuple[np.ndarray, np.ndarray]:
-    """The integers a section streams and each column's predictor: :func:`predicted_stream`
-    where prediction is allowed and there is a row to predict from, else ``q`` itself."""
+    q: np.ndarray,
+    parents: Mesh | None,
+    allow_predict: bool,
+    coding_tools: bool,
+    pushes: bool = False,
+) -> Predicted:
+    """:func:`predicted_stream` where prediction is allowed and there is a row to predict from,
+    else ``q`` itself."""
     if allow_predict and q.shape[0] > 1:
         # in a function of its own: the other predictors' residuals are freed before packing
-        return predicted_stream(q, parents, coding_tools)
-    return q, np.zeros(q.shape[1], dtype=np.uint8)
+        return predicted_stream(q, parents, coding_tools, pushes)
+    return Predicted(q, np.zeros(q.shape[1], dtype=np.uint8), pushes_of(None, q.shape[1]))
 
 
 def predicted_stream(
-    q: np.ndarray, parents: Mesh | None, coding_tools: bool
-) -> tuple[np.ndarray, np.ndarray]:
+    q: np.ndarray, parents: Mesh | None, coding_tools: bool, pushes: bool = False
+) -> Predicted:
     """The residuals to stream and each column's predictor: per column, the predictor whose
-    residuals :func:`_cost` finds cheapest (ties to the lower one)."""
+    residuals :func:`_cost` finds cheapest (ties to the lower one); with ``pushes`` (a U1 of
+    format 1.6), predictor 2 with the push whose residuals are cheapest (ties to PUSH)."""
     mesh = parents if isinstance(parents, MeshPrediction) else None
     stream = residuals(q, parents.parents if isinstance(parents, MeshPrediction) else parents)
     choices = [(PREDICT_NONE, q), (PREDICT_PARENT, stream)]
+    push = pushes_of(None, q.shape[1])
     if mesh is not None and coding_tools and mesh.levels <= MAX_MEAN_LEVELS:
-        mean = mean_residuals(q, mesh.mean_steps)
+        mean, push = _pushed_mean(q, mesh.mean_steps, pushes)
         if mean is not None:  # a column whose residuals would not fit 32 bits keeps to 0 or 1
             fits = np.abs(mean).max(axis=0) < 2**31
             choices.append((PREDICT_MEAN, np.where(fits[None, :], mean, q)))
@@ -181,7 +203,40 @@ def predicted_stream(
         if value != PREDICT_PARENT:
             chosen = np.flatnonzero(best == j)
             stream[:, chosen] = columns[:, chosen]  # in place: stream is a fresh array
-    return stream, predict
+    return Predicted(stream, predict, push)
+
+
+def _pushed_mean(
+    q: np.ndarray, steps: MeanSteps, choose: bool
+) -> tuple[np.ndarray | None, np.ndarray]:
+    """Predictor 2's residuals and each column's push: PUSH, or with ``choose`` the push of
+    PUSHES whose residuals :func:`_cost` finds cheapest, PUSH first so that it wins ties (a
+    few columns at a time, so that the candidates' residuals stay small beside a wide U1)."""
+    push = pushes_of(None, q.shape[1])
+    mean = mean_residuals(q, steps)
+    if not choose or mean is None:
+        return mean, push
+    best = _cost(mean)
+    for start in range(0, q.shape[1], _PUSH_BLOCK):
+        block = slice(start, start + _PUSH_BLOCK)
+        width = mean[:, block].shape[1]
+        for a in PUSHES:
+            if a == PUSH:
+                continue
+            trial = mean_residuals(q[:, block], steps, np.full(width, a, dtype=np.uint8))
+            if trial is None:
+                continue
+            cost = _cost(trial)
+            better = np.flatnonzero(cost < best[block])
+            if better.size:
+                best[start + better] = cost[better]
+                push[start + better] = a
+                mean[:, start + better] = trial[:, better]
+    return mean, push
+
+
+#: Columns whose residuals :func:`_pushed_mean` tries at once for each push.
+_PUSH_BLOCK = 32
 
 
 def decode_matrix(
@@ -208,6 +263,7 @@ def decode_matrix(
     rows, cols, planes, steps, predict = _checked_params(
         params, where, parents is not None, allow_predict, coding_tools
     )
+    pushes = _pushes(params, where, cols, adaptive_coding and parents is not None)
     if _coder(params, where, adaptive_coding) == adaptive.CODER_ADAPTIVE:
         if callable(parents):
             parents = parents()
@@ -219,7 +275,8 @@ def decode_matrix(
     if cols and meaned.size == cols:  # U1's usual case: restored in the stream, no copy made
         mesh = parents() if callable(parents) else parents
         columns = stream.reshape(cols, rows)
-        _restore_mean(columns, mesh if isinstance(mesh, MeshPrediction) else None, where, True)
+        mesh = mesh if isinstance(mesh, MeshPrediction) else None
+        _restore_mean(columns, mesh, pushes, where, True)
         return QuantizedMatrix(columns.T, steps)
     q = np.ascontiguousarray(stream.reshape(cols, rows).T)
     if chosen.size or meaned.size:
@@ -232,7 +289,7 @@ def decode_matrix(
         elif chosen.size:
             q[:, chosen] = accumulate(q[:, chosen], tree)
         if meaned.size:
-            q[:, meaned] = _restore_mean(q[:, meaned], mesh, where)
+            q[:, meaned] = _restore_mean(q[:, meaned], mesh, pushes[meaned], where)
     linear = np.flatnonzero(predict == PREDICT_LINEAR)
     if linear.size:
         try:
@@ -240,6 +297,22 @@ def decode_matrix(
         except ValueError as error:
             _refuse_predictor(f"{error} (-2**33..2**33 for differences, -2**32..2**32)", where)
     return QuantizedMatrix(q, steps)
+
+
+def _pushes(params: dict[str, Any], where: str, cols: int, allowed: bool) -> np.ndarray:
+    """Each column's push of predictor 2 (§6.2, ``mean_push``, format 1.6; R32): PUSH where
+    the section gives none; ``allowed``: a U1 section of a file with flag bit 3."""
+    raw = params.get("mean_push")
+    if raw is None:
+        return pushes_of(None, cols)
+    if not allowed:
+        _refuse_predictor("mean_push is allowed only in U1 of a file with flag bit 3", where)
+    if not isinstance(raw, bytes) or len(raw) != cols:
+        _refuse_predictor(f"mean_push must be {cols} bytes", where)
+    pushes = np.frombuffer(raw, dtype=np.uint8)
+    if int(pushes.max(initial=0)) > PUSHES[-1]:
+        _refuse_predictor(f"every mean_push byte must be 0..{PUSHES[-1]}", where)
+    return pushes
 
 
 def _checked_params(
@@ -306,6 +379,7 @@ def decode_values(
     columns, without the int64 matrix (as large as the floats)."""
     core = native.core()
     rows, cols, planes, steps, predict = _checked_params(params, where, True, True, coding_tools)
+    pushes = _pushes(params, where, cols, adaptive_coding)
     zstd = _coder(params, where, adaptive_coding) == adaptive.CODER_ZSTD
     if core is None or not zstd or not (rows and cols) or not (predict == PREDICT_MEAN).all():
         return decode_matrix(
@@ -320,23 +394,31 @@ def decode_values(
     mesh = parents() if callable(parents) else parents
     plan = _mean_mesh(mesh if isinstance(mesh, MeshPrediction) else None, where).native_plan()
     try:
-        values: np.ndarray = plan.restore_values(raw, planes, rows, steps, 0)
+        values: np.ndarray = (
+            plan.restore_values(raw, planes, rows, steps, 0)
+            if (pushes == PUSH).all()
+            else plan.restore_values(raw, planes, rows, steps, 0, pushes)
+        )
     except ValueError:
         _refuse_predictor(MEAN_RANGE_MESSAGE, where)
     return values
 
 
 def _restore_mean(
-    residual: np.ndarray, mesh: MeshPrediction | None, where: str, in_columns: bool = False
+    residual: np.ndarray,
+    mesh: MeshPrediction | None,
+    pushes: np.ndarray,
+    where: str,
+    in_columns: bool = False,
 ) -> np.ndarray:
-    """Predictor 2's columns restored (§6.2), or R32 when its conditions fail; with
-    ``in_columns``, ``residual`` is (cols, rows) and restored in place."""
+    """Predictor 2's columns restored (§6.2), each with its push, or R32 when its conditions
+    fail; with ``in_columns``, ``residual`` is (cols, rows) and restored in place."""
     steps = _mean_mesh(mesh, where)
     try:
         if in_columns:
-            mean_accumulate_columns(residual, steps)
+            mean_accumulate_columns(residual, steps, pushes)
             return residual
-        return mean_accumulate(residual, steps)
+        return mean_accumulate(residual, steps, pushes)
     except ValueError:
         _refuse_predictor(MEAN_RANGE_MESSAGE, where)
 

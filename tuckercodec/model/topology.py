@@ -204,11 +204,26 @@ class MeanSteps:
     def matrix(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(indptr, indices, data) of the float64 CSR matrix whose row j sums 4 q[w] - q[anchor]
         over row j's sources: 4 at each source, -1 at each anchor, repeats summed."""
+        return self._weighted(4.0, -1.0)
+
+    def pushed_matrix(self, push: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:attr:`matrix` for predictor 2's push ``push`` (format 1.6, §6.2): row j sums
+        (6 + push) q[w] - push q[anchor] over row j's sources."""
+        made = self._pushed.get(push)
+        if made is None:
+            made = self._pushed[push] = self._weighted(6.0 + push, -float(push))
+        return made
+
+    @cached_property
+    def _pushed(self) -> dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        return {}
+
+    def _weighted(self, source: float, anchor: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         import scipy.sparse as sparse
 
         counts = self.counts
         owner = np.repeat(np.arange(self.rows.size), counts)
-        weights = np.concatenate([np.full(counts.sum(), 4.0), np.full(counts.sum(), -1.0)])
+        weights = np.concatenate([np.full(counts.sum(), source), np.full(counts.sum(), anchor)])
         matrix = sparse.csr_matrix(
             (
                 weights,
