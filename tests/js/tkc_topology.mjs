@@ -12,7 +12,8 @@
 // Cases (paths relative to the manifest):
 //   {kind: "traverse", name, entry: FILE (the section-table entry, msgpack), payload: FILE, K, M, n}
 //   {kind: "restore", name, faces: FILE (int32 M*n), K, M, n,
-//    residuals: FILE (int32, or float64 with "wide": true, K*cols column-major), predict: [cols]}
+//    residuals: FILE (int32, or float64 with "wide": true, K*cols column-major), predict: [cols],
+//    push: [cols] (optional: predictor 2's push per column, format 1.6; absent: 2)}
 
 import { createHash } from 'node:crypto';
 import { readFileSync } from 'node:fs';
@@ -68,7 +69,7 @@ function runRestore(spec) {
     for (let c = 0; c < predict.length; c++) {
       const s = performance.now();
       const q = predict[c] === 0 ? Float64Array.from(residuals.subarray(c * K, (c + 1) * K))
-        : restoreMeshColumn(residuals, c * K, predict[c], topo, `column ${c}`);
+        : restoreMeshColumn(residuals, c * K, predict[c], topo, `column ${c}`, spec.push ? spec.push[c] : undefined);
       if (predict[c] === 2 && firstMean === null) firstMean = performance.now() - s;
       out.set(q, c * K);
     }
@@ -77,7 +78,7 @@ function runRestore(spec) {
   }
   return {
     accepted: true, sha256: sha256(out), ...best, max_depth: topo.maxDepth,
-    big_sources: topo.plan !== null && topo.plan.big,
+    big_sources: topo.plan !== null && topo.plan.sources >= 2 ** 17, // push 2 sums in BigInt
   };
 }
 

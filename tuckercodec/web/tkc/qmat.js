@@ -1,19 +1,21 @@
 // Codec `qmat` (spec/FORMAT.md §6.3): a matrix stored as integers with one quantization step per
 // column, each column optionally predicted (§6.2). Checked in the order of §5 step 16: planes,
-// the length and type of steps, of predict, the values of steps, of predict, (1.6) the coder,
-// then the stream: §6.1's zstd frame, or with coder 1 §6.14's adaptive stream.
+// the length and type of steps, of predict, the values of steps, of predict, (1.6) mean_push
+// (predictor 2's push per column, §6.2), (1.6) the coder, then the stream: §6.1's zstd frame, or
+// with coder 1 §6.14's adaptive stream.
 
 import { adaptiveError, decodeAdaptive } from './adaptive.js';
 import { formatError } from './errors.js';
 import { describe, isInt } from './msgpack.js';
 import { decodeIntStream } from './streams.js';
-import { meshCodingOrder, restoreMeshColumn } from './topology.js';
+import { MEAN_PUSH, meshCodingOrder, restoreMeshColumn } from './topology.js';
 
 const EXACT = 2 ** 53; // float64 holds every integer up to here
 const LINEAR_VALUE = 2 ** 32; // §6.2 predictor 3: the restored values ...
 const LINEAR_STEP = 2 ** 33; // ... and the running differences
 const ZSTD = 0; // §6.14's coder values: §6.1's byte planes ...
 const ADAPTIVE = 1; // ... or the adaptive stream
+const MAX_PUSH = 9; // §6.2: mean_push's bytes are 0..9 (sixths of a step)
 
 /**
  * What the file allows a qmat section: `tools`, preamble flag bit 1 (version 1.2: predictors 2
@@ -41,6 +43,7 @@ const ADAPTIVE = 1; // ... or the adaptive stream
 export function decodeQmat(section, payload, rows, cols, relation, coding, topology, keep) {
   const where = `section '${section.id}'`;
   const { planes, step, predict } = checkedParams(section.entry, cols, relation, coding.tools, where);
+  const push = readPush(section.entry, cols, relation === 'mesh' && coding.adaptive, where);
   const coder = readCoder(section.entry, coding.adaptive, where);
   const stream =
     coder === ADAPTIVE
@@ -57,7 +60,7 @@ export function decodeQmat(section, payload, rows, cols, relation, coding, topol
     let q;
     const p = predict[c];
     if (p === 0) q = stream.subarray(offset, offset + rows);
-    else if (relation === 'mesh') q = restoreMeshColumn(stream, offset, p, topology(), `${where} column ${c}`);
+    else if (relation === 'mesh') q = restoreMeshColumn(stream, offset, p, topology(), `${where} column ${c}`, push ? push[c] : MEAN_PUSH);
     else if (p === 1) q = restoreRunningSum(stream, offset, rows);
     else q = restoreLinear(stream, offset, rows, `${where} column ${c}`);
     const s = step[c];
@@ -106,6 +109,33 @@ function checkedParams(entry, cols, relation, codingTools, where) {
     }
   }
   return { planes: Number(planes), step, predict };
+}
+
+/**
+ * The section's `mean_push` (§6.2, version 1.6), checked (R32-predictor): null where absent
+ * (push 2 for every column); else a bin of exactly cols bytes each in 0..9, allowed only where
+ * `allowed` says (a position U1 or U1.s of a file with flag bit 3; never a field's factor).
+ * @param {Map<string, import('./msgpack.js').MsgValue>} entry
+ * @param {number} cols
+ * @param {boolean} allowed
+ * @param {string} where
+ * @returns {Uint8Array | null}
+ */
+function readPush(entry, cols, allowed, where) {
+  const push = entry.get('mean_push');
+  if (push === undefined) return null;
+  if (!allowed) {
+    throw formatError('R32-predictor', `${where}: "mean_push" is allowed only in U1 of a file with preamble flag bit 3 (format 1.6)`);
+  }
+  if (!(push instanceof Uint8Array) || push.length !== cols) {
+    throw formatError('R32-predictor', `${where}: "mean_push" is ${describe(push)}, not a bin of ${cols} bytes`);
+  }
+  for (let c = 0; c < cols; c++) {
+    if (push[c] > MAX_PUSH) {
+      throw formatError('R32-predictor', `${where}: column ${c} has push ${push[c]}; pushes are 0..${MAX_PUSH}`);
+    }
+  }
+  return push;
 }
 
 /**

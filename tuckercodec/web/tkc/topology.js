@@ -2,7 +2,7 @@
 // (predictor 2, version 1.2), both from the breadth-first forest of the face edges.
 //
 //   const topo = meshTopology(faces, M, n, K);           // once per file (FACE is shared)
-//   const q = restoreMeshColumn(stream, c * K, predictor, topo, "section 'U1' column c");
+//   const q = restoreMeshColumn(stream, c * K, predictor, topo, "section 'U1' column c", push);
 //   const order = meshCodingOrder(topo);                 // U1's adaptive coding order (§6.14)
 //
 // No DOM: runs in node and in browsers. Every restored value is the exact integer the spec
@@ -13,13 +13,17 @@ import { formatError } from './errors.js';
 const EXACT = 2 ** 53; // float64 holds every integer of magnitude below this
 const MEAN_RANGE = 2 ** 32; // §6.2: a predictor-2 value lies in −2^32..2^32 (R32-predictor)
 const MAX_DEPTHS = 2048; // §6.2: predictor 2 only on a forest of at most 2048 depths
-// The largest source count c for which one vertex's mean is computed in float64; see meanPlan.
+// The fewest sources c for which one vertex's mean is no longer computed in float64 (BigInt
+// instead): push 2's terms are within 10·2^32, any other push's within 24·2^32; see restoreMean.
 const FLOAT_SOURCES = 2 ** 17;
+const PUSHED_FLOAT_SOURCES = 2 ** 16;
+/** Predictor 2's push where a section gives none (§6.2): a third (2/6) of a step. */
+export const MEAN_PUSH = 2;
 
 /**
- * The mesh mean's plan (meanPlan).
+ * The mesh mean's plan (meanPlan); `sources` is the most sources of any vertex.
  * @typedef {{restore: Int32Array, first: Int32Array, source: Int32Array, anchor: Int32Array,
- *   big: boolean}} MeanPlan
+ *   sources: number}} MeanPlan
  */
 
 /**
@@ -182,7 +186,7 @@ function meanPlan(topo) {
   }
   const source = new Int32Array(total);
   const anchor = new Int32Array(total);
-  let big = false;
+  let most = 0;
   for (let i = 0, t = 0; i < rows; i++) {
     const v = restore[i];
     const d = depth[v];
@@ -197,9 +201,9 @@ function meanPlan(topo) {
         anchor[t++] = w;
       }
     }
-    if (first[i + 1] - first[i] >= FLOAT_SOURCES) big = true;
+    most = Math.max(most, first[i + 1] - first[i]);
   }
-  topo.plan = { restore, first, source, anchor, big };
+  topo.plan = { restore, first, source, anchor, sources: most };
   return topo.plan;
 }
 
@@ -231,12 +235,14 @@ export function meshCodingOrder(topo) {
  * @param {number} predictor 1 (mesh parents) or 2 (mesh mean)
  * @param {Topology} topo meshTopology(...) of the file's faces
  * @param {string} where the section and column, for messages
+ * @param {number} [push] predictor 2's push a, 0..9 (version 1.6's `mean_push`, already checked:
+ *   R32); MEAN_PUSH when the section gives none
  * @returns {Float64Array} K values: float64(q), exact while |q| <= 2^53, else rounded to nearest
  *   (ties to even) from the exact integer, as §6.3's dequantization needs
  * @throws {TkcError} R32-predictor: predictor 2 on a forest deeper than 2048 depths, or a restored
  *   value outside −2^32..2^32
  */
-export function restoreMeshColumn(residuals, offset, predictor, topo, where) {
+export function restoreMeshColumn(residuals, offset, predictor, topo, where, push = MEAN_PUSH) {
   if (predictor === 1) return restoreParents(residuals, offset, topo);
   if (predictor !== 2) throw formatError('R32-predictor', `${where}: predictor ${predictor} is not a mesh predictor`);
   if (topo.maxDepth >= MAX_DEPTHS) {
@@ -245,7 +251,7 @@ export function restoreMeshColumn(residuals, offset, predictor, topo, where) {
       `${where}: predictor 2 needs a forest of at most ${MAX_DEPTHS} depths; this mesh has ${topo.maxDepth + 1}`,
     );
   }
-  return restoreMean(residuals, offset, topo, meanPlan(topo), where);
+  return restoreMean(residuals, offset, topo, meanPlan(topo), push, where);
 }
 
 /**
@@ -282,39 +288,52 @@ function restoreParents(residuals, offset, topo) {
 }
 
 /**
- * Predictor 2, the mesh mean: q[v] = r[v] + floor((2U + 3c) / (6c)) with
- * U = Σ_{w in S(v)} (4·q[w] − q[anchor(w)]), restored by depth and phase, each value checked
- * against ±2^32 as soon as it is restored (so every source and anchor read is within ±2^32).
+ * Predictor 2, the mesh mean with push a: q[v] = r[v] + floor((2V + 6c) / (12c)) with
+ * V = Σ_{w in S(v)} ((6 + a)·q[w] − a·q[anchor(w)]), restored by depth and phase, each value
+ * checked against ±2^32 as soon as it is restored (so every source and anchor read is within
+ * ±2^32). Push 2 (a file without `mean_push`) has V = 2U, U = Σ (4·q[w] − q[anchor(w)]), and is
+ * computed as floor((2U + 3c) / (6c)), exactly as before format 1.6.
  *
- * Why float64 is exact here: each term 4·q[w] − q[a] is an integer of magnitude at most
- * 5·2^32, so for c < 2^17 sources every partial sum of U and 2U + 3c is an integer below
- * 10·2^32·2^17 + 3·2^17 < 2^53: exact. The quotient (2U + 3c)/(6c) is below 2^33 in magnitude,
- * where half an ulp is at most 2^−21, while a quotient that is not an integer is at least
- * 1/(6c) > 2^−20 away from every integer; so the correctly rounded division never crosses an
- * integer and Math.floor of it is the exact floor. Vertices with c ≥ 2^17 sources use BigInt.
+ * Why float64 is exact here: each term of U is an integer of magnitude at most 5·2^32, and each
+ * of V at most (6 + 2a)·2^32 <= 24·2^32. So for push 2 and c < 2^17 sources every partial sum of
+ * U and 2U + 3c is an integer below 10·2^49 + 3·2^17 < 2^53, and for any other push and c < 2^16
+ * every partial sum of V and V + 3c is below 24·2^48 + 3·2^16 < 2^53: exact. The quotient (2U + 3c)/(6c), resp. (V + 3c)/(6c) = (2V + 6c)/(12c), is at most
+ * 2^33, resp. 2^34 + 1/2, in magnitude, where half an ulp is at most 2^−20, resp. 2^−19, while a
+ * quotient that is not an integer is at least 1/(6c) > 2^−20, resp. > 2^−19, away from every
+ * integer; so the correctly rounded division never crosses an integer and Math.floor of it is the
+ * exact floor. Vertices with more sources use BigInt (bigMean): only a crafted mesh has them.
  * @param {Int32Array} residuals
  * @param {number} offset
  * @param {Topology} topo
  * @param {MeanPlan} plan
+ * @param {number} push
  * @param {string} where
  */
-function restoreMean(residuals, offset, topo, plan, where) {
+function restoreMean(residuals, offset, topo, plan, push, where) {
   const { K } = topo;
-  const { restore, first, source, anchor, big } = plan;
+  const { restore, first, source, anchor, sources } = plan;
   const q = new Float64Array(K);
   for (let v = 0; v < K; v++) q[v] = residuals[offset + v]; // depth 0: q = r (others overwritten)
+  const pushed = push !== MEAN_PUSH;
+  const bigFrom = pushed ? PUSHED_FLOAT_SOURCES : FLOAT_SOURCES;
+  const big = sources >= bigFrom;
+  const weight = 6 + push; // V's weights: (6 + a) at a source, −a at its anchor
   const rows = restore.length;
   for (let i = 0; i < rows; i++) {
     const s0 = first[i];
     const s1 = first[i + 1];
     const c = s1 - s0;
     let pred;
-    if (big && c >= FLOAT_SOURCES) {
-      pred = bigMean(q, source, anchor, s0, s1);
-    } else {
-      let u = 0;
+    if (big && c >= bigFrom) {
+      pred = bigMean(q, source, anchor, s0, s1, push);
+    } else if (!pushed) {
+      let u = 0; // today's path, unchanged: U and (2U + 3c)/(6c)
       for (let t = s0; t < s1; t++) u += 4 * q[source[t]] - q[anchor[t]];
       pred = Math.floor((2 * u + 3 * c) / (6 * c));
+    } else {
+      let sum = 0; // V, then (V + 3c)/(6c)
+      for (let t = s0; t < s1; t++) sum += weight * q[source[t]] - push * q[anchor[t]];
+      pred = Math.floor((sum + 3 * c) / (6 * c));
     }
     const v = restore[i];
     const x = q[v] + pred; // q[v] still holds r[v]
@@ -330,19 +349,21 @@ function restoreMean(residuals, offset, topo, plan, where) {
 }
 
 /**
- * The mean of one vertex with very many sources, in BigInt (floor division toward −∞).
+ * The prediction of one vertex with very many sources, in BigInt: floor((2V + 6c) / (12c)) as
+ * floor((V + 3c) / (6c)), floor division toward −∞.
  * @param {Float64Array} q
  * @param {Int32Array} source
  * @param {Int32Array} anchor
  * @param {number} s0
  * @param {number} s1
+ * @param {number} push
  */
-function bigMean(q, source, anchor, s0, s1) {
-  let u = 0n;
-  // each term is an integer below 5·2^32 in magnitude: exact in float64
-  for (let t = s0; t < s1; t++) u += BigInt(4 * q[source[t]] - q[anchor[t]]);
+function bigMean(q, source, anchor, s0, s1, push) {
+  let sum = 0n;
+  // each term is an integer below 24·2^32 in magnitude: exact in float64
+  for (let t = s0; t < s1; t++) sum += BigInt((6 + push) * q[source[t]] - push * q[anchor[t]]);
   const c = BigInt(s1 - s0);
-  const numerator = 2n * u + 3n * c;
+  const numerator = sum + 3n * c;
   const denominator = 6n * c;
   let quotient = numerator / denominator; // truncates toward zero
   if (numerator % denominator !== 0n && numerator < 0n) quotient -= 1n;

@@ -1,9 +1,11 @@
+/** Predictor 2's push where a section gives none (§6.2): a third (2/6) of a step. */
+export declare const MEAN_PUSH = 2;
 export type MeanPlan = {
     restore: Int32Array;
     first: Int32Array;
     source: Int32Array;
     anchor: Int32Array;
-    big: boolean;
+    sources: number;
 };
 export type Topology = {
     K: number;
@@ -17,9 +19,9 @@ export type Topology = {
     plan: MeanPlan | null;
 };
 /**
- * The mesh mean's plan (meanPlan).
+ * The mesh mean's plan (meanPlan); `sources` is the most sources of any vertex.
  * @typedef {{restore: Int32Array, first: Int32Array, source: Int32Array, anchor: Int32Array,
- *   big: boolean}} MeanPlan
+ *   sources: number}} MeanPlan
  */
 /**
  * The face edges' structure (meshTopology).
@@ -56,9 +58,11 @@ export declare function meshCodingOrder(topo: Topology): import('./adaptive.js')
  * @param {number} predictor 1 (mesh parents) or 2 (mesh mean)
  * @param {Topology} topo meshTopology(...) of the file's faces
  * @param {string} where the section and column, for messages
+ * @param {number} [push] predictor 2's push a, 0..9 (version 1.6's `mean_push`, already checked:
+ *   R32); MEAN_PUSH when the section gives none
  * @returns {Float64Array} K values: float64(q), exact while |q| <= 2^53, else rounded to nearest
  *   (ties to even) from the exact integer, as §6.3's dequantization needs
  * @throws {TkcError} R32-predictor: predictor 2 on a forest deeper than 2048 depths, or a restored
  *   value outside −2^32..2^32
  */
-export declare function restoreMeshColumn(residuals: Int32Array, offset: number, predictor: number, topo: Topology, where: string): Float64Array;
+export declare function restoreMeshColumn(residuals: Int32Array, offset: number, predictor: number, topo: Topology, where: string, push?: number): Float64Array;
