@@ -613,11 +613,13 @@ pub fn streams_unpack(data: &[u8]) {
 /// - 0, predictor 2 over a mesh: a byte `b` for `width = 3 + b % 6`; a varint vertex count K
 ///   and a varint face count (each at most 2**12); the faces' entries, signed (any values: the
 ///   forest checks them); a byte `c` for `1 + c % 4` columns; then K rows of the columns'
-///   values, signed (0 past the end). Checks: the forest's mean steps make a plan; where the
-///   values are in predictor 2's range, their residuals restore to the values.
+///   values, signed (0 past the end); then each column's push, a byte `% 10` (2 past the
+///   end). Checks: the forest's mean steps make a plan; where the values are in predictor 2's
+///   range, their residuals restore to the values.
 /// - 1, predictor 2 from any steps: a varint K (at most 2**12); five arrays (rows, step ends,
 ///   sources, anchors, source ends), each a varint length (at most 2**12) and signed values;
-///   then columns of K values, signed, restored with the plan if it is made. Checks: no panic.
+///   then columns of K values, signed, restored with the plan if it is made, with a push per
+///   column as above (after the values: 2 once the input ends). Checks: no panic.
 /// - 2, predictors 1 and 3: a varint row count (at most 2**12); a byte `w` for `1 + w % 4`
 ///   columns; each row's parent, signed; the rows' values, signed (0 past the end). Checks:
 ///   no panic in `accumulate_tree` and `linear_accumulate`, and `accumulate_rows`' running
@@ -642,6 +644,19 @@ fn padded_values(input: &mut Framing<'_>, count: usize) -> Vec<i64> {
     values
 }
 
+/// `count` pushes, each a byte `% 10`, 2 (today's predictor 2) past the end of the input.
+fn pushes(input: &mut Framing<'_>, count: usize) -> Vec<u8> {
+    (0..count)
+        .map(|_| {
+            if input.is_empty() {
+                2
+            } else {
+                input.byte() % 10
+            }
+        })
+        .collect()
+}
+
 fn mean_over_mesh(input: &mut Framing<'_>) {
     let width = 3 + usize::from(input.byte()) % 6;
     let vertex_count = bounded(input, MAX_PREDICTION_VERTICES);
@@ -650,18 +665,19 @@ fn mean_over_mesh(input: &mut Framing<'_>) {
     let faces = &faces[..faces.len() / width * width];
     let columns = 1 + usize::from(input.byte()) % 4;
     let values = padded_values(input, vertex_count * columns);
+    let push = pushes(input, columns);
     let Ok(forest) = Forest::new(faces, width, vertex_count) else {
         return;
     };
     let plan = MeanPlan::from_arrays(&forest.mean_steps(), vertex_count);
-    let Ok(Some(residuals)) = plan.residuals(&values, columns) else {
+    let Ok(Some(residuals)) = plan.residuals(&values, columns, &push) else {
         return;
     };
     // the residuals column after column, as the decoder restores them
     let mut restored: Vec<i64> = (0..columns)
         .flat_map(|c| residuals.iter().skip(c).step_by(columns).copied())
         .collect();
-    plan.restore_columns(&mut restored, vertex_count)
+    plan.restore_columns(&mut restored, vertex_count, &push)
         .expect("residuals of values in range restore");
     let expected: Vec<i64> = (0..columns)
         .flat_map(|c| values.iter().skip(c).step_by(columns).copied())
@@ -679,6 +695,7 @@ fn mean_from_steps(input: &mut Framing<'_>) {
         input.signed_values(length as u64)
     });
     let values = input.signed_values(MAX_PREDICTION_VERTICES * 4);
+    let push = pushes(input, values.len().checked_div(vertex_count).unwrap_or(0));
     let Ok(plan) = MeanPlan::from_steps(
         &rows,
         &step_ends,
@@ -693,8 +710,8 @@ fn mean_from_steps(input: &mut Framing<'_>) {
     if let Some(whole) = columns.len().checked_div(vertex_count) {
         columns.truncate(whole * vertex_count);
     }
-    let _ = plan.restore_columns(&mut columns, vertex_count);
-    let _ = plan.residuals(&columns, 1);
+    let _ = plan.restore_columns(&mut columns, vertex_count, &push);
+    let _ = plan.residuals(&columns, 1, &push[..push.len().min(1)]);
 }
 
 fn along_rows_and_tree(input: &mut Framing<'_>) {

@@ -6,6 +6,7 @@ use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArra
 use numpy::{PyReadwriteArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use pyo3::types::PyBytes;
 use tuckercodec_core::prediction::{self, topology, values};
 
 /// A one-dimensional numpy array handed to Python.
@@ -27,6 +28,22 @@ fn int64_array<'py, T: Copy + TryInto<i64>>(
             .map(|&v| v.try_into().unwrap_or(i64::MAX))
             .collect(),
     )
+}
+
+/// Each column's push (`mean_push`, spec section 6.2): `None` for 2 everywhere (today's
+/// predictor 2), else a `bytes` or a one-dimensional uint8 numpy array of one byte per column
+/// (their count and values are checked by the core: `ValueError` if they do not fit).
+fn pushes(push: Option<&Bound<'_, PyAny>>, cols: usize) -> PyResult<Vec<u8>> {
+    let Some(push) = push else {
+        return Ok(vec![prediction::PLAIN_PUSH; cols]);
+    };
+    if let Ok(bytes) = push.cast::<PyBytes>() {
+        return Ok(bytes.as_bytes().to_vec());
+    }
+    let array: PyReadonlyArray1<'_, u8> = push.extract().map_err(|_| {
+        value_error("push must be None, bytes or a one-dimensional uint8 array".to_string())
+    })?;
+    Ok(array.as_array().to_vec())
 }
 
 /// `MeshForest.mean_steps`'s result.
@@ -143,16 +160,19 @@ impl MeanPlan {
     }
 
     /// Restores predictor 2's residuals in place, a C-contiguous (cols, K) int64 array whose
-    /// rows are columns of U1 (`mean_accumulate_columns`); `ValueError` if a value leaves the
-    /// range.
+    /// rows are columns of U1 (`mean_accumulate_columns`), row c with push `push[c]` (`None`:
+    /// 2 for every column); `ValueError` if a value leaves the range or the pushes do not fit.
+    #[pyo3(signature = (columns, push=None))]
     fn restore_columns(
         &self,
         py: Python<'_>,
         mut columns: PyReadwriteArray2<'_, i64>,
+        push: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<()> {
-        let height = columns.shape()[1];
+        let (cols, height) = (columns.shape()[0], columns.shape()[1]);
+        let push = pushes(push, cols)?;
         let flat = columns.as_slice_mut()?;
-        py.detach(|| self.plan.restore_columns(flat, height))
+        py.detach(|| self.plan.restore_columns(flat, height, &push))
             .map_err(value_error)
     }
 
@@ -160,7 +180,10 @@ impl MeanPlan {
     /// the (height, cols) float64 matrix from the stream's `raw` bytes (zstd's output, `planes`
     /// byte planes of `cols * height` integers, column after column) and the float32 `steps`,
     /// in one pass and without the integers, on up to `threads` threads (0: as many as the
-    /// machine offers, capped); `ValueError` if a value leaves the range.
+    /// machine offers, capped), column c with push `push[c]` (`None`: 2 for every column);
+    /// `ValueError` if a value leaves the range or the pushes do not fit.
+    #[pyo3(signature = (raw, planes, height, steps, threads=0, push=None))]
+    #[allow(clippy::too_many_arguments)]
     fn restore_values<'py>(
         &self,
         py: Python<'py>,
@@ -169,9 +192,11 @@ impl MeanPlan {
         height: usize,
         steps: PyReadonlyArray1<'py, f32>,
         threads: usize,
+        push: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let steps = steps.as_slice()?;
         let width = steps.len();
+        let push = pushes(push, width)?;
         // numpy's allocation: a large array gets huge pages (a Vec faults 4 KiB at a time)
         let array = PyArray2::<f64>::zeros(py, [height, width], false);
         {
@@ -184,24 +209,28 @@ impl MeanPlan {
             };
             py.detach(|| {
                 self.plan
-                    .restore_values(raw, planes, height, steps, out, threads)
+                    .restore_values(raw, planes, height, steps, out, threads, &push)
             })
             .map_err(value_error)?;
         }
         Ok(array)
     }
 
-    /// `mean_residuals` of a C-contiguous (K, cols) int64 array: a new array, or `None` if a
-    /// value leaves the range.
+    /// `mean_residuals` of a C-contiguous (K, cols) int64 array, column c with push `push[c]`
+    /// (`None`: 2 for every column): a new array, or `None` if a value leaves the range;
+    /// `ValueError` if the pushes do not fit.
+    #[pyo3(signature = (values, push=None))]
     fn residuals<'py>(
         &self,
         py: Python<'py>,
         values: PyReadonlyArray2<'py, i64>,
+        push: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Option<Bound<'py, PyArray2<i64>>>> {
         let (rows, width) = (values.shape()[0], values.shape()[1]);
+        let push = pushes(push, width)?;
         let flat = values.as_slice()?;
         let out = py
-            .detach(|| self.plan.residuals(flat, width))
+            .detach(|| self.plan.residuals(flat, width, &push))
             .map_err(value_error)?;
         out.map(|v| PyArray1::from_vec(py, v).reshape([rows, width]))
             .transpose()

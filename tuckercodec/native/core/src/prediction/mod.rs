@@ -18,6 +18,13 @@ pub const MEAN_LIMIT: i64 = 1 << 32;
 /// From this many sources per row on (only a crafted mesh), predictor 2 runs in int64 as
 /// `mean_predictions` does; below it float64 is exact (`_FLOAT_SOURCES`).
 pub const FLOAT_SOURCES: usize = 1 << 17;
+/// From this many sources per row on, a column whose push is not 2 runs in int64 (i128 here):
+/// below it float64 sums `V + 3c` exactly (§6.2, *Push*).
+pub const PUSHED_FLOAT_SOURCES: usize = 1 << 16;
+/// The push of today's predictor 2 (a column without `mean_push`): `V = 2U`.
+pub const PLAIN_PUSH: u8 = 2;
+/// The largest push a column may carry (`mean_push` bytes lie in `0..=MAX_PUSH`).
+pub const MAX_PUSH: u8 = 9;
 /// Predictor 3's limits on the restored values and their first differences.
 pub const LINEAR_LIMIT: i64 = 1 << 32;
 pub const LINEAR_STEP_LIMIT: i64 = 1 << 33;
@@ -37,6 +44,10 @@ pub type PredictionError = String;
 /// Row j of the matrix (`MeanSteps.matrix`) sums `4 q[w] - q[anchor(w)]` over row j's sources:
 /// its columns ascending and merged (4 at a source, -1 at an anchor, repeats summed), the
 /// order scipy's `sum_duplicates` leaves and `csr_matvecs` adds in.
+///
+/// Every function that restores or predicts takes a push per column (`mean_push`, §6.2): a
+/// column of push a sums `V = sum of (6 + a) q[w] - a q[anchor(w)]` and predicts
+/// `floor((2V + 6c) / 12c)`; push 2 is today's prediction and runs today's arithmetic.
 #[derive(Debug, Clone)]
 pub struct MeanPlan {
     /// The vertex restored by each row, by step.
@@ -49,11 +60,17 @@ pub struct MeanPlan {
     pub pointers: Vec<usize>,
     pub columns: Vec<u32>,
     pub weights: Vec<f64>,
+    /// Per entry of the matrix: how often its column is a source of the row (`s`), and that
+    /// minus how often it is an anchor (`s - t`); a push a weighs it `6 s + a (s - t)`.
+    source_weights: Vec<f64>,
+    step_weights: Vec<f64>,
     /// Every index lies below this (the mesh's vertex count): the columns restored must have
     /// at least this many values.
     pub vertex_count: usize,
     /// The float path is exact (no row has `FLOAT_SOURCES` sources or more).
     pub exact_in_float: bool,
+    /// The float path is exact for any push (no row has `PUSHED_FLOAT_SOURCES` sources or more).
+    pub exact_in_float_pushed: bool,
     /// The sources and anchors by row, kept for the int64 path of a crafted mesh.
     sources: Vec<u32>,
     anchors: Vec<u32>,
@@ -162,24 +179,47 @@ impl MeanPlan {
         let mut pointers = Vec::with_capacity(rows.len() + 1);
         let mut columns = Vec::with_capacity(2 * sources.len());
         let mut weights = Vec::with_capacity(2 * sources.len());
-        let mut entries: Vec<(u32, f64)> = Vec::new();
+        let mut source_weights = Vec::with_capacity(2 * sources.len());
+        let mut step_weights = Vec::with_capacity(2 * sources.len());
+        // (column, is a source)
+        let mut entries: Vec<(u32, bool)> = Vec::new();
         pointers.push(0);
         for span in source_ends.windows(2) {
             entries.clear();
-            entries.extend(sources[span[0]..span[1]].iter().map(|&s| (s, 4.0)));
-            entries.extend(anchors[span[0]..span[1]].iter().map(|&a| (a, -1.0)));
+            entries.extend(sources[span[0]..span[1]].iter().map(|&s| (s, true)));
+            entries.extend(anchors[span[0]..span[1]].iter().map(|&a| (a, false)));
             entries.sort_by_key(|&(column, _)| column);
-            for &(column, weight) in &entries {
-                if columns.len() > pointers[pointers.len() - 1] && columns.last() == Some(&column) {
-                    *weights.last_mut().expect("an entry was pushed") += weight;
+            for &(column, source) in &entries {
+                let (weight, once, step) = if source {
+                    (4.0, 1.0, 1.0)
                 } else {
-                    columns.push(column);
-                    weights.push(weight);
+                    (-1.0, 0.0, -1.0)
+                };
+                match (
+                    weights.last_mut(),
+                    source_weights.last_mut(),
+                    step_weights.last_mut(),
+                ) {
+                    (Some(w), Some(s), Some(d))
+                        if columns.len() > pointers[pointers.len() - 1]
+                            && columns.last() == Some(&column) =>
+                    {
+                        *w += weight;
+                        *s += once;
+                        *d += step;
+                    }
+                    _ => {
+                        columns.push(column);
+                        weights.push(weight);
+                        source_weights.push(once);
+                        step_weights.push(step);
+                    }
                 }
             }
             pointers.push(columns.len());
         }
         let exact_in_float = counts.iter().all(|&c| c < FLOAT_SOURCES);
+        let exact_in_float_pushed = counts.iter().all(|&c| c < PUSHED_FLOAT_SOURCES);
         MeanPlan {
             rows,
             step_ends,
@@ -187,8 +227,11 @@ impl MeanPlan {
             pointers,
             columns,
             weights,
+            source_weights,
+            step_weights,
             vertex_count,
             exact_in_float,
+            exact_in_float_pushed,
             sources,
             anchors,
             source_ends,
@@ -197,18 +240,20 @@ impl MeanPlan {
 
     /// Restores columns of predictor 2's residuals in place (`mean_accumulate_columns`):
     /// `columns` holds them one after the other, `height` values each (at least
-    /// `vertex_count`). The rows are restored a step at a time, each from values restored
-    /// before it, for [`COLUMN_BLOCK`] columns at once (their floats side by side, so that each
-    /// of the matrix's entries serves them all).
+    /// `vertex_count`), column c with push `push[c]` (one per column, each `0..=MAX_PUSH`).
+    /// The rows are restored a step at a time, each from values restored before it, for
+    /// [`COLUMN_BLOCK`] columns at once (their floats side by side, so that each of the
+    /// matrix's entries serves them all).
     ///
-    /// Errors: a `height` that does not fit the steps or the array (a caller's error), or
-    /// [`MEAN_RANGE`] when a value leaves +-`MEAN_LIMIT` (in float64 the whole block is checked
-    /// at its end, in int64, for a crafted mesh, each step's rows after the step, as the
-    /// Python does).
+    /// Errors: a `height` or a `push` that does not fit the steps or the array (a caller's
+    /// error), or [`MEAN_RANGE`] when a value leaves +-`MEAN_LIMIT` (in float64 the whole block
+    /// is checked at its end, in int64, for a crafted mesh, each step's rows after the step, as
+    /// the Python does).
     pub fn restore_columns(
         &self,
         columns: &mut [i64],
         height: usize,
+        push: &[u8],
     ) -> Result<(), PredictionError> {
         if height < self.vertex_count || (height == 0 && !columns.is_empty()) {
             return Err(format!(
@@ -217,7 +262,7 @@ impl MeanPlan {
             ));
         }
         if columns.is_empty() {
-            return Ok(());
+            return check_push(push, 0);
         }
         if columns.len() % height != 0 {
             return Err(format!(
@@ -225,14 +270,19 @@ impl MeanPlan {
                 columns.len()
             ));
         }
-        if !self.exact_in_float {
-            return columns
-                .chunks_exact_mut(height)
-                .try_for_each(|column| self.restore_column_integer(column));
-        }
+        check_push(push, columns.len() / height)?;
         let mut work = Vec::new();
         let mut predictions = Vec::new();
-        for block in columns.chunks_mut(COLUMN_BLOCK * height) {
+        for (block, push) in columns
+            .chunks_mut(COLUMN_BLOCK * height)
+            .zip(push.chunks(COLUMN_BLOCK))
+        {
+            if !self.float_is_exact(push) {
+                for (column, &a) in block.chunks_exact_mut(height).zip(push) {
+                    self.restore_column_integer(column, a)?;
+                }
+                continue;
+            }
             let width = block.len() / height;
             // the block's values row after row: a row's columns side by side
             work.clear();
@@ -245,7 +295,7 @@ impl MeanPlan {
                     *value = block[c * height + v] as f64;
                 }
             }
-            self.restore_block_float(&mut work, width, &mut predictions)?;
+            self.restore_block_float(&mut work, width, push, &mut predictions)?;
             for (v, row) in work.chunks_exact(width).enumerate() {
                 for (c, &value) in row.iter().enumerate() {
                     block[c * height + v] = value as i64; // an integer within 2**32: exact
@@ -253,6 +303,16 @@ impl MeanPlan {
             }
         }
         Ok(())
+    }
+
+    /// Float64 restores the columns of these pushes exactly: push 2 below `FLOAT_SOURCES`
+    /// sources a row, any other below `PUSHED_FLOAT_SOURCES`.
+    pub(super) fn float_is_exact(&self, push: &[u8]) -> bool {
+        if push.iter().all(|&a| a == PLAIN_PUSH) {
+            self.exact_in_float
+        } else {
+            self.exact_in_float_pushed
+        }
     }
 
     /// `floor((U + 1.5 c) / 3c)` of row j for each of the `width` columns of `work` (row
@@ -277,6 +337,39 @@ impl MeanPlan {
         }
     }
 
+    /// `floor((V + 3c) / 6c)` of row j for each of the `width` columns of `work`, column c
+    /// pushed by `factors[c]`, into `sums`. Every term is an integer and every partial sum
+    /// lies below `3c + 24c 2**32 < 2**53` (`c < PUSHED_FLOAT_SOURCES`, values within
+    /// `MEAN_LIMIT`), so the sum is exact in any order and its one division floors right.
+    #[inline]
+    fn float_predictions_pushed(
+        &self,
+        j: usize,
+        work: &[f64],
+        width: usize,
+        factors: &[f64],
+        sums: &mut [f64],
+    ) {
+        let count = self.counts[j] as f64;
+        sums.fill(3.0 * count);
+        let (start, stop) = (self.pointers[j], self.pointers[j + 1]);
+        for ((&column, &once), &step) in self.columns[start..stop]
+            .iter()
+            .zip(&self.source_weights[start..stop])
+            .zip(&self.step_weights[start..stop])
+        {
+            let base = column as usize * width;
+            let six = 6.0 * once;
+            for ((sum, &value), &a) in sums.iter_mut().zip(&work[base..base + width]).zip(factors) {
+                *sum += (six + a * step) * value;
+            }
+        }
+        let divisor = 6.0 * count;
+        for sum in sums.iter_mut() {
+            *sum = exact_floor(*sum / divisor);
+        }
+    }
+
     /// `mean_predictions` of row j in int64, wrapping as numpy does.
     fn integer_prediction(&self, j: usize, values: &[i64]) -> i64 {
         let mut total = 0i64;
@@ -296,12 +389,41 @@ impl MeanPlan {
         }
     }
 
-    fn restore_column_integer(&self, column: &mut [i64]) -> Result<(), PredictionError> {
+    /// Row j's prediction with push `push`, exactly in i128 for any values and any count
+    /// (each term is below 2**68 and there are fewer than 2**40 of them); a quotient beyond
+    /// int64, only from values far out of range, saturates.
+    fn integer_prediction_pushed(&self, j: usize, values: &[i64], push: u8) -> i64 {
+        let a = i128::from(push);
+        let mut total = 0i128;
+        for k in self.source_ends[j]..self.source_ends[j + 1] {
+            total += (6 + a) * i128::from(values[self.sources[k] as usize])
+                - a * i128::from(values[self.anchors[k] as usize]);
+        }
+        let count = self.counts[j] as i128;
+        if count == 0 {
+            return 0; // never: every row has a source
+        }
+        let quotient = (2 * total + 6 * count).div_euclid(12 * count);
+        i64::try_from(quotient).unwrap_or(if quotient < 0 { i64::MIN } else { i64::MAX })
+    }
+
+    /// One column restored in integers (a crafted mesh), with push `push`.
+    pub(super) fn restore_column_integer(
+        &self,
+        column: &mut [i64],
+        push: u8,
+    ) -> Result<(), PredictionError> {
         let mut predictions = Vec::new();
         for span in self.step_ends.windows(2) {
             // a step's predictions all read the values before the step
             predictions.clear();
-            predictions.extend((span[0]..span[1]).map(|j| self.integer_prediction(j, column)));
+            if push == PLAIN_PUSH {
+                predictions.extend((span[0]..span[1]).map(|j| self.integer_prediction(j, column)));
+            } else {
+                predictions.extend(
+                    (span[0]..span[1]).map(|j| self.integer_prediction_pushed(j, column, push)),
+                );
+            }
             for (j, &prediction) in (span[0]..span[1]).zip(&predictions) {
                 let slot = &mut column[self.rows[j] as usize];
                 *slot = slot.wrapping_add(prediction);
@@ -313,14 +435,16 @@ impl MeanPlan {
         Ok(())
     }
 
-    /// `mean_residuals` of a (`vertex_count`, `width`) int64 matrix given row after row: each
-    /// predicted row minus predictor 2's prediction from the values themselves, or `None` if a
-    /// value leaves +-`MEAN_LIMIT`.
+    /// `mean_residuals` of a (`vertex_count`, `width`) int64 matrix given row after row, column
+    /// c with push `push[c]`: each predicted row minus predictor 2's prediction from the values
+    /// themselves, or `None` if a value leaves +-`MEAN_LIMIT`.
     pub fn residuals(
         &self,
         values: &[i64],
         width: usize,
+        push: &[u8],
     ) -> Result<Option<Vec<i64>>, PredictionError> {
+        check_push(push, width)?;
         if width == 0 {
             return Ok(Some(Vec::new()));
         }
@@ -336,41 +460,71 @@ impl MeanPlan {
             return Ok(None);
         }
         let mut out = values.to_vec();
-        if self.exact_in_float {
-            // COLUMN_BLOCK columns at a time, their floats row after row
-            let mut work = Vec::new();
-            let mut sums = [0.0f64; COLUMN_BLOCK];
-            for first in (0..width).step_by(COLUMN_BLOCK) {
-                let block = COLUMN_BLOCK.min(width - first);
-                work.clear();
-                work.extend(
-                    values
-                        .chunks_exact(width)
-                        .flat_map(|row| row[first..first + block].iter().map(|&v| v as f64)),
-                );
-                let sums = &mut sums[..block];
-                for j in 0..self.rows.len() {
-                    self.float_predictions(j, &work, block, sums);
-                    let base = self.rows[j] as usize * width + first;
-                    for (slot, &prediction) in out[base..base + block].iter_mut().zip(sums.iter()) {
-                        *slot = slot.wrapping_sub(float_to_int64(prediction));
+        // COLUMN_BLOCK columns at a time, their floats row after row
+        let mut work = Vec::new();
+        let mut sums = [0.0f64; COLUMN_BLOCK];
+        let mut factors = [0.0f64; COLUMN_BLOCK];
+        let mut column = Vec::new();
+        for first in (0..width).step_by(COLUMN_BLOCK) {
+            let block = COLUMN_BLOCK.min(width - first);
+            let push = &push[first..first + block];
+            if !self.float_is_exact(push) {
+                column.resize(height, 0i64);
+                for (c, &a) in (first..first + block).zip(push) {
+                    for (v, slot) in column.iter_mut().enumerate() {
+                        *slot = values[v * width + c];
+                    }
+                    for j in 0..self.rows.len() {
+                        let prediction = if a == PLAIN_PUSH {
+                            self.integer_prediction(j, &column)
+                        } else {
+                            self.integer_prediction_pushed(j, &column, a)
+                        };
+                        let slot = &mut out[self.rows[j] as usize * width + c];
+                        *slot = slot.wrapping_sub(prediction);
                     }
                 }
+                continue;
             }
-        } else {
-            let mut column = vec![0i64; height];
-            for c in 0..width {
-                for (v, slot) in column.iter_mut().enumerate() {
-                    *slot = values[v * width + c];
+            let plain = push.iter().all(|&a| a == PLAIN_PUSH);
+            let factors = &mut factors[..block];
+            for (factor, &a) in factors.iter_mut().zip(push) {
+                *factor = f64::from(a);
+            }
+            work.clear();
+            work.extend(
+                values
+                    .chunks_exact(width)
+                    .flat_map(|row| row[first..first + block].iter().map(|&v| v as f64)),
+            );
+            let sums = &mut sums[..block];
+            for j in 0..self.rows.len() {
+                if plain {
+                    self.float_predictions(j, &work, block, sums);
+                } else {
+                    self.float_predictions_pushed(j, &work, block, factors, sums);
                 }
-                for j in 0..self.rows.len() {
-                    let prediction = self.integer_prediction(j, &column);
-                    let slot = &mut out[self.rows[j] as usize * width + c];
-                    *slot = slot.wrapping_sub(prediction);
+                let base = self.rows[j] as usize * width + first;
+                for (slot, &prediction) in out[base..base + block].iter_mut().zip(sums.iter()) {
+                    *slot = slot.wrapping_sub(float_to_int64(prediction));
                 }
             }
         }
         Ok(Some(out))
+    }
+}
+
+/// A caller's `push`: exactly `cols` bytes, each within `0..=MAX_PUSH`.
+pub fn check_push(push: &[u8], cols: usize) -> Result<(), PredictionError> {
+    if push.len() != cols {
+        return Err(format!(
+            "{} pushes for {cols} columns: one per column",
+            push.len()
+        ));
+    }
+    match push.iter().find(|&&a| a > MAX_PUSH) {
+        Some(a) => Err(format!("a push of {a} outside 0..={MAX_PUSH}")),
+        None => Ok(()),
     }
 }
 

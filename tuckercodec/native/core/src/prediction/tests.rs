@@ -37,10 +37,13 @@ fn restore_inverts_residuals_in_float_and_in_int64() {
     let plan = plan_of(&faces, 4, count);
     assert!(plan.exact_in_float);
     let values = pseudo_random(count * 3, 7, 1 << 31);
-    let residual = plan.residuals(&values, 3).unwrap().unwrap();
+    let residual = plan.residuals(&values, 3, &[2; 3]).unwrap().unwrap();
     let mut integer = plan.clone();
     integer.exact_in_float = false;
-    assert_eq!(integer.residuals(&values, 3).unwrap().unwrap(), residual);
+    assert_eq!(
+        integer.residuals(&values, 3, &[2; 3]).unwrap().unwrap(),
+        residual
+    );
     let transpose = |m: &[i64]| -> Vec<i64> {
         (0..3)
             .flat_map(|c| (0..count).map(move |v| m[v * 3 + c]))
@@ -48,8 +51,8 @@ fn restore_inverts_residuals_in_float_and_in_int64() {
     };
     let mut columns = transpose(&residual);
     let mut other = columns.clone();
-    plan.restore_columns(&mut columns, count).unwrap();
-    integer.restore_columns(&mut other, count).unwrap();
+    plan.restore_columns(&mut columns, count, &[2; 3]).unwrap();
+    integer.restore_columns(&mut other, count, &[2; 3]).unwrap();
     assert_eq!(columns, transpose(&values));
     assert_eq!(other, transpose(&values));
 }
@@ -60,15 +63,15 @@ fn out_of_range_is_refused() {
     let plan = plan_of(&faces, 4, count);
     let mut column = vec![1i64 << 31; count];
     assert_eq!(
-        plan.restore_columns(&mut column, count).unwrap_err(),
+        plan.restore_columns(&mut column, count, &[2]).unwrap_err(),
         MEAN_RANGE
     );
     let mut short = vec![0i64; count - 1];
-    assert!(plan.restore_columns(&mut short, count - 1).is_err());
-    assert!(plan.restore_columns(&mut short, count).is_err());
-    assert!(plan.restore_columns(&mut [], count).is_ok());
+    assert!(plan.restore_columns(&mut short, count - 1, &[2]).is_err());
+    assert!(plan.restore_columns(&mut short, count, &[2]).is_err());
+    assert!(plan.restore_columns(&mut [], count, &[]).is_ok());
     let too_large = vec![MEAN_LIMIT + 1; count];
-    assert_eq!(plan.residuals(&too_large, 1).unwrap(), None);
+    assert_eq!(plan.residuals(&too_large, 1, &[2]).unwrap(), None);
 }
 
 #[test]
@@ -78,7 +81,7 @@ fn minus_two_to_the_63_is_out_of_range() {
     let plan = plan_of(&faces, 4, count);
     let mut values = vec![0; count];
     values[0] = i64::MIN;
-    assert_eq!(plan.residuals(&values, 1).unwrap(), None);
+    assert_eq!(plan.residuals(&values, 1, &[2]).unwrap(), None);
     // the sums wrap back to -2**63 and 0: both checks passed it
     let mut wraps = vec![i64::MIN, 0];
     assert_eq!(
@@ -156,19 +159,19 @@ fn restore_values_matches_restore_columns_times_steps() {
     let plan = plan_of(&faces, 4, count);
     let width = 19; // two full blocks and a narrower one
     let values = pseudo_random(count * width, 3, 1 << 20);
-    let residual = plan.residuals(&values, width).unwrap().unwrap();
+    let residual = plan.residuals(&values, width, &[2; 19]).unwrap().unwrap();
     let mut columns: Vec<i64> = (0..width)
         .flat_map(|c| residual.iter().skip(c).step_by(width).copied())
         .collect();
     let (planes, raw) = crate::streams::pack_planes(&columns);
     let steps: Vec<f32> = (0..width).map(|c| 0.001 * (c as f32 + 1.0)).collect();
-    plan.restore_columns(&mut columns, count).unwrap();
+    plan.restore_columns(&mut columns, count, &[2; 19]).unwrap();
     let mut integer = plan.clone();
     integer.exact_in_float = false;
     for threads in [1, 2, 3] {
         for plan in [&plan, &integer] {
             let mut out = vec![0.0; count * width];
-            plan.restore_values(&raw, planes, count, &steps, &mut out, threads)
+            plan.restore_values(&raw, planes, count, &steps, &mut out, threads, &[2; 19])
                 .unwrap();
             for (v, row) in out.chunks_exact(width).enumerate() {
                 for (c, &value) in row.iter().enumerate() {
@@ -188,12 +191,12 @@ fn restore_values_refuses_bad_sizes_and_values_out_of_range() {
     let mut out = vec![0.0; count * 9];
     // a stream that does not fit the columns, and columns shorter than the mesh
     assert!(plan
-        .restore_values(&[0; 5], 1, count, &steps, &mut out, 2)
+        .restore_values(&[0; 5], 1, count, &steps, &mut out, 2, &[2; 9])
         .is_err());
     let mut short = vec![0.0; (count - 1) * 9];
     let raw = vec![0u8; (count - 1) * 9];
     assert!(plan
-        .restore_values(&raw, 1, count - 1, &steps, &mut short, 2)
+        .restore_values(&raw, 1, count - 1, &steps, &mut short, 2, &[2; 9])
         .is_err());
     // residuals that push a restored value beyond 2**32, in the last block only
     let mut stream = vec![0i64; count * 9];
@@ -202,7 +205,208 @@ fn restore_values_refuses_bad_sizes_and_values_out_of_range() {
     }
     let (planes, raw) = crate::streams::pack_planes(&stream);
     for threads in [1, 2] {
-        let result = plan.restore_values(&raw, planes, count, &steps, &mut out, threads);
+        let result = plan.restore_values(&raw, planes, count, &steps, &mut out, threads, &[2; 9]);
         assert_eq!(result, Err(MEAN_RANGE.to_string()));
     }
+}
+
+/// A mesh of `faces` random triangles over `count` vertices (some vertices on no face).
+fn random_triangles(count: usize, faces: usize, seed: u64) -> Vec<i64> {
+    pseudo_random(faces * 3, seed, count as i64)
+        .into_iter()
+        .map(|v| v.rem_euclid(count as i64))
+        .collect()
+}
+
+/// Predictor 2 with a push, straight from the spec (§6.2, *Push*) in i128: row j's prediction
+/// from `column` (one column's values by vertex).
+fn reference_prediction(steps: &topology::MeanStepsArrays, j: usize, column: &[i64], a: u8) -> i64 {
+    let a = i128::from(a);
+    let mut v = 0i128;
+    for k in steps.source_ends[j]..steps.source_ends[j + 1] {
+        let (w, anchor) = (steps.sources[k] as usize, steps.anchors[k] as usize);
+        v += (6 + a) * i128::from(column[w]) - a * i128::from(column[anchor]);
+    }
+    let c = (steps.source_ends[j + 1] - steps.source_ends[j]) as i128;
+    i64::try_from((2 * v + 6 * c).div_euclid(12 * c)).unwrap()
+}
+
+/// The residuals of a (count, width) matrix, row after row, with the reference predictions.
+fn reference_residuals(
+    steps: &topology::MeanStepsArrays,
+    values: &[i64],
+    width: usize,
+    push: &[u8],
+) -> Vec<i64> {
+    let count = values.len() / width;
+    let mut out = values.to_vec();
+    for (c, &a) in push.iter().enumerate() {
+        let column: Vec<i64> = (0..count).map(|v| values[v * width + c]).collect();
+        for (j, &row) in steps.rows.iter().enumerate() {
+            out[row as usize * width + c] -= reference_prediction(steps, j, &column, a);
+        }
+    }
+    out
+}
+
+/// The plan in float64 and the same plan forced through its integer paths.
+fn both_paths(plan: &MeanPlan) -> [MeanPlan; 2] {
+    let mut integer = plan.clone();
+    integer.exact_in_float = false;
+    integer.exact_in_float_pushed = false;
+    [plan.clone(), integer]
+}
+
+fn transpose(matrix: &[i64], width: usize) -> Vec<i64> {
+    let count = matrix.len() / width;
+    (0..width)
+        .flat_map(|c| (0..count).map(move |v| matrix[v * width + c]))
+        .collect()
+}
+
+#[test]
+fn pushes_match_the_reference_on_random_meshes() {
+    let meshes = [
+        (grid(7).0, 4, 49),
+        (random_triangles(40, 70, 11), 3, 40),
+        (random_triangles(60, 150, 12), 3, 60),
+        (random_triangles(30, 200, 13), 3, 30),
+    ];
+    // 0..9 mixed in a block, a block of 2s, a block of one other push, a narrow block
+    let push: Vec<u8> = (0..16)
+        .map(|c| (c % 10) as u8)
+        .chain([2; 16])
+        .chain([7; 16])
+        .chain([9, 0, 2, 5, 6])
+        .collect();
+    let width = push.len();
+    for (seed, (faces, face_width, count)) in meshes.into_iter().enumerate() {
+        let forest = Forest::new(&faces, face_width, count).unwrap();
+        let steps = forest.mean_steps();
+        let plan = MeanPlan::from_arrays(&steps, count);
+        assert!(plan.exact_in_float_pushed);
+        for span in [1i64 << 20, 1 << 31] {
+            let values = pseudo_random(count * width, 100 + seed as u64, span);
+            let expected = reference_residuals(&steps, &values, width, &push);
+            let stream = transpose(&expected, width);
+            let (planes, raw) = crate::streams::pack_planes(&stream);
+            let scales: Vec<f32> = (0..width).map(|c| 0.25 * (c as f32 + 1.0)).collect();
+            for plan in both_paths(&plan) {
+                let residual = plan.residuals(&values, width, &push).unwrap().unwrap();
+                assert_eq!(residual, expected, "mesh {seed}, span {span}");
+                let mut columns = stream.clone();
+                plan.restore_columns(&mut columns, count, &push).unwrap();
+                assert_eq!(columns, transpose(&values, width));
+                for threads in [1, 2] {
+                    let mut out = vec![0.0; count * width];
+                    plan.restore_values(&raw, planes, count, &scales, &mut out, threads, &push)
+                        .unwrap();
+                    for (slot, (&value, c)) in out.iter().zip(values.iter().zip((0..width).cycle()))
+                    {
+                        assert_eq!(*slot, value as f64 * f64::from(scales[c]));
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Push 2 in a block of other pushes (the pushed sums) gives what push 2 alone (today's sums)
+/// gives, and today's prediction `floor((2U + 3c) / 6c)`.
+#[test]
+fn push_two_is_todays_predictor() {
+    let faces = random_triangles(50, 120, 21);
+    let forest = Forest::new(&faces, 3, 50).unwrap();
+    let steps = forest.mean_steps();
+    let plan = MeanPlan::from_arrays(&steps, 50);
+    let values = pseudo_random(50 * 3, 5, 1 << 32);
+    let plain = plan.residuals(&values, 3, &[2, 2, 2]).unwrap().unwrap();
+    let mixed = plan.residuals(&values, 3, &[2, 9, 2]).unwrap().unwrap();
+    for v in 0..50 {
+        assert_eq!(plain[v * 3], mixed[v * 3]);
+        assert_eq!(plain[v * 3 + 2], mixed[v * 3 + 2]);
+    }
+    for c in 0..3 {
+        let column: Vec<i64> = (0..50).map(|v| values[v * 3 + c]).collect();
+        for (j, &row) in steps.rows.iter().enumerate() {
+            let mut u = 0i128;
+            for k in steps.source_ends[j]..steps.source_ends[j + 1] {
+                u += 4 * i128::from(column[steps.sources[k] as usize])
+                    - i128::from(column[steps.anchors[k] as usize]);
+            }
+            let count = (steps.source_ends[j + 1] - steps.source_ends[j]) as i128;
+            let prediction = (2 * u + 3 * count).div_euclid(6 * count) as i64;
+            assert_eq!(
+                plain[row as usize * 3 + c],
+                values[row as usize * 3 + c] - prediction
+            );
+        }
+    }
+}
+
+#[test]
+fn bad_pushes_are_errors() {
+    let (faces, count) = grid(4);
+    let plan = plan_of(&faces, 4, count);
+    let values = vec![0i64; count * 2];
+    for push in [&[2u8][..], &[2, 2, 2], &[2, 10], &[255, 2]] {
+        for plan in both_paths(&plan) {
+            assert!(plan.residuals(&values, 2, push).is_err(), "{push:?}");
+            let mut columns = values.clone();
+            assert!(plan.restore_columns(&mut columns, count, push).is_err());
+            let raw = vec![0u8; count * 2];
+            let mut out = vec![0.0; count * 2];
+            assert!(plan
+                .restore_values(&raw, 1, count, &[1.0; 2], &mut out, 1, push)
+                .is_err());
+        }
+    }
+    assert!(plan.restore_columns(&mut [], count, &[2]).is_err());
+    assert!(plan.residuals(&[], 0, &[]).is_ok());
+    assert!(check_push(&[0, 9], 2).is_ok());
+}
+
+/// A value pushed out of range is refused on both paths, whatever the push.
+#[test]
+fn pushed_values_out_of_range_are_refused() {
+    let (faces, count) = grid(5);
+    for a in [0u8, 5, 9] {
+        for plan in both_paths(&plan_of(&faces, 4, count)) {
+            let mut column = vec![(1i64 << 31) + 1; count];
+            assert_eq!(
+                plan.restore_columns(&mut column, count, &[a]).unwrap_err(),
+                MEAN_RANGE
+            );
+        }
+    }
+}
+
+/// A crafted row of 2**16 sources: push 2 still sums in float64, any other push in integers,
+/// and both give the reference's results.
+#[test]
+fn a_row_of_many_sources_takes_the_integer_path_when_pushed() {
+    let sources = PUSHED_FLOAT_SOURCES;
+    let count = sources + 1;
+    let steps = topology::MeanStepsArrays {
+        rows: vec![sources as u32],
+        step_ends: vec![0, 1],
+        sources: (0..sources as u32).collect(),
+        anchors: (0..sources as u32)
+            .map(|w| (w + 1) % sources as u32)
+            .collect(),
+        source_ends: vec![0, sources],
+        levels: 2,
+    };
+    let plan = MeanPlan::from_arrays(&steps, count);
+    assert!(plan.exact_in_float && !plan.exact_in_float_pushed);
+    let push = [2u8, 9, 0];
+    let values = pseudo_random(count * 3, 17, 1 << 32);
+    let expected = reference_residuals(&steps, &values, 3, &push);
+    assert_eq!(
+        plan.residuals(&values, 3, &push).unwrap().unwrap(),
+        expected
+    );
+    let mut columns = transpose(&expected, 3);
+    plan.restore_columns(&mut columns, count, &push).unwrap();
+    assert_eq!(columns, transpose(&values, 3));
 }

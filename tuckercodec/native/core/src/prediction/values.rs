@@ -6,7 +6,7 @@
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
-use super::{MeanPlan, PredictionError, MEAN_LIMIT, MEAN_RANGE};
+use super::{check_push, MeanPlan, PredictionError, MEAN_LIMIT, MEAN_RANGE, PLAIN_PUSH};
 use crate::streams::unzigzag;
 
 /// Columns restored at once: a block's floats of a 10,000-vertex mesh stay in a core's
@@ -27,9 +27,12 @@ impl MeanPlan {
     /// predictor 2's restoration of the stream's c-th run of `height` integers (zigzagged in
     /// `planes` byte planes, `raw` holding exactly `steps.len() * height * planes` bytes),
     /// times `steps[c]` as float64, as `np.multiply(q, steps.astype(float64))` computes it.
+    /// Column c is predicted with push `push[c]` (one per column, each `0..=MAX_PUSH`; 2 is
+    /// today's predictor 2).
     ///
-    /// Errors: a caller's error (sizes that do not fit together) or [`MEAN_RANGE`] when a
-    /// restored value leaves +-`MEAN_LIMIT` (`out` is then left partly written).
+    /// Errors: a caller's error (sizes or pushes that do not fit together) or [`MEAN_RANGE`]
+    /// when a restored value leaves +-`MEAN_LIMIT` (`out` is then left partly written).
+    #[allow(clippy::too_many_arguments)] // the stream's parts, the output, threads, pushes
     pub fn restore_values(
         &self,
         raw: &[u8],
@@ -38,6 +41,7 @@ impl MeanPlan {
         steps: &[f32],
         out: &mut [f64],
         threads: usize,
+        push: &[u8],
     ) -> Result<(), PredictionError> {
         let width = steps.len();
         let count = width.checked_mul(height);
@@ -51,6 +55,7 @@ impl MeanPlan {
                 out.len()
             ));
         }
+        check_push(push, width)?;
         if width == 0 {
             return Ok(());
         }
@@ -81,7 +86,7 @@ impl MeanPlan {
                     count,
                     height,
                     first,
-                    block_width,
+                    &push[first..first + block_width],
                     &mut work,
                     &mut scratch,
                     &mut predictions,
@@ -122,8 +127,9 @@ impl MeanPlan {
         })
     }
 
-    /// Columns `first..first + block_width` restored into `work` (row after row, the block's
-    /// columns side by side) as exact integers in float64, checked against +-`MEAN_LIMIT`.
+    /// Columns `first..first + push.len()` restored into `work` (row after row, the block's
+    /// columns side by side) as exact integers in float64, checked against +-`MEAN_LIMIT`,
+    /// column `first + c` with push `push[c]`.
     #[allow(clippy::too_many_arguments)]
     fn block_values(
         &self,
@@ -132,11 +138,12 @@ impl MeanPlan {
         count: usize,
         height: usize,
         first: usize,
-        block_width: usize,
+        push: &[u8],
         work: &mut Vec<f64>,
         scratch: &mut Vec<u64>,
         predictions: &mut Vec<f64>,
     ) -> Result<(), PredictionError> {
+        let block_width = push.len();
         work.clear();
         work.resize(height * block_width, 0.0);
         scratch.clear();
@@ -154,18 +161,27 @@ impl MeanPlan {
                 work[v * block_width + c] = unzigzag(value) as f64;
             }
         }
-        if self.exact_in_float && block_width == VALUE_BLOCK {
-            self.restore_block_fixed::<VALUE_BLOCK>(work, predictions)
-        } else if self.exact_in_float {
-            self.restore_block_float(work, block_width, predictions)
+        let exact = self.float_is_exact(push);
+        if exact && block_width == VALUE_BLOCK {
+            let mut factors = [0.0f64; VALUE_BLOCK];
+            for (factor, &a) in factors.iter_mut().zip(push) {
+                *factor = f64::from(a);
+            }
+            if push.iter().all(|&a| a == PLAIN_PUSH) {
+                self.restore_block_fixed::<VALUE_BLOCK, false>(work, &factors, predictions)
+            } else {
+                self.restore_block_fixed::<VALUE_BLOCK, true>(work, &factors, predictions)
+            }
+        } else if exact {
+            self.restore_block_float(work, block_width, push, predictions)
         } else {
             // a crafted mesh: the int64 steps of `mean_accumulate`, a column at a time
             let mut column = vec![0i64; height];
-            for c in 0..block_width {
+            for (c, &a) in push.iter().enumerate() {
                 for (v, slot) in column.iter_mut().enumerate() {
                     *slot = work[v * block_width + c] as i64;
                 }
-                self.restore_column_integer(&mut column)?;
+                self.restore_column_integer(&mut column, a)?;
                 for (v, &value) in column.iter().enumerate() {
                     work[v * block_width + c] = value as f64;
                 }
@@ -177,9 +193,12 @@ impl MeanPlan {
     /// [`MeanPlan::restore_block_float`] for a block of exactly `W` columns: the same sums in
     /// the same order, with the width known to the compiler (the sums stay in registers and
     /// each source's `W` values are added without a loop over a slice of unknown length).
-    fn restore_block_fixed<const W: usize>(
+    /// `PUSHED`: the columns' pushes are `factors` (the sums of `float_predictions_pushed`);
+    /// otherwise every push is 2 and `factors` is unread (today's sums, today's speed).
+    fn restore_block_fixed<const W: usize, const PUSHED: bool>(
         &self,
         work: &mut [f64],
+        factors: &[f64; W],
         predictions: &mut Vec<f64>,
     ) -> Result<(), PredictionError> {
         for span in self.step_ends.windows(2) {
@@ -188,21 +207,43 @@ impl MeanPlan {
             predictions.resize((span[1] - span[0]) * W, 0.0f64);
             for (j, out) in (span[0]..span[1]).zip(predictions.chunks_exact_mut(W)) {
                 let count = self.counts[j] as f64;
-                let mut sums = [1.5 * count; W];
                 let (start, stop) = (self.pointers[j], self.pointers[j + 1]);
-                for (&column, &weight) in self.columns[start..stop]
-                    .iter()
-                    .zip(&self.weights[start..stop])
-                {
-                    let base = column as usize * W;
-                    let values: &[f64; W] = work[base..base + W]
-                        .try_into()
-                        .expect("a slice of W values");
-                    for (sum, &value) in sums.iter_mut().zip(values) {
-                        *sum += weight * value;
+                let mut sums;
+                let divisor;
+                if PUSHED {
+                    // V + 3c: exact, as in `float_predictions_pushed`
+                    sums = [3.0 * count; W];
+                    for ((&column, &once), &step) in self.columns[start..stop]
+                        .iter()
+                        .zip(&self.source_weights[start..stop])
+                        .zip(&self.step_weights[start..stop])
+                    {
+                        let base = column as usize * W;
+                        let values: &[f64; W] = work[base..base + W]
+                            .try_into()
+                            .expect("a slice of W values");
+                        let six = 6.0 * once;
+                        for ((sum, &value), &a) in sums.iter_mut().zip(values).zip(factors) {
+                            *sum += (six + a * step) * value;
+                        }
                     }
+                    divisor = 6.0 * count;
+                } else {
+                    sums = [1.5 * count; W];
+                    for (&column, &weight) in self.columns[start..stop]
+                        .iter()
+                        .zip(&self.weights[start..stop])
+                    {
+                        let base = column as usize * W;
+                        let values: &[f64; W] = work[base..base + W]
+                            .try_into()
+                            .expect("a slice of W values");
+                        for (sum, &value) in sums.iter_mut().zip(values) {
+                            *sum += weight * value;
+                        }
+                    }
+                    divisor = 3.0 * count;
                 }
-                let divisor = 3.0 * count;
                 for (slot, &sum) in out.iter_mut().zip(&sums) {
                     *slot = super::exact_floor(sum / divisor);
                 }
@@ -223,19 +264,26 @@ impl MeanPlan {
     }
 
     /// The float steps of [`MeanPlan::restore_columns`] on one block (`work` row after row,
-    /// `width` columns), then the block's range check.
+    /// `width` columns, column c with push `push[c]`), then the block's range check.
     pub(super) fn restore_block_float(
         &self,
         work: &mut [f64],
         width: usize,
+        push: &[u8],
         predictions: &mut Vec<f64>,
     ) -> Result<(), PredictionError> {
+        let plain = push.iter().all(|&a| a == PLAIN_PUSH);
+        let factors: Vec<f64> = push.iter().map(|&a| f64::from(a)).collect();
         for span in self.step_ends.windows(2) {
             // a step's predictions all read the values before the step
             predictions.clear();
             predictions.resize((span[1] - span[0]) * width, 0.0f64);
             for (j, sums) in (span[0]..span[1]).zip(predictions.chunks_exact_mut(width)) {
-                self.float_predictions(j, work, width, sums);
+                if plain {
+                    self.float_predictions(j, work, width, sums);
+                } else {
+                    self.float_predictions_pushed(j, work, width, &factors, sums);
+                }
             }
             for (j, sums) in (span[0]..span[1]).zip(predictions.chunks_exact(width)) {
                 let base = self.rows[j] as usize * width;
