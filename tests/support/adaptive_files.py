@@ -95,7 +95,8 @@ def stored_integers(
 def zstd_copy(data: bytes) -> bytes:
     """``data`` (a valid file) with every adaptive stream stored as §6.1's zstd planes, in the
     fewest planes that hold its integers, flag bit 3 cleared: a file of 1.5 or before, with the
-    minor version it would have had."""
+    minor version it would have had; unless predictor 2's pushes (``mean_push``, also 1.6)
+    keep it a file of 1.6."""
     parts = taken_apart(data)
     face_entry, face_payload = parts.sections[parts.index("FACE")]
     vertices = int(parts.header["vertices"])
@@ -118,6 +119,8 @@ def zstd_copy(data: bytes) -> bytes:
         minor = SEGMENTED_MINOR
     if parts.flags & CORRECTIONS:
         minor = CORRECTIONS_MINOR
+    if adaptive.uses_adaptive([entry for entry, _ in parts.sections]):
+        return pack_container(parts.header, parts.sections, flags=parts.flags, minor=minor)
     flags = parts.flags & ~adaptive.ADAPTIVE
     return pack_container(parts.header, parts.sections, flags=flags, minor=minor, adaptive=False)
 
