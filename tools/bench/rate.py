@@ -9,7 +9,8 @@ so one run per point is the figure. The decoded KG (Karni-Gotsman, per-frame cen
 of this checkout's file is measured against the original.
 
 ``--generated`` adds sequences made by :mod:`tools.generate.sequence` (a skinned body and a
-flag in the wind, at sizes like the held-out files of the rate issue), written once into
+flag in the wind, at sizes like the held-out files of the rate issue, two of them with a rough
+jitter per vertex), written once into
 ``~/.cache/tuckercodec-bench/generated/``.
 
 Printed: a table of every point (bytes and bpfv per revision, the ratios, the decoded KG), the
@@ -50,12 +51,15 @@ DEFAULT_TARGETS = [1.0, 0.1, 0.02]
 #: The revision the rate issue measures against, and the commit before this work.
 DEFAULT_BASELINES = ["338ced4", "0be6db9"]
 GENERATED_FOLDER = Path("~/.cache/tuckercodec-bench/generated").expanduser()
-#: (kind, vertices, frames, seed): shapes like the held-out files of the rate issue.
+#: (kind, vertices, frames, seed, noise): shapes like the held-out files of the rate issue, and
+#: two with each vertex's own jitter at 2e-3 of the model (rough, high-rank motion).
 GENERATED = [
-    ("body", 7061, 201, 3),
-    ("cloth", 2904, 204, 4),
-    ("body", 10002, 150, 1),
-    ("cloth", 10002, 175, 2),
+    ("body", 7061, 201, 3, 1e-4),
+    ("cloth", 2904, 204, 4, 1e-4),
+    ("body", 10002, 150, 1, 1e-4),
+    ("cloth", 10002, 175, 2, 1e-4),
+    ("body", 10002, 150, 5, 2e-3),
+    ("cloth", 10002, 175, 6, 2e-3),
 ]
 
 
@@ -63,15 +67,16 @@ def generated_sequences() -> list[Path]:
     """The generated sequences, made the first time they are asked for."""
     GENERATED_FOLDER.mkdir(parents=True, exist_ok=True)
     out = []
-    for kind, vertices, frames, seed in GENERATED:
-        path = GENERATED_FOLDER / f"{kind}-{vertices}x{frames}-seed{seed}.npz"
+    for kind, vertices, frames, seed, noise in GENERATED:
+        rough = "" if noise == 1e-4 else f"-noise{noise:g}"
+        path = GENERATED_FOLDER / f"{kind}-{vertices}x{frames}-seed{seed}{rough}.npz"
         if not path.exists():
             print(f"generating {path.name}...", flush=True)
             subprocess.run(
                 [
                     *(sys.executable, "-m", "tools.generate.sequence", "--kind", kind),
                     *("--vertices", str(vertices), "--frames", str(frames)),
-                    *("--seed", str(seed), "-o", str(path)),
+                    *("--seed", str(seed), "--noise", str(noise), "-o", str(path)),
                 ],
                 check=True,
                 cwd=common.REPO,
