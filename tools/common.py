@@ -41,12 +41,13 @@ MIB = 1 << 20
 def package_environment(folder: str | Path) -> dict[str, str]:
     """The environment of a child that runs the package in ``folder`` (first on its
     ``PYTHONPATH``). A revision extracted with ``git archive`` holds sources only, no compiled
-    core, so it runs in pure Python: a ``TUCKERCODEC_NATIVE=1`` of this process (which CI sets,
-    to require its own core) must not make that child fail. The working tree's package, run
-    with ``folder`` the repository itself, keeps the setting."""
+    core, so it runs in pure Python, said explicitly (``TUCKERCODEC_NATIVE=0``): an editable
+    install's import hook would otherwise hand it this checkout's core, whose functions are not
+    its own. The working tree's package, run with ``folder`` the repository itself, keeps the
+    setting."""
     environment = {**os.environ, "PYTHONPATH": str(folder)}
     if Path(folder).resolve() != REPO:
-        environment.pop("TUCKERCODEC_NATIVE", None)
+        environment["TUCKERCODEC_NATIVE"] = "0"
     return environment
 
 
