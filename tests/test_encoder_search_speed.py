@@ -129,3 +129,54 @@ def test_the_worst_vertex_is_the_accumulators():
             (4, 17),
         )
     )
+
+
+class _Trials:
+    """A workspace whose trials rank three truncations one way and whose met files rank them
+    the other: (a, b, c) trial sizes 100, 101, 120 and met sizes 110, 104, 90."""
+
+    denominator2 = 1.0
+    floor_error2 = 0.0
+    late_shares = ()
+
+    def __init__(self, meets_finalists: bool) -> None:
+        self.meets_finalists = meets_finalists
+        self.trial = {"a": 101, "b": 100, "c": 120}
+        self.met = {"a": 104, "b": 110, "c": 90}
+
+    def check_reachable(self, limit2):
+        pass
+
+    def ranks_for(self, target, share):
+        return {0.1: "a", 0.15: "b", 0.2: "c"}.get(share)
+
+    def prepare(self, choices):
+        pass
+
+    def truncation_error2(self, choice):
+        return 0.0
+
+    def initial_step(self, choice, room):
+        return 1.0
+
+    def quantize(self, choice, step, trial=False):
+        return (choice, "trial" if trial else "met")
+
+    def trial_bytes(self, quantized):
+        choice, kind = quantized
+        return (self.trial if kind == "trial" else self.met)[choice]
+
+
+@pytest.mark.parametrize(("meets_finalists", "chosen"), [(True, "a"), (False, "b")])
+def test_the_valleys_close_neighbours_are_met_too(monkeypatch, meets_finalists, chosen):
+    """Trials are quantized at their first step; the valley's neighbour within 3 % of it is met
+    as well, and the smaller met file wins (a workspace whose measures are passes over the input
+    meets the valley alone)."""
+    work = _Trials(meets_finalists)
+
+    def met(work, choice, step, limit2):
+        return work.quantize(choice, step), 0.0, 1
+
+    monkeypatch.setattr(search, "meet", met)
+    quantized, _, _ = search.search_kg(work, 0.1)
+    assert quantized[0] == chosen

@@ -55,6 +55,9 @@ TIGHTEN_AIM, TIGHTEN_LEAST, TIGHTEN_MOST = 0.985, 0.98, 0.25
 #: rounding included); started this far inside, meet() is usually done on its first
 #: quantization instead of its third (above, then too far below, then loosened).
 FIRST_AIM = 0.985
+#: The valley's neighbours whose trial is within this factor of the valley's are met too
+#: (:func:`search_kg`): trials at the first step rank truncations within a few per cent.
+FINALIST_MARGIN = 1.03
 #: Passes that measure the error on the input before giving up on the target (a modelled error
 #: only: each one tightens D by what it measured above the model).
 MAX_MEASURING_PASSES = 6
@@ -155,9 +158,28 @@ def search_kg(
             sizes[index] = work.trial_bytes(work.quantize(choice, step, trial=True))
         return sizes[index]
 
-    choice, step = candidates[_valley(trial_size, len(candidates))]
-    quantized, error2, adjustments = meet(work, choice, step * FIRST_AIM, limit2)
-    return quantized, error2, len(sizes) + adjustments
+    valley = _valley(trial_size, len(candidates))
+    # A trial is quantized at its first step, before meet() moves D to what the target
+    # really allows; how far D moves differs between truncations, so the valley's neighbours
+    # whose trials come close are met too, and the smallest met file wins.
+    finalists = [valley] + [
+        index
+        for index in (valley - 1, valley + 1)
+        if work.meets_finalists
+        and index in sizes
+        and sizes[index] <= FINALIST_MARGIN * sizes[valley]
+    ]
+    best: tuple[int, Quantized[Choice], float] | None = None
+    adjustments = 0
+    for index in finalists:
+        choice, step = candidates[index]
+        quantized, error2, tried = meet(work, choice, step * FIRST_AIM, limit2)
+        adjustments += tried
+        size = work.trial_bytes(quantized)
+        if best is None or size < best[0]:
+            best = (size, quantized, error2)
+    assert best is not None  # the valley itself is always a finalist
+    return best[1], best[2], len(sizes) + adjustments
 
 
 def _valley(size: Callable[[int], int], count: int) -> int:

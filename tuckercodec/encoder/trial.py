@@ -70,6 +70,8 @@ class Workspace(Protocol[Choice]):
     model_margin: float
     #: Truncation shares to try when none of the usual ones leaves room for quantization.
     late_shares: tuple[float, ...]
+    #: Whether a KG search meets the valley's close neighbours too (measuring is cheap enough).
+    meets_finalists: bool
     #: A size target's first fill: the numbers that scale its first guess of the size's slope,
     #: and the least room its trials leave quantization, as a share of the lowest error's square.
     first_fill_values: int

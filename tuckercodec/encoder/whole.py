@@ -98,6 +98,8 @@ class WholeWorkspace:
     model_margin = 0.003
     #: none: the exact table always leaves quantization room, but within rounding of zero error
     late_shares: tuple[float, ...] = ()
+    #: measuring decodes the sequence in memory: the search meets the valley's neighbours too
+    meets_finalists = True
     first_room_floor = FIRST_ROOM_FLOOR
 
     def resolve_finer(self) -> bool:

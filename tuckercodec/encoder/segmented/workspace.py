@@ -102,6 +102,8 @@ class SegmentedWorkspace:
     #: the model's own limit is the target's (each measuring pass tightens it by its miss)
     model_margin = 0.0
     late_shares: tuple[float, ...] = LATE_SHARES
+    #: each measure is a pass over the input: the search meets its valley alone
+    meets_finalists = False
     #: a size target's first trials leave quantization at least the lowest error's square
     first_room_floor = 1.0
 
