@@ -113,13 +113,21 @@ def encode_matrix(
 
     With ``adaptive_coding`` (a position factor of a file that may be of format 1.6), the
     integers are also coded by §6.14's adaptive coder, and the smaller payload is kept: a
-    section never grows by it.
+    section never grows by it. Where the adaptive stream is clearly smaller than zstd's fast
+    level, zstd's slow level (seconds on a large U1, about 1 % smaller) is not run.
     """
     q = matrix.q
     stream, predict, push = section_stream(q, parents, allow_predict, coding_tools, adaptive_coding)
     columns = np.ascontiguousarray(stream.T)
     del stream
-    payload, planes = streams.pack_integers(columns, level)
+    coded = None
+    if adaptive_coding and columns.size:
+        coded = adaptive.encode_columns(columns, coding_order(parents, q.shape[0]))
+        payload, planes = streams.pack_integers(columns, min(level, streams.SEARCH_LEVEL))
+        if len(coded) >= ADAPTIVE_CLEARLY_SMALLER * len(payload) and level > streams.SEARCH_LEVEL:
+            payload, planes = streams.pack_integers(columns, level)
+    else:
+        payload, planes = streams.pack_integers(columns, level)
     params: dict[str, Any] = {
         "shape": [int(q.shape[0]), int(q.shape[1])],
         "planes": planes,
@@ -130,12 +138,16 @@ def encode_matrix(
         params["mean_push"] = (
             np.where(predict == PREDICT_MEAN, push, PUSH).astype(np.uint8).tobytes()
         )
-    if adaptive_coding and columns.size:
-        coded = adaptive.encode_columns(columns, coding_order(parents, q.shape[0]))
-        if len(coded) < len(payload):
-            params["coder"] = adaptive.CODER_ADAPTIVE
-            payload = coded
+    if coded is not None and len(coded) < len(payload):
+        params["coder"] = adaptive.CODER_ADAPTIVE
+        payload = coded
     return params, payload
+
+
+#: The adaptive stream wins outright when below this share of zstd's fast level: zstd's slow
+#: level makes these integers about 1 % smaller than its fast one (streams.SEARCH_LEVEL), so
+#: it could not win, and is not run.
+ADAPTIVE_CLEARLY_SMALLER = 0.9
 
 
 def coding_order(parents: Mesh | None, rows: int) -> adaptive.CodingOrder:
