@@ -29,7 +29,7 @@ from tests.support.adaptive_files import (
     zstd_copy,
 )
 from tests.support.compressed import vector
-from tests.support.js_decoder import VALID, compare_verdicts, run_node
+from tests.support.js_decoder import VALID, compare_verdicts, decoded_frames
 from tests.support.sequences import shared_case, shared_encoded
 from tools.generate import adaptive_fixture
 from tuckercodec.io.samples import sample_path
@@ -45,16 +45,6 @@ def test_the_fixture_is_what_the_reference_writes():
     assert adaptive_fixture.OUT.read_text() == adaptive_fixture.fixture()
 
 
-def _frames(data: bytes, tmp_path: Path, name: str) -> np.ndarray:
-    """Every frame the JavaScript decoder gives, (F, K, 3)."""
-    source, output = tmp_path / f"{name}.tkc", tmp_path / f"{name}.bin"
-    source.write_bytes(data)
-    facts = run_node("decode_file.mjs", source, output)
-    assert facts["accepted"], facts["message"]
-    raw = output.read_bytes()[facts["faces"] * facts["face_width"] * 4 :]
-    return np.frombuffer(raw, "<f8").reshape(facts["frames"], facts["vertices"], 3)
-
-
 def _same_as_original(original: bytes, tmp_path: Path) -> None:
     """Its twin with every position factor in zstd planes and its twin with every one in an
     adaptive stream: the same frames."""
@@ -63,7 +53,9 @@ def _same_as_original(original: bytes, tmp_path: Path) -> None:
     assert tuckercodec.info(zstd).format_version != "1.6" or pushed
     assert tuckercodec.info(copy).format_version == "1.6"
     assert np.array_equal(
-        _frames(copy, tmp_path, "copy"), _frames(zstd, tmp_path, "zstd"), equal_nan=True
+        decoded_frames(copy, tmp_path, "copy"),
+        decoded_frames(zstd, tmp_path, "zstd"),
+        equal_nan=True,
     )
 
 

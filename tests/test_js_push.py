@@ -29,7 +29,7 @@ from tests.support.adaptive_files import (
     zstd_copy,
 )
 from tests.support.compressed import vector
-from tests.support.js_decoder import run_node
+from tests.support.js_decoder import decoded_frames, run_node
 from tuckercodec.format import faces, streams
 from tuckercodec.format.prediction import mean_accumulate
 from tuckercodec.model.topology import MeanSteps, MeshPrediction, mesh_prediction
@@ -103,16 +103,6 @@ def pushed_copy(parts: AdaptiveParts, pushes: dict[str, list[int]]) -> bytes:
     return AdaptiveParts(parts.flags, parts.minor, parts.header, sections).pack()
 
 
-def _frames(data: bytes, tmp_path: Path, name: str) -> np.ndarray:
-    """Every frame the JavaScript decoder gives, (F, K, 3)."""
-    source, output = tmp_path / f"{name}.tkc", tmp_path / f"{name}.bin"
-    source.write_bytes(data)
-    facts = run_node("decode_file.mjs", source, output)
-    assert facts["accepted"], facts["message"]
-    raw = output.read_bytes()[facts["faces"] * facts["face_width"] * 4 :]
-    return np.frombuffer(raw, "<f8").reshape(facts["frames"], facts["vertices"], 3)
-
-
 def _verdicts(files: list[bytes], tmp_path: Path) -> list[dict[str, Any]]:
     paths = []
     for n, data in enumerate(files):
@@ -173,7 +163,8 @@ def test_pushed_u1_gives_the_same_positions(tmp_path, pushes):
     expected = [m and p != PUSH for m, p in zip(meaned, pushes, strict=True)]
     assert differs == expected
     assert np.array_equal(
-        _frames(crafted, tmp_path, "pushed"), _frames(vector("v1.6-adaptive"), tmp_path, "original")
+        decoded_frames(crafted, tmp_path, "pushed"),
+        decoded_frames(vector("v1.6-adaptive"), tmp_path, "original"),
     )
 
 
@@ -182,8 +173,8 @@ def test_pushed_segments_give_the_same_positions(tmp_path):
     parts = taken_apart(vector("v1.6-adaptive-segments"))
     crafted = pushed_copy(parts, {"U1.0": [0, 1, 3, 6, 8, 9], "U1.1": [4, 9, 4, 4, 4, 4]})
     assert np.array_equal(
-        _frames(crafted, tmp_path, "pushed"),
-        _frames(vector("v1.6-adaptive-segments"), tmp_path, "original"),
+        decoded_frames(crafted, tmp_path, "pushed"),
+        decoded_frames(vector("v1.6-adaptive-segments"), tmp_path, "original"),
     )
 
 

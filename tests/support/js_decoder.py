@@ -14,6 +14,7 @@ import subprocess
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
 JS = Path(__file__).resolve().parents[1] / "js"
@@ -54,6 +55,16 @@ def run_node(script: str, *args: str | Path) -> Any:
     )
     assert done.returncode == 0, f"node {script} failed:\n{done.stderr[-3000:]}"
     return json.loads(done.stdout)
+
+
+def decoded_frames(data: bytes, tmp_path: Path, name: str) -> np.ndarray:
+    """Every frame the JavaScript decoder gives of the file ``data``, (F, K, 3) float64."""
+    source, output = tmp_path / f"{name}.tkc", tmp_path / f"{name}.bin"
+    source.write_bytes(data)
+    facts = run_node("decode_file.mjs", source, output)
+    assert facts["accepted"], facts["message"]
+    raw = output.read_bytes()[facts["faces"] * facts["face_width"] * 4 :]
+    return np.frombuffer(raw, "<f8").reshape(facts["frames"], facts["vertices"], 3)
 
 
 def check_every_vector_observed(observed: dict[str, Any]) -> None:

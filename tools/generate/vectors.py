@@ -81,6 +81,16 @@ def polygons(grid: int) -> np.ndarray:
     return quads
 
 
+def named_polygons() -> MeshSequence:
+    """Quads padded to triangles far from the origin, with frame names and a frame rate."""
+    return MeshSequence(
+        wave_sheet(16, 7) * 3.0 + 10.0,
+        polygons(7),
+        [f"walk_{n:03d}.obj" for n in range(16)],
+        frame_rate=30.0,
+    )
+
+
 def scrambled(sequence: MeshSequence, seed: int) -> MeshSequence:
     """The same animation with its vertices renumbered, its faces shuffled and each face's
     corners rotated (orientation kept), as an arbitrary exporter writes: faces-traverse (§6.8)
@@ -480,12 +490,7 @@ def valid_vectors() -> dict[str, tuple[bytes, str]]:
     """name -> (file bytes, what it exercises)."""
     wave_tri = MeshSequence(wave_sheet(24, 9), sheet_triangles(9))
     basic = encode(wave_tri, target_kg=0.5)
-    named = MeshSequence(
-        wave_sheet(16, 7) * 3.0 + 10.0,
-        polygons(7),
-        [f"walk_{n:03d}.obj" for n in range(16)],
-        frame_rate=30.0,
-    )
+    named = named_polygons()
     extended = Parts(basic)
     extended.flags |= 0x00010000  # an ignorable flag bit
     extended.header["x-note"] = "an unknown header key is ignored"
@@ -584,12 +589,7 @@ def adaptive_vectors() -> dict[str, tuple[bytes, str]]:
     """The valid vectors of format 1.6 (§6.14): every position factor adaptively coded, in a
     whole file and in segments with their own U1."""
     triangles = scrambled(MeshSequence(wave_sheet(24, 9), sheet_triangles(9)), seed=21)
-    named = MeshSequence(
-        wave_sheet(16, 7) * 3.0 + 10.0,
-        polygons(7),
-        [f"walk_{n:03d}.obj" for n in range(16)],
-        frame_rate=30.0,
-    )
+    named = named_polygons()
     return {
         "v1.6-adaptive": (
             adaptive_everywhere(encode(triangles, target_kg=0.1)),
@@ -795,12 +795,7 @@ def correction_vectors() -> dict[str, tuple[bytes, str]]:
     rough = wave_sheet(24, 9) + np.random.default_rng(23).normal(scale=2e-3, size=(24, 81, 3))
     wave = MeshSequence(rough, sheet_triangles(9))
     single = MeshSequence(wave_sheet(20, 8).astype(np.float32), sheet_triangles(8))
-    named = MeshSequence(
-        wave_sheet(16, 7) * 3.0 + 10.0,
-        polygons(7),
-        [f"walk_{n:03d}.obj" for n in range(16)],
-        frame_rate=30.0,
-    )
+    named = named_polygons()
     return {
         "v1.3-bound-grid": (
             encode(wave, max_error="0.05%"),
