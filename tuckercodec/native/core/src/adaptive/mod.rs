@@ -64,7 +64,26 @@ pub struct CodingOrder {
     ends: Vec<usize>,
     mesh: bool,
     row_count: usize,
+    /// The arrays again for the decoder's fast loop ([`decode_proper`]), where the order is
+    /// proper: every row once, each source coded before the row it serves, none with more
+    /// than [`MAX_FAST_SOURCES`]. The orders of files always are; other arrays take the
+    /// general loop.
+    proper: Option<Proper>,
 }
+
+/// A proper order's arrays as the fast loop reads them: narrow, and the sources of each row in
+/// turn, without the `ends`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct Proper {
+    /// Each position's row and its number of sources.
+    steps: Vec<(u32, u32)>,
+    /// The sources of every position, one after the other.
+    sources: Vec<u32>,
+}
+
+/// The most sources of one row the fast loop takes: its saturated magnitudes give the exact
+/// class of their mean only up to 3 * 2**15 of them ([`MAGNITUDE_CAP`]).
+const MAX_FAST_SOURCES: usize = 1 << 15;
 
 /// An index of the order arrays as a row or position: `None` outside `0..limit`.
 fn index(value: i64, limit: usize) -> Option<usize> {
@@ -107,12 +126,14 @@ impl CodingOrder {
         if ends.windows(2).any(|pair| pair[0] > pair[1]) {
             return Err(InvalidOrder("ends decrease".to_string()));
         }
+        let proper = Proper::of(&order_rows, &source_rows, &ends, rows);
         Ok(CodingOrder {
             rows: order_rows,
             sources: source_rows,
             ends,
             mesh,
             row_count: rows,
+            proper,
         })
     }
 
@@ -131,7 +152,9 @@ impl CodingOrder {
             ends,
             mesh: false,
             row_count: rows,
+            proper: None,
         }
+        .with_proper()
     }
 
     /// `adaptive.mesh_order`: the rows predictor 2 does not predict (not in `mean_rows`) in
@@ -161,6 +184,12 @@ impl CodingOrder {
         Self::new(&order, &sources, &ends, true, rows)
     }
 
+    /// This order with its [`Proper`] arrays, where it is.
+    fn with_proper(mut self) -> Self {
+        self.proper = Proper::of(&self.rows, &self.sources, &self.ends, self.row_count);
+        self
+    }
+
     /// The number of rows of the matrices this order codes.
     pub fn row_count(&self) -> usize {
         self.row_count
@@ -180,6 +209,38 @@ impl CodingOrder {
             _ => mean_magnitude(sources, magnitude),
         };
         1 + (128 - m.leading_zeros() as usize).min(NEIGHBOUR_CLASSES - 2)
+    }
+}
+
+impl Proper {
+    /// The fast loop's arrays of checked order arrays, if they are proper.
+    fn of(rows: &[usize], sources: &[usize], ends: &[usize], row_count: usize) -> Option<Self> {
+        if rows.len() != row_count || u32::try_from(row_count).is_err() {
+            return None;
+        }
+        let mut position = vec![usize::MAX; row_count];
+        for (j, &row) in rows.iter().enumerate() {
+            if position[row] != usize::MAX {
+                return None;
+            }
+            position[row] = j;
+        }
+        // rows.len() == row_count and no row twice: every row has its position
+        let mut steps = Vec::with_capacity(rows.len());
+        let mut narrow = Vec::with_capacity(sources.len());
+        for ((j, &row), pair) in rows.iter().enumerate().zip(ends.windows(2)) {
+            let mine = &sources[pair[0]..pair[1]];
+            if mine.len() > MAX_FAST_SOURCES || mine.iter().any(|&w| position[w] >= j) {
+                return None;
+            }
+            // rows below 2**32: checked above
+            steps.push((row as u32, mine.len() as u32));
+            narrow.extend(mine.iter().map(|&w| w as u32));
+        }
+        Some(Proper {
+            steps,
+            sources: narrow,
+        })
     }
 }
 
@@ -309,7 +370,8 @@ pub fn decode_columns(
 }
 
 /// [`decode_columns`] into `out`, whose length must be a whole number of columns of the order's
-/// rows (an array the caller allocated after [`check_size`]); it is zeroed first.
+/// rows (an array the caller allocated after [`check_size`]). Every entry is written (0 for a
+/// row the order leaves out); on an error, what `out` holds is unspecified.
 pub fn decode_columns_into(
     payload: &[u8],
     order: &CodingOrder,
@@ -324,8 +386,116 @@ pub fn decode_columns_into(
             format!("{} integers are not columns of {rows} rows", out.len()),
         ));
     }
+    let coder = RangeDecoder::new(payload)?;
+    let coder = match (&order.proper, order.mesh) {
+        (Some(proper), true) => decode_proper::<true>(coder, proper, rows, out)?,
+        (Some(proper), false) => decode_proper::<false>(coder, proper, rows, out)?,
+        (None, _) => decode_general(coder, order, out)?,
+    };
+    coder.finish()
+}
+
+/// Magnitudes saturate at 2**29 in the fast loop: `2 |x| + |y|` stays within a u32, and any
+/// class that a saturated magnitude enters is the top one either way (a left class of 5, a
+/// neighbour class of 15 for up to 3 * 2**15 sources: 3 * 2**29 / count >= 2**14).
+const MAGNITUDE_CAP: u32 = 1 << 29;
+
+/// |value|, saturated at [`MAGNITUDE_CAP`].
+#[inline(always)]
+fn saturated(value: i64) -> u32 {
+    value.unsigned_abs().min(u64::from(MAGNITUDE_CAP)) as u32
+}
+
+/// 1 + min(bit length of m, 14): the neighbour class of a magnitude m.
+#[inline(always)]
+fn magnitude_class(m: u64) -> usize {
+    1 + (64 - m.leading_zeros() as usize).min(NEIGHBOUR_CLASSES - 2)
+}
+
+/// `magnitude_class(floor(x / count))` without a division (which would sit in the chain from one
+/// integer to the next): with k = bitlen(x) - bitlen(count), floor(x / count) has k + 1 bits if
+/// x >= count << k, else k (none if k < 0).
+#[inline(always)]
+fn mean_class(x: u64, count: u64) -> usize {
+    let k = count.leading_zeros() as i32 - x.leading_zeros() as i32;
+    let bits = if k < 0 {
+        0
+    } else {
+        // count << k < 2**bitlen(x): no bit is lost
+        k + i32::from(x >= count << k)
+    };
+    1 + (bits as usize).min(NEIGHBOUR_CLASSES - 2)
+}
+
+/// The decoder's loop for a proper order ([`CodingOrder::proper`]): each row's earlier
+/// neighbours are decoded before it in its column, so one array of saturated magnitudes per
+/// row (its latest and the one before) gives both classes, and every entry of `out` is written.
+/// `MESH`: the neighbours are averaged (U1's), else the first counts twice and the second once.
+/// Returns the decoder, to be finished.
+fn decode_proper<'a, const MESH: bool>(
+    coder: RangeDecoder<'a>,
+    order: &Proper,
+    rows: usize,
+    out: &mut [i64],
+) -> Result<RangeDecoder<'a>, Broken> {
+    if rows == 0 {
+        return Ok(coder);
+    }
+    // a copy of its own, in registers (see RangeDecoder)
+    let mut coder = coder;
+    let mut models = Box::new([FRESH_CONTEXT; CONTEXTS]);
+    // recent[r]: |x[r, c]| once row r of column c is decoded, |x[r, c - 1]| until then, and the
+    // one before it
+    let mut recent = vec![[0u32; 2]; rows];
+    let latest = |recent: &[[u32; 2]], w: u32| {
+        recent
+            .get(w as usize)
+            .map_or(0, |magnitudes| u64::from(magnitudes[0]))
+    };
+    for column in out.chunks_exact_mut(rows) {
+        let mut all_sources = order.sources.as_slice();
+        for &(row, count) in &order.steps {
+            let (sources, rest) = all_sources
+                .split_at_checked(count as usize)
+                .unwrap_or((all_sources, &[]));
+            all_sources = rest;
+            let a = match *sources {
+                [] => 0,
+                _ if MESH => {
+                    let total: u64 = sources.iter().map(|&w| latest(&recent, w)).sum();
+                    mean_class(3 * total, sources.len() as u64)
+                }
+                [w] => magnitude_class(3 * latest(&recent, w)),
+                [w, v, ..] => magnitude_class(2 * latest(&recent, w) + latest(&recent, v)),
+            };
+            let row = row as usize;
+            let [before, two_before] = recent.get(row).copied().unwrap_or_default();
+            let b = usize::from(left_class(u64::from(2 * before + two_before)));
+            let value = decode_integer(&mut coder, &mut models[a * LEFT_CLASSES + b])?;
+            if let Some(slot) = column.get_mut(row) {
+                *slot = value;
+            }
+            if let Some(slot) = recent.get_mut(row) {
+                *slot = [saturated(value), before];
+            }
+        }
+        // a read past the end spoils no check before it: once a column is done is soon enough
+        coder.check_overrun()?;
+    }
+    Ok(coder)
+}
+
+/// The decoder's loop for any order: the reference's, each class from the integers themselves
+/// (rows the order leaves out are 0, sources not decoded yet count as 0).
+fn decode_general<'a>(
+    coder: RangeDecoder<'a>,
+    order: &CodingOrder,
+    out: &mut [i64],
+) -> Result<RangeDecoder<'a>, Broken> {
+    let rows = order.row_count;
+    let cols = out.len().checked_div(rows).unwrap_or(0);
+    let mut coder = coder;
     out.fill(0);
-    let mut coder = RangeDecoder::new(payload)?;
     let mut models = fresh_models();
     let mut left = vec![0u8; rows];
     for c in 0..cols {
@@ -341,5 +511,5 @@ pub fn decode_columns_into(
             column[row] = value;
         }
     }
-    coder.finish()
+    Ok(coder)
 }
