@@ -377,6 +377,21 @@ pub fn decode_columns_into(
     order: &CodingOrder,
     out: &mut [i64],
 ) -> Result<(), Broken> {
+    decode_blocks(payload, order, out, 1, |_, _| {})
+}
+
+/// [`decode_columns_into`], handing each run of `block` columns (the last one may be shorter)
+/// to `done(first column, its integers)` as soon as it is decoded, so that a caller can use
+/// them while the next ones decode. A run handed over is final, but the stream is only known
+/// to be whole once this returns `Ok`. An order that is not proper (see [`CodingOrder`]) is
+/// decoded whole before its first run is handed over.
+pub fn decode_blocks<'o>(
+    payload: &[u8],
+    order: &CodingOrder,
+    out: &'o mut [i64],
+    block: usize,
+    mut done: impl FnMut(usize, &'o [i64]),
+) -> Result<(), Broken> {
     let rows = order.row_count;
     let cols = out.len().checked_div(rows).unwrap_or(0);
     check_size(cols, rows, payload.len())?;
@@ -387,12 +402,31 @@ pub fn decode_columns_into(
         ));
     }
     let coder = RangeDecoder::new(payload)?;
-    let coder = match (&order.proper, order.mesh) {
-        (Some(proper), true) => decode_proper::<true>(coder, proper, rows, out)?,
-        (Some(proper), false) => decode_proper::<false>(coder, proper, rows, out)?,
-        (None, _) => decode_general(coder, order, out)?,
+    let step = block.max(1) * rows;
+    let Some(proper) = &order.proper else {
+        decode_general(coder, order, out)?.finish()?;
+        if step > 0 {
+            let out: &'o [i64] = out;
+            for (n, run) in out.chunks(step).enumerate() {
+                done(n * block.max(1), run);
+            }
+        }
+        return Ok(());
     };
-    coder.finish()
+    let mut decoder = ColumnDecoder::new(coder, proper, rows);
+    if step > 0 {
+        for (n, run) in out.chunks_mut(step).enumerate() {
+            for column in run.chunks_exact_mut(rows) {
+                if order.mesh {
+                    decoder.column::<true>(column)?;
+                } else {
+                    decoder.column::<false>(column)?;
+                }
+            }
+            done(n * block.max(1), run);
+        }
+    }
+    decoder.coder.finish()
 }
 
 /// Magnitudes saturate at 2**29 in the fast loop: `2 |x| + |y|` stays within a u32, and any
@@ -427,34 +461,43 @@ fn mean_class(x: u64, count: u64) -> usize {
     1 + (bits as usize).min(NEIGHBOUR_CLASSES - 2)
 }
 
-/// The decoder's loop for a proper order ([`CodingOrder::proper`]): each row's earlier
-/// neighbours are decoded before it in its column, so one array of saturated magnitudes per
-/// row (its latest and the one before) gives both classes, and every entry of `out` is written.
-/// `MESH`: the neighbours are averaged (U1's), else the first counts twice and the second once.
-/// Returns the decoder, to be finished.
-fn decode_proper<'a, const MESH: bool>(
+/// The decoder's loop for a proper order ([`CodingOrder::proper`]), a column at a time: each
+/// row's earlier neighbours are decoded before it in its column, so one array of saturated
+/// magnitudes per row (its latest and the one before) gives both classes, and every entry of
+/// a column is written.
+struct ColumnDecoder<'a, 'o> {
     coder: RangeDecoder<'a>,
-    order: &Proper,
-    rows: usize,
-    out: &mut [i64],
-) -> Result<RangeDecoder<'a>, Broken> {
-    if rows == 0 {
-        return Ok(coder);
+    order: &'o Proper,
+    models: Box<[Context; CONTEXTS]>,
+    /// recent[r]: |x[r, c]| once row r of column c is decoded, |x[r, c - 1]| until then, and
+    /// the one before it.
+    recent: Vec<[u32; 2]>,
+}
+
+impl<'a, 'o> ColumnDecoder<'a, 'o> {
+    fn new(coder: RangeDecoder<'a>, order: &'o Proper, rows: usize) -> Self {
+        ColumnDecoder {
+            coder,
+            order,
+            models: Box::new([FRESH_CONTEXT; CONTEXTS]),
+            recent: vec![[0u32; 2]; rows],
+        }
     }
-    // a copy of its own, in registers (see RangeDecoder)
-    let mut coder = coder;
-    let mut models = Box::new([FRESH_CONTEXT; CONTEXTS]);
-    // recent[r]: |x[r, c]| once row r of column c is decoded, |x[r, c - 1]| until then, and the
-    // one before it
-    let mut recent = vec![[0u32; 2]; rows];
-    let latest = |recent: &[[u32; 2]], w: u32| {
-        recent
-            .get(w as usize)
-            .map_or(0, |magnitudes| u64::from(magnitudes[0]))
-    };
-    for column in out.chunks_exact_mut(rows) {
-        let mut all_sources = order.sources.as_slice();
-        for &(row, count) in &order.steps {
+
+    /// The next column into `column` (the order's rows long). `MESH`: the neighbours are
+    /// averaged (U1's), else the first counts twice and the second once.
+    fn column<const MESH: bool>(&mut self, column: &mut [i64]) -> Result<(), Broken> {
+        // a copy of its own, in registers (see RangeDecoder)
+        let mut coder = self.coder;
+        let models = &mut self.models;
+        let recent = self.recent.as_mut_slice();
+        let latest = |recent: &[[u32; 2]], w: u32| {
+            recent
+                .get(w as usize)
+                .map_or(0, |magnitudes| u64::from(magnitudes[0]))
+        };
+        let mut all_sources = self.order.sources.as_slice();
+        for &(row, count) in &self.order.steps {
             let (sources, rest) = all_sources
                 .split_at_checked(count as usize)
                 .unwrap_or((all_sources, &[]));
@@ -462,11 +505,11 @@ fn decode_proper<'a, const MESH: bool>(
             let a = match *sources {
                 [] => 0,
                 _ if MESH => {
-                    let total: u64 = sources.iter().map(|&w| latest(&recent, w)).sum();
+                    let total: u64 = sources.iter().map(|&w| latest(recent, w)).sum();
                     mean_class(3 * total, sources.len() as u64)
                 }
-                [w] => magnitude_class(3 * latest(&recent, w)),
-                [w, v, ..] => magnitude_class(2 * latest(&recent, w) + latest(&recent, v)),
+                [w] => magnitude_class(3 * latest(recent, w)),
+                [w, v, ..] => magnitude_class(2 * latest(recent, w) + latest(recent, v)),
             };
             let row = row as usize;
             let [before, two_before] = recent.get(row).copied().unwrap_or_default();
@@ -479,10 +522,10 @@ fn decode_proper<'a, const MESH: bool>(
                 *slot = [saturated(value), before];
             }
         }
+        self.coder = coder;
         // a read past the end spoils no check before it: once a column is done is soon enough
-        coder.check_overrun()?;
+        coder.check_overrun()
     }
-    Ok(coder)
 }
 
 /// The decoder's loop for any order: the reference's, each class from the integers themselves
