@@ -67,6 +67,12 @@ def _broken(message: str, where: str) -> NoReturn:
     raise FormatError(message, rule="R46-adaptive-stream", field=where) from None
 
 
+def refuse(message: str, where: str) -> NoReturn:
+    """R46 with ``message``, for a caller that decodes an adaptive stream in the compiled core
+    by another route (:func:`.qmat.decode_values`)."""
+    _broken(message, where)
+
+
 class RangeEncoder:
     """LZMA's range encoder: decisions in, bytes out."""
 
@@ -309,7 +315,7 @@ def _neighbour_class(magnitudes: list[int], order: CodingOrder, j: int) -> int:
     return magnitude_class(2 * magnitudes[before[0]] + magnitudes[before[1]])
 
 
-def _order_arrays(order: CodingOrder) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def order_arrays(order: CodingOrder) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``order``'s arrays as the compiled core takes them: contiguous int64."""
 
     def contiguous(array: np.ndarray) -> np.ndarray:
@@ -325,7 +331,7 @@ def encode_columns(columns: np.ndarray, order: CodingOrder) -> bytes:
     core = native.core()
     if core is not None:
         values = np.ascontiguousarray(columns, dtype=np.int64)
-        payload: bytes = core.adaptive_encode(values, *_order_arrays(order), bool(order.mesh))
+        payload: bytes = core.adaptive_encode(values, *order_arrays(order), bool(order.mesh))
         return payload
     return _encode_columns_python(columns, order)
 
@@ -368,7 +374,7 @@ def decode_columns(
         return _decode_columns_python(payload, cols, rows, order, where)
     try:
         values: np.ndarray = core.adaptive_decode(
-            bytes(payload), cols, rows, *_order_arrays(order), bool(order.mesh)
+            bytes(payload), cols, rows, *order_arrays(order), bool(order.mesh)
         )
     except core.Broken as error:
         _broken(error.args[1], where)
