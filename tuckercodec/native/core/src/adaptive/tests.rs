@@ -365,8 +365,9 @@ fn large_integers(random: &mut Random, count: usize) -> Vec<i64> {
         .collect()
 }
 
-/// A mesh-like order where row r's sources are up to `width` rows before it, chosen at random.
-fn random_mesh(random: &mut Random, rows: usize, width: usize) -> CodingOrder {
+/// A mesh-like order where row r's sources are up to `width` rows before it, chosen at random
+/// (`mesh`: averaged; else the first two count).
+fn random_order(random: &mut Random, rows: usize, width: usize, mesh: bool) -> CodingOrder {
     let mut sources = Vec::new();
     let mut ends = vec![0i64];
     for r in 0..rows as u64 {
@@ -377,7 +378,7 @@ fn random_mesh(random: &mut Random, rows: usize, width: usize) -> CodingOrder {
         ends.push(sources.len() as i64);
     }
     let order: Vec<i64> = (0..rows as i64).collect();
-    CodingOrder::new(&order, &sources, &ends, true, rows).unwrap()
+    CodingOrder::new(&order, &sources, &ends, mesh, rows).unwrap()
 }
 
 #[test]
@@ -385,7 +386,8 @@ fn the_fast_loop_decodes_as_the_general_one() {
     let mut random = Random(0x5DEE_CE66_D1CE_4E5B);
     for (cols, rows, width) in [(3, 40, 3), (5, 200, 8), (2, 300, 40), (1, 1, 1)] {
         let orders = [
-            random_mesh(&mut random, rows, width),
+            random_order(&mut random, rows, width, true),
+            random_order(&mut random, rows, width, false),
             CodingOrder::sequence(rows),
             reversed(rows),
         ];
