@@ -205,3 +205,15 @@ def test_a_file_reports_its_first_broken_factor() -> None:
             damaged = _with_payloads(data, dict.fromkeys(broken, change))
             outcome = _alike(lambda d: Decoder(d).frame(0), damaged)
             assert outcome[0] == "error" and outcome[3] == f"section {broken[0]}"
+
+
+@pytest.mark.parametrize("rows", [0, 1, 2, 3, 4, 9, 1000])
+def test_the_sequence_order_is_its_definition(rows: int) -> None:
+    """Ascending rows, row r after rows r - 1 and r - 2 (those that exist), in that order."""
+    order = adaptive.sequence_order(rows)
+    sources = [w for r in range(rows) for w in (r - 1, r - 2) if w >= 0]
+    ends = np.cumsum([0] + [min(r, 2) for r in range(rows)])
+    assert not order.mesh
+    expected = [(order.order, range(rows)), (order.sources, sources), (order.ends, ends)]
+    for array, values in expected:
+        assert array.dtype == np.int64 and array.tolist() == list(values)

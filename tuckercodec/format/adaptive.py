@@ -281,12 +281,13 @@ class CodingOrder:
 def sequence_order(rows: int) -> CodingOrder:
     """Rows in ascending order, each after the (up to) two before it."""
     order = np.arange(rows, dtype=np.int64)
-    counts = np.minimum(order, 2)
-    ends = np.zeros(rows + 1, dtype=np.int64)
-    np.cumsum(counts, out=ends[1:])
-    owner = np.repeat(order, counts)
-    offset = np.arange(ends[-1], dtype=np.int64) - np.repeat(ends[:-1], counts)
-    return CodingOrder(order, owner - 1 - offset, ends, mesh=False)
+    # row r's sources end at 2r - 3 (none for row 0, one for row 1, two for each after)
+    ends = np.maximum(2 * np.arange(rows + 1, dtype=np.int64) - 3, 0)
+    sources = np.zeros(int(ends[-1]), dtype=np.int64)  # row 1's: row 0
+    pairs = sources[1:].reshape(-1, 2)  # rows 2, 3, ...: the row before, then the one before
+    pairs[:, 0] = order[1 : rows - 1]
+    pairs[:, 1] = order[: max(rows - 2, 0)]
+    return CodingOrder(order, sources, ends, mesh=False)
 
 
 def mesh_order(

@@ -71,14 +71,20 @@ pub struct CodingOrder {
     proper: Option<Proper>,
 }
 
-/// A proper order's arrays as the fast loop reads them: narrow, each position's first sources
-/// beside its row, so that most rows' sources are summed without a loop (whose exit, after
-/// 2 to 6 sources as the mesh goes, the processor would mispredict).
+/// A proper order as the fast loop reads it.
 #[derive(Debug, Clone, PartialEq, Eq)]
-struct Proper {
-    steps: Vec<Step>,
-    /// The sources past the first [`FIRST_SOURCES`] of every position, one after the other.
-    more: Vec<u32>,
+enum Proper {
+    /// [`CodingOrder::sequence`]'s (U3, CORE, CENT): each row's neighbours are the two rows
+    /// before it, known without arrays (a CORE has tens of thousands of rows).
+    Sequence,
+    /// Any other, its arrays narrow, each position's first sources beside its row, so that most
+    /// rows' sources are summed without a loop (whose exit, after 2 to 6 sources as the mesh
+    /// goes, the processor would mispredict).
+    Listed {
+        steps: Vec<Step>,
+        /// The sources past the first [`FIRST_SOURCES`] of every position, one after another.
+        more: Vec<u32>,
+    },
 }
 
 /// Sources kept beside each position's row: most vertices of a mesh have at most four
@@ -140,7 +146,7 @@ impl CodingOrder {
         if ends.windows(2).any(|pair| pair[0] > pair[1]) {
             return Err(InvalidOrder("ends decrease".to_string()));
         }
-        let proper = Proper::of(&order_rows, &source_rows, &ends, rows);
+        let proper = Proper::of(&order_rows, &source_rows, &ends, rows, mesh);
         Ok(CodingOrder {
             rows: order_rows,
             sources: source_rows,
@@ -166,9 +172,8 @@ impl CodingOrder {
             ends,
             mesh: false,
             row_count: rows,
-            proper: None,
+            proper: Some(Proper::Sequence),
         }
-        .with_proper()
     }
 
     /// `adaptive.mesh_order`: the rows predictor 2 does not predict (not in `mean_rows`) in
@@ -198,12 +203,6 @@ impl CodingOrder {
         Self::new(&order, &sources, &ends, true, rows)
     }
 
-    /// This order with its [`Proper`] arrays, where it is.
-    fn with_proper(mut self) -> Self {
-        self.proper = Proper::of(&self.rows, &self.sources, &self.ends, self.row_count);
-        self
-    }
-
     /// The number of rows of the matrices this order codes.
     pub fn row_count(&self) -> usize {
         self.row_count
@@ -227,10 +226,19 @@ impl CodingOrder {
 }
 
 impl Proper {
-    /// The fast loop's arrays of checked order arrays, if they are proper.
-    fn of(rows: &[usize], sources: &[usize], ends: &[usize], row_count: usize) -> Option<Self> {
+    /// The fast loop's form of checked order arrays, if they are proper.
+    fn of(
+        rows: &[usize],
+        sources: &[usize],
+        ends: &[usize],
+        row_count: usize,
+        mesh: bool,
+    ) -> Option<Self> {
         if rows.len() != row_count || u32::try_from(row_count).is_err() {
             return None;
+        }
+        if !mesh && is_sequence(rows, sources, ends) {
+            return Some(Proper::Sequence);
         }
         let mut position = vec![usize::MAX; row_count];
         for (j, &row) in rows.iter().enumerate() {
@@ -259,8 +267,27 @@ impl Proper {
                 first,
             });
         }
-        Some(Proper { steps, more })
+        Some(Proper::Listed { steps, more })
     }
+}
+
+/// Whether order arrays are [`CodingOrder::sequence`]'s: rows ascending, no sources for row 0,
+/// row 0 for row 1, rows r - 1 and r - 2 for each row r after.
+fn is_sequence(rows: &[usize], sources: &[usize], ends: &[usize]) -> bool {
+    let expected_end = |j: usize| (2 * j).saturating_sub(3);
+    rows.iter().enumerate().all(|(j, &row)| row == j)
+        && ends
+            .iter()
+            .enumerate()
+            .all(|(j, &end)| end == expected_end(j))
+        && sources.len() == expected_end(rows.len())
+        && sources.first().is_none_or(|&w| w == 0)
+        && sources
+            .get(1..)
+            .unwrap_or(&[])
+            .chunks(2)
+            .enumerate()
+            .all(|(n, pair)| pair == [n + 1, n])
 }
 
 /// floor(3 * sum / count) of the sources' magnitudes, exact where the class depends on it (it
@@ -432,14 +459,18 @@ pub fn decode_blocks<'o>(
         }
         return Ok(());
     };
-    let mut decoder = ColumnDecoder::new(coder, proper, rows);
+    let mut decoder = ColumnDecoder::new(coder, rows);
     if step > 0 {
         for (n, run) in out.chunks_mut(step).enumerate() {
             for column in run.chunks_exact_mut(rows) {
-                if order.mesh {
-                    decoder.column::<true>(column)?;
-                } else {
-                    decoder.column::<false>(column)?;
+                match proper {
+                    Proper::Sequence => decoder.sequence_column(column)?,
+                    Proper::Listed { steps, more } if order.mesh => {
+                        decoder.column::<true>(steps, more, column)?
+                    }
+                    Proper::Listed { steps, more } => {
+                        decoder.column::<false>(steps, more, column)?
+                    }
                 }
             }
             done(n * block.max(1), run);
@@ -484,29 +515,33 @@ fn mean_class(x: u64, count: u64) -> usize {
 /// row's earlier neighbours are decoded before it in its column, so one array of saturated
 /// magnitudes per row (its latest and the one before) gives both classes, and every entry of
 /// a column is written.
-struct ColumnDecoder<'a, 'o> {
+struct ColumnDecoder<'a> {
     coder: RangeDecoder<'a>,
-    order: &'o Proper,
     models: Box<[Context; CONTEXTS]>,
     /// recent[r]: |x[r, c]| once row r of column c is decoded, |x[r, c - 1]| until then, and
     /// the one before it.
     recent: Vec<[u32; 2]>,
 }
 
-impl<'a, 'o> ColumnDecoder<'a, 'o> {
-    fn new(coder: RangeDecoder<'a>, order: &'o Proper, rows: usize) -> Self {
+impl<'a> ColumnDecoder<'a> {
+    fn new(coder: RangeDecoder<'a>, rows: usize) -> Self {
         ColumnDecoder {
             coder,
-            order,
             models: Box::new([FRESH_CONTEXT; CONTEXTS]),
             // one more than the rows: the padding of the first sources, whose magnitudes stay 0
             recent: vec![[0u32; 2]; rows + 1],
         }
     }
 
-    /// The next column into `column` (the order's rows long). `MESH`: the neighbours are
-    /// averaged (U1's), else the first counts twice and the second once.
-    fn column<const MESH: bool>(&mut self, column: &mut [i64]) -> Result<(), Broken> {
+    /// The next column into `column` (the order's rows long), in a [`Proper::Listed`] order of
+    /// `steps` and `more`. `MESH`: the neighbours are averaged (U1's), else the first counts
+    /// twice and the second once.
+    fn column<const MESH: bool>(
+        &mut self,
+        steps: &[Step],
+        more: &[u32],
+        column: &mut [i64],
+    ) -> Result<(), Broken> {
         // a copy of its own, in registers (see RangeDecoder)
         let mut coder = self.coder;
         let models = &mut self.models;
@@ -516,8 +551,8 @@ impl<'a, 'o> ColumnDecoder<'a, 'o> {
                 .get(w as usize)
                 .map_or(0, |magnitudes| u64::from(magnitudes[0]))
         };
-        let mut more = self.order.more.iter();
-        for step in &self.order.steps {
+        let mut more = more.iter();
+        for step in steps {
             let count = step.count as usize;
             let [w, v, ..] = step.first;
             let a = if count == 0 {
@@ -548,6 +583,33 @@ impl<'a, 'o> ColumnDecoder<'a, 'o> {
         }
         self.coder = coder;
         // a read past the end spoils no check before it: once a column is done is soon enough
+        coder.check_overrun()
+    }
+}
+
+impl ColumnDecoder<'_> {
+    /// The next column into `column` in [`Proper::Sequence`]: [`ColumnDecoder::column`] with
+    /// the two rows before in registers.
+    fn sequence_column(&mut self, column: &mut [i64]) -> Result<(), Broken> {
+        let mut coder = self.coder;
+        let models = &mut self.models;
+        // |x| of the row before and the one before it, saturated
+        let (mut one, mut two) = (0u64, 0u64);
+        for (r, (slot, recent)) in column.iter_mut().zip(self.recent.iter_mut()).enumerate() {
+            let a = match r {
+                0 => 0,
+                1 => magnitude_class(3 * one),
+                _ => magnitude_class(2 * one + two),
+            };
+            let [before, two_before] = *recent;
+            let b = usize::from(left_class(u64::from(2 * before + two_before)));
+            let value = decode_integer(&mut coder, &mut models[a * LEFT_CLASSES + b])?;
+            *slot = value;
+            let magnitude = saturated(value);
+            *recent = [magnitude, before];
+            (one, two) = (u64::from(magnitude), one);
+        }
+        self.coder = coder;
         coder.check_overrun()
     }
 }

@@ -292,8 +292,28 @@ fn general(order: &CodingOrder) -> CodingOrder {
 
 #[test]
 fn the_orders_of_files_take_the_fast_loop() {
-    assert!(CodingOrder::sequence(0).proper.is_some());
-    assert!(CodingOrder::sequence(7).proper.is_some());
+    // the sequence's arrays, however made, are known without them
+    for rows in [0, 1, 2, 3, 7] {
+        let sequence = CodingOrder::sequence(rows);
+        assert_eq!(sequence.proper, Some(Proper::Sequence));
+        let again = CodingOrder::new(
+            &sequence.rows.iter().map(|&r| r as i64).collect::<Vec<_>>(),
+            &sequence
+                .sources
+                .iter()
+                .map(|&r| r as i64)
+                .collect::<Vec<_>>(),
+            &sequence.ends.iter().map(|&r| r as i64).collect::<Vec<_>>(),
+            false,
+            rows,
+        );
+        assert_eq!(again.unwrap().proper, Some(Proper::Sequence));
+    }
+    // the same arrays averaged, or a source other than the two rows before: listed
+    let averaged = CodingOrder::new(&[0, 1, 2], &[0, 1, 0], &[0, 0, 1, 3], true, 3).unwrap();
+    assert!(matches!(averaged.proper, Some(Proper::Listed { .. })));
+    let other = CodingOrder::new(&[0, 1, 2], &[0, 0, 1], &[0, 0, 1, 3], false, 3).unwrap();
+    assert!(matches!(other.proper, Some(Proper::Listed { .. })));
     assert!(small_mesh().proper.is_some());
     assert!(reversed(9).proper.is_some());
     // a row twice, a row missing, a source not coded yet, a source coded after
