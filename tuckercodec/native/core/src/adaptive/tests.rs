@@ -341,7 +341,7 @@ fn the_mean_class_is_the_divisions() {
     for _ in 0..20000 {
         let (r, s) = (random.next(), random.next());
         let x = r >> (r % 64);
-        let count = 1 + (s >> (s % 64 + 1)).min(x.max(1));
+        let count = 1 + (s >> (s % 63 + 1)).min(x.max(1));
         pairs.push((x, count));
         // the edges: a multiple of count by a power of two, and one less
         let k = s % 40;
