@@ -536,6 +536,8 @@ impl<'a> ColumnDecoder<'a> {
     /// The next column into `column` (the order's rows long), in a [`Proper::Listed`] order of
     /// `steps` and `more`. `MESH`: the neighbours are averaged (U1's), else the first counts
     /// twice and the second once.
+    // not inlined: compiled on its own, the loop keeps more of its state in registers
+    #[inline(never)]
     fn column<const MESH: bool>(
         &mut self,
         steps: &[Step],
@@ -590,6 +592,7 @@ impl<'a> ColumnDecoder<'a> {
 impl ColumnDecoder<'_> {
     /// The next column into `column` in [`Proper::Sequence`]: [`ColumnDecoder::column`] with
     /// the two rows before in registers.
+    #[inline(never)] // as `column`
     fn sequence_column(&mut self, column: &mut [i64]) -> Result<(), Broken> {
         let mut coder = self.coder;
         let models = &mut self.models;
