@@ -979,7 +979,7 @@ def traverse_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
     can ask, and is refused before anything is allocated by it."""
     parts = Parts(good)
     entry = parts.entries[parts.index("FACE")]
-    count, width = entry["shape"]
+    width = entry["shape"][1]
     values, corner_order, coder, vertices = face_streams(parts)
     values[0][0] = traversal.TIP_PREV
     params, broken = packed_face(values, entry["shape"], corner_order, coder, vertices)

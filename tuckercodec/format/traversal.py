@@ -444,13 +444,12 @@ def read_stream_arrays(
             f"{where}.streams", f"the streams take {total} bytes of a {len(payload)}-byte payload"
         )
     fields = [f"{where}.streams.{name}" for name in STREAM_NAMES]
-    if coder == adaptive.CODER_ADAPTIVE:
-        planes = [_no_planes(entry[1], field) for entry, field in zip(table, fields, strict=True)]
-    else:
-        planes = [
-            streams.checked_planes({"planes": entry[1]}, field)
-            for entry, field in zip(table, fields, strict=True)
-        ]
+    planes = [
+        streams.checked_planes(
+            {"planes": entry[1]}, field, adaptive=coder == adaptive.CODER_ADAPTIVE
+        )
+        for entry, field in zip(table, fields, strict=True)
+    ]
     # the bytes the integers take: 32-bit ones for an adaptive stream, as §6.1's 4 planes
     raw = sum(entry[0] * (p or ADAPTIVE_PLANES) for entry, p in zip(table, planes, strict=True))
     check_limit(
@@ -475,15 +474,6 @@ def read_stream_arrays(
             raise _broken(where, str(error)) from None
         values[2] = unseen.gaps(placed)
     return values, int(corner_order)
-
-
-def _no_planes(planes: int, field: str) -> int:
-    """R30 unless a stream of ``coder`` 1 says ``planes`` 0 (its integers are 32-bit ones)."""
-    if planes != 0:
-        raise FormatError(
-            f"planes must be 0 in a stream of coder 1, got {planes}", rule="R30-planes", field=field
-        )
-    return 0
 
 
 def _adaptive_stream(payload: bytes | memoryview, size: int, where: str) -> np.ndarray:
