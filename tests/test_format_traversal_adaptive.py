@@ -5,6 +5,8 @@ and every file that breaks the coding is refused with the rule §5 step 15 gives
 
 from __future__ import annotations
 
+from typing import Any
+
 import msgpack
 import numpy as np
 import pytest
@@ -56,7 +58,7 @@ def test_a_huge_vertex_count_sizes_no_table():
     assert unseen._ranks_python(vertices, 2**41).tolist() == ranks.tolist()
 
 
-def adaptive_round_trip(faces: np.ndarray, k: int) -> dict:
+def adaptive_round_trip(faces: np.ndarray, k: int) -> dict[str, Any]:
     """The section coded with coder 1 forced (both corner orders), decoded back: the walk's
     faces; returns its parameters."""
     table = np.asarray(faces, dtype=np.int64)
@@ -113,7 +115,7 @@ def test_the_encoder_keeps_the_smallest_and_coder_1_only_where_allowed():
     assert "coder" not in plain[0]
     assert chosen[0]["coder"] == 1  # smaller here
 
-    def size(params: dict, payload: bytes) -> int:
+    def size(params: dict[str, Any], payload: bytes) -> int:
         return len(payload) + len(msgpack.packb(params))
 
     assert size(*chosen[:2]) < size(*plain[:2])
@@ -127,7 +129,7 @@ def test_the_encoder_keeps_the_smallest_and_coder_1_only_where_allowed():
         )
 
 
-def coded(faces: np.ndarray, k: int) -> tuple[dict, bytes]:
+def coded(faces: np.ndarray, k: int) -> tuple[dict[str, Any], bytes]:
     params, payload, _ = traversal.encode_traversal(faces, k, adaptive_coding=True)
     assert params.get("coder") == 1
     return params, payload
@@ -174,7 +176,7 @@ def test_a_stream_of_coder_1_has_planes_0(planes):
     assert raised.value.field == "FACE.streams.vertices.planes"
 
 
-def _repacked(params: dict, payload: bytes, change) -> tuple[dict, bytes]:
+def _repacked(params: dict[str, Any], payload: bytes, change) -> tuple[dict[str, Any], bytes]:
     """The section with its streams (ranks in *vertices*) changed by ``change`` and packed
     again with coder 1."""
     count, width = params["shape"]
