@@ -87,6 +87,7 @@ def _walk_holds(
 ) -> bool:
     """Whether the walk decodes to the faces given (in its order), as §6.8 promises: checked
     once per encode, so that a walk the encoder got wrong costs size (faces-delta), never faces."""
+    # the encoder writes coder 1 only where it may (a file of format 1.6)
     decoded = decode_traversal(
         payload, params, vertex_count, "section FACE", adaptive_coding="coder" in params
     )

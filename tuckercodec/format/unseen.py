@@ -24,6 +24,9 @@ import numpy as np
 
 from ..system import native
 
+#: The largest vertex count the compiled core takes (its counts are int64).
+MAX_NATIVE_K = 1 << 62
+
 
 class RankError(ValueError):
     """A rank that names no unseen vertex; its message is the detail of R39-traversal."""
@@ -74,9 +77,10 @@ def ranks_of(vertices: np.ndarray, k: int) -> np.ndarray:
     vertices, int64. By the compiled core where it is installed, else :func:`_ranks_python`."""
     placed = np.ascontiguousarray(vertices, dtype=np.int64)
     core = native.core()
-    if core is not None:
-        ranks: np.ndarray = core.unseen_ranks(placed, k)
-        return ranks
+    if core is not None and 0 <= k <= MAX_NATIVE_K:
+        ranks: np.ndarray | None = core.unseen_ranks(placed, k)
+        if ranks is not None:  # None: a vertex outside 0..k-1, which no walk places
+            return ranks
     return _ranks_python(placed, k)
 
 
@@ -98,7 +102,7 @@ def vertices_of(ranks: np.ndarray, k: int) -> np.ndarray:
     where it is installed, else :func:`_vertices_python`: the same vertices or error."""
     values = np.ascontiguousarray(ranks, dtype=np.int64)
     core = native.core()
-    if core is not None:
+    if core is not None and 0 <= k <= MAX_NATIVE_K:
         try:
             vertices: np.ndarray = core.unseen_vertices(values, k)
         except core.Broken as error:

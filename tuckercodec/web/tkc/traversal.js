@@ -191,7 +191,7 @@ function lowestBit(i) {
 function gapsFromRanks(ranks, K) {
   const placed = new UnseenVertices(K, ranks.length);
   const gaps = new Int32Array(ranks.length);
-  let t = 0; // |t| stays below 2^31 · 2^30: exact in a double
+  let t = 0; // in 0..K−1 after each check, so within ±2^31 of it before: exact in a double
   let last = -1;
   for (let i = 0; i < ranks.length; i++) {
     t += ranks[i];
