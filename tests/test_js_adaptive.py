@@ -126,6 +126,7 @@ def _crafted() -> list[tuple[str, bytes, str | None]]:
     delta = adaptive_parts(vector("v1-wave-triangles"))
     assert delta.sections[delta.index("FACE")][0]["codec"] == "faces-delta"
     assert parts.sections[parts.index("FACE")][0]["codec"] == "faces-traverse"
+    assert parts.sections[parts.index("FACE")][0].get("coder") == 1  # the encoder's choice
     zstd_faces = AdaptiveParts(parts.flags, parts.minor, zstd.header, zstd.sections)
     traversed = taken_apart(vector("v1.2-traverse-triangles"))  # FACE coder 0, no flag bit 3
     unflagged_faces = AdaptiveParts(
@@ -142,6 +143,8 @@ def _crafted() -> list[tuple[str, bytes, str | None]]:
         ),
         ("coder on a faces-delta FACE, ignored", _edited(delta, "FACE", coder=7), None),
         ("coder 7 on a faces-traverse FACE", _edited(parts, "FACE", coder=7), R46),
+        ("coder 1.0 on a faces-traverse FACE", _edited(parts, "FACE", coder=1.0), R46),
+        ("coder true on a faces-traverse FACE", _edited(parts, "FACE", coder=True), R46),
         ("coder 1 on FACE's zstd streams", _edited(zstd_faces, "FACE", coder=1), "R30-planes"),
         ("FACE's coder 1 without flag bit 3", _edited(unflagged_faces, "FACE", coder=1), R46),
         ("coder 0 on a field's factor", _edited(fields, "FLD.0.U1", coder=0), None),
