@@ -28,6 +28,7 @@ import numpy as np
 import pytest
 
 import tuckercodec
+from tests.support.compressed import chunked_file
 from tests.support.inputs import measure
 from tuckercodec import (
     Decoder,
@@ -46,6 +47,7 @@ from tuckercodec.blender.meshes import (
     bake_pc2,
     bake_span,
     file_frame,
+    loop_arrays,
     placement,
     scene_frames,
     scene_range,
@@ -58,6 +60,8 @@ from tuckercodec.io.common.polygons import faces_from_polygons, polygons_from_fa
 from tuckercodec.io.pointcache.pc2 import HEADER
 
 SESSION = Path(__file__).parent / "support" / "blender_session.py"
+#: The triangles of the crafted file the Blender session imports to weigh an import.
+MANY_FACES = 1 << 18
 NO_BPY = (
     "needs Blender's bpy module: pip install 'bpy<5' (the bpy 4.x wheels, for Python 3.11; "
     "about 370 MB)"
@@ -105,6 +109,15 @@ def test_an_export_refuses_a_change_of_topology_naming_the_frame_and_object():
         frames.add(4, np.zeros((4, 3)), faces)
     sequence = frames.sequence(25.0)
     assert sequence.vertices.shape == (2, 3, 3) and sequence.frame_rate == 25.0
+
+
+def test_a_face_table_becomes_blenders_loop_starts_and_corners_in_order():
+    faces = np.array([[0, 1, 2, -1], [2, 1, 3, 4], [4, 3, 5, -1]])
+    starts, corners = loop_arrays(faces)
+    assert starts.dtype == corners.dtype == np.int32
+    assert starts.tolist() == [0, 3, 7]
+    assert corners.tolist() == [0, 1, 2, 2, 1, 3, 4, 4, 3, 5]
+    assert [a.size for a in loop_arrays(np.zeros((0, 3), np.int64))] == [0, 0]
 
 
 def spread_file(spans: float = 199_999.0, first: float = 0.0) -> bytes:
@@ -337,6 +350,7 @@ def session(cloth, tmp_path_factory) -> Session:
     (work / "film.tkc").write_bytes(tuckercodec.encode(_film(cloth), target_kg=0.5))
     (work / "far.tkc").write_bytes(spread_file(23.0, first=2.0**31))
     (work / "spread.tkc").write_bytes(spread_file())
+    (work / "many_faces.tkc").write_bytes(chunked_file(1 << 16, 2, 1, face_count=MANY_FACES))
     addon = work / "tuckercodec_blender.zip"
     assert main(["blender-addon", str(addon)]) == 0
     environment = {name: value for name, value in os.environ.items() if name != "PYTHONPATH"}
@@ -448,6 +462,18 @@ def test_frames_beyond_blenders_and_a_bake_beyond_its_limit_are_refused_leaving_
     assert "far.tkc" in report["far"] and report["far_objects"] == 0
     assert f"span 200000 scene frames, beyond the {BAKE_FRAMES}" in report["spread"]
     assert report["spread_objects"] == 0 and not report["spread_cache"]
+
+
+@needs_bpy
+def test_an_import_builds_the_mesh_from_arrays_not_python_lists(session):
+    """A mesh of many faces costs the import about what decoding them costs: the faces go to
+    Blender as arrays, not as a Python list per face (2**18 faces: 21 MiB of lists, and more
+    for ``from_pydata``'s tuples, against a 6 MiB face table)."""
+    report = session.report
+    assert report["many_faces"] == MANY_FACES
+    face_table = MANY_FACES * 3 * 8  # the decoder's int64 table
+    extra = report["many_faces_import_bytes"] - report["many_faces_decoding_bytes"]
+    assert extra < 2 * face_table, (report["many_faces_import_bytes"], face_table)
 
 
 @needs_bpy

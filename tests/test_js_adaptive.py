@@ -123,6 +123,15 @@ def _crafted() -> list[tuple[str, bytes, str | None]]:
     unflagged = AdaptiveParts(parts.flags & ~8, parts.minor, parts.header, pushless)
     flagged_zstd = AdaptiveParts(zstd.flags | 8, 6, zstd.header, zstd.sections)
     fields = adaptive_parts(vector("v1.5-fields"))
+    delta = adaptive_parts(vector("v1-wave-triangles"))
+    assert delta.sections[delta.index("FACE")][0]["codec"] == "faces-delta"
+    assert parts.sections[parts.index("FACE")][0]["codec"] == "faces-traverse"
+    assert parts.sections[parts.index("FACE")][0].get("coder") == 1  # the encoder's choice
+    zstd_faces = AdaptiveParts(parts.flags, parts.minor, zstd.header, zstd.sections)
+    traversed = taken_apart(vector("v1.2-traverse-triangles"))  # FACE coder 0, no flag bit 3
+    unflagged_faces = AdaptiveParts(
+        traversed.flags, traversed.minor, traversed.header, traversed.sections
+    )
     return [
         ("the copy", parts.pack(), None),
         ("flag bit 3 and no adaptive section", flagged_zstd.pack(), None),
@@ -132,7 +141,12 @@ def _crafted() -> list[tuple[str, bytes, str | None]]:
             _edited(parts, "U3", u3_zstd, coder=REMOVED, planes=planes),
             None,
         ),
-        ("coder on FACE, ignored", _edited(parts, "FACE", coder=7), None),
+        ("coder on a faces-delta FACE, ignored", _edited(delta, "FACE", coder=7), None),
+        ("coder 7 on a faces-traverse FACE", _edited(parts, "FACE", coder=7), R46),
+        ("coder 1.0 on a faces-traverse FACE", _edited(parts, "FACE", coder=1.0), R46),
+        ("coder true on a faces-traverse FACE", _edited(parts, "FACE", coder=True), R46),
+        ("coder 1 on FACE's zstd streams", _edited(zstd_faces, "FACE", coder=1), "R30-planes"),
+        ("FACE's coder 1 without flag bit 3", _edited(unflagged_faces, "FACE", coder=1), R46),
         ("coder 0 on a field's factor", _edited(fields, "FLD.0.U1", coder=0), None),
         ("coder 1 on a field's factor", _edited(fields, "FLD.0.U1", coder=1), R46),
         ("coder 2", _edited(parts, "U3", coder=2), R46),
@@ -165,8 +179,9 @@ def _judged(cases: list[tuple[str, bytes, str | None]], tmp_path: Path) -> list[
 def test_coder_and_streams_are_checked_in_step_16s_order(tmp_path):
     """Each file breaks §6.14 in one way (or is valid): both decoders refuse it with the rule of
     the first check it fails in §5 step 16's order, planes, steps and predict before the coder,
-    the coder before its stream; a coder is no parameter of FACE (ignored), and a field's
-    factors (1.5) keep zstd."""
+    the coder before its stream; a coder is no parameter of faces-delta (ignored), one of
+    faces-traverse (§6.8: 0, or 1 with flag bit 3 and planes 0), and a field's factors (1.5)
+    keep zstd."""
     wrong = _judged(_crafted(), tmp_path)
     assert not wrong, wrong
 
@@ -199,11 +214,11 @@ def _damaged(base: bytes, rng: np.random.Generator) -> bytes:
 def test_damaged_adaptive_streams_get_the_same_verdict(tmp_path):
     """The vectors of 1.6 with a stream damaged at seeded places: the same verdict from both
     decoders (R46 mostly; a damaged stream can also decode to other integers, accepted or
-    refused later, R32)."""
+    refused later, R32, or for FACE's streams R39)."""
     rng = np.random.default_rng(46)
     files = [
         _damaged(vector(name), rng)
-        for name in ["v1.6-adaptive", "v1.6-adaptive-segments"]
+        for name in ["v1.6-adaptive", "v1.6-adaptive-segments", "v1.6-faces-adaptive"]
         for _ in range(DAMAGED_PER_VECTOR)
     ]
     differ, _, verdicts = compare_verdicts(files, tmp_path, lambda python, javascript: False)

@@ -93,10 +93,10 @@ def test_the_segments_kept_are_the_callers_choice(tmp_path, many_segments):
 
 
 def test_the_loader_refuses_a_file_over_its_web_limits_and_accepts_it_when_raised(tmp_path):
-    """A few KB declaring 2^21 + 4 vertices (one frame of 2 frames per chunk): within the
+    """A few KB declaring 2^18 + 4 vertices (one frame of 2 frames per chunk): within the
     decoder's defaults, over TKCLoader's WEB_LIMITS; refused at once, with the limit named, and
     played when the page raises it."""
-    vertices = 2**21 + 4
+    vertices = 2**18 + 4
     data = chunked_file(vertices, 2, chunk_frames=1)
     assert len(data) < 60_000
     refused = _measure(tmp_path, data, via="loader")
@@ -104,5 +104,5 @@ def test_the_loader_refuses_a_file_over_its_web_limits_and_accepts_it_when_raise
     assert refused["rule"] == "R21-header-limit" and "max_vertices" in refused["message"]
     assert refused["maxRssMiB"] < 200, refused
     assert _measure(tmp_path, data, via="decoder")["accepted"]  # the decoder's own defaults
-    raised = _measure(tmp_path, data, via="loader", options={"limits": {"max_vertices": 2**22}})
+    raised = _measure(tmp_path, data, via="loader", options={"limits": {"max_vertices": 2**19}})
     assert raised["accepted"], raised

@@ -76,12 +76,17 @@ class Cases:
         payload: bytes,
         vertices: int,
         spec: tuple[str, str] | None = None,
+        adaptive: bool = False,
     ) -> None:
         """A FACE payload with its parameters; the reference is decode_traversal, unless
-        ``spec`` gives the outcome the spec requires where the reference is known to differ."""
+        ``spec`` gives the outcome the spec requires where the reference is known to differ.
+        ``adaptive``: the file sets flag bit 3, so that ``coder`` may be 1 (format 1.6)."""
         rows, width = params["shape"]
         self.expected[name] = spec or _outcome(
-            lambda: traversal.decode_traversal(payload, params, vertices, "FACE"), "<i4"
+            lambda: traversal.decode_traversal(
+                payload, params, vertices, "FACE", adaptive_coding=adaptive
+            ),
+            "<i4",
         )
         entry = {"id": "FACE", "codec": "faces-traverse", **params}
         self.specs.append(
@@ -93,6 +98,7 @@ class Cases:
                 "K": vertices,
                 "M": rows,
                 "n": width,
+                "adaptive": adaptive,
             }
         )
 
@@ -569,7 +575,8 @@ def _file_cases(cases: Cases, label: str, data: bytes) -> None:
     sections = {s.id: s for s in container.sections}
     face = sections["FACE"]
     if face.codec == "faces-traverse":
-        cases.traverse(f"{label}-FACE", face.params, payload["FACE"], vertices)
+        params, face_payload = face.params, payload["FACE"]
+        cases.traverse(f"{label}-FACE", params, face_payload, vertices, None, container.adaptive)
     faces = tuckercodec.decode(data, frames=[0]).faces
     mesh = MeshPrediction(faces, vertices)
     for section_id, section in sections.items():

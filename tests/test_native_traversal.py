@@ -19,7 +19,7 @@ from tests.test_format_traversal import grid
 from tuckercodec import Decoder
 from tuckercodec.errors import TuckerCodecError
 from tuckercodec.format import faces as face_sections
-from tuckercodec.format import traversal
+from tuckercodec.format import traversal, unseen
 from tuckercodec.system import native
 
 pytestmark = pytest.mark.skipif(
@@ -92,6 +92,37 @@ def check_round_trip(table: np.ndarray, k: int) -> None:
     compiled, reference = both(lambda: traversal.encode_traversal(table, k, 3))
     assert compiled[:2] == reference[:2]
     assert np.array_equal(compiled[2], reference[2])
+    check_ranks(streams[3], k)
+
+
+def check_ranks(new_residuals: list[int], k: int) -> None:
+    """The NEW vertices' ranks among the unseen (coder 1, format 1.6) and the vertices back
+    from them: the same both ways."""
+    placed = unseen.vertices_from_gaps(np.array(new_residuals, dtype=np.int64))
+    compiled, reference = both(lambda: unseen.ranks_of(placed, k))
+    assert compiled == reference
+    ranks = np.array(compiled[2], dtype=np.int64)
+    compiled, reference = both(lambda: unseen.vertices_of(ranks, k))
+    assert compiled == reference
+    assert compiled[2] == placed.tolist()
+
+
+def check_adaptive_round_trip(table: np.ndarray, k: int) -> None:
+    """The section the encoder writes where coder 1 is allowed, the same bytes both ways (the
+    ranks, the adaptive streams and the choice), decoded to the same faces both ways."""
+
+    def encoded() -> tuple[dict[str, Any], bytes, list[list[int]]]:
+        params, payload, walked = traversal.encode_traversal(table, k, 3, adaptive_coding=True)
+        return params, payload, walked.tolist()
+
+    compiled, reference = both(encoded)
+    assert compiled == reference
+    params, payload, walked = compiled
+    decoded = both(
+        lambda: traversal.decode_traversal(payload, params, k, "FACE", adaptive_coding=True)
+    )
+    assert decoded[0] == decoded[1]
+    assert decoded[0][2] == walked
 
 
 # ------------------------------------------------------------------------- the conformance vectors
@@ -135,6 +166,18 @@ def test_the_shared_sequences_walk_the_same_both_ways(name):
     check_round_trip(np.asarray(sequence.faces), sequence.vertex_count)
 
 
+@pytest.mark.parametrize("name", SHARED[1:3])
+def test_the_shared_sequences_code_the_same_with_coder_1_both_ways(name):
+    """Coder 1 is chosen on real meshes: the same bytes and faces from the core and Python."""
+    sequence = shared_sequence(name)
+    faces = np.asarray(sequence.faces, dtype=np.int64)
+    assert (
+        traversal.encode_traversal(faces, sequence.vertex_count, adaptive_coding=True)[0]["coder"]
+        == 1
+    )
+    check_adaptive_round_trip(faces, sequence.vertex_count)
+
+
 # --------------------------------------------------------------------------------- random meshes
 
 
@@ -174,6 +217,36 @@ def test_random_meshes_walk_the_same_both_ways():
     for _ in range(300):
         faces, k = random_mesh(rng)
         check_round_trip(faces, k)
+
+
+def test_random_meshes_code_the_same_with_coder_1_both_ways():
+    rng = np.random.default_rng(16)
+    for _ in range(60):
+        faces, k = random_mesh(rng)
+        check_adaptive_round_trip(np.asarray(faces, dtype=np.int64), k)
+
+
+def test_random_ranks_name_the_same_vertices_or_fail_the_same_both_ways():
+    """Ranks of any value, K of any size (a table of nodes or a hash map): the same vertices,
+    or the same first rank refused (as R39-traversal's detail)."""
+    rng = np.random.default_rng(39)
+    refused = 0
+    for _ in range(2000):
+        k = int(rng.choice([0, 1, 2, 5, 17, 1000, 2**40]))
+        ranks = rng.integers(-4, 6, size=int(rng.integers(0, 12)))
+        if rng.random() < 0.2 and ranks.size:
+            ranks[0] = int(rng.integers(0, max(k, 1)))
+        compiled, reference = both(partial(_placed, ranks, k))
+        assert compiled == reference, (ranks, k)
+        refused += isinstance(compiled, str)
+    assert 100 < refused < 1900
+
+
+def _placed(ranks: np.ndarray, k: int) -> Any:
+    try:
+        return unseen.vertices_of(ranks, k).tolist()
+    except unseen.RankError as error:
+        return str(error)
 
 
 def test_fans_and_tables_the_core_hands_back_to_python():

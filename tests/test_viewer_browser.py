@@ -37,6 +37,7 @@ import pytest
 
 import tuckercodec
 from tests.support.browser import Browser, Page, find_chromium
+from tests.support.compressed import chunked_file
 from tests.support.js_decoder import (
     EXPECTED,
     INVALID,
@@ -195,6 +196,23 @@ def test_samba_frames_match_python(browser, tmp_path):
         page = open_page(browser, url)
         try:
             check_frames(page, data, sequence.vertices)
+        finally:
+            page.close()
+
+
+def test_a_file_beyond_web_limits_opens_in_the_viewer(browser, tmp_path):
+    """The viewer shows the file its user chose, at the decoder's own limits: TKCLoader's
+    WEB_LIMITS (for pages that play files from anywhere) would refuse this one."""
+    vertices = 2**18 + 4  # over WEB_LIMITS' max_vertices
+    data = chunked_file(vertices, 2, chunk_frames=1)
+    with serve(tmp_path, data, "large.tkc", None) as url:
+        page = open_page(browser, url)
+        try:
+            info = page.evaluate(
+                "window.tkcViewer.ready.then(() => window.tkcViewer.info, (e) => String(e))"
+            )
+            assert isinstance(info, dict), info
+            assert (info["vertices"], info["frames"]) == (vertices, 2)
         finally:
             page.close()
 

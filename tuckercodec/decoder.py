@@ -134,6 +134,7 @@ class Decoder:
                 self.info.vertices,
                 "section FACE",
                 limits,
+                adaptive_coding=self._container.adaptive,  # §6.8's coder 1 only in format 1.6
             )
             self._coded_faces = self.faces  # as FACE decodes them: U1's mesh predictors' faces
             if not self.segmented:  # §5 steps 16-17 in order: U1, U3, CORE, CENT, then NAME

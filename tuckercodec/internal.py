@@ -11,7 +11,8 @@ package sees at once what the tools rely on.
   one rule on purpose, and :data:`SIGNATURE`, :data:`HEAD_SIZE`, :data:`PREAMBLE`,
   :data:`CRC`; the modules :mod:`~tuckercodec.format.faces`, :mod:`~tuckercodec.format.qmat`,
   :mod:`~tuckercodec.format.sections`, :mod:`~tuckercodec.format.streams`,
-  :mod:`~tuckercodec.format.traversal` (§6.8) and :mod:`~tuckercodec.format.adaptive` (§6.14);
+  :mod:`~tuckercodec.format.traversal` (§6.8, with :mod:`~tuckercodec.format.unseen`, its NEW
+  vertices' ranks) and :mod:`~tuckercodec.format.adaptive` (§6.14);
   the mesh parents of §6.2 and :func:`mesh_prediction` (its predictor 2), and
   :func:`tree_depths` of a parent forest.
 * The decomposition and its analysis: :func:`centre_frames`, :func:`reconstruct`, :class:`Curve`.
@@ -60,6 +61,7 @@ from .format import (
     sections,
     streams,
     traversal,
+    unseen,
 )
 from .format.container import (
     CRC,
@@ -133,6 +135,7 @@ __all__ = [
     "streams",
     "traversal",
     "tree_depths",
+    "unseen",
     "wave_sheet",
     "write_atomic",
     "write_decomposition_gltf",

@@ -1,8 +1,9 @@
 """A valid file's twins that differ only in how its position factors (U1, U3, CORE, CENT and
 their ``.s`` forms) turn their integers into bytes: :func:`adaptive_copy`, every one through the
 reference adaptive coder (spec/FORMAT.md §6.14) with ``coder`` 1, whichever coder the encoder
-chose (tools/generate/vectors.py's ``adaptive_everywhere``, which wrote the vectors of 1.6); and
-:func:`zstd_copy`, every one in §6.1's zstd planes, as files were before 1.6. The integers, and
+chose (tools/generate/vectors.py's ``adaptive_everywhere``, which wrote the vectors of 1.6; FACE
+as it is); and :func:`zstd_copy`, every one, and a faces-traverse FACE's streams, in §6.1's zstd
+planes, as files were before 1.6. The integers, and
 so the positions, are the original file's. Taken apart as :class:`AdaptiveParts`, a file can be
 edited to break one rule, its preamble flags included, and put back together with every CRC
 right.
@@ -22,7 +23,7 @@ import msgpack
 import numpy as np
 
 from tools.generate.vectors import adaptive_everywhere
-from tuckercodec.format import adaptive, faces, qmat, streams
+from tuckercodec.format import adaptive, faces, qmat, streams, traversal
 from tuckercodec.format.container import pack_container, pack_raw, parse_container
 from tuckercodec.format.residual import CORRECTIONS, CORRECTIONS_MINOR
 from tuckercodec.format.segments import SEGMENTED, SEGMENTED_MINOR
@@ -94,17 +95,28 @@ def stored_integers(
 
 def zstd_copy(data: bytes) -> bytes:
     """``data`` (a valid file) with every adaptive stream stored as §6.1's zstd planes, in the
-    fewest planes that hold its integers, flag bit 3 cleared: a file of 1.5 or before, with the
-    minor version it would have had; unless predictor 2's pushes (``mean_push``, also 1.6)
-    keep it a file of 1.6."""
+    fewest planes that hold its integers (FACE's streams too, its new vertices as gaps again),
+    flag bit 3 cleared: a file of 1.5 or before, with the minor version it would have had;
+    unless predictor 2's pushes (``mean_push``, also 1.6) keep it a file of 1.6."""
     parts = taken_apart(data)
-    face_entry, face_payload = parts.sections[parts.index("FACE")]
+    face_n = parts.index("FACE")
+    face_entry, face_payload = parts.sections[face_n]
     vertices = int(parts.header["vertices"])
     params = {k: v for k, v in face_entry.items() if k not in ("id", "critical", "codec")}
     coded = faces.decode_face_section(
-        face_entry["codec"], face_payload, params, vertices, "section FACE"
+        face_entry["codec"], face_payload, params, vertices, "section FACE", adaptive_coding=True
     )
     mesh = mesh_prediction(coded, vertices)
+    if face_entry.get("coder") == adaptive.CODER_ADAPTIVE:
+        count, width = face_entry["shape"]
+        values, corner_order = traversal.read_streams(
+            face_payload, params, count, width, vertices, "FACE", adaptive_coding=True
+        )
+        face_params, packed = traversal.pack_streams(
+            values, count, width, corner_order, streams.DEFAULT_LEVEL
+        )
+        entry = {k: v for k, v in face_entry.items() if k not in ("coder", "streams")}
+        parts.sections[face_n] = ({**entry, **face_params}, packed)
     for n, (entry, payload) in enumerate(parts.sections):
         if entry.get("coder") != adaptive.CODER_ADAPTIVE:
             continue

@@ -93,6 +93,14 @@ def layers_of(obj: Any, prefix: str, arrays: dict[str, np.ndarray]) -> dict[str,
     corners = np.empty(loops, dtype=np.int32)
     mesh.loops.foreach_get("vertex_index", corners)
     arrays[f"{prefix}corners"] = corners
+    totals = np.empty(len(mesh.polygons), dtype=np.int32)
+    mesh.polygons.foreach_get("loop_total", totals)
+    arrays[f"{prefix}loop_totals"] = totals
+    # the edges as sorted pairs, in sorted order: Blender numbers them as it finds them
+    edges = np.empty(len(mesh.edges) * 2, dtype=np.int32)
+    mesh.edges.foreach_get("vertices", edges)
+    pairs = np.sort(edges.reshape(-1, 2), axis=1)
+    arrays[f"{prefix}edges"] = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
     return {
         "uv_maps": [layer.name for layer in mesh.uv_layers],
         "colours": {layer.name: [layer.data_type, layer.domain] for layer in mesh.color_attributes},

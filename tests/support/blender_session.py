@@ -163,6 +163,35 @@ def hostile(work: Path) -> dict[str, Any]:
     return seen
 
 
+def many_faces(work: Path) -> dict[str, Any]:
+    """Import WORKDIR/many_faces.tkc (2**18 triangles) with tracemalloc tracing Python's
+    allocations: the peak of opening the file and decoding its faces and frame 0 as the add-on
+    does, then the peak of the import itself, beyond what was held before it."""
+    import tracemalloc
+
+    from tuckercodec import Decoder
+    from tuckercodec.blender.meshes import BLENDER_LIMITS
+
+    path = work / "many_faces.tkc"
+    tracemalloc.start()
+    try:
+        decoder = Decoder(path, limits=BLENDER_LIMITS)
+        decoder.faces, decoder.frame(0)
+        decoding = tracemalloc.get_traced_memory()[1]
+        del decoder
+        tracemalloc.reset_peak()
+        held = tracemalloc.get_traced_memory()[0]
+        assert bpy.ops.import_scene.tkc(filepath=str(path)) == {"FINISHED"}
+        importing = tracemalloc.get_traced_memory()[1] - held
+    finally:
+        tracemalloc.stop()
+    return {
+        "many_faces": len(bpy.context.active_object.data.polygons),
+        "many_faces_decoding_bytes": decoding,
+        "many_faces_import_bytes": importing,
+    }
+
+
 def refusal(call: Any) -> str | None:
     """The message of the error ``call`` reports (Blender raises it as RuntimeError)."""
     try:
@@ -243,6 +272,7 @@ def main(addon: Path, tkc: Path, work: Path) -> None:
     seen["camera"] = refusal(lambda: bpy.ops.export_scene.tkc(filepath=str(work / "camera.tkc")))
     seen.update(film(work, arrays))
     seen.update(hostile(work))
+    seen.update(many_faces(work))
     seen.update(reopened(seen["object"], work, arrays))
     np.savez(work / "session.npz", **arrays)  # type: ignore[arg-type] # (the names are keys)
     (work / "session.json").write_text(json.dumps(seen, indent=2))

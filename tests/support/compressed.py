@@ -293,13 +293,14 @@ def chunked_file(
     *,
     face_count: int = 1,
     level: int = 3,
+    rank: int = 1,
 ) -> bytes:
     """A file of format 1.3 of ``vertices`` x ``frames`` built part by part (the encoder would
-    take minutes on so many positions): rank (1, 1) factors that decode to zeros, grid
+    take minutes on so many positions): rank (``rank``, 1) factors that decode to zeros, grid
     corrections of zeros in chunks of ``chunk_frames`` frames, and ``face_count`` copies of the
     triangle (0, 1, 2); a few KB however large they decode."""
-    ones = qmat.QuantizedMatrix(np.ones((vertices, 1), np.int64), np.ones(1, np.float32))
-    zero_core = qmat.QuantizedMatrix(np.zeros((3, 1), np.int64), np.ones(1, np.float32))
+    ones = qmat.QuantizedMatrix(np.ones((vertices, rank), np.int64), np.ones(rank, np.float32))
+    zero_core = qmat.QuantizedMatrix(np.zeros((3 * rank, 1), np.int64), np.ones(1, np.float32))
     time = qmat.QuantizedMatrix(np.ones((frames, 1), np.int64), np.ones(1, np.float32))
     cent = qmat.QuantizedMatrix(np.zeros((frames, 3), np.int64), np.ones(3, np.float32))
     triangles = np.broadcast_to(np.array([0, 1, 2]), (face_count, 3))
@@ -319,7 +320,7 @@ def chunked_file(
     header = header_map(
         vertices=vertices,
         frames=frames,
-        ranks=(1, 1),
+        ranks=(rank, 1),
         u2=[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
         kg=0.0,
         truncation_kg=0.0,

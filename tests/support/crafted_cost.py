@@ -27,21 +27,27 @@ from tests.support.compressed import chunked_file
 ROOT = Path(__file__).resolve().parents[2]
 JS = ROOT / "tests" / "js"
 
-#: name: (vertices, frames, faces, later frame decoded), at the limits of the decoder they target
+#: name: (vertices, frames, faces, later frame decoded, U1's rank), at the limits of the decoder
+#: they target
 FILES = {
     # BLENDER_LIMITS: 8 Mi vertices, K x F = 2^28 positions, 16 Mi faces
-    "blender-vertices": (1 << 23, 32, 1, 31),
-    "blender-both": (1 << 23, 32, 1 << 24, 31),
-    # WEB_LIMITS: 2 Mi vertices, 2^28 positions (the decoder's default), 4 Mi faces
-    "web-vertices": (1 << 21, 128, 1, 127),
-    "web-both": (1 << 21, 128, 1 << 22, 127),
+    "blender-vertices": (1 << 23, 32, 1, 31, 1),
+    "blender-both": (1 << 23, 32, 1 << 24, 31, 1),
+    # WEB_LIMITS: 256 Ki vertices, 512 Ki faces, 4 Mi factor values (U1 of rank 15: with U3,
+    # the core and the centroids, 16 is over)
+    "web-vertices": (1 << 18, 128, 1, 127, 1),
+    "web-both": (1 << 18, 128, 1 << 19, 127, 1),
+    "web-factors": (1 << 18, 128, 1 << 19, 127, 15),
 }
 
 
-def crafted(vertices: int, frames: int, face_count: int) -> bytes:
-    """A format 1.3 file of ``vertices`` x ``frames`` zeros and ``face_count`` faces (0, 1, 2),
-    a correction chunk per frame (so that ``max_chunk_values`` never applies)."""
-    return chunked_file(vertices, frames, chunk_frames=1, face_count=face_count, level=19)
+def crafted(vertices: int, frames: int, face_count: int, rank: int) -> bytes:
+    """A format 1.3 file of ``vertices`` x ``frames`` zeros, of U1 rank ``rank``, and
+    ``face_count`` faces (0, 1, 2), a correction chunk per frame (so that ``max_chunk_values``
+    never applies)."""
+    return chunked_file(
+        vertices, frames, chunk_frames=1, face_count=face_count, level=19, rank=rank
+    )
 
 
 def peak_resident_mib() -> float:
@@ -53,10 +59,10 @@ def peak_resident_mib() -> float:
 
 def python_import(path: Path, limits_name: str) -> dict[str, object]:
     """What the add-on's import decodes (addon.py: ``Decoder(path, limits=BLENDER_LIMITS)``, its
-    faces as lists for ``from_pydata``, frame 0 as float32, then a later frame as
-    ``show_frame`` does), without Blender itself."""
+    faces as the arrays ``_mesh_of`` gives Blender (``loop_arrays``), frame 0 as
+    float32, then a later frame as ``show_frame`` does), without Blender itself."""
     from tuckercodec import Decoder
-    from tuckercodec.blender.meshes import BLENDER_LIMITS
+    from tuckercodec.blender.meshes import BLENDER_LIMITS, loop_arrays
     from tuckercodec.errors import InputError
     from tuckercodec.format.limits import DEFAULT_LIMITS
 
@@ -66,11 +72,11 @@ def python_import(path: Path, limits_name: str) -> dict[str, object]:
     result: dict[str, object] = {"accepted": True}
     try:
         decoder = Decoder(path, limits=limits)
-        face_lists = [row[row >= 0].tolist() for row in decoder.faces]
+        starts, _ = loop_arrays(decoder.faces)
         decoder.frame(0).astype(np.float32)
         result["attributes"] = len(decoder.attributes)
         decoder.frame(later).astype(np.float32)
-        result["faces"] = len(face_lists)
+        result["faces"] = int(starts.size)
     except InputError as error:
         result.update(accepted=False, message=str(error)[:160])
     result["seconds"] = time.perf_counter() - began
@@ -121,8 +127,8 @@ def main(arguments: list[str]) -> None:
     action, target = arguments[0], Path(arguments[1])
     if action == "build":
         target.mkdir(parents=True, exist_ok=True)
-        for name, (vertices, frames, face_count, _) in FILES.items():
-            data = crafted(vertices, frames, face_count)
+        for name, (vertices, frames, face_count, _, rank) in FILES.items():
+            data = crafted(vertices, frames, face_count, rank)
             (target / f"{name}.tkc").write_bytes(data)
             print(f"{name}: {len(data):,} bytes")
     elif action == "python":

@@ -431,7 +431,8 @@ FACE_VERTEX_LIMIT = 1 << 26  # the decoder's max_vertices: a header with more is
 
 def face_check(data: bytes) -> str:
     """The FACE section's decoder on ``[codec, params, vertex_count, payload]`` after the
-    decoder's shape check (default limits); a table must have its shape and valid indices."""
+    decoder's shape check (default limits), as in a file with flag bit 3 (faces-traverse's
+    ``coder`` may be 1); a table must have its shape and valid indices."""
     import msgpack
     import numpy as np
 
@@ -455,7 +456,9 @@ def face_check(data: bytes) -> str:
         return "not-an-input"
     try:
         sections.check_face_shape(params, Limits())
-        table = faces.decode_face_section(codec, payload, params, vertex_count, "section FACE")
+        table = faces.decode_face_section(
+            codec, payload, params, vertex_count, "section FACE", adaptive_coding=True
+        )
     except FormatError as error:
         return type(error).__name__
     if list(table.shape) != list(params["shape"]):
@@ -469,8 +472,8 @@ def face_check(data: bytes) -> str:
 
 
 def face_seeds() -> dict[str, bytes]:
-    """Real FACE sections: of the conformance vectors, and both codecs on small meshes and a
-    part of the built-in sample."""
+    """Real FACE sections: of the conformance vectors, and both codecs (faces-traverse with
+    either coder) on small meshes and a part of the built-in sample."""
     import msgpack
 
     from tuckercodec.internal import faces, parse_container, sections, traversal
@@ -497,7 +500,24 @@ def face_seeds() -> dict[str, bytes]:
             seeds[f"seed-traverse-{name}"] = msgpack.packb(
                 [sections.FACES_TRAVERSE, params, count, payload], use_bin_type=True
             )
+            params, payload = _coder_1(table, count)
+            seeds[f"seed-traverse-adaptive-{name}"] = msgpack.packb(
+                [sections.FACES_TRAVERSE, params, count, payload], use_bin_type=True
+            )
     return seeds
+
+
+def _coder_1(table: Any, count: int) -> tuple[dict[str, Any], bytes]:
+    """faces-traverse of ``table`` with ``coder`` 1 (format 1.6), whichever is smaller."""
+    import numpy as np
+
+    from tuckercodec.internal import traversal, unseen
+
+    walked = traversal._walked(np.asarray(table, dtype=np.int64), len(table), count)
+    placed = unseen.vertices_from_gaps(np.asarray(walked.new_residuals, dtype=np.int64))
+    ranks = unseen.ranks_of(placed, count).tolist()
+    values = [walked.ops[0], walked.degrees, ranks, walked.references]
+    return traversal.pack_streams(values, len(table), table.shape[1], 0, 3, 1)
 
 
 def _mutate_face_payload(rng: random.Random, item: list[Any]) -> None:

@@ -57,6 +57,7 @@ from tuckercodec.internal import (
     sheet_triangles,
     streams,
     traversal,
+    unseen,
     wave_sheet,
 )
 
@@ -585,6 +586,59 @@ def pushed_everywhere(data: bytes) -> bytes:
     return parts.pack()
 
 
+def pinched_sheets(grid: int, frames: int) -> MeshSequence:
+    """Two sheets of :func:`polygons` (quads and padded triangles) that share one vertex, the
+    first's last corner and the second's first: the walk meets it again from a seed (FAR)."""
+    first = wave_sheet(frames, grid)
+    second = first[:, 1:] + (first[:, -1:] - first[:, :1])  # its first corner is the shared one
+    k = grid * grid
+    relabel = np.append(np.arange(k - 1, 2 * k - 1), -1)  # the second's vertices; -1 stays
+    faces_out = np.concatenate([polygons(grid), relabel[polygons(grid)]])
+    return MeshSequence(np.concatenate([first, second], axis=1), faces_out)
+
+
+def face_streams(parts: Parts) -> tuple[list[list[int]], int, int, int]:
+    """A faces-traverse FACE's four streams as the walk reads them (the NEW vertices as gaps,
+    whichever the coder), its corner order, its coder and the file's vertex count."""
+    n = parts.index("FACE")
+    entry = parts.entries[n]
+    count, width = entry["shape"]
+    vertices = parts.header["vertices"]
+    values, corner_order = traversal.read_streams(
+        parts.payloads[n], entry, count, width, vertices, "FACE", adaptive_coding=True
+    )
+    return values, corner_order, entry.get("coder", adaptive.CODER_ZSTD), vertices
+
+
+def packed_face(
+    values: list[list[int]], shape: list[int], corner_order: int, coder: int, vertices: int
+) -> tuple[dict[str, Any], bytes]:
+    """The FACE parameters and payload of ``values`` (as :func:`face_streams` gives them),
+    with ``coder`` 1 the gaps turned into ranks among the unseen vertices first."""
+    values = list(values)
+    if coder == adaptive.CODER_ADAPTIVE:
+        placed = unseen.vertices_from_gaps(np.array(values[2], dtype=np.int64))
+        values[2] = unseen.ranks_of(placed, vertices).tolist()
+    count, width = shape
+    return traversal.pack_streams(values, count, width, corner_order, 19, coder)
+
+
+def with_adaptive_faces(data: bytes) -> bytes:
+    """``data`` (with a faces-traverse FACE) with its FACE's streams stored with ``coder`` 1
+    (§6.8, format 1.6): the same walk and values, the NEW vertices as ranks, each stream one
+    adaptive column; whichever coder the encoder chose."""
+    parts = Parts(data)
+    values, corner_order, _, vertices = face_streams(parts)
+    n = parts.index("FACE")
+    params, parts.payloads[n] = packed_face(
+        values, parts.entries[n]["shape"], corner_order, adaptive.CODER_ADAPTIVE, vertices
+    )
+    parts.entries[n].update(params)
+    parts.flags |= adaptive.ADAPTIVE
+    parts.minor = max(parts.minor, adaptive.ADAPTIVE_MINOR)
+    return parts.pack()
+
+
 def adaptive_vectors() -> dict[str, tuple[bytes, str]]:
     """The valid vectors of format 1.6 (§6.14): every position factor adaptively coded, in a
     whole file and in segments with their own U1."""
@@ -607,6 +661,12 @@ def adaptive_vectors() -> dict[str, tuple[bytes, str]]:
             "format 1.6 and 1.1: two segments with their own U1.s, U3.s, CORE.s and CENT.s, all "
             "adaptively coded, polygons and names",
         ),
+        "v1.6-faces-adaptive": (
+            with_adaptive_faces(encode(scrambled(pinched_sheets(7, 12), seed=31), target_kg=0.1)),
+            "format 1.6: faces-traverse with coder 1 (adaptive streams, NEW vertices as ranks "
+            "among the unseen, negative ones too) of scrambled polygons in two sheets that share "
+            "a vertex (seeds, FAR)",
+        ),
     }
 
 
@@ -626,6 +686,35 @@ def adaptive_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
         "R32-predictor-push": (pushed.pack(), "FormatError"),
         "R46-adaptive-stream": (_edit(good, _payload("U1", trailing)), "FormatError"),
         "R46-adaptive-stream-coder": (without_flag.pack(), "FormatError"),
+    }
+
+
+def faces_adaptive_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
+    """vector name -> (file bytes, error class name): the 1.6 file ``good``, whose FACE has
+    ``coder`` 1, with §6.8 broken. R39: the last NEW vertex's rank one beyond the unseen
+    vertices (the walk is not reached: the ranks are turned into vertices before it). R30: a
+    stream's ``planes`` 1, not 0. R46: coder 1 in a file whose preamble no longer sets flag
+    bit 3 (FACE is the first section read)."""
+    parts = Parts(good)
+    entry = parts.entries[parts.index("FACE")]
+    values, corner_order, _, vertices = face_streams(parts)
+    placed = unseen.vertices_from_gaps(np.array(values[2], dtype=np.int64))
+    ranks = unseen.ranks_of(placed, vertices)
+    # the last NEW tip has K - (its turn) unseen vertices to name: one more names none
+    ranks[-1] += vertices - (len(placed) - 1)
+    values[2] = ranks.tolist()
+    count, width = entry["shape"]
+    params, beyond = traversal.pack_streams(
+        values, count, width, corner_order, 19, adaptive.CODER_ADAPTIVE
+    )
+    planes = [list(stream) for stream in entry["streams"]]
+    planes[0][1] = 1
+    without_flag = Parts(good)
+    without_flag.flags &= ~adaptive.ADAPTIVE
+    return {
+        "R39-traversal-rank": (_edit(good, _payload("FACE", beyond, **params)), "FormatError"),
+        "R30-planes-faces-coder": (_edit(good, _entry("FACE", streams=planes)), "FormatError"),
+        "R46-adaptive-stream-faces-coder": (without_flag.pack(), "FormatError"),
     }
 
 
@@ -890,16 +979,15 @@ def traverse_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
     can ask, and is refused before anything is allocated by it."""
     parts = Parts(good)
     entry = parts.entries[parts.index("FACE")]
-    count, width = entry["shape"]
-    payload = parts.payloads[parts.index("FACE")]
-    vertices = parts.header["vertices"]
-    values, corner_order = traversal.read_streams(payload, entry, count, width, vertices, "FACE")
+    width = entry["shape"][1]
+    values, corner_order, coder, vertices = face_streams(parts)
     values[0][0] = traversal.TIP_PREV
-    params, broken = traversal.pack_streams(values, count, width, corner_order, 19)
+    params, broken = packed_face(values, entry["shape"], corner_order, coder, vertices)
     table = [list(stream) for stream in entry["streams"]]
     too_many = [table[0], table[1], [vertices + 1, *table[2][1:]], table[3]]
     faces = 1 << 28
-    ops = [6 * faces, 4, table[0][2]]
+    # 4 planes, or with coder 1 planes 0 and 32-bit integers: the same bytes (§6.8)
+    ops = [6 * faces, 4 if coder == adaptive.CODER_ZSTD else 0, table[0][2]]
     return {
         "R39-traversal": (_edit(good, _payload("FACE", broken, **params)), "FormatError"),
         "R39-traversal-vertex-count": (
@@ -919,6 +1007,9 @@ SECOND_VECTORS = {
     "R21-header-limit-face-streams": "R21-header-limit",
     "R20-header-field-time-codes": "R20-header-field",
     "R46-adaptive-stream-coder": "R46-adaptive-stream",
+    "R39-traversal-rank": "R39-traversal",
+    "R30-planes-faces-coder": "R30-planes",
+    "R46-adaptive-stream-faces-coder": "R46-adaptive-stream",
     "R32-predictor-push": "R32-predictor",
 }
 
@@ -992,10 +1083,11 @@ def write_invalid(
     corrected: bytes,
     attached: bytes,
     adaptively_coded: bytes,
+    faces_coded: bytes,
 ) -> int:
     """The invalid vectors made from the valid files ``good`` (format 1.0), ``segmented``
-    (1.1), ``traversed`` (1.2), ``corrected`` (1.3), ``attached`` (1.5) and
-    ``adaptively_coded`` (1.6), with their JSON; how many."""
+    (1.1), ``traversed`` (1.2), ``corrected`` (1.3), ``attached`` (1.5), ``adaptively_coded``
+    and ``faces_coded`` (1.6), with their JSON; how many."""
     vectors = {
         **invalid_vectors(good),
         **segmented_invalid_vectors(segmented),
@@ -1003,6 +1095,7 @@ def write_invalid(
         **correction_invalid_vectors(corrected),
         **attachment_invalid_vectors(attached),
         **adaptive_invalid_vectors(adaptively_coded),
+        **faces_adaptive_invalid_vectors(faces_coded),
     }
     for name, (data, error) in vectors.items():
         write_invalid_vector(folder, name, data, error)
@@ -1020,6 +1113,7 @@ def write_invalid_vector(folder: Path, name: str, data: bytes, error: str) -> No
 #: The valid file each group of invalid vectors is made from.
 INVALID_SOURCES = {
     "adaptive": "v1.6-adaptive",
+    "faces-adaptive": "v1.6-faces-adaptive",
     "attachments": "v1.5-attributes",
     "invalid": "v1-wave-triangles",
     "segmented": "v1.1-segments-shared",
@@ -1048,6 +1142,7 @@ def write_only(out: Path, names: list[str]) -> int:
         **correction_invalid_vectors(sources["corrections"]),
         **attachment_invalid_vectors(sources["attachments"]),
         **adaptive_invalid_vectors(sources["adaptive"]),
+        **faces_adaptive_invalid_vectors(sources["faces-adaptive"]),
     }
     for name in names:
         if name in invalid:
@@ -1102,6 +1197,7 @@ def main(argv: list[str] | None = None) -> int:
         valid["v1.3-lossless-float32"][0],
         valid["v1.5-attributes"][0],
         valid["v1.6-adaptive"][0],
+        valid["v1.6-faces-adaptive"][0],
     )
     print(f"wrote {len(valid) + len(derived)} valid and {invalid} invalid vectors to {out}")
     return 0

@@ -57,6 +57,7 @@ from .meshes import (
     bake_pc2,
     bake_span,
     file_frame,
+    loop_arrays,
     placement,
     scene_range,
     scene_rate,
@@ -244,14 +245,30 @@ class EnablePlayback(bpy.types.Operator):
 # import
 
 
+def _mesh_of(name: str, positions: np.ndarray, faces: np.ndarray) -> Any:
+    """A new mesh of ``positions`` and the face table ``faces``, in their order (loops are
+    the faces' corners, face by face), built from arrays: ``Mesh.from_pydata`` turns every
+    coordinate and corner into a Python object first, minutes and GiBs for a mesh of millions
+    of faces, where ``foreach_set`` copies the arrays as they are."""
+    starts, corners = loop_arrays(faces)
+    mesh = bpy.data.meshes.new(name)
+    mesh.vertices.add(positions.shape[0])
+    mesh.vertices.foreach_set("co", positions.astype(np.float32).ravel())
+    mesh.loops.add(corners.size)
+    mesh.polygons.add(starts.size)
+    mesh.polygons.foreach_set("loop_start", starts)
+    mesh.polygons.foreach_set("vertices", corners)
+    # the edges are the faces' sides, found by Blender (as from_pydata asks for them)
+    mesh.update(calc_edges=starts.size > 0)
+    return mesh
+
+
 def _new_object(context: Any, name: str, decoder: Decoder) -> tuple[Any, list[str]]:
     """A mesh object with the file's vertex order and faces (in the file's order: Blender's
     loops are the file's corners), its attributes, face sets and frame 0 of its fields
     (:func:`~.mesh_layers.put_layers`), showing frame 0, linked into the active collection,
     selected and active; and the notes on what was not imported as it is."""
-    faces = [row[row >= 0].tolist() for row in decoder.faces]
-    mesh = bpy.data.meshes.new(name)
-    mesh.from_pydata(decoder.frame(0).astype(np.float32), [], faces)
+    mesh = _mesh_of(name, decoder.frame(0), decoder.faces)
     notes = put_layers(mesh, decoder.attributes, decoder.face_sets, decoder.faces)
     if decoder.field_names:
         notes += put_fields(mesh, decoder.fields([0]))

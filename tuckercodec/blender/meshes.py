@@ -14,6 +14,7 @@ import numpy as np
 from ..decoder import Decoder
 from ..errors import InputError
 from ..format.limits import Limits
+from ..io.common.polygons import polygons_from_faces
 from ..io.pointcache.pc2 import HEADER, SIGNATURE, VERSION
 from ..model.attributes import Attribute, FaceSet
 from ..model.sequence import MeshSequence
@@ -46,6 +47,15 @@ BLENDER_LIMITS = Limits(
     max_section_bytes=1 << 29,
     max_factor_values=1 << 25,
 )
+
+
+def loop_arrays(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The arrays a Blender mesh is built from for the face table ``faces``, in its order: each
+    face's first loop (``loop_start``) and every loop's vertex, face by face, both int32."""
+    counts, corners = polygons_from_faces(faces)
+    starts = np.zeros(counts.size, dtype=np.int32)
+    np.cumsum(counts[:-1], out=starts[1:])
+    return starts, corners
 
 
 def file_frames(

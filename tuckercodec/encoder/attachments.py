@@ -106,7 +106,7 @@ def coded_faces(
     if not keep_order and not keeps_corners(attributes_):
         given_faces = smallest_corner_first(given_faces)
     face, order, walk = faces.encode_face_sections(
-        given_faces, vertex_count, level, keep_order=keep_order
+        given_faces, vertex_count, level, keep_order=keep_order, adaptive_coding=True
     )
     decoded = face.faces
     if order is not None or not (attributes_ or sets):

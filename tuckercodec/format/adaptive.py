@@ -31,7 +31,8 @@ ADAPTIVE = 0x0008
 ADAPTIVE_MINOR = 6
 #: The ``coder`` values of a qmat section: §6.1's zstd frame, or this module's stream.
 CODER_ZSTD, CODER_ADAPTIVE = 0, 1
-#: The section stems that may use the adaptive coder (and their segment forms, ``U1.3``).
+#: The qmat section stems that may use the adaptive coder (and their segment forms, ``U1.3``);
+#: a FACE section of codec faces-traverse may too (§6.8).
 ADAPTIVE_STEMS = ("U1", "U3", "CORE", "CENT")
 
 #: Probabilities are PROB_BITS-bit integers: the chance that a decision is 0, times 2**15.
@@ -364,12 +365,7 @@ def decode_columns(
     is not exactly the coding of cols x rows integers. The compiled core decodes it where it is
     installed, else :func:`_decode_columns_python` (the reference; the same integers, or the
     same error)."""
-    if cols * rows > MAX_EXPANSION * len(payload):  # before anything is allocated
-        _broken(
-            f"{cols * rows} integers cannot come from {len(payload)} bytes (at most "
-            f"{MAX_EXPANSION} per byte)",
-            where,
-        )
+    check_expansion(cols * rows, len(payload), where)  # before anything is allocated
     core = native.core()
     if core is None:
         return _decode_columns_python(payload, cols, rows, order, where)
@@ -380,6 +376,16 @@ def decode_columns(
     except core.Broken as error:
         _broken(error.args[1], where)
     return values
+
+
+def check_expansion(count: int, length: int, where: str) -> None:
+    """R46 unless ``count`` integers can come from ``length`` bytes (§6.14's bound): checked
+    before anything is allocated for them."""
+    if count > MAX_EXPANSION * length:
+        _broken(
+            f"{count} integers cannot come from {length} bytes (at most {MAX_EXPANSION} per byte)",
+            where,
+        )
 
 
 def _decode_columns_python(
@@ -409,12 +415,18 @@ def _decode_columns_python(
     return out
 
 
-def checked_coder(coder: object, where: str, adaptive_coding: bool) -> int:
-    """A qmat section's ``coder`` parameter, checked (R46): 0, or 1 where ``adaptive_coding``
-    (a position factor of a file with flag bit 3)."""
+def checked_coder(
+    coder: object,
+    where: str,
+    adaptive_coding: bool,
+    needs: str = "flag bit 3 and a position factor",
+) -> int:
+    """A section's ``coder`` parameter, checked (R46): 0, or 1 where ``adaptive_coding`` (a
+    qmat position factor, or a faces-traverse FACE, of a file with flag bit 3); ``needs`` says
+    what 1 needs, for the message."""
     allowed = (CODER_ZSTD, CODER_ADAPTIVE) if adaptive_coding else (CODER_ZSTD,)
     if not isinstance(coder, int) or isinstance(coder, bool) or coder not in allowed:
-        note = "" if adaptive_coding else " (1 needs flag bit 3 and a position factor)"
+        note = "" if adaptive_coding else f" (1 needs {needs})"
         _broken(f"coder must be one of {list(allowed)} here, got {coder!r}{note}", f"{where}.coder")
     return int(coder)
 
@@ -433,5 +445,6 @@ def decode_within_planes(
 
 def uses_adaptive(entries: list[dict[str, object]]) -> bool:
     """Whether any of these section entries needs flag bit 3 (format 1.6): integers stored with
-    ``coder`` 1, or predictor 2's pushes (``mean_push``, §6.2)."""
+    ``coder`` 1 (a position factor's, or a faces-traverse FACE's streams, §6.8), or predictor
+    2's pushes (``mean_push``, §6.2)."""
     return any(item.get("coder") == CODER_ADAPTIVE or "mean_push" in item for item in entries)

@@ -34,25 +34,40 @@ class FaceSection(NamedTuple):
 
 
 def encode_face_section(
-    faces: np.ndarray, vertex_count: int, level: int = streams.DEFAULT_LEVEL
+    faces: np.ndarray,
+    vertex_count: int,
+    level: int = streams.DEFAULT_LEVEL,
+    *,
+    adaptive_coding: bool = False,
 ) -> FaceSection:
-    """The smaller of faces-traverse (format 1.2, the face order becomes the walk's) and
-    faces-delta (format 1.0, faces as given). Either way every face keeps its corners, their
-    order and its orientation."""
-    section, _, _ = encode_face_sections(faces, vertex_count, level, keep_order=False)
+    """The smaller of faces-traverse (format 1.2, the face order becomes the walk's; with
+    ``adaptive_coding``, its streams may use the adaptive coder of format 1.6) and faces-delta
+    (format 1.0, faces as given). Either way every face keeps its corners, their order and its
+    orientation."""
+    section, _, _ = encode_face_sections(
+        faces, vertex_count, level, keep_order=False, adaptive_coding=adaptive_coding
+    )
     return section
 
 
 def encode_face_sections(
-    faces: np.ndarray, vertex_count: int, level: int, *, keep_order: bool
+    faces: np.ndarray,
+    vertex_count: int,
+    level: int,
+    *,
+    keep_order: bool,
+    adaptive_coding: bool = False,
 ) -> tuple[FaceSection, tuple[dict[str, Any], bytes] | None, np.ndarray | None]:
     """The FACE section; when ``keep_order`` asks for the faces as given and the walk is
     chosen, the ORDER section that restores their order (format 1.5, §6.10): the smaller
     of faces-delta alone and faces-traverse with ORDER; and when the walk is chosen, its
-    order (the given number of each walked face)."""
+    order (the given number of each walked face). ``adaptive_coding``: the file may be of
+    format 1.6 (flag bit 3), so that the walk's streams may use the adaptive coder."""
     table = np.asarray(faces, dtype=np.int64)
     delta_params, delta_payload = encode_faces(table, level)
-    walk_params, walk_payload, walked, order = encode_traversal_ordered(table, vertex_count, level)
+    walk_params, walk_payload, walked, order = encode_traversal_ordered(
+        table, vertex_count, level, adaptive_coding=adaptive_coding
+    )
     order_section = encode_face_order(order, level) if keep_order else None
     walk_size = len(walk_payload) + (0 if order_section is None else len(order_section[1]))
     if walk_size < len(delta_payload) and _walk_holds(
@@ -72,7 +87,10 @@ def _walk_holds(
 ) -> bool:
     """Whether the walk decodes to the faces given (in its order), as §6.8 promises: checked
     once per encode, so that a walk the encoder got wrong costs size (faces-delta), never faces."""
-    decoded = decode_traversal(payload, params, vertex_count, "section FACE")
+    # the encoder writes coder 1 only where it may (a file of format 1.6)
+    decoded = decode_traversal(
+        payload, params, vertex_count, "section FACE", adaptive_coding="coder" in params
+    )
     same_rows = np.lexsort(decoded.T[::-1]), np.lexsort(table.T[::-1])
     return np.array_equal(decoded, walked) and np.array_equal(
         decoded[same_rows[0]], table[same_rows[1]]
@@ -86,11 +104,16 @@ def decode_face_section(
     vertex_count: int,
     where: str,
     limits: Limits = DEFAULT_LIMITS,
+    *,
+    adaptive_coding: bool = False,
 ) -> np.ndarray:
     """The faces of a FACE section of either codec (the caller has checked that the codec is
-    allowed in this file, and the shape against ``limits``)."""
+    allowed in this file, and the shape against ``limits``). ``adaptive_coding``: the file sets
+    flag bit 3, so that faces-traverse's ``coder`` may be 1 (§6.8)."""
     if codec == FACES_TRAVERSE:
-        return decode_traversal(payload, params, vertex_count, where, limits)
+        return decode_traversal(
+            payload, params, vertex_count, where, limits, adaptive_coding=adaptive_coding
+        )
     return decode_faces(payload, params, vertex_count, where)
 
 

@@ -132,12 +132,16 @@ def zstd_exact(payload: bytes | memoryview, size: int) -> bytes:
     return raw
 
 
-def checked_planes(params: Mapping[str, Any], where: str) -> int:
-    """The ``planes`` parameter of a stream section: an int in 1..MAX_PLANES (R30-planes)."""
+def checked_planes(params: Mapping[str, Any], where: str, *, adaptive: bool = False) -> int:
+    """The ``planes`` parameter of a stream section: an int in 1..MAX_PLANES, or 0 for a
+    faces-traverse stream of ``coder`` 1 (``adaptive``, §6.8), which has no planes
+    (R30-planes)."""
     planes = params.get("planes")
-    if not isinstance(planes, int) or isinstance(planes, bool) or not 1 <= planes <= MAX_PLANES:
+    low, high = (0, 0) if adaptive else (1, MAX_PLANES)
+    if not isinstance(planes, int) or isinstance(planes, bool) or not low <= planes <= high:
+        allowed = "0 with coder 1" if adaptive else f"1..{MAX_PLANES}"
         raise FormatError(
-            f"planes must be 1..{MAX_PLANES}, got {planes!r}",
+            f"planes must be {allowed}, got {planes!r}",
             rule="R30-planes",
             field=f"{where}.planes",
         )

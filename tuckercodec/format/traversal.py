@@ -11,7 +11,8 @@ the orientation of its neighbour, sharing the gate. Each tip w is coded as
 
 * ``NEW``: a vertex not seen yet; its index is the last new vertex's index + 1 + a residual
   (the *order map*: the file's vertex order is kept exactly, and costs little where the order
-  follows the surface);
+  follows the surface); with ``coder`` 1 (format 1.6), its signed rank among the vertices not
+  seen yet instead (:mod:`.unseen`);
 * ``PREV``: the vertex before the face's previous corner on the boundary (closing a fan);
 * ``NEXT``: the vertex after the face's first corner on the boundary (closing the other side);
 * ``FAR``: any vertex already seen, as a residual from the previous corner (rare: handles,
@@ -23,6 +24,11 @@ indices left, in ascending order) all code, only at more bits. A face no gate re
 *seed*, corners coded as tips. What is kept: every face, its corners' cyclic order and its
 orientation (the rotation of the stored corners is coded, ``corner_order`` says against which
 corner). What is not: the order of the faces, which is the walk's (§6.8 makes it normative).
+
+The four streams are stored as zstd over byte planes (§6.1), or with ``coder`` 1 (format 1.6,
+in a file with flag bit 3) each as one column of the adaptive coder (§6.14), the NEW vertices
+as ranks; the walk reads and writes gaps either way (the ranks are turned to and from gaps
+outside it).
 
 The decoder is one pass in Python over the faces, on integers in lists and dicts, with numpy
 doing what is not sequential before and after it (:func:`_walk_triangles`; :func:`_walk` holds
@@ -39,11 +45,12 @@ from collections import defaultdict
 from collections.abc import Iterator, Mapping, Sequence
 from typing import Any, NamedTuple
 
+import msgpack
 import numpy as np
 
 from ..errors import FormatError
 from ..system import native
-from . import streams
+from . import adaptive, streams, unseen
 from .limits import DEFAULT_LIMITS, Limits, check_limit
 from .sections import section_shape
 
@@ -59,6 +66,8 @@ STREAM_NAMES = ("ops", "degrees", "vertices", "references")
 #: ``corner_order``: the rotation is the position in the stored face of the walk's first corner
 #: (0), or of the face's smallest vertex index (1).
 ROTATE_FROM_GATE, ROTATE_FROM_SMALLEST = 0, 1
+#: With ``coder`` 1 every integer of the four streams is a 32-bit one, as with §6.1's planes.
+ADAPTIVE_PLANES = 4
 
 
 class _Boundary:
@@ -129,34 +138,75 @@ def _newest(stack: list[int] | None, open_edges: Mapping[int, int]) -> int | Non
 
 
 def encode_traversal(
-    faces: np.ndarray, vertex_count: int, level: int = streams.DEFAULT_LEVEL
+    faces: np.ndarray,
+    vertex_count: int,
+    level: int = streams.DEFAULT_LEVEL,
+    *,
+    adaptive_coding: bool = False,
 ) -> tuple[dict[str, Any], bytes, np.ndarray]:
     """``(params, payload, faces in walk order)`` of a FACE section with codec faces-traverse.
 
-    The encoder tries both corner orders and keeps the smaller. The faces it returns are the
-    ones a decoder gives back: the same rows, corners and orientation, in the walk's order.
+    The encoder tries both corner orders, and with ``adaptive_coding`` (a file that may be of
+    format 1.6) both coders, and keeps the smallest. The faces it returns are the ones a decoder
+    gives back: the same rows, corners and orientation, in the walk's order.
     """
-    params, payload, walked, _ = encode_traversal_ordered(faces, vertex_count, level)
+    params, payload, walked, _ = encode_traversal_ordered(
+        faces, vertex_count, level, adaptive_coding=adaptive_coding
+    )
     return params, payload, walked
 
 
 def encode_traversal_ordered(
-    faces: np.ndarray, vertex_count: int, level: int = streams.DEFAULT_LEVEL
+    faces: np.ndarray,
+    vertex_count: int,
+    level: int = streams.DEFAULT_LEVEL,
+    *,
+    adaptive_coding: bool = False,
 ) -> tuple[dict[str, Any], bytes, np.ndarray, np.ndarray]:
-    """:func:`encode_traversal`, and the walk's order: the input's row of each walked face."""
+    """:func:`encode_traversal`, and the walk's order: the input's row of each walked face.
+
+    Each candidate is weighed by its payload and its parameters together (``coder`` 1 adds a
+    key to the header), so that the file never grows for it."""
     table = np.asarray(faces, dtype=np.int64)
     count, width = table.shape if table.ndim == 2 and table.size else (0, 3)
     walk = _walked(table, count, vertex_count)
-    best: tuple[dict[str, Any], bytes] | None = None
+    ranks = _ranks(walk.new_residuals, vertex_count) if adaptive_coding else None
+    best: tuple[int, dict[str, Any], bytes] | None = None
     for corner_order in (ROTATE_FROM_GATE, ROTATE_FROM_SMALLEST):
-        coded = [walk.ops[corner_order], walk.degrees, walk.new_residuals, walk.references]
-        params, payload = pack_streams(coded, count, width, corner_order, level)
-        if best is None or len(payload) < len(best[1]):
-            best = params, payload
+        ops = walk.ops[corner_order]
+        coded = [ops, walk.degrees, walk.new_residuals, walk.references]
+        candidates = [pack_streams(coded, count, width, corner_order, level)]
+        if ranks is not None:
+            ranked: list[Sequence[int]] = [ops, walk.degrees, ranks.tolist(), walk.references]
+            if _fits_adaptive(ranked):
+                candidates.append(pack_streams(ranked, count, width, corner_order, level, 1))
+        for params, payload in candidates:
+            size = len(payload) + len(msgpack.packb(params))
+            if best is None or size < best[0]:
+                best = size, params, payload
     assert best is not None
     order = np.asarray(walk.order, dtype=np.int64)
     walked = table[order] if count else np.zeros((0, width), dtype=np.int64)
-    return best[0], best[1], walked, order
+    return best[1], best[2], walked, order
+
+
+def _ranks(new_residuals: Sequence[int], vertex_count: int) -> np.ndarray | None:
+    """The NEW vertices' ranks among the unseen (``coder`` 1), or None where the walk's vertex
+    count is beyond what the rank coding takes (2**62)."""
+    if not 0 <= vertex_count <= 1 << 62:
+        return None
+    vertices = unseen.vertices_from_gaps(np.asarray(new_residuals, dtype=np.int64))
+    return unseen.ranks_of(vertices, vertex_count)
+
+
+def _fits_adaptive(coded: Sequence[Sequence[int]]) -> bool:
+    """Whether every value is a 32-bit integer, as a decoder of ``coder`` 1 requires."""
+    limit = 1 << (8 * ADAPTIVE_PLANES - 1)
+    for values in coded:
+        array = np.asarray(values, dtype=np.int64)
+        if array.size and (int(array.min()) < -limit or int(array.max()) >= limit):
+            return False
+    return True
 
 
 class _Streams(NamedTuple):
@@ -185,15 +235,30 @@ def _walked(table: np.ndarray, count: int, vertex_count: int) -> _Streams:
 
 
 def pack_streams(
-    coded: Sequence[Sequence[int]], count: int, width: int, corner_order: int, level: int
+    coded: Sequence[Sequence[int]],
+    count: int,
+    width: int,
+    corner_order: int,
+    level: int,
+    coder: int = adaptive.CODER_ZSTD,
 ) -> tuple[dict[str, Any], bytes]:
-    """``(params, payload)`` of the four streams ``coded`` (ops, degrees, vertices, references)."""
+    """``(params, payload)`` of the four streams ``coded`` (ops, degrees, vertices, references):
+    zstd over byte planes (§6.1), or with ``coder`` 1 each one adaptive column (§6.14, planes 0;
+    the vertices stream then holds the NEW vertices' ranks)."""
     parts, table = [], []
     for values in coded:
-        payload, planes = streams.pack_integers(np.asarray(values, dtype=np.int64), level)
+        array = np.asarray(values, dtype=np.int64)
+        if coder == adaptive.CODER_ADAPTIVE:
+            payload = adaptive.encode_columns(array[None, :], adaptive.sequence_order(array.size))
+            planes = 0
+        else:
+            payload, planes = streams.pack_integers(array, level)
         parts.append(payload)
         table.append([len(values), planes, len(payload)])
-    params = {"shape": [count, width], "corner_order": corner_order, "streams": table}
+    params: dict[str, Any] = {"shape": [count, width], "corner_order": corner_order}
+    if coder == adaptive.CODER_ADAPTIVE:  # absent means 0: a file of coder 0 is as before 1.6
+        params["coder"] = coder
+    params["streams"] = table
     return params, b"".join(parts)
 
 
@@ -324,11 +389,13 @@ def read_streams(
     vertex_count: int,
     where: str,
     limits: Limits = DEFAULT_LIMITS,
+    *,
+    adaptive_coding: bool = False,
 ) -> tuple[list[list[int]], int]:
     """The four streams of a faces-traverse payload (§6.8) as lists, and ``corner_order``
     (:func:`read_stream_arrays`, whose checks it makes)."""
     arrays, corner_order = read_stream_arrays(
-        payload, params, count, width, vertex_count, where, limits
+        payload, params, count, width, vertex_count, where, limits, adaptive_coding=adaptive_coding
     )
     return [values.tolist() for values in arrays], corner_order
 
@@ -341,13 +408,18 @@ def read_stream_arrays(
     vertex_count: int,
     where: str,
     limits: Limits = DEFAULT_LIMITS,
+    *,
+    adaptive_coding: bool = False,
 ) -> tuple[list[np.ndarray], int]:
-    """The four streams of a faces-traverse payload (§6.8), int64 arrays, and ``corner_order``.
+    """The four streams of a faces-traverse payload (§6.8), int64 arrays, and ``corner_order``;
+    the vertices stream as the walk reads it, gaps ``w - last - 1``, whichever the coder.
 
-    In §5 step 15's order: ``corner_order``, the streams' table (:func:`_stream_table`: each
-    entry's form, the bounds on the counts, the lengths against the payload), every ``planes``
-    (R30), the bytes the streams decompress to (R21), then each stream. Nothing is allocated by a
-    declared count before its stream is decompressed.
+    In §5 step 15's order: ``corner_order``, ``coder`` (R46: 1 only where ``adaptive_coding``,
+    a file with flag bit 3), the streams' table (:func:`_stream_table`: each entry's form, the
+    bounds on the counts, the lengths against the payload), every ``planes`` (R30: 1..4, or 0
+    with ``coder`` 1), the bytes the streams decompress to (R21), then each stream (R29, or R46
+    for an adaptive one), then with ``coder`` 1 the ranks of the NEW vertices (R39). Nothing is
+    allocated by a declared count before its stream is decoded.
     """
     corner_order = params.get("corner_order")
     # an int, not a float that equals 0 or 1 (§1: an int is never a float): found by the
@@ -359,6 +431,12 @@ def read_stream_arrays(
         raise _problem(
             f"{where}.corner_order", f"corner_order must be 0 or 1, got {corner_order!r}"
         )
+    coder = adaptive.checked_coder(
+        params.get("coder", adaptive.CODER_ZSTD),
+        where,
+        adaptive_coding,
+        needs="flag bit 3",
+    )
     table = _stream_table(params.get("streams"), count, width, vertex_count, where)
     total = sum(length for _, _, length in table)
     if total != len(payload):
@@ -367,10 +445,13 @@ def read_stream_arrays(
         )
     fields = [f"{where}.streams.{name}" for name in STREAM_NAMES]
     planes = [
-        streams.checked_planes({"planes": entry[1]}, field)
+        streams.checked_planes(
+            {"planes": entry[1]}, field, adaptive=coder == adaptive.CODER_ADAPTIVE
+        )
         for entry, field in zip(table, fields, strict=True)
     ]
-    raw = sum(entry[0] * p for entry, p in zip(table, planes, strict=True))
+    # the bytes the integers take: 32-bit ones for an adaptive stream, as §6.1's 4 planes
+    raw = sum(entry[0] * (p or ADAPTIVE_PLANES) for entry, p in zip(table, planes, strict=True))
     check_limit(
         raw,
         limits,
@@ -380,9 +461,28 @@ def read_stream_arrays(
     )
     values, offset = [], 0
     for (size, _, length), p, field in zip(table, planes, fields, strict=True):
-        values.append(streams.unpack_integers(payload[offset : offset + length], size, p, field))
+        part = payload[offset : offset + length]
+        if coder == adaptive.CODER_ADAPTIVE:
+            values.append(_adaptive_stream(part, size, field))
+        else:
+            values.append(streams.unpack_integers(part, size, p, field))
         offset += length
+    if coder == adaptive.CODER_ADAPTIVE:
+        try:
+            placed = unseen.vertices_of(values[2], vertex_count)
+        except unseen.RankError as error:
+            raise _broken(where, str(error)) from None
+        values[2] = unseen.gaps(placed)
     return values, int(corner_order)
+
+
+def _adaptive_stream(payload: bytes | memoryview, size: int, where: str) -> np.ndarray:
+    """One stream of ``coder`` 1: ``size`` integers, one column of §6.14 in ascending order,
+    each a 32-bit integer (R46). The payload's bound (R46) is checked before the coding order,
+    whose arrays are ``size`` long, is made."""
+    adaptive.check_expansion(size, len(payload), where)
+    order = adaptive.sequence_order(size)
+    return adaptive.decode_within_planes(payload, 1, size, ADAPTIVE_PLANES, order, where)[0]
 
 
 def _stream_table(
@@ -431,17 +531,20 @@ def decode_traversal(
     vertex_count: int,
     where: str,
     limits: Limits = DEFAULT_LIMITS,
+    *,
+    adaptive_coding: bool = False,
 ) -> np.ndarray:
     """The (M, n) faces of a FACE section with codec faces-traverse (§6.8), in walk order.
 
     In §5 step 15's order: the streams' table is checked and the streams read
     (:func:`read_stream_arrays`), then the walk rebuilds the faces from them
     (:func:`walk_streams`). The walk's state grows with the values it reads; the (M, n) table is
-    made once M faces are decoded.
+    made once M faces are decoded. ``adaptive_coding``: the file sets flag bit 3, so that
+    ``coder`` may be 1.
     """
     count, width = section_shape(params, where, min_cols=3)
     arrays, corner_order = read_stream_arrays(
-        payload, params, count, width, vertex_count, where, limits
+        payload, params, count, width, vertex_count, where, limits, adaptive_coding=adaptive_coding
     )
     return walk_streams(arrays, count, width, vertex_count, corner_order, where)
 

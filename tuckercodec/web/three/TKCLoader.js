@@ -27,30 +27,31 @@ export const DEFAULT_FRAME_RATE = 24;
 
 /**
  * The decoder limits (spec §7) TKCLoader opens files with unless told otherwise: sized for a
- * browser tab, whose memory is a few GiB at most (often less on a phone), where the decoder's
- * own defaults (DEFAULT_LIMITS, the reference's, for a workstation) let a crafted file of a few
- * KB ask for several GiB and seconds. At these limits a file costs at most about half a GiB:
+ * web page, where the decoder's own defaults (DEFAULT_LIMITS, the reference's, for a
+ * workstation) let a crafted file of a few KB ask for several GiB and seconds. A page's
+ * animated meshes are far below these (a game character has thousands of vertices, a scanned
+ * performer a few hundred thousand at most), and a file within them costs a tab tens of MiB:
  *
- * - `max_vertices` 2^21 (2,097,152): one frame is then 24 MiB as float32 for the GPU, as much
- *   for its normals, 48 MiB as binary64 (twice with corrections);
- * - `max_faces` 2^22 (4,194,304): the triangle index, 48 MiB or more for polygons;
+ * - `max_vertices` 2^18 (262,144): one frame is then 3 MiB as float32 for the GPU, as much for
+ *   its normals, 6 MiB as binary64 (twice with corrections);
+ * - `max_faces` 2^19 (524,288): the triangle index, 6 MiB or more for polygons;
  * - `max_frames` 2^19 (524,288): two and a half hours at 60 frames a second; time codes then
  *   fit the header limit;
  * - `max_header_bytes` 2^23 (8 MiB), for such time codes: the header is parsed whole;
- * - `max_factor_values` 2^24 (16,777,216): what is decoded before any frame, 128 MiB as
+ * - `max_factor_values` 2^22 (4,194,304): what is decoded before any frame, 32 MiB as
  *   binary64, held two or three times over (U1, its integers with corrections, its SIMD copy):
- *   130,000 vertices with 128 basis columns (a lossless file), or 2 million with 8;
+ *   32,768 vertices with 128 basis columns (a lossless file), or 262,144 with 16;
  * - `max_section_bytes` 2^28 (256 MiB): the largest buffer one section decompresses into.
  *
  * The other limits are the decoder's defaults. A page that plays larger files it trusts raises
  * any of them with setDecoderOptions({limits: {...}}), the rest staying as here.
  */
 export const WEB_LIMITS = Object.freeze({
-  max_vertices: 2 ** 21,
-  max_faces: 2 ** 22,
+  max_vertices: 2 ** 18,
+  max_faces: 2 ** 19,
   max_frames: 2 ** 19,
   max_header_bytes: 2 ** 23,
-  max_factor_values: 2 ** 24,
+  max_factor_values: 2 ** 22,
   max_section_bytes: 2 ** 28,
 });
 

@@ -106,7 +106,7 @@ export class TkcFile {
     this.faceCount = M;
     this.faceWidth = n;
     /** @type {Int32Array} the M × n faces, -1 padded, in the order they were given (§6.10) */
-    this.faces = decodeFaces(layout.face, this._payload(layout.face), this.vertices, M, n, limits);
+    this.faces = decodeFaces(layout.face, this._payload(layout.face), this.vertices, M, n, limits, layout.adaptive);
     /** The faces as FACE decodes them (the walk's order): the mesh predictors' (§6.8). */
     this._codedFaces = this.faces;
     /** @type {Topology | null} */

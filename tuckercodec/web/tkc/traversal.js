@@ -8,7 +8,14 @@
 // no file can aim at collisions), into(v) and out(v) are stacks with lazy deletion (an entry is
 // live while its edge is present and entered the boundary at that entry), the gates a stack.
 // Its memory grows with the values read: nothing is sized by K, M or a declared count.
+//
+// With `coder` 1 (format 1.6, a file with flag bit 3) each stream is one column of §6.14's
+// adaptive coder (planes 0), and the vertices stream holds each NEW vertex's signed rank among
+// the vertices not seen yet. The ranks' running sum is u(w), the unseen vertices below w, so
+// they are turned into gaps (w − last − 1) before the walk, by a Fenwick tree over the placed
+// vertices (UnseenVertices), and the walk is the same for both coders.
 
+import { adaptiveError, decodeAdaptive } from './adaptive.js';
 import { formatError, limitError } from './errors.js';
 import { DEFAULT_LIMITS } from './limits.js';
 import { describe, isInt } from './msgpack.js';
@@ -23,6 +30,9 @@ const NEW = 0;
 const PREV = 1;
 const NEXT = 2;
 const FAR = 3;
+const ZSTD = 0; // the coder values (§6.8, §6.14): §6.1's byte planes ...
+const ADAPTIVE = 1; // ... or one adaptive column per stream
+const ADAPTIVE_PLANES = 4; // with coder 1 every integer is a 32-bit one
 
 /** @param {string} message */
 function fail(message) {
@@ -46,14 +56,17 @@ function isNonNegativeInt(value) {
  * @param {number} M faces (the checked `shape`)
  * @param {number} n face width
  * @param {Limits} [limits] the decoder's limits (§7): max_section_bytes bounds the streams
+ * @param {boolean} [adaptive] the file sets flag bit 3 (format 1.6): `coder` may be 1
  * @returns {Int32Array} M*n vertex indices, row-major, in walk order, −1 padded
- * @throws {TkcError} R39-traversal, R30-planes, R21-header-limit or R29-zstd-content-size
+ * @throws {TkcError} R39-traversal, R30-planes, R21-header-limit, R29-zstd-content-size or
+ *   R46-adaptive-stream
  */
-export function decodeTraverse(entry, payload, K, M, n, limits = DEFAULT_LIMITS) {
+export function decodeTraverse(entry, payload, K, M, n, limits = DEFAULT_LIMITS, adaptive = false) {
   const cornerOrder = entry.get('corner_order');
   if (cornerOrder !== 0 && cornerOrder !== 1) {
     throw fail(`"corner_order" is ${cornerOrder === undefined ? 'missing' : describe(cornerOrder)}, not 0 or 1`);
   }
+  const coder = readCoder(entry, adaptive);
   const table = streamTable(entry.get('streams'), K, M, n);
   let total = 0;
   for (const item of table) total += Number(item[2]); // a BigInt length is past any payload: the sum cannot match
@@ -63,12 +76,14 @@ export function decodeTraverse(entry, payload, K, M, n, limits = DEFAULT_LIMITS)
   }
   for (let s = 0; s < 4; s++) {
     const planes = table[s][1];
-    if (!(planes >= 1 && planes <= 4)) {
-      throw formatError('R30-planes', `${WHERE} stream ${s} (${STREAMS[s]}): "planes" is ${planes}, not an int in 1..4`);
+    if (coder === ADAPTIVE ? planes !== 0 : !(planes >= 1 && planes <= 4)) {
+      const allowed = coder === ADAPTIVE ? '0 (coder 1)' : 'an int in 1..4';
+      throw formatError('R30-planes', `${WHERE} stream ${s} (${STREAMS[s]}): "planes" is ${planes}, not ${allowed}`);
     }
   }
   // the bytes the streams decompress to, before any is: counts are below 2^36 and planes 1..4
-  const raw = table.reduce((sum, [count, planes]) => sum + Number(count) * Number(planes), 0);
+  // (with coder 1, 32-bit integers: as 4 planes)
+  const raw = table.reduce((sum, [count, planes]) => sum + Number(count) * (coder === ADAPTIVE ? ADAPTIVE_PLANES : Number(planes)), 0);
   if (raw > limits.max_section_bytes) {
     throw limitError('R21-header-limit', `${WHERE}: the streams decompress to ${raw} bytes, max_section_bytes = ${limits.max_section_bytes}`);
   }
@@ -77,10 +92,116 @@ export function decodeTraverse(entry, payload, K, M, n, limits = DEFAULT_LIMITS)
   for (let s = 0; s < 4; s++) {
     const [count, planes, length] = table[s];
     const where = `${WHERE} stream ${s} (${STREAMS[s]})`;
-    streams.push(decodeIntStream(payload.subarray(at, at + Number(length)), Number(count), Number(planes), where));
+    const part = payload.subarray(at, at + Number(length));
+    if (coder === ADAPTIVE) {
+      // §6.14's bound on the count is decodeAdaptive's first check, before it allocates
+      streams.push(decodeAdaptive(part, Number(count), 1, null, ADAPTIVE_PLANES, where));
+    } else {
+      streams.push(decodeIntStream(part, Number(count), Number(planes), where));
+    }
     at += Number(length);
   }
+  if (coder === ADAPTIVE) streams[2] = gapsFromRanks(streams[2], K);
   return walk(streams, cornerOrder, K, M, n);
+}
+
+/**
+ * The section's `coder` (§6.8): absent or 0, §6.1's zstd planes; 1, adaptive streams with the
+ * NEW vertices as ranks, only in a file with flag bit 3; anything else R46.
+ * @param {Map<string, MsgValue>} entry
+ * @param {boolean} adaptive
+ */
+function readCoder(entry, adaptive) {
+  const coder = entry.get('coder');
+  if (coder === undefined || coder === ZSTD) return ZSTD;
+  if (coder === ADAPTIVE && adaptive) return ADAPTIVE;
+  const allowed = adaptive ? '0 or 1' : '0 (1 needs preamble flag bit 3, format 1.6)';
+  throw adaptiveError(WHERE, `"coder" is ${describe(coder)}; this section allows ${allowed}`);
+}
+
+/**
+ * The vertices placed so far among 0..K−1: a Fenwick tree of their counts, whose nodes are a
+ * table where K is within a few times the vertices the stream can place, else a Map filled as
+ * vertices are placed (K is only the header's claim and must not size an allocation).
+ */
+class UnseenVertices {
+  /**
+   * @param {number} K
+   * @param {number} most the count of the vertices stream
+   */
+  constructor(K, most) {
+    this.top = 1; // a power of two >= K, for the descent
+    while (this.top < K) this.top *= 2;
+    /** @type {Int32Array | null} */
+    this.table = this.top <= 4 * most + 1024 ? new Int32Array(this.top + 1) : null;
+    /** @type {Map<number, number>} */
+    this.map = new Map();
+  }
+
+  /** @param {number} i */
+  node(i) {
+    return this.table !== null ? this.table[i] : this.map.get(i) ?? 0;
+  }
+
+  /**
+   * Marks vertex v (unplaced, below K) as placed.
+   * @param {number} v
+   */
+  place(v) {
+    for (let i = v + 1; i <= this.top; i += lowestBit(i)) {
+      if (this.table !== null) this.table[i]++;
+      else this.map.set(i, (this.map.get(i) ?? 0) + 1);
+    }
+  }
+
+  /**
+   * The unplaced vertex with exactly t unplaced vertices below it (t below their count): the
+   * binary descent of a Fenwick tree.
+   * @param {number} t
+   */
+  unplaced(t) {
+    let position = 0;
+    for (let step = this.top; step >= 1; step /= 2) {
+      const free = step - this.node(position + step); // unplaced vertices in position..position+step−1
+      if (free <= t) {
+        position += step;
+        t -= free;
+      }
+    }
+    return position;
+  }
+}
+
+/**
+ * The lowest set bit of i ≥ 1 (i & −i, which holds for 32-bit ints only; K may be larger).
+ * @param {number} i
+ */
+function lowestBit(i) {
+  return i < 2 ** 30 ? i & -i : Number(BigInt(i) & -BigInt(i));
+}
+
+/**
+ * The vertices stream of coder 1 as the walk reads it: each rank r turned into its vertex w (the
+ * unseen vertex with t unseen below it, t the ranks' running sum), then into the gap
+ * w − last − 1. R39 at the first rank that names no unseen vertex.
+ * @param {Int32Array} ranks
+ * @param {number} K
+ * @returns {Int32Array}
+ */
+function gapsFromRanks(ranks, K) {
+  const placed = new UnseenVertices(K, ranks.length);
+  const gaps = new Int32Array(ranks.length);
+  let t = 0; // in 0..K−1 after each check, so within ±2^31 of it before: exact in a double
+  let last = -1;
+  for (let i = 0; i < ranks.length; i++) {
+    t += ranks[i];
+    if (!(t >= 0 && t < K - i)) throw fail(`new vertex rank ${ranks[i]} names no unseen vertex`);
+    const w = placed.unplaced(t);
+    placed.place(w);
+    gaps[i] = w - last - 1;
+    last = w;
+  }
+  return gaps;
 }
 
 /**

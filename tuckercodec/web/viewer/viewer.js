@@ -19,6 +19,7 @@
 // play, pause, stats.
 
 import { attachedRows, checkerTexture } from './attached.js';
+import { DEFAULT_LIMITS } from '../tkc/limits.js';
 import {
   FRAME_KG_DEFINITION, colourScale, computeNormals, emptyBox, extendBox, frameError,
   paintDistances,
@@ -165,7 +166,9 @@ async function start() {
     import('../three/TKCLoader.js'),
   ]);
   const [{ animation, fetched }, reference] = await Promise.all([
-    loadAnimation(new TKCLoader(), fileUrl),
+    // the file is the one its user chose to view: the decoder's own limits, as the command
+    // line decodes it, not the loader's WEB_LIMITS for pages that play files from anywhere
+    loadAnimation(new TKCLoader().setDecoderOptions({ limits: { ...DEFAULT_LIMITS } }), fileUrl),
     referenceUrl ? fetchReference(referenceUrl) : null,
   ]);
   const opened = performance.now();

@@ -65,9 +65,39 @@ fn encode_traversal<'py>(
     ))
 }
 
+/// The rank of each NEW vertex (int64, in 0..vertex_count, in the walk's order) among the
+/// unseen vertices (format 1.6, unseen.py's `ranks_of`), or None for a vertex outside.
+#[pyfunction]
+fn unseen_ranks<'py>(
+    py: Python<'py>,
+    vertices: PyReadonlyArray1<'py, i64>,
+    vertex_count: u64,
+) -> PyResult<Option<Bound<'py, PyArray1<i64>>>> {
+    let values = vertices.as_slice()?;
+    let ranks = py.detach(|| traversal::ranks(values, vertex_count));
+    Ok(ranks.map(|ranks| PyArray1::from_vec(py, ranks)))
+}
+
+/// The NEW vertices that the ranks name (unseen.py's `vertices_of`), or Broken(rule, detail)
+/// at the first rank that names no unseen vertex.
+#[pyfunction]
+fn unseen_vertices<'py>(
+    py: Python<'py>,
+    ranks: PyReadonlyArray1<'py, i64>,
+    vertex_count: u64,
+) -> PyResult<Bound<'py, PyArray1<i64>>> {
+    let values = ranks.as_slice()?;
+    let placed = py
+        .detach(|| traversal::vertices(values, vertex_count))
+        .map_err(broken)?;
+    Ok(PyArray1::from_vec(py, placed))
+}
+
 /// Adds the functions of this module to tuckercodec._native.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(decode_traversal, m)?)?;
     m.add_function(wrap_pyfunction!(encode_traversal, m)?)?;
+    m.add_function(wrap_pyfunction!(unseen_ranks, m)?)?;
+    m.add_function(wrap_pyfunction!(unseen_vertices, m)?)?;
     Ok(())
 }

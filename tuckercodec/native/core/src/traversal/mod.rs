@@ -5,15 +5,19 @@
 //! references), with the checks and the error details of the Python walk (`_walk`, and
 //! `_walk_triangles` which gives the same faces and errors for triangles); it is also the entry
 //! point for fuzzing, as it takes any values and never panics. [`encode`] computes the streams
-//! of a face table, the values of Python's `_Walk`, for both corner orders.
+//! of a face table, the values of Python's `_Walk`, for both corner orders. [`ranks`] and
+//! [`vertices`] turn the NEW vertices into their ranks among the unseen ones and back (`coder`
+//! 1, format 1.6): the walk itself reads and writes gaps whichever coder the file uses.
 
 mod boundary;
 mod decode;
 mod encode;
 mod hash;
+mod ranks;
 
 pub use decode::{decode, Streams};
 pub use encode::{encode, Walked};
+pub use ranks::{ranks, vertices};
 
 /// The rule a broken walk breaks (spec §11).
 pub const RULE: &str = "R39-traversal";
