@@ -18,6 +18,7 @@ each position then corrected by its integer; the integers are read a chunk of fr
 from __future__ import annotations
 
 import dataclasses
+import math
 import operator
 import os
 from collections import OrderedDict
@@ -30,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from .errors import FormatError
-from .format import attributes, face_order, face_sets, faces, names, qmat, residual
+from .format import adaptive, attributes, face_order, face_sets, faces, names, qmat, residual
 from .format.attachments import find_attachments
 from .format.container import parse_container
 from .format.disk import FileRanges, open_file_container, read_file
@@ -86,6 +87,9 @@ class SegmentFactors:
 CACHED_SEGMENTS = 2
 #: Decoded chunks of corrections kept (about a million integers each, §6.9).
 CACHED_CHUNKS = 3
+#: The fewest integers adaptively coded in U3, CORE and CENT that are decoded on a thread beside
+#: U1's (about half a millisecond of work, several times what starting the thread costs).
+BESIDE_U1 = 16384
 #: Threads that correct chunks at once: the work is numpy's and zstd's, which release the GIL.
 CHUNK_THREADS = min(4, os.cpu_count() or 1)
 
@@ -229,17 +233,21 @@ class Decoder:
         )
 
     def _u1_values_beside(
-        self, section_id: str, others: Callable[[], tuple[np.ndarray, np.ndarray, np.ndarray]]
+        self,
+        segment: SegmentEntry,
+        others: Callable[[], tuple[np.ndarray, np.ndarray, np.ndarray]],
     ) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray] | None]:
-        """:meth:`_decode_u1_values`, and ``others()`` (U3, CORE and CENT) on a second thread
-        meanwhile where that gains time: in a file held in memory whose factors are coded
-        adaptively (§6.14), which the compiled core decodes one integer at a time with the GIL
-        released. ``None`` for the others where they are left to the caller. An error of U1
-        comes first, as in §5 step 16's order (the others' thread is waited for)."""
+        """The segment's U1 (:meth:`_decode_u1_values`), and ``others()`` (U3, CORE and CENT)
+        on a second thread meanwhile where that gains time: in a file held in memory whose
+        other factors hold many adaptively coded integers (§6.14), which the compiled core
+        decodes one at a time with the GIL released. ``None`` for the others where they are
+        left to the caller. An error of U1 comes first, as in §5 step 16's order (the others'
+        thread is waited for)."""
+        section_id = self._section_id(segment, "U1")
         beside = (
-            self._container.adaptive
-            and isinstance(self._data, (bytes, memoryview))  # FileRanges counts its reads
+            isinstance(self._data, (bytes, memoryview))  # FileRanges counts its reads
             and native.core() is not None
+            and self._adaptive_integers(segment) >= BESIDE_U1
         )
         if not beside:
             return self._decode_u1_values(section_id), None
@@ -247,6 +255,17 @@ class Decoder:
             decoding = pool.submit(others)
             u1 = self._decode_u1_values(section_id)
             return u1, decoding.result()
+
+    def _adaptive_integers(self, segment: SegmentEntry) -> int:
+        """How many integers the segment's U3, CORE and CENT say they code adaptively (§6.14),
+        from parameters not checked yet (anything else counts 0)."""
+        count = 0
+        for stem in ("U3", "CORE", "CENT"):
+            params = self._section(self._section_id(segment, stem)).params
+            shape = params.get("shape")
+            if params.get("coder") == adaptive.CODER_ADAPTIVE and isinstance(shape, list):
+                count += math.prod(n if isinstance(n, int) and n > 0 else 0 for n in shape)
+        return count
 
     def segment_factors(self, number: int) -> SegmentFactors:
         """Segment ``number``'s dequantized factors, decoded (§5 step 16, in its order) and
@@ -302,7 +321,7 @@ class Decoder:
                 u1 = u1_quantized.values()
             else:
                 u1_quantized = None
-                u1, decoded_others = self._u1_values_beside(self._section_id(segment, "U1"), others)
+                u1, decoded_others = self._u1_values_beside(segment, others)
             u3, core, centroids = others() if decoded_others is None else decoded_others
             core = core.reshape(i, 3, k)
         u2 = np.array(segment.u2, dtype=np.float64).reshape(3, 3)
