@@ -11,7 +11,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from tests.support.sequences import grid_faces
+from tests.support.sequences import grid_faces, wave_sequence
+from tuckercodec import Decoder, MeshSequence, decoder, encode, internal
 from tuckercodec.errors import FormatError
 from tuckercodec.format import adaptive
 from tuckercodec.model.topology import mesh_prediction
@@ -174,3 +175,47 @@ def test_the_core_checks_its_arguments() -> None:
         assert not isinstance(refused.value, core.Broken)
         with pytest.raises(ValueError, match="invalid coding order"):
             core.adaptive_encode(np.zeros((1, 3), dtype=np.int64), *bad, False)
+
+
+def _with_payloads(data: bytes, change: dict[str, Callable[[bytes], bytes]]) -> bytes:
+    """``data`` with the payloads of the sections named in ``change`` changed (CRCs made anew)."""
+    container = internal.parse_container(data)
+    sections = []
+    for section, entry in zip(container.sections, container.header["sections"], strict=True):
+        payload = bytes(container.payload(data, section))
+        payload = change.get(str(entry["id"]), lambda p: p)(payload)
+        entry = {k: v for k, v in entry.items() if k not in ("offset", "length", "crc32")}
+        sections.append((entry, payload))
+    header = {k: v for k, v in container.header.items() if k != "sections"}
+    return internal.pack_container(header, sections, flags=container.flags, minor=container.minor)
+
+
+def test_a_file_reports_its_first_broken_factor(monkeypatch: pytest.MonkeyPatch) -> None:
+    """U3, CORE and CENT decode on a thread beside U1 in the compiled core (here whatever their
+    size): the error reported is still the first in §5 step 16's order, U1's before theirs, as
+    in pure Python."""
+    monkeypatch.setattr(decoder, "BESIDE_U1", 1)
+    sequence = MeshSequence(wave_sequence(60, 20), grid_faces(20))
+    data = encode(sequence, target_kg=0.02)
+    coders = {e["id"]: e.get("coder") for e in internal.parse_container(data).header["sections"]}
+    assert all(coders[stem] == adaptive.CODER_ADAPTIVE for stem in ("U1", "U3", "CORE", "CENT"))
+    _alike(lambda d: Decoder(d).frame(0), data)
+    cut: Callable[[bytes], bytes] = lambda payload: payload[:-1]  # noqa: E731
+    longer: Callable[[bytes], bytes] = lambda payload: payload + b"\0"  # noqa: E731
+    for broken in [("U1",), ("U3",), ("CORE", "CENT"), ("U1", "U3"), ("U1", "CENT"), ("CENT",)]:
+        for change in (cut, longer):
+            damaged = _with_payloads(data, dict.fromkeys(broken, change))
+            outcome = _alike(lambda d: Decoder(d).frame(0), damaged)
+            assert outcome[0] == "error" and outcome[3] == f"section {broken[0]}"
+
+
+@pytest.mark.parametrize("rows", [0, 1, 2, 3, 4, 9, 1000])
+def test_the_sequence_order_is_its_definition(rows: int) -> None:
+    """Ascending rows, row r after rows r - 1 and r - 2 (those that exist), in that order."""
+    order = adaptive.sequence_order(rows)
+    sources = [w for r in range(rows) for w in (r - 1, r - 2) if w >= 0]
+    ends = np.cumsum([0] + [min(r, 2) for r in range(rows)])
+    assert not order.mesh
+    expected = [(order.order, range(rows)), (order.sources, sources), (order.ends, ends)]
+    for array, values in expected:
+        assert array.dtype == np.int64 and array.tolist() == list(values)

@@ -18,10 +18,11 @@ each position then corrected by its integer; the integers are read a chunk of fr
 from __future__ import annotations
 
 import dataclasses
+import math
 import operator
 import os
 from collections import OrderedDict
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -30,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from .errors import FormatError
-from .format import attributes, face_order, face_sets, faces, names, qmat, residual
+from .format import adaptive, attributes, face_order, face_sets, faces, names, qmat, residual
 from .format.attachments import find_attachments
 from .format.container import parse_container
 from .format.disk import FileRanges, open_file_container, read_file
@@ -42,6 +43,7 @@ from .format.segments import BASIS_OWN, BASIS_SHARED, SegmentEntry
 from .model.attributes import Attribute, FaceSet, Field
 from .model.sequence import MeshSequence, default_frame_names
 from .model.topology import MeshPrediction
+from .system import native
 
 #: A compressed file: its bytes, or a path to read it from.
 CompressedFile = bytes | bytearray | memoryview | str | os.PathLike[str]
@@ -85,6 +87,9 @@ class SegmentFactors:
 CACHED_SEGMENTS = 2
 #: Decoded chunks of corrections kept (about a million integers each, §6.9).
 CACHED_CHUNKS = 3
+#: The fewest integers adaptively coded in U3, CORE and CENT that are decoded on a thread beside
+#: U1's (about half a millisecond of work, several times what starting the thread costs).
+BESIDE_U1 = 16384
 #: Threads that correct chunks at once: the work is numpy's and zstd's, which release the GIL.
 CHUNK_THREADS = min(4, os.cpu_count() or 1)
 
@@ -227,6 +232,41 @@ class Decoder:
             adaptive_coding=self._container.adaptive,
         )
 
+    def _u1_values_beside(
+        self,
+        segment: SegmentEntry,
+        others: Callable[[], tuple[np.ndarray, np.ndarray, np.ndarray]],
+    ) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray] | None]:
+        """The segment's U1 (:meth:`_decode_u1_values`), and ``others()`` (U3, CORE and CENT)
+        on a second thread meanwhile where that gains time: in a file held in memory whose
+        other factors hold many adaptively coded integers (§6.14), which the compiled core
+        decodes one at a time with the GIL released. ``None`` for the others where they are
+        left to the caller. An error of U1 comes first, as in §5 step 16's order (the others'
+        thread is waited for)."""
+        section_id = self._section_id(segment, "U1")
+        beside = (
+            isinstance(self._data, (bytes, memoryview))  # FileRanges counts its reads
+            and native.core() is not None
+            and self._adaptive_integers(segment) >= BESIDE_U1
+        )
+        if not beside:
+            return self._decode_u1_values(section_id), None
+        with ThreadPoolExecutor(1) as pool:
+            decoding = pool.submit(others)
+            u1 = self._decode_u1_values(section_id)
+            return u1, decoding.result()
+
+    def _adaptive_integers(self, segment: SegmentEntry) -> int:
+        """How many integers the segment's U3, CORE and CENT say they code adaptively (§6.14),
+        from parameters not checked yet (anything else counts 0)."""
+        count = 0
+        for stem in ("U3", "CORE", "CENT"):
+            params = self._section(self._section_id(segment, stem)).params
+            shape = params.get("shape")
+            if params.get("coder") == adaptive.CODER_ADAPTIVE and isinstance(shape, list):
+                count += math.prod(n if isinstance(n, int) and n > 0 else 0 for n in shape)
+        return count
+
     def segment_factors(self, number: int) -> SegmentFactors:
         """Segment ``number``'s dequantized factors, decoded (§5 step 16, in its order) and
         kept for the next frames; the shared U1 is decoded once for every segment."""
@@ -237,7 +277,24 @@ class Decoder:
         segment = self._index[number]
         i, k = segment.ranks
         with self._naming_path():
+
+            def matrix(stem: str, allow_predict: bool = True) -> np.ndarray:
+                section_id = self._section_id(segment, stem)
+                return qmat.decode_matrix(
+                    self._payload(section_id),
+                    self._section(section_id).params,
+                    None,  # U3 and CENT: the previous frame; CORE: nothing
+                    f"section {section_id}",
+                    allow_predict=allow_predict,
+                    coding_tools=self._container.coding_tools,  # predictor 3 only in 1.2
+                    adaptive_coding=self._container.adaptive,
+                ).values()
+
+            def others() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                return matrix("U3"), matrix("CORE", allow_predict=False), matrix("CENT")
+
             u1_quantized: qmat.QuantizedMatrix | None
+            decoded_others = None
             if segment.basis == BASIS_SHARED:
                 if self._shared_u1_values is None and not self._container.corrections:
                     # no integers wanted: the floats straight from the stream
@@ -264,23 +321,9 @@ class Decoder:
                 u1 = u1_quantized.values()
             else:
                 u1_quantized = None
-                u1 = self._decode_u1_values(self._section_id(segment, "U1"))
-
-            def matrix(stem: str, allow_predict: bool = True) -> np.ndarray:
-                section_id = self._section_id(segment, stem)
-                return qmat.decode_matrix(
-                    self._payload(section_id),
-                    self._section(section_id).params,
-                    None,  # U3 and CENT: the previous frame; CORE: nothing
-                    f"section {section_id}",
-                    allow_predict=allow_predict,
-                    coding_tools=self._container.coding_tools,  # predictor 3 only in 1.2
-                    adaptive_coding=self._container.adaptive,
-                ).values()
-
-            u3 = matrix("U3")
-            core = matrix("CORE", allow_predict=False).reshape(i, 3, k)
-            centroids = matrix("CENT")
+                u1, decoded_others = self._u1_values_beside(segment, others)
+            u3, core, centroids = others() if decoded_others is None else decoded_others
+            core = core.reshape(i, 3, k)
         u2 = np.array(segment.u2, dtype=np.float64).reshape(3, 3)
         with np.errstate(over="ignore", invalid="ignore"):  # an overflow is R36, found per frame
             basis = reconstruction_basis(core, u2)

@@ -101,14 +101,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def zstd_twin(data: bytes) -> bytes:
-    """``data`` with every adaptively coded section's integers in a zstd frame instead."""
+    """``data`` with every adaptively coded position factor's integers in a zstd frame instead
+    (a FACE whose streams are adaptive, §6.8, stays as it is: the twin isolates the factors')."""
     container = internal.parse_container(data)
     entries: list[dict[str, Any]] = []
     payloads: list[bytes] = []
     for section in container.sections:
         entry = dict(container.header["sections"][len(entries)])
         payload = bytes(container.payload(data, section))
-        if entry.get("coder") == internal.adaptive.CODER_ADAPTIVE:
+        if entry.get("coder") == internal.adaptive.CODER_ADAPTIVE and entry["codec"] == "qmat":
             rows, cols = entry["shape"]
             stem = str(entry["id"]).split(".")[0]
             mesh = None
@@ -124,7 +125,9 @@ def zstd_twin(data: bytes) -> bytes:
         entries.append(entry)
         payloads.append(payload)
     header = {k: v for k, v in container.header.items() if k != "sections"}
-    flags = container.flags & ~internal.adaptive.ADAPTIVE
+    flags = container.flags
+    if not internal.adaptive.uses_adaptive(entries):  # else kept for FACE's coder or the pushes
+        flags &= ~internal.adaptive.ADAPTIVE
     return internal.pack_container(
         header, list(zip(entries, payloads, strict=True)), flags=flags, minor=container.minor
     )

@@ -68,6 +68,12 @@ def _broken(message: str, where: str) -> NoReturn:
     raise FormatError(message, rule="R46-adaptive-stream", field=where) from None
 
 
+def refuse(message: str, where: str) -> NoReturn:
+    """R46 with ``message``, for a caller that decodes an adaptive stream in the compiled core
+    by another route (:func:`.qmat.decode_values`)."""
+    _broken(message, where)
+
+
 class RangeEncoder:
     """LZMA's range encoder: decisions in, bytes out."""
 
@@ -276,12 +282,13 @@ class CodingOrder:
 def sequence_order(rows: int) -> CodingOrder:
     """Rows in ascending order, each after the (up to) two before it."""
     order = np.arange(rows, dtype=np.int64)
-    counts = np.minimum(order, 2)
-    ends = np.zeros(rows + 1, dtype=np.int64)
-    np.cumsum(counts, out=ends[1:])
-    owner = np.repeat(order, counts)
-    offset = np.arange(ends[-1], dtype=np.int64) - np.repeat(ends[:-1], counts)
-    return CodingOrder(order, owner - 1 - offset, ends, mesh=False)
+    # row r's sources end at 2r - 3 (none for row 0, one for row 1, two for each after)
+    ends = np.maximum(2 * np.arange(rows + 1, dtype=np.int64) - 3, 0)
+    sources = np.zeros(int(ends[-1]), dtype=np.int64)  # row 1's: row 0
+    pairs = sources[1:].reshape(-1, 2)  # rows 2, 3, ...: the row before, then the one before
+    pairs[:, 0] = order[1 : rows - 1]
+    pairs[:, 1] = order[: max(rows - 2, 0)]
+    return CodingOrder(order, sources, ends, mesh=False)
 
 
 def mesh_order(
@@ -310,7 +317,7 @@ def _neighbour_class(magnitudes: list[int], order: CodingOrder, j: int) -> int:
     return magnitude_class(2 * magnitudes[before[0]] + magnitudes[before[1]])
 
 
-def _order_arrays(order: CodingOrder) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def order_arrays(order: CodingOrder) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``order``'s arrays as the compiled core takes them: contiguous int64."""
 
     def contiguous(array: np.ndarray) -> np.ndarray:
@@ -326,7 +333,7 @@ def encode_columns(columns: np.ndarray, order: CodingOrder) -> bytes:
     core = native.core()
     if core is not None:
         values = np.ascontiguousarray(columns, dtype=np.int64)
-        payload: bytes = core.adaptive_encode(values, *_order_arrays(order), bool(order.mesh))
+        payload: bytes = core.adaptive_encode(values, *order_arrays(order), bool(order.mesh))
         return payload
     return _encode_columns_python(columns, order)
 
@@ -364,7 +371,7 @@ def decode_columns(
         return _decode_columns_python(payload, cols, rows, order, where)
     try:
         values: np.ndarray = core.adaptive_decode(
-            bytes(payload), cols, rows, *_order_arrays(order), bool(order.mesh)
+            bytes(payload), cols, rows, *order_arrays(order), bool(order.mesh)
         )
     except core.Broken as error:
         _broken(error.args[1], where)

@@ -388,12 +388,14 @@ def decode_values(
     """``decode_matrix(...).values()`` of a section whose rows follow a mesh (U1), for a caller
     that needs no integers. When every column has predictor 2 (U1's usual case) the compiled
     core goes from the stream's bytes to the floats in one pass, its threads sharing the
-    columns, without the int64 matrix (as large as the floats)."""
+    columns, without the int64 matrix (as large as the floats); from an adaptive stream
+    (§6.14), which decodes a column after the other, one thread restores while another
+    decodes."""
     core = native.core()
     rows, cols, planes, steps, predict = _checked_params(params, where, True, True, coding_tools)
     pushes = _pushes(params, where, cols, adaptive_coding)
     zstd = _coder(params, where, adaptive_coding) == adaptive.CODER_ZSTD
-    if core is None or not zstd or not (rows and cols) or not (predict == PREDICT_MEAN).all():
+    if core is None or not (rows and cols) or not (predict == PREDICT_MEAN).all():
         return decode_matrix(
             payload,
             params,
@@ -402,6 +404,10 @@ def decode_values(
             coding_tools=coding_tools,
             adaptive_coding=adaptive_coding,
         ).values()
+    if not zstd:
+        return _adaptive_values(
+            core, payload, params, parents, where, coding_tools, (rows, planes, steps, pushes)
+        )
     raw = streams.decompress_exact(payload, rows * cols * planes, where)
     mesh = parents() if callable(parents) else parents
     plan = _mean_mesh(mesh if isinstance(mesh, MeshPrediction) else None, where).native_plan()
@@ -411,6 +417,39 @@ def decode_values(
             if (pushes == PUSH).all()
             else plan.restore_values(raw, planes, rows, steps, 0, pushes)
         )
+    except ValueError:
+        _refuse_predictor(MEAN_RANGE_MESSAGE, where)
+    return values
+
+
+def _adaptive_values(
+    core: Any,
+    payload: bytes | memoryview,
+    params: dict[str, Any],
+    parents: Mesh | Callable[[], Mesh],
+    where: str,
+    coding_tools: bool,
+    checked: tuple[int, int, np.ndarray, np.ndarray],
+) -> np.ndarray:
+    """:func:`decode_values` of an adaptive stream (§6.14) whose every column has predictor 2:
+    the compiled core decodes it and restores each block of columns on a second thread while
+    the next ones decode. ``checked``: the section's rows, planes, steps and pushes."""
+    rows, planes, steps, pushes = checked
+    mesh = parents() if callable(parents) else parents
+    if not isinstance(mesh, MeshPrediction) or mesh.levels > MAX_MEAN_LEVELS:
+        # the reference's order of errors: the stream's before the mesh's depth
+        return decode_matrix(
+            payload, params, mesh, where, coding_tools=coding_tools, adaptive_coding=True
+        ).values()
+    plan = _mean_mesh(mesh, where).native_plan()
+    order = adaptive.order_arrays(coding_order(mesh, rows))
+    push = None if (pushes == PUSH).all() else pushes
+    try:
+        values: np.ndarray = plan.restore_adaptive_values(
+            bytes(payload), *order, planes, rows, steps, 0, push
+        )
+    except core.Broken as error:
+        adaptive.refuse(error.args[1], where)
     except ValueError:
         _refuse_predictor(MEAN_RANGE_MESSAGE, where)
     return values

@@ -7,7 +7,10 @@ use numpy::{PyReadwriteArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
+use tuckercodec_core::adaptive::{self, CodingOrder};
 use tuckercodec_core::prediction::{self, topology, values};
+
+use crate::broken;
 
 /// A one-dimensional numpy array handed to Python.
 type Array<'py, T> = Bound<'py, PyArray1<T>>;
@@ -211,6 +214,62 @@ impl MeanPlan {
                 self.plan
                     .restore_values(raw, planes, height, steps, out, threads, &push)
             })
+            .map_err(value_error)?;
+        }
+        Ok(array)
+    }
+
+    /// `restore_values` of a section whose integers are an adaptive stream (§6.14): the
+    /// (height, cols) float64 matrix from `payload`, coded in the mesh order given by `order`,
+    /// `sources` and `ends` (int64, `adaptive.CodingOrder`'s arrays, over `height` rows), each
+    /// integer within `planes` byte planes, restored and times `steps`; a second thread
+    /// restores while the stream decodes when `threads` (0: as the machine offers) allows.
+    /// `Broken` (R46) for a stream that is not exactly the coding of the integers or an
+    /// integer outside the planes; `ValueError` for arrays that are not an order, pushes that
+    /// do not fit, or a value out of range.
+    #[pyo3(signature = (payload, order, sources, ends, planes, height, steps, threads=0, push=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn restore_adaptive_values<'py>(
+        &self,
+        py: Python<'py>,
+        payload: &[u8],
+        order: PyReadonlyArray1<'py, i64>,
+        sources: PyReadonlyArray1<'py, i64>,
+        ends: PyReadonlyArray1<'py, i64>,
+        planes: usize,
+        height: usize,
+        steps: PyReadonlyArray1<'py, f32>,
+        threads: usize,
+        push: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let steps = steps.as_slice()?;
+        let width = steps.len();
+        let push = pushes(push, width)?;
+        // the bound first: nothing is allocated for a size the payload cannot hold
+        adaptive::check_size(width, height, payload.len()).map_err(broken)?;
+        let order = CodingOrder::new(
+            order.as_slice()?,
+            sources.as_slice()?,
+            ends.as_slice()?,
+            true,
+            height,
+        )
+        .map_err(|error| PyValueError::new_err(error.to_string()))?;
+        let array = PyArray2::<f64>::zeros(py, [height, width], false);
+        {
+            let mut writable = array.readwrite();
+            let out = writable.as_slice_mut()?;
+            // the stream decodes on one thread: a second one restores, more would wait
+            let threads = if threads == 0 {
+                values::thread_count(2)
+            } else {
+                threads
+            };
+            py.detach(|| {
+                self.plan
+                    .restore_adaptive_values(payload, &order, planes, steps, out, threads, &push)
+            })
+            .map_err(broken)?
             .map_err(value_error)?;
         }
         Ok(array)

@@ -16,15 +16,11 @@ const LAST_SHIFT: u16 = 6;
 /// The range is renormalized (a byte shifted in or out) whenever it falls below this.
 const TOP: u32 = 1 << 24;
 
-/// Models of one context, by offset: zero, sign, the unary exponent steps, the first bit under
-/// the leading one by exponent, the second by exponent and first bit.
-const ZERO: usize = 0;
-const SIGN: usize = 1;
-const EXPONENT: usize = 2;
+/// Models of a context for the exponent steps, and for each of the two bits under the leading
+/// one by exponent (§6.14's offsets 2, 34 and 66).
 pub const EXPONENT_MODELS: usize = 32;
-const FIRST_BIT: usize = EXPONENT + EXPONENT_MODELS;
-const SECOND_BIT: usize = FIRST_BIT + EXPONENT_MODELS;
-pub const MODELS_PER_CONTEXT: usize = SECOND_BIT + 2 * EXPONENT_MODELS;
+/// The models of one context (§6.14's 130).
+pub const MODELS_PER_CONTEXT: usize = 2 + 4 * EXPONENT_MODELS;
 /// The largest exponent (bit length less one) a decoded magnitude may have.
 pub const MAX_EXPONENT: u32 = 62;
 
@@ -57,11 +53,27 @@ impl Model {
     }
 }
 
-/// The models of one context (§6.14's table of offsets).
-pub type Context = [Model; MODELS_PER_CONTEXT];
+/// The models of one context, in the order of §6.14's table of offsets: zero (0), sign (1), the
+/// unary exponent steps (2..34), the first bit under the leading one by exponent (34..66), the
+/// second by exponent and first bit (66..130). Named arrays rather than one of 130 models, so
+/// that an index below 32 needs no bounds check in the decoder's loop.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Context {
+    zero: Model,
+    sign: Model,
+    exponent: [Model; EXPONENT_MODELS],
+    first: [Model; EXPONENT_MODELS],
+    second: [[Model; 2]; EXPONENT_MODELS],
+}
 
 /// A fresh context.
-pub const FRESH_CONTEXT: Context = [Model::FRESH; MODELS_PER_CONTEXT];
+pub const FRESH_CONTEXT: Context = Context {
+    zero: Model::FRESH,
+    sign: Model::FRESH,
+    exponent: [Model::FRESH; EXPONENT_MODELS],
+    first: [Model::FRESH; EXPONENT_MODELS],
+    second: [[Model::FRESH; 2]; EXPONENT_MODELS],
+};
 
 /// The model slot of exponent step or bit length index `i` (steps past 31 share the last).
 #[inline(always)]
@@ -160,9 +172,13 @@ impl RangeEncoder {
 
 /// LZMA's range decoder over a whole payload, which must be used up exactly.
 ///
+/// `Copy`, so that a loop can decode with a copy of its own, which the compiler keeps in
+/// registers (a decoder whose address is passed to a call stays in memory).
+///
 /// A read past the end gives 0 and is remembered ([`RangeDecoder::overrun`]): the reference
 /// stops there, so every error the decoder reports afterwards is checked against it first,
 /// and the first error reported is the reference's.
+#[derive(Clone, Copy)]
 pub struct RangeDecoder<'a> {
     data: &'a [u8],
     next: usize,
@@ -198,10 +214,7 @@ impl<'a> RangeDecoder<'a> {
     #[inline(always)]
     pub fn check_overrun(&self) -> Result<(), Broken> {
         if self.overrun() {
-            Err(Broken::new(
-                RULE,
-                "the adaptive stream ends before its last integer",
-            ))
+            Err(ends_early())
         } else {
             Ok(())
         }
@@ -234,6 +247,27 @@ impl<'a> RangeDecoder<'a> {
         bit
     }
 
+    /// [`RangeDecoder::bit`] computed with masks instead of branches, for a decision close to
+    /// a coin flip whose value nothing branches on (a sign, a bit under the leading one): a
+    /// branch on it would be mispredicted about every other time.
+    #[inline(always)]
+    pub fn data_bit(&mut self, model: &mut Model) -> bool {
+        let p = u32::from(model.prob);
+        let bound = (self.range >> PROB_BITS) * p;
+        let bit = self.code >= bound;
+        let one = u32::from(bit).wrapping_neg();
+        self.code -= bound & one;
+        self.range = (bound & !one) | (self.range.wrapping_sub(bound) & one);
+        // Model::update without its branch: a 1 takes p >> s off, a 0 adds (32768 - p) >> s
+        let s = model.shift;
+        let up = ((PROB_ONE - p) >> s) & !one;
+        let down = (p >> s) & one;
+        model.prob = (p + up - down) as u16;
+        model.shift = if s < LAST_SHIFT { s + 1 } else { s };
+        self.normalize();
+        bit
+    }
+
     /// The next bit at even odds.
     #[inline(always)]
     pub fn direct(&mut self) -> bool {
@@ -247,6 +281,7 @@ impl<'a> RangeDecoder<'a> {
     }
 
     /// R46 unless the whole payload was read, no more, and `code < range`.
+    #[inline]
     pub fn finish(&self) -> Result<(), Broken> {
         self.check_overrun()?;
         if self.next != self.data.len() {
@@ -272,24 +307,26 @@ impl<'a> RangeDecoder<'a> {
 #[inline]
 pub fn encode_integer(coder: &mut RangeEncoder, context: &mut Context, value: i64) {
     if value == 0 {
-        coder.bit(&mut context[ZERO], false);
+        coder.bit(&mut context.zero, false);
         return;
     }
-    coder.bit(&mut context[ZERO], true);
-    coder.bit(&mut context[SIGN], value < 0);
+    coder.bit(&mut context.zero, true);
+    coder.bit(&mut context.sign, value < 0);
     let magnitude = value.unsigned_abs();
     let exponent = 63 - magnitude.leading_zeros();
     for i in 0..exponent {
-        coder.bit(&mut context[EXPONENT + slot(i)], true);
+        coder.bit(&mut context.exponent[slot(i)], true);
     }
-    coder.bit(&mut context[EXPONENT + slot(exponent)], false);
+    coder.bit(&mut context.exponent[slot(exponent)], false);
     if exponent >= 1 {
         let first = (magnitude >> (exponent - 1)) & 1 == 1;
-        coder.bit(&mut context[FIRST_BIT + slot(exponent)], first);
+        coder.bit(&mut context.first[slot(exponent)], first);
         if exponent >= 2 {
             let second = (magnitude >> (exponent - 2)) & 1 == 1;
-            let model = SECOND_BIT + 2 * slot(exponent) + usize::from(first);
-            coder.bit(&mut context[model], second);
+            coder.bit(
+                &mut context.second[slot(exponent)][usize::from(first)],
+                second,
+            );
             for shift in (0..exponent - 2).rev() {
                 coder.direct((magnitude >> shift) & 1 == 1);
             }
@@ -299,30 +336,36 @@ pub fn encode_integer(coder: &mut RangeEncoder, context: &mut Context, value: i6
 
 /// The inverse of [`encode_integer`]: R46 for a magnitude of more than 63 bits, or (first) for
 /// a read past the end of the payload.
-#[inline]
+#[inline(always)]
 pub fn decode_integer(coder: &mut RangeDecoder<'_>, context: &mut Context) -> Result<i64, Broken> {
-    if !coder.bit(&mut context[ZERO]) {
+    if !coder.bit(&mut context.zero) {
         return Ok(0);
     }
-    let negative = coder.bit(&mut context[SIGN]);
-    let mut exponent = 0u32;
-    while coder.bit(&mut context[EXPONENT + slot(exponent)]) {
+    let negative = coder.data_bit(&mut context.sign);
+    // the exponent in unary: the loop's bound keeps the index in the array, unchecked
+    let mut exponent = 0;
+    while exponent < EXPONENT_MODELS - 1 && coder.bit(&mut context.exponent[exponent]) {
         exponent += 1;
-        if exponent > MAX_EXPONENT {
-            coder.check_overrun()?;
-            return Err(Broken::new(
-                RULE,
-                format!("an integer of the adaptive stream has more than {MAX_EXPONENT} bits"),
-            ));
+    }
+    if exponent == EXPONENT_MODELS - 1 {
+        // a magnitude of 2**31 or more: the steps from the 32nd on share the last model
+        let model = &mut context.exponent[EXPONENT_MODELS - 1];
+        while coder.bit(model) {
+            exponent += 1;
+            if exponent > MAX_EXPONENT as usize {
+                coder.check_overrun()?;
+                return Err(too_long());
+            }
         }
     }
     let mut magnitude = 1u64;
     if exponent >= 1 {
-        let first = coder.bit(&mut context[FIRST_BIT + slot(exponent)]);
+        let e = exponent.min(EXPONENT_MODELS - 1);
+        let first = coder.data_bit(&mut context.first[e]);
         magnitude = 2 | u64::from(first);
         if exponent >= 2 {
-            let model = SECOND_BIT + 2 * slot(exponent) + usize::from(first);
-            magnitude = (magnitude << 1) | u64::from(coder.bit(&mut context[model]));
+            let second = coder.data_bit(&mut context.second[e][usize::from(first)]);
+            magnitude = (magnitude << 1) | u64::from(second);
             for _ in 2..exponent {
                 magnitude = (magnitude << 1) | u64::from(coder.direct());
             }
@@ -331,4 +374,21 @@ pub fn decode_integer(coder: &mut RangeDecoder<'_>, context: &mut Context) -> Re
     // exponent <= 62: the magnitude is below 2**63
     let value = magnitude as i64;
     Ok(if negative { -value } else { value })
+}
+
+/// R46 for a read past the end. The errors are made out of line, to keep the loops small.
+#[cold]
+#[inline(never)]
+fn ends_early() -> Broken {
+    Broken::new(RULE, "the adaptive stream ends before its last integer")
+}
+
+/// R46 for a magnitude of more than 63 bits.
+#[cold]
+#[inline(never)]
+fn too_long() -> Broken {
+    Broken::new(
+        RULE,
+        format!("an integer of the adaptive stream has more than {MAX_EXPONENT} bits"),
+    )
 }

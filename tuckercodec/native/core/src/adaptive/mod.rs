@@ -64,7 +64,46 @@ pub struct CodingOrder {
     ends: Vec<usize>,
     mesh: bool,
     row_count: usize,
+    /// The arrays again for the decoder's fast loop ([`decode_proper`]), where the order is
+    /// proper: every row once, each source coded before the row it serves, none with more
+    /// than [`MAX_FAST_SOURCES`]. The orders of files always are; other arrays take the
+    /// general loop.
+    proper: Option<Proper>,
 }
+
+/// A proper order as the fast loop reads it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum Proper {
+    /// [`CodingOrder::sequence`]'s (U3, CORE, CENT): each row's neighbours are the two rows
+    /// before it, known without arrays (a CORE has tens of thousands of rows).
+    Sequence,
+    /// Any other, its arrays narrow, each position's first sources beside its row, so that most
+    /// rows' sources are summed without a loop (whose exit, after 2 to 6 sources as the mesh
+    /// goes, the processor would mispredict).
+    Listed {
+        steps: Vec<Step>,
+        /// The sources past the first [`FIRST_SOURCES`] of every position, one after another.
+        more: Vec<u32>,
+    },
+}
+
+/// Sources kept beside each position's row: most vertices of a mesh have at most four
+/// decoded neighbours when predictor 2 restores them.
+const FIRST_SOURCES: usize = 4;
+
+/// One position of a [`Proper`] order.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct Step {
+    row: u32,
+    /// Its number of sources.
+    count: u32,
+    /// Its first sources, padded with the row count (a row whose magnitude is always 0).
+    first: [u32; FIRST_SOURCES],
+}
+
+/// The most sources of one row the fast loop takes: its saturated magnitudes give the exact
+/// class of their mean only up to 3 * 2**15 of them ([`MAGNITUDE_CAP`]).
+const MAX_FAST_SOURCES: usize = 1 << 15;
 
 /// An index of the order arrays as a row or position: `None` outside `0..limit`.
 fn index(value: i64, limit: usize) -> Option<usize> {
@@ -107,12 +146,14 @@ impl CodingOrder {
         if ends.windows(2).any(|pair| pair[0] > pair[1]) {
             return Err(InvalidOrder("ends decrease".to_string()));
         }
+        let proper = Proper::of(&order_rows, &source_rows, &ends, rows, mesh);
         Ok(CodingOrder {
             rows: order_rows,
             sources: source_rows,
             ends,
             mesh,
             row_count: rows,
+            proper,
         })
     }
 
@@ -131,6 +172,7 @@ impl CodingOrder {
             ends,
             mesh: false,
             row_count: rows,
+            proper: Some(Proper::Sequence),
         }
     }
 
@@ -181,6 +223,71 @@ impl CodingOrder {
         };
         1 + (128 - m.leading_zeros() as usize).min(NEIGHBOUR_CLASSES - 2)
     }
+}
+
+impl Proper {
+    /// The fast loop's form of checked order arrays, if they are proper.
+    fn of(
+        rows: &[usize],
+        sources: &[usize],
+        ends: &[usize],
+        row_count: usize,
+        mesh: bool,
+    ) -> Option<Self> {
+        if rows.len() != row_count || u32::try_from(row_count).is_err() {
+            return None;
+        }
+        if !mesh && is_sequence(rows, sources, ends) {
+            return Some(Proper::Sequence);
+        }
+        let mut position = vec![usize::MAX; row_count];
+        for (j, &row) in rows.iter().enumerate() {
+            if position[row] != usize::MAX {
+                return None;
+            }
+            position[row] = j;
+        }
+        // rows.len() == row_count and no row twice: every row has its position
+        let mut steps = Vec::with_capacity(rows.len());
+        let mut more = Vec::new();
+        for ((j, &row), pair) in rows.iter().enumerate().zip(ends.windows(2)) {
+            let mine = &sources[pair[0]..pair[1]];
+            if mine.len() > MAX_FAST_SOURCES || mine.iter().any(|&w| position[w] >= j) {
+                return None;
+            }
+            // rows below 2**32 (checked above), and so is the row count, the padding
+            let mut first = [row_count as u32; FIRST_SOURCES];
+            for (slot, &w) in first.iter_mut().zip(mine) {
+                *slot = w as u32;
+            }
+            more.extend(mine.iter().skip(FIRST_SOURCES).map(|&w| w as u32));
+            steps.push(Step {
+                row: row as u32,
+                count: mine.len() as u32,
+                first,
+            });
+        }
+        Some(Proper::Listed { steps, more })
+    }
+}
+
+/// Whether order arrays are [`CodingOrder::sequence`]'s: rows ascending, no sources for row 0,
+/// row 0 for row 1, rows r - 1 and r - 2 for each row r after.
+fn is_sequence(rows: &[usize], sources: &[usize], ends: &[usize]) -> bool {
+    let expected_end = |j: usize| (2 * j).saturating_sub(3);
+    rows.iter().enumerate().all(|(j, &row)| row == j)
+        && ends
+            .iter()
+            .enumerate()
+            .all(|(j, &end)| end == expected_end(j))
+        && sources.len() == expected_end(rows.len())
+        && sources.first().is_none_or(|&w| w == 0)
+        && sources
+            .get(1..)
+            .unwrap_or(&[])
+            .chunks(2)
+            .enumerate()
+            .all(|(n, pair)| pair == [n + 1, n])
 }
 
 /// floor(3 * sum / count) of the sources' magnitudes, exact where the class depends on it (it
@@ -309,11 +416,27 @@ pub fn decode_columns(
 }
 
 /// [`decode_columns`] into `out`, whose length must be a whole number of columns of the order's
-/// rows (an array the caller allocated after [`check_size`]); it is zeroed first.
+/// rows (an array the caller allocated after [`check_size`]). Every entry is written (0 for a
+/// row the order leaves out); on an error, what `out` holds is unspecified.
 pub fn decode_columns_into(
     payload: &[u8],
     order: &CodingOrder,
     out: &mut [i64],
+) -> Result<(), Broken> {
+    decode_blocks(payload, order, out, 1, |_, _| {})
+}
+
+/// [`decode_columns_into`], handing each run of `block` columns (the last one may be shorter)
+/// to `done(first column, its integers)` as soon as it is decoded, so that a caller can use
+/// them while the next ones decode. A run handed over is final, but the stream is only known
+/// to be whole once this returns `Ok`. An order that is not proper (see [`CodingOrder`]) is
+/// decoded whole before its first run is handed over.
+pub fn decode_blocks<'o>(
+    payload: &[u8],
+    order: &CodingOrder,
+    out: &'o mut [i64],
+    block: usize,
+    mut done: impl FnMut(usize, &'o [i64]),
 ) -> Result<(), Broken> {
     let rows = order.row_count;
     let cols = out.len().checked_div(rows).unwrap_or(0);
@@ -324,8 +447,187 @@ pub fn decode_columns_into(
             format!("{} integers are not columns of {rows} rows", out.len()),
         ));
     }
+    let coder = RangeDecoder::new(payload)?;
+    let step = block.max(1) * rows;
+    let Some(proper) = &order.proper else {
+        decode_general(coder, order, out)?.finish()?;
+        if step > 0 {
+            let out: &'o [i64] = out;
+            for (n, run) in out.chunks(step).enumerate() {
+                done(n * block.max(1), run);
+            }
+        }
+        return Ok(());
+    };
+    let mut decoder = ColumnDecoder::new(coder, rows);
+    if step > 0 {
+        for (n, run) in out.chunks_mut(step).enumerate() {
+            for column in run.chunks_exact_mut(rows) {
+                match proper {
+                    Proper::Sequence => decoder.sequence_column(column)?,
+                    Proper::Listed { steps, more } if order.mesh => {
+                        decoder.column::<true>(steps, more, column)?
+                    }
+                    Proper::Listed { steps, more } => {
+                        decoder.column::<false>(steps, more, column)?
+                    }
+                }
+            }
+            done(n * block.max(1), run);
+        }
+    }
+    decoder.coder.finish()
+}
+
+/// Magnitudes saturate at 2**29 in the fast loop: `2 |x| + |y|` stays within a u32, and any
+/// class that a saturated magnitude enters is the top one either way (a left class of 5, a
+/// neighbour class of 15 for up to 3 * 2**15 sources: 3 * 2**29 / count >= 2**14).
+const MAGNITUDE_CAP: u32 = 1 << 29;
+
+/// |value|, saturated at [`MAGNITUDE_CAP`].
+#[inline(always)]
+fn saturated(value: i64) -> u32 {
+    value.unsigned_abs().min(u64::from(MAGNITUDE_CAP)) as u32
+}
+
+/// 1 + min(bit length of m, 14): the neighbour class of a magnitude m.
+#[inline(always)]
+fn magnitude_class(m: u64) -> usize {
+    1 + (64 - m.leading_zeros() as usize).min(NEIGHBOUR_CLASSES - 2)
+}
+
+/// `magnitude_class(floor(x / count))` without a division (which would sit in the chain from one
+/// integer to the next): with k = bitlen(x) - bitlen(count), floor(x / count) has k + 1 bits if
+/// x >= count << k, else k (none if k < 0).
+#[inline(always)]
+fn mean_class(x: u64, count: u64) -> usize {
+    let k = count.leading_zeros() as i32 - x.leading_zeros() as i32;
+    let bits = if k < 0 {
+        0
+    } else {
+        // count << k < 2**bitlen(x): no bit is lost
+        k + i32::from(x >= count << k)
+    };
+    1 + (bits as usize).min(NEIGHBOUR_CLASSES - 2)
+}
+
+/// The decoder's loop for a proper order ([`CodingOrder::proper`]), a column at a time: each
+/// row's earlier neighbours are decoded before it in its column, so one array of saturated
+/// magnitudes per row (its latest and the one before) gives both classes, and every entry of
+/// a column is written.
+struct ColumnDecoder<'a> {
+    coder: RangeDecoder<'a>,
+    models: Box<[Context; CONTEXTS]>,
+    /// recent[r]: |x[r, c]| once row r of column c is decoded, |x[r, c - 1]| until then, and
+    /// the one before it.
+    recent: Vec<[u32; 2]>,
+}
+
+impl<'a> ColumnDecoder<'a> {
+    fn new(coder: RangeDecoder<'a>, rows: usize) -> Self {
+        ColumnDecoder {
+            coder,
+            models: Box::new([FRESH_CONTEXT; CONTEXTS]),
+            // one more than the rows: the padding of the first sources, whose magnitudes stay 0
+            recent: vec![[0u32; 2]; rows + 1],
+        }
+    }
+
+    /// The next column into `column` (the order's rows long), in a [`Proper::Listed`] order of
+    /// `steps` and `more`. `MESH`: the neighbours are averaged (U1's), else the first counts
+    /// twice and the second once.
+    // not inlined: compiled on its own, the loop keeps more of its state in registers
+    #[inline(never)]
+    fn column<const MESH: bool>(
+        &mut self,
+        steps: &[Step],
+        more: &[u32],
+        column: &mut [i64],
+    ) -> Result<(), Broken> {
+        // a copy of its own, in registers (see RangeDecoder)
+        let mut coder = self.coder;
+        let models = &mut self.models;
+        let recent = self.recent.as_mut_slice();
+        let latest = |recent: &[[u32; 2]], w: u32| {
+            recent
+                .get(w as usize)
+                .map_or(0, |magnitudes| u64::from(magnitudes[0]))
+        };
+        let mut more = more.iter();
+        for step in steps {
+            let count = step.count as usize;
+            let [w, v, ..] = step.first;
+            let a = if count == 0 {
+                0
+            } else if MESH {
+                // the padding adds 0s: no branch on the count
+                let mut total: u64 = step.first.iter().map(|&w| latest(recent, w)).sum();
+                if count > FIRST_SOURCES {
+                    let others = more.by_ref().take(count - FIRST_SOURCES);
+                    total += others.map(|&w| latest(recent, w)).sum::<u64>();
+                }
+                mean_class(3 * total, count as u64)
+            } else if count == 1 {
+                magnitude_class(3 * latest(recent, w))
+            } else {
+                magnitude_class(2 * latest(recent, w) + latest(recent, v))
+            };
+            let row = step.row as usize;
+            let [before, two_before] = recent.get(row).copied().unwrap_or_default();
+            let b = usize::from(left_class(u64::from(2 * before + two_before)));
+            let value = decode_integer(&mut coder, &mut models[a * LEFT_CLASSES + b])?;
+            if let Some(slot) = column.get_mut(row) {
+                *slot = value;
+            }
+            if let Some(slot) = recent.get_mut(row) {
+                *slot = [saturated(value), before];
+            }
+        }
+        self.coder = coder;
+        // a read past the end spoils no check before it: once a column is done is soon enough
+        coder.check_overrun()
+    }
+}
+
+impl ColumnDecoder<'_> {
+    /// The next column into `column` in [`Proper::Sequence`]: [`ColumnDecoder::column`] with
+    /// the two rows before in registers.
+    #[inline(never)] // as `column`
+    fn sequence_column(&mut self, column: &mut [i64]) -> Result<(), Broken> {
+        let mut coder = self.coder;
+        let models = &mut self.models;
+        // |x| of the row before and the one before it, saturated
+        let (mut one, mut two) = (0u64, 0u64);
+        for (r, (slot, recent)) in column.iter_mut().zip(self.recent.iter_mut()).enumerate() {
+            let a = match r {
+                0 => 0,
+                1 => magnitude_class(3 * one),
+                _ => magnitude_class(2 * one + two),
+            };
+            let [before, two_before] = *recent;
+            let b = usize::from(left_class(u64::from(2 * before + two_before)));
+            let value = decode_integer(&mut coder, &mut models[a * LEFT_CLASSES + b])?;
+            *slot = value;
+            let magnitude = saturated(value);
+            *recent = [magnitude, before];
+            (one, two) = (u64::from(magnitude), one);
+        }
+        self.coder = coder;
+        coder.check_overrun()
+    }
+}
+
+/// The decoder's loop for any order: the reference's, each class from the integers themselves
+/// (rows the order leaves out are 0, sources not decoded yet count as 0).
+fn decode_general<'a>(
+    coder: RangeDecoder<'a>,
+    order: &CodingOrder,
+    out: &mut [i64],
+) -> Result<RangeDecoder<'a>, Broken> {
+    let rows = order.row_count;
+    let cols = out.len().checked_div(rows).unwrap_or(0);
+    let mut coder = coder;
     out.fill(0);
-    let mut coder = RangeDecoder::new(payload)?;
     let mut models = fresh_models();
     let mut left = vec![0u8; rows];
     for c in 0..cols {
@@ -341,5 +643,5 @@ pub fn decode_columns_into(
             column[row] = value;
         }
     }
-    coder.finish()
+    Ok(coder)
 }

@@ -281,3 +281,157 @@ fn classes_at_their_edges() {
         3 * (i64::MAX as u128)
     );
 }
+
+/// `order` without its fast loop: the general one decodes it.
+fn general(order: &CodingOrder) -> CodingOrder {
+    CodingOrder {
+        proper: None,
+        ..order.clone()
+    }
+}
+
+#[test]
+fn the_orders_of_files_take_the_fast_loop() {
+    // the sequence's arrays, however made, are known without them
+    for rows in [0, 1, 2, 3, 7] {
+        let sequence = CodingOrder::sequence(rows);
+        assert_eq!(sequence.proper, Some(Proper::Sequence));
+        let again = CodingOrder::new(
+            &sequence.rows.iter().map(|&r| r as i64).collect::<Vec<_>>(),
+            &sequence
+                .sources
+                .iter()
+                .map(|&r| r as i64)
+                .collect::<Vec<_>>(),
+            &sequence.ends.iter().map(|&r| r as i64).collect::<Vec<_>>(),
+            false,
+            rows,
+        );
+        assert_eq!(again.unwrap().proper, Some(Proper::Sequence));
+    }
+    // the same arrays averaged, or a source other than the two rows before: listed
+    let averaged = CodingOrder::new(&[0, 1, 2], &[0, 1, 0], &[0, 0, 1, 3], true, 3).unwrap();
+    assert!(matches!(averaged.proper, Some(Proper::Listed { .. })));
+    let other = CodingOrder::new(&[0, 1, 2], &[0, 0, 1], &[0, 0, 1, 3], false, 3).unwrap();
+    assert!(matches!(other.proper, Some(Proper::Listed { .. })));
+    assert!(small_mesh().proper.is_some());
+    assert!(reversed(9).proper.is_some());
+    // a row twice, a row missing, a source not coded yet, a source coded after
+    let improper = [
+        CodingOrder::new(&[1, 1], &[], &[0, 0, 0], true, 2),
+        CodingOrder::new(&[1], &[], &[0, 0], true, 2),
+        CodingOrder::new(&[0, 1], &[1], &[0, 1, 1], true, 2),
+        CodingOrder::new(&[0, 1], &[0], &[0, 0, 1], true, 2),
+    ];
+    let proper = [false, false, false, true];
+    for (order, expected) in improper.into_iter().zip(proper) {
+        assert_eq!(order.unwrap().proper.is_some(), expected);
+    }
+}
+
+#[test]
+fn the_mean_class_is_the_divisions() {
+    let mut random = Random(0x0123_4567_89AB_CDEF);
+    let mut pairs: Vec<(u64, u64)> = Vec::new();
+    for x in 0..200 {
+        for count in 1..40 {
+            pairs.push((x, count));
+        }
+    }
+    for _ in 0..20000 {
+        let (r, s) = (random.next(), random.next());
+        let x = r >> (r % 64);
+        let count = 1 + (s >> (s % 63 + 1)).min(x.max(1));
+        pairs.push((x, count));
+        // the edges: a multiple of count by a power of two, and one less
+        let k = s % 40;
+        if count << k >> k == count {
+            pairs.push((count << k, count));
+            pairs.push(((count << k) - 1, count));
+        }
+    }
+    pairs.extend([
+        (u64::MAX, 1),
+        (u64::MAX, u64::MAX),
+        (u64::MAX - 1, u64::MAX),
+        (0, 1),
+    ]);
+    for (x, count) in pairs {
+        assert_eq!(
+            mean_class(x, count),
+            magnitude_class(x / count),
+            "{x} / {count}"
+        );
+    }
+}
+
+/// Random integers with magnitudes around the fast loop's saturation and far beyond it.
+fn large_integers(random: &mut Random, count: usize) -> Vec<i64> {
+    (0..count)
+        .map(|_| {
+            let r = random.next();
+            let magnitude = match r % 4 {
+                0 => 0,
+                1 => i64::from(MAGNITUDE_CAP) + (r >> 60) as i64 - 8,
+                2 => (r >> 2) as i64 >> (r % 64),
+                _ => ((r >> 8) % 50) as i64,
+            };
+            if r & 256 != 0 {
+                -magnitude
+            } else {
+                magnitude
+            }
+        })
+        .collect()
+}
+
+/// A mesh-like order where row r's sources are up to `width` rows before it, chosen at random
+/// (`mesh`: averaged; else the first two count).
+fn random_order(random: &mut Random, rows: usize, width: usize, mesh: bool) -> CodingOrder {
+    let mut sources = Vec::new();
+    let mut ends = vec![0i64];
+    for r in 0..rows as u64 {
+        let count = random.next() % (width as u64 + 1);
+        for _ in 0..count.min(r) {
+            sources.push((random.next() % r) as i64);
+        }
+        ends.push(sources.len() as i64);
+    }
+    let order: Vec<i64> = (0..rows as i64).collect();
+    CodingOrder::new(&order, &sources, &ends, mesh, rows).unwrap()
+}
+
+#[test]
+fn the_fast_loop_decodes_as_the_general_one() {
+    let mut random = Random(0x5DEE_CE66_D1CE_4E5B);
+    for (cols, rows, width) in [(3, 40, 3), (5, 200, 8), (2, 300, 40), (1, 1, 1)] {
+        let orders = [
+            random_order(&mut random, rows, width, true),
+            random_order(&mut random, rows, width, false),
+            CodingOrder::sequence(rows),
+            reversed(rows),
+        ];
+        for order in orders {
+            assert!(order.proper.is_some());
+            let values = large_integers(&mut random, cols * rows);
+            let encoded = encode_columns(&values, cols, rows, &order).unwrap();
+            assert_eq!(decode_columns(&encoded, cols, &order).unwrap(), values);
+            assert_eq!(
+                decode_columns(&encoded, cols, &general(&order)).unwrap(),
+                values
+            );
+            // damaged streams: the same integers or the same error, either way
+            for at in (0..encoded.len()).step_by(encoded.len() / 16 + 1) {
+                let mut damaged = encoded.clone();
+                damaged[at] ^= (random.next() as u8) | 1;
+                for length in [damaged.len(), damaged.len() - 1, at + 1] {
+                    let payload = &damaged[..length];
+                    assert_eq!(
+                        decode_columns(payload, cols, &order),
+                        decode_columns(payload, cols, &general(&order))
+                    );
+                }
+            }
+        }
+    }
+}

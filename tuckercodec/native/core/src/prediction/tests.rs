@@ -410,3 +410,100 @@ fn a_row_of_many_sources_takes_the_integer_path_when_pushed() {
     plan.restore_columns(&mut columns, count, &push).unwrap();
     assert_eq!(columns, transpose(&values, 3));
 }
+
+/// The adaptive stream (§6.14) of residual `columns` in the mesh order of `faces`, and the order.
+fn adaptive_stream(
+    faces: &[i64],
+    count: usize,
+    columns: &[i64],
+) -> (Vec<u8>, crate::adaptive::CodingOrder) {
+    let steps = Forest::new(faces, 4, count).unwrap().mean_steps();
+    let order =
+        crate::adaptive::CodingOrder::mesh(count, &steps.rows, &steps.sources, &steps.source_ends)
+            .unwrap();
+    let width = columns.len() / count;
+    let payload = crate::adaptive::encode_columns(columns, width, count, &order).unwrap();
+    (payload, order)
+}
+
+/// `restore_adaptive_values`: the same floats as decoding the stream, `restore_columns` and the
+/// product by each column's step, on one thread or two, with pushes or without.
+#[test]
+fn restore_adaptive_values_matches_decoding_then_restoring() {
+    let (faces, count) = grid(11);
+    let plan = plan_of(&faces, 4, count);
+    let width = 19; // two full blocks and a narrower one
+    let values = pseudo_random(count * width, 5, 1 << 20);
+    let steps: Vec<f32> = (0..width).map(|c| 0.001 * (c as f32 + 1.0)).collect();
+    for push in [[2u8; 19], [0, 1, 2, 3].repeat(5)[..19].try_into().unwrap()] {
+        let residual = plan.residuals(&values, width, &push).unwrap().unwrap();
+        let mut columns: Vec<i64> = (0..width)
+            .flat_map(|c| residual.iter().skip(c).step_by(width).copied())
+            .collect();
+        let (payload, order) = adaptive_stream(&faces, count, &columns);
+        plan.restore_columns(&mut columns, count, &push).unwrap();
+        for threads in [1, 2] {
+            let mut out = vec![0.0; count * width];
+            plan.restore_adaptive_values(&payload, &order, 3, &steps, &mut out, threads, &push)
+                .unwrap()
+                .unwrap();
+            for (v, row) in out.chunks_exact(width).enumerate() {
+                for (c, &value) in row.iter().enumerate() {
+                    let expected = columns[c * count + v] as f64 * f64::from(steps[c]);
+                    assert_eq!(value.to_bits(), expected.to_bits());
+                }
+            }
+        }
+    }
+}
+
+/// Its errors in the reference's order: the stream's, then an integer outside the planes, then
+/// a value out of range; a caller's sizes.
+#[test]
+fn restore_adaptive_values_refuses_in_order() {
+    let (faces, count) = grid(5);
+    let plan = plan_of(&faces, 4, count);
+    let steps = [1.0f32; 9];
+    let mut out = vec![0.0; count * 9];
+    // residuals that push a restored value beyond 2**32, in the first block, and one integer
+    // beyond four planes in the last: the planes' error is the one reported
+    let mut stream = vec![0i64; count * 9];
+    stream[..count].fill((1 << 31) - 1);
+    let (payload, order) = adaptive_stream(&faces, count, &stream);
+    let mut wide = stream.clone();
+    wide[8 * count + 3] = 1 << 31;
+    let (wide_payload, _) = adaptive_stream(&faces, count, &wide);
+    let planes_error = "an integer of the adaptive stream does not fit its 4 planes";
+    for threads in [1, 2] {
+        let mut restore = |payload: &[u8], planes: usize| {
+            plan.restore_adaptive_values(
+                payload, &order, planes, &steps, &mut out, threads, &[2; 9],
+            )
+        };
+        assert_eq!(restore(&payload, 4), Ok(Err(MEAN_RANGE.to_string())));
+        assert_eq!(restore(&wide_payload, 5), Ok(Err(MEAN_RANGE.to_string())));
+        let refused = restore(&wide_payload, 4).unwrap_err();
+        assert_eq!(
+            (refused.rule, refused.detail.as_str()),
+            (crate::adaptive::RULE, planes_error)
+        );
+        // and the stream's error before both
+        let cut = restore(&wide_payload[..wide_payload.len() - 2], 4).unwrap_err();
+        assert_eq!(
+            cut.detail,
+            "the adaptive stream ends before its last integer"
+        );
+    }
+    // sizes that do not fit: the columns, the planes, the pushes
+    let mut short = vec![0.0; count * 9 - 1];
+    let caller = |result: Result<Result<(), PredictionError>, _>| matches!(result, Ok(Err(_)));
+    assert!(caller(plan.restore_adaptive_values(
+        &payload, &order, 5, &steps, &mut short, 1, &[2; 9]
+    )));
+    assert!(caller(plan.restore_adaptive_values(
+        &payload, &order, 9, &steps, &mut out, 1, &[2; 9]
+    )));
+    assert!(caller(plan.restore_adaptive_values(
+        &payload, &order, 5, &steps, &mut out, 1, &[2; 8]
+    )));
+}

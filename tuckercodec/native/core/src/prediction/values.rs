@@ -2,11 +2,16 @@
 //! float64 matrix (`decode_matrix(...).values()` of `tuckercodec/format/qmat.py`) in one pass,
 //! without the section's int64 integers: a block of columns at a time, the blocks shared
 //! between threads (columns do not depend on each other, so the bits do not depend on them).
+//! [`MeanPlan::restore_adaptive_values`] does the same for an adaptive stream (§6.14), whose
+//! columns decode one after the other: a second thread restores each block of columns while
+//! the next ones decode.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
+use std::sync::{mpsc, Mutex};
 
 use super::{check_push, MeanPlan, PredictionError, MEAN_LIMIT, MEAN_RANGE, PLAIN_PUSH};
+use crate::adaptive::{self, CodingOrder};
+use crate::error::Broken;
 use crate::streams::unzigzag;
 
 /// Columns restored at once: a block's floats of a 10,000-vertex mesh stay in a core's
@@ -20,6 +25,20 @@ pub const MAX_THREADS: usize = 8;
 pub fn thread_count(blocks: usize) -> usize {
     let available = std::thread::available_parallelism().map_or(1, |n| n.get());
     available.min(MAX_THREADS).min(blocks).max(1)
+}
+
+/// Where a block's residuals come from.
+#[derive(Clone, Copy)]
+enum Residuals<'r> {
+    /// The stream's byte planes: `planes` planes of `count` bytes, the block's columns at
+    /// their place in it.
+    Planes {
+        raw: &'r [u8],
+        planes: usize,
+        count: usize,
+    },
+    /// The block's columns of integers, one after the other.
+    Integers(&'r [i64]),
 }
 
 impl MeanPlan {
@@ -80,10 +99,9 @@ impl MeanPlan {
                 }
                 let first = block * VALUE_BLOCK;
                 let block_width = VALUE_BLOCK.min(width - first);
+                let residuals = Residuals::Planes { raw, planes, count };
                 self.block_values(
-                    raw,
-                    planes,
-                    count,
+                    residuals,
                     height,
                     first,
                     &push[first..first + block_width],
@@ -127,15 +145,102 @@ impl MeanPlan {
         })
     }
 
+    /// [`MeanPlan::restore_values`] of a section whose integers are an adaptive stream
+    /// (§6.14, `payload` in `order`, which must have `height` rows): the (`height`,
+    /// `steps.len()`) float64 matrix into `out`, the same floats as decoding the integers
+    /// (`adaptive::decode_columns`), checking that each zigzags below 2**(8 `planes`)
+    /// (`decode_within_planes`), restoring them (`restore_columns`) and multiplying by the
+    /// steps. With `threads` of 2 or more, a second thread restores each block of columns as
+    /// soon as it is decoded.
+    ///
+    /// Errors, in the reference's order: `Err` (R46) for a stream that is not exactly the
+    /// coding of the integers, then for an integer outside the planes; `Ok(Err(..))` for a
+    /// caller's error (sizes, pushes) or [`MEAN_RANGE`]. `out` is then left partly written.
+    #[allow(clippy::too_many_arguments)] // the stream's parts, the output, threads, pushes
+    pub fn restore_adaptive_values(
+        &self,
+        payload: &[u8],
+        order: &CodingOrder,
+        planes: usize,
+        steps: &[f32],
+        out: &mut [f64],
+        threads: usize,
+        push: &[u8],
+    ) -> Result<Result<(), PredictionError>, Broken> {
+        let (width, height) = (steps.len(), order.row_count());
+        if !(1..=8).contains(&planes) || width.checked_mul(height) != Some(out.len()) {
+            return Ok(Err(format!(
+                "{} values of {planes} planes are not {width} columns of {height}",
+                out.len()
+            )));
+        }
+        if let Err(error) = check_push(push, width) {
+            return Ok(Err(error));
+        }
+        if height < self.vertex_count || (height == 0 && width > 0) {
+            return Ok(Err(format!(
+                "columns of {height} values, fewer than the {} the steps index",
+                self.vertex_count
+            )));
+        }
+        // the bound before the integers' array is allocated
+        adaptive::check_size(width, height, payload.len())?;
+        let mut integers = vec![0i64; out.len()];
+        let mut restorer = BlockRestorer {
+            plan: self,
+            planes,
+            height,
+            steps,
+            push,
+            out,
+            outcome: Outcome::default(),
+            buffers: Default::default(),
+        };
+        let (decoded, outcome) = if threads < 2 {
+            let decoded =
+                adaptive::decode_blocks(payload, order, &mut integers, VALUE_BLOCK, |f, b| {
+                    restorer.restore(f, b)
+                });
+            (decoded, restorer.outcome)
+        } else {
+            std::thread::scope(|scope| {
+                let (send, receive) = mpsc::channel::<(usize, &[i64])>();
+                let restoring = scope.spawn(move || {
+                    for (first, block) in receive {
+                        restorer.restore(first, block);
+                    }
+                    restorer.outcome
+                });
+                let decoded =
+                    adaptive::decode_blocks(payload, order, &mut integers, VALUE_BLOCK, |f, b| {
+                        // the receiver ends only with its thread, which fails only on a bug
+                        let _ = send.send((f, b));
+                    });
+                drop(send);
+                let outcome = restoring.join().unwrap_or_else(|_| Outcome {
+                    outside_planes: false,
+                    failed: Some("a restoring thread failed".into()),
+                });
+                (decoded, outcome)
+            })
+        };
+        decoded?;
+        if outcome.outside_planes {
+            return Err(Broken::new(
+                adaptive::RULE,
+                format!("an integer of the adaptive stream does not fit its {planes} planes"),
+            ));
+        }
+        Ok(outcome.failed.map_or(Ok(()), Err))
+    }
+
     /// Columns `first..first + push.len()` restored into `work` (row after row, the block's
     /// columns side by side) as exact integers in float64, checked against +-`MEAN_LIMIT`,
     /// column `first + c` with push `push[c]`.
     #[allow(clippy::too_many_arguments)]
     fn block_values(
         &self,
-        raw: &[u8],
-        planes: usize,
-        count: usize,
+        residuals: Residuals<'_>,
         height: usize,
         first: usize,
         push: &[u8],
@@ -146,19 +251,30 @@ impl MeanPlan {
         let block_width = push.len();
         work.clear();
         work.resize(height * block_width, 0.0);
-        scratch.clear();
-        scratch.resize(height, 0);
-        for c in 0..block_width {
-            let start = (first + c) * height;
-            scratch.fill(0);
-            for plane in 0..planes {
-                let bytes = &raw[plane * count + start..plane * count + start + height];
-                for (value, &byte) in scratch.iter_mut().zip(bytes) {
-                    *value |= u64::from(byte) << (8 * plane);
+        match residuals {
+            Residuals::Planes { raw, planes, count } => {
+                scratch.clear();
+                scratch.resize(height, 0);
+                for c in 0..block_width {
+                    let start = (first + c) * height;
+                    scratch.fill(0);
+                    for plane in 0..planes {
+                        let bytes = &raw[plane * count + start..plane * count + start + height];
+                        for (value, &byte) in scratch.iter_mut().zip(bytes) {
+                            *value |= u64::from(byte) << (8 * plane);
+                        }
+                    }
+                    for (v, &value) in scratch.iter().enumerate() {
+                        work[v * block_width + c] = unzigzag(value) as f64;
+                    }
                 }
             }
-            for (v, &value) in scratch.iter().enumerate() {
-                work[v * block_width + c] = unzigzag(value) as f64;
+            Residuals::Integers(columns) => {
+                for (c, column) in columns.chunks_exact(height).enumerate() {
+                    for (v, &value) in column.iter().enumerate() {
+                        work[v * block_width + c] = value as f64;
+                    }
+                }
             }
         }
         let exact = self.float_is_exact(push);
@@ -298,5 +414,76 @@ impl MeanPlan {
             return Err(MEAN_RANGE.to_string());
         }
         Ok(())
+    }
+}
+
+/// What went wrong in [`MeanPlan::restore_adaptive_values`]'s blocks so far.
+#[derive(Default)]
+struct Outcome {
+    /// An integer outside the planes (R46, before any error of the restoring).
+    outside_planes: bool,
+    /// The first block's error of restoring.
+    failed: Option<PredictionError>,
+}
+
+/// What a block of [`MeanPlan::restore_adaptive_values`] needs, and what went wrong so far: a
+/// block outside the planes or failing to restore stops the restoring (not the planes checks,
+/// whose error comes first).
+struct BlockRestorer<'p, 'o> {
+    plan: &'p MeanPlan,
+    planes: usize,
+    height: usize,
+    steps: &'p [f32],
+    push: &'p [u8],
+    out: &'o mut [f64],
+    outcome: Outcome,
+    /// `block_values`' work, scratch and predictions.
+    buffers: (Vec<f64>, Vec<u64>, Vec<f64>),
+}
+
+impl BlockRestorer<'_, '_> {
+    /// Columns `first..` (`block`, whole columns) checked against the planes, restored and
+    /// written to their place in `out`, times their steps.
+    fn restore(&mut self, first: usize, block: &[i64]) {
+        if self.planes < 8 {
+            // zigzag below 2**(8P): -limit <= x < limit (every int64 does for 8 planes)
+            let limit = 1i64 << (8 * self.planes - 1);
+            if block.iter().any(|&x| x < -limit || x >= limit) {
+                self.outcome.outside_planes = true;
+            }
+        }
+        if self.outcome.outside_planes || self.outcome.failed.is_some() || self.height == 0 {
+            return;
+        }
+        let block_width = block.len() / self.height;
+        let (work, scratch, predictions) = &mut self.buffers;
+        if let Err(error) = self.plan.block_values(
+            Residuals::Integers(block),
+            self.height,
+            first,
+            &self.push[first..first + block_width],
+            work,
+            scratch,
+            predictions,
+        ) {
+            self.outcome.failed = Some(error);
+            return;
+        }
+        let width = self.steps.len();
+        let steps = &self.steps[first..first + block_width];
+        for (row, values) in self
+            .out
+            .chunks_exact_mut(width)
+            .zip(work.chunks_exact(block_width))
+        {
+            for ((slot, &value), &step) in row[first..first + block_width]
+                .iter_mut()
+                .zip(values)
+                .zip(steps)
+            {
+                // an exact integer: through int64 as numpy's product of q reads it
+                *slot = (value as i64) as f64 * f64::from(step);
+            }
+        }
     }
 }
