@@ -36,6 +36,7 @@ The result is deterministic (pure numpy, ties to the nearest integer).
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 from typing import Any
 
@@ -347,6 +348,12 @@ def quantize_mesh(
     return QuantizedMatrix(q, nearest.steps)
 
 
+#: :func:`_mean_choice` prices residuals within +-this by a table indexed by the residual itself
+#: (the same bits as :func:`_bits`); a larger one is priced as the table's edge, where a step
+#: more or less changes the escape's price by a few thousandths of a bit.
+VALUE_TABLE_HALF = 2048
+
+
 def _mean_choice(
     values: np.ndarray,
     steps: np.ndarray,
@@ -358,25 +365,31 @@ def _mean_choice(
     """Each entry the floor or the ceiling of ``values / steps``, whichever minimises J (the
     module docstring) against predictor 2's prediction from the integers chosen before it,
     in the decoder's order: the roots (predicted by 0), then each step of ``mean``. The bits
-    are each column's table of ``residual`` (the nearest rounding's predictor-2 residuals)."""
-    table = _bit_table(residual)
-    flat_table = np.ascontiguousarray(table).reshape(-1)
-    offsets = (np.arange(values.shape[1]) * table.shape[1])[None, :]
+    are each column's table of ``residual`` (the nearest rounding's predictor-2 residuals).
+    A mesh has eight steps per depth (samba: 929), so each step is a few numpy calls: what
+    does not change between steps is made once."""
+    half = VALUE_TABLE_HALF
+    flat_table = _value_table(_bit_table(residual)).reshape(-1)
+    offsets = (np.arange(values.shape[1]) * (2 * half + 1) + half)[None, :]
     scaled = values / steps[None, :]
     low = np.floor(scaled)
+    error_low = np.square(scaled - low)
+    error_high = np.square(low + 1.0 - scaled)
+    below = low.astype(np.int64)
+    del scaled, low
     q = np.empty(values.shape, dtype=np.int64)
 
     def choose(rows: np.ndarray, prediction: np.ndarray | int) -> None:
-        base = low[rows]
-        error_low = np.square(scaled[rows] - base)
-        error_high = np.square(base + 1.0 - scaled[rows])
-        below = base.astype(np.int64)
-        residual = below - prediction
-        cost_low = error_low + lam * _bits(residual, flat_table, offsets)
-        cost_high = error_high + lam * _bits(residual + 1, flat_table, offsets)
+        index = below[rows] - prediction
+        np.clip(index, -half, half - 1, out=index)
+        index += offsets
+        below_error, above_error = error_low[rows], error_high[rows]
+        cost_low = below_error + lam * flat_table.take(index)
+        index += 1
+        cost_high = above_error + lam * flat_table.take(index)
         # ties go to the nearer integer, as in _choose
-        high = (cost_high < cost_low) | ((cost_high == cost_low) & (error_high < error_low))
-        q[rows] = below + high
+        high = (cost_high < cost_low) | ((cost_high == cost_low) & (above_error < below_error))
+        q[rows] = below[rows] + high
 
     roots = np.ones(values.shape[0], dtype=bool)
     roots[mean.rows] = False
@@ -384,21 +397,33 @@ def _mean_choice(
     # predictor 2 (§6.2): V / 6c rounded half up, V the sum over the c sources w of
     # (6 + a) q[w] - a q[anchor(w)], a the column's push; exact in int64
     weight = push.astype(np.int64)[None, :]
-    ends, source_ends = mean.step_ends, mean.source_ends
-    for step in range(ends.size - 1):
-        start, stop = int(ends[step]), int(ends[step + 1])
+    source_weight = 6 + weight
+    counts = np.diff(mean.source_ends)[:, None]
+    offset, divisor = 6 * counts, 12 * counts
+    ends, source_ends = mean.step_ends.tolist(), mean.source_ends
+    for start, stop in itertools.pairwise(ends):
         if start == stop:
             continue
         first, last = int(source_ends[start]), int(source_ends[stop])
-        terms = q[mean.sources[first:last]] * (6 + weight)
+        terms = q[mean.sources[first:last]] * source_weight
         terms -= weight * q[mean.anchors[first:last]]
         total = np.add.reduceat(terms, source_ends[start:stop] - first, axis=0)
-        counts = np.diff(source_ends[start : stop + 1])[:, None]
         total *= 2
-        total += 6 * counts
-        np.floor_divide(total, 12 * counts, out=total)
+        total += offset[start:stop]
+        np.floor_divide(total, divisor[start:stop], out=total)
         choose(mean.rows[start:stop], total)
     return q
+
+
+def _value_table(table: np.ndarray) -> np.ndarray:
+    """(cols, 2 VALUE_TABLE_HALF + 1) bits of each residual -VALUE_TABLE_HALF..VALUE_TABLE_HALF
+    by the zigzag tables of :func:`_bit_table`, escapes priced as :func:`_bits` prices them."""
+    residual = np.arange(-VALUE_TABLE_HALF, VALUE_TABLE_HALF + 1, dtype=np.int64)
+    zig = _zigzag(residual)
+    bits: np.ndarray = table[:, np.minimum(zig, TABLE_SIZE)]
+    over = zig > TABLE_SIZE
+    bits[:, over] += 2.0 * np.log2(zig[over] / TABLE_SIZE)
+    return np.ascontiguousarray(bits)
 
 
 __all__ = [
