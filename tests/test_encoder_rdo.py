@@ -9,10 +9,12 @@ from unittest import mock
 import numpy as np
 import pytest
 
+from tests.support.sequences import grid_faces
 from tuckercodec import decode, encode_with_report, kg_error
 from tuckercodec.encoder import rdo
 from tuckercodec.format import qmat
-from tuckercodec.format.prediction import residuals
+from tuckercodec.format.prediction import mean_residuals, residuals
+from tuckercodec.model.topology import MeshPrediction
 
 
 def _matrix(rows: int = 400, cols: int = 6, seed: int = 1) -> np.ndarray:
@@ -75,3 +77,70 @@ def test_encode_with_rdo_meets_the_target(cloth, target):
         result = encode_with_report(cloth, target_kg=target)
     assert kg_error(cloth.vertices, decode(result.data).vertices) <= target
     assert result.report.kg <= target
+
+
+def _mesh_columns(grid: int = 24, cols: int = 5) -> tuple[np.ndarray, MeshPrediction]:
+    """Columns smooth over a grid sheet (as U1's are over a mesh), and the sheet's predictors."""
+    y, x = np.mgrid[0:grid, 0:grid] / grid
+    rng = np.random.default_rng(3)
+    columns = [np.sin((c + 1) * 2.0 * x + c) * np.cos((c + 2) * y) for c in range(cols)]
+    values = np.stack(columns, axis=-1).reshape(grid * grid, cols)
+    values += 1e-3 * rng.standard_normal(values.shape)
+    return values, MeshPrediction(grid_faces(grid), grid * grid)
+
+
+def _mesh_quantized(values, mesh, steps, settings=rdo.DEFAULT):
+    nearest = qmat.quantize(values, steps)
+    chosen = qmat.predicted_stream(nearest.q, mesh, True, pushes=True)
+    levels = rdo.Levels(mesh.parents)
+    return rdo.quantize_mesh(values, steps, levels, mesh, chosen.predict, chosen.push, settings)
+
+
+def test_mesh_rounding_follows_predictor_2():
+    values, mesh = _mesh_columns()
+    steps = np.full(values.shape[1], 0.02)
+    nearest = qmat.quantize(values, steps)
+    chosen = qmat.predicted_stream(nearest.q, mesh, True, pushes=True)
+    assert (chosen.predict == qmat.PREDICT_MEAN).all()  # what this test is about
+    q = _mesh_quantized(values, mesh, steps).q
+    scaled = values / nearest.steps.astype(np.float64)
+    assert ((q == np.floor(scaled)) | (q == np.floor(scaled) + 1)).all()
+    assert (q != nearest.q).any()
+    np.testing.assert_array_equal(q, _mesh_quantized(values.copy(), mesh, steps).q)
+    # what it trades error for: smaller residuals under the file's own predictor, with its
+    # push, than the rounding that models the mesh parent's prediction leaves
+    parent_rounded = _mesh_quantized(values, mesh, steps, rdo.Settings(mean=False)).q
+
+    def cost(q: np.ndarray) -> float:
+        residual = mean_residuals(q, mesh.mean_steps, chosen.push)
+        assert residual is not None
+        return float(np.log2(1.0 + 2.0 * np.abs(residual)).sum())
+
+    assert cost(q) < cost(parent_rounded) < cost(nearest.q)
+
+
+def test_mesh_rounding_without_rate_weight_is_nearest():
+    values, mesh = _mesh_columns()
+    steps = np.full(values.shape[1], 0.02)
+    plain = qmat.quantize(values, steps)
+    for settings in (rdo.NEAREST, rdo.Settings(lam=0.0)):
+        chosen = _mesh_quantized(values, mesh, steps, settings)
+        np.testing.assert_array_equal(chosen.q, plain.q)
+        np.testing.assert_array_equal(chosen.steps, plain.steps)
+
+
+def test_mesh_rounding_keeps_other_columns_as_before():
+    # columns the file does not predict with predictor 2 are rounded as quantize() rounds them
+    values, mesh = _mesh_columns()
+    steps = np.full(values.shape[1], 0.02)
+    predict = np.array([qmat.PREDICT_MEAN, 1, qmat.PREDICT_MEAN, 0, 1], dtype=np.uint8)
+    push = np.full(values.shape[1], 2, dtype=np.uint8)
+    levels = rdo.Levels(mesh.parents)
+    q = rdo.quantize_mesh(values, steps, levels, mesh, predict, push).q
+    others = np.flatnonzero(predict != qmat.PREDICT_MEAN)
+    alone = rdo.quantize(values[:, others], steps[others], levels).q
+    np.testing.assert_array_equal(q[:, others], alone)
+    with mock.patch.object(rdo, "MEAN_BLOCK_VALUES", 1):  # a block per column: the same
+        np.testing.assert_array_equal(
+            rdo.quantize_mesh(values, steps, levels, mesh, predict, push).q, q
+        )

@@ -14,9 +14,9 @@ from tuckercodec.decomposition import analysis
 from tuckercodec.decomposition.hosvd import centre_frames
 from tuckercodec.encoder import estimate, rdo
 from tuckercodec.errors import InputError
-from tuckercodec.format import adaptive
+from tuckercodec.format import adaptive, qmat
 from tuckercodec.model.sequence import MeshSequence
-from tuckercodec.model.topology import mesh_parents
+from tuckercodec.model.topology import MeshPrediction, mesh_parents
 from tuckercodec.system import native
 
 
@@ -97,6 +97,25 @@ def test_rdo_strided_values_are_the_same(core):
     steps = np.full(values.shape[1], 0.07)
     fast, reference = _both(rdo.quantize, values, steps, rdo.Levels.chain(50))
     np.testing.assert_array_equal(fast.q, reference.q)
+
+
+def test_rdo_under_predictor_2_is_the_same(core):
+    # U1's rounding against predictor 2: its predictors and residuals come from the core or
+    # from numpy, and must give the same integers
+    grid = 20
+    rng = np.random.default_rng(8)
+    values = np.cumsum(np.cumsum(rng.standard_normal((grid, grid, 6)), axis=0), axis=1)
+    values = values.reshape(grid * grid, 6) * 1e-2
+    steps = np.geomspace(0.01, 0.05, 6)
+
+    def rounded() -> np.ndarray:
+        mesh = MeshPrediction(grid_faces(grid), grid * grid)
+        chosen = qmat.predicted_stream(qmat.quantize(values, steps).q, mesh, True, pushes=True)
+        levels = rdo.Levels(mesh.parents)
+        return rdo.quantize_mesh(values, steps, levels, mesh, chosen.predict, chosen.push).q
+
+    fast, reference = _both(rounded)
+    np.testing.assert_array_equal(fast, reference)
 
 
 def test_rdo_refusals_are_the_same(core):

@@ -43,15 +43,20 @@ class U1Predictors:
         """The bits of U1's integers ``q`` as the file codes them."""
         return coded_bits(self.stream(q), self.coding_order(q.shape[0]))
 
-    def stream(self, q: np.ndarray) -> np.ndarray:
-        """The residuals ``q`` (rows, cols) would be streamed as under the predictors kept
-        (chosen now for columns not seen before)."""
+    def kept(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The predictor and push kept for each column of ``q`` (rows, cols), chosen now, from
+        ``q``, for columns not seen before."""
         cols, known = q.shape[1], self.predict.size
         if cols > known:  # choose for the new columns, as the file would (each on its own)
             new = qmat.predicted_stream(q[:, known:], self.mesh, True, pushes=True)
             self.predict = np.concatenate([self.predict, new.predict])
             self.push = np.concatenate([self.push, new.push])
-        predict = self.predict[:cols]
+        return self.predict[:cols], self.push[:cols]
+
+    def stream(self, q: np.ndarray) -> np.ndarray:
+        """The residuals ``q`` (rows, cols) would be streamed as under the predictors kept
+        (chosen now for columns not seen before)."""
+        predict, _ = self.kept(q)
         out = q.copy()
         parent = np.flatnonzero(predict == qmat.PREDICT_PARENT)
         if parent.size:

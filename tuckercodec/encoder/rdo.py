@@ -25,20 +25,27 @@ slope of the high-rate rate-distortion curve D(R) = step**2 / 12, where trading 
 this price is break-even; the measurements in ``python -m tools.bench entropy --rdo`` chose
 :data:`DEFAULT_LAMBDA`.
 
+U1's columns that the file predicts with predictor 2 (the mean of a vertex's decoded neighbours,
+pushed on, §6.2: most of them) are chosen against that prediction instead (:func:`quantize_mesh`),
+a step of the decoder's order at a time, so that the rate model prices the residuals the file
+really codes rather than those of the mesh parent's prediction, which the file does not use.
+
 Nothing here changes the format: the file stores the same kind of integers, chosen differently.
 The result is deterministic (pure numpy, ties to the nearest integer).
 """
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from ..format import qmat
-from ..format.prediction import tree_depths
-from ..format.qmat import QuantizedMatrix
+from ..format.prediction import mean_residuals, tree_depths
+from ..format.qmat import PREDICT_MEAN, QuantizedMatrix
+from ..model.topology import MAX_MEAN_LEVELS, MeanSteps, MeshPrediction
 from ..system import native
 
 #: Rate weight (step**2 per bit) used by the encoder; ``None`` in :class:`Settings` turns RDO off.
@@ -56,6 +63,9 @@ class Settings:
 
     lam: float | None = DEFAULT_LAMBDA
     passes: int = DEFAULT_PASSES
+    #: Whether U1's predictor-2 columns are chosen against predictor 2 (:func:`quantize_mesh`);
+    #: if not, as the others are, against the mesh parent's prediction.
+    mean: bool = True
     #: A fixed dead zone instead of the rate model: the residual from the prediction,
     #: r = x / step - prediction, becomes sign(r) * floor(|r| + 1 - dead_zone) (0.5: nearest).
     dead_zone: float | None = None
@@ -284,4 +294,144 @@ def _choose(
     return q
 
 
-__all__ = ["DEFAULT", "DEFAULT_LAMBDA", "NEAREST", "Levels", "Settings", "quantize"]
+# -- U1 under predictor 2 -------------------------------------------------------------------------
+
+#: Values of U1 that :func:`quantize_mesh` chooses at once: its cost is a few numpy calls per
+#: step of predictor 2 (samba: 929 steps), so its blocks of columns are as wide as memory allows
+#: (three arrays of this many float64 or int64 beside U1).
+MEAN_BLOCK_VALUES = 1 << 22
+
+
+def quantize_mesh(
+    values: np.ndarray,
+    steps: np.ndarray,
+    levels: Levels,
+    mesh: MeshPrediction,
+    predict: np.ndarray,
+    push: np.ndarray,
+    settings: Settings = DEFAULT,
+) -> QuantizedMatrix:
+    """U1 ``values`` (vertices, cols) quantized with per-column ``steps``: as :func:`quantize`
+    with ``levels`` (the mesh parents), except that the columns whose ``predict`` is predictor 2
+    (the file's likely predictor, §6.2, with its ``push``) are chosen against predictor 2's own
+    prediction, their bits from the nearest rounding's predictor-2 residuals."""
+    nearest = qmat.quantize(values, steps)  # checks the steps and the integer range
+    meaned = np.flatnonzero(predict == PREDICT_MEAN)
+    if (
+        settings.lam is None
+        or not settings.mean
+        or settings.dead_zone is not None
+        or meaned.size == 0
+        or values.shape[0] < 2
+        or mesh.levels > MAX_MEAN_LEVELS
+    ):
+        return quantize(values, steps, levels, settings)
+    residual = mean_residuals(nearest.q[:, meaned], mesh.mean_steps, push[meaned])
+    if residual is None:  # a value too large for predictor 2: the file will not use it
+        return quantize(values, steps, levels, settings)
+    q = np.empty(nearest.q.shape, dtype=np.int64)
+    others = np.flatnonzero(predict != PREDICT_MEAN)
+    if others.size:  # columns are chosen independently: a subset changes none of them
+        q[:, others] = quantize(values[:, others], nearest.steps[others], levels, settings).q
+    width = max(COLUMN_BLOCK, MEAN_BLOCK_VALUES // values.shape[0])
+    for start in range(0, meaned.size, width):
+        block = slice(start, start + width)
+        columns = meaned[block]
+        q[:, columns] = _mean_choice(
+            values[:, columns],
+            nearest.steps[columns].astype(np.float64),
+            mesh.mean_steps,
+            push[columns],
+            residual[:, block],
+            settings.lam,
+        )
+    return QuantizedMatrix(q, nearest.steps)
+
+
+#: :func:`_mean_choice` prices residuals within +-this by a table indexed by the residual itself
+#: (the same bits as :func:`_bits`); a larger one is priced as the table's edge, where a step
+#: more or less changes the escape's price by a few thousandths of a bit.
+VALUE_TABLE_HALF = 2048
+
+
+def _mean_choice(
+    values: np.ndarray,
+    steps: np.ndarray,
+    mean: MeanSteps,
+    push: np.ndarray,
+    residual: np.ndarray,
+    lam: float,
+) -> np.ndarray:
+    """Each entry the floor or the ceiling of ``values / steps``, whichever minimises J (the
+    module docstring) against predictor 2's prediction from the integers chosen before it,
+    in the decoder's order: the roots (predicted by 0), then each step of ``mean``. The bits
+    are each column's table of ``residual`` (the nearest rounding's predictor-2 residuals).
+    A mesh has eight steps per depth (samba: 929), so each step is a few numpy calls: what
+    does not change between steps is made once."""
+    half = VALUE_TABLE_HALF
+    flat_table = _value_table(_bit_table(residual)).reshape(-1)
+    offsets = (np.arange(values.shape[1]) * (2 * half + 1) + half)[None, :]
+    scaled = values / steps[None, :]
+    low = np.floor(scaled)
+    error_low = np.square(scaled - low)
+    error_high = np.square(low + 1.0 - scaled)
+    below = low.astype(np.int64)
+    del scaled, low
+    q = np.empty(values.shape, dtype=np.int64)
+
+    def choose(rows: np.ndarray, prediction: np.ndarray | int) -> None:
+        index = below[rows] - prediction
+        np.clip(index, -half, half - 1, out=index)
+        index += offsets
+        below_error, above_error = error_low[rows], error_high[rows]
+        cost_low = below_error + lam * flat_table.take(index)
+        index += 1
+        cost_high = above_error + lam * flat_table.take(index)
+        # ties go to the nearer integer, as in _choose
+        high = (cost_high < cost_low) | ((cost_high == cost_low) & (above_error < below_error))
+        q[rows] = below[rows] + high
+
+    roots = np.ones(values.shape[0], dtype=bool)
+    roots[mean.rows] = False
+    choose(np.flatnonzero(roots), 0)
+    # predictor 2 (§6.2): V / 6c rounded half up, V the sum over the c sources w of
+    # (6 + a) q[w] - a q[anchor(w)], a the column's push; exact in int64
+    weight = push.astype(np.int64)[None, :]
+    source_weight = 6 + weight
+    counts = np.diff(mean.source_ends)[:, None]
+    offset, divisor = 6 * counts, 12 * counts
+    ends, source_ends = mean.step_ends.tolist(), mean.source_ends
+    for start, stop in itertools.pairwise(ends):
+        if start == stop:
+            continue
+        first, last = int(source_ends[start]), int(source_ends[stop])
+        terms = q[mean.sources[first:last]] * source_weight
+        terms -= weight * q[mean.anchors[first:last]]
+        total = np.add.reduceat(terms, source_ends[start:stop] - first, axis=0)
+        total *= 2
+        total += offset[start:stop]
+        np.floor_divide(total, divisor[start:stop], out=total)
+        choose(mean.rows[start:stop], total)
+    return q
+
+
+def _value_table(table: np.ndarray) -> np.ndarray:
+    """(cols, 2 VALUE_TABLE_HALF + 1) bits of each residual -VALUE_TABLE_HALF..VALUE_TABLE_HALF
+    by the zigzag tables of :func:`_bit_table`, escapes priced as :func:`_bits` prices them."""
+    residual = np.arange(-VALUE_TABLE_HALF, VALUE_TABLE_HALF + 1, dtype=np.int64)
+    zig = _zigzag(residual)
+    bits: np.ndarray = table[:, np.minimum(zig, TABLE_SIZE)]
+    over = zig > TABLE_SIZE
+    bits[:, over] += 2.0 * np.log2(zig[over] / TABLE_SIZE)
+    return np.ascontiguousarray(bits)
+
+
+__all__ = [
+    "DEFAULT",
+    "DEFAULT_LAMBDA",
+    "NEAREST",
+    "Levels",
+    "Settings",
+    "quantize",
+    "quantize_mesh",
+]

@@ -238,8 +238,12 @@ class WholeWorkspace:
         if section == "U1":
             if self._u1_levels is None:
                 self._u1_levels = rdo.Levels(self.parents)
-            levels = self._u1_levels
-        elif section == "U3":
+            # the predictors the trials keep (:mod:`.estimate`): the file's likely ones
+            predict, push = self._u1_predictors.kept(qmat.quantize(values, steps).q)
+            return rdo.quantize_mesh(
+                values, steps, self._u1_levels, self.mesh, predict, push, rounding
+            )
+        if section == "U3":
             levels = rdo.Levels.chain(values.shape[0])
         else:
             levels = rdo.Levels.flat(values.shape[0])
