@@ -175,9 +175,11 @@ pub fn rdo_mean_choice(
                     total[col] = total[col].wrapping_add(term);
                 }
             }
-            // c <= sources.len(), so 12 c fits an i64 of any slice's length
-            let count = span.len() as i64;
-            let (offset, divisor) = (6 * count, 12 * count);
+            let (offset, divisor) = match i64::try_from(span.len()).map(|c| (c, c.checked_mul(12)))
+            {
+                Ok((count, Some(divisor))) => (6 * count, divisor),
+                _ => return fail(format!("row {row} has too many sources")),
+            };
             for col in 0..cols {
                 // np.floor_divide by a positive divisor: Euclidean division
                 let prediction = total[col]
