@@ -15,6 +15,7 @@ from tuckercodec.decomposition.hosvd import centre_frames
 from tuckercodec.encoder import estimate, rdo
 from tuckercodec.errors import InputError
 from tuckercodec.format import adaptive, qmat
+from tuckercodec.format.prediction import mean_residuals
 from tuckercodec.model.sequence import MeshSequence
 from tuckercodec.model.topology import MeshPrediction, mesh_parents
 from tuckercodec.system import native
@@ -116,6 +117,146 @@ def test_rdo_under_predictor_2_is_the_same(core):
 
     fast, reference = _both(rounded)
     np.testing.assert_array_equal(fast, reference)
+
+
+def _polygons(rng: np.random.Generator, count: int, faces: int) -> np.ndarray:
+    """Random triangles, quads and pentagons (padded with -1) over ``count`` vertices."""
+    table = rng.integers(0, count, size=(faces, 5), dtype=np.int64)
+    corners = rng.integers(3, 6, size=faces)
+    table[np.arange(5)[None, :] >= corners[:, None]] = -1
+    return table
+
+
+MEAN_MESHES = {
+    "grid": lambda rng: (grid_faces(13), 169),
+    "polygons": lambda rng: (_polygons(rng, 90, 160), 90),
+    "dense polygons": lambda rng: (_polygons(rng, 25, 120), 25),
+    "two pieces and loose vertices": lambda rng: (
+        np.concatenate([grid_faces(6), grid_faces(4) + 36]),
+        60,
+    ),
+    "no faces": lambda rng: (np.zeros((0, 3), dtype=np.int64), 7),
+}
+
+
+def _same_mean_choice(core, values, steps, mean, push, residual, lam) -> np.ndarray:
+    """rdo._mean_choice in the core and in numpy: the same integers (returned)."""
+    reference = rdo._mean_choice(values, steps, mean, push, residual, lam)
+    fast = rdo._native_mean_choice(core, values, steps, mean, push, residual, lam)
+    assert fast.dtype == np.int64
+    np.testing.assert_array_equal(fast, reference)
+    return reference
+
+
+def _random_value_table(table: np.ndarray) -> np.ndarray:
+    """A value table of random bits, the same for the same number of columns: every entry
+    differs from its neighbours, so that an index one off changes choices."""
+    rng = np.random.default_rng(table.shape[0])
+    return rng.random((table.shape[0], 2 * rdo.VALUE_TABLE_HALF + 1)) * 8.0
+
+
+@pytest.mark.parametrize("mesh", sorted(MEAN_MESHES))
+@pytest.mark.parametrize("seed", range(3))
+def test_rdo_mean_choice_is_the_same(core, monkeypatch, mesh, seed):
+    if seed == 2:  # bits that no histogram makes: an index one off changes choices
+        monkeypatch.setattr(rdo, "_value_table", _random_value_table)
+    rng = np.random.default_rng(seed)
+    faces, count = MEAN_MESHES[mesh](rng)
+    mean = MeshPrediction(faces, count).mean_steps
+    cols = 10
+    push = np.arange(cols, dtype=np.uint8)  # every push 0..9
+    steps = np.geomspace(0.01, 0.05, cols)
+    smooth = _smooth(count, cols, seed, scale=0.3)
+    half_steps = np.rint(smooth / steps * 2.0) * 0.5 * steps  # floors and ceilings tie
+    # large: residuals through the bit table's escapes and past the value table's edges
+    large = smooth * 1e3 + rng.choice([-1.0, 1.0], cols) * rdo.VALUE_TABLE_HALF * steps
+    for values in (smooth, half_steps, large, -large):
+        nearest = qmat.quantize(values, steps)
+        residual = mean_residuals(nearest.q, mean, push)
+        assert residual is not None
+        noise = rng.integers(-3, 4, residual.shape)  # a table that does not fit the values
+        steps64 = nearest.steps.astype(np.float64)
+        for lam in (0.0, 0.05, 0.4, 30.0):
+            for table_of in (residual, noise):
+                q = _same_mean_choice(core, values, steps64, mean, push, table_of, lam)
+                assert np.isin(q - np.floor(values / steps64), (0, 1)).all()
+
+
+@pytest.mark.parametrize("random_bits", [False, True])
+def test_rdo_mean_choice_at_the_value_table_edges(core, monkeypatch, random_bits):
+    # roots (predicted by 0) whose floor lies at and around the table's edges, -half and half - 1,
+    # where the reference clips the index, and far beyond them
+    if random_bits:
+        monkeypatch.setattr(rdo, "_value_table", _random_value_table)
+    half = rdo.VALUE_TABLE_HALF
+    mean = MeshPrediction(np.zeros((0, 3), dtype=np.int64), 12).mean_steps
+    floors = np.array([-half - 2, -half - 1, -half, -half + 1, half - 2, half - 1, half, half + 1])
+    floors = np.concatenate([floors, [-(1 << 30), 1 << 30, 0, -1]])
+    rng = np.random.default_rng(5)
+    cols = 16
+    values = floors[:, None] + rng.random((12, cols))
+    values[:, 3] = floors + 0.5  # ties
+    steps = np.ones(cols)
+    residual = rng.integers(-half - 100, half + 100, (50, cols))
+    for lam in (0.0, 0.05, 3.0):
+        _same_mean_choice(core, values, steps, mean, np.full(cols, 2), residual, lam)
+
+
+def test_rdo_mean_choice_blocks_of_columns_are_the_same(core, monkeypatch):
+    # a block per column, and a few columns per block: the same integers as one block
+    grid = 16
+    rng = np.random.default_rng(9)
+    values = np.cumsum(np.cumsum(rng.standard_normal((grid, grid, 40)), axis=0), axis=1)
+    values = values.reshape(grid * grid, 40) * 1e-2
+    steps = np.geomspace(0.005, 0.05, 40)
+    mesh = MeshPrediction(grid_faces(grid), grid * grid)
+    chosen = qmat.predicted_stream(qmat.quantize(values, steps).q, mesh, True, pushes=True)
+    assert (chosen.predict == qmat.PREDICT_MEAN).sum() > 20  # what this test is about
+    levels = rdo.Levels(mesh.parents)
+
+    def rounded() -> np.ndarray:
+        return rdo.quantize_mesh(values, steps, levels, mesh, chosen.predict, chosen.push).q
+
+    whole = rounded()
+    for block in (1, 3 * grid * grid):
+        monkeypatch.setattr(rdo, "MEAN_BLOCK_VALUES", block)
+        fast, reference = _both(rounded)
+        np.testing.assert_array_equal(fast, reference)
+        np.testing.assert_array_equal(fast, whole)
+
+
+def test_core_refuses_inconsistent_mean_steps(core):
+    mean = MeshPrediction(grid_faces(4), 16).mean_steps
+    arrays = [mean.rows, mean.step_ends, mean.sources, mean.anchors, mean.source_ends]
+    table = np.zeros((2, 2 * 8 + 1))
+    args = (np.zeros((16, 2)), np.ones(2), *arrays, np.full(2, 2), table)
+    assert core.rdo_mean_choice(*args, 8, 0.1).shape == (16, 2)
+    with pytest.raises(ValueError, match="value table"):
+        core.rdo_mean_choice(*args, 7, 0.1)
+    # every row in one step: rows read rows of their own step
+    whole = np.array([0, mean.rows.size])
+    with pytest.raises(ValueError, match="not chosen before its step"):
+        core.rdo_mean_choice(args[0], args[1], arrays[0], whole, *arrays[2:], *args[7:], 8, 0.1)
+
+
+@pytest.mark.slow
+def test_rdo_mean_choice_on_a_real_encode(core, monkeypatch):
+    # every call the encoder makes on a real mesh, checked against the reference as it runs
+    calls = []
+    native_choice = rdo._native_mean_choice
+
+    def checked(core, values, steps, mean, push, residual, lam):
+        calls.append(values.shape)
+        fast = native_choice(core, values, steps, mean, push, residual, lam)
+        reference = rdo._mean_choice(values, steps, mean, push, residual, lam)
+        np.testing.assert_array_equal(fast, reference)
+        return fast
+
+    monkeypatch.setattr(rdo, "_native_mean_choice", checked)
+    plain = encode(shared_sequence("cloth-vellum.npz"), target_kg=0.1)
+    assert calls
+    monkeypatch.setattr(rdo, "_native_mean_choice", native_choice)
+    assert encode(shared_sequence("cloth-vellum.npz"), target_kg=0.1) == plain
 
 
 def test_rdo_refusals_are_the_same(core):

@@ -31,11 +31,13 @@ a step of the decoder's order at a time, so that the rate model prices the resid
 really codes rather than those of the mesh parent's prediction, which the file does not use.
 
 Nothing here changes the format: the file stores the same kind of integers, chosen differently.
-The result is deterministic (pure numpy, ties to the nearest integer).
+The result is deterministic (ties to the nearest integer); the compiled core's loops, where
+installed, give the same integers as the numpy reference here.
 """
 
 from __future__ import annotations
 
+import functools
 import itertools
 from dataclasses import dataclass
 from typing import Any
@@ -333,11 +335,13 @@ def quantize_mesh(
     others = np.flatnonzero(predict != PREDICT_MEAN)
     if others.size:  # columns are chosen independently: a subset changes none of them
         q[:, others] = quantize(values[:, others], nearest.steps[others], levels, settings).q
+    core = native.core()
+    choice = _mean_choice if core is None else functools.partial(_native_mean_choice, core)
     width = max(COLUMN_BLOCK, MEAN_BLOCK_VALUES // values.shape[0])
     for start in range(0, meaned.size, width):
         block = slice(start, start + width)
         columns = meaned[block]
-        q[:, columns] = _mean_choice(
+        q[:, columns] = choice(
             values[:, columns],
             nearest.steps[columns].astype(np.float64),
             mesh.mean_steps,
@@ -413,6 +417,33 @@ def _mean_choice(
         np.floor_divide(total, divisor[start:stop], out=total)
         choose(mean.rows[start:stop], total)
     return q
+
+
+def _native_mean_choice(
+    core: Any,
+    values: np.ndarray,
+    steps: np.ndarray,
+    mean: MeanSteps,
+    push: np.ndarray,
+    residual: np.ndarray,
+    lam: float,
+) -> np.ndarray:
+    """:func:`_mean_choice` in the compiled core: the same integers (the value table, whose
+    float sums numpy orders, is made here as the reference makes it)."""
+    table = _value_table(_bit_table(residual))
+    q = core.rdo_mean_choice(
+        np.ascontiguousarray(values, dtype=np.float64),
+        np.ascontiguousarray(steps, dtype=np.float64),
+        *(
+            np.ascontiguousarray(array, dtype=np.int64)
+            for array in (mean.rows, mean.step_ends, mean.sources, mean.anchors, mean.source_ends)
+        ),
+        np.ascontiguousarray(push, dtype=np.int64),
+        table,
+        VALUE_TABLE_HALF,
+        lam,
+    )
+    return np.asarray(q)
 
 
 def _value_table(table: np.ndarray) -> np.ndarray:

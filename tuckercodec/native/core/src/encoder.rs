@@ -1,5 +1,6 @@
-//! The encoder's trial loops: rate-distortion rounding (`tuckercodec/encoder/rdo.py`) and the
-//! order-0 entropy of trial streams (`tuckercodec/encoder/estimate.py`).
+//! The encoder's trial loops: rate-distortion rounding (`tuckercodec/encoder/rdo.py`, under
+//! predictor 2 in `mean_choice.rs`) and the order-0 entropy of trial streams
+//! (`tuckercodec/encoder/estimate.py`).
 //!
 //! Every result is the same as the Python reference's, integer for integer; where a float
 //! feeds a decision it is computed with the same operations in the same order (no fused
@@ -12,6 +13,10 @@
 //! one is an [`EncoderError`], never a panic.
 
 use std::fmt;
+
+mod mean_choice;
+
+pub use mean_choice::{rdo_mean_choice, MeanChoiceModel};
 
 /// An argument the encoder's loops cannot use (shapes that disagree, a parent out of range).
 #[derive(Debug, Clone, PartialEq, Eq)]

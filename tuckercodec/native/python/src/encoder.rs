@@ -7,7 +7,7 @@ use numpy::{
 };
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use tuckercodec_core::encoder::{self, ChooseModel, EncoderError};
+use tuckercodec_core::encoder::{self, ChooseModel, EncoderError, MeanChoiceModel};
 
 fn value_error(error: EncoderError) -> PyErr {
     PyValueError::new_err(error.0)
@@ -90,6 +90,44 @@ fn rdo_choose<'py>(
     matrix(py, q, rows, cols)
 }
 
+/// rdo._mean_choice: U1's columns under predictor 2 chosen against its prediction, in the
+/// decoder's order, from MeanSteps' arrays, each column's push (int64) and the value table
+/// (cols, 2 half + 1): the integers chosen, (rows, cols) int64.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+fn rdo_mean_choice<'py>(
+    py: Python<'py>,
+    values: PyReadonlyArray2<'py, f64>,
+    steps: PyReadonlyArray1<'py, f64>,
+    rows: PyReadonlyArray1<'py, i64>,
+    step_ends: PyReadonlyArray1<'py, i64>,
+    sources: PyReadonlyArray1<'py, i64>,
+    anchors: PyReadonlyArray1<'py, i64>,
+    source_ends: PyReadonlyArray1<'py, i64>,
+    push: PyReadonlyArray1<'py, i64>,
+    table: PyReadonlyArray2<'py, f64>,
+    half: usize,
+    lam: f64,
+) -> PyResult<Bound<'py, PyArray2<i64>>> {
+    let (height, cols) = shape2(&values);
+    let model = MeanChoiceModel {
+        rows: rows.as_slice()?,
+        step_ends: step_ends.as_slice()?,
+        sources: sources.as_slice()?,
+        anchors: anchors.as_slice()?,
+        source_ends: source_ends.as_slice()?,
+        push: push.as_slice()?,
+        table: table.as_slice()?,
+        half,
+        lam,
+    };
+    let (values, steps) = (values.as_slice()?, steps.as_slice()?);
+    let q = py
+        .detach(|| encoder::rdo_mean_choice(values, height, cols, steps, &model))
+        .map_err(value_error)?;
+    matrix(py, q, height, cols)
+}
+
 /// np.abs(values).max() of a contiguous float64 array of any shape (0 for none).
 #[pyfunction]
 fn max_abs(py: Python<'_>, values: PyReadonlyArrayDyn<'_, f64>) -> PyResult<f64> {
@@ -102,6 +140,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(rdo_predicted_columns, m)?)?;
     m.add_function(wrap_pyfunction!(rdo_residual_counts, m)?)?;
     m.add_function(wrap_pyfunction!(rdo_choose, m)?)?;
+    m.add_function(wrap_pyfunction!(rdo_mean_choice, m)?)?;
     m.add_function(wrap_pyfunction!(max_abs, m)?)?;
     Ok(())
 }
