@@ -170,17 +170,23 @@ def encode_traversal_ordered(
     table = np.asarray(faces, dtype=np.int64)
     count, width = table.shape if table.ndim == 2 and table.size else (0, 3)
     walk = _walked(table, count, vertex_count)
+    # the coders to try, each with the three streams the corner order does not change, packed
+    # once: only the ops differ between the corner orders
+    coders = {adaptive.CODER_ZSTD: [walk.degrees, walk.new_residuals, walk.references]}
     ranks = _ranks(walk.new_residuals, vertex_count) if adaptive_coding else None
+    if ranks is not None:
+        ranked: list[Sequence[int]] = [walk.degrees, ranks.tolist(), walk.references]
+        if _fits_adaptive([*walk.ops, *ranked]):
+            coders[adaptive.CODER_ADAPTIVE] = ranked
+    packed_rest = {
+        coder: [_pack_stream(values, level, coder) for values in rest]
+        for coder, rest in coders.items()
+    }
     best: tuple[int, dict[str, Any], bytes] | None = None
     for corner_order in (ROTATE_FROM_GATE, ROTATE_FROM_SMALLEST):
-        ops = walk.ops[corner_order]
-        coded = [ops, walk.degrees, walk.new_residuals, walk.references]
-        candidates = [pack_streams(coded, count, width, corner_order, level)]
-        if ranks is not None:
-            ranked: list[Sequence[int]] = [ops, walk.degrees, ranks.tolist(), walk.references]
-            if _fits_adaptive(ranked):
-                candidates.append(pack_streams(ranked, count, width, corner_order, level, 1))
-        for params, payload in candidates:
+        for coder in coders:
+            packed = [_pack_stream(walk.ops[corner_order], level, coder), *packed_rest[coder]]
+            params, payload = _assembled(packed, count, width, corner_order, coder)
             size = len(payload) + len(msgpack.packb(params))
             if best is None or size < best[0]:
                 best = size, params, payload
@@ -245,21 +251,30 @@ def pack_streams(
     """``(params, payload)`` of the four streams ``coded`` (ops, degrees, vertices, references):
     zstd over byte planes (§6.1), or with ``coder`` 1 each one adaptive column (§6.14, planes 0;
     the vertices stream then holds the NEW vertices' ranks)."""
-    parts, table = [], []
-    for values in coded:
-        array = np.asarray(values, dtype=np.int64)
-        if coder == adaptive.CODER_ADAPTIVE:
-            payload = adaptive.encode_columns(array[None, :], adaptive.sequence_order(array.size))
-            planes = 0
-        else:
-            payload, planes = streams.pack_integers(array, level)
-        parts.append(payload)
-        table.append([len(values), planes, len(payload)])
+    packed = [_pack_stream(values, level, coder) for values in coded]
+    return _assembled(packed, count, width, corner_order, coder)
+
+
+def _pack_stream(values: Sequence[int], level: int, coder: int) -> tuple[int, int, bytes]:
+    """``(count, planes, payload)`` of one stream: zstd over byte planes, or with ``coder`` 1
+    one adaptive column (planes 0)."""
+    array = np.asarray(values, dtype=np.int64)
+    if coder == adaptive.CODER_ADAPTIVE:
+        order = adaptive.sequence_order(array.size)
+        return array.size, 0, adaptive.encode_columns(array[None, :], order)
+    payload, planes = streams.pack_integers(array, level)
+    return array.size, planes, payload
+
+
+def _assembled(
+    packed: Sequence[tuple[int, int, bytes]], count: int, width: int, corner_order: int, coder: int
+) -> tuple[dict[str, Any], bytes]:
+    """``(params, payload)`` of the four packed streams (ops, degrees, vertices, references)."""
     params: dict[str, Any] = {"shape": [count, width], "corner_order": corner_order}
     if coder == adaptive.CODER_ADAPTIVE:  # absent means 0: a file of coder 0 is as before 1.6
         params["coder"] = coder
-    params["streams"] = table
-    return params, b"".join(parts)
+    params["streams"] = [[size, planes, len(payload)] for size, planes, payload in packed]
+    return params, b"".join(payload for _, _, payload in packed)
 
 
 class _Walk:
