@@ -39,15 +39,34 @@ def variants(
     ]
 
 
+def random_mesh_matrix(rng: np.random.Generator) -> tuple[np.ndarray, qmat.QuantizedMatrix]:
+    """A random mesh's faces and a smooth quantized U1 on it, of up to 39 columns (up to five
+    blocks of columns, which the core's threads share)."""
+    count = int(rng.integers(3, 150))
+    faces = random_faces(rng, count, 2 * count)
+    cols = int(rng.integers(1, 40))
+    values = np.cumsum(rng.integers(-500, 501, size=(count, cols)), axis=0)
+    steps = rng.uniform(1e-4, 1.0, size=cols).astype(np.float32)
+    return faces, qmat.QuantizedMatrix(values, steps)
+
+
+def assert_fused_as_reference(decode: Any, reference: Any) -> None:
+    """The fused path (``decode``) gives what the pure path and the pure-Python reference give:
+    the same values, or the same error."""
+    fused, pure = both(decode)
+    assert_same(fused, pure)
+    with native.pure_python():
+        expected = both(reference)[1]
+    if isinstance(expected, qmat.QuantizedMatrix):
+        expected = expected.values()
+    assert_same(fused, expected)
+
+
 @pytest.mark.parametrize("seed", range(8))
 def test_mesh_sections_decode_to_the_same_values(seed: int) -> None:
     rng = np.random.default_rng(300 + seed)
-    count = int(rng.integers(3, 150))
-    faces = random_faces(rng, count, 2 * count)
-    cols = int(rng.integers(1, 40))  # up to five blocks of columns, the threads share them
-    values = np.cumsum(rng.integers(-500, 501, size=(count, cols)), axis=0)
-    steps = rng.uniform(1e-4, 1.0, size=cols).astype(np.float32)
-    matrix = qmat.QuantizedMatrix(values, steps)
+    faces, matrix = random_mesh_matrix(rng)
+    count, cols = matrix.q.shape
     params, payload = qmat.encode_matrix(matrix, MeshPrediction(faces, count), level=1)
     for mutated, data in variants(rng, params, payload, count * cols):
         for tools in [True, False]:
@@ -64,13 +83,7 @@ def test_mesh_sections_decode_to_the_same_values(seed: int) -> None:
                 mesh = MeshPrediction(faces, count)
                 return qmat.decode_matrix(data, mutated, mesh, "test", coding_tools=tools)
 
-            fused, pure = both(decode)
-            assert_same(fused, pure)
-            with native.pure_python():
-                expected = both(reference)[1]
-            if isinstance(expected, qmat.QuantizedMatrix):
-                expected = expected.values()
-            assert_same(fused, expected)
+            assert_fused_as_reference(decode, reference)
 
 
 def adaptive_variants(
@@ -104,13 +117,10 @@ def adaptive_variants(
 @pytest.mark.parametrize("seed", range(8))
 def test_adaptive_mesh_sections_decode_to_the_same_values(seed: int) -> None:
     rng = np.random.default_rng(700 + seed)
-    count = int(rng.integers(3, 150))
-    faces = random_faces(rng, count, 2 * count)
-    cols = int(rng.integers(1, 40))  # up to five blocks of columns, restored beside the decoding
-    values = np.cumsum(rng.integers(-500, 501, size=(count, cols)), axis=0)
-    steps = rng.uniform(1e-4, 1.0, size=cols).astype(np.float32)
+    faces, matrix = random_mesh_matrix(rng)
+    count = matrix.q.shape[0]
     mesh = MeshPrediction(faces, count)
-    params, _ = qmat.encode_matrix(qmat.QuantizedMatrix(values, steps), mesh, level=1)
+    params, _ = qmat.encode_matrix(matrix, mesh, level=1)
     for mutated, data in adaptive_variants(rng, params, mesh, count):
 
         def decode(mutated: dict[str, Any] = mutated, data: bytes = data) -> Any:
@@ -125,10 +135,4 @@ def test_adaptive_mesh_sections_decode_to_the_same_values(seed: int) -> None:
                 data, mutated, mesh, "test", coding_tools=True, adaptive_coding=True
             )
 
-        fused, pure = both(decode)
-        assert_same(fused, pure)
-        with native.pure_python():
-            expected = both(reference)[1]
-        if isinstance(expected, qmat.QuantizedMatrix):
-            expected = expected.values()
-        assert_same(fused, expected)
+        assert_fused_as_reference(decode, reference)
