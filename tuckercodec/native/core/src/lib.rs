@@ -12,5 +12,7 @@ pub mod fuzzing;
 pub mod prediction;
 pub mod residual;
 pub mod streams;
+#[cfg(test)]
+mod test_random;
 pub mod text;
 pub mod traversal;

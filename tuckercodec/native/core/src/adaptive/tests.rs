@@ -1,16 +1,7 @@
 use super::*;
-
-/// A small deterministic generator (xorshift64*), so the tests need no crate.
-struct Random(u64);
+use crate::test_random::Random;
 
 impl Random {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-
     /// Mostly small signed integers, some zero, now and then one of any size below 2**62.
     fn integer(&mut self) -> i64 {
         let r = self.next();

@@ -2,6 +2,7 @@
 //! values that must never panic.
 
 use super::{decode, encode, Streams};
+use crate::test_random::Random;
 
 fn streams<'a>(values: &'a [Vec<i64>; 4]) -> Streams<'a> {
     Streams {
@@ -137,17 +138,7 @@ fn every_error_says_what_the_reference_says() {
     );
 }
 
-/// xorshift64*: random values without a crate.
-struct Random(u64);
-
 impl Random {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-
     fn below(&mut self, n: u64) -> u64 {
         self.next() % n
     }
