@@ -110,20 +110,13 @@ impl MeanPlan {
                     &mut predictions,
                 )?;
                 let mut out = output.lock().unwrap_or_else(|e| e.into_inner());
-                let steps = &steps[first..first + block_width];
-                for (row, values) in out
-                    .chunks_exact_mut(width)
-                    .zip(work.chunks_exact(block_width))
-                {
-                    for ((slot, &value), &step) in row[first..first + block_width]
-                        .iter_mut()
-                        .zip(values)
-                        .zip(steps)
-                    {
-                        // an exact integer: through int64 as numpy's product of q reads it
-                        *slot = (value as i64) as f64 * f64::from(step);
-                    }
-                }
+                scale_into(
+                    &mut out,
+                    width,
+                    first,
+                    &work,
+                    &steps[first..first + block_width],
+                );
             }
         };
         let threads = threads.clamp(1, blocks);
@@ -471,19 +464,25 @@ impl BlockRestorer<'_, '_> {
         }
         let width = self.steps.len();
         let steps = &self.steps[first..first + block_width];
-        for (row, values) in self
-            .out
-            .chunks_exact_mut(width)
-            .zip(work.chunks_exact(block_width))
+        scale_into(self.out, width, first, work, steps);
+    }
+}
+
+/// A block of restored columns (`work`, row-major, `steps.len()` wide) scaled by their steps
+/// into columns `first..` of `out` (row-major, `width` wide).
+fn scale_into(out: &mut [f64], width: usize, first: usize, work: &[f64], steps: &[f32]) {
+    let block_width = steps.len();
+    for (row, values) in out
+        .chunks_exact_mut(width)
+        .zip(work.chunks_exact(block_width))
+    {
+        for ((slot, &value), &step) in row[first..first + block_width]
+            .iter_mut()
+            .zip(values)
+            .zip(steps)
         {
-            for ((slot, &value), &step) in row[first..first + block_width]
-                .iter_mut()
-                .zip(values)
-                .zip(steps)
-            {
-                // an exact integer: through int64 as numpy's product of q reads it
-                *slot = (value as i64) as f64 * f64::from(step);
-            }
+            // an exact integer: through int64 as numpy's product of q reads it
+            *slot = (value as i64) as f64 * f64::from(step);
         }
     }
 }
