@@ -173,12 +173,7 @@ fn restore_values_matches_restore_columns_times_steps() {
             let mut out = vec![0.0; count * width];
             plan.restore_values(&raw, planes, count, &steps, &mut out, threads, &[2; 19])
                 .unwrap();
-            for (v, row) in out.chunks_exact(width).enumerate() {
-                for (c, &value) in row.iter().enumerate() {
-                    let expected = columns[c * count + v] as f64 * f64::from(steps[c]);
-                    assert_eq!(value.to_bits(), expected.to_bits());
-                }
-            }
+            assert_scaled(&out, &columns, count, &steps);
         }
     }
 }
@@ -447,12 +442,7 @@ fn restore_adaptive_values_matches_decoding_then_restoring() {
             plan.restore_adaptive_values(&payload, &order, 3, &steps, &mut out, threads, &push)
                 .unwrap()
                 .unwrap();
-            for (v, row) in out.chunks_exact(width).enumerate() {
-                for (c, &value) in row.iter().enumerate() {
-                    let expected = columns[c * count + v] as f64 * f64::from(steps[c]);
-                    assert_eq!(value.to_bits(), expected.to_bits());
-                }
-            }
+            assert_scaled(&out, &columns, count, &steps);
         }
     }
 }
@@ -506,4 +496,15 @@ fn restore_adaptive_values_refuses_in_order() {
     assert!(caller(plan.restore_adaptive_values(
         &payload, &order, 5, &steps, &mut out, 1, &[2; 8]
     )));
+}
+
+/// `out` (row-major, one column per step) is each restored column (column-major, `count` rows)
+/// times its step, bit for bit.
+fn assert_scaled(out: &[f64], columns: &[i64], count: usize, steps: &[f32]) {
+    for (v, row) in out.chunks_exact(steps.len()).enumerate() {
+        for (c, &value) in row.iter().enumerate() {
+            let expected = columns[c * count + v] as f64 * f64::from(steps[c]);
+            assert_eq!(value.to_bits(), expected.to_bits());
+        }
+    }
 }
