@@ -176,7 +176,9 @@ function sourcePositions(order, rows) {
  * more than half its ulp); past 2^53, x / n is far above 2^13 (n < 2^31) and the class is the
  * last whatever the rounding. Below 2^31, x needs no division (which would sit between one
  * integer and the next): with k = bitlen(x) − bitlen(n), bitlen(m) is k + 1 if x >= n·2^k, else
- * k (0 if k < 0), and n·2^k < 2^bitlen(x) <= 2^31 is exact as an int32 shift.
+ * k (0 if k < 0), and n·2^k < 2^bitlen(x) <= 2^31 is exact as an int32 shift. Both tests are
+ * taken from the sign of a difference rather than a branch, as the processor could not predict
+ * them.
  * @param {number} j
  * @param {Uint32Array} magnitudes by coding position (decodeAdaptive)
  * @param {Int32Array | null} ends the mesh order's, or null for ascending rows
@@ -197,8 +199,9 @@ function neighbourClass(j, magnitudes, ends, first, source) {
   const x = 3 * s;
   if (x >= 8192 * n) return NEIGHBOUR_CLASSES - 1;
   if (x >= 2 ** 31) return magnitudeClass(Math.floor(x / n));
-  const k = Math.clz32(n) - Math.clz32(x);
-  return k < 0 ? 1 : 1 + k + (x >= n << k ? 1 : 0);
+  const gap = Math.clz32(n) - Math.clz32(x);
+  const k = gap & ~(gap >> 31); // max(gap, 0) without a branch: if gap < 0, x < n = n << k
+  return 2 + k - ((x - (n << k)) >>> 31);
 }
 
 /**
@@ -297,7 +300,7 @@ function decodeColumn(d, column, magnitudes, left, rows, ends, first, source) {
     }
     // past the payload's end, the padding's zeros were read: R46 for that before anything else
     if (next > end || (negative ? magnitude > half : magnitude >= half)) throw next > end ? d.ended() : d.unbounded();
-    column[rows === null ? j : rows[j]] = negative ? -magnitude : magnitude;
+    column[rows === null ? j : rows[j]] = (magnitude ^ -negative) + negative; // −magnitude if negative
     // B = min(bitlen(2·|x[r, c]| + |x[r, c−1]|), 5) for the next column
     const b = 2 * magnitude + magnitudes[j];
     left[j] = b >= 16 ? LEFT_CLASSES - 1 : 32 - Math.clz32(b);
