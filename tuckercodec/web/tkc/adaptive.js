@@ -158,12 +158,13 @@ const FIRST_SOURCES = 4;
 function sourcePositions(order, rows) {
   const at = new Int32Array(rows);
   for (let j = 0; j < rows; j++) at[order.order[j]] = j;
-  const source = order.source.map((w) => at[w]);
+  const source = new Int32Array(order.source.length);
+  for (let t = 0; t < source.length; t++) source[t] = at[order.source[t]];
   const first = new Int32Array(FIRST_SOURCES * rows).fill(rows);
   for (let j = 0; j < rows; j++) {
     const s0 = order.ends[j];
     const n = Math.min(order.ends[j + 1] - s0, FIRST_SOURCES);
-    first.set(source.subarray(s0, s0 + n), FIRST_SOURCES * j);
+    for (let i = 0; i < n; i++) first[FIRST_SOURCES * j + i] = source[s0 + i];
   }
   return { first, source };
 }
