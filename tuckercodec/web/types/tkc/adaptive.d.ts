@@ -25,6 +25,12 @@ export declare function adaptiveError(where: string, message: string): import(".
  */
 export declare class RangeDecoder {
     data: Uint8Array<ArrayBufferLike>;
+    /**
+     * the payload then PADDING zeros: decodeColumn reads on past the payload's end until the
+     * integer's end, where it refuses the stream (an integer is at most 65 decisions, each
+     * taking in at most two bytes), so that no byte read checks the end
+     */
+    padded: Uint8Array<ArrayBuffer>;
     where: string;
     code: number;
     range: number;
