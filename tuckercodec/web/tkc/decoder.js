@@ -1,4 +1,4 @@
-// The JavaScript decoder of the tuckercodec format, written from spec/FORMAT.md (version 1.6):
+// The JavaScript decoder of the tuckercodec format, written from spec/FORMAT.md (version 1.7):
 // openTkc(bytes) checks the container and header, decodes the faces and names, and, for a file
 // that is not segmented, every factor and its corrections' parameters; a segmented file's
 // segments are decoded when one of their frames is asked for (§6.7), and the two most recently
@@ -388,7 +388,8 @@ export class TkcFile {
   _readResidual(d, s) {
     const segment = this.layout.segments[s];
     const section = /** @type {import('./container.js').Section} */ (segment.resd);
-    const residual = readResidual(section, segment.frames, this.vertices, this.limits);
+    // (1.7) with flag bit 4 its `coder` is read: each chunk may be an adaptive stream (§6.14)
+    const residual = readResidual(section, segment.frames, this.vertices, this.limits, this.layout.adaptiveCorrections);
     d.residualPayload = this._payload(section);
     d.residual = residual;
   }
