@@ -696,13 +696,15 @@ def encode_section(
     chunk_frames: int | None = None,
     predict: int | None = None,
     adaptive_coding: bool = False,
+    adaptive_gain: float = ADAPTIVE_GAIN,
 ) -> tuple[dict[str, Any], bytes]:
     """A RESD section's parameters and payload for the integers ``residual`` (F', K, 3).
 
     ``chunk_frames`` defaults to about :data:`CHUNK_VALUES` integers a chunk; ``predict`` to
     whichever of the two stores the smaller payload. With ``adaptive_coding`` (a file that may
-    set flag bit 4, format 1.7) the chunks are also coded as adaptive streams, with either
-    predict, and that coding is kept where it is smaller by more than :data:`ADAPTIVE_GAIN`."""
+    set flag bit 4, format 1.7) the chunks are also coded as adaptive streams, with the same
+    predict options, and that coding is kept where it is smaller by more than
+    ``adaptive_gain`` (a share of the zstd payload)."""
     frames, vertices, _ = residual.shape
     if chunk_frames is None:
         chunk_frames = max(1, min(frames, CHUNK_VALUES // (3 * vertices)))
@@ -715,12 +717,16 @@ def encode_section(
             best = section
     assert best is not None
     if adaptive_coding:
-        for choice in (0, 1):
+        threshold = (1.0 - adaptive_gain) * len(best[1])
+        adaptive_best: tuple[dict[str, Any], bytes] | None = None
+        for choice in options:
             coded = _packed_section(
                 residual, domain, level, exponent, chunk_frames, choice, adaptive.CODER_ADAPTIVE
             )
-            if coded is not None and len(coded[1]) < (1.0 - ADAPTIVE_GAIN) * len(best[1]):
-                best = coded
+            if coded is not None and (adaptive_best is None or len(coded[1]) < len(adaptive_best[1])):
+                adaptive_best = coded
+        if adaptive_best is not None and len(adaptive_best[1]) < threshold:
+            best = adaptive_best
     return best
 
 
