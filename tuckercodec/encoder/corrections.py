@@ -207,11 +207,14 @@ def smallest_section(
     *,
     exponent: int = 0,
     predict: int | None = None,
+    adaptive_coding: bool = False,
 ) -> tuple[Domain, tuple[dict[str, Any], bytes], np.ndarray]:
     """Of ``domains``, the one whose corrections from ``exact`` to ``original`` pack smallest
     at zstd ``level`` (the first of equal sizes): the domain, its RESD section (§6.9) and its
     integers. The one place the corrections are put in the format's terms, for sizing a part
-    and for the file, whole or in segments."""
+    and for the file, whole or in segments. With ``adaptive_coding`` (the file's final
+    sections), the domain chosen is packed again with the adaptive chunks of format 1.7 tried
+    too (:func:`~..format.residual.encode_section`)."""
     best: tuple[Domain, tuple[dict[str, Any], bytes], np.ndarray] | None = None
     for domain in domains:
         integers = integers_for(exact, original, goal, domain)
@@ -221,6 +224,12 @@ def smallest_section(
         if best is None or len(section[1]) < len(best[1][1]):
             best = (domain, section, integers)
     assert best is not None
+    if adaptive_coding:
+        domain, section, integers = best
+        section = residual.encode_section(
+            integers, domain, level, exponent=exponent, predict=predict, adaptive_coding=True
+        )
+        best = (domain, section, integers)
     return best
 
 
@@ -363,6 +372,7 @@ def final_section(
         min(level, CORRECTION_LEVEL),
         exponent=exponent,
         predict=predict,
+        adaptive_coding=True,
     )
     return section, integers, corrected_positions(exact, integers, domain)
 
@@ -380,7 +390,13 @@ def check_written(
     frames, vertices = integers.shape[:2]
     where = f"section {section_id}"
     layout = residual.read_layout(
-        entry.params, entry.length, frames, vertices, DEFAULT_LIMITS, where
+        entry.params,
+        entry.length,
+        frames,
+        vertices,
+        DEFAULT_LIMITS,
+        where,
+        adaptive_corrections=container.adaptive_corrections,
     )
     for chunk in range(len(layout.planes)):
         start, stop = layout.chunk_range(chunk)
@@ -464,7 +480,13 @@ def correct_segments(
         )
         original = work.source.read(part.segment.start, part.segment.stop)
         domain, section, integers = smallest_section(
-            exact, original, goal, goal.domains, min(level, CORRECTION_LEVEL), exponent=exponent
+            exact,
+            original,
+            goal,
+            goal.domains,
+            min(level, CORRECTION_LEVEL),
+            exponent=exponent,
+            adaptive_coding=True,
         )
         decoded = corrected_positions(exact, integers, domain)
         measure(decoded, original, goal)
