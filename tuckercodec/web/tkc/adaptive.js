@@ -394,53 +394,59 @@ function decodeWideColumn(d, column, magnitudes, left) {
       const s = shifts[m];
       const bound = Math.imul(range >>> PROB_BITS, p) >>> 0;
       if (s < LAST_SHIFT) shifts[m] = s + 1;
-      const bit = code >= bound ? 1 : 0;
-      if (bit) {
-        code = (code - bound) >>> 0;
-        range = (range - bound) >>> 0;
-        probs[m] = p - (p >> s);
-      } else {
+      if (code < bound) {
         range = bound;
         probs[m] = p + ((PROB_ONE - p) >> s);
+        for (; range < TOP; range = (range << 8) >>> 0) code = ((code << 8) | data[next++]) >>> 0;
+        break;
       }
+      code = (code - bound) >>> 0;
+      range = (range - bound) >>> 0;
+      probs[m] = p - (p >> s);
       for (; range < TOP; range = (range << 8) >>> 0) code = ((code << 8) | data[next++]) >>> 0;
-      if (!bit) break;
       if (e >= 0) {
         if (++e > longest) throw next > end ? d.ended() : d.tooLong();
         continue;
       }
-      [negative, range, code] = modelled(probs, shifts, base + SIGN, range, code);
+      const sb = Math.imul(range >>> PROB_BITS, probs[base + SIGN]) >>> 0; // the sign: masks
+      negative = code >= sb ? 1 : 0;
+      code = (code - (sb & -negative)) >>> 0;
+      range = ((sb & (negative - 1)) | ((range - sb) & -negative)) >>> 0;
+      adapt(probs, shifts, base + SIGN, negative);
       for (; range < TOP; range = (range << 8) >>> 0) code = ((code << 8) | data[next++]) >>> 0;
       e = 0;
     }
-    let hi = e >= 32 ? 1 : 0; // the leading one
-    let lo = e >= 0 && e < 32 ? 1 : 0;
+    // the bits under the leading one, into `acc`: from 2^32 up they make `hi`, then `lo`
+    let acc = e < 0 ? 0 : 1;
+    let hi = 0;
+    let first = 0;
     const slot = e < EXPONENT_MODELS ? e : EXPONENT_MODELS - 1;
     for (let b = 0; b < e; b++) {
+      if (b === e - 32) {
+        hi = acc;
+        acc = 0;
+      }
       let bit = 0;
       if (b < 2) {
-        const m = b === 0 ? base + FIRST_BIT + slot : base + SECOND_BIT + 2 * slot + ((e - 1 >= 32 ? hi : lo) & 1);
-        [bit, range, code] = modelled(probs, shifts, m, range, code);
+        const m = b === 0 ? base + FIRST_BIT + slot : base + SECOND_BIT + 2 * slot + first;
+        const bound = Math.imul(range >>> PROB_BITS, probs[m]) >>> 0;
+        bit = code >= bound ? 1 : 0;
+        code = (code - (bound & -bit)) >>> 0;
+        range = ((bound & (bit - 1)) | ((range - bound) & -bit)) >>> 0;
+        adapt(probs, shifts, m, bit);
+        first = bit;
       } else {
         range >>>= 1;
         bit = code >= range ? 1 : 0;
         code = (code - (range & -bit)) >>> 0;
       }
       for (; range < TOP; range = (range << 8) >>> 0) code = ((code << 8) | data[next++]) >>> 0;
-      if (e - 1 - b >= 32) hi = 2 * hi + bit;
-      else lo = 2 * lo + bit;
+      acc = 2 * acc + bit;
     }
     if (next > end) throw d.ended();
-    if (hi > halfHi || (hi === halfHi && (negative ? lo > halfLo : lo >= halfLo))) throw d.unbounded();
-    // −(hi·2^32 + lo) if negative: each half complemented, plus one carried in from the low
-    column[2 * j] = ((lo ^ -negative) + negative) | 0;
-    column[2 * j + 1] = ((hi ^ -negative) + (lo === 0 ? negative : 0)) | 0;
-    const magnitude = hi > 0 || lo >= MAGNITUDE_CAP ? MAGNITUDE_CAP : lo;
-    const b = 2 * magnitude + magnitudes[j];
-    left[j] = b >= 16 ? LEFT_CLASSES - 1 : 32 - Math.clz32(b);
-    magnitudes[j] = magnitude;
+    if (hi > halfHi || (hi === halfHi && (negative ? acc > halfLo : acc >= halfLo))) throw d.unbounded();
     two = one;
-    one = magnitude;
+    one = store(column, j, hi, acc, negative, magnitudes, left);
   }
   d.range = range;
   d.code = code;
@@ -448,23 +454,41 @@ function decodeWideColumn(d, column, magnitudes, left) {
 }
 
 /**
- * One decision of model m, close to even odds (the sign, the first and second bits under the
- * leading one), computed with masks rather than a branch: its bit and the registers after it,
- * before the range is renormalized.
+ * Row j's integer, −(hi·2^32 + lo) if negative, into decodeWideColumn's column as halves (each
+ * complemented, plus one carried in from the low); its magnitude saturated at MAGNITUDE_CAP
+ * into `magnitudes`, and its B for the next column into `left`.
+ * @param {Int32Array} column
+ * @param {number} j
+ * @param {number} hi
+ * @param {number} lo
+ * @param {number} negative 1 or 0
+ * @param {Uint32Array} magnitudes
+ * @param {Uint8Array} left
+ * @returns {number} the saturated magnitude
+ */
+function store(column, j, hi, lo, negative, magnitudes, left) {
+  column[2 * j] = ((lo ^ -negative) + negative) | 0;
+  column[2 * j + 1] = ((hi ^ -negative) + (lo === 0 ? negative : 0)) | 0;
+  const magnitude = hi > 0 || lo >= MAGNITUDE_CAP ? MAGNITUDE_CAP : lo;
+  const b = 2 * magnitude + magnitudes[j];
+  left[j] = b >= 16 ? LEFT_CLASSES - 1 : 32 - Math.clz32(b);
+  magnitudes[j] = magnitude;
+  return magnitude;
+}
+
+/**
+ * A model's update after its decision `bit` (§6.14): the probability moved toward it by its
+ * shift, with masks rather than a branch (the decisions near even odds would mispredict one),
+ * and the shift one more up to LAST_SHIFT.
  * @param {Uint16Array} probs
  * @param {Uint8Array} shifts
  * @param {number} m
- * @param {number} range
- * @param {number} code
- * @returns {[number, number, number]} bit, range, code
+ * @param {number} bit
  */
-function modelled(probs, shifts, m, range, code) {
+function adapt(probs, shifts, m, bit) {
   const p = probs[m];
   const s = shifts[m];
-  const bound = Math.imul(range >>> PROB_BITS, p) >>> 0;
-  const bit = code >= bound ? 1 : 0;
   const one = -bit;
   probs[m] = p + (((PROB_ONE - p) >> s) & ~one) - ((p >> s) & one);
   if (s < LAST_SHIFT) shifts[m] = s + 1;
-  return [bit, ((bound & ~one) | ((range - bound) & one)) >>> 0, (code - (bound & one)) >>> 0];
 }
