@@ -282,12 +282,13 @@ export class TkcFile {
   /**
    * Segment s's corrections (§6.9): null in a file without them (flag bit 2), else the RESD
    * section's domain, grid step (0 outside domain "grid"), scale (the places or digits of a
-   * decimal domain, else null), §8.1's exponent, predict, frames per chunk and chunks.
+   * decimal domain, else null), §8.1's exponent, predict, (1.7) coder (0: zstd planes, 1:
+   * adaptive streams), frames per chunk and chunks.
    */
   residual(s = 0) {
     const r = this._segment(s).residual;
     if (r === null) return null;
-    return { domain: r.domain, step: r.step, scale: r.scale, exponent: r.exponent, predict: r.predict, chunkFrames: r.chunkFrames, chunks: r.chunks.length };
+    return { domain: r.domain, step: r.step, scale: r.scale, exponent: r.exponent, predict: r.predict, coder: r.coder, chunkFrames: r.chunkFrames, chunks: r.chunks.length };
   }
 
   /**
