@@ -952,8 +952,7 @@ def adaptive_correction_vectors(
         ),
         "v1.7-segments-adaptive": (
             with_adaptive_corrections(segments, predict=1),
-            "format 1.7 and 1.1: lossless values in three segments, each RESD.s an adaptive "
-            "stream",
+            "format 1.7 and 1.1: lossless values in three segments, each RESD.s an adaptive stream",
         ),
     }
 
@@ -1063,7 +1062,15 @@ def correction_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
     entry = parts.entries[parts.index("RESD")]
     payload = parts.payloads[parts.index("RESD")]
     vertices, frames = parts.header["vertices"], parts.header["frames"]
-    layout = residual.read_layout(entry, len(payload), frames, vertices, DEFAULT_LIMITS, "RESD")
+    layout = residual.read_layout(
+        entry,
+        len(payload),
+        frames,
+        vertices,
+        DEFAULT_LIMITS,
+        "RESD",
+        adaptive_corrections=bool(parts.flags & residual.ADAPTIVE_CORRECTIONS),
+    )
     chunks = [
         residual.decode_chunk(payload, layout, number, vertices, "RESD")
         for number in range(len(layout.planes))

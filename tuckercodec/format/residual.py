@@ -723,7 +723,9 @@ def encode_section(
             coded = _packed_section(
                 residual, domain, level, exponent, chunk_frames, choice, adaptive.CODER_ADAPTIVE
             )
-            if coded is not None and (adaptive_best is None or len(coded[1]) < len(adaptive_best[1])):
+            if coded is not None and (
+                adaptive_best is None or len(coded[1]) < len(adaptive_best[1])
+            ):
                 adaptive_best = coded
         if adaptive_best is not None and len(adaptive_best[1]) < threshold:
             best = adaptive_best
