@@ -178,6 +178,14 @@ def test_a_shared_basis_newer_than_the_cap_is_refused(scrambled):
     part = SequenceFrames(tc.MeshSequence(scrambled.vertices[:8], scrambled.faces))
     with pytest.raises(FormatVersionError, match=re.escape("the shared basis needs format 1.6")):
         encode_frames(part, target_kg=TARGET, format_version="1.5", shared_basis=basis)
+    predicted = shared_basis_of(
+        tc.encode_with_report(
+            scrambled, target_kg=TARGET, segment_frames=8, format_version="1.2"
+        ).data
+    )
+    assert 2 in predicted.params["predict"]  # U1's mean predictor, a tool of 1.2
+    with pytest.raises(FormatVersionError, match=re.escape("the shared basis needs format 1.2")):
+        encode_frames(part, target_kg=TARGET, format_version="1.1", shared_basis=predicted)
     older = tc.encode_with_report(
         scrambled, target_kg=TARGET, segment_frames=8, format_version="1.1"
     ).data

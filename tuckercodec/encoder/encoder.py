@@ -24,6 +24,7 @@ from ..format.attachments import ATTACHMENTS_MINOR
 from ..format.container import PREAMBLE, SCENE_MINOR, SIGNATURE
 from ..format.header import scene_keys
 from ..format.sections import CODING_TOOLS_MINOR, uses_coding_tools
+from ..format.sections import entry as section_entry
 from ..format.segments import BASIS_OWN, SEGMENTED_MINOR
 from ..model.attributes import Field
 from ..model.sequence import MeshSequence
@@ -115,7 +116,8 @@ class Encoder:
         """Encode in segments (format 1.1), however small the sequence: ``segment_frames``
         frames each (default 250). With ``shared_basis`` (the U1 section of another segmented
         file, :func:`~.segmented.shared_basis_of`), every segment uses its leading columns and
-        the file holds the section byte for byte."""
+        the file holds the section byte for byte. ``FormatVersionError`` where
+        ``format_version`` is below 1.1, or below what the basis's section uses."""
         start = time.perf_counter()
         options = self.options
         if options.select != "exact":
@@ -231,7 +233,7 @@ class Encoder:
         """Refuse a given shared basis whose section, copied byte for byte, uses a feature
         newer than the format version asked for."""
         features = self.options.features
-        entry = {"id": "U1", "critical": True, **shared_basis.params}
+        entry = section_entry("U1", shared_basis.params)
         if uses_coding_tools([entry]):
             features.require(
                 CODING_TOOLS_MINOR,
