@@ -17,6 +17,11 @@ v1.2-traverse-triangles.tkc (1.2) they come out byte for byte as committed (a te
 The encoder is not byte-identical across machines (the SVD's signs and last bits depend on the
 BLAS), so the vectors are written once and committed; every test run decodes them. Never write
 them into spec/vectors/ again unless the format itself changes.
+
+Each vector is named for the format version it exercises (``v1-`` 1.0, ``v1.3-`` 1.3), and is
+encoded with that version as the encoder's ``format_version``, so that today's encoder, which
+would use the newest features, writes it at that version: :func:`write_valid` refuses a file
+whose version is not its name's.
 """
 
 from __future__ import annotations
@@ -24,6 +29,7 @@ from __future__ import annotations
 import argparse
 import hashlib
 import json
+import re
 import struct
 import sys
 import zlib
@@ -490,7 +496,7 @@ def segment_index(decoder: Decoder) -> list[dict[str, Any]]:
 def valid_vectors() -> dict[str, tuple[bytes, str]]:
     """name -> (file bytes, what it exercises)."""
     wave_tri = MeshSequence(wave_sheet(24, 9), sheet_triangles(9))
-    basic = encode(wave_tri, target_kg=0.5)
+    basic = encode(wave_tri, target_kg=0.5, format_version="1.0")
     named = named_polygons()
     extended = Parts(basic)
     extended.flags |= 0x00010000  # an ignorable flag bit
@@ -507,15 +513,19 @@ def valid_vectors() -> dict[str, tuple[bytes, str]]:
         **adaptive_vectors(),
         "v1-wave-triangles": (basic, "triangles, no names: the basic file"),
         "v1.1-segments-shared": (
-            encode_with_report(long_wave, target_kg=0.5, segment_frames=12).data,
+            encode_with_report(
+                long_wave, target_kg=0.5, segment_frames=12, format_version="1.1"
+            ).data,
             "format 1.1: three segments of 12, 12 and 16 frames sharing one U1",
         ),
         "v1.1-segments-own": (
-            encode_with_report(named, target_kg=0.5, segment_frames=8, basis="own").data,
+            encode_with_report(
+                named, target_kg=0.5, segment_frames=8, basis="own", format_version="1.1"
+            ).data,
             "format 1.1: two segments, each with its own U1 (mesh parents of polygons), names",
         ),
         "v1-polygons-names": (
-            encode(named, target_kg=0.1),
+            encode(named, target_kg=0.1, format_version="1.0"),
             "quads padded to triangles, frame names, frame rate, far from the origin",
         ),
         "v1-ignorable-extensions": (
@@ -646,23 +656,29 @@ def adaptive_vectors() -> dict[str, tuple[bytes, str]]:
     named = named_polygons()
     return {
         "v1.6-adaptive": (
-            adaptive_everywhere(encode(triangles, target_kg=0.1)),
+            adaptive_everywhere(encode(triangles, target_kg=0.1, format_version="1.6")),
             "format 1.6: U1 (the mesh's coding order), U3, CORE and CENT (ascending) through the "
             "adaptive range coder, faces-traverse of scrambled triangles",
         ),
         "v1.6-mean-push": (
-            pushed_everywhere(encode(triangles, ranks=(12, 6))),
+            pushed_everywhere(encode(triangles, ranks=(12, 6), format_version="1.6")),
             "format 1.6: U1's predictor 2 with each push 0..9 (mean_push), adaptively coded",
         ),
         "v1.6-adaptive-segments": (
             adaptive_everywhere(
-                encode_with_report(named, target_kg=0.1, segment_frames=8, basis="own").data
+                encode_with_report(
+                    named, target_kg=0.1, segment_frames=8, basis="own", format_version="1.6"
+                ).data
             ),
             "format 1.6 and 1.1: two segments with their own U1.s, U3.s, CORE.s and CENT.s, all "
             "adaptively coded, polygons and names",
         ),
         "v1.6-faces-adaptive": (
-            with_adaptive_faces(encode(scrambled(pinched_sheets(7, 12), seed=31), target_kg=0.1)),
+            with_adaptive_faces(
+                encode(
+                    scrambled(pinched_sheets(7, 12), seed=31), target_kg=0.1, format_version="1.6"
+                )
+            ),
             "format 1.6: faces-traverse with coder 1 (adaptive streams, NEW vertices as ranks "
             "among the unseen, negative ones too) of scrambled polygons in two sheets that share "
             "a vertex (seeds, FAR)",
@@ -753,12 +769,14 @@ def attachment_vectors() -> dict[str, tuple[bytes, str]]:
     sheet = attached_sheet(9, 24)
     return {
         "v1.5-attributes": (
-            encode(sheet, target_kg=0.5),
+            encode(sheet, target_kg=0.5, format_version="1.5"),
             "format 1.5: ORDER, an attribute of every domain and type (indexed UVs with a NaN, "
             "face colours, float64 per vertex, int32 per face, indexed normals), face sets",
         ),
         "v1.5-attributes-walk-segments": (
-            encode_with_report(sheet, target_kg=0.5, segment_frames=12, face_order="walk").data,
+            encode_with_report(
+                sheet, target_kg=0.5, segment_frames=12, face_order="walk", format_version="1.5"
+            ).data,
             "format 1.5 and 1.1: the same attributes following the walk's face order, no "
             "ORDER, two segments",
         ),
@@ -782,6 +800,7 @@ def fields_vector() -> dict[str, tuple[bytes, str]]:
         MeshSequence(sheet.vertices, faces, fields=fields),
         target_kg=0.5,
         field_targets={**targets, "height": "lossless"},
+        format_version="1.5",
     )
     modes = field_modes(Decoder(data))
     assert modes == ["tucker", "grid", "exact", "exact"], modes
@@ -842,11 +861,13 @@ def scene_vectors() -> dict[str, tuple[bytes, str]]:
     )
     return {
         "v1.4-scene-times": (
-            encode(film, target_kg=0.5),
+            encode(film, target_kg=0.5, format_version="1.4"),
             "format 1.4: time codes from 1001 with one frame missing, metres, Z up",
         ),
         "v1.4-scene-segments": (
-            encode_with_report(seconds, target_kg=0.5, segment_frames=16).data,
+            encode_with_report(
+                seconds, target_kg=0.5, segment_frames=16, format_version="1.4"
+            ).data,
             "format 1.4 and 1.1: time codes offset by 4 frames in three segments, no unit or axis",
         ),
     }
@@ -866,11 +887,13 @@ def traverse_vectors() -> dict[str, tuple[bytes, str]]:
     )
     return {
         "v1.2-traverse-triangles": (
-            encode(triangles, target_kg=0.5),
+            encode(triangles, target_kg=0.5, format_version="1.2"),
             "format 1.2: faces-traverse, triangles shuffled, vertices renumbered, corners rotated",
         ),
         "v1.2-traverse-polygons-segments": (
-            encode_with_report(polygons_in_segments, target_kg=0.5, segment_frames=8).data,
+            encode_with_report(
+                polygons_in_segments, target_kg=0.5, segment_frames=8, format_version="1.2"
+            ).data,
             "format 1.2 and 1.1 together: faces-traverse of scrambled polygons (degrees), two "
             "segments sharing U1, names",
         ),
@@ -887,23 +910,23 @@ def correction_vectors() -> dict[str, tuple[bytes, str]]:
     named = named_polygons()
     return {
         "v1.3-bound-grid": (
-            encode(wave, max_error="0.05%"),
+            encode(wave, max_error="0.05%", format_version="1.3"),
             "format 1.3: every vertex of a noisy sheet within 0.05 % of the diagonal, on a grid",
         ),
         "v1.3-lossless-float32": (
-            encode(single, lossless=True),
+            encode(single, lossless=True, format_version="1.3"),
             "format 1.3: lossless float32 values, corrections of binary32 ordered integers",
         ),
         "v1.3-lossless-float64": (
-            encode(named, lossless=True),
+            encode(named, lossless=True, format_version="1.3"),
             "format 1.3: lossless float64 values far from the origin, polygons and names",
         ),
         "v1.3-lossless-digits": (
-            encode(as_text(rough, "{:.6g}"), lossless=True),
+            encode(as_text(rough, "{:.6g}"), lossless=True, format_version="1.3"),
             "format 1.3: lossless values read from %.6g text, decimals of 6 significant digits",
         ),
         "v1.3-lossless-digits-float32": (
-            encode(as_text(rough, "{:.6g}", np.float32), lossless=True),
+            encode(as_text(rough, "{:.6g}", np.float32), lossless=True, format_version="1.3"),
             "format 1.3: lossless float32 values read from %.6g text",
         ),
         "v1.3-segments-lossless": (
@@ -911,12 +934,13 @@ def correction_vectors() -> dict[str, tuple[bytes, str]]:
                 MeshSequence(rough.astype(np.float32).astype(np.float64), sheet_triangles(9)),
                 lossless=True,
                 segment_frames=8,
+                format_version="1.3",
             ).data,
             "format 1.3 and 1.1 together: lossless float32 values in three segments sharing U1, "
             "each with its RESD.s",
         ),
         "v1.3-lossless-places": (
-            encode(as_text(rough + 20.0, "{:.5f}"), lossless=True),
+            encode(as_text(rough + 20.0, "{:.5f}"), lossless=True, format_version="1.3"),
             "format 1.3: lossless values read from %.5f text, decimals of 5 places",
         ),
     }
@@ -1137,9 +1161,23 @@ SECOND_VECTORS = {
 }
 
 
+def named_version(name: str) -> str:
+    """The format version a vector's name promises: ``v1-...`` 1.0, ``v1.3-...`` 1.3."""
+    match = re.match(r"v(\d+)(?:\.(\d+))?-", name)
+    if match is None:
+        raise ValueError(f"a valid vector's name starts with its format version: {name!r}")
+    return f"{match.group(1)}.{match.group(2) or 0}"
+
+
 def write_valid(folder: Path, name: str, data: bytes, purpose: str) -> None:
-    """One valid vector: the file, its reference positions and the JSON of what it holds."""
+    """One valid vector: the file, its reference positions and the JSON of what it holds;
+    ``ValueError`` for a file of another format version than its name says."""
     decoder = Decoder(data)
+    if decoder.info.format_version != named_version(name):
+        raise ValueError(
+            f"{name} is a file of format {decoder.info.format_version}, not the "
+            f"{named_version(name)} its name says"
+        )
     positions = decoder.positions()
     (folder / f"{name}.tkc").write_bytes(data)
     np.save(folder / f"{name}.positions.npy", positions)
