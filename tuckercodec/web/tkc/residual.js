@@ -61,7 +61,8 @@ export const LITTLE_ENDIAN = new Uint8Array(new Uint16Array([1]).buffer)[0] === 
 
 /**
  * A RESD (or RESD.s) section's parameters, checked; chunk c holds the section's frames
- * c·chunkFrames .. (its start and frames).
+ * c·chunkFrames .. (its start and frames). `coder` is 1 where each chunk is an adaptive stream
+ * (format 1.7), else 0 (zstd planes; in a file without flag bit 4 whatever the entry says).
  * @typedef {{section: import('./container.js').Section, domain: string, step: number,
  *   scale: number | null, exponent: number, predict: number, coder: number, chunkFrames: number,
  *   chunks: Chunk[], frames: number}} Residual
@@ -142,8 +143,8 @@ export function readResidual(section, frames, K, limits, adaptive = false) {
       throw limitError('R21-header-limit', `${where}: chunk ${c} holds ${count} integers (${chunk.frames} frames of ${K} vertices), max_chunk_values = ${limits.max_chunk_values}`);
     }
   });
-  // chunkFrames as the file gives it (a BigInt one made a Number: still above F', one chunk)
   const stored = adaptive && coder === ADAPTIVE ? ADAPTIVE : ZSTD;
+  // chunkFrames as the file gives it (a BigInt one made a Number: still above F', one chunk)
   return { section, domain, step, scale, exponent: Number(exponent), predict, coder: stored, chunkFrames: Number(chunkFrames), chunks, frames };
 }
 

@@ -25,7 +25,8 @@ export type Residual = {
  */
 /**
  * A RESD (or RESD.s) section's parameters, checked; chunk c holds the section's frames
- * c·chunkFrames .. (its start and frames).
+ * c·chunkFrames .. (its start and frames). `coder` is 1 where each chunk is an adaptive stream
+ * (format 1.7), else 0 (zstd planes; in a file without flag bit 4 whatever the entry says).
  * @typedef {{section: import('./container.js').Section, domain: string, step: number,
  *   scale: number | null, exponent: number, predict: number, coder: number, chunkFrames: number,
  *   chunks: Chunk[], frames: number}} Residual
