@@ -20,9 +20,10 @@ from tuckercodec.encoder.versions import VERSIONS
 from tuckercodec.errors import EXIT_USAGE, FormatVersionError, InternalError
 from tuckercodec.format.adaptive import ADAPTIVE
 from tuckercodec.format.container import pack_container, parse_container
-from tuckercodec.format.residual import CORRECTIONS
+from tuckercodec.format.residual import ADAPTIVE_CORRECTIONS, CORRECTIONS
 from tuckercodec.format.sections import CODING_TOOLS
 from tuckercodec.format.segments import SEGMENTED
+from tuckercodec.io.samples import sheet_triangles, wave_sheet
 from tuckercodec.model.attributes import Attribute
 from tuckercodec.model.sources import SequenceFrames
 
@@ -47,6 +48,9 @@ def _uses_no_feature_above(data: bytes, cap: str) -> None:
     container = parse_container(data)
     assert container.minor <= cap_minor
     entries = [section.params for section in container.sections]
+    if cap_minor < 7:
+        assert not container.flags & ADAPTIVE_CORRECTIONS
+        assert not any(s.codec == "residual" and "coder" in s.params for s in container.sections)
     if cap_minor < 6:
         assert not container.flags & ADAPTIVE
         assert not any("coder" in e or "mean_push" in e for e in entries)
@@ -80,7 +84,9 @@ def test_the_cap_is_what_holds_the_newer_tools_back(scrambled):
     written = {
         cap: _minor(tc.encode(scrambled, target_kg=TARGET, format_version=cap)) for cap in VERSIONS
     }
-    assert written == {"1.0": 0, "1.1": 0, "1.2": 2, "1.3": 2, "1.4": 2, "1.5": 2, "1.6": 6}
+    assert written == {
+        "1.0": 0, "1.1": 0, "1.2": 2, "1.3": 2, "1.4": 2, "1.5": 2, "1.6": 6, "1.7": 6
+    }  # fmt: skip
 
 
 def test_the_default_is_the_newest_version_byte_for_byte(scrambled):
@@ -98,6 +104,18 @@ def test_segments_follow_the_cap(scrambled, cap, minor):
     _uses_no_feature_above(result.data, cap)
     assert _minor(result.data) == minor and parse_container(result.data).segmented
     assert tc.kg_error(scrambled.vertices, tc.Decoder(result.data).positions()) <= TARGET
+
+
+@pytest.mark.parametrize("cap", ["1.6", "1.7"])
+def test_lossless_corrections_are_adaptive_only_from_1_7(cap):
+    # float32 values: their corrections gain more than 3 % from the adaptive coder
+    sheet = tc.MeshSequence(
+        wave_sheet(20, 8).astype(np.float32).astype(np.float64), sheet_triangles(8)
+    )
+    data = tc.encode(sheet, lossless=True, format_version=cap)
+    _uses_no_feature_above(data, cap)
+    assert _minor(data) == int(cap.split(".")[1])
+    assert np.array_equal(tc.Decoder(data).positions(), sheet.vertices)
 
 
 def test_lossless_at_1_3_is_bit_for_bit_without_adaptive_coding(scrambled):
@@ -206,7 +224,7 @@ def test_a_file_above_the_cap_is_a_bug_never_returned(scrambled, monkeypatch):
         tc.encode(scrambled, target_kg=TARGET, format_version="1.2")
 
 
-@pytest.mark.parametrize("value", ["1.7", "2.0", "one", "", 1.2, 2, (1, 2)])
+@pytest.mark.parametrize("value", ["1.8", "2.0", "one", "", 1.2, 2, (1, 2)])
 def test_a_version_the_encoder_does_not_write_is_refused(value):
     with pytest.raises(ValueError, match=re.escape("format_version must be one of 1.0, 1.1")):
         tc.EncodeOptions(format_version=value)

@@ -144,8 +144,17 @@ def test_the_invalid_vectors_come_from_the_committed_valid_one(tmp_path):
     attached = (SPEC / "vectors" / "v1.5-attributes.tkc").read_bytes()
     coded = (SPEC / "vectors" / "v1.6-adaptive.tkc").read_bytes()
     faces_coded = (SPEC / "vectors" / "v1.6-faces-adaptive.tkc").read_bytes()
+    corrected_adaptively = (SPEC / "vectors" / "v1.7-lossless-adaptive.tkc").read_bytes()
     count = make_vectors.write_invalid(
-        tmp_path, good, segmented, traversed, corrected, attached, coded, faces_coded
+        tmp_path,
+        good,
+        segmented,
+        traversed,
+        corrected,
+        attached,
+        coded,
+        faces_coded,
+        corrected_adaptively,
     )
     assert count == len([p for p in VECTORS if not json.loads(p.read_text())["valid"]])
     for path in sorted(tmp_path.iterdir()):

@@ -237,7 +237,7 @@ def invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
         "R03-preamble-truncated": (good[:20], "TruncatedFileError"),
         "R04-preamble-crc": (good[:10] + bytes([good[10] ^ 0x04]) + good[11:], "ChecksumError"),
         "R05-major-version": (_set_preamble(good, 8, "<H", 2), "UnsupportedVersionError"),
-        "R06-critical-flag": (_set_preamble(good, 12, "<I", 0x0010), "UnsupportedVersionError"),
+        "R06-critical-flag": (_set_preamble(good, 12, "<I", 0x8000), "UnsupportedVersionError"),
         "R07-header-limit": (_set_preamble(good, 16, "<I", (16 << 20) + 1), "LimitError"),
         "R08-total-length": (
             _set_preamble(good, 20, "<Q", HEAD_SIZE + header_length),
@@ -958,6 +958,117 @@ def derived_valid_vectors(corrected: bytes) -> dict[str, tuple[bytes, str]]:
     }
 
 
+def adaptive_correction_vectors(
+    float32: bytes, float64: bytes, segments: bytes
+) -> dict[str, tuple[bytes, str]]:
+    """The valid vectors of format 1.7 (§6.9's ``coder`` 1), made from the 1.3 files as the
+    derived ones are: their corrections, the same integers, stored as adaptive streams."""
+    return {
+        "v1.7-lossless-adaptive": (
+            with_adaptive_corrections(float32, predict=1),
+            "format 1.7: lossless float32 values, the RESD chunk one adaptive stream of the "
+            "frames' differences (predict 1), at most 4 planes",
+        ),
+        "v1.7-lossless-float64-adaptive": (
+            with_adaptive_corrections(float64, predict=0),
+            "format 1.7: lossless float64 values, the RESD chunk one adaptive stream of "
+            "corrections past 32 bits (more than 4 planes)",
+        ),
+        "v1.7-segments-adaptive": (
+            with_adaptive_corrections(segments, predict=1),
+            "format 1.7 and 1.1: lossless values in three segments, each RESD.s an adaptive stream",
+        ),
+    }
+
+
+def with_adaptive_corrections(data: bytes, predict: int) -> bytes:
+    """``data`` (a file with corrections) with every RESD section's integers stored as adaptive
+    streams (§6.9 ``coder`` 1, format 1.7) with ``predict``, whichever coding the encoder chose;
+    flag bit 4 set."""
+    parts = Parts(data)
+    for n, entry in enumerate(parts.entries):
+        if entry.get("codec") != residual.RESIDUAL:
+            continue
+        integers = _corrections(parts, n)
+        layout_domain = residual.Domain(entry["domain"], entry.get("step"), _scale(entry))
+        params, payload = residual.encode_section(
+            integers,
+            layout_domain,
+            19,
+            exponent=entry["exponent"],
+            predict=predict,
+            chunk_frames=entry["chunk_frames"],
+            adaptive_coding=True,
+            adaptive_gain=-1.0,  # whatever it costs: the vector is for the coding
+        )
+        parts.entries[n] = {**{k: entry[k] for k in ("id", "critical", "codec")}, **params}
+        parts.payloads[n] = payload
+    parts.flags |= residual.ADAPTIVE_CORRECTIONS
+    parts.minor = max(parts.minor, residual.ADAPTIVE_CORRECTIONS_MINOR)
+    return parts.pack()
+
+
+def _scale(entry: dict[str, Any]) -> int | None:
+    """A RESD entry's places or digits, if its domain has them."""
+    return entry.get("places", entry.get("digits"))
+
+
+def _corrections(parts: Parts, n: int) -> np.ndarray:
+    """The restored integers e (F', K, 3) of the RESD section at ``n``."""
+    entry, payload = parts.entries[n], parts.payloads[n]
+    vertices = parts.header["vertices"]
+    frames = _section_frames(parts, str(entry["id"]))
+    layout = residual.read_layout(
+        entry,
+        len(payload),
+        frames,
+        vertices,
+        DEFAULT_LIMITS,
+        str(entry["id"]),
+        adaptive_corrections=bool(parts.flags & residual.ADAPTIVE_CORRECTIONS),
+    )
+    return np.concatenate(
+        [
+            residual.decode_chunk(payload, layout, c, vertices, str(entry["id"]))
+            for c in range(len(layout.planes))
+        ]
+    )
+
+
+def _section_frames(parts: Parts, section_id: str) -> int:
+    """F': the frames a RESD section covers (the file's, or its segment's)."""
+    if "." not in section_id:
+        return int(parts.header["frames"])
+    number = int(section_id.split(".")[1])
+    segment = parts.header["segments"][number]
+    return int(segment["frames"]) if "frames" in segment else int(segment[1]) - int(segment[0])
+
+
+def adaptive_correction_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
+    """rule id -> (file bytes, error class name): the 1.7 file ``good`` (one adaptive RESD
+    chunk) with §6.9's ``coder`` 1 broken. R46: a byte after the chunk's stream; ``coder`` 2;
+    ``planes`` 1 for integers that need more. R29: ``coder`` 1 in a file without flag bit 4,
+    where it is an unknown parameter, so the chunk is read as a zstd frame, which it is not."""
+    parts = Parts(good)
+    n = parts.index("RESD")
+    entry, payload = parts.entries[n], parts.payloads[n]
+    (planes, length), *rest = entry["chunks"]
+    trailing = _edit(
+        good, _payload("RESD", payload + b"\x00", chunks=[[planes, length + 1], *rest])
+    )
+    without_flag = Parts(good)
+    without_flag.flags &= ~residual.ADAPTIVE_CORRECTIONS
+    return {
+        "R46-adaptive-stream-resd": (trailing, "FormatError"),
+        "R46-adaptive-stream-resd-coder": (_edit(good, _entry("RESD", coder=2)), "FormatError"),
+        "R46-adaptive-stream-resd-planes": (
+            _edit(good, _entry("RESD", chunks=[[1, length], *rest])),
+            "FormatError",
+        ),
+        "R29-zstd-content-size-resd-coder": (without_flag.pack(), "FormatError"),
+    }
+
+
 def as_text(positions: np.ndarray, style: str, dtype: type = np.float64) -> MeshSequence:
     """The sheet as an OBJ of ``style`` would give it back: each value parsed from its text
     (as float32 values, with ``dtype``, each parsed straight to float32)."""
@@ -975,7 +1086,15 @@ def correction_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
     entry = parts.entries[parts.index("RESD")]
     payload = parts.payloads[parts.index("RESD")]
     vertices, frames = parts.header["vertices"], parts.header["frames"]
-    layout = residual.read_layout(entry, len(payload), frames, vertices, DEFAULT_LIMITS, "RESD")
+    layout = residual.read_layout(
+        entry,
+        len(payload),
+        frames,
+        vertices,
+        DEFAULT_LIMITS,
+        "RESD",
+        adaptive_corrections=bool(parts.flags & residual.ADAPTIVE_CORRECTIONS),
+    )
     chunks = [
         residual.decode_chunk(payload, layout, number, vertices, "RESD")
         for number in range(len(layout.planes))
@@ -1031,6 +1150,10 @@ SECOND_VECTORS = {
     "R21-header-limit-face-streams": "R21-header-limit",
     "R20-header-field-time-codes": "R20-header-field",
     "R46-adaptive-stream-coder": "R46-adaptive-stream",
+    "R46-adaptive-stream-resd": "R46-adaptive-stream",
+    "R46-adaptive-stream-resd-coder": "R46-adaptive-stream",
+    "R46-adaptive-stream-resd-planes": "R46-adaptive-stream",
+    "R29-zstd-content-size-resd-coder": "R29-zstd-content-size",
     "R39-traversal-rank": "R39-traversal",
     "R30-planes-faces-coder": "R30-planes",
     "R46-adaptive-stream-faces-coder": "R46-adaptive-stream",
@@ -1122,10 +1245,11 @@ def write_invalid(
     attached: bytes,
     adaptively_coded: bytes,
     faces_coded: bytes,
+    corrected_adaptively: bytes,
 ) -> int:
     """The invalid vectors made from the valid files ``good`` (format 1.0), ``segmented``
     (1.1), ``traversed`` (1.2), ``corrected`` (1.3), ``attached`` (1.5), ``adaptively_coded``
-    and ``faces_coded`` (1.6), with their JSON; how many."""
+    and ``faces_coded`` (1.6) and ``corrected_adaptively`` (1.7), with their JSON; how many."""
     vectors = {
         **invalid_vectors(good),
         **segmented_invalid_vectors(segmented),
@@ -1134,6 +1258,7 @@ def write_invalid(
         **attachment_invalid_vectors(attached),
         **adaptive_invalid_vectors(adaptively_coded),
         **faces_adaptive_invalid_vectors(faces_coded),
+        **adaptive_correction_invalid_vectors(corrected_adaptively),
     }
     for name, (data, error) in vectors.items():
         write_invalid_vector(folder, name, data, error)
@@ -1157,7 +1282,11 @@ INVALID_SOURCES = {
     "segmented": "v1.1-segments-shared",
     "traverse": "v1.2-traverse-triangles",
     "corrections": "v1.3-lossless-float32",
+    "corrections-float64": "v1.3-lossless-float64",
+    "corrections-segments": "v1.3-segments-lossless",
 }
+#: The valid file of 1.7 the invalid vectors of §6.9's coder 1 are made from (itself derived).
+ADAPTIVE_CORRECTIONS_SOURCE = "v1.7-lossless-adaptive"
 
 
 def write_only(out: Path, names: list[str]) -> int:
@@ -1169,7 +1298,12 @@ def write_only(out: Path, names: list[str]) -> int:
         if name in valid:
             write_valid(out, name, *valid[name])
     sources = {key: (out / f"{name}.tkc").read_bytes() for key, name in INVALID_SOURCES.items()}
-    derived = derived_valid_vectors(sources["corrections"])
+    derived = {
+        **derived_valid_vectors(sources["corrections"]),
+        **adaptive_correction_vectors(
+            sources["corrections"], sources["corrections-float64"], sources["corrections-segments"]
+        ),
+    }
     for name in names:
         if name in derived:
             write_valid(out, name, *derived[name])
@@ -1181,6 +1315,9 @@ def write_only(out: Path, names: list[str]) -> int:
         **attachment_invalid_vectors(sources["attachments"]),
         **adaptive_invalid_vectors(sources["adaptive"]),
         **faces_adaptive_invalid_vectors(sources["faces-adaptive"]),
+        **adaptive_correction_invalid_vectors(
+            (out / f"{ADAPTIVE_CORRECTIONS_SOURCE}.tkc").read_bytes()
+        ),
     }
     for name in names:
         if name in invalid:
@@ -1224,7 +1361,14 @@ def main(argv: list[str] | None = None) -> int:
     valid = valid_vectors()
     for name, (data, purpose) in valid.items():
         write_valid(out, name, data, purpose)
-    derived = derived_valid_vectors(valid["v1.3-lossless-float32"][0])
+    derived = {
+        **derived_valid_vectors(valid["v1.3-lossless-float32"][0]),
+        **adaptive_correction_vectors(
+            valid["v1.3-lossless-float32"][0],
+            valid["v1.3-lossless-float64"][0],
+            valid["v1.3-segments-lossless"][0],
+        ),
+    }
     for name, (data, purpose) in derived.items():
         write_valid(out, name, data, purpose)
     invalid = write_invalid(
@@ -1236,6 +1380,7 @@ def main(argv: list[str] | None = None) -> int:
         valid["v1.5-attributes"][0],
         valid["v1.6-adaptive"][0],
         valid["v1.6-faces-adaptive"][0],
+        derived["v1.7-lossless-adaptive"][0],
     )
     print(f"wrote {len(valid) + len(derived)} valid and {invalid} invalid vectors to {out}")
     return 0
