@@ -1083,27 +1083,13 @@ def correction_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
     first chunk made 2**40, beyond binary32's range of corrections (its frame repacked, so that
     only the value is wrong)."""
     parts = Parts(good)
-    entry = parts.entries[parts.index("RESD")]
-    payload = parts.payloads[parts.index("RESD")]
-    vertices, frames = parts.header["vertices"], parts.header["frames"]
-    layout = residual.read_layout(
-        entry,
-        len(payload),
-        frames,
-        vertices,
-        DEFAULT_LIMITS,
-        "RESD",
-        adaptive_corrections=bool(parts.flags & residual.ADAPTIVE_CORRECTIONS),
-    )
-    chunks = [
-        residual.decode_chunk(payload, layout, number, vertices, "RESD")
-        for number in range(len(layout.planes))
-    ]
-    values = np.concatenate(chunks)
+    section = parts.index("RESD")
+    entry = parts.entries[section]
+    values = _corrections(parts, section)
     values[0, 0, 0] = 1 << 40
-    domain = residual.Domain(layout.domain, layout.step, layout.scale)
+    domain = residual.Domain(entry["domain"], entry.get("step"), _scale(entry))
     params, broken = residual.encode_section(
-        values, domain, 19, chunk_frames=layout.chunk_frames, predict=0
+        values, domain, 19, chunk_frames=entry["chunk_frames"], predict=0
     )
     return {
         "R40-residual": (_edit(good, _entry("RESD", domain="float16")), "FormatError"),
