@@ -225,6 +225,39 @@ def test_rdo_mean_choice_blocks_of_columns_are_the_same(core, monkeypatch):
         np.testing.assert_array_equal(fast, whole)
 
 
+@pytest.mark.parametrize("mesh", sorted(MEAN_MESHES))
+@pytest.mark.parametrize("cols", [1, 2, 16, 17, 33])
+def test_push_choice_is_the_same(core, mesh, cols):
+    # qmat._pushed_mean: the core prices every push of every column at once (numpy's log2 of
+    # each residual from a table, summed in numpy's order: pairwise for a column alone in its
+    # block of 16, as the 17th and the 33rd are), the reference forms each push's residuals
+    rng = np.random.default_rng(cols)
+    faces, count = MEAN_MESHES[mesh](rng)
+    steps = MeshPrediction(faces, count).mean_steps
+    smooth = np.rint(_smooth(count, cols, cols, scale=40.0)).astype(np.int64)
+    mixed = smooth.copy()
+    mixed[:, ::3] *= 10**4  # residuals beyond the core's table: those blocks priced by numpy
+    constant = np.full((count, cols), 7, dtype=np.int64)  # every push ties: PUSH is kept
+    beyond = smooth.copy()
+    beyond[0, -1] = 2**33  # out of predictor 2's range: no residuals, every push PUSH
+    # the prices themselves, to the bit
+    costs = steps.native_plan().push_costs(smooth, qmat._log2_table(), 16)
+    for a in range(10):
+        residual = mean_residuals(smooth, steps, np.full(cols, a, dtype=np.uint8))
+        assert residual is not None
+        assert costs[:, a].tobytes() == qmat._cost(residual).tobytes()
+    pushes = []
+    for q in (smooth, mixed, -mixed, constant, beyond):
+        (fast, fast_push), (reference, push) = _both(qmat._pushed_mean, q, steps, True)
+        np.testing.assert_array_equal(fast_push, push)
+        if reference is None:
+            assert fast is None
+        else:
+            np.testing.assert_array_equal(fast, reference)
+        pushes.append(push)
+    assert (pushes[3] == 2).all() and (pushes[4] == 2).all()
+
+
 def test_core_refuses_inconsistent_mean_steps(core):
     mean = MeshPrediction(grid_faces(4), 16).mean_steps
     arrays = [mean.rows, mean.step_ends, mean.sources, mean.anchors, mean.source_ends]

@@ -294,6 +294,26 @@ impl MeanPlan {
         out.map(|v| PyArray1::from_vec(py, v).reshape([rows, width]))
             .transpose()
     }
+    /// `qmat._cost` of each column's predictor-2 residuals under each push, for the
+    /// encoder's choice of push (`qmat._pushed_mean`): a (cols, 10) float64 array from a
+    /// C-contiguous (K, cols) int64 array, `bits[m]` numpy's `log2(1 + 2m)` and the columns
+    /// priced in blocks of `block` as `_cost` prices them; a row of NaN for a column with a
+    /// residual beyond `bits` (the caller prices it), `None` if a value leaves the range.
+    fn push_costs<'py>(
+        &self,
+        py: Python<'py>,
+        values: PyReadonlyArray2<'py, i64>,
+        bits: PyReadonlyArray1<'py, f64>,
+        block: usize,
+    ) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
+        let width = values.shape()[1];
+        let (flat, bits) = (values.as_slice()?, bits.as_slice()?);
+        let out = py
+            .detach(|| self.plan.push_costs(flat, width, bits, block))
+            .map_err(value_error)?;
+        out.map(|v| PyArray1::from_vec(py, v).reshape([width, prediction::PUSH_COUNT]))
+            .transpose()
+    }
 }
 
 /// Predictor 1 along a tree, in place on a C-contiguous (rows, cols) int64 array.

@@ -8,8 +8,11 @@
 //! a face table and U1's residuals; [`accumulate_tree`], [`accumulate_rows`] and
 //! [`linear_accumulate`] for the other predictors.
 
+mod push_costs;
 pub mod topology;
 pub mod values;
+
+pub use push_costs::{numpy_pairwise_sum, PUSH_COUNT};
 
 use topology::MeanStepsArrays;
 
