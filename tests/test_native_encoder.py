@@ -140,9 +140,11 @@ MEAN_MESHES = {
 
 
 def _same_mean_choice(core, values, steps, mean, push, residual, lam) -> np.ndarray:
-    """rdo._mean_choice in the core and in numpy: the same integers (returned)."""
-    reference = rdo._mean_choice(values, steps, mean, push, residual, lam)
-    fast = rdo._native_mean_choice(core, values, steps, mean, push, residual, lam)
+    """rdo._mean_choice in the core and in numpy, its bits from the counts of ``residual``: the
+    same integers (returned)."""
+    counts = rdo._residual_counts(residual)
+    reference = rdo._mean_choice(values, steps, mean, push, counts, lam)
+    fast = rdo._native_mean_choice(core, values, steps, mean, push, counts, lam)
     assert fast.dtype == np.int64
     np.testing.assert_array_equal(fast, reference)
     return reference
@@ -258,6 +260,28 @@ def test_push_choice_is_the_same(core, mesh, cols):
     assert (pushes[3] == 2).all() and (pushes[4] == 2).all()
 
 
+@pytest.mark.parametrize("mesh", sorted(MEAN_MESHES))
+def test_mean_residual_counts_are_the_same(core, mesh):
+    # quantize_mesh's histograms: counted by the core without the residuals, or from numpy's
+    rng = np.random.default_rng(3)
+    faces, count = MEAN_MESHES[mesh](rng)
+    steps = MeshPrediction(faces, count).mean_steps
+    smooth = np.rint(_smooth(count, 12, 4, scale=300.0)).astype(np.int64)
+    push = np.arange(12, dtype=np.uint8) % 10
+    for q, meaned in (
+        (smooth, np.arange(12)),  # every column
+        (smooth, np.array([1, 4, 5, 11])),  # some
+        (smooth * 10**6, np.arange(0, 12, 2)),  # residuals past the table, clipped
+        (smooth + 2**32, np.arange(12)),  # out of predictor 2's range
+    ):
+        fast, reference = _both(rdo._mean_residual_counts, q, meaned, steps, push[meaned])
+        if reference is None:
+            assert fast is None
+        else:
+            assert fast.dtype == reference.dtype and fast.shape == (meaned.size, rdo.TABLE_SIZE + 1)
+            np.testing.assert_array_equal(fast, reference)
+
+
 def test_core_refuses_inconsistent_mean_steps(core):
     mean = MeshPrediction(grid_faces(4), 16).mean_steps
     arrays = [mean.rows, mean.step_ends, mean.sources, mean.anchors, mean.source_ends]
@@ -278,10 +302,10 @@ def test_rdo_mean_choice_on_a_real_encode(core, monkeypatch):
     calls = []
     native_choice = rdo._native_mean_choice
 
-    def checked(core, values, steps, mean, push, residual, lam):
+    def checked(core, values, steps, mean, push, counts, lam):
         calls.append(values.shape)
-        fast = native_choice(core, values, steps, mean, push, residual, lam)
-        reference = rdo._mean_choice(values, steps, mean, push, residual, lam)
+        fast = native_choice(core, values, steps, mean, push, counts, lam)
+        reference = rdo._mean_choice(values, steps, mean, push, counts, lam)
         np.testing.assert_array_equal(fast, reference)
         return fast
 

@@ -8,6 +8,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 use tuckercodec_core::adaptive::{self, CodingOrder};
+use tuckercodec_core::encoder;
 use tuckercodec_core::prediction::{self, topology, values};
 
 use crate::broken;
@@ -294,6 +295,34 @@ impl MeanPlan {
         out.map(|v| PyArray1::from_vec(py, v).reshape([rows, width]))
             .transpose()
     }
+    /// `rdo._residual_counts` of `residuals(values, push)`, for the encoder's rounding against
+    /// predictor 2 (`rdo.quantize_mesh`), without the residuals: (cols, `table_size` + 1)
+    /// int64 counts, or `None` if a value leaves the range.
+    fn residual_counts<'py>(
+        &self,
+        py: Python<'py>,
+        values: PyReadonlyArray2<'py, i64>,
+        push: &Bound<'py, PyAny>,
+        table_size: usize,
+    ) -> PyResult<Option<Bound<'py, PyArray2<i64>>>> {
+        let (rows, width) = (values.shape()[0], values.shape()[1]);
+        let push = pushes(Some(push), width)?;
+        let flat = values.as_slice()?;
+        let counts = py
+            .detach(|| {
+                let Some(residual) = self.plan.residuals(flat, width, &push)? else {
+                    return Ok(None);
+                };
+                encoder::zigzag_counts(&residual, rows, width, table_size)
+                    .map(Some)
+                    .map_err(|error| error.0)
+            })
+            .map_err(value_error)?;
+        counts
+            .map(|v| PyArray1::from_vec(py, v).reshape([width, table_size + 1]))
+            .transpose()
+    }
+
     /// `qmat._cost` of each column's predictor-2 residuals under each push, for the
     /// encoder's choice of push (`qmat._pushed_mean`): a (cols, 10) float64 array from a
     /// C-contiguous (K, cols) int64 array, `bits[m]` numpy's `log2(1 + 2m)` and the columns
