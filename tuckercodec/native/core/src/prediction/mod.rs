@@ -540,7 +540,7 @@ pub const COLUMN_BLOCK: usize = 16;
 /// SSE4.1 makes: below 2**52 in magnitude, adding and taking away 2**52 rounds to the nearest
 /// integer, one less if that is above `x`; from 2**52 on `x` is an integer (or not finite).
 #[inline]
-fn exact_floor(x: f64) -> f64 {
+pub(crate) fn exact_floor(x: f64) -> f64 {
     const TWO_52: f64 = 4_503_599_627_370_496.0;
     let big = TWO_52.copysign(x);
     let nearest = (x + big) - big;
