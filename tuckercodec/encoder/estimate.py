@@ -56,7 +56,10 @@ class U1Predictors:
     def stream(self, q: np.ndarray) -> np.ndarray:
         """The residuals ``q`` (rows, cols) would be streamed as under the predictors kept
         (chosen now for columns not seen before)."""
-        predict, _ = self.kept(q)
+        predict, push = self.kept(q)
+        if (predict == qmat.PREDICT_MEAN).all():  # U1's usual case: no copy of q
+            predicted = mean_residuals(q, self.mesh.mean_steps, push)
+            return predicted if predicted is not None else residuals(q, self.mesh.parents)
         out = q.copy()
         parent = np.flatnonzero(predict == qmat.PREDICT_PARENT)
         if parent.size:
