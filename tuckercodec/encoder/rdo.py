@@ -312,12 +312,15 @@ def quantize_mesh(
     predict: np.ndarray,
     push: np.ndarray,
     settings: Settings = DEFAULT,
+    nearest: QuantizedMatrix | None = None,
 ) -> QuantizedMatrix:
     """U1 ``values`` (vertices, cols) quantized with per-column ``steps``: as :func:`quantize`
     with ``levels`` (the mesh parents), except that the columns whose ``predict`` is predictor 2
     (the file's likely predictor, §6.2, with its ``push``) are chosen against predictor 2's own
-    prediction, their bits from the nearest rounding's predictor-2 residuals."""
-    nearest = qmat.quantize(values, steps)  # checks the steps and the integer range
+    prediction, their bits from the nearest rounding's predictor-2 residuals. ``nearest``:
+    ``qmat.quantize(values, steps)`` where the caller has it already."""
+    if nearest is None:
+        nearest = qmat.quantize(values, steps)  # checks the steps and the integer range
     meaned = np.flatnonzero(predict == PREDICT_MEAN)
     if (
         settings.lam is None
@@ -331,19 +334,23 @@ def quantize_mesh(
     counts = _mean_residual_counts(nearest.q, meaned, mesh.mean_steps, push[meaned])
     if counts is None:  # a value too large for predictor 2: the file will not use it
         return quantize(values, steps, levels, settings)
+    core = native.core()
+    choice = _mean_choice if core is None else functools.partial(_native_mean_choice, core)
+    width = max(COLUMN_BLOCK, MEAN_BLOCK_VALUES // values.shape[0])
+    steps64 = nearest.steps.astype(np.float64)
+    if meaned.size == values.shape[1] <= width:  # U1's usual case: one block, no copies
+        chosen = choice(values, steps64, mesh.mean_steps, push[meaned], counts, settings.lam)
+        return QuantizedMatrix(chosen, nearest.steps)
     q = np.empty(nearest.q.shape, dtype=np.int64)
     others = np.flatnonzero(predict != PREDICT_MEAN)
     if others.size:  # columns are chosen independently: a subset changes none of them
         q[:, others] = quantize(values[:, others], nearest.steps[others], levels, settings).q
-    core = native.core()
-    choice = _mean_choice if core is None else functools.partial(_native_mean_choice, core)
-    width = max(COLUMN_BLOCK, MEAN_BLOCK_VALUES // values.shape[0])
     for start in range(0, meaned.size, width):
         block = slice(start, start + width)
         columns = meaned[block]
         q[:, columns] = choice(
             values[:, columns],
-            nearest.steps[columns].astype(np.float64),
+            steps64[columns],
             mesh.mean_steps,
             push[columns],
             counts[block],
