@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..format import adaptive, qmat
-from ..format.prediction import mean_residuals, residuals
+from ..format.prediction import mean_residual_columns, mean_residuals, residuals
 from ..model.topology import MeshPrediction
 from .trial import QuantizedSegment
 
@@ -58,8 +58,9 @@ class U1Predictors:
         (chosen now for columns not seen before)."""
         predict, push = self.kept(q)
         if (predict == qmat.PREDICT_MEAN).all():  # U1's usual case: no copy of q
-            predicted = mean_residuals(q, self.mesh.mean_steps, push)
-            return predicted if predicted is not None else residuals(q, self.mesh.parents)
+            # made column after column, as coded_bits reads them: its transposition is a view
+            columns = mean_residual_columns(q, self.mesh.mean_steps, push)
+            return columns.T if columns is not None else residuals(q, self.mesh.parents)
         out = q.copy()
         parent = np.flatnonzero(predict == qmat.PREDICT_PARENT)
         if parent.size:

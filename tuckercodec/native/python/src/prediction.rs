@@ -278,21 +278,34 @@ impl MeanPlan {
 
     /// `mean_residuals` of a C-contiguous (K, cols) int64 array, column c with push `push[c]`
     /// (`None`: 2 for every column): a new array, or `None` if a value leaves the range;
-    /// `ValueError` if the pushes do not fit.
-    #[pyo3(signature = (values, push=None))]
+    /// `ValueError` if the pushes do not fit. With `columns`, the new array is (cols, K), the
+    /// residuals column after column (as a section streams them).
+    #[pyo3(signature = (values, push=None, columns=false))]
     fn residuals<'py>(
         &self,
         py: Python<'py>,
         values: PyReadonlyArray2<'py, i64>,
         push: Option<&Bound<'py, PyAny>>,
+        columns: bool,
     ) -> PyResult<Option<Bound<'py, PyArray2<i64>>>> {
         let (rows, width) = (values.shape()[0], values.shape()[1]);
         let push = pushes(push, width)?;
         let flat = values.as_slice()?;
         let out = py
-            .detach(|| self.plan.residuals(flat, width, &push))
+            .detach(|| {
+                if columns {
+                    self.plan.residual_columns(flat, width, &push)
+                } else {
+                    self.plan.residuals(flat, width, &push)
+                }
+            })
             .map_err(value_error)?;
-        out.map(|v| PyArray1::from_vec(py, v).reshape([rows, width]))
+        let shape = if columns {
+            [width, rows]
+        } else {
+            [rows, width]
+        };
+        out.map(|v| PyArray1::from_vec(py, v).reshape(shape))
             .transpose()
     }
     /// `rdo._residual_counts` of `residuals(values, push)`, for the encoder's rounding against

@@ -72,6 +72,7 @@ fn out_of_range_is_refused() {
     assert!(plan.restore_columns(&mut [], count, &[]).is_ok());
     let too_large = vec![MEAN_LIMIT + 1; count];
     assert_eq!(plan.residuals(&too_large, 1, &[2]).unwrap(), None);
+    assert_eq!(plan.residual_columns(&too_large, 1, &[2]).unwrap(), None);
 }
 
 #[test]
@@ -289,6 +290,8 @@ fn pushes_match_the_reference_on_random_meshes() {
             for plan in both_paths(&plan) {
                 let residual = plan.residuals(&values, width, &push).unwrap().unwrap();
                 assert_eq!(residual, expected, "mesh {seed}, span {span}");
+                let columns = plan.residual_columns(&values, width, &push).unwrap();
+                assert_eq!(columns.unwrap(), transpose(&expected, width));
                 let mut columns = stream.clone();
                 plan.restore_columns(&mut columns, count, &push).unwrap();
                 assert_eq!(columns, transpose(&values, width));
