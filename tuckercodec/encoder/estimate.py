@@ -48,9 +48,9 @@ class U1Predictors:
         ``q``, for columns not seen before."""
         cols, known = q.shape[1], self.predict.size
         if cols > known:  # choose for the new columns, as the file would (each on its own)
-            new = qmat.predicted_stream(q[:, known:], self.mesh, True, pushes=True)
-            self.predict = np.concatenate([self.predict, new.predict])
-            self.push = np.concatenate([self.push, new.push])
+            predict, push = qmat.chosen_predictors(q[:, known:], self.mesh, True, pushes=True)
+            self.predict = np.concatenate([self.predict, predict])
+            self.push = np.concatenate([self.push, push])
         return self.predict[:cols], self.push[:cols]
 
     def stream(self, q: np.ndarray) -> np.ndarray:

@@ -189,6 +189,30 @@ def predicted_stream(
     """The residuals to stream and each column's predictor: per column, the predictor whose
     residuals :func:`_cost` finds cheapest (ties to the lower one); with ``pushes`` (a U1 of
     format 1.6), predictor 2 with the push whose residuals are cheapest (ties to PUSH)."""
+    choices, best, push = _predictor_choices(q, parents, coding_tools, pushes)
+    predict = np.array([choices[j][0] for j in best], dtype=np.uint8)
+    stream = choices[1][1]  # the parent's residuals: a fresh array
+    for j, (value, columns) in enumerate(choices):
+        if value != PREDICT_PARENT:
+            chosen = np.flatnonzero(best == j)
+            stream[:, chosen] = columns[:, chosen]  # in place: stream is a fresh array
+    return Predicted(stream, predict, push)
+
+
+def chosen_predictors(
+    q: np.ndarray, parents: Mesh | None, coding_tools: bool, pushes: bool = False
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`predicted_stream`'s predictors and pushes alone, without the stream it would
+    assemble from the chosen residuals (the encoder's trials keep the predictors only)."""
+    choices, best, push = _predictor_choices(q, parents, coding_tools, pushes)
+    return np.array([choices[j][0] for j in best], dtype=np.uint8), push
+
+
+def _predictor_choices(
+    q: np.ndarray, parents: Mesh | None, coding_tools: bool, pushes: bool
+) -> tuple[list[tuple[int, np.ndarray]], np.ndarray, np.ndarray]:
+    """Each predictor's residuals (predictor 1's a fresh array, second), the index of each
+    column's cheapest by :func:`_cost`, and each column's push."""
     mesh = parents if isinstance(parents, MeshPrediction) else None
     stream = residuals(q, parents.parents if isinstance(parents, MeshPrediction) else parents)
     choices = [(PREDICT_NONE, q), (PREDICT_PARENT, stream)]
@@ -211,12 +235,7 @@ def predicted_stream(
             choices.append((PREDICT_LINEAR, np.where(fits[None, :], linear, q)))
     costs = np.stack([_cost(columns) for _, columns in choices])
     best = costs.argmin(axis=0)  # ties go to the lower predictor
-    predict = np.array([choices[j][0] for j in best], dtype=np.uint8)
-    for j, (value, columns) in enumerate(choices):
-        if value != PREDICT_PARENT:
-            chosen = np.flatnonzero(best == j)
-            stream[:, chosen] = columns[:, chosen]  # in place: stream is a fresh array
-    return Predicted(stream, predict, push)
+    return choices, best, push
 
 
 def _pushed_mean(
