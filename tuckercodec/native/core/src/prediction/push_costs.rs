@@ -10,7 +10,7 @@
 //! numpy takes it in `mean(axis=0)`: row after row where the column shares its block of the
 //! cost with other columns, numpy's pairwise sum where it is alone in it.
 
-use super::{beyond, exact_floor, MeanPlan, PredictionError, COLUMN_BLOCK, MAX_PUSH, MEAN_LIMIT};
+use super::{beyond, MeanPlan, PredictionError, COLUMN_BLOCK, MAX_PUSH, MEAN_LIMIT};
 
 /// The pushes a column may carry, `0..=MAX_PUSH`: the width of [`MeanPlan::push_costs`]'s rows.
 pub const PUSH_COUNT: usize = MAX_PUSH as usize + 1;
@@ -280,8 +280,11 @@ impl PushWork {
                 for ((sum, ((&value, &s), &d)), c) in self.sums.iter_mut().zip(terms).zip(0..) {
                     // floor((6 S + 3c + a D) / 6c): the numerator an integer below 2**53, so
                     // exact, and its one division floored right (as in the restore); within
-                    // 2**36 (the values within MEAN_LIMIT), so the cast is exact
-                    let prediction = exact_floor((s + a * d) / divisor) as i64;
+                    // 2**36 (the values within MEAN_LIMIT), so truncated and stepped down
+                    // where that went up, a negative quotient that is no integer
+                    let quotient = (s + a * d) / divisor;
+                    let truncated = quotient as i64;
+                    let prediction = truncated - i64::from(truncated as f64 > quotient);
                     let price = bits.price(value.wrapping_sub(prediction));
                     *sum += price;
                     if lone == Some(c) {
