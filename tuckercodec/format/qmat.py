@@ -221,7 +221,7 @@ def _predictor_choices(
         mean, push = _pushed_mean(q, mesh.mean_steps, pushes)
         if mean is not None:  # a column whose residuals would not fit 32 bits keeps to 0 or 1
             fits = np.abs(mean).max(axis=0) < 2**31
-            choices.append((PREDICT_MEAN, np.where(fits[None, :], mean, q)))
+            choices.append((PREDICT_MEAN, mean if fits.all() else np.where(fits[None, :], mean, q)))
     elif parents is None and coding_tools and q.shape[0] > 2:
         linear = linear_residuals(q)  # along time: the second difference
         # a column may use 3 only if its residuals fit 32 bits and its values and running
