@@ -29,6 +29,7 @@ def test_public_surface():
             "Encoder",
             "FileInfo",
             "FormatError",
+            "FormatVersionError",
             "FrameSource",
             "InputError",
             "InternalError",

@@ -106,7 +106,12 @@ EVERY_FIELD: list[dict[str, Any]] = [
         "max_error": "1%",
     },
     {"ranks": (3, 2), "jobs": 2, "max_error": 0.01},
-    {"target_bpfv": 3.0, "face_order": "given", "field_targets": (("speed", "max:0.01"),)},
+    {
+        "target_bpfv": 3.0,
+        "face_order": "given",
+        "field_targets": (("speed", "max:0.01"),),
+        "format_version": "1.5",
+    },
     {"lossless": True, "field_target": "rel:0.5", "attachments": False},
 ]
 

@@ -22,7 +22,7 @@ def _error_classes() -> list[type[tuckercodec.TuckerCodecError]]:
 
 def test_every_error_class_is_exported():
     classes = _error_classes()
-    assert len(classes) == 10
+    assert len(classes) == 11
     for cls in classes:
         assert cls.__name__ in tuckercodec.__all__
         assert getattr(tuckercodec, cls.__name__) is cls
@@ -36,6 +36,7 @@ def test_every_error_class_is_exported():
         (tuckercodec.FormatError, 3),
         (tuckercodec.ChecksumError, 3),
         (tuckercodec.UnreachableTargetError, 5),
+        (tuckercodec.FormatVersionError, 2),
         (tuckercodec.DependencyError, 6),
         (tuckercodec.InternalError, 70),
     ],
@@ -67,6 +68,9 @@ def test_a_format_error_names_path_field_offset_and_rule():
         tuckercodec.InputError("not a number", path="a.obj", line=7, frame=2),
         tuckercodec.UnreachableTargetError("no file fits 0.1 bpfv"),
         tuckercodec.InternalError("the corrections read back differently"),
+        tuckercodec.FormatVersionError(
+            "lossless needs format 1.3", feature="lossless", needs="1.3", format_version="1.2"
+        ),
     ],
     ids=lambda error: type(error).__name__,
 )

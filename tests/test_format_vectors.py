@@ -144,8 +144,17 @@ def test_the_invalid_vectors_come_from_the_committed_valid_one(tmp_path):
     attached = (SPEC / "vectors" / "v1.5-attributes.tkc").read_bytes()
     coded = (SPEC / "vectors" / "v1.6-adaptive.tkc").read_bytes()
     faces_coded = (SPEC / "vectors" / "v1.6-faces-adaptive.tkc").read_bytes()
+    corrected_adaptively = (SPEC / "vectors" / "v1.7-lossless-adaptive.tkc").read_bytes()
     count = make_vectors.write_invalid(
-        tmp_path, good, segmented, traversed, corrected, attached, coded, faces_coded
+        tmp_path,
+        good,
+        segmented,
+        traversed,
+        corrected,
+        attached,
+        coded,
+        faces_coded,
+        corrected_adaptively,
     )
     assert count == len([p for p in VECTORS if not json.loads(p.read_text())["valid"]])
     for path in sorted(tmp_path.iterdir()):
@@ -169,5 +178,18 @@ def test_the_writer_writes_every_vector_elsewhere_and_never_overwrites(tmp_path,
         assert written.keys() == committed.keys(), path.name
         if not committed["valid"]:
             assert written == committed
+        else:  # today's encoder, held to the version each vector's name says
+            version = written["header"]["format_version"]
+            assert version == committed["header"]["format_version"], path.name
+            assert version == make_vectors.named_version(path.stem), path.name
     assert make_vectors.main(["--out", str(out)]) == 1
     assert "--force" in capsys.readouterr().err
+
+
+def test_the_writer_refuses_a_file_of_another_version_than_its_name(tmp_path):
+    assert make_vectors.named_version("v1-wave-triangles") == "1.0"
+    assert make_vectors.named_version("v1.3-lossless-float32") == "1.3"
+    good = (SPEC / "vectors" / "v1-wave-triangles.tkc").read_bytes()
+    with pytest.raises(ValueError, match=r"v1\.2-renamed is a file of format 1\.0"):
+        make_vectors.write_valid(tmp_path, "v1.2-renamed", good, "a 1.0 file named for 1.2")
+    assert not list(tmp_path.iterdir())

@@ -350,6 +350,7 @@ class Decoder:
                 self.info.vertices,
                 self.limits,
                 f"section {section_id}",
+                adaptive_corrections=self._container.adaptive_corrections,
             )
             self._payload(section_id)  # the CRC (step 9), before any chunk is read
         with np.errstate(over="ignore", invalid="ignore"):  # an overflow is R36, per frame

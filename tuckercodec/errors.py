@@ -3,8 +3,9 @@
 Every error the library raises on purpose derives from :class:`TuckerCodecError`, so a caller can
 catch one class. Misuse of the API (a wrong argument type, an impossible parameter, a frame that
 does not exist) raises the plain ``TypeError``/``ValueError`` as usual. The classes that describe
-a bad value (:class:`InputError`, :class:`FormatError`, :class:`UnreachableTargetError`) are also
-``ValueError``\\ s, so that code written against generic exceptions keeps working.
+a bad value (:class:`InputError`, :class:`FormatError`, :class:`UnreachableTargetError`,
+:class:`FormatVersionError`) are also ``ValueError``\\ s, so that code written against generic
+exceptions keeps working.
 :class:`InternalError` is the one that is nobody's fault but tuckercodec's: a state the code
 checks for and holds impossible (a file that does not decode to what was measured), reported
 as a bug rather than as something the caller could change.
@@ -78,6 +79,31 @@ class UnreachableTargetError(TuckerCodecError, ValueError):
     coarsest file needs, or an error below what the format's 32-bit integers can resolve."""
 
     exit_code = EXIT_UNREACHABLE
+
+
+class FormatVersionError(TuckerCodecError, ValueError):
+    """An encode that needs a feature of a newer format version than the one asked for (the
+    encoder's ``format_version``): lossless with format 1.2, say, or a sequence with UVs that
+    a file of 1.4 cannot hold. Nothing is dropped to fit: the message names the option or the
+    data at fault, the version it needs and what to change.
+
+    Attributes:
+        feature: what needs the newer version, as named to the caller (``"lossless"``,
+            ``"the sequence's attributes"``).
+        needs: the format version it needs (``"1.3"``).
+        format_version: the version the encode is held to (``"1.2"``).
+    """
+
+    exit_code = EXIT_USAGE
+
+    def __init__(self, message: str, *, feature: str, needs: str, format_version: str) -> None:
+        self.feature = feature
+        self.needs = needs
+        self.format_version = format_version
+        super().__init__(message)
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return _rebuild, (type(self), self.args, self.__dict__)
 
 
 class InternalError(TuckerCodecError, RuntimeError):

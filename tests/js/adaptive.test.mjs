@@ -3,14 +3,16 @@
 // tuckercodec/format/adaptive.py): every stream decodes to the reference's integers, or is
 // refused with R46 where the reference refuses it; U1's coding order (meshCodingOrder) is the
 // reference's on the fixture's mesh; and a section declaring far more integers than its bytes can
-// hold is refused before anything of their size is made.
+// hold is refused before anything of their size is made. The streams of 5 to 8 planes (`wide`,
+// 64-bit integers: a RESD chunk's, format 1.7) go through decodeAdaptiveWide, which must also
+// make of every 32-bit stream in the ascending order what decodeAdaptive makes of it.
 
 import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
 import { dirname, join } from 'node:path';
 import { test } from 'node:test';
 import { fileURLToPath } from 'node:url';
-import { decodeAdaptive } from '../../tuckercodec/web/tkc/adaptive.js';
+import { decodeAdaptive, decodeAdaptiveWide } from '../../tuckercodec/web/tkc/adaptive.js';
 import { TkcError } from '../../tuckercodec/web/tkc/errors.js';
 import { meshCodingOrder, meshTopology } from '../../tuckercodec/web/tkc/topology.js';
 
@@ -25,12 +27,18 @@ function fixtureOrder() {
   return meshCodingOrder(meshTopology(faces, mesh.face_count, mesh.face_width, K));
 }
 
-/** What decodeAdaptive makes of a case: its integers, or the rule it throws. */
-function observe(c) {
+/**
+ * What the decoder makes of a case: its integers, or the rule it throws. A wide case's (or with
+ * `wide`, any case's) through decodeAdaptiveWide, its integers as decimal strings for a wide case.
+ */
+function observe(c, wide = c.wide === true) {
   const payload = new Uint8Array(Buffer.from(c.payload, 'base64'));
   const order = c.mesh ? () => fixtureOrder() : null;
   try {
-    return { integers: Array.from(decodeAdaptive(payload, c.rows, c.cols, order, c.planes, `case ${c.name}`)) };
+    if (!wide) return { integers: Array.from(decodeAdaptive(payload, c.rows, c.cols, order, c.planes, `case ${c.name}`)) };
+    const halves = decodeAdaptiveWide(payload, c.rows, c.cols, c.planes, `case ${c.name}`);
+    const values = Array.from(new BigInt64Array(halves.buffer)); // little-endian hosts
+    return { integers: c.wide ? values.map(String) : values.map(Number) };
   } catch (error) {
     if (!(error instanceof TkcError)) throw error;
     assert.equal(error.kind, 'FormatError');
@@ -54,6 +62,26 @@ for (const c of cases) {
     else assert.deepEqual(got, { integers: c.integers });
   });
 }
+
+test('decodeAdaptiveWide makes of every 32-bit stream in the ascending order what the reference makes', () => {
+  const narrow = cases.filter((c) => !c.mesh && !c.wide);
+  assert.ok(narrow.length > 20 && narrow.some((c) => c.rule) && narrow.some((c) => c.integers));
+  for (const c of narrow) {
+    const got = observe(c, true);
+    assert.deepEqual(got, c.rule !== undefined ? { rule: c.rule } : { integers: c.integers }, c.name);
+  }
+});
+
+test('the wide cases reach 63 bits and every refusal of a wide stream', () => {
+  const wide = cases.filter((c) => c.wide);
+  const largest = wide.flatMap((c) => c.integers ?? []).reduce((a, v) => (BigInt(v) > a ? BigInt(v) : a), 0n);
+  assert.equal(largest, 2n ** 63n - 1n);
+  for (const name of ['wide-bound-positive-5', 'wide-bound-negative-5', 'wide-64-bits']) {
+    assert.equal(wide.find((c) => c.name === name)?.rule, 'R46-adaptive-stream', name);
+  }
+  const damaged = wide.filter((c) => c.name.includes('damaged'));
+  assert.ok(damaged.some((c) => c.rule) && damaged.some((c) => c.integers), 'damaged wide streams refused and accepted');
+});
 
 test("U1's coding order is the reference's: depth 0 ascending, then predictor 2's rows and sources", () => {
   const { order, ends, source } = fixtureOrder();

@@ -3,7 +3,8 @@ their ``.s`` forms) turn their integers into bytes: :func:`adaptive_copy`, every
 reference adaptive coder (spec/FORMAT.md §6.14) with ``coder`` 1, whichever coder the encoder
 chose (tools/generate/vectors.py's ``adaptive_everywhere``, which wrote the vectors of 1.6; FACE
 as it is); and :func:`zstd_copy`, every one, and a faces-traverse FACE's streams, in §6.1's zstd
-planes, as files were before 1.6. The integers, and
+planes, as files were before 1.6 (a RESD section's adaptive chunks, format 1.7, are kept as
+they are). The integers, and
 so the positions, are the original file's. Taken apart as :class:`AdaptiveParts`, a file can be
 edited to break one rule, its preamble flags included, and put back together with every CRC
 right.
@@ -118,7 +119,8 @@ def zstd_copy(data: bytes) -> bytes:
         entry = {k: v for k, v in face_entry.items() if k not in ("coder", "streams")}
         parts.sections[face_n] = ({**entry, **face_params}, packed)
     for n, (entry, payload) in enumerate(parts.sections):
-        if entry.get("coder") != adaptive.CODER_ADAPTIVE:
+        # a RESD section's coder (format 1.7, flag bit 4) is not a position factor's: kept
+        if entry.get("coder") != adaptive.CODER_ADAPTIVE or entry["codec"] == "residual":
             continue
         stream = stored_integers(str(entry["id"]), entry, payload, mesh)
         packed, planes = streams.pack_integers(stream)

@@ -15,7 +15,10 @@ says. Cases: streams of small, wide and boundary integers in both orders; the st
 integers; each way a stream is refused (too short, a first byte other than 0, cut, a byte after
 its end, a last ``code`` not below ``range``, more integers than 32768 per byte, an integer
 outside the planes); and streams damaged at seeded random bytes, whatever the reference makes of
-them. Everything is deterministic (seeded, pure Python integers): ``--check`` regenerates it.
+them. Cases of 5 to 8 planes (``wide``: the 64-bit integers of a RESD chunk, §6.9, version 1.7,
+which the JavaScript decodes with decodeAdaptiveWide) give their integers as decimal strings,
+as JSON's numbers hold only 53 bits. Everything is deterministic (seeded, pure Python
+integers): ``--check`` regenerates it.
 """
 
 from __future__ import annotations
@@ -84,6 +87,11 @@ def verdict(payload: bytes, section: Section) -> dict[str, Any]:
 
 
 def case(name: str, payload: bytes, section: Section, **extra: Any) -> dict[str, Any]:
+    found = verdict(payload, section)
+    if section.planes > 4:
+        extra = {**extra, "wide": True}
+        if "integers" in found:
+            found = {"integers": [str(v) for v in found["integers"]]}
     return {
         "name": name,
         "payload": base64.b64encode(payload).decode(),
@@ -92,7 +100,7 @@ def case(name: str, payload: bytes, section: Section, **extra: Any) -> dict[str,
         "planes": section.planes,
         "mesh": section.order.mesh,
         **extra,
-        **verdict(payload, section),
+        **found,
     }
 
 
@@ -169,6 +177,54 @@ def bound_cases() -> list[dict[str, Any]]:
     return out
 
 
+def wide_cases() -> list[dict[str, Any]]:
+    """Integers of up to 63 bits in 5 to 8 planes (a RESD chunk's, §6.9), in the ascending
+    order: magnitudes of every bit length, the bounds of 5 and 8 planes, an integer of 64 bits
+    (-2^63, which only the reference's Python coder writes), and damaged copies."""
+    rng = np.random.default_rng(3)
+    out = []
+    for planes in (5, 6, 7, 8):
+        top = 8 * planes - 1  # magnitudes below 2^top fit
+        k = rng.integers(0, top, size=(4, 50))
+        low = rng.integers(0, 1 << 62, size=(4, 50), dtype=np.int64)
+        leading = np.left_shift(np.int64(1), k)  # a bit length k + 1, the bits under it random
+        columns = (leading | (low & (leading - 1))) * rng.choice([-1, 1], size=(4, 50))
+        columns[:, 10:14] = 0  # a run of zeros
+        columns[0, 20:23] = [1, -1, 2]
+        section = sequence(50, 4, planes)
+        payload = adaptive.encode_columns(columns, section.order)
+        out.append(case(f"wide-{planes}", payload, section))
+        if planes in (5, 8):
+            # mostly small integers, a few wide: damage leaves some such streams readable
+            mixed = np.rint(rng.laplace(0.0, 30.0, size=(6, 40))).astype(np.int64)
+            mixed[rng.random((6, 40)) < 0.05] = columns[0, np.argmax(np.abs(columns[0]))]
+            section = sequence(40, 6, planes)
+            payload = adaptive.encode_columns(mixed, section.order)
+            out.append(case(f"wide-mixed-{planes}", payload, section))
+            out += damaged(f"wide-mixed-{planes}", payload, section, seed=20 + planes)
+            for back in (2, 3, 4, 5):  # in the last bytes, where damage may leave it readable
+                broken = bytearray(payload)
+                broken[-back] ^= 0x5A
+                name = f"wide-mixed-{planes}-damaged-end-{back}"
+                out.append(case(name, bytes(broken), section))
+    for name, values, planes in [
+        ("wide-bound-fits-5", [2**39 - 1, -(2**39), 0], 5),
+        ("wide-bound-positive-5", [2**39, 0, 0], 5),
+        ("wide-bound-negative-5", [0, -(2**39) - 1, 0], 5),
+        ("wide-bound-fits-8", [2**63 - 1, -(2**63 - 1), 1], 8),
+        ("wide-small-8", [0, -3, 2**32, -(2**32), 2**31], 8),
+    ]:
+        out.append(
+            encoded(name, np.array([values], dtype=np.int64), sequence(len(values), 1, planes))
+        )
+    longest = sequence(3, 1, 8)
+    payload = adaptive._encode_columns_python(
+        np.array([[0, -(2**63), 0]], dtype=np.int64), longest.order
+    )
+    out.append(case("wide-64-bits", payload, longest))
+    return out
+
+
 def mesh_cases() -> list[dict[str, Any]]:
     """U1's mesh order on a small mesh, smooth columns and rough ones."""
     faces, vertices = mesh_faces()
@@ -194,7 +250,7 @@ def mesh_cases() -> list[dict[str, Any]]:
 
 
 def fixture() -> str:
-    cases = sequence_cases() + mesh_cases()
+    cases = sequence_cases() + wide_cases() + mesh_cases()
     return json.dumps({"about": __doc__.split("\n\n")[0], "cases": cases}, indent=1) + "\n"
 
 

@@ -17,6 +17,11 @@ v1.2-traverse-triangles.tkc (1.2) they come out byte for byte as committed (a te
 The encoder is not byte-identical across machines (the SVD's signs and last bits depend on the
 BLAS), so the vectors are written once and committed; every test run decodes them. Never write
 them into spec/vectors/ again unless the format itself changes.
+
+Each vector is named for the format version it exercises (``v1-`` 1.0, ``v1.3-`` 1.3), and is
+encoded with that version as the encoder's ``format_version``, so that today's encoder, which
+would use the newest features, writes it at that version: :func:`write_valid` refuses a file
+whose version is not its name's.
 """
 
 from __future__ import annotations
@@ -24,6 +29,7 @@ from __future__ import annotations
 import argparse
 import hashlib
 import json
+import re
 import struct
 import sys
 import zlib
@@ -231,7 +237,7 @@ def invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
         "R03-preamble-truncated": (good[:20], "TruncatedFileError"),
         "R04-preamble-crc": (good[:10] + bytes([good[10] ^ 0x04]) + good[11:], "ChecksumError"),
         "R05-major-version": (_set_preamble(good, 8, "<H", 2), "UnsupportedVersionError"),
-        "R06-critical-flag": (_set_preamble(good, 12, "<I", 0x0010), "UnsupportedVersionError"),
+        "R06-critical-flag": (_set_preamble(good, 12, "<I", 0x8000), "UnsupportedVersionError"),
         "R07-header-limit": (_set_preamble(good, 16, "<I", (16 << 20) + 1), "LimitError"),
         "R08-total-length": (
             _set_preamble(good, 20, "<Q", HEAD_SIZE + header_length),
@@ -490,7 +496,7 @@ def segment_index(decoder: Decoder) -> list[dict[str, Any]]:
 def valid_vectors() -> dict[str, tuple[bytes, str]]:
     """name -> (file bytes, what it exercises)."""
     wave_tri = MeshSequence(wave_sheet(24, 9), sheet_triangles(9))
-    basic = encode(wave_tri, target_kg=0.5)
+    basic = encode(wave_tri, target_kg=0.5, format_version="1.0")
     named = named_polygons()
     extended = Parts(basic)
     extended.flags |= 0x00010000  # an ignorable flag bit
@@ -507,15 +513,19 @@ def valid_vectors() -> dict[str, tuple[bytes, str]]:
         **adaptive_vectors(),
         "v1-wave-triangles": (basic, "triangles, no names: the basic file"),
         "v1.1-segments-shared": (
-            encode_with_report(long_wave, target_kg=0.5, segment_frames=12).data,
+            encode_with_report(
+                long_wave, target_kg=0.5, segment_frames=12, format_version="1.1"
+            ).data,
             "format 1.1: three segments of 12, 12 and 16 frames sharing one U1",
         ),
         "v1.1-segments-own": (
-            encode_with_report(named, target_kg=0.5, segment_frames=8, basis="own").data,
+            encode_with_report(
+                named, target_kg=0.5, segment_frames=8, basis="own", format_version="1.1"
+            ).data,
             "format 1.1: two segments, each with its own U1 (mesh parents of polygons), names",
         ),
         "v1-polygons-names": (
-            encode(named, target_kg=0.1),
+            encode(named, target_kg=0.1, format_version="1.0"),
             "quads padded to triangles, frame names, frame rate, far from the origin",
         ),
         "v1-ignorable-extensions": (
@@ -646,23 +656,29 @@ def adaptive_vectors() -> dict[str, tuple[bytes, str]]:
     named = named_polygons()
     return {
         "v1.6-adaptive": (
-            adaptive_everywhere(encode(triangles, target_kg=0.1)),
+            adaptive_everywhere(encode(triangles, target_kg=0.1, format_version="1.6")),
             "format 1.6: U1 (the mesh's coding order), U3, CORE and CENT (ascending) through the "
             "adaptive range coder, faces-traverse of scrambled triangles",
         ),
         "v1.6-mean-push": (
-            pushed_everywhere(encode(triangles, ranks=(12, 6))),
+            pushed_everywhere(encode(triangles, ranks=(12, 6), format_version="1.6")),
             "format 1.6: U1's predictor 2 with each push 0..9 (mean_push), adaptively coded",
         ),
         "v1.6-adaptive-segments": (
             adaptive_everywhere(
-                encode_with_report(named, target_kg=0.1, segment_frames=8, basis="own").data
+                encode_with_report(
+                    named, target_kg=0.1, segment_frames=8, basis="own", format_version="1.6"
+                ).data
             ),
             "format 1.6 and 1.1: two segments with their own U1.s, U3.s, CORE.s and CENT.s, all "
             "adaptively coded, polygons and names",
         ),
         "v1.6-faces-adaptive": (
-            with_adaptive_faces(encode(scrambled(pinched_sheets(7, 12), seed=31), target_kg=0.1)),
+            with_adaptive_faces(
+                encode(
+                    scrambled(pinched_sheets(7, 12), seed=31), target_kg=0.1, format_version="1.6"
+                )
+            ),
             "format 1.6: faces-traverse with coder 1 (adaptive streams, NEW vertices as ranks "
             "among the unseen, negative ones too) of scrambled polygons in two sheets that share "
             "a vertex (seeds, FAR)",
@@ -753,12 +769,14 @@ def attachment_vectors() -> dict[str, tuple[bytes, str]]:
     sheet = attached_sheet(9, 24)
     return {
         "v1.5-attributes": (
-            encode(sheet, target_kg=0.5),
+            encode(sheet, target_kg=0.5, format_version="1.5"),
             "format 1.5: ORDER, an attribute of every domain and type (indexed UVs with a NaN, "
             "face colours, float64 per vertex, int32 per face, indexed normals), face sets",
         ),
         "v1.5-attributes-walk-segments": (
-            encode_with_report(sheet, target_kg=0.5, segment_frames=12, face_order="walk").data,
+            encode_with_report(
+                sheet, target_kg=0.5, segment_frames=12, face_order="walk", format_version="1.5"
+            ).data,
             "format 1.5 and 1.1: the same attributes following the walk's face order, no "
             "ORDER, two segments",
         ),
@@ -782,6 +800,7 @@ def fields_vector() -> dict[str, tuple[bytes, str]]:
         MeshSequence(sheet.vertices, faces, fields=fields),
         target_kg=0.5,
         field_targets={**targets, "height": "lossless"},
+        format_version="1.5",
     )
     modes = field_modes(Decoder(data))
     assert modes == ["tucker", "grid", "exact", "exact"], modes
@@ -842,11 +861,13 @@ def scene_vectors() -> dict[str, tuple[bytes, str]]:
     )
     return {
         "v1.4-scene-times": (
-            encode(film, target_kg=0.5),
+            encode(film, target_kg=0.5, format_version="1.4"),
             "format 1.4: time codes from 1001 with one frame missing, metres, Z up",
         ),
         "v1.4-scene-segments": (
-            encode_with_report(seconds, target_kg=0.5, segment_frames=16).data,
+            encode_with_report(
+                seconds, target_kg=0.5, segment_frames=16, format_version="1.4"
+            ).data,
             "format 1.4 and 1.1: time codes offset by 4 frames in three segments, no unit or axis",
         ),
     }
@@ -866,11 +887,13 @@ def traverse_vectors() -> dict[str, tuple[bytes, str]]:
     )
     return {
         "v1.2-traverse-triangles": (
-            encode(triangles, target_kg=0.5),
+            encode(triangles, target_kg=0.5, format_version="1.2"),
             "format 1.2: faces-traverse, triangles shuffled, vertices renumbered, corners rotated",
         ),
         "v1.2-traverse-polygons-segments": (
-            encode_with_report(polygons_in_segments, target_kg=0.5, segment_frames=8).data,
+            encode_with_report(
+                polygons_in_segments, target_kg=0.5, segment_frames=8, format_version="1.2"
+            ).data,
             "format 1.2 and 1.1 together: faces-traverse of scrambled polygons (degrees), two "
             "segments sharing U1, names",
         ),
@@ -887,23 +910,23 @@ def correction_vectors() -> dict[str, tuple[bytes, str]]:
     named = named_polygons()
     return {
         "v1.3-bound-grid": (
-            encode(wave, max_error="0.05%"),
+            encode(wave, max_error="0.05%", format_version="1.3"),
             "format 1.3: every vertex of a noisy sheet within 0.05 % of the diagonal, on a grid",
         ),
         "v1.3-lossless-float32": (
-            encode(single, lossless=True),
+            encode(single, lossless=True, format_version="1.3"),
             "format 1.3: lossless float32 values, corrections of binary32 ordered integers",
         ),
         "v1.3-lossless-float64": (
-            encode(named, lossless=True),
+            encode(named, lossless=True, format_version="1.3"),
             "format 1.3: lossless float64 values far from the origin, polygons and names",
         ),
         "v1.3-lossless-digits": (
-            encode(as_text(rough, "{:.6g}"), lossless=True),
+            encode(as_text(rough, "{:.6g}"), lossless=True, format_version="1.3"),
             "format 1.3: lossless values read from %.6g text, decimals of 6 significant digits",
         ),
         "v1.3-lossless-digits-float32": (
-            encode(as_text(rough, "{:.6g}", np.float32), lossless=True),
+            encode(as_text(rough, "{:.6g}", np.float32), lossless=True, format_version="1.3"),
             "format 1.3: lossless float32 values read from %.6g text",
         ),
         "v1.3-segments-lossless": (
@@ -911,12 +934,13 @@ def correction_vectors() -> dict[str, tuple[bytes, str]]:
                 MeshSequence(rough.astype(np.float32).astype(np.float64), sheet_triangles(9)),
                 lossless=True,
                 segment_frames=8,
+                format_version="1.3",
             ).data,
             "format 1.3 and 1.1 together: lossless float32 values in three segments sharing U1, "
             "each with its RESD.s",
         ),
         "v1.3-lossless-places": (
-            encode(as_text(rough + 20.0, "{:.5f}"), lossless=True),
+            encode(as_text(rough + 20.0, "{:.5f}"), lossless=True, format_version="1.3"),
             "format 1.3: lossless values read from %.5f text, decimals of 5 places",
         ),
     }
@@ -931,6 +955,117 @@ def derived_valid_vectors(corrected: bytes) -> dict[str, tuple[bytes, str]]:
             "format 1.3: chunk_frames 2**64 - 1, the largest a msgpack int holds, which §6.9 "
             "allows: more than the frames, so the section is one chunk",
         ),
+    }
+
+
+def adaptive_correction_vectors(
+    float32: bytes, float64: bytes, segments: bytes
+) -> dict[str, tuple[bytes, str]]:
+    """The valid vectors of format 1.7 (§6.9's ``coder`` 1), made from the 1.3 files as the
+    derived ones are: their corrections, the same integers, stored as adaptive streams."""
+    return {
+        "v1.7-lossless-adaptive": (
+            with_adaptive_corrections(float32, predict=1),
+            "format 1.7: lossless float32 values, the RESD chunk one adaptive stream of the "
+            "frames' differences (predict 1), at most 4 planes",
+        ),
+        "v1.7-lossless-float64-adaptive": (
+            with_adaptive_corrections(float64, predict=0),
+            "format 1.7: lossless float64 values, the RESD chunk one adaptive stream of "
+            "corrections past 32 bits (more than 4 planes)",
+        ),
+        "v1.7-segments-adaptive": (
+            with_adaptive_corrections(segments, predict=1),
+            "format 1.7 and 1.1: lossless values in three segments, each RESD.s an adaptive stream",
+        ),
+    }
+
+
+def with_adaptive_corrections(data: bytes, predict: int) -> bytes:
+    """``data`` (a file with corrections) with every RESD section's integers stored as adaptive
+    streams (§6.9 ``coder`` 1, format 1.7) with ``predict``, whichever coding the encoder chose;
+    flag bit 4 set."""
+    parts = Parts(data)
+    for n, entry in enumerate(parts.entries):
+        if entry.get("codec") != residual.RESIDUAL:
+            continue
+        integers = _corrections(parts, n)
+        layout_domain = residual.Domain(entry["domain"], entry.get("step"), _scale(entry))
+        params, payload = residual.encode_section(
+            integers,
+            layout_domain,
+            19,
+            exponent=entry["exponent"],
+            predict=predict,
+            chunk_frames=entry["chunk_frames"],
+            adaptive_coding=True,
+            adaptive_gain=-1.0,  # whatever it costs: the vector is for the coding
+        )
+        parts.entries[n] = {**{k: entry[k] for k in ("id", "critical", "codec")}, **params}
+        parts.payloads[n] = payload
+    parts.flags |= residual.ADAPTIVE_CORRECTIONS
+    parts.minor = max(parts.minor, residual.ADAPTIVE_CORRECTIONS_MINOR)
+    return parts.pack()
+
+
+def _scale(entry: dict[str, Any]) -> int | None:
+    """A RESD entry's places or digits, if its domain has them."""
+    return entry.get("places", entry.get("digits"))
+
+
+def _corrections(parts: Parts, n: int) -> np.ndarray:
+    """The restored integers e (F', K, 3) of the RESD section at ``n``."""
+    entry, payload = parts.entries[n], parts.payloads[n]
+    vertices = parts.header["vertices"]
+    frames = _section_frames(parts, str(entry["id"]))
+    layout = residual.read_layout(
+        entry,
+        len(payload),
+        frames,
+        vertices,
+        DEFAULT_LIMITS,
+        str(entry["id"]),
+        adaptive_corrections=bool(parts.flags & residual.ADAPTIVE_CORRECTIONS),
+    )
+    return np.concatenate(
+        [
+            residual.decode_chunk(payload, layout, c, vertices, str(entry["id"]))
+            for c in range(len(layout.planes))
+        ]
+    )
+
+
+def _section_frames(parts: Parts, section_id: str) -> int:
+    """F': the frames a RESD section covers (the file's, or its segment's)."""
+    if "." not in section_id:
+        return int(parts.header["frames"])
+    number = int(section_id.split(".")[1])
+    segment = parts.header["segments"][number]
+    return int(segment["frames"]) if "frames" in segment else int(segment[1]) - int(segment[0])
+
+
+def adaptive_correction_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
+    """rule id -> (file bytes, error class name): the 1.7 file ``good`` (one adaptive RESD
+    chunk) with §6.9's ``coder`` 1 broken. R46: a byte after the chunk's stream; ``coder`` 2;
+    ``planes`` 1 for integers that need more. R29: ``coder`` 1 in a file without flag bit 4,
+    where it is an unknown parameter, so the chunk is read as a zstd frame, which it is not."""
+    parts = Parts(good)
+    n = parts.index("RESD")
+    entry, payload = parts.entries[n], parts.payloads[n]
+    (planes, length), *rest = entry["chunks"]
+    trailing = _edit(
+        good, _payload("RESD", payload + b"\x00", chunks=[[planes, length + 1], *rest])
+    )
+    without_flag = Parts(good)
+    without_flag.flags &= ~residual.ADAPTIVE_CORRECTIONS
+    return {
+        "R46-adaptive-stream-resd": (trailing, "FormatError"),
+        "R46-adaptive-stream-resd-coder": (_edit(good, _entry("RESD", coder=2)), "FormatError"),
+        "R46-adaptive-stream-resd-planes": (
+            _edit(good, _entry("RESD", chunks=[[1, length], *rest])),
+            "FormatError",
+        ),
+        "R29-zstd-content-size-resd-coder": (without_flag.pack(), "FormatError"),
     }
 
 
@@ -951,7 +1086,15 @@ def correction_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
     entry = parts.entries[parts.index("RESD")]
     payload = parts.payloads[parts.index("RESD")]
     vertices, frames = parts.header["vertices"], parts.header["frames"]
-    layout = residual.read_layout(entry, len(payload), frames, vertices, DEFAULT_LIMITS, "RESD")
+    layout = residual.read_layout(
+        entry,
+        len(payload),
+        frames,
+        vertices,
+        DEFAULT_LIMITS,
+        "RESD",
+        adaptive_corrections=bool(parts.flags & residual.ADAPTIVE_CORRECTIONS),
+    )
     chunks = [
         residual.decode_chunk(payload, layout, number, vertices, "RESD")
         for number in range(len(layout.planes))
@@ -1007,6 +1150,10 @@ SECOND_VECTORS = {
     "R21-header-limit-face-streams": "R21-header-limit",
     "R20-header-field-time-codes": "R20-header-field",
     "R46-adaptive-stream-coder": "R46-adaptive-stream",
+    "R46-adaptive-stream-resd": "R46-adaptive-stream",
+    "R46-adaptive-stream-resd-coder": "R46-adaptive-stream",
+    "R46-adaptive-stream-resd-planes": "R46-adaptive-stream",
+    "R29-zstd-content-size-resd-coder": "R29-zstd-content-size",
     "R39-traversal-rank": "R39-traversal",
     "R30-planes-faces-coder": "R30-planes",
     "R46-adaptive-stream-faces-coder": "R46-adaptive-stream",
@@ -1014,9 +1161,23 @@ SECOND_VECTORS = {
 }
 
 
+def named_version(name: str) -> str:
+    """The format version a vector's name promises: ``v1-...`` 1.0, ``v1.3-...`` 1.3."""
+    match = re.match(r"v(\d+)(?:\.(\d+))?-", name)
+    if match is None:
+        raise ValueError(f"a valid vector's name starts with its format version: {name!r}")
+    return f"{match.group(1)}.{match.group(2) or 0}"
+
+
 def write_valid(folder: Path, name: str, data: bytes, purpose: str) -> None:
-    """One valid vector: the file, its reference positions and the JSON of what it holds."""
+    """One valid vector: the file, its reference positions and the JSON of what it holds;
+    ``ValueError`` for a file of another format version than its name says."""
     decoder = Decoder(data)
+    if decoder.info.format_version != named_version(name):
+        raise ValueError(
+            f"{name} is a file of format {decoder.info.format_version}, not the "
+            f"{named_version(name)} its name says"
+        )
     positions = decoder.positions()
     (folder / f"{name}.tkc").write_bytes(data)
     np.save(folder / f"{name}.positions.npy", positions)
@@ -1084,10 +1245,11 @@ def write_invalid(
     attached: bytes,
     adaptively_coded: bytes,
     faces_coded: bytes,
+    corrected_adaptively: bytes,
 ) -> int:
     """The invalid vectors made from the valid files ``good`` (format 1.0), ``segmented``
     (1.1), ``traversed`` (1.2), ``corrected`` (1.3), ``attached`` (1.5), ``adaptively_coded``
-    and ``faces_coded`` (1.6), with their JSON; how many."""
+    and ``faces_coded`` (1.6) and ``corrected_adaptively`` (1.7), with their JSON; how many."""
     vectors = {
         **invalid_vectors(good),
         **segmented_invalid_vectors(segmented),
@@ -1096,6 +1258,7 @@ def write_invalid(
         **attachment_invalid_vectors(attached),
         **adaptive_invalid_vectors(adaptively_coded),
         **faces_adaptive_invalid_vectors(faces_coded),
+        **adaptive_correction_invalid_vectors(corrected_adaptively),
     }
     for name, (data, error) in vectors.items():
         write_invalid_vector(folder, name, data, error)
@@ -1119,7 +1282,11 @@ INVALID_SOURCES = {
     "segmented": "v1.1-segments-shared",
     "traverse": "v1.2-traverse-triangles",
     "corrections": "v1.3-lossless-float32",
+    "corrections-float64": "v1.3-lossless-float64",
+    "corrections-segments": "v1.3-segments-lossless",
 }
+#: The valid file of 1.7 the invalid vectors of §6.9's coder 1 are made from (itself derived).
+ADAPTIVE_CORRECTIONS_SOURCE = "v1.7-lossless-adaptive"
 
 
 def write_only(out: Path, names: list[str]) -> int:
@@ -1131,7 +1298,12 @@ def write_only(out: Path, names: list[str]) -> int:
         if name in valid:
             write_valid(out, name, *valid[name])
     sources = {key: (out / f"{name}.tkc").read_bytes() for key, name in INVALID_SOURCES.items()}
-    derived = derived_valid_vectors(sources["corrections"])
+    derived = {
+        **derived_valid_vectors(sources["corrections"]),
+        **adaptive_correction_vectors(
+            sources["corrections"], sources["corrections-float64"], sources["corrections-segments"]
+        ),
+    }
     for name in names:
         if name in derived:
             write_valid(out, name, *derived[name])
@@ -1143,6 +1315,9 @@ def write_only(out: Path, names: list[str]) -> int:
         **attachment_invalid_vectors(sources["attachments"]),
         **adaptive_invalid_vectors(sources["adaptive"]),
         **faces_adaptive_invalid_vectors(sources["faces-adaptive"]),
+        **adaptive_correction_invalid_vectors(
+            (out / f"{ADAPTIVE_CORRECTIONS_SOURCE}.tkc").read_bytes()
+        ),
     }
     for name in names:
         if name in invalid:
@@ -1186,7 +1361,14 @@ def main(argv: list[str] | None = None) -> int:
     valid = valid_vectors()
     for name, (data, purpose) in valid.items():
         write_valid(out, name, data, purpose)
-    derived = derived_valid_vectors(valid["v1.3-lossless-float32"][0])
+    derived = {
+        **derived_valid_vectors(valid["v1.3-lossless-float32"][0]),
+        **adaptive_correction_vectors(
+            valid["v1.3-lossless-float32"][0],
+            valid["v1.3-lossless-float64"][0],
+            valid["v1.3-segments-lossless"][0],
+        ),
+    }
     for name, (data, purpose) in derived.items():
         write_valid(out, name, data, purpose)
     invalid = write_invalid(
@@ -1198,6 +1380,7 @@ def main(argv: list[str] | None = None) -> int:
         valid["v1.5-attributes"][0],
         valid["v1.6-adaptive"][0],
         valid["v1.6-faces-adaptive"][0],
+        derived["v1.7-lossless-adaptive"][0],
     )
     print(f"wrote {len(valid) + len(derived)} valid and {invalid} invalid vectors to {out}")
     return 0

@@ -17,6 +17,7 @@ from ..decomposition.analysis import SELECTIONS
 from ..encoder import DEFAULT_TARGET_KG
 from ..encoder.options import BASES, FACE_ORDERS, parse_field_target, parse_max_error
 from ..encoder.plan import DEFAULT_SEGMENT_FRAMES, parse_size
+from ..encoder.versions import VERSIONS, parse_format_version
 from ..errors import DependencyError
 from ..files import SUFFIX
 from ..gltf_export import COMPRESSIONS
@@ -599,6 +600,16 @@ def _field_target(text: str) -> tuple[str, str]:
         raise argparse.ArgumentTypeError(str(error)) from None
 
 
+def _format_version(text: str) -> str:
+    """--format-version: 1.0 to the newest, checked."""
+    try:
+        return parse_format_version(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected one of {', '.join(VERSIONS)}, got {text!r}"
+        ) from None
+
+
 def _add_mode_options(parser: argparse.ArgumentParser) -> None:
     """The encoder's three modes, one at a time, and how ranks are selected."""
     mode = parser.add_mutually_exclusive_group()
@@ -651,6 +662,16 @@ def _add_mode_options(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         default=None,
         help="write the positions and faces alone: no UVs, normals, colours, face sets or fields",
+    )
+    parser.add_argument(
+        "--format-version",
+        type=_format_version,
+        metavar="1.N",
+        help=f"the newest format version the file may be, for decoders that read only up to it "
+        f"(default {VERSIONS[-1]}); below 1.6 no adaptive coding, below 1.2 neither "
+        "faces-traverse nor the mesh predictors; an option or data that needs a later version "
+        "(--lossless and --max-error 1.3, segments 1.1, time codes 1.4, attributes 1.5) is "
+        "refused with exit 2",
     )
 
 

@@ -131,6 +131,7 @@ def encode_options(args: argparse.Namespace, *, passes: bool = True) -> EncodeOp
         "field_targets": getattr(args, "field", None),
         "field_target": getattr(args, "fields", None),
         "attachments": False if getattr(args, "no_attributes", None) else None,
+        "format_version": getattr(args, "format_version", None),
     }
     return resolve_options(**{name: value for name, value in given.items() if value is not None})
 

@@ -12,6 +12,7 @@ import numpy as np
 
 from ..format import attributes, face_order, face_sets, faces
 from ..model.attributes import CORNER, FACE, Attribute, FaceSet, Field
+from .versions import NEWEST, Features
 
 Coded = tuple[dict[str, Any], bytes]
 
@@ -97,16 +98,25 @@ def coded_faces(
     fields: Sequence[Field],
     level: int,
     choice: str = "auto",
+    features: Features = NEWEST,
 ) -> tuple[faces.FaceSection, list[Coded]]:
     """The FACE section, and the sections of 1.5 coded once (ORDER, ATTR.n, FSET) with the
     attributes and sets numbered as the decoder will return the faces: in the given order when
     :func:`keeps_face_order` says so, else in the order FACE decodes them, each then starting
-    at its smallest vertex unless data per corner follows its corners."""
+    at its smallest vertex unless data per corner follows its corners. Only the codecs
+    ``features`` allow: below 1.2 faces-delta, the faces as given; faces kept in their order
+    below 1.5 too, which needs no ORDER then (the caller has refused attachments there)."""
     keep_order = keeps_face_order(choice, attributes_, sets, fields)
-    if not keep_order and not keeps_corners(attributes_):
+    traverse = features.coding_tools and (features.attachments or not keep_order)
+    if traverse and not keep_order and not keeps_corners(attributes_):
         given_faces = smallest_corner_first(given_faces)
     face, order, walk = faces.encode_face_sections(
-        given_faces, vertex_count, level, keep_order=keep_order, adaptive_coding=True
+        given_faces,
+        vertex_count,
+        level,
+        keep_order=keep_order,
+        adaptive_coding=features.adaptive,
+        traverse=traverse,
     )
     decoded = face.faces
     if order is not None or not (attributes_ or sets):

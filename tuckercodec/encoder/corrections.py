@@ -207,11 +207,14 @@ def smallest_section(
     *,
     exponent: int = 0,
     predict: int | None = None,
+    adaptive_coding: bool = False,
 ) -> tuple[Domain, tuple[dict[str, Any], bytes], np.ndarray]:
     """Of ``domains``, the one whose corrections from ``exact`` to ``original`` pack smallest
     at zstd ``level`` (the first of equal sizes): the domain, its RESD section (§6.9) and its
     integers. The one place the corrections are put in the format's terms, for sizing a part
-    and for the file, whole or in segments."""
+    and for the file, whole or in segments. With ``adaptive_coding`` (the file's final
+    sections), the domain chosen is packed again with the adaptive chunks of format 1.7 tried
+    too (:func:`~..format.residual.encode_section`)."""
     best: tuple[Domain, tuple[dict[str, Any], bytes], np.ndarray] | None = None
     for domain in domains:
         integers = integers_for(exact, original, goal, domain)
@@ -221,6 +224,12 @@ def smallest_section(
         if best is None or len(section[1]) < len(best[1][1]):
             best = (domain, section, integers)
     assert best is not None
+    if adaptive_coding:
+        domain, section, integers = best
+        section = residual.encode_section(
+            integers, domain, level, exponent=exponent, predict=predict, adaptive_coding=True
+        )
+        best = (domain, section, integers)
     return best
 
 
@@ -346,11 +355,17 @@ def plain_positions(quantized: Quantized[Any], u2: np.ndarray) -> np.ndarray:
 
 
 def final_section(
-    corrected: Corrected, goal: Goal, original: np.ndarray, u2: np.ndarray, level: int
+    corrected: Corrected,
+    goal: Goal,
+    original: np.ndarray,
+    u2: np.ndarray,
+    level: int,
+    adaptive_coding: bool = True,
 ) -> tuple[tuple[dict[str, Any], bytes], np.ndarray, np.ndarray] | None:
     """The chosen part's corrections on §8.1's exact positions, packed for the file at the
-    final level (capped at :data:`CORRECTION_LEVEL`) with the predictor the search chose, the
-    integers and the positions they decode to; ``None`` if the part needs none."""
+    final level (capped at :data:`CORRECTION_LEVEL`) with the predictor the search chose, and
+    with ``adaptive_coding`` (format 1.7) adaptive chunks where they gain enough; the integers
+    and the positions they decode to; ``None`` if the part needs none."""
     if corrected.section is None or corrected.domain is None:
         return None
     exact, exponent = exact_positions(corrected.quantized, u2)
@@ -363,6 +378,7 @@ def final_section(
         min(level, CORRECTION_LEVEL),
         exponent=exponent,
         predict=predict,
+        adaptive_coding=adaptive_coding,
     )
     return section, integers, corrected_positions(exact, integers, domain)
 
@@ -380,7 +396,13 @@ def check_written(
     frames, vertices = integers.shape[:2]
     where = f"section {section_id}"
     layout = residual.read_layout(
-        entry.params, entry.length, frames, vertices, DEFAULT_LIMITS, where
+        entry.params,
+        entry.length,
+        frames,
+        vertices,
+        DEFAULT_LIMITS,
+        where,
+        adaptive_corrections=container.adaptive_corrections,
     )
     for chunk in range(len(layout.planes)):
         start, stop = layout.chunk_range(chunk)
@@ -444,10 +466,15 @@ class SegmentCorrections:
 
 
 def correct_segments(
-    work: SegmentedWorkspace, quantized: Quantized[Any], goal: Goal, level: int
+    work: SegmentedWorkspace,
+    quantized: Quantized[Any],
+    goal: Goal,
+    level: int,
+    adaptive_coding: bool = True,
 ) -> SegmentCorrections:
     """A pass over the input: each segment's §8.1 positions, its corrections (the smallest of
-    the goal's domains) and the error of the corrected file, measured on them."""
+    the goal's domains, with ``adaptive_coding`` adaptive chunks where they gain enough) and the
+    error of the corrected file, measured on them."""
     work.say(f"pass {work.passes + 1}: correcting every segment")
     measured = ErrorAccumulator()
     out = SegmentCorrections([], [], 0.0, Displacement(0.0, 0, 0), [])
@@ -464,7 +491,13 @@ def correct_segments(
         )
         original = work.source.read(part.segment.start, part.segment.stop)
         domain, section, integers = smallest_section(
-            exact, original, goal, goal.domains, min(level, CORRECTION_LEVEL), exponent=exponent
+            exact,
+            original,
+            goal,
+            goal.domains,
+            min(level, CORRECTION_LEVEL),
+            exponent=exponent,
+            adaptive_coding=adaptive_coding,
         )
         decoded = corrected_positions(exact, integers, domain)
         measure(decoded, original, goal)
@@ -520,6 +553,8 @@ class Corrector:
         block_frames: int | None = None,
     ) -> None:
         self.options = options
+        #: whether the corrections may be adaptive streams (format 1.7, flag bit 4)
+        self.adaptive_corrections = options.features.adaptive_corrections
         if isinstance(frames, MeshSequence):
             self.goal = goal_of_blocks(options, [frames.vertices])
         else:
@@ -545,7 +580,9 @@ class Corrector:
         goal, original = self.goal, work.sequence.vertices
         chosen, trials = search_whole(work, self.options, goal)
         u2 = work.analysis.decomposition.u2
-        final = final_section(chosen, goal, original, u2, self.options.level)
+        final = final_section(
+            chosen, goal, original, u2, self.options.level, self.adaptive_corrections
+        )
         written: list[tuple[str, np.ndarray]] = []
         sections = None
         if final is not None:
@@ -577,7 +614,7 @@ class Corrector:
                 chosen, _ = search_whole(whole, options, goal)
                 kg = chosen.kg if chosen.kg is not None else DEFAULT_TARGET_KG
             quantized, _, trials = search.search_kg(work, kg)
-        fixed = correct_segments(work, quantized, goal, options.level)
+        fixed = correct_segments(work, quantized, goal, options.level, self.adaptive_corrections)
         written = [
             (f"{residual.SECTION_STEM}.{number}", integers)
             for number, integers in enumerate(fixed.integers)

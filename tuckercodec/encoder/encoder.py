@@ -1,5 +1,6 @@
 """The :class:`Encoder`: one set of options, any number of sequences, and the one place that
-decides whether a sequence is encoded whole (format 1.0) or in segments (format 1.1).
+decides whether a sequence is encoded whole (format 1.0) or in segments (format 1.1), and
+whether the sequence fits the format version asked for (:mod:`.versions`).
 
 Every way into the encoder goes through here: :func:`tuckercodec.encode` and
 :func:`~tuckercodec.encode_with_report`, :func:`tuckercodec.encode_file`, ``batch``, the zarr
@@ -17,7 +18,14 @@ from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 from ..decomposition.analysis import Analysis, analyze
-from ..format.segments import BASIS_OWN
+from ..errors import InternalError
+from ..format.adaptive import ADAPTIVE_MINOR, uses_adaptive
+from ..format.attachments import ATTACHMENTS_MINOR
+from ..format.container import PREAMBLE, SCENE_MINOR, SIGNATURE
+from ..format.header import scene_keys
+from ..format.sections import CODING_TOOLS_MINOR, uses_coding_tools
+from ..format.sections import entry as section_entry
+from ..format.segments import BASIS_OWN, SEGMENTED_MINOR
 from ..model.attributes import Field
 from ..model.sequence import MeshSequence
 from ..model.sources import FrameSource, SequenceFrames
@@ -86,7 +94,14 @@ class Encoder:
     ) -> EncodeResult:
         """Encode an opened sequence (:func:`tuckercodec.io.open_frames`): whole when
         :meth:`segments` says no, else in segments read a range of frames at a time."""
+        self._refuse_newer_data(frames)
         if self.segments(frames.frame_count, frames.vertex_count):
+            self.options.features.require(
+                SEGMENTED_MINOR,
+                "a sequence larger than max_memory",
+                "it is encoded in segments, spec §6.7",
+                "give a larger max_memory",
+            )
             return self.encode_segments(frames)
         if self.options.jobs is not None or self.options.scheduler is not None:
             self._say(
@@ -101,11 +116,19 @@ class Encoder:
         """Encode in segments (format 1.1), however small the sequence: ``segment_frames``
         frames each (default 250). With ``shared_basis`` (the U1 section of another segmented
         file, :func:`~.segmented.shared_basis_of`), every segment uses its leading columns and
-        the file holds the section byte for byte."""
+        the file holds the section byte for byte. ``FormatVersionError`` where
+        ``format_version`` is below 1.1, or below what the basis's section uses."""
         start = time.perf_counter()
         options = self.options
         if options.select != "exact":
             raise ValueError("a segmented encode chooses its ranks by the exact error (select)")
+        self._refuse_newer_data(frames)
+        features = options.features
+        features.require(
+            SEGMENTED_MINOR, "encode_segments", "segmented files, spec §6.7", "encode it whole"
+        )
+        if shared_basis is not None:
+            self._refuse_newer_basis(shared_basis)
         memory = memory_allowed(options.max_memory)
         plan = plan_segments(
             frames.frame_count,
@@ -130,6 +153,7 @@ class Encoder:
                 shared_basis,
                 face_order=options.face_order,
                 keep=options.attachments,
+                features=features,
             )
             if options.attachments and frames.field_names:
                 fields = frames.read_fields(0, frames.frame_count)  # whole: see §6.13
@@ -147,11 +171,18 @@ class Encoder:
         # the GIL): on two cores about the shorter of the two is saved. The same bytes.
         with ThreadPoolExecutor(max_workers=1) as pool:
             connectivity = pool.submit(
-                Connectivity.of, sequence, options.level, options.face_order, options.attachments
+                Connectivity.of,
+                sequence,
+                options.level,
+                options.face_order,
+                options.attachments,
+                options.features,
             )
             analysis = analyze(sequence) if analysis is None else analysis
             coded = connectivity.result()
-        work = WholeWorkspace(sequence, analysis, options.level, options.select, coded)
+        work = WholeWorkspace(
+            sequence, analysis, options.level, options.select, coded, options.features
+        )
         if options.attachments and sequence.fields:
             work.attached += self._field_sections(sequence.fields, coded.mesh)
         if options.corrections:
@@ -164,6 +195,59 @@ class Encoder:
             extra = {"exact_ranks": (exact.i, exact.k), "bound_ranks": (bound.i, bound.k)}
         extra["max_distance"], extra["max_distance_at"] = work.worst_vertex(quantized)
         return self._result(work, quantized, error2, start, trials, **extra)
+
+    def _refuse_newer_data(self, frames: FrameSource) -> None:
+        """Refuse a sequence whose data the format version asked for cannot hold: its time
+        and scene keys (1.4) or, kept, its attributes, face sets and fields (1.5). Nothing is
+        dropped unasked: every decoder of 1.x reads the positions of such files anyway (§10)."""
+        features = self.options.features
+        scene = scene_keys(
+            frames.frame_count, frames.time_codes, frames.meters_per_unit, frames.up_axis
+        )
+        if scene:
+            features.require(
+                SCENE_MINOR,
+                f"the sequence's {', '.join(sorted(scene))}",
+                "header keys, spec §4, that decoders of 1.0 to 1.3 ignore",
+                "remove them from the sequence",
+            )
+        if self.options.attachments:
+            carried = [
+                name
+                for name, present in (
+                    ("attributes", frames.attributes),
+                    ("face sets", frames.face_sets),
+                    ("fields", frames.field_names),
+                )
+                if present
+            ]
+            if carried:
+                features.require(
+                    ATTACHMENTS_MINOR,
+                    f"the sequence's {' and '.join(carried)}",
+                    "ancillary sections, spec §6.10 to §6.13, that decoders of 1.0 to 1.4 skip",
+                    "attachments=False (--no-attributes) to write the positions and faces alone",
+                )
+
+    def _refuse_newer_basis(self, shared_basis: SharedBasis) -> None:
+        """Refuse a given shared basis whose section, copied byte for byte, uses a feature
+        newer than the format version asked for."""
+        features = self.options.features
+        entry = section_entry("U1", shared_basis.params)
+        if uses_coding_tools([entry]):
+            features.require(
+                CODING_TOOLS_MINOR,
+                "the shared basis",
+                "U1's predictor 2, spec §6.2",
+                "a basis of an older file",
+            )
+        if uses_adaptive([entry]):
+            features.require(
+                ADAPTIVE_MINOR,
+                "the shared basis",
+                "adaptive coding, spec §6.14",
+                "a basis of an older file",
+            )
 
     def _field_sections(
         self, fields: list[Field], mesh_prediction: MeshPrediction
@@ -273,11 +357,29 @@ class Encoder:
         corrections) decided by :func:`.promises.header_claims`, which checks the KG promise."""
         if fixed is None:
             stated = promises.header_claims(self.options, work.kg(error2))
-            return work.pack(quantized, error2, stated.target_kg, claims=stated.error)
-        stated = promises.header_claims(self.options, work.kg(error2), fixed.worst, fixed.bound)
-        return work.pack(
-            quantized, error2, stated.target_kg, corrections=fixed.sections, claims=stated.error
-        )
+            packed = work.pack(quantized, error2, stated.target_kg, claims=stated.error)
+        else:
+            stated = promises.header_claims(self.options, work.kg(error2), fixed.worst, fixed.bound)
+            packed = work.pack(
+                quantized,
+                error2,
+                stated.target_kg,
+                corrections=fixed.sections,
+                claims=stated.error,
+            )
+        self._check_version(packed[0])
+        return packed
+
+    def _check_version(self, data: bytes) -> None:
+        """The file's minor version is at most the one asked for: every feature newer was
+        refused or left unused before, so a file above it is a bug."""
+        _, minor, *_ = PREAMBLE.unpack_from(data, len(SIGNATURE))
+        features = self.options.features
+        if minor > features.minor:
+            raise InternalError(
+                f"the encoder wrote a file of format 1.{minor}, newer than format_version "
+                f"{features.version}"
+            )
 
     def _shape(
         self, work: WholeWorkspace | SegmentedWorkspace, quantized: Quantized[Any], trials: int

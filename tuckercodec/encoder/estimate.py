@@ -25,10 +25,15 @@ from .trial import QuantizedSegment
 
 class U1Predictors:
     """U1's predictor per column and predictor 2's push, chosen once by
-    :func:`.format.qmat.encode_matrix`'s rule and reused by later trials."""
+    :func:`.format.qmat.encode_matrix`'s rule and reused by later trials: among those of
+    format 1.2 (``coding_tools``: predictor 2) and 1.6 (``pushes``) only where the file may
+    use them."""
 
-    def __init__(self, mesh: MeshPrediction) -> None:
+    def __init__(
+        self, mesh: MeshPrediction, *, coding_tools: bool = True, pushes: bool = True
+    ) -> None:
         self.mesh = mesh
+        self.coding_tools, self.pushes = coding_tools, pushes
         self.predict = np.zeros(0, dtype=np.uint8)
         self.push = np.zeros(0, dtype=np.uint8)
         self._order: adaptive.CodingOrder | None = None
@@ -48,7 +53,9 @@ class U1Predictors:
         ``q``, for columns not seen before."""
         cols, known = q.shape[1], self.predict.size
         if cols > known:  # choose for the new columns, as the file would (each on its own)
-            predict, push = qmat.chosen_predictors(q[:, known:], self.mesh, True, pushes=True)
+            predict, push = qmat.chosen_predictors(
+                q[:, known:], self.mesh, self.coding_tools, pushes=self.pushes
+            )
             self.predict = np.concatenate([self.predict, predict])
             self.push = np.concatenate([self.push, push])
         return self.predict[:cols], self.push[:cols]
@@ -82,15 +89,18 @@ def coded_bits(stream: np.ndarray, order: adaptive.CodingOrder) -> float:
     return 8.0 * len(adaptive.encode_columns(np.ascontiguousarray(stream.T), order))
 
 
-def segment_bits(segment: QuantizedSegment, u1_predictors: U1Predictors | None) -> float:
+def segment_bits(
+    segment: QuantizedSegment, u1_predictors: U1Predictors | None, coding_tools: bool = True
+) -> float:
     """The estimated bits of a decomposition's quantized sections: its own U1 (if it has one,
     under ``u1_predictors``), then U3 and CENT predicted and CORE as it is, each chosen as
-    :func:`.format.qmat.encode_matrix` chooses (:func:`.format.qmat.section_stream`)."""
+    :func:`.format.qmat.encode_matrix` chooses (:func:`.format.qmat.section_stream`; predictor
+    3 with ``coding_tools``, format 1.2)."""
     bits = 0.0
     if segment.u1 is not None:
         assert u1_predictors is not None  # an own U1 is sized under its kept predictors
         bits += u1_predictors.bits(segment.u1.q)
     for matrix, predict in ((segment.u3, True), (segment.core, False), (segment.centroids, True)):
-        stream = qmat.section_stream(matrix.q, None, predict, True).stream
+        stream = qmat.section_stream(matrix.q, None, predict, coding_tools).stream
         bits += coded_bits(stream, adaptive.sequence_order(stream.shape[0]))
     return bits

@@ -2,7 +2,8 @@
 
 :class:`EncodeOptions` is the encoder's whole configuration, checked once when it is made:
 the mode (a target KG error, fixed ranks or a target size), how ranks are selected, the zstd
-level, when and how to segment, and where a segmented encode's passes run. The one-shot
+level, when and how to segment, where a segmented encode's passes run, and the newest format
+version the file may be. The one-shot
 functions (:func:`tuckercodec.encode`, :func:`tuckercodec.encode_file` and the others) take it
 whole, as keywords named as its fields, or both, all through :func:`resolve_options`; they, the
 zarr codecs, ``batch`` and the command line hand it to :class:`~tuckercodec.encoder.Encoder`.
@@ -22,7 +23,9 @@ import numpy as np
 
 from ..decomposition.analysis import DEFAULT_SELECTION, SELECTIONS, Selection
 from ..format import streams
-from ..format.segments import BASIS_OWN, BASIS_SHARED
+from ..format.residual import CORRECTIONS_MINOR
+from ..format.segments import BASIS_OWN, BASIS_SHARED, SEGMENTED_MINOR
+from .versions import Features, parse_format_version
 
 Mode = Literal["kg", "ranks", "bpfv", "max-error", "lossless"]
 
@@ -74,6 +77,17 @@ class EncodeOptions:
             ``"lossless"`` in mode lossless, else ``"rel:P"`` with P the positions' KG target).
         attachments: keep the sequence's attributes, face sets and fields (the default); False
             writes the positions and faces alone, as format 1.4 did.
+        format_version: the newest format version the file may be, ``"1.0"`` to ``"1.6"``
+            (default ``None``: the newest, 1.6), for decoders that read only up to it. The
+            encoder then uses no feature of a later version (:mod:`.versions`): below 1.6 no
+            adaptive coding (§6.14), below 1.2 neither faces-traverse nor predictors 2 and 3.
+            The file says the version of the newest feature it uses, as without the option. What
+            needs a later version raises :class:`~tuckercodec.errors.FormatVersionError` naming
+            it and the version it needs, never dropped: ``segment_frames`` (1.1), ``max_error``
+            and ``lossless`` (1.3) here; with the sequence, a whole encode beyond
+            ``max_memory`` (segments, 1.1), time codes, a unit or an up axis (1.4), attributes,
+            face sets or fields unless ``attachments`` is False (1.5). ``face_order="given"``
+            below 1.5 keeps the faces as given without §6.10's ORDER (faces-delta).
 
     At most one of ``target_kg``, ``ranks`` and ``target_bpfv``; ``jobs`` or ``scheduler``, not
     both. A bad value raises ``ValueError`` naming it. Whether ranks fit the sequence is known
@@ -96,6 +110,7 @@ class EncodeOptions:
     field_targets: Any = ()
     field_target: str | None = None
     attachments: bool = True
+    format_version: str | None = None
 
     def __post_init__(self) -> None:
         _refuse_two_modes(self.target_kg, self.ranks, self.target_bpfv)
@@ -163,6 +178,28 @@ class EncodeOptions:
         if not isinstance(self.attachments, (bool, np.bool_)):
             raise ValueError(f"attachments must be true or false, got {self.attachments!r}")
         object.__setattr__(self, "attachments", bool(self.attachments))
+        if self.format_version is not None:
+            object.__setattr__(self, "format_version", parse_format_version(self.format_version))
+        self._refuse_newer_options()
+
+    def _refuse_newer_options(self) -> None:
+        """Refuse an option that needs a newer format than :attr:`format_version` (those the
+        sequence decides are checked by the encoder)."""
+        features = self.features
+        if self.segment_frames is not None:
+            features.require(
+                SEGMENTED_MINOR, "segment_frames", "segmented files, spec §6.7", "leave it out"
+            )
+        for name in ("lossless", "max_error"):
+            if getattr(self, name) not in (None, False):
+                features.require(
+                    CORRECTIONS_MINOR, name, "corrections, spec §6.9", f"leave {name} out"
+                )
+
+    @property
+    def features(self) -> Features:
+        """The format features the file may use (:attr:`format_version`'s)."""
+        return Features.of(self.format_version)
 
     def target_of_field(self, name: str) -> str:
         """The error target of the field ``name``: its own, :attr:`field_target`, or the

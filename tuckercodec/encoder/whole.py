@@ -31,6 +31,7 @@ from ..model.sequence import MeshSequence
 from ..model.topology import MeshPrediction
 from . import attachments, estimate, rdo
 from .trial import TRIAL_RATIO, Quantized, QuantizedSegment
+from .versions import NEWEST, Features
 
 #: The largest |integer| a section may stream: after zigzag it must fit streams.MAX_PLANES bytes.
 LARGEST_STREAMED = 2 ** (8 * streams.MAX_PLANES - 1) - 1
@@ -63,11 +64,16 @@ class Connectivity:
 
     @classmethod
     def of(
-        cls, sequence: MeshSequence, level: int, face_order: str = "auto", keep: bool = True
+        cls,
+        sequence: MeshSequence,
+        level: int,
+        face_order: str = "auto",
+        keep: bool = True,
+        features: Features = NEWEST,
     ) -> Connectivity:
         """The connectivity of ``sequence``, its sections at zstd ``level``; with ``keep``, its
         attributes and face sets too, the faces in the order ``face_order`` decides
-        (:func:`.attachments.keeps_face_order`)."""
+        (:func:`.attachments.keeps_face_order`), coded as ``features`` allow."""
         face, attached = attachments.coded_faces(
             sequence.faces,
             sequence.vertex_count,
@@ -76,6 +82,7 @@ class Connectivity:
             sequence.fields if keep else [],
             level,
             face_order,
+            features,
         )
         return cls(
             MeshPrediction(sequence.faces, sequence.vertex_count),
@@ -113,8 +120,11 @@ class WholeWorkspace:
         level: int,
         select: Selection,
         connectivity: Connectivity | None = None,
+        features: Features = NEWEST,
     ) -> None:
         self.sequence = sequence
+        # the format features the file may use (:attr:`.options.EncodeOptions.format_version`)
+        self.features = features
         self.analysis = analysis
         self.level = level
         self.select: Selection = select
@@ -127,7 +137,7 @@ class WholeWorkspace:
         # The KG denominator: each frame is centred, so ||A - E(A)|| is the centred tensor's norm.
         self.denominator2 = analysis.total_energy
         if connectivity is None:
-            connectivity = Connectivity.of(sequence, level)
+            connectivity = Connectivity.of(sequence, level, features=features)
         # U1's predictors: the mesh parents (1) and the decoded neighbours' mean (2)
         self.mesh = connectivity.mesh
         self.parents = self.mesh.parents
@@ -144,7 +154,9 @@ class WholeWorkspace:
         # how factors are rounded (rdo.py); the prediction trees it needs are made on first use
         self.rdo = rdo.DEFAULT
         self._u1_levels: rdo.Levels | None = None
-        self._u1_predictors = estimate.U1Predictors(self.mesh)
+        self._u1_predictors = estimate.U1Predictors(
+            self.mesh, coding_tools=features.coding_tools, pushes=features.adaptive
+        )
 
     # -- choosing ranks ------------------------------------------------------------------------
 
@@ -363,7 +375,12 @@ class WholeWorkspace:
         ):
             assert matrix is not None  # a whole file's U1 is its own
             coded[section_id] = qmat.encode_matrix(
-                matrix, parents, allow_predict=predict, level=level, adaptive_coding=True
+                matrix,
+                parents,
+                allow_predict=predict,
+                coding_tools=self.features.coding_tools,
+                level=level,
+                adaptive_coding=self.features.adaptive,
             )
         if self.name_section is not None:
             coded["NAME"] = self.name_section
@@ -385,7 +402,7 @@ class WholeWorkspace:
         """The quantized sections' bytes estimated from their integers (:mod:`.estimate`), and
         the coded faces': to compare trials, not the final size."""
         (factors,) = quantized.segments
-        bits = estimate.segment_bits(factors, self._u1_predictors)
+        bits = estimate.segment_bits(factors, self._u1_predictors, self.features.coding_tools)
         return round(bits / 8.0) + len(self.face_section[1])
 
     def trial_size(self, quantized: Quantized[Ranks]) -> float:

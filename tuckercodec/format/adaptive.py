@@ -446,5 +446,10 @@ def decode_within_planes(
 def uses_adaptive(entries: list[dict[str, object]]) -> bool:
     """Whether any of these section entries needs flag bit 3 (format 1.6): integers stored with
     ``coder`` 1 (a position factor's, or a faces-traverse FACE's streams, §6.8), or predictor
-    2's pushes (``mean_push``, §6.2)."""
-    return any(item.get("coder") == CODER_ADAPTIVE or "mean_push" in item for item in entries)
+    2's pushes (``mean_push``, §6.2). A RESD section's ``coder`` 1 needs flag bit 4 instead
+    (format 1.7, §6.9)."""
+    return any(
+        (item.get("coder") == CODER_ADAPTIVE and item.get("codec") != "residual")
+        or "mean_push" in item
+        for item in entries
+    )

@@ -36,7 +36,7 @@ from ..errors import (
 from .adaptive import ADAPTIVE, ADAPTIVE_MINOR, uses_adaptive
 from .attachments import ATTACHMENTS_MINOR, attachment_codec
 from .limits import DEFAULT_LIMITS, Limits
-from .residual import CORRECTIONS
+from .residual import ADAPTIVE_CORRECTIONS, ADAPTIVE_CORRECTIONS_MINOR, CORRECTIONS, RESIDUAL
 from .sections import CODING_TOOLS, Section, read_section_table, with_coding_tools
 from .segments import SEGMENTED
 
@@ -59,7 +59,7 @@ SCENE_MINOR = 4
 CRITICAL_FLAGS_MASK = 0x0000FFFF
 #: Critical flags this decoder knows: bit 0, a segmented file (format 1.1, §6.7), and bit 1,
 #: the coding tools of format 1.2, and bit 2, corrections (format 1.3, §6.9).
-KNOWN_CRITICAL_FLAGS = SEGMENTED | CODING_TOOLS | CORRECTIONS | ADAPTIVE
+KNOWN_CRITICAL_FLAGS = SEGMENTED | CODING_TOOLS | CORRECTIONS | ADAPTIVE | ADAPTIVE_CORRECTIONS
 
 
 @dataclass(frozen=True)
@@ -131,6 +131,12 @@ class Container:
         """Whether the preamble sets flag bit 3: adaptive coding (format 1.6, §6.14)."""
         return bool(self.flags & ADAPTIVE)
 
+    @property
+    def adaptive_corrections(self) -> bool:
+        """Whether the preamble sets flag bit 4: corrections in adaptive streams (format 1.7,
+        §6.9)."""
+        return bool(self.flags & ADAPTIVE_CORRECTIONS)
+
     def payload(self, data: bytes | memoryview | RangeReader, entry: Section) -> memoryview:
         """The bytes of a section, after checking its CRC-32 (§5 step 9); ``data`` is the whole
         file, or a reader of the file's byte ranges (:class:`.disk.FileRanges`) that reads just
@@ -179,6 +185,9 @@ def pack_container(
             rules on purpose (conformance vectors) say ``False`` for such sections.
         adaptive: whether to set flag bit 3 and minor version 6 (§6.14); by default, when a
             section stores its integers with ``coder`` 1.
+
+    Flag bit 4 and minor version 7 are set when a RESD section stores its chunks with ``coder``
+    1 (§6.9).
     """
     flags, minor = with_coding_tools([entry for entry, _ in sections], flags, minor, coding_tools)
     if any(key in header for key in SCENE_KEYS):
@@ -189,6 +198,8 @@ def pack_container(
         adaptive = uses_adaptive([entry for entry, _ in sections])
     if adaptive:
         flags, minor = flags | ADAPTIVE, max(minor, ADAPTIVE_MINOR)
+    if any(entry.get("codec") == RESIDUAL and entry.get("coder") == 1 for entry, _ in sections):
+        flags, minor = flags | ADAPTIVE_CORRECTIONS, max(minor, ADAPTIVE_CORRECTIONS_MINOR)
     table = []
     offset = 0
     for entry, payload in sections:

@@ -57,14 +57,19 @@ def encode_face_sections(
     *,
     keep_order: bool,
     adaptive_coding: bool = False,
+    traverse: bool = True,
 ) -> tuple[FaceSection, tuple[dict[str, Any], bytes] | None, np.ndarray | None]:
     """The FACE section; when ``keep_order`` asks for the faces as given and the walk is
     chosen, the ORDER section that restores their order (format 1.5, §6.10): the smaller
     of faces-delta alone and faces-traverse with ORDER; and when the walk is chosen, its
     order (the given number of each walked face). ``adaptive_coding``: the file may be of
-    format 1.6 (flag bit 3), so that the walk's streams may use the adaptive coder."""
+    format 1.6 (flag bit 3), so that the walk's streams may use the adaptive coder.
+    ``traverse``: the file may be of format 1.2, so that the walk may be chosen at all
+    (otherwise faces-delta, the faces as given)."""
     table = np.asarray(faces, dtype=np.int64)
     delta_params, delta_payload = encode_faces(table, level)
+    if not traverse:
+        return FaceSection(FACES_DELTA, delta_params, delta_payload, table), None, None
     walk_params, walk_payload, walked, order = encode_traversal_ordered(
         table, vertex_count, level, adaptive_coding=adaptive_coding
     )

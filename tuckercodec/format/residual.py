@@ -7,7 +7,8 @@ is reconstructed in one normative order (:func:`exact_frames`), one rounded oper
 
 The integers are stored per chunk of frames (:class:`ResidualLayout`), each chunk one zstd frame
 of 64-bit zigzagged integers in byte planes (§6.1 on 64 bits), optionally as differences from
-the frame before within the chunk.
+the frame before within the chunk; or (format 1.7, flag bit 4) each chunk one adaptive stream
+of §6.14 (:mod:`.adaptive`), a column per frame and axis, the vertices in ascending order.
 """
 
 from __future__ import annotations
@@ -21,13 +22,21 @@ import numpy as np
 
 from ..errors import FormatError, InternalError
 from ..system import native
-from . import streams
+from . import adaptive, streams
 from .limits import Limits, check_limit
 
 #: Preamble flag bit 2 (critical, format 1.3): the file has corrections (§6.9).
 CORRECTIONS = 0x0004
 #: The minor version of a file that sets :data:`CORRECTIONS`.
 CORRECTIONS_MINOR = 3
+#: Preamble flag bit 4 (critical, format 1.7): a RESD section stores its chunks as adaptive
+#: streams (``coder`` 1, §6.9).
+ADAPTIVE_CORRECTIONS = 0x0010
+#: The minor version of a file that sets :data:`ADAPTIVE_CORRECTIONS`.
+ADAPTIVE_CORRECTIONS_MINOR = 7
+#: The adaptive coding is kept only where it makes the section smaller by more than this share:
+#: its chunks decode about four times slower than zstd's, so a percent or two is not worth it.
+ADAPTIVE_GAIN = 0.03
 #: The codec id of RESD sections.
 RESIDUAL = "residual"
 SECTION_STEM = "RESD"
@@ -318,6 +327,7 @@ class ResidualLayout:
     frames: int
     scale: int | None = None  # decimal-places' places, decimal-digits' digits
     exponent: int = 0  # e of §8.1: S x 2**e
+    coder: int = adaptive.CODER_ZSTD  # 1: each chunk is an adaptive stream (format 1.7)
 
     @property
     def kind(self) -> Domain:
@@ -347,8 +357,11 @@ def read_layout(
     vertices: int,
     limits: Limits,
     where: str,
+    *,
+    adaptive_corrections: bool = False,
 ) -> ResidualLayout:
-    """§5 step 18: the parameters in order (R40), then each chunk's size against the decoder's
+    """§5 step 18: the parameters in order (R40; ``coder`` R46, read only in a file with flag
+    bit 4, ``adaptive_corrections``), then each chunk's size against the decoder's
     ``max_section_bytes`` (R21). The CRC and the chunks themselves are checked later."""
     domain = params.get("domain")
     if domain not in DOMAINS:
@@ -395,6 +408,9 @@ def read_layout(
             rule="R40-residual",
             field=f"{where}.predict",
         )
+    coder = adaptive.CODER_ZSTD  # before 1.7 (without flag bit 4) an unknown parameter: ignored
+    if adaptive_corrections:
+        coder = adaptive.checked_coder(params.get("coder", adaptive.CODER_ZSTD), where, True)
     chunk_frames = params.get("chunk_frames")
     if not (isinstance(chunk_frames, int) and not isinstance(chunk_frames, bool)):
         chunk_frames = 0
@@ -447,6 +463,7 @@ def read_layout(
         frames,
         scale,
         exponent,
+        coder,
     )
     _check_chunk_sizes(layout, vertices, limits, where)
     return layout
@@ -482,12 +499,15 @@ def _check_chunk_sizes(layout: ResidualLayout, vertices: int, limits: Limits, wh
 def decode_chunk(
     payload: bytes | memoryview, layout: ResidualLayout, chunk: int, vertices: int, where: str
 ) -> np.ndarray:
-    """The restored integers e of one chunk, (n_c, K, 3) int64 (R29 for its zstd frame)."""
+    """The restored integers e of one chunk, (n_c, K, 3) int64 (R29 for its zstd frame, R46 for
+    its adaptive stream)."""
     start, stop = layout.chunk_range(chunk)
     count = (stop - start) * vertices * 3
     planes = layout.planes[chunk]
     piece = payload[layout.offsets[chunk] : layout.offsets[chunk + 1]]
     field = f"{where}.chunks[{chunk}]"
+    if layout.coder == adaptive.CODER_ADAPTIVE:
+        return _adaptive_chunk(piece, layout.predict, stop - start, vertices, planes, field)
     core = native.core()
     if core is not None:  # the planes, the zigzag and the prediction in one pass
         raw = streams.decompress_exact(piece, count * planes, field)
@@ -502,6 +522,20 @@ def decode_chunk(
     values = streams.unpack_integers(piece, count, planes, field)
     values = values.reshape(stop - start, vertices, 3)
     if layout.predict == 1:
+        np.cumsum(values, axis=0, out=values)  # int64 addition wraps, as §6.9 wraps
+    return values
+
+
+def _adaptive_chunk(
+    piece: bytes | memoryview, predict: int, frames: int, vertices: int, planes: int, field: str
+) -> np.ndarray:
+    """:func:`decode_chunk` of an adaptive chunk (format 1.7): its stream holds a column per
+    frame and axis, (t, x) in order, of the K vertices in ascending order."""
+    columns = adaptive.decode_within_planes(
+        piece, 3 * frames, vertices, planes, adaptive.sequence_order(vertices), field
+    )
+    values = np.ascontiguousarray(columns.reshape(frames, 3, vertices).transpose(0, 2, 1))
+    if predict == 1:
         np.cumsum(values, axis=0, out=values)  # int64 addition wraps, as §6.9 wraps
     return values
 
@@ -661,32 +695,90 @@ def encode_section(
     exponent: int = 0,
     chunk_frames: int | None = None,
     predict: int | None = None,
+    adaptive_coding: bool = False,
+    adaptive_gain: float = ADAPTIVE_GAIN,
 ) -> tuple[dict[str, Any], bytes]:
     """A RESD section's parameters and payload for the integers ``residual`` (F', K, 3).
 
     ``chunk_frames`` defaults to about :data:`CHUNK_VALUES` integers a chunk; ``predict`` to
-    whichever of the two stores the smaller payload."""
+    whichever of the two stores the smaller payload. With ``adaptive_coding`` (a file that may
+    set flag bit 4, format 1.7) the chunks are also coded as adaptive streams, with the same
+    predict options, and that coding is kept where it is smaller by more than
+    ``adaptive_gain`` (a share of the zstd payload)."""
     frames, vertices, _ = residual.shape
     if chunk_frames is None:
         chunk_frames = max(1, min(frames, CHUNK_VALUES // (3 * vertices)))
     options = (0, 1) if predict is None else (predict,)
     best: tuple[dict[str, Any], bytes] | None = None
     for choice in options:
-        chunks: list[list[int]] = []
-        payloads: list[bytes] = []
-        for start in range(0, frames, chunk_frames):
-            planes, raw = _chunk_planes(residual[start : start + chunk_frames], choice)
-            payload = streams.compress(raw, level)
-            chunks.append([planes, len(payload)])
-            payloads.append(payload)
-        params = domain.params()
-        params.update(exponent=exponent)
-        params.update(predict=choice, chunk_frames=chunk_frames, chunks=chunks)
-        body = b"".join(payloads)
-        if best is None or len(body) < len(best[1]):
-            best = (params, body)
+        section = _packed_section(residual, domain, level, exponent, chunk_frames, choice)
+        assert section is not None  # zstd planes take every int64
+        if best is None or len(section[1]) < len(best[1]):
+            best = section
     assert best is not None
+    if adaptive_coding:
+        threshold = (1.0 - adaptive_gain) * len(best[1])
+        adaptive_best: tuple[dict[str, Any], bytes] | None = None
+        for choice in options:
+            coded = _packed_section(
+                residual, domain, level, exponent, chunk_frames, choice, adaptive.CODER_ADAPTIVE
+            )
+            if coded is not None and (
+                adaptive_best is None or len(coded[1]) < len(adaptive_best[1])
+            ):
+                adaptive_best = coded
+        if adaptive_best is not None and len(adaptive_best[1]) < threshold:
+            best = adaptive_best
     return best
+
+
+def _packed_section(
+    residual: np.ndarray,
+    domain: Domain,
+    level: int,
+    exponent: int,
+    chunk_frames: int,
+    predict: int,
+    coder: int = adaptive.CODER_ZSTD,
+) -> tuple[dict[str, Any], bytes] | None:
+    """The section of :func:`encode_section` with this ``predict`` and ``coder``, or, for the
+    adaptive coder, None when a stored integer is -2**63 (§6.14 codes bit lengths up to 63)."""
+    frames = residual.shape[0]
+    chunks: list[list[int]] = []
+    payloads: list[bytes] = []
+    for start in range(0, frames, chunk_frames):
+        block = residual[start : start + chunk_frames]
+        if coder == adaptive.CODER_ADAPTIVE:
+            packed = _adaptive_chunk_payload(block, predict)
+            if packed is None:
+                return None
+            planes, payload = packed
+        else:
+            planes, raw = _chunk_planes(block, predict)
+            payload = streams.compress(raw, level)
+        chunks.append([planes, len(payload)])
+        payloads.append(payload)
+    params = domain.params()
+    params.update(exponent=exponent)
+    params.update(predict=predict)
+    if coder == adaptive.CODER_ADAPTIVE:  # absent means 0: a zstd section is as before 1.7
+        params.update(coder=coder)
+    params.update(chunk_frames=chunk_frames, chunks=chunks)
+    return params, b"".join(payloads)
+
+
+def _adaptive_chunk_payload(values: np.ndarray, predict: int) -> tuple[int, bytes] | None:
+    """A chunk's integers (n_c, K, 3) as one adaptive stream (format 1.7): ``(planes, payload)``,
+    the planes the zstd coding would declare, or None where a stored integer is -2**63."""
+    stored = np.array(values, dtype=np.int64)
+    if predict == 1:
+        stored[1:] -= values[:-1]  # wraps like e
+    if stored.size and int(stored.min()) == np.iinfo(np.int64).min:
+        return None
+    planes = streams.planes_needed(streams.zigzag(stored.reshape(-1)))
+    frames, vertices, _ = stored.shape
+    columns = np.ascontiguousarray(stored.transpose(0, 2, 1)).reshape(3 * frames, vertices)
+    return planes, adaptive.encode_columns(columns, adaptive.sequence_order(vertices))
 
 
 def _chunk_planes(values: np.ndarray, predict: int) -> tuple[int, bytes]:

@@ -40,6 +40,7 @@ from ...system.parallel import Background, Executor, InProcessExecutor
 from .. import attachments, estimate
 from ..plan import SegmentPlan
 from ..trial import TRIAL_RATIO, Quantized, QuantizedSegment
+from ..versions import NEWEST, Features
 from ..whole import LARGEST_STREAMED, column_steps
 from .model import (
     SegmentRanks,
@@ -119,8 +120,11 @@ class SegmentedWorkspace:
         *,
         face_order: str = "auto",
         keep: bool = True,
+        features: Features = NEWEST,
     ) -> None:
         self.source, self.plan, self.basis = source, plan, basis
+        # the format features the file may use (:attr:`..options.EncodeOptions.format_version`)
+        self.features = features
         self.executor, self.level = executor, level
         self._progress = progress
         self.vertex_count, self.frame_count = source.vertex_count, source.frame_count
@@ -151,6 +155,7 @@ class SegmentedWorkspace:
             [],  # fields per face are read with the frames: the order follows the others
             level,
             face_order,
+            features,
             name="faces",
         )
         self._read_and_model()
@@ -525,7 +530,11 @@ class SegmentedWorkspace:
             out.append((_entry("U1", self.fixed_basis.params), self.fixed_basis.payload))
         elif quantized.shared_u1 is not None:
             params, payload = qmat.encode_matrix(
-                quantized.shared_u1, self.mesh, level=level, adaptive_coding=True
+                quantized.shared_u1,
+                self.mesh,
+                coding_tools=self.features.coding_tools,
+                level=level,
+                adaptive_coding=self.features.adaptive,
             )
             out.append((_entry("U1", params), payload))
         for s, factors in enumerate(quantized.segments):
@@ -541,7 +550,12 @@ class SegmentedWorkspace:
                     continue
                 matrix, parents, predict = matrices[stem]
                 params, payload = qmat.encode_matrix(
-                    matrix, parents, allow_predict=predict, level=level, adaptive_coding=True
+                    matrix,
+                    parents,
+                    allow_predict=predict,
+                    coding_tools=self.features.coding_tools,
+                    level=level,
+                    adaptive_coding=self.features.adaptive,
                 )
                 out.append((_entry(segment_section_id(stem, s), params, stem), payload))
         if self.name_section is not None:
@@ -555,13 +569,15 @@ class SegmentedWorkspace:
         if self.fixed_basis is None and quantized.shared_u1 is not None:
             bits += self._predictors(-1).bits(quantized.shared_u1.q)
         for s, factors in enumerate(quantized.segments):
-            bits += estimate.segment_bits(factors, self._predictors(s))
+            bits += estimate.segment_bits(factors, self._predictors(s), self.features.coding_tools)
         return round(bits / 8.0) + self._coded_once
 
     def _predictors(self, segment: int) -> estimate.U1Predictors:
         """U1's predictors kept between trials: the shared U1's (-1) or a segment's own."""
         if segment not in self._u1_predictors:
-            self._u1_predictors[segment] = estimate.U1Predictors(self.mesh)
+            self._u1_predictors[segment] = estimate.U1Predictors(
+                self.mesh, coding_tools=self.features.coding_tools, pushes=self.features.adaptive
+            )
         return self._u1_predictors[segment]
 
     def trial_size(self, quantized: Quantized[SegmentRanks]) -> float:

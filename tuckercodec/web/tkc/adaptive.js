@@ -11,6 +11,10 @@
 // prediction and dequantization after it are the same. Every integer must zigzag below
 // 2^(8·planes) <= 2^32 (R46), so a decoded magnitude never needs more than 32 bits: one that would
 // is refused as soon as its bit length is known.
+//
+// Version 1.7's adaptive corrections (§6.9) have up to 8 planes, integers of up to 63 bits:
+// decodeAdaptiveWide gives them as 64-bit halves (rows in ascending order, the only order a RESD
+// chunk has), and decodeAdaptive stays the 32-bit path of every other section.
 
 import { formatError } from './errors.js';
 
@@ -35,6 +39,14 @@ const EXPONENT = 2;
 const FIRST_BIT = EXPONENT + EXPONENT_MODELS;
 const SECOND_BIT = FIRST_BIT + EXPONENT_MODELS;
 const MODELS_PER_CONTEXT = SECOND_BIT + 2 * EXPONENT_MODELS; // 130
+/** The largest exponent (bit length − 1) of a magnitude: no integer has more than 63 bits. */
+const MAX_EXPONENT = 62;
+/**
+ * decodeAdaptiveWide's magnitudes for the contexts are saturated here: the classes they enter
+ * are the same (a sum of them of 2^29 or more is in the last class of either kind, whose
+ * thresholds are 16 and 8192), and three of them add up below 2^31.
+ */
+const MAGNITUDE_CAP = 2 ** 29;
 
 /**
  * A coding order (§6.14): `order` lists the rows in the order they are coded, and the row coded
@@ -61,7 +73,8 @@ export function adaptiveError(where, message) {
 export class RangeDecoder {
   /**
    * @param {Uint8Array} data the payload
-   * @param {number} planes the section's P (1..4): every integer zigzags below 2^(8P)
+   * @param {number} planes the section's P (1..4; 1..8 for decodeAdaptiveWide): every integer
+   *   zigzags below 2^(8P)
    * @param {string} where the section, for messages
    */
   constructor(data, planes, where) {
@@ -71,8 +84,9 @@ export class RangeDecoder {
     this.data = data;
     /**
      * the payload then PADDING zeros: decodeColumn reads on past the payload's end until the
-     * integer's end, where it refuses the stream (an integer is at most 65 decisions, each
-     * taking in at most two bytes), so that no byte read checks the end
+     * integer's end, where it refuses the stream (an integer is at most 67 decisions of a
+     * model, each taking in at most two bytes, and 60 at even odds, each at most one: 194
+     * bytes), so that no byte read checks the end
      */
     this.padded = new Uint8Array(data.length + PADDING);
     this.padded.set(data);
@@ -85,8 +99,8 @@ export class RangeDecoder {
     this.planes = planes;
     /** 2^(8P − 1): a positive integer is below it, a negative one's magnitude at most it */
     this.half = 2 ** (8 * planes - 1);
-    /** the largest exponent (bit length − 1) of a magnitude within the planes (<= 31) */
-    this.longest = 8 * planes - 1;
+    /** the largest exponent (bit length − 1) of a magnitude within the planes (<= 31 for P <= 4) */
+    this.longest = Math.min(8 * planes - 1, MAX_EXPONENT);
   }
 
   ended() {
@@ -95,6 +109,12 @@ export class RangeDecoder {
 
   unbounded() {
     return adaptiveError(this.where, `an integer of the adaptive stream does not zigzag below 2^${8 * this.planes} (planes ${this.planes})`);
+  }
+
+  /** For an exponent past `longest`: beyond the planes, or (P = 8) beyond 63 bits. */
+  tooLong() {
+    if (8 * this.planes - 1 <= MAX_EXPONENT) return this.unbounded();
+    return adaptiveError(this.where, `an integer of the adaptive stream has more than ${MAX_EXPONENT + 1} bits`);
   }
 
   /** After the last integer: every byte read and code below range, else R46. */
@@ -137,6 +157,35 @@ export function decodeAdaptive(payload, rows, cols, meshOrder, planes, where) {
     if (order === null || mesh === null) decodeColumn(decoder, column, magnitudes, left, null, null, null, null);
     else decodeColumn(decoder, column, magnitudes, left, order.order, order.ends, mesh.first, mesh.source);
   }
+  decoder.finish();
+  return out;
+}
+
+/**
+ * The integers of an adaptive stream (§6.14) of up to 63 bits, rows in ascending order (each
+ * after the two before it): a RESD chunk's with `coder` 1 (§6.9, version 1.7). In stream order
+ * (column-major, j = c·rows + r) as 64-bit two's complement halves, low half first: out[2j] and
+ * out[2j + 1]. Any planes 1..8 (the caller has checked them); decodeAdaptive is the faster path
+ * where P <= 4 and 32-bit integers will do.
+ * @param {Uint8Array} payload
+ * @param {number} rows
+ * @param {number} cols
+ * @param {number} planes P: every integer zigzags below 2^(8P), on 64 bits
+ * @param {string} where the section and chunk, for messages
+ * @returns {Int32Array} 2·rows·cols halves
+ * @throws {import('./errors.js').TkcError} R46-adaptive-stream
+ */
+export function decodeAdaptiveWide(payload, rows, cols, planes, where) {
+  if (rows * cols > MAX_EXPANSION * payload.length) {
+    throw adaptiveError(where, `${rows * cols} integers cannot come from ${payload.length} bytes (at most ${MAX_EXPANSION} per byte)`);
+  }
+  const decoder = new RangeDecoder(payload, planes, where);
+  const out = new Int32Array(2 * rows * cols);
+  // by row: |x| (saturated) of the column being decoded up to the row before, of the column
+  // before from the row on; and each row's B
+  const magnitudes = new Uint32Array(rows);
+  const left = new Uint8Array(rows);
+  for (let c = 0; c < cols; c++) decodeWideColumn(decoder, out.subarray(2 * c * rows, 2 * (c + 1) * rows), magnitudes, left);
   decoder.finish();
   return out;
 }
@@ -262,7 +311,7 @@ function decodeColumn(d, column, magnitudes, left, rows, ends, first, source) {
       probs[m] = p - (p >> s);
       for (; range < TOP; range = (range << 8) >>> 0) code = ((code << 8) | data[next++]) >>> 0;
       if (e >= 0) {
-        if (++e > longest) throw next > end ? d.ended() : d.unbounded();
+        if (++e > longest) throw next > end ? d.ended() : d.tooLong();
         continue;
       }
       const ps = probs[base + SIGN]; // the sign, after a 1 for "not zero"
@@ -310,4 +359,136 @@ function decodeColumn(d, column, magnitudes, left, rows, ends, first, source) {
   d.range = range;
   d.code = code;
   d.next = next;
+}
+
+/**
+ * One column of decodeAdaptiveWide: decodeColumn's decisions (the exponent's models shared past
+ * 31 steps, §6.14), each magnitude built in two halves, `hi` taking the bits from 2^32 up. The
+ * contexts come from magnitudes saturated at MAGNITUDE_CAP, which give the same classes. An
+ * exponent past the planes' (or past 62) is refused at once, the bound 2^(8P − 1) itself
+ * (allowed for a negative integer only) on the halves at the integer's end. R46 as
+ * decodeAdaptive says.
+ * @param {RangeDecoder} d
+ * @param {Int32Array} column out: the column's integers as halves, by row
+ * @param {Uint32Array} magnitudes in and out, by row (decodeAdaptiveWide)
+ * @param {Uint8Array} left in and out, by row: each row's B
+ */
+function decodeWideColumn(d, column, magnitudes, left) {
+  const { probs, shifts, padded: data, longest } = d;
+  const end = d.data.length;
+  const halfHi = Math.floor(d.half / 2 ** 32); // 2^(8P − 1) in halves
+  const halfLo = d.half % 2 ** 32;
+  let range = d.range >>> 0;
+  let code = d.code >>> 0;
+  let next = d.next | 0;
+  let one = 0; // the saturated magnitudes of the row before and the one before it
+  let two = 0;
+  for (let j = 0; 2 * j < column.length; j++) {
+    const a = j >= 2 ? magnitudeClass(2 * one + two) : j === 1 ? magnitudeClass(3 * one) : 0;
+    const base = (a * LEFT_CLASSES + left[j]) * MODELS_PER_CONTEXT;
+    let e = -1; // -1: the zero decision, then the exponent's steps so far
+    let negative = 0;
+    for (;;) {
+      const m = e < 0 ? base + ZERO : base + EXPONENT + (e < EXPONENT_MODELS ? e : EXPONENT_MODELS - 1);
+      const p = probs[m];
+      const s = shifts[m];
+      const bound = Math.imul(range >>> PROB_BITS, p) >>> 0;
+      if (s < LAST_SHIFT) shifts[m] = s + 1;
+      if (code < bound) {
+        range = bound;
+        probs[m] = p + ((PROB_ONE - p) >> s);
+        for (; range < TOP; range = (range << 8) >>> 0) code = ((code << 8) | data[next++]) >>> 0;
+        break;
+      }
+      code = (code - bound) >>> 0;
+      range = (range - bound) >>> 0;
+      probs[m] = p - (p >> s);
+      for (; range < TOP; range = (range << 8) >>> 0) code = ((code << 8) | data[next++]) >>> 0;
+      if (e >= 0) {
+        if (++e > longest) throw next > end ? d.ended() : d.tooLong();
+        continue;
+      }
+      const sb = Math.imul(range >>> PROB_BITS, probs[base + SIGN]) >>> 0; // the sign: masks
+      negative = code >= sb ? 1 : 0;
+      code = (code - (sb & -negative)) >>> 0;
+      range = ((sb & (negative - 1)) | ((range - sb) & -negative)) >>> 0;
+      adapt(probs, shifts, base + SIGN, negative);
+      for (; range < TOP; range = (range << 8) >>> 0) code = ((code << 8) | data[next++]) >>> 0;
+      e = 0;
+    }
+    // the bits under the leading one, into `acc`: from 2^32 up they make `hi`, then `lo`
+    let acc = e < 0 ? 0 : 1;
+    let hi = 0;
+    let first = 0;
+    const slot = e < EXPONENT_MODELS ? e : EXPONENT_MODELS - 1;
+    for (let b = 0; b < e; b++) {
+      if (b === e - 32) {
+        hi = acc;
+        acc = 0;
+      }
+      let bit = 0;
+      if (b < 2) {
+        const m = b === 0 ? base + FIRST_BIT + slot : base + SECOND_BIT + 2 * slot + first;
+        const bound = Math.imul(range >>> PROB_BITS, probs[m]) >>> 0;
+        bit = code >= bound ? 1 : 0;
+        code = (code - (bound & -bit)) >>> 0;
+        range = ((bound & (bit - 1)) | ((range - bound) & -bit)) >>> 0;
+        adapt(probs, shifts, m, bit);
+        first = bit;
+      } else {
+        range >>>= 1;
+        bit = code >= range ? 1 : 0;
+        code = (code - (range & -bit)) >>> 0;
+      }
+      for (; range < TOP; range = (range << 8) >>> 0) code = ((code << 8) | data[next++]) >>> 0;
+      acc = 2 * acc + bit;
+    }
+    if (next > end) throw d.ended();
+    if (hi > halfHi || (hi === halfHi && (negative ? acc > halfLo : acc >= halfLo))) throw d.unbounded();
+    two = one;
+    one = store(column, j, hi, acc, negative, magnitudes, left);
+  }
+  d.range = range;
+  d.code = code;
+  d.next = next;
+}
+
+/**
+ * Row j's integer, −(hi·2^32 + lo) if negative, into decodeWideColumn's column as halves (each
+ * complemented, plus one carried in from the low); its magnitude saturated at MAGNITUDE_CAP
+ * into `magnitudes`, and its B for the next column into `left`.
+ * @param {Int32Array} column
+ * @param {number} j
+ * @param {number} hi
+ * @param {number} lo
+ * @param {number} negative 1 or 0
+ * @param {Uint32Array} magnitudes
+ * @param {Uint8Array} left
+ * @returns {number} the saturated magnitude
+ */
+function store(column, j, hi, lo, negative, magnitudes, left) {
+  column[2 * j] = ((lo ^ -negative) + negative) | 0;
+  column[2 * j + 1] = ((hi ^ -negative) + (lo === 0 ? negative : 0)) | 0;
+  const magnitude = hi > 0 || lo >= MAGNITUDE_CAP ? MAGNITUDE_CAP : lo;
+  const b = 2 * magnitude + magnitudes[j];
+  left[j] = b >= 16 ? LEFT_CLASSES - 1 : 32 - Math.clz32(b);
+  magnitudes[j] = magnitude;
+  return magnitude;
+}
+
+/**
+ * A model's update after its decision `bit` (§6.14): the probability moved toward it by its
+ * shift, with masks rather than a branch (the decisions near even odds would mispredict one),
+ * and the shift one more up to LAST_SHIFT.
+ * @param {Uint16Array} probs
+ * @param {Uint8Array} shifts
+ * @param {number} m
+ * @param {number} bit
+ */
+function adapt(probs, shifts, m, bit) {
+  const p = probs[m];
+  const s = shifts[m];
+  const one = -bit;
+  probs[m] = p + (((PROB_ONE - p) >> s) & ~one) - ((p >> s) & one);
+  if (s < LAST_SHIFT) shifts[m] = s + 1;
 }

@@ -1,4 +1,4 @@
-// The JavaScript decoder of the tuckercodec format, written from spec/FORMAT.md (version 1.6):
+// The JavaScript decoder of the tuckercodec format, written from spec/FORMAT.md (version 1.7):
 // openTkc(bytes) checks the container and header, decodes the faces and names, and, for a file
 // that is not segmented, every factor and its corrections' parameters; a segmented file's
 // segments are decoded when one of their frames is asked for (§6.7), and the two most recently
@@ -282,12 +282,13 @@ export class TkcFile {
   /**
    * Segment s's corrections (§6.9): null in a file without them (flag bit 2), else the RESD
    * section's domain, grid step (0 outside domain "grid"), scale (the places or digits of a
-   * decimal domain, else null), §8.1's exponent, predict, frames per chunk and chunks.
+   * decimal domain, else null), §8.1's exponent, predict, (1.7) coder (0: zstd planes, 1:
+   * adaptive streams), frames per chunk and chunks.
    */
   residual(s = 0) {
     const r = this._segment(s).residual;
     if (r === null) return null;
-    return { domain: r.domain, step: r.step, scale: r.scale, exponent: r.exponent, predict: r.predict, chunkFrames: r.chunkFrames, chunks: r.chunks.length };
+    return { domain: r.domain, step: r.step, scale: r.scale, exponent: r.exponent, predict: r.predict, coder: r.coder, chunkFrames: r.chunkFrames, chunks: r.chunks.length };
   }
 
   /**
@@ -388,7 +389,8 @@ export class TkcFile {
   _readResidual(d, s) {
     const segment = this.layout.segments[s];
     const section = /** @type {import('./container.js').Section} */ (segment.resd);
-    const residual = readResidual(section, segment.frames, this.vertices, this.limits);
+    // (1.7) with flag bit 4 its `coder` is read: each chunk may be an adaptive stream (§6.14)
+    const residual = readResidual(section, segment.frames, this.vertices, this.limits, this.layout.adaptiveCorrections);
     d.residualPayload = this._payload(section);
     d.residual = residual;
   }

@@ -4,10 +4,11 @@
 // significant digits ("decimal-places", "decimal-digits", and "decimal-digits-float32" for the
 // binary32 values such decimals give).
 //
-// readResidual checks the section's parameters in the order of §5 step 18 (R40-residual, then
-// R21-header-limit for each chunk's decompressed size); the caller checks the CRC after it.
-// decodeChunk decodes one chunk (R29 for its zstd frame) and restores its integers; correct
-// applies one frame's integers to P (R41-residual-value).
+// readResidual checks the section's parameters in the order of §5 step 18 (R40-residual, and
+// (1.7) R46-adaptive-stream for `coder`, then R21-header-limit for each chunk's decompressed
+// size); the caller checks the CRC after it. decodeChunk decodes one chunk (R29 for its zstd
+// frame, or with `coder` 1 R46 for its adaptive stream, §6.14) and restores its integers;
+// correct applies one frame's integers to P (R41-residual-value).
 //
 // The 64-bit integers are held as interleaved 32-bit halves in an Int32Array, low half first:
 // e[j] = pairs[2j+1]·2^32 + (pairs[2j] >>> 0). On a little-endian engine (every one this
@@ -16,6 +17,7 @@
 // float64 domain are all done on the halves with exact 32-bit operations, and the grid and
 // float32 domains read e as a Number, which is exact within the ranges they allow (±2^53, ±2^32).
 
+import { adaptiveError, decodeAdaptive, decodeAdaptiveWide } from './adaptive.js';
 import { formatError, limitError } from './errors.js';
 import { MsgFloat, describe, isInt } from './msgpack.js';
 import { decompressExact } from './zstd.js';
@@ -23,6 +25,8 @@ import { decompressExact } from './zstd.js';
 const PARAMETER = 'R40-residual';
 const VALUE = 'R41-residual-value';
 const TWO_32 = 4294967296;
+const ZSTD = 0; // `coder` (1.7): each chunk §6.1's zstd frame of byte planes ...
+const ADAPTIVE = 1; // ... or one adaptive stream of §6.14
 // float32 domain: the ordered integers of the finite binary32 values (§6.9)
 const F32_LOWEST = -2139095040;
 const F32_HIGHEST = 2139095039;
@@ -57,24 +61,27 @@ export const LITTLE_ENDIAN = new Uint8Array(new Uint16Array([1]).buffer)[0] === 
 
 /**
  * A RESD (or RESD.s) section's parameters, checked; chunk c holds the section's frames
- * c·chunkFrames .. (its start and frames).
+ * c·chunkFrames .. (its start and frames). `coder` is 1 where each chunk is an adaptive stream
+ * (format 1.7), else 0 (zstd planes; in a file without flag bit 4 whatever the entry says).
  * @typedef {{section: import('./container.js').Section, domain: string, step: number,
- *   scale: number | null, exponent: number, predict: number, chunkFrames: number,
+ *   scale: number | null, exponent: number, predict: number, coder: number, chunkFrames: number,
  *   chunks: Chunk[], frames: number}} Residual
  */
 
 /**
  * §5 step 18 up to the CRC: the parameters of a RESD section covering `frames` frames of K
- * vertices, in the order §6.9 lists them (R40-residual), then each chunk's decompressed size
- * against max_section_bytes and, for a chunk of several frames, its integers against
+ * vertices, in the order §6.9 lists them (R40-residual; (1.7) `coder`, R46-adaptive-stream,
+ * read only in a file with flag bit 4), then each chunk's decompressed size against
+ * max_section_bytes and, for a chunk of several frames, its integers against
  * max_chunk_values (R21-header-limit).
  * @param {import('./container.js').Section} section
  * @param {number} frames F' (F for RESD, F_s for RESD.s)
  * @param {number} K
  * @param {import('./limits.js').Limits} limits
+ * @param {boolean} [adaptive] the file sets flag bit 4 (format 1.7): `coder` is read, and may be 1
  * @returns {Residual}
  */
-export function readResidual(section, frames, K, limits) {
+export function readResidual(section, frames, K, limits, adaptive = false) {
   const where = `section '${section.id}'`;
   const entry = section.entry;
   /** @type {(message: string) => Error} */
@@ -109,6 +116,11 @@ export function readResidual(section, frames, K, limits) {
   }
   const predict = entry.get('predict');
   if (predict !== 0 && predict !== 1) throw fail(`"predict" is ${shown('predict')}, not 0 or 1`);
+  // without flag bit 4, `coder` is an unknown parameter (§3): ignored, as before 1.7
+  const coder = entry.get('coder');
+  if (adaptive && coder !== undefined && coder !== ZSTD && coder !== ADAPTIVE) {
+    throw adaptiveError(where, `"coder" is ${describe(coder)}; this section allows 0 or 1`);
+  }
   const chunkFrames = entry.get('chunk_frames');
   if (!isInt(chunkFrames) || chunkFrames < 1) throw fail(`"chunk_frames" is ${shown('chunk_frames')}, not an int >= 1`);
   // a BigInt chunk_frames is above 2^53, so above F': one chunk
@@ -119,6 +131,34 @@ export function readResidual(section, frames, K, limits) {
     const what = Array.isArray(table) ? `an array of ${table.length} entries` : shown('chunks');
     throw fail(`"chunks" is ${what}; ${frames} frames in chunks of ${L} need ${count}`);
   }
+  const chunks = readChunks(table, L, frames, section.length, fail);
+  chunks.forEach((chunk, c) => {
+    const size = chunk.frames * K * 3 * chunk.planes;
+    if (size > limits.max_section_bytes) {
+      throw limitError('R21-header-limit', `${where}: chunk ${c} decodes to ${size} bytes, max_section_bytes = ${limits.max_section_bytes}`);
+    }
+    // a frame is decoded with its whole chunk: one of several frames is held to a bounded size
+    const count = chunk.frames * K * 3;
+    if (chunk.frames > 1 && count > limits.max_chunk_values) {
+      throw limitError('R21-header-limit', `${where}: chunk ${c} holds ${count} integers (${chunk.frames} frames of ${K} vertices), max_chunk_values = ${limits.max_chunk_values}`);
+    }
+  });
+  const stored = adaptive && coder === ADAPTIVE ? ADAPTIVE : ZSTD;
+  // chunkFrames as the file gives it (a BigInt one made a Number: still above F', one chunk)
+  return { section, domain, step, scale, exponent: Number(exponent), predict, coder: stored, chunkFrames: Number(chunkFrames), chunks, frames };
+}
+
+/**
+ * The `chunks` table, each entry's form and `planes` in order, then their lengths against the
+ * payload's (R40-residual): chunk c holds the frames c·L .. of F'.
+ * @param {import('./msgpack.js').MsgValue[]} table its C entries
+ * @param {number} L the frames of a chunk
+ * @param {number} frames F'
+ * @param {number} payload the payload's length
+ * @param {(message: string) => Error} fail
+ * @returns {Chunk[]}
+ */
+function readChunks(table, L, frames, payload, fail) {
   /** @type {Chunk[]} */
   const chunks = [];
   let offset = 0;
@@ -135,22 +175,8 @@ export function readResidual(section, frames, K, limits) {
     chunks.push({ planes: Number(planes), offset, length: bytes, start, frames: Math.min(L, frames - start) });
     offset += bytes;
   });
-  if (offset !== section.length) {
-    throw fail(`the chunks' lengths add up to ${offset} bytes, the payload has ${section.length}`);
-  }
-  chunks.forEach((chunk, c) => {
-    const size = chunk.frames * K * 3 * chunk.planes;
-    if (size > limits.max_section_bytes) {
-      throw limitError('R21-header-limit', `${where}: chunk ${c} decodes to ${size} bytes, max_section_bytes = ${limits.max_section_bytes}`);
-    }
-    // a frame is decoded with its whole chunk: one of several frames is held to a bounded size
-    const count = chunk.frames * K * 3;
-    if (chunk.frames > 1 && count > limits.max_chunk_values) {
-      throw limitError('R21-header-limit', `${where}: chunk ${c} holds ${count} integers (${chunk.frames} frames of ${K} vertices), max_chunk_values = ${limits.max_chunk_values}`);
-    }
-  });
-  // chunkFrames as the file gives it (a BigInt one made a Number: still above F', one chunk)
-  return { section, domain, step, scale, exponent: Number(exponent), predict, chunkFrames: Number(chunkFrames), chunks, frames };
+  if (offset !== payload) throw fail(`the chunks' lengths add up to ${offset} bytes, the payload has ${payload}`);
+  return chunks;
 }
 
 /**
@@ -164,10 +190,33 @@ export function readResidual(section, frames, K, limits) {
  */
 export function decodeChunk(residual, c, payload, K) {
   const chunk = residual.chunks[c];
+  const where = `section '${residual.section.id}' chunk ${c}`;
+  const bytes = payload.subarray(chunk.offset, chunk.offset + chunk.length);
+  const pairs = residual.coder === ADAPTIVE ? adaptivePairs(bytes, chunk, K, where) : zstdPairs(bytes, chunk, K, where);
+  if (residual.predict === 1) {
+    // e[t] = s[t] + e[t − 1], wrapped to 64 bits: a carry from the low halves into the high
+    for (let j = 2 * K * 3; j < pairs.length; j += 2) {
+      const before = j - 2 * K * 3;
+      const lo = (pairs[j] >>> 0) + (pairs[before] >>> 0);
+      pairs[j] = lo | 0;
+      pairs[j + 1] = (pairs[j + 1] + pairs[before + 1] + (lo >= TWO_32 ? 1 : 0)) | 0;
+    }
+  }
+  return pairs;
+}
+
+/**
+ * A zstd chunk's stored integers s (§6.9): its frame decompressed to N·P bytes (R29), planes
+ * made integers and zigzag undone, as interleaved halves in the chunk's order.
+ * @param {Uint8Array} bytes the chunk's payload
+ * @param {Chunk} chunk
+ * @param {number} K
+ * @param {string} where
+ */
+function zstdPairs(bytes, chunk, K, where) {
   const N = chunk.frames * K * 3;
   const P = chunk.planes;
-  const where = `section '${residual.section.id}' chunk ${c}`;
-  const raw = decompressExact(payload.subarray(chunk.offset, chunk.offset + chunk.length), N * P, where);
+  const raw = decompressExact(bytes, N * P, where);
   const pairs = new Int32Array(2 * N);
   // u[j] = Σ_p raw[p·N + j] << 8p: planes 0-3 make the low half, 4-7 the high half (a plane
   // the chunk does not have reads as zeros); then zigzag on 64 bits, s = (u >> 1) XOR
@@ -193,13 +242,39 @@ export function decodeChunk(residual, c, payload, K) {
       pairs[2 * j + 1] = (hi >>> 1) ^ sign;
     }
   }
-  if (residual.predict === 1) {
-    // e[t] = s[t] + e[t − 1], wrapped to 64 bits: a carry from the low halves into the high
-    for (let j = 2 * K * 3; j < 2 * N; j += 2) {
-      const before = j - 2 * K * 3;
-      const lo = (pairs[j] >>> 0) + (pairs[before] >>> 0);
-      pairs[j] = lo | 0;
-      pairs[j + 1] = (pairs[j + 1] + pairs[before + 1] + (lo >= TWO_32 ? 1 : 0)) | 0;
+  return pairs;
+}
+
+/**
+ * An adaptive chunk's stored integers s (§6.9, version 1.7): its stream (§6.14, R46) holds
+ * them as K rows and n_c·3 columns, column 3t + x holding s[t, v, x] for v = 0..K − 1; put back
+ * in the chunk's order j = (t·K + v)·3 + x as interleaved halves. Within 4 planes (integers of
+ * 32 bits) through decodeAdaptive, the faster path, else decodeAdaptiveWide.
+ * @param {Uint8Array} bytes the chunk's payload
+ * @param {Chunk} chunk
+ * @param {number} K
+ * @param {string} where
+ */
+function adaptivePairs(bytes, chunk, K, where) {
+  const cols = chunk.frames * 3;
+  if (chunk.planes <= 4) {
+    const values = decodeAdaptive(bytes, K, cols, null, chunk.planes, where);
+    const pairs = new Int32Array(2 * cols * K);
+    for (let c = 0; c < cols; c++) {
+      // column c = 3t + x starts at j = 3tK + x, its rows 3 apart
+      for (let v = 0, i = c * K, j = 2 * (K * (c - (c % 3)) + (c % 3)); v < K; v++, i++, j += 6) {
+        pairs[j] = values[i];
+        pairs[j + 1] = values[i] >> 31;
+      }
+    }
+    return pairs;
+  }
+  const halves = decodeAdaptiveWide(bytes, K, cols, chunk.planes, where);
+  const pairs = new Int32Array(halves.length);
+  for (let c = 0; c < cols; c++) {
+    for (let v = 0, i = 2 * c * K, j = 2 * (K * (c - (c % 3)) + (c % 3)); v < K; v++, i += 2, j += 6) {
+      pairs[j] = halves[i];
+      pairs[j + 1] = halves[i + 1];
     }
   }
   return pairs;

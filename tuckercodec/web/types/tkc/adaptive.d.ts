@@ -27,8 +27,9 @@ export declare class RangeDecoder {
     data: Uint8Array<ArrayBufferLike>;
     /**
      * the payload then PADDING zeros: decodeColumn reads on past the payload's end until the
-     * integer's end, where it refuses the stream (an integer is at most 65 decisions, each
-     * taking in at most two bytes), so that no byte read checks the end
+     * integer's end, where it refuses the stream (an integer is at most 67 decisions of a
+     * model, each taking in at most two bytes, and 60 at even odds, each at most one: 194
+     * bytes), so that no byte read checks the end
      */
     padded: Uint8Array<ArrayBuffer>;
     where: string;
@@ -40,16 +41,19 @@ export declare class RangeDecoder {
     planes: number;
     /** 2^(8P − 1): a positive integer is below it, a negative one's magnitude at most it */
     half: number;
-    /** the largest exponent (bit length − 1) of a magnitude within the planes (<= 31) */
+    /** the largest exponent (bit length − 1) of a magnitude within the planes (<= 31 for P <= 4) */
     longest: number;
     /**
      * @param {Uint8Array} data the payload
-     * @param {number} planes the section's P (1..4): every integer zigzags below 2^(8P)
+     * @param {number} planes the section's P (1..4; 1..8 for decodeAdaptiveWide): every integer
+     *   zigzags below 2^(8P)
      * @param {string} where the section, for messages
      */
     constructor(data: Uint8Array, planes: number, where: string);
     ended(): import("./errors.js").TkcError;
     unbounded(): import("./errors.js").TkcError;
+    /** For an exponent past `longest`: beyond the planes, or (P = 8) beyond 63 bits. */
+    tooLong(): import("./errors.js").TkcError;
     /** After the last integer: every byte read and code below range, else R46. */
     finish(): void;
 }
@@ -67,3 +71,18 @@ export declare class RangeDecoder {
  * @throws {import('./errors.js').TkcError} R46-adaptive-stream
  */
 export declare function decodeAdaptive(payload: Uint8Array, rows: number, cols: number, meshOrder: (() => CodingOrder) | null, planes: number, where: string): Int32Array;
+/**
+ * The integers of an adaptive stream (§6.14) of up to 63 bits, rows in ascending order (each
+ * after the two before it): a RESD chunk's with `coder` 1 (§6.9, version 1.7). In stream order
+ * (column-major, j = c·rows + r) as 64-bit two's complement halves, low half first: out[2j] and
+ * out[2j + 1]. Any planes 1..8 (the caller has checked them); decodeAdaptive is the faster path
+ * where P <= 4 and 32-bit integers will do.
+ * @param {Uint8Array} payload
+ * @param {number} rows
+ * @param {number} cols
+ * @param {number} planes P: every integer zigzags below 2^(8P), on 64 bits
+ * @param {string} where the section and chunk, for messages
+ * @returns {Int32Array} 2·rows·cols halves
+ * @throws {import('./errors.js').TkcError} R46-adaptive-stream
+ */
+export declare function decodeAdaptiveWide(payload: Uint8Array, rows: number, cols: number, planes: number, where: string): Int32Array;

@@ -187,7 +187,8 @@ export declare class TkcFile {
     /**
      * Segment s's corrections (§6.9): null in a file without them (flag bit 2), else the RESD
      * section's domain, grid step (0 outside domain "grid"), scale (the places or digits of a
-     * decimal domain, else null), §8.1's exponent, predict, frames per chunk and chunks.
+     * decimal domain, else null), §8.1's exponent, predict, (1.7) coder (0: zstd planes, 1:
+     * adaptive streams), frames per chunk and chunks.
      */
     residual(s?: number): {
         domain: string;
@@ -195,6 +196,7 @@ export declare class TkcFile {
         scale: number | null;
         exponent: number;
         predict: number;
+        coder: number;
         chunkFrames: number;
         chunks: number;
     } | null;

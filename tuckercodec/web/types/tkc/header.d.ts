@@ -25,6 +25,7 @@ export type Layout = {
     codingTools: boolean;
     corrections: boolean;
     adaptive: boolean;
+    adaptiveCorrections: boolean;
     segments: Segment[];
     face: Section;
     faceShape: number[];

@@ -14,6 +14,7 @@ export type Residual = {
     scale: number | null;
     exponent: number;
     predict: number;
+    coder: number;
     chunkFrames: number;
     chunks: Chunk[];
     frames: number;
@@ -24,23 +25,26 @@ export type Residual = {
  */
 /**
  * A RESD (or RESD.s) section's parameters, checked; chunk c holds the section's frames
- * c·chunkFrames .. (its start and frames).
+ * c·chunkFrames .. (its start and frames). `coder` is 1 where each chunk is an adaptive stream
+ * (format 1.7), else 0 (zstd planes; in a file without flag bit 4 whatever the entry says).
  * @typedef {{section: import('./container.js').Section, domain: string, step: number,
- *   scale: number | null, exponent: number, predict: number, chunkFrames: number,
+ *   scale: number | null, exponent: number, predict: number, coder: number, chunkFrames: number,
  *   chunks: Chunk[], frames: number}} Residual
  */
 /**
  * §5 step 18 up to the CRC: the parameters of a RESD section covering `frames` frames of K
- * vertices, in the order §6.9 lists them (R40-residual), then each chunk's decompressed size
- * against max_section_bytes and, for a chunk of several frames, its integers against
+ * vertices, in the order §6.9 lists them (R40-residual; (1.7) `coder`, R46-adaptive-stream,
+ * read only in a file with flag bit 4), then each chunk's decompressed size against
+ * max_section_bytes and, for a chunk of several frames, its integers against
  * max_chunk_values (R21-header-limit).
  * @param {import('./container.js').Section} section
  * @param {number} frames F' (F for RESD, F_s for RESD.s)
  * @param {number} K
  * @param {import('./limits.js').Limits} limits
+ * @param {boolean} [adaptive] the file sets flag bit 4 (format 1.7): `coder` is read, and may be 1
  * @returns {Residual}
  */
-export declare function readResidual(section: import('./container.js').Section, frames: number, K: number, limits: import('./limits.js').Limits): Residual;
+export declare function readResidual(section: import('./container.js').Section, frames: number, K: number, limits: import('./limits.js').Limits, adaptive?: boolean): Residual;
 /**
  * Chunk c's restored integers e (§6.9), as interleaved halves (see the top of this file):
  * N_c = n_c·K·3 values in frame-major order, j = (t·K + v)·3 + x.
