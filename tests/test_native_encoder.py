@@ -140,9 +140,11 @@ MEAN_MESHES = {
 
 
 def _same_mean_choice(core, values, steps, mean, push, residual, lam) -> np.ndarray:
-    """rdo._mean_choice in the core and in numpy: the same integers (returned)."""
-    reference = rdo._mean_choice(values, steps, mean, push, residual, lam)
-    fast = rdo._native_mean_choice(core, values, steps, mean, push, residual, lam)
+    """rdo._mean_choice in the core and in numpy, its bits from the counts of ``residual``: the
+    same integers (returned)."""
+    counts = rdo._residual_counts(residual)
+    reference = rdo._mean_choice(values, steps, mean, push, counts, lam)
+    fast = rdo._native_mean_choice(core, values, steps, mean, push, counts, lam)
     assert fast.dtype == np.int64
     np.testing.assert_array_equal(fast, reference)
     return reference
@@ -225,6 +227,61 @@ def test_rdo_mean_choice_blocks_of_columns_are_the_same(core, monkeypatch):
         np.testing.assert_array_equal(fast, whole)
 
 
+@pytest.mark.parametrize("mesh", sorted(MEAN_MESHES))
+@pytest.mark.parametrize("cols", [1, 2, 16, 17, 33])
+def test_push_choice_is_the_same(core, mesh, cols):
+    # qmat._pushed_mean: the core prices every push of every column at once (numpy's log2 of
+    # each residual from a table, summed in numpy's order: pairwise for a column alone in its
+    # block of 16, as the 17th and the 33rd are), the reference forms each push's residuals
+    rng = np.random.default_rng(cols)
+    faces, count = MEAN_MESHES[mesh](rng)
+    steps = MeshPrediction(faces, count).mean_steps
+    smooth = np.rint(_smooth(count, cols, cols, scale=40.0)).astype(np.int64)
+    mixed = smooth.copy()
+    mixed[:, ::3] *= 10**4  # residuals beyond the core's table: those blocks priced by numpy
+    constant = np.full((count, cols), 7, dtype=np.int64)  # every push ties: PUSH is kept
+    beyond = smooth.copy()
+    beyond[0, -1] = 2**33  # out of predictor 2's range: no residuals, every push PUSH
+    # the prices themselves, to the bit
+    costs = steps.native_plan().push_costs(smooth, qmat._log2_table(), 16)
+    for a in range(10):
+        residual = mean_residuals(smooth, steps, np.full(cols, a, dtype=np.uint8))
+        assert residual is not None
+        assert costs[:, a].tobytes() == qmat._cost(residual).tobytes()
+    pushes = []
+    for q in (smooth, mixed, -mixed, constant, beyond):
+        (fast, fast_push), (reference, push) = _both(qmat._pushed_mean, q, steps, True)
+        np.testing.assert_array_equal(fast_push, push)
+        if reference is None:
+            assert fast is None
+        else:
+            np.testing.assert_array_equal(fast, reference)
+        pushes.append(push)
+    assert (pushes[3] == 2).all() and (pushes[4] == 2).all()
+
+
+@pytest.mark.parametrize("mesh", sorted(MEAN_MESHES))
+def test_mean_residual_counts_are_the_same(core, mesh):
+    # quantize_mesh's histograms: counted by the core without the residuals, or from numpy's
+    rng = np.random.default_rng(3)
+    faces, count = MEAN_MESHES[mesh](rng)
+    steps = MeshPrediction(faces, count).mean_steps
+    smooth = np.rint(_smooth(count, 12, 4, scale=300.0)).astype(np.int64)
+    push = np.arange(12, dtype=np.uint8) % 10
+    for q, meaned in (
+        (smooth, np.arange(12)),  # every column
+        (smooth, np.array([1, 4, 5, 11])),  # some
+        (smooth * 10**6, np.arange(0, 12, 2)),  # residuals past the table, clipped
+        (smooth + 2**32, np.arange(12)),  # out of predictor 2's range
+    ):
+        fast, reference = _both(rdo._mean_residual_counts, q, meaned, steps, push[meaned])
+        if reference is None:
+            assert fast is None
+        else:
+            assert fast.dtype == reference.dtype and fast.shape == (meaned.size, rdo.TABLE_SIZE + 1)
+            np.testing.assert_array_equal(fast, reference)
+
+
 def test_core_refuses_inconsistent_mean_steps(core):
     mean = MeshPrediction(grid_faces(4), 16).mean_steps
     arrays = [mean.rows, mean.step_ends, mean.sources, mean.anchors, mean.source_ends]
@@ -245,10 +302,10 @@ def test_rdo_mean_choice_on_a_real_encode(core, monkeypatch):
     calls = []
     native_choice = rdo._native_mean_choice
 
-    def checked(core, values, steps, mean, push, residual, lam):
+    def checked(core, values, steps, mean, push, counts, lam):
         calls.append(values.shape)
-        fast = native_choice(core, values, steps, mean, push, residual, lam)
-        reference = rdo._mean_choice(values, steps, mean, push, residual, lam)
+        fast = native_choice(core, values, steps, mean, push, counts, lam)
+        reference = rdo._mean_choice(values, steps, mean, push, counts, lam)
         np.testing.assert_array_equal(fast, reference)
         return fast
 

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from tuckercodec.format import streams
+from tuckercodec.format.prediction import mean_residual_columns
 from tuckercodec.model.topology import MeanSteps, mesh_prediction
 from tuckercodec.system import native
 
@@ -97,6 +98,14 @@ def test_pushes_match_the_reference(
         residual = plan.residuals(values, given)
         assert residual is not None
         np.testing.assert_array_equal(residual, expected)
+        columns = plan.residuals(values, given, columns=True)  # as a section streams them
+        assert columns.flags.c_contiguous
+        np.testing.assert_array_equal(columns, expected.T)
+    np.testing.assert_array_equal(mean_residual_columns(values, steps, push_array), expected.T)
+    with native.pure_python():
+        reference = mean_residual_columns(values, steps, push_array)
+    assert reference is not None and reference.flags.c_contiguous
+    np.testing.assert_array_equal(reference, expected.T)
 
     np.testing.assert_array_equal(reference_restore(expected, steps, push), values)
     columns = np.ascontiguousarray(expected.T)

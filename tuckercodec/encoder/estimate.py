@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..format import adaptive, qmat
-from ..format.prediction import mean_residuals, residuals
+from ..format.prediction import mean_residual_columns, mean_residuals, residuals
 from ..model.topology import MeshPrediction
 from .trial import QuantizedSegment
 
@@ -53,17 +53,21 @@ class U1Predictors:
         ``q``, for columns not seen before."""
         cols, known = q.shape[1], self.predict.size
         if cols > known:  # choose for the new columns, as the file would (each on its own)
-            new = qmat.predicted_stream(
+            predict, push = qmat.chosen_predictors(
                 q[:, known:], self.mesh, self.coding_tools, pushes=self.pushes
             )
-            self.predict = np.concatenate([self.predict, new.predict])
-            self.push = np.concatenate([self.push, new.push])
+            self.predict = np.concatenate([self.predict, predict])
+            self.push = np.concatenate([self.push, push])
         return self.predict[:cols], self.push[:cols]
 
     def stream(self, q: np.ndarray) -> np.ndarray:
         """The residuals ``q`` (rows, cols) would be streamed as under the predictors kept
         (chosen now for columns not seen before)."""
-        predict, _ = self.kept(q)
+        predict, push = self.kept(q)
+        if (predict == qmat.PREDICT_MEAN).all():  # U1's usual case: no copy of q
+            # made column after column, as coded_bits reads them: its transposition is a view
+            columns = mean_residual_columns(q, self.mesh.mean_steps, push)
+            return columns.T if columns is not None else residuals(q, self.mesh.parents)
         out = q.copy()
         parent = np.flatnonzero(predict == qmat.PREDICT_PARENT)
         if parent.size:

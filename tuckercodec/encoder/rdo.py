@@ -312,12 +312,15 @@ def quantize_mesh(
     predict: np.ndarray,
     push: np.ndarray,
     settings: Settings = DEFAULT,
+    nearest: QuantizedMatrix | None = None,
 ) -> QuantizedMatrix:
     """U1 ``values`` (vertices, cols) quantized with per-column ``steps``: as :func:`quantize`
     with ``levels`` (the mesh parents), except that the columns whose ``predict`` is predictor 2
     (the file's likely predictor, §6.2, with its ``push``) are chosen against predictor 2's own
-    prediction, their bits from the nearest rounding's predictor-2 residuals."""
-    nearest = qmat.quantize(values, steps)  # checks the steps and the integer range
+    prediction, their bits from the nearest rounding's predictor-2 residuals. ``nearest``:
+    ``qmat.quantize(values, steps)`` where the caller has it already."""
+    if nearest is None:
+        nearest = qmat.quantize(values, steps)  # checks the steps and the integer range
     meaned = np.flatnonzero(predict == PREDICT_MEAN)
     if (
         settings.lam is None
@@ -328,28 +331,49 @@ def quantize_mesh(
         or mesh.levels > MAX_MEAN_LEVELS
     ):
         return quantize(values, steps, levels, settings)
-    residual = mean_residuals(nearest.q[:, meaned], mesh.mean_steps, push[meaned])
-    if residual is None:  # a value too large for predictor 2: the file will not use it
+    counts = _mean_residual_counts(nearest.q, meaned, mesh.mean_steps, push[meaned])
+    if counts is None:  # a value too large for predictor 2: the file will not use it
         return quantize(values, steps, levels, settings)
+    core = native.core()
+    choice = _mean_choice if core is None else functools.partial(_native_mean_choice, core)
+    width = max(COLUMN_BLOCK, MEAN_BLOCK_VALUES // values.shape[0])
+    steps64 = nearest.steps.astype(np.float64)
+    if meaned.size == values.shape[1] <= width:  # U1's usual case: one block, no copies
+        chosen = choice(values, steps64, mesh.mean_steps, push[meaned], counts, settings.lam)
+        return QuantizedMatrix(chosen, nearest.steps)
     q = np.empty(nearest.q.shape, dtype=np.int64)
     others = np.flatnonzero(predict != PREDICT_MEAN)
     if others.size:  # columns are chosen independently: a subset changes none of them
         q[:, others] = quantize(values[:, others], nearest.steps[others], levels, settings).q
-    core = native.core()
-    choice = _mean_choice if core is None else functools.partial(_native_mean_choice, core)
-    width = max(COLUMN_BLOCK, MEAN_BLOCK_VALUES // values.shape[0])
     for start in range(0, meaned.size, width):
         block = slice(start, start + width)
         columns = meaned[block]
         q[:, columns] = choice(
             values[:, columns],
-            nearest.steps[columns].astype(np.float64),
+            steps64[columns],
             mesh.mean_steps,
             push[columns],
-            residual[:, block],
+            counts[block],
             settings.lam,
         )
     return QuantizedMatrix(q, nearest.steps)
+
+
+def _mean_residual_counts(
+    q: np.ndarray, meaned: np.ndarray, steps: MeanSteps, push: np.ndarray
+) -> np.ndarray | None:
+    """:func:`_residual_counts` of predictor 2's residuals of the columns ``meaned`` of ``q``,
+    each with its push, or ``None`` if a value leaves predictor 2's range. The compiled core
+    counts them without handing the residuals (a matrix as large as U1) back."""
+    columns = q if meaned.size == q.shape[1] else q[:, meaned]  # meaned: ascending indices
+    core = native.core()
+    if core is not None:
+        counts: np.ndarray | None = steps.native_plan().residual_counts(
+            np.ascontiguousarray(columns, dtype=np.int64), push, TABLE_SIZE
+        )
+        return counts
+    residual = mean_residuals(columns, steps, push)
+    return None if residual is None else _residual_counts(residual)
 
 
 #: :func:`_mean_choice` prices residuals within +-this by a table indexed by the residual itself
@@ -363,17 +387,18 @@ def _mean_choice(
     steps: np.ndarray,
     mean: MeanSteps,
     push: np.ndarray,
-    residual: np.ndarray,
+    counts: np.ndarray,
     lam: float,
 ) -> np.ndarray:
     """Each entry the floor or the ceiling of ``values / steps``, whichever minimises J (the
     module docstring) against predictor 2's prediction from the integers chosen before it,
     in the decoder's order: the roots (predicted by 0), then each step of ``mean``. The bits
-    are each column's table of ``residual`` (the nearest rounding's predictor-2 residuals).
+    are each column's table of the residuals ``counts`` counts (:func:`_residual_counts` of
+    the nearest rounding's predictor-2 residuals).
     A mesh has eight steps per depth (samba: 929), so each step is a few numpy calls: what
     does not change between steps is made once."""
     half = VALUE_TABLE_HALF
-    flat_table = _value_table(_bit_table(residual)).reshape(-1)
+    flat_table = _value_table(_bits_of_counts(counts)).reshape(-1)
     offsets = (np.arange(values.shape[1]) * (2 * half + 1) + half)[None, :]
     scaled = values / steps[None, :]
     low = np.floor(scaled)
@@ -425,12 +450,12 @@ def _native_mean_choice(
     steps: np.ndarray,
     mean: MeanSteps,
     push: np.ndarray,
-    residual: np.ndarray,
+    counts: np.ndarray,
     lam: float,
 ) -> np.ndarray:
     """:func:`_mean_choice` in the compiled core: the same integers (the value table, whose
     float sums numpy orders, is made here as the reference makes it)."""
-    table = _value_table(_bit_table(residual))
+    table = _value_table(_bits_of_counts(counts))
     q = core.rdo_mean_choice(
         np.ascontiguousarray(values, dtype=np.float64),
         np.ascontiguousarray(steps, dtype=np.float64),

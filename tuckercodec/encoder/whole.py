@@ -251,9 +251,10 @@ class WholeWorkspace:
             if self._u1_levels is None:
                 self._u1_levels = rdo.Levels(self.parents)
             # the predictors the trials keep (:mod:`.estimate`): the file's likely ones
-            predict, push = self._u1_predictors.kept(qmat.quantize(values, steps).q)
+            nearest = qmat.quantize(values, steps)
+            predict, push = self._u1_predictors.kept(nearest.q)
             return rdo.quantize_mesh(
-                values, steps, self._u1_levels, self.mesh, predict, push, rounding
+                values, steps, self._u1_levels, self.mesh, predict, push, rounding, nearest
             )
         if section == "U3":
             levels = rdo.Levels.chain(values.shape[0])

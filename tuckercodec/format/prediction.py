@@ -186,6 +186,24 @@ def mean_residuals(
     return out
 
 
+def mean_residual_columns(
+    values: np.ndarray, steps: MeanSteps, push: np.ndarray | None = None
+) -> np.ndarray | None:
+    """:func:`mean_residuals` column after column, a (cols, rows) C-contiguous array, as a
+    section streams them: the compiled core lays them out so as it reads the columns, where
+    a transposition would be a pass of its own."""
+    core = native.core()
+    if core is not None:
+        contiguous = np.ascontiguousarray(values, dtype=np.int64)
+        pushes = pushes_of(push, values.shape[1])
+        columns: np.ndarray | None = steps.native_plan().residuals(
+            contiguous, None if (pushes == PUSH).all() else pushes, columns=True
+        )
+        return columns
+    residual = mean_residuals(values, steps, push)
+    return None if residual is None else np.ascontiguousarray(residual.T)
+
+
 def _pushed_residuals(values: np.ndarray, steps: MeanSteps, push: int) -> np.ndarray:
     """:func:`mean_residuals` of columns that share one push (every value within the range)."""
     out = values.copy()

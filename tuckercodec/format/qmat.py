@@ -13,6 +13,7 @@ little-endian, as bytes) and ``predict`` (cols uint8, as bytes).
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, NamedTuple, NoReturn
@@ -188,6 +189,30 @@ def predicted_stream(
     """The residuals to stream and each column's predictor: per column, the predictor whose
     residuals :func:`_cost` finds cheapest (ties to the lower one); with ``pushes`` (a U1 of
     format 1.6), predictor 2 with the push whose residuals are cheapest (ties to PUSH)."""
+    choices, best, push = _predictor_choices(q, parents, coding_tools, pushes)
+    predict = np.array([choices[j][0] for j in best], dtype=np.uint8)
+    stream = choices[1][1]  # the parent's residuals: a fresh array
+    for j, (value, columns) in enumerate(choices):
+        if value != PREDICT_PARENT:
+            chosen = np.flatnonzero(best == j)
+            stream[:, chosen] = columns[:, chosen]  # in place: stream is a fresh array
+    return Predicted(stream, predict, push)
+
+
+def chosen_predictors(
+    q: np.ndarray, parents: Mesh | None, coding_tools: bool, pushes: bool = False
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`predicted_stream`'s predictors and pushes alone, without the stream it would
+    assemble from the chosen residuals (the encoder's trials keep the predictors only)."""
+    choices, best, push = _predictor_choices(q, parents, coding_tools, pushes)
+    return np.array([choices[j][0] for j in best], dtype=np.uint8), push
+
+
+def _predictor_choices(
+    q: np.ndarray, parents: Mesh | None, coding_tools: bool, pushes: bool
+) -> tuple[list[tuple[int, np.ndarray]], np.ndarray, np.ndarray]:
+    """Each predictor's residuals (predictor 1's a fresh array, second), the index of each
+    column's cheapest by :func:`_cost`, and each column's push."""
     mesh = parents if isinstance(parents, MeshPrediction) else None
     stream = residuals(q, parents.parents if isinstance(parents, MeshPrediction) else parents)
     choices = [(PREDICT_NONE, q), (PREDICT_PARENT, stream)]
@@ -196,7 +221,7 @@ def predicted_stream(
         mean, push = _pushed_mean(q, mesh.mean_steps, pushes)
         if mean is not None:  # a column whose residuals would not fit 32 bits keeps to 0 or 1
             fits = np.abs(mean).max(axis=0) < 2**31
-            choices.append((PREDICT_MEAN, np.where(fits[None, :], mean, q)))
+            choices.append((PREDICT_MEAN, mean if fits.all() else np.where(fits[None, :], mean, q)))
     elif parents is None and coding_tools and q.shape[0] > 2:
         linear = linear_residuals(q)  # along time: the second difference
         # a column may use 3 only if its residuals fit 32 bits and its values and running
@@ -210,12 +235,7 @@ def predicted_stream(
             choices.append((PREDICT_LINEAR, np.where(fits[None, :], linear, q)))
     costs = np.stack([_cost(columns) for _, columns in choices])
     best = costs.argmin(axis=0)  # ties go to the lower predictor
-    predict = np.array([choices[j][0] for j in best], dtype=np.uint8)
-    for j, (value, columns) in enumerate(choices):
-        if value != PREDICT_PARENT:
-            chosen = np.flatnonzero(best == j)
-            stream[:, chosen] = columns[:, chosen]  # in place: stream is a fresh array
-    return Predicted(stream, predict, push)
+    return choices, best, push
 
 
 def _pushed_mean(
@@ -225,6 +245,9 @@ def _pushed_mean(
     PUSHES whose residuals :func:`_cost` finds cheapest, PUSH first so that it wins ties (a
     few columns at a time, so that the candidates' residuals stay small beside a wide U1)."""
     push = pushes_of(None, q.shape[1])
+    core = native.core()
+    if choose and core is not None:
+        return _native_pushed_mean(q, steps)
     mean = mean_residuals(q, steps)
     if not choose or mean is None:
         return mean, push
@@ -247,8 +270,55 @@ def _pushed_mean(
     return mean, push
 
 
-#: Columns whose residuals :func:`_pushed_mean` tries at once for each push.
+#: Columns whose residuals :func:`_pushed_mean` tries at once for each push: a multiple of
+#: :func:`_cost`'s block, so that each push's columns are priced in the same blocks as PUSH's.
 _PUSH_BLOCK = 32
+#: :func:`_cost`'s block of columns (its default).
+_COST_BLOCK = 16
+#: Residuals below this size are priced from :func:`_log2_table` by the compiled core.
+_LOG2_TABLE_SIZE = 1 << 16
+
+
+def _native_pushed_mean(q: np.ndarray, steps: MeanSteps) -> tuple[np.ndarray | None, np.ndarray]:
+    """:func:`_pushed_mean` choosing, with the compiled core pricing every push of every
+    column in one pass (:func:`_pushed_mean` forms ten matrices of residuals as large as
+    ``q``): the same prices to the bit (numpy's log2 of each residual, from
+    :func:`_log2_table`, summed in numpy's order), so the same pushes and residuals."""
+    cols = q.shape[1]
+    push = pushes_of(None, cols)
+    contiguous = np.ascontiguousarray(q, dtype=np.int64)
+    costs = steps.native_plan().push_costs(contiguous, _log2_table(), _COST_BLOCK)
+    if costs is None:  # a value out of predictor 2's range
+        return None, push
+    unpriced = np.flatnonzero(np.isnan(costs[:, 0]))
+    for start in np.unique(unpriced // _COST_BLOCK) * _COST_BLOCK:
+        # a residual beyond the table: the block priced as the reference prices it
+        block = slice(int(start), int(start) + _COST_BLOCK)
+        width = contiguous[:, block].shape[1]
+        for a in PUSHES:
+            trial = mean_residuals(contiguous[:, block], steps, np.full(width, a, dtype=np.uint8))
+            assert trial is not None  # the whole is within the range
+            costs[block, a] = _cost(trial)
+    best = costs[:, PUSH].copy()
+    for a in PUSHES:  # PUSH first, then the others in order: a strictly lower price wins
+        if a == PUSH:
+            continue
+        better = costs[:, a] < best
+        best[better] = costs[better, a]
+        push[better] = a
+    return mean_residuals(contiguous, steps, push), push
+
+
+@functools.cache
+def _log2_table() -> np.ndarray:
+    """``log2(1 + 2m)`` for m below :data:`_LOG2_TABLE_SIZE`, by the numpy operations that
+    :func:`_cost` applies to each residual (the compiled core prices residuals from it)."""
+    part = np.abs(np.arange(_LOG2_TABLE_SIZE, dtype=np.int64)).astype(np.float64)
+    part *= 2.0
+    part += 1.0
+    np.log2(part, out=part)
+    part.flags.writeable = False
+    return part
 
 
 def decode_matrix(

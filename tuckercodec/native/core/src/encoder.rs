@@ -178,6 +178,29 @@ pub fn rdo_residual_counts(
     Ok(counts)
 }
 
+/// `rdo._residual_counts`: each column's histogram of the zigzag of its residuals, clipped to
+/// `table_size`, of a (rows, cols) row-major matrix: (cols, `table_size` + 1) counts.
+pub fn zigzag_counts(
+    residual: &[i64],
+    rows: usize,
+    cols: usize,
+    table_size: usize,
+) -> Result<Vec<i64>, EncoderError> {
+    check_shape(residual.len(), rows, cols, "the residuals")?;
+    let width = table_size + 1;
+    let mut counts = vec![0i64; cols * width];
+    let top = i64::try_from(table_size).unwrap_or(i64::MAX);
+    for row in residual.chunks_exact(cols.max(1)) {
+        for (col, &value) in row.iter().enumerate() {
+            match usize::try_from(zigzag(value).min(top)) {
+                Ok(index) => counts[col * width + index] += 1,
+                Err(_) => return fail("a residual too large for int64's zigzag"),
+            }
+        }
+    }
+    Ok(counts)
+}
+
 /// What `rdo._choose` needs besides the values: the prediction tree and its order, the
 /// columns predicted, the bit tables and the rate weight.
 pub struct ChooseModel<'a> {
@@ -313,6 +336,21 @@ mod tests {
         expected[9] += 2;
         expected[9 + 8] += 1;
         assert_eq!(counts, expected);
+    }
+
+    #[test]
+    fn zigzag_counts_clip_each_column() {
+        // column 0: 3, -1, 0 -> zigzag 6, 1, 0; column 1: -5, 4, 9 -> 9 (clipped 8), 8, 18 (8)
+        let residual = [3, -5, -1, 4, 0, 9];
+        let counts = zigzag_counts(&residual, 3, 2, 8).unwrap();
+        let mut expected = vec![0i64; 18];
+        for index in [6, 1, 0, 9 + 8, 9 + 8, 9 + 8] {
+            expected[index] += 1;
+        }
+        assert_eq!(counts, expected);
+        assert!(zigzag_counts(&residual, 2, 2, 8).is_err());
+        assert!(zigzag_counts(&[i64::MIN / 2 - 1], 1, 1, 8).is_err());
+        assert_eq!(zigzag_counts(&[], 0, 3, 2).unwrap(), vec![0; 9]);
     }
 
     #[test]

@@ -8,6 +8,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 use tuckercodec_core::adaptive::{self, CodingOrder};
+use tuckercodec_core::encoder;
 use tuckercodec_core::prediction::{self, topology, values};
 
 use crate::broken;
@@ -277,21 +278,82 @@ impl MeanPlan {
 
     /// `mean_residuals` of a C-contiguous (K, cols) int64 array, column c with push `push[c]`
     /// (`None`: 2 for every column): a new array, or `None` if a value leaves the range;
-    /// `ValueError` if the pushes do not fit.
-    #[pyo3(signature = (values, push=None))]
+    /// `ValueError` if the pushes do not fit. With `columns`, the new array is (cols, K), the
+    /// residuals column after column (as a section streams them).
+    #[pyo3(signature = (values, push=None, columns=false))]
     fn residuals<'py>(
         &self,
         py: Python<'py>,
         values: PyReadonlyArray2<'py, i64>,
         push: Option<&Bound<'py, PyAny>>,
+        columns: bool,
     ) -> PyResult<Option<Bound<'py, PyArray2<i64>>>> {
         let (rows, width) = (values.shape()[0], values.shape()[1]);
         let push = pushes(push, width)?;
         let flat = values.as_slice()?;
         let out = py
-            .detach(|| self.plan.residuals(flat, width, &push))
+            .detach(|| {
+                if columns {
+                    self.plan.residual_columns(flat, width, &push)
+                } else {
+                    self.plan.residuals(flat, width, &push)
+                }
+            })
             .map_err(value_error)?;
-        out.map(|v| PyArray1::from_vec(py, v).reshape([rows, width]))
+        let shape = if columns {
+            [width, rows]
+        } else {
+            [rows, width]
+        };
+        out.map(|v| PyArray1::from_vec(py, v).reshape(shape))
+            .transpose()
+    }
+    /// `rdo._residual_counts` of `residuals(values, push)`, for the encoder's rounding against
+    /// predictor 2 (`rdo.quantize_mesh`), without the residuals: (cols, `table_size` + 1)
+    /// int64 counts, or `None` if a value leaves the range.
+    fn residual_counts<'py>(
+        &self,
+        py: Python<'py>,
+        values: PyReadonlyArray2<'py, i64>,
+        push: &Bound<'py, PyAny>,
+        table_size: usize,
+    ) -> PyResult<Option<Bound<'py, PyArray2<i64>>>> {
+        let (rows, width) = (values.shape()[0], values.shape()[1]);
+        let push = pushes(Some(push), width)?;
+        let flat = values.as_slice()?;
+        let counts = py
+            .detach(|| {
+                let Some(residual) = self.plan.residuals(flat, width, &push)? else {
+                    return Ok(None);
+                };
+                encoder::zigzag_counts(&residual, rows, width, table_size)
+                    .map(Some)
+                    .map_err(|error| error.0)
+            })
+            .map_err(value_error)?;
+        counts
+            .map(|v| PyArray1::from_vec(py, v).reshape([width, table_size + 1]))
+            .transpose()
+    }
+
+    /// `qmat._cost` of each column's predictor-2 residuals under each push, for the
+    /// encoder's choice of push (`qmat._pushed_mean`): a (cols, 10) float64 array from a
+    /// C-contiguous (K, cols) int64 array, `bits[m]` numpy's `log2(1 + 2m)` and the columns
+    /// priced in blocks of `block` as `_cost` prices them; a row of NaN for a column with a
+    /// residual beyond `bits` (the caller prices it), `None` if a value leaves the range.
+    fn push_costs<'py>(
+        &self,
+        py: Python<'py>,
+        values: PyReadonlyArray2<'py, i64>,
+        bits: PyReadonlyArray1<'py, f64>,
+        block: usize,
+    ) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
+        let width = values.shape()[1];
+        let (flat, bits) = (values.as_slice()?, bits.as_slice()?);
+        let out = py
+            .detach(|| self.plan.push_costs(flat, width, bits, block))
+            .map_err(value_error)?;
+        out.map(|v| PyArray1::from_vec(py, v).reshape([width, prediction::PUSH_COUNT]))
             .transpose()
     }
 }

@@ -385,6 +385,30 @@ pub fn encode_columns(
         )));
     }
     let mut coder = RangeEncoder::new();
+    let Some(proper) = &order.proper else {
+        encode_general(&mut coder, values, cols, order);
+        return Ok(coder.finish());
+    };
+    let mut encoder = ColumnEncoder::new(rows);
+    if rows > 0 {
+        for column in values.chunks_exact(rows) {
+            match proper {
+                Proper::Sequence => encoder.sequence_column(&mut coder, column),
+                Proper::Listed { steps, more } if order.mesh => {
+                    encoder.column::<true>(&mut coder, steps, more, column)
+                }
+                Proper::Listed { steps, more } => {
+                    encoder.column::<false>(&mut coder, steps, more, column)
+                }
+            }
+        }
+    }
+    Ok(coder.finish())
+}
+
+/// The encoder's loop for any order: the reference's, each class from the integers themselves.
+fn encode_general(coder: &mut RangeEncoder, values: &[i64], cols: usize, order: &CodingOrder) {
+    let rows = order.row_count;
     let mut models = fresh_models();
     let mut left = vec![0u8; rows];
     for c in 0..cols {
@@ -394,10 +418,95 @@ pub fn encode_columns(
         left_classes(before, two_before, &mut left);
         for (j, &row) in order.rows.iter().enumerate() {
             let t = context_of(order, column, &left, j, row);
-            encode_integer(&mut coder, &mut models[t], column[row]);
+            encode_integer(coder, &mut models[t], column[row]);
         }
     }
-    Ok(coder.finish())
+}
+
+/// The encoder's loop for a proper order ([`CodingOrder::proper`]): the decoder's
+/// ([`ColumnDecoder`]), each class from the saturated magnitudes of a row's latest two values,
+/// so the same contexts as the general loop (as the decoder's fast loop reads the general
+/// loop's streams), without its divisions and its reads of two other columns a row.
+struct ColumnEncoder {
+    models: Box<[Context; CONTEXTS]>,
+    /// As [`ColumnDecoder`]'s: |x[r, c]| once row r of column c is coded, else |x[r, c - 1]|,
+    /// and the one before it.
+    recent: Vec<[u32; 2]>,
+}
+
+impl ColumnEncoder {
+    fn new(rows: usize) -> Self {
+        ColumnEncoder {
+            models: Box::new([FRESH_CONTEXT; CONTEXTS]),
+            recent: vec![[0u32; 2]; rows + 1],
+        }
+    }
+
+    /// Codes `column` (the order's rows long) in a [`Proper::Listed`] order, as
+    /// [`ColumnDecoder::column`] decodes it.
+    #[inline(never)]
+    fn column<const MESH: bool>(
+        &mut self,
+        coder: &mut RangeEncoder,
+        steps: &[Step],
+        more: &[u32],
+        column: &[i64],
+    ) {
+        let models = &mut self.models;
+        let recent = self.recent.as_mut_slice();
+        let latest = |recent: &[[u32; 2]], w: u32| {
+            recent
+                .get(w as usize)
+                .map_or(0, |magnitudes| u64::from(magnitudes[0]))
+        };
+        let mut more = more.iter();
+        for step in steps {
+            let count = step.count as usize;
+            let [w, v, ..] = step.first;
+            let a = if count == 0 {
+                0
+            } else if MESH {
+                let mut total: u64 = step.first.iter().map(|&w| latest(recent, w)).sum();
+                if count > FIRST_SOURCES {
+                    let others = more.by_ref().take(count - FIRST_SOURCES);
+                    total += others.map(|&w| latest(recent, w)).sum::<u64>();
+                }
+                mean_class(3 * total, count as u64)
+            } else if count == 1 {
+                magnitude_class(3 * latest(recent, w))
+            } else {
+                magnitude_class(2 * latest(recent, w) + latest(recent, v))
+            };
+            let row = step.row as usize;
+            let [before, two_before] = recent.get(row).copied().unwrap_or_default();
+            let b = usize::from(left_class(u64::from(2 * before + two_before)));
+            let value = column.get(row).copied().unwrap_or(0);
+            encode_integer(coder, &mut models[a * LEFT_CLASSES + b], value);
+            if let Some(slot) = recent.get_mut(row) {
+                *slot = [saturated(value), before];
+            }
+        }
+    }
+
+    /// Codes `column` in [`Proper::Sequence`], as [`ColumnDecoder::sequence_column`] decodes it.
+    #[inline(never)]
+    fn sequence_column(&mut self, coder: &mut RangeEncoder, column: &[i64]) {
+        let models = &mut self.models;
+        let (mut one, mut two) = (0u64, 0u64);
+        for (r, (&value, recent)) in column.iter().zip(self.recent.iter_mut()).enumerate() {
+            let a = match r {
+                0 => 0,
+                1 => magnitude_class(3 * one),
+                _ => magnitude_class(2 * one + two),
+            };
+            let [before, two_before] = *recent;
+            let b = usize::from(left_class(u64::from(2 * before + two_before)));
+            encode_integer(coder, &mut models[a * LEFT_CLASSES + b], value);
+            let magnitude = saturated(value);
+            *recent = [magnitude, before];
+            (one, two) = (u64::from(magnitude), one);
+        }
+    }
 }
 
 /// The `cols` columns of `order.row_count()` integers of an adaptive stream (shape (cols,

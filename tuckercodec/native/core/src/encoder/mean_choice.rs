@@ -7,6 +7,7 @@
 //! source row is read once per row it serves.
 
 use super::{check_shape, fail, EncoderError};
+use crate::prediction::exact_floor;
 
 /// What `rdo._mean_choice` needs besides the values and their steps: predictor 2's steps (the
 /// arrays of `MeanSteps`), each column's push, the bits of each residual value and the rate
@@ -64,10 +65,23 @@ fn checked_ends(
 /// 2**63, exact in float64.
 const INT64_BOUND: f64 = (1u64 << 63) as f64;
 
+/// `numerator.div_euclid(divisor)` (numpy's floor_divide) for a positive `divisor` below
+/// 2**53, `divisor_float` the same number: in float64 below 2**52, where the floor of the one
+/// correctly rounded quotient is the exact floor (a quotient that is no integer lies at least
+/// 1 / divisor from one, more than its rounding error), so without an integer division.
+#[inline(always)]
+fn floor_divide(numerator: i64, divisor: i64, divisor_float: f64) -> i64 {
+    if numerator.unsigned_abs() < 1 << 52 {
+        exact_floor(numerator as f64 / divisor_float) as i64
+    } else {
+        numerator.div_euclid(divisor)
+    }
+}
+
 /// One entry's choice: `rdo._mean_choice`'s `choose`, for the value `value`, its column's
 /// step and the prediction of its row. `table` is the column's row of the value table and
 /// `half` its half width. An entry whose floor is no int64 is an error.
-#[inline]
+#[inline(always)]
 fn choose(
     value: f64,
     step: f64,
@@ -77,7 +91,8 @@ fn choose(
     lam: f64,
 ) -> Result<i64, EncoderError> {
     let scaled = value / step;
-    let low = scaled.floor();
+    // floor() to the bit but a zero's sign, which changes nothing below, without libm's call
+    let low = exact_floor(scaled);
     // the range of int64 (NaN outside it): numpy's cast would not be the same beyond
     if !(-INT64_BOUND..INT64_BOUND).contains(&low) {
         return fail(format!("{value} / {step} has no int64 floor"));
@@ -177,15 +192,14 @@ pub fn rdo_mean_choice(
             }
             let (offset, divisor) = match i64::try_from(span.len()).map(|c| (c, c.checked_mul(12)))
             {
-                Ok((count, Some(divisor))) => (6 * count, divisor),
+                Ok((count, Some(divisor))) if divisor < 1 << 53 => (6 * count, divisor),
                 _ => return fail(format!("row {row} has too many sources")),
             };
+            let divisor_float = divisor as f64;
             for col in 0..cols {
                 // np.floor_divide by a positive divisor: Euclidean division
-                let prediction = total[col]
-                    .wrapping_mul(2)
-                    .wrapping_add(offset)
-                    .div_euclid(divisor);
+                let numerator = total[col].wrapping_mul(2).wrapping_add(offset);
+                let prediction = floor_divide(numerator, divisor, divisor_float);
                 let at = row * cols + col;
                 let table = &model.table[col * width..(col + 1) * width];
                 q[at] = choose(values[at], steps[col], prediction, table, half, model.lam)?;
@@ -214,6 +228,29 @@ mod tests {
             table,
             half,
             lam,
+        }
+    }
+
+    #[test]
+    fn floor_divide_is_euclidean_division() {
+        let divisors = [1i64, 6, 12, 36, 12 * 1_000_003];
+        let mut numerators = vec![0i64, 1, -1, 5, -5, 6, -6, 7, -7, i64::MAX, i64::MIN];
+        for shift in [20, 40, 51, 52, 53, 62] {
+            for delta in [-13i64, -1, 0, 1, 13] {
+                numerators.push((1i64 << shift) + delta);
+                numerators.push(-(1i64 << shift) + delta);
+            }
+        }
+        for &d in &divisors {
+            for k in [3i64, 1 << 20, (1 << 52) / d] {
+                // multiples of the divisor and their neighbours, where a rounding shows
+                numerators.extend([k * d - 1, k * d, k * d + 1, -k * d - 1, -k * d, -k * d + 1]);
+            }
+        }
+        for &d in &divisors {
+            for &n in &numerators {
+                assert_eq!(floor_divide(n, d, d as f64), n.div_euclid(d), "{n} / {d}");
+            }
         }
     }
 

@@ -8,8 +8,11 @@
 //! a face table and U1's residuals; [`accumulate_tree`], [`accumulate_rows`] and
 //! [`linear_accumulate`] for the other predictors.
 
+mod push_costs;
 pub mod topology;
 pub mod values;
+
+pub use push_costs::{numpy_pairwise_sum, PUSH_COUNT};
 
 use topology::MeanStepsArrays;
 
@@ -444,6 +447,27 @@ impl MeanPlan {
         width: usize,
         push: &[u8],
     ) -> Result<Option<Vec<i64>>, PredictionError> {
+        self.residuals_laid_out(values, width, push, false)
+    }
+
+    /// [`MeanPlan::residuals`] column after column, (`width`, height), as a section streams
+    /// them: the transposition made as the columns are read, not as a pass of its own.
+    pub fn residual_columns(
+        &self,
+        values: &[i64],
+        width: usize,
+        push: &[u8],
+    ) -> Result<Option<Vec<i64>>, PredictionError> {
+        self.residuals_laid_out(values, width, push, true)
+    }
+
+    fn residuals_laid_out(
+        &self,
+        values: &[i64],
+        width: usize,
+        push: &[u8],
+        by_column: bool,
+    ) -> Result<Option<Vec<i64>>, PredictionError> {
         check_push(push, width)?;
         if width == 0 {
             return Ok(Some(Vec::new()));
@@ -459,7 +483,19 @@ impl MeanPlan {
         if values.iter().any(|&v| beyond(v, MEAN_LIMIT)) {
             return Ok(None);
         }
-        let mut out = values.to_vec();
+        // where row v of column c goes
+        let at = |v: usize, c: usize| {
+            if by_column {
+                c * height + v
+            } else {
+                v * width + c
+            }
+        };
+        let mut out = if by_column {
+            vec![0i64; values.len()] // each block's columns are copied in as they are read
+        } else {
+            values.to_vec()
+        };
         // COLUMN_BLOCK columns at a time, their floats row after row
         let mut work = Vec::new();
         let mut sums = [0.0f64; COLUMN_BLOCK];
@@ -468,6 +504,13 @@ impl MeanPlan {
         for first in (0..width).step_by(COLUMN_BLOCK) {
             let block = COLUMN_BLOCK.min(width - first);
             let push = &push[first..first + block];
+            if by_column {
+                for (v, row) in values.chunks_exact(width).enumerate() {
+                    for (c, &value) in (first..).zip(&row[first..first + block]) {
+                        out[c * height + v] = value;
+                    }
+                }
+            }
             if !self.float_is_exact(push) {
                 column.resize(height, 0i64);
                 for (c, &a) in (first..first + block).zip(push) {
@@ -480,7 +523,7 @@ impl MeanPlan {
                         } else {
                             self.integer_prediction_pushed(j, &column, a)
                         };
-                        let slot = &mut out[self.rows[j] as usize * width + c];
+                        let slot = &mut out[at(self.rows[j] as usize, c)];
                         *slot = slot.wrapping_sub(prediction);
                     }
                 }
@@ -504,8 +547,9 @@ impl MeanPlan {
                 } else {
                     self.float_predictions_pushed(j, &work, block, factors, sums);
                 }
-                let base = self.rows[j] as usize * width + first;
-                for (slot, &prediction) in out[base..base + block].iter_mut().zip(sums.iter()) {
+                let row = self.rows[j] as usize;
+                for (c, &prediction) in (first..).zip(sums.iter()) {
+                    let slot = &mut out[at(row, c)];
                     *slot = slot.wrapping_sub(float_to_int64(prediction));
                 }
             }
@@ -537,7 +581,7 @@ pub const COLUMN_BLOCK: usize = 16;
 /// SSE4.1 makes: below 2**52 in magnitude, adding and taking away 2**52 rounds to the nearest
 /// integer, one less if that is above `x`; from 2**52 on `x` is an integer (or not finite).
 #[inline]
-fn exact_floor(x: f64) -> f64 {
+pub(crate) fn exact_floor(x: f64) -> f64 {
     const TWO_52: f64 = 4_503_599_627_370_496.0;
     let big = TWO_52.copysign(x);
     let nearest = (x + big) - big;

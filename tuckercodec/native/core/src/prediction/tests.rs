@@ -72,6 +72,7 @@ fn out_of_range_is_refused() {
     assert!(plan.restore_columns(&mut [], count, &[]).is_ok());
     let too_large = vec![MEAN_LIMIT + 1; count];
     assert_eq!(plan.residuals(&too_large, 1, &[2]).unwrap(), None);
+    assert_eq!(plan.residual_columns(&too_large, 1, &[2]).unwrap(), None);
 }
 
 #[test]
@@ -289,6 +290,8 @@ fn pushes_match_the_reference_on_random_meshes() {
             for plan in both_paths(&plan) {
                 let residual = plan.residuals(&values, width, &push).unwrap().unwrap();
                 assert_eq!(residual, expected, "mesh {seed}, span {span}");
+                let columns = plan.residual_columns(&values, width, &push).unwrap();
+                assert_eq!(columns.unwrap(), transpose(&expected, width));
                 let mut columns = stream.clone();
                 plan.restore_columns(&mut columns, count, &push).unwrap();
                 assert_eq!(columns, transpose(&values, width));
@@ -507,4 +510,124 @@ fn assert_scaled(out: &[f64], columns: &[i64], count: usize, steps: &[f32]) {
             assert_eq!(value.to_bits(), expected.to_bits());
         }
     }
+}
+
+/// `push_costs`'s prices by the plain route: each push's residuals from `residuals`, each
+/// column's `bits[|r|]` summed row after row (or pairwise where `alone`), over the rows.
+fn reference_push_costs(
+    plan: &MeanPlan,
+    values: &[i64],
+    width: usize,
+    bits: &[f64],
+    alone: Option<usize>,
+) -> Vec<f64> {
+    let height = values.len() / width;
+    let mut out = vec![0.0; width * PUSH_COUNT];
+    for a in 0..=MAX_PUSH {
+        let residual = plan
+            .residuals(values, width, &vec![a; width])
+            .unwrap()
+            .unwrap();
+        for c in 0..width {
+            let prices: Vec<f64> = (0..height)
+                .map(|v| {
+                    let m = residual[v * width + c].unsigned_abs() as usize;
+                    bits.get(m).copied().unwrap_or(f64::NAN)
+                })
+                .collect();
+            let sum = if alone == Some(c) {
+                numpy_pairwise_sum(&prices)
+            } else {
+                prices.iter().fold(0.0, |sum, &p| sum + p)
+            };
+            out[c * PUSH_COUNT + usize::from(a)] = sum / height as f64;
+        }
+    }
+    for row in out.chunks_exact_mut(PUSH_COUNT) {
+        if row.iter().any(|p| p.is_nan()) {
+            row.fill(f64::NAN);
+        }
+    }
+    out
+}
+
+fn same_prices(fast: &[f64], reference: &[f64]) -> bool {
+    fast.len() == reference.len()
+        && fast
+            .iter()
+            .zip(reference)
+            .all(|(a, b)| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()))
+}
+
+#[test]
+fn push_costs_price_every_push_as_the_residuals_do() {
+    // prices that differ in their last bits from value to value, so that any change of order
+    // or of residual shows
+    let bits: Vec<f64> = (0..300).map(|m| (1.0 + 2.0 * m as f64).log2()).collect();
+    let meshes = [
+        (grid(7).0, 4, 49),
+        (random_triangles(40, 70, 11), 3, 40),
+        (random_triangles(60, 150, 12), 3, 60),
+    ];
+    for (seed, (faces, face_width, count)) in meshes.into_iter().enumerate() {
+        let plan = plan_of(&faces, face_width, count);
+        // 17 columns: the last is alone in its block of 16 and summed pairwise; 33 in
+        // blocks of 8 leaves it alone too; 18 leaves none alone
+        for (width, block, span) in [(17, 16, 60), (33, 8, 200), (18, 16, 5), (1, 16, 40)] {
+            let values = pseudo_random(count * width, 40 + seed as u64, span);
+            let alone = (width % block == 1).then_some(width - 1);
+            let expected = reference_push_costs(&plan, &values, width, &bits, alone);
+            assert!(expected.iter().any(|p| p.is_nan()) == (span == 200));
+            for plan in both_paths(&plan) {
+                let fast = plan
+                    .push_costs(&values, width, &bits, block)
+                    .unwrap()
+                    .unwrap();
+                assert!(same_prices(&fast, &expected), "mesh {seed}, width {width}");
+            }
+        }
+    }
+}
+
+#[test]
+fn push_costs_refuse_what_residuals_refuse() {
+    let (faces, count) = grid(4);
+    let plan = plan_of(&faces, 4, count);
+    let bits = [0.0, 1.0];
+    let too_large = vec![MEAN_LIMIT + 1; count];
+    assert_eq!(plan.push_costs(&too_large, 1, &bits, 16).unwrap(), None);
+    assert!(plan.push_costs(&[0; 3], 1, &bits, 16).is_err());
+    assert!(plan.push_costs(&vec![0; count], 1, &bits, 0).is_err());
+    assert_eq!(
+        plan.push_costs(&[], 0, &bits, 16).unwrap(),
+        Some(Vec::new())
+    );
+    // an empty table prices every column NaN
+    let zeros = vec![0; count * 2];
+    let prices = plan.push_costs(&zeros, 2, &[], 16).unwrap().unwrap();
+    assert!(prices.len() == 2 * PUSH_COUNT && prices.iter().all(|p| p.is_nan()));
+}
+
+#[test]
+fn pairwise_sum_is_numpys() {
+    // numpy's order, written out for 9 values (8 partial sums, then the ninth) and for 300
+    // (halves of 144 and 156, each unrolled by 8): values whose sums round differently in
+    // another order
+    let values: Vec<f64> = (0..300)
+        .map(|i| 1.0 + f64::from(i) * 1e-3 + 1e16 * f64::from(i % 3))
+        .collect();
+    let nine = &values[..9];
+    let eight =
+        ((nine[0] + nine[1]) + (nine[2] + nine[3])) + ((nine[4] + nine[5]) + (nine[6] + nine[7]));
+    assert_eq!(
+        numpy_pairwise_sum(nine).to_bits(),
+        (eight + nine[8]).to_bits()
+    );
+    let halves = numpy_pairwise_sum(&values[..144]) + numpy_pairwise_sum(&values[144..]);
+    assert_eq!(numpy_pairwise_sum(&values).to_bits(), halves.to_bits());
+    assert_eq!(
+        numpy_pairwise_sum(&values[..3]),
+        values[0] + values[1] + values[2]
+    );
+    assert_eq!(numpy_pairwise_sum(&[]), 0.0);
 }
