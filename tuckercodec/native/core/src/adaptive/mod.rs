@@ -423,6 +423,45 @@ fn encode_general(coder: &mut RangeEncoder, values: &[i64], cols: usize, order: 
     }
 }
 
+/// The context of a [`Proper::Listed`] order's `step` from the saturated magnitudes in
+/// `recent` (see [`ColumnDecoder`]), the sources past its first ones read from `more`; with its
+/// row and the row's magnitude in the column before. `MESH`: the neighbours are averaged (U1's),
+/// else the first counts twice and the second once. One function for the encoder's and the
+/// decoder's loops, inlined into both.
+#[inline(always)]
+fn step_context<const MESH: bool>(
+    recent: &[[u32; 2]],
+    step: &Step,
+    more: &mut std::slice::Iter<'_, u32>,
+) -> (usize, usize, u32) {
+    let latest = |w: u32| {
+        recent
+            .get(w as usize)
+            .map_or(0, |magnitudes| u64::from(magnitudes[0]))
+    };
+    let count = step.count as usize;
+    let [w, v, ..] = step.first;
+    let a = if count == 0 {
+        0
+    } else if MESH {
+        // the padding adds 0s: no branch on the count
+        let mut total: u64 = step.first.iter().map(|&w| latest(w)).sum();
+        if count > FIRST_SOURCES {
+            let others = more.by_ref().take(count - FIRST_SOURCES);
+            total += others.map(|&w| latest(w)).sum::<u64>();
+        }
+        mean_class(3 * total, count as u64)
+    } else if count == 1 {
+        magnitude_class(3 * latest(w))
+    } else {
+        magnitude_class(2 * latest(w) + latest(v))
+    };
+    let row = step.row as usize;
+    let [before, two_before] = recent.get(row).copied().unwrap_or_default();
+    let b = usize::from(left_class(u64::from(2 * before + two_before)));
+    (a * LEFT_CLASSES + b, row, before)
+}
+
 /// The encoder's loop for a proper order ([`CodingOrder::proper`]): the decoder's
 /// ([`ColumnDecoder`]), each class from the saturated magnitudes of a row's latest two values,
 /// so the same contexts as the general loop (as the decoder's fast loop reads the general
@@ -454,34 +493,11 @@ impl ColumnEncoder {
     ) {
         let models = &mut self.models;
         let recent = self.recent.as_mut_slice();
-        let latest = |recent: &[[u32; 2]], w: u32| {
-            recent
-                .get(w as usize)
-                .map_or(0, |magnitudes| u64::from(magnitudes[0]))
-        };
         let mut more = more.iter();
         for step in steps {
-            let count = step.count as usize;
-            let [w, v, ..] = step.first;
-            let a = if count == 0 {
-                0
-            } else if MESH {
-                let mut total: u64 = step.first.iter().map(|&w| latest(recent, w)).sum();
-                if count > FIRST_SOURCES {
-                    let others = more.by_ref().take(count - FIRST_SOURCES);
-                    total += others.map(|&w| latest(recent, w)).sum::<u64>();
-                }
-                mean_class(3 * total, count as u64)
-            } else if count == 1 {
-                magnitude_class(3 * latest(recent, w))
-            } else {
-                magnitude_class(2 * latest(recent, w) + latest(recent, v))
-            };
-            let row = step.row as usize;
-            let [before, two_before] = recent.get(row).copied().unwrap_or_default();
-            let b = usize::from(left_class(u64::from(2 * before + two_before)));
+            let (context, row, before) = step_context::<MESH>(recent, step, &mut more);
             let value = column.get(row).copied().unwrap_or(0);
-            encode_integer(coder, &mut models[a * LEFT_CLASSES + b], value);
+            encode_integer(coder, &mut models[context], value);
             if let Some(slot) = recent.get_mut(row) {
                 *slot = [saturated(value), before];
             }
@@ -657,34 +673,10 @@ impl<'a> ColumnDecoder<'a> {
         let mut coder = self.coder;
         let models = &mut self.models;
         let recent = self.recent.as_mut_slice();
-        let latest = |recent: &[[u32; 2]], w: u32| {
-            recent
-                .get(w as usize)
-                .map_or(0, |magnitudes| u64::from(magnitudes[0]))
-        };
         let mut more = more.iter();
         for step in steps {
-            let count = step.count as usize;
-            let [w, v, ..] = step.first;
-            let a = if count == 0 {
-                0
-            } else if MESH {
-                // the padding adds 0s: no branch on the count
-                let mut total: u64 = step.first.iter().map(|&w| latest(recent, w)).sum();
-                if count > FIRST_SOURCES {
-                    let others = more.by_ref().take(count - FIRST_SOURCES);
-                    total += others.map(|&w| latest(recent, w)).sum::<u64>();
-                }
-                mean_class(3 * total, count as u64)
-            } else if count == 1 {
-                magnitude_class(3 * latest(recent, w))
-            } else {
-                magnitude_class(2 * latest(recent, w) + latest(recent, v))
-            };
-            let row = step.row as usize;
-            let [before, two_before] = recent.get(row).copied().unwrap_or_default();
-            let b = usize::from(left_class(u64::from(2 * before + two_before)));
-            let value = decode_integer(&mut coder, &mut models[a * LEFT_CLASSES + b])?;
+            let (context, row, before) = step_context::<MESH>(recent, step, &mut more);
+            let value = decode_integer(&mut coder, &mut models[context])?;
             if let Some(slot) = column.get_mut(row) {
                 *slot = value;
             }

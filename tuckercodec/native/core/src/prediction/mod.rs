@@ -461,6 +461,25 @@ impl MeanPlan {
         self.residuals_laid_out(values, width, push, true)
     }
 
+    /// The rows of `values`, a matrix in rows of `width` (> 0) over this plan's vertices: an
+    /// error where it is not one, `None` where a value is beyond predictor 2's range
+    /// ([`MEAN_LIMIT`]).
+    pub(super) fn matrix_height(
+        &self,
+        values: &[i64],
+        width: usize,
+    ) -> Result<Option<usize>, PredictionError> {
+        let height = values.len() / width;
+        if values.len() % width != 0 || height < self.vertex_count {
+            return Err(format!(
+                "a matrix of {} values in rows of {width}, fewer rows than the {} the steps index",
+                values.len(),
+                self.vertex_count
+            ));
+        }
+        Ok((!values.iter().any(|&v| beyond(v, MEAN_LIMIT))).then_some(height))
+    }
+
     fn residuals_laid_out(
         &self,
         values: &[i64],
@@ -472,17 +491,9 @@ impl MeanPlan {
         if width == 0 {
             return Ok(Some(Vec::new()));
         }
-        let height = values.len() / width;
-        if values.len() % width != 0 || height < self.vertex_count {
-            return Err(format!(
-                "a matrix of {} values in rows of {width}, fewer rows than the {} the steps index",
-                values.len(),
-                self.vertex_count
-            ));
-        }
-        if values.iter().any(|&v| beyond(v, MEAN_LIMIT)) {
+        let Some(height) = self.matrix_height(values, width)? else {
             return Ok(None);
-        }
+        };
         // where row v of column c goes
         let at = |v: usize, c: usize| {
             if by_column {

@@ -10,7 +10,7 @@
 //! numpy takes it in `mean(axis=0)`: row after row where the column shares its block of the
 //! cost with other columns, numpy's pairwise sum where it is alone in it.
 
-use super::{beyond, MeanPlan, PredictionError, COLUMN_BLOCK, MAX_PUSH, MEAN_LIMIT};
+use super::{MeanPlan, PredictionError, COLUMN_BLOCK, MAX_PUSH};
 
 /// The pushes a column may carry, `0..=MAX_PUSH`: the width of [`MeanPlan::push_costs`]'s rows.
 pub const PUSH_COUNT: usize = MAX_PUSH as usize + 1;
@@ -80,17 +80,9 @@ impl MeanPlan {
         if width == 0 {
             return Ok(Some(Vec::new()));
         }
-        let height = values.len() / width;
-        if values.len() % width != 0 || height < self.vertex_count {
-            return Err(format!(
-                "a matrix of {} values in rows of {width}, fewer rows than the {} the steps index",
-                values.len(),
-                self.vertex_count
-            ));
-        }
-        if values.iter().any(|&v| beyond(v, MEAN_LIMIT)) {
+        let Some(height) = self.matrix_height(values, width)? else {
             return Ok(None);
-        }
+        };
         // numpy sums a block of one column pairwise: only the last column can be alone
         let alone = (width % block == 1).then_some(width - 1);
         let bits = Prices::new(bits);
