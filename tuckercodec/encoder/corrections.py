@@ -224,10 +224,10 @@ def smallest_section(
         if best is None or len(section[1]) < len(best[1][1]):
             best = (domain, section, integers)
     assert best is not None
-    if adaptive_coding:
+    if adaptive_coding:  # the chosen zstd section, or its adaptive twin (not packed again)
         domain, section, integers = best
-        section = residual.encode_section(
-            integers, domain, level, exponent=exponent, predict=predict, adaptive_coding=True
+        section = residual.with_adaptive_chunks(
+            section, integers, domain, exponent=exponent, predict=predict
         )
         best = (domain, section, integers)
     return best

@@ -18,6 +18,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, NoReturn
 
+import msgpack
 import numpy as np
 
 from ..errors import FormatError, InternalError
@@ -717,19 +718,42 @@ def encode_section(
             best = section
     assert best is not None
     if adaptive_coding:
-        threshold = (1.0 - adaptive_gain) * len(best[1])
-        adaptive_best: tuple[dict[str, Any], bytes] | None = None
-        for choice in options:
-            coded = _packed_section(
-                residual, domain, level, exponent, chunk_frames, choice, adaptive.CODER_ADAPTIVE
-            )
-            if coded is not None and (
-                adaptive_best is None or len(coded[1]) < len(adaptive_best[1])
-            ):
-                adaptive_best = coded
-        if adaptive_best is not None and len(adaptive_best[1]) < threshold:
-            best = adaptive_best
+        best = with_adaptive_chunks(
+            best, residual, domain, exponent=exponent, predict=predict, adaptive_gain=adaptive_gain
+        )
     return best
+
+
+def with_adaptive_chunks(
+    section: tuple[dict[str, Any], bytes],
+    residual: np.ndarray,
+    domain: Domain,
+    *,
+    exponent: int = 0,
+    predict: int | None = None,
+    adaptive_gain: float = ADAPTIVE_GAIN,
+) -> tuple[dict[str, Any], bytes]:
+    """``section`` (:func:`encode_section`'s zstd chunks of ``residual``), or the same
+    integers in the same chunks as adaptive streams (format 1.7), with ``predict`` (or either),
+    where that section, its parameters counted, is smaller by more than ``adaptive_gain`` (a
+    share of ``section``'s): so that the file never grows for it."""
+    chunk_frames = int(section[0]["chunk_frames"])
+    options = (0, 1) if predict is None else (predict,)
+    best: tuple[dict[str, Any], bytes] | None = None
+    for choice in options:
+        coded = _packed_section(
+            residual, domain, 0, exponent, chunk_frames, choice, adaptive.CODER_ADAPTIVE
+        )
+        if coded is not None and (best is None or _section_size(coded) < _section_size(best)):
+            best = coded
+    if best is not None and _section_size(best) < (1.0 - adaptive_gain) * _section_size(section):
+        return best
+    return section
+
+
+def _section_size(section: tuple[dict[str, Any], bytes]) -> int:
+    """A section's bytes in the file: its payload and its parameters in the header."""
+    return len(section[1]) + len(msgpack.packb(section[0]))
 
 
 def _packed_section(
@@ -741,8 +765,9 @@ def _packed_section(
     predict: int,
     coder: int = adaptive.CODER_ZSTD,
 ) -> tuple[dict[str, Any], bytes] | None:
-    """The section of :func:`encode_section` with this ``predict`` and ``coder``, or, for the
-    adaptive coder, None when a stored integer is -2**63 (§6.14 codes bit lengths up to 63)."""
+    """The section of :func:`encode_section` with this ``predict`` and ``coder`` (``level``:
+    zstd's), or, for the adaptive coder, None when a stored integer is -2**63 (§6.14 codes bit
+    lengths up to 63)."""
     frames = residual.shape[0]
     chunks: list[list[int]] = []
     payloads: list[bytes] = []
