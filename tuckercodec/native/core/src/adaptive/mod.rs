@@ -462,6 +462,21 @@ fn step_context<const MESH: bool>(
     (a * LEFT_CLASSES + b, row, before)
 }
 
+/// The context of row `r` in [`Proper::Sequence`]: from `one` and `two`, the saturated
+/// magnitudes of the two rows before, and `recent`, the row's in the two columns before (the
+/// first of which is returned too). For the encoder's and the decoder's loops, inlined into both.
+#[inline(always)]
+fn sequence_context(r: usize, one: u64, two: u64, recent: [u32; 2]) -> (usize, u32) {
+    let a = match r {
+        0 => 0,
+        1 => magnitude_class(3 * one),
+        _ => magnitude_class(2 * one + two),
+    };
+    let [before, two_before] = recent;
+    let b = usize::from(left_class(u64::from(2 * before + two_before)));
+    (a * LEFT_CLASSES + b, before)
+}
+
 /// The encoder's loop for a proper order ([`CodingOrder::proper`]): the decoder's
 /// ([`ColumnDecoder`]), each class from the saturated magnitudes of a row's latest two values,
 /// so the same contexts as the general loop (as the decoder's fast loop reads the general
@@ -510,14 +525,8 @@ impl ColumnEncoder {
         let models = &mut self.models;
         let (mut one, mut two) = (0u64, 0u64);
         for (r, (&value, recent)) in column.iter().zip(self.recent.iter_mut()).enumerate() {
-            let a = match r {
-                0 => 0,
-                1 => magnitude_class(3 * one),
-                _ => magnitude_class(2 * one + two),
-            };
-            let [before, two_before] = *recent;
-            let b = usize::from(left_class(u64::from(2 * before + two_before)));
-            encode_integer(coder, &mut models[a * LEFT_CLASSES + b], value);
+            let (context, before) = sequence_context(r, one, two, *recent);
+            encode_integer(coder, &mut models[context], value);
             let magnitude = saturated(value);
             *recent = [magnitude, before];
             (one, two) = (u64::from(magnitude), one);
@@ -700,14 +709,8 @@ impl ColumnDecoder<'_> {
         // |x| of the row before and the one before it, saturated
         let (mut one, mut two) = (0u64, 0u64);
         for (r, (slot, recent)) in column.iter_mut().zip(self.recent.iter_mut()).enumerate() {
-            let a = match r {
-                0 => 0,
-                1 => magnitude_class(3 * one),
-                _ => magnitude_class(2 * one + two),
-            };
-            let [before, two_before] = *recent;
-            let b = usize::from(left_class(u64::from(2 * before + two_before)));
-            let value = decode_integer(&mut coder, &mut models[a * LEFT_CLASSES + b])?;
+            let (context, before) = sequence_context(r, one, two, *recent);
+            let value = decode_integer(&mut coder, &mut models[context])?;
             *slot = value;
             let magnitude = saturated(value);
             *recent = [magnitude, before];
