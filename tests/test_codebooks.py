@@ -170,6 +170,15 @@ def test_malformed_codebooks_are_r40(books):
     assert caught.value.rule == "R40-residual"
 
 
+def test_a_grid_section_may_declare_three_empty_codebooks():
+    """R40 allows [0, 0, 0] for every axis in any domain: nothing to read, nothing to map."""
+    grid = residual.Domain(residual.GRID, step=0.5)
+    params, payload = residual.encode_section(np.zeros((2, 4, 3), dtype=np.int64), grid, 3)
+    params = {**params, "codebooks": [[0, 0, 0]] * 3}
+    layout = residual.read_layout(params, len(payload), 2, 4, DEFAULT_LIMITS, "R", codebooks=True)
+    assert residual.decode_codebooks(payload, layout, "R") == (None, None, None)
+
+
 def test_a_grid_has_no_codebooks():
     grid = residual.Domain(residual.GRID, step=0.5)
     params, payload = _section((None, None, np.arange(3, dtype=np.int64)), grid)
@@ -311,4 +320,5 @@ def test_a_codebook_beyond_max_chunk_values_is_refused_before_it_is_read():
     with pytest.raises(tc.LimitError) as caught:
         residual.read_layout(params, len(payload), 2, 4, small, "RESD", codebooks=True)
     assert caught.value.rule == "R21-header-limit" and "codebook" in str(caught.value)
-    assert residual.read_layout(params, len(payload), 2, 4, DEFAULT_LIMITS, "R", codebooks=True)
+    layout = residual.read_layout(params, len(payload), 2, 4, DEFAULT_LIMITS, "R", codebooks=True)
+    assert layout.codebooks[2][0] == 5

@@ -381,18 +381,14 @@ def read_layout(
     CRC, the codebooks and the chunks themselves are checked later."""
     domain = params.get("domain")
     if domain not in DOMAINS:
-        raise FormatError(
-            f"domain must be one of {', '.join(DOMAINS)}, got {domain!r}",
-            rule="R40-residual",
-            field=f"{where}.domain",
+        _parameter_error(
+            f"{where}.domain", f"domain must be one of {', '.join(DOMAINS)}, got {domain!r}"
         )
     step = params.get("step")
     if domain == GRID:
         if not (isinstance(step, float) and math.isfinite(step) and step > 0):
-            raise FormatError(
-                f"a grid's step must be a finite float > 0, got {step!r}",
-                rule="R40-residual",
-                field=f"{where}.step",
+            _parameter_error(
+                f"{where}.step", f"a grid's step must be a finite float > 0, got {step!r}"
             )
     else:
         step = None
@@ -401,10 +397,8 @@ def read_layout(
         key, least, most = SCALES[domain]
         scale = params.get(key)
         if not (isinstance(scale, int) and not isinstance(scale, bool) and least <= scale <= most):
-            raise FormatError(
-                f"{key} must be an int from {least} to {most}, got {scale!r}",
-                rule="R40-residual",
-                field=f"{where}.{key}",
+            _parameter_error(
+                f"{where}.{key}", f"{key} must be an int from {least} to {most}, got {scale!r}"
             )
     exponent = params.get("exponent")
     if not (
@@ -412,18 +406,13 @@ def read_layout(
         and not isinstance(exponent, bool)
         and EXPONENTS[0] <= exponent <= EXPONENTS[1]
     ):
-        raise FormatError(
+        _parameter_error(
+            f"{where}.exponent",
             f"exponent must be an int from {EXPONENTS[0]} to {EXPONENTS[1]}, got {exponent!r}",
-            rule="R40-residual",
-            field=f"{where}.exponent",
         )
     predict = params.get("predict")
     if not (isinstance(predict, int) and not isinstance(predict, bool) and predict in (0, 1)):
-        raise FormatError(
-            f"predict must be 0 or 1, got {predict!r}",
-            rule="R40-residual",
-            field=f"{where}.predict",
-        )
+        _parameter_error(f"{where}.predict", f"predict must be 0 or 1, got {predict!r}")
     coder = adaptive.CODER_ZSTD  # before 1.7 (without flag bit 4) an unknown parameter: ignored
     if adaptive_corrections:
         coder = adaptive.checked_coder(params.get("coder", adaptive.CODER_ZSTD), where, True)
@@ -432,20 +421,18 @@ def read_layout(
     if not (isinstance(chunk_frames, int) and not isinstance(chunk_frames, bool)):
         chunk_frames = 0
     if chunk_frames < 1:
-        raise FormatError(
+        _parameter_error(
+            f"{where}.chunk_frames",
             f"chunk_frames must be an int >= 1, got {params.get('chunk_frames')!r}",
-            rule="R40-residual",
-            field=f"{where}.chunk_frames",
         )
     chunks = params.get("chunks")
     count = -(-frames // chunk_frames)
     if not (isinstance(chunks, list) and len(chunks) == count):
         got = f"{len(chunks)} entries" if isinstance(chunks, list) else repr(chunks)
-        raise FormatError(
+        _parameter_error(
+            f"{where}.chunks",
             f"chunks must be an array of {count} [planes, length] entries "
             f"({frames} frames, {chunk_frames} a chunk), got {got}",
-            rule="R40-residual",
-            field=f"{where}.chunks",
         )
     planes: list[int] = []
     placed: list[tuple[int, int, int, int]] = []
@@ -462,19 +449,17 @@ def read_layout(
             and 1 <= entry[0] <= MAX_PLANES
             and entry[1] >= 0
         ):
-            raise FormatError(
+            _parameter_error(
+                f"{where}.chunks[{number}]",
                 f"each chunk is [planes 1..{MAX_PLANES}, length >= 0], got {entry!r}",
-                rule="R40-residual",
-                field=f"{where}.chunks[{number}]",
             )
         planes.append(entry[0])
         offsets.append(offsets[-1] + entry[1])
     if offsets[-1] != payload_length:
         what = "the codebooks' and the chunks'" if placed else "the chunks'"
-        raise FormatError(
+        _parameter_error(
+            f"{where}.chunks",
             f"{what} lengths add up to {offsets[-1]} bytes, the payload has {payload_length}",
-            rule="R40-residual",
-            field=f"{where}.chunks",
         )
     layout = ResidualLayout(
         domain,
@@ -489,23 +474,7 @@ def read_layout(
         coder,
         tuple(placed),
     )
-    for axis, (count, book_planes, _, _) in enumerate(placed):
-        check_limit(
-            count * book_planes,
-            limits,
-            "max_section_bytes",
-            what=f"axis {axis}'s codebook of {count} integers of {book_planes} bytes",
-            field=f"{where}.codebooks[{axis}]",
-        )
-        # every frame needs the whole codebook: held, like a chunk, to a size of its own
-        check_limit(
-            count,
-            limits,
-            "max_chunk_values",
-            what=f"axis {axis}'s codebook of {count} entries",
-            field=f"{where}.codebooks[{axis}]",
-        )
-    _check_chunk_sizes(layout, vertices, limits, where)
+    _check_sizes(layout, vertices, limits, where)
     return layout
 
 
@@ -519,39 +488,44 @@ def _read_codebooks(
     if books is None and "codebooks" not in params:
         return []
     if not (isinstance(books, list) and len(books) == 3):
-        raise FormatError(
+        _parameter_error(
+            f"{where}.codebooks",
             f"codebooks must be an array of 3 [count, planes, length] entries, got {books!r}",
-            rule="R40-residual",
-            field=f"{where}.codebooks",
         )
     found: list[tuple[int, int, int]] = []
     for axis, entry in enumerate(books):
         field = f"{where}.codebooks[{axis}]"
         if not (isinstance(entry, list) and len(entry) == 3 and all(map(_is_int, entry))):
-            raise FormatError(
-                f"each codebook is [count, planes, length] of ints, got {entry!r}",
-                rule="R40-residual",
-                field=field,
+            _parameter_error(
+                field, f"each codebook is [count, planes, length] of ints, got {entry!r}"
             )
         count, planes, length = entry
         if entry != [0, 0, 0] and not (
             1 <= count <= values and 1 <= planes <= MAX_PLANES and length >= 0
         ):
-            raise FormatError(
+            _parameter_error(
+                field,
                 f"a codebook is [0, 0, 0] or [count 1..{values}, planes 1..{MAX_PLANES}, "
                 f"length >= 0], got {entry!r}",
-                rule="R40-residual",
-                field=field,
             )
         if count and domain == GRID:
-            raise FormatError("the grid domain has no codebooks", rule="R40-residual", field=field)
+            _parameter_error(field, "the grid domain has no codebooks")
         found.append((count, planes, length))
     return found
 
 
-def _check_chunk_sizes(layout: ResidualLayout, vertices: int, limits: Limits, where: str) -> None:
-    """§5 step 18's limits, chunk by chunk: its decompressed size against ``max_section_bytes``,
-    then, for a chunk of more than one frame, its integers against ``max_chunk_values`` (R21)."""
+def _check_sizes(layout: ResidualLayout, vertices: int, limits: Limits, where: str) -> None:
+    """§5 step 18's limits (R21): each codebook's decompressed size against
+    ``max_section_bytes`` and its entries against ``max_chunk_values`` (format 1.8), then
+    chunk by chunk, its decompressed size against ``max_section_bytes`` and, for a chunk of
+    more than one frame, its integers against ``max_chunk_values``."""
+    for axis, (count, book_planes, _, _) in enumerate(layout.codebooks):
+        field = f"{where}.codebooks[{axis}]"
+        what = f"axis {axis}'s codebook of {count} integers of {book_planes} bytes"
+        check_limit(count * book_planes, limits, "max_section_bytes", what=what, field=field)
+        # every frame needs the whole codebook: held, like a chunk, to a size of its own
+        what = f"axis {axis}'s codebook of {count} entries"
+        check_limit(count, limits, "max_chunk_values", what=what, field=field)
     for number, chunk_planes in enumerate(layout.planes):
         start, stop = layout.chunk_range(number)
         count = (stop - start) * vertices * 3
@@ -644,11 +618,11 @@ def decode_codebooks(payload: bytes | memoryview, layout: ResidualLayout, where:
     """Each axis's codebook of a section (format 1.8), in axis order: its zstd frame (R29),
     then its entries, strictly increasing and within the domain's ordered integers (R47)."""
     books: list[np.ndarray | None] = []
-    low, high = domain_range(layout.kind) if layout.codebooks else (0, 0)
     for axis, (count, planes, start, stop) in enumerate(layout.codebooks):
-        if count == 0:
+        if count == 0:  # no codebook (the only kind a grid section may declare)
             books.append(None)
             continue
+        low, high = domain_range(layout.kind)
         field = f"{where}.codebooks[{axis}]"
         steps = streams.unpack_integers(payload[start:stop], count, planes, field)
         entries = np.cumsum(steps)  # int64 addition wraps, as §6.9 wraps
@@ -874,6 +848,10 @@ def _decimal(
         if domain.name == DIGITS32:  # rounded once more, to binary32
             values = values.astype(np.float32).astype(np.float64)
     return values if every else np.where(finite, values, np.nan)
+
+
+def _parameter_error(field: str, problem: str) -> NoReturn:
+    raise FormatError(problem, rule="R40-residual", field=field)
 
 
 def _value_error(where: str, problem: str) -> NoReturn:
