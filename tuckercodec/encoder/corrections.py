@@ -286,6 +286,13 @@ def smallest_section(
     return best
 
 
+def described(domain: Domain, section: tuple[dict[str, Any], bytes]) -> str:
+    """The domain as a report names it, and the axes with a codebook (format 1.8) if any."""
+    books = section[0].get("codebooks", [])
+    axes = [name for name, book in zip("xyz", books, strict=False) if book[0]]
+    return domain.describe() + (f" with codebooks on {', '.join(axes)}" if axes else "")
+
+
 def _size(section: tuple[dict[str, Any], bytes]) -> int:
     """A section's bytes in the file: its payload and its parameters."""
     return len(section[1]) + len(msgpack.packb(section[0]))
@@ -652,7 +659,7 @@ class Corrector:
             decoded = plain_positions(chosen.quantized, u2)
         worst = measure(decoded, original, goal)
         error2 = float(np.square(decoded - original).sum())
-        domain = chosen.domain.describe() if chosen.domain and sections else None
+        domain = described(chosen.domain, sections[0]) if chosen.domain and sections else None
         return CorrectedFile(
             chosen.quantized, sections, error2, worst, goal.bound, trials, domain
         ), written
@@ -679,7 +686,14 @@ class Corrector:
             (f"{residual.SECTION_STEM}.{number}", integers)
             for number, integers in enumerate(fixed.integers)
         ]
-        domains = ", ".join(sorted({domain.describe() for domain in fixed.domains}))
+        domains = ", ".join(
+            sorted(
+                {
+                    described(d, section)
+                    for d, section in zip(fixed.domains, fixed.sections, strict=True)
+                }
+            )
+        )
         return CorrectedFile(
             quantized, fixed.sections, fixed.error2, fixed.worst, goal.bound, trials, domains
         ), written
