@@ -285,12 +285,13 @@ def book_bytes(book: list[int], extra_planes: int = 0) -> tuple[list[int], bytes
 
 
 def _book_for(
-    bases: np.ndarray, low: int, high: int, rng: np.random.Generator, anywhere: int
+    bases: np.ndarray, low: int, high: int, rng: np.random.Generator, anywhere: int, ends: bool
 ) -> list[int]:
-    """An axis's codebook: both ends of the range, some of the axis's own b, pairs b - d and
-    b + d around others (ties, where nothing falls between), and ``anywhere`` more."""
+    """An axis's codebook: both ends of the range (with ``ends``), some of the axis's own b,
+    pairs b - d and b + d around others (ties, where nothing falls between), and ``anywhere``
+    more."""
     values = [int(v) for v in bases.reshape(-1)]
-    entries = {low, high}
+    entries = {low, high} if ends else set()
     entries |= {values[i] for i in rng.choice(len(values), size=min(20, len(values)))}
     for i in rng.choice(len(values), size=8):
         d = int(rng.integers(1, 50))
@@ -302,12 +303,13 @@ def _book_for(
 @dataclasses.dataclass
 class HandMade:
     """A hand-made file with codebooks, the positions it must decode to, and how many values
-    took a tie between two entries or an entry at an end of the domain's range."""
+    took a tie between two entries, an entry at an end of the codebook, or had b outside it."""
 
     data: bytes
     expected: np.ndarray
     ties: int = 0
     ends: int = 0
+    outside: int = 0
 
 
 def hand_made(
@@ -321,6 +323,7 @@ def hand_made(
     axes: tuple[int, ...] = (0, 1, 2),
     seed: int = 0,
     anywhere: int = 5,
+    ends: bool = True,
     books_hook: Any = None,
     e_hook: Any = None,
 ) -> HandMade:
@@ -338,9 +341,10 @@ def hand_made(
         o = b.copy()
         books: list[list[int] | None] = [None, None, None]
         for x in axes:
-            book = _book_for(b[..., x], low, high, rng, anywhere)
+            book = _book_for(b[..., x], low, high, rng, anywhere, ends)
             flat = [int(v) for v in b[..., x].reshape(-1)]
             j = np.array([spec_nearest(book, v) for v in flat])
+            made.outside += sum(v < book[0] or v > book[-1] for v in flat)
             for v in flat:
                 k = bisect.bisect_right(book, v) - 1
                 made.ties += int(0 <= k < len(book) - 1 and book[k + 1] - v == v - book[k])
@@ -387,6 +391,12 @@ HAND_MADE: dict[str, tuple[tuple[Any, ...], dict[str, Any]]] = {
         ("v1.1-segments-shared", "float64"),
         {"axes": (0, 2), "chunk_frames": 3, "seed": 1},
     ),
+    # entries near the values alone: some b below the first entry or above the last
+    "float64-inside": (("v1-wave-triangles", "float64"), {"anywhere": 0, "ends": False}),
+    "digits-15-inside": (
+        ("v1-wave-triangles", "decimal-digits", 15),
+        {"anywhere": 0, "ends": False, "chunk_frames": 6},
+    ),
     "places-3": (("v1-wave-triangles", "decimal-places", 3), {"chunk_frames": 4}),
     "places-22": (("v1-wave-triangles", "decimal-places", 22), {"predict": 1}),
     "digits-4": (("v1-wave-triangles", "decimal-digits", 4), {"axes": (1,)}),
@@ -418,12 +428,13 @@ def test_hand_made_codebooks_decode_to_the_entries_values(hand_made_files, name)
 
 def test_hand_made_codebooks_take_ties_and_both_ends(hand_made_files):
     """The files exercise what an inexact search would get wrong: b halfway between two
-    entries (the lower kept), and t at either end of the codebook (the domain's extreme
-    values), in every domain."""
+    entries (the lower kept), t at either end of the codebook (the domain's extreme values),
+    in every domain, and b below the first entry or above the last."""
     made = hand_made_files["made"]
     assert all(m.ends > 0 for m in made.values())
     for domain in ("float32", "float64", "places-3", "digits-4", "digits-15"):
         assert made[domain].ties > 0, domain
+    assert made["float64-inside"].outside > 0 and made["digits-15-inside"].outside > 0
 
 
 # ------------------------------------------------------------------------------------------

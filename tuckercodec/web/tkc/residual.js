@@ -470,25 +470,59 @@ function baseOf(residual) {
 }
 
 /**
+ * Whether entry m of C (halves) is above b.
+ * @param {Int32Array} C
+ * @param {number} m
+ * @param {number} bHi
+ * @param {number} bLo unsigned
+ */
+function above(C, m, bHi, bLo) {
+  return C[2 * m + 1] > bHi || (C[2 * m + 1] === bHi && C[2 * m] >>> 0 > bLo);
+}
+
+/**
  * j of §6.9: the index of the entry of C (n entries, halves) nearest b: the largest with
- * C[j] <= b (0 if none), or the one after it where that is nearer (a tie keeps j). The two gaps
- * are exact differences in 1 .. 2^64 − 1, compared as unsigned halves.
+ * C[j] <= b (0 if none), or the one after it where that is nearer (a tie keeps j). The search
+ * gallops from `hint` (the same value's j in the last frame corrected: values move little from
+ * frame to frame, and a codebook can hold hundreds of thousands of entries), then halves the
+ * bracket. The two gaps are exact differences in 1 .. 2^64 − 1, compared as unsigned halves.
  * @param {Int32Array} C
  * @param {number} n
  * @param {number} bHi
  * @param {number} bLo unsigned
+ * @param {number} hint an index in 0..n − 1
  */
-function nearest(C, n, bHi, bLo) {
-  /** @param {number} m whether C[m] > b */
-  const above = (m) => C[2 * m + 1] > bHi || (C[2 * m + 1] === bHi && C[2 * m] >>> 0 > bLo);
-  if (above(0)) return 0;
-  let j = 0;
-  let top = n - 1;
-  while (j < top) {
-    const mid = Math.ceil((j + top) / 2);
-    if (above(mid)) top = mid - 1;
-    else j = mid;
+function nearest(C, n, bHi, bLo, hint) {
+  // a bracket lo < hi with C[lo] <= b < C[hi] (hi = n: past the end)
+  let lo = hint;
+  let hi = hint + 1;
+  let step = 1;
+  if (above(C, hint, bHi, bLo)) {
+    hi = hint;
+    lo = hint - 1;
+    while (lo >= 0 && above(C, lo, bHi, bLo)) {
+      hi = lo;
+      step *= 2;
+      lo = hint - step;
+    }
+    if (lo < 0) {
+      if (above(C, 0, bHi, bLo)) return 0; // every entry is above b
+      lo = 0;
+    }
+  } else {
+    while (hi < n && !above(C, hi, bHi, bLo)) {
+      lo = hi;
+      step *= 2;
+      hi = hint + step;
+    }
+    if (hi > n) hi = n;
   }
+  while (hi - lo > 1) {
+    const mid = lo + Math.floor((hi - lo) / 2);
+    if (above(C, mid, bHi, bLo)) hi = mid;
+    else lo = mid;
+  }
+  const j = lo;
   if (j + 1 < n) {
     let upLo = (C[2 * j + 2] >>> 0) - bLo;
     const upHi = (C[2 * j + 3] - bHi - (upLo < 0 ? 1 : 0)) >>> 0;
@@ -500,6 +534,9 @@ function nearest(C, n, bHi, bLo) {
   }
   return j;
 }
+
+/** Each codebook's hints for nearest: per vertex, the j its value took last. */
+const HINTS = new WeakMap();
 
 /** Scratch of throughCodebooks: one frame's integers. */
 let bookPairs = new Int32Array(0);
@@ -527,11 +564,15 @@ function throughCodebooks(residual, books, P, pairs, at, frameNumber) {
   books.forEach((C, x) => {
     if (C === null) return;
     const count = C.length / 2;
+    /** @type {Int32Array | undefined} */
+    let hints = HINTS.get(C);
+    if (hints === undefined || hints.length !== n / 3) HINTS.set(C, (hints = new Int32Array(n / 3)));
     for (let v = x; v < n; v += 3) {
       if (!base(P[v])) continue;
       const bHi = BASE[1];
       const bLo = BASE[0] >>> 0;
-      const j = nearest(C, count, bHi, bLo);
+      const j = nearest(C, count, bHi, bLo, hints[(v - x) / 3]);
+      hints[(v - x) / 3] = j;
       // exact within ±2^53; an e beyond rounds to a Number beyond every t all the same
       const t = j + (out[2 * v + 1] * TWO_32 + (out[2 * v] >>> 0));
       if (!(t >= 0 && t < count)) {
