@@ -483,9 +483,10 @@ function above(C, m, bHi, bLo) {
 /**
  * j of §6.9: the index of the entry of C (n entries, halves) nearest b: the largest with
  * C[j] <= b (0 if none), or the one after it where that is nearer (a tie keeps j). The search
- * gallops from `hint` (the same value's j in the last frame corrected: values move little from
- * frame to frame, and a codebook can hold hundreds of thousands of entries), then halves the
- * bracket. The two gaps are exact differences in 1 .. 2^64 − 1, compared as unsigned halves.
+ * gallops from `hint` (guessed from the same value's j in the frames corrected before: values
+ * move little from frame to frame, and a codebook can hold hundreds of thousands of entries),
+ * then halves the bracket. The two gaps are exact differences in 1 .. 2^64 − 1, compared as
+ * unsigned halves.
  * @param {Int32Array} C
  * @param {number} n
  * @param {number} bHi
@@ -535,7 +536,10 @@ function nearest(C, n, bHi, bLo, hint) {
   return j;
 }
 
-/** Each codebook's hints for nearest: per vertex, the j its value took last. */
+/**
+ * Each codebook's hints for nearest: per vertex, the j its value took in the last two frames
+ * corrected, from which the next is guessed as if it kept moving so (played frames move on).
+ */
 const HINTS = new WeakMap();
 
 /** Scratch of throughCodebooks: one frame's integers. */
@@ -566,13 +570,15 @@ function throughCodebooks(residual, books, P, pairs, at, frameNumber) {
     const count = C.length / 2;
     /** @type {Int32Array | undefined} */
     let hints = HINTS.get(C);
-    if (hints === undefined || hints.length !== n / 3) HINTS.set(C, (hints = new Int32Array(n / 3)));
-    for (let v = x; v < n; v += 3) {
+    if (hints === undefined || hints.length !== 2 * n / 3) HINTS.set(C, (hints = new Int32Array(2 * n / 3)));
+    for (let v = x, i = 0; v < n; v += 3, i += 2) {
       if (!base(P[v])) continue;
       const bHi = BASE[1];
       const bLo = BASE[0] >>> 0;
-      const j = nearest(C, count, bHi, bLo, hints[(v - x) / 3]);
-      hints[(v - x) / 3] = j;
+      const guess = Math.min(Math.max(2 * hints[i] - hints[i + 1], 0), count - 1);
+      const j = nearest(C, count, bHi, bLo, guess);
+      hints[i + 1] = hints[i];
+      hints[i] = j;
       // exact within ±2^53; an e beyond rounds to a Number beyond every t all the same
       const t = j + (out[2 * v + 1] * TWO_32 + (out[2 * v] >>> 0));
       if (!(t >= 0 && t < count)) {
