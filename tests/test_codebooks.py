@@ -9,6 +9,8 @@ the ``-codebook(s)`` vectors of R29, R40 and R41) hold the decoders to the layou
 
 from __future__ import annotations
 
+import itertools
+
 import msgpack
 import numpy as np
 import pytest
@@ -51,6 +53,14 @@ def test_the_nearest_entry_takes_the_lower_on_a_tie_and_clamps_at_the_ends():
     assert residual.nearest_entries(book, base).tolist() == expected
 
 
+def test_the_midpoints_give_the_rule_of_the_spec_exactly():
+    """floor((C[m] + C[m+1]) / 2) without overflow, against Python's integers."""
+    low, high = residual.FINITE64
+    book = np.array([low, low + 1, -(2**40) - 1, 0, 3, 2**62, high], dtype=np.int64)
+    expected = [(int(a) + int(b)) // 2 for a, b in itertools.pairwise(book)]
+    assert residual.midpoints(book).tolist() == expected
+
+
 def test_the_nearest_entry_is_exact_across_the_whole_int64_range():
     """Gaps up to 2**64 - 1 (float64's ordered integers span both signs): no overflow."""
     low, high = residual.FINITE64
@@ -78,7 +88,12 @@ def test_positions_in_the_codebook_come_back_as_the_domain_corrections():
     ordered = residual.ordered_in(values, FLOAT64)
     books = residual.codebooks_of(ordered)
     assert books is not None and all(book is not None for book in books)
-    stored = residual.codebook_integers(exact, ordered, FLOAT64, books)
+    plain = residual.residuals_of(exact, values, FLOAT64)
+    positions = tuple(
+        None if book is None else np.searchsorted(book, ordered[..., axis])
+        for axis, book in enumerate(books)
+    )
+    stored = residual.codebook_integers(exact, plain, FLOAT64, books, positions)
     assert np.abs(stored).max() <= 3  # positions, not ulps
     corrections = residual.from_codebooks(exact, stored, FLOAT64, books, "RESD")
     assert _bit_exact(residual.correct(exact, corrections, FLOAT64, "RESD"), values)

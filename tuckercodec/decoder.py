@@ -120,7 +120,9 @@ class Decoder:
         self._shared_u1_values: np.ndarray | None = None  # dequantized once for every segment
         self._mesh: MeshPrediction | None = None
         self._chunks: OrderedDict[tuple[int, int], np.ndarray] = OrderedDict()
-        self._books: OrderedDict[int, residual.Codebooks] = OrderedDict()  # format 1.8
+        #: each recent segment's codebooks (format 1.8) and their midpoints
+        self._books: OrderedDict[int, tuple[residual.Codebooks, tuple[np.ndarray | None, ...]]]
+        self._books = OrderedDict()
         self._data: bytes | memoryview | FileRanges
         with self._naming_path():
             if isinstance(source, (str, os.PathLike)):
@@ -376,18 +378,22 @@ class Decoder:
                 payload, part.corrections, chunk, self.info.vertices, f"section {part.residual_id}"
             )
 
-    def _codebooks_of(self, number: int, part: SegmentFactors) -> residual.Codebooks:
-        """A segment's codebooks (format 1.8, R29 and R47), decoded once and kept with the
-        most recent segments'."""
+    def _codebooks_of(
+        self, number: int, part: SegmentFactors
+    ) -> tuple[residual.Codebooks, tuple[np.ndarray | None, ...]]:
+        """A segment's codebooks (format 1.8, R29 and R47) and their midpoints, decoded once
+        and kept with the most recent segments'."""
         assert part.corrections is not None
         books = self._books.get(number)
         if books is None:
             with self._naming_path():
-                books = residual.decode_codebooks(
+                decoded = residual.decode_codebooks(
                     self._payload(part.residual_id),
                     part.corrections,
                     f"section {part.residual_id}",
                 )
+            middles = tuple(None if book is None else residual.midpoints(book) for book in decoded)
+            books = (decoded, middles)
         self._books[number] = books
         self._books.move_to_end(number)
         while len(self._books) > CACHED_SEGMENTS:
@@ -417,7 +423,7 @@ class Decoder:
                 layout.exponent,
                 f"section {part.residual_id}",
             )
-        books = self._codebooks_of(number, part) if layout.codebooks else ()
+        books, middles = self._codebooks_of(number, part) if layout.codebooks else ((), ())
         out = np.empty_like(exact) if out is None else out
         chunks = local // layout.span
         needed = np.unique(chunks).tolist()
@@ -442,7 +448,9 @@ class Decoder:
                 frames = exact[rows]
                 stored = values[taken]
                 if books:  # positions in the codebooks, as the domain's corrections
-                    stored = residual.from_codebooks(frames, stored, layout.kind, books, where)
+                    stored = residual.from_codebooks(
+                        frames, stored, layout.kind, books, where, middles
+                    )
                 out[rows] = residual.correct(frames, stored, layout.kind, where)
             return chunk, values
 

@@ -65,24 +65,56 @@ LOSSLESS_COLUMNS = 128
 CORRECTION_LEVEL = 9
 
 
-class CodebookMemo:
-    """The codebooks (format 1.8) of the last input a goal corrected, per domain: the search
-    corrects the same frames for every Tucker part it tries."""
+@dataclass(frozen=True)
+class InputCodebooks:
+    """An input's codebooks in one domain (format 1.8), with what every Tucker part's
+    corrections reuse: the input's positions in them, and their midpoints."""
+
+    books: residual.Codebooks
+    positions: tuple[np.ndarray | None, ...]
+    middles: tuple[np.ndarray | None, ...]
+
+    @classmethod
+    def of(cls, ordered: np.ndarray) -> InputCodebooks | None:
+        """Those of the ordered integers ``ordered`` (F', K, 3), or None where no axis has few
+        enough distinct values (:func:`~..format.residual.codebooks_of`)."""
+        books = residual.codebooks_of(ordered)
+        if books is None:
+            return None
+        positions = tuple(
+            None if book is None else np.searchsorted(book, ordered[..., axis])
+            for axis, book in enumerate(books)
+        )
+        middles = tuple(None if book is None else residual.midpoints(book) for book in books)
+        return cls(books, positions, middles)
+
+
+class InputMemo:
+    """What the corrections of the last input a goal corrected need per domain, whatever the
+    Tucker part: its ordered integers and its codebooks (format 1.8). The search corrects the
+    same frames for every part it tries."""
 
     def __init__(self) -> None:
         self._original: np.ndarray | None = None  # held, so that its identity stays its own
-        self._books: dict[Domain, tuple[np.ndarray, residual.Codebooks | None]] = {}
+        self._ordered: dict[Domain, np.ndarray] = {}
+        self._books: dict[Domain, InputCodebooks | None] = {}
 
-    def of(
-        self, original: np.ndarray, domain: Domain
-    ) -> tuple[np.ndarray, residual.Codebooks | None]:
-        """The ordered integers of ``original`` in ``domain``, and its codebooks where an axis
-        has few enough distinct values (:func:`~..format.residual.codebooks_of`)."""
+    def _for(self, original: np.ndarray) -> None:
         if self._original is not original:
-            self._original, self._books = original, {}
+            self._original, self._ordered, self._books = original, {}, {}
+
+    def ordered(self, original: np.ndarray, domain: Domain) -> np.ndarray:
+        """The ordered integers of ``original`` in the lossless ``domain``."""
+        self._for(original)
+        if domain not in self._ordered:
+            self._ordered[domain] = residual.ordered_in(original, domain)
+        return self._ordered[domain]
+
+    def codebooks(self, original: np.ndarray, domain: Domain) -> InputCodebooks | None:
+        """The codebooks of ``original`` in ``domain``, or None where it has none."""
+        self._for(original)
         if domain not in self._books:
-            ordered = residual.ordered_in(original, domain)
-            self._books[domain] = (ordered, residual.codebooks_of(ordered))
+            self._books[domain] = InputCodebooks.of(self.ordered(original, domain))
         return self._books[domain]
 
 
@@ -95,7 +127,7 @@ class Goal:
     domains: tuple[Domain, ...]
     bound: float | None = None  # D, in the sequence's units
     codebooks: bool = False
-    memo: CodebookMemo = field(default_factory=CodebookMemo, compare=False, repr=False)
+    memo: InputMemo = field(default_factory=InputMemo, compare=False, repr=False)
 
     @property
     def lossless(self) -> bool:
@@ -262,23 +294,29 @@ def smallest_section(
     too (:func:`~..format.residual.encode_section`)."""
     best: Packed | None = None
     for domain in domains:
-        integers = integers_for(exact, original, goal, domain)
+        if goal.lossless:  # the input's side of e is the same for every part
+            integers = goal.memo.ordered(original, domain) - residual.ordered_in(exact, domain)
+        else:
+            integers = integers_for(exact, original, goal, domain)
         section = residual.encode_section(
             integers, domain, level, exponent=exponent, predict=predict
         )
         if best is None or len(section[1]) < len(best.section[1]):
             best = Packed(domain, section, integers)
-        ordered, codebooks = (
-            goal.memo.of(original, domain) if goal.codebooks and goal.lossless else (None, None)
-        )
-        if ordered is not None and codebooks is not None:
-            integers = residual.codebook_integers(exact, ordered, domain, codebooks)
-            section = residual.encode_section(
-                integers, domain, level, exponent=exponent, predict=predict, codebooks=codebooks
-            )
-            if _size(section) < _size(best.section):
-                best = Packed(domain, section, integers, codebooks)
     assert best is not None
+    # codebooks hold the same positions in every domain: they are tried in the one whose
+    # integers packed smallest, which also stores them in the fewest bits
+    found = goal.memo.codebooks(original, best.domain) if goal.codebooks else None
+    if found is not None and goal.lossless:
+        domain = best.domain
+        integers = residual.codebook_integers(
+            exact, best.integers, domain, found.books, found.positions, found.middles
+        )
+        section = residual.encode_section(
+            integers, domain, level, exponent=exponent, predict=predict, codebooks=found.books
+        )
+        if _size(section) < _size(best.section):
+            best = Packed(domain, section, integers, found.books)
     if adaptive_coding:  # the chosen zstd section, or its adaptive twin (not packed again)
         best.section = residual.with_adaptive_chunks(
             best.section, best.integers, best.domain, exponent=exponent, predict=predict

@@ -659,20 +659,24 @@ def decode_codebooks(payload: bytes | memoryview, layout: ResidualLayout, where:
     return tuple(books)
 
 
-def nearest_entries(book: np.ndarray, base: np.ndarray) -> np.ndarray:
+def midpoints(book: np.ndarray) -> np.ndarray:
+    """``floor((C[m] + C[m+1]) / 2)`` for each pair of neighbours of a codebook, exactly: b is
+    nearer ``C[m+1]`` than ``C[m]`` (§6.9, a tie keeping ``C[m]``) exactly when ``2b > C[m] +
+    C[m+1]``, that is when b is above this midpoint."""
+    # the gap is in 1 .. 2**64 - 1: exact as uint64 (subtraction mod 2**64), its half fits int64
+    gaps = book[1:].astype(np.uint64) - book[:-1].astype(np.uint64)
+    return book[:-1] + (gaps // np.uint64(2)).astype(np.int64)
+
+
+def nearest_entries(
+    book: np.ndarray, base: np.ndarray, middles: np.ndarray | None = None
+) -> np.ndarray:
     """j of §6.9: for each ordered integer b, the index of the entry of ``book`` nearest it (the
-    lower on a tie; the first entry below them all, the last above)."""
-    last = len(book) - 1
-    below = np.searchsorted(book, base, side="right") - 1
-    lowest = np.clip(below, 0, last)
-    above = np.minimum(lowest + 1, last)
-    # the two gaps are exact differences in 1 .. 2**64 - 1: as uint64, subtraction mod 2**64
-    # gives them where C[j] <= b < C[j + 1], the only place they are compared
-    unsigned = base.astype(np.uint64)
-    gap_down = unsigned - book[lowest].astype(np.uint64)
-    gap_up = book[above].astype(np.uint64) - unsigned
-    nearer_up = (below >= 0) & (above > lowest) & (gap_up < gap_down)
-    return lowest + nearer_up
+    lower on a tie; the first entry below them all, the last above): how many midpoints lie
+    below b (``middles``: :func:`midpoints` of ``book``, computed if not given)."""
+    if middles is None:
+        middles = midpoints(book)
+    return np.searchsorted(middles, base, side="left")
 
 
 def codebook_base(exact: np.ndarray, domain: Domain) -> tuple[np.ndarray, np.ndarray | None]:
@@ -685,11 +689,17 @@ def codebook_base(exact: np.ndarray, domain: Domain) -> tuple[np.ndarray, np.nda
 
 
 def from_codebooks(
-    exact: np.ndarray, stored: np.ndarray, domain: Domain, books: Codebooks, where: str
+    exact: np.ndarray,
+    stored: np.ndarray,
+    domain: Domain,
+    books: Codebooks,
+    where: str,
+    middles: tuple[np.ndarray | None, ...] = (),
 ) -> np.ndarray:
     """The corrections e that ``stored`` (F', K, 3) means on each axis: on one with a codebook
     C, ``C[j + s] - b`` (R41 for j + s outside C), so that :func:`correct` gives ``C[j + s]``'s
-    value; elsewhere ``stored`` itself."""
+    value; elsewhere ``stored`` itself. ``middles``: each codebook's :func:`midpoints`, if
+    kept."""
     if not any(book is not None for book in books):
         return stored
     out = np.array(stored, dtype=np.int64)
@@ -698,7 +708,7 @@ def from_codebooks(
             continue
         base, finite = codebook_base(exact[..., axis], domain)
         steps = out[..., axis]
-        nearest = nearest_entries(book, base)
+        nearest = nearest_entries(book, base, middles[axis] if middles else None)
         outside = (steps < -nearest) | (steps > (len(book) - 1) - nearest)  # no overflow
         if finite is not None:
             outside &= finite
@@ -873,17 +883,24 @@ def codebooks_of(ordered: np.ndarray, share: float = CODEBOOK_SHARE) -> Codebook
 
 
 def codebook_integers(
-    exact: np.ndarray, ordered: np.ndarray, domain: Domain, books: Codebooks
+    exact: np.ndarray,
+    plain: np.ndarray,
+    domain: Domain,
+    books: Codebooks,
+    positions: tuple[np.ndarray | None, ...],
+    middles: tuple[np.ndarray | None, ...] = (),
 ) -> np.ndarray:
-    """The integers a section with ``books`` stores to take ``exact`` to the values whose
-    ordered integers are ``ordered``: positions in the codebook less the nearest's, or, on an
-    axis without one, as :func:`residuals_of`."""
-    integers = ordered - ordered_in(exact, domain)  # int64: wraps as e does
+    """The integers a section with ``books`` stores to take ``exact`` to the input: on an axis
+    with a codebook, the input's ``positions`` in it less the entry nearest each value of
+    ``exact``; elsewhere the domain's corrections ``plain`` (:func:`residuals_of`).
+    ``middles``: each codebook's :func:`midpoints`, if kept."""
+    integers = np.array(plain, dtype=np.int64)
     for axis, book in enumerate(books):
-        if book is not None:
+        at = positions[axis]
+        if book is not None and at is not None:
             base, _ = codebook_base(exact[..., axis], domain)
-            positions = np.searchsorted(book, ordered[..., axis])
-            integers[..., axis] = positions - nearest_entries(book, base)
+            nearest = nearest_entries(book, base, middles[axis] if middles else None)
+            integers[..., axis] = at - nearest
     return integers
 
 
