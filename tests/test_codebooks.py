@@ -253,3 +253,51 @@ def test_a_codebook_counts_its_parameters_when_it_is_weighed():
     params = _resd(tc.encode(sheet, lossless=True))
     assert "codebooks" in params
     assert len(msgpack.packb(params["codebooks"])) > 0
+
+
+# ------------------------------------------------------------------------------------------
+# the compiled core: the same integers as the reference, and the same R41
+
+
+@pytest.mark.parametrize(
+    "domain",
+    [FLOAT64, residual.Domain(residual.FLOAT32), residual.Domain(residual.PLACES, scale=3)],
+)
+def test_the_compiled_core_finds_the_same_entries_and_corrections(domain):
+    rng = np.random.default_rng(17)
+    grid = np.linspace(-3.0, 3.0, 61)
+    values = rng.choice(grid, size=(9, 80, 3)).astype(np.float32).astype(np.float64)
+    values = np.round(values, 3)
+    exact = values + rng.normal(scale=0.05, size=values.shape)
+    exact[4, 7, 1] = np.nan  # not finite: 0 outside float32, whatever is stored
+    ordered = residual.ordered_in(values, domain)
+    books = residual.codebooks_of(ordered)
+    assert books is not None
+    positions = tuple(
+        None if book is None else np.searchsorted(book, ordered[..., axis])
+        for axis, book in enumerate(books)
+    )
+    plain = ordered - residual.ordered_in(np.nan_to_num(exact), domain)
+    compiled = residual.codebook_integers(exact, plain, domain, books, positions)
+    decoded = residual.from_codebooks(exact, compiled, domain, books, "RESD")
+    with native.pure_python():
+        assert np.array_equal(
+            residual.codebook_integers(exact, plain, domain, books, positions), compiled
+        )
+        assert np.array_equal(
+            residual.from_codebooks(exact, compiled, domain, books, "RESD"), decoded
+        )
+    beyond = compiled.copy()
+    beyond[8, 79, 2] = 10**6
+    for pure in (False, True):
+        with native.pure_python() if pure else _nothing(), pytest.raises(tc.FormatError) as caught:
+            residual.from_codebooks(exact, beyond, domain, books, "RESD")
+        assert caught.value.rule == "R41-residual-value" and "axis 2" in str(caught.value)
+
+
+class _nothing:
+    def __enter__(self) -> None:
+        return None
+
+    def __exit__(self, *args: object) -> None:
+        return None

@@ -703,8 +703,15 @@ def from_codebooks(
     if not any(book is not None for book in books):
         return stored
     out = np.array(stored, dtype=np.int64)
+    core = native.core()
     for axis, book in enumerate(books):
         if book is None:
+            continue
+        if core is not None:  # the same integers, each search started from the frame before
+            middle = middles[axis] if middles else None
+            out[..., axis] = _native_codebook_corrections(
+                core, exact[..., axis], out[..., axis], domain, book, middle, axis, where
+            )
             continue
         base, finite = codebook_base(exact[..., axis], domain)
         steps = out[..., axis]
@@ -718,10 +725,39 @@ def from_codebooks(
             )
         positions = nearest + steps
         if finite is not None:
-            positions[~finite] = 0  # not finite: R36, whatever e says
+            positions[~finite] = 0
         with np.errstate(over="ignore"):
-            out[..., axis] = book[positions] - base  # int64: wraps as b + e does
+            corrections = book[positions] - base  # int64: wraps as b + e does
+        if finite is not None:
+            corrections[~finite] = 0  # not finite: R36, whatever e says
+        out[..., axis] = corrections
     return out
+
+
+def _native_codebook_corrections(
+    core: Any,
+    exact: np.ndarray,
+    stored: np.ndarray,
+    domain: Domain,
+    book: np.ndarray,
+    middles: np.ndarray | None,
+    axis: int,
+    where: str,
+) -> np.ndarray:
+    """:func:`from_codebooks` for one axis (``exact`` and ``stored`` of shape (F', K)) in the
+    compiled core: the same integers, and the same R41."""
+    flat = np.ascontiguousarray(exact, dtype=np.float64).reshape(-1)
+    steps = np.ascontiguousarray(stored, dtype=np.int64).reshape(-1)
+    middles = midpoints(book) if middles is None else middles
+    try:
+        out: np.ndarray = core.residual_codebook_corrections(
+            flat, steps, domain.name, int(domain.scale or 0), book, middles, exact.shape[-1]
+        )
+    except core.Broken:
+        _value_error(
+            where, f"a correction moves beyond axis {axis}'s codebook of {len(book)} entries"
+        )
+    return out.reshape(exact.shape)
 
 
 def correct(exact: np.ndarray, residual: np.ndarray, domain: Domain, where: str) -> np.ndarray:
@@ -895,11 +931,19 @@ def codebook_integers(
     ``exact``; elsewhere the domain's corrections ``plain`` (:func:`residuals_of`).
     ``middles``: each codebook's :func:`midpoints`, if kept."""
     integers = np.array(plain, dtype=np.int64)
+    core = native.core()
     for axis, book in enumerate(books):
         at = positions[axis]
         if book is not None and at is not None:
             base, _ = codebook_base(exact[..., axis], domain)
-            nearest = nearest_entries(book, base, middles[axis] if middles else None)
+            middle = middles[axis] if middles else None
+            if core is not None:  # the same j, each search started from the frame before
+                middle = midpoints(book) if middle is None else middle
+                flat = np.ascontiguousarray(base, dtype=np.int64).reshape(-1)
+                nearest = core.residual_nearest_entries(middle, flat, base.shape[-1])
+                nearest = nearest.reshape(base.shape)
+            else:
+                nearest = nearest_entries(book, base, middle)
             integers[..., axis] = at - nearest
     return integers
 
