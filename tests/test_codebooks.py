@@ -9,6 +9,7 @@ the ``-codebook(s)`` vectors of R29, R40 and R41) hold the decoders to the layou
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 
 import msgpack
@@ -301,3 +302,13 @@ class _nothing:
 
     def __exit__(self, *args: object) -> None:
         return None
+
+
+def test_a_codebook_beyond_max_chunk_values_is_refused_before_it_is_read():
+    """Every frame needs the whole codebook: it is held to max_chunk_values entries (R21)."""
+    params, payload = _section((None, None, np.arange(5, dtype=np.int64)))
+    small = dataclasses.replace(DEFAULT_LIMITS, max_chunk_values=4)
+    with pytest.raises(tc.LimitError) as caught:
+        residual.read_layout(params, len(payload), 2, 4, small, "RESD", codebooks=True)
+    assert caught.value.rule == "R21-header-limit" and "codebook" in str(caught.value)
+    assert residual.read_layout(params, len(payload), 2, 4, DEFAULT_LIMITS, "R", codebooks=True)

@@ -28,7 +28,7 @@ import numpy as np
 from ..errors import FormatError, InternalError
 from ..system import native
 from . import adaptive, streams
-from .limits import Limits, check_limit
+from .limits import DEFAULT_LIMITS, Limits, check_limit
 
 #: Preamble flag bit 2 (critical, format 1.3): the file has corrections (§6.9).
 CORRECTIONS = 0x0004
@@ -497,6 +497,14 @@ def read_layout(
             what=f"axis {axis}'s codebook of {count} integers of {book_planes} bytes",
             field=f"{where}.codebooks[{axis}]",
         )
+        # every frame needs the whole codebook: held, like a chunk, to a size of its own
+        check_limit(
+            count,
+            limits,
+            "max_chunk_values",
+            what=f"axis {axis}'s codebook of {count} entries",
+            field=f"{where}.codebooks[{axis}]",
+        )
     _check_chunk_sizes(layout, vertices, limits, where)
     return layout
 
@@ -909,12 +917,14 @@ def residuals_of(exact: np.ndarray, original: np.ndarray, domain: Domain) -> np.
 
 def codebooks_of(ordered: np.ndarray, share: float = CODEBOOK_SHARE) -> Codebooks | None:
     """Per axis, the sorted distinct ordered integers of ``ordered`` (F', K, 3) where they are
-    at most ``share`` of its values (None elsewhere); None when no axis has few enough."""
+    at most ``share`` of its values and within the default ``max_chunk_values`` (a decoder
+    holds a codebook whole, §7), None elsewhere; None when no axis has few enough."""
     values = ordered.shape[0] * ordered.shape[1]
+    most = min(share * values, DEFAULT_LIMITS.max_chunk_values)
     books: list[np.ndarray | None] = []
     for axis in range(3):
         distinct = np.unique(ordered[..., axis])
-        books.append(distinct if len(distinct) <= share * values else None)
+        books.append(distinct if len(distinct) <= most else None)
     return tuple(books) if any(book is not None for book in books) else None
 
 
