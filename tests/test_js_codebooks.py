@@ -652,24 +652,31 @@ def test_python_reads_grid_with_empty_codebooks():
     assert np.array_equal(_python_bits(empty), _python_bits(plain))
 
 
-def test_codebook_size_limit(tmp_path):
-    """Each codebook's decompressed size n·P against max_section_bytes (R21), at step 18."""
+@pytest.mark.parametrize("limit", ["max_section_bytes", "max_chunk_values"])
+def test_codebook_size_limits(tmp_path, limit):
+    """Each codebook's decompressed size n·P against max_section_bytes, and its entries n
+    against max_chunk_values (R21, at step 18): refused one below, read at the limit."""
     data = hand_made("v1-wave-triangles", "float64", chunk_frames=1, anywhere=1000).data
     (entry,) = _residual_entries(data)
-    largest = max(count * planes for count, planes, _ in entry["codebooks"])
-    assert largest > max(81 * 3 * planes for planes, _ in entry["chunks"])
+    sizes = {
+        "max_section_bytes": max(count * planes for count, planes, _ in entry["codebooks"]),
+        "max_chunk_values": max(count for count, _, _ in entry["codebooks"]),
+    }
+    largest = sizes[limit]
+    # the chunks (of one frame: never held to max_chunk_values) are below it
+    assert sizes["max_section_bytes"] > max(81 * 3 * planes for planes, _ in entry["chunks"])
     path = tmp_path / "a.tkc"
     path.write_bytes(data)
     jobs = [
-        {"path": str(path), "limits": {"max_section_bytes": largest - 1}},
-        {"path": str(path), "limits": {"max_section_bytes": largest}},
+        {"path": str(path), "limits": {limit: largest - 1}},
+        {"path": str(path), "limits": {limit: largest}},
     ]
     over, under = _run(jobs, tmp_path)
     assert (over["rule"], over["kind"]) == ("R21-header-limit", "LimitError"), over
-    assert "codebook" in over["message"]  # the codebook is what the limit stops
+    assert "codebook" in over["message"] and limit in over["message"]
     assert under["accepted"], under.get("message")
-    limits = dataclasses.replace(DEFAULT_LIMITS, max_section_bytes=largest - 1)
+    limits = dataclasses.replace(DEFAULT_LIMITS, **{limit: largest - 1})
     with pytest.raises(tuckercodec.LimitError) as python:
         tuckercodec.decode(data, limits=limits)
     assert python.value.rule == "R21-header-limit" and "codebook" in str(python.value)
-    tuckercodec.decode(data, limits=dataclasses.replace(limits, max_section_bytes=largest))
+    tuckercodec.decode(data, limits=dataclasses.replace(limits, **{limit: largest}))

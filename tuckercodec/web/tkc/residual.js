@@ -89,8 +89,9 @@ export const LITTLE_ENDIAN = new Uint8Array(new Uint16Array([1]).buffer)[0] === 
  * §5 step 18 up to the CRC: the parameters of a RESD section covering `frames` frames of K
  * vertices, in the order §6.9 lists them (R40-residual; (1.7) `coder`, R46-adaptive-stream,
  * read only in a file with flag bit 4; (1.8) `codebooks`, read only in a file with flag bit 5),
- * then each codebook's decompressed size and each chunk's against max_section_bytes and, for a
- * chunk of several frames, its integers against max_chunk_values (R21-header-limit).
+ * then each codebook's decompressed size against max_section_bytes and its entries against
+ * max_chunk_values, then each chunk's size against max_section_bytes and, for a chunk of
+ * several frames, its integers against max_chunk_values (R21-header-limit).
  * @param {import('./container.js').Section} section
  * @param {number} frames F' (F for RESD, F_s for RESD.s)
  * @param {number} K
@@ -152,10 +153,33 @@ export function readResidual(section, frames, K, limits, adaptive = false, codeb
     throw fail(`"chunks" is ${what}; ${frames} frames in chunks of ${L} need ${count}`);
   }
   const chunks = readChunks(table, L, frames, section.length, books, fail);
+  checkSizes(books, chunks, K, limits, where);
+  const stored = adaptive && coder === ADAPTIVE ? ADAPTIVE : ZSTD;
+  // chunkFrames as the file gives it (a BigInt one made a Number: still above F', one chunk)
+  return { section, domain, step, scale, exponent: Number(exponent), predict, coder: stored, chunkFrames: Number(chunkFrames), chunks, frames, codebooks: books };
+}
+
+/**
+ * §5 step 18's limits (R21-header-limit): each codebook's decompressed size n·P against
+ * max_section_bytes and its entries n against max_chunk_values (format 1.8: every frame needs
+ * the whole codebook), in axis order; then each chunk's N_c·P against max_section_bytes and,
+ * for a chunk of several frames (a frame is decoded with its whole chunk), N_c against
+ * max_chunk_values.
+ * @param {Codebook[]} books
+ * @param {Chunk[]} chunks
+ * @param {number} K
+ * @param {import('./limits.js').Limits} limits
+ * @param {string} where
+ */
+function checkSizes(books, chunks, K, limits, where) {
   books.forEach((book, x) => {
     const size = book.count * book.planes;
     if (size > limits.max_section_bytes) {
       throw limitError('R21-header-limit', `${where}: axis ${x}'s codebook decodes to ${size} bytes, max_section_bytes = ${limits.max_section_bytes}`);
+    }
+    // every frame needs the whole codebook: held, like a chunk, to a size that does not grow
+    if (book.count > limits.max_chunk_values) {
+      throw limitError('R21-header-limit', `${where}: axis ${x}'s codebook holds ${book.count} entries, max_chunk_values = ${limits.max_chunk_values}`);
     }
   });
   chunks.forEach((chunk, c) => {
@@ -169,9 +193,6 @@ export function readResidual(section, frames, K, limits, adaptive = false, codeb
       throw limitError('R21-header-limit', `${where}: chunk ${c} holds ${count} integers (${chunk.frames} frames of ${K} vertices), max_chunk_values = ${limits.max_chunk_values}`);
     }
   });
-  const stored = adaptive && coder === ADAPTIVE ? ADAPTIVE : ZSTD;
-  // chunkFrames as the file gives it (a BigInt one made a Number: still above F', one chunk)
-  return { section, domain, step, scale, exponent: Number(exponent), predict, coder: stored, chunkFrames: Number(chunkFrames), chunks, frames, codebooks: books };
 }
 
 /**

@@ -55,8 +55,9 @@ export type Codebooks = (Int32Array | null)[];
  * §5 step 18 up to the CRC: the parameters of a RESD section covering `frames` frames of K
  * vertices, in the order §6.9 lists them (R40-residual; (1.7) `coder`, R46-adaptive-stream,
  * read only in a file with flag bit 4; (1.8) `codebooks`, read only in a file with flag bit 5),
- * then each codebook's decompressed size and each chunk's against max_section_bytes and, for a
- * chunk of several frames, its integers against max_chunk_values (R21-header-limit).
+ * then each codebook's decompressed size against max_section_bytes and its entries against
+ * max_chunk_values, then each chunk's size against max_section_bytes and, for a chunk of
+ * several frames, its integers against max_chunk_values (R21-header-limit).
  * @param {import('./container.js').Section} section
  * @param {number} frames F' (F for RESD, F_s for RESD.s)
  * @param {number} K
