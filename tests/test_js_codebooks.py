@@ -641,12 +641,6 @@ def test_grid_with_empty_codebooks_reads_as_before(tmp_path):
         assert np.array_equal(bits, expected), name
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=AssertionError,
-    reason="reference bug: decode_codebooks asks domain_range of the grid domain for three "
-    "[0, 0, 0] codebooks, which R40 allows there, and fails an assertion",
-)
 def test_python_reads_grid_with_empty_codebooks():
     plain, empty = _grid_empty_codebooks()
     assert np.array_equal(_python_bits(empty), _python_bits(plain))
