@@ -20,7 +20,7 @@ from tuckercodec.encoder.versions import VERSIONS
 from tuckercodec.errors import EXIT_USAGE, FormatVersionError, InternalError
 from tuckercodec.format.adaptive import ADAPTIVE
 from tuckercodec.format.container import pack_container, parse_container
-from tuckercodec.format.residual import ADAPTIVE_CORRECTIONS, CORRECTIONS
+from tuckercodec.format.residual import ADAPTIVE_CORRECTIONS, CODEBOOKS, CORRECTIONS
 from tuckercodec.format.sections import CODING_TOOLS
 from tuckercodec.format.segments import SEGMENTED
 from tuckercodec.io.samples import sheet_triangles, wave_sheet
@@ -48,6 +48,11 @@ def _uses_no_feature_above(data: bytes, cap: str) -> None:
     container = parse_container(data)
     assert container.minor <= cap_minor
     entries = [section.params for section in container.sections]
+    if cap_minor < 8:
+        assert not container.flags & CODEBOOKS
+        assert not any(
+            s.codec == "residual" and "codebooks" in s.params for s in container.sections
+        )
     if cap_minor < 7:
         assert not container.flags & ADAPTIVE_CORRECTIONS
         assert not any(s.codec == "residual" and "coder" in s.params for s in container.sections)
@@ -85,7 +90,8 @@ def test_the_cap_is_what_holds_the_newer_tools_back(scrambled):
         cap: _minor(tc.encode(scrambled, target_kg=TARGET, format_version=cap)) for cap in VERSIONS
     }
     assert written == {
-        "1.0": 0, "1.1": 0, "1.2": 2, "1.3": 2, "1.4": 2, "1.5": 2, "1.6": 6, "1.7": 6
+        "1.0": 0, "1.1": 0, "1.2": 2, "1.3": 2, "1.4": 2, "1.5": 2, "1.6": 6, "1.7": 6,
+        "1.8": 6
     }  # fmt: skip
 
 
@@ -112,6 +118,16 @@ def test_lossless_corrections_are_adaptive_only_from_1_7(cap):
     sheet = tc.MeshSequence(
         wave_sheet(20, 8).astype(np.float32).astype(np.float64), sheet_triangles(8)
     )
+    data = tc.encode(sheet, lossless=True, format_version=cap)
+    _uses_no_feature_above(data, cap)
+    assert _minor(data) == int(cap.split(".")[1])
+    assert np.array_equal(tc.Decoder(data).positions(), sheet.vertices)
+
+
+@pytest.mark.parametrize("cap", ["1.7", "1.8"])
+def test_lossless_codebooks_only_from_1_8(cap):
+    # positions on a coarse grid take few distinct values: codebooks pay from 1.8
+    sheet = tc.MeshSequence(np.round(wave_sheet(20, 8) * 64) / 64, sheet_triangles(8))
     data = tc.encode(sheet, lossless=True, format_version=cap)
     _uses_no_feature_above(data, cap)
     assert _minor(data) == int(cap.split(".")[1])
@@ -224,7 +240,7 @@ def test_a_file_above_the_cap_is_a_bug_never_returned(scrambled, monkeypatch):
         tc.encode(scrambled, target_kg=TARGET, format_version="1.2")
 
 
-@pytest.mark.parametrize("value", ["1.8", "2.0", "one", "", 1.2, 2, (1, 2)])
+@pytest.mark.parametrize("value", ["1.9", "2.0", "one", "", 1.2, 2, (1, 2)])
 def test_a_version_the_encoder_does_not_write_is_refused(value):
     with pytest.raises(ValueError, match=re.escape("format_version must be one of 1.0, 1.1")):
         tc.EncodeOptions(format_version=value)

@@ -132,6 +132,7 @@ def test_hand_made_file_decodes_bit_for_bit(decoded, case):
             "exponent": c.exponent,
             "predict": c.predict,
             "coder": 0,
+            "codebooks": None,
             "chunkFrames": c.chunk_frames,
             "chunks": -(-P.shape[0] // c.chunk_frames),
         }

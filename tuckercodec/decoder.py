@@ -120,6 +120,9 @@ class Decoder:
         self._shared_u1_values: np.ndarray | None = None  # dequantized once for every segment
         self._mesh: MeshPrediction | None = None
         self._chunks: OrderedDict[tuple[int, int], np.ndarray] = OrderedDict()
+        #: each recent segment's codebooks (format 1.8) and their midpoints
+        self._books: OrderedDict[int, tuple[residual.Codebooks, tuple[np.ndarray | None, ...]]]
+        self._books = OrderedDict()
         self._data: bytes | memoryview | FileRanges
         with self._naming_path():
             if isinstance(source, (str, os.PathLike)):
@@ -351,6 +354,7 @@ class Decoder:
                 self.limits,
                 f"section {section_id}",
                 adaptive_corrections=self._container.adaptive_corrections,
+                codebooks=self._container.codebooks,
             )
             self._payload(section_id)  # the CRC (step 9), before any chunk is read
         with np.errstate(over="ignore", invalid="ignore"):  # an overflow is R36, per frame
@@ -373,6 +377,28 @@ class Decoder:
             return residual.decode_chunk(
                 payload, part.corrections, chunk, self.info.vertices, f"section {part.residual_id}"
             )
+
+    def _codebooks_of(
+        self, number: int, part: SegmentFactors
+    ) -> tuple[residual.Codebooks, tuple[np.ndarray | None, ...]]:
+        """A segment's codebooks (format 1.8, R29 and R47) and their midpoints, decoded once
+        and kept with the most recent segments'."""
+        assert part.corrections is not None
+        books = self._books.get(number)
+        if books is None:
+            with self._naming_path():
+                decoded = residual.decode_codebooks(
+                    self._payload(part.residual_id),
+                    part.corrections,
+                    f"section {part.residual_id}",
+                )
+            middles = tuple(None if book is None else residual.midpoints(book) for book in decoded)
+            books = (decoded, middles)
+        self._books[number] = books
+        self._books.move_to_end(number)
+        while len(self._books) > CACHED_SEGMENTS:
+            self._books.popitem(last=False)
+        return books
 
     def _keep_chunk(self, key: tuple[int, int], values: np.ndarray) -> None:
         """Keep a chunk's integers for the next frames (the most recent few)."""
@@ -397,6 +423,7 @@ class Decoder:
                 layout.exponent,
                 f"section {part.residual_id}",
             )
+        books, middles = self._codebooks_of(number, part) if layout.codebooks else ((), ())
         out = np.empty_like(exact) if out is None else out
         chunks = local // layout.span
         needed = np.unique(chunks).tolist()
@@ -416,13 +443,15 @@ class Decoder:
             start, _ = layout.chunk_range(chunk)
             taken = _run_or_indices(local[indices] - start)
             rows = _run_or_indices(indices)  # the usual case: runs of frames, views not copies
+            where = f"section {part.residual_id}"
             with self._naming_path():
-                out[rows] = residual.correct(
-                    exact[rows],
-                    values[taken],
-                    layout.kind,
-                    f"section {part.residual_id}",
-                )
+                frames = exact[rows]
+                stored = values[taken]
+                if books:  # positions in the codebooks, as the domain's corrections
+                    stored = residual.from_codebooks(
+                        frames, stored, layout.kind, books, where, middles
+                    )
+                out[rows] = residual.correct(frames, stored, layout.kind, where)
             return chunk, values
 
         workers = min(len(needed), CHUNK_THREADS)

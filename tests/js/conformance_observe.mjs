@@ -78,13 +78,19 @@ export async function observeVector(tkc, npy) {
       observed.sha256[`core${suffix}`] = await sha256(littleEndianFloat64(f.core));
       observed.sha256[`centroids${suffix}`] = await sha256(littleEndianFloat64(f.cent));
       // a file with corrections (§6.9, §12): the first segment's parameters, and every
-      // segment's restored integers e (little-endian int64)
+      // segment's restored integers e (little-endian int64) and (1.8) codebooks' entries
       const residual = file.residual(s);
       if (residual !== null) {
         // L as decoded: a chunk_frames above the segment's frames is one chunk of them all
         const L = Math.min(residual.chunkFrames, file.segments[s].frames);
         observed.residual ??= { domain: residual.domain, scale: residual.scale, predict: residual.predict, chunk_frames: L, sha256: {} };
         observed.residual.sha256[`residual${suffix}`] = await sha256(littleEndianInt64(file.residualIntegers(s)));
+        // (1.8) a section with codebooks: each axis's entries C, or null for an axis without one
+        const books = file.residualCodebooks(s);
+        if (books !== null) {
+          observed.residual.codebooks ??= {};
+          observed.residual.codebooks[`codebooks${suffix}`] = await Promise.all(books.map((C) => (C === null ? null : sha256(littleEndianInt64(C)))));
+        }
       }
     }
     // every frame, each alone (§8: a frame does not depend on which others are asked for)

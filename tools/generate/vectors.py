@@ -397,7 +397,8 @@ def digests(decoder: Decoder) -> dict[str, str]:
 def corrections_of(decoder: Decoder) -> dict[str, Any]:
     """A file of format 1.3's corrections (§12): the RESD parameters a decoder reads, and the
     SHA-256 of its restored integers e (little-endian int64, F x K x 3; per segment
-    ``residual.s``)."""
+    ``residual.s``) and, in a file with codebooks (1.8), of each axis's entries (little-endian
+    int64; ``codebooks.s`` per segment, null for an axis without one)."""
     first = decoder.segment_factors(0).corrections
     assert first is not None
     found: dict[str, Any] = {
@@ -420,6 +421,13 @@ def corrections_of(decoder: Decoder) -> dict[str, Any]:
         )
         name = f"residual.{segment.index}" if decoder.segmented else "residual"
         found["sha256"][name] = hashlib.sha256(values.astype("<i8").tobytes()).hexdigest()
+        if layout.codebooks:
+            books = residual.decode_codebooks(payload, layout, part.residual_id)
+            key = f"codebooks.{segment.index}" if decoder.segmented else "codebooks"
+            found.setdefault("codebooks", {})[key] = [
+                None if book is None else hashlib.sha256(book.astype("<i8").tobytes()).hexdigest()
+                for book in books
+            ]
     return found
 
 
@@ -511,6 +519,7 @@ def valid_vectors() -> dict[str, tuple[bytes, str]]:
         **attachment_vectors(),
         **fields_vector(),
         **adaptive_vectors(),
+        **codebook_vectors(),
         "v1-wave-triangles": (basic, "triangles, no names: the basic file"),
         "v1.1-segments-shared": (
             encode_with_report(
@@ -647,6 +656,39 @@ def with_adaptive_faces(data: bytes) -> bytes:
     parts.flags |= adaptive.ADAPTIVE
     parts.minor = max(parts.minor, adaptive.ADAPTIVE_MINOR)
     return parts.pack()
+
+
+def codebook_vectors() -> dict[str, tuple[bytes, str]]:
+    """The valid vectors of format 1.8 (§6.9's codebooks): lossless sheets whose coordinates
+    take few distinct values (a grid's x and y, the heights rounded to a coarse step)."""
+    rough = wave_sheet(24, 9) + np.random.default_rng(31).normal(scale=2e-3, size=(24, 81, 3))
+    coarse = rough.copy()
+    coarse[..., 2] = np.round(coarse[..., 2] * 64.0) / 64.0  # few heights
+    coarse[..., :2] = wave_sheet(24, 9)[..., :2]  # the grid's x and y, as given
+    return {
+        "v1.8-lossless-codebooks": (
+            encode(MeshSequence(coarse, sheet_triangles(9)), lossless=True, format_version="1.8"),
+            "format 1.8: lossless float64 values whose heights lie on a grid of 1/64, the "
+            "corrections positions in each axis's codebook",
+        ),
+        "v1.8-lossless-codebooks-float32": (
+            encode(
+                MeshSequence(coarse.astype(np.float32).astype(np.float64), sheet_triangles(9)),
+                lossless=True,
+                format_version="1.8",
+            ),
+            "format 1.8: lossless float32 values with codebooks of binary32 ordered integers",
+        ),
+        "v1.8-segments-codebooks": (
+            encode_with_report(
+                MeshSequence(coarse, sheet_triangles(9)),
+                lossless=True,
+                segment_frames=8,
+                format_version="1.8",
+            ).data,
+            "format 1.8 and 1.1: lossless values in three segments, each RESD.s with its codebooks",
+        ),
+    }
 
 
 def adaptive_vectors() -> dict[str, tuple[bytes, str]]:
@@ -1008,6 +1050,64 @@ def with_adaptive_corrections(data: bytes, predict: int) -> bytes:
     return parts.pack()
 
 
+def codebook_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
+    """rule id -> (file bytes, error class name): the 1.8 file ``good`` (lossless, codebooks)
+    with a rule of its codebooks broken. R40: two entries for three axes. R29: the first
+    codebook's count one less than its frame holds. R47: its second entry repeating the first
+    (a step of 0), and its last entry beyond the domain's ordered integers. R41: the first
+    stored integer past the end of its axis's codebook (the section repacked as zstd chunks)."""
+    parts = Parts(good)
+    n = parts.index("RESD")
+    entry, payload = parts.entries[n], parts.payloads[n]
+    books = [list(book) for book in entry["codebooks"]]
+    axis = next(a for a, book in enumerate(books) if book[0] > 1)
+    start = sum(book[2] for book in books[:axis])
+    count, planes, length = books[axis]
+    head, tail = payload[:start], payload[start + length :]
+    steps = streams.unpack_integers(payload[start : start + length], count, planes, "codebook")
+    domain = residual.Domain(entry["domain"], entry.get("step"), _scale(entry))
+
+    def with_steps(changed: np.ndarray) -> Callable[[Parts], None]:
+        unsigned = streams.zigzag(changed)
+        wide = streams.planes_needed(unsigned)
+        frame = streams.compress(streams.to_planes(unsigned, wide), 19)
+        table = [list(book) for book in books]
+        table[axis] = [count, wide, len(frame)]
+        return _payload("RESD", head + frame + tail, codebooks=table)
+
+    repeated = steps.copy()
+    repeated[1] = 0
+    beyond = steps.copy()
+    beyond[-1] += residual.domain_range(domain)[1]  # the last entry past the largest
+    integers = _corrections(parts, n)
+    integers[0, 0, axis] = count  # j + e beyond the last position
+    shared = (books, payload[: sum(book[2] for book in books)])
+    packed = residual._packed_section(
+        integers, domain, 19, entry["exponent"], entry["chunk_frames"], 0, books=shared
+    )
+    assert packed is not None  # zstd chunks take every int64
+    params, broken = packed
+    return {
+        "R40-residual-codebooks": (_edit(good, _entry("RESD", codebooks=books[:2])), "FormatError"),
+        "R29-zstd-content-size-codebook": (
+            _edit(
+                good,
+                _entry(
+                    "RESD",
+                    codebooks=[*books[:axis], [count - 1, planes, length], *books[axis + 1 :]],
+                ),
+            ),
+            "FormatError",
+        ),
+        "R47-codebook": (_edit(good, with_steps(repeated)), "FormatError"),
+        "R47-codebook-range": (_edit(good, with_steps(beyond)), "FormatError"),
+        "R41-residual-value-codebook": (
+            _edit(good, _payload("RESD", broken, **{**params, "coder": 0})),
+            "FormatError",
+        ),
+    }
+
+
 def _scale(entry: dict[str, Any]) -> int | None:
     """A RESD entry's places or digits, if its domain has them."""
     return entry.get("places", entry.get("digits"))
@@ -1026,6 +1126,7 @@ def _corrections(parts: Parts, n: int) -> np.ndarray:
         DEFAULT_LIMITS,
         str(entry["id"]),
         adaptive_corrections=bool(parts.flags & residual.ADAPTIVE_CORRECTIONS),
+        codebooks=bool(parts.flags & residual.CODEBOOKS),
     )
     return np.concatenate(
         [
@@ -1144,6 +1245,10 @@ SECOND_VECTORS = {
     "R30-planes-faces-coder": "R30-planes",
     "R46-adaptive-stream-faces-coder": "R46-adaptive-stream",
     "R32-predictor-push": "R32-predictor",
+    "R40-residual-codebooks": "R40-residual",
+    "R29-zstd-content-size-codebook": "R29-zstd-content-size",
+    "R47-codebook-range": "R47-codebook",
+    "R41-residual-value-codebook": "R41-residual-value",
 }
 
 
@@ -1232,6 +1337,7 @@ def write_invalid(
     adaptively_coded: bytes,
     faces_coded: bytes,
     corrected_adaptively: bytes,
+    codebooks: bytes,
 ) -> int:
     """The invalid vectors made from the valid files ``good`` (format 1.0), ``segmented``
     (1.1), ``traversed`` (1.2), ``corrected`` (1.3), ``attached`` (1.5), ``adaptively_coded``
@@ -1245,6 +1351,7 @@ def write_invalid(
         **adaptive_invalid_vectors(adaptively_coded),
         **faces_adaptive_invalid_vectors(faces_coded),
         **adaptive_correction_invalid_vectors(corrected_adaptively),
+        **codebook_invalid_vectors(codebooks),
     }
     for name, (data, error) in vectors.items():
         write_invalid_vector(folder, name, data, error)
@@ -1273,6 +1380,8 @@ INVALID_SOURCES = {
 }
 #: The valid file of 1.7 the invalid vectors of §6.9's coder 1 are made from (itself derived).
 ADAPTIVE_CORRECTIONS_SOURCE = "v1.7-lossless-adaptive"
+#: The valid file of 1.8 the invalid vectors of §6.9's codebooks are made from.
+CODEBOOKS_SOURCE = "v1.8-lossless-codebooks"
 
 
 def write_only(out: Path, names: list[str]) -> int:
@@ -1304,6 +1413,7 @@ def write_only(out: Path, names: list[str]) -> int:
         **adaptive_correction_invalid_vectors(
             (out / f"{ADAPTIVE_CORRECTIONS_SOURCE}.tkc").read_bytes()
         ),
+        **codebook_invalid_vectors((out / f"{CODEBOOKS_SOURCE}.tkc").read_bytes()),
     }
     for name in names:
         if name in invalid:
@@ -1367,6 +1477,7 @@ def main(argv: list[str] | None = None) -> int:
         valid["v1.6-adaptive"][0],
         valid["v1.6-faces-adaptive"][0],
         derived["v1.7-lossless-adaptive"][0],
+        valid[CODEBOOKS_SOURCE][0],
     )
     print(f"wrote {len(valid) + len(derived)} valid and {invalid} invalid vectors to {out}")
     return 0

@@ -25,6 +25,7 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
+import msgpack
 import numpy as np
 
 from ..decomposition.analysis import analyze
@@ -65,12 +66,68 @@ CORRECTION_LEVEL = 9
 
 
 @dataclass(frozen=True)
+class InputCodebooks:
+    """An input's codebooks in one domain (format 1.8), with what every Tucker part's
+    corrections reuse: the input's positions in them, and their midpoints."""
+
+    books: residual.Codebooks
+    positions: tuple[np.ndarray | None, ...]
+    middles: tuple[np.ndarray | None, ...]
+
+    @classmethod
+    def of(cls, ordered: np.ndarray) -> InputCodebooks | None:
+        """Those of the ordered integers ``ordered`` (F', K, 3), or None where no axis has few
+        enough distinct values (:func:`~..format.residual.codebooks_of`)."""
+        books = residual.codebooks_of(ordered)
+        if books is None:
+            return None
+        positions = tuple(
+            None if book is None else np.searchsorted(book, ordered[..., axis])
+            for axis, book in enumerate(books)
+        )
+        middles = tuple(None if book is None else residual.midpoints(book) for book in books)
+        return cls(books, positions, middles)
+
+
+class InputMemo:
+    """What the corrections of the last input a goal corrected need per domain, whatever the
+    Tucker part: its ordered integers and its codebooks (format 1.8). The search corrects the
+    same frames for every part it tries."""
+
+    def __init__(self) -> None:
+        self._original: np.ndarray | None = None  # held, so that its identity stays its own
+        self._ordered: dict[Domain, np.ndarray] = {}
+        self._books: dict[Domain, InputCodebooks | None] = {}
+
+    def _for(self, original: np.ndarray) -> None:
+        if self._original is not original:
+            self._original, self._ordered, self._books = original, {}, {}
+
+    def ordered(self, original: np.ndarray, domain: Domain) -> np.ndarray:
+        """The ordered integers of ``original`` in the lossless ``domain``."""
+        self._for(original)
+        if domain not in self._ordered:
+            self._ordered[domain] = residual.ordered_in(original, domain)
+        return self._ordered[domain]
+
+    def codebooks(self, original: np.ndarray, domain: Domain) -> InputCodebooks | None:
+        """The codebooks of ``original`` in ``domain``, or None where it has none."""
+        self._for(original)
+        if domain not in self._books:
+            self._books[domain] = InputCodebooks.of(self.ordered(original, domain))
+        return self._books[domain]
+
+
+@dataclass(frozen=True)
 class Goal:
     """What the corrections must achieve: a bound D on every vertex (one grid domain), or the
-    input's bits (every lossless domain its values fit, the smallest file chosen)."""
+    input's bits (every lossless domain its values fit, the smallest file chosen, with
+    ``codebooks`` (format 1.8) where they make it smaller)."""
 
     domains: tuple[Domain, ...]
     bound: float | None = None  # D, in the sequence's units
+    codebooks: bool = False
+    memo: InputMemo = field(default_factory=InputMemo, compare=False, repr=False)
 
     @property
     def lossless(self) -> bool:
@@ -167,8 +224,27 @@ def integers_for(exact: np.ndarray, original: np.ndarray, goal: Goal, domain: Do
     return integers
 
 
-def corrected_positions(exact: np.ndarray, integers: np.ndarray, domain: Domain) -> np.ndarray:
-    """What a decoder returns for these corrections (§6.9's arithmetic)."""
+@dataclass
+class Packed:
+    """Corrections in the format's terms: the domain, the RESD section, the integers it stores
+    and its codebooks (format 1.8; ``None`` without)."""
+
+    domain: Domain
+    section: tuple[dict[str, Any], bytes]
+    integers: np.ndarray
+    books: residual.Codebooks | None = None
+
+
+def corrected_positions(
+    exact: np.ndarray,
+    integers: np.ndarray,
+    domain: Domain,
+    books: residual.Codebooks | None = None,
+) -> np.ndarray:
+    """What a decoder returns for these corrections (§6.9's arithmetic), through the codebooks
+    if any."""
+    if books is not None:
+        integers = residual.from_codebooks(exact, integers, domain, books, "corrections")
     return residual.correct(exact, integers, domain, "corrections")
 
 
@@ -194,8 +270,8 @@ def correct(
         if distance <= goal.bound - tolerance(plain_positions):
             return Corrected(quantized, None, None, tucker_bytes)
     # lossless: the smallest of the domains the values fit
-    domain, section, _ = smallest_section(plain_positions, original, goal, goal.domains, level)
-    return Corrected(quantized, domain, section, tucker_bytes)
+    packed = smallest_section(plain_positions, original, goal, goal.domains, level)
+    return Corrected(quantized, packed.domain, packed.section, tucker_bytes)
 
 
 def smallest_section(
@@ -208,29 +284,56 @@ def smallest_section(
     exponent: int = 0,
     predict: int | None = None,
     adaptive_coding: bool = False,
-) -> tuple[Domain, tuple[dict[str, Any], bytes], np.ndarray]:
+) -> Packed:
     """Of ``domains``, the one whose corrections from ``exact`` to ``original`` pack smallest
-    at zstd ``level`` (the first of equal sizes): the domain, its RESD section (§6.9) and its
-    integers. The one place the corrections are put in the format's terms, for sizing a part
+    at zstd ``level`` (the first of equal sizes), with the goal's codebooks (format 1.8) where
+    they make the section smaller: the domain, its RESD section (§6.9), its integers and its
+    codebooks. The one place the corrections are put in the format's terms, for sizing a part
     and for the file, whole or in segments. With ``adaptive_coding`` (the file's final
-    sections), the domain chosen is packed again with the adaptive chunks of format 1.7 tried
+    sections), the section chosen is packed again with the adaptive chunks of format 1.7 tried
     too (:func:`~..format.residual.encode_section`)."""
-    best: tuple[Domain, tuple[dict[str, Any], bytes], np.ndarray] | None = None
+    best: Packed | None = None
     for domain in domains:
-        integers = integers_for(exact, original, goal, domain)
+        if goal.lossless:  # the input's side of e is the same for every part
+            integers = goal.memo.ordered(original, domain) - residual.ordered_in(exact, domain)
+        else:
+            integers = integers_for(exact, original, goal, domain)
         section = residual.encode_section(
             integers, domain, level, exponent=exponent, predict=predict
         )
-        if best is None or len(section[1]) < len(best[1][1]):
-            best = (domain, section, integers)
+        if best is None or len(section[1]) < len(best.section[1]):
+            best = Packed(domain, section, integers)
     assert best is not None
-    if adaptive_coding:  # the chosen zstd section, or its adaptive twin (not packed again)
-        domain, section, integers = best
-        section = residual.with_adaptive_chunks(
-            section, integers, domain, exponent=exponent, predict=predict
+    # codebooks hold the same positions in every domain: they are tried in the one whose
+    # integers packed smallest, which also stores them in the fewest bits
+    found = goal.memo.codebooks(original, best.domain) if goal.codebooks else None
+    if found is not None and goal.lossless:
+        domain = best.domain
+        integers = residual.codebook_integers(
+            exact, best.integers, domain, found.books, found.positions, found.middles
         )
-        best = (domain, section, integers)
+        section = residual.encode_section(
+            integers, domain, level, exponent=exponent, predict=predict, codebooks=found.books
+        )
+        if _size(section) < _size(best.section):
+            best = Packed(domain, section, integers, found.books)
+    if adaptive_coding:  # the chosen zstd section, or its adaptive twin (not packed again)
+        best.section = residual.with_adaptive_chunks(
+            best.section, best.integers, best.domain, exponent=exponent, predict=predict
+        )
     return best
+
+
+def described(domain: Domain, section: tuple[dict[str, Any], bytes]) -> str:
+    """The domain as a report names it, and the axes with a codebook (format 1.8) if any."""
+    books = section[0].get("codebooks", [])
+    axes = [name for name, book in zip("xyz", books, strict=False) if book[0]]
+    return domain.describe() + (f" with codebooks on {', '.join(axes)}" if axes else "")
+
+
+def _size(section: tuple[dict[str, Any], bytes]) -> int:
+    """A section's bytes in the file: its payload and its parameters."""
+    return len(section[1]) + len(msgpack.packb(section[0]))
 
 
 def tolerance(reference: np.ndarray) -> float:
@@ -370,7 +473,7 @@ def final_section(
         return None
     exact, exponent = exact_positions(corrected.quantized, u2)
     predict = int(corrected.section[0]["predict"])
-    domain, section, integers = smallest_section(
+    packed = smallest_section(
         exact,
         original,
         goal,
@@ -380,7 +483,8 @@ def final_section(
         predict=predict,
         adaptive_coding=adaptive_coding,
     )
-    return section, integers, corrected_positions(exact, integers, domain)
+    decoded = corrected_positions(exact, packed.integers, packed.domain, packed.books)
+    return packed.section, packed.integers, decoded
 
 
 def check_written(
@@ -403,6 +507,7 @@ def check_written(
         DEFAULT_LIMITS,
         where,
         adaptive_corrections=container.adaptive_corrections,
+        codebooks=container.codebooks,
     )
     for chunk in range(len(layout.planes)):
         start, stop = layout.chunk_range(chunk)
@@ -434,7 +539,7 @@ def goal_of_blocks(options: EncodeOptions, blocks: Iterable[np.ndarray]) -> Goal
         largest = max(largest, float(np.abs(block).max()))
     if options.lossless:
         assert domains is not None
-        return Goal(domains)
+        return Goal(domains, codebooks=options.features.codebooks)
     bound = options.max_error_length(float(np.linalg.norm(high - low)))
     assert bound is not None
     return Goal((Domain(GRID, step=_grid_step(bound, largest)),), bound)
@@ -490,7 +595,7 @@ def correct_segments(
             u1, factors.core, factors.u3, factors.centroids, work.models[number].u2
         )
         original = work.source.read(part.segment.start, part.segment.stop)
-        domain, section, integers = smallest_section(
+        packed = smallest_section(
             exact,
             original,
             goal,
@@ -499,12 +604,12 @@ def correct_segments(
             exponent=exponent,
             adaptive_coding=adaptive_coding,
         )
-        decoded = corrected_positions(exact, integers, domain)
+        decoded = corrected_positions(exact, packed.integers, packed.domain, packed.books)
         measure(decoded, original, goal)
         measured.add(original, decoded, frames=range(part.segment.start, part.segment.stop))
-        out.sections.append(section)
-        out.integers.append(integers)
-        out.domains.append(domain)
+        out.sections.append(packed.section)
+        out.integers.append(packed.integers)
+        out.domains.append(packed.domain)
     work.passes += 1
     out.worst = measured.worst
     out.error2 = float(np.sum(measured.per_frame_squared()))
@@ -592,7 +697,7 @@ class Corrector:
             decoded = plain_positions(chosen.quantized, u2)
         worst = measure(decoded, original, goal)
         error2 = float(np.square(decoded - original).sum())
-        domain = chosen.domain.describe() if chosen.domain and sections else None
+        domain = described(chosen.domain, sections[0]) if chosen.domain and sections else None
         return CorrectedFile(
             chosen.quantized, sections, error2, worst, goal.bound, trials, domain
         ), written
@@ -619,7 +724,14 @@ class Corrector:
             (f"{residual.SECTION_STEM}.{number}", integers)
             for number, integers in enumerate(fixed.integers)
         ]
-        domains = ", ".join(sorted({domain.describe() for domain in fixed.domains}))
+        domains = ", ".join(
+            sorted(
+                {
+                    described(d, section)
+                    for d, section in zip(fixed.domains, fixed.sections, strict=True)
+                }
+            )
+        )
         return CorrectedFile(
             quantized, fixed.sections, fixed.error2, fixed.worst, goal.bound, trials, domains
         ), written

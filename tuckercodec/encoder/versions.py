@@ -3,7 +3,8 @@
 Each minor version of format 1 adds features (spec/FORMAT.md §10): 1.1 segments, 1.2 the coding
 tools (faces-traverse, predictors 2 and 3), 1.3 corrections, 1.4 the time and scene header keys,
 1.5 attributes, face sets, fields and the faces' given order, 1.6 adaptive coding and predictor
-2's pushes, 1.7 the corrections' chunks through the adaptive coder. The encoder uses each
+2's pushes, 1.7 the corrections' chunks through the adaptive coder, 1.8 the corrections'
+codebooks. The encoder uses each
 where it makes the file smaller, and the file says the minor version of the newest one it
 uses. :class:`Features` holds an encode to the features of one
 version and before, so that decoders of that version read every file it writes; what cannot be
@@ -19,12 +20,12 @@ from ..errors import FormatVersionError
 from ..format.adaptive import ADAPTIVE_MINOR
 from ..format.attachments import ATTACHMENTS_MINOR
 from ..format.container import FORMAT_MAJOR, SCENE_MINOR
-from ..format.residual import ADAPTIVE_CORRECTIONS_MINOR, CORRECTIONS_MINOR
+from ..format.residual import ADAPTIVE_CORRECTIONS_MINOR, CODEBOOKS_MINOR, CORRECTIONS_MINOR
 from ..format.sections import CODING_TOOLS_MINOR
 from ..format.segments import SEGMENTED_MINOR
 
 #: The newest minor version this encoder writes, and so its default.
-NEWEST_MINOR = ADAPTIVE_CORRECTIONS_MINOR
+NEWEST_MINOR = CODEBOOKS_MINOR
 #: Every version ``format_version`` may name, oldest first.
 VERSIONS = tuple(f"{FORMAT_MAJOR}.{minor}" for minor in range(NEWEST_MINOR + 1))
 
@@ -98,6 +99,11 @@ class Features:
     def adaptive_corrections(self) -> bool:
         """RESD chunks as adaptive streams (``coder`` 1, 1.7, §6.9)."""
         return self.minor >= ADAPTIVE_CORRECTIONS_MINOR
+
+    @property
+    def codebooks(self) -> bool:
+        """RESD codebooks: lossless corrections as positions in each axis's values (1.8, §6.9)."""
+        return self.minor >= CODEBOOKS_MINOR
 
     def require(self, minor: int, feature: str, what: str, instead: str) -> None:
         """Refuse ``feature`` (what the caller asked for or gave) if it needs format

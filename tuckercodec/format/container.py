@@ -36,7 +36,14 @@ from ..errors import (
 from .adaptive import ADAPTIVE, ADAPTIVE_MINOR, uses_adaptive
 from .attachments import ATTACHMENTS_MINOR, attachment_codec
 from .limits import DEFAULT_LIMITS, Limits
-from .residual import ADAPTIVE_CORRECTIONS, ADAPTIVE_CORRECTIONS_MINOR, CORRECTIONS, RESIDUAL
+from .residual import (
+    ADAPTIVE_CORRECTIONS,
+    ADAPTIVE_CORRECTIONS_MINOR,
+    CODEBOOKS,
+    CODEBOOKS_MINOR,
+    CORRECTIONS,
+    RESIDUAL,
+)
 from .sections import CODING_TOOLS, Section, read_section_table, with_coding_tools
 from .segments import SEGMENTED
 
@@ -58,8 +65,11 @@ SCENE_MINOR = 4
 #: Bits 0-15 of the preamble flags are critical: a decoder rejects any it does not know.
 CRITICAL_FLAGS_MASK = 0x0000FFFF
 #: Critical flags this decoder knows: bit 0, a segmented file (format 1.1, §6.7), and bit 1,
-#: the coding tools of format 1.2, and bit 2, corrections (format 1.3, §6.9).
-KNOWN_CRITICAL_FLAGS = SEGMENTED | CODING_TOOLS | CORRECTIONS | ADAPTIVE | ADAPTIVE_CORRECTIONS
+#: the coding tools of format 1.2, bit 2, corrections (format 1.3, §6.9), bit 3, adaptive
+#: coding (1.6, §6.14), bit 4, adaptive corrections (1.7) and bit 5, codebooks (1.8, §6.9).
+KNOWN_CRITICAL_FLAGS = (
+    SEGMENTED | CODING_TOOLS | CORRECTIONS | ADAPTIVE | ADAPTIVE_CORRECTIONS | CODEBOOKS
+)
 
 
 @dataclass(frozen=True)
@@ -137,6 +147,11 @@ class Container:
         §6.9)."""
         return bool(self.flags & ADAPTIVE_CORRECTIONS)
 
+    @property
+    def codebooks(self) -> bool:
+        """Whether the preamble sets flag bit 5: corrections with codebooks (format 1.8, §6.9)."""
+        return bool(self.flags & CODEBOOKS)
+
     def payload(self, data: bytes | memoryview | RangeReader, entry: Section) -> memoryview:
         """The bytes of a section, after checking its CRC-32 (§5 step 9); ``data`` is the whole
         file, or a reader of the file's byte ranges (:class:`.disk.FileRanges`) that reads just
@@ -187,7 +202,7 @@ def pack_container(
             section stores its integers with ``coder`` 1.
 
     Flag bit 4 and minor version 7 are set when a RESD section stores its chunks with ``coder``
-    1 (§6.9).
+    1 (§6.9), and flag bit 5 and minor version 8 when one has ``codebooks``.
     """
     flags, minor = with_coding_tools([entry for entry, _ in sections], flags, minor, coding_tools)
     if any(key in header for key in SCENE_KEYS):
@@ -200,6 +215,8 @@ def pack_container(
         flags, minor = flags | ADAPTIVE, max(minor, ADAPTIVE_MINOR)
     if any(entry.get("codec") == RESIDUAL and entry.get("coder") == 1 for entry, _ in sections):
         flags, minor = flags | ADAPTIVE_CORRECTIONS, max(minor, ADAPTIVE_CORRECTIONS_MINOR)
+    if any(entry.get("codec") == RESIDUAL and "codebooks" in entry for entry, _ in sections):
+        flags, minor = flags | CODEBOOKS, max(minor, CODEBOOKS_MINOR)
     table = []
     offset = 0
     for entry, payload in sections:

@@ -9,6 +9,10 @@ The integers are stored per chunk of frames (:class:`ResidualLayout`), each chun
 of 64-bit zigzagged integers in byte planes (§6.1 on 64 bits), optionally as differences from
 the frame before within the chunk; or (format 1.7, flag bit 4) each chunk one adaptive stream
 of §6.14 (:mod:`.adaptive`), a column per frame and axis, the vertices in ascending order.
+
+An axis whose values are few (format 1.8, flag bit 5) may have a *codebook*: the sorted ordered
+integers its values take. Its corrections are then differences of positions in that list
+(:func:`from_codebooks`), small where the values repeat across frames and vertices.
 """
 
 from __future__ import annotations
@@ -24,7 +28,7 @@ import numpy as np
 from ..errors import FormatError, InternalError
 from ..system import native
 from . import adaptive, streams
-from .limits import Limits, check_limit
+from .limits import DEFAULT_LIMITS, Limits, check_limit
 
 #: Preamble flag bit 2 (critical, format 1.3): the file has corrections (§6.9).
 CORRECTIONS = 0x0004
@@ -38,6 +42,12 @@ ADAPTIVE_CORRECTIONS_MINOR = 7
 #: The adaptive coding is kept only where it makes the section smaller by more than this share:
 #: its chunks decode about four times slower than zstd's, so a percent or two is not worth it.
 ADAPTIVE_GAIN = 0.03
+#: Preamble flag bit 5 (critical, format 1.8): a RESD section may have codebooks (§6.9).
+CODEBOOKS = 0x0020
+#: The minor version of a file that sets :data:`CODEBOOKS`.
+CODEBOOKS_MINOR = 8
+#: An axis gets a codebook tried when its distinct values are at most this share of its values.
+CODEBOOK_SHARE = 0.5
 #: The codec id of RESD sections.
 RESIDUAL = "residual"
 SECTION_STEM = "RESD"
@@ -329,6 +339,9 @@ class ResidualLayout:
     scale: int | None = None  # decimal-places' places, decimal-digits' digits
     exponent: int = 0  # e of §8.1: S x 2**e
     coder: int = adaptive.CODER_ZSTD  # 1: each chunk is an adaptive stream (format 1.7)
+    #: per axis (format 1.8) the codebook's (count, planes, start, stop) in the payload, count
+    #: 0 for none; empty when the section has none
+    codebooks: tuple[tuple[int, int, int, int], ...] = ()
 
     @property
     def kind(self) -> Domain:
@@ -360,24 +373,22 @@ def read_layout(
     where: str,
     *,
     adaptive_corrections: bool = False,
+    codebooks: bool = False,
 ) -> ResidualLayout:
     """§5 step 18: the parameters in order (R40; ``coder`` R46, read only in a file with flag
-    bit 4, ``adaptive_corrections``), then each chunk's size against the decoder's
-    ``max_section_bytes`` (R21). The CRC and the chunks themselves are checked later."""
+    bit 4, ``adaptive_corrections``; ``codebooks`` only with flag bit 5, ``codebooks``), then
+    each codebook's and chunk's size against the decoder's ``max_section_bytes`` (R21). The
+    CRC, the codebooks and the chunks themselves are checked later."""
     domain = params.get("domain")
     if domain not in DOMAINS:
-        raise FormatError(
-            f"domain must be one of {', '.join(DOMAINS)}, got {domain!r}",
-            rule="R40-residual",
-            field=f"{where}.domain",
+        _parameter_error(
+            f"{where}.domain", f"domain must be one of {', '.join(DOMAINS)}, got {domain!r}"
         )
     step = params.get("step")
     if domain == GRID:
         if not (isinstance(step, float) and math.isfinite(step) and step > 0):
-            raise FormatError(
-                f"a grid's step must be a finite float > 0, got {step!r}",
-                rule="R40-residual",
-                field=f"{where}.step",
+            _parameter_error(
+                f"{where}.step", f"a grid's step must be a finite float > 0, got {step!r}"
             )
     else:
         step = None
@@ -386,10 +397,8 @@ def read_layout(
         key, least, most = SCALES[domain]
         scale = params.get(key)
         if not (isinstance(scale, int) and not isinstance(scale, bool) and least <= scale <= most):
-            raise FormatError(
-                f"{key} must be an int from {least} to {most}, got {scale!r}",
-                rule="R40-residual",
-                field=f"{where}.{key}",
+            _parameter_error(
+                f"{where}.{key}", f"{key} must be an int from {least} to {most}, got {scale!r}"
             )
     exponent = params.get("exponent")
     if not (
@@ -397,42 +406,41 @@ def read_layout(
         and not isinstance(exponent, bool)
         and EXPONENTS[0] <= exponent <= EXPONENTS[1]
     ):
-        raise FormatError(
+        _parameter_error(
+            f"{where}.exponent",
             f"exponent must be an int from {EXPONENTS[0]} to {EXPONENTS[1]}, got {exponent!r}",
-            rule="R40-residual",
-            field=f"{where}.exponent",
         )
     predict = params.get("predict")
     if not (isinstance(predict, int) and not isinstance(predict, bool) and predict in (0, 1)):
-        raise FormatError(
-            f"predict must be 0 or 1, got {predict!r}",
-            rule="R40-residual",
-            field=f"{where}.predict",
-        )
+        _parameter_error(f"{where}.predict", f"predict must be 0 or 1, got {predict!r}")
     coder = adaptive.CODER_ZSTD  # before 1.7 (without flag bit 4) an unknown parameter: ignored
     if adaptive_corrections:
         coder = adaptive.checked_coder(params.get("coder", adaptive.CODER_ZSTD), where, True)
+    books = _read_codebooks(params, domain, frames * vertices, where) if codebooks else []
     chunk_frames = params.get("chunk_frames")
     if not (isinstance(chunk_frames, int) and not isinstance(chunk_frames, bool)):
         chunk_frames = 0
     if chunk_frames < 1:
-        raise FormatError(
+        _parameter_error(
+            f"{where}.chunk_frames",
             f"chunk_frames must be an int >= 1, got {params.get('chunk_frames')!r}",
-            rule="R40-residual",
-            field=f"{where}.chunk_frames",
         )
     chunks = params.get("chunks")
     count = -(-frames // chunk_frames)
     if not (isinstance(chunks, list) and len(chunks) == count):
         got = f"{len(chunks)} entries" if isinstance(chunks, list) else repr(chunks)
-        raise FormatError(
+        _parameter_error(
+            f"{where}.chunks",
             f"chunks must be an array of {count} [planes, length] entries "
             f"({frames} frames, {chunk_frames} a chunk), got {got}",
-            rule="R40-residual",
-            field=f"{where}.chunks",
         )
     planes: list[int] = []
-    offsets = [0]
+    placed: list[tuple[int, int, int, int]] = []
+    start = 0
+    for count, book_planes, length in books:
+        placed.append((count, book_planes, start, start + length))
+        start += length
+    offsets = [start]
     for number, entry in enumerate(chunks):
         if not (
             isinstance(entry, list)
@@ -441,18 +449,17 @@ def read_layout(
             and 1 <= entry[0] <= MAX_PLANES
             and entry[1] >= 0
         ):
-            raise FormatError(
+            _parameter_error(
+                f"{where}.chunks[{number}]",
                 f"each chunk is [planes 1..{MAX_PLANES}, length >= 0], got {entry!r}",
-                rule="R40-residual",
-                field=f"{where}.chunks[{number}]",
             )
         planes.append(entry[0])
         offsets.append(offsets[-1] + entry[1])
     if offsets[-1] != payload_length:
-        raise FormatError(
-            f"the chunks' lengths add up to {offsets[-1]} bytes, the payload has {payload_length}",
-            rule="R40-residual",
-            field=f"{where}.chunks",
+        what = "the codebooks' and the chunks'" if placed else "the chunks'"
+        _parameter_error(
+            f"{where}.chunks",
+            f"{what} lengths add up to {offsets[-1]} bytes, the payload has {payload_length}",
         )
     layout = ResidualLayout(
         domain,
@@ -465,14 +472,60 @@ def read_layout(
         scale,
         exponent,
         coder,
+        tuple(placed),
     )
-    _check_chunk_sizes(layout, vertices, limits, where)
+    _check_sizes(layout, vertices, limits, where)
     return layout
 
 
-def _check_chunk_sizes(layout: ResidualLayout, vertices: int, limits: Limits, where: str) -> None:
-    """§5 step 18's limits, chunk by chunk: its decompressed size against ``max_section_bytes``,
-    then, for a chunk of more than one frame, its integers against ``max_chunk_values`` (R21)."""
+def _read_codebooks(
+    params: Mapping[str, Any], domain: str, values: int, where: str
+) -> list[tuple[int, int, int]]:
+    """``codebooks`` (format 1.8, R40): absent (none), or three ``[count, planes, length]``,
+    ``[0, 0, 0]`` for an axis without one, a count of at most ``values`` (K x F') and none in
+    the grid domain."""
+    books = params.get("codebooks")
+    if books is None and "codebooks" not in params:
+        return []
+    if not (isinstance(books, list) and len(books) == 3):
+        _parameter_error(
+            f"{where}.codebooks",
+            f"codebooks must be an array of 3 [count, planes, length] entries, got {books!r}",
+        )
+    found: list[tuple[int, int, int]] = []
+    for axis, entry in enumerate(books):
+        field = f"{where}.codebooks[{axis}]"
+        if not (isinstance(entry, list) and len(entry) == 3 and all(map(_is_int, entry))):
+            _parameter_error(
+                field, f"each codebook is [count, planes, length] of ints, got {entry!r}"
+            )
+        count, planes, length = entry
+        if entry != [0, 0, 0] and not (
+            1 <= count <= values and 1 <= planes <= MAX_PLANES and length >= 0
+        ):
+            _parameter_error(
+                field,
+                f"a codebook is [0, 0, 0] or [count 1..{values}, planes 1..{MAX_PLANES}, "
+                f"length >= 0], got {entry!r}",
+            )
+        if count and domain == GRID:
+            _parameter_error(field, "the grid domain has no codebooks")
+        found.append((count, planes, length))
+    return found
+
+
+def _check_sizes(layout: ResidualLayout, vertices: int, limits: Limits, where: str) -> None:
+    """§5 step 18's limits (R21): each codebook's decompressed size against
+    ``max_section_bytes`` and its entries against ``max_chunk_values`` (format 1.8), then
+    chunk by chunk, its decompressed size against ``max_section_bytes`` and, for a chunk of
+    more than one frame, its integers against ``max_chunk_values``."""
+    for axis, (count, book_planes, _, _) in enumerate(layout.codebooks):
+        field = f"{where}.codebooks[{axis}]"
+        what = f"axis {axis}'s codebook of {count} integers of {book_planes} bytes"
+        check_limit(count * book_planes, limits, "max_section_bytes", what=what, field=field)
+        # every frame needs the whole codebook: held, like a chunk, to a size of its own
+        what = f"axis {axis}'s codebook of {count} entries"
+        check_limit(count, limits, "max_chunk_values", what=what, field=field)
     for number, chunk_planes in enumerate(layout.planes):
         start, stop = layout.chunk_range(number)
         count = (stop - start) * vertices * 3
@@ -539,6 +592,154 @@ def _adaptive_chunk(
     if predict == 1:
         np.cumsum(values, axis=0, out=values)  # int64 addition wraps, as §6.9 wraps
     return values
+
+
+# -- codebooks (format 1.8) ---------------------------------------------------------------------
+
+#: Each axis's codebook (sorted int64 ordered integers), or None for an axis without one.
+Codebooks = tuple[np.ndarray | None, ...]
+
+
+def domain_range(domain: Domain) -> tuple[int, int]:
+    """The ordered integers a lossless domain's values have (R41, R47): the least and the
+    largest."""
+    if domain.name == FLOAT32:
+        return FINITE32
+    if domain.name == FLOAT64:
+        return FINITE64
+    if domain.name == PLACES:
+        return -LARGEST_PLACES_INTEGER, LARGEST_PLACES_INTEGER
+    assert domain.scale is not None
+    largest = digits_largest(domain.scale)
+    return -1 - largest, largest
+
+
+def decode_codebooks(payload: bytes | memoryview, layout: ResidualLayout, where: str) -> Codebooks:
+    """Each axis's codebook of a section (format 1.8), in axis order: its zstd frame (R29),
+    then its entries, strictly increasing and within the domain's ordered integers (R47)."""
+    books: list[np.ndarray | None] = []
+    for axis, (count, planes, start, stop) in enumerate(layout.codebooks):
+        if count == 0:  # no codebook (the only kind a grid section may declare)
+            books.append(None)
+            continue
+        low, high = domain_range(layout.kind)
+        field = f"{where}.codebooks[{axis}]"
+        steps = streams.unpack_integers(payload[start:stop], count, planes, field)
+        entries = np.cumsum(steps)  # int64 addition wraps, as §6.9 wraps
+        if not bool(np.all(entries[1:] > entries[:-1])):
+            raise FormatError(
+                "a codebook's entries must increase", rule="R47-codebook", field=field
+            )
+        if int(entries[0]) < low or int(entries[-1]) > high:
+            raise FormatError(
+                f"a codebook's entries must be {layout.domain}'s ordered integers, "
+                f"{low}..{high}; it holds {int(entries[0])}..{int(entries[-1])}",
+                rule="R47-codebook",
+                field=field,
+            )
+        books.append(entries)
+    return tuple(books)
+
+
+def midpoints(book: np.ndarray) -> np.ndarray:
+    """``floor((C[m] + C[m+1]) / 2)`` for each pair of neighbours of a codebook, exactly: b is
+    nearer ``C[m+1]`` than ``C[m]`` (§6.9, a tie keeping ``C[m]``) exactly when ``2b > C[m] +
+    C[m+1]``, that is when b is above this midpoint."""
+    # the gap is in 1 .. 2**64 - 1: exact as uint64 (subtraction mod 2**64), its half fits int64
+    gaps = book[1:].astype(np.uint64) - book[:-1].astype(np.uint64)
+    return book[:-1] + (gaps // np.uint64(2)).astype(np.int64)
+
+
+def nearest_entries(
+    book: np.ndarray, base: np.ndarray, middles: np.ndarray | None = None
+) -> np.ndarray:
+    """j of §6.9: for each ordered integer b, the index of the entry of ``book`` nearest it (the
+    lower on a tie; the first entry below them all, the last above): how many midpoints lie
+    below b (``middles``: :func:`midpoints` of ``book``, computed if not given)."""
+    if middles is None:
+        middles = midpoints(book)
+    return np.searchsorted(middles, base, side="left")
+
+
+def codebook_base(exact: np.ndarray, domain: Domain) -> tuple[np.ndarray, np.ndarray | None]:
+    """b of §6.9 for each value of ``exact`` (P) and, outside binary32, which P are finite (the
+    others' b is that of 0: their position is not finite, whatever e is)."""
+    if domain.name == FLOAT32:
+        return ordered_in(exact, domain), None
+    finite = np.isfinite(exact)
+    return ordered_in(np.where(finite, exact, 0.0), domain), finite
+
+
+def from_codebooks(
+    exact: np.ndarray,
+    stored: np.ndarray,
+    domain: Domain,
+    books: Codebooks,
+    where: str,
+    middles: tuple[np.ndarray | None, ...] = (),
+) -> np.ndarray:
+    """The corrections e that ``stored`` (F', K, 3) means on each axis: on one with a codebook
+    C, ``C[j + s] - b`` (R41 for j + s outside C), so that :func:`correct` gives ``C[j + s]``'s
+    value; elsewhere ``stored`` itself. ``middles``: each codebook's :func:`midpoints`, if
+    kept."""
+    if not any(book is not None for book in books):
+        return stored
+    out = np.array(stored, dtype=np.int64)
+    core = native.core()
+    for axis, book in enumerate(books):
+        if book is None:
+            continue
+        if core is not None:  # the same integers, each search started from the frame before
+            middle = middles[axis] if middles else None
+            out[..., axis] = _native_codebook_corrections(
+                core, exact[..., axis], out[..., axis], domain, book, middle, axis, where
+            )
+            continue
+        base, finite = codebook_base(exact[..., axis], domain)
+        steps = out[..., axis]
+        nearest = nearest_entries(book, base, middles[axis] if middles else None)
+        outside = (steps < -nearest) | (steps > (len(book) - 1) - nearest)  # no overflow
+        if finite is not None:
+            outside &= finite
+        if outside.any():
+            _value_error(
+                where, f"a correction moves beyond axis {axis}'s codebook of {len(book)} entries"
+            )
+        positions = nearest + steps
+        if finite is not None:
+            positions[~finite] = 0
+        with np.errstate(over="ignore"):
+            corrections = book[positions] - base  # int64: wraps as b + e does
+        if finite is not None:
+            corrections[~finite] = 0  # not finite: R36, whatever e says
+        out[..., axis] = corrections
+    return out
+
+
+def _native_codebook_corrections(
+    core: Any,
+    exact: np.ndarray,
+    stored: np.ndarray,
+    domain: Domain,
+    book: np.ndarray,
+    middles: np.ndarray | None,
+    axis: int,
+    where: str,
+) -> np.ndarray:
+    """:func:`from_codebooks` for one axis (``exact`` and ``stored`` of shape (F', K)) in the
+    compiled core: the same integers, and the same R41."""
+    flat = np.ascontiguousarray(exact, dtype=np.float64).reshape(-1)
+    steps = np.ascontiguousarray(stored, dtype=np.int64).reshape(-1)
+    middles = midpoints(book) if middles is None else middles
+    try:
+        out: np.ndarray = core.residual_codebook_corrections(
+            flat, steps, domain.name, int(domain.scale or 0), book, middles, exact.shape[-1]
+        )
+    except core.Broken:
+        _value_error(
+            where, f"a correction moves beyond axis {axis}'s codebook of {len(book)} entries"
+        )
+    return out.reshape(exact.shape)
 
 
 def correct(exact: np.ndarray, residual: np.ndarray, domain: Domain, where: str) -> np.ndarray:
@@ -649,6 +850,10 @@ def _decimal(
     return values if every else np.where(finite, values, np.nan)
 
 
+def _parameter_error(field: str, problem: str) -> NoReturn:
+    raise FormatError(problem, rule="R40-residual", field=field)
+
+
 def _value_error(where: str, problem: str) -> NoReturn:
     raise FormatError(problem, rule="R41-residual-value", field=where)
 
@@ -688,6 +893,71 @@ def residuals_of(exact: np.ndarray, original: np.ndarray, domain: Domain) -> np.
     return ordered_in(original, domain) - ordered_in(exact, domain)  # int64: wraps as e does
 
 
+def codebooks_of(ordered: np.ndarray, share: float = CODEBOOK_SHARE) -> Codebooks | None:
+    """Per axis, the sorted distinct ordered integers of ``ordered`` (F', K, 3) where they are
+    at most ``share`` of its values and within the default ``max_chunk_values`` (a decoder
+    holds a codebook whole, §7), None elsewhere; None when no axis has few enough."""
+    values = ordered.shape[0] * ordered.shape[1]
+    most = min(share * values, DEFAULT_LIMITS.max_chunk_values)
+    books: list[np.ndarray | None] = []
+    for axis in range(3):
+        distinct = np.unique(ordered[..., axis])
+        books.append(distinct if len(distinct) <= most else None)
+    return tuple(books) if any(book is not None for book in books) else None
+
+
+def codebook_integers(
+    exact: np.ndarray,
+    plain: np.ndarray,
+    domain: Domain,
+    books: Codebooks,
+    positions: tuple[np.ndarray | None, ...],
+    middles: tuple[np.ndarray | None, ...] = (),
+) -> np.ndarray:
+    """The integers a section with ``books`` stores to take ``exact`` to the input: on an axis
+    with a codebook, the input's ``positions`` in it less the entry nearest each value of
+    ``exact``; elsewhere the domain's corrections ``plain`` (:func:`residuals_of`).
+    ``middles``: each codebook's :func:`midpoints`, if kept."""
+    integers = np.array(plain, dtype=np.int64)
+    core = native.core()
+    for axis, book in enumerate(books):
+        at = positions[axis]
+        if book is not None and at is not None:
+            base, _ = codebook_base(exact[..., axis], domain)
+            middle = middles[axis] if middles else None
+            if core is not None:  # the same j, each search started from the frame before
+                middle = midpoints(book) if middle is None else middle
+                flat = np.ascontiguousarray(base, dtype=np.int64).reshape(-1)
+                nearest = core.residual_nearest_entries(middle, flat, base.shape[-1])
+                nearest = nearest.reshape(base.shape)
+            else:
+                nearest = nearest_entries(book, base, middle)
+            integers[..., axis] = at - nearest
+    return integers
+
+
+def _packed_codebooks(books: Codebooks | None, level: int) -> tuple[list[list[int]], bytes]:
+    """The ``codebooks`` parameter and the payload's head for ``books``: each axis's entries as
+    differences from the one before (the first as itself), zigzagged, in byte planes, one zstd
+    frame at ``level``."""
+    if books is None:
+        return [], b""
+    entries: list[list[int]] = []
+    parts: list[bytes] = []
+    for book in books:
+        if book is None:
+            entries.append([0, 0, 0])
+            continue
+        with np.errstate(over="ignore"):
+            steps = np.diff(book, prepend=np.int64(0))  # wraps as the decoder's sums do
+        unsigned = streams.zigzag(steps)
+        planes = streams.planes_needed(unsigned)
+        data = streams.compress(streams.to_planes(unsigned, planes), level)
+        entries.append([len(book), planes, len(data)])
+        parts.append(data)
+    return entries, b"".join(parts)
+
+
 def encode_section(
     residual: np.ndarray,
     domain: Domain,
@@ -698,6 +968,7 @@ def encode_section(
     predict: int | None = None,
     adaptive_coding: bool = False,
     adaptive_gain: float = ADAPTIVE_GAIN,
+    codebooks: Codebooks | None = None,
 ) -> tuple[dict[str, Any], bytes]:
     """A RESD section's parameters and payload for the integers ``residual`` (F', K, 3).
 
@@ -705,14 +976,18 @@ def encode_section(
     whichever of the two stores the smaller payload. With ``adaptive_coding`` (a file that may
     set flag bit 4, format 1.7) the chunks are also coded as adaptive streams, with the same
     predict options, and that coding is kept where it is smaller by more than
-    ``adaptive_gain`` (a share of the zstd payload)."""
+    ``adaptive_gain`` (a share of the zstd payload). With ``codebooks`` (format 1.8) the
+    section holds them, and ``residual`` is :func:`codebook_integers`'s."""
     frames, vertices, _ = residual.shape
     if chunk_frames is None:
         chunk_frames = max(1, min(frames, CHUNK_VALUES // (3 * vertices)))
     options = (0, 1) if predict is None else (predict,)
+    books = _packed_codebooks(codebooks, level)
     best: tuple[dict[str, Any], bytes] | None = None
     for choice in options:
-        section = _packed_section(residual, domain, level, exponent, chunk_frames, choice)
+        section = _packed_section(
+            residual, domain, level, exponent, chunk_frames, choice, books=books
+        )
         assert section is not None  # zstd planes take every int64
         if best is None or len(section[1]) < len(best[1]):
             best = section
@@ -739,10 +1014,12 @@ def with_adaptive_chunks(
     share of ``section``'s): so that the file never grows for it."""
     chunk_frames = int(section[0]["chunk_frames"])
     options = (0, 1) if predict is None else (predict,)
+    entries = section[0].get("codebooks", [])
+    books = (entries, section[1][: sum(entry[2] for entry in entries)])  # the same codebooks
     best: tuple[dict[str, Any], bytes] | None = None
     for choice in options:
         coded = _packed_section(
-            residual, domain, 0, exponent, chunk_frames, choice, adaptive.CODER_ADAPTIVE
+            residual, domain, 0, exponent, chunk_frames, choice, adaptive.CODER_ADAPTIVE, books
         )
         if coded is not None and (best is None or _section_size(coded) < _section_size(best)):
             best = coded
@@ -764,13 +1041,14 @@ def _packed_section(
     chunk_frames: int,
     predict: int,
     coder: int = adaptive.CODER_ZSTD,
+    books: tuple[list[list[int]], bytes] = ([], b""),
 ) -> tuple[dict[str, Any], bytes] | None:
     """The section of :func:`encode_section` with this ``predict`` and ``coder`` (``level``:
-    zstd's), or, for the adaptive coder, None when a stored integer is -2**63 (§6.14 codes bit
-    lengths up to 63)."""
+    zstd's) and the packed codebooks ``books`` (:func:`_packed_codebooks`), or, for the
+    adaptive coder, None when a stored integer is -2**63 (§6.14 codes bit lengths up to 63)."""
     frames = residual.shape[0]
     chunks: list[list[int]] = []
-    payloads: list[bytes] = []
+    payloads: list[bytes] = [books[1]]
     for start in range(0, frames, chunk_frames):
         block = residual[start : start + chunk_frames]
         if coder == adaptive.CODER_ADAPTIVE:
@@ -788,6 +1066,8 @@ def _packed_section(
     params.update(predict=predict)
     if coder == adaptive.CODER_ADAPTIVE:  # absent means 0: a zstd section is as before 1.7
         params.update(coder=coder)
+    if books[0]:  # absent means none: a section without is as before 1.8
+        params.update(codebooks=books[0])
     params.update(chunk_frames=chunk_frames, chunks=chunks)
     return params, b"".join(payloads)
 

@@ -1,4 +1,4 @@
-// The JavaScript decoder of the tuckercodec format, written from spec/FORMAT.md (version 1.7):
+// The JavaScript decoder of the tuckercodec format, written from spec/FORMAT.md (version 1.8):
 // openTkc(bytes) checks the container and header, decodes the faces and names, and, for a file
 // that is not segmented, every factor and its corrections' parameters; a segmented file's
 // segments are decoded when one of their frames is asked for (§6.7), and the two most recently
@@ -26,7 +26,7 @@ import { MsgFloat, isInt } from './msgpack.js';
 import { decodeNames, defaultNames, nameSize } from './names.js';
 import { decodeQmat } from './qmat.js';
 import { coreTimesU2, exactWeights, reconstructExact, reconstructFrame, weightsFit } from './reconstruct.js';
-import { correct, decodeChunk, readResidual } from './residual.js';
+import { correct, decodeChunk, decodeCodebooks, readResidual } from './residual.js';
 import { simdBasis } from './simd.js';
 import { meshTopology } from './topology.js';
 
@@ -283,12 +283,14 @@ export class TkcFile {
    * Segment s's corrections (§6.9): null in a file without them (flag bit 2), else the RESD
    * section's domain, grid step (0 outside domain "grid"), scale (the places or digits of a
    * decimal domain, else null), §8.1's exponent, predict, (1.7) coder (0: zstd planes, 1:
-   * adaptive streams), frames per chunk and chunks.
+   * adaptive streams), (1.8) codebooks (each axis's count of entries, 0 for none; null where
+   * the section has no `codebooks`), frames per chunk and chunks.
    */
   residual(s = 0) {
     const r = this._segment(s).residual;
     if (r === null) return null;
-    return { domain: r.domain, step: r.step, scale: r.scale, exponent: r.exponent, predict: r.predict, coder: r.coder, chunkFrames: r.chunkFrames, chunks: r.chunks.length };
+    const codebooks = r.codebooks.length === 0 ? null : r.codebooks.map((book) => book.count);
+    return { domain: r.domain, step: r.step, scale: r.scale, exponent: r.exponent, predict: r.predict, coder: r.coder, codebooks, chunkFrames: r.chunkFrames, chunks: r.chunks.length };
   }
 
   /**
@@ -303,6 +305,17 @@ export class TkcFile {
     const halves = new Int32Array(out.buffer);
     d.residual.chunks.forEach((chunk, c) => halves.set(this._chunk(s, d, c), 2 * chunk.start * 3 * this.vertices));
     return out;
+  }
+
+  /**
+   * Segment s's codebooks (format 1.8, §6.9): each axis's entries C, or null for an axis
+   * without one; null where the section has none (or the file no corrections).
+   */
+  residualCodebooks(s = 0) {
+    const d = this._segment(s);
+    if (d.residual === null) return null;
+    const books = this._codebooks(d);
+    return books === null ? null : books.map((C) => (C === null ? null : new BigInt64Array(C.slice().buffer)));
   }
 
   /**
@@ -330,9 +343,10 @@ export class TkcFile {
     const P = this._exact.length === out.length ? this._exact : (this._exact = new Float64Array(out.length));
     this._weights(d, t, f);
     reconstructExact(d, t, P, this._scratch, residual.exponent);
+    const books = this._codebooks(d); // (1.8) before the chunk: R29, then R47, axis by axis
     const c = Math.floor(t / residual.chunkFrames);
     const pairs = this._chunk(s, d, c);
-    const j = correct(residual, P, pairs, (t - residual.chunks[c].start) * out.length, out, f);
+    const j = correct(residual, P, pairs, (t - residual.chunks[c].start) * out.length, out, f, books);
     if (finite && j >= 0) {
       throw formatError('R36-reconstruction-finite', `frame ${f}, vertex ${Math.floor(j / 3)}, axis ${'xyz'[j % 3]}: the decoded position is not finite (P of §8.1 is ${P[j]})`);
     }
@@ -353,6 +367,18 @@ export class TkcFile {
       const what = largest === largest ? `R = ${exact.rowSum} times the largest |w| = ${largest} exceeds 2^53` : 'a weight is not finite';
       throw formatError('R41-residual-value', `section '${residual.section.id}', frame ${f}: §8.1's integer weights at exponent ${residual.exponent} do not fit: ${what}`);
     }
+  }
+
+  /**
+   * A segment's codebooks (format 1.8, §6.9), decoded on its first frame (R29, R47) and kept
+   * with its factors; null where its section has none.
+   * @param {Factors} d the segment, its residual read
+   */
+  _codebooks(d) {
+    const residual = /** @type {Residual} */ (d.residual);
+    if (residual.codebooks.length === 0) return null;
+    if (d.codebooks === undefined) d.codebooks = decodeCodebooks(residual, /** @type {Uint8Array} */ (d.residualPayload));
+    return d.codebooks;
   }
 
   /**
@@ -389,8 +415,10 @@ export class TkcFile {
   _readResidual(d, s) {
     const segment = this.layout.segments[s];
     const section = /** @type {import('./container.js').Section} */ (segment.resd);
-    // (1.7) with flag bit 4 its `coder` is read: each chunk may be an adaptive stream (§6.14)
-    const residual = readResidual(section, segment.frames, this.vertices, this.limits, this.layout.adaptiveCorrections);
+    // (1.7) with flag bit 4 its `coder` is read: each chunk may be an adaptive stream (§6.14);
+    // (1.8) with flag bit 5 its `codebooks`: an axis may correct through a sorted list
+    const { adaptiveCorrections, codebooks } = this.layout;
+    const residual = readResidual(section, segment.frames, this.vertices, this.limits, adaptiveCorrections, codebooks);
     d.residualPayload = this._payload(section);
     d.residual = residual;
   }

@@ -5,10 +5,12 @@
 // binary32 values such decimals give).
 //
 // readResidual checks the section's parameters in the order of §5 step 18 (R40-residual, and
-// (1.7) R46-adaptive-stream for `coder`, then R21-header-limit for each chunk's decompressed
-// size); the caller checks the CRC after it. decodeChunk decodes one chunk (R29 for its zstd
-// frame, or with `coder` 1 R46 for its adaptive stream, §6.14) and restores its integers;
-// correct applies one frame's integers to P (R41-residual-value).
+// (1.7) R46-adaptive-stream for `coder`, (1.8) `codebooks`, then R21-header-limit for each
+// codebook's and chunk's decompressed size); the caller checks the CRC after it. decodeCodebooks
+// decodes a section's codebooks (format 1.8: R29 for each zstd frame, R47-codebook for its
+// entries); decodeChunk decodes one chunk (R29 for its zstd frame, or with `coder` 1 R46 for its
+// adaptive stream, §6.14) and restores its integers; correct applies one frame's integers to P
+// (R41-residual-value), through the codebooks on the axes that have one.
 //
 // The 64-bit integers are held as interleaved 32-bit halves in an Int32Array, low half first:
 // e[j] = pairs[2j+1]·2^32 + (pairs[2j] >>> 0). On a little-endian engine (every one this
@@ -24,6 +26,7 @@ import { decompressExact } from './zstd.js';
 
 const PARAMETER = 'R40-residual';
 const VALUE = 'R41-residual-value';
+const CODEBOOK = 'R47-codebook';
 const TWO_32 = 4294967296;
 const ZSTD = 0; // `coder` (1.7): each chunk §6.1's zstd frame of byte planes ...
 const ADAPTIVE = 1; // ... or one adaptive stream of §6.14
@@ -60,28 +63,44 @@ export const LITTLE_ENDIAN = new Uint8Array(new Uint16Array([1]).buffer)[0] === 
  */
 
 /**
+ * One axis's codebook of a RESD section (format 1.8): its `count` integers (0: the axis has
+ * none), their planes and its bytes in the payload.
+ * @typedef {{count: number, planes: number, offset: number, length: number}} Codebook
+ */
+
+/**
  * A RESD (or RESD.s) section's parameters, checked; chunk c holds the section's frames
  * c·chunkFrames .. (its start and frames). `coder` is 1 where each chunk is an adaptive stream
  * (format 1.7), else 0 (zstd planes; in a file without flag bit 4 whatever the entry says).
+ * `codebooks` (format 1.8) has an entry per axis, or none where the section has no `codebooks`
+ * (or the file does not set flag bit 5).
  * @typedef {{section: import('./container.js').Section, domain: string, step: number,
  *   scale: number | null, exponent: number, predict: number, coder: number, chunkFrames: number,
- *   chunks: Chunk[], frames: number}} Residual
+ *   chunks: Chunk[], frames: number, codebooks: Codebook[]}} Residual
+ */
+
+/**
+ * A section's decoded codebooks (format 1.8), one per axis: its entries C as interleaved halves
+ * (as a chunk's integers are), or null for an axis without one.
+ * @typedef {(Int32Array | null)[]} Codebooks
  */
 
 /**
  * §5 step 18 up to the CRC: the parameters of a RESD section covering `frames` frames of K
  * vertices, in the order §6.9 lists them (R40-residual; (1.7) `coder`, R46-adaptive-stream,
- * read only in a file with flag bit 4), then each chunk's decompressed size against
- * max_section_bytes and, for a chunk of several frames, its integers against
- * max_chunk_values (R21-header-limit).
+ * read only in a file with flag bit 4; (1.8) `codebooks`, read only in a file with flag bit 5),
+ * then each codebook's decompressed size against max_section_bytes and its entries against
+ * max_chunk_values, then each chunk's size against max_section_bytes and, for a chunk of
+ * several frames, its integers against max_chunk_values (R21-header-limit).
  * @param {import('./container.js').Section} section
  * @param {number} frames F' (F for RESD, F_s for RESD.s)
  * @param {number} K
  * @param {import('./limits.js').Limits} limits
  * @param {boolean} [adaptive] the file sets flag bit 4 (format 1.7): `coder` is read, and may be 1
+ * @param {boolean} [codebooks] the file sets flag bit 5 (format 1.8): `codebooks` is read
  * @returns {Residual}
  */
-export function readResidual(section, frames, K, limits, adaptive = false) {
+export function readResidual(section, frames, K, limits, adaptive = false, codebooks = false) {
   const where = `section '${section.id}'`;
   const entry = section.entry;
   /** @type {(message: string) => Error} */
@@ -121,6 +140,8 @@ export function readResidual(section, frames, K, limits, adaptive = false) {
   if (adaptive && coder !== undefined && coder !== ZSTD && coder !== ADAPTIVE) {
     throw adaptiveError(where, `"coder" is ${describe(coder)}; this section allows 0 or 1`);
   }
+  // without flag bit 5, `codebooks` is an unknown parameter (§3): ignored, as before 1.8
+  const books = codebooks && entry.has('codebooks') ? readCodebooks(entry.get('codebooks'), domain, K * frames, fail) : [];
   const chunkFrames = entry.get('chunk_frames');
   if (!isInt(chunkFrames) || chunkFrames < 1) throw fail(`"chunk_frames" is ${shown('chunk_frames')}, not an int >= 1`);
   // a BigInt chunk_frames is above 2^53, so above F': one chunk
@@ -131,7 +152,36 @@ export function readResidual(section, frames, K, limits, adaptive = false) {
     const what = Array.isArray(table) ? `an array of ${table.length} entries` : shown('chunks');
     throw fail(`"chunks" is ${what}; ${frames} frames in chunks of ${L} need ${count}`);
   }
-  const chunks = readChunks(table, L, frames, section.length, fail);
+  const chunks = readChunks(table, L, frames, section.length, books, fail);
+  checkSizes(books, chunks, K, limits, where);
+  const stored = adaptive && coder === ADAPTIVE ? ADAPTIVE : ZSTD;
+  // chunkFrames as the file gives it (a BigInt one made a Number: still above F', one chunk)
+  return { section, domain, step, scale, exponent: Number(exponent), predict, coder: stored, chunkFrames: Number(chunkFrames), chunks, frames, codebooks: books };
+}
+
+/**
+ * §5 step 18's limits (R21-header-limit): each codebook's decompressed size n·P against
+ * max_section_bytes and its entries n against max_chunk_values (format 1.8: every frame needs
+ * the whole codebook), in axis order; then each chunk's N_c·P against max_section_bytes and,
+ * for a chunk of several frames (a frame is decoded with its whole chunk), N_c against
+ * max_chunk_values.
+ * @param {Codebook[]} books
+ * @param {Chunk[]} chunks
+ * @param {number} K
+ * @param {import('./limits.js').Limits} limits
+ * @param {string} where
+ */
+function checkSizes(books, chunks, K, limits, where) {
+  books.forEach((book, x) => {
+    const size = book.count * book.planes;
+    if (size > limits.max_section_bytes) {
+      throw limitError('R21-header-limit', `${where}: axis ${x}'s codebook decodes to ${size} bytes, max_section_bytes = ${limits.max_section_bytes}`);
+    }
+    // every frame needs the whole codebook: held, like a chunk, to a size that does not grow
+    if (book.count > limits.max_chunk_values) {
+      throw limitError('R21-header-limit', `${where}: axis ${x}'s codebook holds ${book.count} entries, max_chunk_values = ${limits.max_chunk_values}`);
+    }
+  });
   chunks.forEach((chunk, c) => {
     const size = chunk.frames * K * 3 * chunk.planes;
     if (size > limits.max_section_bytes) {
@@ -143,25 +193,59 @@ export function readResidual(section, frames, K, limits, adaptive = false) {
       throw limitError('R21-header-limit', `${where}: chunk ${c} holds ${count} integers (${chunk.frames} frames of ${K} vertices), max_chunk_values = ${limits.max_chunk_values}`);
     }
   });
-  const stored = adaptive && coder === ADAPTIVE ? ADAPTIVE : ZSTD;
-  // chunkFrames as the file gives it (a BigInt one made a Number: still above F', one chunk)
-  return { section, domain, step, scale, exponent: Number(exponent), predict, coder: stored, chunkFrames: Number(chunkFrames), chunks, frames };
 }
 
 /**
- * The `chunks` table, each entry's form and `planes` in order, then their lengths against the
- * payload's (R40-residual): chunk c holds the frames c·L .. of F'.
+ * `codebooks` (format 1.8, R40-residual): exactly three `[count, planes, length]`, each
+ * `[0, 0, 0]` or `count` in 1..K·F', `planes` in 1..8 and `length` ≥ 0, a count above 0 only
+ * outside domain "grid"; each axis's form, then its values, in axis order. Placed in the payload
+ * (their bytes come first) by readChunks.
+ * @param {import('./msgpack.js').MsgValue | undefined} table
+ * @param {string} domain
+ * @param {number} values K·F', the most integers a codebook may hold
+ * @param {(message: string) => Error} fail
+ * @returns {Codebook[]}
+ */
+function readCodebooks(table, domain, values, fail) {
+  if (!Array.isArray(table) || table.length !== 3) {
+    const what = Array.isArray(table) ? `an array of ${table.length} entries` : describe(table);
+    throw fail(`"codebooks" is ${what}, not an array of 3 [count, planes, length] entries`);
+  }
+  return table.map((item, x) => {
+    if (!Array.isArray(item) || item.length !== 3 || !item.every((v) => isInt(v))) {
+      throw fail(`axis ${x}'s codebook is ${describe(item)}, not an array of three ints [count, planes, length]`);
+    }
+    const [count, planes, length] = /** @type {(number | bigint)[]} */ (item);
+    const none = Number(count) === 0 && Number(planes) === 0 && Number(length) === 0;
+    if (!none && !(count >= 1 && count <= values && planes >= 1 && planes <= 8 && length >= 0)) {
+      throw fail(`axis ${x}'s codebook is [${count}, ${planes}, ${length}]; it is [0, 0, 0] or [count 1..${values}, planes 1..8, length >= 0]`);
+    }
+    if (!none && domain === 'grid') throw fail(`axis ${x} has a codebook; domain "grid" has none`);
+    // a BigInt length cannot add up to a payload's length: Infinity makes the sum say so
+    return { count: Number(count), planes: Number(planes), offset: 0, length: typeof length === 'bigint' ? Infinity : length };
+  });
+}
+
+/**
+ * The `chunks` table, each entry's form and `planes` in order, then their lengths and the
+ * codebooks' against the payload's (R40-residual): chunk c holds the frames c·L .. of F'. The
+ * codebooks' bytes come first (format 1.8): each is given its offset here.
  * @param {import('./msgpack.js').MsgValue[]} table its C entries
  * @param {number} L the frames of a chunk
  * @param {number} frames F'
  * @param {number} payload the payload's length
+ * @param {Codebook[]} books the section's codebooks, none without `codebooks`
  * @param {(message: string) => Error} fail
  * @returns {Chunk[]}
  */
-function readChunks(table, L, frames, payload, fail) {
+function readChunks(table, L, frames, payload, books, fail) {
   /** @type {Chunk[]} */
   const chunks = [];
   let offset = 0;
+  for (const book of books) {
+    book.offset = offset;
+    offset += book.length;
+  }
   table.forEach((item, c) => {
     if (!Array.isArray(item) || item.length !== 2 || !item.every((v) => isInt(v))) {
       throw fail(`chunk ${c} is ${describe(item)}, not an array of two ints [planes, length]`);
@@ -175,7 +259,10 @@ function readChunks(table, L, frames, payload, fail) {
     chunks.push({ planes: Number(planes), offset, length: bytes, start, frames: Math.min(L, frames - start) });
     offset += bytes;
   });
-  if (offset !== payload) throw fail(`the chunks' lengths add up to ${offset} bytes, the payload has ${payload}`);
+  if (offset !== payload) {
+    const what = books.length > 0 ? "the codebooks' and the chunks'" : "the chunks'";
+    throw fail(`${what} lengths add up to ${offset} bytes, the payload has ${payload}`);
+  }
   return chunks;
 }
 
@@ -192,7 +279,7 @@ export function decodeChunk(residual, c, payload, K) {
   const chunk = residual.chunks[c];
   const where = `section '${residual.section.id}' chunk ${c}`;
   const bytes = payload.subarray(chunk.offset, chunk.offset + chunk.length);
-  const pairs = residual.coder === ADAPTIVE ? adaptivePairs(bytes, chunk, K, where) : zstdPairs(bytes, chunk, K, where);
+  const pairs = residual.coder === ADAPTIVE ? adaptivePairs(bytes, chunk, K, where) : zstdPairs(bytes, chunk.frames * K * 3, chunk.planes, where);
   if (residual.predict === 1) {
     // e[t] = s[t] + e[t − 1], wrapped to 64 bits: a carry from the low halves into the high
     for (let j = 2 * K * 3; j < pairs.length; j += 2) {
@@ -206,16 +293,15 @@ export function decodeChunk(residual, c, payload, K) {
 }
 
 /**
- * A zstd chunk's stored integers s (§6.9): its frame decompressed to N·P bytes (R29), planes
- * made integers and zigzag undone, as interleaved halves in the chunk's order.
- * @param {Uint8Array} bytes the chunk's payload
- * @param {Chunk} chunk
- * @param {number} K
+ * A zstd chunk's stored integers s (§6.9), or a codebook's differences d (1.8): the frame
+ * decompressed to N·P bytes (R29), planes made integers and zigzag undone, as interleaved halves
+ * in the stream's order.
+ * @param {Uint8Array} bytes the chunk's or codebook's payload
+ * @param {number} N its integers
+ * @param {number} P its planes
  * @param {string} where
  */
-function zstdPairs(bytes, chunk, K, where) {
-  const N = chunk.frames * K * 3;
-  const P = chunk.planes;
+function zstdPairs(bytes, N, P, where) {
   const raw = decompressExact(bytes, N * P, where);
   const pairs = new Int32Array(2 * N);
   // u[j] = Σ_p raw[p·N + j] << 8p: planes 0-3 make the low half, 4-7 the high half (a plane
@@ -280,6 +366,254 @@ function adaptivePairs(bytes, chunk, K, where) {
   return pairs;
 }
 
+// ---------------------------------------------------------------------------------------------
+// codebooks (format 1.8, §6.9): on an axis with one, e moves b's nearest entry along the sorted
+// list C of the ordered integers the axis takes; o = C[j + e] replaces b + e
+
+/**
+ * A 64-bit value from its halves, for messages.
+ * @param {number} hi
+ * @param {number} lo
+ */
+function int64(hi, lo) {
+  return BigInt.asIntN(64, (BigInt(hi) << 32n) | BigInt(lo >>> 0));
+}
+
+/**
+ * A 64-bit value as [high half (signed), low half (unsigned)], the form `within` compares.
+ * @param {bigint} v
+ */
+function halvesOf(v) {
+  return [Number(BigInt.asIntN(64, v) >> 32n), Number(BigInt.asUintN(32, v))];
+}
+
+/**
+ * The ordered integers a codebook's entries may be in its section's domain (R47), as halves.
+ * @param {Residual} residual not of domain grid, which has no codebooks
+ * @returns {number[][]} [least, largest]
+ */
+function codebookRange(residual) {
+  if (residual.domain === 'float32') return [halvesOf(BigInt(F32_LOWEST)), halvesOf(BigInt(F32_HIGHEST))];
+  if (residual.domain === 'float64') return [halvesOf(-9218868437227405312n), halvesOf(9218868437227405311n)];
+  if (residual.domain === 'decimal-places') return [halvesOf(-(2n ** 53n)), halvesOf(2n ** 53n)];
+  const c = digitConstants(/** @type {number} */ (residual.scale));
+  return [c.oLow, c.oHigh];
+}
+
+/**
+ * A section's codebooks (format 1.8), in axis order: each one's zstd frame of n·P bytes (R29),
+ * then its entries C[0] = d[0], C[m] = C[m − 1] + d[m] wrapped to 64 bits, each above the one
+ * before and all within the domain's ordered integers (R47-codebook).
+ * @param {Residual} residual
+ * @param {Uint8Array} payload the whole section's payload, its CRC checked
+ * @returns {Codebooks}
+ */
+export function decodeCodebooks(residual, payload) {
+  return residual.codebooks.map((book, x) => {
+    if (book.count === 0) return null;
+    const where = `section '${residual.section.id}' codebook of axis ${x}`;
+    const C = zstdPairs(payload.subarray(book.offset, book.offset + book.length), book.count, book.planes, where);
+    for (let m = 2; m < C.length; m += 2) {
+      const lo = (C[m] >>> 0) + (C[m - 2] >>> 0);
+      const hi = (C[m + 1] + C[m - 1] + (lo >= TWO_32 ? 1 : 0)) | 0;
+      C[m] = lo | 0;
+      C[m + 1] = hi;
+      if (hi < C[m - 1] || (hi === C[m - 1] && C[m] >>> 0 <= C[m - 2] >>> 0)) {
+        const [after, before] = [int64(hi, lo), int64(C[m - 1], C[m - 2])];
+        throw formatError(CODEBOOK, `${where}: entry ${m / 2}, ${after}, is not above entry ${m / 2 - 1}, ${before}`);
+      }
+    }
+    const [low, high] = codebookRange(residual);
+    const last = C.length - 2;
+    if (!within(C[1], C[0] >>> 0, low, high) || !within(C[last + 1], C[last] >>> 0, low, high)) {
+      const range = `${int64(low[0], low[1])}..${int64(high[0], high[1])}`;
+      throw formatError(CODEBOOK, `${where}: its entries ${int64(C[1], C[0])}..${int64(C[last + 1], C[last])} are not all within ${range}, the ordered integers of domain "${residual.domain}"`);
+    }
+    return C;
+  });
+}
+
+/** b of one value (baseOf), as halves: low, then high. */
+const BASE = new Int32Array(2);
+const BASE32 = new Float32Array(1);
+const BASE32_BITS = new Int32Array(BASE32.buffer);
+const BASE64 = new Float64Array(1);
+const BASE64_BITS = new Int32Array(BASE64.buffer);
+
+/**
+ * The function that puts into BASE the b of §6.9 of a value P in the section's domain (the
+ * ordered integer that e would move), and returns false where P has none (NaN in float32; not
+ * finite elsewhere): the domain's own loop then refuses it as it would without codebooks.
+ * @param {Residual} residual not of domain grid
+ * @returns {(p: number) => boolean}
+ */
+function baseOf(residual) {
+  const domain = residual.domain;
+  if (domain === 'float32') {
+    return (p) => {
+      if (p !== p) return false;
+      BASE32[0] = p; // the binary32 nearest P, ties to even (beyond the range, ±∞)
+      const w = BASE32_BITS[0];
+      const b = w < 0 ? w ^ 0x7fffffff : w;
+      BASE[0] = b;
+      BASE[1] = b < 0 ? -1 : 0;
+      return true;
+    };
+  }
+  if (domain === 'float64') {
+    return (p) => {
+      if (p - p !== 0) return false;
+      BASE64[0] = p;
+      const lo = BASE64_BITS[0];
+      const hi = BASE64_BITS[1];
+      BASE[0] = hi < 0 ? ~lo : lo;
+      BASE[1] = hi < 0 ? hi ^ 0x7fffffff : hi;
+      return true;
+    };
+  }
+  if (domain === 'decimal-places') {
+    const ten = TEN[/** @type {number} */ (residual.scale)];
+    return (p) => {
+      if (p - p !== 0) return false;
+      const b = Math.min(Math.max(roundHalfEven(p * ten), -TWO_53), TWO_53);
+      const hi = Math.floor(b / TWO_32);
+      BASE[0] = b - hi * TWO_32;
+      BASE[1] = hi;
+      return true;
+    };
+  }
+  const c = digitConstants(/** @type {number} */ (residual.scale));
+  return (p) => {
+    if (p - p !== 0) return false;
+    digitsBase(p, c);
+    return true;
+  };
+}
+
+/**
+ * Whether entry m of C (halves) is above b.
+ * @param {Int32Array} C
+ * @param {number} m
+ * @param {number} bHi
+ * @param {number} bLo unsigned
+ */
+function above(C, m, bHi, bLo) {
+  return C[2 * m + 1] > bHi || (C[2 * m + 1] === bHi && C[2 * m] >>> 0 > bLo);
+}
+
+/**
+ * j of §6.9: the index of the entry of C (n entries, halves) nearest b: the largest with
+ * C[j] <= b (0 if none), or the one after it where that is nearer (a tie keeps j). The search
+ * gallops from `hint` (guessed from the same value's j in the frames corrected before: values
+ * move little from frame to frame, and a codebook can hold hundreds of thousands of entries),
+ * then halves the bracket. The two gaps are exact differences in 1 .. 2^64 − 1, compared as
+ * unsigned halves.
+ * @param {Int32Array} C
+ * @param {number} n
+ * @param {number} bHi
+ * @param {number} bLo unsigned
+ * @param {number} hint an index in 0..n − 1
+ */
+function nearest(C, n, bHi, bLo, hint) {
+  // a bracket lo < hi with C[lo] <= b < C[hi] (hi = n: past the end)
+  let lo = hint;
+  let hi = hint + 1;
+  let step = 1;
+  if (above(C, hint, bHi, bLo)) {
+    hi = hint;
+    lo = hint - 1;
+    while (lo >= 0 && above(C, lo, bHi, bLo)) {
+      hi = lo;
+      step *= 2;
+      lo = hint - step;
+    }
+    if (lo < 0) {
+      if (above(C, 0, bHi, bLo)) return 0; // every entry is above b
+      lo = 0;
+    }
+  } else {
+    while (hi < n && !above(C, hi, bHi, bLo)) {
+      lo = hi;
+      step *= 2;
+      hi = hint + step;
+    }
+    if (hi > n) hi = n;
+  }
+  while (hi - lo > 1) {
+    const mid = lo + Math.floor((hi - lo) / 2);
+    if (above(C, mid, bHi, bLo)) hi = mid;
+    else lo = mid;
+  }
+  const j = lo;
+  if (j + 1 < n) {
+    let upLo = (C[2 * j + 2] >>> 0) - bLo;
+    const upHi = (C[2 * j + 3] - bHi - (upLo < 0 ? 1 : 0)) >>> 0;
+    let downLo = bLo - (C[2 * j] >>> 0);
+    const downHi = (bHi - C[2 * j + 1] - (downLo < 0 ? 1 : 0)) >>> 0;
+    if (upLo < 0) upLo += TWO_32;
+    if (downLo < 0) downLo += TWO_32;
+    if (upHi < downHi || (upHi === downHi && upLo < downLo)) return j + 1;
+  }
+  return j;
+}
+
+/**
+ * Each codebook's hints for nearest: per vertex, the j its value took in the last two frames
+ * corrected, from which the next is guessed as if it kept moving so (played frames move on).
+ */
+const HINTS = new WeakMap();
+
+/** Scratch of throughCodebooks: one frame's integers. */
+let bookPairs = new Int32Array(0);
+
+/**
+ * One frame's integers as correct's loops take them: on each axis with a codebook, e replaced by
+ * C[t] − b (wrapped to 64 bits), t = j + e of §6.9 (R41 outside 0..n − 1), so that the loop's
+ * b + e is o = C[t]. That difference is always within the domain's range of e (b and C[t] are
+ * both within its ordered integers, C[t] by R47), whose check then holds, as §6.9 says it does
+ * not apply. A value without b (baseOf) keeps its e, for the loop to refuse.
+ * @param {Residual} residual
+ * @param {Codebooks} books
+ * @param {Float64Array} P
+ * @param {Int32Array} pairs
+ * @param {number} at the index of the frame's first low half
+ * @param {number} frameNumber for messages
+ * @returns {Int32Array} the frame's 2·P.length halves, from index 0
+ */
+function throughCodebooks(residual, books, P, pairs, at, frameNumber) {
+  const n = P.length;
+  if (bookPairs.length < 2 * n) bookPairs = new Int32Array(2 * n);
+  const out = bookPairs;
+  out.set(pairs.subarray(at, at + 2 * n));
+  const base = baseOf(residual);
+  books.forEach((C, x) => {
+    if (C === null) return;
+    const count = C.length / 2;
+    /** @type {Int32Array | undefined} */
+    let hints = HINTS.get(C);
+    if (hints === undefined || hints.length !== 2 * n / 3) HINTS.set(C, (hints = new Int32Array(2 * n / 3)));
+    for (let v = x, i = 0; v < n; v += 3, i += 2) {
+      if (!base(P[v])) continue;
+      const bHi = BASE[1];
+      const bLo = BASE[0] >>> 0;
+      const guess = Math.min(Math.max(2 * hints[i] - hints[i + 1], 0), count - 1);
+      const j = nearest(C, count, bHi, bLo, guess);
+      hints[i + 1] = hints[i];
+      hints[i] = j;
+      // exact within ±2^53; an e beyond rounds to a Number beyond every t all the same
+      const t = j + (out[2 * v + 1] * TWO_32 + (out[2 * v] >>> 0));
+      if (!(t >= 0 && t < count)) {
+        const e = int64(out[2 * v + 1], out[2 * v]);
+        throw formatError(VALUE, `section '${residual.section.id}', frame ${frameNumber}, vertex ${Math.floor(v / 3)}, axis ${'xyz'[x]}: t = j + e = ${j} + ${e} is outside 0..${count - 1}, the axis's codebook`);
+      }
+      const lo = (C[2 * t] >>> 0) - bLo;
+      out[2 * v] = lo | 0;
+      out[2 * v + 1] = (C[2 * t + 1] - bHi - (lo < 0 ? 1 : 0)) | 0;
+    }
+  });
+  return out;
+}
+
 /** Scratch shared by correct(): one frame's binary32 values, and binary64 ones, with their bits. */
 let scratch32 = new Float32Array(0);
 let bits32 = new Int32Array(0);
@@ -300,11 +634,16 @@ let bits64 = new Int32Array(0);
  * @param {number} first the index in the chunk of the frame's first integer, t·K·3
  * @param {Float64Array | Float32Array} out K·3 values
  * @param {number} frameNumber the frame within the file, for messages
+ * @param {Codebooks | null} [books] the section's codebooks (decodeCodebooks), if it has any
  */
-export function correct(residual, P, pairs, first, out, frameNumber) {
+export function correct(residual, P, pairs, first, out, frameNumber, books = null) {
   if (!LITTLE_ENDIAN) throw new Error('corrections (§6.9) are decoded on little-endian engines only');
   const n = P.length;
-  const at = 2 * first;
+  let at = 2 * first;
+  if (books !== null && books.some((C) => C !== null)) {
+    pairs = throughCodebooks(residual, books, P, pairs, at, frameNumber);
+    at = 0;
+  }
   let bad;
   if (residual.domain === 'float32') {
     if (scratch32.length < n) {
@@ -550,18 +889,16 @@ function digitConstants(p) {
     const least = TEN[p - 1];
     const lowest = p - 23;
     const bound = 45n * 9n * 10n ** BigInt(p - 1);
-    /** @param {bigint} v */
-    const halves = (v) => [Number(BigInt.asIntN(64, v) >> 32n), Number(BigInt.asUintN(32, v))];
     found = {
       digits: p,
       least,
       decade: 9 * least,
       powers: Array.from({ length: 45 }, (_, j) => Number(`1e${lowest + j}`)),
       bound,
-      eHigh: halves(2n * bound + 1n),
-      eLow: halves(-(2n * bound + 1n)),
-      oHigh: halves(bound),
-      oLow: halves(-1n - bound),
+      eHigh: halvesOf(2n * bound + 1n),
+      eLow: halvesOf(-(2n * bound + 1n)),
+      oHigh: halvesOf(bound),
+      oLow: halvesOf(-1n - bound),
     };
     DIGITS.set(p, found);
   }
@@ -658,6 +995,52 @@ function within(hi, lo, low, high) {
 }
 
 /**
+ * The ordered decimal integer b of a finite x (§6.9) into BASE, as halves: exact for every p,
+ * though it reaches 2^57 when p = 15.
+ * @param {number} x
+ * @param {Digits} c
+ */
+function digitsBase(x, c) {
+  const { least, decade: B, powers } = c;
+  let bHi = 0;
+  let bLo = 0;
+  if (x !== 0) {
+    const a = Math.abs(x);
+    // the largest index with powers[index] <= a, or 0 if there is none
+    let lo = 0;
+    let hi = 44;
+    if (powers[0] > a) hi = 0;
+    while (lo < hi) {
+      const mid = (lo + hi + 1) >> 1;
+      if (powers[mid] <= a) lo = mid;
+      else hi = mid - 1;
+    }
+    const s = 22 - lo; // p − 1 − (E_min + index)
+    let m = roundHalfEven(s >= 0 ? a * TEN[s] : a / TEN[-s]);
+    if (m < least) m = least;
+    else if (m > 10 * least - 1) m = 10 * least - 1;
+    // o = index·B + (1 + m − 10^(p−1)): both terms exact, their sum on halves
+    const X = lo * B;
+    const Y = 1 + m - least;
+    const xh = Math.floor(X * INVERSE_32);
+    const yh = Math.floor(Y * INVERSE_32);
+    bLo = X - xh * TWO_32 + (Y - yh * TWO_32);
+    bHi = xh + yh;
+    if (bLo >= TWO_32) {
+      bLo -= TWO_32;
+      bHi += 1;
+    }
+  }
+  if (x < 0 || Object.is(x, -0)) {
+    // −1 − o
+    bHi = -bHi - 1;
+    bLo = TWO_32 - 1 - bLo;
+  }
+  BASE[0] = bLo;
+  BASE[1] = bHi;
+}
+
+/**
  * Domain decimal-digits (p digits): b the ordered decimal integer of P, o = b + e, the position
  * the value of o (§6.9); in decimal-digits-float32 (`float32`) that value rounded to binary32.
  * The integers reach 2^57 when p = 15, so they are added on halves, and o's decade is found
@@ -672,7 +1055,7 @@ function within(hi, lo, low, high) {
  */
 function correctDigits(P, c, pairs, at, out, n, float32) {
   if (c.bound < 2n ** 52n) return correctDigitsNumber(P, c, pairs, at, out, n, float32);
-  const { least, decade: B, powers } = c;
+  const { least, decade: B } = c;
   let notFinite = -1;
   for (let j = 0; j < n; j++) {
     const eHi = pairs[at + 2 * j + 1];
@@ -684,41 +1067,9 @@ function correctDigits(P, c, pairs, at, out, n, float32) {
       out[j] = x;
       continue;
     }
-    // b, the ordered decimal integer of x, as halves
-    let bHi = 0;
-    let bLo = 0;
-    if (x !== 0) {
-      const a = Math.abs(x);
-      // the largest index with powers[index] <= a, or 0 if there is none
-      let lo = 0;
-      let hi = 44;
-      if (powers[0] > a) hi = 0;
-      while (lo < hi) {
-        const mid = (lo + hi + 1) >> 1;
-        if (powers[mid] <= a) lo = mid;
-        else hi = mid - 1;
-      }
-      const s = 22 - lo; // p − 1 − (E_min + index)
-      let m = roundHalfEven(s >= 0 ? a * TEN[s] : a / TEN[-s]);
-      if (m < least) m = least;
-      else if (m > 10 * least - 1) m = 10 * least - 1;
-      // o = index·B + (1 + m − 10^(p−1)): both terms exact, their sum on halves
-      const X = lo * B;
-      const Y = 1 + m - least;
-      const xh = Math.floor(X * INVERSE_32);
-      const yh = Math.floor(Y * INVERSE_32);
-      bLo = X - xh * TWO_32 + (Y - yh * TWO_32);
-      bHi = xh + yh;
-      if (bLo >= TWO_32) {
-        bLo -= TWO_32;
-        bHi += 1;
-      }
-    }
-    if (x < 0 || Object.is(x, -0)) {
-      // −1 − o
-      bHi = -bHi - 1;
-      bLo = TWO_32 - 1 - bLo;
-    }
+    digitsBase(x, c);
+    const bHi = BASE[1];
+    const bLo = BASE[0] >>> 0;
     let oLo = bLo + eLo;
     let oHi = bHi + eHi;
     if (oLo >= TWO_32) {

@@ -6,6 +6,7 @@
 #![forbid(unsafe_code)]
 
 pub mod adaptive;
+pub mod codebooks;
 pub mod encoder;
 pub mod error;
 pub mod fuzzing;

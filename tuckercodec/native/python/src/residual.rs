@@ -5,6 +5,7 @@ use numpy::{PyArray1, PyReadonlyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
+use tuckercodec_core::codebooks;
 use tuckercodec_core::residual::{self, Domain};
 
 use crate::broken;
@@ -91,11 +92,69 @@ fn residual_ordered<'py>(
     Ok(PyArray1::from_vec(py, out))
 }
 
+/// j of §6.9 (format 1.8's codebooks) for the ordered integers `base` of one axis
+/// (frame-major, `frame_values` to a frame): the index of the codebook entry nearest each,
+/// from the codebook's `middles`.
+#[pyfunction]
+fn residual_nearest_entries<'py>(
+    py: Python<'py>,
+    middles: PyReadonlyArray1<'py, i64>,
+    base: PyReadonlyArray1<'py, i64>,
+    frame_values: usize,
+) -> PyResult<Bound<'py, PyArray1<i64>>> {
+    let (middles, base) = (middles.as_slice()?, base.as_slice()?);
+    let out = py.detach(|| {
+        let mut found = vec![0_usize; base.len()];
+        codebooks::nearest_entries(middles, base, frame_values, &mut found);
+        // an index below the codebook's length, itself within a numpy array's
+        found.into_iter().map(|j| j as i64).collect::<Vec<i64>>()
+    });
+    Ok(PyArray1::from_vec(py, out))
+}
+
+/// The corrections (int64) of the domain `name` (its `scale`) that `stored` positions in the
+/// codebook `book` mean for the positions `exact` of one axis (frame-major, `frame_values` to a
+/// frame); R41 as `Broken` when one leaves the codebook.
+#[allow(clippy::too_many_arguments)]
+#[pyfunction]
+fn residual_codebook_corrections<'py>(
+    py: Python<'py>,
+    exact: PyReadonlyArray1<'py, f64>,
+    stored: PyReadonlyArray1<'py, i64>,
+    name: &str,
+    scale: i64,
+    book: PyReadonlyArray1<'py, i64>,
+    middles: PyReadonlyArray1<'py, i64>,
+    frame_values: usize,
+) -> PyResult<Bound<'py, PyArray1<i64>>> {
+    let domain = domain_of(name, 1.0, scale)?;
+    let (exact, stored) = (exact.as_slice()?, stored.as_slice()?);
+    let (book, middles) = (book.as_slice()?, middles.as_slice()?);
+    let out = py
+        .detach(|| {
+            let mut out = vec![0; exact.len()];
+            codebooks::codebook_corrections(
+                exact,
+                stored,
+                domain,
+                book,
+                middles,
+                frame_values,
+                &mut out,
+            )
+            .map(|()| out)
+        })
+        .map_err(broken)?;
+    Ok(PyArray1::from_vec(py, out))
+}
+
 /// Adds this module's functions to `tuckercodec._native`.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(residual_restore_chunk, m)?)?;
     m.add_function(wrap_pyfunction!(residual_pack_chunk, m)?)?;
     m.add_function(wrap_pyfunction!(residual_correct, m)?)?;
     m.add_function(wrap_pyfunction!(residual_ordered, m)?)?;
+    m.add_function(wrap_pyfunction!(residual_nearest_entries, m)?)?;
+    m.add_function(wrap_pyfunction!(residual_codebook_corrections, m)?)?;
     Ok(())
 }

@@ -188,7 +188,8 @@ export declare class TkcFile {
      * Segment s's corrections (§6.9): null in a file without them (flag bit 2), else the RESD
      * section's domain, grid step (0 outside domain "grid"), scale (the places or digits of a
      * decimal domain, else null), §8.1's exponent, predict, (1.7) coder (0: zstd planes, 1:
-     * adaptive streams), frames per chunk and chunks.
+     * adaptive streams), (1.8) codebooks (each axis's count of entries, 0 for none; null where
+     * the section has no `codebooks`), frames per chunk and chunks.
      */
     residual(s?: number): {
         domain: string;
@@ -197,6 +198,7 @@ export declare class TkcFile {
         exponent: number;
         predict: number;
         coder: number;
+        codebooks: number[] | null;
         chunkFrames: number;
         chunks: number;
     } | null;
@@ -206,6 +208,11 @@ export declare class TkcFile {
      * needs only its own chunk).
      */
     residualIntegers(s?: number): BigInt64Array<ArrayBuffer> | null;
+    /**
+     * Segment s's codebooks (format 1.8, §6.9): each axis's entries C, or null for an axis
+     * without one; null where the section has none (or the file no corrections).
+     */
+    residualCodebooks(s?: number): (BigInt64Array<ArrayBuffer> | null)[] | null;
     /**
      * @template {Float64Array | Float32Array} T
      * @param {number} f
@@ -221,6 +228,12 @@ export declare class TkcFile {
      * @param {number} f the frame within the file, for messages
      */
     _weights(d: Factors, t: number, f: number): void;
+    /**
+     * A segment's codebooks (format 1.8, §6.9), decoded on its first frame (R29, R47) and kept
+     * with its factors; null where its section has none.
+     * @param {Factors} d the segment, its residual read
+     */
+    _codebooks(d: Factors): import("./residual.js").Codebooks | null;
     /**
      * Chunk c of segment s's corrections, decoded (R29) and restored, from the cache when there.
      * @param {number} s

@@ -26,6 +26,7 @@ export type Layout = {
     corrections: boolean;
     adaptive: boolean;
     adaptiveCorrections: boolean;
+    codebooks: boolean;
     segments: Segment[];
     face: Section;
     faceShape: number[];

@@ -12,6 +12,7 @@ export type Factors = {
     residual: import('./residual.js').Residual | null;
     residualPayload: Uint8Array | null;
     exact: Exact | null;
+    codebooks?: import('./residual.js').Codebooks;
 };
 export type Exact = {
     q1: Float64Array;
@@ -20,12 +21,14 @@ export type Exact = {
 };
 /**
  * A decoded segment's factors, as reconstructFrame reads them (decoder.js makes them), and its
- * corrections (§6.9; null without flag bit 2) with their section's payload.
+ * corrections (§6.9; null without flag bit 2) with their section's payload and, once decoded,
+ * (1.8) its codebooks.
  * @typedef {{u1: Float64Array, columns: number, i: number, k: number, B: Float64Array,
  *   u3: Float64Array, core: Float64Array, cent: Float64Array, u2: Float64Array,
  *   simd?: import('./simd.js').SimdBasis | null,
  *   residual: import('./residual.js').Residual | null,
- *   residualPayload: Uint8Array | null, exact: Exact | null}} Factors
+ *   residualPayload: Uint8Array | null, exact: Exact | null,
+ *   codebooks?: import('./residual.js').Codebooks}} Factors
  */
 /**
  * What §8.1 takes of U1 in a file with corrections: its restored integers q1 (K × columns,

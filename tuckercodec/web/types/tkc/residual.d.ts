@@ -7,6 +7,12 @@ export type Chunk = {
     start: number;
     frames: number;
 };
+export type Codebook = {
+    count: number;
+    planes: number;
+    offset: number;
+    length: number;
+};
 export type Residual = {
     section: import('./container.js').Section;
     domain: string;
@@ -18,33 +24,49 @@ export type Residual = {
     chunkFrames: number;
     chunks: Chunk[];
     frames: number;
+    codebooks: Codebook[];
 };
+export type Codebooks = (Int32Array | null)[];
 /**
  * One chunk of a RESD section: its frames (counted from the section's first) and bytes.
  * @typedef {{planes: number, offset: number, length: number, start: number, frames: number}} Chunk
  */
 /**
+ * One axis's codebook of a RESD section (format 1.8): its `count` integers (0: the axis has
+ * none), their planes and its bytes in the payload.
+ * @typedef {{count: number, planes: number, offset: number, length: number}} Codebook
+ */
+/**
  * A RESD (or RESD.s) section's parameters, checked; chunk c holds the section's frames
  * c·chunkFrames .. (its start and frames). `coder` is 1 where each chunk is an adaptive stream
  * (format 1.7), else 0 (zstd planes; in a file without flag bit 4 whatever the entry says).
+ * `codebooks` (format 1.8) has an entry per axis, or none where the section has no `codebooks`
+ * (or the file does not set flag bit 5).
  * @typedef {{section: import('./container.js').Section, domain: string, step: number,
  *   scale: number | null, exponent: number, predict: number, coder: number, chunkFrames: number,
- *   chunks: Chunk[], frames: number}} Residual
+ *   chunks: Chunk[], frames: number, codebooks: Codebook[]}} Residual
+ */
+/**
+ * A section's decoded codebooks (format 1.8), one per axis: its entries C as interleaved halves
+ * (as a chunk's integers are), or null for an axis without one.
+ * @typedef {(Int32Array | null)[]} Codebooks
  */
 /**
  * §5 step 18 up to the CRC: the parameters of a RESD section covering `frames` frames of K
  * vertices, in the order §6.9 lists them (R40-residual; (1.7) `coder`, R46-adaptive-stream,
- * read only in a file with flag bit 4), then each chunk's decompressed size against
- * max_section_bytes and, for a chunk of several frames, its integers against
- * max_chunk_values (R21-header-limit).
+ * read only in a file with flag bit 4; (1.8) `codebooks`, read only in a file with flag bit 5),
+ * then each codebook's decompressed size against max_section_bytes and its entries against
+ * max_chunk_values, then each chunk's size against max_section_bytes and, for a chunk of
+ * several frames, its integers against max_chunk_values (R21-header-limit).
  * @param {import('./container.js').Section} section
  * @param {number} frames F' (F for RESD, F_s for RESD.s)
  * @param {number} K
  * @param {import('./limits.js').Limits} limits
  * @param {boolean} [adaptive] the file sets flag bit 4 (format 1.7): `coder` is read, and may be 1
+ * @param {boolean} [codebooks] the file sets flag bit 5 (format 1.8): `codebooks` is read
  * @returns {Residual}
  */
-export declare function readResidual(section: import('./container.js').Section, frames: number, K: number, limits: import('./limits.js').Limits, adaptive?: boolean): Residual;
+export declare function readResidual(section: import('./container.js').Section, frames: number, K: number, limits: import('./limits.js').Limits, adaptive?: boolean, codebooks?: boolean): Residual;
 /**
  * Chunk c's restored integers e (§6.9), as interleaved halves (see the top of this file):
  * N_c = n_c·K·3 values in frame-major order, j = (t·K + v)·3 + x.
@@ -55,6 +77,15 @@ export declare function readResidual(section: import('./container.js').Section, 
  * @returns {Int32Array} 2·N_c halves
  */
 export declare function decodeChunk(residual: Residual, c: number, payload: Uint8Array, K: number): Int32Array;
+/**
+ * A section's codebooks (format 1.8), in axis order: each one's zstd frame of n·P bytes (R29),
+ * then its entries C[0] = d[0], C[m] = C[m − 1] + d[m] wrapped to 64 bits, each above the one
+ * before and all within the domain's ordered integers (R47-codebook).
+ * @param {Residual} residual
+ * @param {Uint8Array} payload the whole section's payload, its CRC checked
+ * @returns {Codebooks}
+ */
+export declare function decodeCodebooks(residual: Residual, payload: Uint8Array): Codebooks;
 /**
  * One frame's decoded positions (§6.9): P (the exact reconstruction of §8.1) corrected by the
  * frame's integers, into `out` (a Float32Array receives the binary64 result rounded once, which
@@ -69,8 +100,9 @@ export declare function decodeChunk(residual: Residual, c: number, payload: Uint
  * @param {number} first the index in the chunk of the frame's first integer, t·K·3
  * @param {Float64Array | Float32Array} out K·3 values
  * @param {number} frameNumber the frame within the file, for messages
+ * @param {Codebooks | null} [books] the section's codebooks (decodeCodebooks), if it has any
  */
-export declare function correct(residual: Residual, P: Float64Array, pairs: Int32Array, first: number, out: Float64Array | Float32Array, frameNumber: number): number;
+export declare function correct(residual: Residual, P: Float64Array, pairs: Int32Array, first: number, out: Float64Array | Float32Array, frameNumber: number, books?: Codebooks | null): number;
 export type Digits = {
     digits: number;
     least: number;
