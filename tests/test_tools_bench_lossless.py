@@ -110,3 +110,16 @@ def test_the_decode_is_timed_part_by_part_for_the_lossless_and_the_plain_file(sh
     for parts in (lossless_file, plain):
         assert parts.open_seconds > 0 and parts.positions_seconds > 0
         assert parts.mb_s == pytest.approx(short.vertices.size * 4 / 1e6 / parts.decode_seconds)
+
+
+@pytest.mark.parametrize("bits", [8, 14])
+def test_quantized_caches_take_few_values_within_half_a_step(bits):
+    rng = np.random.default_rng(3)
+    positions = rng.normal(size=(12, 40, 3)) * np.array([1.0, 5.0, 0.2])
+    quantized = lossless.quantized(positions, bits)
+    assert quantized.dtype == np.float32
+    span = positions.max(axis=(0, 1)) - positions.min(axis=(0, 1))
+    for axis in range(3):
+        assert len(np.unique(quantized[..., axis])) <= 2**bits
+        error = np.abs(quantized[..., axis] - positions[..., axis]).max()
+        assert error <= 0.5 * span[axis] / (2**bits - 1) * (1 + 1e-3) + 1e-6 * span[axis]

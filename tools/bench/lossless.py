@@ -34,11 +34,18 @@ and for the plain file at KG 0.1 beside it: what the lossless mode adds to a dec
 Last, the misses against the targets: every file bit-exact; tuckercodec's smaller than
 the smallest peer's on every sequence; tuckercodec decoding at least ``TARGET_MB_S``.
 
+``--quantized`` adds quantized caches the encoder was never tuned on: two of the rate suite's
+generated sequences (:mod:`tools.generate.sequence`) with each axis quantized over the sequence's
+bounding box to 16 and 14 bits and dequantized to float32 as a quantized-mesh loader does
+(``min + q * scale``, KHR_mesh_quantization style), made the first time in
+``~/.cache/tuckercodec-bench/quantized/``.
+
 Output: lossless.md (what is printed) and results.json (every file tried) in ``--out``.
 
     python -m tools.bench lossless                           # everything present
     python -m tools.bench lossless --repeat 5                # medians of 5 (BENCHMARKS.md)
     python -m tools.bench lossless sample --coders fpzip,zstd-19
+    python -m tools.bench lossless --quantized ../shared/data/chicken.npz
 """
 
 from __future__ import annotations
@@ -51,12 +58,13 @@ import sys
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
+from pathlib import Path
 
 import numpy as np
 
 import tuckercodec
 from tools import common
-from tools.bench import arguments
+from tools.bench import arguments, rate
 from tools.bench.bounds import sequence_name
 from tools.bench.peers import base
 from tools.bench.peers.blosc import run_blosc2
@@ -341,9 +349,45 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="leave out tuckercodec's decode part by part (two more encodes per sequence)",
     )
+    parser.add_argument(
+        "--quantized",
+        action="store_true",
+        help="add two generated sequences quantized to 16 and 14 bits per axis",
+    )
     arguments.output(
         parser, "output folder (default results/bench-lossless)", "results/bench-lossless"
     )
+
+
+#: (generated sequence, bits per axis) of ``--quantized``.
+QUANTIZED = [("body-7061x201-seed3", 16), ("cloth-2904x204-seed4", 14)]
+QUANTIZED_FOLDER = Path("~/.cache/tuckercodec-bench/quantized").expanduser()
+
+
+def quantized_sequences() -> list[str]:
+    """The quantized caches of ``--quantized``, made the first time they are asked for."""
+    QUANTIZED_FOLDER.mkdir(parents=True, exist_ok=True)
+    sources = {path.stem: path for path in rate.generated_sequences()}
+    out = []
+    for name, bits in QUANTIZED:
+        path = QUANTIZED_FOLDER / f"{name}-q{bits}.npz"
+        if not path.exists():
+            with np.load(sources[name]) as source:
+                positions, faces = source["V"].astype(np.float64), source["F"]
+            np.savez(path.with_suffix(".part.npz"), V=quantized(positions, bits), F=faces)
+            path.with_suffix(".part.npz").replace(path)
+        out.append(str(path))
+    return out
+
+
+def quantized(positions: np.ndarray, bits: int) -> np.ndarray:
+    """``positions`` (F, K, 3) quantized per axis to ``bits`` over their bounding box, as float32
+    ``min + q * scale``: what a loader of a quantized mesh hands on."""
+    low, high = positions.min(axis=(0, 1)), positions.max(axis=(0, 1))
+    levels = 2**bits - 1
+    steps = np.round((positions - low) / (high - low) * levels).astype(np.float32)
+    scale = ((high - low) / levels).astype(np.float32)
+    return low.astype(np.float32) + steps * scale
 
 
 def run(args: argparse.Namespace) -> int:
@@ -351,6 +395,8 @@ def run(args: argparse.Namespace) -> int:
     coders, skipped = arguments.available_coders(
         args.coders, CODERS, lambda coder: base.missing(CODERS[coder][0])
     )
+    if args.quantized:
+        args.sequences = [*(args.sequences or common.shared_sequences()), *quantized_sequences()]
     inputs = arguments.sequences_and_folder(args, "lossless.md")
     if inputs is None:
         return 2
