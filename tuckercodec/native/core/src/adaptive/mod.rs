@@ -13,6 +13,8 @@
 //! - [`encode_columns`]`(values, cols, rows, order)`: the stream's bytes;
 //! - [`decode_columns`] / [`decode_columns_into`]`(payload, order, out)`: the integers, or
 //!   R46-adaptive-stream with the reference's message, its first error first;
+//! - [`decode_runs`]`(payload, order, cols, block, buffer, done)`: the same, a run of columns at
+//!   a time into reused buffers, each handed over as soon as it is decoded;
 //! - [`check_size`]`(cols, rows, payload_len)`: the up-front bound (at most 32768 integers a
 //!   byte), which a caller checks before it allocates the output.
 
@@ -557,21 +559,6 @@ pub fn decode_columns_into(
     order: &CodingOrder,
     out: &mut [i64],
 ) -> Result<(), Broken> {
-    decode_blocks(payload, order, out, 1, |_, _| {})
-}
-
-/// [`decode_columns_into`], handing each run of `block` columns (the last one may be shorter)
-/// to `done(first column, its integers)` as soon as it is decoded, so that a caller can use
-/// them while the next ones decode. A run handed over is final, but the stream is only known
-/// to be whole once this returns `Ok`. An order that is not proper (see [`CodingOrder`]) is
-/// decoded whole before its first run is handed over.
-pub fn decode_blocks<'o>(
-    payload: &[u8],
-    order: &CodingOrder,
-    out: &'o mut [i64],
-    block: usize,
-    mut done: impl FnMut(usize, &'o [i64]),
-) -> Result<(), Broken> {
     let rows = order.row_count;
     let cols = out.len().checked_div(rows).unwrap_or(0);
     check_size(cols, rows, payload.len())?;
@@ -582,32 +569,62 @@ pub fn decode_blocks<'o>(
         ));
     }
     let coder = RangeDecoder::new(payload)?;
-    let step = block.max(1) * rows;
     let Some(proper) = &order.proper else {
-        decode_general(coder, order, out)?.finish()?;
-        if step > 0 {
-            let out: &'o [i64] = out;
-            for (n, run) in out.chunks(step).enumerate() {
-                done(n * block.max(1), run);
+        return decode_general(coder, order, out)?.finish();
+    };
+    let mut decoder = ColumnDecoder::new(coder, rows);
+    if rows > 0 {
+        for column in out.chunks_exact_mut(rows) {
+            decoder.next_column(proper, order.mesh, column)?;
+        }
+    }
+    decoder.coder.finish()
+}
+
+/// The `cols` columns of an adaptive stream decoded into buffers of the caller's instead of one
+/// array, so that a caller can use each run of columns while the next ones decode: each
+/// run of `block` columns (the last one may be shorter) is decoded into the vector `buffer()`
+/// gives (resized to the run, its old values overwritten), then handed to `done(first column,
+/// the run)`, which may give it back through `buffer` once it is used. A caller that restores
+/// each run on another thread then needs a few runs' memory, not the whole matrix's. Checks
+/// [`check_size`] first; the errors are [`decode_columns_into`]'s; a run handed over is final, but
+/// the stream is only known to be whole once this returns `Ok`.
+pub fn decode_runs(
+    payload: &[u8],
+    order: &CodingOrder,
+    cols: usize,
+    block: usize,
+    mut buffer: impl FnMut() -> Vec<i64>,
+    mut done: impl FnMut(usize, Vec<i64>),
+) -> Result<(), Broken> {
+    let rows = order.row_count;
+    check_size(cols, rows, payload.len())?;
+    let coder = RangeDecoder::new(payload)?;
+    let block = block.max(1);
+    let Some(proper) = &order.proper else {
+        // within the bound: at most 2**15 integers a byte of a payload that exists
+        let mut out = vec![0i64; cols * rows];
+        decode_general(coder, order, &mut out)?.finish()?;
+        if rows > 0 {
+            for (n, run) in out.chunks(block * rows).enumerate() {
+                let mut vector = buffer();
+                vector.clear();
+                vector.extend_from_slice(run);
+                done(n * block, vector);
             }
         }
         return Ok(());
     };
     let mut decoder = ColumnDecoder::new(coder, rows);
-    if step > 0 {
-        for (n, run) in out.chunks_mut(step).enumerate() {
+    if rows > 0 {
+        for first in (0..cols).step_by(block) {
+            let mut run = buffer();
+            // every entry of a column is written: a reused vector's values need no clearing
+            run.resize(block.min(cols - first) * rows, 0);
             for column in run.chunks_exact_mut(rows) {
-                match proper {
-                    Proper::Sequence => decoder.sequence_column(column)?,
-                    Proper::Listed { steps, more } if order.mesh => {
-                        decoder.column::<true>(steps, more, column)?
-                    }
-                    Proper::Listed { steps, more } => {
-                        decoder.column::<false>(steps, more, column)?
-                    }
-                }
+                decoder.next_column(proper, order.mesh, column)?;
             }
-            done(n * block.max(1), run);
+            done(first, run);
         }
     }
     decoder.coder.finish()
@@ -700,6 +717,22 @@ impl<'a> ColumnDecoder<'a> {
 }
 
 impl ColumnDecoder<'_> {
+    /// The next column into `column` (the order's rows long), in the proper order `proper`
+    /// (`mesh`: U1's averaged neighbours).
+    #[inline]
+    fn next_column(
+        &mut self,
+        proper: &Proper,
+        mesh: bool,
+        column: &mut [i64],
+    ) -> Result<(), Broken> {
+        match proper {
+            Proper::Sequence => self.sequence_column(column),
+            Proper::Listed { steps, more } if mesh => self.column::<true>(steps, more, column),
+            Proper::Listed { steps, more } => self.column::<false>(steps, more, column),
+        }
+    }
+
     /// The next column into `column` in [`Proper::Sequence`]: [`ColumnDecoder::column`] with
     /// the two rows before in registers.
     #[inline(never)] // as `column`

@@ -435,3 +435,45 @@ fn the_fast_loops_code_as_the_general_ones() {
         }
     }
 }
+
+/// `decode_runs` over every kind of order: the runs of `decode_columns`' integers, whatever the
+/// buffers handed to it held (reused, too short, too long), and its errors.
+#[test]
+fn runs_into_reused_buffers_are_the_columns() {
+    let mut random = Random(0x2545_F491_4F6C_DD1D);
+    let (cols, rows) = (7, 60);
+    let orders = [
+        random_order(&mut random, rows, 6, true),
+        CodingOrder::sequence(rows),
+        general(&reversed(rows)),
+    ];
+    for order in orders {
+        let values = large_integers(&mut random, cols * rows);
+        let encoded = encode_columns(&values, cols, rows, &order).unwrap();
+        for block in [1, 3, 7, 10] {
+            let mut sizes = [0, 5, 4 * rows, 50 * rows].into_iter().cycle();
+            let mut runs = Vec::new();
+            decode_runs(
+                &encoded,
+                &order,
+                cols,
+                block,
+                || vec![-1; sizes.next().unwrap()],
+                |first, run| runs.push((first, run)),
+            )
+            .unwrap();
+            let firsts: Vec<usize> = runs.iter().map(|(first, _)| *first).collect();
+            assert_eq!(firsts, (0..cols).step_by(block).collect::<Vec<_>>());
+            let joined: Vec<i64> = runs.into_iter().flat_map(|(_, run)| run).collect();
+            assert_eq!(joined, values);
+        }
+        // the errors of decode_columns, whichever way it is decoded
+        for length in [0, 3, encoded.len() - 1] {
+            let payload = &encoded[..length];
+            let runs = decode_runs(payload, &order, cols, 2, Vec::new, |_, _| {});
+            assert_eq!(runs, decode_columns(payload, cols, &order).map(|_| ()));
+        }
+        let refused = decode_runs(&encoded[..1], &order, 32768 * rows, 2, Vec::new, |_, _| {});
+        assert_eq!(refused.unwrap_err().rule, RULE);
+    }
+}

@@ -6,6 +6,7 @@
 //! columns decode one after the other: a second thread restores each block of columns while
 //! the next ones decode.
 
+use std::cell::RefCell;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{mpsc, Mutex};
 
@@ -176,9 +177,6 @@ impl MeanPlan {
                 self.vertex_count
             )));
         }
-        // the bound before the integers' array is allocated
-        adaptive::check_size(width, height, payload.len())?;
-        let mut integers = vec![0i64; out.len()];
         let mut restorer = BlockRestorer {
             plan: self,
             planes,
@@ -189,26 +187,46 @@ impl MeanPlan {
             outcome: Outcome::default(),
             buffers: Default::default(),
         };
+        // the integers go through a few reused runs of columns, never the whole matrix's
+        // array: no 8 bytes an integer allocated and first touched while the stream decodes
         let (decoded, outcome) = if threads < 2 {
-            let decoded =
-                adaptive::decode_blocks(payload, order, &mut integers, VALUE_BLOCK, |f, b| {
-                    restorer.restore(f, b)
-                });
+            let spare = RefCell::new(Vec::new());
+            let decoded = adaptive::decode_runs(
+                payload,
+                order,
+                width,
+                VALUE_BLOCK,
+                || spare.take(),
+                |first, run| {
+                    restorer.restore(first, &run);
+                    spare.replace(run);
+                },
+            );
             (decoded, restorer.outcome)
         } else {
             std::thread::scope(|scope| {
-                let (send, receive) = mpsc::channel::<(usize, &[i64])>();
+                let (send, receive) = mpsc::channel::<(usize, Vec<i64>)>();
+                let (give_back, given_back) = mpsc::channel::<Vec<i64>>();
                 let restoring = scope.spawn(move || {
-                    for (first, block) in receive {
-                        restorer.restore(first, block);
+                    for (first, run) in receive {
+                        restorer.restore(first, &run);
+                        // the decoder may have finished: a run it no longer needs is dropped
+                        let _ = give_back.send(run);
                     }
                     restorer.outcome
                 });
-                let decoded =
-                    adaptive::decode_blocks(payload, order, &mut integers, VALUE_BLOCK, |f, b| {
+                // a run the restorer has given back, else a new one: the decoder never waits
+                let decoded = adaptive::decode_runs(
+                    payload,
+                    order,
+                    width,
+                    VALUE_BLOCK,
+                    || given_back.try_recv().unwrap_or_default(),
+                    |first, run| {
                         // the receiver ends only with its thread, which fails only on a bug
-                        let _ = send.send((f, b));
-                    });
+                        let _ = send.send((first, run));
+                    },
+                );
                 drop(send);
                 let outcome = restoring.join().unwrap_or_else(|_| Outcome {
                     outside_planes: false,
