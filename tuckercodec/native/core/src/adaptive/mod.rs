@@ -84,7 +84,8 @@ enum Proper {
     /// goes, the processor would mispredict).
     Listed {
         steps: Vec<Step>,
-        /// The sources past the first [`FIRST_SOURCES`] of every position, one after another.
+        /// The positions of the sources past the first [`FIRST_SOURCES`] of every position, one
+        /// after another.
         more: Vec<u32>,
     },
 }
@@ -97,10 +98,25 @@ const FIRST_SOURCES: usize = 4;
 #[derive(Debug, Clone, PartialEq, Eq)]
 struct Step {
     row: u32,
-    /// Its number of sources.
+    /// Its number of sources, and [`AFTER_SOURCE`] if the position just before is one.
     count: u32,
-    /// Its first sources, padded with the row count (a row whose magnitude is always 0).
+    /// The positions of its first sources in the order (not their rows: the magnitudes the
+    /// loops read are kept by position, where a mesh's neighbours lie close together), padded
+    /// with the row count (a position whose magnitude is always 0).
     first: [u32; FIRST_SOURCES],
+}
+
+/// The flag of [`Step::count`] that tells a position whose sources include the position just
+/// before it (rare in a mesh's order), whose context the decoder's loop cannot make before the
+/// integer before it is decoded.
+const AFTER_SOURCE: u32 = 1 << 31;
+
+impl Step {
+    /// Its number of sources.
+    #[inline(always)]
+    fn sources(&self) -> usize {
+        (self.count & !AFTER_SOURCE) as usize
+    }
 }
 
 /// The most sources of one row the fast loop takes: its saturated magnitudes give the exact
@@ -257,15 +273,21 @@ impl Proper {
             if mine.len() > MAX_FAST_SOURCES || mine.iter().any(|&w| position[w] >= j) {
                 return None;
             }
-            // rows below 2**32 (checked above), and so is the row count, the padding
+            // positions below 2**32 (checked above), and so is the row count, the padding
             let mut first = [row_count as u32; FIRST_SOURCES];
             for (slot, &w) in first.iter_mut().zip(mine) {
-                *slot = w as u32;
+                *slot = position[w] as u32;
             }
-            more.extend(mine.iter().skip(FIRST_SOURCES).map(|&w| w as u32));
+            more.extend(mine.iter().skip(FIRST_SOURCES).map(|&w| position[w] as u32));
+            // at most MAX_FAST_SOURCES: below the flag
+            let after = if mine.iter().any(|&w| position[w] + 1 == j) {
+                AFTER_SOURCE
+            } else {
+                0
+            };
             steps.push(Step {
                 row: row as u32,
-                count: mine.len() as u32,
+                count: mine.len() as u32 | after,
                 first,
             });
         }
@@ -425,14 +447,15 @@ fn encode_general(coder: &mut RangeEncoder, values: &[i64], cols: usize, order: 
     }
 }
 
-/// The context of a [`Proper::Listed`] order's `step` from the saturated magnitudes in
-/// `recent` (see [`ColumnDecoder`]), the sources past its first ones read from `more`; with its
-/// row and the row's magnitude in the column before. `MESH`: the neighbours are averaged (U1's),
-/// else the first counts twice and the second once. One function for the encoder's and the
-/// decoder's loops, inlined into both.
+/// The context of a [`Proper::Listed`] order's `step`, at position `j`, from the saturated
+/// magnitudes in `recent` (see [`ColumnDecoder`]), the sources past its first ones read from
+/// `more`; with its row and the row's magnitude in the column before. `MESH`: the neighbours
+/// are averaged (U1's), else the first counts twice and the second once. One function for the
+/// encoder's and the decoder's loops, inlined into both.
 #[inline(always)]
 fn step_context<const MESH: bool>(
     recent: &[[u32; 2]],
+    j: usize,
     step: &Step,
     more: &mut std::slice::Iter<'_, u32>,
 ) -> (usize, usize, u32) {
@@ -441,7 +464,7 @@ fn step_context<const MESH: bool>(
             .get(w as usize)
             .map_or(0, |magnitudes| u64::from(magnitudes[0]))
     };
-    let count = step.count as usize;
+    let count = step.sources();
     let [w, v, ..] = step.first;
     let a = if count == 0 {
         0
@@ -458,10 +481,9 @@ fn step_context<const MESH: bool>(
     } else {
         magnitude_class(2 * latest(w) + latest(v))
     };
-    let row = step.row as usize;
-    let [before, two_before] = recent.get(row).copied().unwrap_or_default();
+    let [before, two_before] = recent.get(j).copied().unwrap_or_default();
     let b = usize::from(left_class(u64::from(2 * before + two_before)));
-    (a * LEFT_CLASSES + b, row, before)
+    (a * LEFT_CLASSES + b, step.row as usize, before)
 }
 
 /// The context of row `r` in [`Proper::Sequence`]: from `one` and `two`, the saturated
@@ -485,8 +507,8 @@ fn sequence_context(r: usize, one: u64, two: u64, recent: [u32; 2]) -> (usize, u
 /// loop's streams), without its divisions and its reads of two other columns a row.
 struct ColumnEncoder {
     models: Box<[Context; CONTEXTS]>,
-    /// As [`ColumnDecoder`]'s: |x[r, c]| once row r of column c is coded, else |x[r, c - 1]|,
-    /// and the one before it.
+    /// As [`ColumnDecoder`]'s: by position j of the order (row r), |x[r, c]| once row r of
+    /// column c is coded, else |x[r, c - 1]|, and the one before it.
     recent: Vec<[u32; 2]>,
 }
 
@@ -511,11 +533,11 @@ impl ColumnEncoder {
         let models = &mut self.models;
         let recent = self.recent.as_mut_slice();
         let mut more = more.iter();
-        for step in steps {
-            let (context, row, before) = step_context::<MESH>(recent, step, &mut more);
+        for (j, step) in steps.iter().enumerate() {
+            let (context, row, before) = step_context::<MESH>(recent, j, step, &mut more);
             let value = column.get(row).copied().unwrap_or(0);
             encode_integer(coder, &mut models[context], value);
-            if let Some(slot) = recent.get_mut(row) {
+            if let Some(slot) = recent.get_mut(j) {
                 *slot = [saturated(value), before];
             }
         }
@@ -669,8 +691,11 @@ fn mean_class(x: u64, count: u64) -> usize {
 struct ColumnDecoder<'a> {
     coder: RangeDecoder<'a>,
     models: Box<[Context; CONTEXTS]>,
-    /// recent[r]: |x[r, c]| once row r of column c is decoded, |x[r, c - 1]| until then, and
-    /// the one before it.
+    /// recent[j] for position j of the order (row r): |x[r, c]| once row r of column c is
+    /// decoded, |x[r, c - 1]| until then, and the one before it. By position, not by row: a
+    /// mesh's neighbours, decoded close together, are read from a few cache lines (its
+    /// magnitudes by row are spread over more than a core's first-level cache), and each
+    /// position's own ones in order. In [`Proper::Sequence`], positions are the rows.
     recent: Vec<[u32; 2]>,
 }
 
@@ -700,14 +725,29 @@ impl<'a> ColumnDecoder<'a> {
         let models = &mut self.models;
         let recent = self.recent.as_mut_slice();
         let mut more = more.iter();
-        for step in steps {
-            let (context, row, before) = step_context::<MESH>(recent, step, &mut more);
+        let Some(first) = steps.first() else {
+            return Ok(());
+        };
+        let mut next = step_context::<MESH>(recent, 0, first, &mut more);
+        for j in 0..steps.len() {
+            let (context, row, before) = next;
+            // the next position's context before this one's decisions, unless this one is
+            // among its sources: after a mispredicted branch on the decisions, the next
+            // integer's first one does not wait for its context's loads and arithmetic again
+            let following = steps.get(j + 1);
+            let after = following.filter(|step| step.count & AFTER_SOURCE != 0);
+            if let Some(step) = following.filter(|_| after.is_none()) {
+                next = step_context::<MESH>(recent, j + 1, step, &mut more);
+            }
             let value = decode_integer(&mut coder, &mut models[context])?;
             if let Some(slot) = column.get_mut(row) {
                 *slot = value;
             }
-            if let Some(slot) = recent.get_mut(row) {
+            if let Some(slot) = recent.get_mut(j) {
                 *slot = [saturated(value), before];
+            }
+            if let Some(step) = after {
+                next = step_context::<MESH>(recent, j + 1, step, &mut more);
             }
         }
         self.coder = coder;

@@ -477,3 +477,23 @@ fn runs_into_reused_buffers_are_the_columns() {
         assert_eq!(refused.unwrap_err().rule, RULE);
     }
 }
+
+/// The decoder's loop makes a position's context before the integer before it is decoded,
+/// except where that integer is one of its sources: the flag says which, by position.
+#[test]
+fn positions_after_their_source_are_flagged() {
+    let flags = |order: &CodingOrder| match &order.proper {
+        Some(Proper::Listed { steps, .. }) => steps
+            .iter()
+            .map(|step| step.count & AFTER_SOURCE != 0)
+            .collect::<Vec<_>>(),
+        _ => panic!("a listed order"),
+    };
+    // each row after the rows after it: every position but the first follows a source
+    assert_eq!(flags(&reversed(4)), [false, true, true, true]);
+    // rows 3, 1, 4 after the roots 0 and 2: row 3 (sources 0, 2) follows root 2, row 1
+    // (sources 0, 3, 2) follows row 3, row 4 (sources 3, 1) follows row 1
+    assert_eq!(flags(&small_mesh()), [false, false, true, true, true]);
+    let spread = CodingOrder::new(&[0, 1, 2], &[0], &[0, 0, 0, 1], true, 3).unwrap();
+    assert_eq!(flags(&spread), [false, false, false]);
+}
