@@ -104,6 +104,27 @@ struct Step {
     /// loops read are kept by position, where a mesh's neighbours lie close together), padded
     /// with the row count (a position whose magnitude is always 0).
     first: [u32; FIRST_SOURCES],
+    /// For up to [`FIRST_SOURCES`] sources, 3 * 2**MEAN_SHIFT / count (0 for none): the mean's
+    /// floor(3 total / count) is (total * mean_scale) >> MEAN_SHIFT, exactly.
+    mean_scale: u32,
+}
+
+/// See [`Step::mean_scale`]: 3 * 2**30 / count is a whole number for counts 1, 2 and 4 (2**30
+/// for 3), and with totals of four magnitudes below 2**29 the product stays below 2**63.
+const MEAN_SHIFT: u32 = 30;
+
+/// [`Step::mean_scale`] of `count` sources.
+fn mean_scale(count: usize) -> u32 {
+    match count {
+        1..=FIRST_SOURCES => ((3u64 << MEAN_SHIFT) / count as u64) as u32,
+        _ => 0,
+    }
+}
+
+/// The number of bits of `x` (0 for 0).
+#[inline(always)]
+fn bit_length(x: u64) -> usize {
+    64 - x.leading_zeros() as usize
 }
 
 /// The flag of [`Step::count`] that tells a position whose sources include the position just
@@ -289,6 +310,7 @@ impl Proper {
                 row: row as u32,
                 count: mine.len() as u32 | after,
                 first,
+                mean_scale: mean_scale(mine.len()),
             });
         }
         Some(Proper::Listed { steps, more })
@@ -459,29 +481,34 @@ fn step_context<const MESH: bool>(
     step: &Step,
     more: &mut std::slice::Iter<'_, u32>,
 ) -> (usize, usize, u32) {
-    let latest = |w: u32| {
-        recent
-            .get(w as usize)
-            .map_or(0, |magnitudes| u64::from(magnitudes[0]))
+    // every source is a position below recent.len() (the order was checked, its padding
+    // included): clamped to the last one, the index is the same, and known to be in bounds
+    let Some(last) = recent.len().checked_sub(1) else {
+        return (0, step.row as usize, 0);
     };
+    let latest = |w: u32| u64::from(recent[(w as usize).min(last)][0]);
     let count = step.sources();
     let [w, v, ..] = step.first;
-    let a = if count == 0 {
-        0
-    } else if MESH {
+    let a = if MESH {
         // the padding adds 0s: no branch on the count
         let mut total: u64 = step.first.iter().map(|&w| latest(w)).sum();
-        if count > FIRST_SOURCES {
+        if count <= FIRST_SOURCES {
+            // floor(3 total / count) without a division (total < 2**31, mean_scale < 2**32)
+            let mean = (total * u64::from(step.mean_scale)) >> MEAN_SHIFT;
+            usize::from(count != 0) + bit_length(mean).min(NEIGHBOUR_CLASSES - 2)
+        } else {
             let others = more.by_ref().take(count - FIRST_SOURCES);
             total += others.map(|&w| latest(w)).sum::<u64>();
+            mean_class(3 * total, count as u64)
         }
-        mean_class(3 * total, count as u64)
+    } else if count == 0 {
+        0
     } else if count == 1 {
         magnitude_class(3 * latest(w))
     } else {
         magnitude_class(2 * latest(w) + latest(v))
     };
-    let [before, two_before] = recent.get(j).copied().unwrap_or_default();
+    let [before, two_before] = recent[j.min(last)];
     let b = usize::from(left_class(u64::from(2 * before + two_before)));
     (a * LEFT_CLASSES + b, step.row as usize, before)
 }

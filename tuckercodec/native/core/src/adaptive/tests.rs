@@ -497,3 +497,22 @@ fn positions_after_their_source_are_flagged() {
     let spread = CodingOrder::new(&[0, 1, 2], &[0], &[0, 0, 0, 1], true, 3).unwrap();
     assert_eq!(flags(&spread), [false, false, false]);
 }
+
+/// The fast loop's mean of up to four sources, a product and a shift: floor(3 total / count)
+/// exactly, up to the largest total of saturated magnitudes.
+#[test]
+fn the_scaled_mean_is_the_division() {
+    let mut random = Random(0x1405_7B7E_F767_814F);
+    let largest = 4 * u64::from(MAGNITUDE_CAP);
+    let mut totals: Vec<u64> = (0..64).flat_map(|b| [1u64 << b, (1u64 << b) - 1]).collect();
+    totals.extend((0..10_000).map(|_| random.next() % (largest + 1)));
+    totals.retain(|&t| t <= largest);
+    totals.push(largest);
+    assert_eq!(mean_scale(0), 0);
+    for count in 1..=FIRST_SOURCES {
+        let scale = u64::from(mean_scale(count));
+        for &total in &totals {
+            assert_eq!((total * scale) >> MEAN_SHIFT, 3 * total / count as u64);
+        }
+    }
+}
