@@ -42,7 +42,7 @@ from .format.sections import Section
 from .format.segments import BASIS_OWN, BASIS_SHARED, SegmentEntry
 from .model.attributes import Attribute, FaceSet, Field
 from .model.sequence import MeshSequence, default_frame_names
-from .model.topology import MAX_MEAN_LEVELS, MeshPrediction
+from .model.topology import MeshPrediction
 from .system import native
 
 #: A compressed file: its bytes, or a path to read it from.
@@ -236,17 +236,18 @@ class Decoder:
         )
 
     def _decode_u1_values(
-        self, section_id: str, mesh: Callable[[], MeshPrediction] | None = None
+        self, section_id: str, beside: Callable[[], object] | None = None
     ) -> np.ndarray:
-        """:meth:`_decode_u1`'s dequantized floats, for a file without corrections; ``mesh``
-        makes U1's mesh when it is needed (:meth:`_mesh_prediction` by default)."""
+        """:meth:`_decode_u1`'s dequantized floats, for a file without corrections; ``beside``
+        as :func:`qmat.decode_values` takes it."""
         return qmat.decode_values(
             self._payload(section_id),
             self._section(section_id).params,
-            self._mesh_prediction if mesh is None else mesh,
+            self._mesh_prediction,
             f"section {section_id}",
             coding_tools=self._container.coding_tools,
             adaptive_coding=self._container.adaptive,
+            beside=beside,
         )
 
     def _others_beside(self, segment: SegmentEntry) -> bool:
@@ -291,19 +292,14 @@ class Decoder:
             pool = self._early_pool or stack.enter_context(ThreadPoolExecutor(1))
             pending: list[Future[OtherFactors]] = []
 
-            def mesh_then_others() -> MeshPrediction:
-                # U1's Python work first (its mesh, predictor 2's steps), then the others':
-                # either waits for the GIL while the other holds it, and U1's stream then
-                # decodes without it
-                mesh = self._mesh_prediction()
-                if mesh.levels <= MAX_MEAN_LEVELS:
-                    _ = mesh.mean_steps
+            def start_others() -> None:
+                # once U1's Python work is done and its stream decodes without the GIL: the
+                # others' Python work then waits for no GIL, nor U1's for theirs
                 if not pending:
                     pending.append(pool.submit(self._other_factors, segment))
-                return mesh
 
             try:
-                u1 = self._decode_u1_values(section_id, mesh_then_others)
+                u1 = self._decode_u1_values(section_id, start_others)
             finally:
                 for decoding in pending:  # its error, if any, comes after U1's
                     decoding.exception()
