@@ -192,8 +192,8 @@ def _with_payloads(data: bytes, change: dict[str, Callable[[bytes], bytes]]) -> 
 
 def test_a_file_reports_its_first_broken_factor(monkeypatch: pytest.MonkeyPatch) -> None:
     """U3, CORE and CENT decode on a thread beside U1 in the compiled core (here whatever their
-    size): the error reported is still the first in §5 step 16's order, U1's before theirs, as
-    in pure Python."""
+    size, their thread started before FACE is read): the error reported is still the first in
+    §5's order, FACE's before theirs, U1's before theirs, as in pure Python."""
     monkeypatch.setattr(decoder, "BESIDE_U1", 1)
     sequence = MeshSequence(wave_sequence(60, 20), grid_faces(20))
     data = encode(sequence, target_kg=0.02)
@@ -202,7 +202,9 @@ def test_a_file_reports_its_first_broken_factor(monkeypatch: pytest.MonkeyPatch)
     _alike(lambda d: Decoder(d).frame(0), data)
     cut: Callable[[bytes], bytes] = lambda payload: payload[:-1]  # noqa: E731
     longer: Callable[[bytes], bytes] = lambda payload: payload + b"\0"  # noqa: E731
-    for broken in [("U1",), ("U3",), ("CORE", "CENT"), ("U1", "U3"), ("U1", "CENT"), ("CENT",)]:
+    # the others' thread starts before FACE is read: FACE's error comes first too
+    broken_sets = [("U1",), ("U3",), ("CORE", "CENT"), ("U1", "U3"), ("U1", "CENT"), ("CENT",)]
+    for broken in [*broken_sets, ("FACE", "U3"), ("FACE", "CORE", "U1")]:
         for change in (cut, longer):
             damaged = _with_payloads(data, dict.fromkeys(broken, change))
             outcome = _alike(lambda d: Decoder(d).frame(0), damaged)

@@ -23,8 +23,8 @@ import operator
 import os
 from collections import OrderedDict
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import ThreadPoolExecutor
-from contextlib import contextmanager
+from concurrent.futures import Future, ThreadPoolExecutor
+from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -83,6 +83,9 @@ class SegmentFactors:
     exact_basis: np.ndarray | None = None
 
 
+#: A segment's dequantized U3, CORE and CENT.
+OtherFactors = tuple[np.ndarray, np.ndarray, np.ndarray]
+
 #: Decoded segments a :class:`Decoder` keeps, most recent first: playback walks forward.
 CACHED_SEGMENTS = 2
 #: Decoded chunks of corrections kept (about a million integers each, §6.9).
@@ -133,19 +136,30 @@ class Decoder:
             self.info = read_header(self._container, limits)
             self._index = self._segment_index()
             self._starts = np.array([segment.start for segment in self._index], dtype=np.int64)
-            face = self._section("FACE")
-            self.faces = faces.decode_face_section(
-                face.codec,
-                self._payload("FACE"),
-                face.params,
-                self.info.vertices,
-                "section FACE",
-                limits,
-                adaptive_coding=self._container.adaptive,  # §6.8's coder 1 only in format 1.6
-            )
-            self._coded_faces = self.faces  # as FACE decodes them: U1's mesh predictors' faces
-            if not self.segmented:  # §5 steps 16-17 in order: U1, U3, CORE, CENT, then NAME
-                self.segment_factors(0)
+            # a file decoded at once whose U3, CORE and CENT are decoded beside U1: their
+            # thread started now, so that handing them to it later costs the open nothing
+            self._early_pool: ThreadPoolExecutor | None = None
+            if not self.segmented and self._others_beside(self._index[0]):
+                self._early_pool = ThreadPoolExecutor(1)
+                self._early_pool.submit(int)
+            try:
+                face = self._section("FACE")
+                self.faces = faces.decode_face_section(
+                    face.codec,
+                    self._payload("FACE"),
+                    face.params,
+                    self.info.vertices,
+                    "section FACE",
+                    limits,
+                    adaptive_coding=self._container.adaptive,  # §6.8's coder 1 only in 1.6
+                )
+                self._coded_faces = self.faces  # as FACE decodes them: U1's mesh's faces
+                if not self.segmented:  # §5 steps 16-17 in order: U1, U3, CORE, CENT, NAME
+                    self.segment_factors(0)
+            finally:
+                if self._early_pool is not None:
+                    self._early_pool.shutdown()
+                    self._early_pool = None
             self.frame_names = self._decode_names()
             if self._container.corrections and not self.segmented:
                 self._segments[0] = self._with_corrections(self._segments[0], self._index[0])
@@ -224,8 +238,11 @@ class Decoder:
             adaptive_coding=self._container.adaptive,  # §6.14 only in format 1.6
         )
 
-    def _decode_u1_values(self, section_id: str) -> np.ndarray:
-        """:meth:`_decode_u1`'s dequantized floats, for a file without corrections."""
+    def _decode_u1_values(
+        self, section_id: str, beside: Callable[[], object] | None = None
+    ) -> np.ndarray:
+        """:meth:`_decode_u1`'s dequantized floats, for a file without corrections; ``beside``
+        as :func:`qmat.decode_values` takes it."""
         return qmat.decode_values(
             self._payload(section_id),
             self._section(section_id).params,
@@ -233,31 +250,63 @@ class Decoder:
             f"section {section_id}",
             coding_tools=self._container.coding_tools,
             adaptive_coding=self._container.adaptive,
+            beside=beside,
         )
 
-    def _u1_values_beside(
-        self,
-        segment: SegmentEntry,
-        others: Callable[[], tuple[np.ndarray, np.ndarray, np.ndarray]],
-    ) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray] | None]:
-        """The segment's U1 (:meth:`_decode_u1_values`), and ``others()`` (U3, CORE and CENT)
-        on a second thread meanwhile where that gains time: in a file held in memory whose
-        other factors hold many adaptively coded integers (§6.14), which the compiled core
-        decodes one at a time with the GIL released. ``None`` for the others where they are
-        left to the caller. An error of U1 comes first, as in §5 step 16's order (the others'
-        thread is waited for)."""
-        section_id = self._section_id(segment, "U1")
-        beside = (
-            isinstance(self._data, (bytes, memoryview))  # FileRanges counts its reads
+    def _others_beside(self, segment: SegmentEntry) -> bool:
+        """Whether the segment's U3, CORE and CENT are decoded on a second thread while U1
+        decodes, where that gains time: a segment with its own U1 and no corrections, in a
+        file held in memory whose other factors hold many adaptively coded integers (§6.14),
+        which the compiled core decodes one at a time with the GIL released."""
+        return (
+            segment.basis != BASIS_SHARED
+            and not self._container.corrections
+            and isinstance(self._data, (bytes, memoryview))  # FileRanges counts its reads
             and native.core() is not None
             and self._adaptive_integers(segment) >= BESIDE_U1
         )
-        if not beside:
+
+    def _other_factors(self, segment: SegmentEntry) -> OtherFactors:
+        """The segment's dequantized U3, CORE and CENT, in §5 step 16's order."""
+
+        def matrix(stem: str, allow_predict: bool = True) -> np.ndarray:
+            section_id = self._section_id(segment, stem)
+            return qmat.decode_matrix(
+                self._payload(section_id),
+                self._section(section_id).params,
+                None,  # U3 and CENT: the previous frame; CORE: nothing
+                f"section {section_id}",
+                allow_predict=allow_predict,
+                coding_tools=self._container.coding_tools,  # predictor 3 only in 1.2
+                adaptive_coding=self._container.adaptive,
+            ).values()
+
+        return matrix("U3"), matrix("CORE", allow_predict=False), matrix("CENT")
+
+    def _u1_values_beside(self, segment: SegmentEntry) -> tuple[np.ndarray, OtherFactors | None]:
+        """The segment's U1 (:meth:`_decode_u1_values`), and its U3, CORE and CENT
+        (:meth:`_other_factors`) on a second thread meanwhile where :meth:`_others_beside`
+        says so. ``None`` for the others where they are left to the caller. An error of U1
+        comes first, as in §5 step 16's order (the others' thread is waited for)."""
+        section_id = self._section_id(segment, "U1")
+        if not self._others_beside(segment):
             return self._decode_u1_values(section_id), None
-        with ThreadPoolExecutor(1) as pool:
-            decoding = pool.submit(others)
-            u1 = self._decode_u1_values(section_id)
-            return u1, decoding.result()
+        with ExitStack() as stack:
+            pool = self._early_pool or stack.enter_context(ThreadPoolExecutor(1))
+            pending: list[Future[OtherFactors]] = []
+
+            def start_others() -> None:
+                # once U1's Python work is done and its stream decodes without the GIL: the
+                # others' Python work then waits for no GIL, nor U1's for theirs
+                if not pending:
+                    pending.append(pool.submit(self._other_factors, segment))
+
+            try:
+                u1 = self._decode_u1_values(section_id, start_others)
+            finally:
+                for decoding in pending:  # its error, if any, comes after U1's
+                    decoding.exception()
+            return u1, pending[0].result() if pending else self._other_factors(segment)
 
     def _adaptive_integers(self, segment: SegmentEntry) -> int:
         """How many integers the segment's U3, CORE and CENT say they code adaptively (§6.14),
@@ -280,22 +329,6 @@ class Decoder:
         segment = self._index[number]
         i, k = segment.ranks
         with self._naming_path():
-
-            def matrix(stem: str, allow_predict: bool = True) -> np.ndarray:
-                section_id = self._section_id(segment, stem)
-                return qmat.decode_matrix(
-                    self._payload(section_id),
-                    self._section(section_id).params,
-                    None,  # U3 and CENT: the previous frame; CORE: nothing
-                    f"section {section_id}",
-                    allow_predict=allow_predict,
-                    coding_tools=self._container.coding_tools,  # predictor 3 only in 1.2
-                    adaptive_coding=self._container.adaptive,
-                ).values()
-
-            def others() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-                return matrix("U3"), matrix("CORE", allow_predict=False), matrix("CENT")
-
             u1_quantized: qmat.QuantizedMatrix | None
             decoded_others = None
             if segment.basis == BASIS_SHARED:
@@ -324,8 +357,10 @@ class Decoder:
                 u1 = u1_quantized.values()
             else:
                 u1_quantized = None
-                u1, decoded_others = self._u1_values_beside(segment, others)
-            u3, core, centroids = others() if decoded_others is None else decoded_others
+                u1, decoded_others = self._u1_values_beside(segment)
+            u3, core, centroids = (
+                self._other_factors(segment) if decoded_others is None else decoded_others
+            )
             core = core.reshape(i, 3, k)
         u2 = np.array(segment.u2, dtype=np.float64).reshape(3, 3)
         with np.errstate(over="ignore", invalid="ignore"):  # an overflow is R36, found per frame

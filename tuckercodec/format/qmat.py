@@ -454,13 +454,16 @@ def decode_values(
     *,
     coding_tools: bool = False,
     adaptive_coding: bool = False,
+    beside: Callable[[], object] | None = None,
 ) -> np.ndarray:
     """``decode_matrix(...).values()`` of a section whose rows follow a mesh (U1), for a caller
     that needs no integers. When every column has predictor 2 (U1's usual case) the compiled
     core goes from the stream's bytes to the floats in one pass, its threads sharing the
     columns, without the int64 matrix (as large as the floats); from an adaptive stream
     (§6.14), which decodes a column after the other, one thread restores while another
-    decodes."""
+    decodes. ``beside``, if given, is called once the compiled core is about to decode with
+    the GIL released (after the Python work before it, which then waits for no other thread's
+    GIL); it is not called where the matrix is decoded otherwise."""
     core = native.core()
     rows, cols, planes, steps, predict = _checked_params(params, where, True, True, coding_tools)
     pushes = _pushes(params, where, cols, adaptive_coding)
@@ -476,11 +479,20 @@ def decode_values(
         ).values()
     if not zstd:
         return _adaptive_values(
-            core, payload, params, parents, where, coding_tools, (rows, planes, steps, pushes)
+            core,
+            payload,
+            params,
+            parents,
+            where,
+            coding_tools,
+            (rows, planes, steps, pushes),
+            beside,
         )
     raw = streams.decompress_exact(payload, rows * cols * planes, where)
     mesh = parents() if callable(parents) else parents
     plan = _mean_mesh(mesh if isinstance(mesh, MeshPrediction) else None, where).native_plan()
+    if beside is not None:
+        beside()
     try:
         values: np.ndarray = (
             plan.restore_values(raw, planes, rows, steps, 0)
@@ -500,10 +512,12 @@ def _adaptive_values(
     where: str,
     coding_tools: bool,
     checked: tuple[int, int, np.ndarray, np.ndarray],
+    beside: Callable[[], object] | None = None,
 ) -> np.ndarray:
     """:func:`decode_values` of an adaptive stream (§6.14) whose every column has predictor 2:
     the compiled core decodes it and restores each block of columns on a second thread while
-    the next ones decode. ``checked``: the section's rows, planes, steps and pushes."""
+    the next ones decode. ``checked``: the section's rows, planes, steps and pushes;
+    ``beside``: :func:`decode_values`'."""
     rows, planes, steps, pushes = checked
     mesh = parents() if callable(parents) else parents
     if not isinstance(mesh, MeshPrediction) or mesh.levels > MAX_MEAN_LEVELS:
@@ -514,9 +528,12 @@ def _adaptive_values(
     plan = _mean_mesh(mesh, where).native_plan()
     order = adaptive.order_arrays(coding_order(mesh, rows))
     push = None if (pushes == PUSH).all() else pushes
+    stream = bytes(payload)
+    if beside is not None:
+        beside()
     try:
         values: np.ndarray = plan.restore_adaptive_values(
-            bytes(payload), *order, planes, rows, steps, 0, push
+            stream, *order, planes, rows, steps, 0, push
         )
     except core.Broken as error:
         adaptive.refuse(error.args[1], where)

@@ -248,14 +248,12 @@ impl MeanPlan {
         let push = pushes(push, width)?;
         // the bound first: nothing is allocated for a size the payload cannot hold
         adaptive::check_size(width, height, payload.len()).map_err(broken)?;
-        let order = CodingOrder::new(
-            order.as_slice()?,
-            sources.as_slice()?,
-            ends.as_slice()?,
-            true,
-            height,
-        )
-        .map_err(|error| PyValueError::new_err(error.to_string()))?;
+        let (order, sources, ends) = (order.as_slice()?, sources.as_slice()?, ends.as_slice()?);
+        // the order is checked and made without the GIL too: a thread waiting for it (U3's,
+        // beside U1) starts at once
+        let order = py
+            .detach(|| CodingOrder::new(order, sources, ends, true, height))
+            .map_err(|error| PyValueError::new_err(error.to_string()))?;
         let array = PyArray2::<f64>::zeros(py, [height, width], false);
         {
             let mut writable = array.readwrite();

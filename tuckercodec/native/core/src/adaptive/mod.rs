@@ -13,6 +13,8 @@
 //! - [`encode_columns`]`(values, cols, rows, order)`: the stream's bytes;
 //! - [`decode_columns`] / [`decode_columns_into`]`(payload, order, out)`: the integers, or
 //!   R46-adaptive-stream with the reference's message, its first error first;
+//! - [`decode_runs`]`(payload, order, cols, block, buffer, done)`: the same, a run of columns at
+//!   a time into reused buffers, each handed over as soon as it is decoded;
 //! - [`check_size`]`(cols, rows, payload_len)`: the up-front bound (at most 32768 integers a
 //!   byte), which a caller checks before it allocates the output.
 
@@ -82,7 +84,8 @@ enum Proper {
     /// goes, the processor would mispredict).
     Listed {
         steps: Vec<Step>,
-        /// The sources past the first [`FIRST_SOURCES`] of every position, one after another.
+        /// The positions of the sources past the first [`FIRST_SOURCES`] of every position, one
+        /// after another.
         more: Vec<u32>,
     },
 }
@@ -95,10 +98,46 @@ const FIRST_SOURCES: usize = 4;
 #[derive(Debug, Clone, PartialEq, Eq)]
 struct Step {
     row: u32,
-    /// Its number of sources.
+    /// Its number of sources, and [`AFTER_SOURCE`] if the position just before is one.
     count: u32,
-    /// Its first sources, padded with the row count (a row whose magnitude is always 0).
+    /// The positions of its first sources in the order (not their rows: the magnitudes the
+    /// loops read are kept by position, where a mesh's neighbours lie close together), padded
+    /// with the row count (a position whose magnitude is always 0).
     first: [u32; FIRST_SOURCES],
+    /// For up to [`FIRST_SOURCES`] sources, 3 * 2**MEAN_SHIFT / count (0 for none): the mean's
+    /// floor(3 total / count) is (total * mean_scale) >> MEAN_SHIFT, exactly.
+    mean_scale: u32,
+}
+
+/// See [`Step::mean_scale`]: 3 * 2**30 / count is a whole number for counts 1, 2 and 4 (2**30
+/// for 3), and with totals of four magnitudes below 2**29 the product stays below 2**63.
+const MEAN_SHIFT: u32 = 30;
+
+/// [`Step::mean_scale`] of `count` sources.
+fn mean_scale(count: usize) -> u32 {
+    match count {
+        1..=FIRST_SOURCES => ((3u64 << MEAN_SHIFT) / count as u64) as u32,
+        _ => 0,
+    }
+}
+
+/// The number of bits of `x` (0 for 0).
+#[inline(always)]
+fn bit_length(x: u64) -> usize {
+    64 - x.leading_zeros() as usize
+}
+
+/// The flag of [`Step::count`] that tells a position whose sources include the position just
+/// before it (rare in a mesh's order), whose context the decoder's loop cannot make before the
+/// integer before it is decoded.
+const AFTER_SOURCE: u32 = 1 << 31;
+
+impl Step {
+    /// Its number of sources.
+    #[inline(always)]
+    fn sources(&self) -> usize {
+        (self.count & !AFTER_SOURCE) as usize
+    }
 }
 
 /// The most sources of one row the fast loop takes: its saturated magnitudes give the exact
@@ -255,16 +294,23 @@ impl Proper {
             if mine.len() > MAX_FAST_SOURCES || mine.iter().any(|&w| position[w] >= j) {
                 return None;
             }
-            // rows below 2**32 (checked above), and so is the row count, the padding
+            // positions below 2**32 (checked above), and so is the row count, the padding
             let mut first = [row_count as u32; FIRST_SOURCES];
             for (slot, &w) in first.iter_mut().zip(mine) {
-                *slot = w as u32;
+                *slot = position[w] as u32;
             }
-            more.extend(mine.iter().skip(FIRST_SOURCES).map(|&w| w as u32));
+            more.extend(mine.iter().skip(FIRST_SOURCES).map(|&w| position[w] as u32));
+            // at most MAX_FAST_SOURCES: below the flag
+            let after = if mine.iter().any(|&w| position[w] + 1 == j) {
+                AFTER_SOURCE
+            } else {
+                0
+            };
             steps.push(Step {
                 row: row as u32,
-                count: mine.len() as u32,
+                count: mine.len() as u32 | after,
                 first,
+                mean_scale: mean_scale(mine.len()),
             });
         }
         Some(Proper::Listed { steps, more })
@@ -423,43 +469,48 @@ fn encode_general(coder: &mut RangeEncoder, values: &[i64], cols: usize, order: 
     }
 }
 
-/// The context of a [`Proper::Listed`] order's `step` from the saturated magnitudes in
-/// `recent` (see [`ColumnDecoder`]), the sources past its first ones read from `more`; with its
-/// row and the row's magnitude in the column before. `MESH`: the neighbours are averaged (U1's),
-/// else the first counts twice and the second once. One function for the encoder's and the
-/// decoder's loops, inlined into both.
+/// The context of a [`Proper::Listed`] order's `step`, at position `j`, from the saturated
+/// magnitudes in `recent` (see [`ColumnDecoder`]), the sources past its first ones read from
+/// `more`; with its row and the row's magnitude in the column before. `MESH`: the neighbours
+/// are averaged (U1's), else the first counts twice and the second once. One function for the
+/// encoder's and the decoder's loops, inlined into both.
 #[inline(always)]
 fn step_context<const MESH: bool>(
     recent: &[[u32; 2]],
+    j: usize,
     step: &Step,
     more: &mut std::slice::Iter<'_, u32>,
 ) -> (usize, usize, u32) {
-    let latest = |w: u32| {
-        recent
-            .get(w as usize)
-            .map_or(0, |magnitudes| u64::from(magnitudes[0]))
+    // every source is a position below recent.len() (the order was checked, its padding
+    // included): clamped to the last one, the index is the same, and known to be in bounds
+    let Some(last) = recent.len().checked_sub(1) else {
+        return (0, step.row as usize, 0);
     };
-    let count = step.count as usize;
+    let latest = |w: u32| u64::from(recent[(w as usize).min(last)][0]);
+    let count = step.sources();
     let [w, v, ..] = step.first;
-    let a = if count == 0 {
-        0
-    } else if MESH {
+    let a = if MESH {
         // the padding adds 0s: no branch on the count
         let mut total: u64 = step.first.iter().map(|&w| latest(w)).sum();
-        if count > FIRST_SOURCES {
+        if count <= FIRST_SOURCES {
+            // floor(3 total / count) without a division (total < 2**31, mean_scale < 2**32)
+            let mean = (total * u64::from(step.mean_scale)) >> MEAN_SHIFT;
+            usize::from(count != 0) + bit_length(mean).min(NEIGHBOUR_CLASSES - 2)
+        } else {
             let others = more.by_ref().take(count - FIRST_SOURCES);
             total += others.map(|&w| latest(w)).sum::<u64>();
+            mean_class(3 * total, count as u64)
         }
-        mean_class(3 * total, count as u64)
+    } else if count == 0 {
+        0
     } else if count == 1 {
         magnitude_class(3 * latest(w))
     } else {
         magnitude_class(2 * latest(w) + latest(v))
     };
-    let row = step.row as usize;
-    let [before, two_before] = recent.get(row).copied().unwrap_or_default();
+    let [before, two_before] = recent[j.min(last)];
     let b = usize::from(left_class(u64::from(2 * before + two_before)));
-    (a * LEFT_CLASSES + b, row, before)
+    (a * LEFT_CLASSES + b, step.row as usize, before)
 }
 
 /// The context of row `r` in [`Proper::Sequence`]: from `one` and `two`, the saturated
@@ -483,8 +534,8 @@ fn sequence_context(r: usize, one: u64, two: u64, recent: [u32; 2]) -> (usize, u
 /// loop's streams), without its divisions and its reads of two other columns a row.
 struct ColumnEncoder {
     models: Box<[Context; CONTEXTS]>,
-    /// As [`ColumnDecoder`]'s: |x[r, c]| once row r of column c is coded, else |x[r, c - 1]|,
-    /// and the one before it.
+    /// As [`ColumnDecoder`]'s: by position j of the order (row r), |x[r, c]| once row r of
+    /// column c is coded, else |x[r, c - 1]|, and the one before it.
     recent: Vec<[u32; 2]>,
 }
 
@@ -509,11 +560,11 @@ impl ColumnEncoder {
         let models = &mut self.models;
         let recent = self.recent.as_mut_slice();
         let mut more = more.iter();
-        for step in steps {
-            let (context, row, before) = step_context::<MESH>(recent, step, &mut more);
+        for (j, step) in steps.iter().enumerate() {
+            let (context, row, before) = step_context::<MESH>(recent, j, step, &mut more);
             let value = column.get(row).copied().unwrap_or(0);
             encode_integer(coder, &mut models[context], value);
-            if let Some(slot) = recent.get_mut(row) {
+            if let Some(slot) = recent.get_mut(j) {
                 *slot = [saturated(value), before];
             }
         }
@@ -557,21 +608,6 @@ pub fn decode_columns_into(
     order: &CodingOrder,
     out: &mut [i64],
 ) -> Result<(), Broken> {
-    decode_blocks(payload, order, out, 1, |_, _| {})
-}
-
-/// [`decode_columns_into`], handing each run of `block` columns (the last one may be shorter)
-/// to `done(first column, its integers)` as soon as it is decoded, so that a caller can use
-/// them while the next ones decode. A run handed over is final, but the stream is only known
-/// to be whole once this returns `Ok`. An order that is not proper (see [`CodingOrder`]) is
-/// decoded whole before its first run is handed over.
-pub fn decode_blocks<'o>(
-    payload: &[u8],
-    order: &CodingOrder,
-    out: &'o mut [i64],
-    block: usize,
-    mut done: impl FnMut(usize, &'o [i64]),
-) -> Result<(), Broken> {
     let rows = order.row_count;
     let cols = out.len().checked_div(rows).unwrap_or(0);
     check_size(cols, rows, payload.len())?;
@@ -582,32 +618,62 @@ pub fn decode_blocks<'o>(
         ));
     }
     let coder = RangeDecoder::new(payload)?;
-    let step = block.max(1) * rows;
     let Some(proper) = &order.proper else {
-        decode_general(coder, order, out)?.finish()?;
-        if step > 0 {
-            let out: &'o [i64] = out;
-            for (n, run) in out.chunks(step).enumerate() {
-                done(n * block.max(1), run);
+        return decode_general(coder, order, out)?.finish();
+    };
+    let mut decoder = ColumnDecoder::new(coder, rows);
+    if rows > 0 {
+        for column in out.chunks_exact_mut(rows) {
+            decoder.next_column(proper, order.mesh, column)?;
+        }
+    }
+    decoder.coder.finish()
+}
+
+/// The `cols` columns of an adaptive stream decoded into buffers of the caller's instead of one
+/// array, so that a caller can use each run of columns while the next ones decode: each
+/// run of `block` columns (the last one may be shorter) is decoded into the vector `buffer()`
+/// gives (resized to the run, its old values overwritten), then handed to `done(first column,
+/// the run)`, which may give it back through `buffer` once it is used. A caller that restores
+/// each run on another thread then needs a few runs' memory, not the whole matrix's. Checks
+/// [`check_size`] first; the errors are [`decode_columns_into`]'s; a run handed over is final, but
+/// the stream is only known to be whole once this returns `Ok`.
+pub fn decode_runs(
+    payload: &[u8],
+    order: &CodingOrder,
+    cols: usize,
+    block: usize,
+    mut buffer: impl FnMut() -> Vec<i64>,
+    mut done: impl FnMut(usize, Vec<i64>),
+) -> Result<(), Broken> {
+    let rows = order.row_count;
+    check_size(cols, rows, payload.len())?;
+    let coder = RangeDecoder::new(payload)?;
+    let block = block.max(1);
+    let Some(proper) = &order.proper else {
+        // within the bound: at most 2**15 integers a byte of a payload that exists
+        let mut out = vec![0i64; cols * rows];
+        decode_general(coder, order, &mut out)?.finish()?;
+        if rows > 0 {
+            for (n, run) in out.chunks(block * rows).enumerate() {
+                let mut vector = buffer();
+                vector.clear();
+                vector.extend_from_slice(run);
+                done(n * block, vector);
             }
         }
         return Ok(());
     };
     let mut decoder = ColumnDecoder::new(coder, rows);
-    if step > 0 {
-        for (n, run) in out.chunks_mut(step).enumerate() {
+    if rows > 0 {
+        for first in (0..cols).step_by(block) {
+            let mut run = buffer();
+            // every entry of a column is written: a reused vector's values need no clearing
+            run.resize(block.min(cols - first) * rows, 0);
             for column in run.chunks_exact_mut(rows) {
-                match proper {
-                    Proper::Sequence => decoder.sequence_column(column)?,
-                    Proper::Listed { steps, more } if order.mesh => {
-                        decoder.column::<true>(steps, more, column)?
-                    }
-                    Proper::Listed { steps, more } => {
-                        decoder.column::<false>(steps, more, column)?
-                    }
-                }
+                decoder.next_column(proper, order.mesh, column)?;
             }
-            done(n * block.max(1), run);
+            done(first, run);
         }
     }
     decoder.coder.finish()
@@ -652,8 +718,11 @@ fn mean_class(x: u64, count: u64) -> usize {
 struct ColumnDecoder<'a> {
     coder: RangeDecoder<'a>,
     models: Box<[Context; CONTEXTS]>,
-    /// recent[r]: |x[r, c]| once row r of column c is decoded, |x[r, c - 1]| until then, and
-    /// the one before it.
+    /// recent[j] for position j of the order (row r): |x[r, c]| once row r of column c is
+    /// decoded, |x[r, c - 1]| until then, and the one before it. By position, not by row: a
+    /// mesh's neighbours, decoded close together, are read from a few cache lines (its
+    /// magnitudes by row are spread over more than a core's first-level cache), and each
+    /// position's own ones in order. In [`Proper::Sequence`], positions are the rows.
     recent: Vec<[u32; 2]>,
 }
 
@@ -683,14 +752,29 @@ impl<'a> ColumnDecoder<'a> {
         let models = &mut self.models;
         let recent = self.recent.as_mut_slice();
         let mut more = more.iter();
-        for step in steps {
-            let (context, row, before) = step_context::<MESH>(recent, step, &mut more);
+        let Some(first) = steps.first() else {
+            return Ok(());
+        };
+        let mut next = step_context::<MESH>(recent, 0, first, &mut more);
+        for j in 0..steps.len() {
+            let (context, row, before) = next;
+            // the next position's context before this one's decisions, unless this one is
+            // among its sources: after a mispredicted branch on the decisions, the next
+            // integer's first one does not wait for its context's loads and arithmetic again
+            let following = steps.get(j + 1);
+            let after = following.filter(|step| step.count & AFTER_SOURCE != 0);
+            if let Some(step) = following.filter(|_| after.is_none()) {
+                next = step_context::<MESH>(recent, j + 1, step, &mut more);
+            }
             let value = decode_integer(&mut coder, &mut models[context])?;
             if let Some(slot) = column.get_mut(row) {
                 *slot = value;
             }
-            if let Some(slot) = recent.get_mut(row) {
+            if let Some(slot) = recent.get_mut(j) {
                 *slot = [saturated(value), before];
+            }
+            if let Some(step) = after {
+                next = step_context::<MESH>(recent, j + 1, step, &mut more);
             }
         }
         self.coder = coder;
@@ -700,6 +784,22 @@ impl<'a> ColumnDecoder<'a> {
 }
 
 impl ColumnDecoder<'_> {
+    /// The next column into `column` (the order's rows long), in the proper order `proper`
+    /// (`mesh`: U1's averaged neighbours).
+    #[inline]
+    fn next_column(
+        &mut self,
+        proper: &Proper,
+        mesh: bool,
+        column: &mut [i64],
+    ) -> Result<(), Broken> {
+        match proper {
+            Proper::Sequence => self.sequence_column(column),
+            Proper::Listed { steps, more } if mesh => self.column::<true>(steps, more, column),
+            Proper::Listed { steps, more } => self.column::<false>(steps, more, column),
+        }
+    }
+
     /// The next column into `column` in [`Proper::Sequence`]: [`ColumnDecoder::column`] with
     /// the two rows before in registers.
     #[inline(never)] // as `column`

@@ -435,3 +435,84 @@ fn the_fast_loops_code_as_the_general_ones() {
         }
     }
 }
+
+/// `decode_runs` over every kind of order: the runs of `decode_columns`' integers, whatever the
+/// buffers handed to it held (reused, too short, too long), and its errors.
+#[test]
+fn runs_into_reused_buffers_are_the_columns() {
+    let mut random = Random(0x2545_F491_4F6C_DD1D);
+    let (cols, rows) = (7, 60);
+    let orders = [
+        random_order(&mut random, rows, 6, true),
+        CodingOrder::sequence(rows),
+        general(&reversed(rows)),
+    ];
+    for order in orders {
+        let values = large_integers(&mut random, cols * rows);
+        let encoded = encode_columns(&values, cols, rows, &order).unwrap();
+        for block in [1, 3, 7, 10] {
+            let mut sizes = [0, 5, 4 * rows, 50 * rows].into_iter().cycle();
+            let mut runs = Vec::new();
+            decode_runs(
+                &encoded,
+                &order,
+                cols,
+                block,
+                || vec![-1; sizes.next().unwrap()],
+                |first, run| runs.push((first, run)),
+            )
+            .unwrap();
+            let firsts: Vec<usize> = runs.iter().map(|(first, _)| *first).collect();
+            assert_eq!(firsts, (0..cols).step_by(block).collect::<Vec<_>>());
+            let joined: Vec<i64> = runs.into_iter().flat_map(|(_, run)| run).collect();
+            assert_eq!(joined, values);
+        }
+        // the errors of decode_columns, whichever way it is decoded
+        for length in [0, 3, encoded.len() - 1] {
+            let payload = &encoded[..length];
+            let runs = decode_runs(payload, &order, cols, 2, Vec::new, |_, _| {});
+            assert_eq!(runs, decode_columns(payload, cols, &order).map(|_| ()));
+        }
+        let refused = decode_runs(&encoded[..1], &order, 32768 * rows, 2, Vec::new, |_, _| {});
+        assert_eq!(refused.unwrap_err().rule, RULE);
+    }
+}
+
+/// The decoder's loop makes a position's context before the integer before it is decoded,
+/// except where that integer is one of its sources: the flag says which, by position.
+#[test]
+fn positions_after_their_source_are_flagged() {
+    let flags = |order: &CodingOrder| match &order.proper {
+        Some(Proper::Listed { steps, .. }) => steps
+            .iter()
+            .map(|step| step.count & AFTER_SOURCE != 0)
+            .collect::<Vec<_>>(),
+        _ => panic!("a listed order"),
+    };
+    // each row after the rows after it: every position but the first follows a source
+    assert_eq!(flags(&reversed(4)), [false, true, true, true]);
+    // rows 3, 1, 4 after the roots 0 and 2: row 3 (sources 0, 2) follows root 2, row 1
+    // (sources 0, 3, 2) follows row 3, row 4 (sources 3, 1) follows row 1
+    assert_eq!(flags(&small_mesh()), [false, false, true, true, true]);
+    let spread = CodingOrder::new(&[0, 1, 2], &[0], &[0, 0, 0, 1], true, 3).unwrap();
+    assert_eq!(flags(&spread), [false, false, false]);
+}
+
+/// The fast loop's mean of up to four sources, a product and a shift: floor(3 total / count)
+/// exactly, up to the largest total of saturated magnitudes.
+#[test]
+fn the_scaled_mean_is_the_division() {
+    let mut random = Random(0x1405_7B7E_F767_814F);
+    let largest = 4 * u64::from(MAGNITUDE_CAP);
+    let mut totals: Vec<u64> = (0..64).flat_map(|b| [1u64 << b, (1u64 << b) - 1]).collect();
+    totals.extend((0..10_000).map(|_| random.next() % (largest + 1)));
+    totals.retain(|&t| t <= largest);
+    totals.push(largest);
+    assert_eq!(mean_scale(0), 0);
+    for count in 1..=FIRST_SOURCES {
+        let scale = u64::from(mean_scale(count));
+        for &total in &totals {
+            assert_eq!((total * scale) >> MEAN_SHIFT, 3 * total / count as u64);
+        }
+    }
+}

@@ -6,6 +6,7 @@
 //! columns decode one after the other: a second thread restores each block of columns while
 //! the next ones decode.
 
+use std::cell::RefCell;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{mpsc, Mutex};
 
@@ -176,45 +177,68 @@ impl MeanPlan {
                 self.vertex_count
             )));
         }
-        // the bound before the integers' array is allocated
-        adaptive::check_size(width, height, payload.len())?;
-        let mut integers = vec![0i64; out.len()];
-        let mut restorer = BlockRestorer {
-            plan: self,
-            planes,
-            height,
-            steps,
-            push,
-            out,
-            outcome: Outcome::default(),
-            buffers: Default::default(),
-        };
+        let output = Mutex::new(out);
+        let restorer = || BlockRestorer::new(self, planes, height, steps, push, &output);
+        // the integers go through a few reused runs of columns, never the whole matrix's
+        // array: no 8 bytes an integer allocated and first touched while the stream decodes
         let (decoded, outcome) = if threads < 2 {
-            let decoded =
-                adaptive::decode_blocks(payload, order, &mut integers, VALUE_BLOCK, |f, b| {
-                    restorer.restore(f, b)
-                });
-            (decoded, restorer.outcome)
+            let mut mine = restorer();
+            let spare = RefCell::new(Vec::new());
+            let decoded = adaptive::decode_runs(
+                payload,
+                order,
+                width,
+                VALUE_BLOCK,
+                || spare.take(),
+                |first, run| {
+                    mine.restore(first, &run);
+                    spare.replace(run);
+                },
+            );
+            (decoded, mine.outcome)
         } else {
-            std::thread::scope(|scope| {
-                let (send, receive) = mpsc::channel::<(usize, &[i64])>();
+            let (send, receive) = mpsc::channel::<(usize, Vec<i64>)>();
+            // shared: once the stream is decoded, this thread restores what is left too
+            let receive = Mutex::new(receive);
+            let next = || receive.lock().ok().and_then(|r| r.recv().ok());
+            let (give_back, given_back) = mpsc::channel::<Vec<i64>>();
+            let (restorer, next) = (&restorer, &next);
+            std::thread::scope(move |scope| {
                 let restoring = scope.spawn(move || {
-                    for (first, block) in receive {
-                        restorer.restore(first, block);
+                    let mut theirs = restorer();
+                    while let Some((first, run)) = next() {
+                        theirs.restore(first, &run);
+                        // the decoder may have finished: a run it no longer needs is dropped
+                        let _ = give_back.send(run);
                     }
-                    restorer.outcome
+                    theirs.outcome
                 });
-                let decoded =
-                    adaptive::decode_blocks(payload, order, &mut integers, VALUE_BLOCK, |f, b| {
-                        // the receiver ends only with its thread, which fails only on a bug
-                        let _ = send.send((f, b));
-                    });
+                // a run the restorer has given back, else a new one: the decoder never waits
+                let decoded = adaptive::decode_runs(
+                    payload,
+                    order,
+                    width,
+                    VALUE_BLOCK,
+                    || given_back.try_recv().unwrap_or_default(),
+                    |first, run| {
+                        // the receiver ends only with the threads, which fail only on a bug
+                        let _ = send.send((first, run));
+                    },
+                );
                 drop(send);
-                let outcome = restoring.join().unwrap_or_else(|_| Outcome {
+                // the runs not restored yet, shared with the restorer rather than waited for
+                // (it lags where it shares a processor with this thread or another program)
+                let mut mine = restorer();
+                if decoded.is_ok() {
+                    while let Some((first, run)) = next() {
+                        mine.restore(first, &run);
+                    }
+                }
+                let theirs = restoring.join().unwrap_or_else(|_| Outcome {
                     outside_planes: false,
                     failed: Some("a restoring thread failed".into()),
                 });
-                (decoded, outcome)
+                (decoded, mine.outcome.and(theirs))
             })
         };
         decoded?;
@@ -419,22 +443,53 @@ struct Outcome {
     failed: Option<PredictionError>,
 }
 
+impl Outcome {
+    /// What went wrong in either's blocks (every error of restoring says the same).
+    fn and(self, other: Outcome) -> Outcome {
+        Outcome {
+            outside_planes: self.outside_planes || other.outside_planes,
+            failed: self.failed.or(other.failed),
+        }
+    }
+}
+
 /// What a block of [`MeanPlan::restore_adaptive_values`] needs, and what went wrong so far: a
 /// block outside the planes or failing to restore stops the restoring (not the planes checks,
 /// whose error comes first).
-struct BlockRestorer<'p, 'o> {
+struct BlockRestorer<'p, 'm, 'o> {
     plan: &'p MeanPlan,
     planes: usize,
     height: usize,
     steps: &'p [f32],
     push: &'p [u8],
-    out: &'o mut [f64],
+    /// The output, which the threads restoring blocks share.
+    out: &'m Mutex<&'o mut [f64]>,
     outcome: Outcome,
     /// `block_values`' work, scratch and predictions.
     buffers: (Vec<f64>, Vec<u64>, Vec<f64>),
 }
 
-impl BlockRestorer<'_, '_> {
+impl<'p, 'm, 'o> BlockRestorer<'p, 'm, 'o> {
+    fn new(
+        plan: &'p MeanPlan,
+        planes: usize,
+        height: usize,
+        steps: &'p [f32],
+        push: &'p [u8],
+        out: &'m Mutex<&'o mut [f64]>,
+    ) -> Self {
+        BlockRestorer {
+            plan,
+            planes,
+            height,
+            steps,
+            push,
+            out,
+            outcome: Outcome::default(),
+            buffers: Default::default(),
+        }
+    }
+
     /// Columns `first..` (`block`, whole columns) checked against the planes, restored and
     /// written to their place in `out`, times their steps.
     fn restore(&mut self, first: usize, block: &[i64]) {
@@ -464,7 +519,8 @@ impl BlockRestorer<'_, '_> {
         }
         let width = self.steps.len();
         let steps = &self.steps[first..first + block_width];
-        scale_into(self.out, width, first, work, steps);
+        let mut out = self.out.lock().unwrap_or_else(|e| e.into_inner());
+        scale_into(&mut out, width, first, work, steps);
     }
 }
 
