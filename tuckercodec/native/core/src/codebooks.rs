@@ -14,7 +14,12 @@ use crate::residual::{ordered_in, Domain, VALUE_RULE};
 pub fn nearest_entries(middles: &[i64], base: &[i64], frame_values: usize, out: &mut [usize]) {
     let first = middles.len() / 2;
     for index in 0..base.len().min(out.len()) {
-        let hint = if frame_values > 0 && index >= frame_values {
+        let hint = if frame_values > 0 && index >= 2 * frame_values {
+            // where the same vertex's entry would be had it kept moving as in the two frames
+            // before (on chicken, half the distance of the last frame's alone)
+            let (last, before) = (out[index - frame_values], out[index - 2 * frame_values]);
+            (2 * last).saturating_sub(before)
+        } else if frame_values > 0 && index >= frame_values {
             out[index - frame_values] // the same vertex a frame before: usually near
         } else {
             first
