@@ -25,7 +25,7 @@ from collections import OrderedDict
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from contextlib import ExitStack, contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -81,6 +81,11 @@ class SegmentFactors:
     residual_id: str = ""
     exact_u1: residual.ExactU1 | None = None
     exact_basis: np.ndarray | None = None
+    #: format 1.8: the corrections' codebooks and their midpoints, once a frame has needed them
+    #: (after §8.1's weights, in §5's order); kept, and dropped, with the segment
+    codebooks: list[tuple[residual.Codebooks, tuple[np.ndarray | None, ...]]] = field(
+        default_factory=list
+    )
 
 
 #: A segment's dequantized U3, CORE and CENT.
@@ -124,8 +129,6 @@ class Decoder:
         self._mesh: MeshPrediction | None = None
         self._chunks: OrderedDict[tuple[int, int], np.ndarray] = OrderedDict()
         #: each recent segment's codebooks (format 1.8) and their midpoints
-        self._books: OrderedDict[int, tuple[residual.Codebooks, tuple[np.ndarray | None, ...]]]
-        self._books = OrderedDict()
         self._data: bytes | memoryview | FileRanges
         with self._naming_path():
             if isinstance(source, (str, os.PathLike)):
@@ -414,26 +417,21 @@ class Decoder:
             )
 
     def _codebooks_of(
-        self, number: int, part: SegmentFactors
+        self, part: SegmentFactors
     ) -> tuple[residual.Codebooks, tuple[np.ndarray | None, ...]]:
-        """A segment's codebooks (format 1.8, R29 and R47) and their midpoints, decoded once
-        and kept with the most recent segments'."""
+        """A segment's codebooks (format 1.8, R29 and R47) and their midpoints, decoded at
+        its first corrected frame and kept with its factors."""
         assert part.corrections is not None
-        books = self._books.get(number)
-        if books is None:
+        if not part.codebooks:
             with self._naming_path():
-                decoded = residual.decode_codebooks(
+                books = residual.decode_codebooks(
                     self._payload(part.residual_id),
                     part.corrections,
                     f"section {part.residual_id}",
                 )
-            middles = tuple(None if book is None else residual.midpoints(book) for book in decoded)
-            books = (decoded, middles)
-        self._books[number] = books
-        self._books.move_to_end(number)
-        while len(self._books) > CACHED_SEGMENTS:
-            self._books.popitem(last=False)
-        return books
+            middles = tuple(None if book is None else residual.midpoints(book) for book in books)
+            part.codebooks.append((books, middles))
+        return part.codebooks[0]
 
     def _keep_chunk(self, key: tuple[int, int], values: np.ndarray) -> None:
         """Keep a chunk's integers for the next frames (the most recent few)."""
@@ -458,7 +456,7 @@ class Decoder:
                 layout.exponent,
                 f"section {part.residual_id}",
             )
-        books, middles = self._codebooks_of(number, part) if layout.codebooks else ((), ())
+        books, middles = self._codebooks_of(part) if layout.codebooks else ((), ())
         out = np.empty_like(exact) if out is None else out
         chunks = local // layout.span
         needed = np.unique(chunks).tolist()

@@ -309,8 +309,9 @@ def smallest_section(
     found = goal.memo.codebooks(original, best.domain) if goal.codebooks else None
     if found is not None and goal.lossless:
         domain = best.domain
+        ordered = goal.memo.ordered(original, domain)
         integers = residual.codebook_integers(
-            exact, best.integers, domain, found.books, found.positions, found.middles
+            best.integers, ordered, found.books, found.positions, found.middles
         )
         section = residual.encode_section(
             integers, domain, level, exponent=exponent, predict=predict, codebooks=found.books

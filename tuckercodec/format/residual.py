@@ -702,9 +702,7 @@ def from_codebooks(
         if finite is not None:
             outside &= finite
         if outside.any():
-            _value_error(
-                where, f"a correction moves beyond axis {axis}'s codebook of {len(book)} entries"
-            )
+            _beyond_codebook(where, axis, book)
         positions = nearest + steps
         if finite is not None:
             positions[~finite] = 0
@@ -735,11 +733,14 @@ def _native_codebook_corrections(
         out: np.ndarray = core.residual_codebook_corrections(
             flat, steps, domain.name, int(domain.scale or 0), book, middles, exact.shape[-1]
         )
-    except core.Broken:
-        _value_error(
-            where, f"a correction moves beyond axis {axis}'s codebook of {len(book)} entries"
-        )
+    except core.Broken:  # the one refusal it has: a position outside the codebook
+        _beyond_codebook(where, axis, book)
     return out.reshape(exact.shape)
+
+
+def _beyond_codebook(where: str, axis: int, book: np.ndarray) -> NoReturn:
+    """R41 for a stored integer that moves past either end of axis ``axis``'s codebook."""
+    _value_error(where, f"a correction moves beyond axis {axis}'s codebook of {len(book)} entries")
 
 
 def correct(exact: np.ndarray, residual: np.ndarray, domain: Domain, where: str) -> np.ndarray:
@@ -910,32 +911,35 @@ def codebooks_of(ordered: np.ndarray, share: float = CODEBOOK_SHARE) -> Codebook
 
 
 def codebook_integers(
-    exact: np.ndarray,
     plain: np.ndarray,
-    domain: Domain,
+    ordered: np.ndarray,
     books: Codebooks,
     positions: tuple[np.ndarray | None, ...],
     middles: tuple[np.ndarray | None, ...] = (),
 ) -> np.ndarray:
-    """The integers a section with ``books`` stores to take ``exact`` to the input: on an axis
-    with a codebook, the input's ``positions`` in it less the entry nearest each value of
-    ``exact``; elsewhere the domain's corrections ``plain`` (:func:`residuals_of`).
-    ``middles``: each codebook's :func:`midpoints`, if kept."""
+    """The integers a section with ``books`` stores to take the exact positions to the input:
+    on an axis with a codebook, the input's ``positions`` in it less the entry nearest each b;
+    elsewhere the domain's corrections ``plain`` (:func:`residuals_of`). b, the ordered
+    integers of the exact positions, is the input's ``ordered`` less ``plain`` (wrapping, as
+    ``plain`` was made), not computed again. ``middles``: each codebook's :func:`midpoints`,
+    if kept."""
     integers = np.array(plain, dtype=np.int64)
     core = native.core()
     for axis, book in enumerate(books):
         at = positions[axis]
-        if book is not None and at is not None:
-            base, _ = codebook_base(exact[..., axis], domain)
-            middle = middles[axis] if middles else None
-            if core is not None:  # the same j, each search started from the frame before
-                middle = midpoints(book) if middle is None else middle
-                flat = np.ascontiguousarray(base, dtype=np.int64).reshape(-1)
-                nearest = core.residual_nearest_entries(middle, flat, base.shape[-1])
-                nearest = nearest.reshape(base.shape)
-            else:
-                nearest = nearest_entries(book, base, middle)
-            integers[..., axis] = at - nearest
+        if book is None or at is None:
+            continue
+        with np.errstate(over="ignore"):
+            base = ordered[..., axis] - plain[..., axis]
+        middle = middles[axis] if middles else None
+        if core is not None:  # the same j, each search started from the frames before
+            middle = midpoints(book) if middle is None else middle
+            flat = np.ascontiguousarray(base, dtype=np.int64).reshape(-1)
+            nearest = core.residual_nearest_entries(middle, flat, base.shape[-1])
+            nearest = nearest.reshape(base.shape)
+        else:
+            nearest = nearest_entries(book, base, middle)
+        integers[..., axis] = at - nearest
     return integers
 
 
