@@ -374,14 +374,7 @@ class WholeWorkspace:
             ("U1", factors.u1, self.mesh, True),
         ):
             assert matrix is not None  # a whole file's U1 is its own
-            coded[section_id] = qmat.encode_matrix(
-                matrix,
-                parents,
-                allow_predict=predict,
-                coding_tools=self.features.coding_tools,
-                level=level,
-                adaptive_coding=self.features.adaptive,
-            )
+            coded[section_id] = encoded_factor(matrix, parents, self.features, level, predict)
         if self.name_section is not None:
             coded["NAME"] = self.name_section
         packed = [
@@ -449,6 +442,25 @@ class WholeWorkspace:
             flags, minor = residual.CORRECTIONS, residual.CORRECTIONS_MINOR
         sizes = {entry["id"]: len(payload) for entry, payload in packed}
         return pack_container(header, packed, flags=flags, minor=minor), sizes
+
+
+def encoded_factor(
+    matrix: QuantizedMatrix,
+    parents: MeshPrediction | None,
+    features: Features,
+    level: int,
+    allow_predict: bool = True,
+) -> tuple[dict[str, Any], bytes]:
+    """A position factor's qmat section (§6.3) with the coding tools and the adaptive coder
+    that ``features`` allow: how a file's factors are coded, whole or in segments."""
+    return qmat.encode_matrix(
+        matrix,
+        parents,
+        allow_predict=allow_predict,
+        coding_tools=features.coding_tools,
+        level=level,
+        adaptive_coding=features.adaptive,
+    )
 
 
 def column_steps(root: float, norms: np.ndarray) -> np.ndarray:

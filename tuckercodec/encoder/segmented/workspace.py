@@ -41,7 +41,7 @@ from .. import attachments, estimate
 from ..plan import SegmentPlan
 from ..trial import TRIAL_RATIO, Quantized, QuantizedSegment
 from ..versions import NEWEST, Features
-from ..whole import LARGEST_STREAMED, column_steps
+from ..whole import LARGEST_STREAMED, column_steps, encoded_factor
 from .model import (
     SegmentRanks,
     cheapest_ranks,
@@ -529,13 +529,7 @@ class SegmentedWorkspace:
         if self.fixed_basis is not None:  # a given basis: its section, byte for byte
             out.append((_entry("U1", self.fixed_basis.params), self.fixed_basis.payload))
         elif quantized.shared_u1 is not None:
-            params, payload = qmat.encode_matrix(
-                quantized.shared_u1,
-                self.mesh,
-                coding_tools=self.features.coding_tools,
-                level=level,
-                adaptive_coding=self.features.adaptive,
-            )
+            params, payload = encoded_factor(quantized.shared_u1, self.mesh, self.features, level)
             out.append((_entry("U1", params), payload))
         for s, factors in enumerate(quantized.segments):
             matrices: dict[str, tuple[QuantizedMatrix, MeshPrediction | None, bool]] = {
@@ -549,14 +543,7 @@ class SegmentedWorkspace:
                 if stem not in matrices:
                     continue
                 matrix, parents, predict = matrices[stem]
-                params, payload = qmat.encode_matrix(
-                    matrix,
-                    parents,
-                    allow_predict=predict,
-                    coding_tools=self.features.coding_tools,
-                    level=level,
-                    adaptive_coding=self.features.adaptive,
-                )
+                params, payload = encoded_factor(matrix, parents, self.features, level, predict)
                 out.append((_entry(segment_section_id(stem, s), params, stem), payload))
         if self.name_section is not None:
             out.append((_entry("NAME", self.name_section[0]), self.name_section[1]))
