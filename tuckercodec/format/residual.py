@@ -689,7 +689,7 @@ def from_codebooks(
     for axis, book in enumerate(books):
         if book is None:
             continue
-        if core is not None:  # the same integers, each search started from the frame before
+        if core is not None:  # the same integers, through an index of the midpoints
             middle = middles[axis] if middles else None
             out[..., axis] = _native_codebook_corrections(
                 core, exact[..., axis], out[..., axis], domain, book, middle, axis, where
@@ -731,7 +731,7 @@ def _native_codebook_corrections(
     middles = midpoints(book) if middles is None else middles
     try:
         out: np.ndarray = core.residual_codebook_corrections(
-            flat, steps, domain.name, int(domain.scale or 0), book, middles, exact.shape[-1]
+            flat, steps, domain.name, int(domain.scale or 0), book, middles
         )
     except core.Broken:  # the one refusal it has: a position outside the codebook
         _beyond_codebook(where, axis, book)
@@ -932,10 +932,10 @@ def codebook_integers(
         with np.errstate(over="ignore"):
             base = ordered[..., axis] - plain[..., axis]
         middle = middles[axis] if middles else None
-        if core is not None:  # the same j, each search started from the frames before
+        if core is not None:  # the same j, found through an index of the midpoints
             middle = midpoints(book) if middle is None else middle
             flat = np.ascontiguousarray(base, dtype=np.int64).reshape(-1)
-            nearest = core.residual_nearest_entries(middle, flat, base.shape[-1])
+            nearest = core.residual_nearest_entries(middle, flat)
             nearest = nearest.reshape(base.shape)
         else:
             nearest = nearest_entries(book, base, middle)

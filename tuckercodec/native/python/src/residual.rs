@@ -92,20 +92,18 @@ fn residual_ordered<'py>(
     Ok(PyArray1::from_vec(py, out))
 }
 
-/// j of §6.9 (format 1.8's codebooks) for the ordered integers `base` of one axis
-/// (frame-major, `frame_values` to a frame): the index of the codebook entry nearest each,
-/// from the codebook's `middles`.
+/// j of §6.9 (format 1.8's codebooks) for the ordered integers `base` of one axis: the index
+/// of the codebook entry nearest each, from the codebook's `middles`.
 #[pyfunction]
 fn residual_nearest_entries<'py>(
     py: Python<'py>,
     middles: PyReadonlyArray1<'py, i64>,
     base: PyReadonlyArray1<'py, i64>,
-    frame_values: usize,
 ) -> PyResult<Bound<'py, PyArray1<i64>>> {
     let (middles, base) = (middles.as_slice()?, base.as_slice()?);
     let out = py.detach(|| {
         let mut found = vec![0_usize; base.len()];
-        codebooks::nearest_entries(middles, base, frame_values, &mut found);
+        codebooks::nearest_entries(middles, base, &mut found);
         // an index below the codebook's length, itself within a numpy array's
         found.into_iter().map(|j| j as i64).collect::<Vec<i64>>()
     });
@@ -113,9 +111,8 @@ fn residual_nearest_entries<'py>(
 }
 
 /// The corrections (int64) of the domain `name` (its `scale`) that `stored` positions in the
-/// codebook `book` mean for the positions `exact` of one axis (frame-major, `frame_values` to a
-/// frame); R41 as `Broken` when one leaves the codebook.
-#[allow(clippy::too_many_arguments)]
+/// codebook `book` mean for the positions `exact` of one axis; R41 as `Broken` when one leaves
+/// the codebook.
 #[pyfunction]
 fn residual_codebook_corrections<'py>(
     py: Python<'py>,
@@ -125,7 +122,6 @@ fn residual_codebook_corrections<'py>(
     scale: i64,
     book: PyReadonlyArray1<'py, i64>,
     middles: PyReadonlyArray1<'py, i64>,
-    frame_values: usize,
 ) -> PyResult<Bound<'py, PyArray1<i64>>> {
     let domain = domain_of(name, 1.0, scale)?;
     let (exact, stored) = (exact.as_slice()?, stored.as_slice()?);
@@ -133,16 +129,8 @@ fn residual_codebook_corrections<'py>(
     let out = py
         .detach(|| {
             let mut out = vec![0; exact.len()];
-            codebooks::codebook_corrections(
-                exact,
-                stored,
-                domain,
-                book,
-                middles,
-                frame_values,
-                &mut out,
-            )
-            .map(|()| out)
+            codebooks::codebook_corrections(exact, stored, domain, book, middles, &mut out)
+                .map(|()| out)
         })
         .map_err(broken)?;
     Ok(PyArray1::from_vec(py, out))
