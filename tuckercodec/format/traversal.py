@@ -188,7 +188,10 @@ def encode_traversal_ordered(
     ranks = _ranks(walk.new_residuals, vertex_count) if adaptive_coding else None
     if ranks is not None and _fits_adaptive([*walk.ops, walk.degrees, ranks, walk.references]):
         coder = adaptive.CODER_ADAPTIVE
-        others = [_pack_stream(walk.degrees, level, coder), _pack_stream(walk.references, level, coder)]
+        others = [
+            _pack_stream(walk.degrees, level, coder),
+            _pack_stream(walk.references, level, coder),
+        ]
         rest[coder, RANKS_ADAPTIVE] = [others[0], _pack_stream(ranks, level, coder), others[1]]
         if uniform_ranks and vertex_count <= uniform.MAX_TOTAL:
             places = np.cumsum(ranks)  # u(w): the unseen vertices below each new vertex w
@@ -466,11 +469,12 @@ def read_stream_arrays(
 
     In §5 step 15's order: ``corner_order``, ``coder`` (R46: 1 only where ``adaptive_coding``,
     a file with flag bit 3), where ``uniform_ranks`` (flag bit 6) ``ranks`` (R46: 1 only with
-    ``coder`` 1 and at most 2**31 vertices; elsewhere an unknown parameter), the streams' table (:func:`_stream_table`: each entry's form, the
-    bounds on the counts, the lengths against the payload), every ``planes`` (R30: 1..4, or 0
-    with ``coder`` 1), the bytes the streams decompress to (R21), then each stream (R29, or R46
-    for an adaptive one), then with ``coder`` 1 the ranks of the NEW vertices (R39). Nothing is
-    allocated by a declared count before its stream is decoded.
+    ``coder`` 1 and at most 2**31 vertices; elsewhere an unknown parameter), the streams'
+    table (:func:`_stream_table`: each entry's form, the bounds on the counts, the lengths
+    against the payload), every ``planes`` (R30: 1..4, or 0 with ``coder`` 1), the bytes the
+    streams decompress to (R21), then each stream (R29, or R46 for an adaptive or uniform one),
+    then with ``coder`` 1 the ranks of the NEW vertices (R39). Nothing is allocated by a
+    declared count before its stream is decoded.
     """
     corner_order = params.get("corner_order")
     # an int, not a float that equals 0 or 1 (§1: an int is never a float): found by the
