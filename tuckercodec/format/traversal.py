@@ -184,7 +184,8 @@ def encode_traversal_ordered(
     # the codings to try, (coder, ranks), each with the three streams the corner order does not
     # change, packed once: only the ops differ between the corner orders
     zstd = (adaptive.CODER_ZSTD, RANKS_ADAPTIVE)
-    rest = {zstd: [_pack_stream(values, level, adaptive.CODER_ZSTD) for values in walk[1:4]]}
+    plain = [walk.degrees, walk.new_residuals, walk.references]
+    rest = {zstd: [_pack_stream(values, level, adaptive.CODER_ZSTD) for values in plain]}
     ranks = _ranks(walk.new_residuals, vertex_count) if adaptive_coding else None
     if ranks is not None and _fits_adaptive([*walk.ops, walk.degrees, ranks, walk.references]):
         coder = adaptive.CODER_ADAPTIVE
