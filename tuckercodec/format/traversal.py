@@ -519,14 +519,7 @@ def read_stream_arrays(
     values, offset = [], 0
     for number, ((size, _, length), p, field) in enumerate(zip(table, planes, fields, strict=True)):
         part = payload[offset : offset + length]
-        if number == NEW_VERTICES and ranks == RANKS_UNIFORM:
-            # each place u(w) among the unseen; the ranks are their differences
-            places = uniform.decode_uniform(part, size, vertex_count, field)
-            values.append(np.diff(places, prepend=np.int64(0)))
-        elif coder == adaptive.CODER_ADAPTIVE:
-            values.append(_adaptive_stream(part, size, field))
-        else:
-            values.append(streams.unpack_integers(part, size, p, field))
+        values.append(_stream(part, size, p, coder, ranks, number, vertex_count, field))
         offset += length
     if coder == adaptive.CODER_ADAPTIVE:
         try:
@@ -535,6 +528,27 @@ def read_stream_arrays(
             raise _broken(where, str(error)) from None
         values[2] = unseen.gaps(placed)
     return values, int(corner_order)
+
+
+def _stream(
+    part: bytes | memoryview,
+    size: int,
+    planes: int,
+    coder: int,
+    ranks: int,
+    number: int,
+    vertex_count: int,
+    where: str,
+) -> np.ndarray:
+    """Stream ``number`` (§6.8's order) of ``size`` integers from its bytes ``part``: zstd
+    planes (R29), an adaptive column (R46), or with ``ranks`` 1 the vertices' uniform stream
+    (R46), whose places among the unseen are turned into ranks, their differences."""
+    if number == NEW_VERTICES and ranks == RANKS_UNIFORM:
+        places = uniform.decode_uniform(part, size, vertex_count, where)
+        return np.diff(places, prepend=np.int64(0))
+    if coder == adaptive.CODER_ADAPTIVE:
+        return _adaptive_stream(part, size, where)
+    return streams.unpack_integers(part, size, planes, where)
 
 
 def _checked_ranks(params: Mapping[str, Any], coder: int, vertex_count: int, where: str) -> int:
