@@ -38,8 +38,7 @@ from typing import Any
 import numpy as np
 
 from tuckercodec import FormatError
-from tuckercodec.format import uniform
-from tuckercodec.internal import adaptive, mesh_prediction
+from tuckercodec.internal import adaptive, mesh_prediction, uniform
 
 OUT = Path(__file__).resolve().parents[2] / "tests" / "js" / "adaptive_fixture.json"
 #: Damaged copies of a stream, each with one byte changed at a seeded place.
