@@ -27,7 +27,6 @@ from tests.support.js_decoder import compare_verdicts, run_node
 from tests.test_js_topology import Cases, _tables
 from tuckercodec.format import adaptive, traversal, uniform
 from tuckercodec.io.samples import sheet_triangles, wave_sheet
-from tuckercodec.system import native
 
 FLAG_UNIFORM_RANKS = 1 << 6
 R46, R39 = "R46-adaptive-stream", "R39-traversal"
@@ -129,13 +128,26 @@ def _places(gaps: list[int]) -> list[int]:
 
 
 def _walk_streams(faces: np.ndarray, vertices: int) -> tuple[list[list[int]], int]:
-    """The four streams of the reference's walk (the vertices as gaps), and its corner order:
-    the pure Python walk's, whose memory does not grow with K (the compiled core's encoder
-    sizes tables by it, too big at K = 2^31; a decoder may not)."""
-    with native.pure_python():
-        params, payload, _ = traversal.encode_traversal(faces, vertices)
-    count, width = params["shape"]
-    return traversal.read_streams(payload, params, count, width, vertices, "FACE")
+    """The four streams of the reference's walk (the vertices as gaps), and its corner order.
+
+    The encoders size tables by K (the compiled core's, and the reference's about 2 GB at
+    K = 2^31), so a table of a few vertices among very many is walked with its vertices
+    renumbered 0, 1, ... in the same order, which gives the same ops (only which vertices are
+    seen, and which is smallest, steer them), and its gaps are then taken between the true
+    numbers. Such a table has no FAR: its references would be differences of numbers too."""
+    used = np.unique(faces[faces >= 0])
+    small = used.size < vertices // 2 and vertices > 1 << 16
+    table = np.where(faces >= 0, np.searchsorted(used, faces), -1) if small else faces
+    count = used.size if small else vertices
+    params, payload, _ = traversal.encode_traversal(table, count)
+    rows, width = params["shape"]
+    coded, order = traversal.read_streams(payload, params, rows, width, count, "FACE")
+    if small:
+        assert not coded[3], "a renumbered table with FAR"
+        news = np.cumsum(np.asarray(coded[VERTICES], np.int64) + 1) - 1  # w = last + 1 + gap
+        true = used[news]
+        coded[VERTICES] = (np.diff(true, prepend=np.int64(-1)) - 1).tolist()
+    return coded, order
 
 
 def _sections(
