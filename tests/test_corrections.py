@@ -149,9 +149,12 @@ def test_every_vertex_of_the_cloth_is_within_the_bound(cloth, fraction):
     assert worst <= bound
     assert result.report.max_distance == pytest.approx(worst, rel=1e-12)
     assert result.report.max_error == pytest.approx(bound)
-    # corrections (1.3), adaptive coding (1.6), and 1.7 where the corrections are adaptive
-    adaptive_resd = _resd_coder(result.data) == 1
-    assert tc.info(result.data).format_version == ("1.7" if adaptive_resd else "1.6")
+    # corrections (1.3), adaptive coding (1.6), 1.7 where the corrections are adaptive, and
+    # 1.9 for the new vertices of the cloth's random vertex order, the newest of them
+    container = parse_container(result.data, DEFAULT_LIMITS)
+    assert container.corrections and container.uniform_ranks
+    assert container.adaptive_corrections == (_resd_coder(result.data) == 1)
+    assert tc.info(result.data).format_version == "1.9"
 
 
 def _resd_coder(data: bytes) -> int:

@@ -23,6 +23,7 @@ from tuckercodec.format.container import pack_container, parse_container
 from tuckercodec.format.residual import ADAPTIVE_CORRECTIONS, CODEBOOKS, CORRECTIONS
 from tuckercodec.format.sections import CODING_TOOLS
 from tuckercodec.format.segments import SEGMENTED
+from tuckercodec.format.traversal import UNIFORM_RANKS
 from tuckercodec.io.samples import sheet_triangles, wave_sheet
 from tuckercodec.model.attributes import Attribute
 from tuckercodec.model.sources import SequenceFrames
@@ -48,6 +49,11 @@ def _uses_no_feature_above(data: bytes, cap: str) -> None:
     container = parse_container(data)
     assert container.minor <= cap_minor
     entries = [section.params for section in container.sections]
+    if cap_minor < 9:
+        assert not container.flags & UNIFORM_RANKS
+        assert not any(
+            s.codec == "faces-traverse" and "ranks" in s.params for s in container.sections
+        )
     if cap_minor < 8:
         assert not container.flags & CODEBOOKS
         assert not any(
@@ -91,7 +97,7 @@ def test_the_cap_is_what_holds_the_newer_tools_back(scrambled):
     }
     assert written == {
         "1.0": 0, "1.1": 0, "1.2": 2, "1.3": 2, "1.4": 2, "1.5": 2, "1.6": 6, "1.7": 6,
-        "1.8": 6
+        "1.8": 6, "1.9": 9
     }  # fmt: skip
 
 
@@ -240,7 +246,7 @@ def test_a_file_above_the_cap_is_a_bug_never_returned(scrambled, monkeypatch):
         tc.encode(scrambled, target_kg=TARGET, format_version="1.2")
 
 
-@pytest.mark.parametrize("value", ["1.9", "2.0", "one", "", 1.2, 2, (1, 2)])
+@pytest.mark.parametrize("value", ["1.10", "2.0", "one", "", 1.2, 2, (1, 2)])
 def test_a_version_the_encoder_does_not_write_is_refused(value):
     with pytest.raises(ValueError, match=re.escape("format_version must be one of 1.0, 1.1")):
         tc.EncodeOptions(format_version=value)
@@ -280,6 +286,6 @@ def test_encode_refuses_what_the_version_cannot_hold_with_exit_2(scrambled_npz, 
     assert "lossless needs format 1.3" in err and len(err.splitlines()) == 1
     assert not packed.exists()
     with pytest.raises(SystemExit) as exit_info:
-        main(["encode", str(scrambled_npz), "-o", str(packed), "--format-version", "1.9"])
+        main(["encode", str(scrambled_npz), "-o", str(packed), "--format-version", "1.10"])
     assert exit_info.value.code == 2
     assert "expected one of 1.0, 1.1" in capsys.readouterr().err

@@ -58,7 +58,7 @@ def test_any_minor_version_is_read(minor):
     assert error is None and sequence is not None
 
 
-@pytest.mark.parametrize("flags", [64, 0x8000, 0xFFFF, 0xFFFFFFFF, 0x00010040])
+@pytest.mark.parametrize("flags", [128, 0x8000, 0xFFFF, 0xFFFFFFFF, 0x00010080])
 def test_critical_flag_bits_are_refused(flags):
     error = expect_error(
         with_preamble(vector("v1-wave-triangles"), flags=flags), UnsupportedVersionError, exact=True

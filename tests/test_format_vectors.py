@@ -146,6 +146,7 @@ def test_the_invalid_vectors_come_from_the_committed_valid_one(tmp_path):
     faces_coded = (SPEC / "vectors" / "v1.6-faces-adaptive.tkc").read_bytes()
     corrected_adaptively = (SPEC / "vectors" / "v1.7-lossless-adaptive.tkc").read_bytes()
     codebooks = (SPEC / "vectors" / "v1.8-lossless-codebooks.tkc").read_bytes()
+    uniform_ranks = (SPEC / "vectors" / "v1.9-faces-uniform-ranks.tkc").read_bytes()
     count = make_vectors.write_invalid(
         tmp_path,
         good,
@@ -157,6 +158,7 @@ def test_the_invalid_vectors_come_from_the_committed_valid_one(tmp_path):
         faces_coded,
         corrected_adaptively,
         codebooks,
+        uniform_ranks,
     )
     assert count == len([p for p in VECTORS if not json.loads(p.read_text())["valid"]])
     for path in sorted(tmp_path.iterdir()):

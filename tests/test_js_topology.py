@@ -77,14 +77,21 @@ class Cases:
         vertices: int,
         spec: tuple[str, str] | None = None,
         adaptive: bool = False,
+        uniform: bool = False,
     ) -> None:
         """A FACE payload with its parameters; the reference is decode_traversal, unless
         ``spec`` gives the outcome the spec requires where the reference is known to differ.
-        ``adaptive``: the file sets flag bit 3, so that ``coder`` may be 1 (format 1.6)."""
+        ``adaptive``: the file sets flag bit 3, so that ``coder`` may be 1 (format 1.6);
+        ``uniform``: flag bit 6, so that ``ranks`` is read and may be 1 (format 1.9)."""
         rows, width = params["shape"]
         self.expected[name] = spec or _outcome(
             lambda: traversal.decode_traversal(
-                payload, params, vertices, "FACE", adaptive_coding=adaptive
+                payload,
+                params,
+                vertices,
+                "FACE",
+                adaptive_coding=adaptive,
+                uniform_ranks=uniform,
             ),
             "<i4",
         )
@@ -99,6 +106,7 @@ class Cases:
                 "M": rows,
                 "n": width,
                 "adaptive": adaptive,
+                "uniform": uniform,
             }
         )
 
@@ -576,7 +584,15 @@ def _file_cases(cases: Cases, label: str, data: bytes) -> None:
     face = sections["FACE"]
     if face.codec == "faces-traverse":
         params, face_payload = face.params, payload["FACE"]
-        cases.traverse(f"{label}-FACE", params, face_payload, vertices, None, container.adaptive)
+        cases.traverse(
+            f"{label}-FACE",
+            params,
+            face_payload,
+            vertices,
+            None,
+            container.adaptive,
+            container.uniform_ranks,
+        )
     faces = tuckercodec.decode(data, frames=[0]).faces
     mesh = MeshPrediction(faces, vertices)
     for section_id, section in sections.items():

@@ -45,7 +45,8 @@ def test_the_whole_sequence_meets_the_target(cloth, basis, target):
     assert measured <= target
     assert measured == pytest.approx(result.report.kg, rel=1e-9)
     assert measured > 0.5 * target  # the budget is used, not wasted
-    assert decoder.info.format_version == "1.6"  # segments (1.1), coding tools, adaptive coding
+    # segments (1.1), coding tools, adaptive coding, the cloth's new vertices in a uniform stream
+    assert decoder.info.format_version == "1.9"
 
 
 def test_segments_decode_alone_to_the_frames_of_the_whole(shared_file, cloth):
@@ -83,7 +84,8 @@ def test_a_frame_from_disk_reads_only_its_segment(shared_file, tmp_path):
 
 def test_without_segments_the_file_is_todays(cloth):
     plain = encode_with_report(cloth, target_kg=0.1).data
-    assert plain[10:12] == b"\x06\x00"  # minor 6: walked faces (§6.8), adaptive coding (§6.14)
+    # minor 9: walked faces (§6.8), adaptive coding (§6.14), the new vertices' uniform stream
+    assert plain[10:12] == b"\x09\x00"
     assert int.from_bytes(plain[12:16], "little") & SEGMENTED == 0
     assert not Decoder(plain).segmented
 
@@ -256,11 +258,11 @@ def test_encode_in_segments_on_the_command_line(tmp_path, capsys):
     out = tmp_path / "cloth.tkc"
     assert main(["encode", str(sample_path()), "-o", str(out), "--segment-frames", "20"]) == 0
     printed = capsys.readouterr().out
-    assert "3 segments of frames with one shared U1 (format 1.6)" in printed
+    assert "3 segments of frames with one shared U1 (format 1.9)" in printed
     assert "of the whole sequence" in printed
     assert main(["info", str(out)]) == 0
     printed = capsys.readouterr().out
-    assert "format 1.6" in printed and "segment 2: frames 40..59" in printed
+    assert "format 1.9" in printed and "segment 2: frames 40..59" in printed
     decoded = tmp_path / "back.npz"
     assert main(["decode", str(out), "-o", str(decoded), "--frames", "45:50"]) == 0
     assert tuckercodec.load_sequence(decoded, progress=False).frame_count == 5

@@ -155,6 +155,7 @@ class Decoder:
                     "section FACE",
                     limits,
                     adaptive_coding=self._container.adaptive,  # §6.8's coder 1 only in 1.6
+                    uniform_ranks=self._container.uniform_ranks,  # and its ranks 1 in 1.9
                 )
                 self._coded_faces = self.faces  # as FACE decodes them: U1's mesh's faces
                 if not self.segmented:  # §5 steps 16-17 in order: U1, U3, CORE, CENT, NAME

@@ -12,7 +12,8 @@ package sees at once what the tools rely on.
   :data:`CRC`; the modules :mod:`~tuckercodec.format.faces`, :mod:`~tuckercodec.format.qmat`,
   :mod:`~tuckercodec.format.sections`, :mod:`~tuckercodec.format.streams`,
   :mod:`~tuckercodec.format.traversal` (§6.8, with :mod:`~tuckercodec.format.unseen`, its NEW
-  vertices' ranks) and :mod:`~tuckercodec.format.adaptive` (§6.14);
+  vertices' ranks, and :mod:`~tuckercodec.format.uniform`, their places in 1.9) and
+  :mod:`~tuckercodec.format.adaptive` (§6.14);
   the mesh parents of §6.2 and :func:`mesh_prediction` (its predictor 2), and
   :func:`tree_depths` of a parent forest.
 * The decomposition and its analysis: :func:`centre_frames`, :func:`reconstruct`, :class:`Curve`.
@@ -61,6 +62,7 @@ from .format import (
     sections,
     streams,
     traversal,
+    uniform,
     unseen,
 )
 from .format.container import (
@@ -135,6 +137,7 @@ __all__ = [
     "streams",
     "traversal",
     "tree_depths",
+    "uniform",
     "unseen",
     "wave_sheet",
     "write_atomic",

@@ -5,14 +5,16 @@
 // reference's on the fixture's mesh; and a section declaring far more integers than its bytes can
 // hold is refused before anything of their size is made. The streams of 5 to 8 planes (`wide`,
 // 64-bit integers: a RESD chunk's, format 1.7) go through decodeAdaptiveWide, which must also
-// make of every 32-bit stream in the ascending order what decodeAdaptive makes of it.
+// make of every 32-bit stream in the ascending order what decodeAdaptive makes of it. The
+// `uniform` cases are uniform streams (§6.8, format 1.9: faces-traverse's places with `ranks` 1),
+// which decodeUniform must read to the reference's places or refuse where it refuses them.
 
 import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
 import { dirname, join } from 'node:path';
 import { test } from 'node:test';
 import { fileURLToPath } from 'node:url';
-import { decodeAdaptive, decodeAdaptiveWide } from '../../tuckercodec/web/tkc/adaptive.js';
+import { decodeAdaptive, decodeAdaptiveWide, decodeUniform } from '../../tuckercodec/web/tkc/adaptive.js';
 import { TkcError } from '../../tuckercodec/web/tkc/errors.js';
 import { meshCodingOrder, meshTopology } from '../../tuckercodec/web/tkc/topology.js';
 
@@ -35,6 +37,7 @@ function observe(c, wide = c.wide === true) {
   const payload = new Uint8Array(Buffer.from(c.payload, 'base64'));
   const order = c.mesh ? () => fixtureOrder() : null;
   try {
+    if (c.uniform) return { integers: Array.from(decodeUniform(payload, c.count, c.total, `case ${c.name}`)) };
     if (!wide) return { integers: Array.from(decodeAdaptive(payload, c.rows, c.cols, order, c.planes, `case ${c.name}`)) };
     const halves = decodeAdaptiveWide(payload, c.rows, c.cols, c.planes, `case ${c.name}`);
     const values = Array.from(new BigInt64Array(halves.buffer)); // little-endian hosts
@@ -64,12 +67,23 @@ for (const c of cases) {
 }
 
 test('decodeAdaptiveWide makes of every 32-bit stream in the ascending order what the reference makes', () => {
-  const narrow = cases.filter((c) => !c.mesh && !c.wide);
+  const narrow = cases.filter((c) => !c.mesh && !c.wide && !c.uniform);
   assert.ok(narrow.length > 20 && narrow.some((c) => c.rule) && narrow.some((c) => c.integers));
   for (const c of narrow) {
     const got = observe(c, true);
     assert.deepEqual(got, c.rule !== undefined ? { rule: c.rule } : { integers: c.integers }, c.name);
   }
+});
+
+test('the uniform cases reach 2^31 − 1 and every refusal of a uniform stream', () => {
+  const uniform = cases.filter((c) => c.uniform);
+  const largest = uniform.flatMap((c) => c.integers ?? []).reduce((a, v) => Math.max(a, v), 0);
+  assert.equal(largest, 2 ** 31 - 1);
+  for (const name of ['uniform-cut', 'uniform-byte-after', 'uniform-first-byte', 'uniform-short', 'uniform-bad-ending', 'uniform-too-many']) {
+    assert.equal(uniform.find((c) => c.name === name)?.rule, 'R46-adaptive-stream', name);
+  }
+  const damaged = uniform.filter((c) => c.name.includes('damaged'));
+  assert.ok(damaged.some((c) => c.rule) && damaged.some((c) => c.integers), 'damaged uniform streams refused and accepted');
 });
 
 test('the wide cases reach 63 bits and every refusal of a wide stream', () => {

@@ -11,7 +11,8 @@
 //
 // Cases (paths relative to the manifest):
 //   {kind: "traverse", name, entry: FILE (the section-table entry, msgpack), payload: FILE, K, M, n,
-//    adaptive (the file sets flag bit 3: faces-traverse's coder may be 1)}
+//    adaptive (the file sets flag bit 3: faces-traverse's coder may be 1),
+//    uniform (the file sets flag bit 6: its ranks is read, and may be 1)}
 //   {kind: "restore", name, faces: FILE (int32 M*n), K, M, n,
 //    residuals: FILE (int32, or float64 with "wide": true, K*cols column-major), predict: [cols],
 //    push: [cols] (optional: predictor 2's push per column, format 1.6; absent: 2)}
@@ -47,7 +48,7 @@ function runTraverse(spec) {
   for (let r = 0; r < repeat; r++) {
     const before = process.memoryUsage().arrayBuffers;
     const started = performance.now();
-    faces = decodeTraverse(entry, payload, spec.K, spec.M, spec.n, undefined, spec.adaptive === true);
+    faces = decodeTraverse(entry, payload, spec.K, spec.M, spec.n, undefined, spec.adaptive === true, spec.uniform === true);
     best = Math.min(best, performance.now() - started);
     // what the walk held at its end is still counted: nothing allocates between its return and this
     if (r === 0) held = process.memoryUsage().arrayBuffers - before;

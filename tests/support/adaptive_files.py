@@ -3,8 +3,9 @@ their ``.s`` forms) turn their integers into bytes: :func:`adaptive_copy`, every
 reference adaptive coder (spec/FORMAT.md §6.14) with ``coder`` 1, whichever coder the encoder
 chose (tools/generate/vectors.py's ``adaptive_everywhere``, which wrote the vectors of 1.6; FACE
 as it is); and :func:`zstd_copy`, every one, and a faces-traverse FACE's streams, in §6.1's zstd
-planes, as files were before 1.6 (a RESD section's adaptive chunks, format 1.7, are kept as
-they are). The integers, and
+planes, as files were before 1.6 (its new vertices as gaps again, whether they were adaptive
+ranks or, format 1.9, places in a uniform stream; a RESD section's adaptive chunks, format 1.7,
+are kept as they are). The integers, and
 so the positions, are the original file's. Taken apart as :class:`AdaptiveParts`, a file can be
 edited to break one rule, its preamble flags included, and put back together with every CRC
 right.
@@ -28,6 +29,7 @@ from tuckercodec.format import adaptive, faces, qmat, streams, traversal
 from tuckercodec.format.container import pack_container, pack_raw, parse_container
 from tuckercodec.format.residual import CORRECTIONS, CORRECTIONS_MINOR
 from tuckercodec.format.segments import SEGMENTED, SEGMENTED_MINOR
+from tuckercodec.format.traversal import UNIFORM_RANKS
 from tuckercodec.model.topology import MeshPrediction, mesh_prediction
 
 
@@ -97,26 +99,42 @@ def stored_integers(
 def zstd_copy(data: bytes) -> bytes:
     """``data`` (a valid file) with every adaptive stream stored as §6.1's zstd planes, in the
     fewest planes that hold its integers (FACE's streams too, its new vertices as gaps again),
-    flag bit 3 cleared: a file of 1.5 or before, with the minor version it would have had;
-    unless predictor 2's pushes (``mean_push``, also 1.6) keep it a file of 1.6."""
+    flag bit 3 (and bit 6, uniform ranks) cleared: a file of 1.5 or before, with the minor
+    version it would have had; unless predictor 2's pushes (``mean_push``, also 1.6) keep it a
+    file of 1.6."""
     parts = taken_apart(data)
+    uniform = bool(parts.flags & UNIFORM_RANKS)
     face_n = parts.index("FACE")
     face_entry, face_payload = parts.sections[face_n]
     vertices = int(parts.header["vertices"])
     params = {k: v for k, v in face_entry.items() if k not in ("id", "critical", "codec")}
     coded = faces.decode_face_section(
-        face_entry["codec"], face_payload, params, vertices, "section FACE", adaptive_coding=True
+        face_entry["codec"],
+        face_payload,
+        params,
+        vertices,
+        "section FACE",
+        adaptive_coding=True,
+        uniform_ranks=uniform,
     )
     mesh = mesh_prediction(coded, vertices)
     if face_entry.get("coder") == adaptive.CODER_ADAPTIVE:
         count, width = face_entry["shape"]
         values, corner_order = traversal.read_streams(
-            face_payload, params, count, width, vertices, "FACE", adaptive_coding=True
+            face_payload,
+            params,
+            count,
+            width,
+            vertices,
+            "FACE",
+            adaptive_coding=True,
+            uniform_ranks=uniform,
         )
         face_params, packed = traversal.pack_streams(
             values, count, width, corner_order, streams.DEFAULT_LEVEL
         )
-        entry = {k: v for k, v in face_entry.items() if k not in ("coder", "streams")}
+        dropped = ("coder", "ranks", "streams")
+        entry = {k: v for k, v in face_entry.items() if k not in dropped}
         parts.sections[face_n] = ({**entry, **face_params}, packed)
     for n, (entry, payload) in enumerate(parts.sections):
         # a RESD section's coder (format 1.7, flag bit 4) is not a position factor's: kept
@@ -133,9 +151,10 @@ def zstd_copy(data: bytes) -> bytes:
         minor = SEGMENTED_MINOR
     if parts.flags & CORRECTIONS:
         minor = CORRECTIONS_MINOR
+    flags = parts.flags & ~UNIFORM_RANKS  # no ranks is left
     if adaptive.uses_adaptive([entry for entry, _ in parts.sections]):
-        return pack_container(parts.header, parts.sections, flags=parts.flags, minor=minor)
-    flags = parts.flags & ~adaptive.ADAPTIVE
+        return pack_container(parts.header, parts.sections, flags=flags, minor=minor)
+    flags &= ~adaptive.ADAPTIVE
     return pack_container(parts.header, parts.sections, flags=flags, minor=minor, adaptive=False)
 
 

@@ -11,7 +11,9 @@ of this checkout's file is measured against the original.
 ``--generated`` adds sequences made by :mod:`tools.generate.sequence` (a skinned body and a
 flag in the wind, at sizes like the held-out files of the rate issue, two of them with a rough
 jitter per vertex), written once into
-``~/.cache/tuckercodec-bench/generated/``.
+``~/.cache/tuckercodec-bench/generated/``. ``--scrambled`` adds each of them again with its
+vertices renumbered at random and its faces shuffled (a fixed seed), as a remesher or an
+exporter leaves a simulation's mesh: the walk of §6.8 then follows nothing of the vertex order.
 
 Printed: a table of every point (bytes and bpfv per revision, the ratios, the decoded KG), the
 median ratio per target against the first baseline, the largest ratio against each baseline,
@@ -24,6 +26,7 @@ integers in zstd frames (§6.1), both decoded by this checkout in one process, a
 ``positions()``. The twin isolates the coder: everything else is the same file.
 
     python -m tools.bench rate --generated
+    python -m tools.bench rate --generated --scrambled --targets 1 0.1 --baselines c798db5
     python -m tools.bench rate ../shared/data/chicken.npz --targets 0.1 --baselines 338ced4
     python -m tools.bench rate --speed --repeat 7
 """
@@ -45,6 +48,7 @@ import numpy as np
 from tools import common
 from tools.bench import arguments
 from tools.bench.size import baseline_sizes
+from tools.generate.vectors import scrambled
 from tuckercodec import Decoder, bpfv, encode, info, internal, kg_error
 
 DEFAULT_TARGETS = [1.0, 0.1, 0.02]
@@ -86,6 +90,22 @@ def generated_sequences() -> list[Path]:
     return out
 
 
+def scrambled_sequences(paths: list[Path]) -> list[Path]:
+    """Each of ``paths`` (generated ``.npz``) with its vertices renumbered and its faces
+    shuffled, written beside it the first time it is asked for."""
+    out = []
+    for path in paths:
+        target = path.with_name(f"{path.stem}-scrambled.npz")
+        if not target.exists():
+            print(f"scrambling {path.name}...", flush=True)
+            with np.load(path) as stored:
+                dtype, face_type = stored["V"].dtype, stored["F"].dtype
+            mixed = scrambled(common.load(path), seed=11)
+            np.savez(target, V=mixed.vertices.astype(dtype), F=mixed.faces.astype(face_type))
+        out.append(target)
+    return out
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The rate suite's options."""
     arguments.sequences(parser, "every sequence of ../shared/data")
@@ -93,6 +113,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--baselines", nargs="+", default=DEFAULT_BASELINES, help="git revisions")
     parser.add_argument(
         "--generated", action="store_true", help="add generated sequences (body, cloth)"
+    )
+    parser.add_argument(
+        "--scrambled",
+        action="store_true",
+        help="with --generated, each generated sequence again with a random vertex order",
     )
     parser.add_argument(
         "--speed", action="store_true", help="decode speed: adaptive against zstd frames"
@@ -184,7 +209,8 @@ def run(args: argparse.Namespace) -> int:
         common.SHARED_DATA / name for name in common.shared_sequences()
     ]
     if args.generated:
-        paths += generated_sequences()
+        generated = generated_sequences()
+        paths += generated + (scrambled_sequences(generated) if args.scrambled else [])
     if not paths:
         print(f"no sequences: {common.SHARED_DATA} is absent", file=sys.stderr)
         return 1

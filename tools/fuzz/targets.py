@@ -457,7 +457,13 @@ def face_check(data: bytes) -> str:
     try:
         sections.check_face_shape(params, Limits())
         table = faces.decode_face_section(
-            codec, payload, params, vertex_count, "section FACE", adaptive_coding=True
+            codec,
+            payload,
+            params,
+            vertex_count,
+            "section FACE",
+            adaptive_coding=True,
+            uniform_ranks=True,
         )
     except FormatError as error:
         return type(error).__name__

@@ -17,7 +17,11 @@ its end, a last ``code`` not below ``range``, more integers than 32768 per byte,
 outside the planes); and streams damaged at seeded random bytes, whatever the reference makes of
 them. Cases of 5 to 8 planes (``wide``: the 64-bit integers of a RESD chunk, §6.9, version 1.7,
 which the JavaScript decodes with decodeAdaptiveWide) give their integers as decimal strings,
-as JSON's numbers hold only 53 bits. Everything is deterministic (seeded, pure Python
+as JSON's numbers hold only 53 bits. Cases marked ``uniform`` are uniform streams (§6.8,
+version 1.9: faces-traverse's places with ``ranks`` 1, the JavaScript's decodeUniform) of
+``count`` values over ``total``, made and judged by ``tuckercodec/format/uniform.py``: places at
+both ends of each range and on both sides of the short codes' bound, totals from 1 to 2^31, each
+way such a stream is refused, and damaged copies. Everything is deterministic (seeded, pure Python
 integers): ``--check`` regenerates it.
 """
 
@@ -34,7 +38,7 @@ from typing import Any
 import numpy as np
 
 from tuckercodec import FormatError
-from tuckercodec.internal import adaptive, mesh_prediction
+from tuckercodec.internal import adaptive, mesh_prediction, uniform
 
 OUT = Path(__file__).resolve().parents[2] / "tests" / "js" / "adaptive_fixture.json"
 #: Damaged copies of a stream, each with one byte changed at a seeded place.
@@ -249,8 +253,74 @@ def mesh_cases() -> list[dict[str, Any]]:
     return out
 
 
+def uniform_case(name: str, payload: bytes, count: int, total: int) -> dict[str, Any]:
+    """A uniform stream's case: its values, or the rule the reference refuses it with."""
+    try:
+        found: dict[str, Any] = {
+            "integers": uniform.decode_uniform(payload, count, total, "fixture").tolist()
+        }
+    except FormatError as error:
+        found = {"rule": error.rule}
+    text = base64.b64encode(payload).decode()
+    return {"name": name, "uniform": True, "payload": text, "count": count, "total": total, **found}
+
+
+def uniform_places(rng: np.random.Generator, count: int, total: int) -> np.ndarray:
+    """``count`` places over ``total`` (place i in 0..total-i-1): random ones, with the
+    ends of each range and the values beside its short codes' bound u (u - 1 takes k bits,
+    u takes k + 1) among them."""
+    n = total - np.arange(count)
+    places = (rng.random(count) * n).astype(np.int64)
+    k = np.floor(np.log2(n)).astype(np.int64)
+    u = (np.int64(2) << k) - n
+    kind = rng.integers(0, 6, size=count)
+    places = np.where(kind == 0, 0, places)
+    places = np.where(kind == 1, n - 1, places)
+    places = np.where(kind == 2, u - 1, places)
+    return np.where((kind == 3) & (u < n), u, places)
+
+
+def uniform_cases() -> list[dict[str, Any]]:
+    """Uniform streams (§6.8, version 1.9) as the reference codes them, and refused ones."""
+    rng = np.random.default_rng(4)
+    out = []
+    for total in (1, 2, 3, 5, 8, 100, 1000, 4097):
+        count = min(total, 300)
+        places = uniform_places(rng, count, total)
+        payload = uniform.encode_uniform(places, total)
+        out.append(uniform_case(f"uniform-{total}", payload, count, total))
+    top = 1 << 31  # the largest total: places of 31 bits, n = 2^31 exactly at first
+    places = np.array([top - 1, 0, top - 3, (1 << 30) - 1, 1 << 30], dtype=np.int64)
+    payload = uniform.encode_uniform(places, top)
+    out.append(uniform_case("uniform-2-31", payload, len(places), top))
+    out.append(uniform_case("uniform-2-31-some", payload[:-1], len(places), top))
+    places = uniform_places(rng, 200, 700)
+    payload = uniform.encode_uniform(places, 700)
+    out.append(uniform_case("uniform-700-of-200", payload, 200, 700))
+    for n in range(DAMAGED_PER_STREAM):
+        broken = bytearray(payload)
+        at = int(rng.integers(1, len(payload)))
+        broken[at] = (broken[at] + int(rng.integers(1, 256))) % 256
+        out.append(uniform_case(f"uniform-700-of-200-damaged-{n}", bytes(broken), 200, 700))
+    for back in (2, 3, 4, 5):  # in the last bytes, where damage may leave it readable
+        broken = bytearray(payload)
+        broken[-back] ^= 0x5A
+        out.append(uniform_case(f"uniform-700-of-200-damaged-end-{back}", bytes(broken), 200, 700))
+    out.append(uniform_case("uniform-cut", payload[:-1], 200, 700))
+    out.append(uniform_case("uniform-byte-after", payload + b"\0", 200, 700))
+    out.append(uniform_case("uniform-first-byte", b"\x01" + payload[1:], 200, 700))
+    none = uniform.encode_uniform(np.zeros(0, dtype=np.int64), 5)
+    out.append(uniform_case("uniform-none", none, 0, 5))
+    out.append(uniform_case("uniform-short", b"\0\0\0\0", 0, 5))
+    out.append(uniform_case("uniform-bad-ending", b"\0\xff\xff\xff\xff", 0, 5))
+    # more values than 32768 per byte: refused before anything is decoded
+    many = 32768 * len(none) + 1
+    out.append(uniform_case("uniform-too-many", none, many, many))
+    return out
+
+
 def fixture() -> str:
-    cases = sequence_cases() + wide_cases() + mesh_cases()
+    cases = sequence_cases() + wide_cases() + mesh_cases() + uniform_cases()
     return json.dumps({"about": __doc__.split("\n\n")[0], "cases": cases}, indent=1) + "\n"
 
 

@@ -520,6 +520,7 @@ def valid_vectors() -> dict[str, tuple[bytes, str]]:
         **fields_vector(),
         **adaptive_vectors(),
         **codebook_vectors(),
+        **uniform_ranks_vectors(),
         "v1-wave-triangles": (basic, "triangles, no names: the basic file"),
         "v1.1-segments-shared": (
             encode_with_report(
@@ -624,7 +625,14 @@ def face_streams(parts: Parts) -> tuple[list[list[int]], int, int, int]:
     count, width = entry["shape"]
     vertices = parts.header["vertices"]
     values, corner_order = traversal.read_streams(
-        parts.payloads[n], entry, count, width, vertices, "FACE", adaptive_coding=True
+        parts.payloads[n],
+        entry,
+        count,
+        width,
+        vertices,
+        "FACE",
+        adaptive_coding=True,
+        uniform_ranks=True,
     )
     return values, corner_order, entry.get("coder", adaptive.CODER_ZSTD), vertices
 
@@ -687,6 +695,54 @@ def codebook_vectors() -> dict[str, tuple[bytes, str]]:
                 format_version="1.8",
             ).data,
             "format 1.8 and 1.1: lossless values in three segments, each RESD.s with its codebooks",
+        ),
+    }
+
+
+def uniform_ranks_vectors() -> dict[str, tuple[bytes, str]]:
+    """The valid vectors of format 1.9 (§6.8's ``ranks`` 1): scrambled meshes, whose vertex
+    order the walk does not follow, so that the encoder stores their new vertices as places in
+    a uniform stream (a ``ValueError`` if it no longer does)."""
+    triangles = scrambled(MeshSequence(wave_sheet(24, 9), sheet_triangles(9)), seed=41)
+    polygons = scrambled(pinched_sheets(7, 12), seed=43)
+    vectors = {
+        "v1.9-faces-uniform-ranks": (
+            encode(triangles, target_kg=0.1, format_version="1.9"),
+            "format 1.9: faces-traverse of scrambled triangles with coder 1 and ranks 1, the "
+            "new vertices' places among the unseen in a uniform stream",
+        ),
+        "v1.9-faces-uniform-polygons": (
+            encode(polygons, target_kg=0.1, format_version="1.9"),
+            "format 1.9: ranks 1 for scrambled polygons in two sheets that share a vertex "
+            "(degrees, seeds, FAR)",
+        ),
+    }
+    for name, (data, _) in vectors.items():
+        if Parts(data).entries[Parts(data).index("FACE")].get("ranks") != 1:
+            raise ValueError(f"{name}: the encoder no longer chooses ranks 1 for it")
+    return vectors
+
+
+def uniform_ranks_invalid_vectors(good: bytes) -> dict[str, tuple[bytes, str]]:
+    """vector name -> (file bytes, error class name): the 1.9 file ``good`` (FACE with
+    ``ranks`` 1) with §6.8's uniform ranks broken, all R46: ``ranks`` 2; ``ranks`` 1 with
+    ``coder`` 0 (checked before the streams, which stay as they are); a byte after the uniform
+    stream's end."""
+    parts = Parts(good)
+    entry = parts.entries[parts.index("FACE")]
+    streams = [list(stream) for stream in entry["streams"]]
+    offsets = np.cumsum([0] + [length for _, _, length in streams])
+    payload = parts.payloads[parts.index("FACE")]
+    vertices = traversal.NEW_VERTICES
+    end = int(offsets[vertices + 1])
+    longer = payload[:end] + b"\x00" + payload[end:]
+    streams[vertices][2] += 1
+    return {
+        "R46-adaptive-stream-ranks": (_edit(good, _entry("FACE", ranks=2)), "FormatError"),
+        "R46-adaptive-stream-ranks-coder": (_edit(good, _entry("FACE", coder=0)), "FormatError"),
+        "R46-adaptive-stream-uniform": (
+            _edit(good, _payload("FACE", longer, streams=streams)),
+            "FormatError",
         ),
     }
 
@@ -1249,6 +1305,9 @@ SECOND_VECTORS = {
     "R29-zstd-content-size-codebook": "R29-zstd-content-size",
     "R47-codebook-range": "R47-codebook",
     "R41-residual-value-codebook": "R41-residual-value",
+    "R46-adaptive-stream-ranks": "R46-adaptive-stream",
+    "R46-adaptive-stream-ranks-coder": "R46-adaptive-stream",
+    "R46-adaptive-stream-uniform": "R46-adaptive-stream",
 }
 
 
@@ -1338,10 +1397,12 @@ def write_invalid(
     faces_coded: bytes,
     corrected_adaptively: bytes,
     codebooks: bytes,
+    uniform_ranks: bytes,
 ) -> int:
     """The invalid vectors made from the valid files ``good`` (format 1.0), ``segmented``
     (1.1), ``traversed`` (1.2), ``corrected`` (1.3), ``attached`` (1.5), ``adaptively_coded``
-    and ``faces_coded`` (1.6) and ``corrected_adaptively`` (1.7), with their JSON; how many."""
+    and ``faces_coded`` (1.6), ``corrected_adaptively`` (1.7), ``codebooks`` (1.8) and
+    ``uniform_ranks`` (1.9), with their JSON; how many."""
     vectors = {
         **invalid_vectors(good),
         **segmented_invalid_vectors(segmented),
@@ -1352,6 +1413,7 @@ def write_invalid(
         **faces_adaptive_invalid_vectors(faces_coded),
         **adaptive_correction_invalid_vectors(corrected_adaptively),
         **codebook_invalid_vectors(codebooks),
+        **uniform_ranks_invalid_vectors(uniform_ranks),
     }
     for name, (data, error) in vectors.items():
         write_invalid_vector(folder, name, data, error)
@@ -1382,6 +1444,8 @@ INVALID_SOURCES = {
 ADAPTIVE_CORRECTIONS_SOURCE = "v1.7-lossless-adaptive"
 #: The valid file of 1.8 the invalid vectors of §6.9's codebooks are made from.
 CODEBOOKS_SOURCE = "v1.8-lossless-codebooks"
+#: The valid file of 1.9 the invalid vectors of §6.8's uniform ranks are made from.
+UNIFORM_RANKS_SOURCE = "v1.9-faces-uniform-ranks"
 
 
 def write_only(out: Path, names: list[str]) -> int:
@@ -1414,6 +1478,7 @@ def write_only(out: Path, names: list[str]) -> int:
             (out / f"{ADAPTIVE_CORRECTIONS_SOURCE}.tkc").read_bytes()
         ),
         **codebook_invalid_vectors((out / f"{CODEBOOKS_SOURCE}.tkc").read_bytes()),
+        **uniform_ranks_invalid_vectors((out / f"{UNIFORM_RANKS_SOURCE}.tkc").read_bytes()),
     }
     for name in names:
         if name in invalid:
@@ -1478,6 +1543,7 @@ def main(argv: list[str] | None = None) -> int:
         valid["v1.6-faces-adaptive"][0],
         derived["v1.7-lossless-adaptive"][0],
         valid[CODEBOOKS_SOURCE][0],
+        valid[UNIFORM_RANKS_SOURCE][0],
     )
     print(f"wrote {len(valid) + len(derived)} valid and {invalid} invalid vectors to {out}")
     return 0

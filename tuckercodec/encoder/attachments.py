@@ -116,6 +116,7 @@ def coded_faces(
         level,
         keep_order=keep_order,
         adaptive_coding=features.adaptive,
+        uniform_ranks=features.uniform_ranks,
         traverse=traverse,
     )
     decoded = face.faces

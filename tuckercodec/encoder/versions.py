@@ -4,7 +4,7 @@ Each minor version of format 1 adds features (spec/FORMAT.md §10): 1.1 segments
 tools (faces-traverse, predictors 2 and 3), 1.3 corrections, 1.4 the time and scene header keys,
 1.5 attributes, face sets, fields and the faces' given order, 1.6 adaptive coding and predictor
 2's pushes, 1.7 the corrections' chunks through the adaptive coder, 1.8 the corrections'
-codebooks. The encoder uses each
+codebooks, 1.9 the walk's new vertices in a uniform stream. The encoder uses each
 where it makes the file smaller, and the file says the minor version of the newest one it
 uses. :class:`Features` holds an encode to the features of one
 version and before, so that decoders of that version read every file it writes; what cannot be
@@ -23,9 +23,10 @@ from ..format.container import FORMAT_MAJOR, SCENE_MINOR
 from ..format.residual import ADAPTIVE_CORRECTIONS_MINOR, CODEBOOKS_MINOR, CORRECTIONS_MINOR
 from ..format.sections import CODING_TOOLS_MINOR
 from ..format.segments import SEGMENTED_MINOR
+from ..format.traversal import UNIFORM_RANKS_MINOR
 
 #: The newest minor version this encoder writes, and so its default.
-NEWEST_MINOR = CODEBOOKS_MINOR
+NEWEST_MINOR = UNIFORM_RANKS_MINOR
 #: Every version ``format_version`` may name, oldest first.
 VERSIONS = tuple(f"{FORMAT_MAJOR}.{minor}" for minor in range(NEWEST_MINOR + 1))
 
@@ -104,6 +105,12 @@ class Features:
     def codebooks(self) -> bool:
         """RESD codebooks: lossless corrections as positions in each axis's values (1.8, §6.9)."""
         return self.minor >= CODEBOOKS_MINOR
+
+    @property
+    def uniform_ranks(self) -> bool:
+        """faces-traverse's new vertices as places among the unseen in a uniform stream
+        (``ranks`` 1, 1.9, §6.8)."""
+        return self.minor >= UNIFORM_RANKS_MINOR
 
     def require(self, minor: int, feature: str, what: str, instead: str) -> None:
         """Refuse ``feature`` (what the caller asked for or gave) if it needs format

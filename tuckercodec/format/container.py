@@ -46,6 +46,7 @@ from .residual import (
 )
 from .sections import CODING_TOOLS, Section, read_section_table, with_coding_tools
 from .segments import SEGMENTED
+from .traversal import UNIFORM_RANKS, UNIFORM_RANKS_MINOR
 
 SIGNATURE = b"\x89TKC\r\n\x1a\n"
 FORMAT_MAJOR = 1
@@ -66,9 +67,16 @@ SCENE_MINOR = 4
 CRITICAL_FLAGS_MASK = 0x0000FFFF
 #: Critical flags this decoder knows: bit 0, a segmented file (format 1.1, §6.7), and bit 1,
 #: the coding tools of format 1.2, bit 2, corrections (format 1.3, §6.9), bit 3, adaptive
-#: coding (1.6, §6.14), bit 4, adaptive corrections (1.7) and bit 5, codebooks (1.8, §6.9).
+#: coding (1.6, §6.14), bit 4, adaptive corrections (1.7), bit 5, codebooks (1.8, §6.9) and
+#: bit 6, new vertices in uniform streams (1.9, §6.8).
 KNOWN_CRITICAL_FLAGS = (
-    SEGMENTED | CODING_TOOLS | CORRECTIONS | ADAPTIVE | ADAPTIVE_CORRECTIONS | CODEBOOKS
+    SEGMENTED
+    | CODING_TOOLS
+    | CORRECTIONS
+    | ADAPTIVE
+    | ADAPTIVE_CORRECTIONS
+    | CODEBOOKS
+    | UNIFORM_RANKS
 )
 
 
@@ -152,6 +160,12 @@ class Container:
         """Whether the preamble sets flag bit 5: corrections with codebooks (format 1.8, §6.9)."""
         return bool(self.flags & CODEBOOKS)
 
+    @property
+    def uniform_ranks(self) -> bool:
+        """Whether the preamble sets flag bit 6: faces-traverse's new vertices in a uniform
+        stream (format 1.9, §6.8)."""
+        return bool(self.flags & UNIFORM_RANKS)
+
     def payload(self, data: bytes | memoryview | RangeReader, entry: Section) -> memoryview:
         """The bytes of a section, after checking its CRC-32 (§5 step 9); ``data`` is the whole
         file, or a reader of the file's byte ranges (:class:`.disk.FileRanges`) that reads just
@@ -202,7 +216,8 @@ def pack_container(
             section stores its integers with ``coder`` 1.
 
     Flag bit 4 and minor version 7 are set when a RESD section stores its chunks with ``coder``
-    1 (§6.9), and flag bit 5 and minor version 8 when one has ``codebooks``.
+    1 (§6.9), flag bit 5 and minor version 8 when one has ``codebooks``, and flag bit 6 and
+    minor version 9 when a faces-traverse FACE has ``ranks`` 1 (§6.8).
     """
     flags, minor = with_coding_tools([entry for entry, _ in sections], flags, minor, coding_tools)
     if any(key in header for key in SCENE_KEYS):
@@ -217,6 +232,8 @@ def pack_container(
         flags, minor = flags | ADAPTIVE_CORRECTIONS, max(minor, ADAPTIVE_CORRECTIONS_MINOR)
     if any(entry.get("codec") == RESIDUAL and "codebooks" in entry for entry, _ in sections):
         flags, minor = flags | CODEBOOKS, max(minor, CODEBOOKS_MINOR)
+    if any(entry.get("codec") == "faces-traverse" and "ranks" in entry for entry, _ in sections):
+        flags, minor = flags | UNIFORM_RANKS, max(minor, UNIFORM_RANKS_MINOR)
     table = []
     offset = 0
     for entry, payload in sections:

@@ -57,21 +57,27 @@ def encode_face_sections(
     *,
     keep_order: bool,
     adaptive_coding: bool = False,
+    uniform_ranks: bool = False,
     traverse: bool = True,
 ) -> tuple[FaceSection, tuple[dict[str, Any], bytes] | None, np.ndarray | None]:
     """The FACE section; when ``keep_order`` asks for the faces as given and the walk is
     chosen, the ORDER section that restores their order (format 1.5, §6.10): the smaller
     of faces-delta alone and faces-traverse with ORDER; and when the walk is chosen, its
     order (the given number of each walked face). ``adaptive_coding``: the file may be of
-    format 1.6 (flag bit 3), so that the walk's streams may use the adaptive coder.
-    ``traverse``: the file may be of format 1.2, so that the walk may be chosen at all
+    format 1.6 (flag bit 3), so that the walk's streams may use the adaptive coder;
+    ``uniform_ranks``: of format 1.9 (flag bit 6), so that its new vertices may be a uniform
+    stream. ``traverse``: the file may be of format 1.2, so that the walk may be chosen at all
     (otherwise faces-delta, the faces as given)."""
     table = np.asarray(faces, dtype=np.int64)
     delta_params, delta_payload = encode_faces(table, level)
     if not traverse:
         return FaceSection(FACES_DELTA, delta_params, delta_payload, table), None, None
     walk_params, walk_payload, walked, order = encode_traversal_ordered(
-        table, vertex_count, level, adaptive_coding=adaptive_coding
+        table,
+        vertex_count,
+        level,
+        adaptive_coding=adaptive_coding,
+        uniform_ranks=uniform_ranks,
     )
     order_section = encode_face_order(order, level) if keep_order else None
     walk_size = len(walk_payload) + (0 if order_section is None else len(order_section[1]))
@@ -92,9 +98,14 @@ def _walk_holds(
 ) -> bool:
     """Whether the walk decodes to the faces given (in its order), as §6.8 promises: checked
     once per encode, so that a walk the encoder got wrong costs size (faces-delta), never faces."""
-    # the encoder writes coder 1 only where it may (a file of format 1.6)
+    # the encoder writes coder 1 only where it may (a file of format 1.6), ranks 1 in 1.9
     decoded = decode_traversal(
-        payload, params, vertex_count, "section FACE", adaptive_coding="coder" in params
+        payload,
+        params,
+        vertex_count,
+        "section FACE",
+        adaptive_coding="coder" in params,
+        uniform_ranks="ranks" in params,
     )
     same_rows = np.lexsort(decoded.T[::-1]), np.lexsort(table.T[::-1])
     return np.array_equal(decoded, walked) and np.array_equal(
@@ -111,13 +122,21 @@ def decode_face_section(
     limits: Limits = DEFAULT_LIMITS,
     *,
     adaptive_coding: bool = False,
+    uniform_ranks: bool = False,
 ) -> np.ndarray:
     """The faces of a FACE section of either codec (the caller has checked that the codec is
     allowed in this file, and the shape against ``limits``). ``adaptive_coding``: the file sets
-    flag bit 3, so that faces-traverse's ``coder`` may be 1 (§6.8)."""
+    flag bit 3, so that faces-traverse's ``coder`` may be 1 (§6.8); ``uniform_ranks``: flag bit
+    6, so that its ``ranks`` may be 1."""
     if codec == FACES_TRAVERSE:
         return decode_traversal(
-            payload, params, vertex_count, where, limits, adaptive_coding=adaptive_coding
+            payload,
+            params,
+            vertex_count,
+            where,
+            limits,
+            adaptive_coding=adaptive_coding,
+            uniform_ranks=uniform_ranks,
         )
     return decode_faces(payload, params, vertex_count, where)
 

@@ -50,7 +50,7 @@ import numpy as np
 
 from ..errors import FormatError
 from ..system import native
-from . import adaptive, streams, unseen
+from . import adaptive, streams, uniform, unseen
 from .limits import DEFAULT_LIMITS, Limits, check_limit
 from .sections import section_shape
 
@@ -63,11 +63,19 @@ GATE_NONE, GATE_FACE, GATE_FLIP = 0, 1, 2
 TIP_NEW, TIP_PREV, TIP_NEXT, TIP_FAR = 0, 1, 2, 3
 #: The four integer streams of the payload, in order.
 STREAM_NAMES = ("ops", "degrees", "vertices", "references")
+NEW_VERTICES = STREAM_NAMES.index("vertices")
 #: ``corner_order``: the rotation is the position in the stored face of the walk's first corner
 #: (0), or of the face's smallest vertex index (1).
 ROTATE_FROM_GATE, ROTATE_FROM_SMALLEST = 0, 1
 #: With ``coder`` 1 every integer of the four streams is a 32-bit one, as with §6.1's planes.
 ADAPTIVE_PLANES = 4
+#: The ``ranks`` values (format 1.9, §6.8): with ``coder`` 1 the vertices stream holds each NEW
+#: vertex's rank from the last one in the adaptive coder, or its place among the unseen vertices
+#: in a uniform stream (:mod:`.uniform`), for a vertex order the walk does not follow.
+RANKS_ADAPTIVE, RANKS_UNIFORM = 0, 1
+#: The preamble's flag bit 6 (critical): ``ranks`` 1 (format 1.9).
+UNIFORM_RANKS = 0x0040
+UNIFORM_RANKS_MINOR = 9
 
 
 class _Boundary:
@@ -143,15 +151,17 @@ def encode_traversal(
     level: int = streams.DEFAULT_LEVEL,
     *,
     adaptive_coding: bool = False,
+    uniform_ranks: bool = False,
 ) -> tuple[dict[str, Any], bytes, np.ndarray]:
     """``(params, payload, faces in walk order)`` of a FACE section with codec faces-traverse.
 
-    The encoder tries both corner orders, and with ``adaptive_coding`` (a file that may be of
-    format 1.6) both coders, and keeps the smallest. The faces it returns are the ones a decoder
+    The encoder tries both corner orders, with ``adaptive_coding`` (a file that may be of
+    format 1.6) both coders, and with ``uniform_ranks`` too (format 1.9) both ways to store the
+    new vertices in coder 1, and keeps the smallest. The faces it returns are the ones a decoder
     gives back: the same rows, corners and orientation, in the walk's order.
     """
     params, payload, walked, _ = encode_traversal_ordered(
-        faces, vertex_count, level, adaptive_coding=adaptive_coding
+        faces, vertex_count, level, adaptive_coding=adaptive_coding, uniform_ranks=uniform_ranks
     )
     return params, payload, walked
 
@@ -162,31 +172,41 @@ def encode_traversal_ordered(
     level: int = streams.DEFAULT_LEVEL,
     *,
     adaptive_coding: bool = False,
+    uniform_ranks: bool = False,
 ) -> tuple[dict[str, Any], bytes, np.ndarray, np.ndarray]:
     """:func:`encode_traversal`, and the walk's order: the input's row of each walked face.
 
     Each candidate is weighed by its payload and its parameters together (``coder`` 1 adds a
-    key to the header), so that the file never grows for it."""
+    key to the header, and ``ranks`` 1 another), so that the file never grows for it."""
     table = np.asarray(faces, dtype=np.int64)
     count, width = table.shape if table.ndim == 2 and table.size else (0, 3)
     walk = _walked(table, count, vertex_count)
-    # the coders to try, each with the three streams the corner order does not change, packed
-    # once: only the ops differ between the corner orders
-    coders = {adaptive.CODER_ZSTD: [walk.degrees, walk.new_residuals, walk.references]}
+    # the codings to try, (coder, ranks), each with the three streams the corner order does not
+    # change, packed once: only the ops differ between the corner orders
+    zstd = (adaptive.CODER_ZSTD, RANKS_ADAPTIVE)
+    plain = [walk.degrees, walk.new_residuals, walk.references]
+    rest = {zstd: [_pack_stream(values, level, adaptive.CODER_ZSTD) for values in plain]}
     ranks = _ranks(walk.new_residuals, vertex_count) if adaptive_coding else None
-    if ranks is not None:
-        ranked: list[Sequence[int]] = [walk.degrees, ranks.tolist(), walk.references]
-        if _fits_adaptive([*walk.ops, *ranked]):
-            coders[adaptive.CODER_ADAPTIVE] = ranked
-    packed_rest = {
-        coder: [_pack_stream(values, level, coder) for values in rest]
-        for coder, rest in coders.items()
-    }
+    if ranks is not None and _fits_adaptive([*walk.ops, walk.degrees, ranks, walk.references]):
+        coder = adaptive.CODER_ADAPTIVE
+        others = [
+            _pack_stream(walk.degrees, level, coder),
+            _pack_stream(walk.references, level, coder),
+        ]
+        rest[coder, RANKS_ADAPTIVE] = [others[0], _pack_stream(ranks, level, coder), others[1]]
+        if uniform_ranks and vertex_count <= uniform.MAX_TOTAL:
+            places = np.cumsum(ranks)  # u(w): the unseen vertices below each new vertex w
+            coded = ranks.size, 0, uniform.encode_uniform(places, vertex_count)
+            rest[coder, RANKS_UNIFORM] = [others[0], coded, others[1]]
     best: tuple[int, dict[str, Any], bytes] | None = None
     for corner_order in (ROTATE_FROM_GATE, ROTATE_FROM_SMALLEST):
-        for coder in coders:
-            packed = [_pack_stream(walk.ops[corner_order], level, coder), *packed_rest[coder]]
-            params, payload = _assembled(packed, count, width, corner_order, coder)
+        ops = {
+            coder: _pack_stream(walk.ops[corner_order], level, coder)
+            for coder in {coder for coder, _ in rest}
+        }
+        for (coder, ranked), streams_ in rest.items():
+            packed = [ops[coder], *streams_]
+            params, payload = _assembled(packed, count, width, corner_order, coder, ranked)
             size = len(payload) + len(msgpack.packb(params))
             if best is None or size < best[0]:
                 best = size, params, payload
@@ -205,7 +225,7 @@ def _ranks(new_residuals: Sequence[int], vertex_count: int) -> np.ndarray | None
     return unseen.ranks_of(vertices, vertex_count)
 
 
-def _fits_adaptive(coded: Sequence[Sequence[int]]) -> bool:
+def _fits_adaptive(coded: Sequence[Sequence[int] | np.ndarray]) -> bool:
     """Whether every value is a 32-bit integer, as a decoder of ``coder`` 1 requires."""
     limit = 1 << (8 * ADAPTIVE_PLANES - 1)
     for values in coded:
@@ -255,7 +275,9 @@ def pack_streams(
     return _assembled(packed, count, width, corner_order, coder)
 
 
-def _pack_stream(values: Sequence[int], level: int, coder: int) -> tuple[int, int, bytes]:
+def _pack_stream(
+    values: Sequence[int] | np.ndarray, level: int, coder: int
+) -> tuple[int, int, bytes]:
     """``(count, planes, payload)`` of one stream: zstd over byte planes, or with ``coder`` 1
     one adaptive column (planes 0)."""
     array = np.asarray(values, dtype=np.int64)
@@ -267,12 +289,19 @@ def _pack_stream(values: Sequence[int], level: int, coder: int) -> tuple[int, in
 
 
 def _assembled(
-    packed: Sequence[tuple[int, int, bytes]], count: int, width: int, corner_order: int, coder: int
+    packed: Sequence[tuple[int, int, bytes]],
+    count: int,
+    width: int,
+    corner_order: int,
+    coder: int,
+    ranks: int = RANKS_ADAPTIVE,
 ) -> tuple[dict[str, Any], bytes]:
     """``(params, payload)`` of the four packed streams (ops, degrees, vertices, references)."""
     params: dict[str, Any] = {"shape": [count, width], "corner_order": corner_order}
     if coder == adaptive.CODER_ADAPTIVE:  # absent means 0: a file of coder 0 is as before 1.6
         params["coder"] = coder
+    if ranks == RANKS_UNIFORM:  # absent means 0, as before 1.9
+        params["ranks"] = ranks
     params["streams"] = [[size, planes, len(payload)] for size, planes, payload in packed]
     return params, b"".join(payload for _, _, payload in packed)
 
@@ -406,11 +435,20 @@ def read_streams(
     limits: Limits = DEFAULT_LIMITS,
     *,
     adaptive_coding: bool = False,
+    uniform_ranks: bool = False,
 ) -> tuple[list[list[int]], int]:
     """The four streams of a faces-traverse payload (§6.8) as lists, and ``corner_order``
     (:func:`read_stream_arrays`, whose checks it makes)."""
     arrays, corner_order = read_stream_arrays(
-        payload, params, count, width, vertex_count, where, limits, adaptive_coding=adaptive_coding
+        payload,
+        params,
+        count,
+        width,
+        vertex_count,
+        where,
+        limits,
+        adaptive_coding=adaptive_coding,
+        uniform_ranks=uniform_ranks,
     )
     return [values.tolist() for values in arrays], corner_order
 
@@ -425,16 +463,19 @@ def read_stream_arrays(
     limits: Limits = DEFAULT_LIMITS,
     *,
     adaptive_coding: bool = False,
+    uniform_ranks: bool = False,
 ) -> tuple[list[np.ndarray], int]:
     """The four streams of a faces-traverse payload (§6.8), int64 arrays, and ``corner_order``;
     the vertices stream as the walk reads it, gaps ``w - last - 1``, whichever the coder.
 
     In §5 step 15's order: ``corner_order``, ``coder`` (R46: 1 only where ``adaptive_coding``,
-    a file with flag bit 3), the streams' table (:func:`_stream_table`: each entry's form, the
-    bounds on the counts, the lengths against the payload), every ``planes`` (R30: 1..4, or 0
-    with ``coder`` 1), the bytes the streams decompress to (R21), then each stream (R29, or R46
-    for an adaptive one), then with ``coder`` 1 the ranks of the NEW vertices (R39). Nothing is
-    allocated by a declared count before its stream is decoded.
+    a file with flag bit 3), where ``uniform_ranks`` (flag bit 6) ``ranks`` (R46: 1 only with
+    ``coder`` 1 and at most 2**31 vertices; elsewhere an unknown parameter), the streams'
+    table (:func:`_stream_table`: each entry's form, the bounds on the counts, the lengths
+    against the payload), every ``planes`` (R30: 1..4, or 0 with ``coder`` 1), the bytes the
+    streams decompress to (R21), then each stream (R29, or R46 for an adaptive or uniform one),
+    then with ``coder`` 1 the ranks of the NEW vertices (R39). Nothing is allocated by a
+    declared count before its stream is decoded.
     """
     corner_order = params.get("corner_order")
     # an int, not a float that equals 0 or 1 (§1: an int is never a float): found by the
@@ -452,6 +493,7 @@ def read_stream_arrays(
         adaptive_coding,
         needs="flag bit 3",
     )
+    ranks = _checked_ranks(params, coder, vertex_count, where) if uniform_ranks else RANKS_ADAPTIVE
     table = _stream_table(params.get("streams"), count, width, vertex_count, where)
     total = sum(length for _, _, length in table)
     if total != len(payload):
@@ -475,12 +517,9 @@ def read_stream_arrays(
         field=f"{where}.streams",
     )
     values, offset = [], 0
-    for (size, _, length), p, field in zip(table, planes, fields, strict=True):
+    for number, ((size, _, length), p, field) in enumerate(zip(table, planes, fields, strict=True)):
         part = payload[offset : offset + length]
-        if coder == adaptive.CODER_ADAPTIVE:
-            values.append(_adaptive_stream(part, size, field))
-        else:
-            values.append(streams.unpack_integers(part, size, p, field))
+        values.append(_stream(part, size, p, coder, ranks, number, vertex_count, field))
         offset += length
     if coder == adaptive.CODER_ADAPTIVE:
         try:
@@ -489,6 +528,43 @@ def read_stream_arrays(
             raise _broken(where, str(error)) from None
         values[2] = unseen.gaps(placed)
     return values, int(corner_order)
+
+
+def _stream(
+    part: bytes | memoryview,
+    size: int,
+    planes: int,
+    coder: int,
+    ranks: int,
+    number: int,
+    vertex_count: int,
+    where: str,
+) -> np.ndarray:
+    """Stream ``number`` (§6.8's order) of ``size`` integers from its bytes ``part``: zstd
+    planes (R29), an adaptive column (R46), or with ``ranks`` 1 the vertices' uniform stream
+    (R46), whose places among the unseen are turned into ranks, their differences."""
+    if number == NEW_VERTICES and ranks == RANKS_UNIFORM:
+        places = uniform.decode_uniform(part, size, vertex_count, where)
+        return np.diff(places, prepend=np.int64(0))
+    if coder == adaptive.CODER_ADAPTIVE:
+        return _adaptive_stream(part, size, where)
+    return streams.unpack_integers(part, size, planes, where)
+
+
+def _checked_ranks(params: Mapping[str, Any], coder: int, vertex_count: int, where: str) -> int:
+    """``ranks`` of a file with flag bit 6 (format 1.9), R46 unless it is absent (0), 0, or 1
+    with ``coder`` 1 and at most :data:`.uniform.MAX_TOTAL` vertices."""
+    ranks = params.get("ranks", RANKS_ADAPTIVE)
+    if type(ranks) is not int or ranks not in (RANKS_ADAPTIVE, RANKS_UNIFORM):
+        adaptive.refuse(f"ranks must be 0 or 1, got {ranks!r}", f"{where}.ranks")
+    if ranks == RANKS_UNIFORM and coder != adaptive.CODER_ADAPTIVE:
+        adaptive.refuse("ranks 1 needs coder 1", f"{where}.ranks")
+    if ranks == RANKS_UNIFORM and vertex_count > uniform.MAX_TOTAL:
+        adaptive.refuse(
+            f"ranks 1 takes at most {uniform.MAX_TOTAL} vertices, not {vertex_count}",
+            f"{where}.ranks",
+        )
+    return int(ranks)
 
 
 def _adaptive_stream(payload: bytes | memoryview, size: int, where: str) -> np.ndarray:
@@ -548,6 +624,7 @@ def decode_traversal(
     limits: Limits = DEFAULT_LIMITS,
     *,
     adaptive_coding: bool = False,
+    uniform_ranks: bool = False,
 ) -> np.ndarray:
     """The (M, n) faces of a FACE section with codec faces-traverse (§6.8), in walk order.
 
@@ -555,11 +632,19 @@ def decode_traversal(
     (:func:`read_stream_arrays`), then the walk rebuilds the faces from them
     (:func:`walk_streams`). The walk's state grows with the values it reads; the (M, n) table is
     made once M faces are decoded. ``adaptive_coding``: the file sets flag bit 3, so that
-    ``coder`` may be 1.
+    ``coder`` may be 1; ``uniform_ranks``: flag bit 6, so that ``ranks`` may be 1.
     """
     count, width = section_shape(params, where, min_cols=3)
     arrays, corner_order = read_stream_arrays(
-        payload, params, count, width, vertex_count, where, limits, adaptive_coding=adaptive_coding
+        payload,
+        params,
+        count,
+        width,
+        vertex_count,
+        where,
+        limits,
+        adaptive_coding=adaptive_coding,
+        uniform_ranks=uniform_ranks,
     )
     return walk_streams(arrays, count, width, vertex_count, corner_order, where)
 

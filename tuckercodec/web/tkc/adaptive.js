@@ -191,6 +191,57 @@ export function decodeAdaptiveWide(payload, rows, cols, planes, where) {
 }
 
 /**
+ * The `count` integers of a uniform stream over `total` (§6.8, version 1.9): value i in
+ * 0..total−i−1 as truncated binary in §6.14's direct bits, most significant first. With
+ * n = total − i, k = floor(log2 n) and u = 2^(k+1) − n, k bits x give x when x < u, else one
+ * more bit b gives 2x + b − u. Every value so read is in its range, so the stream fails only as
+ * an adaptive stream does (R46): more values than §6.14's bound lets its bytes hold (checked
+ * before anything is allocated), a bad start, an end reached too soon or not at all, a bad
+ * ending. The caller has checked count <= total <= 2^31: every value fits an int32.
+ * @param {Uint8Array} payload
+ * @param {number} count
+ * @param {number} total T (the vertices, K)
+ * @param {string} where the stream, for messages
+ * @returns {Int32Array}
+ * @throws {import('./errors.js').TkcError} R46-adaptive-stream
+ */
+export function decodeUniform(payload, count, total, where) {
+  if (count > MAX_EXPANSION * payload.length) {
+    throw adaptiveError(where, `${count} integers cannot come from ${payload.length} bytes (at most ${MAX_EXPANSION} per byte)`);
+  }
+  const d = new RangeDecoder(payload, 4, where);
+  const data = d.padded;
+  const end = payload.length;
+  const out = new Int32Array(count);
+  // the registers as 32-bit locals, as decodeColumn keeps them; a value reads at most 32 direct
+  // bits, so at most 4 bytes past the end (into the padding) before the check after it
+  let range = d.range >>> 0;
+  let code = d.code >>> 0;
+  let next = d.next;
+  for (let i = 0; i < count; i++) {
+    const n = total - i; // 1..2^31
+    const k = 31 - Math.clz32(n);
+    const u = 2 ** (k + 1) - n; // 1..2^k
+    let x = 0; // below 2^31: built in doubles
+    for (let b = 0; b <= k; b++) {
+      if (b === k && x < u) break; // the k bits were enough
+      range >>>= 1;
+      const bit = code >= range ? 1 : 0;
+      code = (code - (range & -bit)) >>> 0;
+      for (; range < TOP; range = (range << 8) >>> 0) code = ((code << 8) | data[next++]) >>> 0;
+      x = 2 * x + bit;
+    }
+    if (next > end) throw d.ended();
+    out[i] = x < u ? x : x - u; // after k + 1 bits x is 2·x' + b, which is at least 2u > u
+  }
+  d.range = range;
+  d.code = code;
+  d.next = next;
+  d.finish();
+  return out;
+}
+
+/**
  * How many of a row's earlier neighbours sourcePositions lays out in a fixed slot: with four, 92%
  * of samba's rows (1 to 7 neighbours) are summed without a loop whose end the processor would
  * mispredict.

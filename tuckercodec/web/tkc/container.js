@@ -13,7 +13,8 @@ export const FLAG_CORRECTIONS = 1 << 2; // §6.9 and §8.1, version 1.3
 export const FLAG_ADAPTIVE = 1 << 3; // §6.14, version 1.6
 export const FLAG_ADAPTIVE_CORRECTIONS = 1 << 4; // §6.9's adaptive chunks, version 1.7
 export const FLAG_CODEBOOKS = 1 << 5; // §6.9's codebooks, version 1.8
-const KNOWN_CRITICAL_FLAGS = FLAG_SEGMENTED | FLAG_CODING_TOOLS | FLAG_CORRECTIONS | FLAG_ADAPTIVE | FLAG_ADAPTIVE_CORRECTIONS | FLAG_CODEBOOKS;
+export const FLAG_UNIFORM_RANKS = 1 << 6; // §6.8's new vertices in a uniform stream, version 1.9
+const KNOWN_CRITICAL_FLAGS = FLAG_SEGMENTED | FLAG_CODING_TOOLS | FLAG_CORRECTIONS | FLAG_ADAPTIVE | FLAG_ADAPTIVE_CORRECTIONS | FLAG_CODEBOOKS | FLAG_UNIFORM_RANKS;
 const PREAMBLE_END = 32;
 
 /**
@@ -82,7 +83,7 @@ export function readContainer(bytes, limits) {
   if (major !== 1) throw unsupported('R05-major-version', `format major version ${major}; this decoder reads 1`);
   const unknown = flags & 0xffff & ~KNOWN_CRITICAL_FLAGS;
   if (unknown) {
-    throw unsupported('R06-critical-flag', `critical flag bits 0x${hex(unknown)} are set; this decoder knows bits 0 to 5 (version 1.8)`);
+    throw unsupported('R06-critical-flag', `critical flag bits 0x${hex(unknown)} are set; this decoder knows bits 0 to 6 (version 1.9)`);
   }
   // step 4: the header's size
   if (headerLength > limits.max_header_bytes) {

@@ -1,4 +1,4 @@
-// The JavaScript decoder of the tuckercodec format, written from spec/FORMAT.md (version 1.8):
+// The JavaScript decoder of the tuckercodec format, written from spec/FORMAT.md (version 1.9):
 // openTkc(bytes) checks the container and header, decodes the faces and names, and, for a file
 // that is not segmented, every factor and its corrections' parameters; a segmented file's
 // segments are decoded when one of their frames is asked for (§6.7), and the two most recently
@@ -106,7 +106,7 @@ export class TkcFile {
     this.faceCount = M;
     this.faceWidth = n;
     /** @type {Int32Array} the M × n faces, -1 padded, in the order they were given (§6.10) */
-    this.faces = decodeFaces(layout.face, this._payload(layout.face), this.vertices, M, n, limits, layout.adaptive);
+    this.faces = decodeFaces(layout.face, this._payload(layout.face), this.vertices, M, n, limits, layout.adaptive, layout.uniformRanks);
     /** The faces as FACE decodes them (the walk's order): the mesh predictors' (§6.8). */
     this._codedFaces = this.faces;
     /** @type {Topology | null} */

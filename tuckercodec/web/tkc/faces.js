@@ -14,10 +14,11 @@ import { decodeTraverse } from './traversal.js';
  * @param {number} n face width
  * @param {import('./limits.js').Limits} limits the decoder's limits (§7)
  * @param {boolean} [adaptive] the file sets flag bit 3 (format 1.6): faces-traverse's `coder` may be 1
+ * @param {boolean} [uniform] the file sets flag bit 6 (format 1.9): faces-traverse's `ranks` is read
  * @returns {Int32Array} M*n indices, row-major
  */
-export function decodeFaces(section, payload, K, M, n, limits, adaptive = false) {
-  if (section.codec === 'faces-traverse') return decodeTraverse(section.entry, payload, K, M, n, limits, adaptive);
+export function decodeFaces(section, payload, K, M, n, limits, adaptive = false, uniform = false) {
+  if (section.codec === 'faces-traverse') return decodeTraverse(section.entry, payload, K, M, n, limits, adaptive, uniform);
   const planes = section.entry.get('planes');
   if (!isInt(planes) || planes < 1 || planes > 4) {
     throw formatError('R30-planes', `section 'FACE': "planes" is ${planes === undefined ? 'missing' : describe(planes)}, not an int in 1..4`);

@@ -4,7 +4,7 @@
 
 import { TkcError, formatError, limitError } from './errors.js';
 import { MsgFloat, describe, isInt } from './msgpack.js';
-import { FLAG_ADAPTIVE, FLAG_ADAPTIVE_CORRECTIONS, FLAG_CODEBOOKS, FLAG_CODING_TOOLS, FLAG_CORRECTIONS, FLAG_SEGMENTED } from './container.js';
+import { FLAG_ADAPTIVE, FLAG_ADAPTIVE_CORRECTIONS, FLAG_CODEBOOKS, FLAG_CODING_TOOLS, FLAG_CORRECTIONS, FLAG_SEGMENTED, FLAG_UNIFORM_RANKS } from './container.js';
 
 /**
  * @typedef {import('./msgpack.js').MsgValue} MsgValue
@@ -27,7 +27,7 @@ import { FLAG_ADAPTIVE, FLAG_ADAPTIVE_CORRECTIONS, FLAG_CODEBOOKS, FLAG_CODING_T
  *   timeCodes: Float64Array | null, metersPerUnit: number | null, upAxis: string | null,
  *   segmented: boolean,
  *   codingTools: boolean, corrections: boolean, adaptive: boolean, adaptiveCorrections: boolean,
- *   codebooks: boolean,
+ *   codebooks: boolean, uniformRanks: boolean,
  *   segments: Segment[], face: Section,
  *   faceShape: number[], name: Section | null, sharedU1: Section | null, sharedColumns: number}} Layout
  */
@@ -65,6 +65,8 @@ export function readLayout(container, limits) {
   const adaptiveCorrections = (flags & FLAG_ADAPTIVE_CORRECTIONS) !== 0;
   // (1.8) §6.9: RESD's `codebooks` is read; without the bit it is an unknown parameter
   const codebooks = (flags & FLAG_CODEBOOKS) !== 0;
+  // (1.9) §6.8: faces-traverse's `ranks` is read; without the bit it is an unknown parameter
+  const uniformRanks = (flags & FLAG_UNIFORM_RANKS) !== 0;
   // step 10 / 10s
   const K = count(header, 'vertices', limits.max_vertices, 'max_vertices');
   const F = count(header, 'frames', limits.max_frames, 'max_frames');
@@ -91,7 +93,7 @@ export function readLayout(container, limits) {
   // step 14: the frame rate; (1.4) the time codes, the unit and the up axis
   const frameRate = readFrameRate(header);
   const { timeCodes, metersPerUnit, upAxis } = readScene(header, F);
-  return { vertices: K, frames: F, frameRate, timeCodes, metersPerUnit, upAxis, segmented, codingTools, corrections, adaptive, adaptiveCorrections, codebooks, segments, face, faceShape: [M, n], name: known.get('NAME') ?? null, sharedU1, sharedColumns };
+  return { vertices: K, frames: F, frameRate, timeCodes, metersPerUnit, upAxis, segmented, codingTools, corrections, adaptive, adaptiveCorrections, codebooks, uniformRanks, segments, face, faceShape: [M, n], name: known.get('NAME') ?? null, sharedU1, sharedColumns };
 }
 
 /**

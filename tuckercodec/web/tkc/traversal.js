@@ -14,8 +14,13 @@
 // the vertices not seen yet. The ranks' running sum is u(w), the unseen vertices below w, so
 // they are turned into gaps (w − last − 1) before the walk, by a Fenwick tree over the placed
 // vertices (UnseenVertices), and the walk is the same for both coders.
+//
+// With `ranks` 1 (format 1.9, a file with flag bit 6; `coder` 1 only) the vertices stream is a
+// uniform stream of each NEW vertex's place among the vertices not seen yet (decodeUniform): the
+// places are those running sums themselves, so their differences are the ranks, and they take
+// the same way to the walk.
 
-import { adaptiveError, decodeAdaptive } from './adaptive.js';
+import { adaptiveError, decodeAdaptive, decodeUniform } from './adaptive.js';
 import { formatError, limitError } from './errors.js';
 import { DEFAULT_LIMITS } from './limits.js';
 import { describe, isInt } from './msgpack.js';
@@ -33,6 +38,11 @@ const FAR = 3;
 const ZSTD = 0; // the coder values (§6.8, §6.14): §6.1's byte planes ...
 const ADAPTIVE = 1; // ... or one adaptive column per stream
 const ADAPTIVE_PLANES = 4; // with coder 1 every integer is a 32-bit one
+const RANKS_ADAPTIVE = 0; // the ranks values (§6.8, version 1.9): NEW vertices as adaptive ranks ...
+const RANKS_UNIFORM = 1; // ... or as places among the unseen in a uniform stream
+const VERTICES = 2; // the vertices stream's place among the four
+/** The most vertices `ranks` 1 takes: its places are 32-bit integers. */
+const MAX_UNIFORM_TOTAL = 2 ** 31;
 
 /** @param {string} message */
 function fail(message) {
@@ -57,16 +67,19 @@ function isNonNegativeInt(value) {
  * @param {number} n face width
  * @param {Limits} [limits] the decoder's limits (§7): max_section_bytes bounds the streams
  * @param {boolean} [adaptive] the file sets flag bit 3 (format 1.6): `coder` may be 1
+ * @param {boolean} [uniform] the file sets flag bit 6 (format 1.9): `ranks` is read, and may be 1
  * @returns {Int32Array} M*n vertex indices, row-major, in walk order, −1 padded
  * @throws {TkcError} R39-traversal, R30-planes, R21-header-limit, R29-zstd-content-size or
  *   R46-adaptive-stream
  */
-export function decodeTraverse(entry, payload, K, M, n, limits = DEFAULT_LIMITS, adaptive = false) {
+export function decodeTraverse(entry, payload, K, M, n, limits = DEFAULT_LIMITS, adaptive = false, uniform = false) {
   const cornerOrder = entry.get('corner_order');
   if (cornerOrder !== 0 && cornerOrder !== 1) {
     throw fail(`"corner_order" is ${cornerOrder === undefined ? 'missing' : describe(cornerOrder)}, not 0 or 1`);
   }
   const coder = readCoder(entry, adaptive);
+  // without flag bit 6, `ranks` is an unknown parameter (§3): ignored, as before 1.9
+  const ranks = uniform ? readRanks(entry, coder, K) : RANKS_ADAPTIVE;
   const table = streamTable(entry.get('streams'), K, M, n);
   let total = 0;
   for (const item of table) total += Number(item[2]); // a BigInt length is past any payload: the sum cannot match
@@ -93,7 +106,10 @@ export function decodeTraverse(entry, payload, K, M, n, limits = DEFAULT_LIMITS,
     const [count, planes, length] = table[s];
     const where = `${WHERE} stream ${s} (${STREAMS[s]})`;
     const part = payload.subarray(at, at + Number(length));
-    if (coder === ADAPTIVE) {
+    if (s === VERTICES && ranks === RANKS_UNIFORM) {
+      // the places; §6.14's bound on the count is decodeUniform's first check, before it allocates
+      streams.push(differences(decodeUniform(part, Number(count), K, where)));
+    } else if (coder === ADAPTIVE) {
       // §6.14's bound on the count is decodeAdaptive's first check, before it allocates
       streams.push(decodeAdaptive(part, Number(count), 1, null, ADAPTIVE_PLANES, where));
     } else {
@@ -117,6 +133,33 @@ function readCoder(entry, adaptive) {
   if (coder === ADAPTIVE && adaptive) return ADAPTIVE;
   const allowed = adaptive ? '0 or 1' : '0 (1 needs preamble flag bit 3, format 1.6)';
   throw adaptiveError(WHERE, `"coder" is ${describe(coder)}; this section allows ${allowed}`);
+}
+
+/**
+ * The section's `ranks` (§6.8), read in a file with flag bit 6 only: absent or 0, adaptive ranks;
+ * 1, places in a uniform stream, only with `coder` 1 and K <= 2^31; anything else R46.
+ * @param {Map<string, MsgValue>} entry
+ * @param {number} coder
+ * @param {number} K
+ */
+function readRanks(entry, coder, K) {
+  const ranks = entry.get('ranks');
+  if (ranks === undefined || ranks === RANKS_ADAPTIVE) return RANKS_ADAPTIVE;
+  if (ranks !== RANKS_UNIFORM) throw adaptiveError(WHERE, `"ranks" is ${describe(ranks)}, not 0 or 1`);
+  if (coder !== ADAPTIVE) throw adaptiveError(WHERE, '"ranks" 1 needs "coder" 1');
+  if (K > MAX_UNIFORM_TOTAL) throw adaptiveError(WHERE, `"ranks" 1 takes at most ${MAX_UNIFORM_TOTAL} vertices, not ${K}`);
+  return RANKS_UNIFORM;
+}
+
+/**
+ * The ranks of places p (r_i = p_i − p_{i−1}, p_{−1} = 0), in place: places below 2^31 differ by
+ * less, so each fits an int32.
+ * @param {Int32Array} places
+ * @returns {Int32Array}
+ */
+function differences(places) {
+  for (let i = places.length - 1; i > 0; i--) places[i] -= places[i - 1];
+  return places;
 }
 
 /**

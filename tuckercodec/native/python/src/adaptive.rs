@@ -1,12 +1,14 @@
 //! The binding of `tuckercodec_core::adaptive` (§6.14 adaptive coding): a matrix's integers to
 //! the adaptive stream and back (`encode_columns` and `decode_columns` of
-//! `tuckercodec/format/adaptive.py`).
+//! `tuckercodec/format/adaptive.py`), and (format 1.9) uniform streams (`format/uniform.py`).
 
-use numpy::{PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{
+    PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
+};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
-use tuckercodec_core::adaptive::{self, CodingOrder, InvalidOrder};
+use tuckercodec_core::adaptive::{self, uniform, CodingOrder, InvalidOrder};
 
 use crate::broken;
 
@@ -80,9 +82,41 @@ fn adaptive_decode<'py>(
     Ok(array)
 }
 
+/// The uniform stream (format 1.9, §6.8) of `values` (int64, value i in `0..total - i - 1`);
+/// a `ValueError` naming the first value outside its range.
+#[pyfunction]
+fn uniform_encode<'py>(
+    py: Python<'py>,
+    values: PyReadonlyArray1<'py, i64>,
+    total: u64,
+) -> PyResult<Bound<'py, PyBytes>> {
+    let values = values.as_slice()?;
+    let payload = py
+        .detach(|| uniform::encode_uniform(values, total))
+        .map_err(PyValueError::new_err)?;
+    Ok(PyBytes::new(py, &payload))
+}
+
+/// The `count` int64 integers of the uniform stream `payload` over `total`; `Broken` (R46) for
+/// any payload that is not exactly their coding.
+#[pyfunction]
+fn uniform_decode<'py>(
+    py: Python<'py>,
+    payload: &[u8],
+    count: usize,
+    total: u64,
+) -> PyResult<Bound<'py, PyArray1<i64>>> {
+    let values = py
+        .detach(|| uniform::decode_uniform(payload, count, total))
+        .map_err(broken)?;
+    Ok(PyArray1::from_vec(py, values))
+}
+
 /// Adds this module's functions to `tuckercodec._native`.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(adaptive_encode, m)?)?;
     m.add_function(wrap_pyfunction!(adaptive_decode, m)?)?;
+    m.add_function(wrap_pyfunction!(uniform_encode, m)?)?;
+    m.add_function(wrap_pyfunction!(uniform_decode, m)?)?;
     Ok(())
 }

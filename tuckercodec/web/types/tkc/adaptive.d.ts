@@ -86,3 +86,19 @@ export declare function decodeAdaptive(payload: Uint8Array, rows: number, cols: 
  * @throws {import('./errors.js').TkcError} R46-adaptive-stream
  */
 export declare function decodeAdaptiveWide(payload: Uint8Array, rows: number, cols: number, planes: number, where: string): Int32Array;
+/**
+ * The `count` integers of a uniform stream over `total` (§6.8, version 1.9): value i in
+ * 0..total−i−1 as truncated binary in §6.14's direct bits, most significant first. With
+ * n = total − i, k = floor(log2 n) and u = 2^(k+1) − n, k bits x give x when x < u, else one
+ * more bit b gives 2x + b − u. Every value so read is in its range, so the stream fails only as
+ * an adaptive stream does (R46): more values than §6.14's bound lets its bytes hold (checked
+ * before anything is allocated), a bad start, an end reached too soon or not at all, a bad
+ * ending. The caller has checked count <= total <= 2^31: every value fits an int32.
+ * @param {Uint8Array} payload
+ * @param {number} count
+ * @param {number} total T (the vertices, K)
+ * @param {string} where the stream, for messages
+ * @returns {Int32Array}
+ * @throws {import('./errors.js').TkcError} R46-adaptive-stream
+ */
+export declare function decodeUniform(payload: Uint8Array, count: number, total: number, where: string): Int32Array;

@@ -5,6 +5,7 @@ export declare const FLAG_CORRECTIONS: number;
 export declare const FLAG_ADAPTIVE: number;
 export declare const FLAG_ADAPTIVE_CORRECTIONS: number;
 export declare const FLAG_CODEBOOKS: number;
+export declare const FLAG_UNIFORM_RANKS: number;
 export type MsgValue = import('./msgpack.js').MsgValue;
 export type Limits = import('./limits.js').Limits;
 export type Section = {

@@ -27,6 +27,7 @@ export type Layout = {
     adaptive: boolean;
     adaptiveCorrections: boolean;
     codebooks: boolean;
+    uniformRanks: boolean;
     segments: Segment[];
     face: Section;
     faceShape: number[];

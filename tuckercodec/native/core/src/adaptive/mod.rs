@@ -21,6 +21,7 @@
 mod coder;
 #[cfg(test)]
 mod tests;
+pub mod uniform;
 
 use std::fmt;
 
