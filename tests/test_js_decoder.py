@@ -14,7 +14,7 @@ import pytest
 
 import tuckercodec
 from tests.support.compressed import Parts, vector
-from tests.support.js_decoder import compare_verdicts, run_node
+from tests.support.js_decoder import compare_verdicts, decoded_file, run_node
 from tests.support.sequences import shared_case, shared_encoded
 from tuckercodec.format.container import HEAD_SIZE, PREAMBLE, SIGNATURE, pack_raw
 from tuckercodec.io.samples import sample_path
@@ -35,20 +35,8 @@ VALID_VECTORS = [
 ]
 
 
-def _js_decode(data: bytes, tmp_path: Path) -> tuple[dict[str, Any], np.ndarray, np.ndarray]:
-    source, output = tmp_path / "in.tkc", tmp_path / "out.bin"
-    source.write_bytes(data)
-    facts = run_node("decode_file.mjs", source, output)
-    assert facts["accepted"], facts["message"]
-    raw = output.read_bytes()
-    face_bytes = facts["faces"] * facts["face_width"] * 4
-    faces = np.frombuffer(raw[:face_bytes], "<i4").reshape(facts["faces"], facts["face_width"])
-    frames = np.frombuffer(raw[face_bytes:], "<f8").reshape(facts["frames"], facts["vertices"], 3)
-    return facts, faces, frames
-
-
 def _same_as_python(data: bytes, tmp_path: Path) -> dict[str, Any]:
-    facts, faces, frames = _js_decode(data, tmp_path)
+    facts, faces, frames = decoded_file(data, tmp_path, "in")
     expected = tuckercodec.decode(data)
     assert facts["version"] == tuckercodec.info(data).format_version
     assert facts["names"] == list(expected.frame_names)

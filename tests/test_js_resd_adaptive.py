@@ -15,6 +15,7 @@ The stream decoder itself is checked integer for integer by tests/js/adaptive.te
 from __future__ import annotations
 
 import json
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -23,7 +24,14 @@ import pytest
 import zstandard
 
 import tuckercodec
-from tests.support.compressed import Parts, vector, with_preamble
+from tests.support.compressed import (
+    Parts,
+    SectionChange,
+    edit_section,
+    vector,
+    with_params,
+    with_preamble,
+)
 from tests.support.corrections import (
     Corrections,
     exact_reconstruction,
@@ -162,16 +170,11 @@ def _twin() -> bytes:
     return adaptive_twin(_zstd_file("v1-wave-triangles", "float64", 1, seed=2))
 
 
-def _edit(data: bytes, change) -> bytes:
-    """``data`` with its RESD section's (entry, payload) replaced by ``change(entry, payload)``."""
-    parts = Parts(data)
-    index = parts.index("RESD")
-    parts.sections[index] = change(*parts.sections[index])
-    return parts.pack()
+def _edit(data: bytes, change: SectionChange) -> bytes:
+    return edit_section(data, "RESD", change)
 
 
-def _set(**params: Any):
-    return lambda data: _edit(data, lambda entry, payload: ({**entry, **params}, payload))
+_set = partial(with_params, "RESD")
 
 
 def _first_chunk(change):

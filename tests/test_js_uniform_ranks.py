@@ -15,6 +15,7 @@ edits the rule named here.
 from __future__ import annotations
 
 import bisect
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -22,8 +23,14 @@ import numpy as np
 import pytest
 
 import tuckercodec
-from tests.support.compressed import Parts, with_preamble
-from tests.support.js_decoder import compare_verdicts, run_node
+from tests.support.compressed import (
+    Parts,
+    SectionChange,
+    edit_section,
+    with_params,
+    with_preamble,
+)
+from tests.support.js_decoder import compare_verdicts, decoded_file
 from tests.test_js_topology import Cases, _tables
 from tuckercodec.format import adaptive, traversal, uniform
 from tuckercodec.io.samples import sheet_triangles, wave_sheet
@@ -73,21 +80,8 @@ def _face(data: bytes) -> tuple[dict[str, Any], bytes]:
     return parts.sections[parts.index("FACE")]
 
 
-def _js_decode(data: bytes, folder: Path, name: str) -> tuple[dict[str, Any], Any, Any]:
-    """node's facts, faces (M, n) and frames (F, K, 3) of a whole file (decode_file.mjs)."""
-    source, output = folder / f"{name}.tkc", folder / f"{name}.bin"
-    source.write_bytes(data)
-    facts = run_node("decode_file.mjs", source, output)
-    assert facts["accepted"], facts["message"]
-    raw = output.read_bytes()
-    face_bytes = facts["faces"] * facts["face_width"] * 4
-    faces = np.frombuffer(raw[:face_bytes], "<i4").reshape(facts["faces"], facts["face_width"])
-    frames = np.frombuffer(raw[face_bytes:], "<f8").reshape(facts["frames"], facts["vertices"], 3)
-    return facts, faces, frames
-
-
 def _same_as_python(data: bytes, folder: Path, name: str, exact: bool) -> None:
-    facts, faces, frames = _js_decode(data, folder, name)
+    facts, faces, frames = decoded_file(data, folder, name)
     expected = tuckercodec.decode(data)
     assert facts["version"] == tuckercodec.info(data).format_version == "1.9"
     assert np.array_equal(faces, expected.faces)  # the same table, row for row
@@ -234,16 +228,11 @@ def _base() -> bytes:
     return _encoded("grid-8-lossless")
 
 
-def _edit(data: bytes, change) -> bytes:
-    """``data`` with its FACE section's (entry, payload) replaced by ``change(entry, payload)``."""
-    parts = Parts(data)
-    index = parts.index("FACE")
-    parts.sections[index] = change(*parts.sections[index])
-    return parts.pack()
+def _edit(data: bytes, change: SectionChange) -> bytes:
+    return edit_section(data, "FACE", change)
 
 
-def _set(**params: Any):
-    return lambda data: _edit(data, lambda entry, payload: ({**entry, **params}, payload))
+_set = partial(with_params, "FACE")
 
 
 def _drop(key: str):
@@ -333,7 +322,7 @@ def test_unknown_ranks_is_ignored_without_flag_bit_6(tmp_path):
     edited = _without_flag(edited)
     assert not Parts(edited).flags & FLAG_UNIFORM_RANKS
     assert _face(edited)[0]["ranks"] == 1
-    facts, faces, frames = _js_decode(edited, tmp_path, "without-bit-6")
+    facts, faces, frames = decoded_file(edited, tmp_path, "without-bit-6")
     assert facts["version"] == "1.8"
     expected = tuckercodec.decode(data)
     assert np.array_equal(tuckercodec.decode(edited).faces, expected.faces)

@@ -83,6 +83,26 @@ class Parts:
         return b"".join(payload for _, payload in self.sections)
 
 
+#: An edit of one section: its (entry, payload) to the new ones.
+SectionChange = Callable[[dict[str, Any], bytes], tuple[dict[str, Any], bytes]]
+
+
+def edit_section(data: bytes, section_id: str, change: SectionChange) -> bytes:
+    """``data`` with section ``section_id``'s (entry, payload) replaced by
+    ``change(entry, payload)``, the file repacked (offsets, lengths, CRCs made right)."""
+    parts = Parts(data)
+    index = parts.index(section_id)
+    parts.sections[index] = change(*parts.sections[index])
+    return parts.pack()
+
+
+def with_params(section_id: str, **params: Any) -> Callable[[bytes], bytes]:
+    """An edit that sets ``params`` in section ``section_id``'s entry, its payload kept."""
+    return lambda data: edit_section(
+        data, section_id, lambda entry, payload: ({**entry, **params}, payload)
+    )
+
+
 def raw_file(
     header: dict[str, Any] | bytes,
     area: bytes = b"",

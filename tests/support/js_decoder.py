@@ -57,14 +57,25 @@ def run_node(script: str, *args: str | Path) -> Any:
     return json.loads(done.stdout)
 
 
-def decoded_frames(data: bytes, tmp_path: Path, name: str) -> np.ndarray:
-    """Every frame the JavaScript decoder gives of the file ``data``, (F, K, 3) float64."""
+def decoded_file(
+    data: bytes, tmp_path: Path, name: str
+) -> tuple[dict[str, Any], np.ndarray, np.ndarray]:
+    """What the JavaScript decoder gives of the whole file ``data`` (decode_file.mjs): its
+    facts, the faces (M, n) int32 and every frame (F, K, 3) float64."""
     source, output = tmp_path / f"{name}.tkc", tmp_path / f"{name}.bin"
     source.write_bytes(data)
     facts = run_node("decode_file.mjs", source, output)
     assert facts["accepted"], facts["message"]
-    raw = output.read_bytes()[facts["faces"] * facts["face_width"] * 4 :]
-    return np.frombuffer(raw, "<f8").reshape(facts["frames"], facts["vertices"], 3)
+    raw = output.read_bytes()
+    face_bytes = facts["faces"] * facts["face_width"] * 4
+    faces = np.frombuffer(raw[:face_bytes], "<i4").reshape(facts["faces"], facts["face_width"])
+    frames = np.frombuffer(raw[face_bytes:], "<f8").reshape(facts["frames"], facts["vertices"], 3)
+    return facts, faces, frames
+
+
+def decoded_frames(data: bytes, tmp_path: Path, name: str) -> np.ndarray:
+    """Every frame the JavaScript decoder gives of the file ``data``, (F, K, 3) float64."""
+    return decoded_file(data, tmp_path, name)[2]
 
 
 def check_every_vector_observed(observed: dict[str, Any]) -> None:
