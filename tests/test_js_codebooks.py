@@ -8,10 +8,12 @@ files with their chunks re-coded as zstd planes (``coder`` 0, ``predict`` 0 or 1
 few frames), the codebooks' bytes kept. Then files made by hand from the spec alone, in every
 domain but the grid: for each axis a codebook of chosen ordered integers (ties between two
 entries, entries at both ends of the domain's range, so that the nearest-entry gaps pass 2^63),
-e = t - j for a chosen position t, and the position the value of C[t]. Node must decode every
-one to the bits of the Python decoder (and of the input, or of C[t]). Last, edits that break one
-rule of ``codebooks``, of a codebook's frame or entries, or of t, must get the Python decoder's
-verdict and the rule named here.
+e = t - j for a chosen position t, and the position the value of C[t]; and codebooks of one,
+two and 64 neighbouring entries, where the decoder's index of midpoints is at its smallest
+(tests/js/codebooks.test.mjs tests that index alone). Node must decode every one to the bits of
+the Python decoder (and of the input, or of C[t]). Last, edits that break one rule of
+``codebooks``, of a codebook's frame or entries, or of t, must get the Python decoder's verdict
+and the rule named here.
 """
 
 from __future__ import annotations
@@ -330,10 +332,12 @@ def hand_made(
     ends: bool = True,
     books_hook: Any = None,
     e_hook: Any = None,
+    book_of: Any = None,
 ) -> HandMade:
     """``base`` with corrections in ``domain`` through a codebook on each of ``axes`` (e = 0 on
     the others). ``books_hook(axis, C)`` may change a codebook after e is chosen, ``e_hook(e, j,
-    n)`` e itself (j the nearest entries, n the entries), to break a rule."""
+    n)`` e itself (j the nearest entries, n the entries), to break a rule. ``book_of(b)`` gives
+    each codebook from the axis's b instead of :func:`_book_for`."""
     data = vector(base)
     rng = np.random.default_rng(seed)
     low, high = _range(domain, scale)
@@ -345,7 +349,10 @@ def hand_made(
         o = b.copy()
         books: list[list[int] | None] = [None, None, None]
         for x in axes:
-            book = _book_for(b[..., x], low, high, rng, anywhere, ends)
+            if book_of is not None:
+                book = book_of(b[..., x])
+            else:
+                book = _book_for(b[..., x], low, high, rng, anywhere, ends)
             flat = [int(v) for v in b[..., x].reshape(-1)]
             j = np.array([spec_nearest(book, v) for v in flat])
             made.outside += sum(v < book[0] or v > book[-1] for v in flat)
@@ -386,6 +393,25 @@ def hand_made(
     return made
 
 
+def _middle(bases: np.ndarray) -> int:
+    return int(np.sort(bases.reshape(-1))[bases.size // 2])
+
+
+def _one_entry(bases: np.ndarray) -> list[int]:
+    """A codebook of one entry: no midpoint, every b's j is 0."""
+    return [_middle(bases)]
+
+
+def _two_entries(bases: np.ndarray) -> list[int]:
+    """Two entries either side of one b: a tie there, and one midpoint."""
+    return [_middle(bases) - 5, _middle(bases) + 5]
+
+
+def _neighbours(bases: np.ndarray) -> list[int]:
+    """64 entries one apart around one b: a span narrower than the midpoints are many."""
+    return list(range(_middle(bases) - 32, _middle(bases) + 32))
+
+
 #: name -> hand_made's arguments
 HAND_MADE: dict[str, tuple[tuple[Any, ...], dict[str, Any]]] = {
     "float32": (("v1-wave-triangles", "float32"), {"chunk_frames": 5}),
@@ -408,6 +434,16 @@ HAND_MADE: dict[str, tuple[tuple[Any, ...], dict[str, Any]]] = {
     "digits-float32-7": (
         ("v1.1-segments-shared", "decimal-digits-float32", 7),
         {"chunk_frames": 2, "seed": 3},
+    ),
+    # codebooks of 1, 2 and 64 entries (one apart): the index of midpoints at its smallest
+    "float64-one-entry": (("v1-wave-triangles", "float64"), {"book_of": _one_entry}),
+    "places-3-two-entries": (
+        ("v1-wave-triangles", "decimal-places", 3),
+        {"book_of": _two_entries, "predict": 1},
+    ),
+    "digits-15-neighbours": (
+        ("v1-wave-triangles", "decimal-digits", 15),
+        {"book_of": _neighbours, "chunk_frames": 5},
     ),
 }
 
@@ -438,6 +474,7 @@ def test_hand_made_codebooks_take_ties_and_both_ends(hand_made_files):
     assert all(m.ends > 0 for m in made.values())
     for domain in ("float32", "float64", "places-3", "digits-4", "digits-15"):
         assert made[domain].ties > 0, domain
+    assert made["places-3-two-entries"].ties > 0
     assert made["float64-inside"].outside > 0 and made["digits-15-inside"].outside > 0
 
 

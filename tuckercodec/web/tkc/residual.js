@@ -491,77 +491,122 @@ function baseOf(residual) {
 }
 
 /**
- * Whether entry m of C (halves) is above b.
- * @param {Int32Array} C
- * @param {number} m
- * @param {number} bHi
- * @param {number} bLo unsigned
+ * j of §6.9 by value. b is nearer C[m + 1] than C[m] (a tie keeping C[m]) exactly when
+ * 2b > C[m] + C[m + 1], that is when b is above the midpoint floor((C[m] + C[m + 1]) / 2), so j
+ * is how many midpoints lie below b. The range from the first midpoint to the last is cut into
+ * about as many equal parts as there are midpoints (each a power of two wide), with how many
+ * midpoints lie before each part: a value's count is one lookup and a search among the few
+ * midpoints of its part, wherever the value was in the frames before. (A search outwards from
+ * each vertex's entry in the frames before missed the cache at almost every step where vertices
+ * move far between frames, as in a gallop.) The compiled core's `MiddleIndex` (codebooks.rs)
+ * cuts the same parts; here the 64-bit integers are 32-bit halves, and the midpoints are not kept
+ * but compared from C itself, whose entries near j the caller reads next.
  */
-function above(C, m, bHi, bLo) {
-  return C[2 * m + 1] > bHi || (C[2 * m + 1] === bHi && C[2 * m] >>> 0 > bLo);
+export class MiddleIndex {
+  /** @param {Int32Array} C the codebook's n ≥ 1 entries, increasing, as interleaved halves */
+  constructor(C) {
+    /** The entries, whose sums of neighbours the search within a part compares. */
+    this.C = C;
+    /** How many midpoints: n − 1. */
+    this.count = C.length / 2 - 1;
+    const middles = midpoints(C);
+    const last = 2 * this.count - 2;
+    // without midpoints, the largest integer, so that every value counts none
+    /** The first midpoint's high half: none lies below a value at or below it. */
+    this.lowHi = this.count > 0 ? middles[1] : 0x7fffffff;
+    /** The first midpoint's low half (unsigned). */
+    this.lowLo = this.count > 0 ? middles[0] >>> 0 : 0xffffffff;
+    const [spanHi, spanLo] = this.count > 0 ? this.distance(middles[last + 1], middles[last] >>> 0) : [0, 0];
+    /** The last midpoint's distance from the first, high half (unsigned): all lie below a value further. */
+    this.spanHi = spanHi;
+    /** Its low half (unsigned). */
+    this.spanLo = spanLo;
+    const wanted = 32 - Math.clz32(this.count);
+    const bits = spanHi > 0 ? 64 - Math.clz32(spanHi) : 32 - Math.clz32(spanLo);
+    /** A distance's part is the distance shifted right by this: about 2^wanted parts. */
+    this.shift = Math.max(bits - wanted, 0);
+    /** starts[k]: how many midpoints lie in the parts before part k (one more entry than parts) */
+    this.starts = new Int32Array(this.part(spanHi, spanLo) + 2);
+    for (let m = 0; m < 2 * this.count; m += 2) {
+      const [hi, lo] = this.distance(middles[m + 1], middles[m] >>> 0);
+      this.starts[this.part(hi, lo) + 1]++;
+    }
+    for (let k = 1; k < this.starts.length; k++) this.starts[k] += this.starts[k - 1];
+  }
+
+  /**
+   * The distance of a value at or above the first midpoint from it, as unsigned halves.
+   * @param {number} hi
+   * @param {number} lo unsigned
+   * @returns {[number, number]}
+   */
+  distance(hi, lo) {
+    const d = lo - this.lowLo;
+    return [(hi - this.lowHi - (d < 0 ? 1 : 0)) >>> 0, d < 0 ? d + TWO_32 : d];
+  }
+
+  /**
+   * The part of a distance within the span: below 2^wanted, a 32-bit integer. (With shift 0,
+   * `hi << 32` is `hi << 0` in JavaScript, which shifts by the count mod 32; it is still 0, as
+   * shift 0 comes only with a span below 2^32.)
+   * @param {number} hi unsigned
+   * @param {number} lo unsigned
+   */
+  part(hi, lo) {
+    const s = this.shift;
+    return s >= 32 ? hi >>> (s - 32) : (hi << (32 - s)) | (lo >>> s);
+  }
+
+  /**
+   * How many midpoints lie below b: j of §6.9. Those of the parts before b's are all below it
+   * and those of the parts after it all above, as (a >> s) < (c >> s) implies a < c.
+   * @param {number} bHi
+   * @param {number} bLo unsigned
+   */
+  countBelow(bHi, bLo) {
+    if (bHi < this.lowHi || (bHi === this.lowHi && bLo <= this.lowLo)) return 0;
+    let dLo = bLo - this.lowLo;
+    const dHi = (bHi - this.lowHi - (dLo < 0 ? 1 : 0)) >>> 0;
+    if (dLo < 0) dLo += TWO_32;
+    if (dHi > this.spanHi || (dHi === this.spanHi && dLo > this.spanLo)) return this.count;
+    const k = this.part(dHi, dLo);
+    // midpoint m is below b when C[m] + C[m + 1] < 2b: (the sum's high half − 2b's)·2^32 < 2b's
+    // low half − the sum's, each side exact in binary64 (a multiple of 2^32 below 2^66, and an
+    // integer below 2^34 in magnitude)
+    const C = this.C;
+    const twiceHi = 2 * bHi;
+    const twiceLo = 2 * bLo;
+    let first = this.starts[k];
+    let end = this.starts[k + 1];
+    while (first < end) {
+      const m = (first + end) >>> 1;
+      if ((C[2 * m + 1] + C[2 * m + 3] - twiceHi) * TWO_32 < twiceLo - (C[2 * m] >>> 0) - (C[2 * m + 2] >>> 0)) first = m + 1;
+      else end = m;
+    }
+    return first;
+  }
 }
 
 /**
- * j of §6.9: the index of the entry of C (n entries, halves) nearest b: the largest with
- * C[j] <= b (0 if none), or the one after it where that is nearer (a tie keeps j). The search
- * gallops from `hint` (guessed from the same value's j in the frames corrected before: values
- * move little from frame to frame, and a codebook can hold hundreds of thousands of entries),
- * then halves the bracket. The two gaps are exact differences in 1 .. 2^64 − 1, compared as
- * unsigned halves.
- * @param {Int32Array} C
- * @param {number} n
- * @param {number} bHi
- * @param {number} bLo unsigned
- * @param {number} hint an index in 0..n − 1
+ * A codebook's midpoints floor((C[m] + C[m + 1]) / 2), as interleaved halves: C[m] + floor(gap
+ * / 2), the gap C[m + 1] − C[m] in 1 .. 2^64 − 1 taken as unsigned halves.
+ * @param {Int32Array} C n ≥ 1 entries, increasing, as interleaved halves
  */
-function nearest(C, n, bHi, bLo, hint) {
-  // a bracket lo < hi with C[lo] <= b < C[hi] (hi = n: past the end)
-  let lo = hint;
-  let hi = hint + 1;
-  let step = 1;
-  if (above(C, hint, bHi, bLo)) {
-    hi = hint;
-    lo = hint - 1;
-    while (lo >= 0 && above(C, lo, bHi, bLo)) {
-      hi = lo;
-      step *= 2;
-      lo = hint - step;
-    }
-    if (lo < 0) {
-      if (above(C, 0, bHi, bLo)) return 0; // every entry is above b
-      lo = 0;
-    }
-  } else {
-    while (hi < n && !above(C, hi, bHi, bLo)) {
-      lo = hi;
-      step *= 2;
-      hi = hint + step;
-    }
-    if (hi > n) hi = n;
+function midpoints(C) {
+  const middles = new Int32Array(C.length - 2);
+  for (let m = 0; m < middles.length; m += 2) {
+    let gapLo = (C[m + 2] >>> 0) - (C[m] >>> 0);
+    const gapHi = (C[m + 3] - C[m + 1] - (gapLo < 0 ? 1 : 0)) >>> 0;
+    if (gapLo < 0) gapLo += TWO_32;
+    const lo = (C[m] >>> 0) + (gapLo >>> 1) + (gapHi & 1) * 2 ** 31;
+    middles[m] = lo | 0;
+    middles[m + 1] = (C[m + 1] + (gapHi >>> 1) + (lo >= TWO_32 ? 1 : 0)) | 0;
   }
-  while (hi - lo > 1) {
-    const mid = lo + Math.floor((hi - lo) / 2);
-    if (above(C, mid, bHi, bLo)) hi = mid;
-    else lo = mid;
-  }
-  const j = lo;
-  if (j + 1 < n) {
-    let upLo = (C[2 * j + 2] >>> 0) - bLo;
-    const upHi = (C[2 * j + 3] - bHi - (upLo < 0 ? 1 : 0)) >>> 0;
-    let downLo = bLo - (C[2 * j] >>> 0);
-    const downHi = (bHi - C[2 * j + 1] - (downLo < 0 ? 1 : 0)) >>> 0;
-    if (upLo < 0) upLo += TWO_32;
-    if (downLo < 0) downLo += TWO_32;
-    if (upHi < downHi || (upHi === downHi && upLo < downLo)) return j + 1;
-  }
-  return j;
+  return middles;
 }
 
-/**
- * Each codebook's hints for nearest: per vertex, the j its value took in the last two frames
- * corrected, from which the next is guessed as if it kept moving so (played frames move on).
- */
-const HINTS = new WeakMap();
+/** Each codebook's MiddleIndex, made on the first frame that needs it. */
+const INDEXES = new WeakMap();
 
 /** Scratch of throughCodebooks: one frame's integers. */
 let bookPairs = new Int32Array(0);
@@ -589,17 +634,14 @@ function throughCodebooks(residual, books, P, pairs, at, frameNumber) {
   books.forEach((C, x) => {
     if (C === null) return;
     const count = C.length / 2;
-    /** @type {Int32Array | undefined} */
-    let hints = HINTS.get(C);
-    if (hints === undefined || hints.length !== 2 * n / 3) HINTS.set(C, (hints = new Int32Array(2 * n / 3)));
-    for (let v = x, i = 0; v < n; v += 3, i += 2) {
+    /** @type {MiddleIndex | undefined} */
+    let index = INDEXES.get(C);
+    if (index === undefined) INDEXES.set(C, (index = new MiddleIndex(C)));
+    for (let v = x; v < n; v += 3) {
       if (!base(P[v])) continue;
       const bHi = BASE[1];
       const bLo = BASE[0] >>> 0;
-      const guess = Math.min(Math.max(2 * hints[i] - hints[i + 1], 0), count - 1);
-      const j = nearest(C, count, bHi, bLo, guess);
-      hints[i + 1] = hints[i];
-      hints[i] = j;
+      const j = index.countBelow(bHi, bLo);
       // exact within ±2^53; an e beyond rounds to a Number beyond every t all the same
       const t = j + (out[2 * v + 1] * TWO_32 + (out[2 * v] >>> 0));
       if (!(t >= 0 && t < count)) {

@@ -87,6 +87,60 @@ export declare function decodeChunk(residual: Residual, c: number, payload: Uint
  */
 export declare function decodeCodebooks(residual: Residual, payload: Uint8Array): Codebooks;
 /**
+ * j of §6.9 by value. b is nearer C[m + 1] than C[m] (a tie keeping C[m]) exactly when
+ * 2b > C[m] + C[m + 1], that is when b is above the midpoint floor((C[m] + C[m + 1]) / 2), so j
+ * is how many midpoints lie below b. The range from the first midpoint to the last is cut into
+ * about as many equal parts as there are midpoints (each a power of two wide), with how many
+ * midpoints lie before each part: a value's count is one lookup and a search among the few
+ * midpoints of its part, wherever the value was in the frames before. (A search outwards from
+ * each vertex's entry in the frames before missed the cache at almost every step where vertices
+ * move far between frames, as in a gallop.) The compiled core's `MiddleIndex` (codebooks.rs)
+ * cuts the same parts; here the 64-bit integers are 32-bit halves, and the midpoints are not kept
+ * but compared from C itself, whose entries near j the caller reads next.
+ */
+export declare class MiddleIndex {
+    /** The entries, whose sums of neighbours the search within a part compares. */
+    C: Int32Array<ArrayBufferLike>;
+    /** How many midpoints: n − 1. */
+    count: number;
+    /** The first midpoint's high half: none lies below a value at or below it. */
+    lowHi: number;
+    /** The first midpoint's low half (unsigned). */
+    lowLo: number;
+    /** The last midpoint's distance from the first, high half (unsigned): all lie below a value further. */
+    spanHi: number;
+    /** Its low half (unsigned). */
+    spanLo: number;
+    /** A distance's part is the distance shifted right by this: about 2^wanted parts. */
+    shift: number;
+    /** starts[k]: how many midpoints lie in the parts before part k (one more entry than parts) */
+    starts: Int32Array<ArrayBuffer>;
+    /** @param {Int32Array} C the codebook's n ≥ 1 entries, increasing, as interleaved halves */
+    constructor(C: Int32Array);
+    /**
+     * The distance of a value at or above the first midpoint from it, as unsigned halves.
+     * @param {number} hi
+     * @param {number} lo unsigned
+     * @returns {[number, number]}
+     */
+    distance(hi: number, lo: number): [number, number];
+    /**
+     * The part of a distance within the span: below 2^wanted, a 32-bit integer. (With shift 0,
+     * `hi << 32` is `hi << 0` in JavaScript, which shifts by the count mod 32; it is still 0, as
+     * shift 0 comes only with a span below 2^32.)
+     * @param {number} hi unsigned
+     * @param {number} lo unsigned
+     */
+    part(hi: number, lo: number): number;
+    /**
+     * How many midpoints lie below b: j of §6.9. Those of the parts before b's are all below it
+     * and those of the parts after it all above, as (a >> s) < (c >> s) implies a < c.
+     * @param {number} bHi
+     * @param {number} bLo unsigned
+     */
+    countBelow(bHi: number, bLo: number): number;
+}
+/**
  * One frame's decoded positions (§6.9): P (the exact reconstruction of §8.1) corrected by the
  * frame's integers, into `out` (a Float32Array receives the binary64 result rounded once, which
  * in domain float32 is the corrected binary32 value itself). In the domains grid and float64 a
