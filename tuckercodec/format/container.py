@@ -44,7 +44,13 @@ from .residual import (
     CORRECTIONS,
     RESIDUAL,
 )
-from .sections import CODING_TOOLS, Section, read_section_table, with_coding_tools
+from .sections import (
+    CODING_TOOLS,
+    FACES_TRAVERSE,
+    Section,
+    read_section_table,
+    with_coding_tools,
+)
 from .segments import SEGMENTED
 from .traversal import UNIFORM_RANKS, UNIFORM_RANKS_MINOR
 
@@ -232,7 +238,7 @@ def pack_container(
         flags, minor = flags | ADAPTIVE_CORRECTIONS, max(minor, ADAPTIVE_CORRECTIONS_MINOR)
     if any(entry.get("codec") == RESIDUAL and "codebooks" in entry for entry, _ in sections):
         flags, minor = flags | CODEBOOKS, max(minor, CODEBOOKS_MINOR)
-    if any(entry.get("codec") == "faces-traverse" and "ranks" in entry for entry, _ in sections):
+    if any(entry.get("codec") == FACES_TRAVERSE and "ranks" in entry for entry, _ in sections):
         flags, minor = flags | UNIFORM_RANKS, max(minor, UNIFORM_RANKS_MINOR)
     table = []
     offset = 0

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..system import native
-from .adaptive import MAX_EXPANSION, RangeDecoder, RangeEncoder, check_expansion, refuse
+from .adaptive import RangeDecoder, RangeEncoder, check_expansion, refuse
 
 #: The largest ``total`` a uniform stream may have: its integers are 32-bit ones, as an
 #: adaptive stream's (§6.8).
@@ -56,7 +56,8 @@ def decode_uniform(payload: bytes | memoryview, count: int, total: int, where: s
     """The ``count`` integers (int64) of a uniform stream over ``total``; R46-adaptive-stream
     for one that is not exactly their coding (the stream's start and end as §6.14's). The
     caller has checked ``count <= total <= MAX_TOTAL``; the payload's bound (at most
-    :data:`MAX_EXPANSION` integers a byte) is checked here, before anything is allocated."""
+    :data:`.adaptive.MAX_EXPANSION` integers a byte) is checked here, before anything is
+    allocated."""
     check_expansion(count, len(payload), where)
     core = native.core()
     if core is not None:
@@ -79,4 +80,4 @@ def decode_uniform(payload: bytes | memoryview, count: int, total: int, where: s
     return out
 
 
-__all__ = ["MAX_EXPANSION", "MAX_TOTAL", "decode_uniform", "encode_uniform"]
+__all__ = ["MAX_TOTAL", "decode_uniform", "encode_uniform"]
